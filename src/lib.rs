@@ -1,0 +1,12 @@
+//! wetgran: phase diagrams of wet granular matter.
+//!
+//! Layers, dependencies pointing one way: [`scene`] and [`physics`] -> [`sim`] -> `cli`.
+//! The physics follows MODEL.md (K. Röller, "Numerical simulations of wet granular matter",
+//! Göttingen 2010); choices where the text is silent or wrong are listed in
+//! docs/model-choices.md.
+
+pub mod bench;
+pub mod cli;
+pub mod physics;
+pub mod scene;
+pub mod sim;

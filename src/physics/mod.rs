@@ -1,0 +1,9 @@
+//! Pure physics: contact laws, capillary bridge rules, free flight, size distributions.
+//!
+//! Everything here is a plain function of its arguments, shared by the engines and tested on its
+//! own against the formulas of MODEL.md.
+
+pub mod capillary;
+pub mod contact;
+pub mod flight;
+pub mod size;

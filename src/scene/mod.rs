@@ -1,0 +1,321 @@
+//! The declarative scene: what a user writes in a scene file (TOML) to describe one simulation.
+//!
+//! A scene names the dimension, the box and its boundaries, the particles, the contact and
+//! capillary laws, gravity, the drive, the initial state, the run length and the engine's accuracy
+//! knobs. [`Scene::from_toml_str`] parses and validates; every rejected value produces a
+//! [`SceneError`] that names the file, the key and the allowed range (see `validate.rs`).
+//!
+//! Conventions (MODEL.md section 1): units of mean diameter `d`, particle mass `m`, gravity `g`.
+//! The last axis is vertical (`z`; in 2D the axes are `x, z`); gravity points along `-z`.
+
+mod validate;
+pub mod lattice;
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+pub use validate::SceneError;
+
+/// One simulation, as read from a scene file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Spatial dimension: 2 (disks) or 3 (spheres).
+    pub dimension: usize,
+    /// Gravitational acceleration along `-z` (0 switches gravity off: straight flights).
+    #[serde(default = "default_gravity")]
+    pub gravity: f64,
+    #[serde(rename = "box")]
+    pub container: BoxSpec,
+    pub particles: ParticleSpec,
+    #[serde(default)]
+    pub contact: ContactSpec,
+    #[serde(default)]
+    pub capillary: CapillarySpec,
+    #[serde(default)]
+    pub drive: DriveSpec,
+    pub initial: InitialSpec,
+    pub run: RunSpec,
+    #[serde(default)]
+    pub engine: EngineSpec,
+}
+
+/// The simulation box: one size and one boundary kind per axis, the vertical axis last.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Edge lengths, one per axis (`[L_x, H]` in 2D, `[L_x, L_y, H]` in 3D), in units of `d`.
+    pub size: Vec<f64>,
+    /// Boundary per axis; default: periodic laterally, walls (floor and lid) vertically.
+    #[serde(default)]
+    pub boundary: Option<Vec<Boundary>>,
+}
+
+/// What happens at the two faces of the box perpendicular to one axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Boundary {
+    Periodic,
+    Wall,
+}
+
+/// The grains.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticleSpec {
+    pub count: usize,
+    /// Mean diameter (1 in the standard units).
+    #[serde(default = "one")]
+    pub diameter: f64,
+    /// `sigma_p` of MODEL.md Eq. 2.22: diameters uniform on `d (1 +- sqrt(3) sigma_p)`.
+    #[serde(default)]
+    pub polydispersity: f64,
+    /// Mass of every particle, whatever its size.
+    #[serde(default = "one")]
+    pub mass: f64,
+}
+
+/// Hard-core contact law (MODEL.md 2.1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Particle-particle coefficient of normal restitution `eps`.
+    #[serde(default = "one")]
+    pub restitution: f64,
+    /// Particle-wall coefficient of normal restitution `e_w`.
+    #[serde(default = "one")]
+    pub wall_restitution: f64,
+}
+
+impl Default for ContactSpec {
+    fn default() -> Self {
+        Self {
+            restitution: 1.0,
+            wall_restitution: 1.0,
+        }
+    }
+}
+
+/// Capillary bridges (MODEL.md 3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CapillarySpec {
+    #[serde(default)]
+    pub model: CapillaryModel,
+    /// Rupture separation of the surfaces, `s_crit` (thin-thread default 0.0711 d).
+    #[serde(default)]
+    pub s_crit: Option<f64>,
+    /// Bridge rupture energy `E_cb` (default `F_B s_crit` with `F_B = 4 m g`).
+    #[serde(default)]
+    pub e_cb: Option<f64>,
+    /// Which kinetic energy pays for a rupture (MODEL.md 3.2).
+    #[serde(default)]
+    pub rupture_rule: RuptureRule,
+}
+
+impl Default for CapillarySpec {
+    fn default() -> Self {
+        Self {
+            model: CapillaryModel::None,
+            s_crit: None,
+            e_cb: None,
+            rupture_rule: RuptureRule::ReducedMass,
+        }
+    }
+}
+
+/// Which capillary model acts between the grains.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CapillaryModel {
+    /// Dry grains.
+    #[default]
+    None,
+    /// The hysteretic square well of MODEL.md 3.2 (event-driven engine).
+    ThinThread,
+}
+
+/// The energy criterion at `s = s_crit` (MODEL.md 3.2).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RuptureRule {
+    /// `1/2 mu (v_ij . n)^2 > E_cb` with `mu = m/2`; a rupture removes exactly `E_cb`.
+    #[default]
+    ReducedMass,
+    /// The thesis appendix A: `1/2 m (v_ij . n)^2 > E_cb`; a rupture removes `E_cb / 2`.
+    ThesisAppendix,
+}
+
+/// Driving of the container. Only `none` exists so far (the shaker and shear are later issues).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveSpec {
+    #[serde(default)]
+    pub kind: DriveKind,
+}
+
+/// The kind of drive.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DriveKind {
+    #[default]
+    None,
+}
+
+/// Initial state: a regular lattice filled from the floor up, Gaussian velocities.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSpec {
+    /// Granular temperature `T_g` in units of `m g d` (or absolute units without gravity).
+    #[serde(default)]
+    pub temperature: Option<f64>,
+    /// Granular temperature in units of `E_cb` (needs capillary bridges).
+    #[serde(default)]
+    pub temperature_over_ecb: Option<f64>,
+    /// Lattice spacing in units of the largest diameter (>= 1; default 1.01).
+    #[serde(default = "default_lattice_spacing")]
+    pub lattice_spacing: f64,
+    /// Seed of the random number generator (sizes and velocities).
+    #[serde(default)]
+    pub seed: u64,
+}
+
+/// How long to run and how often to sample.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    /// Simulated time, in units of `sqrt(d/g)` (or of the scene's own time unit).
+    pub duration: f64,
+    /// Interval between samples of the observables (0: only at the end).
+    #[serde(default)]
+    pub sample_interval: f64,
+    /// Optional cap on the number of processed events.
+    #[serde(default)]
+    pub max_events: Option<u64>,
+}
+
+/// Accuracy and safety knobs of the event-driven engine.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EngineSpec {
+    /// TC model (Luding & McNamara 1998): a collision within `tc` of either particle's previous
+    /// collision is elastic. 0 (default) disables it.
+    #[serde(default = "default_tc")]
+    pub tc: f64,
+    /// Rebound floor: an inelastic collision never separates slower than this (collapse remedy
+    /// for beds resting on a floor; the energy it adds is booked). 0 disables it.
+    #[serde(default = "default_min_rebound")]
+    pub min_rebound_speed: f64,
+    /// Largest overlap (in units of `d`) that the sanity check tolerates.
+    #[serde(default = "default_overlap_tolerance")]
+    pub overlap_tolerance: f64,
+    /// Cell edge of the neighbour grid; 0 chooses the smallest legal one automatically.
+    #[serde(default)]
+    pub cell_size: f64,
+}
+
+impl Default for EngineSpec {
+    fn default() -> Self {
+        Self {
+            tc: default_tc(),
+            min_rebound_speed: default_min_rebound(),
+            overlap_tolerance: default_overlap_tolerance(),
+            cell_size: 0.0,
+        }
+    }
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn default_gravity() -> f64 {
+    1.0
+}
+fn default_lattice_spacing() -> f64 {
+    1.01
+}
+fn default_tc() -> f64 {
+    0.0
+}
+fn default_min_rebound() -> f64 {
+    1e-3
+}
+fn default_overlap_tolerance() -> f64 {
+    1e-6
+}
+
+/// Thin-thread default rupture separation (MODEL.md 1).
+pub const DEFAULT_S_CRIT: f64 = 0.0711;
+/// Default bridge force in units of `m g` (MODEL.md 1): `E_cb = F_B s_crit`.
+pub const DEFAULT_BRIDGE_FORCE_OVER_MG: f64 = 4.0;
+
+impl Scene {
+    /// Parses and validates a scene; `origin` names the file in error messages.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::parse(origin, e))?;
+        scene.validate(origin)?;
+        Ok(scene)
+    }
+
+    /// Reads, parses and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(&origin, e))?;
+        Self::from_toml_str(&text, &origin)
+    }
+
+    /// Boundary per axis, with the default filled in.
+    pub fn boundaries(&self) -> Vec<Boundary> {
+        match &self.container.boundary {
+            Some(b) => b.clone(),
+            None => {
+                let mut b = vec![Boundary::Periodic; self.dimension];
+                b[self.dimension - 1] = Boundary::Wall;
+                b
+            }
+        }
+    }
+
+    /// Whether capillary bridges exist in this scene.
+    pub fn is_wet(&self) -> bool {
+        self.capillary.model != CapillaryModel::None
+    }
+
+    /// Rupture separation `s_crit` (0 for dry scenes).
+    pub fn s_crit(&self) -> f64 {
+        if !self.is_wet() {
+            return 0.0;
+        }
+        self.capillary.s_crit.unwrap_or(DEFAULT_S_CRIT * self.particles.diameter)
+    }
+
+    /// Bridge energy `E_cb` (0 for dry scenes); default `F_B s_crit`, `F_B = 4 m g`.
+    pub fn e_cb(&self) -> f64 {
+        if !self.is_wet() {
+            return 0.0;
+        }
+        self.capillary.e_cb.unwrap_or(
+            DEFAULT_BRIDGE_FORCE_OVER_MG * self.particles.mass * self.gravity * self.s_crit(),
+        )
+    }
+
+    /// Smallest and largest diameter (MODEL.md Eq. 2.22: `d (1 -+ sqrt(3) sigma_p)`).
+    pub fn diameter_range(&self) -> (f64, f64) {
+        crate::physics::size::diameter_range(
+            self.particles.diameter,
+            self.particles.polydispersity,
+        )
+    }
+
+    /// Initial granular temperature in absolute units.
+    pub fn initial_temperature(&self) -> f64 {
+        match (
+            self.initial.temperature,
+            self.initial.temperature_over_ecb,
+        ) {
+            (Some(t), _) => t,
+            (None, Some(r)) => r * self.e_cb(),
+            (None, None) => 0.0,
+        }
+    }
+}

@@ -1,0 +1,305 @@
+//! Scene validation: every value a simulation cannot use is rejected at load, with an error that
+//! names the file, the key and the allowed range.
+
+use super::{Boundary, CapillaryModel, Scene, lattice};
+use crate::physics::size::MAX_POLYDISPERSITY;
+use std::fmt;
+
+/// Why a scene was rejected.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    /// The file (or other origin) the scene came from.
+    pub origin: String,
+    /// The offending key in dotted form (`particles.polydispersity`), empty for syntax errors.
+    pub key: String,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+impl SceneError {
+    pub(crate) fn new(origin: &str, key: &str, message: impl Into<String>) -> Self {
+        Self {
+            origin: origin.to_string(),
+            key: key.to_string(),
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn parse(origin: &str, err: toml::de::Error) -> Self {
+        // The TOML error already says "unknown field `x`, expected one of ..." or
+        // "invalid type: ..., expected ..." and points at the line.
+        Self::new(origin, "", err.to_string().trim_end().to_string())
+    }
+
+    pub(crate) fn io(origin: &str, err: std::io::Error) -> Self {
+        Self::new(origin, "", format!("cannot read the scene file: {err}"))
+    }
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}: {}", self.origin, self.message)
+        } else {
+            write!(f, "{}: key `{}`: {}", self.origin, self.key, self.message)
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// Checks `lo <= value <= hi` (bounds may be open) and formats the range into the error.
+struct Check<'a> {
+    origin: &'a str,
+}
+
+impl Check<'_> {
+    fn err(&self, key: &str, msg: String) -> SceneError {
+        SceneError::new(self.origin, key, msg)
+    }
+
+    fn finite(&self, key: &str, v: f64) -> Result<(), SceneError> {
+        if v.is_finite() {
+            Ok(())
+        } else {
+            Err(self.err(key, format!("= {v} is not a finite number")))
+        }
+    }
+
+    fn positive(&self, key: &str, v: f64) -> Result<(), SceneError> {
+        self.finite(key, v)?;
+        if v > 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(key, format!("= {v} is out of range: must be > 0")))
+        }
+    }
+
+    fn non_negative(&self, key: &str, v: f64) -> Result<(), SceneError> {
+        self.finite(key, v)?;
+        if v >= 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(key, format!("= {v} is out of range: must be >= 0")))
+        }
+    }
+
+    fn closed(&self, key: &str, v: f64, lo: f64, hi: f64, hi_text: &str) -> Result<(), SceneError> {
+        self.finite(key, v)?;
+        if (lo..=hi).contains(&v) {
+            Ok(())
+        } else {
+            Err(self.err(
+                key,
+                format!("= {v} is out of range: must be in [{lo}, {hi_text}]"),
+            ))
+        }
+    }
+}
+
+impl Scene {
+    /// Validates every key; `origin` names the file in the error.
+    pub fn validate(&self, origin: &str) -> Result<(), SceneError> {
+        let c = Check { origin };
+        let dim = self.dimension;
+        if dim != 2 && dim != 3 {
+            return Err(c.err("dimension", format!("= {dim} is not allowed: must be 2 or 3")));
+        }
+        c.non_negative("gravity", self.gravity)?;
+
+        // Box.
+        let size = &self.container.size;
+        if size.len() != dim {
+            return Err(c.err(
+                "box.size",
+                format!(
+                    "has {} entries: a {dim}D scene needs exactly {dim} (lateral sizes, then height)",
+                    size.len()
+                ),
+            ));
+        }
+        for (k, &l) in size.iter().enumerate() {
+            c.positive(&format!("box.size[{k}]"), l)?;
+        }
+        if let Some(b) = &self.container.boundary {
+            if b.len() != dim {
+                return Err(c.err(
+                    "box.boundary",
+                    format!("has {} entries: a {dim}D scene needs exactly {dim}", b.len()),
+                ));
+            }
+        }
+        let boundaries = self.boundaries();
+        if self.gravity > 0.0 && boundaries[dim - 1] != Boundary::Wall {
+            return Err(c.err(
+                &format!("box.boundary[{}]", dim - 1),
+                "= \"periodic\" is not allowed with gravity: the vertical axis needs walls \
+                 (\"wall\"), or set gravity = 0"
+                    .to_string(),
+            ));
+        }
+
+        // Particles.
+        let p = &self.particles;
+        if p.count == 0 {
+            return Err(c.err("particles.count", "= 0 is out of range: must be >= 1".into()));
+        }
+        c.positive("particles.diameter", p.diameter)?;
+        c.positive("particles.mass", p.mass)?;
+        c.closed(
+            "particles.polydispersity",
+            p.polydispersity,
+            0.0,
+            MAX_POLYDISPERSITY,
+            "1/sqrt(3) = 0.5774",
+        )?;
+        if p.polydispersity >= MAX_POLYDISPERSITY {
+            return Err(c.err(
+                "particles.polydispersity",
+                format!(
+                    "= {} is out of range: must be < 1/sqrt(3) = 0.5774 (the smallest diameter \
+                     would be zero)",
+                    p.polydispersity
+                ),
+            ));
+        }
+
+        // Contact.
+        c.closed("contact.restitution", self.contact.restitution, 0.0, 1.0, "1")?;
+        c.closed(
+            "contact.wall_restitution",
+            self.contact.wall_restitution,
+            0.0,
+            1.0,
+            "1",
+        )?;
+
+        // Capillary bridges.
+        let cap = &self.capillary;
+        match cap.model {
+            CapillaryModel::None => {
+                if cap.s_crit.is_some() || cap.e_cb.is_some() {
+                    let key = if cap.s_crit.is_some() {
+                        "capillary.s_crit"
+                    } else {
+                        "capillary.e_cb"
+                    };
+                    return Err(c.err(
+                        key,
+                        "is set but capillary.model = \"none\": choose model = \"thin_thread\" or \
+                         remove the key"
+                            .into(),
+                    ));
+                }
+            }
+            CapillaryModel::ThinThread => {
+                if let Some(s) = cap.s_crit {
+                    c.positive("capillary.s_crit", s)?;
+                }
+                if let Some(e) = cap.e_cb {
+                    c.non_negative("capillary.e_cb", e)?;
+                }
+                if cap.e_cb.is_none() && self.gravity == 0.0 {
+                    return Err(c.err(
+                        "capillary.e_cb",
+                        "is required without gravity (its default 4 m g s_crit would be 0): \
+                         give a value >= 0"
+                            .into(),
+                    ));
+                }
+            }
+        }
+
+        // Initial state.
+        let init = &self.initial;
+        match (init.temperature, init.temperature_over_ecb) {
+            (Some(_), Some(_)) => {
+                return Err(c.err(
+                    "initial.temperature_over_ecb",
+                    "and initial.temperature are both set: give exactly one".into(),
+                ));
+            }
+            (None, None) => {
+                return Err(c.err(
+                    "initial.temperature",
+                    "is missing: give initial.temperature (>= 0) or, for wet scenes, \
+                     initial.temperature_over_ecb (>= 0)"
+                        .into(),
+                ));
+            }
+            (Some(t), None) => c.non_negative("initial.temperature", t)?,
+            (None, Some(r)) => {
+                c.non_negative("initial.temperature_over_ecb", r)?;
+                if !self.is_wet() || self.e_cb() <= 0.0 {
+                    return Err(c.err(
+                        "initial.temperature_over_ecb",
+                        "needs capillary bridges with E_cb > 0: use initial.temperature for dry \
+                         scenes"
+                            .into(),
+                    ));
+                }
+            }
+        }
+        if !(init.lattice_spacing.is_finite() && init.lattice_spacing >= 1.0) {
+            return Err(c.err(
+                "initial.lattice_spacing",
+                format!(
+                    "= {} is out of range: must be >= 1 (units of the largest diameter)",
+                    init.lattice_spacing
+                ),
+            ));
+        }
+        let (_, d_max) = self.diameter_range();
+        let spacing = init.lattice_spacing * d_max;
+        let fit = lattice::capacity(size, spacing);
+        if p.count > fit {
+            return Err(c.err(
+                "particles.count",
+                format!(
+                    "= {} is out of range: at most {fit} particles fit on the initial lattice of \
+                     spacing {spacing:.4} in this box",
+                    p.count
+                ),
+            ));
+        }
+
+        // Run.
+        c.positive("run.duration", self.run.duration)?;
+        c.non_negative("run.sample_interval", self.run.sample_interval)?;
+        if self.run.max_events == Some(0) {
+            return Err(c.err("run.max_events", "= 0 is out of range: must be >= 1".into()));
+        }
+
+        // Engine.
+        let e = &self.engine;
+        c.non_negative("engine.tc", e.tc)?;
+        c.non_negative("engine.min_rebound_speed", e.min_rebound_speed)?;
+        c.positive("engine.overlap_tolerance", e.overlap_tolerance)?;
+        c.non_negative("engine.cell_size", e.cell_size)?;
+        let range = d_max + self.s_crit();
+        if e.cell_size > 0.0 && e.cell_size < range {
+            return Err(c.err(
+                "engine.cell_size",
+                format!(
+                    "= {} is out of range: must be 0 (automatic) or >= d_max + s_crit = {range:.4}",
+                    e.cell_size
+                ),
+            ));
+        }
+        let cell = e.cell_size.max(range);
+        for k in 0..dim {
+            if boundaries[k] == Boundary::Periodic && size[k] < 3.0 * cell {
+                return Err(c.err(
+                    &format!("box.size[{k}]"),
+                    format!(
+                        "= {} is out of range: a periodic axis must be >= 3 cells = {:.4} \
+                         (cell edge >= d_max + s_crit)",
+                        size[k],
+                        3.0 * cell
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

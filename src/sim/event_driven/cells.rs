@@ -1,0 +1,162 @@
+//! The neighbour grid: the box divided into cells no smaller than the interaction range
+//! (largest diameter plus `s_crit`), with doubly linked per-cell particle lists so that a
+//! particle changes cell in `O(1)` without allocation.
+
+const NONE: u32 = u32::MAX;
+
+/// A regular grid of `n[0] x ... x n[D-1]` cells.
+#[derive(Debug, Clone)]
+pub struct CellGrid<const D: usize> {
+    /// Cells per axis.
+    pub n: [i32; D],
+    /// Cell edge per axis.
+    pub width: [f64; D],
+    /// Whether each axis wraps around.
+    pub periodic: [bool; D],
+    head: Vec<u32>,
+    next: Vec<u32>,
+    prev: Vec<u32>,
+}
+
+impl<const D: usize> CellGrid<D> {
+    /// A grid over a box of edges `size` with cells no smaller than `min_edge`.
+    pub fn new(size: [f64; D], periodic: [bool; D], min_edge: f64, particles: usize) -> Self {
+        let mut n = [1i32; D];
+        let mut width = [0.0; D];
+        for k in 0..D {
+            n[k] = ((size[k] / min_edge).floor() as i32).max(1);
+            width[k] = size[k] / n[k] as f64;
+        }
+        let total: usize = n.iter().map(|&x| x as usize).product();
+        Self {
+            n,
+            width,
+            periodic,
+            head: vec![NONE; total],
+            next: vec![NONE; particles],
+            prev: vec![NONE; particles],
+        }
+    }
+
+    /// The cell containing coordinate `x` (clamped into the grid).
+    pub fn locate(&self, x: &[f64; D]) -> [i32; D] {
+        let mut c = [0i32; D];
+        for k in 0..D {
+            c[k] = ((x[k] / self.width[k]).floor() as i32).clamp(0, self.n[k] - 1);
+        }
+        c
+    }
+
+    /// Linear index of a cell.
+    #[inline]
+    pub fn linear(&self, c: &[i32; D]) -> usize {
+        let mut idx = 0usize;
+        for k in (0..D).rev() {
+            idx = idx * self.n[k] as usize + c[k] as usize;
+        }
+        idx
+    }
+
+    /// The cell `c + offset`, wrapped on periodic axes; `None` past a wall.
+    #[inline]
+    pub fn shifted(&self, c: &[i32; D], offset: &[i32; D]) -> Option<usize> {
+        let mut s = [0i32; D];
+        for k in 0..D {
+            let mut v = c[k] + offset[k];
+            if v < 0 || v >= self.n[k] {
+                if !self.periodic[k] {
+                    return None;
+                }
+                v = v.rem_euclid(self.n[k]);
+            }
+            s[k] = v;
+        }
+        Some(self.linear(&s))
+    }
+
+    /// Inserts particle `i` into cell `cell`.
+    #[inline]
+    pub fn insert(&mut self, i: usize, cell: usize) {
+        let h = self.head[cell];
+        self.next[i] = h;
+        self.prev[i] = NONE;
+        if h != NONE {
+            self.prev[h as usize] = i as u32;
+        }
+        self.head[cell] = i as u32;
+    }
+
+    /// Removes particle `i` from cell `cell`.
+    #[inline]
+    pub fn remove(&mut self, i: usize, cell: usize) {
+        let (p, nx) = (self.prev[i], self.next[i]);
+        if p != NONE {
+            self.next[p as usize] = nx;
+        } else {
+            self.head[cell] = nx;
+        }
+        if nx != NONE {
+            self.prev[nx as usize] = p;
+        }
+    }
+
+    /// Calls `f(j)` for every particle in cell `cell`.
+    #[inline]
+    pub fn for_each_in(&self, cell: usize, mut f: impl FnMut(usize)) {
+        let mut j = self.head[cell];
+        while j != NONE {
+            f(j as usize);
+            j = self.next[j as usize];
+        }
+    }
+
+    /// All `3^D` neighbour offsets (including the cell itself).
+    pub fn neighbour_offsets() -> Vec<[i32; D]> {
+        let mut out = Vec::new();
+        let total = 3usize.pow(D as u32);
+        for m in 0..total {
+            let mut o = [0i32; D];
+            let mut r = m;
+            for k in 0..D {
+                o[k] = (r % 3) as i32 - 1;
+                r /= 3;
+            }
+            out.push(o);
+        }
+        out
+    }
+
+    /// Whether every periodic axis has at least three cells (so the `3^D` neighbourhood holds no
+    /// cell twice).
+    pub fn neighbourhood_is_distinct(&self) -> bool {
+        (0..D).all(|k| !self.periodic[k] || self.n[k] >= 3)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lists_follow_insert_and_remove() {
+        let mut g = CellGrid::<2>::new([10.0, 5.0], [true, false], 1.1, 5);
+        assert_eq!(g.n, [9, 4]);
+        for i in 0..5 {
+            g.insert(i, 3);
+        }
+        g.remove(2, 3);
+        g.remove(4, 3);
+        g.insert(4, 7);
+        let mut seen = vec![];
+        g.for_each_in(3, |j| seen.push(j));
+        seen.sort();
+        assert_eq!(seen, vec![0, 1, 3]);
+        let mut seen7 = vec![];
+        g.for_each_in(7, |j| seen7.push(j));
+        assert_eq!(seen7, vec![4]);
+        // Periodic wrap in x, wall in z.
+        assert_eq!(g.shifted(&[0, 0], &[-1, 0]), Some(g.linear(&[8, 0])));
+        assert_eq!(g.shifted(&[0, 0], &[0, -1]), None);
+        assert_eq!(CellGrid::<3>::neighbour_offsets().len(), 27);
+    }
+}

@@ -1,0 +1,879 @@
+//! The event-driven engine for hard disks (`D = 2`) and spheres (`D = 3`).
+//!
+//! Effects are chosen once, at scene start, as compile-time parameters: `GRAV` (parabolic
+//! flights and the vertical-root formulas) and `WET` (thin-thread bridges and their
+//! bookkeeping). A dry or gravity-free scene therefore runs code in which the other branches do
+//! not exist.
+//!
+//! Structure (after DynamO's split of event sources, written anew):
+//! - delayed states: particle `i` stores its position and velocity at its own time `t_loc[i]`;
+//!   it is brought to the current time only when an event involves it;
+//! - per particle three candidate events: the earliest pair event (collision, or the bonded-pair
+//!   event at `s = s_crit`), the next cell crossing, and the next wall collision; the queue
+//!   ([`EventQueue`]) holds the earliest of the three;
+//! - lazy invalidation: each particle counts its velocity changes; a pair event remembers the
+//!   partner's count at prediction time and is re-predicted when popped if the count moved on;
+//! - cell crossings keep the pair event and only scan the newly adjacent slab of cells.
+//!
+//! Numerical safeguards (each tested in `tests/engine_safeguards.rs`):
+//! - overlap: an overlapping pair (or particle beyond a wall) that approaches collides now; one
+//!   that separates is left alone (MODEL.md 6, B.5.6);
+//! - collapse: the TC model and the rebound floor of `physics::contact::rebound_speed`;
+//! - round-off at cell faces: crossing times are clamped at zero and cells are tracked by index,
+//!   never recomputed from positions.
+
+use super::cells::CellGrid;
+use super::queue::EventQueue;
+use crate::physics::capillary::{WellOutcome, well_outcome};
+use crate::physics::contact::rebound_speed;
+use crate::physics::flight::{linear_time_to_plane, parabola_time_down, parabola_time_up};
+use crate::scene::{Boundary, RuptureRule, Scene};
+use crate::sim::initial::initial_state;
+use nalgebra::SVector;
+use serde::Serialize;
+
+/// A point or velocity in `D` dimensions.
+pub type Vector<const D: usize> = SVector<f64, D>;
+
+const NONE: u32 = u32::MAX;
+/// Most bridges one particle may hold (a guard: more means the packing is unphysical).
+pub const MAX_BONDS: usize = 16;
+
+/// Kind of a pair event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PairKind {
+    Collide,
+    Well,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct PairEvent {
+    time: f64,
+    partner: u32,
+    partner_count: u32,
+    kind: PairKind,
+}
+
+impl PairEvent {
+    const NEVER: PairEvent = PairEvent {
+        time: f64::INFINITY,
+        partner: NONE,
+        partner_count: 0,
+        kind: PairKind::Collide,
+    };
+}
+
+/// A cell crossing or wall event: when, along which axis, in which direction.
+#[derive(Debug, Clone, Copy)]
+struct PlaneEvent {
+    time: f64,
+    axis: u8,
+    up: bool,
+}
+
+impl PlaneEvent {
+    const NEVER: PlaneEvent = PlaneEvent {
+        time: f64::INFINITY,
+        axis: 0,
+        up: false,
+    };
+}
+
+/// Events processed, by kind.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct EventCounts {
+    pub pair_collisions: u64,
+    pub wall_collisions: u64,
+    pub cell_crossings: u64,
+    pub bridge_formations: u64,
+    pub bridge_ruptures: u64,
+    pub well_bounces: u64,
+    /// Pair events found stale when popped (partner changed course) and re-predicted.
+    pub invalidated: u64,
+}
+
+impl EventCounts {
+    /// All processed events, stale ones included.
+    pub fn total(&self) -> u64 {
+        self.pair_collisions
+            + self.wall_collisions
+            + self.cell_crossings
+            + self.well_bounces
+            + self.bridge_ruptures
+            + self.invalidated
+    }
+}
+
+/// Energy bookkeeping in units of `m g d` (or the scene's energy unit).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct EnergyLedger {
+    pub kinetic: f64,
+    pub potential: f64,
+    /// Net energy removed by particle-particle and particle-wall restitution.
+    pub dissipated_restitution: f64,
+    /// Energy removed by bridge ruptures (`E_cb` each with the reduced-mass rule).
+    pub dissipated_ruptures: f64,
+    /// Energy added by the rebound floor (collapse remedy); zero in elastic systems.
+    pub injected_by_rebound_floor: f64,
+}
+
+impl EnergyLedger {
+    /// `kinetic + potential + dissipated - injected`: constant in exact arithmetic.
+    pub fn total_accounted(&self) -> f64 {
+        self.kinetic + self.potential + self.dissipated_restitution + self.dissipated_ruptures
+            - self.injected_by_rebound_floor
+    }
+}
+
+/// Runtime parameters of the engine, derived once from the scene.
+#[derive(Debug, Clone)]
+struct Params<const D: usize> {
+    size: [f64; D],
+    periodic: [bool; D],
+    gravity: f64,
+    mass: f64,
+    eps: f64,
+    e_wall: f64,
+    tc: f64,
+    min_rebound: f64,
+    s_crit: f64,
+    e_cb: f64,
+    rule: RuptureRule,
+    overlap_tolerance: f64,
+}
+
+/// The event-driven simulation state.
+#[derive(Debug, Clone)]
+pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
+    p: Params<D>,
+    /// Current simulation time (time of the last processed event).
+    time: f64,
+    pos: Vec<Vector<D>>,
+    vel: Vec<Vector<D>>,
+    t_loc: Vec<f64>,
+    radius: Vec<f64>,
+    count: Vec<u32>,
+    last_collision: Vec<f64>,
+    cell: Vec<[i32; D]>,
+    grid: CellGrid<D>,
+    offsets: Vec<[i32; D]>,
+    bonds: Vec<u32>,
+    bond_len: Vec<u8>,
+    pair_ev: Vec<PairEvent>,
+    cross_ev: Vec<PlaneEvent>,
+    wall_ev: Vec<PlaneEvent>,
+    queue: EventQueue,
+    counts: EventCounts,
+    dissipated_restitution: f64,
+    dissipated_ruptures: f64,
+    injected: f64,
+    /// Events whose time lay before the current time by more than round-off (must stay 0).
+    time_reversals: u64,
+}
+
+impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
+    /// Builds the engine for a validated scene: initial state, cells, first predictions.
+    pub fn new(scene: &Scene) -> Self {
+        assert_eq!(scene.dimension, D, "scene dimension does not match the engine");
+        assert_eq!(GRAV, scene.gravity > 0.0, "gravity flag does not match the scene");
+        assert_eq!(WET, scene.is_wet(), "capillary flag does not match the scene");
+        let init = initial_state(scene);
+        let n = init.radius.len();
+        let mut size = [0.0; D];
+        let mut periodic = [false; D];
+        let boundaries = scene.boundaries();
+        for k in 0..D {
+            size[k] = scene.container.size[k];
+            periodic[k] = boundaries[k] == Boundary::Periodic;
+        }
+        let (_, d_max) = scene.diameter_range();
+        let range = (d_max + scene.s_crit()).max(scene.engine.cell_size);
+        let grid = CellGrid::new(size, periodic, range, n);
+        assert!(
+            grid.neighbourhood_is_distinct(),
+            "box too small for the cell grid (validation should have caught this)"
+        );
+        let p = Params {
+            size,
+            periodic,
+            gravity: scene.gravity,
+            mass: scene.particles.mass,
+            eps: scene.contact.restitution,
+            e_wall: scene.contact.wall_restitution,
+            tc: scene.engine.tc,
+            min_rebound: scene.engine.min_rebound_speed,
+            s_crit: scene.s_crit(),
+            e_cb: scene.e_cb(),
+            rule: scene.capillary.rupture_rule,
+            overlap_tolerance: scene.engine.overlap_tolerance,
+        };
+        let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
+        let mut engine = Self {
+            p,
+            time: 0.0,
+            pos: init.position.iter().map(to_vec).collect(),
+            vel: init.velocity.iter().map(to_vec).collect(),
+            t_loc: vec![0.0; n],
+            radius: init.radius,
+            count: vec![0; n],
+            last_collision: vec![f64::NEG_INFINITY; n],
+            cell: vec![[0; D]; n],
+            grid,
+            offsets: CellGrid::<D>::neighbour_offsets(),
+            bonds: if WET { vec![NONE; n * MAX_BONDS] } else { Vec::new() },
+            bond_len: if WET { vec![0; n] } else { Vec::new() },
+            pair_ev: vec![PairEvent::NEVER; n],
+            cross_ev: vec![PlaneEvent::NEVER; n],
+            wall_ev: vec![PlaneEvent::NEVER; n],
+            queue: EventQueue::new(n),
+            counts: EventCounts::default(),
+            dissipated_restitution: 0.0,
+            dissipated_ruptures: 0.0,
+            injected: 0.0,
+            time_reversals: 0,
+        };
+        for i in 0..n {
+            let x: [f64; D] = engine.pos[i].into();
+            let c = engine.grid.locate(&x);
+            engine.cell[i] = c;
+            let lin = engine.grid.linear(&c);
+            engine.grid.insert(i, lin);
+        }
+        for i in 0..n {
+            engine.predict_all(i);
+        }
+        engine
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.radius.len()
+    }
+
+    /// Whether the system holds no particle.
+    pub fn is_empty(&self) -> bool {
+        self.radius.is_empty()
+    }
+
+    /// Current simulation time.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Events processed so far.
+    pub fn counts(&self) -> &EventCounts {
+        &self.counts
+    }
+
+    // ----- free flight -------------------------------------------------------------------
+
+    /// Position and velocity of particle `i` at time `t` (without storing them).
+    #[inline]
+    fn state_at(&self, i: usize, t: f64) -> (Vector<D>, Vector<D>) {
+        let dt = t - self.t_loc[i];
+        let mut x = self.pos[i] + self.vel[i] * dt;
+        let mut v = self.vel[i];
+        if GRAV {
+            x[D - 1] -= 0.5 * self.p.gravity * dt * dt;
+            v[D - 1] -= self.p.gravity * dt;
+        }
+        (x, v)
+    }
+
+    /// Brings particle `i` to time `t`.
+    #[inline]
+    fn advance(&mut self, i: usize, t: f64) {
+        if self.t_loc[i] != t {
+            let (x, v) = self.state_at(i, t);
+            self.pos[i] = x;
+            self.vel[i] = v;
+            self.t_loc[i] = t;
+        }
+    }
+
+    /// Brings every particle to the current time (before sampling).
+    pub fn synchronize(&mut self) {
+        let t = self.time;
+        for i in 0..self.len() {
+            self.advance(i, t);
+        }
+    }
+
+    /// Minimum-image separation vector `a - b`.
+    #[inline]
+    fn min_image(&self, mut r: Vector<D>) -> Vector<D> {
+        for k in 0..D {
+            if self.p.periodic[k] {
+                let l = self.p.size[k];
+                r[k] -= l * (r[k] / l).round();
+            }
+        }
+        r
+    }
+
+    // ----- bonds -------------------------------------------------------------------------
+
+    #[inline]
+    fn bonded(&self, i: usize, j: usize) -> bool {
+        if !WET {
+            return false;
+        }
+        let base = i * MAX_BONDS;
+        self.bonds[base..base + self.bond_len[i] as usize]
+            .iter()
+            .any(|&b| b as usize == j)
+    }
+
+    fn add_bond_half(&mut self, i: usize, j: usize) {
+        let len = self.bond_len[i] as usize;
+        assert!(
+            len < MAX_BONDS,
+            "particle {i} would hold more than {MAX_BONDS} bridges at t = {}: packing is unphysical",
+            self.time
+        );
+        self.bonds[i * MAX_BONDS + len] = j as u32;
+        self.bond_len[i] += 1;
+    }
+
+    fn remove_bond_half(&mut self, i: usize, j: usize) {
+        let base = i * MAX_BONDS;
+        let len = self.bond_len[i] as usize;
+        if let Some(k) = self.bonds[base..base + len].iter().position(|&b| b as usize == j) {
+            self.bonds[base + k] = self.bonds[base + len - 1];
+            self.bonds[base + len - 1] = NONE;
+            self.bond_len[i] -= 1;
+        }
+    }
+
+    /// Number of capillary bridges.
+    pub fn bridge_count(&self) -> usize {
+        if !WET {
+            return 0;
+        }
+        self.bond_len.iter().map(|&l| l as usize).sum::<usize>() / 2
+    }
+
+    // ----- prediction --------------------------------------------------------------------
+
+    /// Earliest pair event of `i` (already at time `t`) with `j`, as an absolute time.
+    #[inline]
+    fn predict_pair(&self, i: usize, j: usize, t: f64) -> Option<(f64, PairKind)> {
+        let (xj, vj) = self.state_at(j, t);
+        let r = self.min_image(self.pos[i] - xj);
+        // All particles feel the same gravity, so relative motion is a straight line (Eq. B.3).
+        let v = self.vel[i] - vj;
+        let b = r.dot(&v);
+        let rr = r.norm_squared();
+        let sigma = self.radius[i] + self.radius[j];
+        let vv = v.norm_squared();
+        let mut best: Option<(f64, PairKind)> = None;
+        if b < 0.0 {
+            let c = rr - sigma * sigma;
+            if c <= 0.0 {
+                // Overlap safeguard: approaching while overlapping collides now.
+                return Some((t, PairKind::Collide));
+            }
+            let disc = b * b - vv * c;
+            if disc > 0.0 {
+                // Smaller root of |r + v dt| = sigma, cancellation-free.
+                best = Some((t + c / (-b + disc.sqrt()), PairKind::Collide));
+            }
+        }
+        if WET && self.bonded(i, j) {
+            let lambda = sigma + self.p.s_crit;
+            let c = rr - lambda * lambda;
+            let dt = if c >= 0.0 {
+                // At or beyond the well edge (round-off): separating means the event is now.
+                if b > 0.0 { Some(0.0) } else { None }
+            } else if vv > 0.0 {
+                // Larger root of |r + v dt| = sigma + s_crit (c < 0, so disc > b^2).
+                let disc = b * b - vv * c;
+                Some(if b > 0.0 {
+                    -c / (b + disc.sqrt())
+                } else {
+                    (-b + disc.sqrt()) / vv
+                })
+            } else {
+                None
+            };
+            if let Some(dt) = dt {
+                let tw = t + dt;
+                if best.is_none_or(|(tb, _)| tw < tb) {
+                    best = Some((tw, PairKind::Well));
+                }
+            }
+        }
+        best
+    }
+
+    /// Scans the cells at `offsets` around particle `i` and lowers its pair event if a partner
+    /// there gives an earlier one.
+    fn scan_cells(&mut self, i: usize, offsets: &[[i32; D]]) {
+        let t = self.time;
+        let c = self.cell[i];
+        let mut best = self.pair_ev[i];
+        for o in offsets {
+            let Some(cell) = self.grid.shifted(&c, o) else {
+                continue;
+            };
+            self.grid.for_each_in(cell, |j| {
+                if j == i {
+                    return;
+                }
+                if let Some((tj, kind)) = self.predict_pair(i, j, t) {
+                    if tj < best.time {
+                        best = PairEvent {
+                            time: tj,
+                            partner: j as u32,
+                            partner_count: self.count[j],
+                            kind,
+                        };
+                    }
+                }
+            });
+        }
+        self.pair_ev[i] = best;
+    }
+
+    /// Next crossing of a face of `i`'s cell (particle at the current time).
+    fn predict_crossing(&self, i: usize) -> PlaneEvent {
+        let c = self.cell[i];
+        let mut best = PlaneEvent::NEVER;
+        for k in 0..D {
+            let w = self.grid.width[k];
+            let lo = c[k] as f64 * w;
+            let hi = lo + w;
+            let has_lo = self.p.periodic[k] || c[k] > 0;
+            let has_hi = self.p.periodic[k] || c[k] < self.grid.n[k] - 1;
+            let (x, v) = (self.pos[i][k], self.vel[i][k]);
+            let (t_up, t_down) = if GRAV && k == D - 1 {
+                let g = self.p.gravity;
+                (
+                    if has_hi { parabola_time_up(x, v, g, hi) } else { f64::INFINITY },
+                    if has_lo { parabola_time_down(x, v, g, lo) } else { f64::INFINITY },
+                )
+            } else {
+                (
+                    if has_hi { linear_time_to_plane(x, v, hi, true) } else { f64::INFINITY },
+                    if has_lo { linear_time_to_plane(x, v, lo, false) } else { f64::INFINITY },
+                )
+            };
+            if t_up < best.time {
+                best = PlaneEvent { time: t_up, axis: k as u8, up: true };
+            }
+            if t_down < best.time {
+                best = PlaneEvent { time: t_down, axis: k as u8, up: false };
+            }
+        }
+        best.time += self.time;
+        best
+    }
+
+    /// Next collision of `i` with a flat static wall.
+    fn predict_wall(&self, i: usize) -> PlaneEvent {
+        let mut best = PlaneEvent::NEVER;
+        let r = self.radius[i];
+        for k in 0..D {
+            if self.p.periodic[k] {
+                continue;
+            }
+            let (x, v) = (self.pos[i][k], self.vel[i][k]);
+            let (floor, lid) = (r, self.p.size[k] - r);
+            let (t_lid, t_floor) = if GRAV && k == D - 1 {
+                let g = self.p.gravity;
+                (parabola_time_up(x, v, g, lid), parabola_time_down(x, v, g, floor))
+            } else {
+                (linear_time_to_plane(x, v, lid, true), linear_time_to_plane(x, v, floor, false))
+            };
+            if t_lid < best.time {
+                best = PlaneEvent { time: t_lid, axis: k as u8, up: true };
+            }
+            if t_floor < best.time {
+                best = PlaneEvent { time: t_floor, axis: k as u8, up: false };
+            }
+        }
+        best.time += self.time;
+        best
+    }
+
+    #[inline]
+    fn queue_key(&self, i: usize) -> f64 {
+        self.pair_ev[i]
+            .time
+            .min(self.cross_ev[i].time)
+            .min(self.wall_ev[i].time)
+    }
+
+    /// Full re-prediction of every event of `i` (which must be at the current time).
+    fn predict_all(&mut self, i: usize) {
+        self.advance(i, self.time);
+        self.pair_ev[i] = PairEvent::NEVER;
+        let offsets = std::mem::take(&mut self.offsets);
+        self.scan_cells(i, &offsets);
+        self.offsets = offsets;
+        self.cross_ev[i] = self.predict_crossing(i);
+        self.wall_ev[i] = self.predict_wall(i);
+        self.queue.update(i, self.queue_key(i));
+    }
+
+    // ----- event processing --------------------------------------------------------------
+
+    /// Processes every event up to time `t_end` (exclusive of later ones) or until `max_events`
+    /// events have been processed in total; leaves the clock at `t_end` if it got there.
+    /// Returns `false` if it stopped on the event cap.
+    pub fn run_until(&mut self, t_end: f64, max_events: Option<u64>) -> bool {
+        loop {
+            if let Some(cap) = max_events {
+                if self.counts.total() >= cap {
+                    return false;
+                }
+            }
+            let Some((i, t)) = self.queue.min() else {
+                break;
+            };
+            if t > t_end {
+                break;
+            }
+            self.step(i, t);
+        }
+        self.time = self.time.max(t_end);
+        true
+    }
+
+    /// Processes the earliest event, which belongs to particle `i` at time `t`.
+    fn step(&mut self, i: usize, t: f64) {
+        if t < self.time {
+            // Predictions are clamped at "now", so this only reflects round-off in the clock.
+            if t < self.time - 1e-12 * self.time.abs().max(1.0) {
+                self.time_reversals += 1;
+            }
+        } else {
+            self.time = t;
+        }
+        let pair = self.pair_ev[i];
+        let cross = self.cross_ev[i];
+        let wall = self.wall_ev[i];
+        if pair.time <= cross.time && pair.time <= wall.time {
+            let j = pair.partner as usize;
+            if self.count[j] != pair.partner_count {
+                self.counts.invalidated += 1;
+                self.predict_all(i);
+                return;
+            }
+            match pair.kind {
+                PairKind::Collide => self.collide(i, j),
+                PairKind::Well => self.well_edge(i, j),
+            }
+            self.predict_all(i);
+            self.predict_all(j);
+        } else if wall.time <= cross.time {
+            self.wall_collision(i, wall.axis as usize, wall.up);
+            self.predict_all(i);
+        } else {
+            self.cross_cell(i, cross.axis as usize, cross.up);
+        }
+    }
+
+    /// Unit normal from `j` to `i` and the normal relative velocity, both particles at `time`.
+    fn normal(&mut self, i: usize, j: usize) -> (Vector<D>, f64) {
+        let t = self.time;
+        self.advance(i, t);
+        self.advance(j, t);
+        let r = self.min_image(self.pos[i] - self.pos[j]);
+        let n = r / r.norm();
+        let u = (self.vel[i] - self.vel[j]).dot(&n);
+        (n, u)
+    }
+
+    /// Pair collision with restitution (Eqs. 2.3-2.4) and, if wet, bridge formation.
+    fn collide(&mut self, i: usize, j: usize) {
+        let (n, u) = self.normal(i, j);
+        self.count[i] = self.count[i].wrapping_add(1);
+        self.count[j] = self.count[j].wrapping_add(1);
+        if u < 0.0 {
+            let since = self.time - self.last_collision[i].max(self.last_collision[j]);
+            let u_out = rebound_speed(-u, self.p.eps, since, self.p.tc, self.p.min_rebound);
+            // Change of the normal relative velocity, shared equally (equal masses).
+            let du = u_out - u;
+            self.vel[i] += n * (0.5 * du);
+            self.vel[j] -= n * (0.5 * du);
+            // mu/2 (u^2 - u_out^2) with mu = m/2; negative if the rebound floor added energy.
+            let de = 0.25 * self.p.mass * (u * u - u_out * u_out);
+            if de >= 0.0 {
+                self.dissipated_restitution += de;
+            } else {
+                self.injected -= de;
+            }
+            self.last_collision[i] = self.time;
+            self.last_collision[j] = self.time;
+        }
+        self.counts.pair_collisions += 1;
+        if WET && !self.bonded(i, j) {
+            self.add_bond_half(i, j);
+            self.add_bond_half(j, i);
+            self.counts.bridge_formations += 1;
+        }
+    }
+
+    /// Bonded pair at `s = s_crit`: bounce or rupture (MODEL.md 3.2).
+    fn well_edge(&mut self, i: usize, j: usize) {
+        let (n, u) = self.normal(i, j);
+        self.count[i] = self.count[i].wrapping_add(1);
+        self.count[j] = self.count[j].wrapping_add(1);
+        if u <= 0.0 {
+            // Already turning back (round-off at the well edge): nothing to do.
+            self.counts.well_bounces += 1;
+            return;
+        }
+        let u_out = match well_outcome(self.p.mass, u, self.p.e_cb, self.p.rule) {
+            WellOutcome::Bounce(u_out) => {
+                self.counts.well_bounces += 1;
+                u_out
+            }
+            WellOutcome::Rupture {
+                new_normal_speed,
+                energy,
+            } => {
+                self.remove_bond_half(i, j);
+                self.remove_bond_half(j, i);
+                self.dissipated_ruptures += energy;
+                self.counts.bridge_ruptures += 1;
+                new_normal_speed
+            }
+        };
+        let du = u_out - u;
+        self.vel[i] += n * (0.5 * du);
+        self.vel[j] -= n * (0.5 * du);
+    }
+
+    /// Collision with a flat static wall: `v_n' = e_w v_n` reversed.
+    fn wall_collision(&mut self, i: usize, axis: usize, lid: bool) {
+        self.advance(i, self.time);
+        self.count[i] = self.count[i].wrapping_add(1);
+        self.counts.wall_collisions += 1;
+        let v = self.vel[i][axis];
+        let approaching = if lid { v > 0.0 } else { v < 0.0 };
+        if !approaching {
+            return;
+        }
+        let since = self.time - self.last_collision[i];
+        let u_out = rebound_speed(v.abs(), self.p.e_wall, since, self.p.tc, self.p.min_rebound);
+        // m/2 (v^2 - u_out^2): e_w-restitution loss, negative if the rebound floor added energy.
+        let de = 0.5 * self.p.mass * (v * v - u_out * u_out);
+        if de >= 0.0 {
+            self.dissipated_restitution += de;
+        } else {
+            self.injected -= de;
+        }
+        self.vel[i][axis] = if lid { -u_out } else { u_out };
+        self.last_collision[i] = self.time;
+    }
+
+    /// Moves `i` into the neighbouring cell and scans only the newly adjacent slab.
+    fn cross_cell(&mut self, i: usize, axis: usize, up: bool) {
+        self.advance(i, self.time);
+        self.counts.cell_crossings += 1;
+        let old = self.grid.linear(&self.cell[i]);
+        self.grid.remove(i, old);
+        let n = self.grid.n[axis];
+        let c = &mut self.cell[i][axis];
+        if up {
+            *c += 1;
+            if *c == n {
+                *c = 0;
+                self.pos[i][axis] -= self.p.size[axis];
+            }
+        } else {
+            *c -= 1;
+            if *c < 0 {
+                *c = n - 1;
+                self.pos[i][axis] += self.p.size[axis];
+            }
+        }
+        let new = self.grid.linear(&self.cell[i]);
+        self.grid.insert(i, new);
+        // The far slab of the new neighbourhood: offset +-1 along `axis`, anything across.
+        let step = if up { 1 } else { -1 };
+        let mut slab = [[0i32; D]; 9];
+        let mut m = 0;
+        for o in &self.offsets {
+            if o[axis] == step {
+                slab[m] = *o;
+                m += 1;
+            }
+        }
+        self.scan_cells(i, &slab[..m]);
+        self.cross_ev[i] = self.predict_crossing(i);
+        self.queue.update(i, self.queue_key(i));
+    }
+
+    // ----- observables -------------------------------------------------------------------
+
+    /// Energy bookkeeping at the current time (synchronizes all particles).
+    pub fn energy(&mut self) -> EnergyLedger {
+        self.synchronize();
+        let m = self.p.mass;
+        let kinetic = self.vel.iter().map(|v| 0.5 * m * v.norm_squared()).sum();
+        let potential = if GRAV {
+            self.pos.iter().map(|x| m * self.p.gravity * x[D - 1]).sum()
+        } else {
+            0.0
+        };
+        EnergyLedger {
+            kinetic,
+            potential,
+            dissipated_restitution: self.dissipated_restitution,
+            dissipated_ruptures: self.dissipated_ruptures,
+            injected_by_rebound_floor: self.injected,
+        }
+    }
+
+    /// Total momentum (synchronizes all particles).
+    pub fn momentum(&mut self) -> Vector<D> {
+        self.synchronize();
+        self.vel.iter().fold(Vector::<D>::zeros(), |a, v| a + v) * self.p.mass
+    }
+
+    /// Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (Eq. 3.2, `k_B = 1`, `f_d = D`).
+    pub fn granular_temperature(&mut self) -> f64 {
+        self.synchronize();
+        let n = self.len() as f64;
+        let mean = self.vel.iter().fold(Vector::<D>::zeros(), |a, v| a + v) / n;
+        let mean_sq = self.vel.iter().map(|v| v.norm_squared()).sum::<f64>() / n;
+        self.p.mass * (mean_sq - mean.norm_squared()) / D as f64
+    }
+
+    /// Positions at the current time (synchronizes all particles).
+    pub fn positions(&mut self) -> Vec<Vector<D>> {
+        self.synchronize();
+        self.pos.clone()
+    }
+
+    /// Velocities at the current time (synchronizes all particles).
+    pub fn velocities(&mut self) -> Vec<Vector<D>> {
+        self.synchronize();
+        self.vel.clone()
+    }
+
+    /// Particle radii.
+    pub fn radii(&self) -> &[f64] {
+        &self.radius
+    }
+
+    /// Number of events processed out of time order beyond round-off (must be 0).
+    pub fn time_reversals(&self) -> u64 {
+        self.time_reversals
+    }
+
+    /// Overwrites the velocity of particle `i` at the current time (tests and set-ups) and
+    /// re-predicts its events.
+    pub fn set_velocity(&mut self, i: usize, v: Vector<D>) {
+        self.advance(i, self.time);
+        self.vel[i] = v;
+        self.count[i] = self.count[i].wrapping_add(1);
+        self.predict_all(i);
+    }
+
+    /// Overwrites the position of particle `i` at the current time (tests and set-ups), moves
+    /// it to its new cell and re-predicts its events.
+    pub fn set_position(&mut self, i: usize, x: Vector<D>) {
+        self.advance(i, self.time);
+        let old = self.grid.linear(&self.cell[i]);
+        self.grid.remove(i, old);
+        self.pos[i] = x;
+        let arr: [f64; D] = x.into();
+        self.cell[i] = self.grid.locate(&arr);
+        let new = self.grid.linear(&self.cell[i]);
+        self.grid.insert(i, new);
+        self.count[i] = self.count[i].wrapping_add(1);
+        self.predict_all(i);
+    }
+
+    /// Re-predicts every particle (after a batch of `set_*` calls).
+    pub fn repredict_everything(&mut self) {
+        for i in 0..self.len() {
+            self.predict_all(i);
+        }
+    }
+
+    // ----- invariants --------------------------------------------------------------------
+
+    /// Checks the invariants: finite numbers, every particle inside the box, no pair overlap
+    /// and no bonded pair beyond `s_crit` by more than the tolerance, every particle in the
+    /// cell its position says, no event scheduled in the past, no time reversal. Returns a
+    /// description of the first violation.
+    pub fn sanity_check(&mut self) -> Result<(), String> {
+        self.synchronize();
+        let tol = self.p.overlap_tolerance;
+        let t = self.time;
+        if self.time_reversals > 0 {
+            return Err(format!("{} events processed out of time order", self.time_reversals));
+        }
+        for i in 0..self.len() {
+            let (x, v) = (self.pos[i], self.vel[i]);
+            if !x.iter().chain(v.iter()).all(|a| a.is_finite()) {
+                return Err(format!("particle {i} has a non-finite state at t = {t}"));
+            }
+            for k in 0..D {
+                let (lo, hi) = if self.p.periodic[k] {
+                    (0.0, self.p.size[k])
+                } else {
+                    (self.radius[i], self.p.size[k] - self.radius[i])
+                };
+                if x[k] < lo - tol || x[k] > hi + tol {
+                    return Err(format!(
+                        "particle {i} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
+                        x[k]
+                    ));
+                }
+                let w = self.grid.width[k];
+                let c = self.cell[i][k] as f64;
+                if x[k] < c * w - tol || x[k] > (c + 1.0) * w + tol {
+                    return Err(format!(
+                        "particle {i} at {} is not in its cell {} along axis {k} at t = {t}",
+                        x[k], c
+                    ));
+                }
+            }
+            if self.queue.key(i) < t - 1e-9 * t.abs().max(1.0) {
+                return Err(format!("particle {i} has an event in the past: {} < {t}", self.queue.key(i)));
+            }
+        }
+        for i in 0..self.len() {
+            for o in &self.offsets {
+                let Some(cell) = self.grid.shifted(&self.cell[i], o) else {
+                    continue;
+                };
+                let mut err = None;
+                self.grid.for_each_in(cell, |j| {
+                    if j <= i || err.is_some() {
+                        return;
+                    }
+                    let r = self.min_image(self.pos[i] - self.pos[j]).norm();
+                    let sigma = self.radius[i] + self.radius[j];
+                    if r < sigma - tol {
+                        err = Some(format!("particles {i} and {j} overlap by {} at t = {t}", sigma - r));
+                    }
+                });
+                if let Some(e) = err {
+                    return Err(e);
+                }
+            }
+            if WET {
+                let base = i * MAX_BONDS;
+                for &j in &self.bonds[base..base + self.bond_len[i] as usize] {
+                    let j = j as usize;
+                    let r = self.min_image(self.pos[i] - self.pos[j]).norm();
+                    let lambda = self.radius[i] + self.radius[j] + self.p.s_crit;
+                    if r > lambda + tol {
+                        return Err(format!("bonded pair {i}-{j} stretched beyond s_crit by {} at t = {t}", r - lambda));
+                    }
+                    if !self.bonded(j, i) {
+                        return Err(format!("bond {i}-{j} is one-sided"));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

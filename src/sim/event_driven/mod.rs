@@ -1,0 +1,7 @@
+//! Event-driven molecular dynamics of hard disks and spheres with thin-thread bridges.
+
+pub mod cells;
+pub mod engine;
+pub mod queue;
+
+pub use engine::{Engine, EnergyLedger, EventCounts, Vector};
