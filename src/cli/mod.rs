@@ -1,1 +1,142 @@
-pub fn x() {}
+//! The command line: `wetgran simulate` and `wetgran bench`. `src/main.rs` only calls [`main`].
+
+use crate::bench;
+use crate::scene::Scene;
+use crate::sim::{RunReport, run_scene};
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Phase diagrams of wet granular matter.
+#[derive(Debug, Parser)]
+#[command(name = "wetgran", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run one scene file and print a summary (events by kind, temperature, bridges, energy).
+    Simulate {
+        /// The scene file (TOML); see scenes/ for examples.
+        scene: PathBuf,
+        /// Print the full report as JSON (with the sampled time series) instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Measure the engine's speed on the reference systems and print the figures.
+    Bench {
+        /// Which benchmark: `engine` (collisions/s for the reference systems of the
+        /// performance doc).
+        #[arg(default_value = "engine")]
+        which: String,
+        /// Repetitions per system (the median is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+        /// Scale the run lengths (events per repetition) by this factor.
+        #[arg(long, default_value_t = 1.0)]
+        scale: f64,
+    },
+}
+
+/// Entry point of the binary.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Simulate { scene, json } => {
+            let scene = match Scene::load(&scene) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let report = run_scene(&scene);
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).expect("report serializes")
+                );
+            } else {
+                print!("{}", summary_text(&report));
+            }
+            ExitCode::SUCCESS
+        }
+        Command::Bench {
+            which,
+            repeat,
+            scale,
+        } => match bench::run(&which, repeat.max(1), scale) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+    }
+}
+
+/// Human-readable summary of a run.
+pub fn summary_text(r: &RunReport) -> String {
+    let e = &r.events;
+    let mut s = String::new();
+    use std::fmt::Write;
+    let _ = writeln!(s, "{}D, {} particles", r.dimension, r.particles);
+    let _ = writeln!(
+        s,
+        "simulated time      {:.6}{}",
+        r.simulated_time,
+        if r.stopped_on_event_cap {
+            "  (stopped on run.max_events)"
+        } else {
+            ""
+        }
+    );
+    let _ = writeln!(
+        s,
+        "wall time           {:.3} s  ({:.3e} events/s)",
+        r.wall_seconds,
+        r.events_total as f64 / r.wall_seconds.max(1e-9)
+    );
+    let _ = writeln!(s, "events              {}", r.events_total);
+    let _ = writeln!(s, "  pair collisions   {}", e.pair_collisions);
+    let _ = writeln!(s, "  wall collisions   {}", e.wall_collisions);
+    let _ = writeln!(s, "  cell crossings    {}", e.cell_crossings);
+    let _ = writeln!(s, "  bridge formations {}", e.bridge_formations);
+    let _ = writeln!(s, "  bridge ruptures   {}", e.bridge_ruptures);
+    let _ = writeln!(s, "  well bounces      {}", e.well_bounces);
+    let _ = writeln!(s, "  re-predictions    {}", e.invalidated);
+    let _ = write!(s, "granular temp. T_g  {:.6}", r.granular_temperature);
+    if let Some(x) = r.granular_temperature_over_ecb {
+        let _ = write!(s, "  (T_g/E_cb = {x:.4})");
+    }
+    let _ = writeln!(s);
+    let _ = writeln!(s, "bridges             {}", r.bridges);
+    let (a, b) = (&r.energy_initial, &r.energy_final);
+    let _ = writeln!(s, "energy              initial        final");
+    let _ = writeln!(s, "  kinetic           {:<14.6} {:.6}", a.kinetic, b.kinetic);
+    let _ = writeln!(s, "  potential         {:<14.6} {:.6}", a.potential, b.potential);
+    let _ = writeln!(
+        s,
+        "  dissipated (rest.) {:<13.6} {:.6}",
+        a.dissipated_restitution, b.dissipated_restitution
+    );
+    let _ = writeln!(
+        s,
+        "  dissipated (rupt.) {:<13.6} {:.6}",
+        a.dissipated_ruptures, b.dissipated_ruptures
+    );
+    let _ = writeln!(
+        s,
+        "  added (rebound floor) {:<10.3e} {:.3e}",
+        a.injected_by_rebound_floor, b.injected_by_rebound_floor
+    );
+    let _ = writeln!(
+        s,
+        "  bookkeeping error {:.3e} (relative)",
+        r.energy_bookkeeping_error
+    );
+    s
+}

@@ -358,10 +358,23 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// Earliest pair event of `i` (already at time `t`) with `j`, as an absolute time.
     #[inline]
     fn predict_pair(&self, i: usize, j: usize, t: f64) -> Option<(f64, PairKind)> {
+        self.predict_pair_from(&self.pos[i], &self.vel[i], i, j, t)
+    }
+
+    /// Earliest pair event of `i`, with state `(xi, vi)` at time `t`, with `j`.
+    #[inline]
+    fn predict_pair_from(
+        &self,
+        xi: &Vector<D>,
+        vi: &Vector<D>,
+        i: usize,
+        j: usize,
+        t: f64,
+    ) -> Option<(f64, PairKind)> {
         let (xj, vj) = self.state_at(j, t);
-        let r = self.min_image(self.pos[i] - xj);
+        let r = self.min_image(xi - xj);
         // All particles feel the same gravity, so relative motion is a straight line (Eq. B.3).
-        let v = self.vel[i] - vj;
+        let v = vi - vj;
         let b = r.dot(&v);
         let rr = r.norm_squared();
         let sigma = self.radius[i] + self.radius[j];
@@ -382,12 +395,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         if WET && self.bonded(i, j) {
             let lambda = sigma + self.p.s_crit;
             let c = rr - lambda * lambda;
-            let dt = if c >= 0.0 {
-                // At or beyond the well edge (round-off): separating means the event is now.
-                if b > 0.0 { Some(0.0) } else { None }
+            let dt = if b > 0.0 && c >= 0.0 {
+                // At or beyond the well edge (round-off) and separating: the event is now.
+                Some(0.0)
             } else if vv > 0.0 {
-                // Larger root of |r + v dt| = sigma + s_crit (c < 0, so disc > b^2).
-                let disc = b * b - vv * c;
+                // Larger root of |r + v dt| = sigma + s_crit. Right after a bounce off the well
+                // wall the pair sits on the edge (c may be +round-off) and approaches: the root
+                // is then the next exit, not "none" (regression: bonds stretched past s_crit).
+                let disc = (b * b - vv * c).max(0.0);
                 Some(if b > 0.0 {
                     -c / (b + disc.sqrt())
                 } else {
@@ -794,6 +809,64 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         for i in 0..self.len() {
             self.predict_all(i);
         }
+    }
+
+    /// One line describing the events stored for particle `i` (debugging aid).
+    pub fn describe_particle(&self, i: usize) -> String {
+        let pe = self.pair_ev[i];
+        format!(
+            "i={i} key={:.17} pair=({:.17},{},{:?},count_ok={}) cross={:.17} wall={:.17} cell={:?} bonds={:?}",
+            self.queue.key(i), pe.time, pe.partner, pe.kind,
+            pe.partner != NONE && self.count[pe.partner as usize] == pe.partner_count,
+            self.cross_ev[i].time, self.wall_ev[i].time, self.cell[i],
+            if WET { &self.bonds[i * MAX_BONDS..i * MAX_BONDS + self.bond_len[i] as usize] } else { &[][..] }
+        )
+    }
+
+    /// One line describing the next event (for debugging stalls).
+    pub fn describe_next_event(&self) -> String {
+        let Some((i, t)) = self.queue.min() else {
+            return "no event".into();
+        };
+        let pe = self.pair_ev[i];
+        let (xi, vi) = self.state_at(i, t);
+        let mut s = format!(
+            "t={t:.17} i={i} x={:?} v={:?} pair=({:.17},{},{:?}) cross={:.17} wall={:.17}",
+            xi.as_slice(), vi.as_slice(), pe.time, pe.partner, pe.kind, self.cross_ev[i].time, self.wall_ev[i].time
+        );
+        if pe.partner != NONE {
+            let j = pe.partner as usize;
+            let (xj, vj) = self.state_at(j, t);
+            let r = self.min_image(xi - xj);
+            let s_gap = r.norm() - self.radius[i] - self.radius[j];
+            s += &format!(" | j={j} gap={s_gap:.3e} u={:.3e} bonded={}", (vi - vj).dot(&(r / r.norm())), self.bonded(i, j));
+        }
+        s
+    }
+
+    /// Recomputes every still-valid pair event from the current states and reports the first
+    /// one that disagrees with the stored prediction (debugging aid for lazy invalidation).
+    pub fn check_predictions(&self) -> Result<(), String> {
+        let t = self.time;
+        for i in 0..self.len() {
+            let pe = self.pair_ev[i];
+            if pe.partner == NONE || self.count[pe.partner as usize] != pe.partner_count {
+                continue;
+            }
+            let j = pe.partner as usize;
+            let (xi, vi) = self.state_at(i, t);
+            let now = self.predict_pair_from(&xi, &vi, i, j, t);
+            match now {
+                Some((tn, kind)) if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3) && kind == pe.kind => {}
+                other => {
+                    return Err(format!(
+                        "particle {i}: stored {:?} with {j} at {:.17}, recomputed {other:?} at t={t}",
+                        pe.kind, pe.time
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     // ----- invariants --------------------------------------------------------------------
