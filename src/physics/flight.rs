@@ -64,7 +64,7 @@ mod tests {
         for &(z0, v, plane) in &[(0.5, 2.0, 1.5), (0.5, 0.1, 0.4), (3.0, -1.0, 0.5), (1.0, 3.0, 1.0)] {
             let z = |t: f64| z0 + v * t - 0.5 * g * t * t;
             let tu = parabola_time_up(z0, v, g, plane);
-            if tu.is_finite() {
+            if tu.is_finite() && plane >= z0 {
                 assert!((z(tu) - plane).abs() < 1e-12 && v - g * tu >= 0.0);
             }
             let td = parabola_time_down(z0, v, g, plane);

@@ -23,8 +23,15 @@ pub fn initial_state(scene: &Scene) -> InitialState {
     let dim = scene.dimension;
     let diameters = draw_diameters(&mut rng, p.count, p.diameter, p.polydispersity);
     let (_, d_max) = scene.diameter_range();
-    let spacing = scene.initial.lattice_spacing * d_max;
-    let position = lattice::site_positions(&scene.container.size, spacing, p.count);
+    let min_spacing = scene.initial.lattice_spacing * d_max;
+    let size = &scene.container.size;
+    let from_floor = scene.gravity > 0.0;
+    let spacing = if from_floor {
+        min_spacing
+    } else {
+        lattice::uniform_spacing(size, min_spacing, p.count)
+    };
+    let position = lattice::site_positions(size, spacing, p.count, from_floor);
 
     let temperature = scene.initial_temperature();
     let mut velocity: Vec<Vec<f64>> = (0..p.count)

@@ -667,12 +667,26 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.count[i] = self.count[i].wrapping_add(1);
         self.counts.wall_collisions += 1;
         let v = self.vel[i][axis];
-        let approaching = if lid { v > 0.0 } else { v < 0.0 };
+        // A grain exactly at rest on a floor under gravity is pressed into it: approaching.
+        let floor_under_gravity = GRAV && axis == D - 1 && !lid;
+        let approaching = if lid {
+            v > 0.0
+        } else if floor_under_gravity {
+            v <= 0.0
+        } else {
+            v < 0.0
+        };
         if !approaching {
             return;
         }
         let since = self.time - self.last_collision[i];
-        let u_out = rebound_speed(v.abs(), self.p.e_wall, since, self.p.tc, self.p.min_rebound);
+        let mut u_out =
+            rebound_speed(v.abs(), self.p.e_wall, since, self.p.tc, self.p.min_rebound);
+        if floor_under_gravity {
+            // Rest on a static floor is the one state an event-driven engine cannot represent
+            // (zero-time bounces): no grain leaves the floor slower than the rebound floor.
+            u_out = u_out.max(self.p.min_rebound);
+        }
         // m/2 (v^2 - u_out^2): e_w-restitution loss, negative if the rebound floor added energy.
         let de = 0.5 * self.p.mass * (v * v - u_out * u_out);
         if de >= 0.0 {
