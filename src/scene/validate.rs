@@ -5,6 +5,9 @@ use super::{Boundary, CapillaryModel, Scene, lattice};
 use crate::physics::size::MAX_POLYDISPERSITY;
 use std::fmt;
 
+/// Largest neighbour grid the engine is allowed to allocate (2^28 cells, 1 GiB of list heads).
+const MAX_CELLS: usize = 1 << 28;
+
 /// Why a scene was rejected.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneError {
@@ -27,13 +30,51 @@ impl SceneError {
 
     pub(crate) fn parse(origin: &str, err: toml::de::Error) -> Self {
         // The TOML error already says "unknown field `x`, expected one of ..." or
-        // "invalid type: ..., expected ..." and points at the line.
-        Self::new(origin, "", err.to_string().trim_end().to_string())
+        // "invalid type: ..., expected ..." and points at the line; the dotted key is added.
+        let mut message = err.to_string().trim_end().to_string();
+        for (rust, words) in [
+            ("expected usize", "expected an integer >= 0"),
+            ("expected u64", "expected an integer >= 0"),
+            ("expected f64", "expected a number"),
+        ] {
+            message = message.replace(rust, words);
+        }
+        Self::new(origin, &parse_error_key(&err), message)
     }
 
     pub(crate) fn io(origin: &str, err: std::io::Error) -> Self {
         Self::new(origin, "", format!("cannot read the scene file: {err}"))
     }
+}
+
+/// The dotted key a TOML error belongs to (empty for syntax errors): the table path the
+/// deserializer recorded, plus the field of serde's "unknown field" and "missing field" errors.
+fn parse_error_key(err: &toml::de::Error) -> String {
+    // `toml` prints the recorded path ("in `a.b`") only for an error without source context.
+    let mut bare = err.clone();
+    bare.set_input(None);
+    let bare = bare.to_string();
+    let mut key = bare
+        .trim_end()
+        .lines()
+        .last()
+        .and_then(|l| l.strip_prefix("in `"))
+        .and_then(|l| l.strip_suffix('`'))
+        .unwrap_or("")
+        .to_string();
+    for prefix in ["unknown field `", "missing field `"] {
+        if let Some((field, _)) = err
+            .message()
+            .strip_prefix(prefix)
+            .and_then(|rest| rest.split_once('`'))
+        {
+            if !key.is_empty() {
+                key.push('.');
+            }
+            key.push_str(field);
+        }
+    }
+    key
 }
 
 impl fmt::Display for SceneError {
@@ -58,34 +99,32 @@ impl Check<'_> {
         SceneError::new(self.origin, key, msg)
     }
 
-    fn finite(&self, key: &str, v: f64) -> Result<(), SceneError> {
-        if v.is_finite() {
-            Ok(())
-        } else {
-            Err(self.err(key, format!("= {v} is not a finite number")))
-        }
+    /// `= v is out of range: must be <range>`, with "finite and" for `inf` (TOML allows it).
+    fn out_of_range(&self, key: &str, v: f64, range: &str) -> SceneError {
+        let finite = if v.is_finite() { "" } else { "finite and " };
+        self.err(
+            key,
+            format!("= {v} is out of range: must be {finite}{range}"),
+        )
     }
 
     fn positive(&self, key: &str, v: f64) -> Result<(), SceneError> {
-        self.finite(key, v)?;
-        if v > 0.0 {
+        if v.is_finite() && v > 0.0 {
             Ok(())
         } else {
-            Err(self.err(key, format!("= {v} is out of range: must be > 0")))
+            Err(self.out_of_range(key, v, "> 0"))
         }
     }
 
     fn non_negative(&self, key: &str, v: f64) -> Result<(), SceneError> {
-        self.finite(key, v)?;
-        if v >= 0.0 {
+        if v.is_finite() && v >= 0.0 {
             Ok(())
         } else {
-            Err(self.err(key, format!("= {v} is out of range: must be >= 0")))
+            Err(self.out_of_range(key, v, ">= 0"))
         }
     }
 
     fn closed(&self, key: &str, v: f64, lo: f64, hi: f64, hi_text: &str) -> Result<(), SceneError> {
-        self.finite(key, v)?;
         if (lo..=hi).contains(&v) {
             Ok(())
         } else {
@@ -121,13 +160,13 @@ impl Scene {
         for (k, &l) in size.iter().enumerate() {
             c.positive(&format!("box.size[{k}]"), l)?;
         }
-        if let Some(b) = &self.container.boundary {
-            if b.len() != dim {
-                return Err(c.err(
-                    "box.boundary",
-                    format!("has {} entries: a {dim}D scene needs exactly {dim}", b.len()),
-                ));
-            }
+        if let Some(b) = &self.container.boundary
+            && b.len() != dim
+        {
+            return Err(c.err(
+                "box.boundary",
+                format!("has {} entries: a {dim}D scene needs exactly {dim}", b.len()),
+            ));
         }
         let boundaries = self.boundaries();
         if self.gravity > 0.0 && boundaries[dim - 1] != Boundary::Wall {
@@ -146,19 +185,12 @@ impl Scene {
         }
         c.positive("particles.diameter", p.diameter)?;
         c.positive("particles.mass", p.mass)?;
-        c.closed(
-            "particles.polydispersity",
-            p.polydispersity,
-            0.0,
-            MAX_POLYDISPERSITY,
-            "1/sqrt(3) = 0.5774",
-        )?;
-        if p.polydispersity >= MAX_POLYDISPERSITY {
+        if !(0.0..MAX_POLYDISPERSITY).contains(&p.polydispersity) {
             return Err(c.err(
                 "particles.polydispersity",
                 format!(
-                    "= {} is out of range: must be < 1/sqrt(3) = 0.5774 (the smallest diameter \
-                     would be zero)",
+                    "= {} is out of range: must be in [0, 1/sqrt(3) = 0.5774) (the smallest \
+                     diameter d (1 - sqrt(3) polydispersity) must stay > 0)",
                     p.polydispersity
                 ),
             ));
@@ -241,17 +273,19 @@ impl Scene {
             }
         }
         if !(init.lattice_spacing.is_finite() && init.lattice_spacing >= 1.0) {
-            return Err(c.err(
+            return Err(c.out_of_range(
                 "initial.lattice_spacing",
-                format!(
-                    "= {} is out of range: must be >= 1 (units of the largest diameter)",
-                    init.lattice_spacing
-                ),
+                init.lattice_spacing,
+                ">= 1 (units of the largest diameter)",
             ));
         }
         let (_, d_max) = self.diameter_range();
         let spacing = init.lattice_spacing * d_max;
-        let fit = lattice::capacity(size, spacing);
+        // `lattice::capacity` without its overflow: a huge box holds "very many" sites.
+        let fit = lattice::sites_per_axis(size, spacing)
+            .iter()
+            .try_fold(1usize, |acc, &n| acc.checked_mul(n))
+            .unwrap_or(usize::MAX);
         if p.count > fit {
             return Err(c.err(
                 "particles.count",
@@ -299,6 +333,23 @@ impl Scene {
                     ),
                 ));
             }
+        }
+        // A finite but huge box would make the engine allocate a neighbour grid it cannot hold.
+        let cells: f64 = size.iter().map(|&l| (l / cell).floor().max(1.0)).product();
+        if cells > MAX_CELLS as f64 {
+            let cells = if cells.is_finite() {
+                format!("{cells:.3e}")
+            } else {
+                "over 1e308".to_string()
+            };
+            return Err(c.err(
+                "box.size",
+                format!(
+                    "= {size:?} is out of range: the neighbour grid of cell edge {cell:.4} would \
+                     have {cells} cells, must be at most {MAX_CELLS} cells: use a smaller box or \
+                     a larger engine.cell_size"
+                ),
+            ));
         }
         Ok(())
     }

@@ -1,0 +1,255 @@
+//! Scene validation at load, one test per rule.
+//!
+//! The inputs live next to their expectations: every file in `tests/scenes/bad/` is a complete
+//! scene with exactly one bad value, and carries one or more leading comment lines
+//! `# expect: <fragment>`; loading it must fail with an error whose `Display` starts with the
+//! file's path and contains every fragment (the key, the offending value and the allowed range).
+//! Every file in `tests/scenes/good/` (and every example scene in `scenes/`) must load.
+
+use std::collections::BTreeSet;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use wetgran::scene::Scene;
+
+/// `tests/scenes/<kind>` in the source tree.
+fn scene_dir(kind: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests")
+        .join("scenes")
+        .join(kind)
+}
+
+/// The `.toml` files of a directory, sorted.
+fn toml_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()))
+        .map(|entry| entry.expect("directory entry").path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// The fragments of the `# expect:` lines.
+fn expected_fragments(text: &str) -> Vec<&str> {
+    text.lines()
+        .filter_map(|line| line.strip_prefix("# expect:"))
+        .map(str::trim)
+        .collect()
+}
+
+/// Loads `bad/<name>.toml` and checks that it is rejected with the expected message.
+fn check_bad(name: &str) {
+    let path = scene_dir("bad").join(format!("{name}.toml"));
+    let text =
+        fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let expected = expected_fragments(&text);
+    assert!(
+        !expected.is_empty() && expected.iter().all(|f| !f.is_empty()),
+        "{}: needs at least one non-empty `# expect: <fragment>` line",
+        path.display()
+    );
+    let message = match Scene::load(&path) {
+        Ok(_) => panic!(
+            "{} loaded, but must be rejected with an error containing {expected:?}",
+            path.display()
+        ),
+        Err(e) => e.to_string(),
+    };
+    let origin = format!("{}: ", path.display());
+    assert!(
+        message.starts_with(&origin),
+        "the error does not start with the file name {origin:?}:\n{message}"
+    );
+    let missing: Vec<&str> = expected
+        .iter()
+        .copied()
+        .filter(|f| !message.contains(f))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "the error of {} lacks {missing:?}; the full error:\n{message}",
+        path.display()
+    );
+}
+
+/// One test per file in `tests/scenes/bad/`, named after it; `BAD_SCENES` lists them all.
+macro_rules! bad_scenes {
+    ($($name:ident),* $(,)?) => {
+        const BAD_SCENES: &[&str] = &[$(stringify!($name)),*];
+
+        mod bad {
+            $(
+                #[test]
+                fn $name() {
+                    super::check_bad(stringify!($name));
+                }
+            )*
+        }
+    };
+}
+
+bad_scenes! {
+    // Dimension and gravity.
+    dimension_not_2_or_3,
+    gravity_negative,
+    gravity_infinite,
+    dimension_wrong_type,
+    // Box.
+    box_size_wrong_length,
+    box_size_zero,
+    box_size_negative,
+    box_size_infinite,
+    box_size_too_many_cells,
+    box_size_huge,
+    box_boundary_wrong_length,
+    box_boundary_unknown_kind,
+    periodic_vertical_with_gravity,
+    periodic_axis_too_small,
+    // Particles.
+    count_zero,
+    count_exceeds_lattice,
+    count_wrong_type,
+    count_negative,
+    diameter_negative,
+    diameter_nan,
+    mass_zero,
+    polydispersity_above_max,
+    polydispersity_at_max,
+    polydispersity_negative,
+    // Contact.
+    restitution_above_one,
+    restitution_negative,
+    restitution_nan,
+    wall_restitution_above_one,
+    wall_restitution_negative,
+    // Capillary bridges.
+    capillary_model_unknown,
+    s_crit_zero,
+    s_crit_negative,
+    e_cb_negative,
+    s_crit_with_model_none,
+    e_cb_with_model_none,
+    e_cb_missing_without_gravity,
+    // Initial state.
+    temperature_both_keys,
+    temperature_missing,
+    temperature_negative,
+    temperature_over_ecb_negative,
+    temperature_over_ecb_dry,
+    temperature_over_ecb_zero_ecb,
+    lattice_spacing_below_one,
+    seed_negative,
+    // Run.
+    duration_zero,
+    duration_missing,
+    duration_wrong_type,
+    sample_interval_negative,
+    max_events_zero,
+    // Engine.
+    engine_tc_negative,
+    engine_min_rebound_speed_negative,
+    engine_overlap_tolerance_zero,
+    engine_cell_size_negative,
+    engine_cell_size_too_small,
+    // Format.
+    unknown_key_top_level,
+    unknown_key_in_table,
+    unknown_table,
+    toml_syntax_error,
+}
+
+/// No file in `bad/` is forgotten by `bad_scenes!`, and every listed name has its file.
+#[test]
+fn every_bad_scene_is_listed() {
+    let dir = scene_dir("bad");
+    let on_disk: BTreeSet<String> = toml_files(&dir)
+        .iter()
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    let listed: BTreeSet<String> = BAD_SCENES.iter().map(|s| s.to_string()).collect();
+    assert_eq!(listed.len(), BAD_SCENES.len(), "a name is listed twice");
+    let unlisted: Vec<_> = on_disk.difference(&listed).collect();
+    let absent: Vec<_> = listed.difference(&on_disk).collect();
+    assert!(
+        unlisted.is_empty() && absent.is_empty(),
+        "files in {} not listed in bad_scenes!: {unlisted:?}; listed without a file: {absent:?}",
+        dir.display()
+    );
+    let stray: Vec<_> = fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_none_or(|x| x != "toml"))
+        .collect();
+    assert!(
+        stray.is_empty(),
+        "files without .toml in {}: {stray:?}",
+        dir.display()
+    );
+}
+
+/// Loads every `.toml` file of `dir`; returns how many, panics listing every failure.
+fn assert_all_load(dir: &Path) -> usize {
+    let files = toml_files(dir);
+    let failures: Vec<String> = files
+        .iter()
+        .filter_map(|p| Scene::load(p).err().map(|e| e.to_string()))
+        .collect();
+    assert!(
+        failures.is_empty(),
+        "valid scenes were rejected:\n{}",
+        failures.join("\n")
+    );
+    files.len()
+}
+
+#[test]
+fn good_scenes_load() {
+    let n = assert_all_load(&scene_dir("good"));
+    assert!(n >= 5, "expected at least 5 good scenes, found {n}");
+}
+
+/// The example scenes shipped in `scenes/` are valid too.
+#[test]
+fn example_scenes_load() {
+    let n = assert_all_load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"));
+    assert!(n >= 1, "no example scene found");
+}
+
+/// The good scenes carry no `# expect:` line (it would mean a misplaced bad scene).
+#[test]
+fn good_scenes_expect_nothing() {
+    for path in toml_files(&scene_dir("good")) {
+        let text = fs::read_to_string(&path).unwrap();
+        assert!(
+            expected_fragments(&text).is_empty(),
+            "{} is in good/ but has `# expect:` lines",
+            path.display()
+        );
+    }
+}
+
+/// A file that cannot be read is reported with its path.
+#[test]
+fn missing_file_names_the_path() {
+    let path = scene_dir("bad").join("no_such_scene.toml");
+    let message = Scene::load(&path)
+        .expect_err("a missing file must not load")
+        .to_string();
+    assert!(
+        message.starts_with(&format!("{}: ", path.display())),
+        "{message}"
+    );
+    assert!(message.contains("cannot read the scene file"), "{message}");
+}
+
+/// The error's fields agree with its message: the key of a rejected value is the dotted key.
+#[test]
+fn error_fields_name_origin_and_key() {
+    let path = scene_dir("bad").join("polydispersity_above_max.toml");
+    let err = Scene::load(&path).expect_err("must be rejected");
+    assert_eq!(err.origin, path.display().to_string());
+    assert_eq!(err.key, "particles.polydispersity");
+    assert!(err.message.contains("0.6"), "{}", err.message);
+}
