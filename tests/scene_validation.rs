@@ -149,6 +149,7 @@ bad_scenes! {
     max_events_zero,
     // Engine.
     engine_tc_negative,
+    engine_min_rebound_zero_with_gravity,
     engine_min_rebound_speed_negative,
     engine_overlap_tolerance_zero,
     engine_cell_size_negative,

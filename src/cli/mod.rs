@@ -2,7 +2,8 @@
 
 use crate::bench;
 use crate::scene::Scene;
-use crate::sim::{RunReport, run_scene};
+use crate::sim::{RunReport, run_scene, run_scene_with_progress};
+use std::io::IsTerminal;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -53,7 +54,22 @@ pub fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
-            let report = run_scene(&scene);
+            let report = if std::io::stderr().is_terminal() {
+                let duration = scene.run.duration;
+                let report = run_scene_with_progress(&scene, &mut |smp| {
+                    eprint!(
+                        "\r  t = {:.3} / {duration}  ({:.0}%)  T_g = {:.4e}  bridges = {}   ",
+                        smp.time,
+                        100.0 * smp.time / duration,
+                        smp.granular_temperature,
+                        smp.bridges
+                    );
+                });
+                eprintln!();
+                report
+            } else {
+                run_scene(&scene)
+            };
             if json {
                 println!(
                     "{}",

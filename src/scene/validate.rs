@@ -308,6 +308,16 @@ impl Scene {
         let e = &self.engine;
         c.non_negative("engine.tc", e.tc)?;
         c.non_negative("engine.min_rebound_speed", e.min_rebound_speed)?;
+        if self.gravity > 0.0 && e.min_rebound_speed <= 0.0 {
+            return Err(c.err(
+                "engine.min_rebound_speed",
+                format!(
+                    "= {} is out of range: must be > 0 with gravity (a grain at rest on the \
+                     floor would bounce in zero time forever)",
+                    e.min_rebound_speed
+                ),
+            ));
+        }
         c.positive("engine.overlap_tolerance", e.overlap_tolerance)?;
         c.non_negative("engine.cell_size", e.cell_size)?;
         let range = d_max + self.s_crit();

@@ -45,17 +45,23 @@ pub struct RunReport {
 
 /// Runs a validated scene to the end and reports.
 pub fn run_scene(scene: &Scene) -> RunReport {
+    run_scene_with_progress(scene, &mut |_| {})
+}
+
+/// Runs a validated scene, calling `progress` after every sample (for progress displays).
+pub fn run_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&Sample)) -> RunReport {
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
+    let p = progress;
     match (scene.dimension, grav, wet) {
-        (2, false, false) => run_engine(Engine::<2, false, false>::new(scene), scene),
-        (2, false, true) => run_engine(Engine::<2, false, true>::new(scene), scene),
-        (2, true, false) => run_engine(Engine::<2, true, false>::new(scene), scene),
-        (2, true, true) => run_engine(Engine::<2, true, true>::new(scene), scene),
-        (3, false, false) => run_engine(Engine::<3, false, false>::new(scene), scene),
-        (3, false, true) => run_engine(Engine::<3, false, true>::new(scene), scene),
-        (3, true, false) => run_engine(Engine::<3, true, false>::new(scene), scene),
-        (3, true, true) => run_engine(Engine::<3, true, true>::new(scene), scene),
+        (2, false, false) => run_engine(Engine::<2, false, false>::new(scene), scene, p),
+        (2, false, true) => run_engine(Engine::<2, false, true>::new(scene), scene, p),
+        (2, true, false) => run_engine(Engine::<2, true, false>::new(scene), scene, p),
+        (2, true, true) => run_engine(Engine::<2, true, true>::new(scene), scene, p),
+        (3, false, false) => run_engine(Engine::<3, false, false>::new(scene), scene, p),
+        (3, false, true) => run_engine(Engine::<3, false, true>::new(scene), scene, p),
+        (3, true, false) => run_engine(Engine::<3, true, false>::new(scene), scene, p),
+        (3, true, true) => run_engine(Engine::<3, true, true>::new(scene), scene, p),
         (d, _, _) => panic!("dimension {d} passed validation"),
     }
 }
@@ -74,6 +80,7 @@ fn sample<const D: usize, const G: bool, const W: bool>(e: &mut Engine<D, G, W>)
 fn run_engine<const D: usize, const G: bool, const W: bool>(
     mut engine: Engine<D, G, W>,
     scene: &Scene,
+    progress: &mut dyn FnMut(&Sample),
 ) -> RunReport {
     let start = Instant::now();
     let energy_initial = engine.energy();
@@ -94,10 +101,11 @@ fn run_engine<const D: usize, const G: bool, const W: bool>(
             break;
         }
         samples.push(sample(&mut engine));
-        if cfg!(debug_assertions) {
-            if let Err(e) = engine.sanity_check() {
-                panic!("sanity check failed: {e}");
-            }
+        progress(samples.last().expect("just pushed"));
+        if cfg!(debug_assertions)
+            && let Err(e) = engine.sanity_check()
+        {
+            panic!("sanity check failed: {e}");
         }
         if target >= duration {
             break;

@@ -435,15 +435,15 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 if j == i {
                     return;
                 }
-                if let Some((tj, kind)) = self.predict_pair(i, j, t) {
-                    if tj < best.time {
-                        best = PairEvent {
-                            time: tj,
-                            partner: j as u32,
-                            partner_count: self.count[j],
-                            kind,
-                        };
-                    }
+                if let Some((tj, kind)) = self.predict_pair(i, j, t)
+                    && tj < best.time
+                {
+                    best = PairEvent {
+                        time: tj,
+                        partner: j as u32,
+                        partner_count: self.count[j],
+                        kind,
+                    };
                 }
             });
         }
@@ -538,10 +538,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// Returns `false` if it stopped on the event cap.
     pub fn run_until(&mut self, t_end: f64, max_events: Option<u64>) -> bool {
         loop {
-            if let Some(cap) = max_events {
-                if self.counts.total() >= cap {
-                    return false;
-                }
+            if let Some(cap) = max_events
+                && self.counts.total() >= cap
+            {
+                return false;
             }
             let Some((i, t)) = self.queue.min() else {
                 break;
