@@ -74,6 +74,25 @@ impl<const D: usize> CellGrid<D> {
         Some(self.linear(&s))
     }
 
+    /// Whether every neighbour of cell `c` lies inside the grid without wrapping, so that
+    /// [`Self::interior_neighbour`] may be used (the fast path of neighbour scans).
+    #[inline]
+    pub fn is_interior(&self, c: &[i32; D]) -> bool {
+        (0..D).all(|k| c[k] >= 1 && c[k] <= self.n[k] - 2)
+    }
+
+    /// Linear index of the cell at `offset` from the interior cell with linear index `base`.
+    #[inline]
+    pub fn interior_neighbour(&self, base: usize, offset: &[i32; D]) -> usize {
+        let mut delta = 0isize;
+        let mut stride = 1isize;
+        for k in 0..D {
+            delta += offset[k] as isize * stride;
+            stride *= self.n[k] as isize;
+        }
+        (base as isize + delta) as usize
+    }
+
     /// Inserts particle `i` into cell `cell`.
     #[inline]
     pub fn insert(&mut self, i: usize, cell: usize) {
@@ -158,5 +177,12 @@ mod tests {
         assert_eq!(g.shifted(&[0, 0], &[-1, 0]), Some(g.linear(&[8, 0])));
         assert_eq!(g.shifted(&[0, 0], &[0, -1]), None);
         assert_eq!(CellGrid::<3>::neighbour_offsets().len(), 27);
+        // The interior fast path agrees with the general wrap-aware lookup.
+        let g3 = CellGrid::<3>::new([10.0, 10.0, 10.0], [true, true, false], 1.0, 1);
+        let c = [4, 1, 8];
+        assert!(g3.is_interior(&c) && !g3.is_interior(&[0, 1, 8]) && !g3.is_interior(&[4, 1, 9]));
+        for o in CellGrid::<3>::neighbour_offsets() {
+            assert_eq!(Some(g3.interior_neighbour(g3.linear(&c), &o)), g3.shifted(&c, &o));
+        }
     }
 }

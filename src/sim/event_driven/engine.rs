@@ -125,6 +125,17 @@ impl EnergyLedger {
     }
 }
 
+/// The delayed state of one particle: position and velocity at its own time `t`, and its
+/// radius. Kept together (64 bytes for spheres) because a pair prediction reads all of it.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Body<const D: usize> {
+    x: Vector<D>,
+    t: f64,
+    v: Vector<D>,
+    r: f64,
+}
+
 /// Runtime parameters of the engine, derived once from the scene.
 #[derive(Debug, Clone)]
 struct Params<const D: usize> {
@@ -148,10 +159,8 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
     p: Params<D>,
     /// Current simulation time (time of the last processed event).
     time: f64,
-    pos: Vec<Vector<D>>,
-    vel: Vec<Vector<D>>,
-    t_loc: Vec<f64>,
-    radius: Vec<f64>,
+    /// Per-particle state, one cache line per sphere (see [`Body`]).
+    body: Vec<Body<D>>,
     count: Vec<u32>,
     last_collision: Vec<f64>,
     cell: Vec<[i32; D]>,
@@ -211,10 +220,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let mut engine = Self {
             p,
             time: 0.0,
-            pos: init.position.iter().map(to_vec).collect(),
-            vel: init.velocity.iter().map(to_vec).collect(),
-            t_loc: vec![0.0; n],
-            radius: init.radius,
+            body: (0..n)
+                .map(|i| Body {
+                    x: to_vec(&init.position[i]),
+                    t: 0.0,
+                    v: to_vec(&init.velocity[i]),
+                    r: init.radius[i],
+                })
+                .collect(),
             count: vec![0; n],
             last_collision: vec![f64::NEG_INFINITY; n],
             cell: vec![[0; D]; n],
@@ -233,7 +246,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             time_reversals: 0,
         };
         for i in 0..n {
-            let x: [f64; D] = engine.pos[i].into();
+            let x: [f64; D] = engine.body[i].x.into();
             let c = engine.grid.locate(&x);
             engine.cell[i] = c;
             let lin = engine.grid.linear(&c);
@@ -247,12 +260,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
 
     /// Number of particles.
     pub fn len(&self) -> usize {
-        self.radius.len()
+        self.body.len()
     }
 
     /// Whether the system holds no particle.
     pub fn is_empty(&self) -> bool {
-        self.radius.is_empty()
+        self.body.is_empty()
     }
 
     /// Current simulation time.
@@ -270,9 +283,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// Position and velocity of particle `i` at time `t` (without storing them).
     #[inline]
     fn state_at(&self, i: usize, t: f64) -> (Vector<D>, Vector<D>) {
-        let dt = t - self.t_loc[i];
-        let mut x = self.pos[i] + self.vel[i] * dt;
-        let mut v = self.vel[i];
+        let dt = t - self.body[i].t;
+        let mut x = self.body[i].x + self.body[i].v * dt;
+        let mut v = self.body[i].v;
         if GRAV {
             x[D - 1] -= 0.5 * self.p.gravity * dt * dt;
             v[D - 1] -= self.p.gravity * dt;
@@ -283,11 +296,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// Brings particle `i` to time `t`.
     #[inline]
     fn advance(&mut self, i: usize, t: f64) {
-        if self.t_loc[i] != t {
+        if self.body[i].t != t {
             let (x, v) = self.state_at(i, t);
-            self.pos[i] = x;
-            self.vel[i] = v;
-            self.t_loc[i] = t;
+            self.body[i].x = x;
+            self.body[i].v = v;
+            self.body[i].t = t;
         }
     }
 
@@ -300,12 +313,18 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     }
 
     /// Minimum-image separation vector `a - b`.
+    /// Positions on periodic axes stay within a cell of `[0, L)` (crossings wrap them), so
+    /// separations lie in `(-1.5 L, 1.5 L)` and one conditional shift suffices.
     #[inline]
     fn min_image(&self, mut r: Vector<D>) -> Vector<D> {
         for k in 0..D {
             if self.p.periodic[k] {
-                let l = self.p.size[k];
-                r[k] -= l * (r[k] / l).round();
+                let (l, half) = (self.p.size[k], 0.5 * self.p.size[k]);
+                if r[k] > half {
+                    r[k] -= l;
+                } else if r[k] < -half {
+                    r[k] += l;
+                }
             }
         }
         r
@@ -358,7 +377,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// Earliest pair event of `i` (already at time `t`) with `j`, as an absolute time.
     #[inline]
     fn predict_pair(&self, i: usize, j: usize, t: f64) -> Option<(f64, PairKind)> {
-        self.predict_pair_from(&self.pos[i], &self.vel[i], i, j, t)
+        self.predict_pair_from(&self.body[i].x, &self.body[i].v, i, j, t)
     }
 
     /// Earliest pair event of `i`, with state `(xi, vi)` at time `t`, with `j`.
@@ -377,7 +396,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let v = vi - vj;
         let b = r.dot(&v);
         let rr = r.norm_squared();
-        let sigma = self.radius[i] + self.radius[j];
+        let sigma = self.body[i].r + self.body[j].r;
         let vv = v.norm_squared();
         let mut best: Option<(f64, PairKind)> = None;
         if b < 0.0 {
@@ -427,9 +446,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let t = self.time;
         let c = self.cell[i];
         let mut best = self.pair_ev[i];
+        let interior = self.grid.is_interior(&c);
+        let base = self.grid.linear(&c);
         for o in offsets {
-            let Some(cell) = self.grid.shifted(&c, o) else {
-                continue;
+            let cell = if interior {
+                self.grid.interior_neighbour(base, o)
+            } else {
+                match self.grid.shifted(&c, o) {
+                    Some(cell) => cell,
+                    None => continue,
+                }
             };
             self.grid.for_each_in(cell, |j| {
                 if j == i {
@@ -460,7 +486,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             let hi = lo + w;
             let has_lo = self.p.periodic[k] || c[k] > 0;
             let has_hi = self.p.periodic[k] || c[k] < self.grid.n[k] - 1;
-            let (x, v) = (self.pos[i][k], self.vel[i][k]);
+            let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
             let (t_up, t_down) = if GRAV && k == D - 1 {
                 let g = self.p.gravity;
                 (
@@ -487,12 +513,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// Next collision of `i` with a flat static wall.
     fn predict_wall(&self, i: usize) -> PlaneEvent {
         let mut best = PlaneEvent::NEVER;
-        let r = self.radius[i];
+        let r = self.body[i].r;
         for k in 0..D {
             if self.p.periodic[k] {
                 continue;
             }
-            let (x, v) = (self.pos[i][k], self.vel[i][k]);
+            let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
             let (floor, lid) = (r, self.p.size[k] - r);
             let (t_lid, t_floor) = if GRAV && k == D - 1 {
                 let g = self.p.gravity;
@@ -594,9 +620,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let t = self.time;
         self.advance(i, t);
         self.advance(j, t);
-        let r = self.min_image(self.pos[i] - self.pos[j]);
+        let r = self.min_image(self.body[i].x - self.body[j].x);
         let n = r / r.norm();
-        let u = (self.vel[i] - self.vel[j]).dot(&n);
+        let u = (self.body[i].v - self.body[j].v).dot(&n);
         (n, u)
     }
 
@@ -610,8 +636,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             let u_out = rebound_speed(-u, self.p.eps, since, self.p.tc, self.p.min_rebound);
             // Change of the normal relative velocity, shared equally (equal masses).
             let du = u_out - u;
-            self.vel[i] += n * (0.5 * du);
-            self.vel[j] -= n * (0.5 * du);
+            self.body[i].v += n * (0.5 * du);
+            self.body[j].v -= n * (0.5 * du);
             // mu/2 (u^2 - u_out^2) with mu = m/2; negative if the rebound floor added energy.
             let de = 0.25 * self.p.mass * (u * u - u_out * u_out);
             if de >= 0.0 {
@@ -657,8 +683,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             }
         };
         let du = u_out - u;
-        self.vel[i] += n * (0.5 * du);
-        self.vel[j] -= n * (0.5 * du);
+        self.body[i].v += n * (0.5 * du);
+        self.body[j].v -= n * (0.5 * du);
     }
 
     /// Collision with a flat static wall: `v_n' = e_w v_n` reversed.
@@ -666,7 +692,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.advance(i, self.time);
         self.count[i] = self.count[i].wrapping_add(1);
         self.counts.wall_collisions += 1;
-        let v = self.vel[i][axis];
+        let v = self.body[i].v[axis];
         // A grain exactly at rest on a floor under gravity is pressed into it: approaching.
         let floor_under_gravity = GRAV && axis == D - 1 && !lid;
         let approaching = if lid {
@@ -694,7 +720,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         } else {
             self.injected -= de;
         }
-        self.vel[i][axis] = if lid { -u_out } else { u_out };
+        self.body[i].v[axis] = if lid { -u_out } else { u_out };
         self.last_collision[i] = self.time;
     }
 
@@ -710,13 +736,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             *c += 1;
             if *c == n {
                 *c = 0;
-                self.pos[i][axis] -= self.p.size[axis];
+                self.body[i].x[axis] -= self.p.size[axis];
             }
         } else {
             *c -= 1;
             if *c < 0 {
                 *c = n - 1;
-                self.pos[i][axis] += self.p.size[axis];
+                self.body[i].x[axis] += self.p.size[axis];
             }
         }
         let new = self.grid.linear(&self.cell[i]);
@@ -742,9 +768,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     pub fn energy(&mut self) -> EnergyLedger {
         self.synchronize();
         let m = self.p.mass;
-        let kinetic = self.vel.iter().map(|v| 0.5 * m * v.norm_squared()).sum();
+        let kinetic = self.body.iter().map(|b| 0.5 * m * b.v.norm_squared()).sum();
         let potential = if GRAV {
-            self.pos.iter().map(|x| m * self.p.gravity * x[D - 1]).sum()
+            self.body.iter().map(|b| m * self.p.gravity * b.x[D - 1]).sum()
         } else {
             0.0
         };
@@ -760,33 +786,33 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// Total momentum (synchronizes all particles).
     pub fn momentum(&mut self) -> Vector<D> {
         self.synchronize();
-        self.vel.iter().fold(Vector::<D>::zeros(), |a, v| a + v) * self.p.mass
+        self.body.iter().fold(Vector::<D>::zeros(), |a, b| a + b.v) * self.p.mass
     }
 
     /// Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (Eq. 3.2, `k_B = 1`, `f_d = D`).
     pub fn granular_temperature(&mut self) -> f64 {
         self.synchronize();
         let n = self.len() as f64;
-        let mean = self.vel.iter().fold(Vector::<D>::zeros(), |a, v| a + v) / n;
-        let mean_sq = self.vel.iter().map(|v| v.norm_squared()).sum::<f64>() / n;
+        let mean = self.body.iter().fold(Vector::<D>::zeros(), |a, b| a + b.v) / n;
+        let mean_sq = self.body.iter().map(|b| b.v.norm_squared()).sum::<f64>() / n;
         self.p.mass * (mean_sq - mean.norm_squared()) / D as f64
     }
 
     /// Positions at the current time (synchronizes all particles).
     pub fn positions(&mut self) -> Vec<Vector<D>> {
         self.synchronize();
-        self.pos.clone()
+        self.body.iter().map(|b| b.x).collect()
     }
 
     /// Velocities at the current time (synchronizes all particles).
     pub fn velocities(&mut self) -> Vec<Vector<D>> {
         self.synchronize();
-        self.vel.clone()
+        self.body.iter().map(|b| b.v).collect()
     }
 
     /// Particle radii.
-    pub fn radii(&self) -> &[f64] {
-        &self.radius
+    pub fn radii(&self) -> Vec<f64> {
+        self.body.iter().map(|b| b.r).collect()
     }
 
     /// Number of events processed out of time order beyond round-off (must be 0).
@@ -798,7 +824,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// re-predicts its events.
     pub fn set_velocity(&mut self, i: usize, v: Vector<D>) {
         self.advance(i, self.time);
-        self.vel[i] = v;
+        self.body[i].v = v;
         self.count[i] = self.count[i].wrapping_add(1);
         self.predict_all(i);
     }
@@ -809,7 +835,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.advance(i, self.time);
         let old = self.grid.linear(&self.cell[i]);
         self.grid.remove(i, old);
-        self.pos[i] = x;
+        self.body[i].x = x;
         let arr: [f64; D] = x.into();
         self.cell[i] = self.grid.locate(&arr);
         let new = self.grid.linear(&self.cell[i]);
@@ -852,7 +878,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             let j = pe.partner as usize;
             let (xj, vj) = self.state_at(j, t);
             let r = self.min_image(xi - xj);
-            let s_gap = r.norm() - self.radius[i] - self.radius[j];
+            let s_gap = r.norm() - self.body[i].r - self.body[j].r;
             s += &format!(" | j={j} gap={s_gap:.3e} u={:.3e} bonded={}", (vi - vj).dot(&(r / r.norm())), self.bonded(i, j));
         }
         s
@@ -897,7 +923,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             return Err(format!("{} events processed out of time order", self.time_reversals));
         }
         for i in 0..self.len() {
-            let (x, v) = (self.pos[i], self.vel[i]);
+            let (x, v) = (self.body[i].x, self.body[i].v);
             if !x.iter().chain(v.iter()).all(|a| a.is_finite()) {
                 return Err(format!("particle {i} has a non-finite state at t = {t}"));
             }
@@ -905,7 +931,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 let (lo, hi) = if self.p.periodic[k] {
                     (0.0, self.p.size[k])
                 } else {
-                    (self.radius[i], self.p.size[k] - self.radius[i])
+                    (self.body[i].r, self.p.size[k] - self.body[i].r)
                 };
                 if x[k] < lo - tol || x[k] > hi + tol {
                     return Err(format!(
@@ -936,8 +962,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                     if j <= i || err.is_some() {
                         return;
                     }
-                    let r = self.min_image(self.pos[i] - self.pos[j]).norm();
-                    let sigma = self.radius[i] + self.radius[j];
+                    let r = self.min_image(self.body[i].x - self.body[j].x).norm();
+                    let sigma = self.body[i].r + self.body[j].r;
                     if r < sigma - tol {
                         err = Some(format!("particles {i} and {j} overlap by {} at t = {t}", sigma - r));
                     }
@@ -950,8 +976,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 let base = i * MAX_BONDS;
                 for &j in &self.bonds[base..base + self.bond_len[i] as usize] {
                     let j = j as usize;
-                    let r = self.min_image(self.pos[i] - self.pos[j]).norm();
-                    let lambda = self.radius[i] + self.radius[j] + self.p.s_crit;
+                    let r = self.min_image(self.body[i].x - self.body[j].x).norm();
+                    let lambda = self.body[i].r + self.body[j].r + self.p.s_crit;
                     if r > lambda + tol {
                         return Err(format!("bonded pair {i}-{j} stretched beyond s_crit by {} at t = {t}", r - lambda));
                     }

@@ -6,95 +6,92 @@
 //! with per-particle event counters (see `engine.rs`). [`NaiveQueue`] is the reference
 //! implementation the tests compare against.
 
-const NONE: u32 = u32::MAX;
-
-/// Indexed binary min-heap over particle indices.
+/// Indexed binary min-heap over particle indices. Each heap slot stores its key next to the
+/// particle index, so sifting compares without an indirection.
 #[derive(Debug, Clone)]
 pub struct EventQueue {
-    heap: Vec<u32>,
+    heap: Vec<(f64, u32)>,
     slot: Vec<u32>,
-    key: Vec<f64>,
 }
 
 impl EventQueue {
     /// A queue for particles `0..n`, all with key `+inf`.
     pub fn new(n: usize) -> Self {
         Self {
-            heap: (0..n as u32).collect(),
+            heap: (0..n as u32).map(|i| (f64::INFINITY, i)).collect(),
             slot: (0..n as u32).collect(),
-            key: vec![f64::INFINITY; n],
         }
     }
 
     /// The particle with the earliest event and its time.
     #[inline]
     pub fn min(&self) -> Option<(usize, f64)> {
-        self.heap.first().map(|&i| (i as usize, self.key[i as usize]))
+        self.heap.first().map(|&(k, i)| (i as usize, k))
     }
 
     /// The key of particle `i`.
     #[inline]
     pub fn key(&self, i: usize) -> f64 {
-        self.key[i]
+        self.heap[self.slot[i] as usize].0
     }
 
     /// Sets the key of particle `i` and restores the heap order.
     #[inline]
     pub fn update(&mut self, i: usize, time: f64) {
-        let old = self.key[i];
-        self.key[i] = time;
         let s = self.slot[i] as usize;
-        debug_assert!(s != NONE as usize);
+        let old = self.heap[s].0;
+        self.heap[s].0 = time;
         if time < old {
             self.sift_up(s);
-        } else {
+        } else if time > old {
             self.sift_down(s);
         }
     }
 
+    /// Strict order on entries; ties broken by particle index so the order is deterministic.
     #[inline]
-    fn less(&self, a: usize, b: usize) -> bool {
-        // Ties broken by particle index so the order is deterministic.
-        let (ia, ib) = (self.heap[a] as usize, self.heap[b] as usize);
-        let (ka, kb) = (self.key[ia], self.key[ib]);
-        ka < kb || (ka == kb && ia < ib)
-    }
-
-    #[inline]
-    fn swap(&mut self, a: usize, b: usize) {
-        self.heap.swap(a, b);
-        self.slot[self.heap[a] as usize] = a as u32;
-        self.slot[self.heap[b] as usize] = b as u32;
+    fn less(a: (f64, u32), b: (f64, u32)) -> bool {
+        a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
     }
 
     fn sift_up(&mut self, mut s: usize) {
+        let entry = self.heap[s];
         while s > 0 {
             let parent = (s - 1) / 2;
-            if self.less(s, parent) {
-                self.swap(s, parent);
+            let p = self.heap[parent];
+            if Self::less(entry, p) {
+                self.heap[s] = p;
+                self.slot[p.1 as usize] = s as u32;
                 s = parent;
             } else {
                 break;
             }
         }
+        self.heap[s] = entry;
+        self.slot[entry.1 as usize] = s as u32;
     }
 
     fn sift_down(&mut self, mut s: usize) {
         let n = self.heap.len();
+        let entry = self.heap[s];
         loop {
             let l = 2 * s + 1;
             if l >= n {
                 break;
             }
             let r = l + 1;
-            let child = if r < n && self.less(r, l) { r } else { l };
-            if self.less(child, s) {
-                self.swap(s, child);
+            let child = if r < n && Self::less(self.heap[r], self.heap[l]) { r } else { l };
+            let c = self.heap[child];
+            if Self::less(c, entry) {
+                self.heap[s] = c;
+                self.slot[c.1 as usize] = s as u32;
                 s = child;
             } else {
                 break;
             }
         }
+        self.heap[s] = entry;
+        self.slot[entry.1 as usize] = s as u32;
     }
 }
 
