@@ -1,4 +1,4 @@
-//! The event queue: an indexed binary min-heap with exactly one entry per particle, keyed by the
+//! The event queue: an indexed 4-ary min-heap with exactly one entry per particle, keyed by the
 //! time of that particle's earliest predicted event.
 //!
 //! Re-predicting a particle changes its key in place (`O(log N)`), so the queue never holds
@@ -6,8 +6,13 @@
 //! with per-particle event counters (see `engine.rs`). [`NaiveQueue`] is the reference
 //! implementation the tests compare against.
 
-/// Indexed binary min-heap over particle indices. Each heap slot stores its key next to the
-/// particle index, so sifting compares without an indirection.
+/// Children per heap node.
+const ARITY: usize = 4;
+
+/// Indexed 4-ary min-heap over particle indices. Each heap slot stores its key next to the
+/// particle index, so sifting compares without an indirection; four children of 16 bytes share
+/// about one cache line, which makes the frequent sift-down (the processed particle's next event
+/// is later) cheaper than in a binary heap.
 #[derive(Debug, Clone)]
 pub struct EventQueue {
     heap: Vec<(f64, u32)>,
@@ -57,7 +62,7 @@ impl EventQueue {
     fn sift_up(&mut self, mut s: usize) {
         let entry = self.heap[s];
         while s > 0 {
-            let parent = (s - 1) / 2;
+            let parent = (s - 1) / ARITY;
             let p = self.heap[parent];
             if Self::less(entry, p) {
                 self.heap[s] = p;
@@ -75,12 +80,17 @@ impl EventQueue {
         let n = self.heap.len();
         let entry = self.heap[s];
         loop {
-            let l = 2 * s + 1;
-            if l >= n {
+            let first = ARITY * s + 1;
+            if first >= n {
                 break;
             }
-            let r = l + 1;
-            let child = if r < n && Self::less(self.heap[r], self.heap[l]) { r } else { l };
+            let last = (first + ARITY).min(n);
+            let mut child = first;
+            for k in first + 1..last {
+                if Self::less(self.heap[k], self.heap[child]) {
+                    child = k;
+                }
+            }
             let c = self.heap[child];
             if Self::less(c, entry) {
                 self.heap[s] = c;
