@@ -44,7 +44,11 @@ fn overlapping_pair_that_separates_is_left_alone() {
     e.run_until(5.0, None);
     assert_eq!(e.counts().pair_collisions, 0);
     let x = e.positions();
-    assert!((x[0][0] - 0.0).abs() < 1e-12 || (x[0][0] - 20.0).abs() < 1e-12, "{:?}", x[0]);
+    assert!(
+        (x[0][0] - 0.0).abs() < 1e-12 || (x[0][0] - 20.0).abs() < 1e-12,
+        "{:?}",
+        x[0]
+    );
 }
 
 #[test]
@@ -65,7 +69,10 @@ fn grazing_collisions_touch_or_miss_as_geometry_says() {
             // Normal speed at contact is sqrt(1 - b^2): the transferred velocity is that small.
             let v1 = e.velocities()[1];
             let expected = (1.0 - b * b).sqrt();
-            assert!((v1.norm() - expected).abs() < 1e-4 * expected.max(1e-6), "b {b}: {v1:?}");
+            assert!(
+                (v1.norm() - expected).abs() < 1e-4 * expected.max(1e-6),
+                "b {b}: {v1:?}"
+            );
         }
     }
 }
@@ -118,7 +125,11 @@ fn inelastic_grains_dropped_on_a_floor_come_to_rest_with_a_bounded_event_rate() 
     }
     let ledger = e.energy();
     // At rest: the kinetic energy left is the rebound floor's jitter, ~ m v_min^2 per grain.
-    assert!(ledger.kinetic < 60.0 * 1e-4 * 1e-2 + 1e-4 * k0, "kinetic {}", ledger.kinetic);
+    assert!(
+        ledger.kinetic < 60.0 * 1e-4 * 1e-2 + 1e-4 * k0,
+        "kinetic {}",
+        ledger.kinetic
+    );
     // The bed sits on the floor: mean height below three diameters.
     let mean_z = e.positions().iter().map(|x| x[1]).sum::<f64>() / 60.0;
     assert!(mean_z < 3.0, "mean height {mean_z}");
@@ -143,7 +154,10 @@ fn without_collapse_remedies_the_resting_bed_stalls() {
     e.run_until(60.0, Some(3_000_000));
     let t2 = e.time();
     // Zeno: a million more events advance the clock by (almost) nothing.
-    assert!(t2 < 60.0 && t2 - t1 < 1e-6, "expected a stall, got t = {t1} then {t2}");
+    assert!(
+        t2 < 60.0 && t2 - t1 < 1e-6,
+        "expected a stall, got t = {t1} then {t2}"
+    );
     // The TC model alone also prevents the stall: the clock keeps moving.
     let mut s = settling_scene("tc = 1e-2");
     s.engine.min_rebound_speed = 0.0;
@@ -247,7 +261,8 @@ fn lazy_invalidation_leaves_no_wrong_prediction_behind() {
     for _ in 0..20_000 {
         let n = e.counts().total();
         e.run_until(f64::INFINITY, Some(n + 1));
-        e.check_predictions().unwrap_or_else(|m| panic!("after {n} events: {m}"));
+        e.check_predictions()
+            .unwrap_or_else(|m| panic!("after {n} events: {m}"));
     }
     e.sanity_check().unwrap();
 }

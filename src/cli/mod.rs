@@ -3,8 +3,8 @@
 use crate::bench;
 use crate::scene::Scene;
 use crate::sim::{RunReport, run_scene, run_scene_with_progress};
-use std::io::IsTerminal;
 use clap::{Parser, Subcommand};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -132,8 +132,16 @@ pub fn summary_text(r: &RunReport) -> String {
     let _ = writeln!(s, "bridges             {}", r.bridges);
     let (a, b) = (&r.energy_initial, &r.energy_final);
     let _ = writeln!(s, "energy              initial        final");
-    let _ = writeln!(s, "  kinetic           {:<14.6} {:.6}", a.kinetic, b.kinetic);
-    let _ = writeln!(s, "  potential         {:<14.6} {:.6}", a.potential, b.potential);
+    let _ = writeln!(
+        s,
+        "  kinetic           {:<14.6} {:.6}",
+        a.kinetic, b.kinetic
+    );
+    let _ = writeln!(
+        s,
+        "  potential         {:<14.6} {:.6}",
+        a.potential, b.potential
+    );
     let _ = writeln!(
         s,
         "  dissipated (rest.) {:<13.6} {:.6}",

@@ -52,7 +52,10 @@ mod tests {
         let (m, e_cb) = (1.0, 0.2844);
         let u = 2.0; // mu u^2/2 = 1 > E_cb
         match well_outcome(m, u, e_cb, RuptureRule::ReducedMass) {
-            WellOutcome::Rupture { new_normal_speed, energy } => {
+            WellOutcome::Rupture {
+                new_normal_speed,
+                energy,
+            } => {
                 assert_eq!(energy, e_cb);
                 assert!((system_energy_change(m, u, new_normal_speed) + e_cb).abs() < 1e-14);
             }
@@ -60,7 +63,10 @@ mod tests {
         }
         // Just below threshold: mu u^2 / 2 = 0.9 E_cb -> bounce.
         let u = (0.9 * e_cb * 4.0 / m).sqrt();
-        assert_eq!(well_outcome(m, u, e_cb, RuptureRule::ReducedMass), WellOutcome::Bounce(-u));
+        assert_eq!(
+            well_outcome(m, u, e_cb, RuptureRule::ReducedMass),
+            WellOutcome::Bounce(-u)
+        );
     }
 
     #[test]
@@ -68,7 +74,10 @@ mod tests {
         let (m, e_cb) = (1.0, 0.2844);
         let u = 1.0; // m u^2 / 2 = 0.5 > E_cb
         match well_outcome(m, u, e_cb, RuptureRule::ThesisAppendix) {
-            WellOutcome::Rupture { new_normal_speed, energy } => {
+            WellOutcome::Rupture {
+                new_normal_speed,
+                energy,
+            } => {
                 assert_eq!(energy, 0.5 * e_cb);
                 assert!((system_energy_change(m, u, new_normal_speed) + 0.5 * e_cb).abs() < 1e-14);
             }
@@ -76,7 +85,10 @@ mod tests {
         }
         // Between the two thresholds the rules disagree: reduced mass bounces.
         let u = (3.0 * e_cb / m).sqrt(); // m u^2/2 = 1.5 E_cb, mu u^2/2 = 0.75 E_cb
-        assert!(matches!(well_outcome(m, u, e_cb, RuptureRule::ReducedMass), WellOutcome::Bounce(_)));
+        assert!(matches!(
+            well_outcome(m, u, e_cb, RuptureRule::ReducedMass),
+            WellOutcome::Bounce(_)
+        ));
         assert!(matches!(
             well_outcome(m, u, e_cb, RuptureRule::ThesisAppendix),
             WellOutcome::Rupture { .. }

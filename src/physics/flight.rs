@@ -7,7 +7,11 @@
 #[inline]
 pub fn linear_time_to_plane(x0: f64, v: f64, plane: f64, upward: bool) -> f64 {
     if upward {
-        if v > 0.0 { ((plane - x0) / v).max(0.0) } else { f64::INFINITY }
+        if v > 0.0 {
+            ((plane - x0) / v).max(0.0)
+        } else {
+            f64::INFINITY
+        }
     } else if v < 0.0 {
         ((plane - x0) / v).max(0.0)
     } else {
@@ -61,7 +65,12 @@ mod tests {
     #[test]
     fn parabola_roots_satisfy_the_trajectory() {
         let g = 1.0;
-        for &(z0, v, plane) in &[(0.5, 2.0, 1.5), (0.5, 0.1, 0.4), (3.0, -1.0, 0.5), (1.0, 3.0, 1.0)] {
+        for &(z0, v, plane) in &[
+            (0.5, 2.0, 1.5),
+            (0.5, 0.1, 0.4),
+            (3.0, -1.0, 0.5),
+            (1.0, 3.0, 1.0),
+        ] {
             let z = |t: f64| z0 + v * t - 0.5 * g * t * t;
             let tu = parabola_time_up(z0, v, g, plane);
             if tu.is_finite() && plane >= z0 {

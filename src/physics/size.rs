@@ -16,7 +16,13 @@ pub fn diameter_range(d_mean: f64, sigma_p: f64) -> (f64, f64) {
 pub fn draw_diameters<R: Rng>(rng: &mut R, n: usize, d_mean: f64, sigma_p: f64) -> Vec<f64> {
     let (lo, hi) = diameter_range(d_mean, sigma_p);
     (0..n)
-        .map(|_| if hi > lo { rng.gen_range(lo..=hi) } else { d_mean })
+        .map(|_| {
+            if hi > lo {
+                rng.gen_range(lo..=hi)
+            } else {
+                d_mean
+            }
+        })
         .collect()
 }
 
@@ -34,7 +40,11 @@ mod tests {
         let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
         assert!((mean - 1.0).abs() < 1e-3, "mean {mean}");
         // sigma_p = std / mean for a uniform distribution (Eq. 2.22).
-        assert!((var.sqrt() / mean - 0.06).abs() < 5e-4, "sigma {}", var.sqrt());
+        assert!(
+            (var.sqrt() / mean - 0.06).abs() < 5e-4,
+            "sigma {}",
+            var.sqrt()
+        );
         let (lo, hi) = diameter_range(1.0, 0.06);
         assert!(d.iter().all(|&x| x >= lo && x <= hi));
     }

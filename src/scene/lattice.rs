@@ -10,7 +10,13 @@
 /// Number of lattice sites along each axis for box edges `size` and spacing `a`.
 pub fn sites_per_axis(size: &[f64], spacing: f64) -> Vec<usize> {
     size.iter()
-        .map(|&l| if spacing > 0.0 { (l / spacing).floor().max(0.0) as usize } else { 0 })
+        .map(|&l| {
+            if spacing > 0.0 {
+                (l / spacing).floor().max(0.0) as usize
+            } else {
+                0
+            }
+        })
         .collect()
 }
 
@@ -21,7 +27,10 @@ pub fn capacity(size: &[f64], spacing: f64) -> usize {
 
 /// The largest spacing `>= min_spacing` whose lattice still holds `count` sites (bisection).
 pub fn uniform_spacing(size: &[f64], min_spacing: f64, count: usize) -> f64 {
-    let (mut lo, mut hi) = (min_spacing, size.iter().cloned().fold(min_spacing, f64::max));
+    let (mut lo, mut hi) = (
+        min_spacing,
+        size.iter().cloned().fold(min_spacing, f64::max),
+    );
     if capacity(size, hi) >= count {
         return hi;
     }

@@ -8,8 +8,8 @@
 //! Conventions (MODEL.md section 1): units of mean diameter `d`, particle mass `m`, gravity `g`.
 //! The last axis is vertical (`z`; in 2D the axes are `x, z`); gravity points along `-z`.
 
-mod validate;
 pub mod lattice;
+mod validate;
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -286,7 +286,9 @@ impl Scene {
         if !self.is_wet() {
             return 0.0;
         }
-        self.capillary.s_crit.unwrap_or(DEFAULT_S_CRIT * self.particles.diameter)
+        self.capillary
+            .s_crit
+            .unwrap_or(DEFAULT_S_CRIT * self.particles.diameter)
     }
 
     /// Bridge energy `E_cb` (0 for dry scenes); default `F_B s_crit`, `F_B = 4 m g`.
@@ -301,18 +303,12 @@ impl Scene {
 
     /// Smallest and largest diameter (MODEL.md Eq. 2.22: `d (1 -+ sqrt(3) sigma_p)`).
     pub fn diameter_range(&self) -> (f64, f64) {
-        crate::physics::size::diameter_range(
-            self.particles.diameter,
-            self.particles.polydispersity,
-        )
+        crate::physics::size::diameter_range(self.particles.diameter, self.particles.polydispersity)
     }
 
     /// Initial granular temperature in absolute units.
     pub fn initial_temperature(&self) -> f64 {
-        match (
-            self.initial.temperature,
-            self.initial.temperature_over_ecb,
-        ) {
+        match (self.initial.temperature, self.initial.temperature_over_ecb) {
             (Some(t), _) => t,
             (None, Some(r)) => r * self.e_cb(),
             (None, None) => 0.0,

@@ -142,7 +142,10 @@ impl Scene {
         let c = Check { origin };
         let dim = self.dimension;
         if dim != 2 && dim != 3 {
-            return Err(c.err("dimension", format!("= {dim} is not allowed: must be 2 or 3")));
+            return Err(c.err(
+                "dimension",
+                format!("= {dim} is not allowed: must be 2 or 3"),
+            ));
         }
         c.non_negative("gravity", self.gravity)?;
 
@@ -165,7 +168,10 @@ impl Scene {
         {
             return Err(c.err(
                 "box.boundary",
-                format!("has {} entries: a {dim}D scene needs exactly {dim}", b.len()),
+                format!(
+                    "has {} entries: a {dim}D scene needs exactly {dim}",
+                    b.len()
+                ),
             ));
         }
         let boundaries = self.boundaries();
@@ -181,7 +187,10 @@ impl Scene {
         // Particles.
         let p = &self.particles;
         if p.count == 0 {
-            return Err(c.err("particles.count", "= 0 is out of range: must be >= 1".into()));
+            return Err(c.err(
+                "particles.count",
+                "= 0 is out of range: must be >= 1".into(),
+            ));
         }
         c.positive("particles.diameter", p.diameter)?;
         c.positive("particles.mass", p.mass)?;
@@ -197,7 +206,13 @@ impl Scene {
         }
 
         // Contact.
-        c.closed("contact.restitution", self.contact.restitution, 0.0, 1.0, "1")?;
+        c.closed(
+            "contact.restitution",
+            self.contact.restitution,
+            0.0,
+            1.0,
+            "1",
+        )?;
         c.closed(
             "contact.wall_restitution",
             self.contact.wall_restitution,

@@ -7,7 +7,7 @@ pub mod event_driven;
 pub mod initial;
 
 use crate::scene::Scene;
-use event_driven::{Engine, EnergyLedger, EventCounts};
+use event_driven::{EnergyLedger, Engine, EventCounts};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -130,7 +130,11 @@ fn run_engine<const D: usize, const G: bool, const W: bool>(
         bridges: engine.bridge_count(),
         energy_initial,
         energy_final,
-        energy_bookkeeping_error: if a0 != 0.0 { (a1 - a0) / a0.abs() } else { a1 - a0 },
+        energy_bookkeeping_error: if a0 != 0.0 {
+            (a1 - a0) / a0.abs()
+        } else {
+            a1 - a0
+        },
         samples,
     }
 }

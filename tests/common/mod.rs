@@ -19,8 +19,16 @@ pub fn scene_with(
     count: usize,
     extra: &str,
 ) -> Scene {
-    let size = size.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
-    let boundary = boundary.iter().map(|b| format!("\"{b}\"")).collect::<Vec<_>>().join(", ");
+    let size = size
+        .iter()
+        .map(|x| format!("{x:?}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let boundary = boundary
+        .iter()
+        .map(|b| format!("\"{b}\""))
+        .collect::<Vec<_>>()
+        .join(", ");
     let mut text = format!(
         "dimension = {dimension}\ngravity = {gravity:?}\n[box]\nsize = [{size}]\nboundary = [{boundary}]\n\
          [particles]\ncount = {count}\n{extra}\n"
@@ -45,7 +53,8 @@ pub fn run_checked<const D: usize, const G: bool, const W: bool>(
     for k in 1..=chunks {
         let t = t0 + (t_end - t0) * k as f64 / chunks as f64;
         let reached = e.run_until(t, max_events);
-        e.sanity_check().unwrap_or_else(|m| panic!("sanity check failed: {m}"));
+        e.sanity_check()
+            .unwrap_or_else(|m| panic!("sanity check failed: {m}"));
         if !reached {
             return;
         }
@@ -63,6 +72,7 @@ pub fn run_events<const D: usize, const G: bool, const W: bool>(
     while e.counts().total() < target {
         let cap = (e.counts().total() + every).min(target);
         e.run_until(f64::INFINITY, Some(cap));
-        e.sanity_check().unwrap_or_else(|m| panic!("sanity check failed: {m}"));
+        e.sanity_check()
+            .unwrap_or_else(|m| panic!("sanity check failed: {m}"));
     }
 }

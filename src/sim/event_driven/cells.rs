@@ -182,7 +182,10 @@ mod tests {
         let c = [4, 1, 8];
         assert!(g3.is_interior(&c) && !g3.is_interior(&[0, 1, 8]) && !g3.is_interior(&[4, 1, 9]));
         for o in CellGrid::<3>::neighbour_offsets() {
-            assert_eq!(Some(g3.interior_neighbour(g3.linear(&c), &o)), g3.shifted(&c, &o));
+            assert_eq!(
+                Some(g3.interior_neighbour(g3.linear(&c), &o)),
+                g3.shifted(&c, &o)
+            );
         }
     }
 }

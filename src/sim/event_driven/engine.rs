@@ -183,9 +183,20 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
 impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// Builds the engine for a validated scene: initial state, cells, first predictions.
     pub fn new(scene: &Scene) -> Self {
-        assert_eq!(scene.dimension, D, "scene dimension does not match the engine");
-        assert_eq!(GRAV, scene.gravity > 0.0, "gravity flag does not match the scene");
-        assert_eq!(WET, scene.is_wet(), "capillary flag does not match the scene");
+        assert_eq!(
+            scene.dimension, D,
+            "scene dimension does not match the engine"
+        );
+        assert_eq!(
+            GRAV,
+            scene.gravity > 0.0,
+            "gravity flag does not match the scene"
+        );
+        assert_eq!(
+            WET,
+            scene.is_wet(),
+            "capillary flag does not match the scene"
+        );
         let init = initial_state(scene);
         let n = init.radius.len();
         let mut size = [0.0; D];
@@ -233,7 +244,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             cell: vec![[0; D]; n],
             grid,
             offsets: CellGrid::<D>::neighbour_offsets(),
-            bonds: if WET { vec![NONE; n * MAX_BONDS] } else { Vec::new() },
+            bonds: if WET {
+                vec![NONE; n * MAX_BONDS]
+            } else {
+                Vec::new()
+            },
             bond_len: if WET { vec![0; n] } else { Vec::new() },
             pair_ev: vec![PairEvent::NEVER; n],
             cross_ev: vec![PlaneEvent::NEVER; n],
@@ -357,7 +372,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     fn remove_bond_half(&mut self, i: usize, j: usize) {
         let base = i * MAX_BONDS;
         let len = self.bond_len[i] as usize;
-        if let Some(k) = self.bonds[base..base + len].iter().position(|&b| b as usize == j) {
+        if let Some(k) = self.bonds[base..base + len]
+            .iter()
+            .position(|&b| b as usize == j)
+        {
             self.bonds[base + k] = self.bonds[base + len - 1];
             self.bonds[base + len - 1] = NONE;
             self.bond_len[i] -= 1;
@@ -490,20 +508,44 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             let (t_up, t_down) = if GRAV && k == D - 1 {
                 let g = self.p.gravity;
                 (
-                    if has_hi { parabola_time_up(x, v, g, hi) } else { f64::INFINITY },
-                    if has_lo { parabola_time_down(x, v, g, lo) } else { f64::INFINITY },
+                    if has_hi {
+                        parabola_time_up(x, v, g, hi)
+                    } else {
+                        f64::INFINITY
+                    },
+                    if has_lo {
+                        parabola_time_down(x, v, g, lo)
+                    } else {
+                        f64::INFINITY
+                    },
                 )
             } else {
                 (
-                    if has_hi { linear_time_to_plane(x, v, hi, true) } else { f64::INFINITY },
-                    if has_lo { linear_time_to_plane(x, v, lo, false) } else { f64::INFINITY },
+                    if has_hi {
+                        linear_time_to_plane(x, v, hi, true)
+                    } else {
+                        f64::INFINITY
+                    },
+                    if has_lo {
+                        linear_time_to_plane(x, v, lo, false)
+                    } else {
+                        f64::INFINITY
+                    },
                 )
             };
             if t_up < best.time {
-                best = PlaneEvent { time: t_up, axis: k as u8, up: true };
+                best = PlaneEvent {
+                    time: t_up,
+                    axis: k as u8,
+                    up: true,
+                };
             }
             if t_down < best.time {
-                best = PlaneEvent { time: t_down, axis: k as u8, up: false };
+                best = PlaneEvent {
+                    time: t_down,
+                    axis: k as u8,
+                    up: false,
+                };
             }
         }
         best.time += self.time;
@@ -522,15 +564,29 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             let (floor, lid) = (r, self.p.size[k] - r);
             let (t_lid, t_floor) = if GRAV && k == D - 1 {
                 let g = self.p.gravity;
-                (parabola_time_up(x, v, g, lid), parabola_time_down(x, v, g, floor))
+                (
+                    parabola_time_up(x, v, g, lid),
+                    parabola_time_down(x, v, g, floor),
+                )
             } else {
-                (linear_time_to_plane(x, v, lid, true), linear_time_to_plane(x, v, floor, false))
+                (
+                    linear_time_to_plane(x, v, lid, true),
+                    linear_time_to_plane(x, v, floor, false),
+                )
             };
             if t_lid < best.time {
-                best = PlaneEvent { time: t_lid, axis: k as u8, up: true };
+                best = PlaneEvent {
+                    time: t_lid,
+                    axis: k as u8,
+                    up: true,
+                };
             }
             if t_floor < best.time {
-                best = PlaneEvent { time: t_floor, axis: k as u8, up: false };
+                best = PlaneEvent {
+                    time: t_floor,
+                    axis: k as u8,
+                    up: false,
+                };
             }
         }
         best.time += self.time;
@@ -706,8 +762,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             return;
         }
         let since = self.time - self.last_collision[i];
-        let mut u_out =
-            rebound_speed(v.abs(), self.p.e_wall, since, self.p.tc, self.p.min_rebound);
+        let mut u_out = rebound_speed(v.abs(), self.p.e_wall, since, self.p.tc, self.p.min_rebound);
         if floor_under_gravity {
             // Rest on a static floor is the one state an event-driven engine cannot represent
             // (zero-time bounces): no grain leaves the floor slower than the rebound floor.
@@ -770,7 +825,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let m = self.p.mass;
         let kinetic = self.body.iter().map(|b| 0.5 * m * b.v.norm_squared()).sum();
         let potential = if GRAV {
-            self.body.iter().map(|b| m * self.p.gravity * b.x[D - 1]).sum()
+            self.body
+                .iter()
+                .map(|b| m * self.p.gravity * b.x[D - 1])
+                .sum()
         } else {
             0.0
         };
@@ -856,10 +914,19 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let pe = self.pair_ev[i];
         format!(
             "i={i} key={:.17} pair=({:.17},{},{:?},count_ok={}) cross={:.17} wall={:.17} cell={:?} bonds={:?}",
-            self.queue.key(i), pe.time, pe.partner, pe.kind,
+            self.queue.key(i),
+            pe.time,
+            pe.partner,
+            pe.kind,
             pe.partner != NONE && self.count[pe.partner as usize] == pe.partner_count,
-            self.cross_ev[i].time, self.wall_ev[i].time, self.cell[i],
-            if WET { &self.bonds[i * MAX_BONDS..i * MAX_BONDS + self.bond_len[i] as usize] } else { &[][..] }
+            self.cross_ev[i].time,
+            self.wall_ev[i].time,
+            self.cell[i],
+            if WET {
+                &self.bonds[i * MAX_BONDS..i * MAX_BONDS + self.bond_len[i] as usize]
+            } else {
+                &[][..]
+            }
         )
     }
 
@@ -872,14 +939,24 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let (xi, vi) = self.state_at(i, t);
         let mut s = format!(
             "t={t:.17} i={i} x={:?} v={:?} pair=({:.17},{},{:?}) cross={:.17} wall={:.17}",
-            xi.as_slice(), vi.as_slice(), pe.time, pe.partner, pe.kind, self.cross_ev[i].time, self.wall_ev[i].time
+            xi.as_slice(),
+            vi.as_slice(),
+            pe.time,
+            pe.partner,
+            pe.kind,
+            self.cross_ev[i].time,
+            self.wall_ev[i].time
         );
         if pe.partner != NONE {
             let j = pe.partner as usize;
             let (xj, vj) = self.state_at(j, t);
             let r = self.min_image(xi - xj);
             let s_gap = r.norm() - self.body[i].r - self.body[j].r;
-            s += &format!(" | j={j} gap={s_gap:.3e} u={:.3e} bonded={}", (vi - vj).dot(&(r / r.norm())), self.bonded(i, j));
+            s += &format!(
+                " | j={j} gap={s_gap:.3e} u={:.3e} bonded={}",
+                (vi - vj).dot(&(r / r.norm())),
+                self.bonded(i, j)
+            );
         }
         s
     }
@@ -897,7 +974,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             let (xi, vi) = self.state_at(i, t);
             let now = self.predict_pair_from(&xi, &vi, i, j, t);
             match now {
-                Some((tn, kind)) if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3) && kind == pe.kind => {}
+                Some((tn, kind))
+                    if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3)
+                        && kind == pe.kind => {}
                 other => {
                     return Err(format!(
                         "particle {i}: stored {:?} with {j} at {:.17}, recomputed {other:?} at t={t}",
@@ -920,7 +999,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let tol = self.p.overlap_tolerance;
         let t = self.time;
         if self.time_reversals > 0 {
-            return Err(format!("{} events processed out of time order", self.time_reversals));
+            return Err(format!(
+                "{} events processed out of time order",
+                self.time_reversals
+            ));
         }
         for i in 0..self.len() {
             let (x, v) = (self.body[i].x, self.body[i].v);
@@ -949,7 +1031,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 }
             }
             if self.queue.key(i) < t - 1e-9 * t.abs().max(1.0) {
-                return Err(format!("particle {i} has an event in the past: {} < {t}", self.queue.key(i)));
+                return Err(format!(
+                    "particle {i} has an event in the past: {} < {t}",
+                    self.queue.key(i)
+                ));
             }
         }
         for i in 0..self.len() {
@@ -965,7 +1050,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                     let r = self.min_image(self.body[i].x - self.body[j].x).norm();
                     let sigma = self.body[i].r + self.body[j].r;
                     if r < sigma - tol {
-                        err = Some(format!("particles {i} and {j} overlap by {} at t = {t}", sigma - r));
+                        err = Some(format!(
+                            "particles {i} and {j} overlap by {} at t = {t}",
+                            sigma - r
+                        ));
                     }
                 });
                 if let Some(e) = err {
@@ -979,7 +1067,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                     let r = self.min_image(self.body[i].x - self.body[j].x).norm();
                     let lambda = self.body[i].r + self.body[j].r + self.p.s_crit;
                     if r > lambda + tol {
-                        return Err(format!("bonded pair {i}-{j} stretched beyond s_crit by {} at t = {t}", r - lambda));
+                        return Err(format!(
+                            "bonded pair {i}-{j} stretched beyond s_crit by {} at t = {t}",
+                            r - lambda
+                        ));
                     }
                     if !self.bonded(j, i) {
                         return Err(format!("bond {i}-{j} is one-sided"));

@@ -4,4 +4,4 @@ pub mod cells;
 pub mod engine;
 pub mod queue;
 
-pub use engine::{Engine, EnergyLedger, EventCounts, Vector};
+pub use engine::{EnergyLedger, Engine, EventCounts, Vector};

@@ -113,7 +113,9 @@ pub struct NaiveQueue {
 
 impl NaiveQueue {
     pub fn new(n: usize) -> Self {
-        Self { key: vec![f64::INFINITY; n] }
+        Self {
+            key: vec![f64::INFINITY; n],
+        }
     }
     pub fn update(&mut self, i: usize, time: f64) {
         self.key[i] = time;
