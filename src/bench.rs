@@ -190,14 +190,16 @@ pub fn system_a() -> Scene {
 }
 
 /// (b): 32000 elastic spheres, `g = 1`, box 80 x 80 x 40, periodic laterally, floor and lid,
-/// default lattice (79 x 79 sites per layer, 5.13 layers from the floor), `T = 1`.
+/// 7 lattice layers near the floor (spacing 1.17: 68 x 68 sites per layer), `T = 1`.
 pub fn system_b() -> Scene {
-    base_scene(
+    let mut s = base_scene(
         3,
         1.0,
         vec![80.0, 80.0, 40.0],
         vec![Boundary::Periodic, Boundary::Periodic, Boundary::Wall],
-    )
+    );
+    s.initial.lattice_spacing = 1.17;
+    s
 }
 
 /// (c): the 2D standard wet system (as scenes/standard_wet_2d.toml, without a drive).

@@ -93,6 +93,11 @@ impl<const D: usize> CellGrid<D> {
         (base as isize + delta) as usize
     }
 
+    /// Empties every cell list (before re-inserting all particles under new indices).
+    pub fn clear(&mut self) {
+        self.head.fill(NONE);
+    }
+
     /// Inserts particle `i` into cell `cell`.
     #[inline]
     pub fn insert(&mut self, i: usize, cell: usize) {
