@@ -33,6 +33,10 @@ fn overlapping_pair_that_approaches_collides_at_once() {
     // Elastic, equal masses, head-on: velocities exchanged.
     assert!((v[0] - Vector::<2>::new(0.0, 0.0)).norm() < 1e-15);
     assert!((v[1] - Vector::<2>::new(1.0, 0.0)).norm() < 1e-15);
+    // Once the hand-made overlap has resolved, the invariants hold again.
+    e.run_until(1.0, None);
+    e.sanity_check().unwrap();
+    assert_eq!(e.counts().pair_collisions, 1);
 }
 
 #[test]
@@ -42,6 +46,7 @@ fn overlapping_pair_that_separates_is_left_alone() {
     e.set_position(1, Vector::<2>::new(5.9, 5.0));
     e.set_velocity(0, Vector::<2>::new(-1.0, 0.0));
     e.run_until(5.0, None);
+    e.sanity_check().unwrap();
     assert_eq!(e.counts().pair_collisions, 0);
     let x = e.positions();
     assert!(
