@@ -82,6 +82,18 @@ impl PlaneEvent {
         axis: 0,
         up: false,
     };
+
+    /// Replaces this event by `(time, axis, up)` if that is earlier.
+    #[inline]
+    fn keep_earlier(&mut self, time: f64, axis: usize, up: bool) {
+        if time < self.time {
+            *self = PlaneEvent {
+                time,
+                axis: axis as u8,
+                up,
+            };
+        }
+    }
 }
 
 /// Events processed, by kind.
@@ -510,6 +522,43 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.pair_ev[i] = best;
     }
 
+    /// Times until particle `i` (at the current time) reaches the plane `hi` moving up and the
+    /// plane `lo` moving down along axis `k` (`+inf` for a plane at infinity or never reached):
+    /// parabolas on the vertical axis under gravity, straight lines otherwise.
+    #[inline]
+    fn times_to_planes(&self, i: usize, k: usize, lo: f64, hi: f64) -> (f64, f64) {
+        let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
+        let never = f64::INFINITY;
+        if GRAV && k == D - 1 {
+            let g = self.p.gravity;
+            (
+                if hi.is_finite() {
+                    parabola_time_up(x, v, g, hi)
+                } else {
+                    never
+                },
+                if lo.is_finite() {
+                    parabola_time_down(x, v, g, lo)
+                } else {
+                    never
+                },
+            )
+        } else {
+            (
+                if hi.is_finite() {
+                    linear_time_to_plane(x, v, hi, true)
+                } else {
+                    never
+                },
+                if lo.is_finite() {
+                    linear_time_to_plane(x, v, lo, false)
+                } else {
+                    never
+                },
+            )
+        }
+    }
+
     /// Next crossing of a face of `i`'s cell (particle at the current time).
     fn predict_crossing(&self, i: usize) -> PlaneEvent {
         let c = self.cell[i];
@@ -517,58 +566,27 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         for k in 0..D {
             let w = self.grid.width[k];
             let lo = c[k] as f64 * w;
-            let hi = lo + w;
-            let has_lo = self.p.periodic[k] || c[k] > 0;
-            let has_hi = self.p.periodic[k] || c[k] < self.grid.n[k] - 1;
-            let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
-            let (t_up, t_down) = if GRAV && k == D - 1 {
-                let g = self.p.gravity;
-                (
-                    if has_hi {
-                        parabola_time_up(x, v, g, hi)
-                    } else {
-                        f64::INFINITY
-                    },
-                    if has_lo {
-                        parabola_time_down(x, v, g, lo)
-                    } else {
-                        f64::INFINITY
-                    },
-                )
+            let periodic = self.p.periodic[k];
+            // The outer faces of the edge cells of a wall axis are never crossed.
+            let lo = if periodic || c[k] > 0 {
+                lo
             } else {
-                (
-                    if has_hi {
-                        linear_time_to_plane(x, v, hi, true)
-                    } else {
-                        f64::INFINITY
-                    },
-                    if has_lo {
-                        linear_time_to_plane(x, v, lo, false)
-                    } else {
-                        f64::INFINITY
-                    },
-                )
+                f64::NEG_INFINITY
             };
-            if t_up < best.time {
-                best = PlaneEvent {
-                    time: t_up,
-                    axis: k as u8,
-                    up: true,
-                };
-            }
-            if t_down < best.time {
-                best = PlaneEvent {
-                    time: t_down,
-                    axis: k as u8,
-                    up: false,
-                };
-            }
+            let hi = if periodic || c[k] < self.grid.n[k] - 1 {
+                c[k] as f64 * w + w
+            } else {
+                f64::INFINITY
+            };
+            let (t_up, t_down) = self.times_to_planes(i, k, lo, hi);
+            best.keep_earlier(t_up, k, true);
+            best.keep_earlier(t_down, k, false);
         }
         best.time += self.time;
         best
     }
 
-    /// Next collision of `i` with a flat static wall.
+    /// Next collision of `i` with a flat static wall (`up`: the lid or upper wall).
     fn predict_wall(&self, i: usize) -> PlaneEvent {
         let mut best = PlaneEvent::NEVER;
         let r = self.body[i].r;
@@ -576,34 +594,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             if self.p.periodic[k] {
                 continue;
             }
-            let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
-            let (floor, lid) = (r, self.p.size[k] - r);
-            let (t_lid, t_floor) = if GRAV && k == D - 1 {
-                let g = self.p.gravity;
-                (
-                    parabola_time_up(x, v, g, lid),
-                    parabola_time_down(x, v, g, floor),
-                )
-            } else {
-                (
-                    linear_time_to_plane(x, v, lid, true),
-                    linear_time_to_plane(x, v, floor, false),
-                )
-            };
-            if t_lid < best.time {
-                best = PlaneEvent {
-                    time: t_lid,
-                    axis: k as u8,
-                    up: true,
-                };
-            }
-            if t_floor < best.time {
-                best = PlaneEvent {
-                    time: t_floor,
-                    axis: k as u8,
-                    up: false,
-                };
-            }
+            let (t_lid, t_floor) = self.times_to_planes(i, k, r, self.p.size[k] - r);
+            best.keep_earlier(t_lid, k, true);
+            best.keep_earlier(t_floor, k, false);
         }
         best.time += self.time;
         best
