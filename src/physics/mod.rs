@@ -6,4 +6,5 @@
 pub mod capillary;
 pub mod contact;
 pub mod flight;
+pub mod shaken_wall;
 pub mod size;
