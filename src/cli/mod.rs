@@ -123,6 +123,9 @@ pub fn summary_text(r: &RunReport) -> String {
     let _ = writeln!(s, "  bridge formations {}", e.bridge_formations);
     let _ = writeln!(s, "  bridge ruptures   {}", e.bridge_ruptures);
     let _ = writeln!(s, "  well bounces      {}", e.well_bounces);
+    if e.wall_rechecks > 0 {
+        let _ = writeln!(s, "  wall re-checks    {}", e.wall_rechecks);
+    }
     let _ = writeln!(s, "  re-predictions    {}", e.invalidated);
     let _ = write!(s, "granular temp. T_g  {:.6}", r.granular_temperature);
     if let Some(x) = r.granular_temperature_over_ecb {
@@ -156,6 +159,11 @@ pub fn summary_text(r: &RunReport) -> String {
         s,
         "  added (rebound floor) {:<10.3e} {:.3e}",
         a.injected_by_rebound_floor, b.injected_by_rebound_floor
+    );
+    let _ = writeln!(
+        s,
+        "  work by the drive {:<14.6} {:.6}",
+        a.work_by_drive, b.work_by_drive
     );
     let _ = writeln!(
         s,

@@ -146,21 +146,57 @@ pub enum RuptureRule {
     ThesisAppendix,
 }
 
-/// Driving of the container. Only `none` exists so far (the shaker and shear are later issues).
+/// Driving of the container (MODEL.md 4.1): floor and lid move together as
+/// `z_w(t) = A sin(omega t)`. Give either `amplitude` and `omega`, or `gamma` and `e_star`
+/// (`E*` for wet scenes, `E_d*` for dry ones), converted as in MODEL.md 4.1.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DriveSpec {
     #[serde(default)]
     pub kind: DriveKind,
+    /// Amplitude `A` of the container motion.
+    #[serde(default)]
+    pub amplitude: Option<f64>,
+    /// Angular frequency `omega`.
+    #[serde(default)]
+    pub omega: Option<f64>,
+    /// Peak acceleration `Gamma = A omega^2 / g`.
+    #[serde(default)]
+    pub gamma: Option<f64>,
+    /// Driving energy `E* = m (A omega)^2 / (2 E_cb)` (wet) or `E_d* = m (A omega)^2 / (2 m g d)`
+    /// (dry).
+    #[serde(default)]
+    pub e_star: Option<f64>,
+    /// How wall collision times are found.
+    #[serde(default)]
+    pub wall_solver: WallSolverKind,
+    /// Gap tolerance of the wall-root solver, in units of `d` (default 1e-10).
+    #[serde(default)]
+    pub root_tolerance: Option<f64>,
 }
 
 /// The kind of drive.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DriveKind {
+    /// Static floor and lid.
     #[default]
     None,
+    /// Floor and lid shaken sinusoidally along the vertical axis.
+    Sine,
 }
+
+/// Wall-collision solver for the shaken container (MODEL.md 6).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WallSolverKind {
+    /// Conservative advancement with the curvature bound `g + A omega^2`: cannot skip a root.
+    #[default]
+    Exact,
+}
+
+/// Default gap tolerance of the wall-root solver.
+pub const DEFAULT_ROOT_TOLERANCE: f64 = 1e-10;
 
 /// Initial state: a regular lattice filled from the floor up, Gaussian velocities.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -304,6 +340,29 @@ impl Scene {
     /// Smallest and largest diameter (MODEL.md Eq. 2.22: `d (1 -+ sqrt(3) sigma_p)`).
     pub fn diameter_range(&self) -> (f64, f64) {
         crate::physics::size::diameter_range(self.particles.diameter, self.particles.polydispersity)
+    }
+
+    /// Container motion `(A, omega)` of a shaken scene, converted from `(Gamma, E*)` where those
+    /// are given (MODEL.md 4.1): `v_w = sqrt(2 E* E_cb / m)` (dry: `sqrt(2 E_d* g d)`),
+    /// `omega = Gamma g / v_w`, `A = v_w^2 / (Gamma g)`. `None` without a drive.
+    pub fn drive_motion(&self) -> Option<(f64, f64)> {
+        let d = &self.drive;
+        if d.kind == DriveKind::None {
+            return None;
+        }
+        if let (Some(a), Some(w)) = (d.amplitude, d.omega) {
+            return Some((a, w));
+        }
+        let (gamma, e_star) = (d.gamma?, d.e_star?);
+        let energy_unit = if self.is_wet() && self.e_cb() > 0.0 {
+            self.e_cb()
+        } else {
+            self.particles.mass * self.gravity * self.particles.diameter
+        };
+        let v_w = (2.0 * e_star * energy_unit / self.particles.mass).sqrt();
+        let omega = gamma * self.gravity / v_w;
+        let amplitude = v_w * v_w / (gamma * self.gravity);
+        Some((amplitude, omega))
     }
 
     /// Initial granular temperature in absolute units.

@@ -257,6 +257,76 @@ impl Scene {
             }
         }
 
+        // Drive.
+        let drive = &self.drive;
+        match drive.kind {
+            super::DriveKind::None => {
+                let given = [
+                    ("drive.amplitude", drive.amplitude.is_some()),
+                    ("drive.omega", drive.omega.is_some()),
+                    ("drive.gamma", drive.gamma.is_some()),
+                    ("drive.e_star", drive.e_star.is_some()),
+                    ("drive.root_tolerance", drive.root_tolerance.is_some()),
+                ];
+                if let Some((key, _)) = given.iter().find(|(_, g)| *g) {
+                    return Err(c.err(
+                        key,
+                        "is set but drive.kind = \"none\": set kind = \"sine\" or remove the key"
+                            .into(),
+                    ));
+                }
+            }
+            super::DriveKind::Sine => {
+                if self.gravity <= 0.0 {
+                    return Err(c.err(
+                        "drive.kind",
+                        "= \"sine\" needs gravity > 0 (Gamma and E* are defined through g)".into(),
+                    ));
+                }
+                let physical = drive.amplitude.is_some() || drive.omega.is_some();
+                let reduced = drive.gamma.is_some() || drive.e_star.is_some();
+                if physical == reduced {
+                    return Err(c.err(
+                        "drive",
+                        "a sine drive needs exactly one pair: amplitude and omega, or gamma and \
+                         e_star"
+                            .into(),
+                    ));
+                }
+                let pairs = if physical {
+                    [("drive.amplitude", drive.amplitude), ("drive.omega", drive.omega)]
+                } else {
+                    [("drive.gamma", drive.gamma), ("drive.e_star", drive.e_star)]
+                };
+                for (key, value) in pairs {
+                    match value {
+                        None => {
+                            return Err(c.err(key, "is missing: it comes in a pair".into()));
+                        }
+                        Some(v) if key == "drive.amplitude" => c.non_negative(key, v)?,
+                        Some(v) => c.positive(key, v)?,
+                    }
+                }
+                if let Some(tol) = drive.root_tolerance {
+                    c.positive("drive.root_tolerance", tol)?;
+                }
+                if let Some((a, _)) = self.drive_motion() {
+                    let h = size[dim - 1];
+                    let (_, d_max) = self.diameter_range();
+                    if h <= 2.0 * a + d_max {
+                        return Err(c.err(
+                            &format!("box.size[{}]", dim - 1),
+                            format!(
+                                "= {h} is out of range: the shaken box must be taller than \
+                                 2 A + d_max = {:.4}",
+                                2.0 * a + d_max
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+
         // Initial state.
         let init = &self.initial;
         match (init.temperature, init.temperature_over_ecb) {

@@ -27,7 +27,8 @@ use super::queue::EventQueue;
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
 use crate::physics::flight::{linear_time_to_plane, parabola_time_down, parabola_time_up};
-use crate::scene::{Boundary, RuptureRule, Scene};
+use crate::physics::shaken_wall::{WallMotion, WallRoot, exact_root};
+use crate::scene::{Boundary, DEFAULT_ROOT_TOLERANCE, RuptureRule, Scene};
 use crate::sim::initial::initial_state;
 use nalgebra::SVector;
 use serde::Serialize;
@@ -105,6 +106,9 @@ pub struct EventCounts {
     pub bridge_formations: u64,
     pub bridge_ruptures: u64,
     pub well_bounces: u64,
+    /// Shaken walls: scheduled re-checks of a particle that did not reach a wall within the
+    /// solver's horizon (no velocity change).
+    pub wall_rechecks: u64,
     /// Pair events found stale when popped (partner changed course) and re-predicted.
     pub invalidated: u64,
 }
@@ -118,6 +122,7 @@ impl EventCounts {
             + self.well_bounces
             + self.bridge_ruptures
             + self.invalidated
+            + self.wall_rechecks
     }
 }
 
@@ -132,6 +137,8 @@ pub struct EnergyLedger {
     pub dissipated_ruptures: f64,
     /// Energy added by the rebound floor (collapse remedy); zero in elastic systems.
     pub injected_by_rebound_floor: f64,
+    /// Work done on the particles by the shaken walls.
+    pub work_by_drive: f64,
 }
 
 impl EnergyLedger {
@@ -139,6 +146,7 @@ impl EnergyLedger {
     pub fn total_accounted(&self) -> f64 {
         self.kinetic + self.potential + self.dissipated_restitution + self.dissipated_ruptures
             - self.injected_by_rebound_floor
+            - self.work_by_drive
     }
 }
 
@@ -168,6 +176,10 @@ struct Params<const D: usize> {
     e_cb: f64,
     rule: RuptureRule,
     overlap_tolerance: f64,
+    /// Floor and lid motion (MODEL.md 4.1), `None` for static walls.
+    drive: Option<WallMotion>,
+    /// Gap tolerance of the wall-root solver.
+    root_tolerance: f64,
 }
 
 /// The event-driven simulation state.
@@ -193,6 +205,7 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
     dissipated_restitution: f64,
     dissipated_ruptures: f64,
     injected: f64,
+    work_by_drive: f64,
     /// Events whose time lay before the current time by more than round-off (must stay 0).
     time_reversals: u64,
     /// Original index (scene order) of the particle stored at each internal index.
@@ -250,6 +263,15 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             e_cb: scene.e_cb(),
             rule: scene.capillary.rupture_rule,
             overlap_tolerance: scene.engine.overlap_tolerance,
+            drive: scene.drive_motion().map(|(amplitude, omega)| WallMotion {
+                amplitude,
+                omega,
+                g: scene.gravity,
+            }),
+            root_tolerance: scene
+                .drive
+                .root_tolerance
+                .unwrap_or(DEFAULT_ROOT_TOLERANCE),
         };
         let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
         let mut engine = Self {
@@ -282,6 +304,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             dissipated_restitution: 0.0,
             dissipated_ruptures: 0.0,
             injected: 0.0,
+            work_by_drive: 0.0,
             time_reversals: 0,
             id: (0..n as u32).collect(),
             slot_of: (0..n as u32).collect(),
@@ -594,12 +617,40 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             if self.p.periodic[k] {
                 continue;
             }
-            let (t_lid, t_floor) = self.times_to_planes(i, k, r, self.p.size[k] - r);
+            let (t_lid, t_floor) = match self.p.drive {
+                Some(w) if k == D - 1 => self.shaken_wall_times(i, &w),
+                _ => self.times_to_planes(i, k, r, self.p.size[k] - r),
+            };
             best.keep_earlier(t_lid, k, true);
             best.keep_earlier(t_floor, k, false);
         }
         best.time += self.time;
         best
+    }
+
+    /// Times until particle `i` meets the shaken lid and floor (MODEL.md 6), by conservative
+    /// advancement (`physics::shaken_wall::exact_root`). The search looks two periods ahead; a
+    /// particle that meets neither gets a re-check at the horizon (a wall event that finds no
+    /// contact and only re-predicts). The lid is the floor problem mirrored: depth below the
+    /// lid's mean position, velocity reversed, gravity pointing away, wall phase shifted by pi.
+    fn shaken_wall_times(&self, i: usize, w: &WallMotion) -> (f64, f64) {
+        let b = &self.body[i];
+        let (z, vz, r) = (b.x[D - 1], b.v[D - 1], b.r);
+        let t = self.time;
+        let horizon = 2.0 * w.period();
+        let tol = self.p.root_tolerance;
+        let floor = match exact_root(w, z - r, vz, t, tol, horizon) {
+            WallRoot::Hit(dt) => dt,
+            WallRoot::None => horizon,
+        };
+        let lid_motion = WallMotion { g: -w.g, ..*w };
+        let half_period = 0.5 * w.period();
+        let h_lid = self.p.size[D - 1] - z - r;
+        let lid = match exact_root(&lid_motion, h_lid, -vz, t + half_period, tol, horizon) {
+            WallRoot::Hit(dt) => dt,
+            WallRoot::None => f64::INFINITY,
+        };
+        (lid, floor)
     }
 
     #[inline]
@@ -828,6 +879,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
 
     /// Collision with a flat static wall: `v_n' = e_w v_n` reversed.
     fn wall_collision(&mut self, i: usize, axis: usize, lid: bool) {
+        if let Some(w) = self.p.drive
+            && axis == D - 1
+        {
+            self.shaken_wall_collision(i, &w, lid);
+            return;
+        }
         self.advance(i, self.time);
         self.count[i] = self.count[i].wrapping_add(1);
         self.counts.wall_collisions += 1;
@@ -860,6 +917,51 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         }
         self.body[i].v[axis] = if lid { -u_out } else { u_out };
         self.last_collision[i] = self.time;
+    }
+
+    /// Collision with the shaken floor or lid, `v' = v_w + e_w (v_w - v)` along the normal
+    /// (MODEL.md 4.1), with the collapse remedies applied to the speed relative to the wall. An
+    /// event that finds the particle away from the wall is a re-check and changes nothing.
+    fn shaken_wall_collision(&mut self, i: usize, w: &WallMotion, lid: bool) {
+        let t = self.time;
+        self.advance(i, t);
+        let b = self.body[i];
+        let (z, vz) = (b.x[D - 1], b.v[D - 1]);
+        let (z_w, v_w) = (w.position(t), w.velocity(t));
+        // Gap and approach speed in the wall's frame, both positive when the particle is on the
+        // right side and approaching.
+        let (gap, u_in) = if lid {
+            (self.p.size[D - 1] + z_w - z - b.r, vz - v_w)
+        } else {
+            (z - b.r - z_w, v_w - vz)
+        };
+        let contact = gap <= 1e3 * self.p.root_tolerance + 1e-12;
+        let approaching = if lid { u_in > 0.0 } else { u_in >= 0.0 };
+        if !(contact && approaching) {
+            // The caller re-predicts.
+            self.counts.wall_rechecks += 1;
+            return;
+        }
+        self.count[i] = self.count[i].wrapping_add(1);
+        self.counts.wall_collisions += 1;
+        let since = t - self.last_collision[i];
+        let mut u_out = rebound_speed(u_in, self.p.e_wall, since, self.p.tc, self.p.min_rebound);
+        if !lid {
+            // As on the static floor: no grain leaves the floor slower than the rebound floor.
+            u_out = u_out.max(self.p.min_rebound);
+        }
+        let v_new = if lid { v_w - u_out } else { v_w + u_out };
+        let m = self.p.mass;
+        // Loss in the wall's frame; the rest of the kinetic energy change is the wall's work.
+        let de = 0.5 * m * (u_in * u_in - u_out * u_out);
+        if de >= 0.0 {
+            self.dissipated_restitution += de;
+        } else {
+            self.injected -= de;
+        }
+        self.work_by_drive += 0.5 * m * (v_new * v_new - vz * vz) + de;
+        self.body[i].v[D - 1] = v_new;
+        self.last_collision[i] = t;
     }
 
     /// Moves `i` into the neighbouring cell and scans only the newly adjacent slab.
@@ -921,6 +1023,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             dissipated_restitution: self.dissipated_restitution,
             dissipated_ruptures: self.dissipated_ruptures,
             injected_by_rebound_floor: self.injected,
+            work_by_drive: self.work_by_drive,
         }
     }
 
@@ -1105,10 +1208,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 return Err(format!("particle {i} has a non-finite state at t = {t}"));
             }
             for k in 0..D {
+                // The shaken floor and lid move by z_w(t).
+                let shift = match self.p.drive {
+                    Some(w) if k == D - 1 => w.position(t),
+                    _ => 0.0,
+                };
+                let r = self.body[i].r;
                 let (lo, hi) = if self.p.periodic[k] {
                     (0.0, self.p.size[k])
                 } else {
-                    (self.body[i].r, self.p.size[k] - self.body[i].r)
+                    (r + shift, self.p.size[k] - r + shift)
                 };
                 if x[k] < lo - tol || x[k] > hi + tol {
                     return Err(format!(
@@ -1116,12 +1225,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                         x[k]
                     ));
                 }
+                // Edge cells of a wall axis extend outwards (the shaken floor leaves the grid).
                 let w = self.grid.width[k];
-                let c = self.cell[i][k] as f64;
-                if x[k] < c * w - tol || x[k] > (c + 1.0) * w + tol {
+                let c = self.cell[i][k];
+                let open_lo = !self.p.periodic[k] && c == 0;
+                let open_hi = !self.p.periodic[k] && c == self.grid.n[k] - 1;
+                let (c_lo, c_hi) = (c as f64 * w, (c as f64 + 1.0) * w);
+                if (!open_lo && x[k] < c_lo - tol) || (!open_hi && x[k] > c_hi + tol) {
                     return Err(format!(
-                        "particle {i} at {} is not in its cell {} along axis {k} at t = {t}",
-                        x[k], c
+                        "particle {i} at {} is not in its cell {c} along axis {k} at t = {t}",
+                        x[k]
                     ));
                 }
             }
