@@ -121,7 +121,14 @@ pub fn exact_root(w: &WallMotion, h: f64, v: f64, t0: f64, tol: f64, horizon: f6
 /// Independent reference: steps of `step` (much finer than a period) until the gap changes
 /// sign, then bisects to round-off. Tangential roots narrower than `step` can be missed, so this
 /// is a test oracle, not an engine solver.
-pub fn reference_root(w: &WallMotion, h: f64, v: f64, t0: f64, step: f64, horizon: f64) -> WallRoot {
+pub fn reference_root(
+    w: &WallMotion,
+    h: f64,
+    v: f64,
+    t0: f64,
+    step: f64,
+    horizon: f64,
+) -> WallRoot {
     let (s0, ds0) = w.gap(h, v, t0, 0.0);
     if s0 <= 0.0 && ds0 < 0.0 {
         return WallRoot::Hit(0.0);
@@ -160,7 +167,11 @@ mod tests {
     #[test]
     fn static_wall_matches_the_parabola() {
         // A = 0: the root is the falling root of h + v t - g t^2 / 2 = 0.
-        let w = WallMotion { amplitude: 0.0, omega: 1.0, g: 1.0 };
+        let w = WallMotion {
+            amplitude: 0.0,
+            omega: 1.0,
+            g: 1.0,
+        };
         let (h, v) = (2.0f64, 0.5f64);
         let exact = (v + (v * v + 2.0 * h).sqrt()) / 1.0;
         match exact_root(&w, h, v, 0.3, 1e-12, 100.0) {
@@ -176,7 +187,11 @@ mod tests {
         for _ in 0..3000 {
             let gamma: f64 = rng.gen_range(0.3..20.0);
             let omega: f64 = rng.gen_range(0.5..10.0);
-            let w = WallMotion { amplitude: gamma / (omega * omega), omega, g: 1.0 };
+            let w = WallMotion {
+                amplitude: gamma / (omega * omega),
+                omega,
+                g: 1.0,
+            };
             let h = rng.gen_range(w.amplitude..(w.amplitude + 3.0));
             let v = rng.gen_range(-3.0..3.0);
             let t0 = rng.gen_range(0.0..w.period());
@@ -187,7 +202,10 @@ mod tests {
                 (WallRoot::Hit(r), WallRoot::Hit(o)) => {
                     // Ours may only be earlier than the reference by the tolerance's worth, and
                     // never later (that would mean a skipped root).
-                    assert!(o <= r + 1e-9, "skipped: ours {o}, reference {r}, {w:?} h={h} v={v}");
+                    assert!(
+                        o <= r + 1e-9,
+                        "skipped: ours {o}, reference {r}, {w:?} h={h} v={v}"
+                    );
                     let (gap, _) = w.gap(h, v, t0, o);
                     assert!((-1e-9..=1e-12).contains(&gap), "gap at our root {gap}");
                     worst_gap_time = worst_gap_time.max(r - o);
@@ -208,7 +226,11 @@ mod tests {
     fn grazing_shot_is_caught() {
         // Particle at rest relative to a wall at its lowest point... choose a trajectory that
         // touches the wall's crest: h(t) = A + small, apex at the crest time.
-        let w = WallMotion { amplitude: 0.1, omega: 2.0, g: 1.0 };
+        let w = WallMotion {
+            amplitude: 0.1,
+            omega: 2.0,
+            g: 1.0,
+        };
         let t_crest = PI / 2.0 / w.omega;
         // Apex exactly at the crest height: h + v t - t^2/2 reaches A at t = v with zero slope.
         let v = 0.5;

@@ -294,7 +294,10 @@ impl Scene {
                     ));
                 }
                 let pairs = if physical {
-                    [("drive.amplitude", drive.amplitude), ("drive.omega", drive.omega)]
+                    [
+                        ("drive.amplitude", drive.amplitude),
+                        ("drive.omega", drive.omega),
+                    ]
                 } else {
                     [("drive.gamma", drive.gamma), ("drive.e_star", drive.e_star)]
                 };

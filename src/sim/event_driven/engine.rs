@@ -268,10 +268,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 omega,
                 g: scene.gravity,
             }),
-            root_tolerance: scene
-                .drive
-                .root_tolerance
-                .unwrap_or(DEFAULT_ROOT_TOLERANCE),
+            root_tolerance: scene.drive.root_tolerance.unwrap_or(DEFAULT_ROOT_TOLERANCE),
         };
         let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
         let mut engine = Self {
