@@ -173,6 +173,9 @@ pub struct DriveSpec {
     /// Gap tolerance of the wall-root solver, in units of `d` (default 1e-10).
     #[serde(default)]
     pub root_tolerance: Option<f64>,
+    /// Step of the `bracket` solver (MODEL.md 6, B.3), default a thousandth of a period.
+    #[serde(default)]
+    pub t_min: Option<f64>,
 }
 
 /// The kind of drive.
@@ -193,6 +196,8 @@ pub enum WallSolverKind {
     /// Conservative advancement with the curvature bound `g + A omega^2`: cannot skip a root.
     #[default]
     Exact,
+    /// The thesis's reference algorithm: march by `t_min`, refine by safeguarded Newton.
+    Bracket,
 }
 
 /// Default gap tolerance of the wall-root solver.

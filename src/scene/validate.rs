@@ -267,6 +267,7 @@ impl Scene {
                     ("drive.gamma", drive.gamma.is_some()),
                     ("drive.e_star", drive.e_star.is_some()),
                     ("drive.root_tolerance", drive.root_tolerance.is_some()),
+                    ("drive.t_min", drive.t_min.is_some()),
                 ];
                 if let Some((key, _)) = given.iter().find(|(_, g)| *g) {
                     return Err(c.err(
@@ -312,6 +313,9 @@ impl Scene {
                 }
                 if let Some(tol) = drive.root_tolerance {
                     c.positive("drive.root_tolerance", tol)?;
+                }
+                if let Some(t_min) = drive.t_min {
+                    c.positive("drive.t_min", t_min)?;
                 }
                 if let Some((a, _)) = self.drive_motion() {
                     let h = size[dim - 1];

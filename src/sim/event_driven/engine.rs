@@ -27,8 +27,8 @@ use super::queue::EventQueue;
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
 use crate::physics::flight::{linear_time_to_plane, parabola_time_down, parabola_time_up};
-use crate::physics::shaken_wall::{WallMotion, WallRoot, exact_root};
-use crate::scene::{Boundary, DEFAULT_ROOT_TOLERANCE, RuptureRule, Scene};
+use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
+use crate::scene::{Boundary, DEFAULT_ROOT_TOLERANCE, RuptureRule, Scene, WallSolverKind};
 use crate::sim::initial::initial_state;
 use nalgebra::SVector;
 use serde::Serialize;
@@ -180,6 +180,9 @@ struct Params<const D: usize> {
     drive: Option<WallMotion>,
     /// Gap tolerance of the wall-root solver.
     root_tolerance: f64,
+    /// Which wall-root solver, and the `bracket` solver's step.
+    wall_solver: WallSolverKind,
+    t_min: f64,
 }
 
 /// The event-driven simulation state.
@@ -269,6 +272,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 g: scene.gravity,
             }),
             root_tolerance: scene.drive.root_tolerance.unwrap_or(DEFAULT_ROOT_TOLERANCE),
+            wall_solver: scene.drive.wall_solver,
+            t_min: scene.drive.t_min.unwrap_or_else(|| {
+                scene
+                    .drive_motion()
+                    .map_or(0.0, |(_, omega)| 2.0 * std::f64::consts::PI / omega / 1000.0)
+            }),
         };
         let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
         let mut engine = Self {
@@ -625,8 +634,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         best
     }
 
-    /// Times until particle `i` meets the shaken lid and floor (MODEL.md 6), by conservative
-    /// advancement (`physics::shaken_wall::exact_root`). The search looks two periods ahead; a
+    /// Times until particle `i` meets the shaken lid and floor (MODEL.md 6), with the scene's
+    /// solver (`physics::shaken_wall`). The search looks two periods ahead; a
     /// particle that meets neither gets a re-check at the horizon (a wall event that finds no
     /// contact and only re-predicts). The lid is the floor problem mirrored: depth below the
     /// lid's mean position, velocity reversed, gravity pointing away, wall phase shifted by pi.
@@ -636,14 +645,18 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let t = self.time;
         let horizon = 2.0 * w.period();
         let tol = self.p.root_tolerance;
-        let floor = match exact_root(w, z - r, vz, t, tol, horizon) {
+        let solve = |w: &WallMotion, h: f64, v: f64, t0: f64| match self.p.wall_solver {
+            WallSolverKind::Exact => exact_root(w, h, v, t0, tol, horizon),
+            WallSolverKind::Bracket => bracket_root(w, h, v, t0, self.p.t_min, tol, horizon),
+        };
+        let floor = match solve(w, z - r, vz, t) {
             WallRoot::Hit(dt) => dt,
             WallRoot::None => horizon,
         };
         let lid_motion = WallMotion { g: -w.g, ..*w };
         let half_period = 0.5 * w.period();
         let h_lid = self.p.size[D - 1] - z - r;
-        let lid = match exact_root(&lid_motion, h_lid, -vz, t + half_period, tol, horizon) {
+        let lid = match solve(&lid_motion, h_lid, -vz, t + half_period) {
             WallRoot::Hit(dt) => dt,
             WallRoot::None => f64::INFINITY,
         };
