@@ -107,6 +107,11 @@ pub fn exact_root(w: &WallMotion, h: f64, v: f64, t0: f64, tol: f64, horizon: f6
     loop {
         // First zero of the lower bound s + ds h - k h^2 / 2 (cancellation-free form).
         let step = 2.0 * s / ((ds * ds + 2.0 * k * s).sqrt() - ds);
+        if tau + step <= tau {
+            // The step fell below the resolution of the clock: the root is here to machine
+            // precision (a tolerance below round-off of the gap lands in this case).
+            return WallRoot::Hit(tau);
+        }
         tau += step;
         if tau > horizon {
             return WallRoot::None;
@@ -212,7 +217,11 @@ fn refine(w: &WallMotion, h: f64, v: f64, t0: f64, mut a: f64, mut b: f64, tol: 
             b = x;
         }
         let newton = if ds != 0.0 { x - s / ds } else { f64::NAN };
-        x = if newton > a && newton < b { newton } else { 0.5 * (a + b) };
+        x = if newton > a && newton < b {
+            newton
+        } else {
+            0.5 * (a + b)
+        };
         if b - a <= f64::EPSILON * b.abs().max(1.0) {
             break;
         }
@@ -331,8 +340,14 @@ mod tests {
         for _ in 0..2000 {
             let gamma: f64 = rng.gen_range(0.3..20.0);
             let omega: f64 = rng.gen_range(0.5..10.0);
-            let w = WallMotion { amplitude: gamma / (omega * omega), omega, g: 1.0 };
-            let h = rng.gen_range(0.0..(w.amplitude + 3.0)).max(w.position(0.3) + 1e-9);
+            let w = WallMotion {
+                amplitude: gamma / (omega * omega),
+                omega,
+                g: 1.0,
+            };
+            let h = rng
+                .gen_range(0.0..(w.amplitude + 3.0))
+                .max(w.position(0.3) + 1e-9);
             let v = rng.gen_range(-3.0..3.0);
             let t0 = 0.3;
             let exact = exact_root(&w, h, v, t0, 1e-13, 20.0);
@@ -357,15 +372,44 @@ mod tests {
     fn lid_problem_with_gravity_pointing_away() {
         // g < 0: the particle accelerates away from the (mirrored) lid; thrown towards it fast
         // enough it hits, otherwise never.
-        let w = WallMotion { amplitude: 0.05, omega: 4.0, g: -1.0 };
+        let w = WallMotion {
+            amplitude: 0.05,
+            omega: 4.0,
+            g: -1.0,
+        };
         for (h, v, hits) in [(1.0, -3.0, true), (1.0, -0.5, false), (1.0, 1.0, false)] {
             let e = exact_root(&w, h, v, 0.0, 1e-12, 10.0);
             let b = bracket_root(&w, h, v, 0.0, 1e-4, 1e-12, 10.0);
-            assert_eq!(matches!(e, WallRoot::Hit(_)), hits, "exact h={h} v={v}: {e:?}");
-            assert_eq!(matches!(b, WallRoot::Hit(_)), hits, "bracket h={h} v={v}: {b:?}");
+            assert_eq!(
+                matches!(e, WallRoot::Hit(_)),
+                hits,
+                "exact h={h} v={v}: {e:?}"
+            );
+            assert_eq!(
+                matches!(b, WallRoot::Hit(_)),
+                hits,
+                "bracket h={h} v={v}: {b:?}"
+            );
             if let (WallRoot::Hit(x), WallRoot::Hit(y)) = (e, b) {
                 assert!((x - y).abs() < 1e-9);
             }
+        }
+    }
+
+    #[test]
+    fn tolerance_below_round_off_terminates() {
+        // Regression: with a gap tolerance below the round-off of the gap the step underflowed
+        // the clock's resolution and the loop never ended.
+        let w = WallMotion {
+            amplitude: 0.3,
+            omega: 2.0,
+            g: 1.0,
+        };
+        for &(h, v, t0) in &[(3.0, -1.0, 1234.5), (0.5, 0.3, 0.7), (2.0, 2.0, 1e6)] {
+            assert!(matches!(
+                exact_root(&w, h, v, t0, 0.0, 50.0),
+                WallRoot::Hit(_)
+            ));
         }
     }
 

@@ -274,9 +274,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             root_tolerance: scene.drive.root_tolerance.unwrap_or(DEFAULT_ROOT_TOLERANCE),
             wall_solver: scene.drive.wall_solver,
             t_min: scene.drive.t_min.unwrap_or_else(|| {
-                scene
-                    .drive_motion()
-                    .map_or(0.0, |(_, omega)| 2.0 * std::f64::consts::PI / omega / 1000.0)
+                scene.drive_motion().map_or(0.0, |(_, omega)| {
+                    2.0 * std::f64::consts::PI / omega / 1000.0
+                })
             }),
         };
         let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());

@@ -18,6 +18,8 @@
 //!   `T_g / E_cb = 20`;
 //! - (c') the same system dry (no bridges) at the same absolute temperature.
 
+pub mod wall;
+
 use crate::scene::{
     Boundary, BoxSpec, CapillaryModel, CapillarySpec, ContactSpec, DriveSpec, EngineSpec,
     InitialSpec, ParticleSpec, RunSpec, RuptureRule, Scene, lattice,
@@ -36,12 +38,16 @@ const MIN_WARMUP: u64 = 500;
 /// or `engine:LABELS` with a comma-separated subset of `a,b,c,c'` (e.g. `engine:a` to profile
 /// one system).
 pub fn run(which: &str, repeat: usize, scale: f64) -> Result<(), String> {
+    if which == "wall" {
+        print!("{}", wall::report(&wall::measure(repeat, scale)));
+        return Ok(());
+    }
     let only: Option<Vec<&str>> = match which.split_once(':') {
         None if which == "engine" => None,
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine` or `engine:LABELS` (LABELS from a,b,c,c')"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c') or `wall`"
             ));
         }
     };
