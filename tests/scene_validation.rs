@@ -150,6 +150,11 @@ bad_scenes! {
     // Engine.
     engine_tc_negative,
     engine_min_rebound_zero_with_gravity,
+    engine_min_rebound_too_large,
+    engine_min_rebound_zero_with_bridges,
+    engine_inelastic_without_collapse_remedy,
+    engine_overlap_tolerance_too_large,
+    run_sample_interval_too_small,
     drive_amplitude_without_sine,
     drive_gamma_without_e_star,
     drive_both_pairs,

@@ -158,7 +158,7 @@ pub fn summary_text(r: &RunReport) -> String {
     let _ = writeln!(
         s,
         "  added (rebound floor) {:<10.3e} {:.3e}",
-        a.injected_by_rebound_floor, b.injected_by_rebound_floor
+        a.added_by_collapse_remedies, b.added_by_collapse_remedies
     );
     let _ = writeln!(
         s,

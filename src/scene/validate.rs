@@ -8,6 +8,9 @@ use std::fmt;
 /// Largest neighbour grid the engine is allowed to allocate (2^28 cells, 1 GiB of list heads).
 const MAX_CELLS: usize = 1 << 28;
 
+/// Fewest neighbour cells a periodic axis may have (see the check in `validate`).
+pub const MIN_PERIODIC_CELLS: i32 = 4;
+
 /// Why a scene was rejected.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneError {
@@ -392,6 +395,17 @@ impl Scene {
         // Run.
         c.positive("run.duration", self.run.duration)?;
         c.non_negative("run.sample_interval", self.run.sample_interval)?;
+        if self.run.sample_interval > 0.0 && self.run.duration / self.run.sample_interval > 1e7 {
+            return Err(c.err(
+                "run.sample_interval",
+                format!(
+                    "= {} is out of range: at most 1e7 samples per run, so >= run.duration / 1e7 \
+                     = {:e}",
+                    self.run.sample_interval,
+                    self.run.duration / 1e7
+                ),
+            ));
+        }
         if self.run.max_events == Some(0) {
             return Err(c.err("run.max_events", "= 0 is out of range: must be >= 1".into()));
         }
@@ -400,6 +414,24 @@ impl Scene {
         let e = &self.engine;
         c.non_negative("engine.tc", e.tc)?;
         c.non_negative("engine.min_rebound_speed", e.min_rebound_speed)?;
+        if e.min_rebound_speed >= 0.1 {
+            return Err(c.err(
+                "engine.min_rebound_speed",
+                format!(
+                    "= {} is out of range: must be < 0.1 (a collapse remedy, far below thermal \
+                     speeds)",
+                    e.min_rebound_speed
+                ),
+            ));
+        }
+        if self.is_wet() && e.min_rebound_speed <= 0.0 {
+            return Err(c.err(
+                "engine.min_rebound_speed",
+                "= 0 is out of range: must be > 0 with bridges (a bonded pair grazing the well \
+                 wall would bounce ever faster)"
+                    .into(),
+            ));
+        }
         if self.gravity > 0.0 && e.min_rebound_speed <= 0.0 {
             return Err(c.err(
                 "engine.min_rebound_speed",
@@ -410,7 +442,27 @@ impl Scene {
                 ),
             ));
         }
+        let inelastic = self.contact.restitution < 1.0 || self.contact.wall_restitution < 1.0;
+        if inelastic && e.min_rebound_speed <= 0.0 && e.tc <= 0.0 {
+            return Err(c.err(
+                "engine.min_rebound_speed",
+                "= 0 together with engine.tc = 0 leaves inelastic collisions without a collapse \
+                 remedy: set min_rebound_speed > 0 or tc > 0"
+                    .into(),
+            ));
+        }
         c.positive("engine.overlap_tolerance", e.overlap_tolerance)?;
+        if e.overlap_tolerance > 0.01 * p.diameter {
+            return Err(c.err(
+                "engine.overlap_tolerance",
+                format!(
+                    "= {} is out of range: must be <= 0.01 d = {} (it is what the invariant check \
+                     forgives)",
+                    e.overlap_tolerance,
+                    0.01 * p.diameter
+                ),
+            ));
+        }
         c.non_negative("engine.cell_size", e.cell_size)?;
         let range = d_max + self.s_crit();
         if e.cell_size > 0.0 && e.cell_size < range {
@@ -424,14 +476,18 @@ impl Scene {
         }
         let cell = e.cell_size.max(range);
         for k in 0..dim {
-            if boundaries[k] == Boundary::Periodic && size[k] < 3.0 * cell {
+            // Counted exactly as the engine's cell grid counts them. Four cells, not three: with
+            // three, two particles in the outer cells can swap nearest image without crossing a
+            // cell face, and their collision through the seam would be missed.
+            let n_cells = (size[k] / cell).floor();
+            if boundaries[k] == Boundary::Periodic && n_cells < MIN_PERIODIC_CELLS as f64 {
                 return Err(c.err(
                     &format!("box.size[{k}]"),
                     format!(
-                        "= {} is out of range: a periodic axis must be >= 3 cells = {:.4} \
-                         (cell edge >= d_max + s_crit)",
+                        "= {} is out of range: a periodic axis must hold >= {MIN_PERIODIC_CELLS} \
+                         cells, i.e. be >= {:.4} (cell edge >= d_max + s_crit = {cell:.4})",
                         size[k],
-                        3.0 * cell
+                        MIN_PERIODIC_CELLS as f64 * cell
                     ),
                 ));
             }

@@ -150,10 +150,11 @@ impl<const D: usize> CellGrid<D> {
         out
     }
 
-    /// Whether every periodic axis has at least three cells (so the `3^D` neighbourhood holds no
-    /// cell twice).
+    /// Whether every periodic axis has at least four cells: then the `3^D` neighbourhood holds no
+    /// cell twice, and two particles in neighbouring cells are always less than half a box apart,
+    /// so the minimum image cannot switch without a cell crossing.
     pub fn neighbourhood_is_distinct(&self) -> bool {
-        (0..D).all(|k| !self.periodic[k] || self.n[k] >= 3)
+        (0..D).all(|k| !self.periodic[k] || self.n[k] >= crate::scene::MIN_PERIODIC_CELLS)
     }
 }
 

@@ -136,7 +136,7 @@ pub struct EnergyLedger {
     /// Energy removed by bridge ruptures (`E_cb` each with the reduced-mass rule).
     pub dissipated_ruptures: f64,
     /// Energy added by the rebound floor (collapse remedy); zero in elastic systems.
-    pub injected_by_rebound_floor: f64,
+    pub added_by_collapse_remedies: f64,
     /// Work done on the particles by the shaken walls.
     pub work_by_drive: f64,
 }
@@ -145,7 +145,7 @@ impl EnergyLedger {
     /// `kinetic + potential + dissipated - injected`: constant in exact arithmetic.
     pub fn total_accounted(&self) -> f64 {
         self.kinetic + self.potential + self.dissipated_restitution + self.dissipated_ruptures
-            - self.injected_by_rebound_floor
+            - self.added_by_collapse_remedies
             - self.work_by_drive
     }
 }
@@ -207,7 +207,8 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
     counts: EventCounts,
     dissipated_restitution: f64,
     dissipated_ruptures: f64,
-    injected: f64,
+    /// Energy the collapse remedies kept or added compared with plain restitution.
+    added: f64,
     work_by_drive: f64,
     /// Events whose time lay before the current time by more than round-off (must stay 0).
     time_reversals: u64,
@@ -309,7 +310,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             counts: EventCounts::default(),
             dissipated_restitution: 0.0,
             dissipated_ruptures: 0.0,
-            injected: 0.0,
+            added: 0.0,
             work_by_drive: 0.0,
             time_reversals: 0,
             id: (0..n as u32).collect(),
@@ -698,7 +699,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             let Some((i, t)) = self.queue.min() else {
                 break;
             };
-            if t > t_end {
+            if t > t_end || t == f64::INFINITY {
                 break;
             }
             self.step(i, t);
@@ -706,7 +707,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 self.reorder_by_cell();
             }
         }
-        self.time = self.time.max(t_end);
+        if t_end.is_finite() {
+            self.time = self.time.max(t_end);
+        }
         true
     }
 
@@ -815,6 +818,18 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         }
     }
 
+    /// Books a collision of normal speed `u_in` (in the frame of the partner or wall) with
+    /// coefficient `e` that left at `u_out`: plain restitution dissipates
+    /// `inertia/2 (u_in^2 - e^2 u_in^2)`; what the collapse remedies kept or added on top,
+    /// `inertia/2 (u_out^2 - e^2 u_in^2) >= 0`, is booked apart (`inertia` = `m/2` for pairs,
+    /// `m` for walls).
+    #[inline]
+    fn book_restitution(&mut self, inertia: f64, u_in: f64, e: f64, u_out: f64) {
+        let plain = e * u_in;
+        self.dissipated_restitution += 0.5 * inertia * (u_in * u_in - plain * plain);
+        self.added += 0.5 * inertia * (u_out * u_out - plain * plain);
+    }
+
     /// Unit normal from `j` to `i` and the normal relative velocity, both particles at `time`.
     fn normal(&mut self, i: usize, j: usize) -> (Vector<D>, f64) {
         let t = self.time;
@@ -838,13 +853,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             let du = u_out - u;
             self.body[i].v += n * (0.5 * du);
             self.body[j].v -= n * (0.5 * du);
-            // mu/2 (u^2 - u_out^2) with mu = m/2; negative if the rebound floor added energy.
-            let de = 0.25 * self.p.mass * (u * u - u_out * u_out);
-            if de >= 0.0 {
-                self.dissipated_restitution += de;
-            } else {
-                self.injected -= de;
-            }
+            self.book_restitution(0.5 * self.p.mass, -u, self.p.eps, u_out);
             self.last_collision[i] = self.time;
             self.last_collision[j] = self.time;
         }
@@ -861,14 +870,17 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let (n, u) = self.normal(i, j);
         self.count[i] = self.count[i].wrapping_add(1);
         self.count[j] = self.count[j].wrapping_add(1);
-        if u <= 0.0 {
-            // Already turning back (round-off at the well edge): nothing to do.
-            self.counts.well_bounces += 1;
-            return;
-        }
-        let u_out = match well_outcome(self.p.mass, u, self.p.e_cb, self.p.rule) {
-            WellOutcome::Bounce(u_out) => {
+        // A pair on the edge moving tangentially (u <= 0 by round-off) is treated as touching the
+        // wall with zero normal speed.
+        let u_in = u.max(0.0);
+        let u_out = match well_outcome(self.p.mass, u_in, self.p.e_cb, self.p.rule) {
+            WellOutcome::Bounce(reflected) => {
                 self.counts.well_bounces += 1;
+                // A pair grazing the concave well wall would bounce ever more often (about
+                // pi / angle bounces to slide round): it leaves the wall inwards at least at the
+                // rebound floor, and the energy that adds is booked with the collapse remedies.
+                let u_out = reflected.min(-self.p.min_rebound);
+                self.added += 0.25 * self.p.mass * (u_out * u_out - u * u);
                 u_out
             }
             WellOutcome::Rupture {
@@ -896,8 +908,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             return;
         }
         self.advance(i, self.time);
-        self.count[i] = self.count[i].wrapping_add(1);
-        self.counts.wall_collisions += 1;
         let v = self.body[i].v[axis];
         // A grain exactly at rest on a floor under gravity is pressed into it: approaching.
         let floor_under_gravity = GRAV && axis == D - 1 && !lid;
@@ -909,8 +919,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             v < 0.0
         };
         if !approaching {
+            // Round-off put the event a hair late: nothing to do (the caller re-predicts).
             return;
         }
+        self.count[i] = self.count[i].wrapping_add(1);
+        self.counts.wall_collisions += 1;
         let since = self.time - self.last_collision[i];
         let mut u_out = rebound_speed(v.abs(), self.p.e_wall, since, self.p.tc, self.p.min_rebound);
         if floor_under_gravity {
@@ -918,13 +931,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             // (zero-time bounces): no grain leaves the floor slower than the rebound floor.
             u_out = u_out.max(self.p.min_rebound);
         }
-        // m/2 (v^2 - u_out^2): e_w-restitution loss, negative if the rebound floor added energy.
-        let de = 0.5 * self.p.mass * (v * v - u_out * u_out);
-        if de >= 0.0 {
-            self.dissipated_restitution += de;
-        } else {
-            self.injected -= de;
-        }
+        self.book_restitution(self.p.mass, v.abs(), self.p.e_wall, u_out);
         self.body[i].v[axis] = if lid { -u_out } else { u_out };
         self.last_collision[i] = self.time;
     }
@@ -963,12 +970,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let v_new = if lid { v_w - u_out } else { v_w + u_out };
         let m = self.p.mass;
         // Loss in the wall's frame; the rest of the kinetic energy change is the wall's work.
+        self.book_restitution(m, u_in, self.p.e_wall, u_out);
         let de = 0.5 * m * (u_in * u_in - u_out * u_out);
-        if de >= 0.0 {
-            self.dissipated_restitution += de;
-        } else {
-            self.injected -= de;
-        }
         self.work_by_drive += 0.5 * m * (v_new * v_new - vz * vz) + de;
         self.body[i].v[D - 1] = v_new;
         self.last_collision[i] = t;
@@ -1032,7 +1035,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             potential,
             dissipated_restitution: self.dissipated_restitution,
             dissipated_ruptures: self.dissipated_ruptures,
-            injected_by_rebound_floor: self.injected,
+            added_by_collapse_remedies: self.added,
             work_by_drive: self.work_by_drive,
         }
     }
