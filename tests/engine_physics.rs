@@ -72,6 +72,7 @@ fn elastic_with_gravity_and_static_walls_conserves_total_energy() {
         // Energy really moved between kinetic and potential.
         assert!((b.kinetic - a.kinetic).abs() > 1e-3 * t0);
         assert_eq!(b.dissipated_restitution, 0.0);
+        assert_eq!(b.added_by_collapse_remedies, 0.0);
     }
 }
 
@@ -177,7 +178,11 @@ fn thin_thread_elastic_loses_exactly_ecb_per_rupture_and_counts_agree() {
             "{rule}: too few bounces to test: {c:?}"
         );
         // Mechanical energy actually lost, from the particle states alone.
-        let lost = (a.kinetic + a.potential) - (b.kinetic + b.potential);
+        // (The rebound floor may push a bonded pair grazing the well wall back inwards; that
+        // energy is booked and is orders of magnitude below a rupture.)
+        let lost =
+            (a.kinetic + a.potential) - (b.kinetic + b.potential) + b.added_by_collapse_remedies;
+        assert!(b.added_by_collapse_remedies < 1e-3 * e_cb, "{b:?}");
         let expected = per_rupture * c.bridge_ruptures as f64;
         assert!(
             (lost - expected).abs() < 1e-9 * expected,
@@ -334,6 +339,7 @@ fn same_scene_and_seed_give_identical_runs() {
     s.run.duration = 5.0;
     s.run.sample_interval = 1.0;
     let (mut a, mut b) = (run_scene(&s), run_scene(&s));
+    assert_eq!(a.invariant_violation, None);
     a.wall_seconds = 0.0;
     b.wall_seconds = 0.0;
     assert_eq!(a, b);

@@ -198,7 +198,11 @@ fn particles_on_cell_faces_and_box_edges_are_handled() {
     let mut e = Engine::<2, true, false>::new(&s);
     e.set_position(0, Vector::<2>::new(0.0, 3.0));
     e.set_velocity(0, Vector::<2>::new(-1.0, 0.0));
-    e.set_position(1, Vector::<2>::new(12.0 - 1e-16, 2.0));
+    // The largest double below the seam (12.0 - 1e-16 would round to 12.0 itself).
+    e.set_position(
+        1,
+        Vector::<2>::new(f64::from_bits(12.0f64.to_bits() - 1), 2.0),
+    );
     e.set_velocity(1, Vector::<2>::new(1.0, 0.5));
     e.set_position(2, Vector::<2>::new(6.0, 0.5));
     e.set_velocity(2, Vector::<2>::new(0.0, 0.0));
@@ -304,4 +308,211 @@ fn renumbering_particles_in_cell_order_is_a_pure_relabelling() {
     assert_eq!(a.4, b.4);
     assert_eq!(a.0, b.0);
     assert_eq!(a.1, b.1);
+}
+
+#[test]
+fn collision_through_the_periodic_seam_in_the_narrowest_legal_box() {
+    // Regression (review): with three cells per periodic axis a collision through the seam was
+    // missed. Four cells are now the minimum; this is the reviewer's geometry in that box.
+    let s = scene_with(
+        2,
+        0.0,
+        &[4.4, 10.0],
+        &["periodic", "periodic"],
+        2,
+        "[initial]\ntemperature = 0.0\n[run]\nduration = 1.0",
+    );
+    let mut e = Engine::<2, false, false>::new(&s);
+    e.set_position(0, Vector::<2>::new(0.88, 5.0));
+    e.set_position(1, Vector::<2>::new(3.41, 5.0));
+    e.set_velocity(0, Vector::<2>::new(-1.0, 0.0));
+    run_checked(&mut e, 3.0, 30, None);
+    // Through the seam the gap is 0.88 + (4.4 - 3.41) - 1 = 0.87: they meet at t = 0.87.
+    assert!(e.counts().pair_collisions >= 1);
+    let v = e.velocities();
+    assert!(v[0].norm() < 1.0 + 1e-12 && v[1].norm() < 1.0 + 1e-12);
+}
+
+#[test]
+fn random_small_systems_never_overlap_checked_after_every_event() {
+    // Missed-event oracle: tiny random systems in the smallest legal boxes, 2D and 3D, gravity on
+    // and off, dry and wet, elastic and inelastic; the invariant check after every single event
+    // catches any collision the engine failed to schedule (an overlap) or any bond stretched
+    // past s_crit.
+    let mut configs = 0;
+    for dim in [2usize, 3] {
+        for gravity in [0.0, 1.0] {
+            for wet in [false, true] {
+                for eps in [1.0, 0.8] {
+                    let cell = 1.104 + if wet { 0.0711 } else { 0.0 };
+                    let side = 4.0 * cell + 0.01;
+                    let (size, boundary, count): (Vec<f64>, Vec<&str>, usize) = if dim == 2 {
+                        (vec![side, 6.0], vec!["periodic", "wall"], 8)
+                    } else {
+                        (
+                            vec![side, side, 5.0],
+                            vec!["periodic", "periodic", "wall"],
+                            20,
+                        )
+                    };
+                    let boundary: Vec<&str> = if gravity == 0.0 {
+                        boundary.iter().map(|_| "periodic").collect()
+                    } else {
+                        boundary
+                    };
+                    let mut size = size;
+                    if gravity == 0.0 {
+                        *size.last_mut().unwrap() = side;
+                    }
+                    let cap = if wet {
+                        "[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n"
+                    } else {
+                        ""
+                    };
+                    let temp = if wet {
+                        "temperature_over_ecb = 5.0"
+                    } else {
+                        "temperature = 1.0"
+                    };
+                    let s = scene_with(
+                        dim,
+                        gravity,
+                        &size,
+                        &boundary,
+                        count,
+                        &format!(
+                            "polydispersity = 0.06\n[contact]\nrestitution = {eps:?}\n{cap}\
+                             [initial]\n{temp}\nseed = {configs}\n[run]\nduration = 1.0"
+                        ),
+                    );
+                    macro_rules! stress {
+                        ($d:literal, $g:literal, $w:literal) => {{
+                            let mut e = Engine::<$d, $g, $w>::new(&s);
+                            for k in 0..20_000u64 {
+                                e.run_until(f64::INFINITY, Some(e.counts().total() + 1));
+                                if let Err(m) = e.sanity_check() {
+                                    panic!(
+                                        "{dim}D g={gravity} wet={wet} eps={eps}: event {k}: {m}"
+                                    );
+                                }
+                            }
+                        }};
+                    }
+                    match (dim, gravity > 0.0, wet) {
+                        (2, false, false) => stress!(2, false, false),
+                        (2, false, true) => stress!(2, false, true),
+                        (2, true, false) => stress!(2, true, false),
+                        (2, true, true) => stress!(2, true, true),
+                        (3, false, false) => stress!(3, false, false),
+                        (3, false, true) => stress!(3, false, true),
+                        (3, true, false) => stress!(3, true, false),
+                        _ => stress!(3, true, true),
+                    }
+                    configs += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(configs, 16);
+}
+
+#[test]
+fn bonded_pair_sliding_along_the_well_wall_does_not_stall_the_clock() {
+    // Regression (review): a bonded pair on the well edge moving tangentially used to get an
+    // event "now" that did nothing, forever. It now leaves the wall inwards at the rebound floor.
+    for extra in [1e-15, 4e-15, -1e-12] {
+        let s = scene_with(
+            2,
+            0.0,
+            &[10.0, 10.0],
+            &["periodic", "periodic"],
+            2,
+            "[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n[initial]\ntemperature = 0.0\n[run]\nduration = 1.0",
+        );
+        let mut e = Engine::<2, false, true>::new(&s);
+        e.set_position(0, Vector::<2>::new(4.0, 5.0));
+        e.set_position(1, Vector::<2>::new(5.0005, 5.0));
+        e.set_velocity(0, Vector::<2>::new(0.01, 0.0));
+        e.set_velocity(1, Vector::<2>::new(-0.01, 0.0));
+        e.run_until(1.0, None);
+        assert_eq!(e.bridge_count(), 1);
+        // Put the pair on the well edge (1.0711 apart) moving tangentially.
+        e.set_position(0, Vector::<2>::new(4.0, 5.0));
+        e.set_position(1, Vector::<2>::new(4.0 + 1.0711 + extra, 5.0));
+        e.set_velocity(0, Vector::<2>::new(0.0, 0.5));
+        e.set_velocity(1, Vector::<2>::new(0.0, -0.5));
+        let t0 = e.time();
+        e.run_until(t0 + 5.0, Some(e.counts().total() + 200_000));
+        assert!(
+            e.time() >= t0 + 5.0,
+            "stalled at {} (extra {extra})",
+            e.time()
+        );
+        e.sanity_check().unwrap();
+    }
+}
+
+#[test]
+fn tc_model_makes_a_quick_second_collision_elastic() {
+    // Disk 0 (x = 2, moving at 1) hits disk 1 (x = 3.5, at rest) at t = 0.5 with eps = 0.5
+    // (loss m/4 (1 - 0.25) = 0.1875); disk 1 bounces off the wall at x = 5 and meets disk 0
+    // again at t = 2.5, 0.67 after disk 1's wall collision (which counts as its previous
+    // collision). With tc = 3 the second collision is elastic, with tc = 0.5 it is not.
+    for (tc, plain_loss, kept) in [(3.0, 0.375, 0.1875), (0.5, 0.375, 0.0)] {
+        let s = scene_with(
+            2,
+            0.0,
+            &[5.0, 10.0],
+            &["wall", "periodic"],
+            2,
+            &format!(
+                "[contact]\nrestitution = 0.5\n[engine]\ntc = {tc:?}\nmin_rebound_speed = 0.0\n\
+                 [initial]\ntemperature = 0.0\n[run]\nduration = 1.0"
+            ),
+        );
+        let mut e = Engine::<2, false, false>::new(&s);
+        e.set_position(0, Vector::<2>::new(2.0, 5.0));
+        e.set_position(1, Vector::<2>::new(3.5, 5.0));
+        e.set_velocity(0, Vector::<2>::new(1.0, 0.0));
+        e.run_until(2.6, None);
+        assert_eq!(e.counts().pair_collisions, 2);
+        let led = e.energy();
+        assert!(
+            (led.dissipated_restitution - plain_loss).abs() < 1e-12,
+            "tc {tc}: {led:?}"
+        );
+        assert!(
+            (led.added_by_collapse_remedies - kept).abs() < 1e-12,
+            "tc {tc}: {led:?}"
+        );
+        assert!((0.5 - led.kinetic - (plain_loss - kept)).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn wall_restitution_loses_the_formula_energy() {
+    // A disk hits a static wall obliquely with e_w = 0.7: the loss is m v_n^2 (1 - e_w^2) / 2,
+    // the tangential velocity is kept.
+    let mut s = scene_with(
+        2,
+        0.0,
+        &[6.0, 10.0],
+        &["wall", "periodic"],
+        1,
+        "[contact]\nwall_restitution = 0.7\n[initial]\ntemperature = 0.0\n[run]\nduration = 1.0",
+    );
+    s.engine.min_rebound_speed = 0.0;
+    let mut e = Engine::<2, false, false>::new(&s);
+    e.set_position(0, Vector::<2>::new(3.0, 5.0));
+    e.set_velocity(0, Vector::<2>::new(2.0, 0.3));
+    e.run_until(1.5, None);
+    assert_eq!(e.counts().wall_collisions, 1);
+    let led = e.energy();
+    let expected = 0.5 * 4.0 * (1.0 - 0.49);
+    assert!((led.dissipated_restitution - expected).abs() < 1e-14);
+    let v = e.velocities()[0];
+    assert!(
+        (v[0] + 1.4).abs() < 1e-14 && (v[1] - 0.3).abs() < 1e-15,
+        "{v:?}"
+    );
 }

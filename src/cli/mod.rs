@@ -78,6 +78,10 @@ pub fn main() -> ExitCode {
             } else {
                 print!("{}", summary_text(&report));
             }
+            if let Some(v) = &report.invariant_violation {
+                eprintln!("error: the run stopped on a broken invariant: {v}");
+                return ExitCode::from(3);
+            }
             ExitCode::SUCCESS
         }
         Command::Bench {

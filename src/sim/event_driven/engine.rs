@@ -377,14 +377,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         }
     }
 
-    /// Brings every particle to the current time (before sampling).
-    pub fn synchronize(&mut self) {
-        let t = self.time;
-        for i in 0..self.len() {
-            self.advance(i, t);
-        }
-    }
-
     /// Minimum-image separation vector `a - b`.
     /// Positions on periodic axes stay within a cell of `[0, L)` (crossings wrap them), so
     /// separations lie in `(-1.5 L, 1.5 L)` and one conditional shift suffices.
@@ -1017,15 +1009,24 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
 
     // ----- observables -------------------------------------------------------------------
 
-    /// Energy bookkeeping at the current time (synchronizes all particles).
-    pub fn energy(&mut self) -> EnergyLedger {
-        self.synchronize();
+    /// Position and velocity of every particle at the current time, in internal order. The
+    /// stored delayed states are left as they are: observing never changes the round-off of a
+    /// trajectory, so the sampling interval cannot change the physics.
+    fn current_states(&self) -> Vec<(Vector<D>, Vector<D>)> {
+        (0..self.len())
+            .map(|i| self.state_at(i, self.time))
+            .collect()
+    }
+
+    /// Energy bookkeeping at the current time.
+    pub fn energy(&self) -> EnergyLedger {
         let m = self.p.mass;
-        let kinetic = self.body.iter().map(|b| 0.5 * m * b.v.norm_squared()).sum();
+        let states = self.current_states();
+        let kinetic = states.iter().map(|(_, v)| 0.5 * m * v.norm_squared()).sum();
         let potential = if GRAV {
-            self.body
+            states
                 .iter()
-                .map(|b| m * self.p.gravity * b.x[D - 1])
+                .map(|(x, _)| m * self.p.gravity * x[D - 1])
                 .sum()
         } else {
             0.0
@@ -1040,39 +1041,39 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         }
     }
 
-    /// Total momentum (synchronizes all particles).
-    pub fn momentum(&mut self) -> Vector<D> {
-        self.synchronize();
-        self.body.iter().fold(Vector::<D>::zeros(), |a, b| a + b.v) * self.p.mass
+    /// Total momentum.
+    pub fn momentum(&self) -> Vector<D> {
+        let states = self.current_states();
+        states.iter().fold(Vector::<D>::zeros(), |a, (_, v)| a + v) * self.p.mass
     }
 
     /// Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (Eq. 3.2, `k_B = 1`, `f_d = D`).
-    pub fn granular_temperature(&mut self) -> f64 {
-        self.synchronize();
+    pub fn granular_temperature(&self) -> f64 {
+        let states = self.current_states();
         let n = self.len() as f64;
-        let mean = self.body.iter().fold(Vector::<D>::zeros(), |a, b| a + b.v) / n;
-        let mean_sq = self.body.iter().map(|b| b.v.norm_squared()).sum::<f64>() / n;
+        let mean = states.iter().fold(Vector::<D>::zeros(), |a, (_, v)| a + v) / n;
+        let mean_sq = states.iter().map(|(_, v)| v.norm_squared()).sum::<f64>() / n;
         self.p.mass * (mean_sq - mean.norm_squared()) / D as f64
     }
 
-    /// Positions at the current time (synchronizes all particles).
-    pub fn positions(&mut self) -> Vec<Vector<D>> {
-        self.synchronize();
-        self.in_scene_order(|b| b.x)
+    /// Positions at the current time, in scene order.
+    pub fn positions(&self) -> Vec<Vector<D>> {
+        let states = self.current_states();
+        self.slot_of.iter().map(|&k| states[k as usize].0).collect()
     }
 
-    /// A per-particle quantity listed in scene order (the order of the initial state).
+    /// Velocities at the current time, in scene order.
+    pub fn velocities(&self) -> Vec<Vector<D>> {
+        let states = self.current_states();
+        self.slot_of.iter().map(|&k| states[k as usize].1).collect()
+    }
+
+    /// A per-particle constant listed in scene order (the order of the initial state).
     fn in_scene_order<T: Clone>(&self, f: impl Fn(&Body<D>) -> T) -> Vec<T> {
         self.slot_of
             .iter()
             .map(|&k| f(&self.body[k as usize]))
             .collect()
-    }
-
-    /// Velocities at the current time (synchronizes all particles).
-    pub fn velocities(&mut self) -> Vec<Vector<D>> {
-        self.synchronize();
-        self.in_scene_order(|b| b.v)
     }
 
     /// Particle radii.
@@ -1205,8 +1206,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// and no bonded pair beyond `s_crit` by more than the tolerance, every particle in the
     /// cell its position says, no event scheduled in the past, no time reversal. Returns a
     /// description of the first violation.
-    pub fn sanity_check(&mut self) -> Result<(), String> {
-        self.synchronize();
+    pub fn sanity_check(&self) -> Result<(), String> {
+        let states = self.current_states();
         let tol = self.p.overlap_tolerance;
         let t = self.time;
         if self.time_reversals > 0 {
@@ -1216,7 +1217,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             ));
         }
         for i in 0..self.len() {
-            let (x, v) = (self.body[i].x, self.body[i].v);
+            let (x, v) = states[i];
             if !x.iter().chain(v.iter()).all(|a| a.is_finite()) {
                 return Err(format!("particle {i} has a non-finite state at t = {t}"));
             }
@@ -1268,7 +1269,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                     if j <= i || err.is_some() {
                         return;
                     }
-                    let r = self.min_image(self.body[i].x - self.body[j].x).norm();
+                    let r = self.min_image(states[i].0 - states[j].0).norm();
                     let sigma = self.body[i].r + self.body[j].r;
                     if r < sigma - tol {
                         err = Some(format!(
@@ -1285,7 +1286,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 let base = i * MAX_BONDS;
                 for &j in &self.bonds[base..base + self.bond_len[i] as usize] {
                     let j = j as usize;
-                    let r = self.min_image(self.body[i].x - self.body[j].x).norm();
+                    let r = self.min_image(states[i].0 - states[j].0).norm();
                     let lambda = self.body[i].r + self.body[j].r + self.p.s_crit;
                     if r > lambda + tol {
                         return Err(format!(
