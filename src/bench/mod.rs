@@ -18,6 +18,7 @@
 //!   `T_g / E_cb = 20`;
 //! - (c') the same system dry (no bridges) at the same absolute temperature.
 
+pub mod shake;
 pub mod wall;
 
 use crate::scene::{
@@ -42,12 +43,16 @@ pub fn run(which: &str, repeat: usize, scale: f64) -> Result<(), String> {
         print!("{}", wall::report(&wall::measure(repeat, scale)));
         return Ok(());
     }
+    if which == "shake" {
+        print!("{}", shake::report(&shake::measure(40, scale)));
+        return Ok(());
+    }
     let only: Option<Vec<&str>> = match which.split_once(':') {
         None if which == "engine" => None,
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c') or `wall`"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall` or `shake`"
             ));
         }
     };

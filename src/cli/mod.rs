@@ -30,7 +30,8 @@ pub enum Command {
     /// Measure the engine's speed on the reference systems and print the figures.
     Bench {
         /// Which benchmark: `engine` (collisions/s for the reference systems of the
-        /// performance doc).
+        /// performance doc), `wall` (error and cost of the shaken-wall solvers), `shake` (the
+        /// shaken standard wet system with each wall solver).
         #[arg(default_value = "engine")]
         which: String,
         /// Repetitions per system (the median is reported).
