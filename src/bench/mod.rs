@@ -39,8 +39,24 @@ const MIN_WARMUP: u64 = 500;
 /// or `engine:LABELS` with a comma-separated subset of `a,b,c,c'` (e.g. `engine:a` to profile
 /// one system).
 pub fn run(which: &str, repeat: usize, scale: f64) -> Result<(), String> {
+    run_with_svg(which, repeat, scale, None)
+}
+
+/// Like [`run`]; `wall` also writes its error-against-cost plot to `svg` if given.
+pub fn run_with_svg(
+    which: &str,
+    repeat: usize,
+    scale: f64,
+    svg: Option<&std::path::Path>,
+) -> Result<(), String> {
     if which == "wall" {
-        print!("{}", wall::report(&wall::measure(repeat, scale)));
+        let rows = wall::measure(repeat, scale);
+        print!("{}", wall::report(&rows));
+        if let Some(path) = svg {
+            std::fs::write(path, wall::svg(&rows))
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            println!("plot written to {}", path.display());
+        }
         return Ok(());
     }
     if which == "shake" {

@@ -178,5 +178,111 @@ mod tests {
         // A coarse bracket misses grazing roots that the fine one catches.
         let bracket: Vec<&WallRow> = rows.iter().filter(|r| r.solver == "bracket").collect();
         assert!(bracket.first().unwrap().wrong_fraction >= bracket.last().unwrap().wrong_fraction);
+        // The plot has one marker per setting.
+        let plot = svg(&rows);
+        let markers = plot.matches("<circle").count() + plot.matches("<rect x=").count();
+        assert_eq!(markers, rows.len());
     }
+}
+
+/// A log-log SVG of the largest time error against the cost per prediction, one marker per
+/// solver setting (exact: circles, bracket: squares), labelled with the knob; settings with
+/// wrong roots are drawn in red. Hand-written SVG: no plotting dependency.
+pub fn svg(rows: &[WallRow]) -> String {
+    let (w, h, margin, right) = (820.0, 440.0, 70.0, 230.0);
+    let xs: Vec<f64> = rows
+        .iter()
+        .map(|r| r.ns_per_prediction.max(1.0).log10())
+        .collect();
+    let ys: Vec<f64> = rows
+        .iter()
+        .map(|r| r.max_error.max(1e-16).log10())
+        .collect();
+    let (x0, x1) = (
+        xs.iter().cloned().fold(f64::INFINITY, f64::min).floor(),
+        xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max).ceil(),
+    );
+    let (y0, y1) = (
+        ys.iter().cloned().fold(f64::INFINITY, f64::min).floor(),
+        ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max).ceil(),
+    );
+    let px = |x: f64| margin + (x - x0) / (x1 - x0).max(1.0) * (w - margin - right);
+    let py = |y: f64| h - margin - (y - y0) / (y1 - y0).max(1.0) * (h - 2.0 * margin);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">"
+    );
+    let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
+    let _ = writeln!(
+        s,
+        "<text x=\"{}\" y=\"20\" text-anchor=\"middle\" font-size=\"13\">Shaken-wall solvers: largest collision-time error against cost</text>",
+        w / 2.0
+    );
+    for k in x0 as i32..=x1 as i32 {
+        let x = px(k as f64);
+        let _ = writeln!(
+            s,
+            "<line x1=\"{x}\" y1=\"{}\" x2=\"{x}\" y2=\"{}\" stroke=\"#ddd\"/><text x=\"{x}\" y=\"{}\" text-anchor=\"middle\">1e{k}</text>",
+            margin,
+            h - margin,
+            h - margin + 16.0
+        );
+    }
+    for k in y0 as i32..=y1 as i32 {
+        let y = py(k as f64);
+        let _ = writeln!(
+            s,
+            "<line x1=\"{margin}\" y1=\"{y}\" x2=\"{}\" y2=\"{y}\" stroke=\"#ddd\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\">1e{k}</text>",
+            w - right,
+            margin - 6.0,
+            y + 4.0
+        );
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">nanoseconds per wall-event prediction</text>",
+        (w - right + margin) / 2.0,
+        h - 20.0
+    );
+    let _ = writeln!(
+        s,
+        "<text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">largest |dt| error (sqrt(d/g))</text>",
+        h / 2.0,
+        h / 2.0
+    );
+    for (k, (r, (&x, &y))) in rows.iter().zip(xs.iter().zip(&ys)).enumerate() {
+        let (cx, cy) = (px(x), py(y));
+        // Alternate labels above and below so neighbouring markers stay readable.
+        let label_dy = if k % 2 == 0 { -7.0 } else { 15.0 };
+        let colour = if r.wrong_fraction > 0.0 {
+            "#c0392b"
+        } else {
+            "#2c3e50"
+        };
+        if r.solver == "exact" {
+            let _ = writeln!(
+                s,
+                "<circle cx=\"{cx}\" cy=\"{cy}\" r=\"5\" fill=\"{colour}\"/>"
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{colour}\"/>",
+                cx - 5.0,
+                cy - 5.0
+            );
+        }
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\">{} {} ({:.2}% wrong)</text>",
+            cx + 8.0,
+            cy + label_dy,
+            r.solver,
+            r.knob,
+            100.0 * r.wrong_fraction
+        );
+    }
+    s.push_str("</svg>\n");
+    s
 }

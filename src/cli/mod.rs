@@ -40,6 +40,9 @@ pub enum Command {
         /// Scale the run lengths (events per repetition) by this factor.
         #[arg(long, default_value_t = 1.0)]
         scale: f64,
+        /// `wall` only: also write the error-against-cost plot as SVG to this file.
+        #[arg(long)]
+        svg: Option<PathBuf>,
     },
 }
 
@@ -89,7 +92,8 @@ pub fn main() -> ExitCode {
             which,
             repeat,
             scale,
-        } => match bench::run(&which, repeat.max(1), scale) {
+            svg,
+        } => match bench::run_with_svg(&which, repeat.max(1), scale, svg.as_deref()) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");
