@@ -160,31 +160,6 @@ pub fn report(rows: &[WallRow]) -> String {
     s
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn exact_solver_has_no_wrong_roots_and_errors_shrink_with_tolerance() {
-        let rows = measure(1, 0.05);
-        let exact: Vec<&WallRow> = rows.iter().filter(|r| r.solver == "exact").collect();
-        // A loose gap tolerance can land far from a grazing root in time (counted as wrong);
-        // from 1e-8 on, every root is the reference's.
-        assert!(
-            exact[1..].iter().all(|r| r.wrong_fraction == 0.0),
-            "{exact:?}"
-        );
-        assert!(exact.last().unwrap().max_error < exact.first().unwrap().max_error);
-        // A coarse bracket misses grazing roots that the fine one catches.
-        let bracket: Vec<&WallRow> = rows.iter().filter(|r| r.solver == "bracket").collect();
-        assert!(bracket.first().unwrap().wrong_fraction >= bracket.last().unwrap().wrong_fraction);
-        // The plot has one marker per setting.
-        let plot = svg(&rows);
-        let markers = plot.matches("<circle").count() + plot.matches("<rect x=").count();
-        assert_eq!(markers, rows.len());
-    }
-}
-
 /// A log-log SVG of the largest time error against the cost per prediction, one marker per
 /// solver setting (exact: circles, bracket: squares), labelled with the knob; settings with
 /// wrong roots are drawn in red. Hand-written SVG: no plotting dependency.
@@ -285,4 +260,29 @@ pub fn svg(rows: &[WallRow]) -> String {
     }
     s.push_str("</svg>\n");
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exact_solver_has_no_wrong_roots_and_errors_shrink_with_tolerance() {
+        let rows = measure(1, 0.05);
+        let exact: Vec<&WallRow> = rows.iter().filter(|r| r.solver == "exact").collect();
+        // A loose gap tolerance can land far from a grazing root in time (counted as wrong);
+        // from 1e-8 on, every root is the reference's.
+        assert!(
+            exact[1..].iter().all(|r| r.wrong_fraction == 0.0),
+            "{exact:?}"
+        );
+        assert!(exact.last().unwrap().max_error < exact.first().unwrap().max_error);
+        // A coarse bracket misses grazing roots that the fine one catches.
+        let bracket: Vec<&WallRow> = rows.iter().filter(|r| r.solver == "bracket").collect();
+        assert!(bracket.first().unwrap().wrong_fraction >= bracket.last().unwrap().wrong_fraction);
+        // The plot has one marker per setting.
+        let plot = svg(&rows);
+        let markers = plot.matches("<circle").count() + plot.matches("<rect x=").count();
+        assert_eq!(markers, rows.len());
+    }
 }
