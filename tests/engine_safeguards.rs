@@ -217,21 +217,19 @@ fn particles_on_cell_faces_and_box_edges_are_handled() {
     assert!((t1.total_accounted() - t0.total_accounted()).abs() < 1e-12);
 }
 
-#[test]
-fn regression_bonded_pair_on_the_well_edge_and_approaching_keeps_its_next_exit() {
-    // Bug pinned: right after a bounce off the well wall, round-off may leave the pair a hair
-    // outside s_crit while approaching; the engine then predicted no further well event, and a
-    // pair that missed contact drifted apart with its bridge intact. Here the pair is bonded by a
-    // slow head-on contact, then given a mostly tangential relative velocity inside the well:
-    // its impact parameter (1.0195) exceeds the contact distance, so it orbits in the annulus
-    // and only ever meets the well wall.
+/// Two disks in a gravity-free periodic box, bonded by a slow head-on contact at t ~ 0.025,
+/// at t = 1 (bridge energy `e_cb`).
+fn bonded_pair(e_cb: f64) -> Engine<2, false, true> {
     let s = scene_with(
         2,
         0.0,
         &[10.0, 10.0],
         &["periodic", "periodic"],
         2,
-        "[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 10.0\n[initial]\ntemperature = 0.0\n[run]\nduration = 1.0",
+        &format!(
+            "[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = {e_cb:?}\n\
+             [initial]\ntemperature = 0.0\n[run]\nduration = 1.0"
+        ),
     );
     let mut e = Engine::<2, false, true>::new(&s);
     e.set_position(0, Vector::<2>::new(4.0, 5.0));
@@ -240,6 +238,18 @@ fn regression_bonded_pair_on_the_well_edge_and_approaching_keeps_its_next_exit()
     e.set_velocity(1, Vector::<2>::new(-0.01, 0.0));
     e.run_until(1.0, None);
     assert_eq!(e.bridge_count(), 1);
+    e
+}
+
+#[test]
+fn regression_bonded_pair_on_the_well_edge_and_approaching_keeps_its_next_exit() {
+    // Bug pinned: right after a bounce off the well wall, round-off may leave the pair a hair
+    // outside s_crit while approaching; the engine then predicted no further well event, and a
+    // pair that missed contact drifted apart with its bridge intact. Here the pair is bonded by a
+    // slow head-on contact, then given a mostly tangential relative velocity inside the well:
+    // its impact parameter (1.0195) exceeds the contact distance, so it orbits in the annulus
+    // and only ever meets the well wall.
+    let mut e = bonded_pair(10.0);
     e.set_velocity(0, Vector::<2>::new(0.002, 1.5));
     e.set_velocity(1, Vector::<2>::new(-0.002, -1.5));
     let k0 = e.energy().kinetic;
@@ -421,21 +431,7 @@ fn bonded_pair_sliding_along_the_well_wall_does_not_stall_the_clock() {
     // Regression (review): a bonded pair on the well edge moving tangentially used to get an
     // event "now" that did nothing, forever. It now leaves the wall inwards at the rebound floor.
     for extra in [1e-15, 4e-15, -1e-12] {
-        let s = scene_with(
-            2,
-            0.0,
-            &[10.0, 10.0],
-            &["periodic", "periodic"],
-            2,
-            "[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n[initial]\ntemperature = 0.0\n[run]\nduration = 1.0",
-        );
-        let mut e = Engine::<2, false, true>::new(&s);
-        e.set_position(0, Vector::<2>::new(4.0, 5.0));
-        e.set_position(1, Vector::<2>::new(5.0005, 5.0));
-        e.set_velocity(0, Vector::<2>::new(0.01, 0.0));
-        e.set_velocity(1, Vector::<2>::new(-0.01, 0.0));
-        e.run_until(1.0, None);
-        assert_eq!(e.bridge_count(), 1);
+        let mut e = bonded_pair(0.2844);
         // Put the pair on the well edge (1.0711 apart) moving tangentially.
         e.set_position(0, Vector::<2>::new(4.0, 5.0));
         e.set_position(1, Vector::<2>::new(4.0 + 1.0711 + extra, 5.0));
