@@ -157,7 +157,7 @@ fn thin_thread_elastic_loses_exactly_ecb_per_rupture_and_counts_agree() {
     for (rule, per_rupture) in [("reduced_mass", e_cb), ("thesis_appendix", 0.5 * e_cb)] {
         let s = wet_scene(rule, 1.0, 1.0);
         assert_eq!(
-            s.capillary.rupture_rule,
+            s.rupture_rule(),
             if rule == "reduced_mass" {
                 RuptureRule::ReducedMass
             } else {

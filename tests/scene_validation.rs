@@ -150,6 +150,8 @@ bad_scenes! {
     // Engine.
     engine_tc_negative,
     engine_min_rebound_zero_with_gravity,
+    temperature_absurd,
+    capillary_rupture_rule_without_bridges,
     engine_min_rebound_too_large,
     engine_min_rebound_zero_with_bridges,
     engine_inelastic_without_collapse_remedy,

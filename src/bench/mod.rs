@@ -247,7 +247,7 @@ pub fn system_c() -> Scene {
         model: CapillaryModel::ThinThread,
         s_crit: Some(0.0711),
         e_cb: Some(0.2844),
-        rupture_rule: RuptureRule::ReducedMass,
+        rupture_rule: Some(RuptureRule::ReducedMass),
     };
     s.initial.temperature = None;
     s.initial.temperature_over_ecb = Some(20.0);

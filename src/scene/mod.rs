@@ -108,9 +108,9 @@ pub struct CapillarySpec {
     /// Bridge rupture energy `E_cb` (default `F_B s_crit` with `F_B = 4 m g`).
     #[serde(default)]
     pub e_cb: Option<f64>,
-    /// Which kinetic energy pays for a rupture (MODEL.md 3.2).
+    /// Which kinetic energy pays for a rupture (MODEL.md 3.2); default `reduced_mass`.
     #[serde(default)]
-    pub rupture_rule: RuptureRule,
+    pub rupture_rule: Option<RuptureRule>,
 }
 
 impl Default for CapillarySpec {
@@ -119,7 +119,7 @@ impl Default for CapillarySpec {
             model: CapillaryModel::None,
             s_crit: None,
             e_cb: None,
-            rupture_rule: RuptureRule::ReducedMass,
+            rupture_rule: None,
         }
     }
 }
@@ -330,6 +330,11 @@ impl Scene {
         self.capillary
             .s_crit
             .unwrap_or(DEFAULT_S_CRIT * self.particles.diameter)
+    }
+
+    /// The rupture rule in force (default `reduced_mass`).
+    pub fn rupture_rule(&self) -> RuptureRule {
+        self.capillary.rupture_rule.unwrap_or_default()
     }
 
     /// Bridge energy `E_cb` (0 for dry scenes); default `F_B s_crit`, `F_B = 4 m g`.

@@ -97,6 +97,16 @@ struct Check<'a> {
     origin: &'a str,
 }
 
+/// A number as a person would write it in the scene file: plain for ordinary magnitudes,
+/// scientific notation for very large or small ones (`1e300`, not 301 digits).
+fn num(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && (v.abs() >= 1e6 || v.abs() < 1e-4) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 impl Check<'_> {
     fn err(&self, key: &str, msg: String) -> SceneError {
         SceneError::new(self.origin, key, msg)
@@ -107,7 +117,7 @@ impl Check<'_> {
         let finite = if v.is_finite() { "" } else { "finite and " };
         self.err(
             key,
-            format!("= {v} is out of range: must be {finite}{range}"),
+            format!("= {} is out of range: must be {finite}{range}", num(v)),
         )
     }
 
@@ -133,7 +143,7 @@ impl Check<'_> {
         } else {
             Err(self.err(
                 key,
-                format!("= {v} is out of range: must be in [{lo}, {hi_text}]"),
+                format!("= {} is out of range: must be in [{lo}, {hi_text}]", num(v)),
             ))
         }
     }
@@ -228,11 +238,13 @@ impl Scene {
         let cap = &self.capillary;
         match cap.model {
             CapillaryModel::None => {
-                if cap.s_crit.is_some() || cap.e_cb.is_some() {
+                if cap.s_crit.is_some() || cap.e_cb.is_some() || cap.rupture_rule.is_some() {
                     let key = if cap.s_crit.is_some() {
                         "capillary.s_crit"
-                    } else {
+                    } else if cap.e_cb.is_some() {
                         "capillary.e_cb"
+                    } else {
+                        "capillary.rupture_rule"
                     };
                     return Err(c.err(
                         key,
@@ -354,9 +366,11 @@ impl Scene {
                         .into(),
                 ));
             }
-            (Some(t), None) => c.non_negative("initial.temperature", t)?,
+            (Some(t), None) => {
+                c.closed("initial.temperature", t, 0.0, 1e8, "1e8")?;
+            }
             (None, Some(r)) => {
-                c.non_negative("initial.temperature_over_ecb", r)?;
+                c.closed("initial.temperature_over_ecb", r, 0.0, 1e8, "1e8")?;
                 if !self.is_wet() || self.e_cb() <= 0.0 {
                     return Err(c.err(
                         "initial.temperature_over_ecb",

@@ -265,7 +265,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             min_rebound: scene.engine.min_rebound_speed,
             s_crit: scene.s_crit(),
             e_cb: scene.e_cb(),
-            rule: scene.capillary.rupture_rule,
+            rule: scene.rupture_rule(),
             overlap_tolerance: scene.engine.overlap_tolerance,
             drive: scene.drive_motion().map(|(amplitude, omega)| WallMotion {
                 amplitude,
@@ -412,7 +412,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let len = self.bond_len[i] as usize;
         assert!(
             len < MAX_BONDS,
-            "particle {i} would hold more than {MAX_BONDS} bridges at t = {}: packing is unphysical",
+            "particle {} (scene index) would hold more than {MAX_BONDS} bridges at t = {}: packing \
+             is unphysical",
+            self.id[i],
             self.time
         );
         self.bonds[i * MAX_BONDS + len] = j as u32;
@@ -1217,9 +1219,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             ));
         }
         for i in 0..self.len() {
+            // Messages name particles by their scene index.
+            let si = self.id[i];
             let (x, v) = states[i];
             if !x.iter().chain(v.iter()).all(|a| a.is_finite()) {
-                return Err(format!("particle {i} has a non-finite state at t = {t}"));
+                return Err(format!("particle {si} has a non-finite state at t = {t}"));
             }
             for k in 0..D {
                 // The shaken floor and lid move by z_w(t).
@@ -1235,7 +1239,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 };
                 if x[k] < lo - tol || x[k] > hi + tol {
                     return Err(format!(
-                        "particle {i} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
+                        "particle {si} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
                         x[k]
                     ));
                 }
@@ -1247,19 +1251,20 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 let (c_lo, c_hi) = (c as f64 * w, (c as f64 + 1.0) * w);
                 if (!open_lo && x[k] < c_lo - tol) || (!open_hi && x[k] > c_hi + tol) {
                     return Err(format!(
-                        "particle {i} at {} is not in its cell {c} along axis {k} at t = {t}",
+                        "particle {si} at {} is not in its cell {c} along axis {k} at t = {t}",
                         x[k]
                     ));
                 }
             }
             if self.queue.key(i) < t - 1e-9 * t.abs().max(1.0) {
                 return Err(format!(
-                    "particle {i} has an event in the past: {} < {t}",
+                    "particle {si} has an event in the past: {} < {t}",
                     self.queue.key(i)
                 ));
             }
         }
         for i in 0..self.len() {
+            let si = self.id[i];
             for o in &self.offsets {
                 let Some(cell) = self.grid.shifted(&self.cell[i], o) else {
                     continue;
@@ -1269,11 +1274,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                     if j <= i || err.is_some() {
                         return;
                     }
+                    let sj = self.id[j];
                     let r = self.min_image(states[i].0 - states[j].0).norm();
                     let sigma = self.body[i].r + self.body[j].r;
                     if r < sigma - tol {
                         err = Some(format!(
-                            "particles {i} and {j} overlap by {} at t = {t}",
+                            "particles {si} and {sj} overlap by {} at t = {t}",
                             sigma - r
                         ));
                     }
@@ -1286,16 +1292,17 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 let base = i * MAX_BONDS;
                 for &j in &self.bonds[base..base + self.bond_len[i] as usize] {
                     let j = j as usize;
+                    let sj = self.id[j];
                     let r = self.min_image(states[i].0 - states[j].0).norm();
                     let lambda = self.body[i].r + self.body[j].r + self.p.s_crit;
                     if r > lambda + tol {
                         return Err(format!(
-                            "bonded pair {i}-{j} stretched beyond s_crit by {} at t = {t}",
+                            "bonded pair {si}-{sj} stretched beyond s_crit by {} at t = {t}",
                             r - lambda
                         ));
                     }
                     if !self.bonded(j, i) {
-                        return Err(format!("bond {i}-{j} is one-sided"));
+                        return Err(format!("bond {si}-{sj} is one-sided"));
                     }
                 }
             }
