@@ -166,7 +166,7 @@ pub fn summary_text(r: &RunReport) -> String {
     );
     let _ = writeln!(
         s,
-        "  added (rebound floor) {:<10.3e} {:.3e}",
+        "  added (remedies)  {:<14.3e} {:.3e}",
         a.added_by_collapse_remedies, b.added_by_collapse_remedies
     );
     let _ = writeln!(

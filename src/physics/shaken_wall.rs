@@ -291,18 +291,23 @@ mod tests {
         }
     }
 
+    /// A floor motion with Gamma in [0.3, 20) and omega in [0.5, 10), g = 1.
+    fn random_motion(rng: &mut impl Rng) -> WallMotion {
+        let gamma: f64 = rng.gen_range(0.3..20.0);
+        let omega: f64 = rng.gen_range(0.5..10.0);
+        WallMotion {
+            amplitude: gamma / (omega * omega),
+            omega,
+            g: 1.0,
+        }
+    }
+
     #[test]
     fn exact_root_never_misses_the_earliest_root_on_random_shots() {
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(17);
         let mut worst_gap_time = 0.0f64;
         for _ in 0..3000 {
-            let gamma: f64 = rng.gen_range(0.3..20.0);
-            let omega: f64 = rng.gen_range(0.5..10.0);
-            let w = WallMotion {
-                amplitude: gamma / (omega * omega),
-                omega,
-                g: 1.0,
-            };
+            let w = random_motion(&mut rng);
             let h = rng.gen_range(w.amplitude..(w.amplitude + 3.0));
             let v = rng.gen_range(-3.0..3.0);
             let t0 = rng.gen_range(0.0..w.period());
@@ -338,13 +343,7 @@ mod tests {
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(23);
         let mut misses = 0;
         for _ in 0..2000 {
-            let gamma: f64 = rng.gen_range(0.3..20.0);
-            let omega: f64 = rng.gen_range(0.5..10.0);
-            let w = WallMotion {
-                amplitude: gamma / (omega * omega),
-                omega,
-                g: 1.0,
-            };
+            let w = random_motion(&mut rng);
             let h = rng
                 .gen_range(0.0..(w.amplitude + 3.0))
                 .max(w.position(0.3) + 1e-9);
