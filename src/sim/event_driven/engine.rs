@@ -1114,67 +1114,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.predict_all(i);
     }
 
-    /// Re-predicts every particle (after a batch of `set_*` calls).
-    pub fn repredict_everything(&mut self) {
-        for i in 0..self.len() {
-            self.predict_all(i);
-        }
-    }
-
-    /// One line describing the events stored for particle `i` (scene order; debugging aid).
-    /// Indices inside the line are internal ones.
-    pub fn describe_particle(&self, i: usize) -> String {
-        let i = self.slot_of[i] as usize;
-        let pe = self.pair_ev[i];
-        format!(
-            "i={i} key={:.17} pair=({:.17},{},{:?},count_ok={}) cross={:.17} wall={:.17} cell={:?} bonds={:?}",
-            self.queue.key(i),
-            pe.time,
-            pe.partner,
-            pe.kind,
-            pe.partner != NONE && self.count[pe.partner as usize] == pe.partner_count,
-            self.cross_ev[i].time,
-            self.wall_ev[i].time,
-            self.cell[i],
-            if WET {
-                &self.bonds[i * MAX_BONDS..i * MAX_BONDS + self.bond_len[i] as usize]
-            } else {
-                &[][..]
-            }
-        )
-    }
-
-    /// One line describing the next event (for debugging stalls).
-    pub fn describe_next_event(&self) -> String {
-        let Some((i, t)) = self.queue.min() else {
-            return "no event".into();
-        };
-        let pe = self.pair_ev[i];
-        let (xi, vi) = self.state_at(i, t);
-        let mut s = format!(
-            "t={t:.17} i={i} x={:?} v={:?} pair=({:.17},{},{:?}) cross={:.17} wall={:.17}",
-            xi.as_slice(),
-            vi.as_slice(),
-            pe.time,
-            pe.partner,
-            pe.kind,
-            self.cross_ev[i].time,
-            self.wall_ev[i].time
-        );
-        if pe.partner != NONE {
-            let j = pe.partner as usize;
-            let (xj, vj) = self.state_at(j, t);
-            let r = self.min_image(xi - xj);
-            let s_gap = r.norm() - self.body[i].r - self.body[j].r;
-            s += &format!(
-                " | j={j} gap={s_gap:.3e} u={:.3e} bonded={}",
-                (vi - vj).dot(&(r / r.norm())),
-                self.bonded(i, j)
-            );
-        }
-        s
-    }
-
     /// Recomputes every still-valid pair event from the current states and reports the first
     /// one that disagrees with the stored prediction (debugging aid for lazy invalidation).
     pub fn check_predictions(&self) -> Result<(), String> {
