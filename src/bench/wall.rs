@@ -7,12 +7,15 @@
 //! (conservative advancement cannot skip a root; the test suite checks it against an
 //! independent bisection reference). For each solver and knob: mean and largest collision-time
 //! error, the fraction of wrong roots (a different root or a missed one), and nanoseconds per
-//! prediction (median over repetitions).
+//! prediction (median over repetitions); for the `table` solver also the build time, the memory,
+//! and the fraction of queries the table hands to the exact solver.
 
 use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
+use crate::physics::wall_table::{self, TableHit, TableSpec, WallTable};
 use rand::{Rng, SeedableRng};
 use std::fmt::Write as _;
 use std::hint::black_box;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// One solver setting and what it measured.
@@ -24,6 +27,34 @@ pub struct WallRow {
     pub max_error: f64,
     pub wrong_fraction: f64,
     pub ns_per_prediction: f64,
+    /// `table` only: seconds to fill the floor and lid tables, their memory in bytes, and the
+    /// fraction of queries answered by the exact solver (outside the table or failed cells).
+    pub table: Option<TableCost>,
+}
+
+/// What a table costs besides its lookups.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TableCost {
+    pub build_seconds: f64,
+    pub bytes: usize,
+    pub fallback_fraction: f64,
+}
+
+/// A collision time more than this fraction of a period off is a wrong root (another root, or
+/// a missed one); the errors of the others are the mean and maximum reported.
+pub const WRONG_ROOT_FRACTION_OF_PERIOD: f64 = 1e-2;
+
+/// The `table` solver as the engine uses it: the tabulated answer, or the exact solver (gap
+/// tolerance 1e-10) where the table does not answer. Returns the root and whether it fell back.
+pub fn table_root(table: &WallTable, h: f64, v: f64, t0: f64, horizon: f64) -> (WallRoot, bool) {
+    match table.next_hit(h, v, t0, horizon) {
+        TableHit::Hit { dt, .. } => (WallRoot::Hit(dt), false),
+        TableHit::Now if h - table.motion().position(t0) <= 1e-7 => (WallRoot::Hit(0.0), false),
+        TableHit::None => (WallRoot::None, false),
+        TableHit::Now | TableHit::OutOfRange => {
+            (exact_root(table.motion(), h, v, t0, 1e-10, horizon), true)
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -88,16 +119,64 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
             }),
         ));
     }
+    let mut costs: Vec<Option<TableCost>> = vec![None; settings.len()];
+    let vw = floor.amplitude * floor.omega;
+    for (cells, check) in [
+        (32, true),
+        (64, true),
+        (128, true),
+        (256, true),
+        (512, true),
+        (128, false),
+        (256, false),
+    ] {
+        let spec = TableSpec {
+            phase_cells: cells,
+            velocity_cells: cells,
+            v_min: wall_table::DEFAULT_V_MIN_OVER_WALL_SPEED * vw,
+            v_max: wall_table::DEFAULT_V_MAX_OVER_WALL_SPEED * vw,
+            corner_tolerance: check.then_some(wall_table::DEFAULT_CORNER_TOLERANCE),
+        };
+        let lid_motion = WallMotion {
+            g: -floor.g,
+            ..floor
+        };
+        let tables = Arc::new([
+            WallTable::build(floor, spec),
+            WallTable::build(lid_motion, spec),
+        ]);
+        let fallbacks = shots
+            .iter()
+            .filter(|s| {
+                let t = &tables[usize::from(s.motion.g < 0.0)];
+                table_root(t, s.h, s.v, s.t0, horizon).1
+            })
+            .count();
+        costs.push(Some(TableCost {
+            build_seconds: tables[0].build_seconds + tables[1].build_seconds,
+            bytes: tables[0].bytes() + tables[1].bytes(),
+            fallback_fraction: fallbacks as f64 / shots.len() as f64,
+        }));
+        settings.push((
+            "table",
+            format!("{cells}x{cells}{}", if check { "" } else { " no check" }),
+            Box::new(move |s: &Shot| {
+                let t = &tables[usize::from(s.motion.g < 0.0)];
+                table_root(t, s.h, s.v, s.t0, horizon).0
+            }),
+        ));
+    }
     settings
         .into_iter()
-        .map(|(solver, knob, f)| {
+        .zip(costs)
+        .map(|((solver, knob, f), table)| {
             let roots: Vec<WallRoot> = shots.iter().map(&f).collect();
             let (mut sum, mut max, mut wrong, mut hits) = (0.0, 0.0f64, 0usize, 0usize);
             for (r, o) in reference.iter().zip(&roots) {
                 match (r, o) {
                     (WallRoot::Hit(a), WallRoot::Hit(b)) => {
                         let err = (a - b).abs();
-                        if err > 1e-6 * floor.period() {
+                        if err > WRONG_ROOT_FRACTION_OF_PERIOD * floor.period() {
                             wrong += 1;
                         } else {
                             sum += err;
@@ -126,6 +205,7 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
                 max_error: max,
                 wrong_fraction: wrong as f64 / shots.len() as f64,
                 ns_per_prediction: times[times.len() / 2],
+                table,
             }
         })
         .collect()
@@ -138,15 +218,24 @@ pub fn report(rows: &[WallRow]) -> String {
         s,
         "wetgran bench wall: shaken-wall root solvers against exact_root at tol 1e-15\n\
          drive: Gamma 5, E* 10 (2D standard wet system), 3/4 floor shots, 1/4 lid shots\n\
-         time errors in units of sqrt(d/g); wrong = other root or missed (> 1e-6 T off)\n"
+         time errors in units of sqrt(d/g); wrong = other root or missed (> 1e-2 T off)\n\
+         table: build s and MiB for floor + lid tables; exact % = queries the exact solver answers\n"
     );
     let _ = writeln!(
         s,
-        "{:<8} {:<16} {:>12} {:>12} {:>9} {:>12}",
-        "solver", "knob", "mean |dt|", "max |dt|", "wrong %", "ns/predict"
+        "{:<8} {:<16} {:>12} {:>12} {:>9} {:>12} {:>9} {:>9} {:>8}",
+        "solver",
+        "knob",
+        "mean |dt|",
+        "max |dt|",
+        "wrong %",
+        "ns/predict",
+        "build s",
+        "MiB",
+        "exact %"
     );
     for r in rows {
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{:<8} {:<16} {:>12.3e} {:>12.3e} {:>9.3} {:>12.0}",
             r.solver,
@@ -156,12 +245,22 @@ pub fn report(rows: &[WallRow]) -> String {
             100.0 * r.wrong_fraction,
             r.ns_per_prediction
         );
+        if let Some(c) = r.table {
+            let _ = write!(
+                s,
+                " {:>9.3} {:>9.1} {:>8.2}",
+                c.build_seconds,
+                c.bytes as f64 / (1024.0 * 1024.0),
+                100.0 * c.fallback_fraction
+            );
+        }
+        let _ = writeln!(s);
     }
     s
 }
 
 /// A log-log SVG of the largest time error against the cost per prediction, one marker per
-/// solver setting (exact: circles, bracket: squares), labelled with the knob; settings with
+/// solver setting (exact: circles, bracket: squares, table: diamonds), labelled with the knob; settings with
 /// wrong roots are drawn in red. Hand-written SVG: no plotting dependency.
 pub fn svg(rows: &[WallRow]) -> String {
     let (w, h, margin, right) = (820.0, 440.0, 70.0, 230.0);
@@ -240,6 +339,15 @@ pub fn svg(rows: &[WallRow]) -> String {
                 s,
                 "<circle cx=\"{cx}\" cy=\"{cy}\" r=\"5\" fill=\"{colour}\"/>"
             );
+        } else if r.solver == "table" {
+            let _ = writeln!(
+                s,
+                "<polygon points=\"{},{cy} {cx},{} {},{cy} {cx},{}\" fill=\"{colour}\"/>",
+                cx - 6.0,
+                cy - 6.0,
+                cx + 6.0,
+                cy + 6.0
+            );
         } else {
             let _ = writeln!(
                 s,
@@ -280,9 +388,18 @@ mod tests {
         // A coarse bracket misses grazing roots that the fine one catches.
         let bracket: Vec<&WallRow> = rows.iter().filter(|r| r.solver == "bracket").collect();
         assert!(bracket.first().unwrap().wrong_fraction >= bracket.last().unwrap().wrong_fraction);
+        // The checked table finds the reference's root on every shot; finer tables err less.
+        let table: Vec<&WallRow> = rows
+            .iter()
+            .filter(|r| r.solver == "table" && !r.knob.contains("no check"))
+            .collect();
+        assert!(table.iter().all(|r| r.wrong_fraction == 0.0), "{table:?}");
+        assert!(table.last().unwrap().max_error < table.first().unwrap().max_error);
         // The plot has one marker per setting.
         let plot = svg(&rows);
-        let markers = plot.matches("<circle").count() + plot.matches("<rect x=").count();
+        let markers = plot.matches("<circle").count()
+            + plot.matches("<rect x=").count()
+            + plot.matches("<polygon").count();
         assert_eq!(markers, rows.len());
     }
 }

@@ -169,6 +169,13 @@ pub fn summary_text(r: &RunReport) -> String {
         "  added (remedies)  {:<14.3e} {:.3e}",
         a.added_by_collapse_remedies, b.added_by_collapse_remedies
     );
+    if b.added_by_wall_placement != 0.0 {
+        let _ = writeln!(
+            s,
+            "  added (placement) {:<14.3e} {:.3e}",
+            a.added_by_wall_placement, b.added_by_wall_placement
+        );
+    }
     let _ = writeln!(
         s,
         "  work by the drive {:<14.6} {:.6}",

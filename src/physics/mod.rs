@@ -8,3 +8,4 @@ pub mod contact;
 pub mod flight;
 pub mod shaken_wall;
 pub mod size;
+pub mod wall_table;

@@ -176,6 +176,26 @@ pub struct DriveSpec {
     /// Step of the `bracket` solver (MODEL.md 6, B.3), default a thousandth of a period.
     #[serde(default)]
     pub t_min: Option<f64>,
+    /// `table` solver: cells along the phase (or height) and along the mapped velocity
+    /// (default `[128, 128]`).
+    #[serde(default)]
+    pub table_cells: Option<[usize; 2]>,
+    /// `table` solver: where the velocity map turns from linear to logarithmic, in units of the
+    /// wall's peak speed `A omega` (default 0.05).
+    #[serde(default)]
+    pub table_v_min: Option<f64>,
+    /// `table` solver: speed cut-off in units of `A omega`; faster flights go to the exact
+    /// solver (default 50).
+    #[serde(default)]
+    pub table_v_max: Option<f64>,
+    /// `table` solver: check each cell's linear model at its corners and let the exact solver
+    /// answer for cells that fail (default true; false is the thesis's table as printed).
+    #[serde(default)]
+    pub table_corner_check: Option<bool>,
+    /// `table` solver: the corner check's tolerance on root times, in units of the period
+    /// (default 1e-3).
+    #[serde(default)]
+    pub table_corner_tolerance: Option<f64>,
 }
 
 /// The kind of drive.
@@ -198,6 +218,8 @@ pub enum WallSolverKind {
     Exact,
     /// The thesis's reference algorithm: march by `t_min`, refine by safeguarded Newton.
     Bracket,
+    /// The thesis's tabulated method (B.4-B.5), one table per wall motion shared by all jobs.
+    Table,
 }
 
 /// Default gap tolerance of the wall-root solver.
@@ -373,6 +395,35 @@ impl Scene {
         let omega = gamma * self.gravity / v_w;
         let amplitude = v_w * v_w / (gamma * self.gravity);
         Some((amplitude, omega))
+    }
+
+    /// Resolution, velocity map and corner check of the `table` wall solver for a drive
+    /// `(A, omega)`, with the defaults filled in.
+    pub fn wall_table_spec(
+        &self,
+        amplitude: f64,
+        omega: f64,
+    ) -> crate::physics::wall_table::TableSpec {
+        use crate::physics::wall_table as wt;
+        let d = &self.drive;
+        let [phase_cells, velocity_cells] = d
+            .table_cells
+            .unwrap_or([wt::DEFAULT_PHASE_CELLS, wt::DEFAULT_VELOCITY_CELLS]);
+        let v_wall = amplitude * omega;
+        wt::TableSpec {
+            phase_cells,
+            velocity_cells,
+            v_min: d.table_v_min.unwrap_or(wt::DEFAULT_V_MIN_OVER_WALL_SPEED) * v_wall,
+            v_max: d.table_v_max.unwrap_or(wt::DEFAULT_V_MAX_OVER_WALL_SPEED) * v_wall,
+            corner_tolerance: if d.table_corner_check.unwrap_or(true) {
+                Some(
+                    d.table_corner_tolerance
+                        .unwrap_or(wt::DEFAULT_CORNER_TOLERANCE),
+                )
+            } else {
+                None
+            },
+        }
     }
 
     /// Initial granular temperature in absolute units.

@@ -283,6 +283,17 @@ impl Scene {
                     ("drive.e_star", drive.e_star.is_some()),
                     ("drive.root_tolerance", drive.root_tolerance.is_some()),
                     ("drive.t_min", drive.t_min.is_some()),
+                    ("drive.table_cells", drive.table_cells.is_some()),
+                    ("drive.table_v_min", drive.table_v_min.is_some()),
+                    ("drive.table_v_max", drive.table_v_max.is_some()),
+                    (
+                        "drive.table_corner_check",
+                        drive.table_corner_check.is_some(),
+                    ),
+                    (
+                        "drive.table_corner_tolerance",
+                        drive.table_corner_tolerance.is_some(),
+                    ),
                 ];
                 if let Some((key, _)) = given.iter().find(|(_, g)| *g) {
                     return Err(c.err(
@@ -331,6 +342,69 @@ impl Scene {
                 }
                 if let Some(t_min) = drive.t_min {
                     c.positive("drive.t_min", t_min)?;
+                }
+                let table_keys = [
+                    ("drive.table_cells", drive.table_cells.is_some()),
+                    ("drive.table_v_min", drive.table_v_min.is_some()),
+                    ("drive.table_v_max", drive.table_v_max.is_some()),
+                    (
+                        "drive.table_corner_check",
+                        drive.table_corner_check.is_some(),
+                    ),
+                    (
+                        "drive.table_corner_tolerance",
+                        drive.table_corner_tolerance.is_some(),
+                    ),
+                ];
+                if drive.wall_solver != super::WallSolverKind::Table
+                    && let Some((key, _)) = table_keys.iter().find(|(_, g)| *g)
+                {
+                    return Err(c.err(
+                        key,
+                        "is set but drive.wall_solver is not \"table\": set wall_solver =                          \"table\" or remove the key"
+                            .into(),
+                    ));
+                }
+                if let Some(cells) = drive.table_cells {
+                    for (k, n) in cells.iter().enumerate() {
+                        if !(4..=4096).contains(n) {
+                            return Err(c.err(
+                                &format!("drive.table_cells[{k}]"),
+                                format!("= {n} is out of range: must be in [4, 4096]"),
+                            ));
+                        }
+                    }
+                }
+                if let Some(v) = drive.table_v_min {
+                    c.positive("drive.table_v_min", v)?;
+                }
+                if let Some(v) = drive.table_v_max {
+                    c.positive("drive.table_v_max", v)?;
+                    let v_min = drive
+                        .table_v_min
+                        .unwrap_or(crate::physics::wall_table::DEFAULT_V_MIN_OVER_WALL_SPEED);
+                    if v <= v_min {
+                        return Err(c.err(
+                            "drive.table_v_max",
+                            format!(
+                                "= {v} is out of range: must be greater than table_v_min = {v_min}"
+                            ),
+                        ));
+                    }
+                }
+                if let Some(tol) = drive.table_corner_tolerance {
+                    if !(tol > 0.0 && tol <= 1.0) {
+                        return Err(c.err(
+                            "drive.table_corner_tolerance",
+                            format!("= {tol} is out of range: must be in (0, 1] (periods)"),
+                        ));
+                    }
+                    if drive.table_corner_check == Some(false) {
+                        return Err(c.err(
+                            "drive.table_corner_tolerance",
+                            "is set but drive.table_corner_check = false".into(),
+                        ));
+                    }
                 }
                 if let Some((a, _)) = self.drive_motion() {
                     let h = size[dim - 1];

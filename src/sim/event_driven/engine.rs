@@ -28,10 +28,12 @@ use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
 use crate::physics::flight::{linear_time_to_plane, parabola_time_down, parabola_time_up};
 use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
+use crate::physics::wall_table::{TableHit, WallTable, shared_table};
 use crate::scene::{Boundary, DEFAULT_ROOT_TOLERANCE, RuptureRule, Scene, WallSolverKind};
 use crate::sim::initial::initial_state;
 use nalgebra::SVector;
 use serde::Serialize;
+use std::sync::Arc;
 
 /// A point or velocity in `D` dimensions.
 pub type Vector<const D: usize> = SVector<f64, D>;
@@ -137,6 +139,9 @@ pub struct EnergyLedger {
     pub dissipated_ruptures: f64,
     /// Energy added by the rebound floor (collapse remedy); zero in elastic systems.
     pub added_by_collapse_remedies: f64,
+    /// Potential energy added by placing particles exactly on the wall at tabulated hits
+    /// (`table` solver, B.5.1); zero for the other solvers.
+    pub added_by_wall_placement: f64,
     /// Work done on the particles by the shaken walls.
     pub work_by_drive: f64,
 }
@@ -146,6 +151,7 @@ impl EnergyLedger {
     pub fn total_accounted(&self) -> f64 {
         self.kinetic + self.potential + self.dissipated_restitution + self.dissipated_ruptures
             - self.added_by_collapse_remedies
+            - self.added_by_wall_placement
             - self.work_by_drive
     }
 }
@@ -183,7 +189,14 @@ struct Params<const D: usize> {
     /// Which wall-root solver, and the `bracket` solver's step.
     wall_solver: WallSolverKind,
     t_min: f64,
+    /// `table` solver: the shared tables of the floor and of the lid (gravity pointing away).
+    tables: Option<[Arc<WallTable>; 2]>,
 }
+
+/// Largest gap (in units of `d`) at which a tabulated wall hit is accepted and the particle
+/// placed on the wall (B.5.1); a larger gap makes the event a re-check. Bounds the
+/// displacement a table error can cause.
+const TABLE_PLACEMENT_TOLERANCE: f64 = 1e-2;
 
 /// The event-driven simulation state.
 #[derive(Debug, Clone)]
@@ -210,6 +223,14 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
     /// Energy the collapse remedies kept or added compared with plain restitution.
     added: f64,
     work_by_drive: f64,
+    /// Potential energy added by wall placement (`table` solver).
+    placement: f64,
+    /// `table` solver: tabulated approach speed of each particle's predicted wall hit (NaN when
+    /// the hit was not tabulated).
+    wall_vrel: Vec<f64>,
+    /// `table` solver: the particle that has just left the floor (`false`) or lid (`true`);
+    /// its next wall prediction uses the wall-edge table (B.5.2).
+    launched: Option<(usize, bool)>,
     /// Events whose time lay before the current time by more than round-off (must stay 0).
     time_reversals: u64,
     /// Original index (scene order) of the particle stored at each internal index.
@@ -279,6 +300,22 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                     2.0 * std::f64::consts::PI / omega / 1000.0
                 })
             }),
+            tables: match (scene.drive.wall_solver, scene.drive_motion()) {
+                (WallSolverKind::Table, Some((amplitude, omega))) if amplitude > 0.0 => {
+                    let spec = scene.wall_table_spec(amplitude, omega);
+                    let floor = WallMotion {
+                        amplitude,
+                        omega,
+                        g: scene.gravity,
+                    };
+                    let lid = WallMotion {
+                        g: -scene.gravity,
+                        ..floor
+                    };
+                    Some([shared_table(floor, spec), shared_table(lid, spec)])
+                }
+                _ => None,
+            },
         };
         let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
         let mut engine = Self {
@@ -312,6 +349,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             dissipated_ruptures: 0.0,
             added: 0.0,
             work_by_drive: 0.0,
+            placement: 0.0,
+            wall_vrel: vec![f64::NAN; n],
+            launched: None,
             time_reversals: 0,
             id: (0..n as u32).collect(),
             slot_of: (0..n as u32).collect(),
@@ -610,23 +650,34 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         best
     }
 
-    /// Next collision of `i` with a flat static wall (`up`: the lid or upper wall).
-    fn predict_wall(&self, i: usize) -> PlaneEvent {
+    /// Next collision of `i` with a wall (`up`: the lid or upper wall), and the tabulated
+    /// approach speed of a shaken-wall hit (NaN unless the `table` solver provided one).
+    fn predict_wall(&self, i: usize) -> (PlaneEvent, f64) {
         let mut best = PlaneEvent::NEVER;
+        let mut vrel = f64::NAN;
         let r = self.body[i].r;
         for k in 0..D {
             if self.p.periodic[k] {
                 continue;
             }
-            let (t_lid, t_floor) = match self.p.drive {
+            let ((t_lid, v_lid), (t_floor, v_floor)) = match self.p.drive {
                 Some(w) if k == D - 1 => self.shaken_wall_times(i, &w),
-                _ => self.times_to_planes(i, k, r, self.p.size[k] - r),
+                _ => {
+                    let (lid, floor) = self.times_to_planes(i, k, r, self.p.size[k] - r);
+                    ((lid, f64::NAN), (floor, f64::NAN))
+                }
             };
+            if t_lid < best.time {
+                vrel = v_lid;
+            }
             best.keep_earlier(t_lid, k, true);
+            if t_floor < best.time {
+                vrel = v_floor;
+            }
             best.keep_earlier(t_floor, k, false);
         }
         best.time += self.time;
-        best
+        (best, vrel)
     }
 
     /// Times until particle `i` meets the shaken lid and floor (MODEL.md 6), with the scene's
@@ -634,28 +685,60 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     /// particle that meets neither gets a re-check at the horizon (a wall event that finds no
     /// contact and only re-predicts). The lid is the floor problem mirrored: depth below the
     /// lid's mean position, velocity reversed, gravity pointing away, wall phase shifted by pi.
-    fn shaken_wall_times(&self, i: usize, w: &WallMotion) -> (f64, f64) {
+    fn shaken_wall_times(&self, i: usize, w: &WallMotion) -> ((f64, f64), (f64, f64)) {
         let b = &self.body[i];
         let (z, vz, r) = (b.x[D - 1], b.v[D - 1], b.r);
         let t = self.time;
         let horizon = 2.0 * w.period();
         let tol = self.p.root_tolerance;
-        let solve = |w: &WallMotion, h: f64, v: f64, t0: f64| match self.p.wall_solver {
-            WallSolverKind::Exact => exact_root(w, h, v, t0, tol, horizon),
-            WallSolverKind::Bracket => bracket_root(w, h, v, t0, self.p.t_min, tol, horizon),
-        };
-        let floor = match solve(w, z - r, vz, t) {
-            WallRoot::Hit(dt) => dt,
-            WallRoot::None => horizon,
-        };
-        let lid_motion = WallMotion { g: -w.g, ..*w };
         let half_period = 0.5 * w.period();
+        let lid_motion = WallMotion { g: -w.g, ..*w };
         let h_lid = self.p.size[D - 1] - z - r;
-        let lid = match solve(&lid_motion, h_lid, -vz, t + half_period) {
-            WallRoot::Hit(dt) => dt,
-            WallRoot::None => f64::INFINITY,
+        // (time, tabulated approach speed); a miss is a re-check at the horizon for the floor
+        // (gravity brings every flight back) and never for the lid.
+        let exact = |w: &WallMotion, h: f64, v: f64, t0: f64, miss: f64| {
+            let root = match self.p.wall_solver {
+                WallSolverKind::Bracket => bracket_root(w, h, v, t0, self.p.t_min, tol, horizon),
+                _ => exact_root(w, h, v, t0, tol, horizon),
+            };
+            match root {
+                WallRoot::Hit(dt) => (dt, f64::NAN),
+                WallRoot::None => (miss, f64::NAN),
+            }
         };
-        (lid, floor)
+        let Some(tables) = &self.p.tables else {
+            return (
+                exact(&lid_motion, h_lid, -vz, t + half_period, f64::INFINITY),
+                exact(w, z - r, vz, t, horizon),
+            );
+        };
+        // The `table` solver (B.4-B.5), with the exact solver where the table does not answer.
+        let tabulated = |k: usize, h: f64, v: f64, t0: f64, miss: f64| {
+            let table = &tables[k];
+            let answer = match self.launched {
+                Some((j, lid)) if j == i && lid == (k == 1) => {
+                    // Just left this wall, placed on it: the wall-edge table (B.5.2).
+                    let v_rel = v - table.motion().velocity(t0);
+                    table.next_hit_after_wall(v_rel, t0, horizon)
+                }
+                _ => table.next_hit(h, v, t0, horizon),
+            };
+            match answer {
+                TableHit::Hit { dt, v_rel } => (dt, v_rel),
+                // Behind the wall by the table's roots: collide now if the gap agrees (B.5.6),
+                // else the table erred near a root and the exact solver decides.
+                TableHit::Now if h - table.motion().position(t0) <= 1e3 * tol + 1e-12 => {
+                    (0.0, f64::NAN)
+                }
+                TableHit::Now => exact(table.motion(), h, v, t0, miss),
+                TableHit::None => (miss, f64::NAN),
+                TableHit::OutOfRange => exact(table.motion(), h, v, t0, miss),
+            }
+        };
+        (
+            tabulated(1, h_lid, -vz, t + half_period, f64::INFINITY),
+            tabulated(0, z - r, vz, t, horizon),
+        )
     }
 
     #[inline]
@@ -674,7 +757,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.scan_cells(i, &offsets);
         self.offsets = offsets;
         self.cross_ev[i] = self.predict_crossing(i);
-        self.wall_ev[i] = self.predict_wall(i);
+        (self.wall_ev[i], self.wall_vrel[i]) = self.predict_wall(i);
+        if self.launched.is_some_and(|(j, _)| j == i) {
+            self.launched = None;
+        }
         self.queue.update(i, self.queue_key(i));
     }
 
@@ -738,6 +824,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.cell = order.iter().map(|&k| self.cell[pick(k)]).collect();
         self.cross_ev = order.iter().map(|&k| self.cross_ev[pick(k)]).collect();
         self.wall_ev = order.iter().map(|&k| self.wall_ev[pick(k)]).collect();
+        self.wall_vrel = order.iter().map(|&k| self.wall_vrel[pick(k)]).collect();
         self.pair_ev = order
             .iter()
             .map(|&k| {
@@ -941,17 +1028,50 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let (z_w, v_w) = (w.position(t), w.velocity(t));
         // Gap and approach speed in the wall's frame, both positive when the particle is on the
         // right side and approaching.
-        let (gap, u_in) = if lid {
+        let (gap, mut u_in) = if lid {
             (self.p.size[D - 1] + z_w - z - b.r, vz - v_w)
         } else {
             (z - b.r - z_w, v_w - vz)
         };
-        let contact = gap <= 1e3 * self.p.root_tolerance + 1e-12;
-        let approaching = if lid { u_in > 0.0 } else { u_in >= 0.0 };
+        let tabulated = self.wall_vrel[i];
+        let (contact, approaching) = if tabulated.is_finite() {
+            // A tabulated hit (B.5.1): its approach speed is positive by construction (B.5.4);
+            // the table's time error is absorbed by placing the particle on the wall.
+            (gap.abs() <= TABLE_PLACEMENT_TOLERANCE, true)
+        } else {
+            (
+                gap <= 1e3 * self.p.root_tolerance + 1e-12,
+                if lid { u_in > 0.0 } else { u_in >= 0.0 },
+            )
+        };
         if !(contact && approaching) {
             // The caller re-predicts.
             self.counts.wall_rechecks += 1;
             return;
+        }
+        if tabulated.is_finite() {
+            u_in = tabulated;
+            let z_new = if lid {
+                self.p.size[D - 1] + z_w - b.r
+            } else {
+                z_w + b.r
+            };
+            if GRAV {
+                self.placement += self.p.mass * self.p.gravity * (z_new - z);
+            }
+            self.body[i].x[D - 1] = z_new;
+            // The shift may cross a cell face: keep the cell lists right (the caller rescans
+            // the neighbourhood).
+            let x: [f64; D] = self.body[i].x.into();
+            let c = self.grid.locate(&x);
+            if c != self.cell[i] {
+                let old = self.grid.linear(&self.cell[i]);
+                self.grid.remove(i, old);
+                self.cell[i] = c;
+                let new = self.grid.linear(&c);
+                self.grid.insert(i, new);
+            }
+            self.launched = Some((i, lid));
         }
         self.count[i] = self.count[i].wrapping_add(1);
         self.counts.wall_collisions += 1;
@@ -1039,6 +1159,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             dissipated_restitution: self.dissipated_restitution,
             dissipated_ruptures: self.dissipated_ruptures,
             added_by_collapse_remedies: self.added,
+            added_by_wall_placement: self.placement,
             work_by_drive: self.work_by_drive,
         }
     }
