@@ -942,6 +942,22 @@ mod tests {
         }
     }
 
+    #[test]
+    fn one_table_per_drive_is_shared_across_threads() {
+        let w = standard_motion(3.0, 2.0);
+        let spec = spec_for(&w, 16);
+        let handles: Vec<_> = (0..4)
+            .map(|_| std::thread::spawn(move || shared_table(w, spec)))
+            .collect();
+        let tables: Vec<Arc<WallTable>> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+        assert!(tables.iter().all(|t| Arc::ptr_eq(t, &tables[0])));
+        // Another drive or resolution is another table.
+        let other = shared_table(WallMotion { g: -1.0, ..w }, spec);
+        assert!(!Arc::ptr_eq(&other, &tables[0]));
+        let finer = shared_table(w, spec_for(&w, 20));
+        assert!(!Arc::ptr_eq(&finer, &tables[0]));
+    }
+
     /// Sign changes of the gap on a fine grid: an independent count of the roots.
     fn scanned_roots(w: &WallMotion, base: (f64, f64, f64), window: f64) -> Vec<f64> {
         let n = 200_000;
