@@ -523,6 +523,9 @@ impl Scene {
                 ),
             ));
         }
+        // Observers and classification.
+        self.observe.validate(self, origin)?;
+        self.classify.validate(origin)?;
         Ok(())
     }
 }
