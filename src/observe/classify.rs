@@ -131,7 +131,7 @@ fn default_solid_temperature() -> f64 {
     0.02
 }
 fn default_gas_temperature() -> f64 {
-    1.0
+    2.0
 }
 fn default_coexistence_delta_n_cb() -> f64 {
     2.0

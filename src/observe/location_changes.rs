@@ -41,6 +41,10 @@ pub struct Edge {
     pub j: u32,
     pub length: f64,
     pub mid_x: f64,
+    /// 2D: the vertices `c, d` opposite the edge in its two triangles and the sum of the angles
+    /// at `c` and `d`; `None` on the hull (and always for neighbour shells). The edge is Delaunay
+    /// while the sum is at most `pi`; `pi - sum` is by how much.
+    pub opposite: Option<(u32, u32, f64)>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -60,8 +64,9 @@ impl HasPosition for Site {
 /// How the neighbour relations are found, with their parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Method {
-    /// 2D: Delaunay edges; new edges longer than `max_edge` do not count.
-    Delaunay { max_edge: f64 },
+    /// 2D: Delaunay edges; new edges longer than `max_edge` do not count, and a flip counts
+    /// only once the old edge violates the in-circle condition by more than `margin` (radians).
+    Delaunay { max_edge: f64, margin: f64 },
     /// 3D (or on request): neighbour shells with hysteresis.
     NeighbourShell { enter: f64, leave: f64 },
 }
@@ -114,18 +119,36 @@ pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
     let tri: DelaunayTriangulation<Site> =
         DelaunayTriangulation::bulk_load_stable(sites).expect("finite particle positions");
     let mut edges: Vec<Edge> = Vec::with_capacity(3 * frame.len());
+    // Angle at `c` of the triangle `(a, b, c)`.
+    let angle = |a: Point2<f64>, b: Point2<f64>, c: Point2<f64>| {
+        let (u, v) = ((a.x - c.x, a.y - c.y), (b.x - c.x, b.y - c.y));
+        (u.0 * v.1 - u.1 * v.0).abs().atan2(u.0 * v.0 + u.1 * v.1)
+    };
     for e in tri.undirected_edges() {
         let [a, b] = e.vertices();
         let (a, b) = (a.data(), b.data());
         if (a.ghost && b.ghost) || a.id == b.id {
             continue;
         }
+        let directed = e.as_directed();
+        let opposite = match (
+            directed.opposite_vertex(),
+            directed.rev().opposite_vertex(),
+        ) {
+            (Some(c), Some(d)) => {
+                let (c, d) = (c.data(), d.data());
+                let sum = angle(a.p, b.p, c.p) + angle(a.p, b.p, d.p);
+                Some((c.id, d.id, sum))
+            }
+            _ => None,
+        };
         let (dx, dz) = (b.p.x - a.p.x, b.p.y - a.p.y);
         edges.push(Edge {
             i: a.id.min(b.id),
             j: a.id.max(b.id),
             length: (dx * dx + dz * dz).sqrt(),
             mid_x: a.p.x + 0.5 * dx,
+            opposite,
         });
     }
     edges.sort_by(|p, q| (p.i, p.j).cmp(&(q.i, q.j)));
@@ -203,6 +226,7 @@ pub fn neighbour_shell_edges(
                     j: key.1,
                     length: r,
                     mid_x: frame.x(i)[0] + 0.5 * dx,
+                    opposite: None,
                 });
             }
         }
@@ -215,23 +239,60 @@ pub fn neighbour_shell_edges(
 /// sample, used by the hysteresis of the neighbour shells).
 pub fn edges(frame: &Frame, method: Method, previous: &[(u32, u32)]) -> Vec<Edge> {
     match method {
-        Method::Delaunay { max_edge } => delaunay_edges(frame, 4.0 * max_edge),
+        Method::Delaunay { max_edge, .. } => delaunay_edges(frame, 4.0 * max_edge),
         Method::NeighbourShell { enter, leave } => {
             neighbour_shell_edges(frame, previous, enter, leave)
         }
     }
 }
 
-/// The edges of `current` that were not in `previous` and count as location changes.
-pub fn new_edges<'a>(previous: &[(u32, u32)], current: &'a [Edge], method: Method) -> Vec<&'a Edge> {
-    current
-        .iter()
-        .filter(|e| previous.binary_search(&(e.i, e.j)).is_err())
-        .filter(|e| match method {
-            Method::Delaunay { max_edge } => e.length <= max_edge,
-            Method::NeighbourShell { .. } => true,
-        })
-        .collect()
+/// Compares the neighbour relations of the current sample with the tracked ones of the previous
+/// sample. Returns the location changes (new edges that count) and the relations to track from
+/// now on (sorted pairs).
+///
+/// 2D hysteresis: a new Delaunay edge `ab` that replaced a tracked edge `cd` in one flip (`c, d`
+/// opposite `ab`) counts only when the flip is decisive, `pi - (angle_c + angle_d) > margin`:
+/// the old edge's in-circle violation, measured by the angles of its quadrilateral, exceeds
+/// `margin`. Until then `cd` stays tracked in place of `ab`, so a near-square quadrilateral
+/// (four almost co-circular grains, common in a lattice-like solid) whose diagonal flips back and
+/// forth with every rattle counts nothing. Any other new edge counts at once.
+pub fn compare(
+    previous: &[(u32, u32)],
+    current: &[Edge],
+    method: Method,
+) -> (Vec<Edge>, Vec<(u32, u32)>) {
+    let known = |p: (u32, u32)| previous.binary_search(&p).is_ok();
+    let mut fresh = Vec::new();
+    let mut tracked = Vec::with_capacity(current.len());
+    for e in current {
+        let pair = (e.i, e.j);
+        if known(pair) {
+            tracked.push(pair);
+            continue;
+        }
+        match method {
+            Method::Delaunay { max_edge, margin } => {
+                if let Some((c, d, sum)) = e.opposite {
+                    let old = (c.min(d), c.max(d));
+                    if known(old) && std::f64::consts::PI - sum <= margin {
+                        tracked.push(old);
+                        continue;
+                    }
+                }
+                tracked.push(pair);
+                if e.length <= max_edge {
+                    fresh.push(*e);
+                }
+            }
+            Method::NeighbourShell { .. } => {
+                tracked.push(pair);
+                fresh.push(*e);
+            }
+        }
+    }
+    tracked.sort_unstable();
+    tracked.dedup();
+    (fresh, tracked)
 }
 
 /// Counts location changes sample by sample.
@@ -294,8 +355,10 @@ impl Observer for LocationChangeCounter {
         self.particles = frame.len();
         let prev_pairs: &[(u32, u32)] = self.previous.as_ref().map_or(&[], |p| &p.2);
         let current = edges(frame, self.method, prev_pairs);
+        let mut tracked = None;
         if let Some((t0, was_in_window, prev)) = &self.previous {
-            let fresh = new_edges(prev, &current, self.method);
+            let (fresh, keep) = compare(prev, &current, self.method);
+            tracked = Some(keep);
             let dt = frame.time - t0;
             if dt > 0.0 {
                 self.series.push((
@@ -306,12 +369,12 @@ impl Observer for LocationChangeCounter {
             if in_window && *was_in_window {
                 self.window_count += fresh.len() as u64;
                 self.window_time += dt;
-                for e in fresh {
+                for e in &fresh {
                     self.bin_count[self.bins.of(e.mid_x)] += 1;
                 }
             }
         }
-        let pairs = current.iter().map(|e| (e.i, e.j)).collect();
+        let pairs = tracked.unwrap_or_else(|| current.iter().map(|e| (e.i, e.j)).collect());
         self.previous = Some((frame.time, in_window, pairs));
     }
 }

@@ -181,6 +181,7 @@ pub fn run_observed_with_frame(
         let method = if scene.dimension == 2 {
             Method::Delaunay {
                 max_edge: spec.lc_max_edge * scene.particles.diameter,
+                margin: spec.lc_flip_margin,
             }
         } else {
             Method::NeighbourShell {

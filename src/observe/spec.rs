@@ -40,6 +40,11 @@ pub struct ObserveSpec {
     /// change with every rattle of a surface grain without any neighbour exchange.
     #[serde(default = "default_lc_max_edge")]
     pub lc_max_edge: f64,
+    /// 2D: hysteresis of the Delaunay flips, in radians (default 0.2): a flip counts once the
+    /// replaced edge violates the in-circle condition by more than this angle
+    /// (`angle_a + angle_b - pi` of its quadrilateral).
+    #[serde(default = "default_lc_flip_margin")]
+    pub lc_flip_margin: f64,
     /// 3D: two grains become neighbours when their centres come closer than this multiple of
     /// `r_i + r_j` (default 1.2), and stop being neighbours beyond `lc_leave_factor` times it.
     #[serde(default = "default_lc_enter_factor")]
@@ -64,6 +69,7 @@ impl Default for ObserveSpec {
             layers: default_layers(),
             time_series: true,
             lc_max_edge: default_lc_max_edge(),
+            lc_flip_margin: default_lc_flip_margin(),
             lc_enter_factor: default_lc_enter_factor(),
             lc_leave_factor: default_lc_leave_factor(),
             stationarity_tolerance: default_stationarity_tolerance(),
@@ -85,6 +91,9 @@ fn default_layers() -> usize {
 }
 fn default_lc_max_edge() -> f64 {
     2.0
+}
+fn default_lc_flip_margin() -> f64 {
+    0.2
 }
 fn default_lc_enter_factor() -> f64 {
     1.2
@@ -192,6 +201,13 @@ impl ObserveSpec {
                     "= {} is out of range: must be >= 1 (units of d; neighbours touch at 1)",
                     self.lc_max_edge
                 ),
+            ));
+        }
+        let m = self.lc_flip_margin;
+        if !(m.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&m)) {
+            return Err(err(
+                "lc_flip_margin",
+                format!("= {m} is out of range: must be in [0, pi/2) (radians)"),
             ));
         }
         if !(self.lc_enter_factor.is_finite() && self.lc_enter_factor >= 1.0) {

@@ -135,7 +135,13 @@ fn run_engine<const D: usize, const G: bool, const W: bool>(
     loop {
         let target_report = (k as f64 * interval).min(duration);
         let target_obs = if observer.is_some() && j <= last_obs {
-            (j as f64 * obs_dt).min(duration)
+            let t = j as f64 * obs_dt;
+            // The last sample lands on `duration` exactly when round-off alone separates them.
+            if j == last_obs && (duration - t).abs() <= 1e-9 * duration {
+                duration
+            } else {
+                t.min(duration)
+            }
         } else {
             f64::INFINITY
         };
