@@ -12,7 +12,13 @@ fn homogeneous(flc: Option<f64>, t: f64, delta: f64) -> Observables {
     let n_cb: Vec<f64> = (0..bins)
         .map(|b| if b == 0 { 3.0 + delta } else { 3.0 })
         .collect();
-    synthetic(flc, t, n_cb, vec![flc.unwrap_or(0.0); bins], vec![Some(t); bins])
+    synthetic(
+        flc,
+        t,
+        n_cb,
+        vec![flc.unwrap_or(0.0); bins],
+        vec![Some(t); bins],
+    )
 }
 
 fn synthetic(
@@ -75,11 +81,19 @@ fn synthetic(
 fn two_regions(dense: (f64, f64), dilute: (f64, f64)) -> Observables {
     let n = 10;
     let n_cb = (0..n).map(|b| if b < 5 { 6.0 } else { 0.5 }).collect();
-    let f = (0..n).map(|b| if b < 5 { dense.0 } else { dilute.0 }).collect();
+    let f = (0..n)
+        .map(|b| if b < 5 { dense.0 } else { dilute.0 })
+        .collect();
     let t = (0..n)
         .map(|b| Some(if b < 5 { dense.1 } else { dilute.1 }))
         .collect();
-    synthetic(Some(0.5 * (dense.0 + dilute.0)), 0.5 * (dense.1 + dilute.1), n_cb, f, t)
+    synthetic(
+        Some(0.5 * (dense.0 + dilute.0)),
+        0.5 * (dense.1 + dilute.1),
+        n_cb,
+        f,
+        t,
+    )
 }
 
 fn th() -> Thresholds {
@@ -91,15 +105,33 @@ fn homogeneous_phases_and_their_threshold_edges() {
     let t = th();
     let (sf, gas) = (t.solid_flc, t.gas_temperature);
     // Solid versus mobile on f_lc: the edge value is solid.
-    assert_eq!(classify(&homogeneous(Some(0.0), 0.5, 0.0), &t).phase, Phase::S);
-    assert_eq!(classify(&homogeneous(Some(sf), 0.5, 0.0), &t).phase, Phase::S);
+    assert_eq!(
+        classify(&homogeneous(Some(0.0), 0.5, 0.0), &t).phase,
+        Phase::S
+    );
+    assert_eq!(
+        classify(&homogeneous(Some(sf), 0.5, 0.0), &t).phase,
+        Phase::S
+    );
     let above = sf * (1.0 + 1e-12) + 1e-300;
-    assert_eq!(classify(&homogeneous(Some(above), 0.5, 0.0), &t).phase, Phase::F);
+    assert_eq!(
+        classify(&homogeneous(Some(above), 0.5, 0.0), &t).phase,
+        Phase::F
+    );
     // A solid stays solid however hot it is said to be (f_lc decides mobility).
-    assert_eq!(classify(&homogeneous(Some(sf), 10.0 * gas, 0.0), &t).phase, Phase::S);
+    assert_eq!(
+        classify(&homogeneous(Some(sf), 10.0 * gas, 0.0), &t).phase,
+        Phase::S
+    );
     // Fluid versus gas on T_g/E_cb: the edge value is fluid.
-    assert_eq!(classify(&homogeneous(Some(1.0), gas, 0.0), &t).phase, Phase::F);
-    assert_eq!(classify(&homogeneous(Some(1.0), gas * (1.0 + 1e-12), 0.0), &t).phase, Phase::G);
+    assert_eq!(
+        classify(&homogeneous(Some(1.0), gas, 0.0), &t).phase,
+        Phase::F
+    );
+    assert_eq!(
+        classify(&homogeneous(Some(1.0), gas * (1.0 + 1e-12), 0.0), &t).phase,
+        Phase::G
+    );
 }
 
 #[test]
@@ -110,11 +142,20 @@ fn temperature_decides_mobility_when_asked_or_without_flc() {
     let c = classify(&homogeneous(None, st, 0.0), &t);
     assert_eq!(c.phase, Phase::S);
     assert_eq!(c.decided_on.whole.mobility_from, Mobility::Temperature);
-    assert_eq!(classify(&homogeneous(None, st * (1.0 + 1e-12), 0.0), &t).phase, Phase::F);
+    assert_eq!(
+        classify(&homogeneous(None, st * (1.0 + 1e-12), 0.0), &t).phase,
+        Phase::F
+    );
     // f_lc observed but mobility = temperature: a large f_lc does not matter.
     t.mobility = Mobility::Temperature;
-    assert_eq!(classify(&homogeneous(Some(100.0), st, 0.0), &t).phase, Phase::S);
-    assert_eq!(classify(&homogeneous(Some(0.0), 2.0 * st, 0.0), &t).phase, Phase::F);
+    assert_eq!(
+        classify(&homogeneous(Some(100.0), st, 0.0), &t).phase,
+        Phase::S
+    );
+    assert_eq!(
+        classify(&homogeneous(Some(0.0), 2.0 * st, 0.0), &t).phase,
+        Phase::F
+    );
 }
 
 #[test]
@@ -226,7 +267,9 @@ fn inflection_of_a_known_sigmoid() {
         assert_eq!(fluid_gas_inflection(&rev), Some(inf));
     }
     // A curve that only steepens (the inflection lies beyond the range) has none.
-    let convex: Vec<(f64, f64)> = (1..10).map(|k| (k as f64, (k as f64).powi(2).exp())).collect();
+    let convex: Vec<(f64, f64)> = (1..10)
+        .map(|k| (k as f64, (k as f64).powi(2).exp()))
+        .collect();
     assert_eq!(fluid_gas_inflection(&convex), None);
     assert_eq!(fluid_gas_inflection(&convex[..3]), None);
 }

@@ -92,7 +92,11 @@ fn static_lattices_count_nothing() {
     for i in 0..4 {
         for j in 0..4 {
             for k in 0..4 {
-                pos.extend([0.5 + i as f64 * 1.05, 0.5 + j as f64 * 1.05, 0.5 + k as f64 * 1.05]);
+                pos.extend([
+                    0.5 + i as f64 * 1.05,
+                    0.5 + j as f64 * 1.05,
+                    0.5 + k as f64 * 1.05,
+                ]);
             }
         }
     }
@@ -126,7 +130,14 @@ fn static_lattices_count_nothing() {
 /// `a, b` together, slowly and sampled finely, exchanges the neighbour pair once (one T1 step).
 #[test]
 fn one_neighbour_exchange_counts_exactly_one() {
-    let rhombus = |h: f64, w: f64| vec![[5.0 - w, 5.0], [5.0 + w, 5.0], [5.0, 5.0 + h], [5.0, 5.0 - h]];
+    let rhombus = |h: f64, w: f64| {
+        vec![
+            [5.0 - w, 5.0],
+            [5.0 + w, 5.0],
+            [5.0, 5.0 + h],
+            [5.0, 5.0 - h],
+        ]
+    };
     let steps = 200;
     let mut frames = Vec::new();
     for k in 0..=steps {
@@ -134,12 +145,23 @@ fn one_neighbour_exchange_counts_exactly_one() {
         // c-d from 1.6 to 2.0 apart... a-b from 2.0 to 1.6: the diagonals exchange roles.
         let h = 0.8 + 0.2 * s;
         let w = 1.0 - 0.2 * s;
-        frames.push(frame_2d([10.0, 10.0], [false, false], &rhombus(h, w), k as f64));
+        frames.push(frame_2d(
+            [10.0, 10.0],
+            [false, false],
+            &rhombus(h, w),
+            k as f64,
+        ));
     }
     let before = delaunay_edges(&frames[0], 8.0);
     let after = delaunay_edges(&frames[steps], 8.0);
-    assert!(before.iter().any(|e| (e.i, e.j) == (2, 3)), "c-d is the Delaunay diagonal");
-    assert!(after.iter().any(|e| (e.i, e.j) == (0, 1)), "a-b is the Delaunay diagonal");
+    assert!(
+        before.iter().any(|e| (e.i, e.j) == (2, 3)),
+        "c-d is the Delaunay diagonal"
+    );
+    assert!(
+        after.iter().any(|e| (e.i, e.j) == (0, 1)),
+        "a-b is the Delaunay diagonal"
+    );
     assert_eq!(count(&frames, DELAUNAY), 1);
     // Back again: a second exchange.
     let mut there_and_back = frames.clone();
@@ -150,7 +172,10 @@ fn one_neighbour_exchange_counts_exactly_one() {
     }
     assert_eq!(count(&there_and_back, DELAUNAY), 2);
     // Only the two end states, no intermediate sample: still one.
-    assert_eq!(count(&[frames[0].clone(), frames[steps].clone()], DELAUNAY), 1);
+    assert_eq!(
+        count(&[frames[0].clone(), frames[steps].clone()], DELAUNAY),
+        1
+    );
 }
 
 /// Hysteresis: a quadrilateral whose diagonal flips back and forth by less than the margin
@@ -184,12 +209,22 @@ fn swapping_two_lattice_neighbours_counts_six() {
         let size = if periodic { [10.0, 10.0] } else { [14.0, 10.0] };
         let f0 = frame_2d(size, [periodic, false], &a, 0.0);
         let f1 = frame_2d(size, [periodic, false], &b, 1.0);
-        assert_eq!(count(&[f0.clone(), f1.clone()], DELAUNAY), 6, "periodic {periodic}");
-        let e0: Vec<(u32, u32)> = delaunay_edges(&f0, 8.0).iter().map(|e| (e.i, e.j)).collect();
+        assert_eq!(
+            count(&[f0.clone(), f1.clone()], DELAUNAY),
+            6,
+            "periodic {periodic}"
+        );
+        let e0: Vec<(u32, u32)> = delaunay_edges(&f0, 8.0)
+            .iter()
+            .map(|e| (e.i, e.j))
+            .collect();
         let (fresh, _) = compare(&e0, &delaunay_edges(&f1, 8.0), DELAUNAY);
         let mut got: Vec<(u32, u32)> = fresh.iter().map(|e| (e.i, e.j)).collect();
         got.sort_unstable();
-        assert!(got.iter().all(|&(p, q)| [p, q].contains(&(i as u32)) || [p, q].contains(&(j as u32))));
+        assert!(
+            got.iter()
+                .all(|&(p, q)| [p, q].contains(&(i as u32)) || [p, q].contains(&(j as u32)))
+        );
     }
 }
 

@@ -9,7 +9,13 @@ use wetgran::observe::temperature::{granular_temperature, temperature_profile};
 use wetgran::sim::Frame;
 
 /// A 2D frame, periodic in x, walls in z.
-fn frame(size: [f64; 2], pos: &[[f64; 2]], vel: &[[f64; 2]], r: f64, bridges: Vec<(usize, usize)>) -> Frame {
+fn frame(
+    size: [f64; 2],
+    pos: &[[f64; 2]],
+    vel: &[[f64; 2]],
+    r: f64,
+    bridges: Vec<(usize, usize)>,
+) -> Frame {
     Frame::from_parts(
         2,
         size.to_vec(),
@@ -48,7 +54,13 @@ fn bridge_density_equals_hand_count() {
         [14.0, 1.0], // 9: no bridge
     ];
     let vel = [[0.0; 2]; 10];
-    let f = frame([16.0, 4.0], &pos, &vel, 0.5, vec![(0, 1), (3, 2), (4, 5), (5, 6), (8, 7)]);
+    let f = frame(
+        [16.0, 4.0],
+        &pos,
+        &vel,
+        0.5,
+        vec![(0, 1), (3, 2), (4, 5), (5, 6), (8, 7)],
+    );
     let bins = LateralBins::new(4, 16.0);
     assert_eq!(bridge_counts(&f, &bins), vec![2, 1, 2, 0]);
     // n_cb = bridges per unit length of x (2D), in units of 1/d with d = 1, then d = 2.
@@ -57,9 +69,19 @@ fn bridge_density_equals_hand_count() {
     // Packing: bin 0 holds particles 0, 1, 2, 7 (4 disks of radius 0.5) in a 4 x 4 bin.
     let phi = packing_fraction(&f, &bins);
     let disk = PI * 0.25;
-    let expected = [4.0 * disk / 16.0, 1.0 * disk / 16.0, 3.0 * disk / 16.0, 2.0 * disk / 16.0];
+    let expected = [
+        4.0 * disk / 16.0,
+        1.0 * disk / 16.0,
+        3.0 * disk / 16.0,
+        2.0 * disk / 16.0,
+    ];
     for b in 0..4 {
-        assert!((phi[b] - expected[b]).abs() < 1e-15, "bin {b}: {} vs {}", phi[b], expected[b]);
+        assert!(
+            (phi[b] - expected[b]).abs() < 1e-15,
+            "bin {b}: {} vs {}",
+            phi[b],
+            expected[b]
+        );
     }
 }
 
@@ -110,8 +132,24 @@ fn bin_temperature_follows_eq_3_2() {
     // Bin [0, 4): velocities (1, 0), (-1, 0), (0, 2), (0, -2) -> mean 0, <v^2> = 10/4,
     // T = m <v^2> / 2 = 1.25. Bin [4, 8): two particles moving together at (3, 1): T = 0.
     // Bin [8, 12): one particle: no temperature. Bin [12, 16): empty.
-    let pos = [[1.0, 1.0], [2.0, 1.0], [3.0, 1.0], [1.0, 2.5], [5.0, 1.0], [6.0, 1.0], [9.0, 1.0]];
-    let vel = [[1.0, 0.0], [-1.0, 0.0], [0.0, 2.0], [0.0, -2.0], [3.0, 1.0], [3.0, 1.0], [7.0, 0.0]];
+    let pos = [
+        [1.0, 1.0],
+        [2.0, 1.0],
+        [3.0, 1.0],
+        [1.0, 2.5],
+        [5.0, 1.0],
+        [6.0, 1.0],
+        [9.0, 1.0],
+    ];
+    let vel = [
+        [1.0, 0.0],
+        [-1.0, 0.0],
+        [0.0, 2.0],
+        [0.0, -2.0],
+        [3.0, 1.0],
+        [3.0, 1.0],
+        [7.0, 0.0],
+    ];
     let f = frame([16.0, 4.0], &pos, &vel, 0.5, vec![]);
     let bins = LateralBins::new(4, 16.0);
     let (t, counts) = temperature_profile(&f, &bins);

@@ -28,9 +28,18 @@ fn gamma_below_one_with_small_e_star_is_solid() {
     let s = common::scene(&standard_2d(20.0, 54, 0.5, 0.3, 5.0, 3.0));
     let run = run_observed(&s, &mut |_| {});
     let o = &run.observables;
-    assert_eq!(run.classification.phase, Phase::S, "{}", run.classification.decided_on.reason);
+    assert_eq!(
+        run.classification.phase,
+        Phase::S,
+        "{}",
+        run.classification.decided_on.reason
+    );
     assert!(o.granular_temperature_reduced < 0.01, "{o:?}");
-    assert!(o.bridges_per_particle > 1.5, "a bonded bed: {}", o.bridges_per_particle);
+    assert!(
+        o.bridges_per_particle > 1.5,
+        "a bonded bed: {}",
+        o.bridges_per_particle
+    );
     let flc = o.location_changes.as_ref().unwrap().per_particle_per_period;
     assert!(flc <= s.classify.solid_flc, "{flc}");
     for l in &o.diffusion.as_ref().unwrap().layers {
@@ -44,8 +53,17 @@ fn strongly_driven_dilute_system_is_gas() {
     let s = common::scene(&standard_2d(40.0, 60, 6.0, 10.0, 12.0, 4.0));
     let run = run_observed(&s, &mut |_| {});
     let o = &run.observables;
-    assert_eq!(run.classification.phase, Phase::G, "{}", run.classification.decided_on.reason);
-    assert!(o.granular_temperature_reduced > 10.0, "{}", o.granular_temperature_reduced);
+    assert_eq!(
+        run.classification.phase,
+        Phase::G,
+        "{}",
+        run.classification.decided_on.reason
+    );
+    assert!(
+        o.granular_temperature_reduced > 10.0,
+        "{}",
+        o.granular_temperature_reduced
+    );
     assert!(o.bridges_per_particle < 0.3);
     let flc = o.location_changes.as_ref().unwrap().per_particle_per_period;
     assert!(flc > 0.5, "{flc}");
@@ -94,7 +112,10 @@ fn profiles_and_counts_add_up() {
         .map(|r| std::f64::consts::PI * r * r)
         .sum();
     let binned: f64 = p.packing.iter().map(|phi| phi * 5.0 * 9.0).sum();
-    assert!((binned - volume).abs() < 1e-9 * volume, "{binned} vs {volume}");
+    assert!(
+        (binned - volume).abs() < 1e-9 * volume,
+        "{binned} vs {volume}"
+    );
     let e = &run.report.events;
     assert_eq!(o.counts.pair_collisions, e.pair_collisions);
     assert_eq!(o.counts.wall_collisions, e.wall_collisions);
@@ -148,6 +169,9 @@ fn three_dimensional_run_observes_neighbour_shells() {
     // n_cb per bin = bridges / (width * L_y); summed over bins times the measure = bridges.
     let bridges: f64 = o.profiles.n_cb.iter().map(|n| n * 2.0 * 8.0).sum();
     let mean_bridges = o.bridges_per_particle * 120.0;
-    assert!((bridges - mean_bridges).abs() < 1e-9 * mean_bridges.max(1.0), "{bridges} {mean_bridges}");
+    assert!(
+        (bridges - mean_bridges).abs() < 1e-9 * mean_bridges.max(1.0),
+        "{bridges} {mean_bridges}"
+    );
     assert_eq!(o.diffusion.as_ref().unwrap().layers.len(), 3);
 }

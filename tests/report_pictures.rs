@@ -28,16 +28,24 @@ fn xyz_round_trips_the_configuration() {
     let text = snapshot_xyz(&f, 0.2844);
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "5");
-    assert!(lines[1].contains("Lattice=\"10 0 0 0 1 0 0 0 4\""), "{}", lines[1]);
+    assert!(
+        lines[1].contains("Lattice=\"10 0 0 0 1 0 0 0 4\""),
+        "{}",
+        lines[1]
+    );
     assert!(lines[1].contains("pbc=\"T F F\""));
-    assert!(lines[1].contains("Properties=species:S:1:pos:R:3:radius:R:1:velo:R:3:kinetic_energy:R:1:bridges:I:1"));
+    assert!(lines[1].contains(
+        "Properties=species:S:1:pos:R:3:radius:R:1:velo:R:3:kinetic_energy:R:1:bridges:I:1"
+    ));
     assert_eq!(lines.len(), 2 + 5);
     let mut degree_sum = 0;
     for (i, line) in lines[2..].iter().enumerate() {
         let c: Vec<&str> = line.split_whitespace().collect();
         assert_eq!(c.len(), 10, "{line}");
         let num = |k: usize| c[k].parse::<f64>().unwrap();
-        assert!((num(1) - f.x(i)[0]).abs() < 1e-8 && num(2) == 0.0 && (num(3) - f.x(i)[1]).abs() < 1e-8);
+        assert!(
+            (num(1) - f.x(i)[0]).abs() < 1e-8 && num(2) == 0.0 && (num(3) - f.x(i)[1]).abs() < 1e-8
+        );
         assert!((num(4) - f.radii[i]).abs() < 1e-6);
         assert!((num(5) - f.v(i)[0]).abs() < 1e-8 && (num(7) - f.v(i)[1]).abs() < 1e-8);
         let ke = 0.5 * (f.v(i)[0].powi(2) + f.v(i)[1].powi(2)) / 0.2844;
@@ -57,7 +65,13 @@ fn svg_snapshot_draws_grains_images_and_bridges() {
         assert_eq!(svg.matches("<circle").count(), 7);
         // Bridges 0-1 and 1-4 once, 2-3 from both sides of the seam.
         let path = svg.split("stroke=\"#d62728\"").nth(1).unwrap();
-        let d = path.split("d=\"").nth(1).unwrap().split('"').next().unwrap();
+        let d = path
+            .split("d=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
         assert_eq!(d.matches('M').count(), 4, "{d}");
     }
     // Colour by bridges: grain 1 has 2 bridges, grain 0 one: different fills.
@@ -93,7 +107,11 @@ fn profile_plot_and_cli_outputs() {
         .args(["--colour-by", "bridges"])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         json["classification"]["phase"].as_str().unwrap(),
@@ -102,7 +120,11 @@ fn profile_plot_and_cli_outputs() {
     assert_eq!(json["observables"]["particles"], 40);
     let xyz = std::fs::read_to_string(dir.join("a.xyz")).unwrap();
     assert_eq!(xyz.lines().count(), 42);
-    assert!(std::fs::read_to_string(dir.join("a.svg")).unwrap().contains("<circle"));
+    assert!(
+        std::fs::read_to_string(dir.join("a.svg"))
+            .unwrap()
+            .contains("<circle")
+    );
     assert_eq!(std::fs::read_to_string(dir.join("p.svg")).unwrap(), svg);
     // The table names the phase; a bad snapshot extension is refused before running.
     let out = Command::new(env!("CARGO_BIN_EXE_wetgran"))
@@ -111,7 +133,10 @@ fn profile_plot_and_cli_outputs() {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains(&format!("phase               {}", run.classification.phase)), "{text}");
+    assert!(
+        text.contains(&format!("phase               {}", run.classification.phase)),
+        "{text}"
+    );
     let out = Command::new(env!("CARGO_BIN_EXE_wetgran"))
         .args(["simulate", scene.to_str().unwrap(), "--snapshot", "x.png"])
         .output()

@@ -79,7 +79,10 @@ pub fn main() -> ExitCode {
                 }
             };
             for path in &snapshot {
-                if !matches!(path.extension().and_then(|e| e.to_str()), Some("xyz" | "svg")) {
+                if !matches!(
+                    path.extension().and_then(|e| e.to_str()),
+                    Some("xyz" | "svg")
+                ) {
                     eprintln!(
                         "error: --snapshot {}: the file name must end in .xyz or .svg",
                         path.display()

@@ -14,7 +14,10 @@ pub struct LateralBins {
 impl LateralBins {
     /// `n` equal bins over `[0, length)`.
     pub fn new(n: usize, length: f64) -> Self {
-        assert!(n >= 1 && length > 0.0, "at least one bin over a positive length");
+        assert!(
+            n >= 1 && length > 0.0,
+            "at least one bin over a positive length"
+        );
         Self {
             n,
             width: length / n as f64,

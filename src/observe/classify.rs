@@ -262,7 +262,9 @@ fn weighted(sel: &[usize], weight: &[f64], value: &[Option<f64>]) -> Option<f64>
 pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
     let p = &obs.profiles;
     let whole = region(
-        obs.location_changes.as_ref().map(|l| l.per_particle_per_period),
+        obs.location_changes
+            .as_ref()
+            .map(|l| l.per_particle_per_period),
         obs.granular_temperature_reduced,
         p.n_cb.len(),
         th,
@@ -294,10 +296,8 @@ pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
     let mid = 0.5 * (max + min);
     let (dense_bins, dilute_bins): (Vec<usize>, Vec<usize>) =
         (0..p.n_cb.len()).partition(|&b| p.n_cb[b] >= mid);
-    let flc_bins: Option<Vec<Option<f64>>> = p
-        .flc
-        .as_ref()
-        .map(|f| f.iter().map(|&x| Some(x)).collect());
+    let flc_bins: Option<Vec<Option<f64>>> =
+        p.flc.as_ref().map(|f| f.iter().map(|&x| Some(x)).collect());
     let part = |sel: &[usize]| {
         let t = weighted(sel, &p.particles, &p.temperature_reduced)
             .unwrap_or(obs.granular_temperature_reduced);

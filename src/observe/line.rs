@@ -38,7 +38,12 @@ pub fn fluid_gas_inflection(points: &[(f64, f64)]) -> Option<Inflection> {
     }
     let mids: Vec<(f64, f64)> = p
         .windows(2)
-        .map(|w| (0.5 * (w[0].0 + w[1].0), (w[1].1 - w[0].1) / (w[1].0 - w[0].0)))
+        .map(|w| {
+            (
+                0.5 * (w[0].0 + w[1].0),
+                (w[1].1 - w[0].1) / (w[1].0 - w[0].0),
+            )
+        })
         .collect();
     let k = (0..mids.len()).max_by(|&a, &b| mids[a].1.total_cmp(&mids[b].1))?;
     if k == 0 || k == mids.len() - 1 {

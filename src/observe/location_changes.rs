@@ -131,10 +131,7 @@ pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
             continue;
         }
         let directed = e.as_directed();
-        let opposite = match (
-            directed.opposite_vertex(),
-            directed.rev().opposite_vertex(),
-        ) {
+        let opposite = match (directed.opposite_vertex(), directed.rev().opposite_vertex()) {
             (Some(c), Some(d)) => {
                 let (c, d) = (c.data(), d.data());
                 let sum = angle(a.p, b.p, c.p) + angle(a.p, b.p, d.p);
@@ -151,7 +148,7 @@ pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
             opposite,
         });
     }
-    edges.sort_by(|p, q| (p.i, p.j).cmp(&(q.i, q.j)));
+    edges.sort_by_key(|p| (p.i, p.j));
     edges.dedup_by(|p, q| (p.i, p.j) == (q.i, q.j));
     edges
 }
@@ -231,7 +228,7 @@ pub fn neighbour_shell_edges(
             }
         }
     }
-    out.sort_by(|p, q| (p.i, p.j).cmp(&(q.i, q.j)));
+    out.sort_by_key(|p| (p.i, p.j));
     out
 }
 
@@ -295,13 +292,16 @@ pub fn compare(
     (fresh, tracked)
 }
 
+/// The previous sample: its time, whether it lay in the window, and the tracked relations.
+type Tracked = (f64, bool, Vec<(u32, u32)>);
+
 /// Counts location changes sample by sample.
 #[derive(Debug, Clone)]
 pub struct LocationChangeCounter {
     method: Method,
     bins: LateralBins,
     period: f64,
-    previous: Option<(f64, bool, Vec<(u32, u32)>)>,
+    previous: Option<Tracked>,
     /// `(t, location changes per particle per period)` over each sample interval ending at `t`.
     pub series: Vec<(f64, f64)>,
     /// Changes counted in intervals inside the window.
@@ -345,7 +345,13 @@ impl LocationChangeCounter {
         self.bin_count
             .iter()
             .zip(particles)
-            .map(|(&c, &n)| if n > 0.0 { c as f64 / (n * periods) } else { 0.0 })
+            .map(|(&c, &n)| {
+                if n > 0.0 {
+                    c as f64 / (n * periods)
+                } else {
+                    0.0
+                }
+            })
             .collect()
     }
 }

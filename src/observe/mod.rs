@@ -29,7 +29,9 @@ pub mod spec;
 pub mod stationarity;
 pub mod temperature;
 
-pub use classify::{Classification, DecisionInputs, Mobility, Phase, RegionInputs, Thresholds, classify};
+pub use classify::{
+    Classification, DecisionInputs, Mobility, Phase, RegionInputs, Thresholds, classify,
+};
 pub use diffusion::{Diffusion, LayerDiffusion};
 pub use line::{Inflection, fluid_gas_inflection};
 pub use spec::{ObserveSpec, period_of};

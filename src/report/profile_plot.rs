@@ -56,7 +56,9 @@ pub fn profiles_svg(obs: &Observables) -> String {
         let vals: Vec<f64> = values.iter().flatten().copied().collect();
         let (mut lo, mut hi) = vals
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
         if !lo.is_finite() {
             (lo, hi) = (0.0, 1.0);
         }
@@ -74,7 +76,12 @@ pub fn profiles_svg(obs: &Observables) -> String {
             n(y0),
             n(pw)
         );
-        let _ = writeln!(s, "<text x=\"{ml}\" y=\"{}\">{}</text>", n(y0 - 4.0), esc(name));
+        let _ = writeln!(
+            s,
+            "<text x=\"{ml}\" y=\"{}\">{}</text>",
+            n(y0 - 4.0),
+            esc(name)
+        );
         for v in [lo + pad, 0.5 * (lo + hi), hi - pad] {
             let _ = writeln!(
                 s,

@@ -30,7 +30,9 @@ impl std::str::FromStr for ColourBy {
         match s {
             "energy" | "kinetic_energy" => Ok(ColourBy::KineticEnergy),
             "bridges" => Ok(ColourBy::Bridges),
-            _ => Err(format!("unknown colouring `{s}`: expected `energy` or `bridges`")),
+            _ => Err(format!(
+                "unknown colouring `{s}`: expected `energy` or `bridges`"
+            )),
         }
     }
 }
@@ -60,7 +62,11 @@ pub fn snapshot_xyz(frame: &Frame, energy_unit: f64) -> String {
         }
     };
     let size = to3(&frame.box_size);
-    let size = if d == 2 { [size[0], 1.0, size[2]] } else { size };
+    let size = if d == 2 {
+        [size[0], 1.0, size[2]]
+    } else {
+        size
+    };
     let pbc = to3(&frame
         .periodic
         .iter()
@@ -114,7 +120,10 @@ pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> Str
     let scale = (1200.0 / lx).clamp(3.0, 40.0);
     let (ml, mt) = (10.0, 24.0);
     let top_extra = frame.wall_offset.abs() + 0.5;
-    let (w, ht) = (lx * scale + 2.0 * ml, (h + 2.0 * top_extra) * scale + mt + 34.0);
+    let (w, ht) = (
+        lx * scale + 2.0 * ml,
+        (h + 2.0 * top_extra) * scale + mt + 34.0,
+    );
     let px = |x: f64| ml + x * scale;
     let pz = |z: f64| mt + (h + top_extra - z) * scale;
     let mut s = String::new();
@@ -134,7 +143,9 @@ pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> Str
     );
     let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
     let title = match colour_by {
-        ColourBy::KineticEnergy => "colour: log10(kinetic energy / E_cb) from -2 (dark) to 2 (yellow)",
+        ColourBy::KineticEnergy => {
+            "colour: log10(kinetic energy / E_cb) from -2 (dark) to 2 (yellow)"
+        }
         ColourBy::Bridges => "colour: bridges per grain 0 (grey), 1, 2, ... 7+ (red)",
     };
     let _ = writeln!(
@@ -192,7 +203,10 @@ pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> Str
             );
         }
     }
-    let _ = write!(s, "<path stroke=\"#d62728\" stroke-width=\"1\" fill=\"none\" d=\"");
+    let _ = write!(
+        s,
+        "<path stroke=\"#d62728\" stroke-width=\"1\" fill=\"none\" d=\""
+    );
     for &(i, j) in &frame.bridges {
         let (xi, zi) = (frame.wrap(0, frame.x(i)[0]), frame.height(i));
         let (xj, zj) = (frame.wrap(0, frame.x(j)[0]), frame.height(j));
@@ -222,7 +236,10 @@ pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> Str
     let ly = ht - 14.0;
     for k in 0..=8 {
         let (fill, text) = match colour_by {
-            ColourBy::KineticEnergy => (colour(k as f64 / 8.0), format!("{:.1}", -2.0 + 0.5 * k as f64)),
+            ColourBy::KineticEnergy => (
+                colour(k as f64 / 8.0),
+                format!("{:.1}", -2.0 + 0.5 * k as f64),
+            ),
             ColourBy::Bridges if k < 8 => (
                 category(k).to_string(),
                 if k == 7 { "7+".into() } else { k.to_string() },

@@ -40,7 +40,11 @@ pub fn colour(u: f64) -> String {
         (0.75, [94.0, 201.0, 98.0]),
         (1.0, [253.0, 231.0, 37.0]),
     ];
-    let u = if u.is_finite() { u.clamp(0.0, 1.0) } else { 0.0 };
+    let u = if u.is_finite() {
+        u.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let k = STOPS
         .windows(2)
         .position(|w| u <= w[1].0)
