@@ -273,3 +273,25 @@ fn inflection_of_a_known_sigmoid() {
     assert_eq!(fluid_gas_inflection(&convex), None);
     assert_eq!(fluid_gas_inflection(&convex[..3]), None);
 }
+
+/// The dense/dilute split uses every bin, not only the two extremes: one outlier bin does not
+/// pull the split to itself.
+#[test]
+fn split_is_two_classes_not_the_range_midpoint() {
+    use wetgran::observe::classify::two_class_split;
+    let n_cb = [6.0, 6.0, 6.0, 6.0, 6.0, 1.0, 1.0, 1.0, 1.0, 12.0];
+    assert_eq!(two_class_split(&n_cb), 3.5);
+    assert_eq!(two_class_split(&[2.0, 4.0]), 3.0);
+    assert_eq!(two_class_split(&[5.0]), 5.0);
+    // Solid bins (dense, f_lc 0) next to fluid ones (f_lc 1), one very dense solid bin: sfc.
+    let f = (0..10)
+        .map(|b| if b < 5 || b == 9 { 0.0 } else { 1.0 })
+        .collect();
+    let t = (0..10)
+        .map(|b| Some(if b < 5 || b == 9 { 0.01 } else { 0.5 }))
+        .collect();
+    let obs = synthetic(Some(0.4), 0.2, n_cb.to_vec(), f, t);
+    let c = classify(&obs, &th());
+    assert_eq!(c.phase, Phase::Sfc, "{}", c.decided_on.reason);
+    assert_eq!(c.decided_on.dense.as_ref().unwrap().bins, 6);
+}

@@ -9,8 +9,8 @@
 //!    else *fluid*.
 //! 2. If `Delta n_cb` (Eq. 3.3) is at most `coexistence_delta_n_cb`, the system is homogeneous
 //!    and the whole system is classified by rule 1.
-//! 3. Otherwise the lateral bins are split at the middle of the bridge-density range
-//!    `(max n_cb + min n_cb) / 2` into a dense and a dilute region; each region is classified by
+//! 3. Otherwise the lateral bins are split by their bridge density into a dense and a dilute
+//!    region (two classes of maximal between-class variance, [`two_class_split`]); each region is classified by
 //!    rule 1 from its own particle-weighted `f_lc` and `T_g / E_cb`. Two different phases give
 //!    their coexistence (sfc, sgc or fgc); the same phase twice gives that phase.
 //!
@@ -222,6 +222,35 @@ pub struct Classification {
     pub decided_on: DecisionInputs,
 }
 
+/// The bridge density separating dense from dilute bins: the split of the sorted values into
+/// two classes that maximises the between-class variance `w_0 w_1 (mu_0 - mu_1)^2` (Otsu's
+/// rule, every bin weighing the same), placed halfway between the two classes. Unlike the
+/// midpoint of the range it does not hang on the two most extreme bins.
+pub fn two_class_split(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n < 2 {
+        return v.first().copied().unwrap_or(0.0);
+    }
+    let total: f64 = v.iter().sum();
+    let (mut best, mut split, mut low) = (f64::NEG_INFINITY, 0.5 * (v[0] + v[n - 1]), 0.0);
+    for k in 1..n {
+        low += v[k - 1];
+        if v[k] == v[k - 1] {
+            continue;
+        }
+        let (w0, w1) = (k as f64 / n as f64, (n - k) as f64 / n as f64);
+        let (m0, m1) = (low / k as f64, (total - low) / (n - k) as f64);
+        let between = w0 * w1 * (m0 - m1) * (m0 - m1);
+        if between > best {
+            best = between;
+            split = 0.5 * (v[k - 1] + v[k]);
+        }
+    }
+    split
+}
+
 /// Rule 1 for one region.
 fn region(flc: Option<f64>, temperature: f64, bins: usize, th: &Thresholds) -> RegionInputs {
     let (mobile, mobility_from) = match (th.mobility, flc) {
@@ -291,9 +320,7 @@ pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
             decided_on: decided,
         };
     }
-    let max = p.n_cb.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let min = p.n_cb.iter().copied().fold(f64::INFINITY, f64::min);
-    let mid = 0.5 * (max + min);
+    let mid = two_class_split(&p.n_cb);
     let (dense_bins, dilute_bins): (Vec<usize>, Vec<usize>) =
         (0..p.n_cb.len()).partition(|&b| p.n_cb[b] >= mid);
     let flc_bins: Option<Vec<Option<f64>>> =

@@ -195,7 +195,7 @@ pub fn run_observed_with_frame(
     });
     let mut diffusion = spec
         .diffusion
-        .then(|| diffusion::DiffusionObserver::new(spec.layers));
+        .then(|| diffusion::DiffusionObserver::new(spec.layers.min(scene.particles.count)));
     let mut first_counts = None;
     let mut last: Option<Frame> = None;
     let mut window_samples = 0usize;

@@ -34,7 +34,7 @@ pub fn profiles_svg(obs: &Observables) -> String {
             f.iter().map(|&x| Some(x)).collect(),
         ));
     }
-    let (w, ph, ml, mr, mt, gap) = (760.0, 120.0, 70.0, 20.0, 30.0, 36.0);
+    let (w, ph, ml, mr, mt, gap) = (760.0, 120.0, 70.0, 20.0, 44.0, 36.0);
     let h = mt + panels.len() as f64 * (ph + gap) + 10.0;
     let pw = w - ml - mr;
     let lx = p.centres.len() as f64 * p.bin_width;

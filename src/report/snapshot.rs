@@ -205,7 +205,7 @@ pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> Str
     }
     let _ = write!(
         s,
-        "<path stroke=\"#d62728\" stroke-width=\"1\" fill=\"none\" d=\""
+        "<path stroke=\"#d62728\" stroke-width=\"0.7\" stroke-opacity=\"0.8\" fill=\"none\" d=\""
     );
     for &(i, j) in &frame.bridges {
         let (xi, zi) = (frame.wrap(0, frame.x(i)[0]), frame.height(i));
