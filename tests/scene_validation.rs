@@ -241,11 +241,15 @@ fn good_scenes_load() {
     assert!(n >= 5, "expected at least 5 good scenes, found {n}");
 }
 
-/// The example scenes shipped in `scenes/` are valid too.
+/// The example scenes shipped in `scenes/` are valid too, and so are the phase points of
+/// `docs/phases/`.
 #[test]
 fn example_scenes_load() {
-    let n = assert_all_load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"));
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let n = assert_all_load(&root.join("scenes"));
     assert!(n >= 1, "no example scene found");
+    let n = assert_all_load(&root.join("docs").join("phases"));
+    assert!(n >= 5, "expected the phase points of docs/phases.md, found {n}");
 }
 
 /// The good scenes carry no `# expect:` line (it would mean a misplaced bad scene).

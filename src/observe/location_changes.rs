@@ -10,7 +10,9 @@
 //! edges present now that were absent at the previous sample (the flips needed to turn the old
 //! triangulation into the new one when every edge flips at most once). Only new edges of length
 //! at most `lc_max_edge` count: longer ones span the empty space above a bed or in a gas and
-//! change whenever a surface grain rattles, without any neighbour exchange.
+//! change whenever a surface grain rattles, without any neighbour exchange. A flip counts only
+//! once it is decisive (hysteresis `lc_flip_margin`, see [`compare`]): four nearly co-circular
+//! grains would otherwise count every rattle.
 //!
 //! **3D (neighbour shells).** Grains `i, j` become neighbours when their centres come closer
 //! than `lc_enter_factor (r_i + r_j)` and stay neighbours until they separate beyond
