@@ -118,10 +118,18 @@ fn homogeneous_phases_and_their_threshold_edges() {
         classify(&homogeneous(Some(above), 0.5, 0.0), &t).phase,
         Phase::F
     );
-    // A solid stays solid however hot it is said to be (f_lc decides mobility).
+    // f_lc decides mobility up to the gas temperature; hotter than that, bridges cannot hold
+    // and a region with few location changes (a dilute gas at high Gamma) is a gas.
     assert_eq!(
-        classify(&homogeneous(Some(sf), 10.0 * gas, 0.0), &t).phase,
+        classify(&homogeneous(Some(sf), gas, 0.0), &t).phase,
         Phase::S
+    );
+    let c = classify(&homogeneous(Some(sf), gas * (1.0 + 1e-12), 0.0), &t);
+    assert_eq!(c.phase, Phase::G);
+    assert!(
+        c.decided_on.reason.contains("too hot for bridges"),
+        "{}",
+        c.decided_on.reason
     );
     // Fluid versus gas on T_g/E_cb: the edge value is fluid.
     assert_eq!(

@@ -249,7 +249,10 @@ fn example_scenes_load() {
     let n = assert_all_load(&root.join("scenes"));
     assert!(n >= 1, "no example scene found");
     let n = assert_all_load(&root.join("docs").join("phases"));
-    assert!(n >= 5, "expected the phase points of docs/phases.md, found {n}");
+    assert!(
+        n >= 5,
+        "expected the phase points of docs/phases.md, found {n}"
+    );
 }
 
 /// The good scenes carry no `# expect:` line (it would mean a misplaced bad scene).

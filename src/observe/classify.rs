@@ -6,7 +6,8 @@
 //! 1. A region is *solid* when it is not mobile: its location-change frequency `f_lc` is at most
 //!    `solid_flc` (or, with `mobility = "temperature"` or without `f_lc`, its `T_g / E_cb` is at
 //!    most `solid_temperature`). A mobile region is *gas* when `T_g / E_cb > gas_temperature`,
-//!    else *fluid*.
+//!    else *fluid*. A region hotter than `gas_temperature` is mobile whatever its `f_lc`: its
+//!    bridges cannot hold (a dilute gas at high Gamma has a small `f_lc` per short period).
 //! 2. If `Delta n_cb` (Eq. 3.3) is at most `coexistence_delta_n_cb`, the system is homogeneous
 //!    and the whole system is classified by rule 1.
 //! 3. Otherwise the lateral bins are split by their bridge density into a dense and a dilute
@@ -253,8 +254,11 @@ pub fn two_class_split(values: &[f64]) -> f64 {
 
 /// Rule 1 for one region.
 fn region(flc: Option<f64>, temperature: f64, bins: usize, th: &Thresholds) -> RegionInputs {
+    let hot = temperature > th.gas_temperature;
     let (mobile, mobility_from) = match (th.mobility, flc) {
-        (Mobility::LocationChanges, Some(f)) => (f > th.solid_flc, Mobility::LocationChanges),
+        (Mobility::LocationChanges, Some(f)) => {
+            (f > th.solid_flc || hot, Mobility::LocationChanges)
+        }
         _ => (temperature > th.solid_temperature, Mobility::Temperature),
     };
     let phase = if !mobile {
@@ -358,6 +362,9 @@ pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
 /// One region's decision in words.
 fn describe(r: &RegionInputs, th: &Thresholds) -> String {
     let mobility = match (r.mobility_from, r.flc) {
+        (Mobility::LocationChanges, Some(f)) if f <= th.solid_flc && r.phase != Phase::S => {
+            format!("f_lc = {f:.4} <= {} but too hot for bridges", th.solid_flc)
+        }
         (Mobility::LocationChanges, Some(f)) => format!(
             "f_lc = {f:.4} {} {}",
             if f > th.solid_flc { ">" } else { "<=" },
