@@ -121,6 +121,20 @@ fn profiles_and_counts_add_up() {
     assert_eq!(o.counts.wall_collisions, e.wall_collisions);
     assert_eq!(o.counts.bridge_formations, e.bridge_formations);
     assert_eq!(o.counts.bridge_ruptures, e.bridge_ruptures);
+    // The engine's bridge list, translated to scene order: as many as it counts, and every pair
+    // within s_crit of contact (a wrong translation would pair distant grains).
+    assert_eq!(frame.bridges.len(), run.report.bridges);
+    assert!(!frame.bridges.is_empty());
+    for &(i, j) in &frame.bridges {
+        assert!(i < j);
+        let dx = frame.min_image(0, frame.x(j)[0] - frame.x(i)[0]);
+        let dz = frame.x(j)[1] - frame.x(i)[1];
+        let gap = (dx * dx + dz * dz).sqrt() - frame.radii[i] - frame.radii[j];
+        assert!(
+            (-1e-6..=s.s_crit() + 1e-9).contains(&gap),
+            "bridge {i}-{j} with gap {gap}"
+        );
+    }
     assert_eq!(fractions.first(), Some(&0.0));
     assert_eq!(fractions.last(), Some(&1.0));
     assert!(fractions.windows(2).all(|w| w[0] < w[1]));

@@ -12,8 +12,8 @@
 //! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D) |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
 //! | [`stationarity`] | first versus second half of the window |
-//! | [`classify`] | the phase from the observables and the `[classify]` thresholds |
-//! | [`line`] | the fluid-gas inflection point along a line of constant Gamma |
+//! | [`classify`](mod@classify) | the phase from the observables and the `[classify]` thresholds |
+//! | [`line`](mod@line) | the fluid-gas inflection point along a line of constant Gamma |
 //!
 //! Collision counts (pair, wall), bridge formations and ruptures over the window come from the
 //! engine's event counters at the window's first and last sample. Observers only read copies of

@@ -2,6 +2,8 @@
 //!
 //! `run_scene` picks the engine's concrete type once from the scene (dimension, gravity on or
 //! off, bridges or none), so that a scene pays only for the effects it asks for.
+//! [`run_scene_observed`] runs the same loop and also hands a read-only [`Frame`] (a copy of the
+//! configuration in scene order) to an observer at fixed intervals; `crate::observe` builds on it.
 
 pub mod event_driven;
 pub mod frame;
