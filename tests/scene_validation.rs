@@ -173,6 +173,21 @@ bad_scenes! {
     engine_overlap_tolerance_zero,
     engine_cell_size_negative,
     engine_cell_size_too_small,
+    // Observers and classification.
+    observe_transient_too_long,
+    observe_transient_negative,
+    observe_bin_width_zero,
+    observe_samples_per_period_zero,
+    observe_layers_zero,
+    observe_lc_max_edge_below_one,
+    observe_lc_flip_margin_negative,
+    observe_lc_leave_not_above_enter,
+    observe_stationarity_tolerance_zero,
+    observe_unknown_key,
+    classify_solid_flc_negative,
+    classify_gas_below_solid,
+    classify_delta_n_cb_infinite,
+    classify_mobility_unknown,
     // Format.
     unknown_key_top_level,
     unknown_key_in_table,
@@ -230,11 +245,18 @@ fn good_scenes_load() {
     assert!(n >= 5, "expected at least 5 good scenes, found {n}");
 }
 
-/// The example scenes shipped in `scenes/` are valid too.
+/// The example scenes shipped in `scenes/` are valid too, and so are the phase points of
+/// `docs/phases/`.
 #[test]
 fn example_scenes_load() {
-    let n = assert_all_load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"));
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let n = assert_all_load(&root.join("scenes"));
     assert!(n >= 1, "no example scene found");
+    let n = assert_all_load(&root.join("docs").join("phases"));
+    assert!(
+        n >= 5,
+        "expected the phase points of docs/phases.md, found {n}"
+    );
 }
 
 /// The good scenes carry no `# expect:` line (it would mean a misplaced bad scene).

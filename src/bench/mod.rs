@@ -200,6 +200,8 @@ fn base_scene(dimension: usize, gravity: f64, size: Vec<f64>, boundary: Vec<Boun
             max_events: None,
         },
         engine: EngineSpec::default(),
+        observe: Default::default(),
+        classify: Default::default(),
     }
 }
 

@@ -1,8 +1,10 @@
 //! The command line: `wetgran simulate` and `wetgran bench`. `src/main.rs` only calls [`main`].
 
 use crate::bench;
+use crate::observe::{ObservedRun, run_observed_with_frame};
+use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use crate::scene::Scene;
-use crate::sim::{RunReport, run_scene, run_scene_with_progress};
+use crate::sim::RunReport;
 use clap::{Parser, Subcommand};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -19,13 +21,25 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Run one scene file and print a summary (events by kind, temperature, bridges, energy).
+    /// Run one scene file with its observers and print a summary (events by kind, energy,
+    /// observables over the stationary window, and the phase).
     Simulate {
         /// The scene file (TOML); see scenes/ for examples.
         scene: PathBuf,
-        /// Print the full report as JSON (with the sampled time series) instead of a table.
+        /// Print the full result as JSON (run report, observables with time series and profiles,
+        /// classification with the numbers it was decided on) instead of a table.
         #[arg(long)]
         json: bool,
+        /// Write the final configuration: extended XYZ (`.xyz`, opens in OVITO) or an SVG picture
+        /// (`.svg`). May be given more than once.
+        #[arg(long, value_name = "FILE")]
+        snapshot: Vec<PathBuf>,
+        /// Colour of the SVG snapshot: `energy` (kinetic energy / E_cb) or `bridges`.
+        #[arg(long, default_value = "energy", value_name = "BY")]
+        colour_by: String,
+        /// Write the lateral profiles (T_g / E_cb, packing fraction, n_cb, f_lc against x) as SVG.
+        #[arg(long, value_name = "FILE.svg")]
+        profiles: Option<PathBuf>,
     },
     /// Measure the engine's speed on the reference systems and print the figures.
     Bench {
@@ -50,7 +64,32 @@ pub enum Command {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Simulate { scene, json } => {
+        Command::Simulate {
+            scene,
+            json,
+            snapshot,
+            colour_by,
+            profiles,
+        } => {
+            let colour_by: ColourBy = match colour_by.parse() {
+                Ok(c) => c,
+                Err(e) => {
+                    eprintln!("error: --colour-by: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            for path in &snapshot {
+                if !matches!(
+                    path.extension().and_then(|e| e.to_str()),
+                    Some("xyz" | "svg")
+                ) {
+                    eprintln!(
+                        "error: --snapshot {}: the file name must end in .xyz or .svg",
+                        path.display()
+                    );
+                    return ExitCode::from(2);
+                }
+            }
             let scene = match Scene::load(&scene) {
                 Ok(s) => s,
                 Err(e) => {
@@ -58,31 +97,43 @@ pub fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
-            let report = if std::io::stderr().is_terminal() {
+            let (run, frame) = if std::io::stderr().is_terminal() {
                 let duration = scene.run.duration;
-                let report = run_scene_with_progress(&scene, &mut |smp| {
+                let out = run_observed_with_frame(&scene, &mut |f| {
                     eprint!(
-                        "\r  t = {:.3} / {duration}  ({:.0}%)  T_g = {:.4e}  bridges = {}   ",
-                        smp.time,
-                        100.0 * smp.time / duration,
-                        smp.granular_temperature,
-                        smp.bridges
+                        "\r  t = {:.3} / {duration}  ({:.0}%)   ",
+                        f * duration,
+                        100.0 * f
                     );
                 });
                 eprintln!();
-                report
+                out
             } else {
-                run_scene(&scene)
+                run_observed_with_frame(&scene, &mut |_| {})
             };
             if json {
                 println!(
                     "{}",
-                    serde_json::to_string_pretty(&report).expect("report serializes")
+                    serde_json::to_string_pretty(&run).expect("result serializes")
                 );
             } else {
-                print!("{}", summary_text(&report));
+                print!("{}", summary_text(&run.report));
+                print!("{}", observed_text(&run));
             }
-            if let Some(v) = &report.invariant_violation {
+            let unit = run.observables.temperature_unit;
+            for path in &snapshot {
+                if let Err(e) = write_snapshot(path, &frame, colour_by, unit) {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            }
+            if let Some(path) = &profiles
+                && let Err(e) = std::fs::write(path, profiles_svg(&run.observables))
+            {
+                eprintln!("error: {}: cannot write: {e}", path.display());
+                return ExitCode::from(2);
+            }
+            if let Some(v) = &run.report.invariant_violation {
                 eprintln!("error: the run stopped on a broken invariant: {v}");
                 return ExitCode::from(3);
             }
@@ -186,5 +237,82 @@ pub fn summary_text(r: &RunReport) -> String {
         "  bookkeeping error {:.3e} (relative)",
         r.energy_bookkeeping_error
     );
+    s
+}
+
+/// Human-readable summary of the observables and the classification.
+pub fn observed_text(run: &ObservedRun) -> String {
+    use std::fmt::Write;
+    let o = &run.observables;
+    let c = &run.classification;
+    let mut s = String::new();
+    let unit = &o.temperature_unit_name;
+    let _ = writeln!(
+        s,
+        "observables         window t = {:.4} .. {:.4} ({} samples, {:.4} periods of {:.4})",
+        o.window_start,
+        o.window_end,
+        o.window_samples,
+        (o.window_end - o.window_start) / o.period,
+        o.period
+    );
+    let _ = writeln!(
+        s,
+        "  T_g / {unit:<12} {:.6}",
+        o.granular_temperature_reduced
+    );
+    let _ = writeln!(s, "  bridges/particle  {:.4}", o.bridges_per_particle);
+    if let Some(l) = &o.location_changes {
+        let _ = writeln!(
+            s,
+            "  f_lc              {:.6} per particle per period ({} changes, {}, sampled every {:.4})",
+            l.per_particle_per_period, l.count, l.method, l.sample_interval
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  Delta n_cb        {:.4}  (bins of {:.3}; Delta n_area {:.4})",
+        o.profiles.delta_n_cb, o.profiles.bin_width, o.profiles.delta_n_area
+    );
+    if let Some(d) = &o.diffusion {
+        for (k, l) in d.layers.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "  layer {k} (z = {:.2})  D = {:.4e}, MSD = {:.4e} ({} particles)",
+                l.mean_height, l.coefficient, l.msd_end, l.particles
+            );
+        }
+    }
+    let k = &o.counts;
+    let _ = writeln!(
+        s,
+        "  in the window     {} pair, {} wall collisions ({} pair per wall), {} formations, {} ruptures",
+        k.pair_collisions,
+        k.wall_collisions,
+        k.pair_per_wall
+            .map_or_else(|| "-".to_string(), |x| format!("{x:.3}")),
+        k.bridge_formations,
+        k.bridge_ruptures
+    );
+    let st = &o.stationarity;
+    let _ = writeln!(
+        s,
+        "  stationary        {} (first vs second half, tolerance {}): {}",
+        if st.stationary { "yes" } else { "NO" },
+        st.tolerance,
+        st.checks
+            .iter()
+            .map(|c| format!(
+                "{} {:.4} -> {:.4}{}",
+                c.quantity,
+                c.first_half,
+                c.second_half,
+                if c.ok { "" } else { " (!)" }
+            ))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let _ = writeln!(s, "phase               {}", c.phase);
+    let _ = writeln!(s, "  because           {}", c.decided_on.reason);
     s
 }

@@ -38,6 +38,12 @@ pub struct Scene {
     pub run: RunSpec,
     #[serde(default)]
     pub engine: EngineSpec,
+    /// Observers, sampling and the stationary window (`[observe]`).
+    #[serde(default)]
+    pub observe: crate::observe::ObserveSpec,
+    /// Thresholds of the phase classification (`[classify]`).
+    #[serde(default)]
+    pub classify: crate::observe::Thresholds,
 }
 
 /// The simulation box: one size and one boundary kind per axis, the vertical axis last.

@@ -597,6 +597,9 @@ impl Scene {
                 ),
             ));
         }
+        // Observers and classification.
+        self.observe.validate(self, origin)?;
+        self.classify.validate(origin)?;
         Ok(())
     }
 }

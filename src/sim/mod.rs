@@ -2,9 +2,14 @@
 //!
 //! `run_scene` picks the engine's concrete type once from the scene (dimension, gravity on or
 //! off, bridges or none), so that a scene pays only for the effects it asks for.
+//! [`run_scene_observed`] runs the same loop and also hands a read-only [`Frame`] (a copy of the
+//! configuration in scene order) to an observer at fixed intervals; `crate::observe` builds on it.
 
 pub mod event_driven;
+pub mod frame;
 pub mod initial;
+
+pub use frame::Frame;
 
 use crate::scene::Scene;
 use event_driven::{EnergyLedger, Engine, EventCounts};
@@ -53,18 +58,39 @@ pub fn run_scene(scene: &Scene) -> RunReport {
 
 /// Runs a validated scene, calling `progress` after every sample (for progress displays).
 pub fn run_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&Sample)) -> RunReport {
+    run_dispatch(scene, progress, None)
+}
+
+/// Runs a validated scene and hands a [`Frame`] to `observer` at every time `k * interval`
+/// (`k = 0, 1, ...`, up to `run.duration`), besides the report's own samples. The observer only
+/// reads copies of the state, so the trajectory is the same as with [`run_scene`].
+pub fn run_scene_observed(
+    scene: &Scene,
+    interval: f64,
+    observer: &mut dyn FnMut(&Frame),
+    progress: &mut dyn FnMut(&Sample),
+) -> RunReport {
+    assert!(
+        interval > 0.0 && interval.is_finite(),
+        "observer interval must be > 0"
+    );
+    run_dispatch(scene, progress, Some((interval, observer)))
+}
+
+type Observer<'a> = Option<(f64, &'a mut dyn FnMut(&Frame))>;
+
+fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> RunReport {
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
-    let p = progress;
     match (scene.dimension, grav, wet) {
-        (2, false, false) => run_engine(Engine::<2, false, false>::new(scene), scene, p),
-        (2, false, true) => run_engine(Engine::<2, false, true>::new(scene), scene, p),
-        (2, true, false) => run_engine(Engine::<2, true, false>::new(scene), scene, p),
-        (2, true, true) => run_engine(Engine::<2, true, true>::new(scene), scene, p),
-        (3, false, false) => run_engine(Engine::<3, false, false>::new(scene), scene, p),
-        (3, false, true) => run_engine(Engine::<3, false, true>::new(scene), scene, p),
-        (3, true, false) => run_engine(Engine::<3, true, false>::new(scene), scene, p),
-        (3, true, true) => run_engine(Engine::<3, true, true>::new(scene), scene, p),
+        (2, false, false) => run_engine(Engine::<2, false, false>::new(scene), scene, p, o),
+        (2, false, true) => run_engine(Engine::<2, false, true>::new(scene), scene, p, o),
+        (2, true, false) => run_engine(Engine::<2, true, false>::new(scene), scene, p, o),
+        (2, true, true) => run_engine(Engine::<2, true, true>::new(scene), scene, p, o),
+        (3, false, false) => run_engine(Engine::<3, false, false>::new(scene), scene, p, o),
+        (3, false, true) => run_engine(Engine::<3, false, true>::new(scene), scene, p, o),
+        (3, true, false) => run_engine(Engine::<3, true, false>::new(scene), scene, p, o),
+        (3, true, true) => run_engine(Engine::<3, true, true>::new(scene), scene, p, o),
         (d, _, _) => panic!("dimension {d} passed validation"),
     }
 }
@@ -84,6 +110,7 @@ fn run_engine<const D: usize, const G: bool, const W: bool>(
     mut engine: Engine<D, G, W>,
     scene: &Scene,
     progress: &mut dyn FnMut(&Sample),
+    mut observer: Observer<'_>,
 ) -> RunReport {
     let start = Instant::now();
     let energy_initial = engine.energy();
@@ -96,13 +123,44 @@ fn run_engine<const D: usize, const G: bool, const W: bool>(
     };
     let mut stopped_on_cap = false;
     let mut violation = None;
+    // Observer times `j * dt` for `j = 0 ..= last_obs` (none without an observer).
+    let (obs_dt, last_obs) = match &observer {
+        Some((dt, _)) => (*dt, (duration / dt * (1.0 + 1e-12)).floor() as u64),
+        None => (f64::INFINITY, 0),
+    };
+    let mut j = 0u64;
+    if let Some((_, obs)) = observer.as_mut() {
+        obs(&Frame::of_engine(&engine, scene));
+        j = 1;
+    }
     let mut k = 1u64;
     loop {
-        let target = (k as f64 * interval).min(duration);
+        let target_report = (k as f64 * interval).min(duration);
+        let target_obs = if observer.is_some() && j <= last_obs {
+            let t = j as f64 * obs_dt;
+            // The last sample lands on `duration` exactly when round-off alone separates them.
+            if j == last_obs && (duration - t).abs() <= 1e-9 * duration {
+                duration
+            } else {
+                t.min(duration)
+            }
+        } else {
+            f64::INFINITY
+        };
+        let target = target_report.min(target_obs);
         if !engine.run_until(target, scene.run.max_events) {
             stopped_on_cap = true;
             samples.push(sample(&engine));
             break;
+        }
+        if target == target_obs {
+            if let Some((_, obs)) = observer.as_mut() {
+                obs(&Frame::of_engine(&engine, scene));
+            }
+            j += 1;
+        }
+        if target < target_report {
+            continue;
         }
         samples.push(sample(&engine));
         progress(samples.last().expect("just pushed"));

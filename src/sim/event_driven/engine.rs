@@ -482,6 +482,26 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.bond_len.iter().map(|&l| l as usize).sum::<usize>() / 2
     }
 
+    /// The capillary bridges as pairs of scene indices `(i, j)`, `i < j`, sorted (empty for dry
+    /// scenes). Read-only view for the observers.
+    pub fn bridges(&self) -> Vec<(usize, usize)> {
+        if !WET {
+            return Vec::new();
+        }
+        let mut out = Vec::with_capacity(self.bridge_count());
+        for k in 0..self.len() {
+            let base = k * MAX_BONDS;
+            for &b in &self.bonds[base..base + self.bond_len[k] as usize] {
+                let (i, j) = (self.id[k] as usize, self.id[b as usize] as usize);
+                if i < j {
+                    out.push((i, j));
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
     // ----- prediction --------------------------------------------------------------------
 
     /// Earliest pair event of `i` (already at time `t`) with `j`, as an absolute time.

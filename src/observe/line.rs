@@ -1,0 +1,69 @@
+//! Line analyses over a set of results. For inelastic grains the fluid-gas boundary along a line
+//! of constant Gamma is the inflection point of `T_g / E_cb` as a function of `E*` (MODEL.md 7).
+//!
+//! `T_g / E_cb` spans decades and grows roughly like `E*` deep in the gas, so the curve is read
+//! on log-log axes: with `x = ln E*`, `y = ln(T_g / E_cb)`, the inflection point is where the
+//! slope `dy/dx` is largest (the second derivative changes sign there). The slopes of
+//! consecutive points are taken at their midpoints; the largest one and its two neighbours are
+//! fitted by a parabola whose vertex is the inflection point. A largest slope at either end of
+//! the line means the inflection lies outside the sampled range, and no point is returned.
+
+use serde::{Deserialize, Serialize};
+
+/// The result of [`fluid_gas_inflection`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Inflection {
+    /// `E*` of the inflection point.
+    pub e_star: f64,
+    /// The largest log-log slope `d ln(T_g/E_cb) / d ln E*` found.
+    pub max_slope: f64,
+    /// `E*` of the two sampled points that bracket it.
+    pub bracket: (f64, f64),
+}
+
+/// Inflection point of `T_g / E_cb` against `E*` along one line of constant Gamma, from points
+/// `(E*, T_g / E_cb)` in any order. `None` with fewer than four usable points (positive, finite,
+/// distinct `E*`) or when the steepest part is at an end of the line.
+pub fn fluid_gas_inflection(points: &[(f64, f64)]) -> Option<Inflection> {
+    let mut p: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|&(e, t)| e > 0.0 && t > 0.0 && e.is_finite() && t.is_finite())
+        .map(|(e, t)| (e.ln(), t.ln()))
+        .collect();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    p.dedup_by(|a, b| a.0 == b.0);
+    if p.len() < 4 {
+        return None;
+    }
+    let mids: Vec<(f64, f64)> = p
+        .windows(2)
+        .map(|w| {
+            (
+                0.5 * (w[0].0 + w[1].0),
+                (w[1].1 - w[0].1) / (w[1].0 - w[0].0),
+            )
+        })
+        .collect();
+    let k = (0..mids.len()).max_by(|&a, &b| mids[a].1.total_cmp(&mids[b].1))?;
+    if k == 0 || k == mids.len() - 1 {
+        return None;
+    }
+    let (x0, y0) = mids[k - 1];
+    let (x1, y1) = mids[k];
+    let (x2, y2) = mids[k + 1];
+    // Vertex of the parabola through three points (divided differences).
+    let d01 = (y1 - y0) / (x1 - x0);
+    let d12 = (y2 - y1) / (x2 - x1);
+    let a = (d12 - d01) / (x2 - x0);
+    let x = if a < 0.0 {
+        (0.5 * (x0 + x1) - d01 / (2.0 * a)).clamp(x0, x2)
+    } else {
+        x1
+    };
+    Some(Inflection {
+        e_star: x.exp(),
+        max_slope: y1,
+        bracket: (p[k].0.exp(), p[k + 1].0.exp()),
+    })
+}

@@ -1,0 +1,329 @@
+//! Observers, order parameters and the phase classification (MODEL.md 7).
+//!
+//! [`run_observed`] runs a scene and hands a [`Frame`] to every observer the scene's `[observe]`
+//! section asks for, `samples_per_period` times per period (the driving period `2 pi / omega`,
+//! or one time unit without a drive). Each observer keeps a time series over the whole run and
+//! averages over the stationary window `[transient_periods * period, run.duration]`:
+//!
+//! | module | observable |
+//! |---|---|
+//! | [`temperature`] | `T_g / E_cb`, global and per lateral bin (Eq. 3.2) |
+//! | [`profiles`] | lateral profiles of `n_cb` and of the packing fraction; `Delta n_cb` (Eq. 3.3), `Delta n_area` |
+//! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D) |
+//! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
+//! | [`stationarity`] | first versus second half of the window |
+//! | [`classify`](mod@classify) | the phase from the observables and the `[classify]` thresholds |
+//! | [`line`](mod@line) | the fluid-gas inflection point along a line of constant Gamma |
+//!
+//! Collision counts (pair, wall), bridge formations and ruptures over the window come from the
+//! engine's event counters at the window's first and last sample. Observers only read copies of
+//! the state: observing never changes a trajectory.
+
+pub mod bins;
+pub mod classify;
+pub mod diffusion;
+pub mod line;
+pub mod location_changes;
+pub mod profiles;
+pub mod spec;
+pub mod stationarity;
+pub mod temperature;
+
+pub use classify::{
+    Classification, DecisionInputs, Mobility, Phase, RegionInputs, Thresholds, classify,
+};
+pub use diffusion::{Diffusion, LayerDiffusion};
+pub use line::{Inflection, fluid_gas_inflection};
+pub use spec::{ObserveSpec, period_of};
+pub use stationarity::{Stationarity, StationarityCheck};
+
+use crate::scene::Scene;
+use crate::sim::{Frame, RunReport, run_scene_observed};
+use bins::LateralBins;
+use location_changes::{LocationChangeCounter, Method};
+use profiles::ProfileObserver;
+use serde::{Deserialize, Serialize};
+use temperature::TemperatureObserver;
+
+/// Something that looks at sampled frames. `in_window` says whether the frame's time lies in the
+/// stationary window.
+pub trait Observer {
+    fn observe(&mut self, frame: &Frame, in_window: bool);
+}
+
+/// Stationarity floors (see [`stationarity`]): below these magnitudes a change is judged
+/// against the floor instead of the value itself.
+pub const FLOOR_TEMPERATURE: f64 = 0.05;
+/// Floor for bridges per particle.
+pub const FLOOR_BRIDGES_PER_PARTICLE: f64 = 0.1;
+/// Floor for `f_lc` (location changes per particle per period).
+pub const FLOOR_FLC: f64 = 0.05;
+
+/// `f_lc` over the window.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LocationChanges {
+    /// "delaunay" (2D) or "neighbour_shell" (3D).
+    pub method: String,
+    /// Location changes counted in the window.
+    pub count: u64,
+    /// `f_lc`: changes per particle per period.
+    pub per_particle_per_period: f64,
+    /// Interval between the samples the count was taken from.
+    pub sample_interval: f64,
+}
+
+/// Lateral profiles, time-averaged over the window (bins along `x`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Profiles {
+    pub bin_width: f64,
+    pub centres: Vec<f64>,
+    /// Mean particle number per bin.
+    pub particles: Vec<f64>,
+    /// Packing fraction (areal in 2D, volume in 3D).
+    pub packing: Vec<f64>,
+    /// Bridge density, bridges per lateral length (2D) or area (3D), units `d^-(D-1)`.
+    pub n_cb: Vec<f64>,
+    /// `T_g / E_cb` per bin (`None` where a bin never held two particles).
+    pub temperature_reduced: Vec<Option<f64>>,
+    /// `f_lc` per bin (`None` without the location-change observer).
+    pub flc: Option<Vec<f64>>,
+    /// `max n_cb - min n_cb` (Eq. 3.3), units `d^-(D-1)`.
+    pub delta_n_cb: f64,
+    /// `max - min` of the packing fraction.
+    pub delta_n_area: f64,
+}
+
+/// Events inside the window.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WindowCounts {
+    pub pair_collisions: u64,
+    pub wall_collisions: u64,
+    pub bridge_formations: u64,
+    pub bridge_ruptures: u64,
+    /// Pair collisions per wall collision (`None` without wall collisions).
+    pub pair_per_wall: Option<f64>,
+}
+
+/// The time series sampled over the whole run (observer samples).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TimeSeries {
+    pub time: Vec<f64>,
+    /// `T_g / E_cb`.
+    pub temperature_reduced: Vec<f64>,
+    pub bridges_per_particle: Vec<f64>,
+    /// `(t, f_lc)` over each sample interval ending at `t` (empty without the observer).
+    pub location_changes: Vec<(f64, f64)>,
+}
+
+/// Stationary averages, the stationarity check and the counts of one run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Observables {
+    pub dimension: usize,
+    pub particles: usize,
+    /// The period time is counted in (driving period, or 1 without a drive).
+    pub period: f64,
+    pub window_start: f64,
+    pub window_end: f64,
+    /// Observer samples inside the window.
+    pub window_samples: usize,
+    pub sample_interval: f64,
+    /// The energy unit of the reduced temperatures: `E_cb`, or `m g d` for dry scenes.
+    pub temperature_unit: f64,
+    /// "E_cb" or "m g d".
+    pub temperature_unit_name: String,
+    /// Window mean of `T_g / temperature_unit` (`T_g / E_cb` for wet scenes).
+    pub granular_temperature_reduced: f64,
+    /// Window mean of the number of bridges per particle.
+    pub bridges_per_particle: f64,
+    pub location_changes: Option<LocationChanges>,
+    pub profiles: Profiles,
+    pub diffusion: Option<Diffusion>,
+    pub counts: WindowCounts,
+    pub stationarity: Stationarity,
+    pub series: Option<TimeSeries>,
+}
+
+/// What [`run_observed`] returns.
+#[derive(Debug, Clone, Serialize)]
+pub struct ObservedRun {
+    pub report: RunReport,
+    pub observables: Observables,
+    pub classification: Classification,
+}
+
+/// Runs a validated scene with the observers of its `[observe]` section and classifies it with
+/// its `[classify]` thresholds; `progress` gets the completed fraction in `[0, 1]`.
+pub fn run_observed(scene: &Scene, progress: &mut dyn FnMut(f64)) -> ObservedRun {
+    run_observed_with_frame(scene, progress).0
+}
+
+/// Like [`run_observed`], and also returns the last sampled configuration (for pictures).
+pub fn run_observed_with_frame(
+    scene: &Scene,
+    progress: &mut dyn FnMut(f64),
+) -> (ObservedRun, Frame) {
+    let spec = &scene.observe;
+    let period = period_of(scene);
+    let dt = spec.sample_interval(scene);
+    let t_start = spec.window_start(scene);
+    let duration = scene.run.duration;
+    let (n_bins, _) = spec.bins(scene);
+    let bins = LateralBins::new(n_bins, scene.container.size[0]);
+    let e_cb = scene.e_cb();
+    let (unit, unit_name) = if e_cb > 0.0 {
+        (e_cb, "E_cb")
+    } else {
+        let u = scene.particles.mass * scene.gravity.max(0.0) * scene.particles.diameter;
+        if u > 0.0 { (u, "m g d") } else { (1.0, "1") }
+    };
+
+    let mut temperature = TemperatureObserver::new(bins.clone(), unit);
+    let mut profiles = ProfileObserver::new(bins.clone(), scene.particles.diameter);
+    let mut lc = spec.location_changes.then(|| {
+        let method = if scene.dimension == 2 {
+            Method::Delaunay {
+                max_edge: spec.lc_max_edge * scene.particles.diameter,
+                margin: spec.lc_flip_margin,
+            }
+        } else {
+            Method::NeighbourShell {
+                enter: spec.lc_enter_factor,
+                leave: spec.lc_leave_factor,
+            }
+        };
+        LocationChangeCounter::new(method, bins.clone(), period)
+    });
+    let mut diffusion = spec
+        .diffusion
+        .then(|| diffusion::DiffusionObserver::new(spec.layers.min(scene.particles.count)));
+    let mut first_counts = None;
+    let mut last: Option<Frame> = None;
+    let mut window_samples = 0usize;
+    let eps = 1e-9 * duration.max(1.0);
+
+    let mut observer = |frame: &Frame| {
+        let in_window = frame.time >= t_start - eps;
+        temperature.observe(frame, in_window);
+        profiles.observe(frame, in_window);
+        if let Some(o) = lc.as_mut() {
+            o.observe(frame, in_window);
+        }
+        if let Some(o) = diffusion.as_mut() {
+            o.observe(frame, in_window);
+        }
+        if in_window {
+            window_samples += 1;
+            if first_counts.is_none() {
+                first_counts = Some(frame.counts.clone());
+            }
+        }
+        progress((frame.time / duration).clamp(0.0, 1.0));
+        last = Some(frame.clone());
+    };
+    let report = run_scene_observed(scene, dt, &mut observer, &mut |_| {});
+    let last = last.expect("the observer sees at least the initial frame");
+    let window_end = last.time;
+
+    let particles_per_bin = profiles.particles();
+    let n_cb = profiles.n_cb();
+    let packing = profiles.packing();
+    let flc_bins = lc.as_ref().map(|o| o.per_bin(&particles_per_bin));
+    let profile = Profiles {
+        bin_width: bins.width,
+        centres: bins.centres(),
+        delta_n_cb: profiles::spread(&n_cb),
+        delta_n_area: profiles::spread(&packing),
+        particles: particles_per_bin,
+        packing,
+        n_cb,
+        temperature_reduced: temperature.profile_reduced(),
+        flc: flc_bins,
+    };
+    let location_changes = lc.as_ref().map(|o| LocationChanges {
+        method: o.method().name().to_string(),
+        count: o.window_count,
+        per_particle_per_period: o.per_particle_per_period(),
+        sample_interval: dt,
+    });
+
+    let c0 = first_counts.unwrap_or_else(|| last.counts.clone());
+    let c1 = &last.counts;
+    let walls = c1.wall_collisions - c0.wall_collisions;
+    let pairs = c1.pair_collisions - c0.pair_collisions;
+    let counts = WindowCounts {
+        pair_collisions: pairs,
+        wall_collisions: walls,
+        bridge_formations: c1.bridge_formations - c0.bridge_formations,
+        bridge_ruptures: c1.bridge_ruptures - c0.bridge_ruptures,
+        pair_per_wall: (walls > 0).then(|| pairs as f64 / walls as f64),
+    };
+
+    let window = (t_start, window_end);
+    let tol = spec.stationarity_tolerance;
+    let mut checks = vec![stationarity::check(
+        "temperature_reduced",
+        &temperature.series,
+        window,
+        FLOOR_TEMPERATURE,
+        tol,
+    )];
+    if scene.is_wet() {
+        checks.push(stationarity::check(
+            "bridges_per_particle",
+            &profiles.series,
+            window,
+            FLOOR_BRIDGES_PER_PARTICLE,
+            tol,
+        ));
+    }
+    if let Some(o) = &lc {
+        checks.push(stationarity::check(
+            "location_changes",
+            &o.series,
+            window,
+            FLOOR_FLC,
+            tol,
+        ));
+    }
+    let in_window = |s: &[(f64, f64)]| -> Vec<f64> {
+        s.iter()
+            .filter(|(t, _)| *t >= t_start - eps)
+            .map(|&(_, x)| x)
+            .collect()
+    };
+    let mean = |v: Vec<f64>| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let series = spec.time_series.then(|| TimeSeries {
+        time: temperature.series.iter().map(|&(t, _)| t).collect(),
+        temperature_reduced: temperature.series.iter().map(|&(_, x)| x).collect(),
+        bridges_per_particle: profiles.series.iter().map(|&(_, x)| x).collect(),
+        location_changes: lc.as_ref().map_or_else(Vec::new, |o| o.series.clone()),
+    });
+    let observables = Observables {
+        dimension: scene.dimension,
+        particles: scene.particles.count,
+        period,
+        window_start: t_start,
+        window_end,
+        window_samples,
+        sample_interval: dt,
+        temperature_unit: unit,
+        temperature_unit_name: unit_name.to_string(),
+        granular_temperature_reduced: temperature.mean_reduced(),
+        bridges_per_particle: mean(in_window(&profiles.series)),
+        location_changes,
+        profiles: profile,
+        diffusion: diffusion.as_ref().and_then(|o| o.finish(scene.dimension)),
+        counts,
+        stationarity: stationarity::verdict(tol, checks),
+        series,
+    };
+    let classification = classify(&observables, &scene.classify);
+    (
+        ObservedRun {
+            report,
+            observables,
+            classification,
+        },
+        last,
+    )
+}

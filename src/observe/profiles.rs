@@ -1,0 +1,142 @@
+//! Lateral profiles of the capillary-bridge density `n_cb` and of the packing fraction
+//! (areal in 2D, volume in 3D), time-averaged over the window, with
+//! `Delta n_cb = max n_cb - min n_cb` (MODEL.md Eq. 3.3) and `Delta n_area` likewise.
+//!
+//! - `n_cb(bin)` = bridges whose midpoint (nearest periodic image) lies in the bin, divided by
+//!   the bin's lateral measure (its width in 2D, width times `L_y` in 3D): bridges per lateral
+//!   length (2D) or area (3D), summed over the height. Reported in units of `d^-(D-1)` (multiplied
+//!   by `d^(D-1)`).
+//! - packing fraction(bin) = summed disk areas `pi r^2` (sphere volumes `4/3 pi r^3`) of the
+//!   particles whose centre lies in the bin, over the bin's area `width * H` (volume
+//!   `width * L_y * H`). A grain straddling a bin edge is counted whole in its centre's bin.
+
+use super::Observer;
+use super::bins::LateralBins;
+use crate::sim::Frame;
+use std::f64::consts::PI;
+
+/// Bridges per bin of one frame, each counted at its midpoint.
+pub fn bridge_counts(frame: &Frame, bins: &LateralBins) -> Vec<usize> {
+    let mut c = vec![0; bins.n];
+    for &(i, j) in &frame.bridges {
+        c[bins.of_pair(frame, i, j)] += 1;
+    }
+    c
+}
+
+/// `n_cb` per bin of one frame, in units of `d^-(D-1)` for mean diameter `d`.
+pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
+    let scale = d.powi(frame.dimension as i32 - 1) / bins.lateral_measure(frame);
+    bridge_counts(frame, bins)
+        .iter()
+        .map(|&c| c as f64 * scale)
+        .collect()
+}
+
+/// Volume (area in 2D) of a particle of radius `r`.
+pub fn particle_volume(dimension: usize, r: f64) -> f64 {
+    if dimension == 2 {
+        PI * r * r
+    } else {
+        4.0 / 3.0 * PI * r * r * r
+    }
+}
+
+/// Packing fraction per bin of one frame (areal in 2D, volume in 3D).
+pub fn packing_fraction(frame: &Frame, bins: &LateralBins) -> Vec<f64> {
+    let height = frame.box_size[frame.dimension - 1];
+    let bin_volume = bins.lateral_measure(frame) * height;
+    let mut v = vec![0.0; bins.n];
+    for i in 0..frame.len() {
+        v[bins.of(frame.x(i)[0])] += particle_volume(frame.dimension, frame.radii[i]);
+    }
+    v.iter().map(|x| x / bin_volume).collect()
+}
+
+/// `max - min` of a profile (0 for an empty one).
+pub fn spread(profile: &[f64]) -> f64 {
+    if profile.is_empty() {
+        return 0.0;
+    }
+    let max = profile.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let min = profile.iter().copied().fold(f64::INFINITY, f64::min);
+    max - min
+}
+
+/// Accumulates the bridge-density, packing-fraction and occupation profiles over the window,
+/// and the bridge count at every sample.
+#[derive(Debug, Clone)]
+pub struct ProfileObserver {
+    bins: LateralBins,
+    diameter: f64,
+    samples: usize,
+    n_cb: Vec<f64>,
+    packing: Vec<f64>,
+    particles: Vec<f64>,
+    /// `(t, bridges per particle)` at every sample.
+    pub series: Vec<(f64, f64)>,
+}
+
+impl ProfileObserver {
+    pub fn new(bins: LateralBins, diameter: f64) -> Self {
+        let n = bins.n;
+        Self {
+            bins,
+            diameter,
+            samples: 0,
+            n_cb: vec![0.0; n],
+            packing: vec![0.0; n],
+            particles: vec![0.0; n],
+            series: Vec::new(),
+        }
+    }
+
+    fn mean(&self, v: &[f64]) -> Vec<f64> {
+        let s = self.samples.max(1) as f64;
+        v.iter().map(|x| x / s).collect()
+    }
+
+    /// Window-averaged `n_cb` per bin (units `d^-(D-1)`).
+    pub fn n_cb(&self) -> Vec<f64> {
+        self.mean(&self.n_cb)
+    }
+
+    /// Window-averaged packing fraction per bin.
+    pub fn packing(&self) -> Vec<f64> {
+        self.mean(&self.packing)
+    }
+
+    /// Window-averaged particle count per bin.
+    pub fn particles(&self) -> Vec<f64> {
+        self.mean(&self.particles)
+    }
+}
+
+impl Observer for ProfileObserver {
+    fn observe(&mut self, frame: &Frame, in_window: bool) {
+        let n = frame.len().max(1) as f64;
+        self.series
+            .push((frame.time, frame.bridges.len() as f64 / n));
+        if !in_window {
+            return;
+        }
+        self.samples += 1;
+        for (a, x) in self
+            .n_cb
+            .iter_mut()
+            .zip(bridge_density(frame, &self.bins, self.diameter))
+        {
+            *a += x;
+        }
+        for (a, x) in self
+            .packing
+            .iter_mut()
+            .zip(packing_fraction(frame, &self.bins))
+        {
+            *a += x;
+        }
+        for i in 0..frame.len() {
+            self.particles[self.bins.of(frame.x(i)[0])] += 1.0;
+        }
+    }
+}

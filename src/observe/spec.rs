@@ -1,0 +1,227 @@
+//! The `[observe]` section of a scene: which observers run, when they sample, and the
+//! stationary window. Pure data plus its validation (errors name the file, key and range).
+
+use crate::scene::{Scene, SceneError};
+use serde::{Deserialize, Serialize};
+
+/// What to observe and when (scene section `[observe]`; every key optional).
+///
+/// Time is counted in *periods*: the driving period `2 pi / omega` of a shaken scene, or one
+/// time unit `sqrt(d/g)` (the scene's own time unit without gravity) when nothing drives it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObserveSpec {
+    /// Length of the transient, in periods: the stationary window is
+    /// `[transient_periods * period, run.duration]`. Default 0 (the whole run).
+    #[serde(default)]
+    pub transient_periods: f64,
+    /// Width of the lateral bins of the profiles, in units of length (`d = 1`); rounded so that
+    /// a whole number of bins tiles `L_x` (one bin if it exceeds `L_x`). Default 4 d.
+    #[serde(default = "default_bin_width")]
+    pub bin_width: f64,
+    /// Observer samples per period (default 20). The location-change counter needs it fine
+    /// enough (docs/observables.md). A run takes `run.duration / period * samples_per_period`
+    /// samples, each costing a Delaunay triangulation in 2D; like `run.duration`, that is the
+    /// user's choice and not capped (a scene run without observers never samples).
+    #[serde(default = "default_samples_per_period")]
+    pub samples_per_period: f64,
+    /// Count location changes (`f_lc`; Delaunay in 2D, neighbour shells in 3D). Default on.
+    #[serde(default = "yes")]
+    pub location_changes: bool,
+    /// Per-layer lateral mean-square displacement and diffusion coefficient. Default on.
+    #[serde(default = "yes")]
+    pub diffusion: bool,
+    /// Number of layers with equal particle numbers for the diffusion observer (default 3; at
+    /// most one per particle is used).
+    #[serde(default = "default_layers")]
+    pub layers: usize,
+    /// Keep the sampled time series in the result (default on).
+    #[serde(default = "yes")]
+    pub time_series: bool,
+    /// 2D: a new Delaunay edge counts as a location change only if it is at most this long
+    /// (units of `d`; default 2). Longer edges span the empty space above a bed or a gas and
+    /// change with every rattle of a surface grain without any neighbour exchange.
+    #[serde(default = "default_lc_max_edge")]
+    pub lc_max_edge: f64,
+    /// 2D: hysteresis of the Delaunay flips, in radians (default 0.2): a flip counts once the
+    /// replaced edge violates the in-circle condition by more than this angle
+    /// (`angle_a + angle_b - pi` of its quadrilateral).
+    #[serde(default = "default_lc_flip_margin")]
+    pub lc_flip_margin: f64,
+    /// 3D: two grains become neighbours when their centres come closer than this multiple of
+    /// `r_i + r_j` (default 1.2), and stop being neighbours beyond `lc_leave_factor` times it.
+    #[serde(default = "default_lc_enter_factor")]
+    pub lc_enter_factor: f64,
+    /// 3D: leaving factor of the neighbour shell (default 1.5; > `lc_enter_factor`).
+    #[serde(default = "default_lc_leave_factor")]
+    pub lc_leave_factor: f64,
+    /// Largest relative change between the first and second half of the window that still
+    /// counts as stationary (default 0.2).
+    #[serde(default = "default_stationarity_tolerance")]
+    pub stationarity_tolerance: f64,
+}
+
+impl Default for ObserveSpec {
+    fn default() -> Self {
+        Self {
+            transient_periods: 0.0,
+            bin_width: default_bin_width(),
+            samples_per_period: default_samples_per_period(),
+            location_changes: true,
+            diffusion: true,
+            layers: default_layers(),
+            time_series: true,
+            lc_max_edge: default_lc_max_edge(),
+            lc_flip_margin: default_lc_flip_margin(),
+            lc_enter_factor: default_lc_enter_factor(),
+            lc_leave_factor: default_lc_leave_factor(),
+            stationarity_tolerance: default_stationarity_tolerance(),
+        }
+    }
+}
+
+fn yes() -> bool {
+    true
+}
+fn default_bin_width() -> f64 {
+    4.0
+}
+fn default_samples_per_period() -> f64 {
+    20.0
+}
+fn default_layers() -> usize {
+    3
+}
+fn default_lc_max_edge() -> f64 {
+    2.0
+}
+fn default_lc_flip_margin() -> f64 {
+    0.2
+}
+fn default_lc_enter_factor() -> f64 {
+    1.2
+}
+fn default_lc_leave_factor() -> f64 {
+    1.5
+}
+fn default_stationarity_tolerance() -> f64 {
+    0.2
+}
+
+/// The period observations are counted in: `2 pi / omega` for a shaken scene, else 1.
+pub fn period_of(scene: &Scene) -> f64 {
+    match scene.drive_motion() {
+        Some((_, omega)) => 2.0 * std::f64::consts::PI / omega,
+        None => 1.0,
+    }
+}
+
+impl ObserveSpec {
+    /// Interval between two observer samples: `period / samples_per_period`.
+    pub fn sample_interval(&self, scene: &Scene) -> f64 {
+        period_of(scene) / self.samples_per_period
+    }
+
+    /// Start of the stationary window.
+    pub fn window_start(&self, scene: &Scene) -> f64 {
+        self.transient_periods * period_of(scene)
+    }
+
+    /// Number of lateral bins and their width: `n = max(1, round(L_x / bin_width))`,
+    /// width `L_x / n`.
+    pub fn bins(&self, scene: &Scene) -> (usize, f64) {
+        let l = scene.container.size[0];
+        let n = ((l / self.bin_width).round() as usize).max(1);
+        (n, l / n as f64)
+    }
+
+    /// Checks every key of `[observe]` against the rest of the scene.
+    pub fn validate(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
+        let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
+        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
+        let period = period_of(scene);
+        let duration = scene.run.duration;
+        let t = self.transient_periods;
+        if !(t.is_finite() && t >= 0.0 && t * period < duration) {
+            return Err(err(
+                "transient_periods",
+                format!(
+                    "= {t} is out of range: must be >= 0 and shorter than the run, i.e. < \
+                     run.duration / period = {duration} / {period:.6} = {:.6} (one period is {})",
+                    duration / period,
+                    if scene.drive_motion().is_some() {
+                        "the driving period 2 pi / omega"
+                    } else {
+                        "one time unit without a drive"
+                    }
+                ),
+            ));
+        }
+        if !finite_pos(self.bin_width) {
+            return Err(err(
+                "bin_width",
+                format!(
+                    "= {} is out of range: must be > 0 (a width above L_x gives one bin)",
+                    self.bin_width
+                ),
+            ));
+        }
+        let s = self.samples_per_period;
+        if !finite_pos(s) {
+            return Err(err(
+                "samples_per_period",
+                format!("= {s} is out of range: must be > 0"),
+            ));
+        }
+        if self.layers == 0 {
+            return Err(err(
+                "layers",
+                "= 0 is out of range: must be >= 1 (more layers than particles give one \
+                 particle per layer)"
+                    .into(),
+            ));
+        }
+        if !(finite_pos(self.lc_max_edge) && self.lc_max_edge >= 1.0) {
+            return Err(err(
+                "lc_max_edge",
+                format!(
+                    "= {} is out of range: must be >= 1 (units of d; neighbours touch at 1)",
+                    self.lc_max_edge
+                ),
+            ));
+        }
+        let m = self.lc_flip_margin;
+        if !(m.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&m)) {
+            return Err(err(
+                "lc_flip_margin",
+                format!("= {m} is out of range: must be in [0, pi/2) (radians)"),
+            ));
+        }
+        if !(self.lc_enter_factor.is_finite() && self.lc_enter_factor >= 1.0) {
+            return Err(err(
+                "lc_enter_factor",
+                format!(
+                    "= {} is out of range: must be >= 1 (touching grains are at 1)",
+                    self.lc_enter_factor
+                ),
+            ));
+        }
+        if !(self.lc_leave_factor.is_finite() && self.lc_leave_factor > self.lc_enter_factor) {
+            return Err(err(
+                "lc_leave_factor",
+                format!(
+                    "= {} is out of range: must be finite and > lc_enter_factor = {}",
+                    self.lc_leave_factor, self.lc_enter_factor
+                ),
+            ));
+        }
+        let tol = self.stationarity_tolerance;
+        if !(tol.is_finite() && tol > 0.0) {
+            return Err(err(
+                "stationarity_tolerance",
+                format!("= {tol} is out of range: must be > 0"),
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,135 @@
+//! The lateral-profile plot: `T_g / E_cb`, packing fraction, bridge density `n_cb` and (when
+//! observed) `f_lc` against `x`, one stacked panel each, time-averaged over the window.
+
+use super::svg::{esc, label, n};
+use crate::observe::Observables;
+use std::fmt::Write;
+
+/// SVG of the lateral profiles of one result.
+pub fn profiles_svg(obs: &Observables) -> String {
+    let p = &obs.profiles;
+    let unit = &obs.temperature_unit_name;
+    let mut panels: Vec<(String, Vec<Option<f64>>)> = vec![
+        (format!("T_g / {unit}"), p.temperature_reduced.clone()),
+        (
+            if obs.dimension == 2 {
+                "packing fraction (areal)".to_string()
+            } else {
+                "packing fraction (volume)".to_string()
+            },
+            p.packing.iter().map(|&x| Some(x)).collect(),
+        ),
+        (
+            format!(
+                "n_cb (bridges per d{}), Delta n_cb = {}",
+                if obs.dimension == 2 { "" } else { "^2" },
+                label(p.delta_n_cb)
+            ),
+            p.n_cb.iter().map(|&x| Some(x)).collect(),
+        ),
+    ];
+    if let Some(f) = &p.flc {
+        panels.push((
+            "f_lc (per particle per period)".to_string(),
+            f.iter().map(|&x| Some(x)).collect(),
+        ));
+    }
+    let (w, ph, ml, mr, mt, gap) = (760.0, 120.0, 70.0, 20.0, 44.0, 36.0);
+    let h = mt + panels.len() as f64 * (ph + gap) + 10.0;
+    let pw = w - ml - mr;
+    let lx = p.centres.len() as f64 * p.bin_width;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{}\" \
+         font-family=\"sans-serif\" font-size=\"11\">",
+        n(h)
+    );
+    let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
+    let _ = writeln!(
+        s,
+        "<text x=\"{ml}\" y=\"16\">lateral profiles, window t = {:.2} .. {:.2} ({} samples), bin width {:.3}</text>",
+        obs.window_start, obs.window_end, obs.window_samples, p.bin_width
+    );
+    for (k, (name, values)) in panels.iter().enumerate() {
+        let y0 = mt + k as f64 * (ph + gap);
+        let vals: Vec<f64> = values.iter().flatten().copied().collect();
+        let (mut lo, mut hi) = vals
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        if !lo.is_finite() {
+            (lo, hi) = (0.0, 1.0);
+        }
+        if hi - lo < 1e-12 * hi.abs().max(1.0) {
+            let pad = 0.5 * hi.abs().max(1e-3);
+            (lo, hi) = (lo - pad, hi + pad);
+        }
+        let pad = 0.05 * (hi - lo);
+        let (lo, hi) = (lo - pad, hi + pad);
+        let px = |x: f64| ml + x / lx * pw;
+        let py = |v: f64| y0 + ph - (v - lo) / (hi - lo) * ph;
+        let _ = writeln!(
+            s,
+            "<rect x=\"{ml}\" y=\"{}\" width=\"{}\" height=\"{ph}\" fill=\"none\" stroke=\"black\"/>",
+            n(y0),
+            n(pw)
+        );
+        let _ = writeln!(
+            s,
+            "<text x=\"{ml}\" y=\"{}\">{}</text>",
+            n(y0 - 4.0),
+            esc(name)
+        );
+        for v in [lo + pad, 0.5 * (lo + hi), hi - pad] {
+            let _ = writeln!(
+                s,
+                "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
+                n(ml - 4.0),
+                n(py(v) + 4.0),
+                label(v)
+            );
+        }
+        for q in 0..=4 {
+            let x = lx * q as f64 / 4.0;
+            let _ = writeln!(
+                s,
+                "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
+                n(px(x)),
+                n(y0 + ph + 13.0),
+                label(x)
+            );
+        }
+        // One polyline per run of bins with values.
+        let mut path = String::new();
+        let mut pen = false;
+        for (b, v) in values.iter().enumerate() {
+            match v {
+                Some(v) => {
+                    let _ = write!(
+                        path,
+                        "{}{} {}",
+                        if pen { "L" } else { "M" },
+                        n(px(p.centres[b])),
+                        n(py(*v))
+                    );
+                    pen = true;
+                }
+                None => pen = false,
+            }
+        }
+        let _ = writeln!(
+            s,
+            "<path d=\"{path}\" fill=\"none\" stroke=\"#1f77b4\" stroke-width=\"1.5\"/>"
+        );
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">x</text>",
+        n(ml + pw / 2.0),
+        n(h - 2.0)
+    );
+    s.push_str("</svg>\n");
+    s
+}

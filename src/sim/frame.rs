@@ -1,0 +1,145 @@
+//! [`Frame`]: a read-only copy of one configuration (positions, velocities, radii, bridges,
+//! event counts) in scene order, independent of the engine's dimension and type parameters.
+//! Observers and pictures work on frames; the engine never sees them.
+
+use super::event_driven::{Engine, EventCounts};
+use crate::scene::{Boundary, Scene};
+use serde::Serialize;
+
+/// One sampled configuration, in scene order. Vectors are stored flat with stride
+/// `dimension` (`x, z` in 2D, `x, y, z` in 3D; the last axis is vertical).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Frame {
+    pub time: f64,
+    pub dimension: usize,
+    /// Box edge lengths, one per axis.
+    pub box_size: Vec<f64>,
+    /// Whether each axis is periodic.
+    pub periodic: Vec<bool>,
+    /// Vertical displacement of the container (floor and lid) at `time`: `A sin(omega t)`
+    /// for a shaken scene (MODEL.md 4.1), 0 otherwise. The floor is at `z = wall_offset`, the lid
+    /// at `z = H + wall_offset`.
+    pub wall_offset: f64,
+    /// Particle mass (the same for all).
+    pub mass: f64,
+    pub positions: Vec<f64>,
+    pub velocities: Vec<f64>,
+    pub radii: Vec<f64>,
+    /// Capillary bridges as scene-index pairs `(i, j)`, `i < j`, sorted.
+    pub bridges: Vec<(usize, usize)>,
+    /// Events processed up to `time`.
+    pub counts: EventCounts,
+}
+
+impl Frame {
+    /// Copies the current state of an engine.
+    pub fn of_engine<const D: usize, const G: bool, const W: bool>(
+        engine: &Engine<D, G, W>,
+        scene: &Scene,
+    ) -> Frame {
+        let time = engine.time();
+        let flat = |v: Vec<super::event_driven::Vector<D>>| -> Vec<f64> {
+            v.iter().flat_map(|x| x.iter().copied()).collect()
+        };
+        Frame {
+            time,
+            dimension: D,
+            box_size: scene.container.size.clone(),
+            periodic: scene
+                .boundaries()
+                .iter()
+                .map(|b| *b == Boundary::Periodic)
+                .collect(),
+            wall_offset: scene
+                .drive_motion()
+                .map_or(0.0, |(a, omega)| a * (omega * time).sin()),
+            mass: scene.particles.mass,
+            positions: flat(engine.positions()),
+            velocities: flat(engine.velocities()),
+            radii: engine.radii(),
+            bridges: engine.bridges(),
+            counts: engine.counts().clone(),
+        }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.radii.len()
+    }
+
+    /// Whether the frame holds no particle.
+    pub fn is_empty(&self) -> bool {
+        self.radii.is_empty()
+    }
+
+    /// Position of particle `i`.
+    pub fn x(&self, i: usize) -> &[f64] {
+        &self.positions[i * self.dimension..(i + 1) * self.dimension]
+    }
+
+    /// Velocity of particle `i`.
+    pub fn v(&self, i: usize) -> &[f64] {
+        &self.velocities[i * self.dimension..(i + 1) * self.dimension]
+    }
+
+    /// Height (last coordinate) of particle `i`.
+    pub fn height(&self, i: usize) -> f64 {
+        self.positions[(i + 1) * self.dimension - 1]
+    }
+
+    /// `dx` along axis `k` reduced to the nearest periodic image (unchanged on wall axes).
+    pub fn min_image(&self, k: usize, dx: f64) -> f64 {
+        if self.periodic[k] {
+            let l = self.box_size[k];
+            dx - l * (dx / l).round()
+        } else {
+            dx
+        }
+    }
+
+    /// Coordinate `x` along axis `k` wrapped into `[0, L)` on periodic axes.
+    pub fn wrap(&self, k: usize, x: f64) -> f64 {
+        if self.periodic[k] {
+            let l = self.box_size[k];
+            let w = x.rem_euclid(l);
+            if w >= l { 0.0 } else { w }
+        } else {
+            x
+        }
+    }
+
+    /// A frame built by hand (tests, pictures of prescribed configurations): zero counts, no
+    /// wall motion, unit mass.
+    pub fn from_parts(
+        dimension: usize,
+        box_size: Vec<f64>,
+        periodic: Vec<bool>,
+        positions: Vec<f64>,
+        velocities: Vec<f64>,
+        radii: Vec<f64>,
+        bridges: Vec<(usize, usize)>,
+    ) -> Frame {
+        assert_eq!(box_size.len(), dimension, "one box size per axis");
+        assert_eq!(periodic.len(), dimension, "one boundary flag per axis");
+        assert_eq!(positions.len(), radii.len() * dimension, "positions");
+        assert_eq!(velocities.len(), radii.len() * dimension, "velocities");
+        let mut bridges: Vec<(usize, usize)> = bridges
+            .into_iter()
+            .map(|(i, j)| (i.min(j), i.max(j)))
+            .collect();
+        bridges.sort_unstable();
+        Frame {
+            time: 0.0,
+            dimension,
+            box_size,
+            periodic,
+            wall_offset: 0.0,
+            mass: 1.0,
+            positions,
+            velocities,
+            radii,
+            bridges,
+            counts: EventCounts::default(),
+        }
+    }
+}
