@@ -426,3 +426,20 @@ fn standard_wet_system_ten_million_events_stays_inside() {
         );
     }
 }
+
+#[test]
+fn table_errors_cannot_stall_the_clock() {
+    // The table as printed (no corner check) now and then predicts a hit where the particle is
+    // not at the wall. The event is a re-check, and the next prediction of that particle comes
+    // from the exact solver: without that rule the same wrong answer came back at the same
+    // time, and this run spent its 3 million events on re-checks before t = 2.
+    let mut s =
+        wetgran::bench::shake::shaken_standard(5.0, 10.0, wetgran::scene::WallSolverKind::Table);
+    s.drive.table_corner_check = Some(false);
+    let mut e = Engine::<2, true, true>::new(&s);
+    let done = e.run_until(12.0, Some(3_000_000));
+    let c = e.counts();
+    assert!(done, "stalled at t = {}: {c:?}", e.time());
+    assert!(c.wall_rechecks * 20 < c.wall_collisions, "{c:?}");
+    e.sanity_check().unwrap();
+}

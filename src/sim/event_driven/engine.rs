@@ -231,6 +231,10 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
     /// `table` solver: the particle that has just left the floor (`false`) or lid (`true`);
     /// its next wall prediction uses the wall-edge table (B.5.2).
     launched: Option<(usize, bool)>,
+    /// `table` solver: the particle whose tabulated hit found it away from the wall; its next
+    /// wall prediction comes from the exact solver, so a table error cannot repeat itself at
+    /// the same time forever.
+    distrusted: Option<usize>,
     /// Events whose time lay before the current time by more than round-off (must stay 0).
     time_reversals: u64,
     /// Original index (scene order) of the particle stored at each internal index.
@@ -352,6 +356,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             placement: 0.0,
             wall_vrel: vec![f64::NAN; n],
             launched: None,
+            distrusted: None,
             time_reversals: 0,
             id: (0..n as u32).collect(),
             slot_of: (0..n as u32).collect(),
@@ -726,7 +731,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 WallRoot::None => (miss, f64::NAN),
             }
         };
-        let Some(tables) = &self.p.tables else {
+        let tables = match &self.p.tables {
+            Some(t) if self.distrusted != Some(i) => Some(t),
+            _ => None,
+        };
+        let Some(tables) = tables else {
             return (
                 exact(&lid_motion, h_lid, -vz, t + half_period, f64::INFINITY),
                 exact(w, z - r, vz, t, horizon),
@@ -780,6 +789,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         (self.wall_ev[i], self.wall_vrel[i]) = self.predict_wall(i);
         if self.launched.is_some_and(|(j, _)| j == i) {
             self.launched = None;
+        }
+        if self.distrusted == Some(i) {
+            self.distrusted = None;
         }
         self.queue.update(i, self.queue_key(i));
     }
@@ -1065,8 +1077,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             )
         };
         if !(contact && approaching) {
-            // The caller re-predicts.
+            // The caller re-predicts (with the exact solver after a table error).
             self.counts.wall_rechecks += 1;
+            if tabulated.is_finite() {
+                self.distrusted = Some(i);
+            }
             return;
         }
         if tabulated.is_finite() {
