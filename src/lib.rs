@@ -1,12 +1,17 @@
 //! wetgran: phase diagrams of wet granular matter.
 //!
-//! Layers, dependencies pointing one way: [`scene`] and [`physics`] -> [`sim`] -> `cli`.
+//! Layers, dependencies pointing one way: [`scene`] and [`physics`] -> [`sim`] -> [`sweep`] ->
+//! [`store`] -> [`boundary`], [`report`] -> `cli`.
 //! The physics follows MODEL.md (K. Röller, "Numerical simulations of wet granular matter",
 //! Göttingen 2010); choices where the text is silent or wrong are listed in
 //! docs/model-choices.md.
 
 pub mod bench;
+pub mod boundary;
 pub mod cli;
 pub mod physics;
+pub mod report;
 pub mod scene;
 pub mod sim;
+pub mod store;
+pub mod sweep;
