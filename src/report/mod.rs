@@ -1,1 +1,5 @@
-//! Plots and exports.
+//! Reports of a sweep database: the phase-diagram plot (SVG) and the export of all results
+//! (CSV, JSON).
+
+pub mod export;
+pub mod plot_phase;

@@ -867,6 +867,13 @@ impl Store {
     }
 }
 
+impl Drop for Store {
+    /// Closes the connection cleanly, so that SQLite checkpoints the WAL into the main file.
+    fn drop(&mut self) {
+        self.rt.block_on(self.pool.close());
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

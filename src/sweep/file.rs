@@ -81,6 +81,10 @@ pub struct Header {
     /// Free-text cost note for long runs (shown by `sweep status`).
     #[serde(default)]
     pub cost: Option<String>,
+    /// Leave out grid points whose scene fails validation (e.g. a drive stroke too long for
+    /// the box) instead of rejecting the sweep; they are listed when the sweep is registered.
+    #[serde(default)]
+    pub skip_invalid: bool,
 }
 
 fn one_u32() -> Spanned<u32> {
@@ -180,6 +184,7 @@ pub struct SweepFile {
     pub name: String,
     pub description: Option<String>,
     pub cost: Option<String>,
+    pub skip_invalid: bool,
     pub replicas: u32,
     pub periods: Option<f64>,
     /// The base scene file (resolved against the sweep file's folder) and its text.
@@ -476,6 +481,7 @@ impl SweepFile {
             name,
             description: raw.sweep.description.clone(),
             cost: raw.sweep.cost.clone(),
+            skip_invalid: raw.sweep.skip_invalid,
             replicas,
             periods,
             base,

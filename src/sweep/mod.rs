@@ -14,4 +14,4 @@ pub mod spec;
 pub use file::{Axis, AxisKind, SweepError, SweepFile};
 pub use job::{JobError, JobResult, run_job};
 pub use runner::{RunOptions, RunSummary, run_sweeps};
-pub use spec::{JobSpec, SweepJob};
+pub use spec::{JobSpec, Skipped, SweepJob};

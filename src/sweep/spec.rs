@@ -157,6 +157,15 @@ pub struct SweepJob {
     pub spec: JobSpec,
 }
 
+/// A grid point left out by `sweep.skip_invalid`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skipped {
+    pub point: usize,
+    pub coords: Vec<serde_json::Value>,
+    /// Why its scene was rejected.
+    pub reason: SweepError,
+}
+
 /// Writes `value` at a dotted `key` in a TOML tree, creating tables on the way.
 fn set_key(tree: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
     let parts: Vec<&str> = key.split('.').collect();
@@ -210,8 +219,16 @@ fn number(t: &toml::Table, key: &str, file: &SweepFile) -> Result<Option<f64>, S
 
 impl SweepFile {
     /// Expands the sweep into its jobs: every grid point times every replica, each with a
-    /// validated scene. Errors name the sweep file (or base scene), the line and the key.
+    /// validated scene. Errors name the sweep file (or base scene), the line and the key. With
+    /// `sweep.skip_invalid` the points whose scene fails validation are left out (see
+    /// [`SweepFile::expand_with_skips`]).
     pub fn expand(&self) -> Result<Vec<SweepJob>, SweepError> {
+        Ok(self.expand_with_skips()?.0)
+    }
+
+    /// [`SweepFile::expand`], also returning the grid points left out by `sweep.skip_invalid`
+    /// with the reason (empty without it).
+    pub fn expand_with_skips(&self) -> Result<(Vec<SweepJob>, Vec<Skipped>), SweepError> {
         let file = self.path.display().to_string();
         let obs_err = |key: &str, msg: String| {
             SweepError::new(
@@ -261,7 +278,8 @@ impl SweepFile {
 
         let points = self.points();
         let mut jobs = Vec::with_capacity(points * self.replicas as usize);
-        for point in 0..points {
+        let mut skipped = Vec::new();
+        'points: for point in 0..points {
             // Row-major index -> one value per axis, the last axis fastest.
             let mut rest = point;
             let mut idx = vec![0; self.axes.len()];
@@ -303,7 +321,19 @@ impl SweepFile {
                         run.entry("duration").or_insert(toml::Value::Float(1.0));
                     }
                 }
-                let scene = self.scene_of(&tree, &where_)?;
+                let scene = match self.scene_of(&tree, &where_) {
+                    Ok(s) => s,
+                    Err(e) if self.skip_invalid => {
+                        skipped.push(Skipped {
+                            point,
+                            coords: coords.clone(),
+                            reason: e,
+                        });
+                        jobs.retain(|j: &SweepJob| j.point != point);
+                        continue 'points;
+                    }
+                    Err(e) => return Err(e),
+                };
                 let period = driving_period(&scene);
                 let mut scene = scene;
                 if let Some(p) = self.periods {
@@ -352,7 +382,7 @@ impl SweepFile {
                 });
             }
         }
-        Ok(jobs)
+        Ok((jobs, skipped))
     }
 
     /// Parses and validates one job's scene tree; errors point at the axis, the `[scene]` table
