@@ -310,7 +310,7 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
             });
         }
         for list in boundaries.values_mut() {
-            list.sort_by(|p, q| p.between.cmp(&q.between));
+            list.sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
         }
         out.push(Slice {
             fixed: fixed.clone(),

@@ -498,18 +498,18 @@ fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
                         .find(|p| p.x == xv && p.y == yv)
                         .map(|p| format!("{}{}", p.phase, if p.tie { "*" } else { "" }))
                         .unwrap_or_else(|| ".".to_string());
-                    let _ = write!(row, " {cell:>5}");
+                    let _ = write!(row, " {cell:>7}");
                 }
                 let _ = writeln!(out, "{row}");
             }
             let mut axis = format!("  {:>9} +", "");
             for _ in &xs {
-                axis.push_str("------");
+                axis.push_str("--------");
             }
             let _ = writeln!(out, "{axis}");
             let mut labels = format!("  {:>9}  ", xa.label);
             for &xv in &xs {
-                let _ = write!(labels, " {:>5}", short(xv));
+                let _ = write!(labels, " {:>7}", short(xv));
             }
             let _ = writeln!(out, "{labels}");
             if slice.boundaries.is_empty() {

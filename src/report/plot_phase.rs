@@ -129,6 +129,12 @@ pub fn phase_svg(
     };
     let x_range = range_of(slice.points.iter().map(|p| p.x), xa.log);
     let y_range = range_of(slice.points.iter().map(|p| p.y), ya.log);
+    // Headroom above the points for the legend (upper left).
+    let y_range = if ya.log {
+        (y_range.0, y_range.1 * (y_range.1 / y_range.0).powf(0.3))
+    } else {
+        (y_range.0, y_range.1 + 0.3 * (y_range.1 - y_range.0))
+    };
     let mut lines: Vec<Line> = Vec::new();
     if let (Some(l), true) = (landmarks, map.shaking) {
         let n = 300;

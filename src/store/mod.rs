@@ -154,6 +154,8 @@ pub struct PointRow {
     pub wall_seconds: Option<f64>,
     pub events: Option<i64>,
     pub finished_at: Option<f64>,
+    /// The runner that committed the result.
+    pub result_owner: Option<String>,
 }
 
 /// An open wetgran database.
@@ -792,7 +794,7 @@ impl Store {
                 sqlx::query(
                     "SELECT p.point, p.replica, p.coords, p.job_id, j.status, j.spec, j.attempts, \
                      j.last_error, r.phase, r.decided_on, r.observables, r.simulated_time, \
-                     r.wall_seconds, r.events, r.finished_at \
+                     r.wall_seconds, r.events, r.finished_at, r.owner AS result_owner \
                      FROM sweep_points p JOIN jobs j ON j.id = p.job_id \
                      LEFT JOIN results r ON r.job_id = p.job_id \
                      WHERE p.sweep_id = ?1 ORDER BY p.point, p.replica",
@@ -833,6 +835,7 @@ impl Store {
                     wall_seconds: r.get("wall_seconds"),
                     events: r.get("events"),
                     finished_at: r.get("finished_at"),
+                    result_owner: r.get("result_owner"),
                     job_id,
                 })
             })
