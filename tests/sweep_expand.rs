@@ -42,10 +42,18 @@ fn axes_ranges_and_replicas_expand_to_the_full_grid() {
     assert_eq!(s.axes[0].key, "drive.gamma");
     assert_eq!(s.axes[0].label, "Gamma");
     assert_eq!(s.axes[1].kind, AxisKind::Log);
-    let lin: Vec<f64> = s.axes[0].values.iter().map(|v| v.as_f64().unwrap()).collect();
+    let lin: Vec<f64> = s.axes[0]
+        .values
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
     assert_eq!(lin, vec![2.0, 3.0, 4.0]);
     // Log range: both ends exact, constant ratio (8 / 0.5)^(1/4) = 2.
-    let log: Vec<f64> = s.axes[1].values.iter().map(|v| v.as_f64().unwrap()).collect();
+    let log: Vec<f64> = s.axes[1]
+        .values
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
     assert_eq!((log[0], log[4]), (0.5, 8.0));
     for w in log.windows(2) {
         assert!((w[1] / w[0] - 2.0).abs() < 1e-12, "{log:?}");
@@ -106,8 +114,7 @@ fn ids_ignore_key_order_and_spelled_out_defaults_but_not_a_changed_value() {
     let axes = "[[axis]]\nkey = \"gamma\"\nvalues = [2.0, 3.0]\n";
     let a = load(dir.path(), &sweep_text("", axes)).expand().unwrap();
     // The same scene written inline, tables and keys in another order, defaults spelled out.
-    let inline = format!(
-        "[[axis]]\nkey = \"drive.gamma\"\nvalues = [2.0, 3.0]\n\
+    let inline = "[[axis]]\nkey = \"drive.gamma\"\nvalues = [2.0, 3.0]\n\
          [sweep]\nname = \"other-name\"\n\
          [scene.run]\nduration = 10.0\nsample_interval = 0.0\n\
          [scene.initial]\nseed = 7\ntemperature_over_ecb = 20.0\n\
@@ -116,9 +123,8 @@ fn ids_ignore_key_order_and_spelled_out_defaults_but_not_a_changed_value() {
          [scene.contact]\nwall_restitution = 1.0\nrestitution = 0.9\n\
          [scene.particles]\npolydispersity = 0.06\ncount = 40\nmass = 1.0\n\
          [scene.box]\nsize = [20.0, 9.0]\n\
-         [scene]\ndimension = 2\ngravity = 1.0\n"
-    );
-    let b = load(dir.path(), &inline).expand().unwrap();
+         [scene]\ndimension = 2\ngravity = 1.0\n";
+    let b = load(dir.path(), inline).expand().unwrap();
     let ids = |v: &[wetgran::sweep::SweepJob]| v.iter().map(|j| j.id.clone()).collect::<Vec<_>>();
     assert_eq!(ids(&a), ids(&b));
     // One changed parameter: a new job.
@@ -137,7 +143,10 @@ fn canonical_json_is_sorted_round_trips_and_hashes_to_the_id() {
     write(dir.path(), "tiny.toml", TINY_SCENE);
     let jobs = load(
         dir.path(),
-        &sweep_text("", "[[axis]]\nkey = \"e_star\"\nlog = { from = 0.3, to = 3.0, steps = 3 }\n"),
+        &sweep_text(
+            "",
+            "[[axis]]\nkey = \"e_star\"\nlog = { from = 0.3, to = 3.0, steps = 3 }\n",
+        ),
     )
     .expand()
     .unwrap();
@@ -208,7 +217,11 @@ fn sweep_file_errors_name_file_line_and_key() {
     let file = d.join("bad.toml").display().to_string();
     let cases: Vec<(String, &str, &str)> = vec![
         // TOML syntax error on line 4.
-        (sweep_text("", "[[axis]]\nkey = \"gamma\nvalues = [1.0]\n"), ":6", ""),
+        (
+            sweep_text("", "[[axis]]\nkey = \"gamma\nvalues = [1.0]\n"),
+            ":6",
+            "",
+        ),
         // Unknown key in [sweep], line 4.
         (sweep_text("replica = 3", ""), ":4", "key `replica`"),
         // An axis value the scene rejects: the axis line and the scene key.
@@ -219,13 +232,19 @@ fn sweep_file_errors_name_file_line_and_key() {
         ),
         // A log range through zero.
         (
-            sweep_text("", "[[axis]]\nkey = \"e_star\"\nlog = { from = 0.0, to = 3.0, steps = 3 }\n"),
+            sweep_text(
+                "",
+                "[[axis]]\nkey = \"e_star\"\nlog = { from = 0.0, to = 3.0, steps = 3 }\n",
+            ),
             ":7",
             "key `drive.e_star`",
         ),
         // A bad value in the inline [scene] table: its line in the sweep file.
         (
-            sweep_text("[scene]\ncapillary.s_crit = 0.05\nparticles.polydispersity = 0.9", ""),
+            sweep_text(
+                "[scene]\ncapillary.s_crit = 0.05\nparticles.polydispersity = 0.9",
+                "",
+            ),
             ":6",
             "key `particles.polydispersity`",
         ),
@@ -240,7 +259,10 @@ fn sweep_file_errors_name_file_line_and_key() {
         ),
         // Replicas and a seed axis at once.
         (
-            sweep_text("replicas = 2", "[[axis]]\nkey = \"initial.seed\"\nvalues = [1, 2]\n"),
+            sweep_text(
+                "replicas = 2",
+                "[[axis]]\nkey = \"initial.seed\"\nvalues = [1, 2]\n",
+            ),
             ":6",
             "key `initial.seed`",
         ),
@@ -266,10 +288,17 @@ fn sweep_file_errors_name_file_line_and_key() {
         assert!(e.contains(key), "expected {key} in: {e}");
     }
     // A bad value in the base scene file names that file and line.
-    write(d, "tiny_bad.toml", &TINY_SCENE.replace("count = 40", "count = 0"));
+    write(
+        d,
+        "tiny_bad.toml",
+        &TINY_SCENE.replace("count = 40", "count = 0"),
+    );
     let e = err(d, "[sweep]\nname = \"t\"\nbase = \"tiny_bad.toml\"\n");
     let base = d.join("tiny_bad.toml").display().to_string();
-    assert!(e.starts_with(&format!("{base}:6: key `particles.count`")), "{e}");
+    assert!(
+        e.starts_with(&format!("{base}:6: key `particles.count`")),
+        "{e}"
+    );
 }
 
 #[test]

@@ -51,6 +51,20 @@ fn a_sweep_killed_midway_resumes_without_recomputing_finished_jobs() {
             done += 1;
         }
     }
+    // ... once the next job is claimed, so that a job is running at the kill.
+    let t0 = std::time::Instant::now();
+    loop {
+        let store = Store::open_existing(&db).unwrap();
+        let s = store.sweep("tiny").unwrap();
+        if store.counts(s.id).unwrap().running == 1 {
+            break;
+        }
+        assert!(
+            t0.elapsed().as_secs() < 30,
+            "no job claimed after the third"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
     child.kill().unwrap(); // SIGKILL
     child.wait().unwrap(); // reap it, so that its pid is gone
     drop(lines);
@@ -60,15 +74,18 @@ fn a_sweep_killed_midway_resumes_without_recomputing_finished_jobs() {
         let s = store.sweep("tiny").unwrap();
         let c = store.counts(s.id).unwrap();
         assert!(c.done >= 3 && c.done < 12, "killed midway: {c:?}");
-        assert!(c.running <= 1, "one worker: {c:?}");
+        assert_eq!(c.running, 1, "one worker: {c:?}");
         (store.points(s.id).unwrap(), c.running)
     };
 
     let out = run(&["sweep", "resume", "--db", db_s, "--jobs", "1"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    if running_at_kill == 1 {
-        assert!(stderr(&out).contains("re-queued 1 job(s) left running"), "{}", stderr(&out));
-    }
+    assert_eq!(running_at_kill, 1);
+    assert!(
+        stderr(&out).contains("re-queued 1 job(s) left running"),
+        "{}",
+        stderr(&out)
+    );
     let store = Store::open_existing(&db).unwrap();
     let s = store.sweep("tiny").unwrap();
     let after = store.points(s.id).unwrap();
@@ -92,14 +109,20 @@ fn a_sweep_killed_midway_resumes_without_recomputing_finished_jobs() {
         }
     }
     // The resumed and the killed runner are different owners.
-    let owners: std::collections::BTreeSet<_> =
-        after.iter().map(|p| p.result_owner.clone().unwrap()).collect();
+    let owners: std::collections::BTreeSet<_> = after
+        .iter()
+        .map(|p| p.result_owner.clone().unwrap())
+        .collect();
     assert_eq!(owners.len(), 2);
     // Running the sweep again computes nothing.
     drop(store);
     let out = run(&["sweep", "run", sweep_s, "--db", db_s]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(stderr(&out).contains("12 finished before, 0 to run"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("12 finished before, 0 to run"),
+        "{}",
+        stderr(&out)
+    );
     let store = Store::open_existing(&db).unwrap();
     let runs_again: std::collections::BTreeMap<String, i64> =
         store.runs_per_job().unwrap().into_iter().collect();
@@ -133,8 +156,10 @@ fn two_runners_on_one_database_never_run_a_job_twice() {
     assert_eq!(runs.len(), 18);
     assert!(runs.iter().all(|(_, n)| *n == 1), "{runs:?}");
     // Both runners worked, and their "done" lines add up to the sweep.
-    let owners: std::collections::BTreeSet<_> =
-        points.iter().map(|p| p.result_owner.clone().unwrap()).collect();
+    let owners: std::collections::BTreeSet<_> = points
+        .iter()
+        .map(|p| p.result_owner.clone().unwrap())
+        .collect();
     assert_eq!(owners.len(), 2, "both runners took jobs");
     let lines = |o: &std::process::Output| stderr(o).matches("] done ").count();
     assert_eq!(lines(&a) + lines(&b), 18);
@@ -155,15 +180,31 @@ fn a_failing_job_is_recorded_and_the_sweep_goes_on() {
     let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
     let out = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "2"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert_eq!(stderr(&out).matches("FAILED").count(), 6, "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out).matches("FAILED").count(),
+        6,
+        "{}",
+        stderr(&out)
+    );
     let status = stdout(&run(&["sweep", "status", "--db", db_s]));
-    assert!(status.contains("12 total: 6 done, 0 running, 0 pending, 6 failed"), "{status}");
-    assert_eq!(status.matches("no sample after the transient").count(), 6, "{status}");
+    assert!(
+        status.contains("12 total: 6 done, 0 running, 0 pending, 6 failed"),
+        "{status}"
+    );
+    assert_eq!(
+        status.matches("no sample after the transient").count(),
+        6,
+        "{status}"
+    );
     assert!(status.contains("run.max_events = 50"), "{status}");
     // --retry-failed runs exactly the failed ones again (they fail again: attempts = 2).
     let out = run(&["sweep", "resume", "fails", "--db", db_s, "--retry-failed"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(stderr(&out).contains("re-queued 6 failed job(s)"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("re-queued 6 failed job(s)"),
+        "{}",
+        stderr(&out)
+    );
     let store = Store::open_existing(&db).unwrap();
     let s = store.sweep("fails").unwrap();
     for p in store.points(s.id).unwrap() {

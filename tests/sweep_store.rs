@@ -83,7 +83,10 @@ fn an_identical_job_is_shared_between_sweeps_and_computed_once() {
     let db = dir.path().join("w.sqlite");
     let store = Store::open(&db).unwrap();
     let a = register(&store, &synthetic_sweep(dir.path(), "a", 1));
-    assert_eq!(finish_synthetic(&store, a.id, |c, _| Some(true_phase(c).into())), 100);
+    assert_eq!(
+        finish_synthetic(&store, a.id, |c, _| Some(true_phase(c).into())),
+        100
+    );
     // A second sweep over a sub-grid plus one new Gamma value.
     let b_path = write(
         dir.path(),
@@ -94,8 +97,15 @@ fn an_identical_job_is_shared_between_sweeps_and_computed_once() {
     );
     let b = register(&store, &b_path);
     let c = store.counts(b.id).unwrap();
-    assert_eq!((c.done, c.pending), (20, 10), "the Gamma = 1, 2 rows are already done");
-    assert_eq!(finish_synthetic(&store, b.id, |c, _| Some(true_phase(c).into())), 10);
+    assert_eq!(
+        (c.done, c.pending),
+        (20, 10),
+        "the Gamma = 1, 2 rows are already done"
+    );
+    assert_eq!(
+        finish_synthetic(&store, b.id, |c, _| Some(true_phase(c).into())),
+        10
+    );
     assert!(store.runs_per_job().unwrap().iter().all(|(_, n)| *n == 1));
     // Registering a sweep again changes nothing that was computed.
     let a2 = register(&store, &dir.path().join("a.toml"));
@@ -107,7 +117,11 @@ fn an_identical_job_is_shared_between_sweeps_and_computed_once() {
 fn a_file_that_is_not_a_wetgran_database_is_refused_and_left_unchanged() {
     let dir = tempfile::tempdir().unwrap();
     // A text file.
-    let text = write(dir.path(), "notes.sqlite", "my notes, not a database\n".repeat(10).as_str());
+    let text = write(
+        dir.path(),
+        "notes.sqlite",
+        "my notes, not a database\n".repeat(10).as_str(),
+    );
     let before = std::fs::read(&text).unwrap();
     match Store::open(&text) {
         Err(StoreError::NotSqlite { .. }) => {}
@@ -148,18 +162,31 @@ fn a_file_that_is_not_a_wetgran_database_is_refused_and_left_unchanged() {
     assert_eq!(std::fs::read(&foreign).unwrap(), before);
     // Through the command line: exit status 2, the path in the message, file unchanged.
     write(dir.path(), "tiny.toml", TINY_SCENE);
-    let sweep = write(dir.path(), "s.toml", "[sweep]\nname = \"s\"\nbase = \"tiny.toml\"\n");
+    let sweep = write(
+        dir.path(),
+        "s.toml",
+        "[sweep]\nname = \"s\"\nbase = \"tiny.toml\"\n",
+    );
     for path in [&text, &foreign] {
         let before = std::fs::read(path).unwrap();
         for args in [
-            vec!["sweep", "run", sweep.to_str().unwrap(), "--db", path.to_str().unwrap()],
+            vec![
+                "sweep",
+                "run",
+                sweep.to_str().unwrap(),
+                "--db",
+                path.to_str().unwrap(),
+            ],
             vec!["sweep", "status", "--db", path.to_str().unwrap()],
             vec!["boundaries", "--db", path.to_str().unwrap()],
         ] {
             let out = run(&args);
             assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
             let e = stderr(&out);
-            assert!(e.contains(path.to_str().unwrap()) && e.contains("not a wetgran database"), "{e}");
+            assert!(
+                e.contains(path.to_str().unwrap()) && e.contains("not a wetgran database"),
+                "{e}"
+            );
         }
         assert_eq!(std::fs::read(path).unwrap(), before);
     }
@@ -206,10 +233,23 @@ fn boundary_points_of_a_straight_synthetic_boundary_lie_on_it() {
         finish_synthetic(&store, s.id, |c, r| {
             let p = true_phase(c);
             let flip = r == 2 && (c[0].as_f64().unwrap() as i64) % 3 == 0;
-            Some(if flip { if p == "g" { "f" } else { "g" } } else { p }.to_string())
+            Some(
+                if flip {
+                    if p == "g" { "f" } else { "g" }
+                } else {
+                    p
+                }
+                .to_string(),
+            )
         });
     }
-    let out = run(&["boundaries", "--db", db.to_str().unwrap(), "--format", "json"]);
+    let out = run(&[
+        "boundaries",
+        "--db",
+        db.to_str().unwrap(),
+        "--format",
+        "json",
+    ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
     let map = &v[0]["map"];
@@ -220,7 +260,11 @@ fn boundary_points_of_a_straight_synthetic_boundary_lie_on_it() {
     let points = slice["points"].as_array().unwrap();
     assert_eq!(points.len(), 100);
     for p in points {
-        assert_eq!(p["phase"], true_phase(p["coords"].as_array().unwrap()), "{p}");
+        assert_eq!(
+            p["phase"],
+            true_phase(p["coords"].as_array().unwrap()),
+            "{p}"
+        );
     }
     let bounds = slice["boundaries"].as_object().unwrap();
     assert_eq!(bounds.keys().collect::<Vec<_>>(), vec!["f|g"]);
@@ -230,11 +274,21 @@ fn boundary_points_of_a_straight_synthetic_boundary_lie_on_it() {
     let half = 0.5 * (1.0 + 2.0 / 3.0) + 1e-9;
     for b in list {
         let (e, g) = (b["x"].as_f64().unwrap(), b["y"].as_f64().unwrap());
-        assert!((g - gamma_b(e)).abs() <= half, "{b} is {} off", g - gamma_b(e));
+        assert!(
+            (g - gamma_b(e)).abs() <= half,
+            "{b} is {} off",
+            g - gamma_b(e)
+        );
         // Physical units from MODEL.md 4.1 with E_cb = 0.002.
         let v_w = (2.0 * e * 0.002_f64).sqrt();
-        let (a, w) = (b["amplitude"].as_f64().unwrap(), b["omega"].as_f64().unwrap());
-        assert!((w - g / v_w).abs() < 1e-9 * w && (a - v_w * v_w / g).abs() < 1e-9 * a, "{b}");
+        let (a, w) = (
+            b["amplitude"].as_f64().unwrap(),
+            b["omega"].as_f64().unwrap(),
+        );
+        assert!(
+            (w - g / v_w).abs() < 1e-9 * w && (a - v_w * v_w / g).abs() < 1e-9 * a,
+            "{b}"
+        );
     }
     // Independent expectation: in every E* column the line passes between Gamma = floor(Gamma_b)
     // and floor + 1, so that vertical edge gives a point at exactly (E*, floor + 1/2).
@@ -242,16 +296,29 @@ fn boundary_points_of_a_straight_synthetic_boundary_lie_on_it() {
         let e = 10f64.powf(-1.0 + k as f64 / 3.0);
         let want = gamma_b(e).floor() + 0.5;
         assert!(
-            list.iter().any(|b| (b["x"].as_f64().unwrap() / e - 1.0).abs() < 1e-9
-                && (b["y"].as_f64().unwrap() - want).abs() < 1e-9),
+            list.iter()
+                .any(|b| (b["x"].as_f64().unwrap() / e - 1.0).abs() < 1e-9
+                    && (b["y"].as_f64().unwrap() - want).abs() < 1e-9),
             "no boundary point at E* = {e}, Gamma = {want}"
         );
     }
     // The table and CSV forms carry the same points.
-    let csv = stdout(&run(&["boundaries", "--db", db.to_str().unwrap(), "--format", "csv"]));
-    assert_eq!(csv.lines().filter(|l| l.contains(",boundary,f|g,")).count(), list.len());
+    let csv = stdout(&run(&[
+        "boundaries",
+        "--db",
+        db.to_str().unwrap(),
+        "--format",
+        "csv",
+    ]));
+    assert_eq!(
+        csv.lines().filter(|l| l.contains(",boundary,f|g,")).count(),
+        list.len()
+    );
     let table = stdout(&run(&["boundaries", "--db", db.to_str().unwrap()]));
-    assert!(table.contains(&format!("boundary f|g ({} point(s))", list.len())), "{table}");
+    assert!(
+        table.contains(&format!("boundary f|g ({} point(s))", list.len())),
+        "{table}"
+    );
 }
 
 #[test]
@@ -264,20 +331,37 @@ fn plot_and_export_show_every_result() {
         finish_synthetic(&store, s.id, |c, _| Some(true_phase(c).into()));
     }
     let svg = dir.path().join("map.svg");
-    let out = run(&["plot", "--db", db.to_str().unwrap(), "-o", svg.to_str().unwrap()]);
+    let out = run(&[
+        "plot",
+        "--db",
+        db.to_str().unwrap(),
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg"));
     // 100 points + one legend marker per phase (f, g).
     assert_eq!(text.matches("<circle").count(), 102);
-    for label in ["A = d", "A = s_crit", "Eq. 4.15", "boundary points", "E* (log scale)"] {
+    for label in [
+        "A = d",
+        "A = s_crit",
+        "Eq. 4.15",
+        "boundary points",
+        "E* (log scale)",
+    ] {
         assert!(text.contains(label), "missing {label}");
     }
 
     let csv = stdout(&run(&["export", "--db", db.to_str().unwrap()]));
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap_or_else(|| panic!("{n}"));
+    let col = |n: &str| {
+        header
+            .iter()
+            .position(|h| *h == n)
+            .unwrap_or_else(|| panic!("{n}"))
+    };
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 100);
     for r in &rows {
@@ -289,7 +373,13 @@ fn plot_and_export_show_every_result() {
         assert_eq!(r[col("obs.n")], r[col("point")]);
         assert_eq!(r[col("decided_on.synthetic")], "true");
     }
-    let json = stdout(&run(&["export", "--db", db.to_str().unwrap(), "--format", "json"]));
+    let json = stdout(&run(&[
+        "export",
+        "--db",
+        db.to_str().unwrap(),
+        "--format",
+        "json",
+    ]));
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert_eq!(v.as_array().unwrap().len(), 100);
     assert_eq!(v[0]["params"]["drive.gamma"], 1.0);

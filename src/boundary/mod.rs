@@ -193,8 +193,8 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
     };
     // Group the jobs: slice key (axes outside the plane) -> point key (all coords) -> votes.
     type Votes<'a> = Vec<(i64, Option<String>, &'a Observation)>;
-    let mut slices: BTreeMap<String, (Vec<(String, serde_json::Value)>, BTreeMap<String, Votes>)> =
-        BTreeMap::new();
+    type Fixed = Vec<(String, serde_json::Value)>;
+    let mut slices: BTreeMap<String, (Fixed, BTreeMap<String, Votes>)> = BTreeMap::new();
     let mut slice_order: Vec<String> = Vec::new();
     let mut point_order: BTreeMap<String, Vec<String>> = BTreeMap::new();
     for job in jobs {
@@ -218,7 +218,10 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
             .entry(skey.clone())
             .or_insert_with(|| (fixed, BTreeMap::new()));
         if !points.contains_key(&pkey) {
-            point_order.entry(skey.clone()).or_default().push(pkey.clone());
+            point_order
+                .entry(skey.clone())
+                .or_default()
+                .push(pkey.clone());
         }
         points
             .entry(pkey)
@@ -300,14 +303,17 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
                 .as_ref()
                 .map_or(0.0, |ay| ay.unscale(0.5 * (ay.scale(a.y) + ay.scale(b.y))));
             let (amplitude, omega) = motion(scenes[i], xv, yv);
-            boundaries.entry(pair.clone()).or_default().push(BoundaryPoint {
-                pair,
-                x: xv,
-                y: yv,
-                between: [i.min(j), i.max(j)],
-                amplitude,
-                omega,
-            });
+            boundaries
+                .entry(pair.clone())
+                .or_default()
+                .push(BoundaryPoint {
+                    pair,
+                    x: xv,
+                    y: yv,
+                    between: [i.min(j), i.max(j)],
+                    amplitude,
+                    omega,
+                });
         }
         for list in boundaries.values_mut() {
             list.sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
@@ -338,7 +344,12 @@ fn delaunay_edges(
             pos: Point2::new(xa.scale(p.x), ya.scale(p.y)),
             index,
         })
-        .map_err(|e| BoundaryError(format!("point ({}, {}) cannot be triangulated: {e:?}", p.x, p.y)))?;
+        .map_err(|e| {
+            BoundaryError(format!(
+                "point ({}, {}) cannot be triangulated: {e:?}",
+                p.x, p.y
+            ))
+        })?;
     }
     let mut edges: Vec<(usize, usize)> = tri
         .undirected_edges()

@@ -200,7 +200,12 @@ fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Resu
     run_and_report(&store, &sweeps, jobs, retry)
 }
 
-fn run_and_report(store: &Store, sweeps: &[SweepRow], jobs: usize, retry: bool) -> Result<(), Failure> {
+fn run_and_report(
+    store: &Store,
+    sweeps: &[SweepRow],
+    jobs: usize,
+    retry: bool,
+) -> Result<(), Failure> {
     let summary = run_sweeps(
         store,
         sweeps,
@@ -356,7 +361,10 @@ fn sweep_job(path: &Path) -> Result<(), Failure> {
     let spec = JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)?;
     let result = run_job(&spec, &mut |_| {}).map_err(|e| Failure::Other(e.to_string()))?;
     let out = serde_json::json!({ "id": spec.id(), "result": result });
-    println!("{}", serde_json::to_string_pretty(&out).expect("serializes"));
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).expect("serializes")
+    );
     Ok(())
 }
 
@@ -372,7 +380,8 @@ fn sweep_map(store: &Store, sweep: &SweepRow) -> Result<PhaseMap, Failure> {
             scene: p.spec.scene,
         })
         .collect();
-    phase_map(&sweep.axes, &obs).map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
+    phase_map(&sweep.axes, &obs)
+        .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
 }
 
 fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>, Failure> {
@@ -419,8 +428,7 @@ fn fixed_text(fixed: &[(String, serde_json::Value)]) -> String {
 }
 
 fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
-    let mut out =
-        String::from("sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega\n");
+    let mut out = String::from("sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega\n");
     for (s, m) in maps {
         let xl = m.x.as_ref().map(|a| a.key.clone()).unwrap_or_default();
         let yl = m.y.as_ref().map(|a| a.key.clone()).unwrap_or_default();
@@ -490,7 +498,14 @@ fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
                 }
             );
             for &yv in ys.iter().rev() {
-                let mut row = format!("  {:>9} |", if ya.is_some() { short(yv) } else { String::new() });
+                let mut row = format!(
+                    "  {:>9} |",
+                    if ya.is_some() {
+                        short(yv)
+                    } else {
+                        String::new()
+                    }
+                );
                 for &xv in &xs {
                     let cell = slice
                         .points
@@ -531,7 +546,11 @@ fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
                         out,
                         "    {:>10} {:>10} {:>10} {:>10}",
                         short(b.x),
-                        if ya.is_some() { short(b.y) } else { String::new() },
+                        if ya.is_some() {
+                            short(b.y)
+                        } else {
+                            String::new()
+                        },
                         opt_num(b.amplitude),
                         opt_num(b.omega)
                     );
@@ -556,7 +575,10 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path) -> ExitCode {
                     Failure::BadInput(format!("{}: no sweep in this database", db.display()))
                 })?;
                 if !all.is_empty() {
-                    eprintln!("plotting sweep {} (the latest; choose with --sweep)", last.name);
+                    eprintln!(
+                        "plotting sweep {} (the latest; choose with --sweep)",
+                        last.name
+                    );
                 }
                 last
             }
@@ -591,7 +613,12 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path) -> ExitCode {
 }
 
 /// `wetgran export`.
-pub fn export(db: &Path, name: Option<&str>, format: ExportFormat, output: Option<&Path>) -> ExitCode {
+pub fn export(
+    db: &Path,
+    name: Option<&str>,
+    format: ExportFormat,
+    output: Option<&Path>,
+) -> ExitCode {
     exit((|| {
         let store = Store::open_existing(db)?;
         let mut rows = Vec::new();

@@ -186,9 +186,36 @@ pub fn phase_svg(
         let x = x_range.0..x_range.1;
         let y = y_range.0..y_range.1;
         match (xa.log, ya.log) {
-            (true, true) => draw(&root, x.log_scale(), y.log_scale(), slice, &lines, title, &x_desc, &y_desc),
-            (true, false) => draw(&root, x.log_scale(), y, slice, &lines, title, &x_desc, &y_desc),
-            (false, true) => draw(&root, x, y.log_scale(), slice, &lines, title, &x_desc, &y_desc),
+            (true, true) => draw(
+                &root,
+                x.log_scale(),
+                y.log_scale(),
+                slice,
+                &lines,
+                title,
+                &x_desc,
+                &y_desc,
+            ),
+            (true, false) => draw(
+                &root,
+                x.log_scale(),
+                y,
+                slice,
+                &lines,
+                title,
+                &x_desc,
+                &y_desc,
+            ),
+            (false, true) => draw(
+                &root,
+                x,
+                y.log_scale(),
+                slice,
+                &lines,
+                title,
+                &x_desc,
+                &y_desc,
+            ),
             (false, false) => draw(&root, x, y, slice, &lines, title, &x_desc, &y_desc),
         }?;
         root.present().map_err(|e| e.to_string())?;

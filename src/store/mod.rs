@@ -403,7 +403,11 @@ impl Store {
     /// Registers (or re-registers) a sweep and its jobs in one transaction. Jobs already in the
     /// database (same id, from any sweep) are shared, never duplicated; the sweep's point list is
     /// replaced by the new expansion.
-    pub fn register_sweep(&self, file: &SweepFile, jobs: &[SweepJob]) -> Result<SweepRow, StoreError> {
+    pub fn register_sweep(
+        &self,
+        file: &SweepFile,
+        jobs: &[SweepJob],
+    ) -> Result<SweepRow, StoreError> {
         let axes = serde_json::to_string(&file.axes).expect("axes serialize");
         let t = now();
         self.rt.block_on(async {
@@ -435,13 +439,15 @@ impl Store {
                 .await
                 .map_err(|e| self.db(e))?;
             for job in jobs {
-                sqlx::query("INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)")
-                    .bind(&job.id)
-                    .bind(job.spec.canonical_json())
-                    .bind(t)
-                    .execute(&mut *tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+                sqlx::query(
+                    "INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)",
+                )
+                .bind(&job.id)
+                .bind(job.spec.canonical_json())
+                .bind(t)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
                 sqlx::query(
                     "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
                      VALUES (?1, ?2, ?3, ?4, ?5)",
@@ -509,12 +515,11 @@ impl Store {
     pub fn requeue_orphans(&self) -> Result<Vec<String>, StoreError> {
         let stale_before = now() - STALE_AFTER.as_secs_f64();
         self.rt.block_on(async {
-            let running: Vec<(String, Option<String>, Option<f64>)> = sqlx::query_as(
-                "SELECT id, owner, heartbeat FROM jobs WHERE status = 'running'",
-            )
-            .fetch_all(&self.pool)
-            .await
-            .map_err(|e| self.db(e))?;
+            let running: Vec<(String, Option<String>, Option<f64>)> =
+                sqlx::query_as("SELECT id, owner, heartbeat FROM jobs WHERE status = 'running'")
+                    .fetch_all(&self.pool)
+                    .await
+                    .map_err(|e| self.db(e))?;
             let mut requeued = Vec::new();
             for (id, owner, heartbeat) in running {
                 let owner = owner.unwrap_or_default();
@@ -649,7 +654,8 @@ impl Store {
         Ok(Some(Claim {
             spec: JobSpec::from_json(&spec, &format!("job {job_id}"))
                 .map_err(|e| damaged("the spec", e))?,
-            coords: serde_json::from_str(&coords).map_err(|e| damaged("the coords", e.to_string()))?,
+            coords: serde_json::from_str(&coords)
+                .map_err(|e| damaged("the coords", e.to_string()))?,
             job_id,
             run_id,
             sweep,
@@ -662,10 +668,12 @@ impl Store {
     pub fn heartbeat(&self) -> Result<(), StoreError> {
         self.rt
             .block_on(
-                sqlx::query("UPDATE jobs SET heartbeat = ?1 WHERE owner = ?2 AND status = 'running'")
-                    .bind(now())
-                    .bind(&self.owner)
-                    .execute(&self.pool),
+                sqlx::query(
+                    "UPDATE jobs SET heartbeat = ?1 WHERE owner = ?2 AND status = 'running'",
+                )
+                .bind(now())
+                .bind(&self.owner)
+                .execute(&self.pool),
             )
             .map_err(|e| self.db(e))?;
         Ok(())
@@ -892,6 +900,9 @@ mod tests {
         let o = new_owner();
         assert_eq!(o.split(':').count(), 3);
         assert!(!owner_is_dead(&o), "this process is alive");
-        assert!(!owner_is_dead("other-host:1:abc"), "another host is never judged");
+        assert!(
+            !owner_is_dead("other-host:1:abc"),
+            "another host is never judged"
+        );
     }
 }

@@ -215,7 +215,9 @@ pub(crate) fn key_line(text: &str, prefix: &[&str], key: &str) -> Option<usize> 
     let mut current: &DeTable = table.get_ref();
     let mut found = None;
     for (k, part) in path.iter().enumerate() {
-        let (name, value) = current.iter().find(|(n, _)| n.get_ref().as_ref() == *part)?;
+        let (name, value) = current
+            .iter()
+            .find(|(n, _)| n.get_ref().as_ref() == *part)?;
         found = Some(name.span().start);
         if k + 1 < path.len() {
             match value.get_ref() {
@@ -276,7 +278,8 @@ impl SweepFile {
     pub fn parse(text: &str, path: &Path) -> Result<SweepFile, SweepError> {
         let file = path.display().to_string();
         let raw: RawSweep = toml::from_str(text).map_err(|e| toml_error(&file, text, &e))?;
-        let err = |line: Option<usize>, key: &str, msg: String| SweepError::new(&file, line, key, msg);
+        let err =
+            |line: Option<usize>, key: &str, msg: String| SweepError::new(&file, line, key, msg);
         let span_line = |start: usize| Some(line_of(text, start));
 
         let name = raw.sweep.name.get_ref().trim().to_string();
@@ -330,7 +333,8 @@ impl SweepFile {
                 )
             })?;
             let base_file = base_path.display().to_string();
-            scene_tree = toml::from_str(&base_text).map_err(|e| toml_error(&base_file, &base_text, &e))?;
+            scene_tree =
+                toml::from_str(&base_text).map_err(|e| toml_error(&base_file, &base_text, &e))?;
             base = Some((base_path, base_text));
         }
         if let Some(over) = &raw.scene {
@@ -355,9 +359,9 @@ impl SweepFile {
                 None => (name.clone(), name.clone()),
             };
             if key.is_empty()
-                || key
-                    .split('.')
-                    .any(|p| p.is_empty() || !p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+                || key.split('.').any(|p| {
+                    p.is_empty() || !p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                })
             {
                 return Err(err(
                     Some(line),
@@ -403,11 +407,14 @@ impl SweepFile {
                     if let toml::Value::Float(f) = x
                         && !f.is_finite()
                     {
-                        return Err(err(vline, &key, format!("value {f} is not a finite number")));
+                        return Err(err(
+                            vline,
+                            &key,
+                            format!("value {f} is not a finite number"),
+                        ));
                     }
-                    let j = serde_json::to_value(x).map_err(|e| {
-                        err(vline, &key, format!("value {x} cannot be used: {e}"))
-                    })?;
+                    let j = serde_json::to_value(x)
+                        .map_err(|e| err(vline, &key, format!("value {x} cannot be used: {e}")))?;
                     if out.contains(&j) {
                         return Err(err(vline, &key, format!("value {x} appears twice")));
                     }
@@ -423,20 +430,30 @@ impl SweepFile {
                 let rline = Some(line_of(text, r.span().start));
                 let rv = r.get_ref();
                 if !(rv.from.is_finite() && rv.to.is_finite()) {
-                    return Err(err(rline, &key, "range ends must be finite numbers".to_string()));
+                    return Err(err(
+                        rline,
+                        &key,
+                        "range ends must be finite numbers".to_string(),
+                    ));
                 }
                 if rv.steps == 0 || rv.steps > 100_000 {
                     return Err(err(
                         rline,
                         &key,
-                        format!("steps = {} is out of range: must be in [1, 100000]", rv.steps),
+                        format!(
+                            "steps = {} is out of range: must be in [1, 100000]",
+                            rv.steps
+                        ),
                     ));
                 }
                 if rv.steps > 1 && rv.from == rv.to {
                     return Err(err(
                         rline,
                         &key,
-                        format!("from = to = {} with steps = {}: the values would repeat", rv.from, rv.steps),
+                        format!(
+                            "from = to = {} with steps = {}: the values would repeat",
+                            rv.from, rv.steps
+                        ),
                     ));
                 }
                 if log && !(rv.from > 0.0 && rv.to > 0.0) {

@@ -199,7 +199,12 @@ fn to_toml(v: &serde_json::Value) -> Result<toml::Value, String> {
 
 fn json_map(t: &toml::Table) -> BTreeMap<String, serde_json::Value> {
     t.iter()
-        .map(|(k, v)| (k.clone(), serde_json::to_value(v).expect("TOML is JSON-able")))
+        .map(|(k, v)| {
+            (
+                k.clone(),
+                serde_json::to_value(v).expect("TOML is JSON-able"),
+            )
+        })
         .collect()
 }
 
@@ -238,8 +243,8 @@ impl SweepFile {
                 msg,
             )
         };
-        let samples_per_period =
-            number(&self.observe, "samples_per_period", self)?.unwrap_or(DEFAULT_SAMPLES_PER_PERIOD);
+        let samples_per_period = number(&self.observe, "samples_per_period", self)?
+            .unwrap_or(DEFAULT_SAMPLES_PER_PERIOD);
         if !(samples_per_period.is_finite() && samples_per_period > 0.0) {
             return Err(obs_err(
                 "samples_per_period",
@@ -297,12 +302,10 @@ impl SweepFile {
                 let mut tree = self.scene_tree.clone();
                 let where_ = describe_point(self, &coords, replica);
                 for (axis, v) in self.axes.iter().zip(&coords) {
-                    let value = to_toml(v).map_err(|m| {
-                        SweepError::new(&file, Some(axis.line), &axis.key, m)
-                    })?;
-                    set_key(&mut tree, &axis.key, value).map_err(|m| {
-                        SweepError::new(&file, Some(axis.line), &axis.key, m)
-                    })?;
+                    let value = to_toml(v)
+                        .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
+                    set_key(&mut tree, &axis.key, value)
+                        .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
                 }
                 if self.replicas > 1 {
                     let seed = base_seed.checked_add(replica as u64).ok_or_else(|| {
@@ -340,9 +343,8 @@ impl SweepFile {
                     scene.run.duration = p * period;
                 }
                 scene.run.sample_interval = period / samples_per_period;
-                let transient_periods = transient.unwrap_or(
-                    DEFAULT_TRANSIENT_FRACTION * scene.run.duration / period,
-                );
+                let transient_periods =
+                    transient.unwrap_or(DEFAULT_TRANSIENT_FRACTION * scene.run.duration / period);
                 if transient_periods * period >= scene.run.duration {
                     return Err(obs_err(
                         "transient_periods",
@@ -357,7 +359,8 @@ impl SweepFile {
                 scene.validate(&file).map_err(|e| {
                     SweepError::new(
                         &file,
-                        self.periods.and(super::file::key_line(&self.text, &["sweep"], "periods")),
+                        self.periods
+                            .and(super::file::key_line(&self.text, &["sweep"], "periods")),
                         &e.key,
                         format!("{}{where_}", e.message),
                     )
@@ -389,7 +392,12 @@ impl SweepFile {
     /// or the base file that set the offending key.
     fn scene_of(&self, tree: &toml::Table, where_: &str) -> Result<Scene, SweepError> {
         let text = toml::to_string(tree).map_err(|e| {
-            SweepError::new(&self.path.display().to_string(), None, "scene", e.to_string())
+            SweepError::new(
+                &self.path.display().to_string(),
+                None,
+                "scene",
+                e.to_string(),
+            )
         })?;
         let origin = self.path.display().to_string();
         Scene::from_toml_str(&text, &origin).map_err(|e| {
