@@ -70,6 +70,21 @@ pub enum SweepCommand {
         #[arg(long)]
         specs: bool,
     },
+    /// Estimate what a sweep costs: run a few of its jobs (spread over the grid) for a few
+    /// driving periods each, one at a time, and scale the measured wall time per period to the
+    /// sweep's run length and job count. Writes nothing to any database.
+    Estimate {
+        file: PathBuf,
+        /// Driving periods to run per sampled job (after a transient of none).
+        #[arg(long, default_value_t = 2.0)]
+        periods: f64,
+        /// Number of jobs to sample.
+        #[arg(long, default_value_t = 6)]
+        samples: usize,
+        /// Cores the estimate is for (default: the available cores).
+        #[arg(long)]
+        cores: Option<usize>,
+    },
     /// Run one job spec (JSON, as printed by `sweep expand --specs`) and print its result as
     /// JSON: the same function the workers call, for running a job on another machine.
     Job {
@@ -152,6 +167,12 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
         SweepCommand::Status { db } => sweep_status(&db),
         SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_job(&spec),
+        SweepCommand::Estimate {
+            file,
+            periods,
+            samples,
+            cores,
+        } => sweep_estimate(&file, periods, samples, workers(cores)),
     })
 }
 
@@ -246,8 +267,10 @@ fn duration_text(s: f64) -> String {
         format!("{s:.1} s")
     } else if s < 7200.0 {
         format!("{:.1} min", s / 60.0)
-    } else {
+    } else if s < 3.0 * 86400.0 {
         format!("{:.1} h", s / 3600.0)
+    } else {
+        format!("{:.1} days", s / 86400.0)
     }
 }
 
@@ -340,6 +363,87 @@ fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
         }
         println!("{line}");
     }
+    Ok(())
+}
+
+fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Result<(), Failure> {
+    if !(periods.is_finite() && periods > 0.0) || samples == 0 {
+        return Err(Failure::BadInput(
+            "--periods must be > 0 and --samples >= 1".to_string(),
+        ));
+    }
+    let (sweep, jobs) = load_sweep(file)?;
+    let picks: Vec<usize> = if samples >= jobs.len() {
+        (0..jobs.len()).collect()
+    } else if samples == 1 {
+        vec![jobs.len() / 2]
+    } else {
+        (0..samples)
+            .map(|k| (k as f64 * (jobs.len() - 1) as f64 / (samples - 1) as f64).round() as usize)
+            .collect()
+    };
+    println!(
+        "{}: {} job(s); sampling {} for {periods} driving period(s) each, one at a time",
+        file.display(),
+        jobs.len(),
+        picks.len()
+    );
+    let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
+    let mut per_period = Vec::new();
+    let mut full_periods = Vec::new();
+    for &k in &picks {
+        let job = &jobs[k];
+        let mut spec = job.spec.clone();
+        let period = spec.period();
+        full_periods.push(spec.scene.run.duration / period);
+        spec.scene.run.duration = periods * period;
+        spec.observe.transient_periods = 0.0;
+        let t0 = std::time::Instant::now();
+        let outcome = run_job(&spec, &mut |_| {});
+        let wall = t0.elapsed().as_secs_f64();
+        let coords: Vec<String> = labels
+            .iter()
+            .zip(&job.coords)
+            .map(|(l, v)| match v.as_f64() {
+                Some(x) => format!("{l} = {}", short(x)),
+                None => format!("{l} = {v}"),
+            })
+            .collect();
+        match outcome {
+            Ok(r) => {
+                per_period.push(wall / periods);
+                println!(
+                    "  {:<40} {:>9.3} s per period  ({} events)",
+                    coords.join(", "),
+                    wall / periods,
+                    r.events
+                );
+            }
+            Err(e) => println!("  {:<40} failed: {e}", coords.join(", ")),
+        }
+    }
+    if per_period.is_empty() {
+        return Err(Failure::Other("every sampled job failed".to_string()));
+    }
+    let mean = per_period.iter().sum::<f64>() / per_period.len() as f64;
+    let max = per_period.iter().cloned().fold(0.0, f64::max);
+    let run_periods = full_periods.iter().sum::<f64>() / full_periods.len() as f64;
+    let total = mean * run_periods * jobs.len() as f64;
+    println!(
+        "estimate: {:.3} s per period on average (max {:.3}) x {} periods x {} jobs = {} of CPU, \
+         about {} on {cores} core(s)",
+        mean,
+        max,
+        short(run_periods),
+        jobs.len(),
+        duration_text(total),
+        duration_text(total / cores as f64)
+    );
+    println!(
+        "  (measured on the first {periods} period(s) from the initial state; the cost per period \
+         changes as a run settles, e.g. a bed resting on the plate gets dearer: sample more \
+         periods for a closer figure)"
+    );
     Ok(())
 }
 

@@ -402,9 +402,14 @@ impl SweepFile {
         let origin = self.path.display().to_string();
         Scene::from_toml_str(&text, &origin).map_err(|e| {
             let (file, line) = self.locate(&e.key);
-            // A syntax-level message from the re-serialized tree carries a snippet of that text,
-            // not of the user's file: keep its first line only.
-            let message = e.message.lines().next().unwrap_or("").to_string();
+            // A parse-level message from the re-serialized tree carries a position in and a
+            // snippet of that text, not of the user's file: keep only what it says is wrong.
+            let message = e
+                .message
+                .lines()
+                .filter(|l| !l.starts_with("TOML parse error") && !l.contains('|'))
+                .collect::<Vec<_>>()
+                .join(" ");
             SweepError::new(&file, line, &e.key, format!("{message}{where_}"))
         })
     }
