@@ -384,3 +384,45 @@ fn plot_and_export_show_every_result() {
     assert_eq!(v.as_array().unwrap().len(), 100);
     assert_eq!(v[0]["params"]["drive.gamma"], 1.0);
 }
+
+#[test]
+fn a_bad_sweep_file_leaves_the_database_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("w.sqlite");
+    {
+        let store = Store::open(&db).unwrap();
+        let s = register(&store, &synthetic_sweep(dir.path(), "grid", 1));
+        finish_synthetic(&store, s.id, |c, _| Some(true_phase(c).into()));
+    }
+    let before = std::fs::read(&db).unwrap();
+    let bad = write(
+        dir.path(),
+        "bad.toml",
+        "[sweep]\nname = \"grid\"\nbase = \"tiny.toml\"\n[[axis]]\nkey = \"gamma\"\nvalues = [0.0]\n",
+    );
+    let out = run(&[
+        "sweep",
+        "run",
+        bad.to_str().unwrap(),
+        "--db",
+        db.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let e = stderr(&out);
+    assert!(
+        e.contains(&format!("{}:5: key `drive.gamma`", bad.display())),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(&db).unwrap(), before);
+    // Nor is a database created for it.
+    let fresh = dir.path().join("fresh.sqlite");
+    let out = run(&[
+        "sweep",
+        "run",
+        bad.to_str().unwrap(),
+        "--db",
+        fresh.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!fresh.exists());
+}

@@ -895,6 +895,77 @@ mod tests {
         assert_eq!(APPLICATION_ID, 1464291918);
     }
 
+    /// A database with one registered sweep of three (never simulated) jobs.
+    fn store_with_jobs(dir: &Path) -> (PathBuf, i64) {
+        let text = "[sweep]\nname = \"s\"\n[scene]\ndimension = 2\n[scene.box]\nsize = [8.0, 4.0]\n\
+                    [scene.particles]\ncount = 4\n[scene.initial]\ntemperature = 1.0\n\
+                    [scene.run]\nduration = 1.0\n[[axis]]\nkey = \"initial.seed\"\nvalues = [1, 2, 3]\n";
+        let file = SweepFile::parse(text, &dir.join("s.toml")).unwrap();
+        let jobs = file.expand().unwrap();
+        let db = dir.join("w.sqlite");
+        let store = Store::open(&db).unwrap();
+        let id = store.register_sweep(&file, &jobs).unwrap().id;
+        (db, id)
+    }
+
+    fn set_owner(store: &Store, job: &str, owner: &str, heartbeat: f64) {
+        store
+            .rt
+            .block_on(
+                sqlx::query("UPDATE jobs SET owner = ?2, heartbeat = ?3 WHERE id = ?1")
+                    .bind(job)
+                    .bind(owner)
+                    .bind(heartbeat)
+                    .execute(&store.pool),
+            )
+            .unwrap();
+    }
+
+    #[test]
+    fn only_jobs_of_dead_or_silent_runners_are_requeued() {
+        let dir = tempfile::tempdir().unwrap();
+        let (db, sweep) = store_with_jobs(dir.path());
+        let a = Store::open(&db).unwrap();
+        let jobs: Vec<String> = (0..3)
+            .map(|_| a.claim(&[sweep]).unwrap().unwrap().job_id)
+            .collect();
+        // A process of this host that has exited: its pid is free.
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead_pid = child.id();
+        child.wait().unwrap();
+        let t = now();
+        // jobs[0]: another host, heartbeat fresh -> kept.
+        set_owner(&a, &jobs[0], "elsewhere:1:aa", t - 10.0);
+        // jobs[1]: another host, heartbeat older than STALE_AFTER -> re-queued.
+        set_owner(
+            &a,
+            &jobs[1],
+            "elsewhere:1:bb",
+            t - STALE_AFTER.as_secs_f64() - 1.0,
+        );
+        // jobs[2]: this host, a dead pid, heartbeat fresh -> re-queued at once (Linux).
+        set_owner(&a, &jobs[2], &format!("{}:{dead_pid}:cc", host_name()), t);
+        let b = Store::open(&db).unwrap();
+        let mut requeued = b.requeue_orphans().unwrap();
+        requeued.sort();
+        let mut want = vec![jobs[1].clone()];
+        if cfg!(target_os = "linux") {
+            want.push(jobs[2].clone());
+        }
+        want.sort();
+        assert_eq!(requeued, want);
+        let c = b.counts(sweep).unwrap();
+        assert_eq!(
+            (c.running, c.pending),
+            (3 - want.len() as u64, want.len() as u64)
+        );
+        // A's own running jobs are never taken from it by A itself.
+        let mine = a.claim(&[sweep]).unwrap().unwrap();
+        assert!(a.requeue_orphans().unwrap().is_empty());
+        assert_eq!(b.counts(sweep).unwrap().running, 3 - want.len() as u64 + 1);
+        drop(mine);
+    }
+
     #[test]
     fn owner_names_parse_and_a_live_owner_is_not_dead() {
         let o = new_owner();

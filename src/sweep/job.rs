@@ -137,3 +137,49 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
         "unknown panic payload".to_string()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::SweepFile;
+
+    fn tiny_spec() -> JobSpec {
+        let text = "[sweep]\nname = \"t\"\n[scene]\ndimension = 2\ngravity = 0.0\n[scene.box]\n\
+                    size = [8.0, 8.0]\nboundary = [\"periodic\", \"periodic\"]\n\
+                    [scene.particles]\ncount = 4\n[scene.initial]\ntemperature = 1.0\n\
+                    [scene.run]\nduration = 2.0\n";
+        let file = SweepFile::parse(text, std::path::Path::new("t.toml")).unwrap();
+        file.expand().unwrap().remove(0).spec
+    }
+
+    #[test]
+    fn a_panicking_simulation_becomes_a_job_error() {
+        let mut spec = tiny_spec();
+        // Bypasses validation: the engine refuses a dimension it has no type for.
+        spec.scene.dimension = 4;
+        match run_job(&spec, &mut |_| {}) {
+            Err(JobError::Panic(m)) => assert!(m.contains("dimension 4"), "{m}"),
+            other => panic!("expected a panic error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn averages_cover_the_samples_after_the_transient() {
+        let spec = tiny_spec();
+        let mut fractions = Vec::new();
+        let r = run_job(&spec, &mut |f| fractions.push(f)).unwrap();
+        assert!(r.phase.is_none(), "no classifier yet");
+        // Elastic disks, no gravity, fully periodic: kinetic energy and momentum (zero) are
+        // conserved, so T_g stays the initial 1.0 at every sample.
+        let o = &r.observables;
+        assert!(
+            (o["granular_temperature"].as_f64().unwrap() - 1.0).abs() < 1e-9,
+            "{o}"
+        );
+        // Transient a quarter of the 2-unit run, 4 samples per unit: samples at 0.5 .. 2.0.
+        assert_eq!(o["samples"], 7);
+        assert_eq!(o["window"][0], 0.5);
+        assert_eq!(fractions.last().copied(), Some(1.0));
+        assert!(fractions.windows(2).all(|w| w[0] <= w[1]));
+    }
+}
