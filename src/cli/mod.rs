@@ -52,9 +52,12 @@ pub enum Command {
         #[command(subcommand)]
         action: sweep_cmd::SweepCommand,
     },
-    /// Print the phase map of each sweep and its boundary points (MODEL.md 7): Delaunay edges
-    /// between points of different phase in the (log E*, Gamma) plane, grouped by phase pair
-    /// (e.g. f|fgc), in the sweep's axes and as container motion (A, omega).
+    /// Print the phase map of each sweep and its boundary points.
+    ///
+    /// MODEL.md 7: the grid points (majority phase of their replicas) are Delaunay-triangulated
+    /// in the (log E*, Gamma) plane and a boundary point is put at the midpoint of every edge
+    /// between two phases; the points are grouped by phase pair (e.g. f|fgc) and given in the
+    /// sweep's axes and as container motion (A, omega).
     Boundaries {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
@@ -64,8 +67,10 @@ pub enum Command {
         #[arg(long, value_enum, default_value = "table")]
         format: sweep_cmd::BoundaryFormat,
     },
-    /// Draw a sweep's phase diagram as SVG: E* (log axis) against Gamma, points coloured by
-    /// phase, boundary points, and the lines A = s_crit, A = d and Eq. 4.15 drawn over.
+    /// Draw a sweep's phase diagram as SVG.
+    ///
+    /// E* (log axis) against Gamma, points coloured by phase, the boundary points, and the lines
+    /// A = s_crit, A = d and Eq. 4.15 (solid-fluid force balance) drawn over.
     Plot {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
@@ -76,8 +81,10 @@ pub enum Command {
         #[arg(short = 'o', long = "output")]
         output: PathBuf,
     },
-    /// Export all finished jobs with their parameters, phase and observables (for pandas,
-    /// Julia, ...): CSV with observables flattened to dotted columns, or nested JSON.
+    /// Export all finished jobs with their parameters, phase and observables.
+    ///
+    /// For pandas, Julia and friends: CSV with one row per job and the observables flattened to
+    /// dotted `obs.` columns, or JSON with them nested.
     Export {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,

@@ -62,17 +62,21 @@ pub enum SweepCommand {
         #[arg(long, default_value = DEFAULT_DB)]
         db: PathBuf,
     },
-    /// Print the jobs a sweep file expands to (one JSON object per line: id, point, replica,
-    /// coords, and with --specs the canonical job spec), without running anything.
+    /// Print the jobs a sweep file expands to, without running anything.
+    ///
+    /// One JSON object per line: id, point, replica, coords, and with --specs the canonical job
+    /// spec (what `sweep job` runs).
     Expand {
         file: PathBuf,
         /// Include each job's full canonical spec (what `sweep job` runs).
         #[arg(long)]
         specs: bool,
     },
-    /// Estimate what a sweep costs: run a few of its jobs (spread over the grid) for a few
-    /// driving periods each, one at a time, and scale the measured wall time per period to the
-    /// sweep's run length and job count. Writes nothing to any database.
+    /// Estimate what a sweep costs from a few sampled jobs.
+    ///
+    /// Runs a few of its jobs (spread over the grid) for a few driving periods each, one at a
+    /// time, and scales the measured wall time per period to the sweep's run length and job
+    /// count. Writes nothing to any database.
     Estimate {
         file: PathBuf,
         /// Driving periods to run per sampled job (after a transient of none).
@@ -85,8 +89,10 @@ pub enum SweepCommand {
         #[arg(long)]
         cores: Option<usize>,
     },
-    /// Run one job spec (JSON, as printed by `sweep expand --specs`) and print its result as
-    /// JSON: the same function the workers call, for running a job on another machine.
+    /// Run one job spec and print its result as JSON.
+    ///
+    /// The spec is JSON as printed by `sweep expand --specs` (a whole line or its `spec`); the
+    /// same function the workers call, for running a job on another machine.
     Job {
         /// A file with the job spec (`-` for standard input).
         spec: PathBuf,
