@@ -426,3 +426,24 @@ fn a_bad_sweep_file_leaves_the_database_untouched() {
     assert_eq!(out.status.code(), Some(2));
     assert!(!fresh.exists());
 }
+
+#[test]
+fn runners_opening_a_new_database_at_once_all_succeed() {
+    for round in 0..5 {
+        let dir = tempfile::tempdir().unwrap();
+        let db = dir.path().join("new.sqlite");
+        let barrier = std::sync::Arc::new(std::sync::Barrier::new(4));
+        let handles: Vec<_> = (0..4)
+            .map(|_| {
+                let (db, barrier) = (db.clone(), barrier.clone());
+                std::thread::spawn(move || {
+                    barrier.wait();
+                    Store::open(&db).map(|s| s.sweeps().unwrap().len())
+                })
+            })
+            .collect();
+        for h in handles {
+            assert_eq!(h.join().unwrap(), Ok(0), "round {round}");
+        }
+    }
+}

@@ -272,6 +272,22 @@ impl Store {
     }
 
     fn open_impl(path: &Path, create: bool) -> Result<Store, StoreError> {
+        // Two runners starting at once on a new file race to initialise it: the loser's
+        // journal-mode switch or migration fails (its transaction rolls back) and it tries again,
+        // then finding the file initialised.
+        let mut attempt = 0;
+        loop {
+            match Self::open_once(path, create) {
+                Err(StoreError::Db { .. }) if attempt < 6 => {
+                    attempt += 1;
+                    std::thread::sleep(Duration::from_millis(50 * attempt));
+                }
+                other => return other,
+            }
+        }
+    }
+
+    fn open_once(path: &Path, create: bool) -> Result<Store, StoreError> {
         let p = path.display().to_string();
         let existing = inspect(path)?;
         if matches!(existing, Existing::New) && !create {
