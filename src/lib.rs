@@ -1,7 +1,9 @@
 //! wetgran: phase diagrams of wet granular matter.
 //!
-//! Layers, dependencies pointing one way: [`scene`] and [`physics`] -> [`sim`] -> [`sweep`] ->
-//! [`store`] -> [`boundary`], [`report`] -> `cli`.
+//! Layers, dependencies pointing one way: [`scene`] and [`physics`] -> [`sim`] -> [`sweep`]
+//! (sweep files, job specs, `run_job`) -> [`store`] (which stores those types) -> [`boundary`],
+//! [`report`] -> `cli`. The one exception is the scheduler, `sweep::runner`, which drives the
+//! store it sits below.
 //! The physics follows MODEL.md (K. Röller, "Numerical simulations of wet granular matter",
 //! Göttingen 2010); choices where the text is silent or wrong are listed in
 //! docs/model-choices.md.
