@@ -208,6 +208,17 @@ fn sweep_run(file: &Path, db: &Path, jobs: usize, retry: bool) -> Result<(), Fai
     // The file is checked in full before the database is touched.
     let (sweep, expanded) = load_sweep(file)?;
     let store = Store::open(db)?;
+    if let Ok(old) = store.sweep(&sweep.name)
+        && old.file != file.display().to_string()
+    {
+        eprintln!(
+            "sweep {}: registered from {} before, now from {}: its grid is replaced (finished \
+             jobs are kept and reused where their specs match)",
+            sweep.name,
+            old.file,
+            file.display()
+        );
+    }
     let row = store.register_sweep(&sweep, &expanded)?;
     run_and_report(&store, &[row], jobs, retry)
 }
