@@ -1,4 +1,7 @@
-//! The command line: `wetgran simulate` and `wetgran bench`. `src/main.rs` only calls [`main`].
+//! The command line: `wetgran simulate`, `wetgran bench`, and the sweep commands (`sweep`,
+//! `boundaries`, `plot`, `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`].
+
+pub mod sweep_cmd;
 
 use crate::bench;
 use crate::observe::{ObservedRun, run_observed_with_frame};
@@ -57,6 +60,56 @@ pub enum Command {
         /// `wall` only: also write the error-against-cost plot as SVG to this file.
         #[arg(long)]
         svg: Option<PathBuf>,
+    },
+    /// Phase-diagram sweeps: run, resume, status (and expand, job for running elsewhere).
+    Sweep {
+        #[command(subcommand)]
+        action: sweep_cmd::SweepCommand,
+    },
+    /// Print the phase map of each sweep and its boundary points.
+    ///
+    /// MODEL.md 7: the grid points (majority phase of their replicas) are Delaunay-triangulated
+    /// in the (log E*, Gamma) plane and a boundary point is put at the midpoint of every edge
+    /// between two phases; the points are grouped by phase pair (e.g. f|fgc) and given in the
+    /// sweep's axes and as container motion (A, omega).
+    Boundaries {
+        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        db: PathBuf,
+        /// Only this sweep (default: all).
+        #[arg(long)]
+        sweep: Option<String>,
+        #[arg(long, value_enum, default_value = "table")]
+        format: sweep_cmd::BoundaryFormat,
+    },
+    /// Draw a sweep's phase diagram as SVG.
+    ///
+    /// E* (log axis) against Gamma, points coloured by phase, the boundary points, and the lines
+    /// A = s_crit, A = d and Eq. 4.15 (solid-fluid force balance) drawn over.
+    Plot {
+        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        db: PathBuf,
+        /// The sweep (default: the one registered or updated last).
+        #[arg(long)]
+        sweep: Option<String>,
+        /// The SVG file to write.
+        #[arg(short = 'o', long = "output")]
+        output: PathBuf,
+    },
+    /// Export all finished jobs with their parameters, phase and observables.
+    ///
+    /// For pandas, Julia and friends: CSV with one row per job and the observables flattened to
+    /// dotted `obs.` columns, or JSON with them nested.
+    Export {
+        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        db: PathBuf,
+        /// Only this sweep (default: all).
+        #[arg(long)]
+        sweep: Option<String>,
+        #[arg(long, value_enum, default_value = "csv")]
+        format: sweep_cmd::ExportFormat,
+        /// Write to this file instead of standard output.
+        #[arg(short = 'o', long = "output")]
+        output: Option<PathBuf>,
     },
 }
 
@@ -151,6 +204,17 @@ pub fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Sweep { action } => sweep_cmd::sweep(action),
+        Command::Boundaries { db, sweep, format } => {
+            sweep_cmd::boundaries(&db, sweep.as_deref(), format)
+        }
+        Command::Plot { db, sweep, output } => sweep_cmd::plot(&db, sweep.as_deref(), &output),
+        Command::Export {
+            db,
+            sweep,
+            format,
+            output,
+        } => sweep_cmd::export(&db, sweep.as_deref(), format, output.as_deref()),
     }
 }
 

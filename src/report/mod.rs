@@ -1,9 +1,12 @@
 //! Pictures and exports of results: snapshots of a configuration (extended XYZ for OVITO, SVG
-//! coloured by kinetic energy or bridge count, with the bridges drawn) and the lateral-profile
-//! plot (SVG). Hand-written SVG, no plotting dependency. Everything takes plain data (a
-//! [`Frame`](crate::sim::Frame), [`Observables`](crate::observe::Observables)), so a stored
-//! sweep point can be drawn as well as a fresh run.
+//! coloured by kinetic energy or bridge count, with the bridges drawn), the lateral-profile plot
+//! (SVG), the phase-diagram plot of a sweep database (SVG) and the export of all results (CSV,
+//! JSON). Everything takes plain data (a [`Frame`](crate::sim::Frame),
+//! [`Observables`](crate::observe::Observables), stored results), so a stored sweep point can be
+//! drawn as well as a fresh run.
 
+pub mod export;
+pub mod plot_phase;
 pub mod profile_plot;
 pub mod snapshot;
 mod svg;

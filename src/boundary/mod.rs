@@ -1,0 +1,400 @@
+//! Phase-boundary extraction (MODEL.md 7, last paragraph): the phase map of a sweep and the
+//! boundary points between its phases.
+//!
+//! 1. Phase map: the replicas of a grid point vote; the point takes the majority phase. A tie
+//!    goes to the tied phase of the lowest-numbered replica (deterministic; such a point sits on
+//!    a boundary anyway). Replicas without a phase (not run, failed, unclassified) do not vote; a
+//!    point with no vote is left out.
+//! 2. The plane: for a shaking sweep with both a `Gamma` and an `E*` (or `E_d*`) axis, the
+//!    `(log10 E*, Gamma)` plane of the thesis (x = log10 E*, y = Gamma). Otherwise the first two
+//!    numeric axes (x = first, y = second), each scaled linearly, or by log10 where the axis was
+//!    written as a `log` range. Further axes cut the map into slices, each handled on its own. A
+//!    sweep with one axis is a line: boundary points lie halfway between neighbours.
+//! 3. Boundary points: Delaunay-triangulate the map points of a slice in that plane (spade, exact
+//!    predicates) and put a point at the midpoint of every edge whose two ends differ in phase.
+//!    The midpoint is taken in the scaled plane (so on a log axis it is the geometric mean).
+//!    Points are grouped by the pair of phases, sorted by name and joined with `|` (`f|fgc`).
+//! 4. Physical units: for shaking sweeps every map and boundary point also carries the container
+//!    motion `(A, omega)` of MODEL.md 4.1, computed from its `(Gamma, E*)` and the scene's
+//!    `E_cb`, `m`, `g` (Scene::drive_motion).
+
+use crate::scene::{DriveKind, Scene};
+use crate::sweep::file::{Axis, AxisKind};
+use serde::Serialize;
+use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
+use std::collections::BTreeMap;
+
+/// One job's contribution to the map.
+#[derive(Debug, Clone)]
+pub struct Observation {
+    /// The axis values of its grid point, in axis order.
+    pub coords: Vec<serde_json::Value>,
+    pub replica: i64,
+    pub phase: Option<String>,
+    /// The job's scene (for physical units).
+    pub scene: Scene,
+}
+
+/// How an axis of the plane is scaled.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct PlaneAxis {
+    /// Index of the axis in the sweep's axis list.
+    pub index: usize,
+    pub key: String,
+    pub label: String,
+    /// Whether the plane uses `log10` of the axis value.
+    pub log: bool,
+}
+
+impl PlaneAxis {
+    fn scale(&self, v: f64) -> f64 {
+        if self.log { v.log10() } else { v }
+    }
+    fn unscale(&self, s: f64) -> f64 {
+        if self.log { 10f64.powf(s) } else { s }
+    }
+}
+
+/// A grid point of the map with its majority phase.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct MapPoint {
+    /// All axis values of the point.
+    pub coords: Vec<serde_json::Value>,
+    /// Values on the plane's axes (unscaled, in the sweep's units).
+    pub x: f64,
+    pub y: f64,
+    pub phase: String,
+    /// The replicas' phases, replica order (`None`: no result).
+    pub votes: Vec<Option<String>>,
+    /// Whether the majority was a tie.
+    pub tie: bool,
+    /// Container amplitude `A` and angular frequency `omega` (shaking sweeps).
+    pub amplitude: Option<f64>,
+    pub omega: Option<f64>,
+}
+
+/// A boundary point: the midpoint of a Delaunay edge between two phases.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct BoundaryPoint {
+    /// The phase pair, sorted and joined with `|` (`f|fgc`).
+    pub pair: String,
+    /// Position on the plane's axes (unscaled, in the sweep's units).
+    pub x: f64,
+    pub y: f64,
+    /// The two map points of the edge (indices into [`Slice::points`]).
+    pub between: [usize; 2],
+    pub amplitude: Option<f64>,
+    pub omega: Option<f64>,
+}
+
+/// The map for one combination of the axes outside the plane.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Slice {
+    /// `(label, value)` of every axis outside the plane.
+    pub fixed: Vec<(String, serde_json::Value)>,
+    pub points: Vec<MapPoint>,
+    /// Boundary points grouped by phase pair.
+    pub boundaries: BTreeMap<String, Vec<BoundaryPoint>>,
+}
+
+/// The phase map of a sweep and its boundaries.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct PhaseMap {
+    pub x: Option<PlaneAxis>,
+    pub y: Option<PlaneAxis>,
+    /// Whether this is the `(E*, Gamma)` plane of a shaking sweep.
+    pub shaking: bool,
+    pub slices: Vec<Slice>,
+}
+
+/// Why a map cannot be made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoundaryError(pub String);
+
+impl std::fmt::Display for BoundaryError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BoundaryError {}
+
+/// Picks the plane's axes (see the module doc); `None` entries for sweeps with fewer axes.
+pub fn plane_axes(axes: &[Axis]) -> (Option<PlaneAxis>, Option<PlaneAxis>, bool) {
+    let make = |index: usize, log: bool| PlaneAxis {
+        index,
+        key: axes[index].key.clone(),
+        label: axes[index].label.clone(),
+        log,
+    };
+    let gamma = axes.iter().position(Axis::is_gamma);
+    let e_star = axes.iter().position(Axis::is_e_star);
+    if let (Some(g), Some(e)) = (gamma, e_star) {
+        return (Some(make(e, true)), Some(make(g, false)), true);
+    }
+    let numeric: Vec<usize> = (0..axes.len())
+        .filter(|&i| axes[i].values.iter().all(|v| v.as_f64().is_some()))
+        .collect();
+    let pick = |k: usize| {
+        numeric
+            .get(k)
+            .map(|&i| make(i, axes[i].kind == AxisKind::Log))
+    };
+    (pick(0), pick(1), false)
+}
+
+/// The majority phase of a point's votes (see the module doc for ties).
+pub fn majority(votes: &[Option<String>]) -> Option<(String, bool)> {
+    let mut count: BTreeMap<&str, (usize, usize)> = BTreeMap::new(); // phase -> (votes, first replica)
+    for (r, v) in votes.iter().enumerate() {
+        if let Some(p) = v {
+            let e = count.entry(p.as_str()).or_insert((0, r));
+            e.0 += 1;
+        }
+    }
+    let best = count.values().map(|c| c.0).max()?;
+    let tied: Vec<(&str, usize)> = count
+        .iter()
+        .filter(|(_, c)| c.0 == best)
+        .map(|(p, c)| (*p, c.1))
+        .collect();
+    let (phase, _) = tied.iter().min_by_key(|(_, first)| *first)?;
+    Some((phase.to_string(), tied.len() > 1))
+}
+
+/// `(A, omega)` of MODEL.md 4.1 at `(Gamma, E*)` for the given scene's `E_cb`, `m`, `g`.
+pub fn drive_at(scene: &Scene, gamma: f64, e_star: f64) -> Option<(f64, f64)> {
+    let mut s = scene.clone();
+    s.drive.kind = DriveKind::Sine;
+    s.drive.amplitude = None;
+    s.drive.omega = None;
+    s.drive.gamma = Some(gamma);
+    s.drive.e_star = Some(e_star);
+    s.drive_motion()
+}
+
+struct Vertex {
+    pos: Point2<f64>,
+    index: usize,
+}
+
+impl HasPosition for Vertex {
+    type Scalar = f64;
+    fn position(&self) -> Point2<f64> {
+        self.pos
+    }
+}
+
+/// Builds the phase map and its boundary points from a sweep's axes and jobs.
+pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, BoundaryError> {
+    let (x, y, shaking) = plane_axes(axes);
+    let in_plane = |i: usize| {
+        x.as_ref().is_some_and(|a| a.index == i) || y.as_ref().is_some_and(|a| a.index == i)
+    };
+    // Group the jobs: slice key (axes outside the plane) -> point key (all coords) -> votes.
+    type Votes<'a> = Vec<(i64, Option<String>, &'a Observation)>;
+    type Fixed = Vec<(String, serde_json::Value)>;
+    let mut slices: BTreeMap<String, (Fixed, BTreeMap<String, Votes>)> = BTreeMap::new();
+    let mut slice_order: Vec<String> = Vec::new();
+    let mut point_order: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    for job in jobs {
+        if job.coords.len() != axes.len() {
+            return Err(BoundaryError(format!(
+                "a job has {} coordinates for {} axes",
+                job.coords.len(),
+                axes.len()
+            )));
+        }
+        let fixed: Vec<(String, serde_json::Value)> = (0..axes.len())
+            .filter(|&i| !in_plane(i))
+            .map(|i| (axes[i].label.clone(), job.coords[i].clone()))
+            .collect();
+        let skey = serde_json::to_string(&fixed).expect("serializes");
+        let pkey = serde_json::to_string(&job.coords).expect("serializes");
+        if !slices.contains_key(&skey) {
+            slice_order.push(skey.clone());
+        }
+        let (_, points) = slices
+            .entry(skey.clone())
+            .or_insert_with(|| (fixed, BTreeMap::new()));
+        if !points.contains_key(&pkey) {
+            point_order
+                .entry(skey.clone())
+                .or_default()
+                .push(pkey.clone());
+        }
+        points
+            .entry(pkey)
+            .or_default()
+            .push((job.replica, job.phase.clone(), job));
+    }
+    let value = |job: &Observation, a: &Option<PlaneAxis>| -> Result<f64, BoundaryError> {
+        match a {
+            None => Ok(0.0),
+            Some(a) => {
+                let v = job.coords[a.index].as_f64().ok_or_else(|| {
+                    BoundaryError(format!("axis {} has a non-numeric value", a.label))
+                })?;
+                if a.log && v <= 0.0 {
+                    return Err(BoundaryError(format!(
+                        "axis {} is on a log scale but has the value {v}",
+                        a.label
+                    )));
+                }
+                Ok(v)
+            }
+        }
+    };
+    let motion = |scene: &Scene, xv: f64, yv: f64| -> (Option<f64>, Option<f64>) {
+        if !shaking {
+            return (None, None);
+        }
+        match drive_at(scene, yv, xv) {
+            Some((a, w)) => (Some(a), Some(w)),
+            None => (None, None),
+        }
+    };
+
+    let mut out = Vec::new();
+    for skey in &slice_order {
+        let (fixed, points) = &slices[skey];
+        let mut map_points = Vec::new();
+        let mut scenes = Vec::new();
+        for pkey in &point_order[skey] {
+            let mut votes = points[pkey].clone();
+            votes.sort_by_key(|v| v.0);
+            let phases: Vec<Option<String>> = votes.iter().map(|v| v.1.clone()).collect();
+            let Some((phase, tie)) = majority(&phases) else {
+                continue;
+            };
+            let job = votes[0].2;
+            let (xv, yv) = (value(job, &x)?, value(job, &y)?);
+            let (amplitude, omega) = motion(&job.scene, xv, yv);
+            map_points.push(MapPoint {
+                coords: job.coords.clone(),
+                x: xv,
+                y: yv,
+                phase,
+                votes: phases,
+                tie,
+                amplitude,
+                omega,
+            });
+            scenes.push(&job.scene);
+        }
+        let edges = match (&x, &y) {
+            (Some(xa), Some(ya)) => delaunay_edges(&map_points, xa, ya)?,
+            (Some(xa), None) => line_edges(&map_points, xa),
+            _ => Vec::new(),
+        };
+        let mut boundaries: BTreeMap<String, Vec<BoundaryPoint>> = BTreeMap::new();
+        for (i, j) in edges {
+            let (a, b) = (&map_points[i], &map_points[j]);
+            if a.phase == b.phase {
+                continue;
+            }
+            let mut pair = [a.phase.as_str(), b.phase.as_str()];
+            pair.sort();
+            let pair = pair.join("|");
+            let xv = x
+                .as_ref()
+                .map_or(0.0, |ax| ax.unscale(0.5 * (ax.scale(a.x) + ax.scale(b.x))));
+            let yv = y
+                .as_ref()
+                .map_or(0.0, |ay| ay.unscale(0.5 * (ay.scale(a.y) + ay.scale(b.y))));
+            let (amplitude, omega) = motion(scenes[i], xv, yv);
+            boundaries
+                .entry(pair.clone())
+                .or_default()
+                .push(BoundaryPoint {
+                    pair,
+                    x: xv,
+                    y: yv,
+                    between: [i.min(j), i.max(j)],
+                    amplitude,
+                    omega,
+                });
+        }
+        for list in boundaries.values_mut() {
+            list.sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
+        }
+        out.push(Slice {
+            fixed: fixed.clone(),
+            points: map_points,
+            boundaries,
+        });
+    }
+    Ok(PhaseMap {
+        x,
+        y,
+        shaking,
+        slices: out,
+    })
+}
+
+/// Undirected Delaunay edges `(i, j)`, `i < j`, of the map points in the scaled plane.
+fn delaunay_edges(
+    points: &[MapPoint],
+    xa: &PlaneAxis,
+    ya: &PlaneAxis,
+) -> Result<Vec<(usize, usize)>, BoundaryError> {
+    let mut tri: DelaunayTriangulation<Vertex> = DelaunayTriangulation::new();
+    for (index, p) in points.iter().enumerate() {
+        tri.insert(Vertex {
+            pos: Point2::new(xa.scale(p.x), ya.scale(p.y)),
+            index,
+        })
+        .map_err(|e| {
+            BoundaryError(format!(
+                "point ({}, {}) cannot be triangulated: {e:?}",
+                p.x, p.y
+            ))
+        })?;
+    }
+    let mut edges: Vec<(usize, usize)> = tri
+        .undirected_edges()
+        .map(|e| {
+            let [a, b] = e.vertices();
+            let (i, j) = (a.data().index, b.data().index);
+            (i.min(j), i.max(j))
+        })
+        .collect();
+    edges.sort();
+    Ok(edges)
+}
+
+/// Neighbours along a single axis.
+fn line_edges(points: &[MapPoint], xa: &PlaneAxis) -> Vec<(usize, usize)> {
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&i, &j| xa.scale(points[i].x).total_cmp(&xa.scale(points[j].x)));
+    order
+        .windows(2)
+        .map(|w| (w[0].min(w[1]), w[0].max(w[1])))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(s: &[Option<&str>]) -> Vec<Option<String>> {
+        s.iter().map(|x| x.map(str::to_string)).collect()
+    }
+
+    #[test]
+    fn majority_counts_votes_and_breaks_ties_by_the_first_replica() {
+        assert_eq!(
+            majority(&v(&[Some("g"), Some("f"), Some("g")])),
+            Some(("g".into(), false))
+        );
+        assert_eq!(
+            majority(&v(&[Some("g"), Some("f")])),
+            Some(("g".into(), true))
+        );
+        assert_eq!(
+            majority(&v(&[None, Some("sfc"), Some("f")])),
+            Some(("sfc".into(), true))
+        );
+        assert_eq!(majority(&v(&[None, None])), None);
+    }
+}

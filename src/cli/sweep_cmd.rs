@@ -1,0 +1,760 @@
+//! The sweep commands: `sweep run|resume|status|expand|job`, `boundaries`, `plot`, `export`.
+//! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
+//! unknown sweep), 1 any other error.
+
+use crate::boundary::{Observation, PhaseMap, phase_map};
+use crate::report::{export, plot_phase};
+use crate::store::{Store, StoreError, SweepRow};
+use crate::sweep::runner::{point_label, short};
+use crate::sweep::{JobSpec, RunOptions, SweepFile, run_job, run_sweeps};
+use clap::{Subcommand, ValueEnum};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Default database file, in the working directory.
+pub const DEFAULT_DB: &str = "wetgran.sqlite";
+
+/// `wetgran sweep ...`.
+#[derive(Debug, Subcommand)]
+pub enum SweepCommand {
+    /// Register a sweep file in the database and run its pending jobs.
+    ///
+    /// The sweep file (TOML) names a base scene, the axes (lists, linear or log ranges over any
+    /// scene key; gamma, e_star, e_d_star, f_max are short names), replicas and the run length
+    /// in driving periods; see sweeps/quickstart.toml. Every grid point and replica becomes a job
+    /// whose id is the hash of its canonical spec: jobs already computed (by this or any other
+    /// sweep in the database) are not run again. Each finished job is committed on its own, so
+    /// an interrupted run loses at most the jobs that were running; `sweep resume` continues it.
+    /// Progress: bars on a terminal, one line per finished job otherwise.
+    Run {
+        /// The sweep file.
+        file: PathBuf,
+        /// Database file (created if missing).
+        #[arg(long, default_value = DEFAULT_DB)]
+        db: PathBuf,
+        /// Worker threads, one simulation each (default: the available cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Put the failed jobs of this sweep back in the queue first.
+        #[arg(long)]
+        retry_failed: bool,
+    },
+    /// Continue interrupted sweeps: re-queue the jobs of runners that died, run what is pending.
+    ///
+    /// Jobs that were running under a process that no longer exists (same host) or whose
+    /// runner has not sent a heartbeat for 60 s are put back in the queue; finished jobs are
+    /// never recomputed. Without NAME every sweep in the database is continued.
+    Resume {
+        /// The sweep to continue (default: all).
+        name: Option<String>,
+        #[arg(long, default_value = DEFAULT_DB)]
+        db: PathBuf,
+        /// Worker threads (default: the available cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Put failed jobs back in the queue first.
+        #[arg(long)]
+        retry_failed: bool,
+    },
+    /// Per sweep: jobs by state, failures with their message, time spent and time left.
+    Status {
+        #[arg(long, default_value = DEFAULT_DB)]
+        db: PathBuf,
+    },
+    /// Print the jobs a sweep file expands to, without running anything.
+    ///
+    /// One JSON object per line: id, point, replica, coords, and with --specs the canonical job
+    /// spec (what `sweep job` runs).
+    Expand {
+        file: PathBuf,
+        /// Include each job's full canonical spec (what `sweep job` runs).
+        #[arg(long)]
+        specs: bool,
+    },
+    /// Estimate what a sweep costs from a few sampled jobs.
+    ///
+    /// Runs a few of its jobs (spread over the grid) for a few driving periods each, one at a
+    /// time, and scales the measured wall time per period to the sweep's run length and job
+    /// count. Writes nothing to any database.
+    Estimate {
+        file: PathBuf,
+        /// Driving periods to run per sampled job (after a transient of none).
+        #[arg(long, default_value_t = 2.0)]
+        periods: f64,
+        /// Number of jobs to sample.
+        #[arg(long, default_value_t = 6)]
+        samples: usize,
+        /// Cores the estimate is for (default: the available cores).
+        #[arg(long)]
+        cores: Option<usize>,
+    },
+    /// Run one job spec and print its result as JSON.
+    ///
+    /// The spec is JSON as printed by `sweep expand --specs` (a whole line or its `spec`); the
+    /// same function the workers call, for running a job on another machine.
+    Job {
+        /// A file with the job spec (`-` for standard input).
+        spec: PathBuf,
+    },
+}
+
+/// Output format of `boundaries`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BoundaryFormat {
+    Table,
+    Json,
+    Csv,
+}
+
+/// Output format of `export`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ExportFormat {
+    Csv,
+    Json,
+}
+
+enum Failure {
+    BadInput(String),
+    Other(String),
+}
+
+impl From<StoreError> for Failure {
+    fn from(e: StoreError) -> Self {
+        match e {
+            StoreError::NotSqlite { .. }
+            | StoreError::NotWetgran { .. }
+            | StoreError::Damaged { .. }
+            | StoreError::Missing { .. }
+            | StoreError::NoSuchSweep { .. } => Failure::BadInput(e.to_string()),
+            _ => Failure::Other(e.to_string()),
+        }
+    }
+}
+
+fn exit(r: Result<(), Failure>) -> ExitCode {
+    match r {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::BadInput(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Other(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn workers(jobs: Option<usize>) -> usize {
+    jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    })
+    .max(1)
+}
+
+/// Runs a `sweep` subcommand.
+pub fn sweep(cmd: SweepCommand) -> ExitCode {
+    exit(match cmd {
+        SweepCommand::Run {
+            file,
+            db,
+            jobs,
+            retry_failed,
+        } => sweep_run(&file, &db, workers(jobs), retry_failed),
+        SweepCommand::Resume {
+            name,
+            db,
+            jobs,
+            retry_failed,
+        } => sweep_resume(name.as_deref(), &db, workers(jobs), retry_failed),
+        SweepCommand::Status { db } => sweep_status(&db),
+        SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
+        SweepCommand::Job { spec } => sweep_job(&spec),
+        SweepCommand::Estimate {
+            file,
+            periods,
+            samples,
+            cores,
+        } => sweep_estimate(&file, periods, samples, workers(cores)),
+    })
+}
+
+fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>), Failure> {
+    let sweep = SweepFile::load(file).map_err(|e| Failure::BadInput(e.to_string()))?;
+    let (jobs, skipped) = sweep
+        .expand_with_skips()
+        .map_err(|e| Failure::BadInput(e.to_string()))?;
+    if let Some(first) = skipped.first() {
+        eprintln!(
+            "{}: left out {} grid point(s) whose scene is invalid (sweep.skip_invalid), e.g. {}",
+            file.display(),
+            skipped.len(),
+            first.reason
+        );
+    }
+    if jobs.is_empty() {
+        return Err(Failure::BadInput(format!(
+            "{}: the sweep has no valid grid point",
+            file.display()
+        )));
+    }
+    Ok((sweep, jobs))
+}
+
+fn sweep_run(file: &Path, db: &Path, jobs: usize, retry: bool) -> Result<(), Failure> {
+    // The file is checked in full before the database is touched.
+    let (sweep, expanded) = load_sweep(file)?;
+    let store = Store::open(db)?;
+    if let Ok(old) = store.sweep(&sweep.name)
+        && old.file != file.display().to_string()
+    {
+        eprintln!(
+            "sweep {}: registered from {} before, now from {}: its grid is replaced (finished \
+             jobs are kept and reused where their specs match)",
+            sweep.name,
+            old.file,
+            file.display()
+        );
+    }
+    let row = store.register_sweep(&sweep, &expanded)?;
+    run_and_report(&store, &[row], jobs, retry)
+}
+
+fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Result<(), Failure> {
+    let store = Store::open_existing(db)?;
+    let sweeps = match name {
+        Some(n) => vec![store.sweep(n)?],
+        None => store.sweeps()?,
+    };
+    if sweeps.is_empty() {
+        return Err(Failure::BadInput(format!(
+            "{}: no sweep in this database: start one with `wetgran sweep run FILE`",
+            db.display()
+        )));
+    }
+    run_and_report(&store, &sweeps, jobs, retry)
+}
+
+fn run_and_report(
+    store: &Store,
+    sweeps: &[SweepRow],
+    jobs: usize,
+    retry: bool,
+) -> Result<(), Failure> {
+    let summary = run_sweeps(
+        store,
+        sweeps,
+        &RunOptions {
+            jobs,
+            retry_failed: retry,
+            show_progress: true,
+        },
+    )?;
+    eprintln!(
+        "finished: {} job(s) done, {} failed{} in {:.1} s",
+        summary.done,
+        summary.failed,
+        if summary.discarded > 0 {
+            format!(", {} dropped (finished elsewhere first)", summary.discarded)
+        } else {
+            String::new()
+        },
+        summary.wall_seconds
+    );
+    for s in sweeps {
+        let c = store.counts(s.id)?;
+        if c.failed > 0 {
+            eprintln!(
+                "sweep {}: {} failed job(s): see `wetgran sweep status --db {}`; \
+                 `--retry-failed` runs them again",
+                s.name,
+                c.failed,
+                store.path().display()
+            );
+        }
+    }
+    Ok(())
+}
+
+fn duration_text(s: f64) -> String {
+    if s < 120.0 {
+        format!("{s:.1} s")
+    } else if s < 7200.0 {
+        format!("{:.1} min", s / 60.0)
+    } else if s < 3.0 * 86400.0 {
+        format!("{:.1} h", s / 3600.0)
+    } else {
+        format!("{:.1} days", s / 86400.0)
+    }
+}
+
+/// The text of `sweep status`.
+pub fn status_text(store: &Store) -> Result<String, StoreError> {
+    let mut out = String::new();
+    let sweeps = store.sweeps()?;
+    if sweeps.is_empty() {
+        let _ = writeln!(out, "{}: no sweeps yet", store.path().display());
+    }
+    let cores = workers(None);
+    for s in &sweeps {
+        let c = store.counts(s.id)?;
+        let points = store.points(s.id)?;
+        let _ = writeln!(
+            out,
+            "sweep {}  ({}; {} point(s) x {} replica(s))",
+            s.name,
+            s.file,
+            points.len() as u64 / s.replicas.max(1) as u64,
+            s.replicas
+        );
+        if let Some(d) = &s.description {
+            let _ = writeln!(out, "  {d}");
+        }
+        if let Some(cost) = &s.cost {
+            let _ = writeln!(out, "  cost: {cost}");
+        }
+        let _ = writeln!(
+            out,
+            "  jobs   {} total: {} done, {} running, {} pending, {} failed",
+            c.total(),
+            c.done,
+            c.running,
+            c.pending,
+            c.failed
+        );
+        let spent = store.time_spent(s.id)?;
+        let done_walls: Vec<f64> = points
+            .iter()
+            .filter(|p| p.status == "done")
+            .filter_map(|p| p.wall_seconds)
+            .collect();
+        let left = c.pending + c.running;
+        let estimate = if left == 0 {
+            "nothing left".to_string()
+        } else if done_walls.is_empty() {
+            "time left unknown until a job finishes".to_string()
+        } else {
+            let mean = done_walls.iter().sum::<f64>() / done_walls.len() as f64;
+            format!(
+                "about {} left on {cores} core(s) ({left} job(s) x {} mean)",
+                duration_text(mean * left as f64 / cores as f64),
+                duration_text(mean)
+            )
+        };
+        let _ = writeln!(
+            out,
+            "  time   {} spent in finished jobs; {estimate}",
+            duration_text(spent)
+        );
+        for p in points.iter().filter(|p| p.status == "failed") {
+            let _ = writeln!(
+                out,
+                "  failed {} (job {}, {} attempt(s)): {}",
+                point_label(s, &p.coords, p.replica),
+                &p.job_id[..12],
+                p.attempts,
+                p.last_error.as_deref().unwrap_or("no message")
+            );
+        }
+    }
+    Ok(out)
+}
+
+fn sweep_status(db: &Path) -> Result<(), Failure> {
+    let store = Store::open_existing(db)?;
+    print!("{}", status_text(&store)?);
+    Ok(())
+}
+
+fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
+    let (_, jobs) = load_sweep(file)?;
+    for j in &jobs {
+        let mut line = serde_json::json!({
+            "id": j.id, "point": j.point, "replica": j.replica, "coords": j.coords,
+        });
+        if specs {
+            line["spec"] = serde_json::from_str(&j.spec.canonical_json()).expect("valid JSON");
+        }
+        println!("{line}");
+    }
+    Ok(())
+}
+
+fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Result<(), Failure> {
+    if !(periods.is_finite() && periods > 0.0) || samples == 0 {
+        return Err(Failure::BadInput(
+            "--periods must be > 0 and --samples >= 1".to_string(),
+        ));
+    }
+    let (sweep, jobs) = load_sweep(file)?;
+    let picks: Vec<usize> = if samples >= jobs.len() {
+        (0..jobs.len()).collect()
+    } else if samples == 1 {
+        vec![jobs.len() / 2]
+    } else {
+        (0..samples)
+            .map(|k| (k as f64 * (jobs.len() - 1) as f64 / (samples - 1) as f64).round() as usize)
+            .collect()
+    };
+    println!(
+        "{}: {} job(s); sampling {} for {periods} driving period(s) each, one at a time",
+        file.display(),
+        jobs.len(),
+        picks.len()
+    );
+    let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
+    let mut per_period = Vec::new();
+    let mut full_periods = Vec::new();
+    for &k in &picks {
+        let job = &jobs[k];
+        let mut spec = job.spec.clone();
+        let period = spec.period();
+        full_periods.push(spec.scene.run.duration / period);
+        spec.scene.run.duration = periods * period;
+        spec.scene.observe.transient_periods = 0.0;
+        let t0 = std::time::Instant::now();
+        let outcome = run_job(&spec, &mut |_| {});
+        let wall = t0.elapsed().as_secs_f64();
+        let coords: Vec<String> = labels
+            .iter()
+            .zip(&job.coords)
+            .map(|(l, v)| match v.as_f64() {
+                Some(x) => format!("{l} = {}", short(x)),
+                None => format!("{l} = {v}"),
+            })
+            .collect();
+        match outcome {
+            Ok(r) => {
+                per_period.push(wall / periods);
+                println!(
+                    "  {:<40} {:>9.3} s per period  ({} events)",
+                    coords.join(", "),
+                    wall / periods,
+                    r.events
+                );
+            }
+            Err(e) => println!("  {:<40} failed: {e}", coords.join(", ")),
+        }
+    }
+    if per_period.is_empty() {
+        return Err(Failure::Other("every sampled job failed".to_string()));
+    }
+    let mean = per_period.iter().sum::<f64>() / per_period.len() as f64;
+    let max = per_period.iter().cloned().fold(0.0, f64::max);
+    let run_periods = full_periods.iter().sum::<f64>() / full_periods.len() as f64;
+    let total = mean * run_periods * jobs.len() as f64;
+    println!(
+        "estimate: {:.3} s per period on average (max {:.3}) x {} periods x {} jobs = {} of CPU, \
+         about {} on {cores} core(s)",
+        mean,
+        max,
+        short(run_periods),
+        jobs.len(),
+        duration_text(total),
+        duration_text(total / cores as f64)
+    );
+    println!(
+        "  (measured on the first {periods} period(s) from the initial state; the cost per period \
+         changes as a run settles, e.g. a bed resting on the plate gets dearer: sample more \
+         periods for a closer figure)"
+    );
+    Ok(())
+}
+
+fn sweep_job(path: &Path) -> Result<(), Failure> {
+    let text = if path.as_os_str() == "-" {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
+            .map_err(|e| Failure::Other(format!("reading standard input: {e}")))?;
+        s
+    } else {
+        std::fs::read_to_string(path)
+            .map_err(|e| Failure::BadInput(format!("{}: cannot read: {e}", path.display())))?
+    };
+    let origin = path.display().to_string();
+    // Accept a line of `sweep expand --specs` as well as a bare spec.
+    let value: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Failure::BadInput(format!("{origin}: not JSON: {e}")))?;
+    let spec_value = value.get("spec").cloned().unwrap_or(value);
+    let spec = JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)?;
+    let result = run_job(&spec, &mut |_| {}).map_err(|e| Failure::Other(e.to_string()))?;
+    let out = serde_json::json!({ "id": spec.id(), "result": result });
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).expect("serializes")
+    );
+    Ok(())
+}
+
+/// The phase map of a sweep, from its stored results.
+fn sweep_map(store: &Store, sweep: &SweepRow) -> Result<PhaseMap, Failure> {
+    let points = store.points(sweep.id)?;
+    let obs: Vec<Observation> = points
+        .into_iter()
+        .map(|p| Observation {
+            coords: p.coords,
+            replica: p.replica,
+            phase: p.phase,
+            scene: p.spec.scene,
+        })
+        .collect();
+    phase_map(&sweep.axes, &obs)
+        .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
+}
+
+fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>, Failure> {
+    Ok(match name {
+        Some(n) => vec![store.sweep(n)?],
+        None => store.sweeps()?,
+    })
+}
+
+/// `wetgran boundaries`.
+pub fn boundaries(db: &Path, name: Option<&str>, format: BoundaryFormat) -> ExitCode {
+    exit((|| {
+        let store = Store::open_existing(db)?;
+        let sweeps = select(&store, name)?;
+        let mut maps = Vec::new();
+        for s in &sweeps {
+            maps.push((s, sweep_map(&store, s)?));
+        }
+        match format {
+            BoundaryFormat::Json => {
+                let v: Vec<_> = maps
+                    .iter()
+                    .map(|(s, m)| serde_json::json!({"sweep": s.name, "map": m}))
+                    .collect();
+                println!("{}", serde_json::to_string_pretty(&v).expect("serializes"));
+            }
+            BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
+            BoundaryFormat::Table => print!("{}", boundaries_table(&maps)),
+        }
+        Ok(())
+    })())
+}
+
+fn opt_num(v: Option<f64>) -> String {
+    v.map(short).unwrap_or_default()
+}
+
+fn fixed_text(fixed: &[(String, serde_json::Value)]) -> String {
+    fixed
+        .iter()
+        .map(|(l, v)| format!("{l} = {v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
+    let mut out = String::from("sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega\n");
+    for (s, m) in maps {
+        let xl = m.x.as_ref().map(|a| a.key.clone()).unwrap_or_default();
+        let yl = m.y.as_ref().map(|a| a.key.clone()).unwrap_or_default();
+        for (k, slice) in m.slices.iter().enumerate() {
+            for p in &slice.points {
+                let _ = writeln!(
+                    out,
+                    "{},{k},point,{},{xl},{},{yl},{},{},{}",
+                    s.name,
+                    p.phase,
+                    p.x,
+                    p.y,
+                    p.amplitude.map(|v| v.to_string()).unwrap_or_default(),
+                    p.omega.map(|v| v.to_string()).unwrap_or_default()
+                );
+            }
+            for b in slice.boundaries.values().flatten() {
+                let _ = writeln!(
+                    out,
+                    "{},{k},boundary,{},{xl},{},{yl},{},{},{}",
+                    s.name,
+                    b.pair,
+                    b.x,
+                    b.y,
+                    b.amplitude.map(|v| v.to_string()).unwrap_or_default(),
+                    b.omega.map(|v| v.to_string()).unwrap_or_default()
+                );
+            }
+        }
+    }
+    out
+}
+
+fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
+    let mut out = String::new();
+    for (s, m) in maps {
+        let _ = writeln!(out, "sweep {}", s.name);
+        let (Some(xa), ya) = (&m.x, &m.y) else {
+            let _ = writeln!(out, "  no numeric axis: no phase map\n");
+            continue;
+        };
+        let ylabel = ya.as_ref().map(|a| a.label.as_str()).unwrap_or("");
+        for slice in &m.slices {
+            if !slice.fixed.is_empty() {
+                let _ = writeln!(out, "  slice {}", fixed_text(&slice.fixed));
+            }
+            if slice.points.is_empty() {
+                let _ = writeln!(out, "  no classified point yet\n");
+                continue;
+            }
+            // The map as a grid: rows = y (top: largest), columns = x.
+            let mut xs: Vec<f64> = slice.points.iter().map(|p| p.x).collect();
+            let mut ys: Vec<f64> = slice.points.iter().map(|p| p.y).collect();
+            xs.sort_by(f64::total_cmp);
+            xs.dedup();
+            ys.sort_by(f64::total_cmp);
+            ys.dedup();
+            let _ = writeln!(
+                out,
+                "  phase map ({} down, {} across{}):",
+                if ylabel.is_empty() { "-" } else { ylabel },
+                xa.label,
+                if slice.points.iter().any(|p| p.tie) {
+                    "; * = replicas tied"
+                } else {
+                    ""
+                }
+            );
+            for &yv in ys.iter().rev() {
+                let mut row = format!(
+                    "  {:>9} |",
+                    if ya.is_some() {
+                        short(yv)
+                    } else {
+                        String::new()
+                    }
+                );
+                for &xv in &xs {
+                    let cell = slice
+                        .points
+                        .iter()
+                        .find(|p| p.x == xv && p.y == yv)
+                        .map(|p| format!("{}{}", p.phase, if p.tie { "*" } else { "" }))
+                        .unwrap_or_else(|| ".".to_string());
+                    let _ = write!(row, " {cell:>7}");
+                }
+                let _ = writeln!(out, "{row}");
+            }
+            let mut axis = format!("  {:>9} +", "");
+            for _ in &xs {
+                axis.push_str("--------");
+            }
+            let _ = writeln!(out, "{axis}");
+            let mut labels = format!("  {:>9}  ", xa.label);
+            for &xv in &xs {
+                let _ = write!(labels, " {:>7}", short(xv));
+            }
+            let _ = writeln!(out, "{labels}");
+            if slice.boundaries.is_empty() {
+                let _ = writeln!(out, "  no boundary: every point has the same phase\n");
+                continue;
+            }
+            for (pair, list) in &slice.boundaries {
+                let _ = writeln!(out, "  boundary {pair} ({} point(s))", list.len());
+                let _ = writeln!(
+                    out,
+                    "    {:>10} {:>10} {:>10} {:>10}",
+                    xa.label,
+                    ylabel,
+                    if m.shaking { "A" } else { "" },
+                    if m.shaking { "omega" } else { "" }
+                );
+                for b in list {
+                    let _ = writeln!(
+                        out,
+                        "    {:>10} {:>10} {:>10} {:>10}",
+                        short(b.x),
+                        if ya.is_some() {
+                            short(b.y)
+                        } else {
+                            String::new()
+                        },
+                        opt_num(b.amplitude),
+                        opt_num(b.omega)
+                    );
+                }
+            }
+            let _ = writeln!(out);
+        }
+    }
+    out
+}
+
+/// `wetgran plot`.
+pub fn plot(db: &Path, name: Option<&str>, output: &Path) -> ExitCode {
+    exit((|| {
+        let store = Store::open_existing(db)?;
+        let sweep = match name {
+            Some(n) => store.sweep(n)?,
+            None => {
+                let mut all = store.sweeps()?;
+                all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
+                let last = all.pop().ok_or_else(|| {
+                    Failure::BadInput(format!("{}: no sweep in this database", db.display()))
+                })?;
+                if !all.is_empty() {
+                    eprintln!(
+                        "plotting sweep {} (the latest; choose with --sweep)",
+                        last.name
+                    );
+                }
+                last
+            }
+        };
+        let map = sweep_map(&store, &sweep)?;
+        let points = store.points(sweep.id)?;
+        let landmarks = points
+            .first()
+            .and_then(|p| plot_phase::Landmarks::of(&p.spec.scene));
+        let Some(slice) = map.slices.first() else {
+            return Err(Failure::BadInput(format!(
+                "sweep {}: no classified point to plot yet",
+                sweep.name
+            )));
+        };
+        if map.slices.len() > 1 {
+            eprintln!(
+                "sweep {} has {} slices (axes beyond the plane); plotting the first: {}",
+                sweep.name,
+                map.slices.len(),
+                fixed_text(&slice.fixed)
+            );
+        }
+        let title = format!("wetgran phase diagram: {}", sweep.name);
+        let svg = plot_phase::phase_svg(&map, slice, landmarks, &title)
+            .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))?;
+        std::fs::write(output, svg)
+            .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;
+        eprintln!("wrote {}", output.display());
+        Ok(())
+    })())
+}
+
+/// `wetgran export`.
+pub fn export(
+    db: &Path,
+    name: Option<&str>,
+    format: ExportFormat,
+    output: Option<&Path>,
+) -> ExitCode {
+    exit((|| {
+        let store = Store::open_existing(db)?;
+        let mut rows = Vec::new();
+        for s in select(&store, name)? {
+            rows.extend(export::rows(&s, &store.points(s.id)?));
+        }
+        let text = match format {
+            ExportFormat::Csv => export::to_csv(&rows),
+            ExportFormat::Json => export::to_json(&rows),
+        };
+        match output {
+            Some(p) => std::fs::write(p, text)
+                .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", p.display())))?,
+            None => print!("{text}"),
+        }
+        Ok(())
+    })())
+}

@@ -1,0 +1,343 @@
+//! The phase diagram as SVG (plotters): map points coloured by phase, boundary points, and for
+//! shaking sweeps the landmark lines of MODEL.md 4.1 and 8 drawn over, on `E*` (log axis)
+//! against `Gamma`:
+//! - `A = s_crit`: `Gamma = 2 E* E_cb / (m g s_crit)` (wet scenes),
+//! - `A = d`:      `Gamma = 2 E* E_cb / (m g d)` (with `m g d` in place of `E_cb` for `E_d*`),
+//! - Eq. 4.15:     `Gamma_C = 1 + F_B (1 - E*) / (M m g)`, never below `1 - 1/M`, with
+//!   `F_B = E_cb / s_crit` and `M` the number of layers, `N d / L_x` in 2D and
+//!   `N d^2 / (L_x L_y)` in 3D (wet scenes).
+
+use crate::boundary::{PhaseMap, PlaneAxis, Slice};
+use crate::scene::Scene;
+use plotters::coord::Shift;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::prelude::*;
+
+/// Colour of a phase label (unknown labels grey).
+pub fn phase_color(phase: &str) -> RGBColor {
+    match phase {
+        "s" => RGBColor(31, 119, 180),
+        "f" => RGBColor(44, 160, 44),
+        "g" => RGBColor(214, 39, 40),
+        "sfc" => RGBColor(148, 103, 189),
+        "sgc" => RGBColor(255, 127, 14),
+        "fgc" => RGBColor(140, 86, 75),
+        _ => RGBColor(127, 127, 127),
+    }
+}
+
+/// The theory lines of a shaking sweep, from its scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Landmarks {
+    /// Energy unit of the `E*` axis: `E_cb` (wet) or `m g d` (dry).
+    pub energy_unit: f64,
+    pub mass: f64,
+    pub gravity: f64,
+    pub diameter: f64,
+    /// `s_crit` and `F_B = E_cb / s_crit` of a wet scene.
+    pub wet: Option<(f64, f64)>,
+    /// Number of layers `M`.
+    pub layers: f64,
+}
+
+impl Landmarks {
+    /// Landmarks of a scene (`None` without gravity).
+    pub fn of(scene: &Scene) -> Option<Landmarks> {
+        if scene.gravity <= 0.0 {
+            return None;
+        }
+        let m = scene.particles.mass;
+        let g = scene.gravity;
+        let d = scene.particles.diameter;
+        let wet = scene.is_wet() && scene.e_cb() > 0.0;
+        let size = &scene.container.size;
+        let lateral: f64 = size[..size.len() - 1].iter().product();
+        let layers = scene.particles.count as f64 * d.powi(scene.dimension as i32 - 1) / lateral;
+        Some(Landmarks {
+            energy_unit: if wet { scene.e_cb() } else { m * g * d },
+            mass: m,
+            gravity: g,
+            diameter: d,
+            wet: wet.then(|| (scene.s_crit(), scene.e_cb() / scene.s_crit())),
+            layers,
+        })
+    }
+
+    /// `Gamma` on the line where the drive amplitude equals `a` (MODEL.md 4.1).
+    pub fn gamma_at_amplitude(&self, e_star: f64, a: f64) -> f64 {
+        2.0 * e_star * self.energy_unit / (self.mass * self.gravity * a)
+    }
+
+    /// `Gamma_C` of Eq. 4.15, floored at `1 - 1/M` (wet scenes).
+    pub fn gamma_c(&self, e_star: f64) -> Option<f64> {
+        let (_, f_b) = self.wet?;
+        let m = self.layers;
+        let g = 1.0 + f_b * (1.0 - e_star) / (m * self.mass * self.gravity);
+        Some(g.max(1.0 - 1.0 / m))
+    }
+}
+
+/// A `(label, points)` line, already clipped to the y range (split where it leaves it).
+type Line = (String, RGBColor, Vec<Vec<(f64, f64)>>);
+
+fn clipped(xs: &[f64], f: impl Fn(f64) -> Option<f64>, y0: f64, y1: f64) -> Vec<Vec<(f64, f64)>> {
+    let mut parts = vec![Vec::new()];
+    for &x in xs {
+        match f(x) {
+            Some(y) if y >= y0 && y <= y1 && y.is_finite() => {
+                parts.last_mut().expect("non-empty").push((x, y))
+            }
+            _ => {
+                if !parts.last().expect("non-empty").is_empty() {
+                    parts.push(Vec::new());
+                }
+            }
+        }
+    }
+    parts.retain(|p| p.len() > 1);
+    parts
+}
+
+fn range_of(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return if log { (0.1, 10.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        let (a, b) = (lo.log10(), hi.log10());
+        let pad = ((b - a) * 0.06).max(0.1);
+        (10f64.powf(a - pad), 10f64.powf(b + pad))
+    } else {
+        let pad = ((hi - lo) * 0.06).max(if hi == 0.0 { 0.1 } else { hi.abs() * 0.05 });
+        (lo - pad, hi + pad)
+    }
+}
+
+/// Draws one slice of a phase map as SVG. `landmarks` adds the theory lines (shaking sweeps).
+pub fn phase_svg(
+    map: &PhaseMap,
+    slice: &Slice,
+    landmarks: Option<Landmarks>,
+    title: &str,
+) -> Result<String, String> {
+    let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
+        return Err("a phase diagram needs two numeric axes".to_string());
+    };
+    let x_range = range_of(slice.points.iter().map(|p| p.x), xa.log);
+    let y_range = range_of(slice.points.iter().map(|p| p.y), ya.log);
+    // Headroom above the points for the legend (upper left).
+    let y_range = if ya.log {
+        (y_range.0, y_range.1 * (y_range.1 / y_range.0).powf(0.3))
+    } else {
+        (y_range.0, y_range.1 + 0.3 * (y_range.1 - y_range.0))
+    };
+    let mut lines: Vec<Line> = Vec::new();
+    if let (Some(l), true) = (landmarks, map.shaking) {
+        let n = 300;
+        let xs: Vec<f64> = (0..=n)
+            .map(|k| {
+                let t = k as f64 / n as f64;
+                if xa.log {
+                    10f64.powf(x_range.0.log10() + t * (x_range.1.log10() - x_range.0.log10()))
+                } else {
+                    x_range.0 + t * (x_range.1 - x_range.0)
+                }
+            })
+            .collect();
+        let (y0, y1) = y_range;
+        if let Some((s_crit, _)) = l.wet {
+            lines.push((
+                "A = s_crit".to_string(),
+                RGBColor(0, 0, 0),
+                clipped(&xs, |e| Some(l.gamma_at_amplitude(e, s_crit)), y0, y1),
+            ));
+        }
+        lines.push((
+            "A = d".to_string(),
+            RGBColor(90, 90, 90),
+            clipped(&xs, |e| Some(l.gamma_at_amplitude(e, l.diameter)), y0, y1),
+        ));
+        if l.wet.is_some() {
+            lines.push((
+                format!("Eq. 4.15 (M = {:.2})", l.layers),
+                RGBColor(23, 190, 207),
+                clipped(&xs, |e| l.gamma_c(e), y0, y1),
+            ));
+        }
+    }
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 640)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let x_desc = if xa.log {
+            format!("{} (log scale)", xa.label)
+        } else {
+            xa.label.clone()
+        };
+        let y_desc = if ya.log {
+            format!("{} (log scale)", ya.label)
+        } else {
+            ya.label.clone()
+        };
+        let x = x_range.0..x_range.1;
+        let y = y_range.0..y_range.1;
+        match (xa.log, ya.log) {
+            (true, true) => draw(
+                &root,
+                x.log_scale(),
+                y.log_scale(),
+                slice,
+                &lines,
+                title,
+                &x_desc,
+                &y_desc,
+            ),
+            (true, false) => draw(
+                &root,
+                x.log_scale(),
+                y,
+                slice,
+                &lines,
+                title,
+                &x_desc,
+                &y_desc,
+            ),
+            (false, true) => draw(
+                &root,
+                x,
+                y.log_scale(),
+                slice,
+                &lines,
+                title,
+                &x_desc,
+                &y_desc,
+            ),
+            (false, false) => draw(&root, x, y, slice, &lines, title, &x_desc, &y_desc),
+        }?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
+
+fn draw<XR, YR>(
+    root: &DrawingArea<SVGBackend, Shift>,
+    x: XR,
+    y: YR,
+    slice: &Slice,
+    lines: &[Line],
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+) -> Result<(), String>
+where
+    XR: AsRangedCoord<Value = f64>,
+    YR: AsRangedCoord<Value = f64>,
+    XR::CoordDescType: ValueFormatter<f64>,
+    YR::CoordDescType: ValueFormatter<f64>,
+{
+    let err = |e: DrawingAreaErrorKind<_>| e.to_string();
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x, y)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .light_line_style(WHITE)
+        .draw()
+        .map_err(err)?;
+    for (label, color, parts) in lines {
+        let color = *color;
+        for (k, part) in parts.iter().enumerate() {
+            let s = chart
+                .draw_series(LineSeries::new(part.iter().copied(), color.stroke_width(2)))
+                .map_err(err)?;
+            if k == 0 {
+                s.label(label.as_str()).legend(move |(px, py)| {
+                    PathElement::new(vec![(px, py), (px + 18, py)], color.stroke_width(2))
+                });
+            }
+        }
+    }
+    let mut phases: Vec<&str> = slice.points.iter().map(|p| p.phase.as_str()).collect();
+    phases.sort();
+    phases.dedup();
+    for phase in phases {
+        let color = phase_color(phase);
+        chart
+            .draw_series(
+                slice
+                    .points
+                    .iter()
+                    .filter(|p| p.phase == phase)
+                    .map(|p| Circle::new((p.x, p.y), 6, color.filled())),
+            )
+            .map_err(err)?
+            .label(phase)
+            .legend(move |(px, py)| Circle::new((px + 9, py), 5, color.filled()));
+    }
+    let boundary: Vec<(f64, f64)> = slice
+        .boundaries
+        .values()
+        .flatten()
+        .map(|b| (b.x, b.y))
+        .collect();
+    if !boundary.is_empty() {
+        chart
+            .draw_series(
+                boundary
+                    .iter()
+                    .map(|&(bx, by)| Cross::new((bx, by), 4, BLACK.stroke_width(2))),
+            )
+            .map_err(err)?
+            .label("boundary points")
+            .legend(|(px, py)| Cross::new((px + 9, py), 4, BLACK.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.85))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// The plane axis labels, for callers that describe a plot.
+pub fn axis_names(map: &PhaseMap) -> Option<(&PlaneAxis, &PlaneAxis)> {
+    Some((map.x.as_ref()?, map.y.as_ref()?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn landmark_lines_follow_model_4_1_and_eq_4_15() {
+        // Standard wet 2D system: E_cb = 0.2844, s_crit = 0.0711, F_B = 4, N = 1200, L_x = 400.
+        let l = Landmarks {
+            energy_unit: 0.2844,
+            mass: 1.0,
+            gravity: 1.0,
+            diameter: 1.0,
+            wet: Some((0.0711, 4.0)),
+            layers: 3.0,
+        };
+        // On A = s_crit the amplitude from (Gamma, E*) is s_crit: A = v_w^2 / (Gamma g).
+        let e = 2.5;
+        let g = l.gamma_at_amplitude(e, 0.0711);
+        let v_w2 = 2.0 * e * 0.2844;
+        assert!((v_w2 / g - 0.0711).abs() < 1e-12);
+        // Eq. 4.15 at E* = 0: 1 + F_B / (M m g); at large E* the floor 1 - 1/M.
+        assert!((l.gamma_c(0.0).unwrap() - (1.0 + 4.0 / 3.0)).abs() < 1e-12);
+        assert!((l.gamma_c(100.0).unwrap() - (1.0 - 1.0 / 3.0)).abs() < 1e-12);
+    }
+}

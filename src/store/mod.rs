@@ -1,0 +1,995 @@
+//! The SQLite store (sqlx): sweeps, content-addressed jobs, results, and the claim/heartbeat
+//! protocol that lets several runners share one database file.
+//!
+//! Opening: a file that is not SQLite, an SQLite database of another program, or a damaged one is
+//! refused with a message naming the file, before anything is written to it. A new file gets the
+//! wetgran application id (SQLite header offset 68, written before WAL mode so it always lands
+//! in the main file), then WAL mode, then the embedded migrations of `migrations/`. Every
+//! connection waits up to [`BUSY_TIMEOUT`] for a lock held by another process.
+//!
+//! Async stays inside: the store owns a one-thread tokio runtime and a one-connection pool, and
+//! every method blocks on it. Only the thread that owns the store talks to the database.
+//!
+//! Claims and crashes:
+//! - A claim is one `UPDATE ... WHERE id = (SELECT ... status = 'pending' LIMIT 1) AND status =
+//!   'pending' RETURNING` inside a `BEGIN IMMEDIATE` transaction: two runners cannot claim the
+//!   same job.
+//! - A runner owns its jobs under an owner name `host:pid:nonce` and refreshes their heartbeat
+//!   every [`HEARTBEAT_INTERVAL`].
+//! - A running job is orphaned when its heartbeat is older than [`STALE_AFTER`] (twelve missed
+//!   heartbeats), or at once when its owner ran on this host and that process no longer exists
+//!   (Linux, `/proc/PID`). Orphans are re-queued when a runner starts (`sweep run`,
+//!   `sweep resume`).
+//! - A finished job is committed on its own transaction (job row, result row, run row); a crash
+//!   loses at most the jobs that were running. A result arriving for a job that another runner
+//!   already finished is discarded, so a job never has two results.
+
+use crate::sweep::file::{Axis, SweepFile};
+use crate::sweep::job::JobResult;
+use crate::sweep::spec::{JobSpec, SweepJob};
+use sqlx::sqlite::{SqliteConnectOptions, SqlitePool, SqlitePoolOptions};
+use sqlx::{Row, SqliteConnection};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+/// SQLite `application_id` of a wetgran database ("WGRN").
+pub const APPLICATION_ID: i32 = 0x5747_524e;
+/// How long a statement waits for another process's lock.
+pub const BUSY_TIMEOUT: Duration = Duration::from_secs(30);
+/// How often a runner refreshes the heartbeat of its running jobs.
+pub const HEARTBEAT_INTERVAL: Duration = Duration::from_secs(5);
+/// A running job whose heartbeat is older than this is re-queued.
+pub const STALE_AFTER: Duration = Duration::from_secs(60);
+
+static MIGRATOR: sqlx::migrate::Migrator = sqlx::migrate!("./migrations");
+
+/// Why the store could not do what was asked.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StoreError {
+    /// The file exists but is not an SQLite database.
+    NotSqlite { path: String, detail: String },
+    /// An SQLite database, but not one of wetgran's.
+    NotWetgran { path: String, detail: String },
+    /// The database is damaged (failed integrity check or unreadable pages).
+    Damaged { path: String, detail: String },
+    /// No database at the path (commands that only read).
+    Missing { path: String },
+    /// A name that is not in the database.
+    NoSuchSweep { path: String, name: String },
+    /// Any other database error.
+    Db { path: String, detail: String },
+}
+
+impl fmt::Display for StoreError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StoreError::NotSqlite { path, detail } => write!(
+                f,
+                "{path}: not a wetgran database: the file is not SQLite ({detail}); it was left \
+                 unchanged. Give another path with --db"
+            ),
+            StoreError::NotWetgran { path, detail } => write!(
+                f,
+                "{path}: not a wetgran database: an SQLite database of another program \
+                 ({detail}); it was left unchanged. Give another path with --db"
+            ),
+            StoreError::Damaged { path, detail } => write!(
+                f,
+                "{path}: the wetgran database is damaged ({detail}); it was left unchanged. \
+                 Restore a copy, or start a new database with --db"
+            ),
+            StoreError::Missing { path } => write!(
+                f,
+                "{path}: no database here: run `wetgran sweep run FILE` first, or give the \
+                 database with --db"
+            ),
+            StoreError::NoSuchSweep { path, name } => {
+                write!(f, "{path}: no sweep named `{name}` in this database")
+            }
+            StoreError::Db { path, detail } => write!(f, "{path}: database error: {detail}"),
+        }
+    }
+}
+
+impl std::error::Error for StoreError {}
+
+/// A sweep as registered.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepRow {
+    pub id: i64,
+    pub name: String,
+    pub file: String,
+    pub description: Option<String>,
+    pub cost: Option<String>,
+    pub axes: Vec<Axis>,
+    pub replicas: u32,
+    pub created_at: f64,
+    pub updated_at: f64,
+}
+
+/// A job this runner claimed.
+#[derive(Debug, Clone)]
+pub struct Claim {
+    pub job_id: String,
+    /// The row of this attempt in the `runs` table.
+    pub run_id: i64,
+    pub spec: JobSpec,
+    pub sweep: String,
+    pub point: i64,
+    pub replica: i64,
+    pub coords: Vec<serde_json::Value>,
+}
+
+/// Jobs of a sweep by state (counted per grid point and replica).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct StateCounts {
+    pub pending: u64,
+    pub running: u64,
+    pub done: u64,
+    pub failed: u64,
+}
+
+impl StateCounts {
+    pub fn total(&self) -> u64 {
+        self.pending + self.running + self.done + self.failed
+    }
+}
+
+/// One job of a sweep with everything known about it (for boundaries, plots, exports).
+#[derive(Debug, Clone)]
+pub struct PointRow {
+    pub point: i64,
+    pub replica: i64,
+    pub coords: Vec<serde_json::Value>,
+    pub job_id: String,
+    pub status: String,
+    pub spec: JobSpec,
+    pub attempts: i64,
+    pub last_error: Option<String>,
+    pub phase: Option<String>,
+    pub decided_on: Option<serde_json::Value>,
+    pub observables: Option<serde_json::Value>,
+    pub simulated_time: Option<f64>,
+    pub wall_seconds: Option<f64>,
+    pub events: Option<i64>,
+    pub finished_at: Option<f64>,
+    /// The runner that committed the result.
+    pub result_owner: Option<String>,
+}
+
+/// An open wetgran database.
+#[derive(Debug)]
+pub struct Store {
+    rt: tokio::runtime::Runtime,
+    pool: SqlitePool,
+    path: PathBuf,
+    owner: String,
+}
+
+/// Seconds since the Unix epoch.
+pub fn now() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
+fn host_name() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty() && !s.contains(':'))
+        .unwrap_or_else(|| "localhost".to_string())
+}
+
+/// A new owner name `host:pid:nonce` (the nonce tells apart two stores of one process).
+fn new_owner() -> String {
+    use std::hash::{BuildHasher, Hasher};
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u128(
+        SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0),
+    );
+    format!(
+        "{}:{}:{:08x}",
+        host_name(),
+        std::process::id(),
+        h.finish() as u32
+    )
+}
+
+/// Whether an owner name belongs to a process of this host that no longer exists.
+fn owner_is_dead(owner: &str) -> bool {
+    let mut parts = owner.split(':');
+    let (Some(host), Some(pid)) = (parts.next(), parts.next()) else {
+        return false;
+    };
+    if host != host_name() || !cfg!(target_os = "linux") {
+        return false;
+    }
+    match pid.parse::<u32>() {
+        Ok(pid) => !Path::new(&format!("/proc/{pid}")).exists(),
+        Err(_) => false,
+    }
+}
+
+/// What is at a path before it is opened.
+enum Existing {
+    New,
+    Ours,
+    OtherSqlite,
+}
+
+fn inspect(path: &Path) -> Result<Existing, StoreError> {
+    let p = path.display().to_string();
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Existing::New),
+        Err(e) => {
+            return Err(StoreError::Db {
+                path: p,
+                detail: format!("cannot read the file: {e}"),
+            });
+        }
+    };
+    if bytes.is_empty() {
+        return Ok(Existing::New);
+    }
+    if bytes.len() < 100 || &bytes[..16] != b"SQLite format 3\0" {
+        let detail = if bytes.len() < 100 {
+            format!("{} bytes, shorter than an SQLite header", bytes.len())
+        } else {
+            "no SQLite header".to_string()
+        };
+        return Err(StoreError::NotSqlite { path: p, detail });
+    }
+    let app_id = i32::from_be_bytes([bytes[68], bytes[69], bytes[70], bytes[71]]);
+    if app_id == APPLICATION_ID {
+        Ok(Existing::Ours)
+    } else if app_id != 0 {
+        Err(StoreError::NotWetgran {
+            path: p,
+            detail: format!("application id {app_id:#x}"),
+        })
+    } else {
+        Ok(Existing::OtherSqlite)
+    }
+}
+
+impl Store {
+    /// Opens (creating if needed) the database at `path` and applies the migrations.
+    pub fn open(path: &Path) -> Result<Store, StoreError> {
+        Self::open_impl(path, true)
+    }
+
+    /// Opens an existing database; a missing file is an error (nothing is created).
+    pub fn open_existing(path: &Path) -> Result<Store, StoreError> {
+        Self::open_impl(path, false)
+    }
+
+    fn open_impl(path: &Path, create: bool) -> Result<Store, StoreError> {
+        // Two runners starting at once on a new file race to initialise it: the loser's
+        // journal-mode switch or migration fails (its transaction rolls back) and it tries again,
+        // then finding the file initialised.
+        let mut attempt = 0;
+        loop {
+            match Self::open_once(path, create) {
+                Err(StoreError::Db { .. }) if attempt < 6 => {
+                    attempt += 1;
+                    std::thread::sleep(Duration::from_millis(50 * attempt));
+                }
+                other => return other,
+            }
+        }
+    }
+
+    fn open_once(path: &Path, create: bool) -> Result<Store, StoreError> {
+        let p = path.display().to_string();
+        let existing = inspect(path)?;
+        if matches!(existing, Existing::New) && !create {
+            return Err(StoreError::Missing { path: p });
+        }
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .map_err(|e| StoreError::Db {
+                path: p.clone(),
+                detail: format!("cannot start the async runtime: {e}"),
+            })?;
+        let db = |e: sqlx::Error| StoreError::Db {
+            path: p.clone(),
+            detail: e.to_string(),
+        };
+        let opts = SqliteConnectOptions::new()
+            .filename(path)
+            .create_if_missing(true)
+            .busy_timeout(BUSY_TIMEOUT)
+            .foreign_keys(true);
+        let pool = rt
+            .block_on(
+                SqlitePoolOptions::new()
+                    .max_connections(1)
+                    .min_connections(0)
+                    .acquire_timeout(BUSY_TIMEOUT * 2)
+                    .connect_with(opts),
+            )
+            .map_err(db)?;
+        let store = Store {
+            rt,
+            pool,
+            path: path.to_path_buf(),
+            owner: new_owner(),
+        };
+        store.prepare(existing)?;
+        Ok(store)
+    }
+
+    /// Checks (read-only) what is in the file, then initialises and migrates it.
+    fn prepare(&self, existing: Existing) -> Result<(), StoreError> {
+        let p = self.path.display().to_string();
+        let damaged = |e: sqlx::Error| StoreError::Damaged {
+            path: p.clone(),
+            detail: e.to_string(),
+        };
+        self.rt.block_on(async {
+            let mut conn = self.pool.acquire().await.map_err(|e| StoreError::Db {
+                path: p.clone(),
+                detail: e.to_string(),
+            })?;
+            let conn: &mut SqliteConnection = &mut conn;
+            match existing {
+                Existing::OtherSqlite => {
+                    let tables: Vec<String> = sqlx::query_scalar(
+                        "SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name",
+                    )
+                    .fetch_all(&mut *conn)
+                    .await
+                    .map_err(damaged)?;
+                    if !tables.is_empty() {
+                        return Err(StoreError::NotWetgran {
+                            path: p.clone(),
+                            detail: format!("tables {}", tables.join(", ")),
+                        });
+                    }
+                }
+                Existing::Ours => {
+                    let check: Vec<String> = sqlx::query_scalar("PRAGMA quick_check")
+                        .fetch_all(&mut *conn)
+                        .await
+                        .map_err(damaged)?;
+                    if check.first().map(String::as_str) != Some("ok") {
+                        return Err(StoreError::Damaged {
+                            path: p.clone(),
+                            detail: format!("integrity check: {}", check.join("; ")),
+                        });
+                    }
+                }
+                Existing::New => {}
+            }
+            let db = |e: sqlx::Error| StoreError::Db {
+                path: p.clone(),
+                detail: e.to_string(),
+            };
+            if !matches!(existing, Existing::Ours) {
+                // Before WAL mode, so that the id is written to the main file at once.
+                sqlx::query("PRAGMA application_id = 1464291918")
+                    .execute(&mut *conn)
+                    .await
+                    .map_err(db)?;
+            }
+            let mode: String = sqlx::query_scalar("PRAGMA journal_mode = WAL")
+                .fetch_one(&mut *conn)
+                .await
+                .map_err(db)?;
+            if !mode.eq_ignore_ascii_case("wal") {
+                return Err(StoreError::Db {
+                    path: p.clone(),
+                    detail: format!("cannot switch to WAL mode (journal mode is {mode})"),
+                });
+            }
+            MIGRATOR.run(&mut *conn).await.map_err(|e| StoreError::Db {
+                path: p.clone(),
+                detail: format!("applying the migrations: {e}"),
+            })?;
+            Ok(())
+        })
+    }
+
+    /// The database file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// This runner's owner name (`host:pid:nonce`).
+    pub fn owner(&self) -> &str {
+        &self.owner
+    }
+
+    fn db(&self, e: sqlx::Error) -> StoreError {
+        StoreError::Db {
+            path: self.path.display().to_string(),
+            detail: e.to_string(),
+        }
+    }
+
+    /// Registers (or re-registers) a sweep and its jobs in one transaction. Jobs already in the
+    /// database (same id, from any sweep) are shared, never duplicated; the sweep's point list is
+    /// replaced by the new expansion.
+    pub fn register_sweep(
+        &self,
+        file: &SweepFile,
+        jobs: &[SweepJob],
+    ) -> Result<SweepRow, StoreError> {
+        let axes = serde_json::to_string(&file.axes).expect("axes serialize");
+        let t = now();
+        self.rt.block_on(async {
+            let mut tx = self
+                .pool
+                .begin_with("BEGIN IMMEDIATE")
+                .await
+                .map_err(|e| self.db(e))?;
+            let id: i64 = sqlx::query_scalar(
+                "INSERT INTO sweeps (name, file, source, description, cost, axes, replicas, \
+                 created_at, updated_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?8) \
+                 ON CONFLICT (name) DO UPDATE SET file = ?2, source = ?3, description = ?4, \
+                 cost = ?5, axes = ?6, replicas = ?7, updated_at = ?8 RETURNING id",
+            )
+            .bind(&file.name)
+            .bind(file.path.display().to_string())
+            .bind(&file.text)
+            .bind(&file.description)
+            .bind(&file.cost)
+            .bind(&axes)
+            .bind(file.replicas as i64)
+            .bind(t)
+            .fetch_one(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?;
+            sqlx::query("DELETE FROM sweep_points WHERE sweep_id = ?1")
+                .bind(id)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            for job in jobs {
+                sqlx::query(
+                    "INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)",
+                )
+                .bind(&job.id)
+                .bind(job.spec.canonical_json())
+                .bind(t)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+                sqlx::query(
+                    "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
+                     VALUES (?1, ?2, ?3, ?4, ?5)",
+                )
+                .bind(id)
+                .bind(job.point as i64)
+                .bind(job.replica as i64)
+                .bind(serde_json::to_string(&job.coords).expect("coords serialize"))
+                .bind(&job.id)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            }
+            tx.commit().await.map_err(|e| self.db(e))?;
+            Ok(())
+        })?;
+        self.sweep(&file.name)
+    }
+
+    /// All sweeps, oldest first.
+    pub fn sweeps(&self) -> Result<Vec<SweepRow>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query(
+                    "SELECT id, name, file, description, cost, axes, replicas, created_at, \
+                     updated_at FROM sweeps ORDER BY id",
+                )
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        rows.iter()
+            .map(|r| {
+                let axes: String = r.get("axes");
+                Ok(SweepRow {
+                    id: r.get("id"),
+                    name: r.get("name"),
+                    file: r.get("file"),
+                    description: r.get("description"),
+                    cost: r.get("cost"),
+                    axes: serde_json::from_str(&axes).map_err(|e| StoreError::Damaged {
+                        path: self.path.display().to_string(),
+                        detail: format!("axes of a sweep are not readable: {e}"),
+                    })?,
+                    replicas: r.get::<i64, _>("replicas") as u32,
+                    created_at: r.get("created_at"),
+                    updated_at: r.get("updated_at"),
+                })
+            })
+            .collect()
+    }
+
+    /// The sweep with this name.
+    pub fn sweep(&self, name: &str) -> Result<SweepRow, StoreError> {
+        self.sweeps()?
+            .into_iter()
+            .find(|s| s.name == name)
+            .ok_or_else(|| StoreError::NoSuchSweep {
+                path: self.path.display().to_string(),
+                name: name.to_string(),
+            })
+    }
+
+    /// Re-queues orphaned running jobs (see the module doc); returns their ids.
+    pub fn requeue_orphans(&self) -> Result<Vec<String>, StoreError> {
+        let stale_before = now() - STALE_AFTER.as_secs_f64();
+        self.rt.block_on(async {
+            let running: Vec<(String, Option<String>, Option<f64>)> =
+                sqlx::query_as("SELECT id, owner, heartbeat FROM jobs WHERE status = 'running'")
+                    .fetch_all(&self.pool)
+                    .await
+                    .map_err(|e| self.db(e))?;
+            let mut requeued = Vec::new();
+            for (id, owner, heartbeat) in running {
+                let owner = owner.unwrap_or_default();
+                if owner == self.owner {
+                    continue;
+                }
+                let stale = heartbeat.is_none_or(|h| h < stale_before);
+                if !(stale || owner_is_dead(&owner)) {
+                    continue;
+                }
+                let mut tx = self
+                    .pool
+                    .begin_with("BEGIN IMMEDIATE")
+                    .await
+                    .map_err(|e| self.db(e))?;
+                let n = sqlx::query(
+                    "UPDATE jobs SET status = 'pending', owner = NULL, heartbeat = NULL \
+                     WHERE id = ?1 AND status = 'running' AND owner = ?2",
+                )
+                .bind(&id)
+                .bind(&owner)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?
+                .rows_affected();
+                if n == 1 {
+                    sqlx::query(
+                        "UPDATE runs SET outcome = 'orphaned', ended_at = ?3 \
+                         WHERE job_id = ?1 AND owner = ?2 AND outcome IS NULL",
+                    )
+                    .bind(&id)
+                    .bind(&owner)
+                    .bind(now())
+                    .execute(&mut *tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+                    requeued.push(id);
+                }
+                tx.commit().await.map_err(|e| self.db(e))?;
+            }
+            Ok(requeued)
+        })
+    }
+
+    /// Re-queues the failed jobs of the given sweeps; returns how many.
+    pub fn retry_failed(&self, sweep_ids: &[i64]) -> Result<u64, StoreError> {
+        let mut total = 0;
+        for &sid in sweep_ids {
+            total += self
+                .rt
+                .block_on(
+                    sqlx::query(
+                        "UPDATE jobs SET status = 'pending', owner = NULL, heartbeat = NULL \
+                         WHERE status = 'failed' AND id IN \
+                         (SELECT job_id FROM sweep_points WHERE sweep_id = ?1)",
+                    )
+                    .bind(sid)
+                    .execute(&self.pool),
+                )
+                .map_err(|e| self.db(e))?
+                .rows_affected();
+        }
+        Ok(total)
+    }
+
+    /// Atomically claims the next pending job of any of the given sweeps (grid order).
+    pub fn claim(&self, sweep_ids: &[i64]) -> Result<Option<Claim>, StoreError> {
+        for &sid in sweep_ids {
+            if let Some(c) = self.claim_in(sid)? {
+                return Ok(Some(c));
+            }
+        }
+        Ok(None)
+    }
+
+    fn claim_in(&self, sweep_id: i64) -> Result<Option<Claim>, StoreError> {
+        let t = now();
+        let claimed = self.rt.block_on(async {
+            let mut tx = self
+                .pool
+                .begin_with("BEGIN IMMEDIATE")
+                .await
+                .map_err(|e| self.db(e))?;
+            let row: Option<(String, String)> = sqlx::query_as(
+                "UPDATE jobs SET status = 'running', owner = ?1, heartbeat = ?2, claimed_at = ?2, \
+                 attempts = attempts + 1 \
+                 WHERE id = (SELECT j.id FROM sweep_points p JOIN jobs j ON j.id = p.job_id \
+                             WHERE p.sweep_id = ?3 AND j.status = 'pending' \
+                             ORDER BY p.point, p.replica LIMIT 1) \
+                   AND status = 'pending' \
+                 RETURNING id, spec",
+            )
+            .bind(&self.owner)
+            .bind(t)
+            .bind(sweep_id)
+            .fetch_optional(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?;
+            let Some((job_id, spec)) = row else {
+                tx.commit().await.map_err(|e| self.db(e))?;
+                return Ok(None);
+            };
+            let run_id: i64 = sqlx::query_scalar(
+                "INSERT INTO runs (job_id, owner, started_at) VALUES (?1, ?2, ?3) RETURNING id",
+            )
+            .bind(&job_id)
+            .bind(&self.owner)
+            .bind(t)
+            .fetch_one(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?;
+            let (point, replica, coords, sweep): (i64, i64, String, String) = sqlx::query_as(
+                "SELECT p.point, p.replica, p.coords, s.name FROM sweep_points p \
+                 JOIN sweeps s ON s.id = p.sweep_id \
+                 WHERE p.sweep_id = ?1 AND p.job_id = ?2 ORDER BY p.point, p.replica LIMIT 1",
+            )
+            .bind(sweep_id)
+            .bind(&job_id)
+            .fetch_one(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?;
+            tx.commit().await.map_err(|e| self.db(e))?;
+            Ok::<_, StoreError>(Some((job_id, run_id, spec, point, replica, coords, sweep)))
+        })?;
+        let Some((job_id, run_id, spec, point, replica, coords, sweep)) = claimed else {
+            return Ok(None);
+        };
+        let damaged = |what: &str, e: String| StoreError::Damaged {
+            path: self.path.display().to_string(),
+            detail: format!("{what} of job {job_id} is not readable: {e}"),
+        };
+        Ok(Some(Claim {
+            spec: JobSpec::from_json(&spec, &format!("job {job_id}"))
+                .map_err(|e| damaged("the spec", e))?,
+            coords: serde_json::from_str(&coords)
+                .map_err(|e| damaged("the coords", e.to_string()))?,
+            job_id,
+            run_id,
+            sweep,
+            point,
+            replica,
+        }))
+    }
+
+    /// Refreshes the heartbeat of every job this runner is running.
+    pub fn heartbeat(&self) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query(
+                    "UPDATE jobs SET heartbeat = ?1 WHERE owner = ?2 AND status = 'running'",
+                )
+                .bind(now())
+                .bind(&self.owner)
+                .execute(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(())
+    }
+
+    /// Commits a finished job: job row, result row and run row in one transaction. Returns
+    /// `false` (and stores nothing but the run's outcome) when the job already has a result.
+    pub fn finish(&self, claim: &Claim, result: &JobResult) -> Result<bool, StoreError> {
+        let t = now();
+        self.rt.block_on(async {
+            let mut tx = self
+                .pool
+                .begin_with("BEGIN IMMEDIATE")
+                .await
+                .map_err(|e| self.db(e))?;
+            let n = sqlx::query(
+                "UPDATE jobs SET status = 'done', owner = ?2, heartbeat = NULL, finished_at = ?3, \
+                 wall_seconds = ?4, last_error = NULL \
+                 WHERE id = ?1 AND status != 'done' \
+                   AND NOT EXISTS (SELECT 1 FROM results WHERE job_id = ?1)",
+            )
+            .bind(&claim.job_id)
+            .bind(&self.owner)
+            .bind(t)
+            .bind(result.wall_seconds)
+            .execute(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?
+            .rows_affected();
+            let kept = n == 1;
+            if kept {
+                sqlx::query(
+                    "INSERT INTO results (job_id, phase, decided_on, observables, simulated_time, \
+                     wall_seconds, events, owner, finished_at) \
+                     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+                )
+                .bind(&claim.job_id)
+                .bind(&result.phase)
+                .bind(result.decided_on.as_ref().map(|v| v.to_string()))
+                .bind(result.observables.to_string())
+                .bind(result.simulated_time)
+                .bind(result.wall_seconds)
+                .bind(result.events as i64)
+                .bind(&self.owner)
+                .bind(t)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            }
+            sqlx::query("UPDATE runs SET ended_at = ?2, outcome = ?3 WHERE id = ?1")
+                .bind(claim.run_id)
+                .bind(t)
+                .bind(if kept { "done" } else { "discarded" })
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            tx.commit().await.map_err(|e| self.db(e))?;
+            Ok(kept)
+        })
+    }
+
+    /// Records a failed job with its message.
+    pub fn fail(&self, claim: &Claim, message: &str, wall_seconds: f64) -> Result<(), StoreError> {
+        let t = now();
+        self.rt.block_on(async {
+            let mut tx = self
+                .pool
+                .begin_with("BEGIN IMMEDIATE")
+                .await
+                .map_err(|e| self.db(e))?;
+            sqlx::query(
+                "UPDATE jobs SET status = 'failed', heartbeat = NULL, finished_at = ?3, \
+                 wall_seconds = ?4, last_error = ?5 \
+                 WHERE id = ?1 AND owner = ?2 AND status = 'running'",
+            )
+            .bind(&claim.job_id)
+            .bind(&self.owner)
+            .bind(t)
+            .bind(wall_seconds)
+            .bind(message)
+            .execute(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?;
+            sqlx::query("UPDATE runs SET ended_at = ?2, outcome = 'failed' WHERE id = ?1")
+                .bind(claim.run_id)
+                .bind(t)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            tx.commit().await.map_err(|e| self.db(e))?;
+            Ok(())
+        })
+    }
+
+    /// Jobs of a sweep by state.
+    pub fn counts(&self, sweep_id: i64) -> Result<StateCounts, StoreError> {
+        let rows: Vec<(String, i64)> = self
+            .rt
+            .block_on(
+                sqlx::query_as(
+                    "SELECT j.status, count(*) FROM sweep_points p JOIN jobs j ON j.id = p.job_id \
+                     WHERE p.sweep_id = ?1 GROUP BY j.status",
+                )
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        let mut c = StateCounts::default();
+        for (status, n) in rows {
+            let n = n as u64;
+            match status.as_str() {
+                "pending" => c.pending = n,
+                "running" => c.running = n,
+                "done" => c.done = n,
+                _ => c.failed = n,
+            }
+        }
+        Ok(c)
+    }
+
+    /// Every job of a sweep (grid order), with its result where there is one.
+    pub fn points(&self, sweep_id: i64) -> Result<Vec<PointRow>, StoreError> {
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query(
+                    "SELECT p.point, p.replica, p.coords, p.job_id, j.status, j.spec, j.attempts, \
+                     j.last_error, r.phase, r.decided_on, r.observables, r.simulated_time, \
+                     r.wall_seconds, r.events, r.finished_at, r.owner AS result_owner \
+                     FROM sweep_points p JOIN jobs j ON j.id = p.job_id \
+                     LEFT JOIN results r ON r.job_id = p.job_id \
+                     WHERE p.sweep_id = ?1 ORDER BY p.point, p.replica",
+                )
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        let path = self.path.display().to_string();
+        let damaged = |what: &str, e: String| StoreError::Damaged {
+            path: path.clone(),
+            detail: format!("{what} is not readable: {e}"),
+        };
+        rows.iter()
+            .map(|r| {
+                let job_id: String = r.get("job_id");
+                let json = |col: &str| -> Result<Option<serde_json::Value>, StoreError> {
+                    let s: Option<String> = r.get(col);
+                    s.map(|s| serde_json::from_str(&s))
+                        .transpose()
+                        .map_err(|e| damaged(&format!("{col} of job {job_id}"), e.to_string()))
+                };
+                let spec: String = r.get("spec");
+                Ok(PointRow {
+                    point: r.get("point"),
+                    replica: r.get("replica"),
+                    coords: serde_json::from_str(r.get::<&str, _>("coords"))
+                        .map_err(|e| damaged("coords", e.to_string()))?,
+                    status: r.get("status"),
+                    spec: JobSpec::from_json(&spec, &format!("job {job_id}"))
+                        .map_err(|e| damaged("a job spec", e))?,
+                    attempts: r.get("attempts"),
+                    last_error: r.get("last_error"),
+                    phase: r.get("phase"),
+                    decided_on: json("decided_on")?,
+                    observables: json("observables")?,
+                    simulated_time: r.get("simulated_time"),
+                    wall_seconds: r.get("wall_seconds"),
+                    events: r.get("events"),
+                    finished_at: r.get("finished_at"),
+                    result_owner: r.get("result_owner"),
+                    job_id,
+                })
+            })
+            .collect()
+    }
+
+    /// Number of attempts recorded in the `runs` table per job (audit of "no job ran twice").
+    pub fn runs_per_job(&self) -> Result<Vec<(String, i64)>, StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query_as("SELECT job_id, count(*) FROM runs GROUP BY job_id ORDER BY job_id")
+                    .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))
+    }
+
+    /// Total wall time of the finished and failed attempts of a sweep's jobs, in seconds.
+    pub fn time_spent(&self, sweep_id: i64) -> Result<f64, StoreError> {
+        let t: Option<f64> = self
+            .rt
+            .block_on(
+                sqlx::query_scalar(
+                    "SELECT sum(j.wall_seconds) FROM jobs j WHERE j.id IN \
+                     (SELECT job_id FROM sweep_points WHERE sweep_id = ?1) \
+                     AND j.status IN ('done', 'failed')",
+                )
+                .bind(sweep_id)
+                .fetch_one(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(t.unwrap_or(0.0))
+    }
+}
+
+impl Drop for Store {
+    /// Closes the connection cleanly, so that SQLite checkpoints the WAL into the main file.
+    fn drop(&mut self) {
+        self.rt.block_on(self.pool.close());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn application_id_pragma_matches_the_constant() {
+        // The PRAGMA text cannot take a bound parameter; keep it in step with the constant.
+        assert_eq!(APPLICATION_ID, 1464291918);
+    }
+
+    /// A database with one registered sweep of three (never simulated) jobs.
+    fn store_with_jobs(dir: &Path) -> (PathBuf, i64) {
+        let text = "[sweep]\nname = \"s\"\n[scene]\ndimension = 2\n[scene.box]\nsize = [8.0, 4.0]\n\
+                    [scene.particles]\ncount = 4\n[scene.initial]\ntemperature = 1.0\n\
+                    [scene.run]\nduration = 1.0\n[[axis]]\nkey = \"initial.seed\"\nvalues = [1, 2, 3]\n";
+        let file = SweepFile::parse(text, &dir.join("s.toml")).unwrap();
+        let jobs = file.expand().unwrap();
+        let db = dir.join("w.sqlite");
+        let store = Store::open(&db).unwrap();
+        let id = store.register_sweep(&file, &jobs).unwrap().id;
+        (db, id)
+    }
+
+    fn set_owner(store: &Store, job: &str, owner: &str, heartbeat: f64) {
+        store
+            .rt
+            .block_on(
+                sqlx::query("UPDATE jobs SET owner = ?2, heartbeat = ?3 WHERE id = ?1")
+                    .bind(job)
+                    .bind(owner)
+                    .bind(heartbeat)
+                    .execute(&store.pool),
+            )
+            .unwrap();
+    }
+
+    #[test]
+    fn only_jobs_of_dead_or_silent_runners_are_requeued() {
+        let dir = tempfile::tempdir().unwrap();
+        let (db, sweep) = store_with_jobs(dir.path());
+        let a = Store::open(&db).unwrap();
+        let jobs: Vec<String> = (0..3)
+            .map(|_| a.claim(&[sweep]).unwrap().unwrap().job_id)
+            .collect();
+        // A process of this host that has exited: its pid is free.
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead_pid = child.id();
+        child.wait().unwrap();
+        let t = now();
+        // jobs[0]: another host, heartbeat fresh -> kept.
+        set_owner(&a, &jobs[0], "elsewhere:1:aa", t - 10.0);
+        // jobs[1]: another host, heartbeat older than STALE_AFTER -> re-queued.
+        set_owner(
+            &a,
+            &jobs[1],
+            "elsewhere:1:bb",
+            t - STALE_AFTER.as_secs_f64() - 1.0,
+        );
+        // jobs[2]: this host, a dead pid, heartbeat fresh -> re-queued at once (Linux).
+        set_owner(&a, &jobs[2], &format!("{}:{dead_pid}:cc", host_name()), t);
+        let b = Store::open(&db).unwrap();
+        let mut requeued = b.requeue_orphans().unwrap();
+        requeued.sort();
+        let mut want = vec![jobs[1].clone()];
+        if cfg!(target_os = "linux") {
+            want.push(jobs[2].clone());
+        }
+        want.sort();
+        assert_eq!(requeued, want);
+        let c = b.counts(sweep).unwrap();
+        assert_eq!(
+            (c.running, c.pending),
+            (3 - want.len() as u64, want.len() as u64)
+        );
+        // A's own running jobs are never taken from it by A itself.
+        let mine = a.claim(&[sweep]).unwrap().unwrap();
+        assert!(a.requeue_orphans().unwrap().is_empty());
+        assert_eq!(b.counts(sweep).unwrap().running, 3 - want.len() as u64 + 1);
+        drop(mine);
+    }
+
+    #[test]
+    fn owner_names_parse_and_a_live_owner_is_not_dead() {
+        let o = new_owner();
+        assert_eq!(o.split(':').count(), 3);
+        assert!(!owner_is_dead(&o), "this process is alive");
+        assert!(
+            !owner_is_dead("other-host:1:abc"),
+            "another host is never judged"
+        );
+    }
+}

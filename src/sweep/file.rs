@@ -1,0 +1,555 @@
+//! Sweep files: what a user writes to describe a phase-diagram sweep (TOML), and the errors that
+//! point at the file, line and key of a bad value.
+//!
+//! A sweep file has a `[sweep]` header (name, optional base scene file, replicas, run length in
+//! driving periods), an optional inline `[scene]` table merged over the base scene, optional
+//! `[observe]` and `[classify]` tables handed to the observers and the classifier, and one
+//! `[[axis]]` table per swept scene key. An axis is a list (`values = [...]`), a linear range
+//! (`linear = { from, to, steps }`) or a logarithmic range (`log = { from, to, steps }`).
+//! The shaking axes `gamma` (`drive.gamma`), `e_star` (`drive.e_star`), `e_d_star` (`drive.e_star`
+//! of a dry scene) and the shear force `f_max` (`drive.f_max`) are short names; any other scene
+//! key is written in dotted form (`capillary.e_cb`, `contact.restitution`).
+
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// Why a sweep file (or a job it expands to) was rejected.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepError {
+    /// The file the bad value is in (the sweep file or its base scene).
+    pub file: String,
+    /// 1-based line of the bad value, where known.
+    pub line: Option<usize>,
+    /// The offending key in dotted form, empty for syntax errors.
+    pub key: String,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+impl SweepError {
+    pub(crate) fn new(
+        file: &str,
+        line: Option<usize>,
+        key: &str,
+        message: impl Into<String>,
+    ) -> Self {
+        Self {
+            file: file.to_string(),
+            line,
+            key: key.to_string(),
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for SweepError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file)?;
+        if let Some(l) = self.line {
+            write!(f, ":{l}")?;
+        }
+        if !self.key.is_empty() {
+            write!(f, ": key `{}`", self.key)?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+impl std::error::Error for SweepError {}
+
+/// The `[sweep]` header.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Header {
+    /// Name of the sweep in the database (letters, digits, `-`, `_`, `.`).
+    pub name: Spanned<String>,
+    /// Free text shown by `sweep status`.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Base scene file, relative to the sweep file.
+    #[serde(default)]
+    pub base: Option<Spanned<String>>,
+    /// Independent runs per grid point; replica `r` uses `initial.seed = base seed + r`.
+    #[serde(default = "one_u32")]
+    pub replicas: Spanned<u32>,
+    /// Run length in driving periods `T = 2 pi / omega` (one time unit `sqrt(d/g)` without a
+    /// drive); sets `run.duration`. Without it the base scene's `run.duration` is kept.
+    #[serde(default)]
+    pub periods: Option<Spanned<f64>>,
+    /// Free-text cost note for long runs (shown by `sweep status`).
+    #[serde(default)]
+    pub cost: Option<String>,
+    /// Leave out grid points whose scene fails validation (e.g. a drive stroke too long for
+    /// the box) instead of rejecting the sweep; they are listed when the sweep is registered.
+    #[serde(default)]
+    pub skip_invalid: bool,
+}
+
+fn one_u32() -> Spanned<u32> {
+    Spanned::new(0..0, 1)
+}
+
+/// A linear or logarithmic range: `steps` values from `from` to `to`, both included.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Range {
+    pub from: f64,
+    pub to: f64,
+    pub steps: usize,
+}
+
+/// One `[[axis]]` table as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawAxis {
+    pub key: Spanned<String>,
+    #[serde(default)]
+    pub values: Option<Spanned<Vec<toml::Value>>>,
+    #[serde(default)]
+    pub linear: Option<Spanned<Range>>,
+    #[serde(default)]
+    pub log: Option<Spanned<Range>>,
+}
+
+/// The whole file as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSweep {
+    pub sweep: Header,
+    #[serde(default)]
+    pub scene: Option<toml::Table>,
+    #[serde(default)]
+    pub observe: Option<toml::Table>,
+    #[serde(default)]
+    pub classify: Option<toml::Table>,
+    #[serde(default, rename = "axis")]
+    pub axes: Vec<RawAxis>,
+}
+
+/// How an axis was written (the plot and the boundary extraction use log scaling for `Log`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AxisKind {
+    Values,
+    Linear,
+    Log,
+}
+
+/// A swept scene key with its expanded values.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, Deserialize)]
+pub struct Axis {
+    /// The key as written (`gamma`, `drive.gamma`, `capillary.e_cb`).
+    pub name: String,
+    /// The dotted scene key the values are written to (`drive.gamma`).
+    pub key: String,
+    /// Label for tables and plots (`Gamma`, `E*`, `E_d*`, `F_max`, or the key).
+    pub label: String,
+    pub kind: AxisKind,
+    /// The values, as TOML values turned into JSON (numbers, strings, booleans, arrays).
+    pub values: Vec<serde_json::Value>,
+    /// Line of the axis table in the sweep file.
+    #[serde(skip)]
+    pub line: usize,
+}
+
+impl Axis {
+    /// Whether this axis is the peak acceleration `Gamma` (MODEL.md 4.1).
+    pub fn is_gamma(&self) -> bool {
+        self.key == "drive.gamma"
+    }
+    /// Whether this axis is the driving energy `E*` or `E_d*` (MODEL.md 4.1).
+    pub fn is_e_star(&self) -> bool {
+        self.key == "drive.e_star"
+    }
+}
+
+/// The short names of the first-class axes: (name, scene key, label).
+pub const AXIS_ALIASES: [(&str, &str, &str); 4] = [
+    ("gamma", "drive.gamma", "Gamma"),
+    ("e_star", "drive.e_star", "E*"),
+    ("e_d_star", "drive.e_star", "E_d*"),
+    ("f_max", "drive.f_max", "F_max"),
+];
+
+/// A parsed sweep file: the header, the base scene tree (base file merged with `[scene]`), the
+/// observer and classifier settings and the expanded axes.
+#[derive(Debug, Clone)]
+pub struct SweepFile {
+    /// The sweep file as given on the command line.
+    pub path: PathBuf,
+    /// Its text (stored with the sweep in the database).
+    pub text: String,
+    pub name: String,
+    pub description: Option<String>,
+    pub cost: Option<String>,
+    pub skip_invalid: bool,
+    pub replicas: u32,
+    pub periods: Option<f64>,
+    /// The base scene file (resolved against the sweep file's folder) and its text.
+    pub base: Option<(PathBuf, String)>,
+    /// Base scene merged with the sweep file's `[scene]` table.
+    pub scene_tree: toml::Table,
+    pub observe: toml::Table,
+    pub classify: toml::Table,
+    pub axes: Vec<Axis>,
+}
+
+/// Line (1-based) of byte offset `pos` in `text`.
+pub(crate) fn line_of(text: &str, pos: usize) -> usize {
+    text[..pos.min(text.len())].matches('\n').count() + 1
+}
+
+/// The line of a dotted key (`drive.gamma`, `box.size[1]` is looked up as `box.size`) in a TOML
+/// text, below the table path `prefix` (empty for the top level).
+pub(crate) fn key_line(text: &str, prefix: &[&str], key: &str) -> Option<usize> {
+    use toml::de::{DeTable, DeValue};
+    let table = DeTable::parse(text).ok()?;
+    let key = key.split('[').next().unwrap_or(key);
+    let path: Vec<&str> = prefix
+        .iter()
+        .copied()
+        .chain(key.split('.').filter(|s| !s.is_empty()))
+        .collect();
+    let mut current: &DeTable = table.get_ref();
+    let mut found = None;
+    for (k, part) in path.iter().enumerate() {
+        let (name, value) = current
+            .iter()
+            .find(|(n, _)| n.get_ref().as_ref() == *part)?;
+        found = Some(name.span().start);
+        if k + 1 < path.len() {
+            match value.get_ref() {
+                DeValue::Table(t) => current = t,
+                _ => return found.map(|p| line_of(text, p)),
+            }
+        }
+    }
+    found.map(|p| line_of(text, p))
+}
+
+/// `steps` values of a linear or logarithmic range, both ends included.
+pub fn range_values(r: &Range, log: bool) -> Vec<f64> {
+    if r.steps == 1 {
+        return vec![r.from];
+    }
+    (0..r.steps)
+        .map(|k| {
+            let t = k as f64 / (r.steps - 1) as f64;
+            if k == r.steps - 1 {
+                r.to
+            } else if log {
+                // Geometric spacing: from * (to / from)^t.
+                (r.from.ln() + t * (r.to.ln() - r.from.ln())).exp()
+            } else {
+                r.from + t * (r.to - r.from)
+            }
+        })
+        .collect()
+}
+
+/// Deep merge: entries of `over` replace those of `base`, tables merge recursively.
+pub(crate) fn merge_tables(base: &mut toml::Table, over: &toml::Table) {
+    for (k, v) in over {
+        match (base.get_mut(k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge_tables(b, o),
+            _ => {
+                base.insert(k.clone(), v.clone());
+            }
+        }
+    }
+}
+
+/// Most points a sweep may expand to (grid points times replicas).
+pub const MAX_JOBS: usize = 1_000_000;
+
+impl SweepFile {
+    /// Reads and parses a sweep file (and its base scene), without expanding it into jobs.
+    pub fn load(path: &Path) -> Result<SweepFile, SweepError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            SweepError::new(&file, None, "", format!("cannot read the sweep file: {e}"))
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses a sweep file's text; `path` names it in errors and anchors the base scene path.
+    pub fn parse(text: &str, path: &Path) -> Result<SweepFile, SweepError> {
+        let file = path.display().to_string();
+        let raw: RawSweep = toml::from_str(text).map_err(|e| toml_error(&file, text, &e))?;
+        let err =
+            |line: Option<usize>, key: &str, msg: String| SweepError::new(&file, line, key, msg);
+        let span_line = |start: usize| Some(line_of(text, start));
+
+        let name = raw.sweep.name.get_ref().trim().to_string();
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+        {
+            return Err(err(
+                span_line(raw.sweep.name.span().start),
+                "sweep.name",
+                format!(
+                    "= {name:?} is not allowed: must be non-empty letters, digits, '-', '_' or '.'"
+                ),
+            ));
+        }
+        let replicas = *raw.sweep.replicas.get_ref();
+        if !(1..=10_000).contains(&replicas) {
+            return Err(err(
+                key_line(text, &["sweep"], "replicas"),
+                "sweep.replicas",
+                format!("= {replicas} is out of range: must be in [1, 10000]"),
+            ));
+        }
+        let periods = match &raw.sweep.periods {
+            Some(p) => {
+                let v = *p.get_ref();
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(err(
+                        span_line(p.span().start),
+                        "sweep.periods",
+                        format!("= {v} is out of range: must be finite and > 0"),
+                    ));
+                }
+                Some(v)
+            }
+            None => None,
+        };
+
+        // Base scene: the file (relative to the sweep file) merged with the inline [scene].
+        let mut scene_tree = toml::Table::new();
+        let mut base = None;
+        if let Some(b) = &raw.sweep.base {
+            let dir = path.parent().unwrap_or(Path::new(""));
+            let base_path = dir.join(b.get_ref());
+            let base_text = std::fs::read_to_string(&base_path).map_err(|e| {
+                err(
+                    span_line(b.span().start),
+                    "sweep.base",
+                    format!("cannot read the base scene {}: {e}", base_path.display()),
+                )
+            })?;
+            let base_file = base_path.display().to_string();
+            scene_tree =
+                toml::from_str(&base_text).map_err(|e| toml_error(&base_file, &base_text, &e))?;
+            base = Some((base_path, base_text));
+        }
+        if let Some(over) = &raw.scene {
+            merge_tables(&mut scene_tree, over);
+        }
+        if scene_tree.is_empty() {
+            return Err(err(
+                None,
+                "sweep.base",
+                "no scene: give a base scene file (`base = \"scene.toml\"` under [sweep]) or a \
+                 [scene] table"
+                    .to_string(),
+            ));
+        }
+
+        let mut axes: Vec<Axis> = Vec::new();
+        for a in &raw.axes {
+            let line = line_of(text, a.key.span().start);
+            let name = a.key.get_ref().trim().to_string();
+            let (key, label) = match AXIS_ALIASES.iter().find(|(n, _, _)| *n == name) {
+                Some((_, key, label)) => (key.to_string(), label.to_string()),
+                None => (name.clone(), name.clone()),
+            };
+            if key.is_empty()
+                || key.split('.').any(|p| {
+                    p.is_empty() || !p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                })
+            {
+                return Err(err(
+                    Some(line),
+                    "axis.key",
+                    format!(
+                        "= {name:?} is not a scene key: write a dotted key such as \
+                         \"drive.gamma\" or one of gamma, e_star, e_d_star, f_max"
+                    ),
+                ));
+            }
+            if axes.iter().any(|b| b.key == key) {
+                return Err(err(
+                    Some(line),
+                    &key,
+                    "appears on two axes: each scene key may be swept once".to_string(),
+                ));
+            }
+            if key == "initial.seed" && replicas > 1 {
+                return Err(err(
+                    Some(line),
+                    &key,
+                    "is swept while sweep.replicas > 1 also sets the seed: use one of the two"
+                        .to_string(),
+                ));
+            }
+            let given = [a.values.is_some(), a.linear.is_some(), a.log.is_some()];
+            if given.iter().filter(|g| **g).count() != 1 {
+                return Err(err(
+                    Some(line),
+                    &key,
+                    "needs exactly one of `values = [...]`, `linear = { from, to, steps }` or \
+                     `log = { from, to, steps }`"
+                        .to_string(),
+                ));
+            }
+            let (kind, values) = if let Some(v) = &a.values {
+                let vline = Some(line_of(text, v.span().start));
+                if v.get_ref().is_empty() {
+                    return Err(err(vline, &key, "has an empty `values` list".to_string()));
+                }
+                let mut out = Vec::new();
+                for x in v.get_ref() {
+                    if let toml::Value::Float(f) = x
+                        && !f.is_finite()
+                    {
+                        return Err(err(
+                            vline,
+                            &key,
+                            format!("value {f} is not a finite number"),
+                        ));
+                    }
+                    let j = serde_json::to_value(x)
+                        .map_err(|e| err(vline, &key, format!("value {x} cannot be used: {e}")))?;
+                    if out.contains(&j) {
+                        return Err(err(vline, &key, format!("value {x} appears twice")));
+                    }
+                    out.push(j);
+                }
+                (AxisKind::Values, out)
+            } else {
+                let (r, log) = match (&a.linear, &a.log) {
+                    (Some(r), _) => (r, false),
+                    (None, Some(r)) => (r, true),
+                    _ => unreachable!("one of the three is given"),
+                };
+                let rline = Some(line_of(text, r.span().start));
+                let rv = r.get_ref();
+                if !(rv.from.is_finite() && rv.to.is_finite()) {
+                    return Err(err(
+                        rline,
+                        &key,
+                        "range ends must be finite numbers".to_string(),
+                    ));
+                }
+                if rv.steps == 0 || rv.steps > 100_000 {
+                    return Err(err(
+                        rline,
+                        &key,
+                        format!(
+                            "steps = {} is out of range: must be in [1, 100000]",
+                            rv.steps
+                        ),
+                    ));
+                }
+                if rv.steps > 1 && rv.from == rv.to {
+                    return Err(err(
+                        rline,
+                        &key,
+                        format!(
+                            "from = to = {} with steps = {}: the values would repeat",
+                            rv.from, rv.steps
+                        ),
+                    ));
+                }
+                if log && !(rv.from > 0.0 && rv.to > 0.0) {
+                    return Err(err(
+                        rline,
+                        &key,
+                        format!(
+                            "log range from {} to {}: both ends must be > 0",
+                            rv.from, rv.to
+                        ),
+                    ));
+                }
+                let vals = range_values(rv, log)
+                    .into_iter()
+                    .map(|x| serde_json::json!(x))
+                    .collect();
+                (if log { AxisKind::Log } else { AxisKind::Linear }, vals)
+            };
+            axes.push(Axis {
+                name,
+                key,
+                label,
+                kind,
+                values,
+                line,
+            });
+        }
+        let jobs = axes
+            .iter()
+            .try_fold(replicas as usize, |n, a| n.checked_mul(a.values.len()))
+            .unwrap_or(usize::MAX);
+        if jobs > MAX_JOBS {
+            return Err(err(
+                None,
+                "axis",
+                format!("expands to {jobs} jobs: at most {MAX_JOBS} are allowed"),
+            ));
+        }
+        Ok(SweepFile {
+            path: path.to_path_buf(),
+            text: text.to_string(),
+            name,
+            description: raw.sweep.description.clone(),
+            cost: raw.sweep.cost.clone(),
+            skip_invalid: raw.sweep.skip_invalid,
+            replicas,
+            periods,
+            base,
+            scene_tree,
+            observe: raw.observe.unwrap_or_default(),
+            classify: raw.classify.unwrap_or_default(),
+            axes,
+        })
+    }
+
+    /// Number of grid points (product of the axis lengths).
+    pub fn points(&self) -> usize {
+        self.axes.iter().map(|a| a.values.len()).product()
+    }
+
+    /// Where a scene key's value comes from, for error messages: the axis that sets it, the
+    /// inline `[scene]` table of the sweep file, or the base scene file.
+    pub(crate) fn locate(&self, key: &str) -> (String, Option<usize>) {
+        let file = self.path.display().to_string();
+        let bare = key.split('[').next().unwrap_or(key);
+        if let Some(a) = self.axes.iter().find(|a| a.key == bare) {
+            return (file, Some(a.line));
+        }
+        if let Some(l) = key_line(&self.text, &["scene"], key) {
+            return (file, Some(l));
+        }
+        if let Some((p, t)) = &self.base
+            && let Some(l) = key_line(t, &[], key)
+        {
+            return (p.display().to_string(), Some(l));
+        }
+        match &self.base {
+            Some((p, _)) => (p.display().to_string(), None),
+            None => (file, key_line(&self.text, &[], "scene")),
+        }
+    }
+}
+
+/// A TOML syntax or type error with its line and (where the message names one) key.
+fn toml_error(file: &str, text: &str, e: &toml::de::Error) -> SweepError {
+    let line = e.span().map(|s| line_of(text, s.start));
+    let msg = e.message().trim_end().to_string();
+    let mut key = String::new();
+    for prefix in ["unknown field `", "missing field `"] {
+        if let Some((field, _)) = msg.strip_prefix(prefix).and_then(|r| r.split_once('`')) {
+            key = field.to_string();
+        }
+    }
+    let msg = msg
+        .replace("expected usize", "expected an integer >= 0")
+        .replace("expected u32", "expected an integer >= 0")
+        .replace("expected f64", "expected a number");
+    SweepError::new(file, line, &key, msg)
+}

@@ -1,0 +1,142 @@
+//! Running one job: `run_job(spec) -> result`, the same function for the local worker pool and
+//! for a job shipped elsewhere. A panic or a tripped numerical guard becomes a [`JobError`] with
+//! its message; it never takes the worker down.
+
+use super::spec::JobSpec;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// What one finished job produced.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JobResult {
+    /// The phase label (`s`, `f`, `g`, `sfc`, `sgc`, `fgc`), `None` until a classifier runs.
+    pub phase: Option<String>,
+    /// The numbers and thresholds the phase was decided on (JSON), `None` without a classifier.
+    pub decided_on: Option<serde_json::Value>,
+    /// The stationary observables (JSON object).
+    pub observables: serde_json::Value,
+    pub simulated_time: f64,
+    pub wall_seconds: f64,
+    pub events: u64,
+}
+
+/// Why a job produced no result.
+#[derive(Debug, Clone, PartialEq)]
+pub enum JobError {
+    /// The simulation panicked; the panic message.
+    Panic(String),
+    /// A numerical guard tripped (broken engine invariant, non-finite observable).
+    Numerical(String),
+}
+
+impl fmt::Display for JobError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            JobError::Panic(m) => write!(f, "panicked: {m}"),
+            JobError::Numerical(m) => write!(f, "numerical guard: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for JobError {}
+
+/// Runs a job spec; `progress` gets the completed fraction of the simulated time, in `[0, 1]`.
+/// The observers and thresholds are the scene's `[observe]` and `[classify]` sections.
+pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResult, JobError> {
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        crate::observe::run_observed(&spec.scene, progress)
+    }));
+    let run = match outcome {
+        Ok(r) => r,
+        Err(payload) => return Err(JobError::Panic(panic_message(payload.as_ref()))),
+    };
+    check_guards(&run)?;
+    Ok(JobResult {
+        phase: Some(run.classification.phase.to_string()),
+        decided_on: Some(
+            serde_json::to_value(&run.classification.decided_on).expect("decision serializes"),
+        ),
+        observables: serde_json::to_value(&run.observables).expect("observables serialize"),
+        simulated_time: run.report.simulated_time,
+        wall_seconds: run.report.wall_seconds,
+        events: run.report.events_total,
+    })
+}
+
+/// The numerical guards: a broken engine invariant, or a stationary temperature that is not a
+/// finite number (no sample in the window, or a blown-up run), fails the job.
+fn check_guards(run: &crate::observe::ObservedRun) -> Result<(), JobError> {
+    let report = &run.report;
+    if let Some(v) = &report.invariant_violation {
+        return Err(JobError::Numerical(format!(
+            "engine invariant broken at t = {:.6}: {v}",
+            report.simulated_time
+        )));
+    }
+    let t_g = run.observables.granular_temperature_reduced;
+    if !t_g.is_finite() {
+        return Err(JobError::Numerical(format!(
+            "stationary granular temperature is not finite ({t_g}): no sample after the \
+             transient, or a blown-up run (stopped at t = {:.6})",
+            report.simulated_time
+        )));
+    }
+    Ok(())
+}
+
+/// The text of a panic payload.
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        s.to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "unknown panic payload".to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::SweepFile;
+
+    fn tiny_spec() -> JobSpec {
+        let text = "[sweep]\nname = \"t\"\n[scene]\ndimension = 2\ngravity = 0.0\n[scene.box]\n\
+                    size = [8.0, 8.0]\nboundary = [\"periodic\", \"periodic\"]\n\
+                    [scene.particles]\ncount = 4\n[scene.initial]\ntemperature = 1.0\n\
+                    [scene.run]\nduration = 2.0\n";
+        let file = SweepFile::parse(text, std::path::Path::new("t.toml")).unwrap();
+        file.expand().unwrap().remove(0).spec
+    }
+
+    #[test]
+    fn a_panicking_simulation_becomes_a_job_error() {
+        let mut spec = tiny_spec();
+        // Bypasses validation: the engine refuses a dimension it has no type for.
+        spec.scene.dimension = 4;
+        match run_job(&spec, &mut |_| {}) {
+            Err(JobError::Panic(m)) => assert!(m.contains("dimension 4"), "{m}"),
+            other => panic!("expected a panic error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn averages_cover_the_samples_after_the_transient() {
+        let spec = tiny_spec();
+        let mut fractions = Vec::new();
+        let r = run_job(&spec, &mut |f| fractions.push(f)).unwrap();
+        assert!(r.phase.is_none(), "no classifier yet");
+        // Elastic disks, no gravity, fully periodic: kinetic energy and momentum (zero) are
+        // conserved, so T_g stays the initial 1.0 at every sample.
+        let o = &r.observables;
+        assert!(
+            (o["granular_temperature"].as_f64().unwrap() - 1.0).abs() < 1e-9,
+            "{o}"
+        );
+        // Transient a quarter of the 2-unit run, 4 samples per unit: samples at 0.5 .. 2.0.
+        assert_eq!(o["samples"], 7);
+        assert_eq!(o["window"][0], 0.5);
+        assert_eq!(fractions.last().copied(), Some(1.0));
+        assert!(fractions.windows(2).all(|w| w[0] <= w[1]));
+    }
+}

@@ -1,0 +1,128 @@
+//! Progress display of a sweep run: on a terminal an indicatif overall bar (with ETA) and one
+//! line per worker (its grid point and progress); otherwise one plain line per finished job.
+
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::Write;
+use std::time::Duration;
+
+/// Where progress goes.
+#[derive(Debug)]
+pub enum Progress {
+    /// indicatif bars on stderr.
+    Bars {
+        multi: MultiProgress,
+        overall: ProgressBar,
+        workers: Vec<ProgressBar>,
+    },
+    /// Plain lines on stderr (not a terminal).
+    Plain { total: u64, done: u64 },
+    /// Nothing (library use).
+    Quiet,
+}
+
+impl Progress {
+    /// Bars when stderr is a terminal, plain lines otherwise.
+    pub fn auto(total: u64, done: u64, workers: usize) -> Progress {
+        use std::io::IsTerminal;
+        if std::io::stderr().is_terminal() {
+            Self::bars(total, done, workers)
+        } else {
+            Progress::Plain { total, done }
+        }
+    }
+
+    fn bars(total: u64, done: u64, workers: usize) -> Progress {
+        let multi = MultiProgress::with_draw_target(ProgressDrawTarget::stderr_with_hz(4));
+        let overall = multi.add(ProgressBar::new(total));
+        overall.set_style(
+            ProgressStyle::with_template(
+                "{prefix:>8} [{bar:40}] {pos}/{len} jobs  {elapsed_precise}  ETA {eta_precise}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        overall.set_prefix("sweep");
+        overall.set_position(done);
+        overall.reset_eta();
+        let style = ProgressStyle::with_template("{prefix:>8} {bar:20} {percent:>3}%  {msg}")
+            .expect("valid template")
+            .progress_chars("## ");
+        let workers = (0..workers)
+            .map(|w| {
+                let b = multi.add(ProgressBar::new(1000));
+                b.set_style(style.clone());
+                b.set_prefix(format!("worker {}", w + 1));
+                b.set_message("idle");
+                b
+            })
+            .collect();
+        overall.enable_steady_tick(Duration::from_millis(500));
+        Progress::Bars {
+            multi,
+            overall,
+            workers,
+        }
+    }
+
+    /// A worker started a job at `label`.
+    pub fn start(&mut self, worker: usize, label: &str) {
+        if let Progress::Bars { workers, .. } = self {
+            workers[worker].set_position(0);
+            workers[worker].set_message(label.to_string());
+        }
+    }
+
+    /// A worker's job is `fraction` done.
+    pub fn update(&mut self, worker: usize, fraction: f64) {
+        if let Progress::Bars { workers, .. } = self {
+            workers[worker].set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+        }
+    }
+
+    /// A worker's job ended; `line` describes the outcome.
+    pub fn finish(&mut self, worker: usize, line: &str) {
+        match self {
+            Progress::Bars {
+                multi,
+                overall,
+                workers,
+            } => {
+                overall.inc(1);
+                workers[worker].set_position(0);
+                workers[worker].set_message("idle");
+                let _ = multi.println(line);
+            }
+            Progress::Plain { total, done } => {
+                *done += 1;
+                let width = total.to_string().len();
+                let mut err = std::io::stderr().lock();
+                let _ = writeln!(err, "[{:>width$}/{total}] {line}", *done);
+            }
+            Progress::Quiet => {}
+        }
+    }
+
+    /// A message outside the job lines.
+    pub fn note(&mut self, line: &str) {
+        match self {
+            Progress::Bars { multi, .. } => {
+                let _ = multi.println(line);
+            }
+            Progress::Plain { .. } => eprintln!("{line}"),
+            Progress::Quiet => {}
+        }
+    }
+
+    /// Removes the bars.
+    pub fn close(&mut self) {
+        if let Progress::Bars {
+            overall, workers, ..
+        } = self
+        {
+            for w in workers.iter() {
+                w.finish_and_clear();
+            }
+            overall.finish();
+        }
+    }
+}

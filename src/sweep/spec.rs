@@ -1,0 +1,437 @@
+//! Job specs: the self-contained description of one simulation of a sweep, its canonical JSON
+//! and its content-hashed id, and the expansion of a sweep file into job specs.
+//!
+//! A job spec holds the complete, validated scene (every default filled in) and the observer
+//! and classifier settings. Its canonical JSON has the object keys sorted at every level and the
+//! numbers printed by `serde_json` (shortest text that reads back to the same `f64`); its id is
+//! the SHA-256 of that text in hex. So a job written twice, in any key order, with or without
+//! keys at their default, gets one id and is computed once across all sweeps of a database; a
+//! changed parameter is a new job. Nothing in a spec refers to its sweep: the grid coordinates
+//! of a job live beside it in the sweep's point list.
+
+use super::file::{SweepError, SweepFile};
+use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+/// Version of the job-spec layout; part of the hashed text, so a change of layout is a new job.
+pub const SPEC_FORMAT: u32 = 1;
+
+/// Default number of samples per driving period where the sweep file gives none.
+pub const DEFAULT_SAMPLES_PER_PERIOD: f64 = 4.0;
+/// Default transient, as a fraction of the run, where the sweep file gives none.
+pub const DEFAULT_TRANSIENT_FRACTION: f64 = 0.25;
+
+/// Everything needed to run one job, anywhere.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JobSpec {
+    /// [`SPEC_FORMAT`].
+    pub format: u32,
+    /// The validated scene, defaults filled in; `run.duration` and `run.sample_interval` already
+    /// converted from driving periods. Its `[observe]` section (observers, sampling, transient)
+    /// and `[classify]` thresholds come from the sweep file's tables of those names.
+    pub scene: Scene,
+}
+
+impl JobSpec {
+    /// The canonical JSON text: keys sorted at every level, no whitespace.
+    pub fn canonical_json(&self) -> String {
+        let v = serde_json::to_value(self).expect("a job spec serializes");
+        canonical_json(&v)
+    }
+
+    /// The job's id: SHA-256 of the canonical JSON, lower-case hex.
+    pub fn id(&self) -> String {
+        id_of_canonical(&self.canonical_json())
+    }
+
+    /// Reads a job spec from JSON (any key order) and validates its scene.
+    pub fn from_json(text: &str, origin: &str) -> Result<JobSpec, String> {
+        let spec: JobSpec =
+            serde_json::from_str(text).map_err(|e| format!("{origin}: not a job spec: {e}"))?;
+        spec.scene.validate(origin).map_err(|e| e.to_string())?;
+        if spec.format != SPEC_FORMAT {
+            return Err(format!(
+                "{origin}: job spec format {} is not supported (this wetgran reads {SPEC_FORMAT})",
+                spec.format
+            ));
+        }
+        Ok(spec)
+    }
+
+    /// One driving period `T = 2 pi / omega` (MODEL.md 4.1), or one time unit `sqrt(d/g)` when
+    /// the scene has no drive (1 without gravity).
+    pub fn period(&self) -> f64 {
+        driving_period(&self.scene)
+    }
+}
+
+/// See [`JobSpec::period`].
+pub fn driving_period(scene: &Scene) -> f64 {
+    match scene.drive_motion() {
+        Some((_, omega)) if omega > 0.0 => 2.0 * std::f64::consts::PI / omega,
+        _ if scene.gravity > 0.0 => (scene.particles.diameter / scene.gravity).sqrt(),
+        _ => 1.0,
+    }
+}
+
+/// SHA-256 of a canonical JSON text, lower-case hex.
+pub fn id_of_canonical(canonical: &str) -> String {
+    let digest = Sha256::digest(canonical.as_bytes());
+    let mut s = String::with_capacity(64);
+    for b in digest.iter() {
+        s.push_str(&format!("{b:02x}"));
+    }
+    s
+}
+
+/// JSON text with object keys sorted at every level and no whitespace; scalars as `serde_json`
+/// prints them (floats in the shortest form that reads back exactly).
+pub fn canonical_json(v: &serde_json::Value) -> String {
+    let mut out = String::new();
+    write_canonical(v, &mut out);
+    out
+}
+
+fn write_canonical(v: &serde_json::Value, out: &mut String) {
+    use serde_json::Value;
+    match v {
+        Value::Object(m) => {
+            let mut keys: Vec<&String> = m.keys().collect();
+            keys.sort();
+            out.push('{');
+            for (k, key) in keys.iter().enumerate() {
+                if k > 0 {
+                    out.push(',');
+                }
+                out.push_str(&serde_json::to_string(key).expect("a string serializes"));
+                out.push(':');
+                write_canonical(&m[*key], out);
+            }
+            out.push('}');
+        }
+        Value::Array(a) => {
+            out.push('[');
+            for (k, x) in a.iter().enumerate() {
+                if k > 0 {
+                    out.push(',');
+                }
+                write_canonical(x, out);
+            }
+            out.push(']');
+        }
+        scalar => out.push_str(&serde_json::to_string(scalar).expect("a scalar serializes")),
+    }
+}
+
+/// One job of a sweep: its place in the grid and its spec.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SweepJob {
+    /// Index of the grid point (row-major over the axes, the last axis fastest).
+    pub point: usize,
+    /// Replica number, `0 .. replicas`.
+    pub replica: u32,
+    /// The axis values of the point, in axis order.
+    pub coords: Vec<serde_json::Value>,
+    pub id: String,
+    pub spec: JobSpec,
+}
+
+/// A grid point left out by `sweep.skip_invalid`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skipped {
+    pub point: usize,
+    pub coords: Vec<serde_json::Value>,
+    /// Why its scene was rejected.
+    pub reason: SweepError,
+}
+
+/// Writes `value` at a dotted `key` in a TOML tree, creating tables on the way.
+fn set_key(tree: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
+    let parts: Vec<&str> = key.split('.').collect();
+    let mut t = tree;
+    for (k, part) in parts.iter().enumerate() {
+        if k + 1 == parts.len() {
+            t.insert(part.to_string(), value);
+            return Ok(());
+        }
+        let entry = t
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        t = match entry {
+            toml::Value::Table(sub) => sub,
+            other => {
+                return Err(format!(
+                    "`{}` is a {}, not a table: cannot set `{key}` in it",
+                    parts[..=k].join("."),
+                    other.type_str()
+                ));
+            }
+        };
+    }
+    unreachable!("the loop returns at the last part")
+}
+
+/// A JSON axis value as a TOML value.
+fn to_toml(v: &serde_json::Value) -> Result<toml::Value, String> {
+    toml::Value::try_from(v).map_err(|e| format!("value {v} cannot be written to a scene: {e}"))
+}
+
+fn number(t: &toml::Table, key: &str, file: &SweepFile) -> Result<Option<f64>, SweepError> {
+    match t.get(key) {
+        None => Ok(None),
+        Some(toml::Value::Float(f)) => Ok(Some(*f)),
+        Some(toml::Value::Integer(i)) => Ok(Some(*i as f64)),
+        Some(other) => Err(SweepError::new(
+            &file.path.display().to_string(),
+            super::file::key_line(&file.text, &["observe"], key),
+            &format!("observe.{key}"),
+            format!("= {other} is not a number"),
+        )),
+    }
+}
+
+impl SweepFile {
+    /// Whether the scene tree (base scene plus the sweep's `[scene]` table) sets a dotted key.
+    fn base_sets(&self, dotted: &str) -> bool {
+        let mut parts = dotted.split('.');
+        let Some(first) = parts.next() else {
+            return false;
+        };
+        let mut node = self.scene_tree.get(first);
+        for part in parts {
+            node = node.and_then(|n| n.get(part));
+        }
+        node.is_some()
+    }
+
+    /// Expands the sweep into its jobs: every grid point times every replica, each with a
+    /// validated scene. Errors name the sweep file (or base scene), the line and the key. With
+    /// `sweep.skip_invalid` the points whose scene fails validation are left out (see
+    /// [`SweepFile::expand_with_skips`]).
+    pub fn expand(&self) -> Result<Vec<SweepJob>, SweepError> {
+        Ok(self.expand_with_skips()?.0)
+    }
+
+    /// [`SweepFile::expand`], also returning the grid points left out by `sweep.skip_invalid`
+    /// with the reason (empty without it).
+    pub fn expand_with_skips(&self) -> Result<(Vec<SweepJob>, Vec<Skipped>), SweepError> {
+        let file = self.path.display().to_string();
+        let obs_err = |key: &str, msg: String| {
+            SweepError::new(
+                &file,
+                super::file::key_line(&self.text, &["observe"], key),
+                &format!("observe.{key}"),
+                msg,
+            )
+        };
+        let samples_given = number(&self.observe, "samples_per_period", self)?;
+        let samples_per_period = samples_given.unwrap_or(DEFAULT_SAMPLES_PER_PERIOD);
+        if !(samples_per_period.is_finite() && samples_per_period > 0.0) {
+            return Err(obs_err(
+                "samples_per_period",
+                format!("= {samples_per_period} is out of range: must be finite and > 0"),
+            ));
+        }
+        let transient = number(&self.observe, "transient_periods", self)?;
+        if let Some(t) = transient
+            && !(t.is_finite() && t >= 0.0)
+        {
+            return Err(obs_err(
+                "transient_periods",
+                format!("= {t} is out of range: must be finite and >= 0"),
+            ));
+        }
+
+        // The base scene must be valid on its own terms only where no axis overrides it; each
+        // job's scene is validated in full below.
+        let base_seed = match self.scene_tree.get("initial").and_then(|i| i.get("seed")) {
+            None => 0,
+            Some(toml::Value::Integer(s)) if *s >= 0 => *s as u64,
+            Some(other) => {
+                let (f, l) = self.locate("initial.seed");
+                return Err(SweepError::new(
+                    &f,
+                    l,
+                    "initial.seed",
+                    format!("= {other} is not an integer >= 0"),
+                ));
+            }
+        };
+
+        let points = self.points();
+        let mut jobs = Vec::with_capacity(points * self.replicas as usize);
+        let mut skipped = Vec::new();
+        'points: for point in 0..points {
+            // Row-major index -> one value per axis, the last axis fastest.
+            let mut rest = point;
+            let mut idx = vec![0; self.axes.len()];
+            for (a, axis) in self.axes.iter().enumerate().rev() {
+                idx[a] = rest % axis.values.len();
+                rest /= axis.values.len();
+            }
+            let coords: Vec<serde_json::Value> = self
+                .axes
+                .iter()
+                .zip(&idx)
+                .map(|(a, &i)| a.values[i].clone())
+                .collect();
+            for replica in 0..self.replicas {
+                let mut tree = self.scene_tree.clone();
+                let where_ = describe_point(self, &coords, replica);
+                // The sweep's `[observe]` and `[classify]` tables go into the scene's sections
+                // of those names (over what the base scene sets), validated with the scene.
+                for (section, table) in [("observe", &self.observe), ("classify", &self.classify)] {
+                    for (key, value) in table {
+                        set_key(&mut tree, &format!("{section}.{key}"), value.clone())
+                            .map_err(|m| SweepError::new(&file, None, section, m))?;
+                    }
+                }
+                // The transient is checked against the run length once that is converted from
+                // periods (below); until then it is a placeholder.
+                let base_transient = tree
+                    .get("observe")
+                    .and_then(|o| o.get("transient_periods"))
+                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)));
+                set_key(
+                    &mut tree,
+                    "observe.transient_periods",
+                    toml::Value::Float(0.0),
+                )
+                .map_err(|m| SweepError::new(&file, None, "observe", m))?;
+                for (axis, v) in self.axes.iter().zip(&coords) {
+                    let value = to_toml(v)
+                        .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
+                    set_key(&mut tree, &axis.key, value)
+                        .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
+                }
+                if self.replicas > 1 {
+                    let seed = base_seed.checked_add(replica as u64).ok_or_else(|| {
+                        SweepError::new(&file, None, "initial.seed", "overflows with the replicas")
+                    })?;
+                    set_key(&mut tree, "initial.seed", toml::Value::Integer(seed as i64))
+                        .map_err(|m| SweepError::new(&file, None, "initial.seed", m))?;
+                }
+                if self.periods.is_some() {
+                    // The run length comes from `sweep.periods`; a placeholder lets a base scene
+                    // without `run.duration` parse (it is replaced below).
+                    let run = tree
+                        .entry("run")
+                        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+                    if let toml::Value::Table(run) = run {
+                        run.entry("duration").or_insert(toml::Value::Float(1.0));
+                    }
+                }
+                let scene = match self.scene_of(&tree, &where_) {
+                    Ok(s) => s,
+                    Err(e) if self.skip_invalid => {
+                        skipped.push(Skipped {
+                            point,
+                            coords: coords.clone(),
+                            reason: e,
+                        });
+                        jobs.retain(|j: &SweepJob| j.point != point);
+                        continue 'points;
+                    }
+                    Err(e) => return Err(e),
+                };
+                let period = driving_period(&scene);
+                let mut scene = scene;
+                if let Some(p) = self.periods {
+                    scene.run.duration = p * period;
+                }
+                // Sampling: the sweep's `samples_per_period`, else the scene's own `[observe]`
+                // setting if the base scene has one, else the sweep default.
+                let samples_per_period =
+                    if samples_given.is_some() || !self.base_sets("observe.samples_per_period") {
+                        samples_per_period
+                    } else {
+                        scene.observe.samples_per_period
+                    };
+                scene.run.sample_interval = period / samples_per_period;
+                scene.observe.samples_per_period = samples_per_period;
+                let transient_periods = match (transient, base_transient) {
+                    (Some(t), _) | (None, Some(t)) => t,
+                    (None, None) => DEFAULT_TRANSIENT_FRACTION * scene.run.duration / period,
+                };
+                scene.observe.transient_periods = transient_periods;
+                if transient_periods * period >= scene.run.duration {
+                    return Err(obs_err(
+                        "transient_periods",
+                        format!(
+                            "= {transient_periods} periods is not shorter than the run \
+                             ({} periods){where_}",
+                            scene.run.duration / period
+                        ),
+                    ));
+                }
+                // The converted run length and sampling must pass validation too.
+                scene.validate(&file).map_err(|e| {
+                    SweepError::new(
+                        &file,
+                        self.periods
+                            .and(super::file::key_line(&self.text, &["sweep"], "periods")),
+                        &e.key,
+                        format!("{}{where_}", e.message),
+                    )
+                })?;
+                let spec = JobSpec {
+                    format: SPEC_FORMAT,
+                    scene,
+                };
+                let id = spec.id();
+                jobs.push(SweepJob {
+                    point,
+                    replica,
+                    coords: coords.clone(),
+                    id,
+                    spec,
+                });
+            }
+        }
+        Ok((jobs, skipped))
+    }
+
+    /// Parses and validates one job's scene tree; errors point at the axis, the `[scene]` table
+    /// or the base file that set the offending key.
+    fn scene_of(&self, tree: &toml::Table, where_: &str) -> Result<Scene, SweepError> {
+        let text = toml::to_string(tree).map_err(|e| {
+            SweepError::new(
+                &self.path.display().to_string(),
+                None,
+                "scene",
+                e.to_string(),
+            )
+        })?;
+        let origin = self.path.display().to_string();
+        Scene::from_toml_str(&text, &origin).map_err(|e| {
+            let (file, line) = self.locate(&e.key);
+            // A parse-level message from the re-serialized tree carries a position in and a
+            // snippet of that text, not of the user's file: keep only what it says is wrong.
+            let message = e
+                .message
+                .lines()
+                .filter(|l| !l.starts_with("TOML parse error") && !l.contains('|'))
+                .collect::<Vec<_>>()
+                .join(" ");
+            SweepError::new(&file, line, &e.key, format!("{message}{where_}"))
+        })
+    }
+}
+
+/// `" (at Gamma = 2, E* = 3, replica 1)"` for error messages.
+fn describe_point(file: &SweepFile, coords: &[serde_json::Value], replica: u32) -> String {
+    if file.axes.is_empty() && file.replicas == 1 {
+        return String::new();
+    }
+    let mut parts: Vec<String> = file
+        .axes
+        .iter()
+        .zip(coords)
+        .map(|(a, v)| format!("{} = {v}", a.label))
+        .collect();
+    if file.replicas > 1 {
+        parts.push(format!("replica {replica}"));
+    }
+    format!(" (at {})", parts.join(", "))
+}

@@ -1,0 +1,80 @@
+//! Shared helpers of the sweep tests: sweep files written into temporary folders, the wetgran
+//! binary, and synthetic results committed through the store's own claim/finish path.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use wetgran::store::Store;
+use wetgran::sweep::JobResult;
+
+/// A small 2D wet shaken scene: 40 disks in a 20 d x 9 d box. One driving period at
+/// (Gamma, E*) = (3, 2) is T = 2 pi v_w / Gamma with v_w = sqrt(2 E* E_cb).
+pub const TINY_SCENE: &str = r#"
+dimension = 2
+[box]
+size = [20.0, 9.0]
+[particles]
+count = 40
+polydispersity = 0.06
+[contact]
+restitution = 0.9
+[capillary]
+model = "thin_thread"
+[drive]
+kind = "sine"
+gamma = 3.0
+e_star = 2.0
+[initial]
+temperature_over_ecb = 20.0
+seed = 7
+[run]
+duration = 10.0
+"#;
+
+/// Writes `text` to `dir/name` and returns the path.
+pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write a test file");
+    p
+}
+
+/// The wetgran binary built for these tests.
+pub fn wetgran() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_wetgran"))
+}
+
+/// Runs wetgran with `args` and returns its output.
+pub fn run(args: &[&str]) -> Output {
+    wetgran().args(args).output().expect("start wetgran")
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+/// Claims every pending job of the sweep and finishes it with the phase `phase(coords,
+/// replica)`, as a runner would (no simulation).
+pub fn finish_synthetic(
+    store: &Store,
+    sweep_id: i64,
+    phase: impl Fn(&[serde_json::Value], i64) -> Option<String>,
+) -> usize {
+    let mut n = 0;
+    while let Some(c) = store.claim(&[sweep_id]).expect("claim") {
+        let result = JobResult {
+            phase: phase(&c.coords, c.replica),
+            decided_on: Some(serde_json::json!({"synthetic": true})),
+            observables: serde_json::json!({"granular_temperature": 1.5, "n": c.point}),
+            simulated_time: 1.0,
+            wall_seconds: 0.01,
+            events: 10,
+        };
+        assert!(store.finish(&c, &result).expect("finish"));
+        n += 1;
+    }
+    n
+}

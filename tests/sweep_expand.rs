@@ -1,0 +1,325 @@
+//! Sweep files and their expansion into job specs: axes (lists, linear and log ranges),
+//! replicas, run length in driving periods, content-hashed ids (stable across processes,
+//! independent of key order and of spelled-out defaults), and errors naming file, line and key.
+
+mod sweep_common;
+
+use std::path::Path;
+use sweep_common::*;
+use wetgran::sweep::spec::{canonical_json, id_of_canonical};
+use wetgran::sweep::{AxisKind, JobSpec, SweepFile};
+
+fn sweep_text(header: &str, axes: &str) -> String {
+    format!("[sweep]\nname = \"t\"\nbase = \"tiny.toml\"\n{header}\n{axes}")
+}
+
+fn load(dir: &Path, text: &str) -> SweepFile {
+    let p = write(dir, "sweep.toml", text);
+    SweepFile::load(&p).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn err(dir: &Path, text: &str) -> String {
+    let p = write(dir, "bad.toml", text);
+    match SweepFile::load(&p).and_then(|s| s.expand().map(|_| ())) {
+        Ok(()) => panic!("expected an error for:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn axes_ranges_and_replicas_expand_to_the_full_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let s = load(
+        dir.path(),
+        &sweep_text(
+            "replicas = 2",
+            "[[axis]]\nkey = \"gamma\"\nlinear = { from = 2.0, to = 4.0, steps = 3 }\n\
+             [[axis]]\nkey = \"e_star\"\nlog = { from = 0.5, to = 8.0, steps = 5 }\n\
+             [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 1.0]\n",
+        ),
+    );
+    assert_eq!(s.axes[0].key, "drive.gamma");
+    assert_eq!(s.axes[0].label, "Gamma");
+    assert_eq!(s.axes[1].kind, AxisKind::Log);
+    let lin: Vec<f64> = s.axes[0]
+        .values
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(lin, vec![2.0, 3.0, 4.0]);
+    // Log range: both ends exact, constant ratio (8 / 0.5)^(1/4) = 2.
+    let log: Vec<f64> = s.axes[1]
+        .values
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!((log[0], log[4]), (0.5, 8.0));
+    for w in log.windows(2) {
+        assert!((w[1] / w[0] - 2.0).abs() < 1e-12, "{log:?}");
+    }
+    let jobs = s.expand().unwrap();
+    assert_eq!(jobs.len(), 3 * 5 * 2 * 2);
+    // Row-major, last axis fastest, replicas innermost; every value lands in its scene key.
+    for (k, j) in jobs.iter().enumerate() {
+        assert_eq!(j.point, k / 2);
+        assert_eq!(j.replica as usize, k % 2);
+        let (ig, ie, ir) = (j.point / 10, (j.point / 2) % 5, j.point % 2);
+        assert_eq!(j.coords[0].as_f64().unwrap(), lin[ig]);
+        assert_eq!(j.coords[1].as_f64().unwrap(), log[ie]);
+        let scene = &j.spec.scene;
+        assert_eq!(scene.drive.gamma, Some(lin[ig]));
+        assert_eq!(scene.drive.e_star, Some(log[ie]));
+        assert_eq!(scene.contact.restitution, [0.8, 1.0][ir]);
+        // Replica r: base seed (7) + r.
+        assert_eq!(scene.initial.seed, 7 + j.replica as u64);
+    }
+    let mut ids: Vec<&str> = jobs.iter().map(|j| j.id.as_str()).collect();
+    ids.sort();
+    ids.dedup();
+    assert_eq!(ids.len(), jobs.len(), "every job is distinct");
+}
+
+#[test]
+fn run_length_transient_and_sampling_are_converted_from_driving_periods() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let s = load(
+        dir.path(),
+        &sweep_text(
+            "periods = 12\n[observe]\ntransient_periods = 4\nsamples_per_period = 5\nbin_width = 4.0",
+            "[[axis]]\nkey = \"gamma\"\nvalues = [1.5, 6.0]\n",
+        ),
+    );
+    for j in s.expand().unwrap() {
+        let gamma = j.coords[0].as_f64().unwrap();
+        // MODEL.md 4.1, independently: v_w = sqrt(2 E* E_cb / m), omega = Gamma g / v_w.
+        let e_cb: f64 = 4.0 * 0.0711;
+        let v_w = (2.0 * 2.0 * e_cb).sqrt();
+        let period = 2.0 * std::f64::consts::PI / (gamma / v_w);
+        let run = &j.spec.scene.run;
+        assert!((run.duration - 12.0 * period).abs() < 1e-9 * period);
+        assert!((run.sample_interval - period / 5.0).abs() < 1e-12 * period);
+        assert_eq!(j.spec.scene.observe.transient_periods, 4.0);
+        assert_eq!(j.spec.scene.observe.samples_per_period, 5.0);
+        assert_eq!(j.spec.scene.observe.bin_width, 4.0);
+        assert!((j.spec.period() - period).abs() < 1e-12 * period);
+    }
+}
+
+#[test]
+fn ids_ignore_key_order_and_spelled_out_defaults_but_not_a_changed_value() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let axes = "[[axis]]\nkey = \"gamma\"\nvalues = [2.0, 3.0]\n";
+    let a = load(dir.path(), &sweep_text("", axes)).expand().unwrap();
+    // The same scene written inline, tables and keys in another order, defaults spelled out.
+    let inline = "[[axis]]\nkey = \"drive.gamma\"\nvalues = [2.0, 3.0]\n\
+         [sweep]\nname = \"other-name\"\n\
+         [scene.run]\nduration = 10.0\nsample_interval = 0.0\n\
+         [scene.initial]\nseed = 7\ntemperature_over_ecb = 20.0\n\
+         [scene.drive]\ne_star = 2.0\nkind = \"sine\"\ngamma = 3.0\nwall_solver = \"exact\"\n\
+         [scene.capillary]\nmodel = \"thin_thread\"\n\
+         [scene.contact]\nwall_restitution = 1.0\nrestitution = 0.9\n\
+         [scene.particles]\npolydispersity = 0.06\ncount = 40\nmass = 1.0\n\
+         [scene.box]\nsize = [20.0, 9.0]\n\
+         [scene]\ndimension = 2\ngravity = 1.0\n";
+    let b = load(dir.path(), inline).expand().unwrap();
+    let ids = |v: &[wetgran::sweep::SweepJob]| v.iter().map(|j| j.id.clone()).collect::<Vec<_>>();
+    assert_eq!(ids(&a), ids(&b));
+    // One changed parameter: a new job.
+    let c = load(
+        dir.path(),
+        &sweep_text("[scene]\ncontact.restitution = 0.8", axes),
+    )
+    .expand()
+    .unwrap();
+    assert!(ids(&a).iter().all(|id| !ids(&c).contains(id)));
+}
+
+#[test]
+fn canonical_json_is_sorted_round_trips_and_hashes_to_the_id() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let jobs = load(
+        dir.path(),
+        &sweep_text(
+            "",
+            "[[axis]]\nkey = \"e_star\"\nlog = { from = 0.3, to = 3.0, steps = 3 }\n",
+        ),
+    )
+    .expand()
+    .unwrap();
+    for j in &jobs {
+        let text = j.spec.canonical_json();
+        // Keys sorted at every level: re-canonicalising the parsed text changes nothing, and the
+        // top-level keys appear in order.
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(canonical_json(&v), text);
+        let pos: Vec<usize> = ["\"classify\"", "\"format\"", "\"observe\"", "\"scene\""]
+            .iter()
+            .map(|k| text.find(k).unwrap())
+            .collect();
+        assert!(pos.windows(2).all(|w| w[0] < w[1]), "{text}");
+        // The spec alone reproduces the job, floats exactly.
+        let back = JobSpec::from_json(&text, "test").unwrap();
+        assert_eq!(back, j.spec);
+        assert_eq!(back.id(), j.id);
+        assert_eq!(id_of_canonical(&text), j.id);
+        // Independent SHA-256 where the system has one.
+        if let Ok(out) = std::process::Command::new("sha256sum")
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .and_then(|mut c| {
+                use std::io::Write;
+                c.stdin.take().unwrap().write_all(text.as_bytes())?;
+                c.wait_with_output()
+            })
+        {
+            let hex = String::from_utf8_lossy(&out.stdout);
+            assert_eq!(hex.split_whitespace().next().unwrap(), j.id);
+        }
+    }
+}
+
+#[test]
+fn ids_are_stable_across_processes() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &sweep_text(
+            "replicas = 2",
+            "[[axis]]\nkey = \"gamma\"\nlinear = { from = 1.5, to = 6.0, steps = 4 }\n",
+        ),
+    );
+    let p = p.to_str().unwrap();
+    let first = run(&["sweep", "expand", p, "--specs"]);
+    let second = run(&["sweep", "expand", p, "--specs"]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert_eq!(stdout(&first).lines().count(), 8);
+    assert_eq!(first.stdout, second.stdout);
+    // And the same as the library computes in this process.
+    let jobs = SweepFile::load(Path::new(p)).unwrap().expand().unwrap();
+    for (line, j) in stdout(&first).lines().zip(&jobs) {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        assert_eq!(v["id"], serde_json::json!(j.id));
+    }
+}
+
+#[test]
+fn sweep_file_errors_name_file_line_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let d = dir.path();
+    let file = d.join("bad.toml").display().to_string();
+    let cases: Vec<(String, &str, &str)> = vec![
+        // TOML syntax error on line 4.
+        (
+            sweep_text("", "[[axis]]\nkey = \"gamma\nvalues = [1.0]\n"),
+            ":6",
+            "",
+        ),
+        // Unknown key in [sweep], line 4.
+        (sweep_text("replica = 3", ""), ":4", "key `replica`"),
+        // An axis value the scene rejects: the axis line and the scene key.
+        (
+            sweep_text("", "\n[[axis]]\nkey = \"gamma\"\nvalues = [2.0, -1.0]\n"),
+            ":7",
+            "key `drive.gamma`",
+        ),
+        // A log range through zero.
+        (
+            sweep_text(
+                "",
+                "[[axis]]\nkey = \"e_star\"\nlog = { from = 0.0, to = 3.0, steps = 3 }\n",
+            ),
+            ":7",
+            "key `drive.e_star`",
+        ),
+        // A bad value in the inline [scene] table: its line in the sweep file.
+        (
+            sweep_text(
+                "[scene]\ncapillary.s_crit = 0.05\nparticles.polydispersity = 0.9",
+                "",
+            ),
+            ":6",
+            "key `particles.polydispersity`",
+        ),
+        // Two axes on one key.
+        (
+            sweep_text(
+                "",
+                "[[axis]]\nkey = \"gamma\"\nvalues = [2.0]\n[[axis]]\nkey = \"drive.gamma\"\nvalues = [3.0]\n",
+            ),
+            ":9",
+            "key `drive.gamma`",
+        ),
+        // Replicas and a seed axis at once.
+        (
+            sweep_text(
+                "replicas = 2",
+                "[[axis]]\nkey = \"initial.seed\"\nvalues = [1, 2]\n",
+            ),
+            ":6",
+            "key `initial.seed`",
+        ),
+        // Transient not shorter than the run.
+        (
+            sweep_text("periods = 5\n[observe]\ntransient_periods = 5", ""),
+            ":6",
+            "key `observe.transient_periods`",
+        ),
+        // Missing base scene file: the line of `base`.
+        (
+            "[sweep]\nname = \"t\"\nbase = \"nowhere.toml\"\n".to_string(),
+            ":3",
+            "key `sweep.base`",
+        ),
+    ];
+    for (text, line, key) in cases {
+        let e = err(d, &text);
+        assert!(
+            e.starts_with(&format!("{file}{line}")),
+            "expected {file}{line} in: {e}\nfor:\n{text}"
+        );
+        assert!(e.contains(key), "expected {key} in: {e}");
+    }
+    // A bad value in the base scene file names that file and line.
+    write(
+        d,
+        "tiny_bad.toml",
+        &TINY_SCENE.replace("count = 40", "count = 0"),
+    );
+    let e = err(d, "[sweep]\nname = \"t\"\nbase = \"tiny_bad.toml\"\n");
+    let base = d.join("tiny_bad.toml").display().to_string();
+    assert!(
+        e.starts_with(&format!("{base}:6: key `particles.count`")),
+        "{e}"
+    );
+}
+
+#[test]
+fn skip_invalid_leaves_out_points_outside_the_scene_range() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    // A = 2 E* E_cb / (Gamma g) must stay below (9 - d_max) / 2 ~ 3.95: E* = 80 gives A = 30
+    // at Gamma = 1.5 and A = 7.6 at Gamma = 6, too long a stroke for the 9 d box.
+    let text = sweep_text(
+        "skip_invalid = true",
+        "[[axis]]\nkey = \"gamma\"\nvalues = [1.5, 6.0]\n[[axis]]\nkey = \"e_star\"\nvalues = [1.0, 80.0]\n",
+    );
+    let s = load(dir.path(), &text);
+    let (jobs, skipped) = s.expand_with_skips().unwrap();
+    assert_eq!(jobs.len(), 2);
+    assert_eq!(skipped.len(), 2);
+    for k in &skipped {
+        assert_eq!(k.coords[1], serde_json::json!(80.0));
+        assert_eq!(k.reason.key, "box.size[1]");
+    }
+    // Without the switch the sweep is rejected.
+    let e = err(dir.path(), &text.replace("skip_invalid = true", ""));
+    assert!(e.contains("box.size[1]"), "{e}");
+}
