@@ -156,7 +156,7 @@ fn canonical_json_is_sorted_round_trips_and_hashes_to_the_id() {
         // top-level keys appear in order.
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();
         assert_eq!(canonical_json(&v), text);
-        let pos: Vec<usize> = ["\"classify\"", "\"format\"", "\"observe\"", "\"scene\""]
+        let pos: Vec<usize> = ["\"format\"", "\"scene\"", "\"classify\"", "\"observe\""]
             .iter()
             .map(|k| text.find(k).unwrap())
             .collect();

@@ -17,8 +17,10 @@ use sha2::{Digest, Sha256};
 /// Version of the job-spec layout; part of the hashed text, so a change of layout is a new job.
 pub const SPEC_FORMAT: u32 = 1;
 
-/// Default number of samples per driving period where the sweep file gives none.
-pub const DEFAULT_SAMPLES_PER_PERIOD: f64 = 4.0;
+/// Default number of samples per driving period where neither the sweep file nor its base scene
+/// gives one: the observers' own default (the location-change counter needs fine sampling,
+/// docs/observables.md).
+pub const DEFAULT_SAMPLES_PER_PERIOD: f64 = 20.0;
 /// Default transient, as a fraction of the run, where the sweep file gives none.
 pub const DEFAULT_TRANSIENT_FRACTION: f64 = 0.25;
 
