@@ -283,19 +283,12 @@ impl Scene {
                     ("drive.e_star", drive.e_star.is_some()),
                     ("drive.root_tolerance", drive.root_tolerance.is_some()),
                     ("drive.t_min", drive.t_min.is_some()),
-                    ("drive.table_cells", drive.table_cells.is_some()),
-                    ("drive.table_v_min", drive.table_v_min.is_some()),
-                    ("drive.table_v_max", drive.table_v_max.is_some()),
-                    (
-                        "drive.table_corner_check",
-                        drive.table_corner_check.is_some(),
-                    ),
-                    (
-                        "drive.table_corner_tolerance",
-                        drive.table_corner_tolerance.is_some(),
-                    ),
                 ];
-                if let Some((key, _)) = given.iter().find(|(_, g)| *g) {
+                if let Some((key, _)) = given
+                    .iter()
+                    .chain(table_keys_given(drive).iter())
+                    .find(|(_, g)| *g)
+                {
                     return Err(c.err(
                         key,
                         "is set but drive.kind = \"none\": set kind = \"sine\" or remove the key"
@@ -343,21 +336,8 @@ impl Scene {
                 if let Some(t_min) = drive.t_min {
                     c.positive("drive.t_min", t_min)?;
                 }
-                let table_keys = [
-                    ("drive.table_cells", drive.table_cells.is_some()),
-                    ("drive.table_v_min", drive.table_v_min.is_some()),
-                    ("drive.table_v_max", drive.table_v_max.is_some()),
-                    (
-                        "drive.table_corner_check",
-                        drive.table_corner_check.is_some(),
-                    ),
-                    (
-                        "drive.table_corner_tolerance",
-                        drive.table_corner_tolerance.is_some(),
-                    ),
-                ];
                 if drive.wall_solver != super::WallSolverKind::Table
-                    && let Some((key, _)) = table_keys.iter().find(|(_, g)| *g)
+                    && let Some((key, _)) = table_keys_given(drive).iter().find(|(_, g)| *g)
                 {
                     return Err(c.err(
                         key,
@@ -602,4 +582,21 @@ impl Scene {
         self.classify.validate(origin)?;
         Ok(())
     }
+}
+
+/// The `table` solver's keys and whether each is set.
+fn table_keys_given(drive: &super::DriveSpec) -> [(&'static str, bool); 5] {
+    [
+        ("drive.table_cells", drive.table_cells.is_some()),
+        ("drive.table_v_min", drive.table_v_min.is_some()),
+        ("drive.table_v_max", drive.table_v_max.is_some()),
+        (
+            "drive.table_corner_check",
+            drive.table_corner_check.is_some(),
+        ),
+        (
+            "drive.table_corner_tolerance",
+            drive.table_corner_tolerance.is_some(),
+        ),
+    ]
 }
