@@ -1,6 +1,7 @@
 //! The command line: `wetgran simulate`, `wetgran bench`, and the sweep commands (`sweep`,
 //! `boundaries`, `plot`, `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`].
 
+pub mod point_cmd;
 pub mod sweep_cmd;
 
 use crate::bench;
@@ -94,6 +95,35 @@ pub enum Command {
         /// The SVG file to write.
         #[arg(short = 'o', long = "output")]
         output: PathBuf,
+    },
+    /// Show one stored sweep point: phase, the numbers it was decided on, pictures.
+    ///
+    /// The lateral profiles come from the stored observables; a snapshot re-runs the job's
+    /// stored spec (same spec and seed, same numbers: the event count is compared with the
+    /// stored run's) and draws its final configuration.
+    Show {
+        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        db: PathBuf,
+        /// The job: at least 6 leading hex digits of its id (`wetgran export` lists ids).
+        job: String,
+        /// Write a snapshot of the final configuration (`.xyz` for OVITO, or `.svg`); repeatable.
+        #[arg(long)]
+        snapshot: Vec<PathBuf>,
+        /// Colour of the SVG snapshot: `energy` (kinetic energy / E_cb) or `bridges`.
+        #[arg(long, default_value = "energy")]
+        colour_by: String,
+        /// Write the lateral profiles (T_g, packing fraction, n_cb against x) as SVG.
+        #[arg(long)]
+        profiles: Option<PathBuf>,
+    },
+    /// The fluid-gas boundary of inelastic systems: the inflection point of T_g/E_cb against
+    /// E* along each line of constant Gamma of a sweep (MODEL.md 7).
+    Inflection {
+        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        db: PathBuf,
+        /// Only this sweep (default: all).
+        #[arg(long)]
+        sweep: Option<String>,
     },
     /// Export all finished jobs with their parameters, phase and observables.
     ///
@@ -215,6 +245,20 @@ pub fn main() -> ExitCode {
             format,
             output,
         } => sweep_cmd::export(&db, sweep.as_deref(), format, output.as_deref()),
+        Command::Show {
+            db,
+            job,
+            snapshot,
+            colour_by,
+            profiles,
+        } => match colour_by.parse::<ColourBy>() {
+            Ok(c) => point_cmd::show(&db, &job, &snapshot, c, profiles.as_deref()),
+            Err(e) => {
+                eprintln!("error: --colour-by: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Command::Inflection { db, sweep } => point_cmd::inflection(&db, sweep.as_deref()),
     }
 }
 

@@ -114,7 +114,7 @@ pub enum ExportFormat {
     Json,
 }
 
-enum Failure {
+pub(super) enum Failure {
     BadInput(String),
     Other(String),
 }
@@ -132,7 +132,7 @@ impl From<StoreError> for Failure {
     }
 }
 
-fn exit(r: Result<(), Failure>) -> ExitCode {
+pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
     match r {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::BadInput(m)) => {
@@ -505,7 +505,7 @@ fn sweep_map(store: &Store, sweep: &SweepRow) -> Result<PhaseMap, Failure> {
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
 }
 
-fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>, Failure> {
+pub(super) fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>, Failure> {
     Ok(match name {
         Some(n) => vec![store.sweep(n)?],
         None => store.sweeps()?,
