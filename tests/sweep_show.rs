@@ -82,6 +82,26 @@ fn show_redraws_a_stored_point_and_inflection_reads_the_lines() {
         assert!(text(&o).contains(bad), "{}", text(&o));
     }
 
+    // A reader that stops early (`wetgran export | head`) ends the export quietly with the
+    // SIGPIPE status, not with a panic report.
+    {
+        use std::io::{BufRead, BufReader};
+        let mut child = wetgran()
+            .args(["export", "--db", db_s, "--format", "json"])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut first = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut first)
+            .unwrap();
+        assert_eq!(first.trim(), "[");
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(141), "{}", text(&out));
+        assert!(!text(&out).contains("panicked"), "{}", text(&out));
+    }
+
     // One line of constant Gamma with five E*: the analysis reports it.
     let inf = wetgran()
         .args(["inflection", "--db", db_s])
