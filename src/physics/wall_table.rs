@@ -718,19 +718,20 @@ fn tabulate(w: &WallMotion, spec: &TableSpec, edge: Edge, p: [f64; 2], period: f
     cell
 }
 
-/// Times (relative, either sign) at which the parabola `z + v t - g t^2 / 2` passes `plane`.
-fn crossings(z: f64, v: f64, g: f64, plane: f64) -> Vec<f64> {
+/// Times (relative, either sign) at which the parabola `z + v t - g t^2 / 2` passes `plane`;
+/// NaN marks a crossing that does not exist (no allocation: this runs on every query).
+fn crossings(z: f64, v: f64, g: f64, plane: f64) -> [f64; 2] {
     let c = z - plane;
     if g == 0.0 {
-        return if v != 0.0 { vec![-c / v] } else { vec![] };
+        return [if v != 0.0 { -c / v } else { f64::NAN }, f64::NAN];
     }
     // -g/2 t^2 + v t + c = 0
     let disc = v * v + 2.0 * g * c;
     if disc < 0.0 {
-        return vec![];
+        return [f64::NAN; 2];
     }
     let sq = disc.sqrt();
-    vec![(v - sq) / g, (v + sq) / g]
+    [(v - sq) / g, (v + sq) / g]
 }
 
 /// First time `> 0` at which the parabola reaches `plane` moving down (`up = false`) or up.
