@@ -14,6 +14,7 @@ pub mod boundary;
 pub mod cli;
 pub mod observe;
 pub mod physics;
+pub mod refine;
 pub mod report;
 pub mod scene;
 pub mod sim;

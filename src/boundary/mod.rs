@@ -47,10 +47,12 @@ pub struct PlaneAxis {
 }
 
 impl PlaneAxis {
-    fn scale(&self, v: f64) -> f64 {
+    /// The plane coordinate of an axis value (`log10` on a log axis).
+    pub fn scale(&self, v: f64) -> f64 {
         if self.log { v.log10() } else { v }
     }
-    fn unscale(&self, s: f64) -> f64 {
+    /// The axis value of a plane coordinate.
+    pub fn unscale(&self, s: f64) -> f64 {
         if self.log { 10f64.powf(s) } else { s }
     }
 }
@@ -83,6 +85,16 @@ pub struct BoundaryPoint {
     pub y: f64,
     /// The two map points of the edge (indices into [`Slice::points`]).
     pub between: [usize; 2],
+    /// Uncertainty: half the straddling edge along each axis, in the plane's units (axis units;
+    /// decades on a log axis, i.e. a factor `10^x_half` either side).
+    pub x_half: f64,
+    pub y_half: f64,
+    /// The interval the boundary lies in along each axis: the edge's two ends, low to high.
+    pub x_range: [f64; 2],
+    pub y_range: [f64; 2],
+    /// Fraction of the votes at the two ends that agree with their end's majority (1: every
+    /// replica agrees).
+    pub confidence: f64,
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
 }
@@ -303,6 +315,19 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
                 .as_ref()
                 .map_or(0.0, |ay| ay.unscale(0.5 * (ay.scale(a.y) + ay.scale(b.y))));
             let (amplitude, omega) = motion(scenes[i], xv, yv);
+            let half = |ax: &Option<PlaneAxis>, u: f64, v: f64| {
+                ax.as_ref()
+                    .map_or(0.0, |ax| 0.5 * (ax.scale(u) - ax.scale(v)).abs())
+            };
+            let agree = |p: &MapPoint| {
+                p.votes
+                    .iter()
+                    .flatten()
+                    .map(|v| usize::from(*v == p.phase))
+                    .sum::<usize>()
+            };
+            let votes = |p: &MapPoint| p.votes.iter().flatten().count();
+            let confidence = (agree(a) + agree(b)) as f64 / (votes(a) + votes(b)) as f64;
             boundaries
                 .entry(pair.clone())
                 .or_default()
@@ -311,6 +336,11 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
                     x: xv,
                     y: yv,
                     between: [i.min(j), i.max(j)],
+                    x_half: half(&x, a.x, b.x),
+                    y_half: half(&y, a.y, b.y),
+                    x_range: [a.x.min(b.x), a.x.max(b.x)],
+                    y_range: [a.y.min(b.y), a.y.max(b.y)],
+                    confidence,
                     amplitude,
                     omega,
                 });
@@ -338,18 +368,28 @@ fn delaunay_edges(
     xa: &PlaneAxis,
     ya: &PlaneAxis,
 ) -> Result<Vec<(usize, usize)>, BoundaryError> {
+    let pos: Vec<(f64, f64)> = points
+        .iter()
+        .map(|p| (xa.scale(p.x), ya.scale(p.y)))
+        .collect();
+    delaunay_pairs(&pos).map_err(|k| {
+        BoundaryError(format!(
+            "point ({}, {}) cannot be triangulated",
+            points[k].x, points[k].y
+        ))
+    })
+}
+
+/// Undirected Delaunay edges `(i, j)`, `i < j`, sorted, of points in a plane (spade, exact
+/// predicates). Error: the index of a point that cannot be inserted (not finite).
+pub fn delaunay_pairs(pos: &[(f64, f64)]) -> Result<Vec<(usize, usize)>, usize> {
     let mut tri: DelaunayTriangulation<Vertex> = DelaunayTriangulation::new();
-    for (index, p) in points.iter().enumerate() {
+    for (index, &(x, y)) in pos.iter().enumerate() {
         tri.insert(Vertex {
-            pos: Point2::new(xa.scale(p.x), ya.scale(p.y)),
+            pos: Point2::new(x, y),
             index,
         })
-        .map_err(|e| {
-            BoundaryError(format!(
-                "point ({}, {}) cannot be triangulated: {e:?}",
-                p.x, p.y
-            ))
-        })?;
+        .map_err(|_| index)?;
     }
     let mut edges: Vec<(usize, usize)> = tri
         .undirected_edges()
