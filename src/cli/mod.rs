@@ -2,6 +2,7 @@
 //! `boundaries`, `plot`, `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`].
 
 pub mod point_cmd;
+mod refine_cmd;
 pub mod sweep_cmd;
 
 use crate::bench;

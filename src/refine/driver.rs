@@ -2,7 +2,8 @@
 //! round per slice ([`super::plan_round`]), add its jobs to the sweep (new points numbered from
 //! [`REFINED_FROM`], more replicas of existing points), run them with the same scheduler, again.
 //!
-//! The budget is split into rounds of `ceil(budget / rounds)` jobs; a round's budget is shared
+//! The budget is split into rounds of `ceil(budget / rounds)` jobs (fixed by the whole budget,
+//! so that an interrupted refinement continues with rounds of the same size); a round's budget is shared
 //! by the slices in order. Refinement stops when the budget is spent or a round plans nothing
 //! (every boundary edge resolved). Everything is decided from the stored results, so a run
 //! interrupted at any point continues with the same plan: `sweep resume` (or `sweep refine`
@@ -60,17 +61,17 @@ pub fn refined_jobs(rows: &[PointRow], replicas: u32) -> usize {
 }
 
 /// Runs up to `budget` more jobs of refinement on a registered sweep (`file` is its sweep file,
-/// as registered), in rounds of `ceil(budget / rounds)`.
+/// as registered), at most `per_round` per round.
 pub fn refine_sweep(
     store: &Store,
     file: &SweepFile,
     row: &SweepRow,
     budget: usize,
-    rounds: usize,
+    per_round: usize,
     settings: &Settings,
     opts: &RunOptions,
 ) -> Result<Outcome, RefineError> {
-    let per_round = budget.div_ceil(rounds.max(1));
+    let per_round = per_round.max(1);
     let mut left = budget;
     let mut out = Outcome::default();
     loop {
