@@ -437,4 +437,51 @@ mod tests {
         );
         assert_eq!(majority(&v(&[None, None])), None);
     }
+
+    #[test]
+    fn boundary_points_carry_half_the_edge_and_the_replicas_agreement() {
+        let scene = Scene::from_toml_str(
+            "dimension = 2\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
+             [drive]\nkind = \"sine\"\ngamma = 3.0\ne_star = 2.0\n[initial]\nseed = 1\ntemperature = 1.0\n[run]\nduration = 1.0\n",
+            "test",
+        )
+        .unwrap();
+        let axes: Vec<Axis> = [("drive.gamma", "Gamma"), ("drive.e_star", "E*")]
+            .iter()
+            .map(|(k, l)| Axis {
+                name: k.to_string(),
+                key: k.to_string(),
+                label: l.to_string(),
+                kind: AxisKind::Values,
+                values: vec![],
+                line: 0,
+            })
+            .collect();
+        // (Gamma 2, E* 1): f, f, g; (Gamma 2, E* 4): g, g, g.
+        let obs = |e: f64, r: i64, p: &str| Observation {
+            coords: vec![serde_json::json!(2.0), serde_json::json!(e)],
+            replica: r,
+            phase: Some(p.to_string()),
+            scene: scene.clone(),
+        };
+        let jobs = vec![
+            obs(1.0, 0, "f"),
+            obs(1.0, 1, "f"),
+            obs(1.0, 2, "g"),
+            obs(4.0, 0, "g"),
+            obs(4.0, 1, "g"),
+            obs(4.0, 2, "g"),
+        ];
+        let map = phase_map(&axes, &jobs).unwrap();
+        let b = &map.slices[0].boundaries["f|g"][0];
+        // Midpoint in log10 E*: E* = 2 (geometric mean), half the edge = log10(2) decades.
+        assert!((b.x - 2.0).abs() < 1e-12);
+        assert!((b.x_half - 2f64.log10()).abs() < 1e-12);
+        assert_eq!(
+            (b.x_range, b.y_range, b.y_half),
+            ([1.0, 4.0], [2.0, 2.0], 0.0)
+        );
+        // 5 of the 6 votes agree with their point's majority.
+        assert!((b.confidence - 5.0 / 6.0).abs() < 1e-12);
+    }
 }
