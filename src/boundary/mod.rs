@@ -14,6 +14,10 @@
 //!    predicates) and put a point at the midpoint of every edge whose two ends differ in phase.
 //!    The midpoint is taken in the scaled plane (so on a log axis it is the geometric mean).
 //!    Points are grouped by the pair of phases, sorted by name and joined with `|` (`f|fgc`).
+//!    Each boundary point carries its uncertainty, half the straddling edge along each axis (in
+//!    the plane's units: decades on a log axis) with the edge's interval in axis units, and a
+//!    confidence: the fraction of the votes at the two ends that agree with their end's
+//!    majority.
 //! 4. Physical units: for shaking sweeps every map and boundary point also carries the container
 //!    motion `(A, omega)` of MODEL.md 4.1, computed from its `(Gamma, E*)` and the scene's
 //!    `E_cb`, `m`, `g` (Scene::drive_motion).

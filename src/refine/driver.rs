@@ -187,17 +187,15 @@ pub fn plan_jobs(
                 let made = file
                     .jobs_at(p as usize, &coords, from..to)
                     .map_err(|e| bad(e.to_string()))?;
-                match made {
-                    Ok(j) => slice_jobs.extend(j),
-                    Err(_) if matches!(step, Step::Point { .. }) => {
+                match (made, step) {
+                    (Ok(j), _) => slice_jobs.extend(j),
+                    (Err(_), &Step::Point { x, y }) => {
                         // Outside the valid region (e.g. the stroke exceeds the box): never
                         // proposed again, plan the slice anew.
-                        if let Step::Point { x, y } = *step {
-                            blocked.push((x, y));
-                        }
+                        blocked.push((x, y));
                         continue 'plan;
                     }
-                    Err(e) => return Err(bad(e.to_string())),
+                    (Err(e), Step::Replicas { .. }) => return Err(bad(e.to_string())),
                 }
             }
             next_point = point;
