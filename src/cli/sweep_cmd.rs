@@ -1,4 +1,5 @@
-//! The sweep commands: `sweep run|resume|status|expand|job`, `boundaries`, `plot`, `export`.
+//! The sweep commands: `sweep run|resume|status|expand|job|refine`, `boundaries`, `plot`,
+//! `export`.
 //! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
 //! unknown sweep), 1 any other error.
 
@@ -95,7 +96,9 @@ pub enum SweepCommand {
     /// (log axes in decades); every edge between two phases longer than the resolution is split
     /// at its midpoint, or, where the replicas of an end disagree, that end gets more replicas.
     /// The new jobs run with the same scheduler and store. Stops at the budget or when every
-    /// boundary edge is resolved. Interrupted, it continues with `sweep resume` or `sweep refine`.
+    /// boundary edge is resolved. Interrupted, `sweep resume` runs the jobs of the round it was
+    /// in, and continues up to the budget of a `[refine]` table (`--budget` is what one call
+    /// adds: a second call adds that many again).
     Refine {
         /// The sweep (default: the only one in the database).
         #[arg(long)]
