@@ -234,3 +234,67 @@ fn sweep_refine_adds_its_budget_and_boundaries_carry_the_uncertainty() {
         "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence\n"
     ));
 }
+
+#[test]
+fn a_point_whose_replicas_disagree_gets_more_replicas_through_the_store() {
+    // Synthetic phases (no simulation): gas at E* = 2 except replica 1 of (Gamma 2, E* 2).
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let file = write(
+        dir.path(),
+        "noisy.toml",
+        "[sweep]\nname = \"n\"\nbase = \"tiny.toml\"\nreplicas = 2\nperiods = 60\n\
+         [[axis]]\nkey = \"gamma\"\nvalues = [2.0, 3.0]\n\
+         [[axis]]\nkey = \"e_star\"\nvalues = [1.0, 2.0]\n",
+    );
+    let sweep = SweepFile::load(&file).unwrap();
+    let store = Store::open(&dir.path().join("n.sqlite")).unwrap();
+    let row = store
+        .register_sweep(&sweep, &sweep.expand().unwrap())
+        .unwrap();
+    let phase = |c: &[serde_json::Value], r: i64| {
+        let (g, e) = (c[0].as_f64().unwrap(), c[1].as_f64().unwrap());
+        Some(
+            if e < 1.5 || (g == 2.0 && r == 1) {
+                "f"
+            } else {
+                "g"
+            }
+            .to_string(),
+        )
+    };
+    assert_eq!(finish_synthetic(&store, row.id, phase), 8);
+    let settings = Settings {
+        replicas: 2,
+        max_replicas: 4,
+        resolution: 0.0,
+    };
+    // Replicas come first: a budget of 2 buys the two next replicas of point 1 (Gamma 2, E* 2).
+    let round = plan_jobs(&sweep, &row, &store.points(row.id).unwrap(), 2, &settings).unwrap();
+    let got: Vec<(usize, u32, u64)> = round
+        .iter()
+        .map(|j| (j.point, j.replica, j.spec.scene.initial.seed))
+        .collect();
+    assert_eq!(got, vec![(1, 2, 9), (1, 3, 10)]);
+    assert_eq!(
+        round[0].coords,
+        vec![serde_json::json!(2.0), serde_json::json!(2.0)]
+    );
+    store.add_jobs(row.id, &round).unwrap();
+    assert_eq!(finish_synthetic(&store, row.id, phase), 2);
+    // At max_replicas the majority (g, 3 of 4) stands: only new points now, each with 2
+    // replicas, numbered from REFINED_FROM, between the grid points.
+    let stored = store.points(row.id).unwrap();
+    assert_eq!(refined_jobs(&stored, 2), 2);
+    let round = plan_jobs(&sweep, &row, &stored, 100, &settings).unwrap();
+    assert!(!round.is_empty());
+    for (k, j) in round.iter().enumerate() {
+        assert_eq!(j.point as i64, REFINED_FROM + (k / 2) as i64, "{j:?}");
+        assert_eq!(j.replica as usize, k % 2);
+        let (g, e) = (j.coords[0].as_f64().unwrap(), j.coords[1].as_f64().unwrap());
+        assert!(
+            (2.0..=3.0).contains(&g) && (1.0..=2.0).contains(&e),
+            "{j:?}"
+        );
+    }
+}
