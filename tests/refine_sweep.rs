@@ -298,3 +298,63 @@ fn a_point_whose_replicas_disagree_gets_more_replicas_through_the_store() {
         );
     }
 }
+
+#[test]
+fn new_points_on_an_integer_axis_are_whole_numbers() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let file = write(
+        dir.path(),
+        "count.toml",
+        "[sweep]\nname = \"c\"\nbase = \"tiny.toml\"\nperiods = 60\n\
+         [[axis]]\nkey = \"particles.count\"\nvalues = [20, 25]\n\
+         [[axis]]\nkey = \"gamma\"\nvalues = [2.0, 3.0]\n",
+    );
+    let sweep = SweepFile::load(&file).unwrap();
+    let store = Store::open(&dir.path().join("c.sqlite")).unwrap();
+    let row = store
+        .register_sweep(&sweep, &sweep.expand().unwrap())
+        .unwrap();
+    // The phase changes between 20 and 25 particles.
+    let phase = |c: &[serde_json::Value], _: i64| {
+        Some(
+            if c[0].as_i64().unwrap() < 22 {
+                "f"
+            } else {
+                "g"
+            }
+            .to_string(),
+        )
+    };
+    finish_synthetic(&store, row.id, phase);
+    let settings = Settings {
+        replicas: 1,
+        max_replicas: 1,
+        resolution: 0.0,
+    };
+    let mut counts = Vec::new();
+    for _ in 0..4 {
+        let stored = store.points(row.id).unwrap();
+        let round = plan_jobs(&sweep, &row, &stored, 2, &settings).unwrap();
+        for j in &round {
+            let n = j.coords[0]
+                .as_i64()
+                .unwrap_or_else(|| panic!("{:?}", j.coords));
+            assert_eq!(j.spec.scene.particles.count as i64, n);
+            counts.push(n);
+        }
+        store.add_jobs(row.id, &round).unwrap();
+        finish_synthetic(&store, row.id, phase);
+    }
+    // Bisection on whole numbers down to 21 | 22, and no point twice.
+    assert!(counts.contains(&21) && counts.contains(&22), "{counts:?}");
+    let stored = store.points(row.id).unwrap();
+    let mut coords: Vec<String> = stored
+        .iter()
+        .map(|p| serde_json::to_string(&p.coords).unwrap())
+        .collect();
+    let n = coords.len();
+    coords.sort();
+    coords.dedup();
+    assert_eq!(coords.len(), n);
+}

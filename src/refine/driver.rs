@@ -13,7 +13,7 @@
 use super::{Sample, Settings, Step, plan_round};
 use crate::boundary::{Observation, PlaneAxis, phase_map};
 use crate::store::{PointRow, REFINED_FROM, Store, StoreError, SweepRow};
-use crate::sweep::{RunOptions, SweepFile, run_sweeps};
+use crate::sweep::{RunOptions, SweepFile, SweepJob, run_sweeps};
 use std::collections::BTreeMap;
 
 /// What a refinement did.
@@ -107,7 +107,7 @@ pub fn plan_jobs(
     rows: &[PointRow],
     budget: usize,
     settings: &Settings,
-) -> Result<Vec<crate::sweep::SweepJob>, RefineError> {
+) -> Result<Vec<SweepJob>, RefineError> {
     let bad = |m: String| RefineError::Bad(format!("sweep {}: {m}", row.name));
     let obs: Vec<Observation> = rows
         .iter()
@@ -173,8 +173,15 @@ pub fn plan_jobs(
                 let (p, coords, from, to) = match *step {
                     Step::Point { x, y } => {
                         let mut c = template.coords.clone();
-                        c[xa.index] = serde_json::json!(xa.unscale(x));
-                        c[ya.index] = serde_json::json!(ya.unscale(y));
+                        c[xa.index] = value(&row.axes[xa.index], xa.unscale(x));
+                        c[ya.index] = value(&row.axes[ya.index], ya.unscale(y));
+                        if index.contains_key(&key(&c))
+                            || slice_jobs.iter().any(|j: &SweepJob| j.coords == c)
+                        {
+                            // An integer axis rounded it onto a point there is already.
+                            blocked.push((x, y));
+                            continue 'plan;
+                        }
                         point += 1;
                         (point - 1, c, 0, settings.replicas.max(1))
                     }
@@ -205,6 +212,16 @@ pub fn plan_jobs(
         }
     }
     Ok(jobs)
+}
+
+/// A new value on an axis: rounded to an integer where every grid value is an integer (a count,
+/// a seed), else the number itself.
+fn value(axis: &crate::sweep::Axis, v: f64) -> serde_json::Value {
+    if axis.values.iter().all(|g| g.is_i64() || g.is_u64()) {
+        serde_json::json!(v.round() as i64)
+    } else {
+        serde_json::json!(v)
+    }
 }
 
 fn key(c: &[serde_json::Value]) -> String {
