@@ -323,3 +323,59 @@ fn skip_invalid_leaves_out_points_outside_the_scene_range() {
     let e = err(dir.path(), &text.replace("skip_invalid = true", ""));
     assert!(e.contains("box.size[1]"), "{e}");
 }
+
+#[test]
+fn a_refine_table_is_checked_with_file_line_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let axes = "[[axis]]\nkey = \"gamma\"\nvalues = [2.0, 3.0]\n\
+                [[axis]]\nkey = \"e_star\"\nvalues = [1.0, 2.0]\n";
+    let with = |refine: &str| sweep_text("replicas = 2", &format!("{axes}[refine]\n{refine}"));
+    let ok = load(dir.path(), &with("budget = 10\nresolution = 0.05\n"));
+    let r = ok.refine.unwrap();
+    assert_eq!((r.budget, r.rounds, r.max_replicas), (10, 4, 6));
+    assert_eq!(r.resolution, 0.05);
+    let e = err(dir.path(), &with("budget = 10\nresolution = 1.5\n"));
+    assert!(
+        e.contains("bad.toml:13: key `refine.resolution`: = 1.5 is out of range"),
+        "{e}"
+    );
+    let e = err(dir.path(), &with("budget = 10\nmax_replicas = 1\n"));
+    assert!(
+        e.contains("key `refine.max_replicas`: = 1 is out of range"),
+        "{e}"
+    );
+    let e = err(dir.path(), &with("budget = 2\nrounds = 3\n"));
+    assert!(
+        e.contains("key `refine.rounds`: = 3 is out of range"),
+        "{e}"
+    );
+    let e = err(dir.path(), &with("budget = 2\nsteps = 3\n"));
+    assert!(e.contains("steps"), "{e}");
+}
+
+#[test]
+fn jobs_at_a_grid_point_are_the_grid_jobs_and_extra_replicas_take_the_next_seeds() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let sweep = load(
+        dir.path(),
+        &sweep_text(
+            "replicas = 2",
+            "[[axis]]\nkey = \"gamma\"\nvalues = [2.0, 3.0]\n",
+        ),
+    );
+    let grid = sweep.expand().unwrap();
+    let at = sweep.jobs_at(1, &grid[2].coords, 0..4).unwrap().unwrap();
+    assert_eq!(at[..2], grid[2..4]);
+    // TINY_SCENE has seed 7: replica r runs with seed 7 + r.
+    let seeds: Vec<u64> = at.iter().map(|j| j.spec.scene.initial.seed).collect();
+    assert_eq!(seeds, vec![7, 8, 9, 10]);
+    // Between grid values: a valid job whose drive is the new value.
+    let mid = sweep
+        .jobs_at(1_000_000, &[serde_json::json!(2.5)], 0..1)
+        .unwrap()
+        .unwrap();
+    assert_eq!(mid[0].spec.scene.drive.gamma, Some(2.5));
+    assert_eq!(mid[0].point, 1_000_000);
+}

@@ -14,6 +14,10 @@
 //!    predicates) and put a point at the midpoint of every edge whose two ends differ in phase.
 //!    The midpoint is taken in the scaled plane (so on a log axis it is the geometric mean).
 //!    Points are grouped by the pair of phases, sorted by name and joined with `|` (`f|fgc`).
+//!    Each boundary point carries its uncertainty, half the straddling edge along each axis (in
+//!    the plane's units: decades on a log axis) with the edge's interval in axis units, and a
+//!    confidence: the fraction of the votes at the two ends that agree with their end's
+//!    majority.
 //! 4. Physical units: for shaking sweeps every map and boundary point also carries the container
 //!    motion `(A, omega)` of MODEL.md 4.1, computed from its `(Gamma, E*)` and the scene's
 //!    `E_cb`, `m`, `g` (Scene::drive_motion).
@@ -47,10 +51,12 @@ pub struct PlaneAxis {
 }
 
 impl PlaneAxis {
-    fn scale(&self, v: f64) -> f64 {
+    /// The plane coordinate of an axis value (`log10` on a log axis).
+    pub fn scale(&self, v: f64) -> f64 {
         if self.log { v.log10() } else { v }
     }
-    fn unscale(&self, s: f64) -> f64 {
+    /// The axis value of a plane coordinate.
+    pub fn unscale(&self, s: f64) -> f64 {
         if self.log { 10f64.powf(s) } else { s }
     }
 }
@@ -83,6 +89,16 @@ pub struct BoundaryPoint {
     pub y: f64,
     /// The two map points of the edge (indices into [`Slice::points`]).
     pub between: [usize; 2],
+    /// Uncertainty: half the straddling edge along each axis, in the plane's units (axis units;
+    /// decades on a log axis, i.e. a factor `10^x_half` either side).
+    pub x_half: f64,
+    pub y_half: f64,
+    /// The interval the boundary lies in along each axis: the edge's two ends, low to high.
+    pub x_range: [f64; 2],
+    pub y_range: [f64; 2],
+    /// Fraction of the votes at the two ends that agree with their end's majority (1: every
+    /// replica agrees).
+    pub confidence: f64,
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
 }
@@ -303,6 +319,19 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
                 .as_ref()
                 .map_or(0.0, |ay| ay.unscale(0.5 * (ay.scale(a.y) + ay.scale(b.y))));
             let (amplitude, omega) = motion(scenes[i], xv, yv);
+            let half = |ax: &Option<PlaneAxis>, u: f64, v: f64| {
+                ax.as_ref()
+                    .map_or(0.0, |ax| 0.5 * (ax.scale(u) - ax.scale(v)).abs())
+            };
+            let agree = |p: &MapPoint| {
+                p.votes
+                    .iter()
+                    .flatten()
+                    .map(|v| usize::from(*v == p.phase))
+                    .sum::<usize>()
+            };
+            let votes = |p: &MapPoint| p.votes.iter().flatten().count();
+            let confidence = (agree(a) + agree(b)) as f64 / (votes(a) + votes(b)) as f64;
             boundaries
                 .entry(pair.clone())
                 .or_default()
@@ -311,6 +340,11 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
                     x: xv,
                     y: yv,
                     between: [i.min(j), i.max(j)],
+                    x_half: half(&x, a.x, b.x),
+                    y_half: half(&y, a.y, b.y),
+                    x_range: [a.x.min(b.x), a.x.max(b.x)],
+                    y_range: [a.y.min(b.y), a.y.max(b.y)],
+                    confidence,
                     amplitude,
                     omega,
                 });
@@ -338,18 +372,28 @@ fn delaunay_edges(
     xa: &PlaneAxis,
     ya: &PlaneAxis,
 ) -> Result<Vec<(usize, usize)>, BoundaryError> {
+    let pos: Vec<(f64, f64)> = points
+        .iter()
+        .map(|p| (xa.scale(p.x), ya.scale(p.y)))
+        .collect();
+    delaunay_pairs(&pos).map_err(|k| {
+        BoundaryError(format!(
+            "point ({}, {}) cannot be triangulated",
+            points[k].x, points[k].y
+        ))
+    })
+}
+
+/// Undirected Delaunay edges `(i, j)`, `i < j`, sorted, of points in a plane (spade, exact
+/// predicates). Error: the index of a point that cannot be inserted (not finite).
+pub fn delaunay_pairs(pos: &[(f64, f64)]) -> Result<Vec<(usize, usize)>, usize> {
     let mut tri: DelaunayTriangulation<Vertex> = DelaunayTriangulation::new();
-    for (index, p) in points.iter().enumerate() {
+    for (index, &(x, y)) in pos.iter().enumerate() {
         tri.insert(Vertex {
-            pos: Point2::new(xa.scale(p.x), ya.scale(p.y)),
+            pos: Point2::new(x, y),
             index,
         })
-        .map_err(|e| {
-            BoundaryError(format!(
-                "point ({}, {}) cannot be triangulated: {e:?}",
-                p.x, p.y
-            ))
-        })?;
+        .map_err(|_| index)?;
     }
     let mut edges: Vec<(usize, usize)> = tri
         .undirected_edges()
@@ -396,5 +440,52 @@ mod tests {
             Some(("sfc".into(), true))
         );
         assert_eq!(majority(&v(&[None, None])), None);
+    }
+
+    #[test]
+    fn boundary_points_carry_half_the_edge_and_the_replicas_agreement() {
+        let scene = Scene::from_toml_str(
+            "dimension = 2\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
+             [drive]\nkind = \"sine\"\ngamma = 3.0\ne_star = 2.0\n[initial]\nseed = 1\ntemperature = 1.0\n[run]\nduration = 1.0\n",
+            "test",
+        )
+        .unwrap();
+        let axes: Vec<Axis> = [("drive.gamma", "Gamma"), ("drive.e_star", "E*")]
+            .iter()
+            .map(|(k, l)| Axis {
+                name: k.to_string(),
+                key: k.to_string(),
+                label: l.to_string(),
+                kind: AxisKind::Values,
+                values: vec![],
+                line: 0,
+            })
+            .collect();
+        // (Gamma 2, E* 1): f, f, g; (Gamma 2, E* 4): g, g, g.
+        let obs = |e: f64, r: i64, p: &str| Observation {
+            coords: vec![serde_json::json!(2.0), serde_json::json!(e)],
+            replica: r,
+            phase: Some(p.to_string()),
+            scene: scene.clone(),
+        };
+        let jobs = vec![
+            obs(1.0, 0, "f"),
+            obs(1.0, 1, "f"),
+            obs(1.0, 2, "g"),
+            obs(4.0, 0, "g"),
+            obs(4.0, 1, "g"),
+            obs(4.0, 2, "g"),
+        ];
+        let map = phase_map(&axes, &jobs).unwrap();
+        let b = &map.slices[0].boundaries["f|g"][0];
+        // Midpoint in log10 E*: E* = 2 (geometric mean), half the edge = log10(2) decades.
+        assert!((b.x - 2.0).abs() < 1e-12);
+        assert!((b.x_half - 2f64.log10()).abs() < 1e-12);
+        assert_eq!(
+            (b.x_range, b.y_range, b.y_half),
+            ([1.0, 4.0], [2.0, 2.0], 0.0)
+        );
+        // 5 of the 6 votes agree with their point's majority.
+        assert!((b.confidence - 5.0 / 6.0).abs() < 1e-12);
     }
 }

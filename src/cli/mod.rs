@@ -2,6 +2,7 @@
 //! `boundaries`, `plot`, `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`].
 
 pub mod point_cmd;
+mod refine_cmd;
 pub mod sweep_cmd;
 
 use crate::bench;
@@ -62,7 +63,7 @@ pub enum Command {
         #[arg(long)]
         svg: Option<PathBuf>,
     },
-    /// Phase-diagram sweeps: run, resume, status (and expand, job for running elsewhere).
+    /// Phase-diagram sweeps: run, resume, status, refine (and expand, job for running elsewhere).
     Sweep {
         #[command(subcommand)]
         action: sweep_cmd::SweepCommand,
@@ -72,7 +73,9 @@ pub enum Command {
     /// MODEL.md 7: the grid points (majority phase of their replicas) are Delaunay-triangulated
     /// in the (log E*, Gamma) plane and a boundary point is put at the midpoint of every edge
     /// between two phases; the points are grouped by phase pair (e.g. f|fgc) and given in the
-    /// sweep's axes and as container motion (A, omega).
+    /// sweep's axes and as container motion (A, omega), with their uncertainty (half the
+    /// straddling edge per axis, decades on a log axis) and confidence (the fraction of the
+    /// replicas at both ends agreeing with their point's majority).
     Boundaries {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
@@ -85,7 +88,8 @@ pub enum Command {
     /// Draw a sweep's phase diagram as SVG.
     ///
     /// E* (log axis) against Gamma, points coloured by phase, the boundary points, and the lines
-    /// A = s_crit, A = d and Eq. 4.15 (solid-fluid force balance) drawn over.
+    /// A = s_crit, A = d and Eq. 4.15 (solid-fluid force balance) drawn over; grey error bars
+    /// span each boundary point's straddling edge.
     Plot {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,

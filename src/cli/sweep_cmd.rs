@@ -1,4 +1,5 @@
-//! The sweep commands: `sweep run|resume|status|expand|job`, `boundaries`, `plot`, `export`.
+//! The sweep commands: `sweep run|resume|status|expand|job|refine`, `boundaries`, `plot`,
+//! `export`.
 //! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
 //! unknown sweep), 1 any other error.
 
@@ -89,6 +90,39 @@ pub enum SweepCommand {
         #[arg(long)]
         cores: Option<usize>,
     },
+    /// Refine a sweep's phase boundaries: add points where neighbours differ in phase.
+    ///
+    /// In rounds: the stored points are Delaunay-triangulated in the plane of the phase map
+    /// (log axes in decades); every edge between two phases longer than the resolution is split
+    /// at its midpoint, or, where the replicas of an end disagree, that end gets more replicas.
+    /// The new jobs run with the same scheduler and store. Stops at the budget or when every
+    /// boundary edge is resolved. Interrupted, `sweep resume` runs the jobs of the round it was
+    /// in, and continues up to the budget of a `[refine]` table (`--budget` is what one call
+    /// adds: a second call adds that many again).
+    Refine {
+        /// The sweep (default: the only one in the database).
+        #[arg(long)]
+        sweep: Option<String>,
+        #[arg(long, default_value = DEFAULT_DB)]
+        db: PathBuf,
+        /// Jobs to add (default: what is left of the sweep file's `[refine]` budget).
+        #[arg(long)]
+        budget: Option<usize>,
+        /// Rounds the budget is split into (default: the file's, else 4).
+        #[arg(long)]
+        rounds: Option<usize>,
+        /// Stop when every boundary edge spans at most this fraction of each axis' range
+        /// (default: the file's, else 0: the budget only).
+        #[arg(long)]
+        resolution: Option<f64>,
+        /// Most replicas a point whose replicas disagree is raised to (default: the file's,
+        /// else 3 x sweep.replicas).
+        #[arg(long)]
+        max_replicas: Option<u32>,
+        /// Worker threads (default: the available cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
     /// Run one job spec and print its result as JSON.
     ///
     /// The spec is JSON as printed by `sweep expand --specs` (a whole line or its `spec`); the
@@ -173,6 +207,25 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
         SweepCommand::Status { db } => sweep_status(&db),
         SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_job(&spec),
+        SweepCommand::Refine {
+            sweep,
+            db,
+            budget,
+            rounds,
+            resolution,
+            max_replicas,
+            jobs,
+        } => super::refine_cmd::refine(
+            &db,
+            sweep.as_deref(),
+            super::refine_cmd::Overrides {
+                budget,
+                rounds,
+                resolution,
+                max_replicas,
+            },
+            workers(jobs),
+        ),
         SweepCommand::Estimate {
             file,
             periods,
@@ -220,7 +273,8 @@ fn sweep_run(file: &Path, db: &Path, jobs: usize, retry: bool) -> Result<(), Fai
         );
     }
     let row = store.register_sweep(&sweep, &expanded)?;
-    run_and_report(&store, &[row], jobs, retry)
+    run_and_report(&store, std::slice::from_ref(&row), jobs, retry)?;
+    super::refine_cmd::continue_refinement(&store, &[row], jobs)
 }
 
 fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Result<(), Failure> {
@@ -235,7 +289,8 @@ fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Resu
             db.display()
         )));
     }
-    run_and_report(&store, &sweeps, jobs, retry)
+    run_and_report(&store, &sweeps, jobs, retry)?;
+    super::refine_cmd::continue_refinement(&store, &sweeps, jobs)
 }
 
 fn run_and_report(
@@ -549,7 +604,9 @@ fn fixed_text(fixed: &[(String, serde_json::Value)]) -> String {
 }
 
 fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
-    let mut out = String::from("sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega\n");
+    let mut out = String::from(
+        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence\n",
+    );
     for (s, m) in maps {
         let xl = m.x.as_ref().map(|a| a.key.clone()).unwrap_or_default();
         let yl = m.y.as_ref().map(|a| a.key.clone()).unwrap_or_default();
@@ -557,7 +614,7 @@ fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
             for p in &slice.points {
                 let _ = writeln!(
                     out,
-                    "{},{k},point,{},{xl},{},{yl},{},{},{}",
+                    "{},{k},point,{},{xl},{},{yl},{},{},{},,,,,",
                     s.name,
                     p.phase,
                     p.x,
@@ -569,13 +626,18 @@ fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
             for b in slice.boundaries.values().flatten() {
                 let _ = writeln!(
                     out,
-                    "{},{k},boundary,{},{xl},{},{yl},{},{},{}",
+                    "{},{k},boundary,{},{xl},{},{yl},{},{},{},{},{},{},{},{}",
                     s.name,
                     b.pair,
                     b.x,
                     b.y,
                     b.amplitude.map(|v| v.to_string()).unwrap_or_default(),
-                    b.omega.map(|v| v.to_string()).unwrap_or_default()
+                    b.omega.map(|v| v.to_string()).unwrap_or_default(),
+                    b.x_range[0],
+                    b.x_range[1],
+                    b.y_range[0],
+                    b.y_range[1],
+                    b.confidence
                 );
             }
         }
@@ -607,47 +669,18 @@ fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
             xs.dedup();
             ys.sort_by(f64::total_cmp);
             ys.dedup();
-            let _ = writeln!(
-                out,
-                "  phase map ({} down, {} across{}):",
-                if ylabel.is_empty() { "-" } else { ylabel },
-                xa.label,
-                if slice.points.iter().any(|p| p.tie) {
-                    "; * = replicas tied"
-                } else {
-                    ""
-                }
-            );
-            for &yv in ys.iter().rev() {
-                let mut row = format!(
-                    "  {:>9} |",
-                    if ya.is_some() {
-                        short(yv)
-                    } else {
-                        String::new()
-                    }
+            if xs.len() > 24 || ys.len() > 60 {
+                // A refined map is no grid: list counts only (the points are in csv/json).
+                let _ = writeln!(
+                    out,
+                    "  phase map: {} points ({} x values, {} y values; see --format csv)",
+                    slice.points.len(),
+                    xs.len(),
+                    ys.len()
                 );
-                for &xv in &xs {
-                    let cell = slice
-                        .points
-                        .iter()
-                        .find(|p| p.x == xv && p.y == yv)
-                        .map(|p| format!("{}{}", p.phase, if p.tie { "*" } else { "" }))
-                        .unwrap_or_else(|| ".".to_string());
-                    let _ = write!(row, " {cell:>7}");
-                }
-                let _ = writeln!(out, "{row}");
+            } else {
+                write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys);
             }
-            let mut axis = format!("  {:>9} +", "");
-            for _ in &xs {
-                axis.push_str("--------");
-            }
-            let _ = writeln!(out, "{axis}");
-            let mut labels = format!("  {:>9}  ", xa.label);
-            for &xv in &xs {
-                let _ = write!(labels, " {:>7}", short(xv));
-            }
-            let _ = writeln!(out, "{labels}");
             if slice.boundaries.is_empty() {
                 let _ = writeln!(out, "  no boundary: every point has the same phase\n");
                 continue;
@@ -656,16 +689,26 @@ fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
                 let _ = writeln!(out, "  boundary {pair} ({} point(s))", list.len());
                 let _ = writeln!(
                     out,
-                    "    {:>10} {:>10} {:>10} {:>10}",
+                    "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",
                     xa.label,
                     ylabel,
                     if m.shaking { "A" } else { "" },
-                    if m.shaking { "omega" } else { "" }
+                    if m.shaking { "omega" } else { "" },
+                    format!("+-{}", if xa.log { "dec" } else { "x" }),
+                    format!(
+                        "+-{}",
+                        if ya.as_ref().is_some_and(|a| a.log) {
+                            "dec"
+                        } else {
+                            "y"
+                        }
+                    ),
+                    "conf"
                 );
                 for b in list {
                     let _ = writeln!(
                         out,
-                        "    {:>10} {:>10} {:>10} {:>10}",
+                        "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",
                         short(b.x),
                         if ya.is_some() {
                             short(b.y)
@@ -673,7 +716,14 @@ fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
                             String::new()
                         },
                         opt_num(b.amplitude),
-                        opt_num(b.omega)
+                        opt_num(b.omega),
+                        short(b.x_half),
+                        if ya.is_some() {
+                            short(b.y_half)
+                        } else {
+                            String::new()
+                        },
+                        format!("{:.2}", b.confidence)
                     );
                 }
             }
@@ -681,6 +731,59 @@ fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
         }
     }
     out
+}
+
+/// The phase map of a slice as a grid: rows = y (top: largest), columns = x.
+fn write_grid(
+    out: &mut String,
+    slice: &crate::boundary::Slice,
+    xa: &crate::boundary::PlaneAxis,
+    ya: Option<&crate::boundary::PlaneAxis>,
+    xs: &[f64],
+    ys: &[f64],
+) {
+    let ylabel = ya.map(|a| a.label.as_str()).unwrap_or("");
+    let _ = writeln!(
+        out,
+        "  phase map ({} down, {} across{}):",
+        if ylabel.is_empty() { "-" } else { ylabel },
+        xa.label,
+        if slice.points.iter().any(|p| p.tie) {
+            "; * = replicas tied"
+        } else {
+            ""
+        }
+    );
+    for &yv in ys.iter().rev() {
+        let mut row = format!(
+            "  {:>9} |",
+            if ya.is_some() {
+                short(yv)
+            } else {
+                String::new()
+            }
+        );
+        for &xv in xs {
+            let cell = slice
+                .points
+                .iter()
+                .find(|p| p.x == xv && p.y == yv)
+                .map(|p| format!("{}{}", p.phase, if p.tie { "*" } else { "" }))
+                .unwrap_or_else(|| ".".to_string());
+            let _ = write!(row, " {cell:>7}");
+        }
+        let _ = writeln!(out, "{row}");
+    }
+    let mut axis = format!("  {:>9} +", "");
+    for _ in xs {
+        axis.push_str("--------");
+    }
+    let _ = writeln!(out, "{axis}");
+    let mut labels = format!("  {:>9}  ", xa.label);
+    for &xv in xs {
+        let _ = write!(labels, " {:>7}", short(xv));
+    }
+    let _ = writeln!(out, "{labels}");
 }
 
 /// `wetgran plot`.

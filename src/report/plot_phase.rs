@@ -267,6 +267,8 @@ where
             }
         }
     }
+    // Smaller dots where refinement packed points densely.
+    let radius = if slice.points.len() > 100 { 3 } else { 6 };
     let mut phases: Vec<&str> = slice.points.iter().map(|p| p.phase.as_str()).collect();
     phases.sort();
     phases.dedup();
@@ -278,7 +280,7 @@ where
                     .points
                     .iter()
                     .filter(|p| p.phase == phase)
-                    .map(|p| Circle::new((p.x, p.y), 6, color.filled())),
+                    .map(|p| Circle::new((p.x, p.y), radius, color.filled())),
             )
             .map_err(err)?
             .label(phase)
@@ -290,7 +292,20 @@ where
         .flatten()
         .map(|b| (b.x, b.y))
         .collect();
+    // Uncertainty of each boundary point: the straddling edge's extent along each axis.
+    let bars = slice.boundaries.values().flatten().flat_map(|b| {
+        [
+            vec![(b.x_range[0], b.y), (b.x_range[1], b.y)],
+            vec![(b.x, b.y_range[0]), (b.x, b.y_range[1])],
+        ]
+    });
     if !boundary.is_empty() {
+        let grey = RGBColor(110, 110, 110);
+        chart
+            .draw_series(bars.map(|bar| PathElement::new(bar, grey.stroke_width(1))))
+            .map_err(err)?
+            .label("uncertainty (straddling edge)")
+            .legend(move |(px, py)| PathElement::new(vec![(px, py), (px + 18, py)], grey));
         chart
             .draw_series(
                 boundary

@@ -158,6 +158,10 @@ pub struct PointRow {
     pub result_owner: Option<String>,
 }
 
+/// Points added by refinement are numbered from here on (grid points are below: a sweep has at
+/// most `MAX_JOBS` jobs).
+pub const REFINED_FROM: i64 = crate::sweep::file::MAX_JOBS as i64;
+
 /// An open wetgran database.
 #[derive(Debug)]
 pub struct Store {
@@ -417,8 +421,11 @@ impl Store {
     }
 
     /// Registers (or re-registers) a sweep and its jobs in one transaction. Jobs already in the
-    /// database (same id, from any sweep) are shared, never duplicated; the sweep's point list is
-    /// replaced by the new expansion.
+    /// database (same id, from any sweep) are shared, never duplicated; the sweep's grid in the
+    /// point list is replaced by the new expansion. What refinement added (points numbered from
+    /// [`REFINED_FROM`], replicas beyond `sweep.replicas`) is kept while the sweep file's text is
+    /// unchanged, and dropped with the rest when it changed (its jobs and results stay, so a
+    /// refinement planned again finds them).
     pub fn register_sweep(
         &self,
         file: &SweepFile,
@@ -432,6 +439,13 @@ impl Store {
                 .begin_with("BEGIN IMMEDIATE")
                 .await
                 .map_err(|e| self.db(e))?;
+            let old_source: Option<String> =
+                sqlx::query_scalar("SELECT source FROM sweeps WHERE name = ?1")
+                    .bind(&file.name)
+                    .fetch_optional(&mut *tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+            let changed = old_source.as_deref() != Some(file.text.as_str());
             let id: i64 = sqlx::query_scalar(
                 "INSERT INTO sweeps (name, file, source, description, cost, axes, replicas, \
                  created_at, updated_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?8) \
@@ -449,11 +463,17 @@ impl Store {
             .fetch_one(&mut *tx)
             .await
             .map_err(|e| self.db(e))?;
-            sqlx::query("DELETE FROM sweep_points WHERE sweep_id = ?1")
-                .bind(id)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
+            sqlx::query(
+                "DELETE FROM sweep_points WHERE sweep_id = ?1 \
+                 AND (?2 OR (point < ?3 AND replica < ?4))",
+            )
+            .bind(id)
+            .bind(changed)
+            .bind(REFINED_FROM)
+            .bind(file.replicas as i64)
+            .execute(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?;
             for job in jobs {
                 sqlx::query(
                     "INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)",
@@ -481,6 +501,60 @@ impl Store {
             Ok(())
         })?;
         self.sweep(&file.name)
+    }
+
+    /// Adds jobs to a registered sweep's point list (refinement: new points, more replicas), in
+    /// one transaction; jobs already in the database are shared.
+    pub fn add_jobs(&self, sweep_id: i64, jobs: &[SweepJob]) -> Result<(), StoreError> {
+        let t = now();
+        self.rt.block_on(async {
+            let mut tx = self
+                .pool
+                .begin_with("BEGIN IMMEDIATE")
+                .await
+                .map_err(|e| self.db(e))?;
+            for job in jobs {
+                sqlx::query(
+                    "INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)",
+                )
+                .bind(&job.id)
+                .bind(job.spec.canonical_json())
+                .bind(t)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+                sqlx::query(
+                    "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
+                     VALUES (?1, ?2, ?3, ?4, ?5)",
+                )
+                .bind(sweep_id)
+                .bind(job.point as i64)
+                .bind(job.replica as i64)
+                .bind(serde_json::to_string(&job.coords).expect("coords serialize"))
+                .bind(&job.id)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            }
+            sqlx::query("UPDATE sweeps SET updated_at = ?2 WHERE id = ?1")
+                .bind(sweep_id)
+                .bind(t)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            tx.commit().await.map_err(|e| self.db(e))
+        })
+    }
+
+    /// The text of a sweep's file as last registered.
+    pub fn sweep_source(&self, sweep_id: i64) -> Result<String, StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query_scalar("SELECT source FROM sweeps WHERE id = ?1")
+                    .bind(sweep_id)
+                    .fetch_one(&self.pool),
+            )
+            .map_err(|e| self.db(e))
     }
 
     /// All sweeps, oldest first.

@@ -126,6 +126,37 @@ pub struct RawSweep {
     pub classify: Option<toml::Table>,
     #[serde(default, rename = "axis")]
     pub axes: Vec<RawAxis>,
+    #[serde(default)]
+    pub refine: Option<RawRefine>,
+}
+
+/// The `[refine]` table as written (adaptive refinement of the boundaries, `src/refine`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawRefine {
+    /// Jobs refinement may add to the sweep in all.
+    pub budget: usize,
+    #[serde(default)]
+    pub rounds: Option<usize>,
+    #[serde(default)]
+    pub resolution: Option<f64>,
+    #[serde(default)]
+    pub max_replicas: Option<u32>,
+}
+
+/// The `[refine]` table, checked: after the grid, `sweep run` adds up to `budget` jobs in rounds
+/// of `budget / rounds` where neighbouring points differ in phase, until every boundary edge
+/// spans at most `resolution` of each plane axis' range; noisy points get replicas up to
+/// `max_replicas`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefineSection {
+    pub budget: usize,
+    /// Default 4.
+    pub rounds: usize,
+    /// Default 0 (stop at the budget only).
+    pub resolution: f64,
+    /// Default 3 times `sweep.replicas`.
+    pub max_replicas: u32,
 }
 
 /// How an axis was written (the plot and the boundary extraction use log scaling for `Log`).
@@ -194,6 +225,8 @@ pub struct SweepFile {
     pub observe: toml::Table,
     pub classify: toml::Table,
     pub axes: Vec<Axis>,
+    /// The `[refine]` table, if any.
+    pub refine: Option<RefineSection>,
 }
 
 /// Line (1-based) of byte offset `pos` in `text`.
@@ -492,7 +525,68 @@ impl SweepFile {
                 format!("expands to {jobs} jobs: at most {MAX_JOBS} are allowed"),
             ));
         }
+        let refine = match &raw.refine {
+            None => None,
+            Some(r) => {
+                let rerr = |key: &str, msg: String| {
+                    err(
+                        key_line(text, &["refine"], key),
+                        &format!("refine.{key}"),
+                        msg,
+                    )
+                };
+                if !(1..=MAX_JOBS).contains(&r.budget) {
+                    return Err(rerr(
+                        "budget",
+                        format!("= {} is out of range: must be in [1, {MAX_JOBS}]", r.budget),
+                    ));
+                }
+                let rounds = r.rounds.unwrap_or(4);
+                if !(1..=r.budget).contains(&rounds) {
+                    return Err(rerr(
+                        "rounds",
+                        format!(
+                            "= {rounds} is out of range: must be in [1, budget = {}]",
+                            r.budget
+                        ),
+                    ));
+                }
+                let resolution = r.resolution.unwrap_or(0.0);
+                if !(0.0..1.0).contains(&resolution) {
+                    return Err(rerr(
+                        "resolution",
+                        format!("= {resolution} is out of range: must be in [0, 1)"),
+                    ));
+                }
+                let max_replicas = r.max_replicas.unwrap_or(3 * replicas);
+                if !(replicas..=10_000).contains(&max_replicas) {
+                    return Err(rerr(
+                        "max_replicas",
+                        format!(
+                            "= {max_replicas} is out of range: must be in [sweep.replicas = \
+                             {replicas}, 10000]"
+                        ),
+                    ));
+                }
+                if axes.iter().any(|a| a.key == "initial.seed") && max_replicas > replicas {
+                    return Err(rerr(
+                        "max_replicas",
+                        format!(
+                            "= {max_replicas} adds replicas (seeds) while an axis sweeps \
+                             initial.seed: set it to sweep.replicas = {replicas}"
+                        ),
+                    ));
+                }
+                Some(RefineSection {
+                    budget: r.budget,
+                    rounds,
+                    resolution,
+                    max_replicas,
+                })
+            }
+        };
         Ok(SweepFile {
+            refine,
             path: path.to_path_buf(),
             text: text.to_string(),
             name,

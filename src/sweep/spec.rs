@@ -139,6 +139,15 @@ pub struct SweepJob {
     pub spec: JobSpec,
 }
 
+/// What every job of a sweep shares (see [`SweepFile::expand_with_skips`]).
+#[derive(Debug, Clone, Copy)]
+struct Prepared {
+    samples_given: Option<f64>,
+    samples_per_period: f64,
+    transient: Option<f64>,
+    base_seed: u64,
+}
+
 /// A grid point left out by `sweep.skip_invalid`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Skipped {
@@ -215,9 +224,8 @@ impl SweepFile {
         Ok(self.expand_with_skips()?.0)
     }
 
-    /// [`SweepFile::expand`], also returning the grid points left out by `sweep.skip_invalid`
-    /// with the reason (empty without it).
-    pub fn expand_with_skips(&self) -> Result<(Vec<SweepJob>, Vec<Skipped>), SweepError> {
+    /// The settings every job of the sweep shares, checked.
+    fn prepare(&self) -> Result<Prepared, SweepError> {
         let file = self.path.display().to_string();
         let obs_err = |key: &str, msg: String| {
             SweepError::new(
@@ -261,6 +269,18 @@ impl SweepFile {
             }
         };
 
+        Ok(Prepared {
+            samples_given,
+            samples_per_period,
+            transient,
+            base_seed,
+        })
+    }
+
+    /// [`SweepFile::expand`], also returning the grid points left out by `sweep.skip_invalid`
+    /// with the reason (empty without it).
+    pub fn expand_with_skips(&self) -> Result<(Vec<SweepJob>, Vec<Skipped>), SweepError> {
+        let prep = self.prepare()?;
         let points = self.points();
         let mut jobs = Vec::with_capacity(points * self.replicas as usize);
         let mut skipped = Vec::new();
@@ -279,53 +299,8 @@ impl SweepFile {
                 .map(|(a, &i)| a.values[i].clone())
                 .collect();
             for replica in 0..self.replicas {
-                let mut tree = self.scene_tree.clone();
-                let where_ = describe_point(self, &coords, replica);
-                // The sweep's `[observe]` and `[classify]` tables go into the scene's sections
-                // of those names (over what the base scene sets), validated with the scene.
-                for (section, table) in [("observe", &self.observe), ("classify", &self.classify)] {
-                    for (key, value) in table {
-                        set_key(&mut tree, &format!("{section}.{key}"), value.clone())
-                            .map_err(|m| SweepError::new(&file, None, section, m))?;
-                    }
-                }
-                // The transient is checked against the run length once that is converted from
-                // periods (below); until then it is a placeholder.
-                let base_transient = tree
-                    .get("observe")
-                    .and_then(|o| o.get("transient_periods"))
-                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)));
-                set_key(
-                    &mut tree,
-                    "observe.transient_periods",
-                    toml::Value::Float(0.0),
-                )
-                .map_err(|m| SweepError::new(&file, None, "observe", m))?;
-                for (axis, v) in self.axes.iter().zip(&coords) {
-                    let value = to_toml(v)
-                        .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
-                    set_key(&mut tree, &axis.key, value)
-                        .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
-                }
-                if self.replicas > 1 {
-                    let seed = base_seed.checked_add(replica as u64).ok_or_else(|| {
-                        SweepError::new(&file, None, "initial.seed", "overflows with the replicas")
-                    })?;
-                    set_key(&mut tree, "initial.seed", toml::Value::Integer(seed as i64))
-                        .map_err(|m| SweepError::new(&file, None, "initial.seed", m))?;
-                }
-                if self.periods.is_some() {
-                    // The run length comes from `sweep.periods`; a placeholder lets a base scene
-                    // without `run.duration` parse (it is replaced below).
-                    let run = tree
-                        .entry("run")
-                        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-                    if let toml::Value::Table(run) = run {
-                        run.entry("duration").or_insert(toml::Value::Float(1.0));
-                    }
-                }
-                let scene = match self.scene_of(&tree, &where_) {
-                    Ok(s) => s,
+                match self.job_at(&prep, point, replica, &coords)? {
+                    Ok(job) => jobs.push(job),
                     Err(e) if self.skip_invalid => {
                         skipped.push(Skipped {
                             point,
@@ -336,62 +311,159 @@ impl SweepFile {
                         continue 'points;
                     }
                     Err(e) => return Err(e),
-                };
-                let period = driving_period(&scene);
-                let mut scene = scene;
-                if let Some(p) = self.periods {
-                    scene.run.duration = p * period;
                 }
-                // Sampling: the sweep's `samples_per_period`, else the scene's own `[observe]`
-                // setting if the base scene has one, else the sweep default.
-                let samples_per_period =
-                    if samples_given.is_some() || !self.base_sets("observe.samples_per_period") {
-                        samples_per_period
-                    } else {
-                        scene.observe.samples_per_period
-                    };
-                scene.run.sample_interval = period / samples_per_period;
-                scene.observe.samples_per_period = samples_per_period;
-                let transient_periods = match (transient, base_transient) {
-                    (Some(t), _) | (None, Some(t)) => t,
-                    (None, None) => DEFAULT_TRANSIENT_FRACTION * scene.run.duration / period,
-                };
-                scene.observe.transient_periods = transient_periods;
-                if transient_periods * period >= scene.run.duration {
-                    return Err(obs_err(
-                        "transient_periods",
-                        format!(
-                            "= {transient_periods} periods is not shorter than the run \
-                             ({} periods){where_}",
-                            scene.run.duration / period
-                        ),
-                    ));
-                }
-                // The converted run length and sampling must pass validation too.
-                scene.validate(&file).map_err(|e| {
-                    SweepError::new(
-                        &file,
-                        self.periods
-                            .and(super::file::key_line(&self.text, &["sweep"], "periods")),
-                        &e.key,
-                        format!("{}{where_}", e.message),
-                    )
-                })?;
-                let spec = JobSpec {
-                    format: SPEC_FORMAT,
-                    scene,
-                };
-                let id = spec.id();
-                jobs.push(SweepJob {
-                    point,
-                    replica,
-                    coords: coords.clone(),
-                    id,
-                    spec,
-                });
             }
         }
         Ok((jobs, skipped))
+    }
+
+    /// The jobs of one point at any coordinates (not only the grid's: refinement adds points
+    /// between grid points), replicas `replicas`, expanded and validated as in
+    /// [`SweepFile::expand`]. An invalid scene is an error here whatever `sweep.skip_invalid`
+    /// says: `Ok(Err(reason))`.
+    pub fn jobs_at(
+        &self,
+        point: usize,
+        coords: &[serde_json::Value],
+        replicas: std::ops::Range<u32>,
+    ) -> Result<Result<Vec<SweepJob>, SweepError>, SweepError> {
+        let prep = self.prepare()?;
+        let mut out = Vec::new();
+        for replica in replicas {
+            match self.job_at(&prep, point, replica, coords)? {
+                Ok(job) => out.push(job),
+                Err(e) => return Ok(Err(e)),
+            }
+        }
+        Ok(Ok(out))
+    }
+
+    /// One job; `Ok(Err(_))`: its scene is invalid (skippable), `Err(_)`: the sweep is.
+    fn job_at(
+        &self,
+        prep: &Prepared,
+        point: usize,
+        replica: u32,
+        coords: &[serde_json::Value],
+    ) -> Result<Result<SweepJob, SweepError>, SweepError> {
+        let file = self.path.display().to_string();
+        let obs_err = |key: &str, msg: String| {
+            SweepError::new(
+                &file,
+                super::file::key_line(&self.text, &["observe"], key),
+                &format!("observe.{key}"),
+                msg,
+            )
+        };
+        let Prepared {
+            samples_given,
+            samples_per_period,
+            transient,
+            base_seed,
+        } = *prep;
+        {
+            let mut tree = self.scene_tree.clone();
+            let where_ = describe_point(self, coords, replica);
+            // The sweep's `[observe]` and `[classify]` tables go into the scene's sections
+            // of those names (over what the base scene sets), validated with the scene.
+            for (section, table) in [("observe", &self.observe), ("classify", &self.classify)] {
+                for (key, value) in table {
+                    set_key(&mut tree, &format!("{section}.{key}"), value.clone())
+                        .map_err(|m| SweepError::new(&file, None, section, m))?;
+                }
+            }
+            // The transient is checked against the run length once that is converted from
+            // periods (below); until then it is a placeholder.
+            let base_transient = tree
+                .get("observe")
+                .and_then(|o| o.get("transient_periods"))
+                .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)));
+            set_key(
+                &mut tree,
+                "observe.transient_periods",
+                toml::Value::Float(0.0),
+            )
+            .map_err(|m| SweepError::new(&file, None, "observe", m))?;
+            for (axis, v) in self.axes.iter().zip(coords) {
+                let value = to_toml(v)
+                    .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
+                set_key(&mut tree, &axis.key, value)
+                    .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
+            }
+            if self.replicas > 1 || replica > 0 {
+                let seed = base_seed.checked_add(replica as u64).ok_or_else(|| {
+                    SweepError::new(&file, None, "initial.seed", "overflows with the replicas")
+                })?;
+                set_key(&mut tree, "initial.seed", toml::Value::Integer(seed as i64))
+                    .map_err(|m| SweepError::new(&file, None, "initial.seed", m))?;
+            }
+            if self.periods.is_some() {
+                // The run length comes from `sweep.periods`; a placeholder lets a base scene
+                // without `run.duration` parse (it is replaced below).
+                let run = tree
+                    .entry("run")
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+                if let toml::Value::Table(run) = run {
+                    run.entry("duration").or_insert(toml::Value::Float(1.0));
+                }
+            }
+            let scene = match self.scene_of(&tree, &where_) {
+                Ok(s) => s,
+                Err(e) => return Ok(Err(e)),
+            };
+            let period = driving_period(&scene);
+            let mut scene = scene;
+            if let Some(p) = self.periods {
+                scene.run.duration = p * period;
+            }
+            // Sampling: the sweep's `samples_per_period`, else the scene's own `[observe]`
+            // setting if the base scene has one, else the sweep default.
+            let samples_per_period =
+                if samples_given.is_some() || !self.base_sets("observe.samples_per_period") {
+                    samples_per_period
+                } else {
+                    scene.observe.samples_per_period
+                };
+            scene.run.sample_interval = period / samples_per_period;
+            scene.observe.samples_per_period = samples_per_period;
+            let transient_periods = match (transient, base_transient) {
+                (Some(t), _) | (None, Some(t)) => t,
+                (None, None) => DEFAULT_TRANSIENT_FRACTION * scene.run.duration / period,
+            };
+            scene.observe.transient_periods = transient_periods;
+            if transient_periods * period >= scene.run.duration {
+                return Err(obs_err(
+                    "transient_periods",
+                    format!(
+                        "= {transient_periods} periods is not shorter than the run \
+                             ({} periods){where_}",
+                        scene.run.duration / period
+                    ),
+                ));
+            }
+            // The converted run length and sampling must pass validation too.
+            scene.validate(&file).map_err(|e| {
+                SweepError::new(
+                    &file,
+                    self.periods
+                        .and(super::file::key_line(&self.text, &["sweep"], "periods")),
+                    &e.key,
+                    format!("{}{where_}", e.message),
+                )
+            })?;
+            let spec = JobSpec {
+                format: SPEC_FORMAT,
+                scene,
+            };
+            let id = spec.id();
+            Ok(Ok(SweepJob {
+                point,
+                replica,
+                coords: coords.to_vec(),
+                id,
+                spec,
+            }))
+        }
     }
 
     /// Parses and validates one job's scene tree; errors point at the axis, the `[scene]` table
