@@ -474,33 +474,44 @@ impl Store {
             .execute(&mut *tx)
             .await
             .map_err(|e| self.db(e))?;
-            for job in jobs {
-                sqlx::query(
-                    "INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)",
-                )
-                .bind(&job.id)
-                .bind(job.spec.canonical_json())
-                .bind(t)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
-                sqlx::query(
-                    "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
-                     VALUES (?1, ?2, ?3, ?4, ?5)",
-                )
-                .bind(id)
-                .bind(job.point as i64)
-                .bind(job.replica as i64)
-                .bind(serde_json::to_string(&job.coords).expect("coords serialize"))
-                .bind(&job.id)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
-            }
+            self.insert_points(&mut tx, id, jobs, t).await?;
             tx.commit().await.map_err(|e| self.db(e))?;
             Ok(())
         })?;
         self.sweep(&file.name)
+    }
+
+    /// Inserts `jobs` (a job already in the database is shared, not duplicated) and their rows
+    /// in a sweep's point list, inside an open transaction.
+    async fn insert_points(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        sweep_id: i64,
+        jobs: &[SweepJob],
+        t: f64,
+    ) -> Result<(), StoreError> {
+        for job in jobs {
+            sqlx::query("INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)")
+                .bind(&job.id)
+                .bind(job.spec.canonical_json())
+                .bind(t)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            sqlx::query(
+                "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
+                 VALUES (?1, ?2, ?3, ?4, ?5)",
+            )
+            .bind(sweep_id)
+            .bind(job.point as i64)
+            .bind(job.replica as i64)
+            .bind(serde_json::to_string(&job.coords).expect("coords serialize"))
+            .bind(&job.id)
+            .execute(&mut **tx)
+            .await
+            .map_err(|e| self.db(e))?;
+        }
+        Ok(())
     }
 
     /// Adds jobs to a registered sweep's point list (refinement: new points, more replicas), in
@@ -513,29 +524,7 @@ impl Store {
                 .begin_with("BEGIN IMMEDIATE")
                 .await
                 .map_err(|e| self.db(e))?;
-            for job in jobs {
-                sqlx::query(
-                    "INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)",
-                )
-                .bind(&job.id)
-                .bind(job.spec.canonical_json())
-                .bind(t)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
-                sqlx::query(
-                    "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
-                     VALUES (?1, ?2, ?3, ?4, ?5)",
-                )
-                .bind(sweep_id)
-                .bind(job.point as i64)
-                .bind(job.replica as i64)
-                .bind(serde_json::to_string(&job.coords).expect("coords serialize"))
-                .bind(&job.id)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
-            }
+            self.insert_points(&mut tx, sweep_id, jobs, t).await?;
             sqlx::query("UPDATE sweeps SET updated_at = ?2 WHERE id = ?1")
                 .bind(sweep_id)
                 .bind(t)
