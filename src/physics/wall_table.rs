@@ -824,18 +824,27 @@ mod tests {
         assert!((roots[0] - (0.5 + (0.25f64 + 4.0).sqrt())).abs() < 1e-12);
     }
 
+    /// `n` seeded flights `(h, v, t0)` in front of the wall: contact heights from the bottom of
+    /// the reach to three diameters above it, speeds in `[-3, 3]`, start times over 100 units.
+    fn random_shots(w: &WallMotion, n: usize) -> Vec<(f64, f64, f64)> {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
+        (0..n)
+            .map(|_| {
+                let t0 = rng.gen_range(0.0..100.0);
+                let h = rng
+                    .gen_range(-w.amplitude..w.amplitude + 3.0)
+                    .max(w.position(t0) + 1e-6);
+                (h, rng.gen_range(-3.0..3.0), t0)
+            })
+            .collect()
+    }
+
     #[test]
     fn table_agrees_with_exact_solver_on_random_shots() {
         let w = standard_motion(5.0, 10.0);
         let table = WallTable::build(w, spec_for(&w, 256));
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
         let (mut wrong, mut n, mut max_err, mut sum_err) = (0, 0, 0.0f64, 0.0);
-        for _ in 0..5000 {
-            let t0 = rng.gen_range(0.0..100.0);
-            let h = rng
-                .gen_range(-w.amplitude..w.amplitude + 3.0)
-                .max(w.position(t0) + 1e-6);
-            let v = rng.gen_range(-3.0..3.0);
+        for (h, v, t0) in random_shots(&w, 5000) {
             let reference = exact_root(&w, h, v, t0, 1e-15, 4.0 * w.period());
             let ours = table.next_hit(h, v, t0, 4.0 * w.period());
             match (reference, ours) {
@@ -886,14 +895,8 @@ mod tests {
             ..spec_for(&w, 64)
         };
         let table = WallTable::build(w, spec);
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
         let mut wrong = 0;
-        for _ in 0..5000 {
-            let t0 = rng.gen_range(0.0..100.0);
-            let h = rng
-                .gen_range(-w.amplitude..w.amplitude + 3.0)
-                .max(w.position(t0) + 1e-6);
-            let v = rng.gen_range(-3.0..3.0);
+        for (h, v, t0) in random_shots(&w, 5000) {
             let reference = exact_root(&w, h, v, t0, 1e-15, 4.0 * w.period());
             if let (WallRoot::Hit(r), TableHit::Hit { dt, .. }) =
                 (reference, table.next_hit(h, v, t0, 4.0 * w.period()))
