@@ -224,21 +224,22 @@ impl SweepFile {
         Ok(self.expand_with_skips()?.0)
     }
 
+    /// An error about key `observe.<key>` of the sweep file, at its line.
+    fn observe_err(&self, key: &str, msg: String) -> SweepError {
+        SweepError::new(
+            &self.path.display().to_string(),
+            super::file::key_line(&self.text, &["observe"], key),
+            &format!("observe.{key}"),
+            msg,
+        )
+    }
+
     /// The settings every job of the sweep shares, checked.
     fn prepare(&self) -> Result<Prepared, SweepError> {
-        let file = self.path.display().to_string();
-        let obs_err = |key: &str, msg: String| {
-            SweepError::new(
-                &file,
-                super::file::key_line(&self.text, &["observe"], key),
-                &format!("observe.{key}"),
-                msg,
-            )
-        };
         let samples_given = number(&self.observe, "samples_per_period", self)?;
         let samples_per_period = samples_given.unwrap_or(DEFAULT_SAMPLES_PER_PERIOD);
         if !(samples_per_period.is_finite() && samples_per_period > 0.0) {
-            return Err(obs_err(
+            return Err(self.observe_err(
                 "samples_per_period",
                 format!("= {samples_per_period} is out of range: must be finite and > 0"),
             ));
@@ -247,7 +248,7 @@ impl SweepFile {
         if let Some(t) = transient
             && !(t.is_finite() && t >= 0.0)
         {
-            return Err(obs_err(
+            return Err(self.observe_err(
                 "transient_periods",
                 format!("= {t} is out of range: must be finite and >= 0"),
             ));
@@ -347,14 +348,6 @@ impl SweepFile {
         coords: &[serde_json::Value],
     ) -> Result<Result<SweepJob, SweepError>, SweepError> {
         let file = self.path.display().to_string();
-        let obs_err = |key: &str, msg: String| {
-            SweepError::new(
-                &file,
-                super::file::key_line(&self.text, &["observe"], key),
-                &format!("observe.{key}"),
-                msg,
-            )
-        };
         let Prepared {
             samples_given,
             samples_per_period,
@@ -432,7 +425,7 @@ impl SweepFile {
             };
             scene.observe.transient_periods = transient_periods;
             if transient_periods * period >= scene.run.duration {
-                return Err(obs_err(
+                return Err(self.observe_err(
                     "transient_periods",
                     format!(
                         "= {transient_periods} periods is not shorter than the run \
