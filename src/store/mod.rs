@@ -802,16 +802,34 @@ impl Store {
                 .await
                 .map_err(|e| self.db(e))?;
             }
-            sqlx::query("UPDATE runs SET ended_at = ?2, outcome = ?3 WHERE id = ?1")
-                .bind(claim.run_id)
-                .bind(t)
-                .bind(if kept { "done" } else { "discarded" })
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
+            self.end_run(
+                &mut tx,
+                claim.run_id,
+                t,
+                if kept { "done" } else { "discarded" },
+            )
+            .await?;
             tx.commit().await.map_err(|e| self.db(e))?;
             Ok(kept)
         })
+    }
+
+    /// Closes an attempt's row in `runs` with its end time and outcome.
+    async fn end_run(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        run_id: i64,
+        t: f64,
+        outcome: &str,
+    ) -> Result<(), StoreError> {
+        sqlx::query("UPDATE runs SET ended_at = ?2, outcome = ?3 WHERE id = ?1")
+            .bind(run_id)
+            .bind(t)
+            .bind(outcome)
+            .execute(&mut **tx)
+            .await
+            .map_err(|e| self.db(e))?;
+        Ok(())
     }
 
     /// Records a failed job with its message.
@@ -836,12 +854,7 @@ impl Store {
             .execute(&mut *tx)
             .await
             .map_err(|e| self.db(e))?;
-            sqlx::query("UPDATE runs SET ended_at = ?2, outcome = 'failed' WHERE id = ?1")
-                .bind(claim.run_id)
-                .bind(t)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
+            self.end_run(&mut tx, claim.run_id, t, "failed").await?;
             tx.commit().await.map_err(|e| self.db(e))?;
             Ok(())
         })
