@@ -14,6 +14,7 @@
 pub mod bench;
 pub mod boundary;
 pub mod cli;
+pub mod cluster;
 pub mod observe;
 pub mod physics;
 pub mod refine;

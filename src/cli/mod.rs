@@ -1,6 +1,7 @@
 //! The command line: `wetgran simulate`, `wetgran bench`, and the sweep commands (`sweep`,
 //! `boundaries`, `plot`, `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`].
 
+mod cluster_cmd;
 pub mod point_cmd;
 mod refine_cmd;
 pub mod sweep_cmd;
@@ -63,10 +64,16 @@ pub enum Command {
         #[arg(long)]
         svg: Option<PathBuf>,
     },
-    /// Phase-diagram sweeps: run, resume, status, refine (and expand, job for running elsewhere).
+    /// Phase-diagram sweeps: run, resume, status, refine, submit to Slurm and collect (and
+    /// expand, job for running elsewhere).
     Sweep {
         #[command(subcommand)]
         action: sweep_cmd::SweepCommand,
+    },
+    /// Single jobs, as a cluster task runs them.
+    Job {
+        #[command(subcommand)]
+        action: JobCommand,
     },
     /// Print the phase map of each sweep and its boundary points.
     ///
@@ -144,6 +151,24 @@ pub enum Command {
         /// Write to this file instead of standard output.
         #[arg(short = 'o', long = "output")]
         output: Option<PathBuf>,
+    },
+}
+
+/// `wetgran job ...`.
+#[derive(Debug, Subcommand)]
+pub enum JobCommand {
+    /// Run one job spec and write its result record (what a Slurm array task runs).
+    ///
+    /// The spec is JSON as `sweep submit` writes it (or a line of `sweep expand --specs`). The
+    /// record (JSON: the result, or the error of a failed job) is written atomically to --out
+    /// (temporary file + rename), else printed. Never opens a database. Exit status 0: done;
+    /// 1: the job failed (record written); 2: the spec cannot be read (record written).
+    Run {
+        /// The job spec file.
+        spec: PathBuf,
+        /// Where to write the result record.
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -239,6 +264,9 @@ pub fn main() -> ExitCode {
             }
         },
         Command::Sweep { action } => sweep_cmd::sweep(action),
+        Command::Job {
+            action: JobCommand::Run { spec, out },
+        } => cluster_cmd::job_run(&spec, out.as_deref()),
         Command::Boundaries { db, sweep, format } => {
             sweep_cmd::boundaries(&db, sweep.as_deref(), format)
         }

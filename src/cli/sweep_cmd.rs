@@ -1,5 +1,5 @@
-//! The sweep commands: `sweep run|resume|status|expand|job|refine`, `boundaries`, `plot`,
-//! `export`.
+//! The sweep commands: `sweep run|resume|status|expand|job|refine` (and `submit|collect`, in
+//! `cluster_cmd`), `boundaries`, `plot`, `export`.
 //! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
 //! unknown sweep), 1 any other error.
 
@@ -7,7 +7,7 @@ use crate::boundary::{Observation, PhaseMap, phase_map};
 use crate::report::{export, plot_phase};
 use crate::store::{Store, StoreError, SweepRow};
 use crate::sweep::runner::{point_label, short};
-use crate::sweep::{JobSpec, RunOptions, SweepFile, run_job, run_sweeps};
+use crate::sweep::{RunOptions, SweepFile, run_job, run_sweeps};
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -123,6 +123,56 @@ pub enum SweepCommand {
         #[arg(long)]
         jobs: Option<usize>,
     },
+    /// Submit a sweep to a Slurm cluster as job arrays.
+    ///
+    /// Registers the jobs in the database, writes their self-contained specs and an sbatch array
+    /// script into the sweep directory (default: `wetgran-slurm/<sweep name>` beside the
+    /// database; it must be on a filesystem the compute nodes share, as must the wetgran
+    /// executable) and submits it with sbatch. Each task runs `wetgran job run SPEC --out RESULT`
+    /// and never opens the database. More jobs than the array limit (the smaller of
+    /// --array-limit and the cluster's MaxArraySize) are split into several arrays. Submitting
+    /// again first collects what finished, then submits only the jobs that are not done and not
+    /// queued: the failed, missing and corrupt ones.
+    Submit {
+        /// The sweep file.
+        file: PathBuf,
+        /// Submit with Slurm's sbatch (the only cluster backend).
+        #[arg(long)]
+        slurm: bool,
+        /// Slurm partition (default: the cluster's).
+        #[arg(long)]
+        partition: Option<String>,
+        /// Wall-time limit per task, as sbatch takes it (`30`, `2:00:00`, `1-00:00:00`).
+        #[arg(long)]
+        time: Option<String>,
+        /// CPUs per task (a job is one simulation on one thread).
+        #[arg(long, default_value_t = 1)]
+        cpus_per_task: u32,
+        /// Most tasks per array (default 1000, and never more than the cluster's MaxArraySize).
+        #[arg(long)]
+        array_limit: Option<usize>,
+        /// Print the array script(s) and submit nothing (nothing is written).
+        #[arg(long)]
+        dry_run: bool,
+        /// Database file (created if missing).
+        #[arg(long, default_value = DEFAULT_DB)]
+        db: PathBuf,
+        /// The sweep directory (default: `wetgran-slurm/<sweep name>` beside the database).
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
+    /// Read the results of submitted Slurm tasks into the database.
+    ///
+    /// Idempotent: a result already stored is not stored again. Reports failed tasks (with the
+    /// job's error), corrupt result files, and missing ones (no result and no longer queued:
+    /// killed at a limit, node failure); `sweep submit` submits those again.
+    Collect {
+        #[arg(long, default_value = DEFAULT_DB)]
+        db: PathBuf,
+        /// Only this sweep (default: all).
+        #[arg(long)]
+        sweep: Option<String>,
+    },
     /// Run one job spec and print its result as JSON.
     ///
     /// The spec is JSON as printed by `sweep expand --specs` (a whole line or its `spec`); the
@@ -207,6 +257,41 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
         SweepCommand::Status { db } => sweep_status(&db),
         SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_job(&spec),
+        SweepCommand::Submit {
+            file,
+            slurm,
+            partition,
+            time,
+            cpus_per_task,
+            array_limit,
+            dry_run,
+            db,
+            dir,
+        } => {
+            if slurm {
+                super::cluster_cmd::submit(
+                    &file,
+                    &db,
+                    &super::cluster_cmd::Submit {
+                        options: crate::cluster::slurm::SbatchOptions {
+                            partition,
+                            time,
+                            cpus_per_task,
+                        },
+                        array_limit,
+                        dry_run,
+                        dir,
+                    },
+                )
+            } else {
+                Err(Failure::BadInput(
+                    "sweep submit: give --slurm (the only cluster backend so far)".to_string(),
+                ))
+            }
+        }
+        SweepCommand::Collect { db, sweep } => {
+            super::cluster_cmd::collect_cmd(&db, sweep.as_deref())
+        }
         SweepCommand::Refine {
             sweep,
             db,
@@ -235,7 +320,7 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
     })
 }
 
-fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>), Failure> {
+pub(super) fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>), Failure> {
     let sweep = SweepFile::load(file).map_err(|e| Failure::BadInput(e.to_string()))?;
     let (jobs, skipped) = sweep
         .expand_with_skips()
@@ -421,6 +506,14 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
 fn sweep_status(db: &Path) -> Result<(), Failure> {
     let store = Store::open_existing(db)?;
     print!("{}", status_text(&store)?);
+    for s in store.sweeps()? {
+        let text =
+            super::cluster_cmd::slurm_status_text(&store, &s, &mut crate::cluster::slurm::squeue)?;
+        if !text.is_empty() {
+            println!("sweep {} on Slurm", s.name);
+            print!("{text}");
+        }
+    }
     Ok(())
 }
 
@@ -520,21 +613,7 @@ fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Re
 }
 
 fn sweep_job(path: &Path) -> Result<(), Failure> {
-    let text = if path.as_os_str() == "-" {
-        let mut s = String::new();
-        std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
-            .map_err(|e| Failure::Other(format!("reading standard input: {e}")))?;
-        s
-    } else {
-        std::fs::read_to_string(path)
-            .map_err(|e| Failure::BadInput(format!("{}: cannot read: {e}", path.display())))?
-    };
-    let origin = path.display().to_string();
-    // Accept a line of `sweep expand --specs` as well as a bare spec.
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| Failure::BadInput(format!("{origin}: not JSON: {e}")))?;
-    let spec_value = value.get("spec").cloned().unwrap_or(value);
-    let spec = JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)?;
+    let spec = super::cluster_cmd::read_spec(path)?;
     let result = run_job(&spec, &mut |_| {}).map_err(|e| Failure::Other(e.to_string()))?;
     let out = serde_json::json!({ "id": spec.id(), "result": result });
     println!(

@@ -24,6 +24,10 @@
 //!   loses at most the jobs that were running. A result arriving for a job that another runner
 //!   already finished is discarded, so a job never has two results.
 
+mod cluster;
+
+pub use cluster::{TaskRow, TaskState};
+
 use crate::sweep::file::{Axis, SweepFile};
 use crate::sweep::job::JobResult;
 use crate::sweep::spec::{JobSpec, SweepJob};

@@ -1,0 +1,351 @@
+//! Collection: reads the result files of a sweep's submitted tasks into the database.
+//!
+//! Idempotent: only tasks still marked `submitted` are looked at, and a result whose job already
+//! has one (the same content-hashed job finished by two tasks, or by a local run) is not stored
+//! again (`duplicate`). Per task, the file `results/<job id>.json` gives:
+//! - a result: stored, task `collected` (or `duplicate`);
+//! - an error record: the job is marked failed with its message, task `failed`;
+//! - unreadable, another format, or another job's record: task `corrupt`, job left pending;
+//! - no file: the task is `missing` when Slurm no longer has it queued (killed at its time or
+//!   memory limit, node failure, cancelled); while it is queued, or where the queue cannot be
+//!   asked, it stays `submitted` (waiting).
+//!
+//! Missing, failed and corrupt tasks are what the next `sweep submit` submits again.
+
+use super::record::{Outcome, ResultRecord, SweepDir};
+use super::slurm::Queue;
+use crate::store::{Store, StoreError, SweepRow, TaskRow, TaskState};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// What one collection did, task by task.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Collected {
+    /// Results stored now.
+    pub stored: Vec<TaskRow>,
+    /// Results of jobs that already had one (not stored again).
+    pub duplicates: Vec<TaskRow>,
+    /// Error records (`message` holds the error).
+    pub failed: Vec<TaskRow>,
+    /// Unreadable result files (`message` holds why).
+    pub corrupt: Vec<TaskRow>,
+    /// No result and no longer queued.
+    pub missing: Vec<TaskRow>,
+    /// No result yet, with the Slurm state (`None`: the queue could not be asked).
+    pub waiting: Vec<(TaskRow, Option<String>)>,
+    /// Tasks collected by an earlier call (nothing done).
+    pub earlier: usize,
+    /// Why the queue could not be asked, if it could not.
+    pub queue_note: Option<String>,
+}
+
+/// Collects the tasks of `sweep`; `queue(array_job)` asks Slurm for the queued tasks of an
+/// array (asked once per array).
+pub fn collect(
+    store: &Store,
+    sweep: &SweepRow,
+    queue: &mut dyn FnMut(&str) -> Queue,
+) -> Result<Collected, StoreError> {
+    let mut out = Collected::default();
+    let mut queues: HashMap<String, Queue> = HashMap::new();
+    for mut task in store.tasks(sweep.id)? {
+        if task.state != TaskState::Submitted {
+            out.earlier += 1;
+            continue;
+        }
+        let dir = SweepDir::new(Path::new(&task.dir));
+        let path = dir.result(&task.job_id);
+        let record = match ResultRecord::read(&path, &task.job_id) {
+            Ok(r) => r,
+            Err(reason) => {
+                let msg = format!("{}: {reason}", path.display());
+                store.set_task_state(
+                    task.submission_id,
+                    task.task,
+                    TaskState::Corrupt,
+                    Some(&msg),
+                )?;
+                task.state = TaskState::Corrupt;
+                task.message = Some(msg);
+                out.corrupt.push(task);
+                continue;
+            }
+        };
+        let Some(record) = record else {
+            // No result yet: still queued?
+            let state = match &task.slurm_job {
+                None => Queue::Unavailable("sbatch gave no job id".to_string()),
+                Some(j) => queues.entry(j.clone()).or_insert_with(|| queue(j)).clone(),
+            };
+            match state {
+                Queue::Unavailable(why) => {
+                    out.queue_note.get_or_insert(why);
+                    out.waiting.push((task, None));
+                }
+                Queue::Tasks(tasks) => match tasks.get(&task.task) {
+                    Some(s) => {
+                        let s = s.clone();
+                        out.waiting.push((task, Some(s)));
+                    }
+                    None => {
+                        let msg = format!(
+                            "no result file and no longer in the Slurm queue: the task was \
+                             killed (time or memory limit, node failure, scancel) or crashed; \
+                             see {}/logs/{}_{}.out",
+                            task.dir,
+                            task.slurm_job.as_deref().unwrap_or("?"),
+                            task.task
+                        );
+                        store.set_task_state(
+                            task.submission_id,
+                            task.task,
+                            TaskState::Missing,
+                            Some(&msg),
+                        )?;
+                        task.state = TaskState::Missing;
+                        task.message = Some(msg);
+                        out.missing.push(task);
+                    }
+                },
+            }
+            continue;
+        };
+        let owner = record.owner();
+        match &record.outcome {
+            Outcome::Done(result) => {
+                let kept =
+                    store.ingest_result(&task.job_id, result, &owner, record.finished_at)?;
+                let state = if kept {
+                    TaskState::Collected
+                } else {
+                    TaskState::Duplicate
+                };
+                store.set_task_state(task.submission_id, task.task, state, None)?;
+                task.state = state;
+                if kept {
+                    out.stored.push(task);
+                } else {
+                    out.duplicates.push(task);
+                }
+            }
+            Outcome::Failed(message) => {
+                store.ingest_failure(
+                    &task.job_id,
+                    message,
+                    record.wall_seconds,
+                    &owner,
+                    record.finished_at,
+                )?;
+                store.set_task_state(
+                    task.submission_id,
+                    task.task,
+                    TaskState::Failed,
+                    Some(message),
+                )?;
+                task.state = TaskState::Failed;
+                task.message = Some(message.clone());
+                out.failed.push(task);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The jobs of `sweep` to submit (again): every job that is not done, unless a task of it is
+/// still waiting (submitted, not collected). In grid order, each job once.
+pub fn jobs_to_submit(store: &Store, sweep: &SweepRow) -> Result<Vec<String>, StoreError> {
+    let waiting: std::collections::HashSet<String> = store
+        .tasks(sweep.id)?
+        .into_iter()
+        .filter(|t| t.state == TaskState::Submitted)
+        .map(|t| t.job_id)
+        .collect();
+    let mut seen = std::collections::HashSet::new();
+    Ok(store
+        .points(sweep.id)?
+        .into_iter()
+        .filter(|p| p.status != "done" && !waiting.contains(&p.job_id))
+        .filter(|p| seen.insert(p.job_id.clone()))
+        .map(|p| p.job_id)
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::{JobResult, SweepFile};
+
+    /// A database with a registered sweep of four jobs (one with its spec twice: two grid
+    /// points share it) and a sweep directory.
+    fn setup(dir: &Path) -> (Store, SweepRow, Vec<String>, SweepDir) {
+        let text = "[sweep]\nname = \"c\"\n[scene]\ndimension = 2\n[scene.box]\n\
+                    size = [8.0, 4.0]\n[scene.particles]\ncount = 4\n[scene.initial]\n\
+                    temperature = 1.0\n[scene.run]\nduration = 1.0\n[[axis]]\n\
+                    key = \"initial.seed\"\nvalues = [1, 2, 3, 4, 1]\n";
+        let file = SweepFile::parse(text, &dir.join("c.toml")).unwrap();
+        let jobs = file.expand().unwrap();
+        let store = Store::open(&dir.join("w.sqlite")).unwrap();
+        let sweep = store.register_sweep(&file, &jobs).unwrap();
+        let ids = jobs_to_submit(&store, &sweep).unwrap();
+        // Five points, four distinct jobs (seed 1 twice).
+        assert_eq!(ids.len(), 4);
+        let sd = SweepDir::new(&dir.join("cluster"));
+        sd.create().unwrap();
+        (store, sweep, ids, sd)
+    }
+
+    fn result(x: f64) -> JobResult {
+        JobResult {
+            phase: Some("g".to_string()),
+            decided_on: None,
+            observables: serde_json::json!({ "x": x }),
+            simulated_time: 1.0,
+            wall_seconds: 0.2,
+            events: 7,
+        }
+    }
+
+    fn submit(store: &Store, sweep: &SweepRow, sd: &SweepDir, ids: &[String], job: &str) -> i64 {
+        let s = store
+            .record_submission(sweep.id, &sd.root.display().to_string(), "x.sbatch", ids)
+            .unwrap();
+        store.set_slurm_job(s, job).unwrap();
+        s
+    }
+
+    fn done(sd: &SweepDir, id: &str, x: f64) {
+        ResultRecord::new(id, Outcome::Done(result(x)), 0.2)
+            .write(&sd.result(id))
+            .unwrap();
+    }
+
+    /// A queue in which nothing is left.
+    fn empty(_: &str) -> Queue {
+        Queue::Tasks(HashMap::new())
+    }
+
+    #[test]
+    fn results_are_stored_once_however_often_they_are_collected() {
+        let dir = tempfile::tempdir().unwrap();
+        let (store, sweep, ids, sd) = setup(dir.path());
+        // Job 0 is in two arrays (submitted twice), so two tasks bring the same result.
+        submit(&store, &sweep, &sd, &ids, "100");
+        submit(&store, &sweep, &sd, &ids[..1], "101");
+        for (k, id) in ids.iter().enumerate() {
+            done(&sd, id, k as f64);
+        }
+        let c = collect(&store, &sweep, &mut empty).unwrap();
+        assert_eq!(c.stored.len(), 4);
+        assert_eq!(c.duplicates.len(), 1);
+        assert_eq!(c.duplicates[0].job_id, ids[0]);
+        assert!(c.missing.is_empty() && c.corrupt.is_empty() && c.failed.is_empty());
+        // Five points (two share a job): all done, one result row per job.
+        let counts = store.counts(sweep.id).unwrap();
+        assert_eq!((counts.done, counts.pending), (5, 0));
+        let runs = store.runs_per_job().unwrap();
+        assert_eq!(runs.len(), 4);
+        assert!(runs.iter().all(|(_, n)| *n == 1), "{runs:?}");
+        // The stored observables are the files' (point order: seeds 1, 2, 3, 4, 1).
+        let xs: Vec<f64> = store
+            .points(sweep.id)
+            .unwrap()
+            .iter()
+            .map(|p| p.observables.as_ref().unwrap()["x"].as_f64().unwrap())
+            .collect();
+        assert_eq!(xs, [0.0, 1.0, 2.0, 3.0, 0.0]);
+        assert_eq!(
+            store.points(sweep.id).unwrap()[0].result_owner.as_deref(),
+            Some(ResultRecord::new("", Outcome::Failed(String::new()), 0.0).owner().as_str())
+        );
+        // A second collection finds nothing to do and changes nothing.
+        let again = collect(&store, &sweep, &mut empty).unwrap();
+        assert_eq!(again.earlier, 5);
+        assert!(again.stored.is_empty() && again.duplicates.is_empty());
+        assert_eq!(store.runs_per_job().unwrap(), runs);
+        // Nothing is left to submit.
+        assert!(jobs_to_submit(&store, &sweep).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_partial_collection_reports_waiting_missing_failed_and_corrupt_tasks() {
+        let dir = tempfile::tempdir().unwrap();
+        let (store, sweep, ids, sd) = setup(dir.path());
+        submit(&store, &sweep, &sd, &ids, "200");
+        // Task 0: a result. Task 1: an error record. Task 2: a file cut in half. Task 3: no
+        // file; first still running, then gone from the queue.
+        done(&sd, &ids[0], 1.0);
+        ResultRecord::new(&ids[1], Outcome::Failed("numerical guard: boom".into()), 0.1)
+            .write(&sd.result(&ids[1]))
+            .unwrap();
+        done(&sd, &ids[2], 2.0);
+        let text = std::fs::read_to_string(sd.result(&ids[2])).unwrap();
+        std::fs::write(sd.result(&ids[2]), &text[..text.len() - 20]).unwrap();
+        let mut asked = Vec::new();
+        let mut running = |j: &str| {
+            asked.push(j.to_string());
+            Queue::Tasks(HashMap::from([(3, "RUNNING".to_string())]))
+        };
+        let c = collect(&store, &sweep, &mut running).unwrap();
+        assert_eq!(asked, ["200"], "the queue is asked once per array");
+        assert_eq!(c.stored.len(), 1);
+        assert_eq!(c.failed.len(), 1);
+        assert_eq!(c.failed[0].message.as_deref(), Some("numerical guard: boom"));
+        assert_eq!(c.corrupt.len(), 1);
+        assert!(
+            c.corrupt[0]
+                .message
+                .as_deref()
+                .unwrap()
+                .contains("not a result record"),
+            "{:?}",
+            c.corrupt[0]
+        );
+        assert_eq!(c.waiting.len(), 1);
+        assert_eq!(c.waiting[0].1.as_deref(), Some("RUNNING"));
+        assert!(c.missing.is_empty());
+        // The failure is in the job row; the corrupt job is still pending.
+        let statuses = store.job_statuses(&ids).unwrap();
+        assert_eq!(statuses[&ids[0]], "done");
+        assert_eq!(statuses[&ids[1]], "failed");
+        assert_eq!(statuses[&ids[2]], "pending");
+        assert_eq!(statuses[&ids[3]], "pending");
+        // Submitting again now: the failed and the corrupt job, not the running one.
+        assert_eq!(
+            jobs_to_submit(&store, &sweep).unwrap(),
+            [ids[1].clone(), ids[2].clone()]
+        );
+        // Without a queue to ask, a task without result keeps waiting (it may still run).
+        let mut none = |_: &str| Queue::Unavailable("no squeue".to_string());
+        let c = collect(&store, &sweep, &mut none).unwrap();
+        assert_eq!(c.waiting.len(), 1);
+        assert_eq!(c.waiting[0].1, None);
+        assert_eq!(c.queue_note.as_deref(), Some("no squeue"));
+        // The task left the queue without a result: missing, and submitted again.
+        let c = collect(&store, &sweep, &mut empty).unwrap();
+        assert_eq!(c.missing.len(), 1);
+        assert!(
+            c.missing[0]
+                .message
+                .as_deref()
+                .unwrap()
+                .contains("logs/200_3.out")
+        );
+        assert_eq!(
+            jobs_to_submit(&store, &sweep).unwrap(),
+            [ids[1].clone(), ids[2].clone(), ids[3].clone()]
+        );
+        // The resubmitted tasks succeed: everything is stored, the failed job is done.
+        submit(&store, &sweep, &sd, &ids[1..], "201");
+        for id in &ids[1..] {
+            done(&sd, id, 5.0);
+        }
+        let c = collect(&store, &sweep, &mut empty).unwrap();
+        assert_eq!(c.stored.len(), 3);
+        let counts = store.counts(sweep.id).unwrap();
+        assert_eq!((counts.done, counts.failed, counts.pending), (5, 0, 0));
+        // The failed attempt stays on record: two runs for that job.
+        let runs: HashMap<String, i64> = store.runs_per_job().unwrap().into_iter().collect();
+        assert_eq!(runs[&ids[1]], 2);
+        assert_eq!(runs[&ids[0]], 1);
+    }
+}

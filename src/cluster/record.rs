@@ -1,0 +1,243 @@
+//! The sweep directory a cluster works in, and the result record a task leaves in it.
+//!
+//! Layout (all on the shared filesystem; the database is never opened by a task):
+//!
+//! ```text
+//! DIR/specs/<job id>.json     the canonical job spec (self-contained: `wetgran job run` input)
+//! DIR/results/<job id>.json   the task's result record (written atomically: temp file + rename)
+//! DIR/arrays/array-<n>.sbatch the sbatch script of submission n
+//! DIR/arrays/array-<n>.tasks  its task list: line k + 1 is the job id of array task k
+//! DIR/logs/<array>_<task>.out the task's standard output and error (Slurm's --output)
+//! ```
+//!
+//! A result record is one JSON object: `format`, `job_id`, `outcome` (`{"done": JobResult}` or
+//! `{"failed": "message"}`), `wall_seconds`, `finished_at`, `host` and `slurm_task`
+//! (`ARRAYJOB_TASK` when run under Slurm). A file that does not parse, has another format, or
+//! names another job than its file name is corrupt.
+
+use crate::sweep::{JobResult, JobSpec};
+use serde::{Deserialize, Serialize};
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Version of the result-record layout.
+pub const RECORD_FORMAT: u32 = 1;
+
+/// The paths inside a sweep directory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepDir {
+    pub root: PathBuf,
+}
+
+impl SweepDir {
+    pub fn new(root: &Path) -> SweepDir {
+        SweepDir {
+            root: root.to_path_buf(),
+        }
+    }
+
+    pub fn specs(&self) -> PathBuf {
+        self.root.join("specs")
+    }
+    pub fn results(&self) -> PathBuf {
+        self.root.join("results")
+    }
+    pub fn arrays(&self) -> PathBuf {
+        self.root.join("arrays")
+    }
+    pub fn logs(&self) -> PathBuf {
+        self.root.join("logs")
+    }
+    pub fn spec(&self, job_id: &str) -> PathBuf {
+        self.specs().join(format!("{job_id}.json"))
+    }
+    pub fn result(&self, job_id: &str) -> PathBuf {
+        self.results().join(format!("{job_id}.json"))
+    }
+
+    /// Creates the four folders.
+    pub fn create(&self) -> std::io::Result<()> {
+        for d in [self.specs(), self.results(), self.arrays(), self.logs()] {
+            std::fs::create_dir_all(d)?;
+        }
+        Ok(())
+    }
+
+    /// Writes a job's canonical spec (atomically; left alone when already there with the same
+    /// text).
+    pub fn write_spec(&self, spec: &JobSpec) -> std::io::Result<PathBuf> {
+        let path = self.spec(&spec.id());
+        let text = spec.canonical_json();
+        if std::fs::read_to_string(&path).ok().as_deref() != Some(text.as_str()) {
+            write_atomic(&path, text.as_bytes())?;
+        }
+        Ok(path)
+    }
+}
+
+/// How a task ended.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    Done(JobResult),
+    /// The error message (a simulation panic, a numerical guard, an unreadable spec).
+    Failed(String),
+}
+
+/// What a task leaves in `results/<job id>.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResultRecord {
+    pub format: u32,
+    pub job_id: String,
+    pub outcome: Outcome,
+    pub wall_seconds: f64,
+    /// Seconds since the Unix epoch.
+    pub finished_at: f64,
+    pub host: String,
+    /// `ARRAYJOB_TASK` under Slurm.
+    pub slurm_task: Option<String>,
+}
+
+impl ResultRecord {
+    /// A record of this process's environment (host name, Slurm array task).
+    pub fn new(job_id: &str, outcome: Outcome, wall_seconds: f64) -> ResultRecord {
+        let slurm_task = match (
+            std::env::var("SLURM_ARRAY_JOB_ID"),
+            std::env::var("SLURM_ARRAY_TASK_ID"),
+        ) {
+            (Ok(j), Ok(t)) => Some(format!("{j}_{t}")),
+            _ => std::env::var("SLURM_JOB_ID").ok(),
+        };
+        ResultRecord {
+            format: RECORD_FORMAT,
+            job_id: job_id.to_string(),
+            outcome,
+            wall_seconds,
+            finished_at: crate::store::now(),
+            host: std::fs::read_to_string("/proc/sys/kernel/hostname")
+                .map(|s| s.trim().to_string())
+                .unwrap_or_else(|_| "unknown".to_string()),
+            slurm_task,
+        }
+    }
+
+    /// Who computed it, as stored in the database's `owner` columns: `slurm:TASK@host`, or
+    /// `elsewhere@host` outside Slurm.
+    pub fn owner(&self) -> String {
+        match &self.slurm_task {
+            Some(t) => format!("slurm:{t}@{}", self.host),
+            None => format!("elsewhere@{}", self.host),
+        }
+    }
+
+    /// Writes the record atomically (a reader sees no file or the whole file).
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(self).expect("a record serializes");
+        write_atomic(path, format!("{text}\n").as_bytes())
+    }
+
+    /// Reads the record at `path`, which must be `expected_job`'s. `Ok(None)`: no file.
+    /// `Err(reason)`: the file is corrupt.
+    pub fn read(path: &Path, expected_job: &str) -> Result<Option<ResultRecord>, String> {
+        let text = match std::fs::read_to_string(path) {
+            Ok(t) => t,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(format!("cannot read it: {e}")),
+        };
+        let r: ResultRecord =
+            serde_json::from_str(&text).map_err(|e| format!("not a result record: {e}"))?;
+        if r.format != RECORD_FORMAT {
+            return Err(format!(
+                "record format {} (this wetgran reads {RECORD_FORMAT})",
+                r.format
+            ));
+        }
+        if r.job_id != expected_job {
+            return Err(format!(
+                "the record is job {}'s, not this file's job {expected_job}",
+                r.job_id
+            ));
+        }
+        if let Outcome::Done(res) = &r.outcome
+            && !(res.simulated_time.is_finite() && res.wall_seconds.is_finite())
+        {
+            return Err("a result with non-finite times".to_string());
+        }
+        Ok(Some(r))
+    }
+}
+
+/// Writes `bytes` to a temporary file beside `path`, syncs it, and renames it over `path`: on a
+/// POSIX filesystem (NFS and Lustre included) a reader sees the old file or the whole new one.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp.{}", std::process::id()));
+    let written = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result() -> JobResult {
+        JobResult {
+            phase: Some("g".to_string()),
+            decided_on: Some(serde_json::json!({"a": 1})),
+            observables: serde_json::json!({"granular_temperature_reduced": 0.25}),
+            simulated_time: 3.5,
+            wall_seconds: 0.5,
+            events: 1234,
+        }
+    }
+
+    #[test]
+    fn a_record_reads_back_and_a_wrong_or_broken_one_is_corrupt() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("abc.json");
+        assert_eq!(ResultRecord::read(&path, "abc"), Ok(None));
+        let r = ResultRecord::new("abc", Outcome::Done(result()), 0.5);
+        r.write(&path).unwrap();
+        assert_eq!(ResultRecord::read(&path, "abc"), Ok(Some(r.clone())));
+        // No temporary file is left beside it.
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 1);
+        // The record of another job under this name.
+        let e = ResultRecord::read(&path, "xyz").unwrap_err();
+        assert!(e.contains("job abc's"), "{e}");
+        // Cut in the middle (a copy that broke off).
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&path, &text[..text.len() / 2]).unwrap();
+        let e = ResultRecord::read(&path, "abc").unwrap_err();
+        assert!(e.contains("not a result record"), "{e}");
+        // Another format version.
+        let mut other = r.clone();
+        other.format = 99;
+        other.write(&path).unwrap();
+        let e = ResultRecord::read(&path, "abc").unwrap_err();
+        assert!(e.contains("format 99"), "{e}");
+    }
+
+    #[test]
+    fn a_failure_record_round_trips() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("j.json");
+        let r = ResultRecord::new("j", Outcome::Failed("numerical guard: x".to_string()), 0.1);
+        r.write(&path).unwrap();
+        let back = ResultRecord::read(&path, "j").unwrap().unwrap();
+        assert_eq!(back.outcome, Outcome::Failed("numerical guard: x".to_string()));
+        assert!(back.owner().ends_with(&format!("@{}", back.host)));
+    }
+}

@@ -1,0 +1,332 @@
+//! The store's side of cluster execution: submitted job arrays and their tasks (table
+//! `submissions`, `submission_tasks`), and the ingestion of results computed elsewhere.
+//!
+//! Submitting changes no job row: a job stays `pending` until `sweep collect` ingests its result
+//! file ([`Store::ingest_result`]: job done, result row, run row, in one transaction; a job that
+//! already has a result keeps it and nothing is stored) or its error record
+//! ([`Store::ingest_failure`]: job failed with the message, unless it is done or running here).
+
+use super::{Store, StoreError, now};
+use crate::sweep::job::JobResult;
+
+/// What `sweep collect` found for a task.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TaskState {
+    /// Submitted, nothing collected yet.
+    Submitted,
+    /// Its result was stored.
+    Collected,
+    /// Its result arrived, but the job already had one (stored once only).
+    Duplicate,
+    /// It wrote an error record.
+    Failed,
+    /// No result file, and the task is no longer in the Slurm queue.
+    Missing,
+    /// Its result file is unreadable or belongs to another job.
+    Corrupt,
+}
+
+impl TaskState {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TaskState::Submitted => "submitted",
+            TaskState::Collected => "collected",
+            TaskState::Duplicate => "duplicate",
+            TaskState::Failed => "failed",
+            TaskState::Missing => "missing",
+            TaskState::Corrupt => "corrupt",
+        }
+    }
+
+    fn parse(s: &str) -> TaskState {
+        match s {
+            "submitted" => TaskState::Submitted,
+            "collected" => TaskState::Collected,
+            "duplicate" => TaskState::Duplicate,
+            "failed" => TaskState::Failed,
+            "missing" => TaskState::Missing,
+            _ => TaskState::Corrupt,
+        }
+    }
+}
+
+/// One array task as recorded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TaskRow {
+    pub submission_id: i64,
+    pub sweep_id: i64,
+    pub dir: String,
+    /// The array's Slurm job id (`None`: sbatch had not answered).
+    pub slurm_job: Option<String>,
+    pub task: i64,
+    pub job_id: String,
+    pub state: TaskState,
+    pub message: Option<String>,
+    pub submitted_at: f64,
+}
+
+impl Store {
+    /// Records a job array about to be submitted: its script and the job of each task (task `k`
+    /// runs `jobs[k]`). Returns the submission's id; [`Store::set_slurm_job`] adds the Slurm id.
+    pub fn record_submission(
+        &self,
+        sweep_id: i64,
+        dir: &str,
+        script: &str,
+        jobs: &[String],
+    ) -> Result<i64, StoreError> {
+        let t = now();
+        self.rt.block_on(async {
+            let mut tx = self
+                .pool
+                .begin_with("BEGIN IMMEDIATE")
+                .await
+                .map_err(|e| self.db(e))?;
+            let id: i64 = sqlx::query_scalar(
+                "INSERT INTO submissions (sweep_id, dir, script, tasks, submitted_at) \
+                 VALUES (?1, ?2, ?3, ?4, ?5) RETURNING id",
+            )
+            .bind(sweep_id)
+            .bind(dir)
+            .bind(script)
+            .bind(jobs.len() as i64)
+            .bind(t)
+            .fetch_one(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?;
+            for (k, job) in jobs.iter().enumerate() {
+                sqlx::query(
+                    "INSERT INTO submission_tasks (submission_id, task, job_id) VALUES (?1, ?2, ?3)",
+                )
+                .bind(id)
+                .bind(k as i64)
+                .bind(job)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            }
+            tx.commit().await.map_err(|e| self.db(e))?;
+            Ok(id)
+        })
+    }
+
+    /// Adds the Slurm job id sbatch answered to a recorded submission.
+    pub fn set_slurm_job(&self, submission_id: i64, slurm_job: &str) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query("UPDATE submissions SET slurm_job = ?2 WHERE id = ?1")
+                    .bind(submission_id)
+                    .bind(slurm_job)
+                    .execute(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(())
+    }
+
+    /// Forgets a submission that sbatch refused (its tasks never existed).
+    pub fn drop_submission(&self, submission_id: i64) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query("DELETE FROM submissions WHERE id = ?1")
+                    .bind(submission_id)
+                    .execute(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(())
+    }
+
+    /// Every recorded task of a sweep, oldest submission first.
+    pub fn tasks(&self, sweep_id: i64) -> Result<Vec<TaskRow>, StoreError> {
+        let rows: Vec<(i64, String, Option<String>, i64, String, String, Option<String>, f64)> =
+            self.rt
+                .block_on(
+                    sqlx::query_as(
+                        "SELECT s.id, s.dir, s.slurm_job, t.task, t.job_id, t.state, t.message, \
+                         s.submitted_at FROM submission_tasks t \
+                         JOIN submissions s ON s.id = t.submission_id \
+                         WHERE s.sweep_id = ?1 ORDER BY s.id, t.task",
+                    )
+                    .bind(sweep_id)
+                    .fetch_all(&self.pool),
+                )
+                .map_err(|e| self.db(e))?;
+        Ok(rows
+            .into_iter()
+            .map(
+                |(submission_id, dir, slurm_job, task, job_id, state, message, submitted_at)| {
+                    TaskRow {
+                        submission_id,
+                        sweep_id,
+                        dir,
+                        slurm_job,
+                        task,
+                        job_id,
+                        state: TaskState::parse(&state),
+                        message,
+                        submitted_at,
+                    }
+                },
+            )
+            .collect())
+    }
+
+    /// Records what collection found for a task.
+    pub fn set_task_state(
+        &self,
+        submission_id: i64,
+        task: i64,
+        state: TaskState,
+        message: Option<&str>,
+    ) -> Result<(), StoreError> {
+        self.rt
+            .block_on(
+                sqlx::query(
+                    "UPDATE submission_tasks SET state = ?3, message = ?4 \
+                     WHERE submission_id = ?1 AND task = ?2",
+                )
+                .bind(submission_id)
+                .bind(task)
+                .bind(state.as_str())
+                .bind(message)
+                .execute(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(())
+    }
+
+    /// The status of each of these jobs that is in the database (`pending`, `running`, `done`,
+    /// `failed`).
+    pub fn job_statuses(
+        &self,
+        ids: &[String],
+    ) -> Result<std::collections::HashMap<String, String>, StoreError> {
+        let mut out = std::collections::HashMap::new();
+        for id in ids {
+            let s: Option<String> = self
+                .rt
+                .block_on(
+                    sqlx::query_scalar("SELECT status FROM jobs WHERE id = ?1")
+                        .bind(id)
+                        .fetch_optional(&self.pool),
+                )
+                .map_err(|e| self.db(e))?;
+            if let Some(s) = s {
+                out.insert(id.clone(), s);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Stores a result computed elsewhere (`owner` names where: `slurm:JOB_TASK@host`): job done,
+    /// result row, run row, in one transaction. Returns `false`, storing nothing, when the job
+    /// already has a result (content-hashed ids: the same job finished twice is stored once).
+    pub fn ingest_result(
+        &self,
+        job_id: &str,
+        result: &JobResult,
+        owner: &str,
+        finished_at: f64,
+    ) -> Result<bool, StoreError> {
+        self.rt.block_on(async {
+            let mut tx = self
+                .pool
+                .begin_with("BEGIN IMMEDIATE")
+                .await
+                .map_err(|e| self.db(e))?;
+            let n = sqlx::query(
+                "UPDATE jobs SET status = 'done', owner = ?2, heartbeat = NULL, finished_at = ?3, \
+                 wall_seconds = ?4, last_error = NULL, attempts = attempts + 1 \
+                 WHERE id = ?1 AND NOT EXISTS (SELECT 1 FROM results WHERE job_id = ?1)",
+            )
+            .bind(job_id)
+            .bind(owner)
+            .bind(finished_at)
+            .bind(result.wall_seconds)
+            .execute(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?
+            .rows_affected();
+            if n == 1 {
+                sqlx::query(
+                    "INSERT INTO results (job_id, phase, decided_on, observables, simulated_time, \
+                     wall_seconds, events, owner, finished_at) \
+                     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+                )
+                .bind(job_id)
+                .bind(&result.phase)
+                .bind(result.decided_on.as_ref().map(|v| v.to_string()))
+                .bind(result.observables.to_string())
+                .bind(result.simulated_time)
+                .bind(result.wall_seconds)
+                .bind(result.events as i64)
+                .bind(owner)
+                .bind(finished_at)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+                sqlx::query(
+                    "INSERT INTO runs (job_id, owner, started_at, ended_at, outcome) \
+                     VALUES (?1, ?2, ?3, ?4, 'done')",
+                )
+                .bind(job_id)
+                .bind(owner)
+                .bind(finished_at - result.wall_seconds)
+                .bind(finished_at)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            }
+            tx.commit().await.map_err(|e| self.db(e))?;
+            Ok(n == 1)
+        })
+    }
+
+    /// Records a job that failed elsewhere: status `failed` with the message, one more attempt,
+    /// a run row. A job that is done (or running under a runner here) is left as it is; returns
+    /// whether the job row changed.
+    pub fn ingest_failure(
+        &self,
+        job_id: &str,
+        message: &str,
+        wall_seconds: f64,
+        owner: &str,
+        finished_at: f64,
+    ) -> Result<bool, StoreError> {
+        self.rt.block_on(async {
+            let mut tx = self
+                .pool
+                .begin_with("BEGIN IMMEDIATE")
+                .await
+                .map_err(|e| self.db(e))?;
+            let n = sqlx::query(
+                "UPDATE jobs SET status = 'failed', owner = ?2, heartbeat = NULL, \
+                 finished_at = ?3, wall_seconds = ?4, last_error = ?5, attempts = attempts + 1 \
+                 WHERE id = ?1 AND status IN ('pending', 'failed')",
+            )
+            .bind(job_id)
+            .bind(owner)
+            .bind(finished_at)
+            .bind(wall_seconds)
+            .bind(message)
+            .execute(&mut *tx)
+            .await
+            .map_err(|e| self.db(e))?
+            .rows_affected();
+            if n == 1 {
+                sqlx::query(
+                    "INSERT INTO runs (job_id, owner, started_at, ended_at, outcome) \
+                     VALUES (?1, ?2, ?3, ?4, 'failed')",
+                )
+                .bind(job_id)
+                .bind(owner)
+                .bind(finished_at - wall_seconds)
+                .bind(finished_at)
+                .execute(&mut *tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            }
+            tx.commit().await.map_err(|e| self.db(e))?;
+            Ok(n == 1)
+        })
+    }
+}
