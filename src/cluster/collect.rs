@@ -176,18 +176,18 @@ mod tests {
     use crate::sweep::{JobResult, SweepFile};
 
     /// A database with a registered sweep of four jobs (one with its spec twice: two grid
-    /// points share it) and a sweep directory.
+    /// points, temperature 1 and 1.0, share it) and a sweep directory.
     fn setup(dir: &Path) -> (Store, SweepRow, Vec<String>, SweepDir) {
         let text = "[sweep]\nname = \"c\"\n[scene]\ndimension = 2\n[scene.box]\n\
                     size = [8.0, 4.0]\n[scene.particles]\ncount = 4\n[scene.initial]\n\
                     temperature = 1.0\n[scene.run]\nduration = 1.0\n[[axis]]\n\
-                    key = \"initial.seed\"\nvalues = [1, 2, 3, 4, 1]\n";
+                    key = \"initial.temperature\"\nvalues = [1, 2, 3, 4, 1.0]\n";
         let file = SweepFile::parse(text, &dir.join("c.toml")).unwrap();
         let jobs = file.expand().unwrap();
         let store = Store::open(&dir.join("w.sqlite")).unwrap();
         let sweep = store.register_sweep(&file, &jobs).unwrap();
         let ids = jobs_to_submit(&store, &sweep).unwrap();
-        // Five points, four distinct jobs (seed 1 twice).
+        // Five points, four distinct jobs.
         assert_eq!(ids.len(), 4);
         let sd = SweepDir::new(&dir.join("cluster"));
         sd.create().unwrap();
@@ -245,7 +245,7 @@ mod tests {
         let runs = store.runs_per_job().unwrap();
         assert_eq!(runs.len(), 4);
         assert!(runs.iter().all(|(_, n)| *n == 1), "{runs:?}");
-        // The stored observables are the files' (point order: seeds 1, 2, 3, 4, 1).
+        // The stored observables are the files' (point order: temperatures 1, 2, 3, 4, 1).
         let xs: Vec<f64> = store
             .points(sweep.id)
             .unwrap()
