@@ -108,7 +108,12 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
                 options: &s.options,
             })
             .map_err(Failure::BadInput)?;
-            println!("# ---- array {} of {}: {}", k + 1, parts.len(), tasks.display());
+            println!(
+                "# ---- array {} of {}: {}",
+                k + 1,
+                parts.len(),
+                tasks.display()
+            );
             print!("{script}");
         }
         return Ok(());
@@ -234,7 +239,7 @@ fn collected_text(store: &Store, sweep: &SweepRow, c: &Collected) -> Result<Stri
     let _ = writeln!(
         out,
         "sweep {}: {} result(s) stored, {} already stored (not stored twice), {} failed, {} \
-         corrupt, {} missing, {} waiting{}",
+         corrupt, {} missing, {} waiting{}{}",
         sweep.name,
         c.stored.len(),
         c.duplicates.len(),
@@ -253,6 +258,11 @@ fn collected_text(store: &Store, sweep: &SweepRow, c: &Collected) -> Result<Stri
                     .collect::<Vec<_>>()
                     .join(", ")
             )
+        },
+        if c.earlier > 0 {
+            format!("; {} task(s) collected before", c.earlier)
+        } else {
+            String::new()
         }
     );
     for (what, list) in [

@@ -113,8 +113,7 @@ pub fn collect(
         let owner = record.owner();
         match &record.outcome {
             Outcome::Done(result) => {
-                let kept =
-                    store.ingest_result(&task.job_id, result, &owner, record.finished_at)?;
+                let kept = store.ingest_result(&task.job_id, result, &owner, record.finished_at)?;
                 let state = if kept {
                     TaskState::Collected
                 } else {
@@ -255,7 +254,11 @@ mod tests {
         assert_eq!(xs, [0.0, 1.0, 2.0, 3.0, 0.0]);
         assert_eq!(
             store.points(sweep.id).unwrap()[0].result_owner.as_deref(),
-            Some(ResultRecord::new("", Outcome::Failed(String::new()), 0.0).owner().as_str())
+            Some(
+                ResultRecord::new("", Outcome::Failed(String::new()), 0.0)
+                    .owner()
+                    .as_str()
+            )
         );
         // A second collection finds nothing to do and changes nothing.
         let again = collect(&store, &sweep, &mut empty).unwrap();
@@ -274,9 +277,13 @@ mod tests {
         // Task 0: a result. Task 1: an error record. Task 2: a file cut in half. Task 3: no
         // file; first still running, then gone from the queue.
         done(&sd, &ids[0], 1.0);
-        ResultRecord::new(&ids[1], Outcome::Failed("numerical guard: boom".into()), 0.1)
-            .write(&sd.result(&ids[1]))
-            .unwrap();
+        ResultRecord::new(
+            &ids[1],
+            Outcome::Failed("numerical guard: boom".into()),
+            0.1,
+        )
+        .write(&sd.result(&ids[1]))
+        .unwrap();
         done(&sd, &ids[2], 2.0);
         let text = std::fs::read_to_string(sd.result(&ids[2])).unwrap();
         std::fs::write(sd.result(&ids[2]), &text[..text.len() - 20]).unwrap();
@@ -289,7 +296,10 @@ mod tests {
         assert_eq!(asked, ["200"], "the queue is asked once per array");
         assert_eq!(c.stored.len(), 1);
         assert_eq!(c.failed.len(), 1);
-        assert_eq!(c.failed[0].message.as_deref(), Some("numerical guard: boom"));
+        assert_eq!(
+            c.failed[0].message.as_deref(),
+            Some("numerical guard: boom")
+        );
         assert_eq!(c.corrupt.len(), 1);
         assert!(
             c.corrupt[0]

@@ -237,7 +237,10 @@ mod tests {
         let r = ResultRecord::new("j", Outcome::Failed("numerical guard: x".to_string()), 0.1);
         r.write(&path).unwrap();
         let back = ResultRecord::read(&path, "j").unwrap().unwrap();
-        assert_eq!(back.outcome, Outcome::Failed("numerical guard: x".to_string()));
+        assert_eq!(
+            back.outcome,
+            Outcome::Failed("numerical guard: x".to_string())
+        );
         assert!(back.owner().ends_with(&format!("@{}", back.host)));
     }
 }

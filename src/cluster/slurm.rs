@@ -219,7 +219,10 @@ pub fn squeue(array_job: &str) -> Queue {
     };
     let stderr = String::from_utf8_lossy(&out.stderr);
     if out.status.success() {
-        Queue::Tasks(parse_squeue(&String::from_utf8_lossy(&out.stdout), array_job))
+        Queue::Tasks(parse_squeue(
+            &String::from_utf8_lossy(&out.stdout),
+            array_job,
+        ))
     } else if stderr.contains("Invalid job id") {
         // Slurm forgets a finished job after MinJobAge: nothing of it is queued.
         Queue::Tasks(HashMap::new())

@@ -137,19 +137,28 @@ impl Store {
 
     /// Every recorded task of a sweep, oldest submission first.
     pub fn tasks(&self, sweep_id: i64) -> Result<Vec<TaskRow>, StoreError> {
-        let rows: Vec<(i64, String, Option<String>, i64, String, String, Option<String>, f64)> =
-            self.rt
-                .block_on(
-                    sqlx::query_as(
-                        "SELECT s.id, s.dir, s.slurm_job, t.task, t.job_id, t.state, t.message, \
+        let rows: Vec<(
+            i64,
+            String,
+            Option<String>,
+            i64,
+            String,
+            String,
+            Option<String>,
+            f64,
+        )> = self
+            .rt
+            .block_on(
+                sqlx::query_as(
+                    "SELECT s.id, s.dir, s.slurm_job, t.task, t.job_id, t.state, t.message, \
                          s.submitted_at FROM submission_tasks t \
                          JOIN submissions s ON s.id = t.submission_id \
                          WHERE s.sweep_id = ?1 ORDER BY s.id, t.task",
-                    )
-                    .bind(sweep_id)
-                    .fetch_all(&self.pool),
                 )
-                .map_err(|e| self.db(e))?;
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
         Ok(rows
             .into_iter()
             .map(
