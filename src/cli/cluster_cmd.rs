@@ -39,7 +39,7 @@ pub fn sweep_dir(db: &Path, sweep: &str, dir: Option<&Path>) -> Result<PathBuf, 
         None => {
             let db = absolute(db)?;
             let parent = db.parent().unwrap_or(Path::new("/"));
-            Ok(parent.join(DEFAULT_DIR).join(sweep))
+            Ok(parent.join(DEFAULT_DIR).join(slurm::file_name(sweep)))
         }
     }
 }

@@ -53,20 +53,25 @@ pub fn check_directive(what: &str, value: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// The job name: `wetgran-` and the sweep name with anything but letters, digits, `-`, `_`, `.`
-/// replaced by `_`.
-pub fn job_name(sweep: &str) -> String {
-    let clean: String = sweep
+/// A sweep name as a file or job name: anything but ASCII letters, digits, `-`, `_` and `.`
+/// replaced by `_` (and a leading `.` too).
+pub fn file_name(sweep: &str) -> String {
+    sweep
         .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+        .enumerate()
+        .map(|(k, c)| {
+            if c.is_ascii_alphanumeric() || "-_".contains(c) || (c == '.' && k > 0) {
                 c
             } else {
                 '_'
             }
         })
-        .collect();
-    format!("wetgran-{clean}")
+        .collect()
+}
+
+/// The job name: `wetgran-` and the sweep name as [`file_name`] cleans it.
+pub fn job_name(sweep: &str) -> String {
+    format!("wetgran-{}", file_name(sweep))
 }
 
 /// The sbatch script of one array. Task `SLURM_ARRAY_TASK_ID` = k runs the job on line k + 1 of
@@ -371,6 +376,7 @@ mod tests {
         assert_eq!(parse_sbatch("4242\n"), Some("4242".to_string()));
         assert_eq!(parse_sbatch("4242;cluster1\n"), Some("4242".to_string()));
         assert_eq!(parse_sbatch("Submitted batch job 4242\n"), None);
+        assert_eq!(file_name("../a b/c.d"), "_._a_b_c.d");
         let q = parse_squeue("17_0 RUNNING\n17_3 PENDING\n18_0 RUNNING\nbad\n", "17");
         assert_eq!(q.len(), 2);
         assert_eq!(q[&0], "RUNNING");

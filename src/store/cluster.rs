@@ -65,6 +65,19 @@ pub struct TaskRow {
     pub submitted_at: f64,
 }
 
+/// A row of the task query: submission id, dir, Slurm job, task, job id, state, message,
+/// submitted at.
+type TaskTuple = (
+    i64,
+    String,
+    Option<String>,
+    i64,
+    String,
+    String,
+    Option<String>,
+    f64,
+);
+
 impl Store {
     /// Records a job array about to be submitted: its script and the job of each task (task `k`
     /// runs `jobs[k]`). Returns the submission's id; [`Store::set_slurm_job`] adds the Slurm id.
@@ -137,16 +150,7 @@ impl Store {
 
     /// Every recorded task of a sweep, oldest submission first.
     pub fn tasks(&self, sweep_id: i64) -> Result<Vec<TaskRow>, StoreError> {
-        let rows: Vec<(
-            i64,
-            String,
-            Option<String>,
-            i64,
-            String,
-            String,
-            Option<String>,
-            f64,
-        )> = self
+        let rows: Vec<TaskTuple> = self
             .rt
             .block_on(
                 sqlx::query_as(
