@@ -154,8 +154,24 @@ pub fn parse_sbatch(stdout: &str) -> Option<String> {
     (!id.is_empty() && id.chars().all(|c| c.is_ascii_digit())).then(|| id.to_string())
 }
 
-/// The state of each array task from `squeue -h -r -o '%i %T' -j ID` (lines `ID_TASK STATE`);
-/// lines of other jobs are ignored.
+/// Job states in which a task has ended: some Slurm versions list them for a while when asked
+/// for a job by id; such a task counts as gone from the queue.
+pub const ENDED_STATES: [&str; 11] = [
+    "COMPLETED",
+    "FAILED",
+    "TIMEOUT",
+    "CANCELLED",
+    "NODE_FAIL",
+    "OUT_OF_MEMORY",
+    "BOOT_FAIL",
+    "DEADLINE",
+    "PREEMPTED",
+    "SPECIAL_EXIT",
+    "REVOKED",
+];
+
+/// The state of each queued array task from `squeue -h -r -o '%i %T' -j ID` (lines `ID_TASK
+/// STATE`); lines of other jobs and tasks in one of the [`ENDED_STATES`] are left out.
 pub fn parse_squeue(stdout: &str, array_job: &str) -> HashMap<i64, String> {
     let mut out = HashMap::new();
     for line in stdout.lines() {
@@ -166,6 +182,7 @@ pub fn parse_squeue(stdout: &str, array_job: &str) -> HashMap<i64, String> {
         if let Some((job, task)) = id.split_once('_')
             && job == array_job
             && let Ok(task) = task.parse::<i64>()
+            && !ENDED_STATES.contains(&state)
         {
             out.insert(task, state.to_string());
         }
@@ -377,7 +394,10 @@ mod tests {
         assert_eq!(parse_sbatch("4242;cluster1\n"), Some("4242".to_string()));
         assert_eq!(parse_sbatch("Submitted batch job 4242\n"), None);
         assert_eq!(file_name("../a b/c.d"), "_._a_b_c.d");
-        let q = parse_squeue("17_0 RUNNING\n17_3 PENDING\n18_0 RUNNING\nbad\n", "17");
+        let q = parse_squeue(
+            "17_0 RUNNING\n17_3 PENDING\n18_0 RUNNING\nbad\n17_4 TIMEOUT\n17_5 COMPLETED\n",
+            "17",
+        );
         assert_eq!(q.len(), 2);
         assert_eq!(q[&0], "RUNNING");
         assert_eq!(q[&3], "PENDING");
