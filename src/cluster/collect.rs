@@ -8,7 +8,8 @@
 //! - unreadable, another format, or another job's record: task `corrupt`, job left pending;
 //! - no file: the task is `missing` when Slurm no longer has it queued (killed at its time or
 //!   memory limit, node failure, cancelled); while it is queued, or where the queue cannot be
-//!   asked, it stays `submitted` (waiting).
+//!   asked, it stays `submitted` (waiting). A missing task's file is looked for again at every
+//!   collection (a network filesystem may show a new file late).
 //!
 //! Missing, failed and corrupt tasks are what the next `sweep submit` submits again.
 
@@ -47,15 +48,34 @@ pub fn collect(
     queue: &mut dyn FnMut(&str) -> Queue,
 ) -> Result<Collected, StoreError> {
     let mut out = Collected::default();
+    let tasks = store.tasks(sweep.id)?;
+    // The queue is asked before any result file is read: a task it no longer lists had ended
+    // before, so a result it wrote is there for the reads below (no task is judged missing
+    // because it finished between the read and the question).
     let mut queues: HashMap<String, Queue> = HashMap::new();
-    for mut task in store.tasks(sweep.id)? {
-        if task.state != TaskState::Submitted {
+    for t in &tasks {
+        if t.state == TaskState::Submitted
+            && let Some(j) = &t.slurm_job
+            && !queues.contains_key(j)
+        {
+            queues.insert(j.clone(), queue(j));
+        }
+    }
+    for mut task in tasks {
+        // A missing task is looked at again: its file may show up late (a network filesystem's
+        // cache can hide a new file for a while).
+        let recheck = task.state == TaskState::Missing;
+        if task.state != TaskState::Submitted && !recheck {
             out.earlier += 1;
             continue;
         }
         let dir = SweepDir::new(Path::new(&task.dir));
         let path = dir.result(&task.job_id);
         let record = match ResultRecord::read(&path, &task.job_id) {
+            Ok(None) if recheck => {
+                out.earlier += 1;
+                continue;
+            }
             Ok(r) => r,
             Err(reason) => {
                 let msg = format!("{}: {reason}", path.display());
@@ -75,7 +95,7 @@ pub fn collect(
             // No result yet: still queued?
             let state = match &task.slurm_job {
                 None => Queue::Unavailable("sbatch gave no job id".to_string()),
-                Some(j) => queues.entry(j.clone()).or_insert_with(|| queue(j)).clone(),
+                Some(j) => queues[j].clone(),
             };
             match state {
                 Queue::Unavailable(why) => {
@@ -344,13 +364,26 @@ mod tests {
             jobs_to_submit(&store, &sweep).unwrap(),
             [ids[1].clone(), ids[2].clone(), ids[3].clone()]
         );
+        // Still no file: nothing changes.
+        let c = collect(&store, &sweep, &mut empty).unwrap();
+        assert!(c.missing.is_empty() && c.stored.is_empty());
+        assert_eq!(c.earlier, 4);
+        // Its file shows up late: stored after all.
+        done(&sd, &ids[3], 3.0);
+        let c = collect(&store, &sweep, &mut empty).unwrap();
+        assert_eq!(c.stored.len(), 1);
+        assert_eq!(c.stored[0].job_id, ids[3]);
+        assert_eq!(
+            jobs_to_submit(&store, &sweep).unwrap(),
+            [ids[1].clone(), ids[2].clone()]
+        );
         // The resubmitted tasks succeed: everything is stored, the failed job is done.
-        submit(&store, &sweep, &sd, &ids[1..], "201");
-        for id in &ids[1..] {
+        submit(&store, &sweep, &sd, &ids[1..3], "201");
+        for id in &ids[1..3] {
             done(&sd, id, 5.0);
         }
         let c = collect(&store, &sweep, &mut empty).unwrap();
-        assert_eq!(c.stored.len(), 3);
+        assert_eq!(c.stored.len(), 2);
         let counts = store.counts(sweep.id).unwrap();
         assert_eq!((counts.done, counts.failed, counts.pending), (5, 0, 0));
         // The failed attempt stays on record: two runs for that job.
