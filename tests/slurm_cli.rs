@@ -196,8 +196,12 @@ fn submit_splits_at_max_array_size_and_records_the_slurm_ids() {
     let mut want: Vec<String> = tasks.iter().map(|t| t.job_id.clone()).collect();
     want.sort();
     assert_eq!(listed, want);
-    // The queue (empty) no longer has them and no result came: submitting again collects them
-    // as missing and submits all four again.
+    // One task wrote an error record; the queue (empty) no longer has the others and no result
+    // came: submitting again collects 1 failed and 3 missing and submits all four again.
+    let failed = sd.join("results").join(format!("{}.json", tasks[0].job_id));
+    ResultRecord::new(&tasks[0].job_id, Outcome::Failed("boom".to_string()), 0.1)
+        .write(&failed)
+        .unwrap();
     let out = wetgran()
         .args(["sweep", "submit", s.to_str().unwrap(), "--slurm", "--db"])
         .arg(&db)
@@ -205,13 +209,31 @@ fn submit_splits_at_max_array_size_and_records_the_slurm_ids() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(stderr(&out).contains("4 missing"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("1 failed, 0 corrupt, 3 missing"),
+        "{}",
+        stderr(&out)
+    );
     assert!(
         stderr(&out).contains("4 job(s) submitted"),
         "{}",
         stderr(&out)
     );
     assert_eq!(store.tasks(id).unwrap().len(), 8);
+    // The old error record is gone, so it cannot pass for the new task's outcome: a collect
+    // now finds the new tasks missing (the stand-in ran nothing), none failed.
+    assert!(!failed.exists());
+    let out = wetgran()
+        .args(["sweep", "collect", "--db"])
+        .arg(&db)
+        .env("PATH", &bin)
+        .output()
+        .unwrap();
+    assert!(
+        stdout(&out).contains("0 failed, 0 corrupt, 4 missing"),
+        "{}",
+        stdout(&out)
+    );
 }
 
 #[test]

@@ -290,6 +290,21 @@ mod tests {
     }
 
     #[test]
+    fn a_task_finishing_while_the_queue_is_asked_is_not_missing() {
+        let dir = tempfile::tempdir().unwrap();
+        let (store, sweep, ids, sd) = setup(dir.path());
+        submit(&store, &sweep, &sd, &ids[..1], "300");
+        // The task writes its result and leaves the queue just as the queue is asked.
+        let mut finishing = |_: &str| {
+            done(&sd, &ids[0], 9.0);
+            Queue::Tasks(HashMap::new())
+        };
+        let c = collect(&store, &sweep, &mut finishing).unwrap();
+        assert!(c.missing.is_empty(), "{:?}", c.missing);
+        assert_eq!(c.stored.len(), 1);
+    }
+
+    #[test]
     fn a_partial_collection_reports_waiting_missing_failed_and_corrupt_tasks() {
         let dir = tempfile::tempdir().unwrap();
         let (store, sweep, ids, sd) = setup(dir.path());
