@@ -26,7 +26,14 @@ log() { echo "slurm-local: $*" >&2; }
 now() { date +%s.%N; }
 secs() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1f", b - a }'; }
 
-pid_alive() { [[ -f "$1" ]] && kill -0 "$(cat "$1")" 2>/dev/null; }
+# pid_alive PIDFILE: the pid file names a live process whose command is the file's name
+# (munged.pid -> munged): a stale file whose pid was reused by another program does not count.
+pid_alive() {
+    local pid
+    [[ -f "$1" ]] || return 1
+    pid=$(cat "$1")
+    kill -0 "$pid" 2>/dev/null && [[ "$(cat "/proc/$pid/comm" 2>/dev/null)" == "$(basename "$1" .pid)" ]]
+}
 
 install_packages() {
     if command -v slurmctld >/dev/null && command -v slurmd >/dev/null && command -v munged >/dev/null \
