@@ -244,6 +244,7 @@ pub fn system_c() -> Scene {
     s.contact = ContactSpec {
         restitution: 0.9,
         wall_restitution: 1.0,
+        ..ContactSpec::default()
     };
     s.capillary = CapillarySpec {
         model: CapillaryModel::ThinThread,
