@@ -210,3 +210,51 @@ fn damped_restitution_matches_direct_integration() {
         }
     }
 }
+
+const WET: &str = "[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844";
+
+/// Minimal capillary model (MODEL.md 3.1), `F_B = E_cb / s_crit = 4`: a pair that meets
+/// elastically forms a bridge; leaving contact with normal kinetic energy `mu u^2 / 2` below
+/// `E_cb` it stays bonded (turning at `s = KE / F_B < s_crit`), above it the bridge ruptures and
+/// the work done on the pair up to rupture is `F_B s_crit = E_cb`.
+#[test]
+fn minimal_capillary_bonds_ruptures_and_costs_e_cb() {
+    let (s_crit, e_cb, mu): (f64, f64, f64) = (0.0711, 0.2844, 0.5);
+    for integ in ["gear5", "verlet"] {
+        for ratio in [0.9, 1.1] {
+            let s = pair_scene(1e-5, integ, "stiffness = 1e6", WET);
+            let mut e = TimeEngine::<2, false, true>::new(&s);
+            let v = (ratio * e_cb / (0.5 * mu)).sqrt();
+            e.set_state(0, [3.0, 5.0], [0.5 * v, 0.0]);
+            e.set_state(1, [4.05, 5.0], [-0.5 * v, 0.0]);
+            let mut s_max = f64::NEG_INFINITY;
+            let mut was_bonded = false;
+            for _ in 0..300_000 {
+                e.step();
+                let sep = e.position(1)[0] - e.position(0)[0] - 1.0;
+                if e.bridge_count() == 1 {
+                    was_bonded = true;
+                    s_max = s_max.max(sep);
+                }
+            }
+            assert!(was_bonded, "{integ}: no bridge formed");
+            let u = e.velocity(1)[0] - e.velocity(0)[0];
+            let ke = 0.5 * mu * u * u;
+            if ratio < 1.0 {
+                assert_eq!(e.bridge_count(), 1, "{integ}: bond lost");
+                assert_eq!(e.counts().bridge_ruptures, 0);
+                let turn = ratio * e_cb / (e_cb / s_crit);
+                assert!(s_max < s_crit, "{integ}: stretched to {s_max}");
+                assert!((s_max / turn - 1.0).abs() < 1e-2, "{integ}: turned at {s_max}, not {turn}");
+            } else {
+                assert_eq!(e.bridge_count(), 0, "{integ}: still bonded");
+                assert_eq!(e.counts().bridge_ruptures, 1);
+                assert_eq!(e.counts().bridge_formations, 1);
+                let work = ratio * e_cb - ke;
+                assert!((work / e_cb - 1.0).abs() < 1e-2, "{integ}: work {work} vs E_cb {e_cb}");
+                let booked = e.energy().dissipated_ruptures;
+                assert!((booked / e_cb - 1.0).abs() < 1e-2, "{integ}: booked {booked}");
+            }
+        }
+    }
+}
