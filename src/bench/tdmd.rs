@@ -56,12 +56,25 @@ integrator = "{integrator}"
     Scene::from_toml_str(&text, "bench tdmd").expect("bench scene is valid")
 }
 
+/// CPU time of the calling thread in seconds (Linux `/proc/thread-self/schedstat`, first field:
+/// nanoseconds on a CPU), `None` elsewhere. On a loaded machine it separates the engine's cost
+/// from the time spent waiting for a core.
+pub fn thread_cpu_seconds() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
+}
+
 /// One integrator's figures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TdmdRow {
     pub integrator: &'static str,
     /// Wall seconds per simulated time unit, one per repetition.
     pub seconds_per_time: Vec<f64>,
+    /// CPU seconds per simulated time unit, one per repetition (empty without `/proc`).
+    pub cpu_per_time: Vec<f64>,
+    /// Verlet-list entries per particle at the end of the last repetition.
+    pub pairs_per_particle: f64,
     pub particles: usize,
     pub dt: f64,
     pub max_overlap: f64,
@@ -90,6 +103,8 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<TdmdRow> {
             let mut row = TdmdRow {
                 integrator: integ,
                 seconds_per_time: Vec::new(),
+                cpu_per_time: Vec::new(),
+                pairs_per_particle: 0.0,
                 particles: s.particles.count,
                 dt: s.engine.dt.unwrap_or(1e-4),
                 max_overlap: 0.0,
@@ -100,10 +115,15 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<TdmdRow> {
                 let mut e = TimeEngine::<2, true, false>::new(&s);
                 e.run_until(1.0);
                 let (b0, s0) = (e.list_builds(), e.steps());
+                let cpu0 = thread_cpu_seconds();
                 let start = Instant::now();
                 e.run_until(1.0 + timed);
                 let secs = start.elapsed().as_secs_f64();
+                if let (Some(c0), Some(c1)) = (cpu0, thread_cpu_seconds()) {
+                    row.cpu_per_time.push((c1 - c0) / timed);
+                }
                 row.seconds_per_time.push(secs / timed);
+                row.pairs_per_particle = e.list_entries() as f64 / e.len() as f64;
                 row.max_overlap = row.max_overlap.max(e.max_overlap());
                 row.builds_per_step =
                     (e.list_builds() - b0) as f64 / (e.steps() - s0).max(1) as f64;
@@ -123,32 +143,47 @@ pub fn report(rows: &[TdmdRow]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<8} {:>16} {:>12} {:>12} {:>12} {:>14} {:>12} {:>10}",
+        "{:<8} {:>12} {:>11} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}",
         "integr.",
         "p-steps/s",
         "s/time med",
         "min",
         "max",
         "vs 0.38 s",
+        "cpu s/time",
+        "cpu vs .38",
         "max ovl/d",
-        "builds/st"
+        "builds/st",
+        "pairs/p"
     );
     for r in rows {
         let med = median(&r.seconds_per_time);
         let min = r.seconds_per_time.iter().cloned().fold(f64::INFINITY, f64::min);
         let max = r.seconds_per_time.iter().cloned().fold(0.0, f64::max);
         let psteps = r.particles as f64 / r.dt / med;
+        let (cpu, cpu_ratio) = if r.cpu_per_time.is_empty() {
+            ("n/a".to_string(), "n/a".to_string())
+        } else {
+            let c = median(&r.cpu_per_time);
+            (
+                format!("{c:.4}"),
+                format!("{:.2}x", BASELINE_SECONDS_PER_TIME_UNIT / c),
+            )
+        };
         let _ = writeln!(
             s,
-            "{:<8} {:>16.3e} {:>12.4} {:>12.4} {:>12.4} {:>13.2}x {:>12.5} {:>10.4}",
+            "{:<8} {:>12.3e} {:>11.4} {:>9.4} {:>9.4} {:>9.2}x {:>11} {:>10} {:>10.5} {:>10.4} {:>9.2}",
             r.integrator,
             psteps,
             med,
             min,
             max,
             BASELINE_SECONDS_PER_TIME_UNIT / med,
+            cpu,
+            cpu_ratio,
             r.max_overlap,
-            r.builds_per_step
+            r.builds_per_step,
+            r.pairs_per_particle
         );
     }
     if let Some(r) = rows.first() {

@@ -254,6 +254,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.list.builds
     }
 
+    /// Entries of the Verlet list.
+    pub fn list_entries(&self) -> usize {
+        self.list.partner.len()
+    }
+
     /// Contact onsets (pair, wall), bridge formations and ruptures so far.
     pub fn counts(&self) -> &EventCounts {
         &self.counts
@@ -394,113 +399,40 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let x = &self.r[0];
         let v = &self.r[1];
         let f = &mut self.acc;
+        // Start from the weight, -m g along the last axis.
         f.fill(0.0);
+        if GRAV {
+            f[(D - 1) * n..].fill(-p.mass * p.gravity);
+        }
         let mut half = [0.0; D];
         for k in 0..D {
             half[k] = 0.5 * p.size[k];
         }
-        let (k_pair, a_d) = (p.stiffness, p.damping);
-        let mut diss = 0.0;
-        let mut max_ov = self.max_overlap;
         let list = &mut self.list;
-        for i in 0..n {
-            let mut xi = [0.0; D];
-            let mut vi = [0.0; D];
-            let mut fi = [0.0; D];
-            for k in 0..D {
-                xi[k] = x[k * n + i];
-                vi[k] = v[k * n + i];
-            }
-            let ri = self.radius[i];
-            let (p0, p1) = (list.start[i] as usize, list.start[i + 1] as usize);
-            for q in p0..p1 {
-                let j = list.partner[q] as usize;
-                let mut d = [0.0; D];
-                let mut r2 = 0.0;
-                for k in 0..D {
-                    let mut dk = xi[k] - x[k * n + j];
-                    if p.periodic[k] {
-                        if dk > half[k] {
-                            dk -= p.size[k];
-                        } else if dk < -half[k] {
-                            dk += p.size[k];
-                        }
-                    }
-                    d[k] = dk;
-                    r2 += dk * dk;
-                }
-                let rj = self.radius[j];
-                let sig = ri + rj;
-                let fl = list.flags[q];
-                if r2 >= sig * sig && (!WET || fl & BOND == 0) {
-                    if fl & CONTACT != 0 {
-                        list.flags[q] = fl & !CONTACT;
-                    }
-                    continue;
-                }
-                let r = r2.sqrt();
-                let inv = 1.0 / r;
-                let overlap = sig - r;
-                let mut fmag = 0.0;
-                let mut new_fl = fl;
-                if overlap > 0.0 {
-                    if fl & CONTACT == 0 {
-                        new_fl |= CONTACT;
-                        self.counts.pair_collisions += 1;
-                    }
-                    max_ov = max_ov.max(overlap);
-                    // xi_dot = -(v_i - v_j) . n, n = d / r.
-                    let mut vn = 0.0;
-                    for k in 0..D {
-                        vn += (vi[k] - v[k * n + j]) * d[k];
-                    }
-                    let xi_dot = -vn * inv * vs;
-                    let kr = k_pair * (ri * rj / sig).sqrt();
-                    // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
-                    let total = hertz::force(kr, overlap, xi_dot, a_d);
-                    if a_d > 0.0 {
-                        let elastic = kr * overlap * overlap.sqrt();
-                        diss += (total - elastic) * xi_dot * dt;
-                    }
-                    fmag = total;
-                    if WET && fl & BOND == 0 {
-                        // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
-                        // F_B (-overlap).
-                        new_fl |= BOND;
-                        self.counts.bridge_formations += 1;
-                        self.dissipated_bridges += p.bridge_force * overlap;
-                    }
-                } else {
-                    new_fl &= !CONTACT;
-                }
-                if WET && new_fl & BOND != 0 {
-                    let s = -overlap;
-                    if s > p.s_crit {
-                        // Rupture: the bridge energy F_B s leaves the system.
-                        new_fl &= !BOND;
-                        self.counts.bridge_ruptures += 1;
-                        self.dissipated_bridges += p.bridge_force * s;
-                    } else {
-                        // MODEL.md 3.1: constant attraction F_B along the line of centres.
-                        fmag -= p.bridge_force;
-                    }
-                }
-                if new_fl != fl {
-                    list.flags[q] = new_fl;
-                }
-                if fmag != 0.0 {
-                    let s = fmag * inv;
-                    for k in 0..D {
-                        let fk = s * d[k];
-                        fi[k] += fk;
-                        f[k * n + j] -= fk;
-                    }
-                }
-            }
-            for k in 0..D {
-                f[k * n + i] += fi[k];
-            }
-        }
+        let pc = PairConstants {
+            periodic: p.periodic,
+            size: p.size,
+            stiffness: p.stiffness,
+            damping: p.damping,
+            bridge_force: p.bridge_force,
+            s_crit: p.s_crit,
+            vs,
+            dt,
+        };
+        let out = pair_forces::<D, WET>(
+            &pc,
+            x,
+            v,
+            f,
+            &self.radius,
+            &list.start,
+            &list.partner,
+            &mut list.flags,
+            &mut self.counts,
+        );
+        let mut diss = out.dissipated;
+        let mut max_ov = self.max_overlap.max(out.max_overlap);
+        self.dissipated_bridges += out.bridge_ledger;
         // Walls: Hertz with R_eff = R_i on every non-periodic axis; the last axis moves with the
         // drive, z_w(t) = A sin(omega t) (MODEL.md 4.1).
         let (zw, vw) = match p.drive {
@@ -514,15 +446,22 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
             let (shift, wv) = if k == D - 1 { (zw, vw) } else { (0.0, 0.0) };
             let (lo, hi) = (shift, p.size[k] + shift);
+            let xk = &x[k * n..(k + 1) * n];
+            let vk = &v[k * n..(k + 1) * n];
+            let fk = &mut f[k * n..(k + 1) * n];
+            let radius = &self.radius[..n];
+            let wall_kr = &self.wall_kr[..n];
+            let touching = &mut self.wall_contact[..n];
+            let bit_lo = 1u8 << (2 * k);
+            let bit_hi = bit_lo << 1;
             for i in 0..n {
-                let xk = x[k * n + i];
-                let ri = self.radius[i];
-                let bit_lo = 1u8 << (2 * k);
-                let bit_hi = bit_lo << 1;
-                let ov_lo = ri - (xk - lo);
-                let ov_hi = xk + ri - hi;
+                let ri = radius[i];
+                let ov_lo = ri - (xk[i] - lo);
+                let ov_hi = xk[i] + ri - hi;
                 if ov_lo <= 0.0 && ov_hi <= 0.0 {
-                    self.wall_contact[i] &= !(bit_lo | bit_hi);
+                    if touching[i] & (bit_lo | bit_hi) != 0 {
+                        touching[i] &= !(bit_lo | bit_hi);
+                    }
                     continue;
                 }
                 let (ov, sign, bit) = if ov_lo > 0.0 {
@@ -530,21 +469,21 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 } else {
                     (ov_hi, -1.0, bit_hi)
                 };
-                if self.wall_contact[i] & bit == 0 {
-                    self.wall_contact[i] |= bit;
+                if touching[i] & bit == 0 {
+                    touching[i] |= bit;
                     self.counts.wall_collisions += 1;
                 }
                 max_ov = max_ov.max(ov);
                 // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
-                let xi_dot = -sign * (v[k * n + i] * vs - wv);
-                let kr = self.wall_kr[i];
+                let xi_dot = -sign * (vk[i] * vs - wv);
+                let kr = wall_kr[i];
                 let total = hertz::force(kr, ov, xi_dot, p.wall_damping);
                 if p.wall_damping > 0.0 {
                     diss += (total - kr * ov * ov.sqrt()) * xi_dot * dt;
                 }
-                let fk = sign * total;
-                f[k * n + i] += fk;
-                work += fk * wv * dt;
+                let fw = sign * total;
+                fk[i] += fw;
+                work += fw * wv * dt;
             }
         }
         if B::ACTIVE {
@@ -557,14 +496,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 }
             }
         }
-        // a = F / m - g e_z.
-        let inv_m = 1.0 / p.mass;
-        for e in f.iter_mut() {
-            *e *= inv_m;
-        }
-        if GRAV {
-            for e in &mut f[(D - 1) * n..] {
-                *e -= p.gravity;
+        // a = F / m.
+        if p.mass != 1.0 {
+            let inv_m = 1.0 / p.mass;
+            for e in f.iter_mut() {
+                *e *= inv_m;
             }
         }
         self.dissipated_damping += diss;
@@ -732,5 +668,160 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
         }
         Ok(())
+    }
+}
+
+/// What the pair loop needs besides the arrays.
+struct PairConstants<const D: usize> {
+    periodic: [bool; D],
+    size: [f64; D],
+    stiffness: f64,
+    damping: f64,
+    bridge_force: f64,
+    s_crit: f64,
+    /// Factor turning the velocity array into velocities.
+    vs: f64,
+    /// Weight of the bookkeeping (the step, or 0).
+    dt: f64,
+}
+
+/// What the pair loop books.
+struct PairOut {
+    dissipated: f64,
+    max_overlap: f64,
+    bridge_ledger: f64,
+}
+
+/// Pair forces (Eq. 2.7 and MODEL.md 3.1) over the Verlet list, each pair once (Newton's third
+/// law), added to `f`; updates the contact and bond flags. A free function of slices so that the
+/// compiler keeps every array in a register (no aliasing through `self`).
+#[allow(clippy::too_many_arguments)]
+fn pair_forces<const D: usize, const WET: bool>(
+    pc: &PairConstants<D>,
+    x: &[f64],
+    v: &[f64],
+    f: &mut [f64],
+    radius: &[f64],
+    start: &[u32],
+    partner: &[u32],
+    flags: &mut [u8],
+    counts: &mut EventCounts,
+) -> PairOut {
+    let n = radius.len();
+    let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
+    let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
+    let mut half = [0.0; D];
+    for k in 0..D {
+        half[k] = 0.5 * pc.size[k];
+    }
+    let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
+    let mut diss = 0.0;
+    let mut max_ov = 0.0f64;
+    let mut ledger = 0.0;
+    for i in 0..n {
+        let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
+        if p0 == p1 {
+            continue;
+        }
+        let mut xi = [0.0; D];
+        let mut vi = [0.0; D];
+        let mut fi = [0.0; D];
+        for k in 0..D {
+            xi[k] = xs[k][i];
+            vi[k] = vsl[k][i];
+        }
+        let ri = radius[i];
+        for q in p0..p1 {
+            let j = partner[q] as usize;
+            let mut d = [0.0; D];
+            let mut r2 = 0.0;
+            for k in 0..D {
+                let mut dk = xi[k] - xs[k][j];
+                if pc.periodic[k] {
+                    if dk > half[k] {
+                        dk -= pc.size[k];
+                    } else if dk < -half[k] {
+                        dk += pc.size[k];
+                    }
+                }
+                d[k] = dk;
+                r2 += dk * dk;
+            }
+            let rj = radius[j];
+            let sig = ri + rj;
+            let fl = flags[q];
+            if r2 >= sig * sig && (!WET || fl & BOND == 0) {
+                if fl & CONTACT != 0 {
+                    flags[q] = fl & !CONTACT;
+                }
+                continue;
+            }
+            let r = r2.sqrt();
+            let inv = 1.0 / r;
+            let overlap = sig - r;
+            let mut fmag = 0.0;
+            let mut new_fl = fl;
+            if overlap > 0.0 {
+                if fl & CONTACT == 0 {
+                    new_fl |= CONTACT;
+                    counts.pair_collisions += 1;
+                }
+                max_ov = max_ov.max(overlap);
+                // xi_dot = -(v_i - v_j) . n, n = d / r.
+                let mut vn = 0.0;
+                for k in 0..D {
+                    vn += (vi[k] - vsl[k][j]) * d[k];
+                }
+                let xi_dot = -vn * inv * vs;
+                let kr = k_pair * (ri * rj / sig).sqrt();
+                // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
+                let total = hertz::force(kr, overlap, xi_dot, a_d);
+                if a_d > 0.0 {
+                    let elastic = kr * overlap * overlap.sqrt();
+                    diss += (total - elastic) * xi_dot * dt;
+                }
+                fmag = total;
+                if WET && fl & BOND == 0 {
+                    // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
+                    // F_B (-overlap).
+                    new_fl |= BOND;
+                    counts.bridge_formations += 1;
+                    ledger += pc.bridge_force * overlap;
+                }
+            } else {
+                new_fl &= !CONTACT;
+            }
+            if WET && new_fl & BOND != 0 {
+                let s = -overlap;
+                if s > pc.s_crit {
+                    // Rupture: the bridge energy F_B s leaves the system.
+                    new_fl &= !BOND;
+                    counts.bridge_ruptures += 1;
+                    ledger += pc.bridge_force * s;
+                } else {
+                    // MODEL.md 3.1: constant attraction F_B along the line of centres.
+                    fmag -= pc.bridge_force;
+                }
+            }
+            if new_fl != fl {
+                flags[q] = new_fl;
+            }
+            if fmag != 0.0 {
+                let s = fmag * inv;
+                for k in 0..D {
+                    let fk = s * d[k];
+                    fi[k] += fk;
+                    f[k * n + j] -= fk;
+                }
+            }
+        }
+        for k in 0..D {
+            f[k * n + i] += fi[k];
+        }
+    }
+    PairOut {
+        dissipated: diss,
+        max_overlap: max_ov,
+        bridge_ledger: ledger,
     }
 }

@@ -92,25 +92,30 @@ impl<const D: usize> NeighbourList<D> {
     }
 
     /// Whether some particle moved more than `skin / 2` since the last build (`x` axis-major).
+    /// The displacement is taken without the periodic image: a particle that crossed a periodic
+    /// face counts as having moved by about `L` and triggers a (harmless, rare) rebuild; in
+    /// exchange the loop vectorises.
     pub fn needs_rebuild(&self, x: &[f64]) -> bool {
         let n = self.next.len();
         let lim = 0.25 * self.skin * self.skin;
         let mut worst = 0.0f64;
-        for i in 0..n {
-            let mut r2 = 0.0;
+        let mut acc = [0.0f64; 64];
+        let mut i0 = 0;
+        while i0 < n {
+            let m = (n - i0).min(64);
+            acc[..m].fill(0.0);
             for k in 0..D {
-                let mut d = x[k * n + i] - self.built_at[k * n + i];
-                if self.periodic[k] {
-                    let l = self.size[k];
-                    if d > 0.5 * l {
-                        d -= l;
-                    } else if d < -0.5 * l {
-                        d += l;
-                    }
+                let xs = &x[k * n + i0..k * n + i0 + m];
+                let bs = &self.built_at[k * n + i0..k * n + i0 + m];
+                for ((a, &xv), &bv) in acc[..m].iter_mut().zip(xs).zip(bs) {
+                    let d = xv - bv;
+                    *a += d * d;
                 }
-                r2 += d * d;
             }
-            worst = worst.max(r2);
+            for &a in &acc[..m] {
+                worst = if a > worst { a } else { worst };
+            }
+            i0 += m;
         }
         worst > lim
     }
