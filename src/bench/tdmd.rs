@@ -158,7 +158,11 @@ pub fn report(rows: &[TdmdRow]) -> String {
     );
     for r in rows {
         let med = median(&r.seconds_per_time);
-        let min = r.seconds_per_time.iter().cloned().fold(f64::INFINITY, f64::min);
+        let min = r
+            .seconds_per_time
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
         let max = r.seconds_per_time.iter().cloned().fold(0.0, f64::max);
         let psteps = r.particles as f64 / r.dt / med;
         let (cpu, cpu_ratio) = if r.cpu_per_time.is_empty() {

@@ -118,7 +118,7 @@ impl Default for ContactSpec {
 
 /// Default Hertz prefactor `k` of the time-driven engine (chosen in docs/accuracy.md: the largest
 /// overlap of the shaken standard systems stays below 1 % of `d`).
-pub const DEFAULT_STIFFNESS: f64 = 2e6;
+pub const DEFAULT_STIFFNESS: f64 = 1e7;
 /// Default time step of the time-driven engine.
 pub const DEFAULT_DT: f64 = 1e-4;
 /// Default Verlet-list skin of the time-driven engine, in units of `d`.

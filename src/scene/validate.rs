@@ -657,29 +657,29 @@ impl Scene {
                         ),
                     ));
                 }
-                if let Some(dt) = e.dt {
-                    if !(dt.is_finite() && dt > 0.0 && dt <= 1e-2) {
-                        return Err(c.out_of_range("engine.dt", dt, "in (0, 0.01]"));
-                    }
+                if let Some(dt) = e.dt
+                    && !(dt.is_finite() && dt > 0.0 && dt <= 1e-2)
+                {
+                    return Err(c.out_of_range("engine.dt", dt, "in (0, 0.01]"));
                 }
-                if let Some(skin) = e.skin {
-                    if !(skin.is_finite() && skin > 0.0 && skin <= 1.0) {
-                        return Err(c.out_of_range("engine.skin", skin, "in (0, 1] (units of d)"));
-                    }
+                if let Some(skin) = e.skin
+                    && !(skin.is_finite() && skin > 0.0 && skin <= 1.0)
+                {
+                    return Err(c.out_of_range("engine.skin", skin, "in (0, 1] (units of d)"));
                 }
-                if let Some(k) = ct.stiffness {
-                    if !(k.is_finite() && (1e2..=1e12).contains(&k)) {
-                        return Err(c.out_of_range("contact.stiffness", k, "in [1e2, 1e12]"));
-                    }
+                if let Some(k) = ct.stiffness
+                    && !(k.is_finite() && (1e2..=1e12).contains(&k))
+                {
+                    return Err(c.out_of_range("contact.stiffness", k, "in [1e2, 1e12]"));
                 }
                 for (key, v) in [
                     ("contact.damping", ct.damping),
                     ("contact.wall_damping", ct.wall_damping),
                 ] {
-                    if let Some(a) = v {
-                        if !(a.is_finite() && (0.0..=1.0).contains(&a)) {
-                            return Err(c.out_of_range(key, a, "in [0, 1] (a time)"));
-                        }
+                    if let Some(a) = v
+                        && !(a.is_finite() && (0.0..=1.0).contains(&a))
+                    {
+                        return Err(c.out_of_range(key, a, "in [0, 1] (a time)"));
                     }
                 }
                 // The time engine's neighbour cells hold the Verlet-list range.

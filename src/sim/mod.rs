@@ -127,6 +127,9 @@ pub trait Simulation {
     const KIND: &'static str;
     fn time(&self) -> f64;
     fn len(&self) -> usize;
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
     /// Advances to `t_end`; false when stopped on the event cap first.
     fn run_until(&mut self, t_end: f64, max_events: Option<u64>) -> bool;
     fn energy(&self) -> EnergyLedger;

@@ -616,6 +616,25 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         (0..self.n).flat_map(|i| self.velocity(i)).collect()
     }
 
+    /// Test aid, `O(N^2)`: the first pair that overlaps (or is within `s_crit` of contact in a
+    /// wet scene) but is missing from the Verlet list, which would make its force vanish.
+    pub fn pair_missing_from_list(&self) -> Option<(usize, usize)> {
+        let reach = if WET { self.p.s_crit } else { 0.0 };
+        for i in 0..self.n {
+            let row =
+                &self.list.partner[self.list.start[i] as usize..self.list.start[i + 1] as usize];
+            for j in i + 1..self.n {
+                let r = self.distance(i, j);
+                if r < self.radius[i] + self.radius[j] + reach
+                    && row.binary_search(&(j as u32)).is_err()
+                {
+                    return Some((i, j));
+                }
+            }
+        }
+        None
+    }
+
     /// Checks the invariants: finite numbers; every centre inside the box (between the walls at
     /// their current position); no pair or wall overlap beyond [`SANITY_OVERLAP`] `d`; no
     /// bridge stretched beyond `s_crit` by more than the same amount. Returns the first violation.

@@ -109,11 +109,18 @@ mod tests {
             gear_predict(&mut r);
             gear_correct(&mut r, &[0.0], 0.5 * dt * dt, &GEAR5);
             for k in 2..6 {
-                assert!(!r[k][0].is_subnormal(), "r_{k} = {:e} is subnormal", r[k][0]);
+                assert!(
+                    !r[k][0].is_subnormal(),
+                    "r_{k} = {:e} is subnormal",
+                    r[k][0]
+                );
             }
             saw_zero |= r[5][0] == 0.0;
         }
-        assert!(saw_zero, "the derivatives never decayed: the test does not exercise the flush");
+        assert!(
+            saw_zero,
+            "the derivatives never decayed: the test does not exercise the flush"
+        );
     }
 
     #[test]
