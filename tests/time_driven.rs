@@ -465,3 +465,59 @@ fn verlet_list_never_misses_an_interacting_pair() {
         e.list_builds()
     );
 }
+
+/// Mean `T_g / E_cb` over the second half of a run's samples.
+fn late_temperature(r: &wetgran::sim::RunReport) -> f64 {
+    let half = &r.samples[r.samples.len() / 2..];
+    half.iter().map(|s| s.granular_temperature).sum::<f64>() / half.len() as f64 / 0.2844
+}
+
+/// Opt-in table for docs/accuracy.md: stiffness and time step against the largest overlap, the
+/// ledger error, `T_g / E_cb` of the second half and the wall time, for the shaken 2D wet
+/// system of [`small_wet`] run for 20 time units; and the event-driven engine on the same
+/// physical system (restitution 0.9 instead of the damping).
+/// Run with `cargo test --release --test time_driven accuracy_cost_table -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn accuracy_cost_table() {
+    println!("| engine | integrator | stiffness | dt | max overlap / d | ledger error / throughput | T_g/E_cb (2nd half) | wall s |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for integ in ["gear5", "verlet"] {
+        for k in [2e6, 1e7, 5e7] {
+            for dt in [2e-4, 1e-4, 5e-5] {
+                let kr = k * 0.5;
+                let a_d = hertz::damping_for_restitution(kr, 0.5, 1.0, 0.9);
+                let mut s = small_wet(
+                    SHAKEN,
+                    &format!("dt = {dt}\nintegrator = \"{integ}\""),
+                );
+                s.contact.stiffness = Some(k);
+                s.contact.damping = Some(a_d);
+                s.run.duration = 20.0;
+                let r = run_scene(&s);
+                let f = &r.energy_final;
+                let thr = f.dissipated_restitution + f.dissipated_ruptures + f.work_by_drive.abs();
+                let err = (f.total_accounted() - r.energy_initial.total_accounted()).abs() / thr;
+                let bad = r.invariant_violation.as_deref().unwrap_or("");
+                println!(
+                    "| time | {integ} | {k:e} | {dt:e} | {:.4} | {err:.2e} | {:.3} | {:.2} | {bad}",
+                    r.max_overlap.unwrap(),
+                    late_temperature(&r),
+                    r.wall_seconds
+                );
+            }
+        }
+    }
+    let mut s = small_wet(SHAKEN, "");
+    s.engine = Default::default();
+    s.contact = Default::default();
+    s.contact.restitution = 0.9;
+    s.run.duration = 20.0;
+    let r = run_scene(&s);
+    println!(
+        "| event | - | - | - | - | {:.2e} | {:.3} | {:.2} |",
+        r.energy_bookkeeping_error.abs(),
+        late_temperature(&r),
+        r.wall_seconds
+    );
+}
