@@ -80,7 +80,8 @@ fn elastic_energy_error_shrinks_at_the_integrator_order() {
             .iter()
             .map(|&dt| energy_error(&elastic_gas(dt, integ, 1e5)))
             .collect();
-        for &err in &e {
+        for (&dt, &err) in dts.iter().zip(&e) {
+            println!("{integ} dt {dt:e}: largest relative energy error {err:.3e}");
             assert!(err < 1e-4, "{integ}: energy error {err:e} not bounded");
         }
         errs.insert(integ, e);
@@ -480,17 +481,16 @@ fn late_temperature(r: &wetgran::sim::RunReport) -> f64 {
 #[test]
 #[ignore]
 fn accuracy_cost_table() {
-    println!("| engine | integrator | stiffness | dt | max overlap / d | ledger error / throughput | T_g/E_cb (2nd half) | wall s |");
+    println!(
+        "| engine | integrator | stiffness | dt | max overlap / d | ledger error / throughput | T_g/E_cb (2nd half) | wall s |"
+    );
     println!("|---|---|---|---|---|---|---|---|");
     for integ in ["gear5", "verlet"] {
         for k in [2e6, 1e7, 5e7] {
             for dt in [2e-4, 1e-4, 5e-5] {
                 let kr = k * 0.5;
                 let a_d = hertz::damping_for_restitution(kr, 0.5, 1.0, 0.9);
-                let mut s = small_wet(
-                    SHAKEN,
-                    &format!("dt = {dt}\nintegrator = \"{integ}\""),
-                );
+                let mut s = small_wet(SHAKEN, &format!("dt = {dt}\nintegrator = \"{integ}\""));
                 s.contact.stiffness = Some(k);
                 s.contact.damping = Some(a_d);
                 s.run.duration = 20.0;
@@ -520,4 +520,177 @@ fn accuracy_cost_table() {
         late_temperature(&r),
         r.wall_seconds
     );
+}
+
+/// A log-log plot of `(x, y)` series as SVG (for docs/accuracy.md).
+fn loglog_svg(
+    title: &str,
+    xlabel: &str,
+    ylabel: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+) -> String {
+    use std::fmt::Write as _;
+    let colours = [
+        "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
+    ];
+    let (w, h, m, right) = (720.0, 420.0, 70.0, 190.0);
+    let pts = series.iter().flat_map(|(_, p)| p.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in pts {
+        x0 = x0.min(x.log10());
+        x1 = x1.max(x.log10());
+        y0 = y0.min(y.log10());
+        y1 = y1.max(y.log10());
+    }
+    let (x0, x1, y0, y1) = (x0.floor(), x1.ceil(), y0.floor(), y1.ceil());
+    let px = |x: f64| m + (x.log10() - x0) / (x1 - x0).max(1.0) * (w - m - right);
+    let py = |y: f64| h - m - (y.log10() - y0) / (y1 - y0).max(1.0) * (h - 2.0 * m);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"11\">"
+    );
+    let _ = writeln!(s, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
+    let _ = writeln!(
+        s,
+        "<text x=\"{}\" y=\"20\" text-anchor=\"middle\" font-size=\"13\">{title}</text>",
+        w / 2.0
+    );
+    for k in x0 as i32..=x1 as i32 {
+        let x = px(10f64.powi(k));
+        let _ = writeln!(
+            s,
+            "<line x1=\"{x}\" y1=\"{m}\" x2=\"{x}\" y2=\"{}\" stroke=\"#ddd\"/><text x=\"{x}\" y=\"{}\" text-anchor=\"middle\">1e{k}</text>",
+            h - m,
+            h - m + 16.0
+        );
+    }
+    for k in y0 as i32..=y1 as i32 {
+        let y = py(10f64.powi(k));
+        let _ = writeln!(
+            s,
+            "<line x1=\"{m}\" y1=\"{y}\" x2=\"{}\" y2=\"{y}\" stroke=\"#ddd\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\">1e{k}</text>",
+            w - right,
+            m - 6.0,
+            y + 4.0
+        );
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{xlabel}</text>",
+        (w - right + m) / 2.0,
+        h - 22.0
+    );
+    let _ = writeln!(
+        s,
+        "<text x=\"16\" y=\"{}\" transform=\"rotate(-90 16 {})\" text-anchor=\"middle\">{ylabel}</text>",
+        h / 2.0,
+        h / 2.0
+    );
+    for (k, (label, p)) in series.iter().enumerate() {
+        let c = colours[k % colours.len()];
+        let path: Vec<String> = p
+            .iter()
+            .map(|&(x, y)| format!("{:.1},{:.1}", px(x), py(y)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"{c}\" stroke-width=\"2\"/>",
+            path.join(" ")
+        );
+        for &(x, y) in p {
+            let _ = writeln!(
+                s,
+                "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3.5\" fill=\"{c}\"/>",
+                px(x),
+                py(y)
+            );
+        }
+        let ly = m + 18.0 * k as f64;
+        let _ = writeln!(
+            s,
+            "<line x1=\"{}\" y1=\"{ly}\" x2=\"{}\" y2=\"{ly}\" stroke=\"{c}\" stroke-width=\"2\"/><text x=\"{}\" y=\"{}\">{label}</text>",
+            w - right + 15.0,
+            w - right + 35.0,
+            w - right + 40.0,
+            ly + 4.0
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+/// Opt-in: writes the two plots of docs/accuracy.md ("Time-driven engine"):
+/// `docs/tdmd-energy-error.svg` (largest relative energy error of the elastic gas, and ledger
+/// error per energy throughput of the shaken wet system, against `dt`, both integrators) and
+/// `docs/tdmd-overlap.svg` (largest overlap of the shaken wet system against stiffness).
+/// Run with `cargo test --release --test time_driven accuracy_plots -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn accuracy_plots() {
+    let dts = [4e-4, 2e-4, 1e-4, 5e-5, 2.5e-5];
+    let mut series = Vec::new();
+    for integ in ["verlet", "gear5"] {
+        let p: Vec<(f64, f64)> = dts
+            .iter()
+            .map(|&dt| (dt, energy_error(&elastic_gas(dt, integ, 1e5))))
+            .collect();
+        println!("elastic gas {integ}: {p:?}");
+        series.push((format!("elastic gas, {integ}"), p));
+    }
+    for integ in ["verlet", "gear5"] {
+        let p: Vec<(f64, f64)> = dts[..4]
+            .iter()
+            .map(|&dt| {
+                let mut s = small_wet(SHAKEN, &format!("dt = {dt}\nintegrator = \"{integ}\""));
+                s.run.duration = 6.0;
+                let r = run_scene(&s);
+                let f = &r.energy_final;
+                let thr = f.dissipated_restitution + f.dissipated_ruptures + f.work_by_drive.abs();
+                (
+                    dt,
+                    (f.total_accounted() - r.energy_initial.total_accounted()).abs() / thr,
+                )
+            })
+            .collect();
+        println!("shaken wet ledger {integ}: {p:?}");
+        series.push((format!("shaken wet ledger, {integ}"), p));
+    }
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs");
+    std::fs::write(
+        root.join("tdmd-energy-error.svg"),
+        loglog_svg(
+            "Time-driven engine: energy error against time step",
+            "dt (sqrt(d/g))",
+            "relative error",
+            &series,
+        ),
+    )
+    .unwrap();
+    let mut ov = Vec::new();
+    for k in [1e6, 3e6, 1e7, 3e7, 1e8] {
+        let mut s = small_wet(SHAKEN, "");
+        s.contact.stiffness = Some(k);
+        s.contact.damping = Some(hertz::damping_for_restitution(k * 0.5, 0.5, 1.0, 0.9));
+        let r = run_scene(&s);
+        ov.push((k, r.max_overlap.unwrap()));
+    }
+    println!("overlap against stiffness: {ov:?}");
+    let pred: Vec<(f64, f64)> = ov
+        .iter()
+        .map(|&(k, _)| (k, hertz::max_overlap(k * 0.5, 0.5, 10.0)))
+        .collect();
+    std::fs::write(
+        root.join("tdmd-overlap.svg"),
+        loglog_svg(
+            "Largest overlap, shaken wet 2D (hot start)",
+            "stiffness k (m g / d^2)",
+            "overlap / d",
+            &[
+                ("measured".to_string(), ov),
+                ("head-on at v = 10".to_string(), pred),
+            ],
+        ),
+    )
+    .unwrap();
 }

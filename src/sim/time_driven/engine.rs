@@ -27,7 +27,8 @@
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
 
 use super::integrator::{
-    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct, gear_predict, verlet_drift, verlet_kick,
+    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict, gear_predict, verlet_drift,
+    verlet_kick,
 };
 use super::neighbours::{BOND, CONTACT, NeighbourList};
 use crate::physics::hertz;
@@ -90,6 +91,11 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     steps: u64,
     /// Scaled derivatives (Gear) or position, velocity (Verlet); axis-major.
     r: [Vec<f64>; 6],
+    /// Gear: the corrected position and scaled velocity of the current step (between steps `r`
+    /// already holds the prediction for the next step, see `gear_correct_predict`).
+    now: [Vec<f64>; 2],
+    /// Gear: whether `r` holds the prediction for the next step.
+    predicted: bool,
     /// Acceleration of the last force evaluation, axis-major.
     acc: Vec<f64>,
     radius: Vec<f64>,
@@ -199,6 +205,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             n,
             steps: 0,
             r,
+            now: [vec![0.0; D * n], vec![0.0; D * n]],
+            predicted: false,
             acc: vec![0.0; D * n],
             radius: init.radius,
             wall_kr,
@@ -220,8 +228,25 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 engine.r[1][e] *= dt;
                 engine.r[2][e] = 0.5 * dt * dt * engine.acc[e];
             }
+            engine.now = [engine.r[0].clone(), engine.r[1].clone()];
         }
         engine
+    }
+
+    /// Positions of the current step, axis-major.
+    fn x_now(&self) -> &[f64] {
+        match self.p.integrator {
+            IntegratorKind::Gear5 => &self.now[0],
+            IntegratorKind::Verlet => &self.r[0],
+        }
+    }
+
+    /// Velocities of the current step (times [`Self::velocity_scale`]), axis-major.
+    fn v_now(&self) -> &[f64] {
+        match self.p.integrator {
+            IntegratorKind::Gear5 => &self.now[1],
+            IntegratorKind::Verlet => &self.r[1],
+        }
     }
 
     /// Number of particles.
@@ -279,13 +304,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// Position of particle `i` (scene order).
     pub fn position(&self, i: usize) -> [f64; D] {
-        std::array::from_fn(|k| self.r[0][k * self.n + i])
+        std::array::from_fn(|k| self.x_now()[k * self.n + i])
     }
 
     /// Velocity of particle `i`.
     pub fn velocity(&self, i: usize) -> [f64; D] {
         let s = self.velocity_scale();
-        std::array::from_fn(|k| self.r[1][k * self.n + i] * s)
+        std::array::from_fn(|k| self.v_now()[k * self.n + i] * s)
     }
 
     /// Particle radii.
@@ -298,6 +323,21 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     pub fn set_state(&mut self, i: usize, x: [f64; D], v: [f64; D]) {
         let n = self.n;
         let dt = self.p.dt;
+        if self.predicted {
+            // Back to the corrected state of the current step: the inverse of the predictor's
+            // Pascal triangle for the higher derivatives, the stored `now` for r_0 and r_1.
+            let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+            for e in 0..D * n {
+                let a5 = r5[e];
+                let a4 = r4[e] - 5.0 * a5;
+                let a3 = r3[e] - 4.0 * a4 - 10.0 * a5;
+                let a2 = r2[e] - 3.0 * a3 - 6.0 * a4 - 10.0 * a5;
+                (r2[e], r3[e], r4[e]) = (a2, a3, a4);
+                r0[e] = self.now[0][e];
+                r1[e] = self.now[1][e];
+            }
+            self.predicted = false;
+        }
         for k in 0..D {
             self.r[0][k * n + i] = x[k];
             self.r[1][k * n + i] = match self.p.integrator {
@@ -315,6 +355,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             for e in 0..D * n {
                 self.r[2][e] = 0.5 * dt * dt * self.acc[e];
             }
+            self.now = [self.r[0].clone(), self.r[1].clone()];
         }
     }
 
@@ -332,15 +373,21 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         if WET { self.list.count(BOND) } else { 0 }
     }
 
-    /// Wraps periodic coordinates of `r[0]` into `[0, L)`.
-    fn wrap(&mut self) {
+    /// Wraps periodic coordinates of `r[0]` (or, with `now`, of the Gear corrected positions)
+    /// into `[0, L)`.
+    fn wrap(&mut self, now: bool) {
         let n = self.n;
         for k in 0..D {
             if !self.p.periodic[k] {
                 continue;
             }
             let l = self.p.size[k];
-            for x in &mut self.r[0][k * n..(k + 1) * n] {
+            let arr = if now {
+                &mut self.now[0]
+            } else {
+                &mut self.r[0]
+            };
+            for x in &mut arr[k * n..(k + 1) * n] {
                 if *x < 0.0 {
                     *x += l;
                 } else if *x >= l {
@@ -356,20 +403,23 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let t1 = (self.steps + 1) as f64 * dt;
         match self.p.integrator {
             IntegratorKind::Gear5 => {
-                gear_predict(&mut self.r);
-                self.wrap();
+                if !self.predicted {
+                    gear_predict(&mut self.r);
+                }
+                self.wrap(false);
                 if self.list.needs_rebuild(&self.r[0]) {
                     self.list.build(&self.r[0], &self.radius);
                 }
                 self.compute_forces(t1, 1.0 / dt, dt);
                 let c = self.p.gear;
-                gear_correct(&mut self.r, &self.acc, 0.5 * dt * dt, &c);
-                self.wrap();
+                gear_correct_predict(&mut self.r, &mut self.now, &self.acc, 0.5 * dt * dt, &c);
+                self.predicted = true;
+                self.wrap(true);
             }
             IntegratorKind::Verlet => {
                 let [x, v, ..] = &mut self.r;
                 verlet_drift(x, v, &self.acc, dt);
-                self.wrap();
+                self.wrap(false);
                 if self.list.needs_rebuild(&self.r[0]) {
                     self.list.build(&self.r[0], &self.radius);
                 }
@@ -513,10 +563,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let n = self.n;
         let p = &self.p;
         let vs = self.velocity_scale();
-        let x = &self.r[0];
+        let x = self.x_now();
         let mut kinetic = 0.0;
         for e in 0..D * n {
-            let ve = self.r[1][e] * vs;
+            let ve = self.v_now()[e] * vs;
             kinetic += 0.5 * p.mass * ve * ve;
         }
         let mut potential = 0.0;
@@ -573,7 +623,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let n = self.n;
         let mut r2 = 0.0;
         for k in 0..D {
-            let mut d = self.r[0][k * n + i] - self.r[0][k * n + j];
+            let mut d = self.x_now()[k * n + i] - self.x_now()[k * n + j];
             if self.p.periodic[k] {
                 let l = self.p.size[k];
                 d -= l * (d / l).round();
@@ -587,7 +637,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     pub fn momentum(&self) -> [f64; D] {
         let vs = self.velocity_scale();
         std::array::from_fn(|k| {
-            self.r[1][k * self.n..(k + 1) * self.n].iter().sum::<f64>() * vs * self.p.mass
+            self.v_now()[k * self.n..(k + 1) * self.n]
+                .iter()
+                .sum::<f64>()
+                * vs
+                * self.p.mass
         })
     }
 
@@ -598,7 +652,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let mut mean_sq = 0.0;
         let mut mean2 = 0.0;
         for k in 0..D {
-            let col = &self.r[1][k * self.n..(k + 1) * self.n];
+            let col = &self.v_now()[k * self.n..(k + 1) * self.n];
             let m = col.iter().sum::<f64>() * vs / n;
             mean_sq += col.iter().map(|v| v * v).sum::<f64>() * vs * vs / n;
             mean2 += m * m;
