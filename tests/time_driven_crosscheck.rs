@@ -114,18 +114,25 @@ fn summary(label: &str, c: &Comparison) -> (f64, f64, f64) {
         c.event.report.wall_seconds,
         c.time.report.wall_seconds,
     );
-    let worst = c.rows.iter().map(|r| (r.2 / r.1 - 1.0).abs()).fold(0.0, f64::max);
+    let worst = c
+        .rows
+        .iter()
+        .map(|r| (r.2 / r.1 - 1.0).abs())
+        .fold(0.0, f64::max);
     println!("  largest per-bin T_g deviation {worst:.3}");
     (tt / te, pt / pe, worst)
 }
-
 
 /// Checks one point: the same phase, and the dilute-bin means of `T_g / E_cb` within 20 % and of
 /// the packing within 5 % (docs/accuracy.md has the measured values). Single bins scatter by up
 /// to about 60 % over these short windows and are printed, not asserted.
 fn check(label: &str, c: &Comparison) {
     let (t, p, worst) = summary(label, c);
-    assert!(c.rows.len() >= 5, "{label}: only {} dilute bins", c.rows.len());
+    assert!(
+        c.rows.len() >= 5,
+        "{label}: only {} dilute bins",
+        c.rows.len()
+    );
     assert_eq!(
         c.event.classification.phase, c.time.classification.phase,
         "{label}"
@@ -151,7 +158,10 @@ fn full_crosscheck_standard_system() {
     let gas = compare(&base(2.0, 3.0, 1200, 400.0, 60.0));
     let fgc = compare(&base(10.0, 0.3, 1200, 400.0, 7.786487));
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs");
-    let svg = profiles_svg(&[("gas, Gamma 2, E* 3", &gas), ("fgc, Gamma 10, E* 0.3", &fgc)]);
+    let svg = profiles_svg(&[
+        ("gas, Gamma 2, E* 3", &gas),
+        ("fgc, Gamma 10, E* 0.3", &fgc),
+    ]);
     std::fs::write(root.join("tdmd-crosscheck.svg"), svg).unwrap();
     check("gas (N = 1200)", &gas);
     check("fgc (N = 1200)", &fgc);
