@@ -85,10 +85,11 @@ fn compare(s: &Scene) -> Comparison {
     let (pe, pt) = (&event.observables.profiles, &time.observables.profiles);
     let mut rows = Vec::new();
     for b in 0..pe.centres.len() {
-        if pe.packing[b] < DILUTE && pt.packing[b] < DILUTE {
-            if let (Some(te), Some(tt)) = (pe.temperature_reduced[b], pt.temperature_reduced[b]) {
-                rows.push((pe.centres[b], te, tt, pe.packing[b], pt.packing[b]));
-            }
+        if pe.packing[b] < DILUTE
+            && pt.packing[b] < DILUTE
+            && let (Some(te), Some(tt)) = (pe.temperature_reduced[b], pt.temperature_reduced[b])
+        {
+            rows.push((pe.centres[b], te, tt, pe.packing[b], pt.packing[b]));
         }
     }
     Comparison { rows, event, time }
