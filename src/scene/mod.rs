@@ -91,6 +91,17 @@ pub struct ContactSpec {
     /// Particle-wall coefficient of normal restitution `e_w`.
     #[serde(default = "one")]
     pub wall_restitution: f64,
+    /// Time-driven engine: Hertz prefactor `k = 2 Y / (3 (1 - nu^2))` of MODEL.md Eq. 2.7, in
+    /// units of `m g / d^2` (default [`DEFAULT_STIFFNESS`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Time-driven engine: particle-particle damping `A_d` of Eq. 2.7, units of time (default 0,
+    /// elastic).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// Time-driven engine: particle-wall damping `A_d` (default 0, elastic walls).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall_damping: Option<f64>,
 }
 
 impl Default for ContactSpec {
@@ -98,9 +109,20 @@ impl Default for ContactSpec {
         Self {
             restitution: 1.0,
             wall_restitution: 1.0,
+            stiffness: None,
+            damping: None,
+            wall_damping: None,
         }
     }
 }
+
+/// Default Hertz prefactor `k` of the time-driven engine (chosen in docs/accuracy.md: the largest
+/// overlap of the shaken standard systems stays below 1 % of `d`).
+pub const DEFAULT_STIFFNESS: f64 = 1e7;
+/// Default time step of the time-driven engine.
+pub const DEFAULT_DT: f64 = 1e-4;
+/// Default Verlet-list skin of the time-driven engine, in units of `d`.
+pub const DEFAULT_SKIN: f64 = 0.1;
 
 /// Capillary bridges (MODEL.md 3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -263,10 +285,52 @@ pub struct RunSpec {
     pub max_events: Option<u64>,
 }
 
-/// Accuracy and safety knobs of the event-driven engine.
+/// Which engine runs the scene (`engine.kind`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EngineKind {
+    /// Event-driven hard spheres with thin-thread bridges (`sim::event_driven`).
+    #[default]
+    Event,
+    /// Time-driven soft spheres (Hertz) with the minimal capillary model (`sim::time_driven`).
+    Time,
+}
+
+impl EngineKind {
+    fn is_event(&self) -> bool {
+        *self == EngineKind::Event
+    }
+}
+
+/// Integrator of the time-driven engine (`engine.integrator`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorKind {
+    /// Gear predictor-corrector of 5th order (six values per coordinate).
+    #[default]
+    Gear5,
+    /// Velocity Verlet.
+    Verlet,
+}
+
+/// The engine and its accuracy and safety knobs. `tc`, `min_rebound_speed`, `overlap_tolerance`
+/// and `cell_size` belong to the event-driven engine; `dt`, `integrator` and `skin` to the
+/// time-driven one.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EngineSpec {
+    /// `"event"` (default) or `"time"`.
+    #[serde(default, skip_serializing_if = "EngineKind::is_event")]
+    pub kind: EngineKind,
+    /// Time-driven: the time step (default [`DEFAULT_DT`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt: Option<f64>,
+    /// Time-driven: `"gear5"` (default) or `"verlet"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integrator: Option<IntegratorKind>,
+    /// Time-driven: Verlet-list skin in units of `d` (default [`DEFAULT_SKIN`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin: Option<f64>,
     /// TC model (Luding & McNamara 1998): a collision within `tc` of either particle's previous
     /// collision is elastic. 0 (default) disables it.
     #[serde(default = "default_tc")]
@@ -286,6 +350,10 @@ pub struct EngineSpec {
 impl Default for EngineSpec {
     fn default() -> Self {
         Self {
+            kind: EngineKind::Event,
+            dt: None,
+            integrator: None,
+            skin: None,
             tc: default_tc(),
             min_rebound_speed: default_min_rebound(),
             overlap_tolerance: default_overlap_tolerance(),

@@ -479,6 +479,7 @@ impl Scene {
         }
 
         // Engine.
+        self.validate_engine_kind(&c)?;
         let e = &self.engine;
         c.non_negative("engine.tc", e.tc)?;
         c.non_negative("engine.min_rebound_speed", e.min_rebound_speed)?;
@@ -580,6 +581,127 @@ impl Scene {
         // Observers and classification.
         self.observe.validate(self, origin)?;
         self.classify.validate(origin)?;
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// Keys that belong to one engine only are rejected with the other, and the time-driven
+    /// knobs are range-checked (docs/model-choices.md, "Time-driven engine"). Event-engine keys
+    /// with plain-number defaults count as set when they differ from their default.
+    fn validate_engine_kind(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let e = &self.engine;
+        let ct = &self.contact;
+        match e.kind {
+            super::EngineKind::Event => {
+                let time_only = [
+                    ("engine.dt", e.dt.is_some()),
+                    ("engine.integrator", e.integrator.is_some()),
+                    ("engine.skin", e.skin.is_some()),
+                    ("contact.stiffness", ct.stiffness.is_some()),
+                    ("contact.damping", ct.damping.is_some()),
+                    ("contact.wall_damping", ct.wall_damping.is_some()),
+                ];
+                if let Some((key, _)) = time_only.iter().find(|(_, g)| *g) {
+                    return Err(c.err(
+                        key,
+                        "belongs to the time-driven engine: set engine.kind = \"time\" or remove \
+                         the key"
+                            .into(),
+                    ));
+                }
+            }
+            super::EngineKind::Time => {
+                let d = &self.drive;
+                let event_only = [
+                    ("engine.tc", e.tc != super::default_tc()),
+                    (
+                        "engine.min_rebound_speed",
+                        e.min_rebound_speed != super::default_min_rebound(),
+                    ),
+                    (
+                        "engine.overlap_tolerance",
+                        e.overlap_tolerance != super::default_overlap_tolerance(),
+                    ),
+                    ("engine.cell_size", e.cell_size != 0.0),
+                    ("contact.restitution", ct.restitution != 1.0),
+                    ("contact.wall_restitution", ct.wall_restitution != 1.0),
+                    (
+                        "capillary.rupture_rule",
+                        self.capillary.rupture_rule.is_some(),
+                    ),
+                    (
+                        "drive.wall_solver",
+                        d.wall_solver != super::WallSolverKind::Exact,
+                    ),
+                    ("drive.root_tolerance", d.root_tolerance.is_some()),
+                    ("drive.t_min", d.t_min.is_some()),
+                    ("run.max_events", self.run.max_events.is_some()),
+                ];
+                if let Some((key, _)) = event_only
+                    .iter()
+                    .chain(table_keys_given(d).iter())
+                    .find(|(_, g)| *g)
+                {
+                    let hint = if key.contains("restitution") {
+                        " (the time-driven engine damps contacts with contact.damping and \
+                         contact.wall_damping)"
+                    } else {
+                        ""
+                    };
+                    return Err(c.err(
+                        key,
+                        format!(
+                            "belongs to the event-driven engine: remove it or set engine.kind = \
+                             \"event\"{hint}"
+                        ),
+                    ));
+                }
+                if let Some(dt) = e.dt
+                    && !(dt.is_finite() && dt > 0.0 && dt <= 1e-2)
+                {
+                    return Err(c.out_of_range("engine.dt", dt, "in (0, 0.01]"));
+                }
+                if let Some(skin) = e.skin
+                    && !(skin.is_finite() && skin > 0.0 && skin <= 1.0)
+                {
+                    return Err(c.out_of_range("engine.skin", skin, "in (0, 1] (units of d)"));
+                }
+                if let Some(k) = ct.stiffness
+                    && !(k.is_finite() && (1e2..=1e12).contains(&k))
+                {
+                    return Err(c.out_of_range("contact.stiffness", k, "in [1e2, 1e12]"));
+                }
+                for (key, v) in [
+                    ("contact.damping", ct.damping),
+                    ("contact.wall_damping", ct.wall_damping),
+                ] {
+                    if let Some(a) = v
+                        && !(a.is_finite() && (0.0..=1.0).contains(&a))
+                    {
+                        return Err(c.out_of_range(key, a, "in [0, 1] (a time)"));
+                    }
+                }
+                // The time engine's neighbour cells hold the Verlet-list range.
+                let dim = self.dimension;
+                let (_, d_max) = self.diameter_range();
+                let range = d_max + self.s_crit() + e.skin.unwrap_or(super::DEFAULT_SKIN);
+                let boundaries = self.boundaries();
+                for k in 0..dim {
+                    let l = self.container.size[k];
+                    if boundaries[k] == Boundary::Periodic && (l / range).floor() < 3.0 {
+                        return Err(c.err(
+                            &format!("box.size[{k}]"),
+                            format!(
+                                "= {l} is out of range: the time-driven engine needs a periodic \
+                                 axis >= 3 (d_max + s_crit + skin) = {:.4}",
+                                3.0 * range
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
         Ok(())
     }
 }

@@ -3,6 +3,7 @@
 //! Observers and pictures work on frames; the engine never sees them.
 
 use super::event_driven::{Engine, EventCounts};
+use super::time_driven::TimeEngine;
 use crate::scene::{Boundary, Scene};
 use serde::Serialize;
 
@@ -57,6 +58,37 @@ impl Frame {
             positions: flat(engine.positions()),
             velocities: flat(engine.velocities()),
             radii: engine.radii(),
+            bridges: engine.bridges(),
+            counts: engine.counts().clone(),
+        }
+    }
+
+    /// Copies the current state of a time-driven engine (its event counts are contact onsets,
+    /// bridge formations and ruptures; see `time_driven::engine`).
+    pub fn of_time_engine<const D: usize, const G: bool, const W: bool, B>(
+        engine: &TimeEngine<D, G, W, B>,
+        scene: &Scene,
+    ) -> Frame
+    where
+        B: super::time_driven::BodyForce<D>,
+    {
+        let time = engine.time();
+        Frame {
+            time,
+            dimension: D,
+            box_size: scene.container.size.clone(),
+            periodic: scene
+                .boundaries()
+                .iter()
+                .map(|b| *b == Boundary::Periodic)
+                .collect(),
+            wall_offset: scene
+                .drive_motion()
+                .map_or(0.0, |(a, omega)| a * (omega * time).sin()),
+            mass: scene.particles.mass,
+            positions: engine.positions_flat(),
+            velocities: engine.velocities_flat(),
+            radii: engine.radii().to_vec(),
             bridges: engine.bridges(),
             counts: engine.counts().clone(),
         }

@@ -1,20 +1,24 @@
 //! Simulation engines and the one entry point that runs a scene: [`run_scene`].
 //!
-//! `run_scene` picks the engine's concrete type once from the scene (dimension, gravity on or
-//! off, bridges or none), so that a scene pays only for the effects it asks for.
+//! `run_scene` picks the engine (`engine.kind`: event-driven or time-driven) and its concrete
+//! type once from the scene (dimension, gravity on or off, bridges or none), so that a scene pays
+//! only for the effects it asks for. Both engines implement [`Simulation`], so the sampling loop,
+//! the observers and the report are the same for both.
 //! [`run_scene_observed`] runs the same loop and also hands a read-only [`Frame`] (a copy of the
 //! configuration in scene order) to an observer at fixed intervals; `crate::observe` builds on it.
 
 pub mod event_driven;
 pub mod frame;
 pub mod initial;
+pub mod time_driven;
 
 pub use frame::Frame;
 
-use crate::scene::Scene;
+use crate::scene::{EngineKind, Scene};
 use event_driven::{EnergyLedger, Engine, EventCounts};
 use serde::Serialize;
 use std::time::Instant;
+use time_driven::{BodyForce, TimeEngine};
 
 /// One sample of the global observables.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -29,11 +33,20 @@ pub struct Sample {
 /// What one run of a scene produced.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RunReport {
+    /// `"event"` or `"time"` (`engine.kind`).
+    pub engine: String,
     pub dimension: usize,
     pub particles: usize,
     pub simulated_time: f64,
     pub wall_seconds: f64,
+    /// Event engine: events by kind. Time engine: contact onsets (pair, wall), bridge formations
+    /// and ruptures; the other counters stay 0.
     pub events: EventCounts,
+    /// Time steps taken (time engine; 0 for the event engine).
+    pub steps: u64,
+    /// Largest pair or wall overlap seen, in units of `d` (time engine; `None` for the event
+    /// engine, whose overlaps are round-off).
+    pub max_overlap: Option<f64>,
     pub events_total: u64,
     /// Whether the run stopped on `run.max_events` before `run.duration`.
     pub stopped_on_event_cap: bool,
@@ -82,6 +95,19 @@ type Observer<'a> = Option<(f64, &'a mut dyn FnMut(&Frame))>;
 fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> RunReport {
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
+    if scene.engine.kind == EngineKind::Time {
+        return match (scene.dimension, grav, wet) {
+            (2, false, false) => run_engine(TimeEngine::<2, false, false>::new(scene), scene, p, o),
+            (2, false, true) => run_engine(TimeEngine::<2, false, true>::new(scene), scene, p, o),
+            (2, true, false) => run_engine(TimeEngine::<2, true, false>::new(scene), scene, p, o),
+            (2, true, true) => run_engine(TimeEngine::<2, true, true>::new(scene), scene, p, o),
+            (3, false, false) => run_engine(TimeEngine::<3, false, false>::new(scene), scene, p, o),
+            (3, false, true) => run_engine(TimeEngine::<3, false, true>::new(scene), scene, p, o),
+            (3, true, false) => run_engine(TimeEngine::<3, true, false>::new(scene), scene, p, o),
+            (3, true, true) => run_engine(TimeEngine::<3, true, true>::new(scene), scene, p, o),
+            (d, _, _) => panic!("dimension {d} passed validation"),
+        };
+    }
     match (scene.dimension, grav, wet) {
         (2, false, false) => run_engine(Engine::<2, false, false>::new(scene), scene, p, o),
         (2, false, true) => run_engine(Engine::<2, false, true>::new(scene), scene, p, o),
@@ -95,7 +121,104 @@ fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> R
     }
 }
 
-fn sample<const D: usize, const G: bool, const W: bool>(e: &Engine<D, G, W>) -> Sample {
+/// What the sampling loop needs from an engine (both engines implement it).
+pub trait Simulation {
+    /// `"event"` or `"time"`.
+    const KIND: &'static str;
+    fn time(&self) -> f64;
+    fn len(&self) -> usize;
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Advances to `t_end`; false when stopped on the event cap first.
+    fn run_until(&mut self, t_end: f64, max_events: Option<u64>) -> bool;
+    fn energy(&self) -> EnergyLedger;
+    fn granular_temperature(&self) -> f64;
+    fn bridge_count(&self) -> usize;
+    fn sanity_check(&self) -> Result<(), String>;
+    fn counts(&self) -> &EventCounts;
+    fn frame(&self, scene: &Scene) -> Frame;
+    /// Time steps taken (0 for the event engine).
+    fn steps(&self) -> u64 {
+        0
+    }
+    /// Largest overlap seen, units of `d` (`None` for the event engine).
+    fn max_overlap(&self) -> Option<f64> {
+        None
+    }
+}
+
+impl<const D: usize, const G: bool, const W: bool> Simulation for Engine<D, G, W> {
+    const KIND: &'static str = "event";
+    fn time(&self) -> f64 {
+        Engine::time(self)
+    }
+    fn len(&self) -> usize {
+        Engine::len(self)
+    }
+    fn run_until(&mut self, t_end: f64, max_events: Option<u64>) -> bool {
+        Engine::run_until(self, t_end, max_events)
+    }
+    fn energy(&self) -> EnergyLedger {
+        Engine::energy(self)
+    }
+    fn granular_temperature(&self) -> f64 {
+        Engine::granular_temperature(self)
+    }
+    fn bridge_count(&self) -> usize {
+        Engine::bridge_count(self)
+    }
+    fn sanity_check(&self) -> Result<(), String> {
+        Engine::sanity_check(self)
+    }
+    fn counts(&self) -> &EventCounts {
+        Engine::counts(self)
+    }
+    fn frame(&self, scene: &Scene) -> Frame {
+        Frame::of_engine(self, scene)
+    }
+}
+
+impl<const D: usize, const G: bool, const W: bool, B: BodyForce<D>> Simulation
+    for TimeEngine<D, G, W, B>
+{
+    const KIND: &'static str = "time";
+    fn time(&self) -> f64 {
+        TimeEngine::time(self)
+    }
+    fn len(&self) -> usize {
+        TimeEngine::len(self)
+    }
+    fn run_until(&mut self, t_end: f64, _max_events: Option<u64>) -> bool {
+        TimeEngine::run_until(self, t_end)
+    }
+    fn energy(&self) -> EnergyLedger {
+        TimeEngine::energy(self)
+    }
+    fn granular_temperature(&self) -> f64 {
+        TimeEngine::granular_temperature(self)
+    }
+    fn bridge_count(&self) -> usize {
+        TimeEngine::bridge_count(self)
+    }
+    fn sanity_check(&self) -> Result<(), String> {
+        TimeEngine::sanity_check(self)
+    }
+    fn counts(&self) -> &EventCounts {
+        TimeEngine::counts(self)
+    }
+    fn frame(&self, scene: &Scene) -> Frame {
+        Frame::of_time_engine(self, scene)
+    }
+    fn steps(&self) -> u64 {
+        TimeEngine::steps(self)
+    }
+    fn max_overlap(&self) -> Option<f64> {
+        Some(TimeEngine::max_overlap(self))
+    }
+}
+
+fn sample<S: Simulation>(e: &S) -> Sample {
     let energy = e.energy();
     Sample {
         time: e.time(),
@@ -106,8 +229,8 @@ fn sample<const D: usize, const G: bool, const W: bool>(e: &Engine<D, G, W>) -> 
     }
 }
 
-fn run_engine<const D: usize, const G: bool, const W: bool>(
-    mut engine: Engine<D, G, W>,
+fn run_engine<S: Simulation>(
+    mut engine: S,
     scene: &Scene,
     progress: &mut dyn FnMut(&Sample),
     mut observer: Observer<'_>,
@@ -130,7 +253,7 @@ fn run_engine<const D: usize, const G: bool, const W: bool>(
     };
     let mut j = 0u64;
     if let Some((_, obs)) = observer.as_mut() {
-        obs(&Frame::of_engine(&engine, scene));
+        obs(&engine.frame(scene));
         j = 1;
     }
     let mut k = 1u64;
@@ -155,7 +278,7 @@ fn run_engine<const D: usize, const G: bool, const W: bool>(
         }
         if target == target_obs {
             if let Some((_, obs)) = observer.as_mut() {
-                obs(&Frame::of_engine(&engine, scene));
+                obs(&engine.frame(scene));
             }
             j += 1;
         }
@@ -179,12 +302,15 @@ fn run_engine<const D: usize, const G: bool, const W: bool>(
     let a0 = energy_initial.total_accounted();
     let a1 = energy_final.total_accounted();
     RunReport {
-        dimension: D,
+        engine: S::KIND.to_string(),
+        dimension: scene.dimension,
         particles: engine.len(),
         simulated_time: engine.time(),
         wall_seconds: start.elapsed().as_secs_f64(),
         events: engine.counts().clone(),
         events_total: engine.counts().total(),
+        steps: engine.steps(),
+        max_overlap: engine.max_overlap(),
         stopped_on_event_cap: stopped_on_cap,
         invariant_violation: violation,
         granular_temperature: t_g,

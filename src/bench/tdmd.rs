@@ -1,0 +1,203 @@
+//! `wetgran bench tdmd`: speed of the time-driven engine on the dry shaken 2D system of issue 6.
+//!
+//! The system: N = 1200 disks, `sigma_p = 0.06`, box 400 x 9 periodic in x, Hertz floor and lid
+//! shaken with `A = 0.05` at `Gamma = 15` (`omega = sqrt(Gamma g / A)`), `dt = 1e-4`, default
+//! stiffness, and the particle damping `A_d` that gives restitution 0.9 at impact speed 1
+//! (`physics::hertz::damping_for_restitution`); elastic walls; initial `T = 1 m g d`.
+//!
+//! Each repetition builds a fresh engine (same seed), runs one time unit untimed (the bed leaves
+//! the lattice), then times `scale` simulated time units (at least 0.1). Reported per integrator:
+//! particle-steps per second and wall seconds per simulated time unit (median, min, max over the
+//! repetitions), the ratio of the median to the 0.38 s per time unit a widely used C++ granular
+//! code needs for this system (issue 6; goal: at least 3x faster, i.e. <= 0.127 s), the largest
+//! overlap over the whole run and the neighbour-list builds per step.
+
+use crate::physics::hertz;
+use crate::scene::{DEFAULT_STIFFNESS, Scene};
+use crate::sim::time_driven::TimeEngine;
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// Wall seconds per simulated time unit of the C++ reference code (issue 6).
+pub const BASELINE_SECONDS_PER_TIME_UNIT: f64 = 0.38;
+
+/// The benchmark scene for one integrator (`"gear5"` or `"verlet"`).
+pub fn scene(integrator: &str) -> Scene {
+    let kr = DEFAULT_STIFFNESS * 0.25f64.sqrt();
+    let a_d = hertz::damping_for_restitution(kr, 0.5, 1.0, 0.9);
+    let text = format!(
+        r#"
+dimension = 2
+gravity = 1.0
+[box]
+size = [400.0, 9.0]
+boundary = ["periodic", "wall"]
+[particles]
+count = 1200
+polydispersity = 0.06
+[contact]
+damping = {a_d}
+[drive]
+kind = "sine"
+amplitude = 0.05
+omega = {omega}
+[initial]
+temperature = 1.0
+seed = 1
+[run]
+duration = 1.0
+[engine]
+kind = "time"
+dt = 1e-4
+integrator = "{integrator}"
+"#,
+        omega = (15.0f64 / 0.05).sqrt()
+    );
+    Scene::from_toml_str(&text, "bench tdmd").expect("bench scene is valid")
+}
+
+/// CPU time of the calling thread in seconds (Linux `/proc/thread-self/schedstat`, first field:
+/// nanoseconds on a CPU), `None` elsewhere. On a loaded machine it separates the engine's cost
+/// from the time spent waiting for a core.
+pub fn thread_cpu_seconds() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
+}
+
+/// One integrator's figures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TdmdRow {
+    pub integrator: &'static str,
+    /// Wall seconds per simulated time unit, one per repetition.
+    pub seconds_per_time: Vec<f64>,
+    /// CPU seconds per simulated time unit, one per repetition (empty without `/proc`).
+    pub cpu_per_time: Vec<f64>,
+    /// Verlet-list entries per particle at the end of the last repetition.
+    pub pairs_per_particle: f64,
+    pub particles: usize,
+    pub dt: f64,
+    pub max_overlap: f64,
+    pub builds_per_step: f64,
+    pub damping: f64,
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let m = s.len() / 2;
+    if s.len() % 2 == 1 {
+        s[m]
+    } else {
+        0.5 * (s[m - 1] + s[m])
+    }
+}
+
+/// Runs the benchmark for both integrators.
+pub fn measure(repeat: usize, scale: f64) -> Vec<TdmdRow> {
+    let timed = scale.max(0.1);
+    ["gear5", "verlet"]
+        .into_iter()
+        .map(|integ| {
+            let s = scene(integ);
+            let mut row = TdmdRow {
+                integrator: integ,
+                seconds_per_time: Vec::new(),
+                cpu_per_time: Vec::new(),
+                pairs_per_particle: 0.0,
+                particles: s.particles.count,
+                dt: s.engine.dt.unwrap_or(1e-4),
+                max_overlap: 0.0,
+                builds_per_step: 0.0,
+                damping: s.contact.damping.unwrap_or(0.0),
+            };
+            for _ in 0..repeat.max(1) {
+                let mut e = TimeEngine::<2, true, false>::new(&s);
+                e.run_until(1.0);
+                let (b0, s0) = (e.list_builds(), e.steps());
+                let cpu0 = thread_cpu_seconds();
+                let start = Instant::now();
+                e.run_until(1.0 + timed);
+                let secs = start.elapsed().as_secs_f64();
+                if let (Some(c0), Some(c1)) = (cpu0, thread_cpu_seconds()) {
+                    row.cpu_per_time.push((c1 - c0) / timed);
+                }
+                row.seconds_per_time.push(secs / timed);
+                row.pairs_per_particle = e.list_entries() as f64 / e.len() as f64;
+                row.max_overlap = row.max_overlap.max(e.max_overlap());
+                row.builds_per_step =
+                    (e.list_builds() - b0) as f64 / (e.steps() - s0).max(1) as f64;
+                e.sanity_check().expect("bench run keeps its invariants");
+            }
+            row
+        })
+        .collect()
+}
+
+/// The table.
+pub fn report(rows: &[TdmdRow]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "time-driven engine, dry shaken 2D: N = 1200, sigma_p 0.06, box 400 x 9, A = 0.05, Gamma = 15, dt = 1e-4"
+    );
+    let _ = writeln!(
+        s,
+        "{:<8} {:>12} {:>11} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}",
+        "integr.",
+        "p-steps/s",
+        "s/time med",
+        "min",
+        "max",
+        "vs 0.38 s",
+        "cpu s/time",
+        "cpu vs .38",
+        "max ovl/d",
+        "builds/st",
+        "pairs/p"
+    );
+    for r in rows {
+        let med = median(&r.seconds_per_time);
+        let min = r
+            .seconds_per_time
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
+        let max = r.seconds_per_time.iter().cloned().fold(0.0, f64::max);
+        let psteps = r.particles as f64 / r.dt / med;
+        let (cpu, cpu_ratio) = if r.cpu_per_time.is_empty() {
+            ("n/a".to_string(), "n/a".to_string())
+        } else {
+            let c = median(&r.cpu_per_time);
+            (
+                format!("{c:.4}"),
+                format!("{:.2}x", BASELINE_SECONDS_PER_TIME_UNIT / c),
+            )
+        };
+        let _ = writeln!(
+            s,
+            "{:<8} {:>12.3e} {:>11.4} {:>9.4} {:>9.4} {:>9.2}x {:>11} {:>10} {:>10.5} {:>10.4} {:>9.2}",
+            r.integrator,
+            psteps,
+            med,
+            min,
+            max,
+            BASELINE_SECONDS_PER_TIME_UNIT / med,
+            cpu,
+            cpu_ratio,
+            r.max_overlap,
+            r.builds_per_step,
+            r.pairs_per_particle
+        );
+    }
+    if let Some(r) = rows.first() {
+        let _ = writeln!(
+            s,
+            "damping A_d = {:.4e} (restitution 0.9 at impact speed 1), stiffness {:e}; {} repetitions",
+            r.damping,
+            DEFAULT_STIFFNESS,
+            r.seconds_per_time.len()
+        );
+    }
+    s
+}

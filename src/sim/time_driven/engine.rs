@@ -1,0 +1,900 @@
+//! The time-driven engine: soft disks (`D = 2`) and spheres (`D = 3`) with damped Hertz contacts
+//! (MODEL.md 2.2, Eq. 2.7), the minimal capillary model (MODEL.md 3.1), gravity, periodic lateral
+//! axes, static or sinusoidally shaken Hertz floor and lid (MODEL.md 4.1) and an optional body
+//! force per particle ([`BodyForce`]).
+//!
+//! Effects are compile-time parameters, chosen once at scene start: `GRAV` (gravity), `WET`
+//! (bridges and their bookkeeping) and the body force type `B` ([`NoBodyForce`] compiles to
+//! nothing).
+//!
+//! State: structure of arrays, every coordinate axis-major (`x[k * n + i]`). With the Gear
+//! integrator `r[k]` holds the scaled `k`-th derivative (`integrator.rs`); with velocity Verlet
+//! `r[0]` is the position and `r[1]` the velocity. Forces come from the Verlet list of
+//! `neighbours.rs` with Newton's third law (each pair once). Nothing is allocated inside a step
+//! once the neighbour list has reached its working size.
+//!
+//! Energy bookkeeping ([`EnergyLedger`], same fields as the event engine):
+//! - `potential`: gravity `m g z`, Hertz elastic energy of pairs and walls (`(2/5) k sqrt(R_eff)
+//!   xi^(5/2)`), and the bridge energy `F_B s` of every bonded pair (MODEL.md 3.1: zero at
+//!   contact, `E_cb` at rupture);
+//! - `dissipated_restitution`: work of the damping part of Eq. 2.7, `sum F_damp xi_dot dt`;
+//! - `dissipated_ruptures`: the bridge energy `F_B s` removed at each rupture (about `E_cb`),
+//!   minus the (small, negative) `F_B s` a bridge starts with when it forms at overlap `-s`;
+//! - `work_by_drive`: work of the moving walls on the particles, `sum F_wall v_wall dt`, plus the
+//!   work of the body force, `sum F . v dt`.
+//!
+//! The sums over `dt` are rectangle rules at the force evaluations, so the ledger closes to the
+//! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
+
+use super::integrator::{
+    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict, gear_predict, verlet_drift,
+    verlet_kick,
+};
+use super::neighbours::{BOND, CONTACT, NeighbourList};
+use crate::physics::hertz;
+use crate::scene::{Boundary, DEFAULT_DT, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
+use crate::sim::event_driven::{EnergyLedger, EventCounts};
+use crate::sim::initial::initial_state;
+
+/// A force per particle that depends on its position and the time (hook for driving by a body
+/// force, e.g. the shear force of MODEL.md 4.2). Its work is booked in `work_by_drive`.
+pub trait BodyForce<const D: usize> {
+    /// Whether the force exists (false compiles the call away).
+    const ACTIVE: bool;
+    /// The force on a particle at `x` at time `t`.
+    fn force(&self, x: &[f64; D], t: f64) -> [f64; D];
+}
+
+/// No body force.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoBodyForce;
+
+impl<const D: usize> BodyForce<D> for NoBodyForce {
+    const ACTIVE: bool = false;
+    #[inline]
+    fn force(&self, _: &[f64; D], _: f64) -> [f64; D] {
+        [0.0; D]
+    }
+}
+
+/// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
+/// (five times the 1 % the default stiffness is chosen for).
+pub const SANITY_OVERLAP: f64 = 0.05;
+
+/// Runtime parameters derived once from the scene.
+#[derive(Debug, Clone)]
+struct Params<const D: usize> {
+    size: [f64; D],
+    periodic: [bool; D],
+    gravity: f64,
+    mass: f64,
+    dt: f64,
+    integrator: IntegratorKind,
+    gear: [f64; 6],
+    /// Hertz prefactor `k` of Eq. 2.7.
+    stiffness: f64,
+    damping: f64,
+    wall_damping: f64,
+    s_crit: f64,
+    /// `F_B = E_cb / s_crit` (MODEL.md 3.1).
+    bridge_force: f64,
+    /// `(A, omega)` of the shaken floor and lid.
+    drive: Option<(f64, f64)>,
+    diameter: f64,
+}
+
+/// The time-driven simulation state.
+#[derive(Debug, Clone)]
+pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoBodyForce> {
+    p: Params<D>,
+    n: usize,
+    steps: u64,
+    /// Scaled derivatives (Gear) or position, velocity (Verlet); axis-major.
+    r: [Vec<f64>; 6],
+    /// Gear: the corrected position and scaled velocity of the current step (between steps `r`
+    /// already holds the prediction for the next step, see `gear_correct_predict`).
+    now: [Vec<f64>; 2],
+    /// Gear: whether `r` holds the prediction for the next step.
+    predicted: bool,
+    /// Acceleration of the last force evaluation, axis-major.
+    acc: Vec<f64>,
+    radius: Vec<f64>,
+    /// `k sqrt(R_i)`: the wall prefactor of each particle (`R_eff = R_i`).
+    wall_kr: Vec<f64>,
+    /// Per particle: bit 0 touching the lower wall, bit 1 the upper wall, of each axis `k`
+    /// (bits `2k`, `2k + 1`).
+    wall_contact: Vec<u8>,
+    list: NeighbourList<D>,
+    counts: EventCounts,
+    dissipated_damping: f64,
+    dissipated_bridges: f64,
+    work_by_drive: f64,
+    max_overlap: f64,
+    body: B,
+}
+
+impl<const D: usize, const GRAV: bool, const WET: bool> TimeEngine<D, GRAV, WET, NoBodyForce> {
+    /// Builds the engine for a validated scene with `engine.kind = "time"`.
+    pub fn new(scene: &Scene) -> Self {
+        Self::with_body_force(scene, NoBodyForce)
+    }
+}
+
+impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
+    TimeEngine<D, GRAV, WET, B>
+{
+    /// Builds the engine with a body force.
+    pub fn with_body_force(scene: &Scene, body: B) -> Self {
+        assert_eq!(scene.dimension, D, "scene dimension does not match");
+        assert_eq!(GRAV, scene.gravity > 0.0, "gravity flag does not match");
+        assert_eq!(WET, scene.is_wet(), "capillary flag does not match");
+        let init = initial_state(scene);
+        let n = init.radius.len();
+        let boundaries = scene.boundaries();
+        let mut size = [0.0; D];
+        let mut periodic = [false; D];
+        for k in 0..D {
+            size[k] = scene.container.size[k];
+            periodic[k] = boundaries[k] == Boundary::Periodic;
+        }
+        let e = &scene.engine;
+        let c = &scene.contact;
+        let damping = c.damping.unwrap_or(0.0);
+        let wall_damping = c.wall_damping.unwrap_or(0.0);
+        let mut gear = GEAR5;
+        if damping > 0.0 || wall_damping > 0.0 {
+            gear[0] = GEAR5_C0_VELOCITY_DEPENDENT;
+        }
+        let stiffness = c.stiffness.unwrap_or(DEFAULT_STIFFNESS);
+        let s_crit = scene.s_crit();
+        let p = Params {
+            size,
+            periodic,
+            gravity: scene.gravity,
+            mass: scene.particles.mass,
+            dt: e.dt.unwrap_or(DEFAULT_DT),
+            integrator: e.integrator.unwrap_or_default(),
+            gear,
+            stiffness,
+            damping,
+            wall_damping,
+            s_crit,
+            bridge_force: if WET {
+                hertz::bridge_force(scene.e_cb(), s_crit)
+            } else {
+                0.0
+            },
+            drive: scene.drive_motion(),
+            diameter: scene.particles.diameter,
+        };
+        let skin = e.skin.unwrap_or(DEFAULT_SKIN) * scene.particles.diameter;
+        let (_, d_max) = scene.diameter_range();
+        let amp = p.drive.map_or(0.0, |(a, _)| a.abs());
+        let mut lower = [0.0; D];
+        let mut upper = size;
+        for k in 0..D {
+            if !periodic[k] {
+                lower[k] = -amp - d_max;
+                upper[k] = size[k] + amp + d_max;
+            }
+        }
+        let list = NeighbourList::new(
+            n,
+            size,
+            periodic,
+            lower,
+            upper,
+            s_crit + skin,
+            skin,
+            d_max + s_crit + skin,
+        );
+        let mut r: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; D * n]);
+        for i in 0..n {
+            for k in 0..D {
+                r[0][k * n + i] = init.position[i][k];
+                r[1][k * n + i] = init.velocity[i][k];
+            }
+        }
+        let wall_kr = init
+            .radius
+            .iter()
+            .map(|&ri| stiffness * ri.sqrt())
+            .collect();
+        let mut engine = Self {
+            p,
+            n,
+            steps: 0,
+            r,
+            now: [vec![0.0; D * n], vec![0.0; D * n]],
+            predicted: false,
+            acc: vec![0.0; D * n],
+            radius: init.radius,
+            wall_kr,
+            wall_contact: vec![0; n],
+            list,
+            counts: EventCounts::default(),
+            dissipated_damping: 0.0,
+            dissipated_bridges: 0.0,
+            work_by_drive: 0.0,
+            max_overlap: 0.0,
+            body,
+        };
+        engine.list.build(&engine.r[0], &engine.radius);
+        // Initial accelerations; the bookkeeping of this evaluation is not a step (dt = 0).
+        engine.compute_forces(0.0, 1.0, 0.0);
+        if engine.p.integrator == IntegratorKind::Gear5 {
+            let dt = engine.p.dt;
+            for e in 0..D * n {
+                engine.r[1][e] *= dt;
+                engine.r[2][e] = 0.5 * dt * dt * engine.acc[e];
+            }
+            engine.now = [engine.r[0].clone(), engine.r[1].clone()];
+        }
+        engine
+    }
+
+    /// Positions of the current step, axis-major.
+    fn x_now(&self) -> &[f64] {
+        match self.p.integrator {
+            IntegratorKind::Gear5 => &self.now[0],
+            IntegratorKind::Verlet => &self.r[0],
+        }
+    }
+
+    /// Velocities of the current step (times [`Self::velocity_scale`]), axis-major.
+    fn v_now(&self) -> &[f64] {
+        match self.p.integrator {
+            IntegratorKind::Gear5 => &self.now[1],
+            IntegratorKind::Verlet => &self.r[1],
+        }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether the engine holds no particle.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Current time, `steps * dt`.
+    pub fn time(&self) -> f64 {
+        self.steps as f64 * self.p.dt
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The time step.
+    pub fn dt(&self) -> f64 {
+        self.p.dt
+    }
+
+    /// Neighbour-list builds so far.
+    pub fn list_builds(&self) -> u64 {
+        self.list.builds
+    }
+
+    /// Entries of the Verlet list.
+    pub fn list_entries(&self) -> usize {
+        self.list.partner.len()
+    }
+
+    /// Contact onsets (pair, wall), bridge formations and ruptures so far.
+    pub fn counts(&self) -> &EventCounts {
+        &self.counts
+    }
+
+    /// Largest pair or wall overlap seen at any force evaluation, in units of `d`.
+    pub fn max_overlap(&self) -> f64 {
+        self.max_overlap / self.p.diameter
+    }
+
+    /// Factor turning `r[1]` into a velocity.
+    fn velocity_scale(&self) -> f64 {
+        match self.p.integrator {
+            IntegratorKind::Gear5 => 1.0 / self.p.dt,
+            IntegratorKind::Verlet => 1.0,
+        }
+    }
+
+    /// Position of particle `i` (scene order).
+    pub fn position(&self, i: usize) -> [f64; D] {
+        std::array::from_fn(|k| self.x_now()[k * self.n + i])
+    }
+
+    /// Velocity of particle `i`.
+    pub fn velocity(&self, i: usize) -> [f64; D] {
+        let s = self.velocity_scale();
+        std::array::from_fn(|k| self.v_now()[k * self.n + i] * s)
+    }
+
+    /// Particle radii.
+    pub fn radii(&self) -> &[f64] {
+        &self.radius
+    }
+
+    /// Overwrites position and velocity of particle `i` (tests and set-ups); the higher Gear
+    /// derivatives are reset to zero and the neighbour list rebuilt.
+    pub fn set_state(&mut self, i: usize, x: [f64; D], v: [f64; D]) {
+        let n = self.n;
+        let dt = self.p.dt;
+        if self.predicted {
+            // Back to the corrected state of the current step: the inverse of the predictor's
+            // Pascal triangle for the higher derivatives, the stored `now` for r_0 and r_1.
+            let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+            for e in 0..D * n {
+                let a5 = r5[e];
+                let a4 = r4[e] - 5.0 * a5;
+                let a3 = r3[e] - 4.0 * a4 - 10.0 * a5;
+                let a2 = r2[e] - 3.0 * a3 - 6.0 * a4 - 10.0 * a5;
+                (r2[e], r3[e], r4[e]) = (a2, a3, a4);
+                r0[e] = self.now[0][e];
+                r1[e] = self.now[1][e];
+            }
+            self.predicted = false;
+        }
+        for k in 0..D {
+            self.r[0][k * n + i] = x[k];
+            self.r[1][k * n + i] = match self.p.integrator {
+                IntegratorKind::Gear5 => v[k] * dt,
+                IntegratorKind::Verlet => v[k],
+            };
+            for r in &mut self.r[2..] {
+                r[k * n + i] = 0.0;
+            }
+        }
+        self.list.build(&self.r[0], &self.radius);
+        let t = self.time();
+        self.compute_forces(t, self.velocity_scale(), 0.0);
+        if self.p.integrator == IntegratorKind::Gear5 {
+            for e in 0..D * n {
+                self.r[2][e] = 0.5 * dt * dt * self.acc[e];
+            }
+            self.now = [self.r[0].clone(), self.r[1].clone()];
+        }
+    }
+
+    /// Capillary bridges as pairs `(i, j)`, `i < j`, sorted.
+    pub fn bridges(&self) -> Vec<(usize, usize)> {
+        if WET {
+            self.list.flagged(BOND)
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// Number of capillary bridges.
+    pub fn bridge_count(&self) -> usize {
+        if WET { self.list.count(BOND) } else { 0 }
+    }
+
+    /// Wraps periodic coordinates of `r[0]` (or, with `now`, of the Gear corrected positions)
+    /// into `[0, L)`.
+    fn wrap(&mut self, now: bool) {
+        let n = self.n;
+        for k in 0..D {
+            if !self.p.periodic[k] {
+                continue;
+            }
+            let l = self.p.size[k];
+            let arr = if now {
+                &mut self.now[0]
+            } else {
+                &mut self.r[0]
+            };
+            for x in &mut arr[k * n..(k + 1) * n] {
+                if *x < 0.0 {
+                    *x += l;
+                } else if *x >= l {
+                    *x -= l;
+                }
+            }
+        }
+    }
+
+    /// One time step of the scene's integrator.
+    pub fn step(&mut self) {
+        let dt = self.p.dt;
+        let t1 = (self.steps + 1) as f64 * dt;
+        match self.p.integrator {
+            IntegratorKind::Gear5 => {
+                if !self.predicted {
+                    gear_predict(&mut self.r);
+                }
+                self.wrap(false);
+                if self.list.needs_rebuild(&self.r[0]) {
+                    self.list.build(&self.r[0], &self.radius);
+                }
+                self.compute_forces(t1, 1.0 / dt, dt);
+                let c = self.p.gear;
+                gear_correct_predict(&mut self.r, &mut self.now, &self.acc, 0.5 * dt * dt, &c);
+                self.predicted = true;
+                self.wrap(true);
+            }
+            IntegratorKind::Verlet => {
+                let [x, v, ..] = &mut self.r;
+                verlet_drift(x, v, &self.acc, dt);
+                self.wrap(false);
+                if self.list.needs_rebuild(&self.r[0]) {
+                    self.list.build(&self.r[0], &self.radius);
+                }
+                self.compute_forces(t1, 1.0, dt);
+                verlet_kick(&mut self.r[1], &self.acc, dt);
+            }
+        }
+        self.steps += 1;
+    }
+
+    /// Runs until the time is the multiple of `dt` nearest to `t_end`. Always returns true (the
+    /// time engine has no event cap).
+    pub fn run_until(&mut self, t_end: f64) -> bool {
+        let target = (t_end / self.p.dt).round().max(0.0) as u64;
+        while self.steps < target {
+            self.step();
+        }
+        true
+    }
+
+    /// Accelerations at positions `r[0]` and velocities `r[1] * vs` at time `t`; books
+    /// dissipation, drive work, contact onsets and bridge events with weight `dt` (0: a
+    /// re-evaluation that is not a step).
+    fn compute_forces(&mut self, t: f64, vs: f64, dt: f64) {
+        let n = self.n;
+        let p = &self.p;
+        let x = &self.r[0];
+        let v = &self.r[1];
+        let f = &mut self.acc;
+        // Start from the weight, -m g along the last axis.
+        f.fill(0.0);
+        if GRAV {
+            f[(D - 1) * n..].fill(-p.mass * p.gravity);
+        }
+        let mut half = [0.0; D];
+        for k in 0..D {
+            half[k] = 0.5 * p.size[k];
+        }
+        let list = &mut self.list;
+        let pc = PairConstants {
+            periodic: p.periodic,
+            size: p.size,
+            stiffness: p.stiffness,
+            damping: p.damping,
+            bridge_force: p.bridge_force,
+            s_crit: p.s_crit,
+            vs,
+            dt,
+        };
+        let out = pair_forces::<D, WET>(
+            &pc,
+            x,
+            v,
+            f,
+            &self.radius,
+            &list.start,
+            &list.partner,
+            &mut list.flags,
+            &mut self.counts,
+        );
+        let mut diss = out.dissipated;
+        let mut max_ov = self.max_overlap.max(out.max_overlap);
+        self.dissipated_bridges += out.bridge_ledger;
+        // Walls: Hertz with R_eff = R_i on every non-periodic axis; the last axis moves with the
+        // drive, z_w(t) = A sin(omega t) (MODEL.md 4.1).
+        let (zw, vw) = match p.drive {
+            Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
+            None => (0.0, 0.0),
+        };
+        let mut work = 0.0;
+        for k in 0..D {
+            if p.periodic[k] {
+                continue;
+            }
+            let (shift, wv) = if k == D - 1 { (zw, vw) } else { (0.0, 0.0) };
+            let (lo, hi) = (shift, p.size[k] + shift);
+            let xk = &x[k * n..(k + 1) * n];
+            let vk = &v[k * n..(k + 1) * n];
+            let fk = &mut f[k * n..(k + 1) * n];
+            let radius = &self.radius[..n];
+            let wall_kr = &self.wall_kr[..n];
+            let touching = &mut self.wall_contact[..n];
+            let bit_lo = 1u8 << (2 * k);
+            let bit_hi = bit_lo << 1;
+            for i in 0..n {
+                let ri = radius[i];
+                let ov_lo = ri - (xk[i] - lo);
+                let ov_hi = xk[i] + ri - hi;
+                if ov_lo <= 0.0 && ov_hi <= 0.0 {
+                    if touching[i] & (bit_lo | bit_hi) != 0 {
+                        touching[i] &= !(bit_lo | bit_hi);
+                    }
+                    continue;
+                }
+                let (ov, sign, bit) = if ov_lo > 0.0 {
+                    (ov_lo, 1.0, bit_lo)
+                } else {
+                    (ov_hi, -1.0, bit_hi)
+                };
+                if touching[i] & bit == 0 {
+                    touching[i] |= bit;
+                    self.counts.wall_collisions += 1;
+                }
+                max_ov = max_ov.max(ov);
+                // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
+                let xi_dot = -sign * (vk[i] * vs - wv);
+                let kr = wall_kr[i];
+                let total = hertz::force(kr, ov, xi_dot, p.wall_damping);
+                if p.wall_damping > 0.0 {
+                    diss += (total - kr * ov * ov.sqrt()) * xi_dot * dt;
+                }
+                let fw = sign * total;
+                fk[i] += fw;
+                work += fw * wv * dt;
+            }
+        }
+        if B::ACTIVE {
+            for i in 0..n {
+                let xi: [f64; D] = std::array::from_fn(|k| x[k * n + i]);
+                let fb = self.body.force(&xi, t);
+                for k in 0..D {
+                    f[k * n + i] += fb[k];
+                    work += fb[k] * v[k * n + i] * vs * dt;
+                }
+            }
+        }
+        // a = F / m.
+        if p.mass != 1.0 {
+            let inv_m = 1.0 / p.mass;
+            for e in f.iter_mut() {
+                *e *= inv_m;
+            }
+        }
+        self.dissipated_damping += diss;
+        self.work_by_drive += work;
+        self.max_overlap = max_ov;
+    }
+
+    /// Energy bookkeeping at the current time (see the module doc for the fields).
+    pub fn energy(&self) -> EnergyLedger {
+        let n = self.n;
+        let p = &self.p;
+        let vs = self.velocity_scale();
+        let x = self.x_now();
+        let mut kinetic = 0.0;
+        for e in 0..D * n {
+            let ve = self.v_now()[e] * vs;
+            kinetic += 0.5 * p.mass * ve * ve;
+        }
+        let mut potential = 0.0;
+        if GRAV {
+            potential += x[(D - 1) * n..]
+                .iter()
+                .map(|z| p.mass * p.gravity * z)
+                .sum::<f64>();
+        }
+        for i in 0..n {
+            for q in self.list.start[i] as usize..self.list.start[i + 1] as usize {
+                let j = self.list.partner[q] as usize;
+                let r = self.distance(i, j);
+                let sig = self.radius[i] + self.radius[j];
+                if r < sig {
+                    let kr = p.stiffness * (self.radius[i] * self.radius[j] / sig).sqrt();
+                    potential += hertz::elastic_energy(kr, sig - r);
+                }
+                if WET && self.list.flags[q] & BOND != 0 {
+                    potential += p.bridge_force * (r - sig);
+                }
+            }
+        }
+        let t = self.time();
+        let zw = p.drive.map_or(0.0, |(a, w)| a * (w * t).sin());
+        for k in 0..D {
+            if p.periodic[k] {
+                continue;
+            }
+            let shift = if k == D - 1 { zw } else { 0.0 };
+            for i in 0..n {
+                let xk = x[k * n + i];
+                let ri = self.radius[i];
+                for ov in [ri - (xk - shift), xk + ri - (p.size[k] + shift)] {
+                    if ov > 0.0 {
+                        potential += hertz::elastic_energy(self.wall_kr[i], ov);
+                    }
+                }
+            }
+        }
+        EnergyLedger {
+            kinetic,
+            potential,
+            dissipated_restitution: self.dissipated_damping,
+            dissipated_ruptures: self.dissipated_bridges,
+            added_by_collapse_remedies: 0.0,
+            added_by_wall_placement: 0.0,
+            work_by_drive: self.work_by_drive,
+        }
+    }
+
+    /// Centre distance of `i` and `j` (nearest image).
+    fn distance(&self, i: usize, j: usize) -> f64 {
+        let n = self.n;
+        let mut r2 = 0.0;
+        for k in 0..D {
+            let mut d = self.x_now()[k * n + i] - self.x_now()[k * n + j];
+            if self.p.periodic[k] {
+                let l = self.p.size[k];
+                d -= l * (d / l).round();
+            }
+            r2 += d * d;
+        }
+        r2.sqrt()
+    }
+
+    /// Total momentum.
+    pub fn momentum(&self) -> [f64; D] {
+        let vs = self.velocity_scale();
+        std::array::from_fn(|k| {
+            self.v_now()[k * self.n..(k + 1) * self.n]
+                .iter()
+                .sum::<f64>()
+                * vs
+                * self.p.mass
+        })
+    }
+
+    /// Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (Eq. 3.2, `f_d = D`).
+    pub fn granular_temperature(&self) -> f64 {
+        let n = self.n as f64;
+        let vs = self.velocity_scale();
+        let mut mean_sq = 0.0;
+        let mut mean2 = 0.0;
+        for k in 0..D {
+            let col = &self.v_now()[k * self.n..(k + 1) * self.n];
+            let m = col.iter().sum::<f64>() * vs / n;
+            mean_sq += col.iter().map(|v| v * v).sum::<f64>() * vs * vs / n;
+            mean2 += m * m;
+        }
+        self.p.mass * (mean_sq - mean2) / D as f64
+    }
+
+    /// Positions flat with stride `D`, scene order.
+    pub fn positions_flat(&self) -> Vec<f64> {
+        (0..self.n).flat_map(|i| self.position(i)).collect()
+    }
+
+    /// Velocities flat with stride `D`, scene order.
+    pub fn velocities_flat(&self) -> Vec<f64> {
+        (0..self.n).flat_map(|i| self.velocity(i)).collect()
+    }
+
+    /// Test aid, `O(N^2)`: the first pair that overlaps (or is within `s_crit` of contact in a
+    /// wet scene) but is missing from the Verlet list, which would make its force vanish.
+    pub fn pair_missing_from_list(&self) -> Option<(usize, usize)> {
+        let reach = if WET { self.p.s_crit } else { 0.0 };
+        for i in 0..self.n {
+            let row =
+                &self.list.partner[self.list.start[i] as usize..self.list.start[i + 1] as usize];
+            for j in i + 1..self.n {
+                let r = self.distance(i, j);
+                if r < self.radius[i] + self.radius[j] + reach
+                    && row.binary_search(&(j as u32)).is_err()
+                {
+                    return Some((i, j));
+                }
+            }
+        }
+        None
+    }
+
+    /// Checks the invariants: finite numbers; every centre inside the box (between the walls at
+    /// their current position); no pair or wall overlap beyond [`SANITY_OVERLAP`] `d`; no
+    /// bridge stretched beyond `s_crit` by more than the same amount. Returns the first violation.
+    pub fn sanity_check(&self) -> Result<(), String> {
+        let n = self.n;
+        let t = self.time();
+        let tol = SANITY_OVERLAP * self.p.diameter;
+        let zw = self.p.drive.map_or(0.0, |(a, w)| a * (w * t).sin());
+        for i in 0..n {
+            let x = self.position(i);
+            let v = self.velocity(i);
+            if !x.iter().chain(v.iter()).all(|a| a.is_finite()) {
+                return Err(format!("particle {i} has a non-finite state at t = {t}"));
+            }
+            for k in 0..D {
+                let (lo, hi) = if self.p.periodic[k] {
+                    (0.0, self.p.size[k])
+                } else {
+                    let s = if k == D - 1 { zw } else { 0.0 };
+                    (
+                        s + self.radius[i] - tol,
+                        self.p.size[k] + s - self.radius[i] + tol,
+                    )
+                };
+                if x[k] < lo || x[k] > hi {
+                    return Err(format!(
+                        "particle {i} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
+                        x[k]
+                    ));
+                }
+            }
+        }
+        for i in 0..n {
+            for q in self.list.start[i] as usize..self.list.start[i + 1] as usize {
+                let j = self.list.partner[q] as usize;
+                let r = self.distance(i, j);
+                let sig = self.radius[i] + self.radius[j];
+                if sig - r > tol {
+                    return Err(format!(
+                        "particles {i} and {j} overlap by {} at t = {t}",
+                        sig - r
+                    ));
+                }
+                if WET && self.list.flags[q] & BOND != 0 && r - sig > self.p.s_crit + tol {
+                    return Err(format!(
+                        "bonded pair {i}-{j} stretched beyond s_crit by {} at t = {t}",
+                        r - sig - self.p.s_crit
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What the pair loop needs besides the arrays.
+struct PairConstants<const D: usize> {
+    periodic: [bool; D],
+    size: [f64; D],
+    stiffness: f64,
+    damping: f64,
+    bridge_force: f64,
+    s_crit: f64,
+    /// Factor turning the velocity array into velocities.
+    vs: f64,
+    /// Weight of the bookkeeping (the step, or 0).
+    dt: f64,
+}
+
+/// What the pair loop books.
+struct PairOut {
+    dissipated: f64,
+    max_overlap: f64,
+    bridge_ledger: f64,
+}
+
+/// Pair forces (Eq. 2.7 and MODEL.md 3.1) over the Verlet list, each pair once (Newton's third
+/// law), added to `f`; updates the contact and bond flags. A free function of slices so that the
+/// compiler keeps every array in a register (no aliasing through `self`).
+#[allow(clippy::too_many_arguments)]
+fn pair_forces<const D: usize, const WET: bool>(
+    pc: &PairConstants<D>,
+    x: &[f64],
+    v: &[f64],
+    f: &mut [f64],
+    radius: &[f64],
+    start: &[u32],
+    partner: &[u32],
+    flags: &mut [u8],
+    counts: &mut EventCounts,
+) -> PairOut {
+    let n = radius.len();
+    let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
+    let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
+    let mut half = [0.0; D];
+    for k in 0..D {
+        half[k] = 0.5 * pc.size[k];
+    }
+    let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
+    let mut diss = 0.0;
+    let mut max_ov = 0.0f64;
+    let mut ledger = 0.0;
+    for i in 0..n {
+        let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
+        if p0 == p1 {
+            continue;
+        }
+        let mut xi = [0.0; D];
+        let mut vi = [0.0; D];
+        let mut fi = [0.0; D];
+        for k in 0..D {
+            xi[k] = xs[k][i];
+            vi[k] = vsl[k][i];
+        }
+        let ri = radius[i];
+        for q in p0..p1 {
+            let j = partner[q] as usize;
+            let mut d = [0.0; D];
+            let mut r2 = 0.0;
+            for k in 0..D {
+                let mut dk = xi[k] - xs[k][j];
+                if pc.periodic[k] {
+                    if dk > half[k] {
+                        dk -= pc.size[k];
+                    } else if dk < -half[k] {
+                        dk += pc.size[k];
+                    }
+                }
+                d[k] = dk;
+                r2 += dk * dk;
+            }
+            let rj = radius[j];
+            let sig = ri + rj;
+            let fl = flags[q];
+            if r2 >= sig * sig && (!WET || fl & BOND == 0) {
+                if fl & CONTACT != 0 {
+                    flags[q] = fl & !CONTACT;
+                }
+                continue;
+            }
+            let r = r2.sqrt();
+            let inv = 1.0 / r;
+            let overlap = sig - r;
+            let mut fmag = 0.0;
+            let mut new_fl = fl;
+            if overlap > 0.0 {
+                if fl & CONTACT == 0 {
+                    new_fl |= CONTACT;
+                    counts.pair_collisions += 1;
+                }
+                max_ov = max_ov.max(overlap);
+                // xi_dot = -(v_i - v_j) . n, n = d / r.
+                let mut vn = 0.0;
+                for k in 0..D {
+                    vn += (vi[k] - vsl[k][j]) * d[k];
+                }
+                let xi_dot = -vn * inv * vs;
+                let kr = k_pair * (ri * rj / sig).sqrt();
+                // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
+                let total = hertz::force(kr, overlap, xi_dot, a_d);
+                if a_d > 0.0 {
+                    let elastic = kr * overlap * overlap.sqrt();
+                    diss += (total - elastic) * xi_dot * dt;
+                }
+                fmag = total;
+                if WET && fl & BOND == 0 {
+                    // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
+                    // F_B (-overlap).
+                    new_fl |= BOND;
+                    counts.bridge_formations += 1;
+                    ledger += pc.bridge_force * overlap;
+                }
+            } else {
+                new_fl &= !CONTACT;
+            }
+            if WET && new_fl & BOND != 0 {
+                let s = -overlap;
+                if s > pc.s_crit {
+                    // Rupture: the bridge energy F_B s leaves the system.
+                    new_fl &= !BOND;
+                    counts.bridge_ruptures += 1;
+                    ledger += pc.bridge_force * s;
+                } else {
+                    // MODEL.md 3.1: constant attraction F_B along the line of centres.
+                    fmag -= pc.bridge_force;
+                }
+            }
+            if new_fl != fl {
+                flags[q] = new_fl;
+            }
+            if fmag != 0.0 {
+                let s = fmag * inv;
+                for k in 0..D {
+                    let fk = s * d[k];
+                    fi[k] += fk;
+                    f[k * n + j] -= fk;
+                }
+            }
+        }
+        for k in 0..D {
+            f[k * n + i] += fi[k];
+        }
+    }
+    PairOut {
+        dissipated: diss,
+        max_overlap: max_ov,
+        bridge_ledger: ledger,
+    }
+}

@@ -1,0 +1,257 @@
+//! Verlet neighbour list with skin, built from linked cells, for the time-driven engine.
+//!
+//! The list is a half list in compressed-row form: row `i` holds the partners `j > i` whose
+//! centres were closer than `R_i + R_j + s_crit + skin` when the list was built, sorted by `j`.
+//! Each entry carries flags (in contact at the last force evaluation; bridged). The list is rebuilt
+//! when some particle has moved more than `skin / 2` since the last build (then no pair can have
+//! come from outside the range into interaction); the flags of the old list are carried into the
+//! new one by merging the sorted rows. Every buffer is allocated once and reused: a rebuild
+//! allocates only while the list grows beyond its largest size so far.
+
+/// Entry flag: the pair overlapped at the last force evaluation.
+pub const CONTACT: u8 = 1;
+/// Entry flag: the pair holds a capillary bridge (MODEL.md 3.1).
+pub const BOND: u8 = 2;
+
+/// Linked cells and the Verlet list.
+#[derive(Debug, Clone)]
+pub struct NeighbourList<const D: usize> {
+    /// Row starts, `n + 1` entries.
+    pub start: Vec<u32>,
+    /// Partner of each entry.
+    pub partner: Vec<u32>,
+    /// Flags of each entry ([`CONTACT`], [`BOND`]).
+    pub flags: Vec<u8>,
+    old_start: Vec<u32>,
+    old_partner: Vec<u32>,
+    old_flags: Vec<u8>,
+    /// Positions (axis-major, as the engine's) at the last build.
+    built_at: Vec<f64>,
+    /// Cells per axis, cell width per axis, lower edge per axis.
+    cells: [usize; D],
+    width: [f64; D],
+    lower: [f64; D],
+    periodic: [bool; D],
+    size: [f64; D],
+    head: Vec<u32>,
+    next: Vec<u32>,
+    cell_of: Vec<u32>,
+    /// Interaction range beyond contact (`s_crit` or 0) plus the skin.
+    extra: f64,
+    skin: f64,
+    /// Builds so far.
+    pub builds: u64,
+}
+
+const NONE: u32 = u32::MAX;
+
+impl<const D: usize> NeighbourList<D> {
+    /// A list for `n` particles in a box of edges `size`; `lower`/`upper` bound the wall axes
+    /// (the shaken floor and lid move), `range` is the largest `d_max + s_crit + skin`.
+    pub fn new(
+        n: usize,
+        size: [f64; D],
+        periodic: [bool; D],
+        lower: [f64; D],
+        upper: [f64; D],
+        extra: f64,
+        skin: f64,
+        range: f64,
+    ) -> Self {
+        let mut cells = [1usize; D];
+        let mut width = [0.0; D];
+        for k in 0..D {
+            let span = upper[k] - lower[k];
+            cells[k] = ((span / range).floor() as usize).max(1);
+            if periodic[k] {
+                assert!(cells[k] >= 3, "periodic axis {k} needs >= 3 cells");
+            }
+            width[k] = span / cells[k] as f64;
+        }
+        let total: usize = cells.iter().product();
+        Self {
+            start: vec![0; n + 1],
+            partner: Vec::with_capacity(8 * n),
+            flags: Vec::with_capacity(8 * n),
+            old_start: vec![0; n + 1],
+            old_partner: Vec::with_capacity(8 * n),
+            old_flags: Vec::with_capacity(8 * n),
+            built_at: vec![0.0; D * n],
+            cells,
+            width,
+            lower,
+            periodic,
+            size,
+            head: vec![NONE; total],
+            next: vec![NONE; n],
+            cell_of: vec![0; n],
+            extra,
+            skin,
+            builds: 0,
+        }
+    }
+
+    /// Whether some particle moved more than `skin / 2` since the last build (`x` axis-major).
+    /// The displacement is taken without the periodic image: a particle that crossed a periodic
+    /// face counts as having moved by about `L` and triggers a (harmless, rare) rebuild; in
+    /// exchange the loop vectorises.
+    pub fn needs_rebuild(&self, x: &[f64]) -> bool {
+        let n = self.next.len();
+        let lim = 0.25 * self.skin * self.skin;
+        let mut worst = 0.0f64;
+        let mut acc = [0.0f64; 64];
+        let mut i0 = 0;
+        while i0 < n {
+            let m = (n - i0).min(64);
+            acc[..m].fill(0.0);
+            for k in 0..D {
+                let xs = &x[k * n + i0..k * n + i0 + m];
+                let bs = &self.built_at[k * n + i0..k * n + i0 + m];
+                for ((a, &xv), &bv) in acc[..m].iter_mut().zip(xs).zip(bs) {
+                    let d = xv - bv;
+                    *a += d * d;
+                }
+            }
+            for &a in &acc[..m] {
+                worst = if a > worst { a } else { worst };
+            }
+            i0 += m;
+        }
+        worst > lim
+    }
+
+    fn cell_index(&self, c: &[usize; D]) -> usize {
+        let mut idx = 0;
+        for k in (0..D).rev() {
+            idx = idx * self.cells[k] + c[k];
+        }
+        idx
+    }
+
+    /// Rebuilds the list from positions `x` (axis-major) and radii, keeping the flags of pairs
+    /// that stay listed (a flagged pair always does: it is within `s_crit` of contact).
+    pub fn build(&mut self, x: &[f64], radius: &[f64]) {
+        let n = radius.len();
+        self.builds += 1;
+        std::mem::swap(&mut self.start, &mut self.old_start);
+        std::mem::swap(&mut self.partner, &mut self.old_partner);
+        std::mem::swap(&mut self.flags, &mut self.old_flags);
+        self.partner.clear();
+        self.flags.clear();
+        self.built_at.copy_from_slice(x);
+        self.head.fill(NONE);
+        for i in (0..n).rev() {
+            let mut c = [0usize; D];
+            for k in 0..D {
+                let f = ((x[k * n + i] - self.lower[k]) / self.width[k]).floor();
+                c[k] = if self.periodic[k] {
+                    (f as i64).rem_euclid(self.cells[k] as i64) as usize
+                } else {
+                    f.clamp(0.0, (self.cells[k] - 1) as f64) as usize
+                };
+            }
+            let idx = self.cell_index(&c);
+            self.cell_of[i] = idx as u32;
+            self.next[i] = self.head[idx];
+            self.head[idx] = i as u32;
+        }
+        let stencil = 3usize.pow(D as u32);
+        for i in 0..n {
+            self.start[i] = self.partner.len() as u32;
+            let mut c = [0usize; D];
+            let mut rest = self.cell_of[i] as usize;
+            for k in 0..D {
+                c[k] = rest % self.cells[k];
+                rest /= self.cells[k];
+            }
+            'cells: for s in 0..stencil {
+                let mut code = s;
+                let mut nc = [0usize; D];
+                for k in 0..D {
+                    let o = (code % 3) as i64 - 1;
+                    code /= 3;
+                    let m = self.cells[k] as i64;
+                    let v = c[k] as i64 + o;
+                    if self.periodic[k] {
+                        // With fewer than 3 cells two offsets would name one cell twice.
+                        if m < 3 && o != 0 {
+                            continue 'cells;
+                        }
+                        nc[k] = v.rem_euclid(m) as usize;
+                    } else if v < 0 || v >= m {
+                        continue 'cells;
+                    } else {
+                        nc[k] = v as usize;
+                    }
+                }
+                let mut j = self.head[self.cell_index(&nc)];
+                while j != NONE {
+                    let ju = j as usize;
+                    if ju > i {
+                        let mut r2 = 0.0;
+                        for k in 0..D {
+                            let mut d = x[k * n + i] - x[k * n + ju];
+                            if self.periodic[k] {
+                                let l = self.size[k];
+                                if d > 0.5 * l {
+                                    d -= l;
+                                } else if d < -0.5 * l {
+                                    d += l;
+                                }
+                            }
+                            r2 += d * d;
+                        }
+                        let cut = radius[i] + radius[ju] + self.extra;
+                        if r2 < cut * cut {
+                            self.partner.push(j);
+                        }
+                    }
+                    j = self.next[ju];
+                }
+            }
+            let row = self.start[i] as usize..self.partner.len();
+            self.partner[row.clone()].sort_unstable();
+            self.flags.resize(self.partner.len(), 0);
+            // Carry the flags of the old row (both rows sorted).
+            let (o0, o1) = (self.old_start[i] as usize, self.old_start[i + 1] as usize);
+            if self.builds > 1 {
+                let mut p = row.start;
+                for q in o0..o1 {
+                    let fl = self.old_flags[q];
+                    if fl == 0 {
+                        continue;
+                    }
+                    let pj = self.old_partner[q];
+                    while p < row.end && self.partner[p] < pj {
+                        p += 1;
+                    }
+                    assert!(
+                        p < row.end && self.partner[p] == pj,
+                        "flagged pair {i}-{pj} left the neighbour list"
+                    );
+                    self.flags[p] = fl;
+                }
+            }
+        }
+        self.start[n] = self.partner.len() as u32;
+    }
+
+    /// Pairs with `flag` set, as `(i, j)` with `i < j`, sorted.
+    pub fn flagged(&self, flag: u8) -> Vec<(usize, usize)> {
+        let n = self.start.len() - 1;
+        let mut out = Vec::new();
+        for i in 0..n {
+            for p in self.start[i] as usize..self.start[i + 1] as usize {
+                if self.flags[p] & flag != 0 {
+                    out.push((i, self.partner[p] as usize));
+                }
+            }
+        }
+        out
+    }
+
+    /// Number of entries with `flag` set.
+    pub fn count(&self, flag: u8) -> usize {
+        self.flags.iter().filter(|&&f| f & flag != 0).count()
+    }
+}
