@@ -1,7 +1,7 @@
 //! Simulation engines and the one entry point that runs a scene: [`run_scene`].
 //!
 //! `run_scene` picks the engine's concrete type once from the scene (dimension, gravity on or
-//! off, bridges or none), so that a scene pays only for the effects it asks for.
+//! off, bridges or none, shear drive or not), so that a scene pays only for the effects it asks for.
 //! [`run_scene_observed`] runs the same loop and also hands a read-only [`Frame`] (a copy of the
 //! configuration in scene order) to an observer at fixed intervals; `crate::observe` builds on it.
 
@@ -82,6 +82,15 @@ type Observer<'a> = Option<(f64, &'a mut dyn FnMut(&Frame))>;
 fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> RunReport {
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
+    if scene.shear_slabs().is_some() {
+        // Validation admits the shear drive in 3D only.
+        return match (grav, wet) {
+            (false, false) => run_engine(Engine::<3, false, false, true>::new(scene), scene, p, o),
+            (false, true) => run_engine(Engine::<3, false, true, true>::new(scene), scene, p, o),
+            (true, false) => run_engine(Engine::<3, true, false, true>::new(scene), scene, p, o),
+            (true, true) => run_engine(Engine::<3, true, true, true>::new(scene), scene, p, o),
+        };
+    }
     match (scene.dimension, grav, wet) {
         (2, false, false) => run_engine(Engine::<2, false, false>::new(scene), scene, p, o),
         (2, false, true) => run_engine(Engine::<2, false, true>::new(scene), scene, p, o),
@@ -95,7 +104,9 @@ fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> R
     }
 }
 
-fn sample<const D: usize, const G: bool, const W: bool>(e: &Engine<D, G, W>) -> Sample {
+fn sample<const D: usize, const G: bool, const W: bool, const S: bool>(
+    e: &Engine<D, G, W, S>,
+) -> Sample {
     let energy = e.energy();
     Sample {
         time: e.time(),
@@ -106,8 +117,8 @@ fn sample<const D: usize, const G: bool, const W: bool>(e: &Engine<D, G, W>) -> 
     }
 }
 
-fn run_engine<const D: usize, const G: bool, const W: bool>(
-    mut engine: Engine<D, G, W>,
+fn run_engine<const D: usize, const G: bool, const W: bool, const S: bool>(
+    mut engine: Engine<D, G, W, S>,
     scene: &Scene,
     progress: &mut dyn FnMut(&Sample),
     mut observer: Observer<'_>,
