@@ -1433,6 +1433,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
         self.body[i].x = x;
         let arr: [f64; D] = x.into();
         self.cell[i] = self.grid.locate(&arr);
+        if let Some(f) = &self.p.shear {
+            let k = f.slab_of(x[0]);
+            self.slab[i] = k as u32;
+            self.accel[i] = f.accel(k);
+        }
         let new = self.grid.linear(&self.cell[i]);
         self.grid.insert(i, new);
         self.count[i] = self.count[i].wrapping_add(1);
