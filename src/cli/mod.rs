@@ -299,6 +299,9 @@ pub fn summary_text(r: &RunReport) -> String {
         let _ = writeln!(s, "  wall re-checks    {}", e.wall_rechecks);
     }
     let _ = writeln!(s, "  re-predictions    {}", e.invalidated);
+    if e.slab_crossings > 0 {
+        let _ = writeln!(s, "  slab crossings    {}", e.slab_crossings);
+    }
     let _ = write!(s, "granular temp. T_g  {:.6}", r.granular_temperature);
     if let Some(x) = r.granular_temperature_over_ecb {
         let _ = write!(s, "  (T_g/E_cb = {x:.4})");
@@ -374,6 +377,15 @@ pub fn observed_text(run: &ObservedRun) -> String {
         o.granular_temperature_reduced
     );
     let _ = writeln!(s, "  bridges/particle  {:.4}", o.bridges_per_particle);
+    if let Some(sh) = &o.shear {
+        let _ = writeln!(
+            s,
+            "  E_par / {unit:<10} {:.6}  (E_perp {:.6}; {} complete cycles)",
+            sh.e_par,
+            sh.e_perp,
+            sh.cycles.len()
+        );
+    }
     if let Some(l) = &o.location_changes {
         let _ = writeln!(
             s,

@@ -6,6 +6,11 @@
 //! - Eq. 4.15:     `Gamma_C = 1 + F_B (1 - E*) / (M m g)`, never below `1 - 1/M`, with
 //!   `F_B = E_cb / s_crit` and `M` the number of layers, `N d / L_x` in 2D and
 //!   `N d^2 / (L_x L_y)` in 3D (wet scenes).
+//!
+//! On shear sweeps whose plane has the `F_max` axis (`drive.f_max`), the chain model of
+//! MODEL.md 8 (Eq. 7.9) is drawn: the solid is stable while `F_max L_x / (F_B d) <= 0.9229`, so
+//! the line `F_max = 0.9229 F_B d / L_x` (`F_B = E_cb / s_crit`) evaluated on each point's own
+//! scene (the other axis may change `L_x`, `E_cb`, `s_crit` or anything else).
 
 use crate::boundary::{PhaseMap, PlaneAxis, Slice};
 use crate::scene::Scene;
@@ -77,6 +82,44 @@ impl Landmarks {
     }
 }
 
+/// The constant of the chain model, Eq. 7.9: solid while `F_max L_x / (F_B d) <= 0.9229`.
+pub const CHAIN_MODEL_CONSTANT: f64 = 0.9229;
+
+/// The chain model's critical force `F_max = 0.9229 F_B d / L_x` (MODEL.md 8, Eq. 7.9) with
+/// `F_B = E_cb / s_crit`; `None` for dry scenes.
+pub fn chain_model_f_max(scene: &Scene) -> Option<f64> {
+    if !scene.is_wet() || scene.e_cb() <= 0.0 {
+        return None;
+    }
+    let f_b = scene.e_cb() / scene.s_crit();
+    Some(CHAIN_MODEL_CONSTANT * f_b * scene.particles.diameter / scene.container.size[0])
+}
+
+/// The chain-model line in the plane of a shear sweep: one vertex per point of the slice,
+/// `(F_c, y)` when `F_max` is the x axis or `(x, F_c)` when it is the y axis, with `F_c` from
+/// the point's scene (`scene_of` maps a point's coordinates to its scene); `None` if neither
+/// plane axis is `drive.f_max` or the scenes are dry.
+pub fn chain_model_line(
+    map: &PhaseMap,
+    slice: &Slice,
+    scene_of: impl Fn(&[serde_json::Value]) -> Option<Scene>,
+) -> Option<Vec<(f64, f64)>> {
+    let (xa, ya) = (map.x.as_ref()?, map.y.as_ref()?);
+    let f_on_x = xa.key == "drive.f_max";
+    if !f_on_x && ya.key != "drive.f_max" {
+        return None;
+    }
+    let mut line: Vec<(f64, f64)> = Vec::new();
+    for p in &slice.points {
+        let f_c = chain_model_f_max(&scene_of(&p.coords)?)?;
+        line.push(if f_on_x { (f_c, p.y) } else { (p.x, f_c) });
+    }
+    let along = |q: &(f64, f64)| if f_on_x { q.1 } else { q.0 };
+    line.sort_by(|a, b| along(a).total_cmp(&along(b)));
+    line.dedup_by(|a, b| along(a) == along(b));
+    (!line.is_empty()).then_some(line)
+}
+
 /// A `(label, points)` line, already clipped to the y range (split where it leaves it).
 type Line = (String, RGBColor, Vec<Vec<(f64, f64)>>);
 
@@ -122,6 +165,7 @@ pub fn phase_svg(
     map: &PhaseMap,
     slice: &Slice,
     landmarks: Option<Landmarks>,
+    chain_model: Option<Vec<(f64, f64)>>,
     title: &str,
 ) -> Result<String, String> {
     let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
@@ -168,6 +212,24 @@ pub fn phase_svg(
                 clipped(&xs, |e| l.gamma_c(e), y0, y1),
             ));
         }
+    }
+    if let Some(line) = chain_model {
+        // A single value (one point along the other axis) is drawn as a short bar across.
+        let line = if line.len() == 1 {
+            let (x, y) = line[0];
+            if map.x.as_ref().is_some_and(|a| a.key == "drive.f_max") {
+                vec![(x, y_range.0), (x, y_range.1)]
+            } else {
+                vec![(x_range.0, y), (x_range.1, y)]
+            }
+        } else {
+            line
+        };
+        lines.push((
+            format!("chain model, Eq. 7.9 (F_max L_x / (F_B d) = {CHAIN_MODEL_CONSTANT})"),
+            RGBColor(214, 39, 40),
+            vec![line],
+        ));
     }
     let mut svg = String::new();
     {
