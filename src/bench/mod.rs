@@ -19,6 +19,7 @@
 //! - (c') the same system dry (no bridges) at the same absolute temperature.
 
 pub mod shake;
+pub mod slab;
 pub mod wall;
 
 use crate::scene::{
@@ -59,6 +60,10 @@ pub fn run_with_svg(
         }
         return Ok(());
     }
+    if which == "slab" {
+        print!("{}", slab::report(&slab::measure(repeat, scale), repeat, scale));
+        return Ok(());
+    }
     if which == "shake" {
         print!("{}", shake::report(&shake::measure(40, scale)));
         return Ok(());
@@ -68,7 +73,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall` or `shake`"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake` or `slab`"
             ));
         }
     };

@@ -50,7 +50,8 @@ pub enum Command {
     Bench {
         /// Which benchmark: `engine` (collisions/s for the reference systems of the
         /// performance doc), `wall` (error and cost of the shaken-wall solvers), `shake` (the
-        /// shaken standard wet system with each wall solver).
+        /// shaken standard wet system with each wall solver), `slab` (E_par and cost of the
+        /// shear drive against the slab width).
         #[arg(default_value = "engine")]
         which: String,
         /// Repetitions per system (the median is reported).
