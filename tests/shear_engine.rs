@@ -163,3 +163,31 @@ duration = 10.0
     }
     assert!(pos > neg, "flow along the force: {pos} vs {neg}");
 }
+
+#[test]
+fn observed_shear_run_reports_e_par_and_classifies_fluidised() {
+    let mut s = scene(include_str!("../scenes/shear_small_3d.toml"));
+    s.drive.f_max = Some(1.5);
+    s.run.duration = 6.0;
+    s.observe.transient_periods = 3.0;
+    let run = wetgran::observe::run_observed(&s, &mut |_| {});
+    let sh = run.observables.shear.as_ref().expect("sheared scenes report E_par");
+    // The window mean is the mean of the window's samples of the series (sampled twice per
+    // time unit from t = 0).
+    let window: Vec<f64> = sh
+        .series
+        .iter()
+        .filter(|x| x.0 >= 3.0 - 1e-9)
+        .map(|x| x.1)
+        .collect();
+    assert_eq!(window.len(), 7);
+    let mean = window.iter().sum::<f64>() / window.len() as f64;
+    assert!((mean - sh.e_par).abs() <= 1e-12 * mean.abs().max(1.0));
+    // The initial sample is the initial Gaussian state: E_par = E_perp = T_0 / 2 = 20 E_cb on
+    // average over 360 spheres.
+    assert!((sh.series[0].1 - 20.0).abs() < 4.0, "{:?}", sh.series[0]);
+    // The force drives a flow along y: E_par well above E_perp and the threshold.
+    assert!(sh.e_par > 3.0 * sh.e_perp, "E_par {} E_perp {}", sh.e_par, sh.e_perp);
+    assert_eq!(run.classification.phase, wetgran::observe::Phase::F);
+    assert_eq!(run.classification.decided_on.shear_e_par, Some(sh.e_par));
+}

@@ -17,7 +17,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 /// Slab widths measured (units of `d`); 12 / w slabs tile `L_x = 12`.
-pub const WIDTHS: [f64; 6] = [6.0, 3.0, 2.0, 1.0, 0.5, 0.25];
+pub const WIDTHS: [f64; 5] = [3.0, 2.0, 1.0, 0.5, 0.25];
 
 /// One slab width.
 #[derive(Debug, Clone, PartialEq)]

@@ -417,4 +417,26 @@ mod tests {
         assert!((l.gamma_c(0.0).unwrap() - (1.0 + 4.0 / 3.0)).abs() < 1e-12);
         assert!((l.gamma_c(100.0).unwrap() - (1.0 - 1.0 / 3.0)).abs() < 1e-12);
     }
+
+    #[test]
+    fn chain_model_matches_eq_7_9() {
+        // The shear set-up of MODEL.md 1: F_B = E_cb / s_crit = 6 m g, L_x = 60 d:
+        // F_max = 0.9229 * 6 / 60 = 0.09229 (the value quoted in sweeps/shear_3d.toml).
+        let text = include_str!("../../tests/scenes/good/shear_3d.toml")
+            .replace("size = [12.0, 12.0, 6.0]", "size = [60.0, 12.0, 6.0]");
+        let scene = Scene::from_toml_str(&text, "test").unwrap();
+        let f = chain_model_f_max(&scene).unwrap();
+        assert!((f - 0.09229).abs() < 1e-12, "{f}");
+        // Dry scenes have no bridge force and no chain model.
+        let dry = Scene::from_toml_str(
+            &text
+                .replace("model = \"thin_thread\"", "model = \"none\"")
+                .replace("s_crit = 0.0625\n", "")
+                .replace("e_cb = 0.375\n", "")
+                .replace("temperature_over_ecb = 40.0", "temperature = 10.0"),
+            "test",
+        )
+        .unwrap();
+        assert_eq!(chain_model_f_max(&dry), None);
+    }
 }

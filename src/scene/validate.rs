@@ -655,11 +655,20 @@ impl Scene {
             }
             Some(f) => c.non_negative("drive.f_max", f)?,
         }
-        if let Some(w) = drive.slab_width {
-            let l_x = self.container.size[0];
-            if !(w.is_finite() && w > 0.0 && w <= l_x) {
-                return Err(c.out_of_range("drive.slab_width", w, &format!("in (0, L_x = {l_x}]")));
-            }
+        // At least 4 slabs: with 2 the slab centres sit on the zeros of the cosine (no force at
+        // all), with 1 the force is uniform (no shear).
+        let l_x = self.container.size[0];
+        let w = drive.slab_width.unwrap_or(self.particles.diameter);
+        if !(w.is_finite() && w > 0.0 && (l_x / w).round() >= 4.0) {
+            return Err(c.out_of_range(
+                "drive.slab_width",
+                w,
+                &format!(
+                    "in (0, L_x / 3.5 = {:.4}] (at least 4 slabs along L_x = {l_x}; with 2 the \
+                     slab centres sit on the zeros of the cosine)",
+                    l_x / 3.5
+                ),
+            ));
         }
         Ok(())
     }
