@@ -8,7 +8,13 @@ use common::{run_checked, scene, scene_with};
 use wetgran::sim::event_driven::{Engine, Vector};
 
 /// A 3D scene with the shear drive; `extra` adds sections.
-fn shear_scene(gravity: f64, size: [f64; 3], count: usize, drive: &str, extra: &str) -> wetgran::scene::Scene {
+fn shear_scene(
+    gravity: f64,
+    size: [f64; 3],
+    count: usize,
+    drive: &str,
+    extra: &str,
+) -> wetgran::scene::Scene {
     scene_with(
         3,
         gravity,
@@ -56,18 +62,31 @@ fn single_particle_follows_the_slab_forces_across_the_seam() {
     let v = e.velocities()[0];
     let p = e.positions()[0];
     // y-momentum (m = 1) changed by the integrated force.
-    assert!((v[1] - vy0 - impulse).abs() < 1e-12, "dp_y = {} vs {impulse}", v[1] - vy0);
+    assert!(
+        (v[1] - vy0 - impulse).abs() < 1e-12,
+        "dp_y = {} vs {impulse}",
+        v[1] - vy0
+    );
     assert!((v[1] - vy).abs() < 1e-12);
     // Position along y (periodic, L_y = 8) and x.
     let dy = (p[1] - y).rem_euclid(8.0);
-    assert!(dy.min(8.0 - dy) < 1e-10, "y = {} vs {}", p[1], y.rem_euclid(8.0));
+    assert!(
+        dy.min(8.0 - dy) < 1e-10,
+        "y = {} vs {}",
+        p[1],
+        y.rem_euclid(8.0)
+    );
     let dx = (p[0] - x).rem_euclid(l_x);
     assert!(dx.min(l_x - dx) < 1e-10);
     assert_eq!(v[0], vx);
     // The ledger books the field's work: kinetic energy change.
     let en = e.energy();
     let de = 0.5 * (v.norm_squared() - vx * vx - vy0 * vy0);
-    assert!((en.work_by_drive - de).abs() < 1e-12, "{} vs {de}", en.work_by_drive);
+    assert!(
+        (en.work_by_drive - de).abs() < 1e-12,
+        "{} vs {de}",
+        en.work_by_drive
+    );
 }
 
 #[test]
@@ -91,7 +110,11 @@ fn elastic_dry_runs_book_the_work_of_the_field() {
             },
             ..s
         });
-        assert!(report.invariant_violation.is_none(), "{:?}", report.invariant_violation);
+        assert!(
+            report.invariant_violation.is_none(),
+            "{:?}",
+            report.invariant_violation
+        );
         let (e0, e1) = (&report.energy_initial, &report.energy_final);
         let work = e1.work_by_drive - e0.work_by_drive;
         let dk = (e1.kinetic + e1.potential) - (e0.kinetic + e0.potential);
@@ -99,7 +122,10 @@ fn elastic_dry_runs_book_the_work_of_the_field() {
         assert_eq!(e1.dissipated_restitution, 0.0);
         // The field did real work (the test could fail), and it is all in the kinetic and
         // potential energy.
-        assert!(work.abs() > 0.05 * e0.kinetic, "g = {gravity}: work {work} too small");
+        assert!(
+            work.abs() > 0.05 * e0.kinetic,
+            "g = {gravity}: work {work} too small"
+        );
         assert!(report.events.slab_crossings > 1000);
         assert!(
             (dk - work - added).abs() < 1e-9 * e0.kinetic.max(1.0),
@@ -147,7 +173,10 @@ duration = 10.0
     // Bounded event rate (no inelastic collapse, no zero-time bounces): with the shipped sweeps'
     // rebound floor 0.03 a settled wet bed runs at about 400 events per grain per unit time
     // (measured); a collapse makes the rate diverge.
-    assert!(rate < 1000.0, "event rate {rate} per particle per unit time: {c:?}");
+    assert!(
+        rate < 1000.0,
+        "event rate {rate} per particle per unit time: {c:?}"
+    );
     assert!(c.slab_crossings > 0 && c.pair_collisions > 0 && c.bridge_formations > 0);
     // No particle left the box along z (checked by sanity_check) and the field drives a flow:
     // the y velocity profile follows the force's sign (slab-averaged momentum along +y where
@@ -171,7 +200,11 @@ fn observed_shear_run_reports_e_par_and_classifies_fluidised() {
     s.run.duration = 6.0;
     s.observe.transient_periods = 3.0;
     let run = wetgran::observe::run_observed(&s, &mut |_| {});
-    let sh = run.observables.shear.as_ref().expect("sheared scenes report E_par");
+    let sh = run
+        .observables
+        .shear
+        .as_ref()
+        .expect("sheared scenes report E_par");
     // The window mean is the mean of the window's samples of the series (sampled twice per
     // time unit from t = 0).
     let window: Vec<f64> = sh
@@ -187,7 +220,12 @@ fn observed_shear_run_reports_e_par_and_classifies_fluidised() {
     // average over 360 spheres.
     assert!((sh.series[0].1 - 20.0).abs() < 4.0, "{:?}", sh.series[0]);
     // The force drives a flow along y: E_par well above E_perp and the threshold.
-    assert!(sh.e_par > 3.0 * sh.e_perp, "E_par {} E_perp {}", sh.e_par, sh.e_perp);
+    assert!(
+        sh.e_par > 3.0 * sh.e_perp,
+        "E_par {} E_perp {}",
+        sh.e_par,
+        sh.e_perp
+    );
     assert_eq!(run.classification.phase, wetgran::observe::Phase::F);
     assert_eq!(run.classification.decided_on.shear_e_par, Some(sh.e_par));
 }

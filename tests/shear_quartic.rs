@@ -208,7 +208,11 @@ fn tangential_contacts_under_relative_acceleration() {
         assert!(t <= t_star + 1e-9 && t >= t_star - 1e-3, "case {case}: {t}");
         check(&cross, 10.0, &format!("shallow crossing {case}"));
         let miss = contact_quartic(&[sigma * (1.0 + 1e-3), -1.0, 0.0], &v, &a, sigma);
-        assert_eq!(earliest_entry(&miss, 10.0), None, "case {case}: a clear miss hits");
+        assert_eq!(
+            earliest_entry(&miss, 10.0),
+            None,
+            "case {case}: a clear miss hits"
+        );
     }
 }
 

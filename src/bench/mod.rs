@@ -61,7 +61,10 @@ pub fn run_with_svg(
         return Ok(());
     }
     if which == "slab" {
-        print!("{}", slab::report(&slab::measure(repeat, scale), repeat, scale));
+        print!(
+            "{}",
+            slab::report(&slab::measure(repeat, scale), repeat, scale)
+        );
         return Ok(());
     }
     if which == "shake" {

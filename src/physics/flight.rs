@@ -100,13 +100,20 @@ mod tests {
             for (plane, up) in [(1.0, true), (0.0, false)] {
                 let t = accelerated_time_to_plane(x0, v, a, plane, up);
                 if t.is_finite() {
-                    assert!((x(t) - plane).abs() < 1e-12, "x0={x0} v={v} a={a} plane={plane}");
+                    assert!(
+                        (x(t) - plane).abs() < 1e-12,
+                        "x0={x0} v={v} a={a} plane={plane}"
+                    );
                     let vt = v + a * t;
                     assert!(if up { vt >= -1e-12 } else { vt <= 1e-12 });
                     // No earlier crossing: sample the flight before t.
                     for k in 1..100 {
                         let s = t * k as f64 / 100.0;
-                        assert!(if up { x(s) < plane + 1e-12 } else { x(s) > plane - 1e-12 });
+                        assert!(if up {
+                            x(s) < plane + 1e-12
+                        } else {
+                            x(s) > plane - 1e-12
+                        });
                     }
                 } else {
                     // Never reached: e.g. decelerating before the plane.

@@ -29,6 +29,39 @@
 //! moment a bonded pair reaches the well edge while separating). Pieces on which `p` increases
 //! are skipped: a pair that touches now and separates has no event there.
 
+/// At most 6 sorted points (ends plus up to 4 critical points), on the stack: the solver runs
+/// in the engine's hot path and allocates nothing.
+#[derive(Debug, Clone, Copy)]
+pub struct Points {
+    x: [f64; 6],
+    len: usize,
+}
+
+impl Points {
+    fn new() -> Self {
+        Points {
+            x: [0.0; 6],
+            len: 0,
+        }
+    }
+
+    fn push(&mut self, v: f64) {
+        if self.len < self.x.len() {
+            self.x[self.len] = v;
+            self.len += 1;
+        }
+    }
+
+    /// The points, sorted.
+    pub fn as_slice(&self) -> &[f64] {
+        &self.x[..self.len]
+    }
+
+    fn last(&self) -> Option<f64> {
+        self.as_slice().last().copied()
+    }
+}
+
 /// A polynomial `c[0] + c[1] t + ... + c[n] t^n`, `n <= 4`, stored with its degree.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Poly {
@@ -119,15 +152,16 @@ impl Poly {
     /// Sorted real roots in `[a, b]` where the sign changes (simple and odd-order roots), found
     /// by isolation through the derivative's roots. Even-order roots (no sign change) are not
     /// listed; [`earliest_entry`] handles them at the critical points.
-    pub fn sign_changes_in(&self, a: f64, b: f64) -> Vec<f64> {
-        let mut out = Vec::with_capacity(4);
+    pub fn sign_changes_in(&self, a: f64, b: f64) -> Points {
+        let mut out = Points::new();
         if !(a <= b) {
             return out;
         }
-        for (x0, x1) in self.monotone_pieces(a, b).windows(2).map(|w| (w[0], w[1])) {
+        let pieces = self.monotone_pieces(a, b);
+        for (x0, x1) in pieces.as_slice().windows(2).map(|w| (w[0], w[1])) {
             let (p0, p1) = (self.eval(x0), self.eval(x1));
             if p1 == 0.0 {
-                if out.last() != Some(&x1) {
+                if out.last() != Some(x1) {
                     out.push(x1);
                 }
             } else if p0 != 0.0 && (p0 < 0.0) != (p1 < 0.0) {
@@ -139,11 +173,11 @@ impl Poly {
 
     /// `[a, c_1, ..., c_k, b]`: the ends and the critical points (roots of `p'`) between them;
     /// `p` is monotone between consecutive entries.
-    fn monotone_pieces(&self, a: f64, b: f64) -> Vec<f64> {
-        let mut pts = Vec::with_capacity(5);
+    fn monotone_pieces(&self, a: f64, b: f64) -> Points {
+        let mut pts = Points::new();
         pts.push(a);
         if self.n >= 2 {
-            for c in self.derivative().sign_changes_in(a, b) {
+            for &c in self.derivative().sign_changes_in(a, b).as_slice() {
                 if c > a && c < b {
                     pts.push(c);
                 }
@@ -170,7 +204,8 @@ impl Poly {
             } else {
                 hi = x;
             }
-            if hi - lo <= 4.0 * f64::EPSILON * lo.abs().max(hi.abs()) || hi - lo <= f64::MIN_POSITIVE
+            if hi - lo <= 4.0 * f64::EPSILON * lo.abs().max(hi.abs())
+                || hi - lo <= f64::MIN_POSITIVE
             {
                 break;
             }
@@ -213,6 +248,7 @@ pub fn earliest_entry(p: &Poly, horizon: f64) -> Option<f64> {
     }
     let pts = p.monotone_pieces(0.0, end);
     let dp = p.derivative();
+    let pts = pts.as_slice();
     let last = pts.len() - 1;
     for (k, w) in pts.windows(2).enumerate() {
         let (x0, x1) = (w[0], w[1]);
@@ -243,7 +279,12 @@ pub fn earliest_entry(p: &Poly, horizon: f64) -> Option<f64> {
 /// The contact quartic of two bodies with relative position `r`, velocity `v` and constant
 /// acceleration `a` (all `i` minus `j`) and contact distance `sigma`:
 /// `p(t) = |r + v t + a t^2/2|^2 - sigma^2` (module doc).
-pub fn contact_quartic<const D: usize>(r: &[f64; D], v: &[f64; D], a: &[f64; D], sigma: f64) -> Poly {
+pub fn contact_quartic<const D: usize>(
+    r: &[f64; D],
+    v: &[f64; D],
+    a: &[f64; D],
+    sigma: f64,
+) -> Poly {
     let dot = |x: &[f64; D], y: &[f64; D]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
     Poly::new([
         dot(r, r) - sigma * sigma,
@@ -278,6 +319,7 @@ mod tests {
     fn simple_roots_are_found_in_order() {
         let p = from_roots(&[0.5, 1.5, 2.0, 3.25], 1.0);
         let r = p.sign_changes_in(0.0, 10.0);
+        let r = r.as_slice();
         assert_eq!(r.len(), 4);
         for (got, want) in r.iter().zip([0.5, 1.5, 2.0, 3.25]) {
             assert!((got - want).abs() < 1e-12, "{got} vs {want}");
