@@ -154,7 +154,9 @@ impl Poly {
     /// listed; [`earliest_entry`] handles them at the critical points.
     pub fn sign_changes_in(&self, a: f64, b: f64) -> Points {
         let mut out = Points::new();
-        if !(a <= b) {
+        if a.partial_cmp(&b)
+            .is_none_or(|o| o == std::cmp::Ordering::Greater)
+        {
             return out;
         }
         let pieces = self.monotone_pieces(a, b);
@@ -243,7 +245,7 @@ pub fn earliest_entry(p: &Poly, horizon: f64) -> Option<f64> {
     if p.n == 0 {
         return None;
     }
-    if !(end >= 0.0) {
+    if end.is_nan() || end < 0.0 {
         return None;
     }
     let pts = p.monotone_pieces(0.0, end);

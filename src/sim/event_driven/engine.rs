@@ -651,7 +651,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
     ) -> Option<(f64, PairKind)> {
         let horizon = (self.slab_ev[i].time.min(self.slab_ev[j].time) - t).max(0.0);
         let sigma = self.body[i].r + self.body[j].r;
-        let lambda = (WET && self.bonded(i, j)).then(|| sigma + self.p.s_crit);
+        let lambda = (WET && self.bonded(i, j)).then_some(sigma + self.p.s_crit);
         let (contact, well) = pair_times::<D>(
             &(*r).into(),
             &(*v).into(),
