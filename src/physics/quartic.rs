@@ -333,14 +333,18 @@ mod tests {
 
     #[test]
     fn increasing_start_is_skipped() {
-        // Roots at -1 and 2 of a positive-leading quartic with extra pair at 3, 4: p(0) < 0,
-        // increasing? p = (t+1)(t-2)(t-3)(t-4): p(0) = -24 < 0, p'(0) = ... decreasing: now.
+        // p = (t + 1)(t - 2)(t - 3)(t - 4): p(0) = -24 < 0 but p'(0) = 2 > 0 (overlapping and
+        // separating: no event); p rises through 2, turns in (2, 3) and enters p <= 0 at 3.
         let p = from_roots(&[-1.0, 2.0, 3.0, 4.0], 1.0);
-        assert_eq!(earliest_entry(&p, 10.0), Some(0.0));
-        // Negated: p(0) = 24 > 0, rising first, entry at 2.
-        let q = p.negated();
-        let t = earliest_entry(&q, 10.0).unwrap();
+        let t = earliest_entry(&p, 10.0).unwrap();
+        assert!((t - 3.0).abs() < 1e-12, "{t}");
+        // Negated: -p(0) = 24 > 0 and falling: the entry is the first root, 2.
+        let t = earliest_entry(&p.negated(), 10.0).unwrap();
         assert!((t - 2.0).abs() < 1e-12, "{t}");
+        // Overlapping (p(0) < 0) and approaching (p'(0) < 0): now.
+        let q = from_roots(&[-0.5, 2.0, 3.0, 4.0], 1.0);
+        assert!(q.eval(0.0) < 0.0);
+        assert_eq!(earliest_entry(&q, 10.0), Some(0.0));
     }
 
     #[test]

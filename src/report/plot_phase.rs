@@ -439,4 +439,66 @@ mod tests {
         .unwrap();
         assert_eq!(chain_model_f_max(&dry), None);
     }
+
+    #[test]
+    fn chain_model_line_follows_the_other_axis() {
+        use crate::boundary::MapPoint;
+        // Plane: x = L_x (box.size[0]), y = F_max; the line F_c(L_x) = 0.9229 * 6 / L_x.
+        let base = include_str!("../../tests/scenes/good/shear_3d.toml");
+        let scene_of = |c: &[serde_json::Value]| {
+            let l_x = c[0].as_f64()?;
+            let text = base.replace(
+                "size = [12.0, 12.0, 6.0]",
+                &format!("size = [{l_x:?}, 12.0, 6.0]"),
+            );
+            Scene::from_toml_str(&text, "test").ok()
+        };
+        let point = |l_x: f64, f: f64| MapPoint {
+            coords: vec![serde_json::json!(l_x), serde_json::json!(f)],
+            x: l_x,
+            y: f,
+            phase: "s".into(),
+            votes: vec![Some("s".into())],
+            tie: false,
+            amplitude: None,
+            omega: None,
+        };
+        let axis = |index: usize, key: &str| PlaneAxis {
+            index,
+            key: key.into(),
+            label: key.into(),
+            log: false,
+        };
+        let slice = Slice {
+            fixed: Vec::new(),
+            points: vec![
+                point(24.0, 0.1),
+                point(12.0, 0.1),
+                point(12.0, 0.5),
+                point(24.0, 0.5),
+            ],
+            boundaries: Default::default(),
+        };
+        let map = PhaseMap {
+            x: Some(axis(0, "box.size[0]")),
+            y: Some(axis(1, "drive.f_max")),
+            shaking: false,
+            slices: vec![slice.clone()],
+        };
+        let line = chain_model_line(&map, &slice, scene_of).unwrap();
+        assert_eq!(line.len(), 2);
+        for (&(x, y), l_x) in line.iter().zip([12.0, 24.0]) {
+            assert_eq!(x, l_x);
+            assert!((y - 0.9229 * 6.0 / l_x).abs() < 1e-12, "{y}");
+        }
+        // Without the F_max axis in the plane: no line.
+        let other = PhaseMap {
+            y: Some(axis(1, "contact.restitution")),
+            ..map.clone()
+        };
+        assert!(chain_model_line(&other, &slice, scene_of).is_none());
+        // The plot draws it with its legend.
+        let svg = phase_svg(&map, &slice, None, Some(line), "t").unwrap();
+        assert!(svg.contains("chain model, Eq. 7.9"));
+    }
 }
