@@ -22,7 +22,7 @@ pub enum SweepCommand {
     /// Register a sweep file in the database and run its pending jobs.
     ///
     /// The sweep file (TOML) names a base scene, the axes (lists, linear or log ranges over any
-    /// scene key; gamma, e_star, e_d_star, f_max are short names), replicas and the run length
+    /// scene key, `box.size[0]` for an array entry; gamma, e_star, e_d_star, f_max, l_x are short names), replicas and the run length
     /// in driving periods; see sweeps/quickstart.toml. Every grid point and replica becomes a job
     /// whose id is the hash of its canonical spec: jobs already computed (by this or any other
     /// sweep in the database) are not run again. Each finished job is committed on its own, so
