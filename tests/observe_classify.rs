@@ -74,6 +74,7 @@ fn synthetic(
             stationary: true,
         },
         series: None,
+        shear: None,
     }
 }
 
@@ -302,4 +303,24 @@ fn split_is_two_classes_not_the_range_midpoint() {
     let c = classify(&obs, &th());
     assert_eq!(c.phase, Phase::Sfc, "{}", c.decided_on.reason);
     assert_eq!(c.decided_on.dense.as_ref().unwrap().bins, 6);
+}
+
+#[test]
+fn sheared_scenes_are_solid_or_fluid_by_e_par() {
+    use wetgran::observe::shear::ShearObservables;
+    let th = Thresholds::default();
+    for (e_par, want) in [(0.02, Phase::S), (0.1, Phase::S), (0.5, Phase::F)] {
+        // Whatever the unsheared rules say (a hot, split system here), E_par decides.
+        let mut obs = two_regions((0.5, 5.0), (0.0, 0.0));
+        obs.shear = Some(ShearObservables {
+            e_par,
+            e_perp: 0.01,
+            cycles: Vec::new(),
+            series: Vec::new(),
+        });
+        let c = classify(&obs, &th);
+        assert_eq!(c.phase, want, "E_par = {e_par}: {}", c.decided_on.reason);
+        assert_eq!(c.decided_on.shear_e_par, Some(e_par));
+        assert!(c.decided_on.reason.starts_with("sheared"));
+    }
 }

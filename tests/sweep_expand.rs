@@ -379,3 +379,33 @@ fn jobs_at_a_grid_point_are_the_grid_jobs_and_extra_replicas_take_the_next_seeds
     assert_eq!(mid[0].spec.scene.drive.gamma, Some(2.5));
     assert_eq!(mid[0].point, 1_000_000);
 }
+
+#[test]
+fn shear_sweeps_take_f_max_and_an_indexed_box_size_as_axes() {
+    // MODEL.md 4.2 / issue 7: sweeps over F_max and L_x (`l_x` = `box.size[0]`).
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "shear.toml",
+        include_str!("../tests/scenes/good/shear_3d.toml"),
+    );
+    let text = "[sweep]\nname = \"s\"\nbase = \"shear.toml\"\n\
+                [[axis]]\nkey = \"f_max\"\nvalues = [0.2, 0.8]\n\
+                [[axis]]\nkey = \"l_x\"\nvalues = [12.0, 16.0]\n";
+    let jobs = load(dir.path(), text).expand().unwrap();
+    assert_eq!(jobs.len(), 4);
+    let mut seen: Vec<(f64, f64)> = jobs
+        .iter()
+        .map(|j| {
+            let s = &j.spec.scene;
+            assert_eq!(s.container.size[1..], [12.0, 6.0]);
+            (s.drive.f_max.unwrap(), s.container.size[0])
+        })
+        .collect();
+    seen.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_eq!(seen, [(0.2, 12.0), (0.2, 16.0), (0.8, 12.0), (0.8, 16.0)]);
+    // An index past the array is an error naming the key.
+    let bad = text.replace("key = \"l_x\"", "key = \"box.size[5]\"");
+    let e = err(dir.path(), &bad);
+    assert!(e.contains("box.size[5]"), "{e}");
+}

@@ -19,6 +19,7 @@
 //! - (c') the same system dry (no bridges) at the same absolute temperature.
 
 pub mod shake;
+pub mod slab;
 pub mod tdmd;
 pub mod wall;
 
@@ -64,6 +65,13 @@ pub fn run_with_svg(
         print!("{}", tdmd::report(&tdmd::measure(repeat, scale)));
         return Ok(());
     }
+    if which == "slab" {
+        print!(
+            "{}",
+            slab::report(&slab::measure(repeat, scale), repeat, scale)
+        );
+        return Ok(());
+    }
     if which == "shake" {
         print!("{}", shake::report(&shake::measure(40, scale)));
         return Ok(());
@@ -73,7 +81,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake` or `tdmd`"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd` or `slab`"
             ));
         }
     };

@@ -52,7 +52,8 @@ pub enum Command {
         /// Which benchmark: `engine` (collisions/s for the reference systems of the
         /// performance doc), `wall` (error and cost of the shaken-wall solvers), `shake` (the
         /// shaken standard wet system with each wall solver), `tdmd` (the time-driven engine on
-        /// the dry shaken 2D system of issue 6; `scale` = simulated time units timed).
+        /// the dry shaken 2D system of issue 6; `scale` = simulated time units timed), `slab`
+        /// (E_par and cost of the shear drive against the slab width).
         #[arg(default_value = "engine")]
         which: String,
         /// Repetitions per system (the median is reported).
@@ -343,6 +344,9 @@ pub fn summary_text(r: &RunReport) -> String {
         let _ = writeln!(s, "  wall re-checks    {}", e.wall_rechecks);
     }
     let _ = writeln!(s, "  re-predictions    {}", e.invalidated);
+    if e.slab_crossings > 0 {
+        let _ = writeln!(s, "  slab crossings    {}", e.slab_crossings);
+    }
     let _ = write!(s, "granular temp. T_g  {:.6}", r.granular_temperature);
     if let Some(x) = r.granular_temperature_over_ecb {
         let _ = write!(s, "  (T_g/E_cb = {x:.4})");
@@ -418,6 +422,15 @@ pub fn observed_text(run: &ObservedRun) -> String {
         o.granular_temperature_reduced
     );
     let _ = writeln!(s, "  bridges/particle  {:.4}", o.bridges_per_particle);
+    if let Some(sh) = &o.shear {
+        let _ = writeln!(
+            s,
+            "  E_par / {unit:<10} {:.6}  (E_perp {:.6}; {} complete cycles)",
+            sh.e_par,
+            sh.e_perp,
+            sh.cycles.len()
+        );
+    }
     if let Some(l) = &o.location_changes {
         let _ = writeln!(
             s,

@@ -22,7 +22,7 @@ pub enum SweepCommand {
     /// Register a sweep file in the database and run its pending jobs.
     ///
     /// The sweep file (TOML) names a base scene, the axes (lists, linear or log ranges over any
-    /// scene key; gamma, e_star, e_d_star, f_max are short names), replicas and the run length
+    /// scene key, `box.size[0]` for an array entry; gamma, e_star, e_d_star, f_max, l_x are short names), replicas and the run length
     /// in driving periods; see sweeps/quickstart.toml. Every grid point and replica becomes a job
     /// whose id is the hash of its canonical spec: jobs already computed (by this or any other
     /// sweep in the database) are not run again. Each finished job is committed on its own, so
@@ -664,7 +664,15 @@ pub fn boundaries(db: &Path, name: Option<&str>, format: BoundaryFormat) -> Exit
                 println!("{}", serde_json::to_string_pretty(&v).expect("serializes"));
             }
             BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
-            BoundaryFormat::Table => print!("{}", boundaries_table(&maps)),
+            BoundaryFormat::Table => {
+                let mut notes = std::collections::HashMap::new();
+                for s in &sweeps {
+                    if let Some(n) = chain_model_note(&store.points(s.id)?) {
+                        notes.insert(s.name.clone(), n);
+                    }
+                }
+                print!("{}", boundaries_table(&maps, &notes))
+            }
         }
         Ok(())
     })())
@@ -724,10 +732,40 @@ fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
     out
 }
 
-fn boundaries_table(maps: &[(&SweepRow, PhaseMap)]) -> String {
+/// For shear sweeps of wet scenes: the chain model's critical force (MODEL.md 8, Eq. 7.9),
+/// `F_max = 0.9229 F_B d / L_x`, over the sweep's points (a range if the axes change it).
+fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
+    let values: Vec<f64> = points
+        .iter()
+        .filter(|p| p.spec.scene.shear_slabs().is_some())
+        .filter_map(|p| plot_phase::chain_model_f_max(&p.spec.scene))
+        .collect();
+    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if values.is_empty() {
+        return None;
+    }
+    let value = if hi - lo <= 1e-12 * hi.abs() {
+        format!("F_max = {}", short(lo))
+    } else {
+        format!("F_max from {} to {} over the points", short(lo), short(hi))
+    };
+    Some(format!(
+        "  chain model (MODEL.md 8, Eq. 7.9: solid while F_max L_x / (F_B d) <= {}): {value}",
+        plot_phase::CHAIN_MODEL_CONSTANT
+    ))
+}
+
+fn boundaries_table(
+    maps: &[(&SweepRow, PhaseMap)],
+    notes: &std::collections::HashMap<String, String>,
+) -> String {
     let mut out = String::new();
     for (s, m) in maps {
         let _ = writeln!(out, "sweep {}", s.name);
+        if let Some(n) = notes.get(&s.name) {
+            let _ = writeln!(out, "{n}");
+        }
         let (Some(xa), ya) = (&m.x, &m.y) else {
             let _ = writeln!(out, "  no numeric axis: no phase map\n");
             continue;
@@ -906,7 +944,13 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path) -> ExitCode {
             );
         }
         let title = format!("wetgran phase diagram: {}", sweep.name);
-        let svg = plot_phase::phase_svg(&map, slice, landmarks, &title)
+        let chain = plot_phase::chain_model_line(&map, slice, |coords| {
+            points
+                .iter()
+                .find(|p| p.coords == coords)
+                .map(|p| p.spec.scene.clone())
+        });
+        let svg = plot_phase::phase_svg(&map, slice, landmarks, chain, &title)
             .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))?;
         std::fs::write(output, svg)
             .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;

@@ -15,6 +15,10 @@
 //!    rule 1 from its own particle-weighted `f_lc` and `T_g / E_cb`. Two different phases give
 //!    their coexistence (sfc, sgc or fgc); the same phase twice gives that phase.
 //!
+//! 4. A sheared scene (MODEL.md 4.2) is solid or fluidised by `E_par` alone: solid when the
+//!    window mean of `E_par / E_cb` (`/ (m g d)` dry) is at most `shear_e_par`, else fluid
+//!    (label f). The rules above are still evaluated and recorded, but do not decide.
+//!
 //! A value equal to a threshold stays on the calmer side (solid, not gas, homogeneous).
 
 use super::Observables;
@@ -123,6 +127,13 @@ pub struct Thresholds {
     /// dilute region.
     #[serde(default = "default_coexistence_delta_n_cb")]
     pub coexistence_delta_n_cb: f64,
+    /// Sheared scenes: largest window mean of `E_par / E_cb` (`/ (m g d)` dry) of a solid.
+    #[serde(default = "default_shear_e_par")]
+    pub shear_e_par: f64,
+}
+
+fn default_shear_e_par() -> f64 {
+    0.1
 }
 
 fn default_solid_flc() -> f64 {
@@ -146,6 +157,7 @@ impl Default for Thresholds {
             solid_temperature: default_solid_temperature(),
             gas_temperature: default_gas_temperature(),
             coexistence_delta_n_cb: default_coexistence_delta_n_cb(),
+            shear_e_par: default_shear_e_par(),
         }
     }
 }
@@ -158,6 +170,7 @@ impl Thresholds {
             ("solid_temperature", self.solid_temperature),
             ("gas_temperature", self.gas_temperature),
             ("coexistence_delta_n_cb", self.coexistence_delta_n_cb),
+            ("shear_e_par", self.shear_e_par),
         ];
         for (key, v) in checks {
             if !(v.is_finite() && v >= 0.0) {
@@ -212,6 +225,9 @@ pub struct DecisionInputs {
     pub split_n_cb: Option<f64>,
     pub dense: Option<RegionInputs>,
     pub dilute: Option<RegionInputs>,
+    /// Sheared scenes: the window mean of `E_par / E_cb` that decided (rule 4).
+    #[serde(default)]
+    pub shear_e_par: Option<f64>,
     /// The decision in words.
     pub reason: String,
 }
@@ -293,6 +309,29 @@ fn weighted(sel: &[usize], weight: &[f64], value: &[Option<f64>]) -> Option<f64>
 /// Classifies observables with the given thresholds (pure: the same inputs give the same
 /// answer).
 pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
+    let mut c = classify_unsheared(obs, th);
+    if let Some(sh) = &obs.shear {
+        let phase = if sh.e_par <= th.shear_e_par {
+            Phase::S
+        } else {
+            Phase::F
+        };
+        c.decided_on.reason = format!(
+            "sheared: E_par/{} = {:.4} {} {} -> {phase} (rule 4; unsheared rules would say: {})",
+            obs.temperature_unit_name,
+            sh.e_par,
+            if phase == Phase::S { "<=" } else { ">" },
+            th.shear_e_par,
+            c.decided_on.reason
+        );
+        c.decided_on.shear_e_par = Some(sh.e_par);
+        c.phase = phase;
+    }
+    c
+}
+
+/// Rules 1-3.
+fn classify_unsheared(obs: &Observables, th: &Thresholds) -> Classification {
     let p = &obs.profiles;
     let whole = region(
         obs.location_changes
@@ -311,6 +350,7 @@ pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
         split_n_cb: None,
         dense: None,
         dilute: None,
+        shear_e_par: None,
         reason: String::new(),
     };
     if delta.is_nan() || delta <= th.coexistence_delta_n_cb {

@@ -12,6 +12,7 @@
 //! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D) |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
 //! | [`stationarity`] | first versus second half of the window |
+//! | [`shear`](mod@shear) | shear drive: `E_par`, `E_perp`, their window means and extrema per cycle |
 //! | [`classify`](mod@classify) | the phase from the observables and the `[classify]` thresholds |
 //! | [`line`](mod@line) | the fluid-gas inflection point along a line of constant Gamma |
 //!
@@ -25,6 +26,7 @@ pub mod diffusion;
 pub mod line;
 pub mod location_changes;
 pub mod profiles;
+pub mod shear;
 pub mod spec;
 pub mod stationarity;
 pub mod temperature;
@@ -58,6 +60,8 @@ pub const FLOOR_TEMPERATURE: f64 = 0.05;
 pub const FLOOR_BRIDGES_PER_PARTICLE: f64 = 0.1;
 /// Floor for `f_lc` (location changes per particle per period).
 pub const FLOOR_FLC: f64 = 0.05;
+/// Floor for `E_par` in units of `E_cb` (`m g d` dry): the default solid threshold.
+pub const FLOOR_E_PAR: f64 = 0.1;
 
 /// `f_lc` over the window.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -141,6 +145,9 @@ pub struct Observables {
     pub counts: WindowCounts,
     pub stationarity: Stationarity,
     pub series: Option<TimeSeries>,
+    /// Shear drive only: `E_par`, `E_perp` and their cycles ([`shear`](mod@shear)).
+    #[serde(default)]
+    pub shear: Option<shear::ShearObservables>,
 }
 
 /// What [`run_observed`] returns.
@@ -196,6 +203,10 @@ pub fn run_observed_with_frame(
     let mut diffusion = spec
         .diffusion
         .then(|| diffusion::DiffusionObserver::new(spec.layers.min(scene.particles.count)));
+    let mut shear_obs = scene
+        .shear_slabs()
+        .is_some()
+        .then(|| shear::ShearObserver::new(unit));
     let mut first_counts = None;
     let mut last: Option<Frame> = None;
     let mut window_samples = 0usize;
@@ -209,6 +220,9 @@ pub fn run_observed_with_frame(
             o.observe(frame, in_window);
         }
         if let Some(o) = diffusion.as_mut() {
+            o.observe(frame, in_window);
+        }
+        if let Some(o) = shear_obs.as_mut() {
             o.observe(frame, in_window);
         }
         if in_window {
@@ -285,6 +299,15 @@ pub fn run_observed_with_frame(
             tol,
         ));
     }
+    if let Some(o) = &shear_obs {
+        checks.push(stationarity::check(
+            "e_par",
+            &o.e_par_series(),
+            window,
+            FLOOR_E_PAR,
+            tol,
+        ));
+    }
     let in_window = |s: &[(f64, f64)]| -> Vec<f64> {
         s.iter()
             .filter(|(t, _)| *t >= t_start - eps)
@@ -316,6 +339,7 @@ pub fn run_observed_with_frame(
         counts,
         stationarity: stationarity::verdict(tol, checks),
         series,
+        shear: shear_obs.as_ref().map(|o| o.finish(spec.time_series)),
     };
     let classification = classify(&observables, &scene.classify);
     (

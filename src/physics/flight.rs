@@ -58,9 +58,73 @@ pub fn parabola_time_down(z0: f64, v: f64, g: f64, plane: f64) -> f64 {
     }
 }
 
+/// Time until `x(t) = x0 + v t + a t^2 / 2` (any sign of `a`) reaches `plane` moving up
+/// (`upward`, `dx/dt >= 0` there) or down, `+inf` if never. Reduced to the gravity formulas
+/// above: `a < 0` is a parabola under `g = -a`; `a > 0` is the mirror image `z = -x` under
+/// `g = a`, where reaching a plane upwards is falling onto its mirror. `a = 0` is the straight
+/// line. Never negative.
+#[inline]
+pub fn accelerated_time_to_plane(x0: f64, v: f64, a: f64, plane: f64, upward: bool) -> f64 {
+    if a < 0.0 {
+        if upward {
+            parabola_time_up(x0, v, -a, plane)
+        } else {
+            parabola_time_down(x0, v, -a, plane)
+        }
+    } else if a > 0.0 {
+        if upward {
+            parabola_time_down(-x0, -v, a, -plane)
+        } else {
+            parabola_time_up(-x0, -v, a, -plane)
+        }
+    } else {
+        linear_time_to_plane(x0, v, plane, upward)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn accelerated_roots_satisfy_the_trajectory() {
+        for &(x0, v, a) in &[
+            (0.5, -1.0, 2.0),
+            (0.5, 1.0, 2.0),
+            (0.5, 1.0, -2.0),
+            (0.5, -1.0, -2.0),
+            (0.5, 0.0, 0.3),
+            (0.5, 0.0, -0.3),
+        ] {
+            let x = |t: f64| x0 + v * t + 0.5 * a * t * t;
+            for (plane, up) in [(1.0, true), (0.0, false)] {
+                let t = accelerated_time_to_plane(x0, v, a, plane, up);
+                if t.is_finite() {
+                    assert!(
+                        (x(t) - plane).abs() < 1e-12,
+                        "x0={x0} v={v} a={a} plane={plane}"
+                    );
+                    let vt = v + a * t;
+                    assert!(if up { vt >= -1e-12 } else { vt <= 1e-12 });
+                    // No earlier crossing: sample the flight before t.
+                    for k in 1..100 {
+                        let s = t * k as f64 / 100.0;
+                        assert!(if up {
+                            x(s) < plane + 1e-12
+                        } else {
+                            x(s) > plane - 1e-12
+                        });
+                    }
+                } else {
+                    // Never reached: e.g. decelerating before the plane.
+                    for k in 0..1000 {
+                        let s = k as f64 * 0.01;
+                        assert!(if up { x(s) < plane } else { x(s) > plane });
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn parabola_roots_satisfy_the_trajectory() {

@@ -7,6 +7,7 @@ pub mod capillary;
 pub mod contact;
 pub mod flight;
 pub mod hertz;
+pub mod quartic;
 pub mod shaken_wall;
 pub mod size;
 pub mod wall_table;

@@ -6,6 +6,11 @@
 //! - Eq. 4.15:     `Gamma_C = 1 + F_B (1 - E*) / (M m g)`, never below `1 - 1/M`, with
 //!   `F_B = E_cb / s_crit` and `M` the number of layers, `N d / L_x` in 2D and
 //!   `N d^2 / (L_x L_y)` in 3D (wet scenes).
+//!
+//! On shear sweeps whose plane has the `F_max` axis (`drive.f_max`), the chain model of
+//! MODEL.md 8 (Eq. 7.9) is drawn: the solid is stable while `F_max L_x / (F_B d) <= 0.9229`, so
+//! the line `F_max = 0.9229 F_B d / L_x` (`F_B = E_cb / s_crit`) evaluated on each point's own
+//! scene (the other axis may change `L_x`, `E_cb`, `s_crit` or anything else).
 
 use crate::boundary::{PhaseMap, PlaneAxis, Slice};
 use crate::scene::Scene;
@@ -77,6 +82,44 @@ impl Landmarks {
     }
 }
 
+/// The constant of the chain model, Eq. 7.9: solid while `F_max L_x / (F_B d) <= 0.9229`.
+pub const CHAIN_MODEL_CONSTANT: f64 = 0.9229;
+
+/// The chain model's critical force `F_max = 0.9229 F_B d / L_x` (MODEL.md 8, Eq. 7.9) with
+/// `F_B = E_cb / s_crit`; `None` for dry scenes.
+pub fn chain_model_f_max(scene: &Scene) -> Option<f64> {
+    if !scene.is_wet() || scene.e_cb() <= 0.0 {
+        return None;
+    }
+    let f_b = scene.e_cb() / scene.s_crit();
+    Some(CHAIN_MODEL_CONSTANT * f_b * scene.particles.diameter / scene.container.size[0])
+}
+
+/// The chain-model line in the plane of a shear sweep: one vertex per point of the slice,
+/// `(F_c, y)` when `F_max` is the x axis or `(x, F_c)` when it is the y axis, with `F_c` from
+/// the point's scene (`scene_of` maps a point's coordinates to its scene); `None` if neither
+/// plane axis is `drive.f_max` or the scenes are dry.
+pub fn chain_model_line(
+    map: &PhaseMap,
+    slice: &Slice,
+    scene_of: impl Fn(&[serde_json::Value]) -> Option<Scene>,
+) -> Option<Vec<(f64, f64)>> {
+    let (xa, ya) = (map.x.as_ref()?, map.y.as_ref()?);
+    let f_on_x = xa.key == "drive.f_max";
+    if !f_on_x && ya.key != "drive.f_max" {
+        return None;
+    }
+    let mut line: Vec<(f64, f64)> = Vec::new();
+    for p in &slice.points {
+        let f_c = chain_model_f_max(&scene_of(&p.coords)?)?;
+        line.push(if f_on_x { (f_c, p.y) } else { (p.x, f_c) });
+    }
+    let along = |q: &(f64, f64)| if f_on_x { q.1 } else { q.0 };
+    line.sort_by(|a, b| along(a).total_cmp(&along(b)));
+    line.dedup_by(|a, b| along(a) == along(b));
+    (!line.is_empty()).then_some(line)
+}
+
 /// A `(label, points)` line, already clipped to the y range (split where it leaves it).
 type Line = (String, RGBColor, Vec<Vec<(f64, f64)>>);
 
@@ -122,6 +165,7 @@ pub fn phase_svg(
     map: &PhaseMap,
     slice: &Slice,
     landmarks: Option<Landmarks>,
+    chain_model: Option<Vec<(f64, f64)>>,
     title: &str,
 ) -> Result<String, String> {
     let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
@@ -168,6 +212,24 @@ pub fn phase_svg(
                 clipped(&xs, |e| l.gamma_c(e), y0, y1),
             ));
         }
+    }
+    if let Some(line) = chain_model {
+        // A single value (one point along the other axis) is drawn as a short bar across.
+        let line = if line.len() == 1 {
+            let (x, y) = line[0];
+            if map.x.as_ref().is_some_and(|a| a.key == "drive.f_max") {
+                vec![(x, y_range.0), (x, y_range.1)]
+            } else {
+                vec![(x_range.0, y), (x_range.1, y)]
+            }
+        } else {
+            line
+        };
+        lines.push((
+            format!("chain model, Eq. 7.9 (F_max L_x / (F_B d) = {CHAIN_MODEL_CONSTANT})"),
+            RGBColor(214, 39, 40),
+            vec![line],
+        ));
     }
     let mut svg = String::new();
     {
@@ -354,5 +416,89 @@ mod tests {
         // Eq. 4.15 at E* = 0: 1 + F_B / (M m g); at large E* the floor 1 - 1/M.
         assert!((l.gamma_c(0.0).unwrap() - (1.0 + 4.0 / 3.0)).abs() < 1e-12);
         assert!((l.gamma_c(100.0).unwrap() - (1.0 - 1.0 / 3.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn chain_model_matches_eq_7_9() {
+        // The shear set-up of MODEL.md 1: F_B = E_cb / s_crit = 6 m g, L_x = 60 d:
+        // F_max = 0.9229 * 6 / 60 = 0.09229 (the value quoted in sweeps/shear_3d.toml).
+        let text = include_str!("../../tests/scenes/good/shear_3d.toml")
+            .replace("size = [12.0, 12.0, 6.0]", "size = [60.0, 12.0, 6.0]");
+        let scene = Scene::from_toml_str(&text, "test").unwrap();
+        let f = chain_model_f_max(&scene).unwrap();
+        assert!((f - 0.09229).abs() < 1e-12, "{f}");
+        // Dry scenes have no bridge force and no chain model.
+        let dry = Scene::from_toml_str(
+            &text
+                .replace("model = \"thin_thread\"", "model = \"none\"")
+                .replace("s_crit = 0.0625\n", "")
+                .replace("e_cb = 0.375\n", "")
+                .replace("temperature_over_ecb = 40.0", "temperature = 10.0"),
+            "test",
+        )
+        .unwrap();
+        assert_eq!(chain_model_f_max(&dry), None);
+    }
+
+    #[test]
+    fn chain_model_line_follows_the_other_axis() {
+        use crate::boundary::MapPoint;
+        // Plane: x = L_x (box.size[0]), y = F_max; the line F_c(L_x) = 0.9229 * 6 / L_x.
+        let base = include_str!("../../tests/scenes/good/shear_3d.toml");
+        let scene_of = |c: &[serde_json::Value]| {
+            let l_x = c[0].as_f64()?;
+            let text = base.replace(
+                "size = [12.0, 12.0, 6.0]",
+                &format!("size = [{l_x:?}, 12.0, 6.0]"),
+            );
+            Scene::from_toml_str(&text, "test").ok()
+        };
+        let point = |l_x: f64, f: f64| MapPoint {
+            coords: vec![serde_json::json!(l_x), serde_json::json!(f)],
+            x: l_x,
+            y: f,
+            phase: "s".into(),
+            votes: vec![Some("s".into())],
+            tie: false,
+            amplitude: None,
+            omega: None,
+        };
+        let axis = |index: usize, key: &str| PlaneAxis {
+            index,
+            key: key.into(),
+            label: key.into(),
+            log: false,
+        };
+        let slice = Slice {
+            fixed: Vec::new(),
+            points: vec![
+                point(24.0, 0.1),
+                point(12.0, 0.1),
+                point(12.0, 0.5),
+                point(24.0, 0.5),
+            ],
+            boundaries: Default::default(),
+        };
+        let map = PhaseMap {
+            x: Some(axis(0, "box.size[0]")),
+            y: Some(axis(1, "drive.f_max")),
+            shaking: false,
+            slices: vec![slice.clone()],
+        };
+        let line = chain_model_line(&map, &slice, scene_of).unwrap();
+        assert_eq!(line.len(), 2);
+        for (&(x, y), l_x) in line.iter().zip([12.0, 24.0]) {
+            assert_eq!(x, l_x);
+            assert!((y - 0.9229 * 6.0 / l_x).abs() < 1e-12, "{y}");
+        }
+        // Without the F_max axis in the plane: no line.
+        let other = PhaseMap {
+            y: Some(axis(1, "contact.restitution")),
+            ..map.clone()
+        };
+        assert!(chain_model_line(&other, &slice, scene_of).is_none());
+        // The plot draws it with its legend.
+        let svg = phase_svg(&map, &slice, None, Some(line), "t").unwrap();
+        assert!(svg.contains("chain model, Eq. 7.9"));
     }
 }

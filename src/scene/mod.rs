@@ -224,6 +224,14 @@ pub struct DriveSpec {
     /// (default 1e-3).
     #[serde(default)]
     pub table_corner_tolerance: Option<f64>,
+    /// `shear`: peak body force `F_max` of `F_s(x) = F_max cos(2 pi x / L_x)` along `y`
+    /// (MODEL.md 4.2, Eq. 2.20), in units of `m g` (absolute force units without gravity).
+    #[serde(default)]
+    pub f_max: Option<f64>,
+    /// `shear`: requested width of the slabs of constant force (event-driven engine), in units
+    /// of `d` (default 1 mean diameter); rounded so that a whole number of slabs tiles `L_x`.
+    #[serde(default)]
+    pub slab_width: Option<f64>,
 }
 
 /// The kind of drive.
@@ -235,6 +243,29 @@ pub enum DriveKind {
     None,
     /// Floor and lid shaken sinusoidally along the vertical axis.
     Sine,
+    /// Kolmogorov flow (MODEL.md 4.2): the body force `F_max cos(2 pi x / L_x)` along `y`,
+    /// static floor and lid; 3D only (a 2D box has no axis `y` across the force's variation).
+    Shear,
+}
+
+/// The slabs of constant force of a shear drive (event-driven engine, MODEL.md 4.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShearSlabs {
+    /// Peak force `F_max`.
+    pub f_max: f64,
+    /// Number of slabs along `x`.
+    pub count: usize,
+    /// Slab width `L_x / count`.
+    pub width: f64,
+}
+
+impl ShearSlabs {
+    /// Force in slab `k`: the field at the slab centre, `F_max cos(2 pi (k + 1/2) w / L_x)`
+    /// (Eq. 2.20 made piecewise constant).
+    pub fn force(&self, k: usize) -> f64 {
+        let phase = 2.0 * std::f64::consts::PI * (k as f64 + 0.5) / self.count as f64;
+        self.f_max * phase.cos()
+    }
 }
 
 /// Wall-collision solver for the shaken container (MODEL.md 6).
@@ -448,12 +479,29 @@ impl Scene {
         crate::physics::size::diameter_range(self.particles.diameter, self.particles.polydispersity)
     }
 
+    /// The slabs of a shear drive (`None` for other drives): `count = max(1, round(L_x / w))`
+    /// for the requested width `w` (`drive.slab_width`, default one mean diameter), so the slabs
+    /// tile `L_x` exactly with width `L_x / count`.
+    pub fn shear_slabs(&self) -> Option<ShearSlabs> {
+        if self.drive.kind != DriveKind::Shear {
+            return None;
+        }
+        let l_x = self.container.size[0];
+        let w = self.drive.slab_width.unwrap_or(self.particles.diameter);
+        let count = ((l_x / w).round() as usize).max(1);
+        Some(ShearSlabs {
+            f_max: self.drive.f_max.unwrap_or(0.0),
+            count,
+            width: l_x / count as f64,
+        })
+    }
+
     /// Container motion `(A, omega)` of a shaken scene, converted from `(Gamma, E*)` where those
     /// are given (MODEL.md 4.1): `v_w = sqrt(2 E* E_cb / m)` (dry: `sqrt(2 E_d* g d)`),
     /// `omega = Gamma g / v_w`, `A = v_w^2 / (Gamma g)`. `None` without a drive.
     pub fn drive_motion(&self) -> Option<(f64, f64)> {
         let d = &self.drive;
-        if d.kind == DriveKind::None {
+        if d.kind != DriveKind::Sine {
             return None;
         }
         if let (Some(a), Some(w)) = (d.amplitude, d.omega) {

@@ -287,16 +287,25 @@ impl Scene {
                 if let Some((key, _)) = given
                     .iter()
                     .chain(table_keys_given(drive).iter())
+                    .chain(shear_keys_given(drive).iter())
                     .find(|(_, g)| *g)
                 {
                     return Err(c.err(
                         key,
-                        "is set but drive.kind = \"none\": set kind = \"sine\" or remove the key"
+                        "is set but drive.kind = \"none\": set kind = \"sine\" (or \"shear\" \
+                         for f_max, slab_width) or remove the key"
                             .into(),
                     ));
                 }
             }
+            super::DriveKind::Shear => self.validate_shear(&c)?,
             super::DriveKind::Sine => {
+                if let Some((key, _)) = shear_keys_given(drive).iter().find(|(_, g)| *g) {
+                    return Err(c.err(
+                        key,
+                        "is set but drive.kind = \"sine\": it belongs to kind = \"shear\"".into(),
+                    ));
+                }
                 if self.gravity <= 0.0 {
                     return Err(c.err(
                         "drive.kind",
@@ -636,6 +645,7 @@ impl Scene {
                     ),
                     ("drive.root_tolerance", d.root_tolerance.is_some()),
                     ("drive.t_min", d.t_min.is_some()),
+                    ("drive.slab_width", d.slab_width.is_some()),
                     ("run.max_events", self.run.max_events.is_some()),
                 ];
                 if let Some((key, _)) = event_only
@@ -704,6 +714,93 @@ impl Scene {
         }
         Ok(())
     }
+
+    /// The shear drive (MODEL.md 4.2): 3D, `x` and `y` periodic, floor and lid, `f_max >= 0`,
+    /// `0 < slab_width <= L_x`, none of the shaking keys.
+    fn validate_shear(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let drive = &self.drive;
+        if self.dimension != 3 {
+            return Err(c.err(
+                "drive.kind",
+                "= \"shear\" needs dimension = 3: the force acts along y and varies along x \
+                 (Kolmogorov flow, MODEL.md 4.2); a 2D box (axes x, z) has no y axis"
+                    .into(),
+            ));
+        }
+        let b = self.boundaries();
+        for (k, want) in [Boundary::Periodic, Boundary::Periodic, Boundary::Wall]
+            .iter()
+            .enumerate()
+        {
+            if b[k] != *want {
+                return Err(c.err(
+                    &format!("box.boundary[{k}]"),
+                    "is not allowed with drive.kind = \"shear\": the box must be [\"periodic\", \
+                     \"periodic\", \"wall\"] (periodic in x and y, floor and lid)"
+                        .into(),
+                ));
+            }
+        }
+        let shaking = [
+            ("drive.amplitude", drive.amplitude.is_some()),
+            ("drive.omega", drive.omega.is_some()),
+            ("drive.gamma", drive.gamma.is_some()),
+            ("drive.e_star", drive.e_star.is_some()),
+            ("drive.root_tolerance", drive.root_tolerance.is_some()),
+            ("drive.t_min", drive.t_min.is_some()),
+        ];
+        if let Some((key, _)) = shaking
+            .iter()
+            .chain(table_keys_given(drive).iter())
+            .find(|(_, g)| *g)
+        {
+            return Err(c.err(
+                key,
+                "is set but drive.kind = \"shear\": floor and lid are static; remove the key"
+                    .into(),
+            ));
+        }
+        if drive.wall_solver != super::WallSolverKind::Exact {
+            return Err(c.err(
+                "drive.wall_solver",
+                "is set but drive.kind = \"shear\": floor and lid are static; remove the key"
+                    .into(),
+            ));
+        }
+        match drive.f_max {
+            None => {
+                return Err(c.err(
+                    "drive.f_max",
+                    "is missing: drive.kind = \"shear\" needs the peak force f_max (>= 0)".into(),
+                ));
+            }
+            Some(f) => c.non_negative("drive.f_max", f)?,
+        }
+        // At least 4 slabs: with 2 the slab centres sit on the zeros of the cosine (no force at
+        // all), with 1 the force is uniform (no shear).
+        let l_x = self.container.size[0];
+        let w = drive.slab_width.unwrap_or(self.particles.diameter);
+        if !(w.is_finite() && w > 0.0 && (l_x / w).round() >= 4.0) {
+            return Err(c.out_of_range(
+                "drive.slab_width",
+                w,
+                &format!(
+                    "in (0, L_x / 3.5 = {:.4}] (at least 4 slabs along L_x = {l_x}; with 2 the \
+                     slab centres sit on the zeros of the cosine)",
+                    l_x / 3.5
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The shear drive's keys and whether each is set.
+fn shear_keys_given(drive: &super::DriveSpec) -> [(&'static str, bool); 2] {
+    [
+        ("drive.f_max", drive.f_max.is_some()),
+        ("drive.slab_width", drive.slab_width.is_some()),
+    ]
 }
 
 /// The `table` solver's keys and whether each is set.

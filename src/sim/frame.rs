@@ -34,8 +34,8 @@ pub struct Frame {
 
 impl Frame {
     /// Copies the current state of an engine.
-    pub fn of_engine<const D: usize, const G: bool, const W: bool>(
-        engine: &Engine<D, G, W>,
+    pub fn of_engine<const D: usize, const G: bool, const W: bool, const S: bool>(
+        engine: &Engine<D, G, W, S>,
         scene: &Scene,
     ) -> Frame {
         let time = engine.time();

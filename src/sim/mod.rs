@@ -1,9 +1,9 @@
 //! Simulation engines and the one entry point that runs a scene: [`run_scene`].
 //!
 //! `run_scene` picks the engine (`engine.kind`: event-driven or time-driven) and its concrete
-//! type once from the scene (dimension, gravity on or off, bridges or none), so that a scene pays
-//! only for the effects it asks for. Both engines implement [`Simulation`], so the sampling loop,
-//! the observers and the report are the same for both.
+//! type once from the scene (dimension, gravity on or off, bridges or none, shear drive or not),
+//! so that a scene pays only for the effects it asks for. Both engines implement [`Simulation`],
+//! so the sampling loop, the observers and the report are the same for both.
 //! [`run_scene_observed`] runs the same loop and also hands a read-only [`Frame`] (a copy of the
 //! configuration in scene order) to an observer at fixed intervals; `crate::observe` builds on it.
 
@@ -96,6 +96,35 @@ fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> R
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
     if scene.engine.kind == EngineKind::Time {
+        if let Some(field) = time_driven::shear::CosineShear::of_scene(scene) {
+            // Validation admits the shear drive in 3D only.
+            return match (grav, wet) {
+                (false, false) => run_engine(
+                    TimeEngine::<3, false, false, _>::with_body_force(scene, field),
+                    scene,
+                    p,
+                    o,
+                ),
+                (false, true) => run_engine(
+                    TimeEngine::<3, false, true, _>::with_body_force(scene, field),
+                    scene,
+                    p,
+                    o,
+                ),
+                (true, false) => run_engine(
+                    TimeEngine::<3, true, false, _>::with_body_force(scene, field),
+                    scene,
+                    p,
+                    o,
+                ),
+                (true, true) => run_engine(
+                    TimeEngine::<3, true, true, _>::with_body_force(scene, field),
+                    scene,
+                    p,
+                    o,
+                ),
+            };
+        }
         return match (scene.dimension, grav, wet) {
             (2, false, false) => run_engine(TimeEngine::<2, false, false>::new(scene), scene, p, o),
             (2, false, true) => run_engine(TimeEngine::<2, false, true>::new(scene), scene, p, o),
@@ -106,6 +135,15 @@ fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> R
             (3, true, false) => run_engine(TimeEngine::<3, true, false>::new(scene), scene, p, o),
             (3, true, true) => run_engine(TimeEngine::<3, true, true>::new(scene), scene, p, o),
             (d, _, _) => panic!("dimension {d} passed validation"),
+        };
+    }
+    if scene.shear_slabs().is_some() {
+        // Validation admits the shear drive in 3D only.
+        return match (grav, wet) {
+            (false, false) => run_engine(Engine::<3, false, false, true>::new(scene), scene, p, o),
+            (false, true) => run_engine(Engine::<3, false, true, true>::new(scene), scene, p, o),
+            (true, false) => run_engine(Engine::<3, true, false, true>::new(scene), scene, p, o),
+            (true, true) => run_engine(Engine::<3, true, true, true>::new(scene), scene, p, o),
         };
     }
     match (scene.dimension, grav, wet) {
@@ -148,7 +186,9 @@ pub trait Simulation {
     }
 }
 
-impl<const D: usize, const G: bool, const W: bool> Simulation for Engine<D, G, W> {
+impl<const D: usize, const G: bool, const W: bool, const S: bool> Simulation
+    for Engine<D, G, W, S>
+{
     const KIND: &'static str = "event";
     fn time(&self) -> f64 {
         Engine::time(self)

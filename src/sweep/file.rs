@@ -197,11 +197,12 @@ impl Axis {
 }
 
 /// The short names of the first-class axes: (name, scene key, label).
-pub const AXIS_ALIASES: [(&str, &str, &str); 4] = [
+pub const AXIS_ALIASES: [(&str, &str, &str); 5] = [
     ("gamma", "drive.gamma", "Gamma"),
     ("e_star", "drive.e_star", "E*"),
     ("e_d_star", "drive.e_star", "E_d*"),
     ("f_max", "drive.f_max", "F_max"),
+    ("l_x", "box.size[0]", "L_x"),
 ];
 
 /// A parsed sweep file: the header, the base scene tree (base file merged with `[scene]`), the
@@ -391,17 +392,29 @@ impl SweepFile {
                 Some((_, key, label)) => (key.to_string(), label.to_string()),
                 None => (name.clone(), name.clone()),
             };
+            // Dotted identifiers; the last part may index an array (`box.size[0]`).
+            let ident =
+                |p: &str| !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            let parts: Vec<&str> = key.split('.').collect();
+            let last_ok = |p: &str| match p.split_once('[') {
+                Some((name, rest)) => {
+                    ident(name)
+                        && rest
+                            .strip_suffix(']')
+                            .is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()))
+                }
+                None => ident(p),
+            };
             if key.is_empty()
-                || key.split('.').any(|p| {
-                    p.is_empty() || !p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-                })
+                || !parts[..parts.len() - 1].iter().all(|p| ident(p))
+                || !last_ok(parts[parts.len() - 1])
             {
                 return Err(err(
                     Some(line),
                     "axis.key",
                     format!(
                         "= {name:?} is not a scene key: write a dotted key such as \
-                         \"drive.gamma\" or one of gamma, e_star, e_d_star, f_max"
+                         \"drive.gamma\" (or \"box.size[0]\") or one of gamma, e_star, e_d_star, f_max, l_x"
                     ),
                 ));
             }

@@ -163,6 +163,27 @@ fn set_key(tree: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), 
     let mut t = tree;
     for (k, part) in parts.iter().enumerate() {
         if k + 1 == parts.len() {
+            // `name[i]`: element i of an existing array (`box.size[0]`).
+            if let Some((name, rest)) = part.split_once('[') {
+                let i: usize = rest
+                    .trim_end_matches(']')
+                    .parse()
+                    .map_err(|_| format!("`{part}` is not `name[index]`"))?;
+                return match t.get_mut(name) {
+                    Some(toml::Value::Array(a)) if i < a.len() => {
+                        a[i] = value;
+                        Ok(())
+                    }
+                    Some(toml::Value::Array(a)) => Err(format!(
+                        "`{key}`: index {i} is past the end of `{name}` ({} entries)",
+                        a.len()
+                    )),
+                    _ => Err(format!(
+                        "`{key}`: the scene has no array `{name}` to index (give it in the base \
+                         scene or [scene])"
+                    )),
+                };
+            }
             t.insert(part.to_string(), value);
             return Ok(());
         }

@@ -43,8 +43,8 @@ pub fn scene_with(
 }
 
 /// Runs the engine in `chunks` steps up to `t_end`, checking invariants after each chunk.
-pub fn run_checked<const D: usize, const G: bool, const W: bool>(
-    e: &mut Engine<D, G, W>,
+pub fn run_checked<const D: usize, const G: bool, const W: bool, const S: bool>(
+    e: &mut Engine<D, G, W, S>,
     t_end: f64,
     chunks: usize,
     max_events: Option<u64>,
@@ -63,8 +63,8 @@ pub fn run_checked<const D: usize, const G: bool, const W: bool>(
 
 /// Runs until at least `events` more events have been processed, checking invariants every
 /// `every` events.
-pub fn run_events<const D: usize, const G: bool, const W: bool>(
-    e: &mut Engine<D, G, W>,
+pub fn run_events<const D: usize, const G: bool, const W: bool, const S: bool>(
+    e: &mut Engine<D, G, W, S>,
     events: u64,
     every: u64,
 ) {

@@ -1,9 +1,10 @@
 //! The event-driven engine for hard disks (`D = 2`) and spheres (`D = 3`).
 //!
 //! Effects are chosen once, at scene start, as compile-time parameters: `GRAV` (parabolic
-//! flights and the vertical-root formulas) and `WET` (thin-thread bridges and their
-//! bookkeeping). A dry or gravity-free scene therefore runs code in which the other branches do
-//! not exist.
+//! flights and the vertical-root formulas), `WET` (thin-thread bridges and their
+//! bookkeeping) and `SHEAR` (the slab forces of the shear drive, MODEL.md 4.2: slab-crossing
+//! events, parabolic flights along `y`, quartic pair predictions in [`super::shear`]). A dry,
+//! gravity-free or unsheared scene therefore runs code in which the other branches do not exist.
 //!
 //! Structure (after DynamO's split of event sources, written anew):
 //! - delayed states: particle `i` stores its position and velocity at its own time `t_loc[i]`;
@@ -24,9 +25,12 @@
 
 use super::cells::CellGrid;
 use super::queue::EventQueue;
+use super::shear::{FORCE_AXIS, ShearField, pair_times};
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
-use crate::physics::flight::{linear_time_to_plane, parabola_time_down, parabola_time_up};
+use crate::physics::flight::{
+    accelerated_time_to_plane, linear_time_to_plane, parabola_time_down, parabola_time_up,
+};
 use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
 use crate::physics::wall_table::{TableHit, WallTable, shared_table};
 use crate::scene::{Boundary, DEFAULT_ROOT_TOLERANCE, RuptureRule, Scene, WallSolverKind};
@@ -113,6 +117,8 @@ pub struct EventCounts {
     pub wall_rechecks: u64,
     /// Pair events found stale when popped (partner changed course) and re-predicted.
     pub invalidated: u64,
+    /// Shear drive: crossings of a slab face (the force on the particle changes).
+    pub slab_crossings: u64,
 }
 
 impl EventCounts {
@@ -125,6 +131,7 @@ impl EventCounts {
             + self.bridge_ruptures
             + self.invalidated
             + self.wall_rechecks
+            + self.slab_crossings
     }
 }
 
@@ -142,7 +149,8 @@ pub struct EnergyLedger {
     /// Potential energy added by placing particles exactly on the wall at tabulated hits
     /// (`table` solver, B.5.1); zero for the other solvers.
     pub added_by_wall_placement: f64,
-    /// Work done on the particles by the shaken walls.
+    /// Work done on the particles by the drive: the shaken walls, or the shear field
+    /// (`sum m a_k dy` over every flight in slab `k`, MODEL.md 4.2).
     pub work_by_drive: f64,
 }
 
@@ -191,6 +199,8 @@ struct Params<const D: usize> {
     t_min: f64,
     /// `table` solver: the shared tables of the floor and of the lid (gravity pointing away).
     tables: Option<[Arc<WallTable>; 2]>,
+    /// Shear drive: the slabs and their accelerations (`None` unless `SHEAR`).
+    shear: Option<ShearField>,
 }
 
 /// Largest gap (in units of `d`) at which a tabulated wall hit is accepted and the particle
@@ -200,7 +210,7 @@ const TABLE_PLACEMENT_TOLERANCE: f64 = 1e-2;
 
 /// The event-driven simulation state.
 #[derive(Debug, Clone)]
-pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
+pub struct Engine<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool = false> {
     p: Params<D>,
     /// Current simulation time (time of the last processed event).
     time: f64,
@@ -244,9 +254,16 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool> {
     /// Event count at which particles are next renumbered in cell order, and the interval.
     next_reorder: u64,
     reorder_every: u64,
+    /// Shear drive (empty otherwise): slab index, acceleration along `y`, and the next slab
+    /// crossing of each particle.
+    slab: Vec<u32>,
+    accel: Vec<f64>,
+    slab_ev: Vec<PlaneEvent>,
 }
 
-impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
+impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
+    Engine<D, GRAV, WET, SHEAR>
+{
     /// Builds the engine for a validated scene: initial state, cells, first predictions.
     pub fn new(scene: &Scene) -> Self {
         assert_eq!(
@@ -263,6 +280,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             scene.is_wet(),
             "capillary flag does not match the scene"
         );
+        assert_eq!(
+            SHEAR,
+            scene.shear_slabs().is_some(),
+            "shear flag does not match the scene"
+        );
+        assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
         let init = initial_state(scene);
         let n = init.radius.len();
         let mut size = [0.0; D];
@@ -320,6 +343,21 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                 }
                 _ => None,
             },
+            shear: scene
+                .shear_slabs()
+                .map(|s| ShearField::new(&s, scene.particles.mass, scene.container.size[0])),
+        };
+        let slab: Vec<u32> = match &p.shear {
+            Some(f) => init
+                .position
+                .iter()
+                .map(|x| f.slab_of(x[0]) as u32)
+                .collect(),
+            None => Vec::new(),
+        };
+        let accel: Vec<f64> = match &p.shear {
+            Some(f) => slab.iter().map(|&k| f.accel(k as usize)).collect(),
+            None => Vec::new(),
         };
         let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
         let mut engine = Self {
@@ -362,6 +400,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             slot_of: (0..n as u32).collect(),
             next_reorder: reorder_interval(n),
             reorder_every: reorder_interval(n),
+            slab,
+            accel,
+            slab_ev: if SHEAR {
+                vec![PlaneEvent::NEVER; n]
+            } else {
+                Vec::new()
+            },
         };
         for i in 0..n {
             let x: [f64; D] = engine.body[i].x.into();
@@ -408,7 +453,19 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             x[D - 1] -= 0.5 * self.p.gravity * dt * dt;
             v[D - 1] -= self.p.gravity * dt;
         }
+        if SHEAR {
+            let a = self.accel[i];
+            x[FORCE_AXIS] += 0.5 * a * dt * dt;
+            v[FORCE_AXIS] += a * dt;
+        }
         (x, v)
+    }
+
+    /// Work of the shear field on particle `i` from its own time to `t` at state `x`:
+    /// `m a (y(t) - y(t_i))` (constant force over the flight).
+    #[inline]
+    fn field_work(&self, i: usize, x: &Vector<D>) -> f64 {
+        self.p.mass * self.accel[i] * (x[FORCE_AXIS] - self.body[i].x[FORCE_AXIS])
     }
 
     /// Brings particle `i` to time `t`.
@@ -416,6 +473,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     fn advance(&mut self, i: usize, t: f64) {
         if self.body[i].t != t {
             let (x, v) = self.state_at(i, t);
+            if SHEAR {
+                self.work_by_drive += self.field_work(i, &x);
+            }
             self.body[i].x = x;
             self.body[i].v = v;
             self.body[i].t = t;
@@ -529,6 +589,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let r = self.min_image(xi - xj);
         // All particles feel the same gravity, so relative motion is a straight line (Eq. B.3).
         let v = vi - vj;
+        if SHEAR && self.accel[i] != self.accel[j] {
+            return self.predict_sheared_pair(&r, &v, i, j, t);
+        }
         let b = r.dot(&v);
         let rr = r.norm_squared();
         let sigma = self.body[i].r + self.body[j].r;
@@ -575,6 +638,36 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         best
     }
 
+    /// Pair events of `i` and `j` in slabs of different force (shear drive): the quartics of
+    /// [`super::shear::pair_times`], solved up to the first slab exit of either particle.
+    #[cold]
+    fn predict_sheared_pair(
+        &self,
+        r: &Vector<D>,
+        v: &Vector<D>,
+        i: usize,
+        j: usize,
+        t: f64,
+    ) -> Option<(f64, PairKind)> {
+        let horizon = (self.slab_ev[i].time.min(self.slab_ev[j].time) - t).max(0.0);
+        let sigma = self.body[i].r + self.body[j].r;
+        let lambda = (WET && self.bonded(i, j)).then_some(sigma + self.p.s_crit);
+        let (contact, well) = pair_times::<D>(
+            &(*r).into(),
+            &(*v).into(),
+            self.accel[i] - self.accel[j],
+            sigma,
+            lambda,
+            horizon,
+        );
+        match (contact, well) {
+            (Some(c), Some(w)) if w < c => Some((t + w, PairKind::Well)),
+            (Some(c), _) => Some((t + c, PairKind::Collide)),
+            (None, Some(w)) => Some((t + w, PairKind::Well)),
+            (None, None) => None,
+        }
+    }
+
     /// Scans the cells at `offsets` around particle `i` and lowers its pair event if a partner
     /// there gives an earlier one.
     fn scan_cells(&mut self, i: usize, offsets: &[[i32; D]]) {
@@ -618,6 +711,21 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
     fn times_to_planes(&self, i: usize, k: usize, lo: f64, hi: f64) -> (f64, f64) {
         let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
         let never = f64::INFINITY;
+        if SHEAR && k == FORCE_AXIS {
+            let a = self.accel[i];
+            return (
+                if hi.is_finite() {
+                    accelerated_time_to_plane(x, v, a, hi, true)
+                } else {
+                    never
+                },
+                if lo.is_finite() {
+                    accelerated_time_to_plane(x, v, a, lo, false)
+                } else {
+                    never
+                },
+            );
+        }
         if GRAV && k == D - 1 {
             let g = self.p.gravity;
             (
@@ -673,6 +781,36 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         }
         best.time += self.time;
         best
+    }
+
+    /// Next crossing of a slab face by `i` (shear drive; particle at the current time): the
+    /// `x` motion is force-free, so the time is linear.
+    fn predict_slab(&self, i: usize) -> PlaneEvent {
+        let Some(f) = &self.p.shear else {
+            return PlaneEvent::NEVER;
+        };
+        let mut best = PlaneEvent::NEVER;
+        if f.count() > 1 {
+            let (x, v) = (self.body[i].x[0], self.body[i].v[0]);
+            let (lo, hi) = f.faces(self.slab[i] as usize, x);
+            best.keep_earlier(linear_time_to_plane(x, v, hi, true), 0, true);
+            best.keep_earlier(linear_time_to_plane(x, v, lo, false), 0, false);
+        }
+        best.time += self.time;
+        best
+    }
+
+    /// Moves `i` into the neighbouring slab (shear drive): its force changes, so it counts as
+    /// a course change and every event of `i` is re-predicted.
+    fn cross_slab(&mut self, i: usize, up: bool) {
+        self.advance(i, self.time);
+        self.counts.slab_crossings += 1;
+        let f = self.p.shear.as_ref().expect("shear engine has slabs");
+        let k = f.next(self.slab[i] as usize, up);
+        self.slab[i] = k as u32;
+        self.accel[i] = f.accel(k);
+        self.count[i] = self.count[i].wrapping_add(1);
+        self.predict_all(i);
     }
 
     /// Next collision of `i` with a wall (`up`: the lid or upper wall), and the tabulated
@@ -772,15 +910,24 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
 
     #[inline]
     fn queue_key(&self, i: usize) -> f64 {
-        self.pair_ev[i]
+        let key = self.pair_ev[i]
             .time
             .min(self.cross_ev[i].time)
-            .min(self.wall_ev[i].time)
+            .min(self.wall_ev[i].time);
+        if SHEAR {
+            key.min(self.slab_ev[i].time)
+        } else {
+            key
+        }
     }
 
     /// Full re-prediction of every event of `i` (which must be at the current time).
     fn predict_all(&mut self, i: usize) {
         self.advance(i, self.time);
+        if SHEAR {
+            // Before the pair scan: sheared pair predictions stop at the first slab exit.
+            self.slab_ev[i] = self.predict_slab(i);
+        }
         self.pair_ev[i] = PairEvent::NEVER;
         let offsets = std::mem::take(&mut self.offsets);
         self.scan_cells(i, &offsets);
@@ -857,6 +1004,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.cross_ev = order.iter().map(|&k| self.cross_ev[pick(k)]).collect();
         self.wall_ev = order.iter().map(|&k| self.wall_ev[pick(k)]).collect();
         self.wall_vrel = order.iter().map(|&k| self.wall_vrel[pick(k)]).collect();
+        if SHEAR {
+            self.slab = order.iter().map(|&k| self.slab[pick(k)]).collect();
+            self.accel = order.iter().map(|&k| self.accel[pick(k)]).collect();
+            self.slab_ev = order.iter().map(|&k| self.slab_ev[pick(k)]).collect();
+        }
         self.pair_ev = order
             .iter()
             .map(|&k| {
@@ -910,7 +1062,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         let pair = self.pair_ev[i];
         let cross = self.cross_ev[i];
         let wall = self.wall_ev[i];
-        if pair.time <= cross.time && pair.time <= wall.time {
+        let slab = if SHEAR {
+            self.slab_ev[i]
+        } else {
+            PlaneEvent::NEVER
+        };
+        if pair.time <= cross.time && pair.time <= wall.time && pair.time <= slab.time {
             let j = pair.partner as usize;
             if self.count[j] != pair.partner_count {
                 self.counts.invalidated += 1;
@@ -923,6 +1080,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             }
             self.predict_all(i);
             self.predict_all(j);
+        } else if SHEAR && slab.time <= cross.time && slab.time <= wall.time {
+            self.cross_slab(i, slab.up);
         } else if wall.time <= cross.time {
             self.wall_collision(i, wall.axis as usize, wall.up);
             self.predict_all(i);
@@ -1188,6 +1347,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         } else {
             0.0
         };
+        // The field's work on the flights not yet brought to the current time.
+        let pending: f64 = if SHEAR {
+            states
+                .iter()
+                .enumerate()
+                .map(|(i, (x, _))| self.field_work(i, x))
+                .sum()
+        } else {
+            0.0
+        };
         EnergyLedger {
             kinetic,
             potential,
@@ -1195,7 +1364,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
             dissipated_ruptures: self.dissipated_ruptures,
             added_by_collapse_remedies: self.added,
             added_by_wall_placement: self.placement,
-            work_by_drive: self.work_by_drive,
+            work_by_drive: self.work_by_drive + pending,
         }
     }
 
@@ -1264,6 +1433,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
         self.body[i].x = x;
         let arr: [f64; D] = x.into();
         self.cell[i] = self.grid.locate(&arr);
+        if let Some(f) = &self.p.shear {
+            let k = f.slab_of(x[0]);
+            self.slab[i] = k as u32;
+            self.accel[i] = f.accel(k);
+        }
         let new = self.grid.linear(&self.cell[i]);
         self.grid.insert(i, new);
         self.count[i] = self.count[i].wrapping_add(1);
@@ -1348,6 +1522,15 @@ impl<const D: usize, const GRAV: bool, const WET: bool> Engine<D, GRAV, WET> {
                     return Err(format!(
                         "particle {si} at {} is not in its cell {c} along axis {k} at t = {t}",
                         x[k]
+                    ));
+                }
+            }
+            if SHEAR && let Some(f) = &self.p.shear {
+                let (lo, hi) = f.faces(self.slab[i] as usize, x[0]);
+                if x[0] < lo - tol || x[0] > hi + tol {
+                    return Err(format!(
+                        "particle {si} at x = {} is not in its slab {} [{lo}, {hi}] at t = {t}",
+                        x[0], self.slab[i]
                     ));
                 }
             }

@@ -3,5 +3,6 @@
 pub mod cells;
 pub mod engine;
 pub mod queue;
+pub mod shear;
 
 pub use engine::{EnergyLedger, Engine, EventCounts, Vector};

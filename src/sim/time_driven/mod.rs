@@ -3,10 +3,12 @@
 //!
 //! - `engine.rs`: state, force accumulation (pairs, walls, bridges, body force), bookkeeping;
 //! - `integrator.rs`: Gear 5th-order predictor-corrector and velocity Verlet;
-//! - `neighbours.rs`: linked cells and the Verlet list with skin.
+//! - `neighbours.rs`: linked cells and the Verlet list with skin;
+//! - `shear.rs`: the continuous Kolmogorov shear force (a [`BodyForce`]).
 
 pub mod engine;
 pub mod integrator;
 pub mod neighbours;
+pub mod shear;
 
 pub use engine::{BodyForce, NoBodyForce, SANITY_OVERLAP, TimeEngine};
