@@ -193,6 +193,7 @@ bad_scenes! {
     time_engine_damping_negative,
     time_engine_integrator_unknown,
     event_engine_with_dt,
+    time_engine_with_shear_slab_width,
     event_engine_with_stiffness,
     time_engine_box_too_narrow,
     // Observers and classification.
