@@ -184,7 +184,10 @@ bad_scenes! {
     // Engine kind (time-driven engine, issue 6).
     engine_kind_unknown,
     time_engine_with_tc,
-    time_engine_with_restitution,
+    time_engine_restitution_and_damping,
+    time_engine_restitution_too_small,
+    time_engine_restitution_speed_zero,
+    event_engine_with_restitution_speed,
     time_engine_with_wall_solver,
     time_engine_with_max_events,
     time_engine_dt_too_large,

@@ -102,6 +102,10 @@ pub struct ContactSpec {
     /// Time-driven engine: particle-wall damping `A_d` (default 0, elastic walls).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wall_damping: Option<f64>,
+    /// Time-driven engine: the impact speed at which `restitution` and `wall_restitution` are
+    /// converted into damping constants (`sim::time_driven::damping`; default 1 `sqrt(g d)`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restitution_speed: Option<f64>,
 }
 
 impl Default for ContactSpec {
@@ -112,6 +116,7 @@ impl Default for ContactSpec {
             stiffness: None,
             damping: None,
             wall_damping: None,
+            restitution_speed: None,
         }
     }
 }

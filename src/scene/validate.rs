@@ -610,6 +610,7 @@ impl Scene {
                     ("contact.stiffness", ct.stiffness.is_some()),
                     ("contact.damping", ct.damping.is_some()),
                     ("contact.wall_damping", ct.wall_damping.is_some()),
+                    ("contact.restitution_speed", ct.restitution_speed.is_some()),
                 ];
                 if let Some((key, _)) = time_only.iter().find(|(_, g)| *g) {
                     return Err(c.err(
@@ -633,8 +634,6 @@ impl Scene {
                         e.overlap_tolerance != super::default_overlap_tolerance(),
                     ),
                     ("engine.cell_size", e.cell_size != 0.0),
-                    ("contact.restitution", ct.restitution != 1.0),
-                    ("contact.wall_restitution", ct.wall_restitution != 1.0),
                     (
                         "capillary.rupture_rule",
                         self.capillary.rupture_rule.is_some(),
@@ -653,18 +652,54 @@ impl Scene {
                     .chain(table_keys_given(d).iter())
                     .find(|(_, g)| *g)
                 {
-                    let hint = if key.contains("restitution") {
-                        " (the time-driven engine damps contacts with contact.damping and \
-                         contact.wall_damping)"
-                    } else {
-                        ""
-                    };
                     return Err(c.err(
                         key,
-                        format!(
-                            "belongs to the event-driven engine: remove it or set engine.kind = \
-                             \"event\"{hint}"
-                        ),
+                        "belongs to the event-driven engine: remove it or set engine.kind = \
+                         \"event\""
+                            .into(),
+                    ));
+                }
+                // A restitution is converted into a damping constant at scene start
+                // (`sim::time_driven::damping`); giving both is ambiguous.
+                for (key, e_r, other, a_d) in [
+                    (
+                        "contact.restitution",
+                        ct.restitution,
+                        "contact.damping",
+                        ct.damping,
+                    ),
+                    (
+                        "contact.wall_restitution",
+                        ct.wall_restitution,
+                        "contact.wall_damping",
+                        ct.wall_damping,
+                    ),
+                ] {
+                    if e_r < 1.0 && a_d.is_some() {
+                        return Err(c.err(
+                            key,
+                            format!(
+                                "and {other} are both given: the time-driven engine derives the \
+                                 damping from the restitution; give one of them"
+                            ),
+                        ));
+                    }
+                    if e_r < 0.1 {
+                        return Err(c.out_of_range(
+                            key,
+                            e_r,
+                            "in [0.1, 1] with the time-driven engine (converted into a Hertz \
+                             damping constant at contact.restitution_speed)",
+                        ));
+                    }
+                }
+                if let Some(v) = ct.restitution_speed
+                    && !(v.is_finite() && v > 0.0 && v <= 100.0)
+                {
+                    return Err(c.out_of_range(
+                        "contact.restitution_speed",
+                        v,
+                        "in (0, 100] (units of sqrt(g d))",
                     ));
                 }
                 if let Some(dt) = e.dt

@@ -139,8 +139,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
         let e = &scene.engine;
         let c = &scene.contact;
-        let damping = c.damping.unwrap_or(0.0);
-        let wall_damping = c.wall_damping.unwrap_or(0.0);
+        let (damping, wall_damping) = super::damping::contact_damping(scene);
         let mut gear = GEAR5;
         if damping > 0.0 || wall_damping > 0.0 {
             gear[0] = GEAR5_C0_VELOCITY_DEPENDENT;

@@ -1,11 +1,13 @@
 //! Time-driven molecular dynamics of soft (Hertz) disks and spheres with the minimal capillary
 //! model (MODEL.md 2.2, 3.1): the second, independent engine, chosen by `engine.kind = "time"`.
 //!
+//! - `damping.rs`: damping constants, given or derived from a restitution;
 //! - `engine.rs`: state, force accumulation (pairs, walls, bridges, body force), bookkeeping;
 //! - `integrator.rs`: Gear 5th-order predictor-corrector and velocity Verlet;
 //! - `neighbours.rs`: linked cells and the Verlet list with skin;
 //! - `shear.rs`: the continuous Kolmogorov shear force (a [`BodyForce`]).
 
+pub mod damping;
 pub mod engine;
 pub mod integrator;
 pub mod neighbours;
