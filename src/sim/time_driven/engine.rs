@@ -27,7 +27,7 @@
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
 
 use super::integrator::{
-    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict, gear_predict, verlet_drift,
+    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict, verlet_drift,
     verlet_kick,
 };
 use super::neighbours::{BOND, CONTACT, NeighbourList};
@@ -56,6 +56,10 @@ impl<const D: usize> BodyForce<D> for NoBodyForce {
         [0.0; D]
     }
 }
+
+/// The exact neighbour-list displacement test runs at least every this many steps (it bounds
+/// the round-off accumulated in the displacement bound of [`TimeEngine::update_list`]).
+pub const EXACT_CHECK_EVERY: u32 = 1024;
 
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
@@ -105,6 +109,12 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     /// (bits `2k`, `2k + 1`).
     wall_contact: Vec<u8>,
     list: NeighbourList<D>,
+    /// Upper bound on the displacement of every particle since the last neighbour-list build
+    /// (or exact check): the sum over steps of `sqrt(sum_k m_k^2)`, `m_k` the largest move along
+    /// axis `k` in that step (returned by the integrator loops). See [`Self::update_list`].
+    moved_bound: f64,
+    /// Steps since the last exact displacement check.
+    since_check: u32,
     counts: EventCounts,
     dissipated_damping: f64,
     dissipated_bridges: f64,
@@ -212,6 +222,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             wall_kr,
             wall_contact: vec![0; n],
             list,
+            moved_bound: 0.0,
+            since_check: 0,
             counts: EventCounts::default(),
             dissipated_damping: 0.0,
             dissipated_bridges: 0.0,
@@ -349,6 +361,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
         }
         self.list.build(&self.r[0], &self.radius);
+        self.moved_bound = 0.0;
         let t = self.time();
         self.compute_forces(t, self.velocity_scale(), 0.0);
         if self.p.integrator == IntegratorKind::Gear5 {
@@ -373,21 +386,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         if WET { self.list.count(BOND) } else { 0 }
     }
 
-    /// Wraps periodic coordinates of `r[0]` (or, with `now`, of the Gear corrected positions)
-    /// into `[0, L)`.
-    fn wrap(&mut self, now: bool) {
+    /// Wraps periodic coordinates of `r[0]` into `[0, L)` (Verlet, and the first Gear
+    /// prediction; afterwards the Gear loop wraps its own output).
+    fn wrap(&mut self) {
         let n = self.n;
         for k in 0..D {
             if !self.p.periodic[k] {
                 continue;
             }
             let l = self.p.size[k];
-            let arr = if now {
-                &mut self.now[0]
-            } else {
-                &mut self.r[0]
-            };
-            for x in &mut arr[k * n..(k + 1) * n] {
+            for x in &mut self.r[0][k * n..(k + 1) * n] {
                 if *x < 0.0 {
                     *x += l;
                 } else if *x >= l {
@@ -397,32 +405,84 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
     }
 
+    /// Keeps the Verlet list valid: rebuilds it when some particle has moved more than
+    /// `skin / 2` since the last build. The exact test (a pass over all positions,
+    /// [`NeighbourList::needs_rebuild`]) runs only when the bound `moved_bound` reaches
+    /// `skin / 2` (less a relative margin of `1e-6` for its round-off) or after
+    /// [`EXACT_CHECK_EVERY`] steps; otherwise no particle can have moved that far (each
+    /// particle's displacement is at most the sum of the per-step largest moves), so the
+    /// decision is the one the exact test would take. After an exact test the bound restarts
+    /// from the exact largest displacement.
+    fn update_list(&mut self) {
+        self.since_check += 1;
+        let half_skin = 0.5 * self.list.skin();
+        if self.moved_bound < half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
+            return;
+        }
+        self.since_check = 0;
+        let worst = self.list.max_displacement_sq(&self.r[0]);
+        if worst > half_skin * half_skin {
+            self.list.build(&self.r[0], &self.radius);
+            self.moved_bound = 0.0;
+        } else {
+            self.moved_bound = worst.sqrt();
+        }
+    }
+
     /// One time step of the scene's integrator.
     pub fn step(&mut self) {
         let dt = self.p.dt;
         let t1 = (self.steps + 1) as f64 * dt;
+        let n = self.n;
         match self.p.integrator {
             IntegratorKind::Gear5 => {
                 if !self.predicted {
                     gear_predict(&mut self.r);
+                    self.wrap();
+                    // The predictor's moves are not tracked: force the exact test.
+                    self.moved_bound = f64::INFINITY;
                 }
-                self.wrap(false);
-                if self.list.needs_rebuild(&self.r[0]) {
-                    self.list.build(&self.r[0], &self.radius);
-                }
+                self.update_list();
                 self.compute_forces(t1, 1.0 / dt, dt);
+                // Corrector of this step, predictor of the next, the wrap of both positions
+                // and the largest move, in one pass per axis.
                 let c = self.p.gear;
-                gear_correct_predict(&mut self.r, &mut self.now, &self.acc, 0.5 * dt * dt, &c);
+                let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+                let [x_now, v_now] = &mut self.now;
+                let mut moved2 = 0.0;
+                for k in 0..D {
+                    let a = k * n..(k + 1) * n;
+                    let m = gear_correct_predict_axis(
+                        [
+                            &mut r0[a.clone()],
+                            &mut r1[a.clone()],
+                            &mut r2[a.clone()],
+                            &mut r3[a.clone()],
+                            &mut r4[a.clone()],
+                            &mut r5[a.clone()],
+                        ],
+                        [&mut x_now[a.clone()], &mut v_now[a.clone()]],
+                        &self.acc[a],
+                        0.5 * dt * dt,
+                        &c,
+                        self.p.periodic[k].then_some(self.p.size[k]),
+                    );
+                    moved2 += m * m;
+                }
+                self.moved_bound += moved2.sqrt();
                 self.predicted = true;
-                self.wrap(true);
             }
             IntegratorKind::Verlet => {
                 let [x, v, ..] = &mut self.r;
-                verlet_drift(x, v, &self.acc, dt);
-                self.wrap(false);
-                if self.list.needs_rebuild(&self.r[0]) {
-                    self.list.build(&self.r[0], &self.radius);
+                let mut moved2 = 0.0;
+                for k in 0..D {
+                    let a = k * n..(k + 1) * n;
+                    let m = verlet_drift(&mut x[a.clone()], &mut v[a.clone()], &self.acc[a], dt);
+                    moved2 += m * m;
                 }
+                self.moved_bound += moved2.sqrt();
+                self.wrap();
+                self.update_list();
                 self.compute_forces(t1, 1.0, dt);
                 verlet_kick(&mut self.r[1], &self.acc, dt);
             }
@@ -476,6 +536,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             f,
             &self.radius,
             &list.start,
+            &list.rows,
             &list.partner,
             &mut list.flags,
             &mut self.counts,
@@ -776,6 +837,7 @@ fn pair_forces<const D: usize, const WET: bool>(
     f: &mut [f64],
     radius: &[f64],
     start: &[u32],
+    rows: &[u32],
     partner: &[u32],
     flags: &mut [u8],
     counts: &mut EventCounts,
@@ -791,11 +853,9 @@ fn pair_forces<const D: usize, const WET: bool>(
     let mut diss = 0.0;
     let mut max_ov = 0.0f64;
     let mut ledger = 0.0;
-    for i in 0..n {
+    for &i in rows {
+        let i = i as usize;
         let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
-        if p0 == p1 {
-            continue;
-        }
         let mut xi = [0.0; D];
         let mut vi = [0.0; D];
         let mut fi = [0.0; D];

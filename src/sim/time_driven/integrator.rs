@@ -69,10 +69,45 @@ pub fn gear_correct(r: &mut [Vec<f64>; 6], acc: &[f64], half_dt2: f64, c: &[f64;
     }
 }
 
+/// Runs `$body!([arrays], e)` for `e = 0..$n` in order and evaluates to the largest value it
+/// returned (0 when none). The loop runs over blocks of [`BLOCK`] elements, each array
+/// re-sliced to the block (no bounds checks inside), and keeps one running maximum per block
+/// position (a compare-and-select that compiles to packed `maxpd`); the positions are reduced
+/// once at the end. So the body vectorises: a single floating-point running maximum is a
+/// loop-carried dependence the compiler does not vectorise without fast-math. NaN values are
+/// ignored (caught by the engine's sanity check).
+macro_rules! lane_max {
+    ($n:expr, $body:ident, mut [$($m:ident),*], [$($c:ident),*]) => {{
+        let n: usize = $n;
+        let mut lane = [0.0f64; BLOCK];
+        let mut b = 0;
+        while b < n {
+            let m = (n - b).min(BLOCK);
+            $(let $m = &mut $m[b..b + m];)*
+            $(let $c = &$c[b..b + m];)*
+            let lane = &mut lane[..m];
+            for j in 0..m {
+                let s = $body!([$($m,)* $($c),*], j);
+                lane[j] = if s > lane[j] { s } else { lane[j] };
+            }
+            b += m;
+        }
+        let mut moved = 0.0f64;
+        for m in lane {
+            moved = if m > moved { m } else { moved };
+        }
+        moved
+    }};
+}
+
+/// Block length of [`lane_max`].
+const BLOCK: usize = 64;
+
 /// Corrector of one step fused with the predictor of the next: `r` goes from predicted (step
 /// `n`) to predicted (step `n + 1`) in one pass, and the corrected position and scaled velocity
 /// of step `n` are written to `now`. The same arithmetic as [`gear_correct`] then
-/// [`gear_predict`], with half the passes over memory.
+/// [`gear_predict`], with half the passes over memory. All coordinates are treated alike (no
+/// wrap); the engine calls [`gear_correct_predict_axis`] per axis.
 pub fn gear_correct_predict(
     r: &mut [Vec<f64>; 6],
     now: &mut [Vec<f64>; 2],
@@ -82,32 +117,121 @@ pub fn gear_correct_predict(
 ) {
     let [r0, r1, r2, r3, r4, r5] = r;
     let [x_now, v_now] = now;
-    let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
-    for e in 0..r0.len() {
-        let delta = acc[e] * half_dt2 - r2[e];
-        let a0 = r0[e] + c[0] * delta;
-        let a1 = r1[e] + c[1] * delta;
-        let a2 = flush(r2[e] + c[2] * delta);
-        let a3 = flush(r3[e] + c[3] * delta);
-        let a4 = flush(r4[e] + c[4] * delta);
-        let a5 = flush(r5[e] + c[5] * delta);
-        x_now[e] = a0;
-        v_now[e] = a1;
-        r0[e] = a0 + (a1 + a2 + a3 + a4 + a5);
-        r1[e] = a1 + 2.0 * a2 + 3.0 * a3 + 4.0 * a4 + 5.0 * a5;
-        r2[e] = a2 + 3.0 * a3 + 6.0 * a4 + 10.0 * a5;
-        r3[e] = a3 + 4.0 * a4 + 10.0 * a5;
-        r4[e] = a4 + 5.0 * a5;
-        r5[e] = a5;
+    gear_correct_predict_axis(
+        [r0, r1, r2, r3, r4, r5],
+        [x_now, v_now],
+        acc,
+        half_dt2,
+        c,
+        None,
+    );
+}
+
+/// [`gear_correct_predict`] on one slice of coordinates (one axis of the engine's axis-major
+/// arrays), with two more jobs done in the same pass:
+///
+/// - with `period = Some(L)`, the corrected position `now[0]` and the new predicted position
+///   `r[0]` are wrapped into `[0, L)` (`x < 0: x + L; x >= L: x - L`, the same operation as a
+///   separate wrap pass, so the numbers are identical);
+/// - returns `max_e |r0_new[e] - r0_old[e]|`, the largest move of a predicted position in this
+///   step, taken before the wrap (the true displacement). The engine sums these per step into a
+///   bound on every particle's displacement since the last neighbour-list build
+///   (`needs_rebuild` is then only evaluated when the bound reaches `skin / 2`).
+///
+/// The reduction is written as a compare-and-select, not `f64::max`, so that it compiles to
+/// packed `maxpd` (NaN positions are caught by the engine's sanity check, not here).
+pub fn gear_correct_predict_axis(
+    r: [&mut [f64]; 6],
+    now: [&mut [f64]; 2],
+    acc: &[f64],
+    half_dt2: f64,
+    c: &[f64; 6],
+    period: Option<f64>,
+) -> f64 {
+    match period {
+        Some(l) => fused_axis::<true>(r, now, acc, half_dt2, c, l),
+        None => fused_axis::<false>(r, now, acc, half_dt2, c, 0.0),
     }
 }
 
-/// Velocity Verlet, first half: `v += a dt/2; x += v dt`.
-pub fn verlet_drift(x: &mut [f64], v: &mut [f64], acc: &[f64], dt: f64) {
-    for e in 0..x.len() {
-        v[e] += 0.5 * dt * acc[e];
-        x[e] += dt * v[e];
+#[inline(always)]
+fn fused_axis<const WRAP: bool>(
+    r: [&mut [f64]; 6],
+    now: [&mut [f64]; 2],
+    acc: &[f64],
+    half_dt2: f64,
+    c: &[f64; 6],
+    l: f64,
+) -> f64 {
+    let [r0, r1, r2, r3, r4, r5] = r;
+    let [x_now, v_now] = now;
+    let n = r0.len();
+    // Equal lengths up front, so the loop below carries no bounds checks and vectorises.
+    let (r1, r2, r3, r4, r5) = (
+        &mut r1[..n],
+        &mut r2[..n],
+        &mut r3[..n],
+        &mut r4[..n],
+        &mut r5[..n],
+    );
+    let (x_now, v_now, acc) = (&mut x_now[..n], &mut v_now[..n], &acc[..n]);
+    let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
+    // `x < 0: x + L; x >= L: x - L`, written as arithmetic (adding or subtracting `0 * L`
+    // leaves `x` unchanged) so that it compiles to packed compares, not branches.
+    let wrap = |x: f64| {
+        if WRAP {
+            let up = f64::from(u8::from(x < 0.0));
+            let down = f64::from(u8::from(x >= l));
+            x + up * l - down * l
+        } else {
+            x
+        }
+    };
+    // One element `e` of the arrays `r0 .. r5, x_now, v_now, acc` (slices, or 4-element
+    // blocks of them): the fused update; evaluates to the move `|r0_new - r0_old|` before the
+    // wrap.
+    macro_rules! update {
+        ([$r0:ident, $r1:ident, $r2:ident, $r3:ident, $r4:ident, $r5:ident, $xn:ident, $vn:ident, $acc:ident], $e:expr) => {{
+            let e = $e;
+            let old = $r0[e];
+            let delta = $acc[e] * half_dt2 - $r2[e];
+            let a0 = old + c[0] * delta;
+            let a1 = $r1[e] + c[1] * delta;
+            let a2 = flush($r2[e] + c[2] * delta);
+            let a3 = flush($r3[e] + c[3] * delta);
+            let a4 = flush($r4[e] + c[4] * delta);
+            let a5 = flush($r5[e] + c[5] * delta);
+            $xn[e] = wrap(a0);
+            $vn[e] = a1;
+            let p0 = a0 + (a1 + a2 + a3 + a4 + a5);
+            $r0[e] = wrap(p0);
+            $r1[e] = a1 + 2.0 * a2 + 3.0 * a3 + 4.0 * a4 + 5.0 * a5;
+            $r2[e] = a2 + 3.0 * a3 + 6.0 * a4 + 10.0 * a5;
+            $r3[e] = a3 + 4.0 * a4 + 10.0 * a5;
+            $r4[e] = a4 + 5.0 * a5;
+            $r5[e] = a5;
+            (p0 - old).abs()
+        }};
     }
+    lane_max!(n, update, mut [r0, r1, r2, r3, r4, r5, x_now, v_now], [acc])
+}
+
+
+/// Velocity Verlet, first half: `v += a dt/2; x += v dt`. Returns `max_e |v dt|`, the largest
+/// move of this step (see [`gear_correct_predict_axis`]; the engine calls this per axis).
+pub fn verlet_drift(x: &mut [f64], v: &mut [f64], acc: &[f64], dt: f64) -> f64 {
+    let n = x.len();
+    let (v, acc) = (&mut v[..n], &acc[..n]);
+    macro_rules! drift {
+        ([$x:ident, $v:ident, $acc:ident], $e:expr) => {{
+            let e = $e;
+            $v[e] += 0.5 * dt * $acc[e];
+            let step = dt * $v[e];
+            $x[e] += step;
+            step.abs()
+        }};
+    }
+    lane_max!(n, drift, mut [x, v], [acc])
 }
 
 /// Velocity Verlet, second half: `v += a dt/2` with the new acceleration.
