@@ -176,13 +176,14 @@ fn fused_axis<const WRAP: bool>(
     );
     let (x_now, v_now, acc) = (&mut x_now[..n], &mut v_now[..n], &acc[..n]);
     let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
-    // `x < 0: x + L; x >= L: x - L`, written as arithmetic (adding or subtracting `0 * L`
-    // leaves `x` unchanged) so that it compiles to packed compares, not branches.
+    // `x < 0: x + L; x >= L: x - L`, written as the addition of selected constants (adding or
+    // subtracting 0 leaves `x` unchanged) so that it compiles to packed compares and masks,
+    // not branches.
     let wrap = |x: f64| {
         if WRAP {
-            let up = f64::from(u8::from(x < 0.0));
-            let down = f64::from(u8::from(x >= l));
-            x + up * l - down * l
+            let up = if x < 0.0 { l } else { 0.0 };
+            let down = if x >= l { l } else { 0.0 };
+            x + up - down
         } else {
             x
         }
