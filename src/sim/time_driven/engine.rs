@@ -27,9 +27,10 @@
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
 
 use super::integrator::{
-    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict, verlet_drift,
-    verlet_kick,
+    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict, gear_unpredict,
+    verlet_drift, verlet_kick,
 };
+use std::borrow::Cow;
 use super::neighbours::{BOND, CONTACT, NeighbourList};
 use crate::physics::hertz;
 use crate::scene::{Boundary, DEFAULT_DT, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
@@ -95,10 +96,9 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     steps: u64,
     /// Scaled derivatives (Gear) or position, velocity (Verlet); axis-major.
     r: [Vec<f64>; 6],
-    /// Gear: the corrected position and scaled velocity of the current step (between steps `r`
-    /// already holds the prediction for the next step, see `gear_correct_predict`).
-    now: [Vec<f64>; 2],
-    /// Gear: whether `r` holds the prediction for the next step.
+    /// Gear: whether `r` holds the prediction for the next step (then the corrected position
+    /// and velocity of the current step are recovered on demand by inverting the predictor,
+    /// [`gear_unpredict`], instead of being stored every step).
     predicted: bool,
     /// Acceleration of the last force evaluation, axis-major.
     acc: Vec<f64>,
@@ -215,7 +215,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             n,
             steps: 0,
             r,
-            now: [vec![0.0; D * n], vec![0.0; D * n]],
             predicted: false,
             acc: vec![0.0; D * n],
             radius: init.radius,
@@ -240,24 +239,47 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 engine.r[1][e] *= dt;
                 engine.r[2][e] = 0.5 * dt * dt * engine.acc[e];
             }
-            engine.now = [engine.r[0].clone(), engine.r[1].clone()];
         }
         engine
     }
 
+    /// Position and scaled velocity (`r_0`, `r_1`) of the current step at flat index `e`. For
+    /// Gear between steps `r` holds the prediction for the next step, and the corrected values
+    /// are recovered by [`gear_unpredict`] (equal to the corrector's output up to round-off),
+    /// the position wrapped into the box on periodic axes.
+    fn now_at(&self, e: usize) -> (f64, f64) {
+        if !self.predicted {
+            return (self.r[0][e], self.r[1][e]);
+        }
+        let a = gear_unpredict(std::array::from_fn(|k| self.r[k][e]));
+        let k = e / self.n;
+        let mut x = a[0];
+        if self.p.periodic[k] {
+            let l = self.p.size[k];
+            if x < 0.0 {
+                x += l;
+            } else if x >= l {
+                x -= l;
+            }
+        }
+        (x, a[1])
+    }
+
     /// Positions of the current step, axis-major.
-    fn x_now(&self) -> &[f64] {
-        match self.p.integrator {
-            IntegratorKind::Gear5 => &self.now[0],
-            IntegratorKind::Verlet => &self.r[0],
+    fn x_now(&self) -> Cow<'_, [f64]> {
+        if self.predicted {
+            Cow::Owned((0..D * self.n).map(|e| self.now_at(e).0).collect())
+        } else {
+            Cow::Borrowed(&self.r[0])
         }
     }
 
     /// Velocities of the current step (times [`Self::velocity_scale`]), axis-major.
-    fn v_now(&self) -> &[f64] {
-        match self.p.integrator {
-            IntegratorKind::Gear5 => &self.now[1],
-            IntegratorKind::Verlet => &self.r[1],
+    fn v_now(&self) -> Cow<'_, [f64]> {
+        if self.predicted {
+            Cow::Owned((0..D * self.n).map(|e| self.now_at(e).1).collect())
+        } else {
+            Cow::Borrowed(&self.r[1])
         }
     }
 
@@ -316,13 +338,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// Position of particle `i` (scene order).
     pub fn position(&self, i: usize) -> [f64; D] {
-        std::array::from_fn(|k| self.x_now()[k * self.n + i])
+        std::array::from_fn(|k| self.now_at(k * self.n + i).0)
     }
 
     /// Velocity of particle `i`.
     pub fn velocity(&self, i: usize) -> [f64; D] {
         let s = self.velocity_scale();
-        std::array::from_fn(|k| self.v_now()[k * self.n + i] * s)
+        std::array::from_fn(|k| self.now_at(k * self.n + i).1 * s)
     }
 
     /// Particle radii.
@@ -336,17 +358,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let n = self.n;
         let dt = self.p.dt;
         if self.predicted {
-            // Back to the corrected state of the current step: the inverse of the predictor's
-            // Pascal triangle for the higher derivatives, the stored `now` for r_0 and r_1.
-            let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+            // Back to the corrected state of the current step: the inverse of the predictor.
             for e in 0..D * n {
-                let a5 = r5[e];
-                let a4 = r4[e] - 5.0 * a5;
-                let a3 = r3[e] - 4.0 * a4 - 10.0 * a5;
-                let a2 = r2[e] - 3.0 * a3 - 6.0 * a4 - 10.0 * a5;
-                (r2[e], r3[e], r4[e]) = (a2, a3, a4);
-                r0[e] = self.now[0][e];
-                r1[e] = self.now[1][e];
+                let (x, _) = self.now_at(e);
+                let a = gear_unpredict(std::array::from_fn(|k| self.r[k][e]));
+                for (k, ak) in a.into_iter().enumerate() {
+                    self.r[k][e] = ak;
+                }
+                self.r[0][e] = x;
             }
             self.predicted = false;
         }
@@ -368,7 +387,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             for e in 0..D * n {
                 self.r[2][e] = 0.5 * dt * dt * self.acc[e];
             }
-            self.now = [self.r[0].clone(), self.r[1].clone()];
         }
     }
 
@@ -448,7 +466,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 // and the largest move, in one pass per axis.
                 let c = self.p.gear;
                 let [r0, r1, r2, r3, r4, r5] = &mut self.r;
-                let [x_now, v_now] = &mut self.now;
                 let mut moved2 = 0.0;
                 for k in 0..D {
                     let a = k * n..(k + 1) * n;
@@ -461,7 +478,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                             &mut r4[a.clone()],
                             &mut r5[a.clone()],
                         ],
-                        [&mut x_now[a.clone()], &mut v_now[a.clone()]],
                         &self.acc[a],
                         0.5 * dt * dt,
                         &c,
@@ -625,9 +641,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let p = &self.p;
         let vs = self.velocity_scale();
         let x = self.x_now();
+        let v = self.v_now();
         let mut kinetic = 0.0;
         for e in 0..D * n {
-            let ve = self.v_now()[e] * vs;
+            let ve = v[e] * vs;
             kinetic += 0.5 * p.mass * ve * ve;
         }
         let mut potential = 0.0;
@@ -684,7 +701,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let n = self.n;
         let mut r2 = 0.0;
         for k in 0..D {
-            let mut d = self.x_now()[k * n + i] - self.x_now()[k * n + j];
+            let mut d = self.now_at(k * n + i).0 - self.now_at(k * n + j).0;
             if self.p.periodic[k] {
                 let l = self.p.size[k];
                 d -= l * (d / l).round();
@@ -697,8 +714,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// Total momentum.
     pub fn momentum(&self) -> [f64; D] {
         let vs = self.velocity_scale();
+        let v = self.v_now();
         std::array::from_fn(|k| {
-            self.v_now()[k * self.n..(k + 1) * self.n]
+            v[k * self.n..(k + 1) * self.n]
                 .iter()
                 .sum::<f64>()
                 * vs
@@ -712,8 +730,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let vs = self.velocity_scale();
         let mut mean_sq = 0.0;
         let mut mean2 = 0.0;
+        let v = self.v_now();
         for k in 0..D {
-            let col = &self.v_now()[k * self.n..(k + 1) * self.n];
+            let col = &v[k * self.n..(k + 1) * self.n];
             let m = col.iter().sum::<f64>() * vs / n;
             mean_sq += col.iter().map(|v| v * v).sum::<f64>() * vs * vs / n;
             mean2 += m * m;
