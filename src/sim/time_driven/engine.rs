@@ -30,12 +30,12 @@ use super::integrator::{
     GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict, gear_unpredict,
     verlet_drift, verlet_kick,
 };
-use std::borrow::Cow;
 use super::neighbours::{BOND, CONTACT, NeighbourList};
 use crate::physics::hertz;
 use crate::scene::{Boundary, DEFAULT_DT, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
 use crate::sim::event_driven::{EnergyLedger, EventCounts};
 use crate::sim::initial::initial_state;
+use std::borrow::Cow;
 
 /// A force per particle that depends on its position and the time (hook for driving by a body
 /// force, e.g. the shear force of MODEL.md 4.2). Its work is booked in `work_by_drive`.
@@ -716,11 +716,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let vs = self.velocity_scale();
         let v = self.v_now();
         std::array::from_fn(|k| {
-            v[k * self.n..(k + 1) * self.n]
-                .iter()
-                .sum::<f64>()
-                * vs
-                * self.p.mass
+            v[k * self.n..(k + 1) * self.n].iter().sum::<f64>() * vs * self.p.mass
         })
     }
 

@@ -237,7 +237,6 @@ fn fused_axis<const WRAP: bool>(
     lane_max!(n, update, mut [r0, r1, r2, r3, r4, r5], [acc])
 }
 
-
 /// Velocity Verlet, first half: `v += a dt/2; x += v dt`. Returns `max_e |v dt|`, the largest
 /// move of this step (see [`gear_correct_predict_axis`]; the engine calls this per axis).
 pub fn verlet_drift(x: &mut [f64], v: &mut [f64], acc: &[f64], dt: f64) -> f64 {
@@ -375,7 +374,10 @@ mod tests {
                 assert_eq!(got[k][e], want[k][e], "r_{k} at {e}");
             }
             let a = gear_unpredict(std::array::from_fn(|k| want[k][e]));
-            assert!((a[0] - now[0][e]).abs() <= 4.0 * f64::EPSILON * l, "x at {e}");
+            assert!(
+                (a[0] - now[0][e]).abs() <= 4.0 * f64::EPSILON * l,
+                "x at {e}"
+            );
             assert!(
                 (a[1] - now[1][e]).abs() <= 1e-12 * now[1][e].abs().max(1e-12),
                 "v at {e}: {} vs {}",
