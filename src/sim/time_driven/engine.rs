@@ -9,9 +9,17 @@
 //!
 //! State: structure of arrays, every coordinate axis-major (`x[k * n + i]`). With the Gear
 //! integrator `r[k]` holds the scaled `k`-th derivative (`integrator.rs`); with velocity Verlet
-//! `r[0]` is the position and `r[1]` the velocity. Forces come from the Verlet list of
-//! `neighbours.rs` with Newton's third law (each pair once). Nothing is allocated inside a step
-//! once the neighbour list has reached its working size.
+//! `r[0]` is the position and `r[1]` the velocity. Between Gear steps `r` holds the prediction
+//! for the next step; the current (corrected) position and velocity are recovered on demand by
+//! inverting the predictor (round-off equal to the corrector's output), not stored each step.
+//! Forces come from the Verlet list of `neighbours.rs` with Newton's third law (each pair once),
+//! visiting only non-empty rows. The list's displacement test runs only when a bound summed
+//! from the integrator loops' largest moves says it might fire ([`TimeEngine`]'s
+//! `update_list`); the builds happen at the same steps as with a test every step (up to the
+//! rebuilds a test every step triggers when a particle crosses a periodic face), and the
+//! trajectories are bit-identical (a build changes only which non-interacting pairs are
+//! listed). Nothing is allocated inside a step once the neighbour list has reached its working
+//! size.
 //!
 //! Energy bookkeeping ([`EnergyLedger`], same fields as the event engine):
 //! - `potential`: gravity `m g z`, Hertz elastic energy of pairs and walls (`(2/5) k sqrt(R_eff)

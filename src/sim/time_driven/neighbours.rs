@@ -4,7 +4,8 @@
 //! centres were closer than `R_i + R_j + s_crit + skin` when the list was built, sorted by `j`.
 //! Each entry carries flags (in contact at the last force evaluation; bridged). The list is rebuilt
 //! when some particle has moved more than `skin / 2` since the last build (then no pair can have
-//! come from outside the range into interaction); the flags of the old list are carried into the
+//! come from outside the range into interaction; the engine evaluates this test only when its
+//! bound on the displacements says it might fire); the flags of the old list are carried into the
 //! new one by merging the sorted rows. Every buffer is allocated once and reused: a rebuild
 //! allocates only while the list grows beyond its largest size so far.
 
