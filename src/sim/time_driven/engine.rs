@@ -9,9 +9,17 @@
 //!
 //! State: structure of arrays, every coordinate axis-major (`x[k * n + i]`). With the Gear
 //! integrator `r[k]` holds the scaled `k`-th derivative (`integrator.rs`); with velocity Verlet
-//! `r[0]` is the position and `r[1]` the velocity. Forces come from the Verlet list of
-//! `neighbours.rs` with Newton's third law (each pair once). Nothing is allocated inside a step
-//! once the neighbour list has reached its working size.
+//! `r[0]` is the position and `r[1]` the velocity. Between Gear steps `r` holds the prediction
+//! for the next step; the current (corrected) position and velocity are recovered on demand by
+//! inverting the predictor (round-off equal to the corrector's output), not stored each step.
+//! Forces come from the Verlet list of `neighbours.rs` with Newton's third law (each pair once),
+//! visiting only non-empty rows. The list's displacement test runs only when a bound summed
+//! from the integrator loops' largest moves says it might fire ([`TimeEngine`]'s
+//! `update_list`); the builds happen at the same steps as with a test every step (up to the
+//! rebuilds a test every step triggers when a particle crosses a periodic face), and the
+//! trajectories are bit-identical (a build changes only which non-interacting pairs are
+//! listed). Nothing is allocated inside a step once the neighbour list has reached its working
+//! size.
 //!
 //! Energy bookkeeping ([`EnergyLedger`], same fields as the event engine):
 //! - `potential`: gravity `m g z`, Hertz elastic energy of pairs and walls (`(2/5) k sqrt(R_eff)
@@ -27,14 +35,15 @@
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
 
 use super::integrator::{
-    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict, gear_predict, verlet_drift,
-    verlet_kick,
+    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict, gear_unpredict,
+    verlet_drift, verlet_kick,
 };
 use super::neighbours::{BOND, CONTACT, NeighbourList};
 use crate::physics::hertz;
 use crate::scene::{Boundary, DEFAULT_DT, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
 use crate::sim::event_driven::{EnergyLedger, EventCounts};
 use crate::sim::initial::initial_state;
+use std::borrow::Cow;
 
 /// A force per particle that depends on its position and the time (hook for driving by a body
 /// force, e.g. the shear force of MODEL.md 4.2). Its work is booked in `work_by_drive`.
@@ -56,6 +65,10 @@ impl<const D: usize> BodyForce<D> for NoBodyForce {
         [0.0; D]
     }
 }
+
+/// The exact neighbour-list displacement test runs at least every this many steps (it bounds
+/// the round-off accumulated in the displacement bound of [`TimeEngine::update_list`]).
+pub const EXACT_CHECK_EVERY: u32 = 1024;
 
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
@@ -91,10 +104,9 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     steps: u64,
     /// Scaled derivatives (Gear) or position, velocity (Verlet); axis-major.
     r: [Vec<f64>; 6],
-    /// Gear: the corrected position and scaled velocity of the current step (between steps `r`
-    /// already holds the prediction for the next step, see `gear_correct_predict`).
-    now: [Vec<f64>; 2],
-    /// Gear: whether `r` holds the prediction for the next step.
+    /// Gear: whether `r` holds the prediction for the next step (then the corrected position
+    /// and velocity of the current step are recovered on demand by inverting the predictor,
+    /// [`gear_unpredict`], instead of being stored every step).
     predicted: bool,
     /// Acceleration of the last force evaluation, axis-major.
     acc: Vec<f64>,
@@ -105,6 +117,12 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     /// (bits `2k`, `2k + 1`).
     wall_contact: Vec<u8>,
     list: NeighbourList<D>,
+    /// Upper bound on the displacement of every particle since the last neighbour-list build
+    /// (or exact check): the sum over steps of `sqrt(sum_k m_k^2)`, `m_k` the largest move along
+    /// axis `k` in that step (returned by the integrator loops). See [`Self::update_list`].
+    moved_bound: f64,
+    /// Steps since the last exact displacement check.
+    since_check: u32,
     counts: EventCounts,
     dissipated_damping: f64,
     dissipated_bridges: f64,
@@ -204,13 +222,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             n,
             steps: 0,
             r,
-            now: [vec![0.0; D * n], vec![0.0; D * n]],
             predicted: false,
             acc: vec![0.0; D * n],
             radius: init.radius,
             wall_kr,
             wall_contact: vec![0; n],
             list,
+            moved_bound: 0.0,
+            since_check: 0,
             counts: EventCounts::default(),
             dissipated_damping: 0.0,
             dissipated_bridges: 0.0,
@@ -227,24 +246,47 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 engine.r[1][e] *= dt;
                 engine.r[2][e] = 0.5 * dt * dt * engine.acc[e];
             }
-            engine.now = [engine.r[0].clone(), engine.r[1].clone()];
         }
         engine
     }
 
+    /// Position and scaled velocity (`r_0`, `r_1`) of the current step at flat index `e`. For
+    /// Gear between steps `r` holds the prediction for the next step, and the corrected values
+    /// are recovered by [`gear_unpredict`] (equal to the corrector's output up to round-off),
+    /// the position wrapped into the box on periodic axes.
+    fn now_at(&self, e: usize) -> (f64, f64) {
+        if !self.predicted {
+            return (self.r[0][e], self.r[1][e]);
+        }
+        let a = gear_unpredict(std::array::from_fn(|k| self.r[k][e]));
+        let k = e / self.n;
+        let mut x = a[0];
+        if self.p.periodic[k] {
+            let l = self.p.size[k];
+            if x < 0.0 {
+                x += l;
+            } else if x >= l {
+                x -= l;
+            }
+        }
+        (x, a[1])
+    }
+
     /// Positions of the current step, axis-major.
-    fn x_now(&self) -> &[f64] {
-        match self.p.integrator {
-            IntegratorKind::Gear5 => &self.now[0],
-            IntegratorKind::Verlet => &self.r[0],
+    fn x_now(&self) -> Cow<'_, [f64]> {
+        if self.predicted {
+            Cow::Owned((0..D * self.n).map(|e| self.now_at(e).0).collect())
+        } else {
+            Cow::Borrowed(&self.r[0])
         }
     }
 
     /// Velocities of the current step (times [`Self::velocity_scale`]), axis-major.
-    fn v_now(&self) -> &[f64] {
-        match self.p.integrator {
-            IntegratorKind::Gear5 => &self.now[1],
-            IntegratorKind::Verlet => &self.r[1],
+    fn v_now(&self) -> Cow<'_, [f64]> {
+        if self.predicted {
+            Cow::Owned((0..D * self.n).map(|e| self.now_at(e).1).collect())
+        } else {
+            Cow::Borrowed(&self.r[1])
         }
     }
 
@@ -303,13 +345,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// Position of particle `i` (scene order).
     pub fn position(&self, i: usize) -> [f64; D] {
-        std::array::from_fn(|k| self.x_now()[k * self.n + i])
+        std::array::from_fn(|k| self.now_at(k * self.n + i).0)
     }
 
     /// Velocity of particle `i`.
     pub fn velocity(&self, i: usize) -> [f64; D] {
         let s = self.velocity_scale();
-        std::array::from_fn(|k| self.v_now()[k * self.n + i] * s)
+        std::array::from_fn(|k| self.now_at(k * self.n + i).1 * s)
     }
 
     /// Particle radii.
@@ -323,17 +365,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let n = self.n;
         let dt = self.p.dt;
         if self.predicted {
-            // Back to the corrected state of the current step: the inverse of the predictor's
-            // Pascal triangle for the higher derivatives, the stored `now` for r_0 and r_1.
-            let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+            // Back to the corrected state of the current step: the inverse of the predictor.
             for e in 0..D * n {
-                let a5 = r5[e];
-                let a4 = r4[e] - 5.0 * a5;
-                let a3 = r3[e] - 4.0 * a4 - 10.0 * a5;
-                let a2 = r2[e] - 3.0 * a3 - 6.0 * a4 - 10.0 * a5;
-                (r2[e], r3[e], r4[e]) = (a2, a3, a4);
-                r0[e] = self.now[0][e];
-                r1[e] = self.now[1][e];
+                let (x, _) = self.now_at(e);
+                let a = gear_unpredict(std::array::from_fn(|k| self.r[k][e]));
+                for (k, ak) in a.into_iter().enumerate() {
+                    self.r[k][e] = ak;
+                }
+                self.r[0][e] = x;
             }
             self.predicted = false;
         }
@@ -348,13 +387,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
         }
         self.list.build(&self.r[0], &self.radius);
+        self.moved_bound = 0.0;
         let t = self.time();
         self.compute_forces(t, self.velocity_scale(), 0.0);
         if self.p.integrator == IntegratorKind::Gear5 {
             for e in 0..D * n {
                 self.r[2][e] = 0.5 * dt * dt * self.acc[e];
             }
-            self.now = [self.r[0].clone(), self.r[1].clone()];
         }
     }
 
@@ -372,21 +411,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         if WET { self.list.count(BOND) } else { 0 }
     }
 
-    /// Wraps periodic coordinates of `r[0]` (or, with `now`, of the Gear corrected positions)
-    /// into `[0, L)`.
-    fn wrap(&mut self, now: bool) {
+    /// Wraps periodic coordinates of `r[0]` into `[0, L)` (Verlet, and the first Gear
+    /// prediction; afterwards the Gear loop wraps its own output).
+    fn wrap(&mut self) {
         let n = self.n;
         for k in 0..D {
             if !self.p.periodic[k] {
                 continue;
             }
             let l = self.p.size[k];
-            let arr = if now {
-                &mut self.now[0]
-            } else {
-                &mut self.r[0]
-            };
-            for x in &mut arr[k * n..(k + 1) * n] {
+            for x in &mut self.r[0][k * n..(k + 1) * n] {
                 if *x < 0.0 {
                     *x += l;
                 } else if *x >= l {
@@ -396,32 +430,82 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
     }
 
+    /// Keeps the Verlet list valid: rebuilds it when some particle has moved more than
+    /// `skin / 2` since the last build. The exact test (a pass over all positions,
+    /// [`NeighbourList::needs_rebuild`]) runs only when the bound `moved_bound` reaches
+    /// `skin / 2` (less a relative margin of `1e-6` for its round-off) or after
+    /// [`EXACT_CHECK_EVERY`] steps; otherwise no particle can have moved that far (each
+    /// particle's displacement is at most the sum of the per-step largest moves), so the
+    /// decision is the one the exact test would take. After an exact test the bound restarts
+    /// from the exact largest displacement.
+    fn update_list(&mut self) {
+        self.since_check += 1;
+        let half_skin = 0.5 * self.list.skin();
+        if self.moved_bound < half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
+            return;
+        }
+        self.since_check = 0;
+        let worst = self.list.max_displacement_sq(&self.r[0]);
+        if worst > half_skin * half_skin {
+            self.list.build(&self.r[0], &self.radius);
+            self.moved_bound = 0.0;
+        } else {
+            self.moved_bound = worst.sqrt();
+        }
+    }
+
     /// One time step of the scene's integrator.
     pub fn step(&mut self) {
         let dt = self.p.dt;
         let t1 = (self.steps + 1) as f64 * dt;
+        let n = self.n;
         match self.p.integrator {
             IntegratorKind::Gear5 => {
                 if !self.predicted {
                     gear_predict(&mut self.r);
+                    self.wrap();
+                    // The predictor's moves are not tracked: force the exact test.
+                    self.moved_bound = f64::INFINITY;
                 }
-                self.wrap(false);
-                if self.list.needs_rebuild(&self.r[0]) {
-                    self.list.build(&self.r[0], &self.radius);
-                }
+                self.update_list();
                 self.compute_forces(t1, 1.0 / dt, dt);
+                // Corrector of this step, predictor of the next, the wrap of both positions
+                // and the largest move, in one pass per axis.
                 let c = self.p.gear;
-                gear_correct_predict(&mut self.r, &mut self.now, &self.acc, 0.5 * dt * dt, &c);
+                let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+                let mut moved2 = 0.0;
+                for k in 0..D {
+                    let a = k * n..(k + 1) * n;
+                    let m = gear_correct_predict_axis(
+                        [
+                            &mut r0[a.clone()],
+                            &mut r1[a.clone()],
+                            &mut r2[a.clone()],
+                            &mut r3[a.clone()],
+                            &mut r4[a.clone()],
+                            &mut r5[a.clone()],
+                        ],
+                        &self.acc[a],
+                        0.5 * dt * dt,
+                        &c,
+                        self.p.periodic[k].then_some(self.p.size[k]),
+                    );
+                    moved2 += m * m;
+                }
+                self.moved_bound += moved2.sqrt();
                 self.predicted = true;
-                self.wrap(true);
             }
             IntegratorKind::Verlet => {
                 let [x, v, ..] = &mut self.r;
-                verlet_drift(x, v, &self.acc, dt);
-                self.wrap(false);
-                if self.list.needs_rebuild(&self.r[0]) {
-                    self.list.build(&self.r[0], &self.radius);
+                let mut moved2 = 0.0;
+                for k in 0..D {
+                    let a = k * n..(k + 1) * n;
+                    let m = verlet_drift(&mut x[a.clone()], &mut v[a.clone()], &self.acc[a], dt);
+                    moved2 += m * m;
                 }
+                self.moved_bound += moved2.sqrt();
+                self.wrap();
+                self.update_list();
                 self.compute_forces(t1, 1.0, dt);
                 verlet_kick(&mut self.r[1], &self.acc, dt);
             }
@@ -475,6 +559,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             f,
             &self.radius,
             &list.start,
+            &list.rows,
             &list.partner,
             &mut list.flags,
             &mut self.counts,
@@ -563,9 +648,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let p = &self.p;
         let vs = self.velocity_scale();
         let x = self.x_now();
+        let v = self.v_now();
         let mut kinetic = 0.0;
         for e in 0..D * n {
-            let ve = self.v_now()[e] * vs;
+            let ve = v[e] * vs;
             kinetic += 0.5 * p.mass * ve * ve;
         }
         let mut potential = 0.0;
@@ -622,7 +708,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let n = self.n;
         let mut r2 = 0.0;
         for k in 0..D {
-            let mut d = self.x_now()[k * n + i] - self.x_now()[k * n + j];
+            let mut d = self.now_at(k * n + i).0 - self.now_at(k * n + j).0;
             if self.p.periodic[k] {
                 let l = self.p.size[k];
                 d -= l * (d / l).round();
@@ -635,12 +721,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// Total momentum.
     pub fn momentum(&self) -> [f64; D] {
         let vs = self.velocity_scale();
+        let v = self.v_now();
         std::array::from_fn(|k| {
-            self.v_now()[k * self.n..(k + 1) * self.n]
-                .iter()
-                .sum::<f64>()
-                * vs
-                * self.p.mass
+            v[k * self.n..(k + 1) * self.n].iter().sum::<f64>() * vs * self.p.mass
         })
     }
 
@@ -650,8 +733,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let vs = self.velocity_scale();
         let mut mean_sq = 0.0;
         let mut mean2 = 0.0;
+        let v = self.v_now();
         for k in 0..D {
-            let col = &self.v_now()[k * self.n..(k + 1) * self.n];
+            let col = &v[k * self.n..(k + 1) * self.n];
             let m = col.iter().sum::<f64>() * vs / n;
             mean_sq += col.iter().map(|v| v * v).sum::<f64>() * vs * vs / n;
             mean2 += m * m;
@@ -775,6 +859,7 @@ fn pair_forces<const D: usize, const WET: bool>(
     f: &mut [f64],
     radius: &[f64],
     start: &[u32],
+    rows: &[u32],
     partner: &[u32],
     flags: &mut [u8],
     counts: &mut EventCounts,
@@ -790,11 +875,9 @@ fn pair_forces<const D: usize, const WET: bool>(
     let mut diss = 0.0;
     let mut max_ov = 0.0f64;
     let mut ledger = 0.0;
-    for i in 0..n {
+    for &i in rows {
+        let i = i as usize;
         let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
-        if p0 == p1 {
-            continue;
-        }
         let mut xi = [0.0; D];
         let mut vi = [0.0; D];
         let mut fi = [0.0; D];

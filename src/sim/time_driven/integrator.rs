@@ -69,10 +69,45 @@ pub fn gear_correct(r: &mut [Vec<f64>; 6], acc: &[f64], half_dt2: f64, c: &[f64;
     }
 }
 
+/// Runs `$body!([arrays], e)` for `e = 0..$n` in order and evaluates to the largest value it
+/// returned (0 when none). The loop runs over blocks of [`BLOCK`] elements, each array
+/// re-sliced to the block (no bounds checks inside), and keeps one running maximum per block
+/// position (a compare-and-select that compiles to packed `maxpd`); the positions are reduced
+/// once at the end. So the body vectorises: a single floating-point running maximum is a
+/// loop-carried dependence the compiler does not vectorise without fast-math. NaN values are
+/// ignored (caught by the engine's sanity check).
+macro_rules! lane_max {
+    ($n:expr, $body:ident, mut [$($m:ident),*], [$($c:ident),*]) => {{
+        let n: usize = $n;
+        let mut lane = [0.0f64; BLOCK];
+        let mut b = 0;
+        while b < n {
+            let m = (n - b).min(BLOCK);
+            $(let $m = &mut $m[b..b + m];)*
+            $(let $c = &$c[b..b + m];)*
+            let lane = &mut lane[..m];
+            for j in 0..m {
+                let s = $body!([$($m,)* $($c),*], j);
+                lane[j] = if s > lane[j] { s } else { lane[j] };
+            }
+            b += m;
+        }
+        let mut moved = 0.0f64;
+        for m in lane {
+            moved = if m > moved { m } else { moved };
+        }
+        moved
+    }};
+}
+
+/// Block length of [`lane_max`].
+const BLOCK: usize = 64;
+
 /// Corrector of one step fused with the predictor of the next: `r` goes from predicted (step
 /// `n`) to predicted (step `n + 1`) in one pass, and the corrected position and scaled velocity
 /// of step `n` are written to `now`. The same arithmetic as [`gear_correct`] then
-/// [`gear_predict`], with half the passes over memory.
+/// [`gear_predict`], with half the passes over memory. All coordinates are treated alike (no
+/// wrap); the engine calls [`gear_correct_predict_axis`] per axis.
 pub fn gear_correct_predict(
     r: &mut [Vec<f64>; 6],
     now: &mut [Vec<f64>; 2],
@@ -102,12 +137,121 @@ pub fn gear_correct_predict(
     }
 }
 
-/// Velocity Verlet, first half: `v += a dt/2; x += v dt`.
-pub fn verlet_drift(x: &mut [f64], v: &mut [f64], acc: &[f64], dt: f64) {
-    for e in 0..x.len() {
-        v[e] += 0.5 * dt * acc[e];
-        x[e] += dt * v[e];
+/// Inverse of the predictor (the inverse Pascal triangle): the corrected scaled derivatives of
+/// step `n` from the prediction `p` for step `n + 1`. Exact up to round-off (the position to
+/// about one ulp of `|x|`); the engine uses it to read the current state instead of storing it
+/// every step.
+pub fn gear_unpredict(p: [f64; 6]) -> [f64; 6] {
+    let a5 = p[5];
+    let a4 = p[4] - 5.0 * a5;
+    let a3 = p[3] - 4.0 * a4 - 10.0 * a5;
+    let a2 = p[2] - 3.0 * a3 - 6.0 * a4 - 10.0 * a5;
+    let a1 = p[1] - 2.0 * a2 - 3.0 * a3 - 4.0 * a4 - 5.0 * a5;
+    let a0 = p[0] - (a1 + a2 + a3 + a4 + a5);
+    [a0, a1, a2, a3, a4, a5]
+}
+
+/// [`gear_correct_predict`] on one slice of coordinates (one axis of the engine's axis-major
+/// arrays), without storing the corrected position and velocity (the engine recovers them on
+/// demand with [`gear_unpredict`]: two fewer streams to memory), and with two more jobs done in
+/// the same pass:
+///
+/// - with `period = Some(L)`, the new predicted position `r[0]` is wrapped into `[0, L)`
+///   (`x < 0: x + L; x >= L: x - L`, the same operation as a separate wrap pass, so the
+///   numbers are identical);
+/// - returns `max_e |r0_new[e] - r0_old[e]|`, the largest move of a predicted position in this
+///   step, taken before the wrap (the true displacement). The engine sums these per step into a
+///   bound on every particle's displacement since the last neighbour-list build
+///   (`needs_rebuild` is then only evaluated when the bound reaches `skin / 2`).
+///
+/// The reduction is written as a compare-and-select, not `f64::max`, so that it compiles to
+/// packed `maxpd` (NaN positions are caught by the engine's sanity check, not here).
+pub fn gear_correct_predict_axis(
+    r: [&mut [f64]; 6],
+    acc: &[f64],
+    half_dt2: f64,
+    c: &[f64; 6],
+    period: Option<f64>,
+) -> f64 {
+    match period {
+        Some(l) => fused_axis::<true>(r, acc, half_dt2, c, l),
+        None => fused_axis::<false>(r, acc, half_dt2, c, 0.0),
     }
+}
+
+#[inline(always)]
+fn fused_axis<const WRAP: bool>(
+    r: [&mut [f64]; 6],
+    acc: &[f64],
+    half_dt2: f64,
+    c: &[f64; 6],
+    l: f64,
+) -> f64 {
+    let [r0, r1, r2, r3, r4, r5] = r;
+    let n = r0.len();
+    // Equal lengths up front, so the loop below carries no bounds checks and vectorises.
+    let (r1, r2, r3, r4, r5) = (
+        &mut r1[..n],
+        &mut r2[..n],
+        &mut r3[..n],
+        &mut r4[..n],
+        &mut r5[..n],
+    );
+    let acc = &acc[..n];
+    let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
+    // `x < 0: x + L; x >= L: x - L`, written as the addition of selected constants (adding or
+    // subtracting 0 leaves `x` unchanged) so that it compiles to packed compares and masks,
+    // not branches.
+    let wrap = |x: f64| {
+        if WRAP {
+            let up = if x < 0.0 { l } else { 0.0 };
+            let down = if x >= l { l } else { 0.0 };
+            x + up - down
+        } else {
+            x
+        }
+    };
+    // One element `e` of the arrays `r0 .. r5, acc` (slices, or blocks of them): the fused update; evaluates to the move `|r0_new - r0_old|` before the
+    // wrap.
+    macro_rules! update {
+        ([$r0:ident, $r1:ident, $r2:ident, $r3:ident, $r4:ident, $r5:ident, $acc:ident], $e:expr) => {{
+            let e = $e;
+            let old = $r0[e];
+            let delta = $acc[e] * half_dt2 - $r2[e];
+            let a0 = old + c[0] * delta;
+            let a1 = $r1[e] + c[1] * delta;
+            let a2 = flush($r2[e] + c[2] * delta);
+            let a3 = flush($r3[e] + c[3] * delta);
+            let a4 = flush($r4[e] + c[4] * delta);
+            let a5 = flush($r5[e] + c[5] * delta);
+            let p0 = a0 + (a1 + a2 + a3 + a4 + a5);
+            $r0[e] = wrap(p0);
+            $r1[e] = a1 + 2.0 * a2 + 3.0 * a3 + 4.0 * a4 + 5.0 * a5;
+            $r2[e] = a2 + 3.0 * a3 + 6.0 * a4 + 10.0 * a5;
+            $r3[e] = a3 + 4.0 * a4 + 10.0 * a5;
+            $r4[e] = a4 + 5.0 * a5;
+            $r5[e] = a5;
+            (p0 - old).abs()
+        }};
+    }
+    lane_max!(n, update, mut [r0, r1, r2, r3, r4, r5], [acc])
+}
+
+/// Velocity Verlet, first half: `v += a dt/2; x += v dt`. Returns `max_e |v dt|`, the largest
+/// move of this step (see [`gear_correct_predict_axis`]; the engine calls this per axis).
+pub fn verlet_drift(x: &mut [f64], v: &mut [f64], acc: &[f64], dt: f64) -> f64 {
+    let n = x.len();
+    let (v, acc) = (&mut v[..n], &acc[..n]);
+    macro_rules! drift {
+        ([$x:ident, $v:ident, $acc:ident], $e:expr) => {{
+            let e = $e;
+            $v[e] += 0.5 * dt * $acc[e];
+            let step = dt * $v[e];
+            $x[e] += step;
+            step.abs()
+        }};
+    }
+    lane_max!(n, drift, mut [x, v], [acc])
 }
 
 /// Velocity Verlet, second half: `v += a dt/2` with the new acceleration.
@@ -171,6 +315,85 @@ mod tests {
         assert_eq!(a, b);
         assert_eq!(now, corrected);
     }
+
+    /// The engine's per-axis loop is the reference `gear_correct_predict` bit for bit (the
+    /// predicted state, with the wrap on a periodic axis), returns the largest move of the
+    /// predicted position, and `gear_unpredict` recovers the corrected position and velocity
+    /// the reference stores, to round-off.
+    #[test]
+    fn axis_loop_matches_the_reference_and_unpredict_recovers_the_corrected_state() {
+        let m = 131; // not a multiple of the block length: exercises the tail
+        let l = 10.0;
+        let init: [Vec<f64>; 6] = std::array::from_fn(|k| {
+            (0..m)
+                .map(|e| {
+                    let t = e as f64;
+                    match k {
+                        0 => (t * 0.37).rem_euclid(l),
+                        1 => 1e-4 * (t * 1.3).sin() * (1.0 + (e % 7) as f64),
+                        _ => 1e-9 * (t * (k as f64)).cos() / (k * k) as f64,
+                    }
+                })
+                .collect()
+        });
+        // Particles at the faces, moving out: the wrap is exercised both ways.
+        let mut init = init;
+        init[0][3] = 1e-6;
+        init[1][3] = -1e-3;
+        init[0][4] = l - 1e-6;
+        init[1][4] = 1e-3;
+        let acc: Vec<f64> = (0..m).map(|e| (e as f64 * 0.11).cos() - 1.0).collect();
+        let h = 5e-9;
+        let mut want = init.clone();
+        let mut now = [vec![0.0; m], vec![0.0; m]];
+        gear_correct_predict(&mut want, &mut now, &acc, h, &GEAR5_DAMPED_TEST);
+        let mut got = init.clone();
+        let [g0, g1, g2, g3, g4, g5] = &mut got;
+        let moved = gear_correct_predict_axis(
+            [g0, g1, g2, g3, g4, g5],
+            &acc,
+            h,
+            &GEAR5_DAMPED_TEST,
+            Some(l),
+        );
+        let mut wrapped = 0;
+        let mut most = 0.0f64;
+        for e in 0..m {
+            most = most.max((want[0][e] - init[0][e]).abs());
+            let w = want[0][e];
+            let w = if w < 0.0 {
+                w + l
+            } else if w >= l {
+                w - l
+            } else {
+                w
+            };
+            wrapped += usize::from(w != want[0][e]);
+            assert_eq!(got[0][e], w, "position {e}");
+            for k in 1..6 {
+                assert_eq!(got[k][e], want[k][e], "r_{k} at {e}");
+            }
+            let a = gear_unpredict(std::array::from_fn(|k| want[k][e]));
+            assert!(
+                (a[0] - now[0][e]).abs() <= 4.0 * f64::EPSILON * l,
+                "x at {e}"
+            );
+            assert!(
+                (a[1] - now[1][e]).abs() <= 1e-12 * now[1][e].abs().max(1e-12),
+                "v at {e}: {} vs {}",
+                a[1],
+                now[1][e]
+            );
+        }
+        assert!(wrapped >= 2, "the face particles wrap");
+        assert_eq!(moved, most);
+    }
+
+    const GEAR5_DAMPED_TEST: [f64; 6] = {
+        let mut c = GEAR5;
+        c[0] = GEAR5_C0_VELOCITY_DEPENDENT;
+        c
+    };
 
     #[test]
     fn orders_on_the_harmonic_oscillator() {

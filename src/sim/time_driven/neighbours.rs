@@ -4,7 +4,8 @@
 //! centres were closer than `R_i + R_j + s_crit + skin` when the list was built, sorted by `j`.
 //! Each entry carries flags (in contact at the last force evaluation; bridged). The list is rebuilt
 //! when some particle has moved more than `skin / 2` since the last build (then no pair can have
-//! come from outside the range into interaction); the flags of the old list are carried into the
+//! come from outside the range into interaction; the engine evaluates this test only when its
+//! bound on the displacements says it might fire); the flags of the old list are carried into the
 //! new one by merging the sorted rows. Every buffer is allocated once and reused: a rebuild
 //! allocates only while the list grows beyond its largest size so far.
 
@@ -22,6 +23,10 @@ pub struct NeighbourList<const D: usize> {
     pub partner: Vec<u32>,
     /// Flags of each entry ([`CONTACT`], [`BOND`]).
     pub flags: Vec<u8>,
+    /// The rows that hold at least one partner, ascending: the pair loop visits only these
+    /// (in a dilute system most rows are empty, and testing each one costs a mispredicted
+    /// branch).
+    pub rows: Vec<u32>,
     old_start: Vec<u32>,
     old_partner: Vec<u32>,
     old_flags: Vec<u8>,
@@ -73,6 +78,7 @@ impl<const D: usize> NeighbourList<D> {
             start: vec![0; n + 1],
             partner: Vec::with_capacity(8 * n),
             flags: Vec::with_capacity(8 * n),
+            rows: Vec::with_capacity(n),
             old_start: vec![0; n + 1],
             old_partner: Vec::with_capacity(8 * n),
             old_flags: Vec::with_capacity(8 * n),
@@ -91,13 +97,22 @@ impl<const D: usize> NeighbourList<D> {
         }
     }
 
+    /// The skin (the list holds pairs up to `skin` beyond their interaction range).
+    pub fn skin(&self) -> f64 {
+        self.skin
+    }
+
     /// Whether some particle moved more than `skin / 2` since the last build (`x` axis-major).
+    pub fn needs_rebuild(&self, x: &[f64]) -> bool {
+        self.max_displacement_sq(x) > 0.25 * self.skin * self.skin
+    }
+
+    /// The largest squared displacement of a particle since the last build (`x` axis-major).
     /// The displacement is taken without the periodic image: a particle that crossed a periodic
     /// face counts as having moved by about `L` and triggers a (harmless, rare) rebuild; in
     /// exchange the loop vectorises.
-    pub fn needs_rebuild(&self, x: &[f64]) -> bool {
+    pub fn max_displacement_sq(&self, x: &[f64]) -> f64 {
         let n = self.next.len();
-        let lim = 0.25 * self.skin * self.skin;
         let mut worst = 0.0f64;
         let mut acc = [0.0f64; 64];
         let mut i0 = 0;
@@ -117,7 +132,7 @@ impl<const D: usize> NeighbourList<D> {
             }
             i0 += m;
         }
-        worst > lim
+        worst
     }
 
     fn cell_index(&self, c: &[usize; D]) -> usize {
@@ -138,6 +153,7 @@ impl<const D: usize> NeighbourList<D> {
         std::mem::swap(&mut self.flags, &mut self.old_flags);
         self.partner.clear();
         self.flags.clear();
+        self.rows.clear();
         self.built_at.copy_from_slice(x);
         self.head.fill(NONE);
         for i in (0..n).rev() {
@@ -210,6 +226,9 @@ impl<const D: usize> NeighbourList<D> {
                 }
             }
             let row = self.start[i] as usize..self.partner.len();
+            if !row.is_empty() {
+                self.rows.push(i as u32);
+            }
             self.partner[row.clone()].sort_unstable();
             self.flags.resize(self.partner.len(), 0);
             // Carry the flags of the old row (both rows sorted).
