@@ -424,6 +424,44 @@ impl Store {
         }
     }
 
+    /// Opens a write transaction (`BEGIN IMMEDIATE`: the write lock is taken at once, so two
+    /// processes cannot both read a job as free and then both write it).
+    async fn begin(&self) -> Result<sqlx::Transaction<'_, sqlx::Sqlite>, StoreError> {
+        self.pool
+            .begin_with("BEGIN IMMEDIATE")
+            .await
+            .map_err(|e| self.db(e))
+    }
+
+    /// Inserts a job's result row, inside an open transaction (the job row is the caller's).
+    async fn insert_result(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        job_id: &str,
+        result: &JobResult,
+        owner: &str,
+        finished_at: f64,
+    ) -> Result<(), StoreError> {
+        sqlx::query(
+            "INSERT INTO results (job_id, phase, decided_on, observables, simulated_time, \
+             wall_seconds, events, owner, finished_at) \
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+        )
+        .bind(job_id)
+        .bind(&result.phase)
+        .bind(result.decided_on.as_ref().map(|v| v.to_string()))
+        .bind(result.observables.to_string())
+        .bind(result.simulated_time)
+        .bind(result.wall_seconds)
+        .bind(result.events as i64)
+        .bind(owner)
+        .bind(finished_at)
+        .execute(&mut **tx)
+        .await
+        .map_err(|e| self.db(e))?;
+        Ok(())
+    }
+
     /// Registers (or re-registers) a sweep and its jobs in one transaction. Jobs already in the
     /// database (same id, from any sweep) are shared, never duplicated; the sweep's grid in the
     /// point list is replaced by the new expansion. What refinement added (points numbered from
@@ -438,11 +476,7 @@ impl Store {
         let axes = serde_json::to_string(&file.axes).expect("axes serialize");
         let t = now();
         self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+            let mut tx = self.begin().await?;
             let old_source: Option<String> =
                 sqlx::query_scalar("SELECT source FROM sweeps WHERE name = ?1")
                     .bind(&file.name)
@@ -523,11 +557,7 @@ impl Store {
     pub fn add_jobs(&self, sweep_id: i64, jobs: &[SweepJob]) -> Result<(), StoreError> {
         let t = now();
         self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+            let mut tx = self.begin().await?;
             self.insert_points(&mut tx, sweep_id, jobs, t).await?;
             sqlx::query("UPDATE sweeps SET updated_at = ?2 WHERE id = ?1")
                 .bind(sweep_id)
@@ -613,11 +643,7 @@ impl Store {
                 if !(stale || owner_is_dead(&owner)) {
                     continue;
                 }
-                let mut tx = self
-                    .pool
-                    .begin_with("BEGIN IMMEDIATE")
-                    .await
-                    .map_err(|e| self.db(e))?;
+                let mut tx = self.begin().await?;
                 let n = sqlx::query(
                     "UPDATE jobs SET status = 'pending', owner = NULL, heartbeat = NULL \
                      WHERE id = ?1 AND status = 'running' AND owner = ?2",
@@ -681,11 +707,7 @@ impl Store {
     fn claim_in(&self, sweep_id: i64) -> Result<Option<Claim>, StoreError> {
         let t = now();
         let claimed = self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+            let mut tx = self.begin().await?;
             let row: Option<(String, String)> = sqlx::query_as(
                 "UPDATE jobs SET status = 'running', owner = ?1, heartbeat = ?2, claimed_at = ?2, \
                  attempts = attempts + 1 \
@@ -767,11 +789,7 @@ impl Store {
     pub fn finish(&self, claim: &Claim, result: &JobResult) -> Result<bool, StoreError> {
         let t = now();
         self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+            let mut tx = self.begin().await?;
             let n = sqlx::query(
                 "UPDATE jobs SET status = 'done', owner = ?2, heartbeat = NULL, finished_at = ?3, \
                  wall_seconds = ?4, last_error = NULL \
@@ -788,23 +806,8 @@ impl Store {
             .rows_affected();
             let kept = n == 1;
             if kept {
-                sqlx::query(
-                    "INSERT INTO results (job_id, phase, decided_on, observables, simulated_time, \
-                     wall_seconds, events, owner, finished_at) \
-                     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
-                )
-                .bind(&claim.job_id)
-                .bind(&result.phase)
-                .bind(result.decided_on.as_ref().map(|v| v.to_string()))
-                .bind(result.observables.to_string())
-                .bind(result.simulated_time)
-                .bind(result.wall_seconds)
-                .bind(result.events as i64)
-                .bind(&self.owner)
-                .bind(t)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                self.insert_result(&mut tx, &claim.job_id, result, &self.owner, t)
+                    .await?;
             }
             self.end_run(
                 &mut tx,
@@ -840,11 +843,7 @@ impl Store {
     pub fn fail(&self, claim: &Claim, message: &str, wall_seconds: f64) -> Result<(), StoreError> {
         let t = now();
         self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+            let mut tx = self.begin().await?;
             sqlx::query(
                 "UPDATE jobs SET status = 'failed', heartbeat = NULL, finished_at = ?3, \
                  wall_seconds = ?4, last_error = ?5 \
