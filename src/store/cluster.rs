@@ -89,8 +89,7 @@ impl Store {
         jobs: &[String],
     ) -> Result<i64, StoreError> {
         let t = now();
-        self.rt.block_on(async {
-            let mut tx = self.begin().await?;
+        self.in_transaction(async |tx| {
             let id: i64 = sqlx::query_scalar(
                 "INSERT INTO submissions (sweep_id, dir, script, tasks, submitted_at) \
                  VALUES (?1, ?2, ?3, ?4, ?5) RETURNING id",
@@ -100,7 +99,7 @@ impl Store {
             .bind(script)
             .bind(jobs.len() as i64)
             .bind(t)
-            .fetch_one(&mut *tx)
+            .fetch_one(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
             for (k, job) in jobs.iter().enumerate() {
@@ -110,11 +109,10 @@ impl Store {
                 .bind(id)
                 .bind(k as i64)
                 .bind(job)
-                .execute(&mut *tx)
+                .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
             }
-            tx.commit().await.map_err(|e| self.db(e))?;
             Ok(id)
         })
     }
@@ -236,8 +234,7 @@ impl Store {
         owner: &str,
         finished_at: f64,
     ) -> Result<bool, StoreError> {
-        self.rt.block_on(async {
-            let mut tx = self.begin().await?;
+        self.in_transaction(async |tx| {
             let n = sqlx::query(
                 "UPDATE jobs SET status = 'done', owner = ?2, heartbeat = NULL, finished_at = ?3, \
                  wall_seconds = ?4, last_error = NULL, attempts = attempts + 1 \
@@ -247,24 +244,16 @@ impl Store {
             .bind(owner)
             .bind(finished_at)
             .bind(result.wall_seconds)
-            .execute(&mut *tx)
+            .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?
             .rows_affected();
             if n == 1 {
-                self.insert_result(&mut tx, job_id, result, owner, finished_at)
+                self.insert_result(tx, job_id, result, owner, finished_at)
                     .await?;
-                self.insert_remote_run(
-                    &mut tx,
-                    job_id,
-                    owner,
-                    result.wall_seconds,
-                    finished_at,
-                    "done",
-                )
-                .await?;
+                self.insert_remote_run(tx, job_id, owner, result.wall_seconds, finished_at, "done")
+                    .await?;
             }
-            tx.commit().await.map_err(|e| self.db(e))?;
             Ok(n == 1)
         })
     }
@@ -280,8 +269,7 @@ impl Store {
         owner: &str,
         finished_at: f64,
     ) -> Result<bool, StoreError> {
-        self.rt.block_on(async {
-            let mut tx = self.begin().await?;
+        self.in_transaction(async |tx| {
             let n = sqlx::query(
                 "UPDATE jobs SET status = 'failed', owner = ?2, heartbeat = NULL, \
                  finished_at = ?3, wall_seconds = ?4, last_error = ?5, attempts = attempts + 1 \
@@ -292,15 +280,14 @@ impl Store {
             .bind(finished_at)
             .bind(wall_seconds)
             .bind(message)
-            .execute(&mut *tx)
+            .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?
             .rows_affected();
             if n == 1 {
-                self.insert_remote_run(&mut tx, job_id, owner, wall_seconds, finished_at, "failed")
+                self.insert_remote_run(tx, job_id, owner, wall_seconds, finished_at, "failed")
                     .await?;
             }
-            tx.commit().await.map_err(|e| self.db(e))?;
             Ok(n == 1)
         })
     }
