@@ -62,6 +62,19 @@ fn submit_on_path(path: &Path, sweep: &Path, db: &Path) -> Output {
     )
 }
 
+/// `wetgran sweep submit SWEEP --slurm --dry-run OPTIONS`.
+fn dry_run(sweep: &Path, options: &[&str]) -> Output {
+    let mut args = vec![
+        "sweep",
+        "submit",
+        sweep.to_str().unwrap(),
+        "--slurm",
+        "--dry-run",
+    ];
+    args.extend_from_slice(options);
+    run(&args)
+}
+
 /// `wetgran job run SPEC --out RESULT`.
 fn job_run(spec: &Path, result: &Path) -> Output {
     run(&[
@@ -128,19 +141,17 @@ fn a_dry_run_prints_the_arrays_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let s = sweep(dir.path());
     let db = dir.path().join("w.sqlite");
-    let out = run(&[
-        "sweep",
-        "submit",
-        s.to_str().unwrap(),
-        "--slurm",
-        "--dry-run",
-        "--array-limit",
-        "3",
-        "--partition",
-        "short",
-        "--db",
-        db.to_str().unwrap(),
-    ]);
+    let out = dry_run(
+        &s,
+        &[
+            "--array-limit",
+            "3",
+            "--partition",
+            "short",
+            "--db",
+            db.to_str().unwrap(),
+        ],
+    );
     assert!(out.status.success(), "{}", stderr(&out));
     let text = stdout(&out);
     assert!(text.contains("4 job(s) to submit as 2 array(s)"), "{text}");
@@ -151,15 +162,7 @@ fn a_dry_run_prints_the_arrays_and_writes_nothing() {
     assert!(!db.exists(), "a dry run creates no database");
     assert!(!dir.path().join("wetgran-slurm").exists());
     // A value that cannot go on an #SBATCH line is refused as bad input.
-    let out = run(&[
-        "sweep",
-        "submit",
-        s.to_str().unwrap(),
-        "--slurm",
-        "--dry-run",
-        "--time",
-        "1 day",
-    ]);
+    let out = dry_run(&s, &["--time", "1 day"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("--time `1 day`"), "{}", stderr(&out));
     // Without --slurm there is no backend to submit to.
