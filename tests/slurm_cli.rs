@@ -6,6 +6,7 @@
 mod sweep_common;
 
 use std::path::Path;
+use std::process::Output;
 use sweep_common::*;
 use wetgran::cluster::{Outcome, ResultRecord};
 use wetgran::store::Store;
@@ -36,6 +37,60 @@ fn stand_ins(dir: &Path, programs: &[(&str, &str)]) -> std::path::PathBuf {
     bin
 }
 
+/// `wetgran ARGS DB` with only `path` on the PATH (stand-ins or no Slurm at all).
+fn on_path(path: &Path, args: &[&str], db: &Path) -> Output {
+    wetgran()
+        .args(args)
+        .arg(db)
+        .env("PATH", path)
+        .output()
+        .unwrap()
+}
+
+/// `wetgran sweep submit SWEEP --slurm --db DB` with only `path` on the PATH.
+fn submit_on_path(path: &Path, sweep: &Path, db: &Path) -> Output {
+    on_path(
+        path,
+        &[
+            "sweep",
+            "submit",
+            sweep.to_str().unwrap(),
+            "--slurm",
+            "--db",
+        ],
+        db,
+    )
+}
+
+/// `wetgran sweep submit SWEEP --slurm --dry-run OPTIONS`.
+fn dry_run(sweep: &Path, options: &[&str]) -> Output {
+    let mut args = vec![
+        "sweep",
+        "submit",
+        sweep.to_str().unwrap(),
+        "--slurm",
+        "--dry-run",
+    ];
+    args.extend_from_slice(options);
+    run(&args)
+}
+
+/// `wetgran job run SPEC --out RESULT`.
+fn job_run(spec: &Path, result: &Path) -> Output {
+    run(&[
+        "job",
+        "run",
+        spec.to_str().unwrap(),
+        "--out",
+        result.to_str().unwrap(),
+    ])
+}
+
+/// Asserts that `text` (a command's output) contains `want`, printing it where not.
+fn assert_has(text: &str, want: &str) {
+    assert!(text.contains(want), "no `{want}` in:\n{text}");
+}
+
 #[test]
 fn job_run_writes_a_result_or_an_error_record() {
     let dir = tempfile::tempdir().unwrap();
@@ -56,13 +111,7 @@ fn job_run_writes_a_result_or_an_error_record() {
             &lines[k]["spec"].to_string(),
         );
         let res = dir.path().join(format!("r{k}.json"));
-        let out = run(&[
-            "job",
-            "run",
-            spec.to_str().unwrap(),
-            "--out",
-            res.to_str().unwrap(),
-        ]);
+        let out = job_run(&spec, &res);
         assert_eq!(out.status.code(), Some(want_code), "{}", stderr(&out));
         let rec = ResultRecord::read(&res, id).unwrap().unwrap();
         match (&rec.outcome, want_code) {
@@ -81,13 +130,7 @@ fn job_run_writes_a_result_or_an_error_record() {
     // A spec that does not parse: exit 2, and an error record under the file's name.
     let bad = write(dir.path(), "deadbeef.json", "{\"format\": 1, \"scene\": ");
     let res = dir.path().join("bad.json");
-    let out = run(&[
-        "job",
-        "run",
-        bad.to_str().unwrap(),
-        "--out",
-        res.to_str().unwrap(),
-    ]);
+    let out = job_run(&bad, &res);
     assert_eq!(out.status.code(), Some(2));
     let rec = ResultRecord::read(&res, "deadbeef").unwrap().unwrap();
     assert!(matches!(rec.outcome, Outcome::Failed(ref m) if m.contains("cannot be read")));
@@ -98,19 +141,17 @@ fn a_dry_run_prints_the_arrays_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let s = sweep(dir.path());
     let db = dir.path().join("w.sqlite");
-    let out = run(&[
-        "sweep",
-        "submit",
-        s.to_str().unwrap(),
-        "--slurm",
-        "--dry-run",
-        "--array-limit",
-        "3",
-        "--partition",
-        "short",
-        "--db",
-        db.to_str().unwrap(),
-    ]);
+    let out = dry_run(
+        &s,
+        &[
+            "--array-limit",
+            "3",
+            "--partition",
+            "short",
+            "--db",
+            db.to_str().unwrap(),
+        ],
+    );
     assert!(out.status.success(), "{}", stderr(&out));
     let text = stdout(&out);
     assert!(text.contains("4 job(s) to submit as 2 array(s)"), "{text}");
@@ -121,15 +162,7 @@ fn a_dry_run_prints_the_arrays_and_writes_nothing() {
     assert!(!db.exists(), "a dry run creates no database");
     assert!(!dir.path().join("wetgran-slurm").exists());
     // A value that cannot go on an #SBATCH line is refused as bad input.
-    let out = run(&[
-        "sweep",
-        "submit",
-        s.to_str().unwrap(),
-        "--slurm",
-        "--dry-run",
-        "--time",
-        "1 day",
-    ]);
+    let out = dry_run(&s, &["--time", "1 day"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("--time `1 day`"), "{}", stderr(&out));
     // Without --slurm there is no backend to submit to.
@@ -155,17 +188,11 @@ fn submit_splits_at_max_array_size_and_records_the_slurm_ids() {
             ("squeue", "exit 0"),
         ],
     );
-    let out = wetgran()
-        .args(["sweep", "submit", s.to_str().unwrap(), "--slurm", "--db"])
-        .arg(&db)
-        .env("PATH", &bin)
-        .output()
-        .unwrap();
+    let out = submit_on_path(&bin, &s, &db);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        stderr(&out).contains("4 job(s) submitted as 2 array(s) of at most 2 task(s)"),
-        "{}",
-        stderr(&out)
+    assert_has(
+        &stderr(&out),
+        "4 job(s) submitted as 2 array(s) of at most 2 task(s)",
     );
     let store = Store::open_existing(&db).unwrap();
     let id = store.sweep("cl").unwrap().id;
@@ -202,38 +229,16 @@ fn submit_splits_at_max_array_size_and_records_the_slurm_ids() {
     ResultRecord::new(&tasks[0].job_id, Outcome::Failed("boom".to_string()), 0.1)
         .write(&failed)
         .unwrap();
-    let out = wetgran()
-        .args(["sweep", "submit", s.to_str().unwrap(), "--slurm", "--db"])
-        .arg(&db)
-        .env("PATH", &bin)
-        .output()
-        .unwrap();
+    let out = submit_on_path(&bin, &s, &db);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        stderr(&out).contains("1 failed, 0 corrupt, 3 missing"),
-        "{}",
-        stderr(&out)
-    );
-    assert!(
-        stderr(&out).contains("4 job(s) submitted"),
-        "{}",
-        stderr(&out)
-    );
+    assert_has(&stderr(&out), "1 failed, 0 corrupt, 3 missing");
+    assert_has(&stderr(&out), "4 job(s) submitted");
     assert_eq!(store.tasks(id).unwrap().len(), 8);
     // The old error record is gone, so it cannot pass for the new task's outcome: a collect
     // now finds the new tasks missing (the stand-in ran nothing), none failed.
     assert!(!failed.exists());
-    let out = wetgran()
-        .args(["sweep", "collect", "--db"])
-        .arg(&db)
-        .env("PATH", &bin)
-        .output()
-        .unwrap();
-    assert!(
-        stdout(&out).contains("0 failed, 0 corrupt, 4 missing"),
-        "{}",
-        stdout(&out)
-    );
+    let out = on_path(&bin, &["sweep", "collect", "--db"], &db);
+    assert_has(&stdout(&out), "0 failed, 0 corrupt, 4 missing");
 }
 
 #[test]
@@ -243,18 +248,9 @@ fn submit_without_slurm_fails_cleanly() {
     let db = dir.path().join("w.sqlite");
     let empty = dir.path().join("nothing");
     std::fs::create_dir_all(&empty).unwrap();
-    let out = wetgran()
-        .args(["sweep", "submit", s.to_str().unwrap(), "--slurm", "--db"])
-        .arg(&db)
-        .env("PATH", &empty)
-        .output()
-        .unwrap();
+    let out = submit_on_path(&empty, &s, &db);
     assert_eq!(out.status.code(), Some(1));
-    assert!(
-        stderr(&out).contains("cannot run sbatch"),
-        "{}",
-        stderr(&out)
-    );
+    assert_has(&stderr(&out), "cannot run sbatch");
     // No submission is on record; the jobs are registered and pending.
     let store = Store::open_existing(&db).unwrap();
     let id = store.sweep("cl").unwrap().id;
@@ -268,17 +264,8 @@ fn submit_without_slurm_fails_cleanly() {
             "echo 'sbatch: error: invalid partition' >&2; exit 1",
         )],
     );
-    let out = wetgran()
-        .args(["sweep", "submit", s.to_str().unwrap(), "--slurm", "--db"])
-        .arg(&db)
-        .env("PATH", &bin)
-        .output()
-        .unwrap();
+    let out = submit_on_path(&bin, &s, &db);
     assert_eq!(out.status.code(), Some(1));
-    assert!(
-        stderr(&out).contains("invalid partition"),
-        "{}",
-        stderr(&out)
-    );
+    assert_has(&stderr(&out), "invalid partition");
     assert!(store.tasks(id).unwrap().is_empty());
 }

@@ -71,6 +71,18 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
     let max = slurm::max_array_size();
     let limit = slurm::array_limit(s.array_limit, max);
     let sd = SweepDir::new(&dir);
+    // The batch script of an array of `n` tasks whose job ids are listed in `tasks_file`.
+    let array_script = |tasks_file: &Path, n: usize| {
+        slurm::array_script(&ArrayScript {
+            sweep: &sweep.name,
+            dir: &dir,
+            tasks_file,
+            tasks: n,
+            wetgran: &exe,
+            options: &s.options,
+        })
+        .map_err(Failure::BadInput)
+    };
 
     if s.dry_run {
         // Nothing is written: the jobs not done in the database (all where there is none).
@@ -99,15 +111,7 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
         );
         for (k, part) in parts.iter().enumerate() {
             let tasks = sd.arrays().join(format!("array-dryrun-{}.tasks", k + 1));
-            let script = slurm::array_script(&ArrayScript {
-                sweep: &sweep.name,
-                dir: &dir,
-                tasks_file: &tasks,
-                tasks: part.len(),
-                wetgran: &exe,
-                options: &s.options,
-            })
-            .map_err(Failure::BadInput)?;
+            let script = array_script(&tasks, part.len())?;
             println!(
                 "# ---- array {} of {}: {}",
                 k + 1,
@@ -162,15 +166,7 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
         let name = next_array_name(&sd.arrays());
         let tasks = sd.arrays().join(format!("{name}.tasks"));
         let script_path = sd.arrays().join(format!("{name}.sbatch"));
-        let script = slurm::array_script(&ArrayScript {
-            sweep: &sweep.name,
-            dir: &dir,
-            tasks_file: &tasks,
-            tasks: part.len(),
-            wetgran: &exe,
-            options: &s.options,
-        })
-        .map_err(Failure::BadInput)?;
+        let script = array_script(&tasks, part.len())?;
         crate::cluster::record::write_atomic(&tasks, (part.join("\n") + "\n").as_bytes())
             .map_err(|e| io(&tasks, e))?;
         crate::cluster::record::write_atomic(&script_path, script.as_bytes())
@@ -219,6 +215,23 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
     Ok(())
 }
 
+/// Counts one more `key` in a list of (key, count) kept in order of first appearance.
+fn count(counts: &mut Vec<(String, usize)>, key: String) {
+    match counts.iter_mut().find(|(k, _)| *k == key) {
+        Some((_, n)) => *n += 1,
+        None => counts.push((key, 1)),
+    }
+}
+
+/// `3 running, 1 pending`: the counts in their order.
+fn counts_text(counts: &[(String, usize)]) -> String {
+    counts
+        .iter()
+        .map(|(s, n)| format!("{n} {s}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// The lines `sweep collect` prints for one sweep.
 fn collected_text(store: &Store, sweep: &SweepRow, c: &Collected) -> Result<String, Failure> {
     let labels: HashMap<String, String> = store
@@ -231,10 +244,7 @@ fn collected_text(store: &Store, sweep: &SweepRow, c: &Collected) -> Result<Stri
     let mut by_state: Vec<(String, usize)> = Vec::new();
     for (_, s) in &c.waiting {
         let s = s.clone().unwrap_or_else(|| "state unknown".to_string());
-        match by_state.iter_mut().find(|(k, _)| *k == s) {
-            Some((_, n)) => *n += 1,
-            None => by_state.push((s, 1)),
-        }
+        count(&mut by_state, s);
     }
     let _ = writeln!(
         out,
@@ -250,14 +260,7 @@ fn collected_text(store: &Store, sweep: &SweepRow, c: &Collected) -> Result<Stri
         if by_state.is_empty() {
             String::new()
         } else {
-            format!(
-                " ({})",
-                by_state
-                    .iter()
-                    .map(|(s, n)| format!("{n} {s}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
+            format!(" ({})", counts_text(&by_state))
         },
         if c.earlier > 0 {
             format!("; {} task(s) collected before", c.earlier)
@@ -366,10 +369,7 @@ pub fn slurm_status_text(
                 }
             },
         };
-        match queued.iter_mut().find(|(k, _)| *k == state) {
-            Some((_, n)) => *n += 1,
-            None => queued.push((state, 1)),
-        }
+        count(&mut queued, state);
     }
     let mut out = String::new();
     let order = [
@@ -393,15 +393,7 @@ pub fn slurm_status_text(
             .join(", ")
     );
     if !queued.is_empty() {
-        let _ = writeln!(
-            out,
-            "         not collected yet: {}",
-            queued
-                .iter()
-                .map(|(s, n)| format!("{n} {s}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+        let _ = writeln!(out, "         not collected yet: {}", counts_text(&queued));
     }
     if let Some(why) = unavailable {
         let _ = writeln!(out, "         (no Slurm queue to ask: {why})");

@@ -89,12 +89,7 @@ impl Store {
         jobs: &[String],
     ) -> Result<i64, StoreError> {
         let t = now();
-        self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+        self.in_transaction(async |tx| {
             let id: i64 = sqlx::query_scalar(
                 "INSERT INTO submissions (sweep_id, dir, script, tasks, submitted_at) \
                  VALUES (?1, ?2, ?3, ?4, ?5) RETURNING id",
@@ -104,7 +99,7 @@ impl Store {
             .bind(script)
             .bind(jobs.len() as i64)
             .bind(t)
-            .fetch_one(&mut *tx)
+            .fetch_one(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
             for (k, job) in jobs.iter().enumerate() {
@@ -114,11 +109,10 @@ impl Store {
                 .bind(id)
                 .bind(k as i64)
                 .bind(job)
-                .execute(&mut *tx)
+                .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
             }
-            tx.commit().await.map_err(|e| self.db(e))?;
             Ok(id)
         })
     }
@@ -240,12 +234,7 @@ impl Store {
         owner: &str,
         finished_at: f64,
     ) -> Result<bool, StoreError> {
-        self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+        self.in_transaction(async |tx| {
             let n = sqlx::query(
                 "UPDATE jobs SET status = 'done', owner = ?2, heartbeat = NULL, finished_at = ?3, \
                  wall_seconds = ?4, last_error = NULL, attempts = attempts + 1 \
@@ -255,41 +244,16 @@ impl Store {
             .bind(owner)
             .bind(finished_at)
             .bind(result.wall_seconds)
-            .execute(&mut *tx)
+            .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?
             .rows_affected();
             if n == 1 {
-                sqlx::query(
-                    "INSERT INTO results (job_id, phase, decided_on, observables, simulated_time, \
-                     wall_seconds, events, owner, finished_at) \
-                     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
-                )
-                .bind(job_id)
-                .bind(&result.phase)
-                .bind(result.decided_on.as_ref().map(|v| v.to_string()))
-                .bind(result.observables.to_string())
-                .bind(result.simulated_time)
-                .bind(result.wall_seconds)
-                .bind(result.events as i64)
-                .bind(owner)
-                .bind(finished_at)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
-                sqlx::query(
-                    "INSERT INTO runs (job_id, owner, started_at, ended_at, outcome) \
-                     VALUES (?1, ?2, ?3, ?4, 'done')",
-                )
-                .bind(job_id)
-                .bind(owner)
-                .bind(finished_at - result.wall_seconds)
-                .bind(finished_at)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                self.insert_result(tx, job_id, result, owner, finished_at)
+                    .await?;
+                self.insert_remote_run(tx, job_id, owner, result.wall_seconds, finished_at, "done")
+                    .await?;
             }
-            tx.commit().await.map_err(|e| self.db(e))?;
             Ok(n == 1)
         })
     }
@@ -305,12 +269,7 @@ impl Store {
         owner: &str,
         finished_at: f64,
     ) -> Result<bool, StoreError> {
-        self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+        self.in_transaction(async |tx| {
             let n = sqlx::query(
                 "UPDATE jobs SET status = 'failed', owner = ?2, heartbeat = NULL, \
                  finished_at = ?3, wall_seconds = ?4, last_error = ?5, attempts = attempts + 1 \
@@ -321,25 +280,41 @@ impl Store {
             .bind(finished_at)
             .bind(wall_seconds)
             .bind(message)
-            .execute(&mut *tx)
+            .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?
             .rows_affected();
             if n == 1 {
-                sqlx::query(
-                    "INSERT INTO runs (job_id, owner, started_at, ended_at, outcome) \
-                     VALUES (?1, ?2, ?3, ?4, 'failed')",
-                )
-                .bind(job_id)
-                .bind(owner)
-                .bind(finished_at - wall_seconds)
-                .bind(finished_at)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                self.insert_remote_run(tx, job_id, owner, wall_seconds, finished_at, "failed")
+                    .await?;
             }
-            tx.commit().await.map_err(|e| self.db(e))?;
             Ok(n == 1)
         })
+    }
+
+    /// Inserts the closed run row of an attempt made elsewhere (it started `wall_seconds`
+    /// before `finished_at`), inside an open transaction.
+    async fn insert_remote_run(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        job_id: &str,
+        owner: &str,
+        wall_seconds: f64,
+        finished_at: f64,
+        outcome: &str,
+    ) -> Result<(), StoreError> {
+        sqlx::query(
+            "INSERT INTO runs (job_id, owner, started_at, ended_at, outcome) \
+             VALUES (?1, ?2, ?3, ?4, ?5)",
+        )
+        .bind(job_id)
+        .bind(owner)
+        .bind(finished_at - wall_seconds)
+        .bind(finished_at)
+        .bind(outcome)
+        .execute(&mut **tx)
+        .await
+        .map_err(|e| self.db(e))?;
+        Ok(())
     }
 }

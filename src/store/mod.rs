@@ -424,6 +424,58 @@ impl Store {
         }
     }
 
+    /// Opens a write transaction (`BEGIN IMMEDIATE`: the write lock is taken at once, so two
+    /// processes cannot both read a job as free and then both write it).
+    async fn begin(&self) -> Result<sqlx::Transaction<'_, sqlx::Sqlite>, StoreError> {
+        self.pool
+            .begin_with("BEGIN IMMEDIATE")
+            .await
+            .map_err(|e| self.db(e))
+    }
+
+    /// Runs `body` in one write transaction ([`Store::begin`]) and commits it; an error rolls it
+    /// back (the transaction is dropped uncommitted).
+    fn in_transaction<T>(
+        &self,
+        body: impl AsyncFnOnce(&mut sqlx::Transaction<'_, sqlx::Sqlite>) -> Result<T, StoreError>,
+    ) -> Result<T, StoreError> {
+        self.rt.block_on(async {
+            let mut tx = self.begin().await?;
+            let out = body(&mut tx).await?;
+            tx.commit().await.map_err(|e| self.db(e))?;
+            Ok(out)
+        })
+    }
+
+    /// Inserts a job's result row, inside an open transaction (the job row is the caller's).
+    async fn insert_result(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        job_id: &str,
+        result: &JobResult,
+        owner: &str,
+        finished_at: f64,
+    ) -> Result<(), StoreError> {
+        sqlx::query(
+            "INSERT INTO results (job_id, phase, decided_on, observables, simulated_time, \
+             wall_seconds, events, owner, finished_at) \
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+        )
+        .bind(job_id)
+        .bind(&result.phase)
+        .bind(result.decided_on.as_ref().map(|v| v.to_string()))
+        .bind(result.observables.to_string())
+        .bind(result.simulated_time)
+        .bind(result.wall_seconds)
+        .bind(result.events as i64)
+        .bind(owner)
+        .bind(finished_at)
+        .execute(&mut **tx)
+        .await
+        .map_err(|e| self.db(e))?;
+        Ok(())
+    }
+
     /// Registers (or re-registers) a sweep and its jobs in one transaction. Jobs already in the
     /// database (same id, from any sweep) are shared, never duplicated; the sweep's grid in the
     /// point list is replaced by the new expansion. What refinement added (points numbered from
@@ -437,16 +489,11 @@ impl Store {
     ) -> Result<SweepRow, StoreError> {
         let axes = serde_json::to_string(&file.axes).expect("axes serialize");
         let t = now();
-        self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+        self.in_transaction(async |tx| {
             let old_source: Option<String> =
                 sqlx::query_scalar("SELECT source FROM sweeps WHERE name = ?1")
                     .bind(&file.name)
-                    .fetch_optional(&mut *tx)
+                    .fetch_optional(&mut **tx)
                     .await
                     .map_err(|e| self.db(e))?;
             let changed = old_source.as_deref() != Some(file.text.as_str());
@@ -464,7 +511,7 @@ impl Store {
             .bind(&axes)
             .bind(file.replicas as i64)
             .bind(t)
-            .fetch_one(&mut *tx)
+            .fetch_one(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
             sqlx::query(
@@ -475,11 +522,10 @@ impl Store {
             .bind(changed)
             .bind(REFINED_FROM)
             .bind(file.replicas as i64)
-            .execute(&mut *tx)
+            .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
-            self.insert_points(&mut tx, id, jobs, t).await?;
-            tx.commit().await.map_err(|e| self.db(e))?;
+            self.insert_points(tx, id, jobs, t).await?;
             Ok(())
         })?;
         self.sweep(&file.name)
@@ -522,20 +568,15 @@ impl Store {
     /// one transaction; jobs already in the database are shared.
     pub fn add_jobs(&self, sweep_id: i64, jobs: &[SweepJob]) -> Result<(), StoreError> {
         let t = now();
-        self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
-            self.insert_points(&mut tx, sweep_id, jobs, t).await?;
+        self.in_transaction(async |tx| {
+            self.insert_points(tx, sweep_id, jobs, t).await?;
             sqlx::query("UPDATE sweeps SET updated_at = ?2 WHERE id = ?1")
                 .bind(sweep_id)
                 .bind(t)
-                .execute(&mut *tx)
+                .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
-            tx.commit().await.map_err(|e| self.db(e))
+            Ok(())
         })
     }
 
@@ -613,11 +654,7 @@ impl Store {
                 if !(stale || owner_is_dead(&owner)) {
                     continue;
                 }
-                let mut tx = self
-                    .pool
-                    .begin_with("BEGIN IMMEDIATE")
-                    .await
-                    .map_err(|e| self.db(e))?;
+                let mut tx = self.begin().await?;
                 let n = sqlx::query(
                     "UPDATE jobs SET status = 'pending', owner = NULL, heartbeat = NULL \
                      WHERE id = ?1 AND status = 'running' AND owner = ?2",
@@ -680,12 +717,7 @@ impl Store {
 
     fn claim_in(&self, sweep_id: i64) -> Result<Option<Claim>, StoreError> {
         let t = now();
-        let claimed = self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+        let claimed = self.in_transaction(async |tx| {
             let row: Option<(String, String)> = sqlx::query_as(
                 "UPDATE jobs SET status = 'running', owner = ?1, heartbeat = ?2, claimed_at = ?2, \
                  attempts = attempts + 1 \
@@ -698,11 +730,10 @@ impl Store {
             .bind(&self.owner)
             .bind(t)
             .bind(sweep_id)
-            .fetch_optional(&mut *tx)
+            .fetch_optional(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
             let Some((job_id, spec)) = row else {
-                tx.commit().await.map_err(|e| self.db(e))?;
                 return Ok(None);
             };
             let run_id: i64 = sqlx::query_scalar(
@@ -711,7 +742,7 @@ impl Store {
             .bind(&job_id)
             .bind(&self.owner)
             .bind(t)
-            .fetch_one(&mut *tx)
+            .fetch_one(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
             let (point, replica, coords, sweep): (i64, i64, String, String) = sqlx::query_as(
@@ -721,10 +752,9 @@ impl Store {
             )
             .bind(sweep_id)
             .bind(&job_id)
-            .fetch_one(&mut *tx)
+            .fetch_one(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
-            tx.commit().await.map_err(|e| self.db(e))?;
             Ok::<_, StoreError>(Some((job_id, run_id, spec, point, replica, coords, sweep)))
         })?;
         let Some((job_id, run_id, spec, point, replica, coords, sweep)) = claimed else {
@@ -766,12 +796,7 @@ impl Store {
     /// `false` (and stores nothing but the run's outcome) when the job already has a result.
     pub fn finish(&self, claim: &Claim, result: &JobResult) -> Result<bool, StoreError> {
         let t = now();
-        self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+        self.in_transaction(async |tx| {
             let n = sqlx::query(
                 "UPDATE jobs SET status = 'done', owner = ?2, heartbeat = NULL, finished_at = ?3, \
                  wall_seconds = ?4, last_error = NULL \
@@ -782,38 +807,17 @@ impl Store {
             .bind(&self.owner)
             .bind(t)
             .bind(result.wall_seconds)
-            .execute(&mut *tx)
+            .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?
             .rows_affected();
             let kept = n == 1;
             if kept {
-                sqlx::query(
-                    "INSERT INTO results (job_id, phase, decided_on, observables, simulated_time, \
-                     wall_seconds, events, owner, finished_at) \
-                     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
-                )
-                .bind(&claim.job_id)
-                .bind(&result.phase)
-                .bind(result.decided_on.as_ref().map(|v| v.to_string()))
-                .bind(result.observables.to_string())
-                .bind(result.simulated_time)
-                .bind(result.wall_seconds)
-                .bind(result.events as i64)
-                .bind(&self.owner)
-                .bind(t)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                self.insert_result(tx, &claim.job_id, result, &self.owner, t)
+                    .await?;
             }
-            self.end_run(
-                &mut tx,
-                claim.run_id,
-                t,
-                if kept { "done" } else { "discarded" },
-            )
-            .await?;
-            tx.commit().await.map_err(|e| self.db(e))?;
+            self.end_run(tx, claim.run_id, t, if kept { "done" } else { "discarded" })
+                .await?;
             Ok(kept)
         })
     }
@@ -839,12 +843,7 @@ impl Store {
     /// Records a failed job with its message.
     pub fn fail(&self, claim: &Claim, message: &str, wall_seconds: f64) -> Result<(), StoreError> {
         let t = now();
-        self.rt.block_on(async {
-            let mut tx = self
-                .pool
-                .begin_with("BEGIN IMMEDIATE")
-                .await
-                .map_err(|e| self.db(e))?;
+        self.in_transaction(async |tx| {
             sqlx::query(
                 "UPDATE jobs SET status = 'failed', heartbeat = NULL, finished_at = ?3, \
                  wall_seconds = ?4, last_error = ?5 \
@@ -855,11 +854,10 @@ impl Store {
             .bind(t)
             .bind(wall_seconds)
             .bind(message)
-            .execute(&mut *tx)
+            .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
-            self.end_run(&mut tx, claim.run_id, t, "failed").await?;
-            tx.commit().await.map_err(|e| self.db(e))?;
+            self.end_run(tx, claim.run_id, t, "failed").await?;
             Ok(())
         })
     }
