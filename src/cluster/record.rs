@@ -203,6 +203,23 @@ mod tests {
         }
     }
 
+    /// Regression: serde_json's default float parser may miss the nearest double by one ulp
+    /// (CI saw `finished_at` 1795370055.8602185 read back as ...2183), so a record did not
+    /// read back equal to what was written. The crate enables serde_json's `float_roundtrip`.
+    #[test]
+    fn floats_read_back_bit_exactly() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(7);
+        let mut values = vec![1795370055.8602185f64, 1795370055.8602183, 0.1, 1.0 / 3.0];
+        values.extend((0..20000).map(|_| rng.gen_range(1.0e9..2.0e9) + rng.r#gen::<f64>()));
+        values.extend((0..20000).map(|_| f64::from_bits(rng.r#gen::<u64>() >> 2)));
+        for x in values.into_iter().filter(|x| x.is_finite()) {
+            let text = serde_json::to_string(&x).unwrap();
+            let back: f64 = serde_json::from_str(&text).unwrap();
+            assert_eq!(back.to_bits(), x.to_bits(), "{x:e} -> {text} -> {back:e}");
+        }
+    }
+
     #[test]
     fn a_record_reads_back_and_a_wrong_or_broken_one_is_corrupt() {
         let dir = tempfile::tempdir().unwrap();
