@@ -276,14 +276,7 @@ impl Scene {
         let drive = &self.drive;
         match drive.kind {
             super::DriveKind::None => {
-                let given = [
-                    ("drive.amplitude", drive.amplitude.is_some()),
-                    ("drive.omega", drive.omega.is_some()),
-                    ("drive.gamma", drive.gamma.is_some()),
-                    ("drive.e_star", drive.e_star.is_some()),
-                    ("drive.root_tolerance", drive.root_tolerance.is_some()),
-                    ("drive.t_min", drive.t_min.is_some()),
-                ];
+                let given = shaking_keys_given(drive);
                 if let Some((key, _)) = given
                     .iter()
                     .chain(table_keys_given(drive).iter())
@@ -776,14 +769,7 @@ impl Scene {
                 ));
             }
         }
-        let shaking = [
-            ("drive.amplitude", drive.amplitude.is_some()),
-            ("drive.omega", drive.omega.is_some()),
-            ("drive.gamma", drive.gamma.is_some()),
-            ("drive.e_star", drive.e_star.is_some()),
-            ("drive.root_tolerance", drive.root_tolerance.is_some()),
-            ("drive.t_min", drive.t_min.is_some()),
-        ];
+        let shaking = shaking_keys_given(drive);
         if let Some((key, _)) = shaking
             .iter()
             .chain(table_keys_given(drive).iter())
@@ -828,6 +814,18 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// The shaking drive's keys (other than the table's) and whether each is set.
+fn shaking_keys_given(drive: &super::DriveSpec) -> [(&'static str, bool); 6] {
+    [
+        ("drive.amplitude", drive.amplitude.is_some()),
+        ("drive.omega", drive.omega.is_some()),
+        ("drive.gamma", drive.gamma.is_some()),
+        ("drive.e_star", drive.e_star.is_some()),
+        ("drive.root_tolerance", drive.root_tolerance.is_some()),
+        ("drive.t_min", drive.t_min.is_some()),
+    ]
 }
 
 /// The shear drive's keys and whether each is set.

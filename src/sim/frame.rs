@@ -38,29 +38,18 @@ impl Frame {
         engine: &Engine<D, G, W, S>,
         scene: &Scene,
     ) -> Frame {
-        let time = engine.time();
         let flat = |v: Vec<super::event_driven::Vector<D>>| -> Vec<f64> {
             v.iter().flat_map(|x| x.iter().copied()).collect()
         };
-        Frame {
-            time,
-            dimension: D,
-            box_size: scene.container.size.clone(),
-            periodic: scene
-                .boundaries()
-                .iter()
-                .map(|b| *b == Boundary::Periodic)
-                .collect(),
-            wall_offset: scene
-                .drive_motion()
-                .map_or(0.0, |(a, omega)| a * (omega * time).sin()),
-            mass: scene.particles.mass,
-            positions: flat(engine.positions()),
-            velocities: flat(engine.velocities()),
-            radii: engine.radii(),
-            bridges: engine.bridges(),
-            counts: engine.counts().clone(),
-        }
+        Frame::of_state(
+            scene,
+            D,
+            engine.time(),
+            [flat(engine.positions()), flat(engine.velocities())],
+            engine.radii(),
+            engine.bridges(),
+            engine.counts().clone(),
+        )
     }
 
     /// Copies the current state of a time-driven engine (its event counts are contact onsets,
@@ -72,10 +61,31 @@ impl Frame {
     where
         B: super::time_driven::BodyForce<D>,
     {
-        let time = engine.time();
+        Frame::of_state(
+            scene,
+            D,
+            engine.time(),
+            [engine.positions_flat(), engine.velocities_flat()],
+            engine.radii().to_vec(),
+            engine.bridges(),
+            engine.counts().clone(),
+        )
+    }
+
+    /// A frame from an engine's state (`[positions, velocities]` flat, particle-major) and the
+    /// scene's box, boundaries, container motion and mass.
+    fn of_state(
+        scene: &Scene,
+        dimension: usize,
+        time: f64,
+        [positions, velocities]: [Vec<f64>; 2],
+        radii: Vec<f64>,
+        bridges: Vec<(usize, usize)>,
+        counts: EventCounts,
+    ) -> Frame {
         Frame {
             time,
-            dimension: D,
+            dimension,
             box_size: scene.container.size.clone(),
             periodic: scene
                 .boundaries()
@@ -86,11 +96,11 @@ impl Frame {
                 .drive_motion()
                 .map_or(0.0, |(a, omega)| a * (omega * time).sin()),
             mass: scene.particles.mass,
-            positions: engine.positions_flat(),
-            velocities: engine.velocities_flat(),
-            radii: engine.radii().to_vec(),
-            bridges: engine.bridges(),
-            counts: engine.counts().clone(),
+            positions,
+            velocities,
+            radii,
+            bridges,
+            counts,
         }
     }
 
