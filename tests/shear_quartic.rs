@@ -99,21 +99,6 @@ fn reference_entry_near(p: &Poly, t: f64) -> bool {
     (0..=2000).any(|k| eval_dd(p, t - h + 2.0 * h * k as f64 / 2000.0) <= 0.0)
 }
 
-fn from_roots(roots: &[f64], scale: f64) -> Poly {
-    let mut c = vec![scale];
-    for &r in roots {
-        let mut next = vec![0.0; c.len() + 1];
-        for (k, &ck) in c.iter().enumerate() {
-            next[k + 1] += ck;
-            next[k] -= r * ck;
-        }
-        c = next;
-    }
-    let mut out = [0.0; 5];
-    out[..c.len()].copy_from_slice(&c);
-    Poly::new(out)
-}
-
 #[test]
 fn random_contact_quartics_match_the_reference() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
@@ -161,7 +146,7 @@ fn double_roots_and_close_pairs_are_never_missed() {
         let farther = far + rng.gen_range(0.1..2.0);
         let scale = rng.gen_range(0.01..10.0);
         // A double root (tangential contact): touching without a sign change.
-        let p = from_roots(&[r0, r0, far, farther], scale);
+        let p = Poly::from_roots(&[r0, r0, far, farther], scale);
         let t = earliest_entry(&p, 10.0)
             .unwrap_or_else(|| panic!("case {case}: double root at {r0} missed: {p:?}"));
         assert!(
@@ -170,7 +155,7 @@ fn double_roots_and_close_pairs_are_never_missed() {
         );
         // Two roots closer than any fixed step: the entry is the first.
         let delta = 10f64.powf(rng.gen_range(-10.0..-4.0));
-        let q = from_roots(&[r0, r0 + delta, far, farther], scale);
+        let q = Poly::from_roots(&[r0, r0 + delta, far, farther], scale);
         let t = earliest_entry(&q, 10.0)
             .unwrap_or_else(|| panic!("case {case}: close pair at {r0} (+{delta}) missed"));
         // Against the nominal roots only to the conditioning of a near-double root: rounding

@@ -70,6 +70,21 @@ pub struct Poly {
 }
 
 impl Poly {
+    /// `scale * prod_k (t - r_k)` for at most four roots (test cases with known roots).
+    pub fn from_roots(roots: &[f64], scale: f64) -> Poly {
+        assert!(roots.len() <= 4, "a quartic has at most four roots");
+        let mut c = [0.0; 5];
+        c[0] = scale;
+        for (m, &r) in roots.iter().enumerate() {
+            // Multiply the degree-m polynomial by (t - r), highest coefficient first.
+            for k in (0..=m + 1).rev() {
+                let lower = if k > 0 { c[k - 1] } else { 0.0 };
+                c[k] = lower - r * c[k];
+            }
+        }
+        Poly::new(c)
+    }
+
     /// The polynomial with coefficients `c` (lowest order first); trailing zeros lower the
     /// degree.
     pub fn new(c: [f64; 5]) -> Self {
@@ -301,25 +316,9 @@ pub fn contact_quartic<const D: usize>(
 mod tests {
     use super::*;
 
-    fn from_roots(roots: &[f64], scale: f64) -> Poly {
-        // scale * prod (t - r_k), lowest order first
-        let mut c = vec![scale];
-        for &r in roots {
-            let mut next = vec![0.0; c.len() + 1];
-            for (k, &ck) in c.iter().enumerate() {
-                next[k + 1] += ck;
-                next[k] -= r * ck;
-            }
-            c = next;
-        }
-        let mut out = [0.0; 5];
-        out[..c.len()].copy_from_slice(&c);
-        Poly::new(out)
-    }
-
     #[test]
     fn simple_roots_are_found_in_order() {
-        let p = from_roots(&[0.5, 1.5, 2.0, 3.25], 1.0);
+        let p = Poly::from_roots(&[0.5, 1.5, 2.0, 3.25], 1.0);
         let r = p.sign_changes_in(0.0, 10.0);
         let r = r.as_slice();
         assert_eq!(r.len(), 4);
@@ -335,14 +334,14 @@ mod tests {
     fn increasing_start_is_skipped() {
         // p = (t + 1)(t - 2)(t - 3)(t - 4): p(0) = -24 < 0 but p'(0) = 2 > 0 (overlapping and
         // separating: no event); p rises through 2, turns in (2, 3) and enters p <= 0 at 3.
-        let p = from_roots(&[-1.0, 2.0, 3.0, 4.0], 1.0);
+        let p = Poly::from_roots(&[-1.0, 2.0, 3.0, 4.0], 1.0);
         let t = earliest_entry(&p, 10.0).unwrap();
         assert!((t - 3.0).abs() < 1e-12, "{t}");
         // Negated: -p(0) = 24 > 0 and falling: the entry is the first root, 2.
         let t = earliest_entry(&p.negated(), 10.0).unwrap();
         assert!((t - 2.0).abs() < 1e-12, "{t}");
         // Overlapping (p(0) < 0) and approaching (p'(0) < 0): now.
-        let q = from_roots(&[-0.5, 2.0, 3.0, 4.0], 1.0);
+        let q = Poly::from_roots(&[-0.5, 2.0, 3.0, 4.0], 1.0);
         assert!(q.eval(0.0) < 0.0);
         assert_eq!(earliest_entry(&q, 10.0), Some(0.0));
     }
@@ -350,7 +349,7 @@ mod tests {
     #[test]
     fn double_root_is_a_contact() {
         // (t - 1)^2 (t - 3)(t - 5): touches zero at t = 1 without a sign change.
-        let p = from_roots(&[1.0, 1.0, 3.0, 5.0], 1.0);
+        let p = Poly::from_roots(&[1.0, 1.0, 3.0, 5.0], 1.0);
         let t = earliest_entry(&p, 10.0).unwrap();
         assert!((t - 1.0).abs() < 1e-7, "{t}");
     }
