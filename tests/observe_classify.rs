@@ -1,64 +1,80 @@
-//! The classifier on synthetic observables: every phase, every threshold edge, re-classification
-//! from stored numbers; the fluid-gas inflection line analysis on curves with a known answer.
+//! The classifier on synthetic observables: every phase, every threshold edge (mobility,
+//! fluid/gas fallback, the coexistence noise baseline and contrast), region membership,
+//! re-classification from stored numbers, legacy results, the line rule for fluid versus gas,
+//! and the fluid-gas inflection line analysis on curves with a known answer.
 
+use wetgran::observe::classify::{FluidGasFrom, LEGACY_DELTA_N_CB, two_class_split};
+use wetgran::observe::line::{classify_line, largest_jump};
+use wetgran::observe::noise::range_quantile;
 use wetgran::observe::{
-    Mobility, Observables, Phase, Profiles, Stationarity, Thresholds, WindowCounts, classify,
-    fluid_gas_inflection,
+    LateralMobility, Mobility, NcbNormalisation, Observables, Phase, Profiles, Stationarity,
+    Thresholds, WindowCounts, classify, fluid_gas_inflection,
 };
 
-/// Observables with a homogeneous bridge profile (spread `delta`), global `f_lc` and `T_g/E_cb`.
-fn homogeneous(flc: Option<f64>, t: f64, delta: f64) -> Observables {
-    let bins = 10;
-    let n_cb: Vec<f64> = (0..bins)
-        .map(|b| if b == 0 { 3.0 + delta } else { 3.0 })
-        .collect();
-    synthetic(
-        flc,
-        t,
-        n_cb,
-        vec![flc.unwrap_or(0.0); bins],
-        vec![Some(t); bins],
-    )
+/// Statistical error of every synthetic bin's time average.
+const SE: f64 = 0.01;
+
+/// Per-bin inputs of a synthetic result.
+#[derive(Clone)]
+struct Bins {
+    n_cb: Vec<f64>,
+    packing: Vec<f64>,
+    /// `(D_lat, T_g/E_cb)` of all grains per bin.
+    all: Vec<(f64, f64)>,
+    /// `(D_lat, T_g/E_cb)` of the clustered grains per bin (`None`: no clustered grains).
+    clustered: Vec<Option<(f64, f64)>>,
 }
 
-fn synthetic(
-    flc: Option<f64>,
-    t: f64,
-    n_cb: Vec<f64>,
-    flc_bins: Vec<f64>,
-    t_bins: Vec<Option<f64>>,
-) -> Observables {
-    let bins = n_cb.len();
-    let spread = n_cb.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-        - n_cb.iter().copied().fold(f64::INFINITY, f64::min);
+fn synthetic(d: f64, t: f64, b: Bins, wet: bool) -> Observables {
+    let bins = b.n_cb.len();
+    let spread = |v: &[f64]| {
+        v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - v.iter().copied().fold(f64::INFINITY, f64::min)
+    };
     Observables {
         dimension: 2,
         particles: 10 * bins,
         period: 1.0,
         window_start: 0.0,
-        window_end: 10.0,
-        window_samples: 200,
+        window_end: 100.0,
+        window_samples: 2000,
         sample_interval: 0.05,
-        temperature_unit: 0.2844,
-        temperature_unit_name: "E_cb".into(),
+        temperature_unit: if wet { 0.2844 } else { 1.0 },
+        temperature_unit_name: if wet { "E_cb" } else { "m g d" }.into(),
         granular_temperature_reduced: t,
         bridges_per_particle: 1.0,
-        location_changes: flc.map(|f| wetgran::observe::LocationChanges {
-            method: "delaunay".into(),
-            count: 0,
-            per_particle_per_period: f,
-            sample_interval: 0.05,
+        location_changes: None,
+        mobility: Some(LateralMobility {
+            lag: 10.0,
+            diffusion: d,
+            diffusion_clustered: None,
+            lags: 30.0,
         }),
         profiles: Profiles {
             bin_width: 4.0,
+            bin_width_y: None,
+            grid: None,
             centres: (0..bins).map(|b| 4.0 * b as f64 + 2.0).collect(),
+            centres_y: None,
             particles: vec![10.0; bins],
-            packing: vec![0.5; bins],
-            n_cb,
-            temperature_reduced: t_bins,
-            flc: flc.map(|_| flc_bins),
-            delta_n_cb: spread,
-            delta_n_area: 0.0,
+            packing: b.packing.clone(),
+            delta_n_cb: spread(&b.n_cb),
+            delta_n_area: spread(&b.packing),
+            n_cb: b.n_cb,
+            n_cb_normalisation: NcbNormalisation::PerAreaAveragedOverHeight,
+            temperature_reduced: b.all.iter().map(|x| Some(x.1)).collect(),
+            temperature_clustered: b.clustered.iter().map(|x| x.map(|y| y.1)).collect(),
+            clustered: b
+                .clustered
+                .iter()
+                .map(|x| if x.is_some() { 8.0 } else { 0.0 })
+                .collect(),
+            diffusion: b.all.iter().map(|x| Some(x.0)).collect(),
+            diffusion_clustered: b.clustered.iter().map(|x| x.map(|y| y.0)).collect(),
+            flc: None,
+            n_cb_standard_error: Some(SE),
+            packing_standard_error: Some(SE),
+            noise_blocks: 32,
         },
         diffusion: None,
         counts: WindowCounts {
@@ -78,22 +94,36 @@ fn synthetic(
     }
 }
 
-/// Two regions: bins 0..5 dense (n_cb 6) with `(flc, T)`, bins 5..10 dilute (n_cb 0.5).
-fn two_regions(dense: (f64, f64), dilute: (f64, f64)) -> Observables {
-    let n = 10;
-    let n_cb = (0..n).map(|b| if b < 5 { 6.0 } else { 0.5 }).collect();
-    let f = (0..n)
-        .map(|b| if b < 5 { dense.0 } else { dilute.0 })
+/// A homogeneous system of 10 bins at `n_cb = 3` with one bin higher by `delta`; mobility `d`,
+/// temperature `t` everywhere.
+fn homogeneous(d: f64, t: f64, delta: f64) -> Observables {
+    let n_cb: Vec<f64> = (0..10)
+        .map(|b| if b == 0 { 3.0 + delta } else { 3.0 })
         .collect();
-    let t = (0..n)
-        .map(|b| Some(if b < 5 { dense.1 } else { dilute.1 }))
-        .collect();
-    synthetic(
-        Some(0.5 * (dense.0 + dilute.0)),
-        0.5 * (dense.1 + dilute.1),
+    let b = Bins {
+        packing: vec![0.5; 10],
+        all: vec![(d, t); 10],
+        clustered: vec![Some((d, t)); 10],
         n_cb,
-        f,
-        t,
+    };
+    synthetic(d, t, b, true)
+}
+
+/// Two regions: bins 0..5 dense (n_cb 6) whose grains are all clustered with `(D, T)`, bins
+/// 5..10 dilute (n_cb 0.5) with `(D, T)` and no clustered grains.
+fn two_regions(dense: (f64, f64), dilute: (f64, f64)) -> Observables {
+    let region = |b: usize| if b < 5 { dense } else { dilute };
+    let b = Bins {
+        n_cb: (0..10).map(|b| if b < 5 { 6.0 } else { 0.5 }).collect(),
+        packing: (0..10).map(|b| if b < 5 { 0.7 } else { 0.1 }).collect(),
+        all: (0..10).map(region).collect(),
+        clustered: (0..10).map(|b| (b < 5).then_some(dense)).collect(),
+    };
+    synthetic(
+        0.5 * (dense.0 + dilute.0),
+        0.5 * (dense.1 + dilute.1),
+        b,
+        true,
     )
 }
 
@@ -104,104 +134,157 @@ fn th() -> Thresholds {
 #[test]
 fn homogeneous_phases_and_their_threshold_edges() {
     let t = th();
-    let (sf, gas) = (t.solid_flc, t.gas_temperature);
-    // Solid versus mobile on f_lc: the edge value is solid.
+    let (sd, gas) = (t.solid_diffusion, t.gas_temperature);
+    // Solid versus mobile on D_lat: the edge value is solid.
+    assert_eq!(classify(&homogeneous(0.0, 0.5, 0.0), &t).phase, Phase::S);
+    assert_eq!(classify(&homogeneous(sd, 0.5, 0.0), &t).phase, Phase::S);
+    let above = sd * (1.0 + 1e-12);
+    let c = classify(&homogeneous(above, 0.5, 0.0), &t);
+    assert_eq!(c.phase, Phase::F);
+    assert_eq!(c.decided_on.whole.mobility_from, Mobility::Displacement);
+    // A solid stays solid however hot its rattling (a bed vibrated at high Gamma).
+    assert_eq!(classify(&homogeneous(sd, 50.0, 0.0), &t).phase, Phase::S);
+    // Fluid versus gas per point (no line): T_g/E_cb against gas_temperature, edge is fluid,
+    // and the label says it came from the per-point fallback.
+    let c = classify(&homogeneous(1.0, gas, 0.0), &t);
+    assert_eq!(c.phase, Phase::F);
+    assert_eq!(c.decided_on.fluid_gas, FluidGasFrom::PointFallback);
     assert_eq!(
-        classify(&homogeneous(Some(0.0), 0.5, 0.0), &t).phase,
-        Phase::S
-    );
-    assert_eq!(
-        classify(&homogeneous(Some(sf), 0.5, 0.0), &t).phase,
-        Phase::S
-    );
-    let above = sf * (1.0 + 1e-12) + 1e-300;
-    assert_eq!(
-        classify(&homogeneous(Some(above), 0.5, 0.0), &t).phase,
-        Phase::F
-    );
-    // f_lc decides mobility up to the gas temperature; hotter than that, bridges cannot hold
-    // and a region with few location changes (a dilute gas at high Gamma) is a gas.
-    assert_eq!(
-        classify(&homogeneous(Some(sf), gas, 0.0), &t).phase,
-        Phase::S
-    );
-    let c = classify(&homogeneous(Some(sf), gas * (1.0 + 1e-12), 0.0), &t);
-    assert_eq!(c.phase, Phase::G);
-    assert!(
-        c.decided_on.reason.contains("too hot for bridges"),
-        "{}",
-        c.decided_on.reason
-    );
-    // Fluid versus gas on T_g/E_cb: the edge value is fluid.
-    assert_eq!(
-        classify(&homogeneous(Some(1.0), gas, 0.0), &t).phase,
-        Phase::F
-    );
-    assert_eq!(
-        classify(&homogeneous(Some(1.0), gas * (1.0 + 1e-12), 0.0), &t).phase,
+        classify(&homogeneous(1.0, gas * (1.0 + 1e-12), 0.0), &t).phase,
         Phase::G
     );
 }
 
 #[test]
-fn temperature_decides_mobility_when_asked_or_without_flc() {
+fn other_mobility_measures_when_asked_or_without_displacement() {
     let mut t = th();
     let st = t.solid_temperature;
-    // No f_lc observed: temperature is used, and recorded as used.
-    let c = classify(&homogeneous(None, st, 0.0), &t);
+    // No displacement observed: temperature is used, and recorded as used.
+    let mut o = homogeneous(1.0, st, 0.0);
+    o.mobility = None;
+    o.profiles.diffusion = vec![None; 10];
+    let c = classify(&o, &t);
     assert_eq!(c.phase, Phase::S);
     assert_eq!(c.decided_on.whole.mobility_from, Mobility::Temperature);
-    assert_eq!(
-        classify(&homogeneous(None, st * (1.0 + 1e-12), 0.0), &t).phase,
-        Phase::F
-    );
-    // f_lc observed but mobility = temperature: a large f_lc does not matter.
+    // mobility = temperature: a large D_lat does not matter.
     t.mobility = Mobility::Temperature;
+    assert_eq!(classify(&homogeneous(100.0, st, 0.0), &t).phase, Phase::S);
     assert_eq!(
-        classify(&homogeneous(Some(100.0), st, 0.0), &t).phase,
-        Phase::S
-    );
-    assert_eq!(
-        classify(&homogeneous(Some(0.0), 2.0 * st, 0.0), &t).phase,
+        classify(&homogeneous(0.0, 2.0 * st, 0.0), &t).phase,
         Phase::F
+    );
+    // mobility = location_changes: f_lc per period against solid_flc.
+    t.mobility = Mobility::LocationChanges;
+    let mut o = homogeneous(100.0, 0.5, 0.0);
+    o.location_changes = Some(wetgran::observe::LocationChanges {
+        method: "delaunay".into(),
+        count: 0,
+        per_particle_per_period: t.solid_flc,
+        per_particle_per_time: None,
+        sample_interval: 0.05,
+    });
+    let c = classify(&o, &t);
+    assert_eq!(c.phase, Phase::S);
+    assert_eq!(c.decided_on.whole.mobility_from, Mobility::LocationChanges);
+}
+
+#[test]
+fn coexistence_needs_the_noise_baseline_and_the_contrast() {
+    let t = th();
+    // Ten bins with error SE each: the level quantile of the homogeneous spread.
+    let q = SE * range_quantile(10, t.coexistence_level);
+    assert!(q > 4.0 * SE && q < 7.0 * SE, "{q}");
+    // A bump at the noise threshold is noise, whatever its contrast would say.
+    let c = classify(&homogeneous(1.0, 5.0, q), &t);
+    assert!(!c.decided_on.split, "{}", c.decided_on.reason);
+    let test = c.decided_on.coexistence.as_ref().unwrap();
+    assert!((test.noise_threshold.unwrap() - q).abs() < 1e-12);
+    // A bump far above the noise but small against the mean (3 -> 3.5: contrast 0.14 < 0.5)
+    // is a persistent inhomogeneity of one phase, not a coexistence.
+    let c = classify(&homogeneous(1.0, 5.0, 0.5), &t);
+    assert!(!c.decided_on.split);
+    assert!(c.decided_on.coexistence.as_ref().unwrap().contrast < t.coexistence_contrast);
+    // Large and above the noise: split.
+    let c = classify(&homogeneous(1.0, 5.0, 10.0), &t);
+    assert!(c.decided_on.split, "{}", c.decided_on.reason);
+    // The absolute floor, where set, is a further condition.
+    let strict = Thresholds {
+        coexistence_delta_n_cb: 20.0,
+        ..th()
+    };
+    assert!(
+        !classify(&homogeneous(1.0, 5.0, 10.0), &strict)
+            .decided_on
+            .split
     );
 }
 
 #[test]
-fn coexistence_edge_and_every_pair() {
+fn every_coexistence_pair() {
     let t = th();
-    let d = t.coexistence_delta_n_cb;
-    // At the edge the system is homogeneous; a mobile, hot one is a gas.
-    let c = classify(&homogeneous(Some(1.0), 5.0, d), &t);
-    assert!(!c.decided_on.split);
-    assert_eq!(c.phase, Phase::G);
-    // Just above: split; the synthetic regions are then equal, so still g.
-    let c = classify(&homogeneous(Some(1.0), 5.0, d * (1.0 + 1e-9)), &t);
-    assert!(c.decided_on.split);
-    assert_eq!(c.phase, Phase::G);
     let (s, f, g) = ((0.0, 0.01), (1.0, 0.5), (1.0, 10.0));
     assert_eq!(classify(&two_regions(s, f), &t).phase, Phase::Sfc);
     assert_eq!(classify(&two_regions(s, g), &t).phase, Phase::Sgc);
     assert_eq!(classify(&two_regions(f, g), &t).phase, Phase::Fgc);
     assert_eq!(classify(&two_regions(s, s), &t).phase, Phase::S);
     assert_eq!(classify(&two_regions(f, f), &t).phase, Phase::F);
-    // The order of dense and dilute does not matter.
-    assert_eq!(classify(&two_regions(g, s), &t).phase, Phase::Sgc);
     let c = classify(&two_regions(s, g), &t);
     let dense = c.decided_on.dense.as_ref().unwrap();
     let dilute = c.decided_on.dilute.as_ref().unwrap();
     assert_eq!((dense.phase, dense.bins), (Phase::S, 5));
+    assert_eq!(dense.grains, "clustered");
     assert_eq!((dilute.phase, dilute.bins), (Phase::G, 5));
     assert_eq!(c.decided_on.split_n_cb, Some(3.25));
+}
+
+/// The case: a bonded cluster in a hot gas. The gas grains that cross the cluster's
+/// bins make those bins hot; its bonded grains are cold and immobile. Classified by its
+/// clustered grains the cluster is solid (sgc); by everything in its bins it would read as gas.
+#[test]
+fn the_dense_region_is_its_clustered_grains_not_the_passers_by() {
+    let mut o = two_regions((0.0, 0.01), (5.0, 150.0));
+    for b in 0..5 {
+        o.profiles.temperature_reduced[b] = Some(4.2);
+        o.profiles.diffusion[b] = Some(3.0);
+    }
+    let c = classify(&o, &th());
+    assert_eq!(c.phase, Phase::Sgc, "{}", c.decided_on.reason);
+    // Without the clustered accumulators (old results), the bins' grains decide: gas.
+    o.profiles.clustered.clear();
+    o.profiles.temperature_clustered.clear();
+    o.profiles.diffusion_clustered.clear();
+    let c = classify(&o, &th());
+    assert_eq!(c.phase, Phase::G, "{}", c.decided_on.reason);
+    assert_eq!(c.decided_on.dense.as_ref().unwrap().grains, "all");
+}
+
+/// A dry bed (no bridges, n_cb = 0 everywhere) with a dense cluster and a dilute region is a
+/// coexistence by its packing profile.
+#[test]
+fn dry_coexistence_by_packing() {
+    let mut o = two_regions((0.0, 0.01), (1.0, 10.0));
+    o.temperature_unit_name = "m g d".into();
+    o.profiles.n_cb = vec![0.0; 10];
+    o.profiles.delta_n_cb = 0.0;
+    let c = classify(&o, &th());
+    assert_eq!(c.phase, Phase::Sgc, "{}", c.decided_on.reason);
+    assert_eq!(
+        c.decided_on.coexistence.as_ref().unwrap().profile,
+        "packing"
+    );
+    // The same with a flat packing profile is homogeneous.
+    o.profiles.packing = vec![0.4; 10];
+    o.profiles.delta_n_area = 0.0;
+    assert!(!classify(&o, &th()).decided_on.split);
 }
 
 #[test]
 fn every_phase_is_reachable() {
     let t = th();
     let cases = [
-        (homogeneous(Some(0.0), 0.001, 0.0), Phase::S),
-        (homogeneous(Some(1.0), 0.5, 0.0), Phase::F),
-        (homogeneous(Some(1.0), 10.0, 0.0), Phase::G),
+        (homogeneous(0.0, 0.001, 0.0), Phase::S),
+        (homogeneous(1.0, 0.5, 0.0), Phase::F),
+        (homogeneous(1.0, 10.0, 0.0), Phase::G),
         (two_regions((0.0, 0.01), (1.0, 0.5)), Phase::Sfc),
         (two_regions((0.0, 0.01), (1.0, 10.0)), Phase::Sgc),
         (two_regions((1.0, 0.5), (1.0, 10.0)), Phase::Fgc),
@@ -216,29 +299,147 @@ fn every_phase_is_reachable() {
 /// classification records the numbers and thresholds it used.
 #[test]
 fn reclassification_from_stored_numbers() {
-    let obs = two_regions((0.05, 0.3), (1.0, 3.0));
+    let obs = two_regions((0.004, 0.3), (1.0, 3.0));
     let json = serde_json::to_string(&obs).unwrap();
     let back: Observables = serde_json::from_str(&json).unwrap();
     assert_eq!(back, obs);
-    let t = th();
-    assert_eq!(classify(&back, &t).phase, Phase::Fgc);
+    assert_eq!(classify(&back, &th()).phase, Phase::Fgc);
     let strict = Thresholds {
-        solid_flc: 0.1,
+        solid_diffusion: 0.01,
         ..th()
     };
     let c = classify(&back, &strict);
     assert_eq!(c.phase, Phase::Sgc);
     assert_eq!(c.decided_on.thresholds, strict);
-    assert_eq!(c.decided_on.dense.as_ref().unwrap().flc, Some(0.05));
+    assert_eq!(c.decided_on.dense.as_ref().unwrap().diffusion, Some(0.004));
     let hot = Thresholds {
         gas_temperature: 5.0,
         ..th()
     };
     assert_eq!(classify(&back, &hot).phase, Phase::F);
-    // The decision itself round-trips.
     let c2: wetgran::observe::Classification =
         serde_json::from_str(&serde_json::to_string(&c).unwrap()).unwrap();
     assert_eq!(c2, c);
+}
+
+/// Results stored before block statistics (no standard errors, `n_cb` summed over the height)
+/// still parse and are tested against the legacy absolute threshold.
+#[test]
+fn legacy_results_use_the_legacy_threshold() {
+    let mut o = homogeneous(1.0, 5.0, LEGACY_DELTA_N_CB);
+    o.profiles.n_cb_standard_error = None;
+    let mut v = serde_json::to_value(&o).unwrap();
+    let p = v["profiles"].as_object_mut().unwrap();
+    for key in [
+        "n_cb_normalisation",
+        "n_cb_standard_error",
+        "packing_standard_error",
+        "noise_blocks",
+        "temperature_clustered",
+        "clustered",
+        "diffusion",
+        "diffusion_clustered",
+    ] {
+        p.remove(key);
+    }
+    v.as_object_mut().unwrap().remove("mobility");
+    let old: Observables = serde_json::from_value(v).unwrap();
+    assert_eq!(
+        old.profiles.n_cb_normalisation,
+        NcbNormalisation::PerLateralMeasureSummedOverHeight
+    );
+    assert!(!classify(&old, &th()).decided_on.split);
+    let mut above = old.clone();
+    above.profiles.delta_n_cb = LEGACY_DELTA_N_CB * 1.01;
+    above.profiles.n_cb[0] = 3.0 + LEGACY_DELTA_N_CB * 1.01;
+    assert!(classify(&above, &th()).decided_on.split);
+}
+
+/// Along a line of constant Gamma, fluid versus gas follows the jump of `T_g/E_cb(E*)`
+/// (elastic) or its inflection (inelastic), for every point of the line, whatever the
+/// per-point threshold says; solid points do not make the jump.
+#[test]
+fn fluid_gas_along_a_line() {
+    let t = th();
+    // Elastic: T jumps from 0.8 to 30 between E* = 1 and 1.5; a per-point threshold of 2
+    // would also put 1.5 (T = 1.5 in the curve below) on the fluid side.
+    let curve = [
+        (0.3, 0.002, 0.0),
+        (0.5, 0.3, 1.0),
+        (0.7, 0.5, 1.0),
+        (1.0, 0.8, 1.0),
+        (1.5, 30.0, 1.0),
+        (2.0, 60.0, 1.0),
+    ];
+    let obs: Vec<Observables> = curve
+        .iter()
+        .map(|&(_, temp, d)| homogeneous(d, temp, 0.0))
+        .collect();
+    let pts: Vec<(f64, &Observables)> = curve.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
+    let labels: Vec<Phase> = classify_line(30.0, &pts, &t, true)
+        .iter()
+        .map(|c| c.phase)
+        .collect();
+    assert_eq!(
+        labels,
+        [Phase::S, Phase::F, Phase::F, Phase::F, Phase::G, Phase::G]
+    );
+    let c = &classify_line(30.0, &pts, &t, true)[3];
+    match &c.decided_on.fluid_gas {
+        FluidGasFrom::Line {
+            gamma,
+            method,
+            e_star_boundary,
+        } => {
+            assert_eq!((*gamma, method.as_str()), (30.0, "jump"));
+            assert!((e_star_boundary - 1.5f64.sqrt()).abs() < 1e-12);
+        }
+        other => panic!("{other:?}"),
+    }
+    // The jump must be large: a smooth line has none, and keeps the per-point fallback.
+    let smooth: Vec<(f64, f64)> = (0..8)
+        .map(|k| (0.5 + 0.25 * k as f64, 0.5 + 0.3 * k as f64))
+        .collect();
+    assert!(largest_jump(&smooth, t.line_jump_ratio).is_none());
+    let obs: Vec<Observables> = smooth
+        .iter()
+        .map(|&(_, temp)| homogeneous(1.0, temp, 0.0))
+        .collect();
+    let pts: Vec<(f64, &Observables)> = smooth.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
+    let cs = classify_line(30.0, &pts, &t, true);
+    assert!(
+        cs.iter()
+            .all(|c| c.decided_on.fluid_gas == FluidGasFrom::PointFallback)
+    );
+    // Inelastic: the inflection of a sigmoid in log-log decides; the per-point threshold (2)
+    // would have put the boundary elsewhere (T = 2 lies at E* = 1.26 here).
+    let e0: f64 = 3.0;
+    let sig: Vec<(f64, f64)> = (0..12)
+        .map(|k| {
+            let e = 0.3 * 1.4f64.powi(k);
+            (
+                e,
+                (0.7 + 2.5 * ((e.ln() - e0.ln()) / 0.7).tanh()).exp() / 10.0,
+            )
+        })
+        .collect();
+    let obs: Vec<Observables> = sig
+        .iter()
+        .map(|&(_, temp)| homogeneous(1.0, temp, 0.0))
+        .collect();
+    let pts: Vec<(f64, &Observables)> = sig.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
+    let cs = classify_line(10.0, &pts, &t, false);
+    for ((e, _), c) in sig.iter().zip(&cs) {
+        let want = if *e > 3.0 * 1.1 {
+            Phase::G
+        } else if *e < 3.0 / 1.1 {
+            Phase::F
+        } else {
+            c.phase
+        };
+        assert_eq!(c.phase, want, "E* = {e}: {}", c.decided_on.reason);
+        assert!(matches!(c.decided_on.fluid_gas, FluidGasFrom::Line { .. }));
+    }
 }
 
 #[test]
@@ -287,19 +488,23 @@ fn inflection_of_a_known_sigmoid() {
 /// pull the split to itself.
 #[test]
 fn split_is_two_classes_not_the_range_midpoint() {
-    use wetgran::observe::classify::two_class_split;
     let n_cb = [6.0, 6.0, 6.0, 6.0, 6.0, 1.0, 1.0, 1.0, 1.0, 12.0];
     assert_eq!(two_class_split(&n_cb), 3.5);
     assert_eq!(two_class_split(&[2.0, 4.0]), 3.0);
     assert_eq!(two_class_split(&[5.0]), 5.0);
-    // Solid bins (dense, f_lc 0) next to fluid ones (f_lc 1), one very dense solid bin: sfc.
-    let f = (0..10)
-        .map(|b| if b < 5 || b == 9 { 0.0 } else { 1.0 })
-        .collect();
-    let t = (0..10)
-        .map(|b| Some(if b < 5 || b == 9 { 0.01 } else { 0.5 }))
-        .collect();
-    let obs = synthetic(Some(0.4), 0.2, n_cb.to_vec(), f, t);
+    // Solid bins (dense, D 0) next to fluid ones (D 1), one very dense solid bin: sfc.
+    let solid = |b: usize| b < 5 || b == 9;
+    let b = Bins {
+        n_cb: n_cb.to_vec(),
+        packing: vec![0.5; 10],
+        all: (0..10)
+            .map(|b| if solid(b) { (0.0, 0.01) } else { (1.0, 0.5) })
+            .collect(),
+        clustered: (0..10)
+            .map(|b| Some(if solid(b) { (0.0, 0.01) } else { (1.0, 0.5) }))
+            .collect(),
+    };
+    let obs = synthetic(0.4, 0.2, b, true);
     let c = classify(&obs, &th());
     assert_eq!(c.phase, Phase::Sfc, "{}", c.decided_on.reason);
     assert_eq!(c.decided_on.dense.as_ref().unwrap().bins, 6);

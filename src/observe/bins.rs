@@ -1,53 +1,161 @@
-//! Lateral bins: slabs of equal width along `x` that tile the (periodic) lateral axis. Every
-//! profile observer bins by `x` only, in 2D and in 3D (a 3D slab spans the whole `y` depth).
+//! Lateral bins: cells of equal size that tile the lateral extent of the box. In 2D they are
+//! slabs along `x` (the only lateral axis). In 3D they are, by default, square cells over the
+//! lateral plane `(x, y)` (`observe.bins_3d = "plane"`), so that a drop- or strip-shaped region
+//! is resolved in both lateral directions; `observe.bins_3d = "x_slabs"` keeps slabs along `x`
+//! that span the whole depth `L_y` (the layout before the plane bins, kept for comparison).
+//! Bins are numbered `ix + nx * iy`.
 
 use crate::sim::Frame;
+use serde::{Deserialize, Serialize};
 
-/// `n` bins of width `L_x / n` over `[0, L_x)`.
+/// How a 3D box is cut into lateral bins (`observe.bins_3d`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Bins3d {
+    /// Square cells over `(x, y)`.
+    #[default]
+    Plane,
+    /// Slabs along `x` spanning all of `L_y`.
+    XSlabs,
+}
+
+/// `nx * ny` bins of size `width[0] x width[1]` over `[0, L_x) x [0, L_y)` (`ny = 1`,
+/// `width[1] = 1` in 2D, where the lateral extent is `L_x` alone).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LateralBins {
+    /// Total number of bins, `nx * ny`.
     pub n: usize,
+    pub nx: usize,
+    pub ny: usize,
+    /// Width along `x` (kept as `width` for the 2D callers).
     pub width: f64,
+    pub width_y: f64,
     pub length: f64,
+    pub length_y: f64,
 }
 
 impl LateralBins {
-    /// `n` equal bins over `[0, length)`.
+    /// `n` equal slabs over `[0, length)` along `x` (2D, or 3D x-slabs).
     pub fn new(n: usize, length: f64) -> Self {
+        Self::grid(n, length, 1, 1.0)
+    }
+
+    /// `nx` by `ny` equal cells over `[0, length) x [0, length_y)`.
+    pub fn grid(nx: usize, length: f64, ny: usize, length_y: f64) -> Self {
         assert!(
-            n >= 1 && length > 0.0,
+            nx >= 1 && ny >= 1 && length > 0.0 && length_y > 0.0,
             "at least one bin over a positive length"
         );
         Self {
-            n,
-            width: length / n as f64,
+            n: nx * ny,
+            nx,
+            ny,
+            width: length / nx as f64,
+            width_y: length_y / ny as f64,
             length,
+            length_y,
         }
     }
 
-    /// The bin of lateral coordinate `x` (wrapped into `[0, L_x)` first).
+    /// Whether the bins cut the `y` axis too (3D plane bins).
+    pub fn is_plane(&self) -> bool {
+        self.ny > 1
+    }
+
+    /// Index along one axis of a coordinate (wrapped into `[0, L)` first).
+    fn index(x: f64, length: f64, width: f64, n: usize) -> usize {
+        let w = x.rem_euclid(length);
+        ((w / width) as usize).min(n - 1)
+    }
+
+    /// The bin of lateral coordinate `x` (slabs; the `y` index is 0).
     pub fn of(&self, x: f64) -> usize {
-        let w = x.rem_euclid(self.length);
-        ((w / self.width) as usize).min(self.n - 1)
+        Self::index(x, self.length, self.width, self.nx)
     }
 
-    /// Bin centres.
-    pub fn centres(&self) -> Vec<f64> {
-        (0..self.n).map(|b| (b as f64 + 0.5) * self.width).collect()
-    }
-
-    /// Lateral measure of one bin: its width in 2D, width times `L_y` in 3D.
-    pub fn lateral_measure(&self, frame: &Frame) -> f64 {
-        let mut m = self.width;
-        for k in 1..frame.dimension - 1 {
-            m *= frame.box_size[k];
+    /// The bin of the lateral point `(x, y)` (`y` ignored for slabs).
+    pub fn of_xy(&self, x: f64, y: f64) -> usize {
+        let ix = self.of(x);
+        if self.ny == 1 {
+            return ix;
         }
-        m
+        ix + self.nx * Self::index(y, self.length_y, self.width_y, self.ny)
+    }
+
+    /// The bin of particle `i` of a frame.
+    pub fn of_particle(&self, frame: &Frame, i: usize) -> usize {
+        let x = frame.x(i);
+        if frame.dimension == 3 {
+            self.of_xy(x[0], x[1])
+        } else {
+            self.of(x[0])
+        }
+    }
+
+    /// Bin `x` centres, one per bin (in bin order).
+    pub fn centres(&self) -> Vec<f64> {
+        (0..self.n)
+            .map(|b| ((b % self.nx) as f64 + 0.5) * self.width)
+            .collect()
+    }
+
+    /// Bin `y` centres, one per bin (`None` for slabs).
+    pub fn centres_y(&self) -> Option<Vec<f64>> {
+        self.is_plane().then(|| {
+            (0..self.n)
+                .map(|b| ((b / self.nx) as f64 + 0.5) * self.width_y)
+                .collect()
+        })
+    }
+
+    /// Lateral measure of one bin: its width in 2D; width times `L_y` for 3D slabs; the cell's
+    /// area for 3D plane bins.
+    pub fn lateral_measure(&self, frame: &Frame) -> f64 {
+        if frame.dimension == 2 {
+            return self.width;
+        }
+        if self.is_plane() {
+            self.width * self.width_y
+        } else {
+            self.width * frame.box_size[1]
+        }
     }
 
     /// Bin of the midpoint of the pair `(i, j)` (nearest periodic image of `j` seen from `i`).
     pub fn of_pair(&self, frame: &Frame, i: usize, j: usize) -> usize {
-        let (xi, xj) = (frame.x(i)[0], frame.x(j)[0]);
-        self.of(xi + 0.5 * frame.min_image(0, xj - xi))
+        let (xi, xj) = (frame.x(i), frame.x(j));
+        let mx = xi[0] + 0.5 * frame.min_image(0, xj[0] - xi[0]);
+        if frame.dimension == 3 && self.is_plane() {
+            let my = xi[1] + 0.5 * frame.min_image(1, xj[1] - xi[1]);
+            self.of_xy(mx, my)
+        } else {
+            self.of(mx)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_bins_number_x_fastest_and_wrap() {
+        let b = LateralBins::grid(4, 8.0, 3, 6.0);
+        assert_eq!(b.n, 12);
+        assert_eq!(b.of_xy(0.5, 0.5), 0);
+        assert_eq!(b.of_xy(2.5, 0.5), 1);
+        assert_eq!(b.of_xy(0.5, 2.5), 4);
+        assert_eq!(b.of_xy(7.9, 5.9), 11);
+        assert_eq!(b.of_xy(-0.1, -0.1), 11);
+        assert_eq!(b.centres()[5], 3.0);
+        assert_eq!(b.centres_y().unwrap()[5], 3.0);
+    }
+
+    #[test]
+    fn slabs_ignore_y() {
+        let b = LateralBins::new(4, 8.0);
+        assert!(!b.is_plane());
+        assert_eq!(b.of_xy(2.5, 100.0), 1);
+        assert!(b.centres_y().is_none());
     }
 }

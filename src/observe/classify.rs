@@ -1,27 +1,39 @@
 //! Phase classification: maps [`Observables`] to one of s, f, g, sfc, sgc, fgc (MODEL.md 7)
 //! with the thresholds of the scene's `[classify]` section, and records every number the
-//! decision used so that a result can be re-classified later without re-simulating.
+//! decision used so that a result can be re-classified later without re-simulating
+//! (`wetgran reclassify`). docs/observables.md gives the reasoning and the evidence.
 //!
-//! The rule (docs/observables.md gives the reasoning behind the default thresholds):
-//! 1. A region is *solid* when it is not mobile: its location-change frequency `f_lc` is at most
-//!    `solid_flc` (or, with `mobility = "temperature"` or without `f_lc`, its `T_g / E_cb` is at
-//!    most `solid_temperature`). A mobile region is *gas* when `T_g / E_cb > gas_temperature`,
-//!    else *fluid*. A region hotter than `gas_temperature` is mobile whatever its `f_lc`: its
-//!    bridges cannot hold (a dilute gas at high Gamma has a small `f_lc` per short period).
-//! 2. If `Delta n_cb` (Eq. 3.3) is at most `coexistence_delta_n_cb`, the system is homogeneous
-//!    and the whole system is classified by rule 1.
-//! 3. Otherwise the lateral bins are split by their bridge density into a dense and a dilute
-//!    region (two classes of maximal between-class variance, [`two_class_split`]); each region is classified by
-//!    rule 1 from its own particle-weighted `f_lc` and `T_g / E_cb`. Two different phases give
-//!    their coexistence (sfc, sgc or fgc); the same phase twice gives that phase.
-//!
+//! The rule for one run (per point):
+//! 1. A region is *solid* when it is not mobile: its lateral mobility `D_lat` (mean-square
+//!    lateral displacement over a fixed lag in time, `observe::lateral`) is at most
+//!    `solid_diffusion`. (`mobility = "location_changes"`: `f_lc` per period against
+//!    `solid_flc`, a region hotter than `gas_temperature` counting as mobile; `mobility =
+//!    "temperature"`, or where neither was observed: `T_g / E_cb` against `solid_temperature`.)
+//!    A mobile region is *gas* when `T_g / E_cb > gas_temperature`, else *fluid*: this is the
+//!    per-point fallback of the fluid-gas decision, which a sweep replaces by the line rule
+//!    below wherever the point lies on a line of constant Gamma.
+//! 2. *Coexistence* needs a lateral profile that is significantly inhomogeneous: the profile
+//!    (`n_cb` for wet scenes, the packing fraction for dry ones, `coexistence_by`) has a spread
+//!    `Delta` (Eq. 3.3) above the `coexistence_level` quantile of the spread that a homogeneous
+//!    state with the same bins and window shows (`observe::noise`: the range of `B` normal
+//!    values with the bins' statistical error), above `coexistence_delta_n_cb`, and its dense
+//!    and dilute classes differ by at least the fraction `coexistence_contrast` of the dense
+//!    mean. Otherwise the system is homogeneous and rule 1 classifies it as a whole.
+//! 3. A coexistence splits the bins into a dense and a dilute class (Otsu's rule,
+//!    [`two_class_split`]). The dense region is described by its *clustered* grains (bonded,
+//!    or closely packed when dry: `observe::lateral`), the dilute region by all of its grains,
+//!    each time-averaged over the samples; each is classified by rule 1. Two different phases
+//!    give their coexistence (sfc, sgc or fgc); the same phase twice gives that phase.
 //! 4. A sheared scene (MODEL.md 4.2) is solid or fluidised by `E_par` alone: solid when the
 //!    window mean of `E_par / E_cb` (`/ (m g d)` dry) is at most `shear_e_par`, else fluid
 //!    (label f). The rules above are still evaluated and recorded, but do not decide.
 //!
+//! Along a line of constant Gamma (sweeps), fluid versus gas follows MODEL.md 7: the jump of
+//! `T_g / E_cb(E*)` for elastic grains, its inflection for inelastic ones ([`super::line`]).
+//!
 //! A value equal to a threshold stays on the calmer side (solid, not gas, homogeneous).
 
-use super::Observables;
+use super::{Observables, noise};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -98,12 +110,28 @@ impl std::str::FromStr for Phase {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Mobility {
-    /// The location-change frequency `f_lc` (falls back to temperature where it was not
+    /// The lateral mobility `D_lat` per unit time (falls back to temperature where it was not
     /// observed).
     #[default]
+    Displacement,
+    /// The location-change frequency `f_lc` per period (falls back to temperature where it was
+    /// not observed). Depends on the sampling rate and the drive period (docs/observables.md).
     LocationChanges,
     /// `T_g / E_cb`.
     Temperature,
+}
+
+/// Which lateral profile decides coexistence.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CoexistenceBy {
+    /// `n_cb` for wet scenes, the packing fraction for dry ones.
+    #[default]
+    Auto,
+    /// The bridge density `n_cb` (Eq. 3.3).
+    Bridges,
+    /// The packing fraction (`Delta n_area`).
+    Packing,
 }
 
 /// Thresholds of the classifier (scene section `[classify]`); defaults and their reasoning are
@@ -114,19 +142,40 @@ pub struct Thresholds {
     /// Observable for solid versus mobile.
     #[serde(default)]
     pub mobility: Mobility,
-    /// Largest `f_lc` (location changes per particle per period) of a solid.
+    /// Largest lateral mobility `D_lat` (units `d^2 / sqrt(d/g)`) of a solid.
+    #[serde(default = "default_solid_diffusion")]
+    pub solid_diffusion: f64,
+    /// Largest `f_lc` (location changes per particle per period) of a solid
+    /// (`mobility = "location_changes"`).
     #[serde(default = "default_solid_flc")]
     pub solid_flc: f64,
-    /// Largest `T_g / E_cb` of a solid (used with `mobility = "temperature"` or without `f_lc`).
+    /// Largest `T_g / E_cb` of a solid (used with `mobility = "temperature"` or without
+    /// another mobility observable).
     #[serde(default = "default_solid_temperature")]
     pub solid_temperature: f64,
-    /// `T_g / E_cb` above which a mobile region is a gas.
+    /// `T_g / E_cb` above which a mobile region is a gas: the per-point fallback where no line
+    /// of constant Gamma decides.
     #[serde(default = "default_gas_temperature")]
     pub gas_temperature: f64,
-    /// `Delta n_cb` (units `d^-(D-1)`) above which the system is split into a dense and a
-    /// dilute region.
-    #[serde(default = "default_coexistence_delta_n_cb")]
+    /// Which profile decides coexistence.
+    #[serde(default)]
+    pub coexistence_by: CoexistenceBy,
+    /// Quantile of the homogeneous-state spread a coexistence must exceed (default 0.999).
+    #[serde(default = "default_coexistence_level")]
+    pub coexistence_level: f64,
+    /// Smallest relative difference `(dense - dilute) / dense` of the two classes' mean
+    /// profile values of a coexistence (default 0.5).
+    #[serde(default = "default_coexistence_contrast")]
+    pub coexistence_contrast: f64,
+    /// Optional absolute floor on `Delta` (units of the profile; default 0). For results
+    /// stored without statistical errors it is the only test (2, in their old `n_cb` units,
+    /// when 0).
+    #[serde(default)]
     pub coexistence_delta_n_cb: f64,
+    /// Along a line of constant Gamma of elastic grains: smallest ratio of `T_g / E_cb`
+    /// between neighbouring points that counts as the fluid-gas jump (default 3).
+    #[serde(default = "default_line_jump_ratio")]
+    pub line_jump_ratio: f64,
     /// Sheared scenes: largest window mean of `E_par / E_cb` (`/ (m g d)` dry) of a solid.
     #[serde(default = "default_shear_e_par")]
     pub shear_e_par: f64,
@@ -135,7 +184,11 @@ pub struct Thresholds {
 fn default_shear_e_par() -> f64 {
     0.1
 }
-
+fn default_solid_diffusion() -> f64 {
+    SOLID_DIFFUSION
+}
+/// Default of `solid_diffusion` (docs/observables.md gives the calibration).
+pub const SOLID_DIFFUSION: f64 = 2e-3;
 fn default_solid_flc() -> f64 {
     0.02
 }
@@ -145,18 +198,32 @@ fn default_solid_temperature() -> f64 {
 fn default_gas_temperature() -> f64 {
     2.0
 }
-fn default_coexistence_delta_n_cb() -> f64 {
-    2.0
+fn default_coexistence_level() -> f64 {
+    0.999
 }
+fn default_coexistence_contrast() -> f64 {
+    0.5
+}
+fn default_line_jump_ratio() -> f64 {
+    3.0
+}
+/// The coexistence threshold of results stored before block statistics, in their `n_cb` units
+/// (bridges per lateral measure summed over the height).
+pub const LEGACY_DELTA_N_CB: f64 = 2.0;
 
 impl Default for Thresholds {
     fn default() -> Self {
         Self {
             mobility: Mobility::default(),
+            solid_diffusion: default_solid_diffusion(),
             solid_flc: default_solid_flc(),
             solid_temperature: default_solid_temperature(),
             gas_temperature: default_gas_temperature(),
-            coexistence_delta_n_cb: default_coexistence_delta_n_cb(),
+            coexistence_by: CoexistenceBy::default(),
+            coexistence_level: default_coexistence_level(),
+            coexistence_contrast: default_coexistence_contrast(),
+            coexistence_delta_n_cb: 0.0,
+            line_jump_ratio: default_line_jump_ratio(),
             shear_e_par: default_shear_e_par(),
         }
     }
@@ -165,7 +232,11 @@ impl Default for Thresholds {
 impl Thresholds {
     /// Checks every key of `[classify]`.
     pub fn validate(&self, origin: &str) -> Result<(), crate::scene::SceneError> {
+        let bad = |key: &str, msg: String| {
+            crate::scene::SceneError::new(origin, &format!("classify.{key}"), msg)
+        };
         let checks = [
+            ("solid_diffusion", self.solid_diffusion),
             ("solid_flc", self.solid_flc),
             ("solid_temperature", self.solid_temperature),
             ("gas_temperature", self.gas_temperature),
@@ -174,17 +245,36 @@ impl Thresholds {
         ];
         for (key, v) in checks {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(crate::scene::SceneError::new(
-                    origin,
-                    &format!("classify.{key}"),
+                return Err(bad(
+                    key,
                     format!("= {v} is out of range: must be finite and >= 0"),
                 ));
             }
         }
+        let q = self.coexistence_level;
+        if !(q.is_finite() && q > 0.5 && q < 1.0) {
+            return Err(bad(
+                "coexistence_level",
+                format!("= {q} is out of range: must be in (0.5, 1) (a quantile, e.g. 0.999)"),
+            ));
+        }
+        let c = self.coexistence_contrast;
+        if !(c.is_finite() && (0.0..=1.0).contains(&c)) {
+            return Err(bad(
+                "coexistence_contrast",
+                format!("= {c} is out of range: must be in [0, 1]"),
+            ));
+        }
+        let j = self.line_jump_ratio;
+        if !(j.is_finite() && j > 1.0) {
+            return Err(bad(
+                "line_jump_ratio",
+                format!("= {j} is out of range: must be finite and > 1"),
+            ));
+        }
         if self.gas_temperature < self.solid_temperature {
-            return Err(crate::scene::SceneError::new(
-                origin,
-                "classify.gas_temperature",
+            return Err(bad(
+                "gas_temperature",
                 format!(
                     "= {} is out of range: must be >= classify.solid_temperature = {} (a gas is \
                      hotter than a solid)",
@@ -196,19 +286,58 @@ impl Thresholds {
     }
 }
 
+/// How the fluid-versus-gas part of a label was decided.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "by")]
+pub enum FluidGasFrom {
+    /// Per point: `T_g / E_cb` against `gas_temperature` (no line decided it).
+    PointFallback,
+    /// A line of constant Gamma: the fluid-gas boundary at `e_star_boundary`.
+    Line {
+        gamma: f64,
+        /// `"jump"` (elastic) or `"inflection"`.
+        method: String,
+        e_star_boundary: f64,
+    },
+}
+
 /// The numbers one region (whole system, dense part or dilute part) was classified on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RegionInputs {
     /// Location changes per particle per period (`None` where not observed).
     pub flc: Option<f64>,
+    /// Lateral mobility `D_lat` (`None` where not observed).
+    #[serde(default)]
+    pub diffusion: Option<f64>,
     /// `T_g / E_cb` (`T_g / (m g d)` for dry scenes).
     pub temperature: f64,
     /// Which observable decided solid versus mobile.
     pub mobility_from: Mobility,
     /// Lateral bins in the region (all bins for the whole system).
     pub bins: usize,
+    /// `"all"` grains of the region's bins, or only the `"clustered"` ones.
+    #[serde(default)]
+    pub grains: String,
     /// The phase rule 1 gives this region.
     pub phase: Phase,
+}
+
+/// The coexistence test of rule 2.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CoexistenceTest {
+    /// `"n_cb"` or `"packing"`.
+    pub profile: String,
+    /// Spread of the profile, `max - min` (Eq. 3.3).
+    pub delta: f64,
+    /// RMS statistical error of the bins' time averages (`None`: not measured).
+    pub standard_error: Option<f64>,
+    /// Expected spread of a homogeneous state, `E[range of B normals] * standard_error`.
+    pub expected_noise: Option<f64>,
+    /// The `coexistence_level` quantile of that spread.
+    pub noise_threshold: Option<f64>,
+    /// `(dense - dilute) / dense` of the two classes' means.
+    pub contrast: f64,
+    pub significant: bool,
 }
 
 /// Everything a classification was decided on: the thresholds, the inputs and each step.
@@ -217,19 +346,29 @@ pub struct DecisionInputs {
     pub thresholds: Thresholds,
     /// The whole system by rule 1.
     pub whole: RegionInputs,
-    /// `Delta n_cb` (Eq. 3.3), units `d^-(D-1)`.
+    /// `Delta n_cb` (Eq. 3.3), units of `n_cb`.
     pub delta_n_cb: f64,
-    /// Whether `Delta n_cb` exceeded its threshold (rule 3 applied).
+    /// The coexistence test (rule 2).
+    #[serde(default)]
+    pub coexistence: Option<CoexistenceTest>,
+    /// Whether rule 3 applied.
     pub split: bool,
-    /// The bridge density that separated dense from dilute bins.
+    /// The profile value that separated dense from dilute bins.
     pub split_n_cb: Option<f64>,
     pub dense: Option<RegionInputs>,
     pub dilute: Option<RegionInputs>,
+    /// How fluid versus gas was decided.
+    #[serde(default = "point_fallback")]
+    pub fluid_gas: FluidGasFrom,
     /// Sheared scenes: the window mean of `E_par / E_cb` that decided (rule 4).
     #[serde(default)]
     pub shear_e_par: Option<f64>,
     /// The decision in words.
     pub reason: String,
+}
+
+fn point_fallback() -> FluidGasFrom {
+    FluidGasFrom::PointFallback
 }
 
 /// A phase and the numbers it was decided on.
@@ -268,48 +407,71 @@ pub fn two_class_split(values: &[f64]) -> f64 {
     split
 }
 
-/// Rule 1 for one region.
-fn region(flc: Option<f64>, temperature: f64, bins: usize, th: &Thresholds) -> RegionInputs {
+/// Rule 1 for one region; `gas` decides fluid versus gas of a mobile region.
+fn region(
+    inputs: (Option<f64>, Option<f64>, f64),
+    bins: usize,
+    grains: &str,
+    th: &Thresholds,
+    gas: &dyn Fn(f64) -> bool,
+) -> RegionInputs {
+    let (flc, diffusion, temperature) = inputs;
     let hot = temperature > th.gas_temperature;
-    let (mobile, mobility_from) = match (th.mobility, flc) {
-        (Mobility::LocationChanges, Some(f)) => {
+    let (mobile, mobility_from) = match (th.mobility, diffusion, flc) {
+        (Mobility::Displacement, Some(d), _) => (d > th.solid_diffusion, Mobility::Displacement),
+        (Mobility::LocationChanges, _, Some(f)) => {
             (f > th.solid_flc || hot, Mobility::LocationChanges)
         }
         _ => (temperature > th.solid_temperature, Mobility::Temperature),
     };
     let phase = if !mobile {
         Phase::S
-    } else if temperature > th.gas_temperature {
+    } else if gas(temperature) {
         Phase::G
     } else {
         Phase::F
     };
     RegionInputs {
         flc,
+        diffusion,
         temperature,
         mobility_from,
         bins,
+        grains: grains.to_string(),
         phase,
     }
 }
 
-/// Particle-weighted mean over the bins `sel` of a per-bin quantity; bins without a value
-/// (no particle, or too few for a temperature) are skipped.
+/// Weighted mean over the bins `sel` of a per-bin quantity; bins without a value or weight are
+/// skipped.
 fn weighted(sel: &[usize], weight: &[f64], value: &[Option<f64>]) -> Option<f64> {
     let (mut s, mut w) = (0.0, 0.0);
     for &b in sel {
-        if let Some(v) = value[b] {
-            s += v * weight[b];
-            w += weight[b];
+        if let (Some(v), Some(&wb)) = (value.get(b).copied().flatten(), weight.get(b)) {
+            s += v * wb;
+            w += wb;
         }
     }
     (w > 0.0).then(|| s / w)
 }
 
 /// Classifies observables with the given thresholds (pure: the same inputs give the same
-/// answer).
+/// answer). Fluid versus gas is decided per point (`gas_temperature`); a sweep replaces that by
+/// the line rule ([`super::line::apply_fluid_gas_line`]).
 pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
-    let mut c = classify_unsheared(obs, th);
+    let t_gas = th.gas_temperature;
+    classify_with(obs, th, &|t| t > t_gas, FluidGasFrom::PointFallback)
+}
+
+/// [`classify`] with the fluid-gas decision `gas(T_g / E_cb)` given from outside.
+pub fn classify_with(
+    obs: &Observables,
+    th: &Thresholds,
+    gas: &dyn Fn(f64) -> bool,
+    from: FluidGasFrom,
+) -> Classification {
+    let mut c = classify_unsheared(obs, th, gas);
+    c.decided_on.fluid_gas = from;
     if let Some(sh) = &obs.shear {
         let phase = if sh.e_par <= th.shear_e_par {
             Phase::S
@@ -330,33 +492,113 @@ pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
     c
 }
 
-/// Rules 1-3.
-fn classify_unsheared(obs: &Observables, th: &Thresholds) -> Classification {
+/// Rule 2: whether the deciding profile is significantly inhomogeneous.
+fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec<f64>) {
     let p = &obs.profiles;
+    let wet = obs.temperature_unit_name == "E_cb";
+    let by_bridges = match th.coexistence_by {
+        CoexistenceBy::Auto => wet,
+        CoexistenceBy::Bridges => true,
+        CoexistenceBy::Packing => false,
+    };
+    let (name, values, delta, se) = if by_bridges {
+        ("n_cb", p.n_cb.clone(), p.delta_n_cb, p.n_cb_standard_error)
+    } else {
+        (
+            "packing",
+            p.packing.clone(),
+            p.delta_n_area,
+            p.packing_standard_error,
+        )
+    };
+    let bins = values.len();
+    let split = two_class_split(&values);
+    let (mut hi, mut nhi, mut lo, mut nlo) = (0.0, 0usize, 0.0, 0usize);
+    for &v in &values {
+        if v >= split {
+            hi += v;
+            nhi += 1;
+        } else {
+            lo += v;
+            nlo += 1;
+        }
+    }
+    let (mh, ml) = (hi / nhi.max(1) as f64, lo / nlo.max(1) as f64);
+    let contrast = if mh > 0.0 && nlo > 0 {
+        (mh - ml) / mh
+    } else {
+        0.0
+    };
+    let expected = se.map(|s| s * noise::range_mean(bins));
+    let threshold = se.map(|s| s * noise::range_quantile(bins, th.coexistence_level));
+    let significant = !delta.is_nan()
+        && match threshold {
+            Some(q) => {
+                delta > q
+                    && delta > th.coexistence_delta_n_cb
+                    && contrast >= th.coexistence_contrast
+            }
+            // Stored before block statistics: the absolute threshold alone.
+            None => {
+                let floor = if th.coexistence_delta_n_cb > 0.0 {
+                    th.coexistence_delta_n_cb
+                } else {
+                    LEGACY_DELTA_N_CB
+                };
+                delta > floor
+            }
+        };
+    (
+        CoexistenceTest {
+            profile: name.to_string(),
+            delta,
+            standard_error: se,
+            expected_noise: expected,
+            noise_threshold: threshold,
+            contrast,
+            significant,
+        },
+        values,
+    )
+}
+
+/// Rules 1-3.
+fn classify_unsheared(
+    obs: &Observables,
+    th: &Thresholds,
+    gas: &dyn Fn(f64) -> bool,
+) -> Classification {
+    let p = &obs.profiles;
+    let flc_whole = obs
+        .location_changes
+        .as_ref()
+        .map(|l| l.per_particle_per_period);
+    let d_whole = obs.mobility.as_ref().map(|m| m.diffusion);
     let whole = region(
-        obs.location_changes
-            .as_ref()
-            .map(|l| l.per_particle_per_period),
-        obs.granular_temperature_reduced,
+        (flc_whole, d_whole, obs.granular_temperature_reduced),
         p.n_cb.len(),
+        "all",
         th,
+        gas,
     );
-    let delta = p.delta_n_cb;
+    let (test, values) = coexistence_test(obs, th);
     let mut decided = DecisionInputs {
         thresholds: th.clone(),
         whole: whole.clone(),
-        delta_n_cb: delta,
+        delta_n_cb: p.delta_n_cb,
+        coexistence: Some(test.clone()),
         split: false,
         split_n_cb: None,
         dense: None,
         dilute: None,
+        fluid_gas: FluidGasFrom::PointFallback,
         shear_e_par: None,
         reason: String::new(),
     };
-    if delta.is_nan() || delta <= th.coexistence_delta_n_cb {
+    if !test.significant {
         decided.reason = format!(
-            "homogeneous (Delta n_cb = {delta:.4} <= {}): {}",
-            th.coexistence_delta_n_cb,
+            "homogeneous ({}): {}",
+            describe_test(&test, th),
             describe(&whole, th)
         );
         return Classification {
@@ -364,27 +606,52 @@ fn classify_unsheared(obs: &Observables, th: &Thresholds) -> Classification {
             decided_on: decided,
         };
     }
-    let mid = two_class_split(&p.n_cb);
+    let mid = two_class_split(&values);
     let (dense_bins, dilute_bins): (Vec<usize>, Vec<usize>) =
-        (0..p.n_cb.len()).partition(|&b| p.n_cb[b] >= mid);
-    let flc_bins: Option<Vec<Option<f64>>> =
-        p.flc.as_ref().map(|f| f.iter().map(|&x| Some(x)).collect());
-    let part = |sel: &[usize]| {
-        let t = weighted(sel, &p.particles, &p.temperature_reduced)
-            .unwrap_or(obs.granular_temperature_reduced);
+        (0..values.len()).partition(|&b| values[b] >= mid);
+    // f_lc per bin is stored per time unit; rule 1 compares per period.
+    let flc_bins: Option<Vec<Option<f64>>> = p
+        .flc
+        .as_ref()
+        .map(|f| f.iter().map(|&x| Some(x * obs.period)).collect());
+    let has_clusters = !p.clustered.is_empty() && !p.temperature_clustered.is_empty();
+    let dense = {
+        let sel = &dense_bins;
+        let (w, t_bins, d_bins, grains) = if has_clusters {
+            (
+                &p.clustered,
+                &p.temperature_clustered,
+                &p.diffusion_clustered,
+                "clustered",
+            )
+        } else {
+            (&p.particles, &p.temperature_reduced, &p.diffusion, "all")
+        };
+        let t = weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced);
+        let d = weighted(sel, w, d_bins);
         let f = flc_bins
             .as_ref()
             .and_then(|fb| weighted(sel, &p.particles, fb));
-        region(f, t, sel.len(), th)
+        region((f, d, t), sel.len(), grains, th, gas)
     };
-    let dense = part(&dense_bins);
-    let dilute = part(&dilute_bins);
+    let dilute = {
+        let sel = &dilute_bins;
+        let t = weighted(sel, &p.particles, &p.temperature_reduced)
+            .unwrap_or(obs.granular_temperature_reduced);
+        let d = weighted(sel, &p.particles, &p.diffusion);
+        let f = flc_bins
+            .as_ref()
+            .and_then(|fb| weighted(sel, &p.particles, fb));
+        region((f, d, t), sel.len(), "all", th, gas)
+    };
     let phase = Phase::coexistence(dense.phase, dilute.phase).unwrap_or(dense.phase);
     decided.reason = format!(
-        "Delta n_cb = {delta:.4} > {}: split at n_cb = {mid:.4}; dense part ({} bins): {}; \
-         dilute part ({} bins): {}; so {phase}",
-        th.coexistence_delta_n_cb,
+        "coexistence test passed ({}): split at {} = {mid:.4}; dense part ({} bins, {} grains): \
+         {}; dilute part ({} bins): {}; so {phase}",
+        describe_test(&test, th),
+        test.profile,
         dense.bins,
+        dense.grains,
         describe(&dense, th),
         dilute.bins,
         describe(&dilute, th)
@@ -399,13 +666,39 @@ fn classify_unsheared(obs: &Observables, th: &Thresholds) -> Classification {
     }
 }
 
+/// The coexistence test in words.
+fn describe_test(t: &CoexistenceTest, th: &Thresholds) -> String {
+    match t.noise_threshold {
+        Some(q) => format!(
+            "Delta {} = {:.4} against noise {:.4} (level {} threshold {:.4}), contrast {:.2} \
+             (min {})",
+            t.profile,
+            t.delta,
+            t.expected_noise.unwrap_or(f64::NAN),
+            th.coexistence_level,
+            q,
+            t.contrast,
+            th.coexistence_contrast
+        ),
+        None => format!(
+            "Delta {} = {:.4}, no statistical error stored: legacy threshold",
+            t.profile, t.delta
+        ),
+    }
+}
+
 /// One region's decision in words.
 fn describe(r: &RegionInputs, th: &Thresholds) -> String {
-    let mobility = match (r.mobility_from, r.flc) {
-        (Mobility::LocationChanges, Some(f)) if f <= th.solid_flc && r.phase != Phase::S => {
+    let mobility = match (r.mobility_from, r.diffusion, r.flc) {
+        (Mobility::Displacement, Some(d), _) => format!(
+            "D_lat = {d:.3e} {} {}",
+            if d > th.solid_diffusion { ">" } else { "<=" },
+            th.solid_diffusion
+        ),
+        (Mobility::LocationChanges, _, Some(f)) if f <= th.solid_flc && r.phase != Phase::S => {
             format!("f_lc = {f:.4} <= {} but too hot for bridges", th.solid_flc)
         }
-        (Mobility::LocationChanges, Some(f)) => format!(
+        (Mobility::LocationChanges, _, Some(f)) => format!(
             "f_lc = {f:.4} {} {}",
             if f > th.solid_flc { ">" } else { "<=" },
             th.solid_flc
@@ -424,15 +717,5 @@ fn describe(r: &RegionInputs, th: &Thresholds) -> String {
     if r.phase == Phase::S {
         return format!("{mobility} -> s");
     }
-    format!(
-        "{mobility}, T_g/E_cb = {:.4} {} {} -> {}",
-        r.temperature,
-        if r.temperature > th.gas_temperature {
-            ">"
-        } else {
-            "<="
-        },
-        th.gas_temperature,
-        r.phase
-    )
+    format!("{mobility}, T_g/E_cb = {:.4} -> {}", r.temperature, r.phase)
 }

@@ -1,5 +1,8 @@
-//! Line analyses over a set of results. For inelastic grains the fluid-gas boundary along a line
-//! of constant Gamma is the inflection point of `T_g / E_cb` as a function of `E*` (MODEL.md 7).
+//! Line analyses over a set of results: the fluid-gas boundary along a line of constant Gamma
+//! (MODEL.md 7) and the relabelling of the line's points by it ([`classify_line`]). For elastic
+//! grains the boundary is the jump of `T_g / E_cb(E*)` ([`largest_jump`]); for inelastic ones
+//! the inflection point ([`fluid_gas_inflection`]). Only the line's *mobile* points (not solid
+//! by rule 1 as a whole) enter: the step from a solid to a fluid is not the fluid-gas jump.
 //!
 //! `T_g / E_cb` spans decades and grows roughly like `E*` deep in the gas, so the curve is read
 //! on log-log axes: with `x = ln E*`, `y = ln(T_g / E_cb)`, the inflection point is where the
@@ -8,6 +11,8 @@
 //! fitted by a parabola whose vertex is the inflection point. A largest slope at either end of
 //! the line means the inflection lies outside the sampled range, and no point is returned.
 
+use super::Observables;
+use super::classify::{Classification, FluidGasFrom, Phase, Thresholds, classify, classify_with};
 use serde::{Deserialize, Serialize};
 
 /// The result of [`fluid_gas_inflection`].
@@ -66,4 +71,83 @@ pub fn fluid_gas_inflection(points: &[(f64, f64)]) -> Option<Inflection> {
         max_slope: y1,
         bracket: (p[k].0.exp(), p[k + 1].0.exp()),
     })
+}
+
+/// The largest jump of `T_g / E_cb` between neighbouring points of a line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Jump {
+    /// The boundary: the geometric mean of the bracketing `E*`.
+    pub e_star: f64,
+    /// `T_g / E_cb` ratio across the jump.
+    pub ratio: f64,
+    pub bracket: (f64, f64),
+}
+
+/// The largest ratio `T_{k+1} / T_k` between neighbouring points `(E*, T_g / E_cb)` (sorted by
+/// `E*`), if it is at least `min_ratio`.
+pub fn largest_jump(points: &[(f64, f64)], min_ratio: f64) -> Option<Jump> {
+    let mut p: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|&(e, t)| e > 0.0 && t > 0.0 && e.is_finite() && t.is_finite())
+        .collect();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    p.dedup_by(|a, b| a.0 == b.0);
+    let (k, ratio) = p
+        .windows(2)
+        .map(|w| w[1].1 / w[0].1)
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (ratio >= min_ratio).then(|| Jump {
+        e_star: (p[k].0 * p[k + 1].0).sqrt(),
+        ratio,
+        bracket: (p[k].0, p[k + 1].0),
+    })
+}
+
+/// The fluid-gas boundary `E*` on one line from its mobile points `(E*, T_g / E_cb)`: the
+/// jump (elastic) or the inflection (inelastic); `None` where the line does not show one.
+pub fn fluid_gas_boundary(
+    points: &[(f64, f64)],
+    elastic: bool,
+    th: &Thresholds,
+) -> Option<(f64, &'static str)> {
+    if elastic {
+        largest_jump(points, th.line_jump_ratio).map(|j| (j.e_star, "jump"))
+    } else {
+        fluid_gas_inflection(points).map(|i| (i.e_star, "inflection"))
+    }
+}
+
+/// Classifies the points `(E*, observables)` of one line of constant `gamma`: each point by
+/// [`classify`], then, where the line's mobile points give a fluid-gas boundary, every point
+/// again with "gas" meaning `E* > E*_boundary` (for the whole system and for the dilute region
+/// of a coexistence). Points of a line without a boundary keep the per-point fallback.
+pub fn classify_line(
+    gamma: f64,
+    points: &[(f64, &Observables)],
+    th: &Thresholds,
+    elastic: bool,
+) -> Vec<Classification> {
+    let first: Vec<Classification> = points.iter().map(|(_, o)| classify(o, th)).collect();
+    let mobile: Vec<(f64, f64)> = points
+        .iter()
+        .zip(&first)
+        .filter(|(_, c)| c.decided_on.whole.phase != Phase::S)
+        .map(|((e, o), _)| (*e, o.granular_temperature_reduced))
+        .collect();
+    let Some((boundary, method)) = fluid_gas_boundary(&mobile, elastic, th) else {
+        return first;
+    };
+    points
+        .iter()
+        .map(|&(e, o)| {
+            let from = FluidGasFrom::Line {
+                gamma,
+                method: method.to_string(),
+                e_star_boundary: boundary,
+            };
+            classify_with(o, th, &|_| e > boundary, from)
+        })
+        .collect()
 }

@@ -43,6 +43,8 @@ pub struct Edge {
     pub j: u32,
     pub length: f64,
     pub mid_x: f64,
+    /// Midpoint `y` (3D; 0 in 2D).
+    pub mid_y: f64,
     /// 2D: the vertices `c, d` opposite the edge in its two triangles and the sum of the angles
     /// at `c` and `d`; `None` on the hull (and always for neighbour shells). The edge is Delaunay
     /// while the sum is at most `pi`; `pi - sum` is by how much.
@@ -147,6 +149,7 @@ pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
             j: a.id.max(b.id),
             length: (dx * dx + dz * dz).sqrt(),
             mid_x: a.p.x + 0.5 * dx,
+            mid_y: 0.0,
             opposite,
         });
     }
@@ -220,11 +223,13 @@ pub fn neighbour_shell_edges(
             if r < enter * contact || (r < leave * contact && previous.binary_search(&key).is_ok())
             {
                 let dx = frame.min_image(0, frame.x(j)[0] - frame.x(i)[0]);
+                let dy = frame.min_image(1, frame.x(j)[1] - frame.x(i)[1]);
                 out.push(Edge {
                     i: key.0,
                     j: key.1,
                     length: r,
                     mid_x: frame.x(i)[0] + 0.5 * dx,
+                    mid_y: frame.x(i)[1] + 0.5 * dy,
                     opposite: None,
                 });
             }
@@ -341,9 +346,15 @@ impl LocationChangeCounter {
         self.window_count as f64 / (self.particles as f64 * self.window_time / self.period)
     }
 
-    /// `f_lc` per bin, given the mean particle number of every bin (`0` for empty bins).
+    /// `f_lc` over the window per unit time: changes per particle per time unit.
+    pub fn per_particle_per_time(&self) -> f64 {
+        self.window_count as f64 / (self.particles as f64 * self.window_time)
+    }
+
+    /// `f_lc` per bin per unit time, given the mean particle number of every bin (`0` for
+    /// empty bins).
     pub fn per_bin(&self, particles: &[f64]) -> Vec<f64> {
-        let periods = self.window_time / self.period;
+        let periods = self.window_time;
         self.bin_count
             .iter()
             .zip(particles)
@@ -378,7 +389,7 @@ impl Observer for LocationChangeCounter {
                 self.window_count += fresh.len() as u64;
                 self.window_time += dt;
                 for e in &fresh {
-                    self.bin_count[self.bins.of(e.mid_x)] += 1;
+                    self.bin_count[self.bins.of_xy(e.mid_x, e.mid_y)] += 1;
                 }
             }
         }

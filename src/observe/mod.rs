@@ -9,6 +9,8 @@
 //! |---|---|
 //! | [`temperature`] | `T_g / E_cb`, global and per lateral bin (Eq. 3.2) |
 //! | [`profiles`] | lateral profiles of `n_cb` and of the packing fraction; `Delta n_cb` (Eq. 3.3), `Delta n_area` |
+//! | [`lateral`] | per-bin block sums: packing, bridges, `T_g` of all and of clustered grains, lateral mobility `D_lat` |
+//! | [`noise`] | statistical error of the profiles and the noise baseline of `Delta n` |
 //! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D) |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
 //! | [`stationarity`] | first versus second half of the window |
@@ -23,8 +25,10 @@
 pub mod bins;
 pub mod classify;
 pub mod diffusion;
+pub mod lateral;
 pub mod line;
 pub mod location_changes;
+pub mod noise;
 pub mod profiles;
 pub mod shear;
 pub mod spec;
@@ -41,7 +45,7 @@ pub use stationarity::{Stationarity, StationarityCheck};
 
 use crate::scene::Scene;
 use crate::sim::{Frame, RunReport, run_scene_observed};
-use bins::LateralBins;
+use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
 use profiles::ProfileObserver;
 use serde::{Deserialize, Serialize};
@@ -72,29 +76,93 @@ pub struct LocationChanges {
     pub count: u64,
     /// `f_lc`: changes per particle per period.
     pub per_particle_per_period: f64,
+    /// `f_lc` per particle per time unit (`None` in results stored before it existed).
+    #[serde(default)]
+    pub per_particle_per_time: Option<f64>,
     /// Interval between the samples the count was taken from.
     pub sample_interval: f64,
 }
 
-/// Lateral profiles, time-averaged over the window (bins along `x`).
+/// How `Profiles::n_cb` is normalised.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NcbNormalisation {
+    /// Bridges per lateral measure of the bin and per unit height, units `d^-D` (MODEL.md 7).
+    PerAreaAveragedOverHeight,
+    /// Results stored before the MODEL.md 7 normalisation: bridges per lateral measure summed
+    /// over the height, units `d^-(D-1)`; divide by `H` to convert.
+    #[default]
+    PerLateralMeasureSummedOverHeight,
+}
+
+/// Lateral profiles, time-averaged over the window. Bins are slabs along `x` in 2D and, by
+/// default, square cells over `(x, y)` in 3D (`bins::LateralBins`, numbered `ix + nx iy`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Profiles {
     pub bin_width: f64,
+    /// 3D plane bins: width along `y` and the grid `(nx, ny)`.
+    #[serde(default)]
+    pub bin_width_y: Option<f64>,
+    #[serde(default)]
+    pub grid: Option<(usize, usize)>,
+    /// Bin centres along `x` (one per bin).
     pub centres: Vec<f64>,
+    /// Bin centres along `y` (3D plane bins).
+    #[serde(default)]
+    pub centres_y: Option<Vec<f64>>,
     /// Mean particle number per bin.
     pub particles: Vec<f64>,
     /// Packing fraction (areal in 2D, volume in 3D).
     pub packing: Vec<f64>,
-    /// Bridge density, bridges per lateral length (2D) or area (3D), units `d^-(D-1)`.
+    /// Bridge density `n_cb` per bin (see `n_cb_normalisation`).
     pub n_cb: Vec<f64>,
-    /// `T_g / E_cb` per bin (`None` where a bin never held two particles).
+    #[serde(default)]
+    pub n_cb_normalisation: NcbNormalisation,
+    /// `T_g / E_cb` per bin, all grains in the bin at each sample (`None` where a bin never
+    /// held two particles).
     pub temperature_reduced: Vec<Option<f64>>,
-    /// `f_lc` per bin (`None` without the location-change observer).
+    /// `T_g / E_cb` per bin of the clustered grains only (`observe::lateral`).
+    #[serde(default)]
+    pub temperature_clustered: Vec<Option<f64>>,
+    /// Mean number of clustered grains per bin.
+    #[serde(default)]
+    pub clustered: Vec<f64>,
+    /// Lateral mobility `D_lat` per bin (grains booked to their bin at the lag's origin).
+    #[serde(default)]
+    pub diffusion: Vec<Option<f64>>,
+    /// `D_lat` per bin of the grains clustered at the lag's origin.
+    #[serde(default)]
+    pub diffusion_clustered: Vec<Option<f64>>,
+    /// `f_lc` per bin, per particle per time unit (`None` without the location-change
+    /// observer). Results stored before per-time normalisation hold per-period values.
     pub flc: Option<Vec<f64>>,
-    /// `max n_cb - min n_cb` (Eq. 3.3), units `d^-(D-1)`.
+    /// `max n_cb - min n_cb` (Eq. 3.3), units as `n_cb`.
     pub delta_n_cb: f64,
     /// `max - min` of the packing fraction.
     pub delta_n_area: f64,
+    /// Root mean square over the bins of the standard error of each bin's time-averaged
+    /// `n_cb`, from block means (`observe::noise`); `None` with fewer than two blocks.
+    #[serde(default)]
+    pub n_cb_standard_error: Option<f64>,
+    /// The same for the packing fraction.
+    #[serde(default)]
+    pub packing_standard_error: Option<f64>,
+    /// Blocks the standard errors were taken from.
+    #[serde(default)]
+    pub noise_blocks: usize,
+}
+
+/// The lateral mobility of the whole system over the window (`observe::lateral`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LateralMobility {
+    /// The lag `tau`, time units.
+    pub lag: f64,
+    /// `D_lat = <|Delta r_lat|^2> / (2 n_lat tau)`, all grains.
+    pub diffusion: f64,
+    /// The same over the grains clustered at the lag's origin (`None` without any).
+    pub diffusion_clustered: Option<f64>,
+    /// Lag windows that went into it (grain-lags / N).
+    pub lags: f64,
 }
 
 /// Events inside the window.
@@ -140,6 +208,10 @@ pub struct Observables {
     /// Window mean of the number of bridges per particle.
     pub bridges_per_particle: f64,
     pub location_changes: Option<LocationChanges>,
+    /// Lateral mobility (`None` in results stored before it existed, or when the window is
+    /// shorter than the lag).
+    #[serde(default)]
+    pub mobility: Option<LateralMobility>,
     pub profiles: Profiles,
     pub diffusion: Option<Diffusion>,
     pub counts: WindowCounts,
@@ -169,178 +241,18 @@ pub fn run_observed_with_frame(
     scene: &Scene,
     progress: &mut dyn FnMut(f64),
 ) -> (ObservedRun, Frame) {
-    let spec = &scene.observe;
-    let period = period_of(scene);
-    let dt = spec.sample_interval(scene);
-    let t_start = spec.window_start(scene);
+    let mut set = ObserverSet::new(scene);
     let duration = scene.run.duration;
-    let (n_bins, _) = spec.bins(scene);
-    let bins = LateralBins::new(n_bins, scene.container.size[0]);
-    let e_cb = scene.e_cb();
-    let (unit, unit_name) = if e_cb > 0.0 {
-        (e_cb, "E_cb")
-    } else {
-        let u = scene.particles.mass * scene.gravity.max(0.0) * scene.particles.diameter;
-        if u > 0.0 { (u, "m g d") } else { (1.0, "1") }
-    };
-
-    let mut temperature = TemperatureObserver::new(bins.clone(), unit);
-    let mut profiles = ProfileObserver::new(bins.clone(), scene.particles.diameter);
-    let mut lc = spec.location_changes.then(|| {
-        let method = if scene.dimension == 2 {
-            Method::Delaunay {
-                max_edge: spec.lc_max_edge * scene.particles.diameter,
-                margin: spec.lc_flip_margin,
-            }
-        } else {
-            Method::NeighbourShell {
-                enter: spec.lc_enter_factor,
-                leave: spec.lc_leave_factor,
-            }
-        };
-        LocationChangeCounter::new(method, bins.clone(), period)
-    });
-    let mut diffusion = spec
-        .diffusion
-        .then(|| diffusion::DiffusionObserver::new(spec.layers.min(scene.particles.count)));
-    let mut shear_obs = scene
-        .shear_slabs()
-        .is_some()
-        .then(|| shear::ShearObserver::new(unit));
-    let mut first_counts = None;
-    let mut last: Option<Frame> = None;
-    let mut window_samples = 0usize;
-    let eps = 1e-9 * duration.max(1.0);
-
+    let dt = set.sample_interval();
     let mut observer = |frame: &Frame| {
-        let in_window = frame.time >= t_start - eps;
-        temperature.observe(frame, in_window);
-        profiles.observe(frame, in_window);
-        if let Some(o) = lc.as_mut() {
-            o.observe(frame, in_window);
-        }
-        if let Some(o) = diffusion.as_mut() {
-            o.observe(frame, in_window);
-        }
-        if let Some(o) = shear_obs.as_mut() {
-            o.observe(frame, in_window);
-        }
-        if in_window {
-            window_samples += 1;
-            if first_counts.is_none() {
-                first_counts = Some(frame.counts.clone());
-            }
-        }
+        set.observe(frame);
         progress((frame.time / duration).clamp(0.0, 1.0));
-        last = Some(frame.clone());
     };
     let report = run_scene_observed(scene, dt, &mut observer, &mut |_| {});
-    let last = last.expect("the observer sees at least the initial frame");
-    let window_end = last.time;
-
-    let particles_per_bin = profiles.particles();
-    let n_cb = profiles.n_cb();
-    let packing = profiles.packing();
-    let flc_bins = lc.as_ref().map(|o| o.per_bin(&particles_per_bin));
-    let profile = Profiles {
-        bin_width: bins.width,
-        centres: bins.centres(),
-        delta_n_cb: profiles::spread(&n_cb),
-        delta_n_area: profiles::spread(&packing),
-        particles: particles_per_bin,
-        packing,
-        n_cb,
-        temperature_reduced: temperature.profile_reduced(),
-        flc: flc_bins,
-    };
-    let location_changes = lc.as_ref().map(|o| LocationChanges {
-        method: o.method().name().to_string(),
-        count: o.window_count,
-        per_particle_per_period: o.per_particle_per_period(),
-        sample_interval: dt,
-    });
-
-    let c0 = first_counts.unwrap_or_else(|| last.counts.clone());
-    let c1 = &last.counts;
-    let walls = c1.wall_collisions - c0.wall_collisions;
-    let pairs = c1.pair_collisions - c0.pair_collisions;
-    let counts = WindowCounts {
-        pair_collisions: pairs,
-        wall_collisions: walls,
-        bridge_formations: c1.bridge_formations - c0.bridge_formations,
-        bridge_ruptures: c1.bridge_ruptures - c0.bridge_ruptures,
-        pair_per_wall: (walls > 0).then(|| pairs as f64 / walls as f64),
-    };
-
-    let window = (t_start, window_end);
-    let tol = spec.stationarity_tolerance;
-    let mut checks = vec![stationarity::check(
-        "temperature_reduced",
-        &temperature.series,
-        window,
-        FLOOR_TEMPERATURE,
-        tol,
-    )];
-    if scene.is_wet() {
-        checks.push(stationarity::check(
-            "bridges_per_particle",
-            &profiles.series,
-            window,
-            FLOOR_BRIDGES_PER_PARTICLE,
-            tol,
-        ));
-    }
-    if let Some(o) = &lc {
-        checks.push(stationarity::check(
-            "location_changes",
-            &o.series,
-            window,
-            FLOOR_FLC,
-            tol,
-        ));
-    }
-    if let Some(o) = &shear_obs {
-        checks.push(stationarity::check(
-            "e_par",
-            &o.e_par_series(),
-            window,
-            FLOOR_E_PAR,
-            tol,
-        ));
-    }
-    let in_window = |s: &[(f64, f64)]| -> Vec<f64> {
-        s.iter()
-            .filter(|(t, _)| *t >= t_start - eps)
-            .map(|&(_, x)| x)
-            .collect()
-    };
-    let mean = |v: Vec<f64>| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let series = spec.time_series.then(|| TimeSeries {
-        time: temperature.series.iter().map(|&(t, _)| t).collect(),
-        temperature_reduced: temperature.series.iter().map(|&(_, x)| x).collect(),
-        bridges_per_particle: profiles.series.iter().map(|&(_, x)| x).collect(),
-        location_changes: lc.as_ref().map_or_else(Vec::new, |o| o.series.clone()),
-    });
-    let observables = Observables {
-        dimension: scene.dimension,
-        particles: scene.particles.count,
-        period,
-        window_start: t_start,
-        window_end,
-        window_samples,
-        sample_interval: dt,
-        temperature_unit: unit,
-        temperature_unit_name: unit_name.to_string(),
-        granular_temperature_reduced: temperature.mean_reduced(),
-        bridges_per_particle: mean(in_window(&profiles.series)),
-        location_changes,
-        profiles: profile,
-        diffusion: diffusion.as_ref().and_then(|o| o.finish(scene.dimension)),
-        counts,
-        stationarity: stationarity::verdict(tol, checks),
-        series,
-        shear: shear_obs.as_ref().map(|o| o.finish(spec.time_series)),
-    };
+    let observables = set.finish(scene);
+    let last = set
+        .last
+        .expect("the observer sees at least the initial frame");
     let classification = classify(&observables, &scene.classify);
     (
         ObservedRun {
@@ -351,3 +263,325 @@ pub fn run_observed_with_frame(
         last,
     )
 }
+
+/// Every observer a scene's `[observe]` section asks for, fed frame by frame
+/// ([`ObserverSet::observe`]) and summed up into [`Observables`] ([`ObserverSet::finish`]).
+/// [`run_observed`] feeds it from an engine; tests feed it prescribed configurations.
+#[derive(Debug)]
+pub struct ObserverSet {
+    period: f64,
+    dt: f64,
+    t_start: f64,
+    eps: f64,
+    unit: f64,
+    unit_name: &'static str,
+    temperature: TemperatureObserver,
+    profiles: ProfileObserver,
+    lateral: LateralObserver,
+    lc: Option<LocationChangeCounter>,
+    diffusion: Option<diffusion::DiffusionObserver>,
+    shear: Option<shear::ShearObserver>,
+    first_counts: Option<crate::sim::event_driven::EventCounts>,
+    window_samples: usize,
+    /// The last frame seen.
+    pub last: Option<Frame>,
+}
+
+impl ObserverSet {
+    /// The observers of a validated scene.
+    pub fn new(scene: &Scene) -> Self {
+        let spec = &scene.observe;
+        let period = period_of(scene);
+        let dt = spec.sample_interval(scene);
+        let bins = spec.lateral_bins(scene);
+        let e_cb = scene.e_cb();
+        let (unit, unit_name) = if e_cb > 0.0 {
+            (e_cb, "E_cb")
+        } else {
+            let u = scene.particles.mass * scene.gravity.max(0.0) * scene.particles.diameter;
+            if u > 0.0 { (u, "m g d") } else { (1.0, "1") }
+        };
+        let lc = spec.location_changes.then(|| {
+            let method = if scene.dimension == 2 {
+                Method::Delaunay {
+                    max_edge: spec.lc_max_edge * scene.particles.diameter,
+                    margin: spec.lc_flip_margin,
+                }
+            } else {
+                Method::NeighbourShell {
+                    enter: spec.lc_enter_factor,
+                    leave: spec.lc_leave_factor,
+                }
+            };
+            LocationChangeCounter::new(method, bins.clone(), period)
+        });
+        Self {
+            period,
+            dt,
+            t_start: spec.window_start(scene),
+            eps: 1e-9 * scene.run.duration.max(1.0),
+            unit,
+            unit_name,
+            temperature: TemperatureObserver::new(unit),
+            profiles: ProfileObserver::default(),
+            lateral: LateralObserver::new(
+                bins,
+                scene.is_wet(),
+                unit,
+                dt,
+                period,
+                spec.mobility_lag,
+            ),
+            lc,
+            diffusion: spec
+                .diffusion
+                .then(|| diffusion::DiffusionObserver::new(spec.layers.min(scene.particles.count))),
+            shear: scene
+                .shear_slabs()
+                .is_some()
+                .then(|| shear::ShearObserver::new(unit)),
+            first_counts: None,
+            window_samples: 0,
+            last: None,
+        }
+    }
+
+    /// Interval between two samples.
+    pub fn sample_interval(&self) -> f64 {
+        self.dt
+    }
+
+    /// Hands one sampled frame to every observer.
+    pub fn observe(&mut self, frame: &Frame) {
+        let in_window = frame.time >= self.t_start - self.eps;
+        self.temperature.observe(frame, in_window);
+        self.profiles.observe(frame, in_window);
+        if in_window {
+            self.lateral.observe(frame);
+        }
+        if let Some(o) = self.lc.as_mut() {
+            o.observe(frame, in_window);
+        }
+        if let Some(o) = self.diffusion.as_mut() {
+            o.observe(frame, in_window);
+        }
+        if let Some(o) = self.shear.as_mut() {
+            o.observe(frame, in_window);
+        }
+        if in_window {
+            self.window_samples += 1;
+            if self.first_counts.is_none() {
+                self.first_counts = Some(frame.counts.clone());
+            }
+        }
+        self.last = Some(frame.clone());
+    }
+
+    /// The observables over the window, from every frame seen so far.
+    pub fn finish(&self, scene: &Scene) -> Observables {
+        let spec = &scene.observe;
+        let (t_start, eps, dt) = (self.t_start, self.eps, self.dt);
+        let last = self.last.as_ref().expect("at least one frame observed");
+        let window_end = last.time;
+        let lc = self.lc.as_ref();
+        let (profile, mobility) = lateral_profiles(&self.lateral, scene, t_start, lc);
+        let location_changes = lc.map(|o| LocationChanges {
+            method: o.method().name().to_string(),
+            count: o.window_count,
+            per_particle_per_period: o.per_particle_per_period(),
+            per_particle_per_time: Some(o.per_particle_per_time()),
+            sample_interval: dt,
+        });
+        let c0 = self
+            .first_counts
+            .clone()
+            .unwrap_or_else(|| last.counts.clone());
+        let c1 = &last.counts;
+        let walls = c1.wall_collisions - c0.wall_collisions;
+        let pairs = c1.pair_collisions - c0.pair_collisions;
+        let counts = WindowCounts {
+            pair_collisions: pairs,
+            wall_collisions: walls,
+            bridge_formations: c1.bridge_formations - c0.bridge_formations,
+            bridge_ruptures: c1.bridge_ruptures - c0.bridge_ruptures,
+            pair_per_wall: (walls > 0).then(|| pairs as f64 / walls as f64),
+        };
+        let window = (t_start, window_end);
+        let tol = spec.stationarity_tolerance;
+        let mut checks = vec![stationarity::check(
+            "temperature_reduced",
+            &self.temperature.series,
+            window,
+            FLOOR_TEMPERATURE,
+            tol,
+        )];
+        if scene.is_wet() {
+            checks.push(stationarity::check(
+                "bridges_per_particle",
+                &self.profiles.series,
+                window,
+                FLOOR_BRIDGES_PER_PARTICLE,
+                tol,
+            ));
+        }
+        if let Some(o) = lc {
+            checks.push(stationarity::check(
+                "location_changes",
+                &o.series,
+                window,
+                FLOOR_FLC,
+                tol,
+            ));
+        }
+        if let Some(o) = &self.shear {
+            checks.push(stationarity::check(
+                "e_par",
+                &o.e_par_series(),
+                window,
+                FLOOR_E_PAR,
+                tol,
+            ));
+        }
+        let in_window = |s: &[(f64, f64)]| -> Vec<f64> {
+            s.iter()
+                .filter(|(t, _)| *t >= t_start - eps)
+                .map(|&(_, x)| x)
+                .collect()
+        };
+        let mean = |v: Vec<f64>| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        let temperature = &self.temperature;
+        let series = spec.time_series.then(|| TimeSeries {
+            time: temperature.series.iter().map(|&(t, _)| t).collect(),
+            temperature_reduced: temperature.series.iter().map(|&(_, x)| x).collect(),
+            bridges_per_particle: self.profiles.series.iter().map(|&(_, x)| x).collect(),
+            location_changes: lc.map_or_else(Vec::new, |o| o.series.clone()),
+        });
+        Observables {
+            dimension: scene.dimension,
+            particles: scene.particles.count,
+            period: self.period,
+            window_start: t_start,
+            window_end,
+            window_samples: self.window_samples,
+            sample_interval: dt,
+            temperature_unit: self.unit,
+            temperature_unit_name: self.unit_name.to_string(),
+            granular_temperature_reduced: temperature.mean_reduced(),
+            bridges_per_particle: mean(in_window(&self.profiles.series)),
+            location_changes,
+            mobility,
+            profiles: profile,
+            diffusion: self
+                .diffusion
+                .as_ref()
+                .and_then(|o| o.finish(scene.dimension)),
+            counts,
+            stationarity: stationarity::verdict(tol, checks),
+            series,
+            shear: self.shear.as_ref().map(|o| o.finish(spec.time_series)),
+        }
+    }
+}
+
+/// Time-averaged lateral profiles over the blocks of the window starting at `t_start`, their
+/// statistical errors, and the system's lateral mobility.
+fn lateral_profiles(
+    lateral: &LateralObserver,
+    scene: &Scene,
+    t_start: f64,
+    lc: Option<&LocationChangeCounter>,
+) -> (Profiles, Option<LateralMobility>) {
+    let bins = lateral.bins();
+    let nb = bins.n;
+    let blocks = lateral.blocks_from(t_start);
+    let samples: u64 = blocks.iter().map(|b| b.samples).sum();
+    let per_sample = |f: usize| -> Vec<f64> {
+        field_sums(blocks, nb, f)
+            .into_iter()
+            .map(|x| x / samples.max(1) as f64)
+            .collect()
+    };
+    let ratio = |num: usize, den: usize, scale: f64| -> Vec<Option<f64>> {
+        field_sums(blocks, nb, num)
+            .into_iter()
+            .zip(field_sums(blocks, nb, den))
+            .map(|(a, w)| (w > 0.0).then(|| scale * a / w))
+            .collect()
+    };
+    let d = scene.particles.diameter;
+    let dim = scene.dimension;
+    let n_lat = (dim - 1) as f64;
+    let height = scene.container.size[dim - 1];
+    // A representative frame geometry for the bin measures.
+    let lateral_measure = if dim == 2 {
+        bins.width
+    } else if bins.is_plane() {
+        bins.width * bins.width_y
+    } else {
+        bins.width * scene.container.size[1]
+    };
+    let bin_volume = lateral_measure * height;
+    // n_cb: bridges per lateral measure per unit height, units d^-D (MODEL.md 7, Eq. 3.3).
+    let ncb_scale = d.powi(dim as i32) / bin_volume;
+    let n_cb: Vec<f64> = per_sample(field::BRIDGES)
+        .into_iter()
+        .map(|x| x * ncb_scale)
+        .collect();
+    let packing: Vec<f64> = per_sample(field::VOLUME)
+        .into_iter()
+        .map(|x| x / bin_volume)
+        .collect();
+    let particles = per_sample(field::PARTICLES);
+    // Per-bin standard errors from block means (observe::noise).
+    let block_se = |f: usize, scale: f64| -> Option<f64> {
+        let mut sq = 0.0;
+        for b in 0..nb {
+            let means: Vec<f64> = blocks
+                .iter()
+                .map(|k| scale * k.get(b, f) / k.samples.max(1) as f64)
+                .collect();
+            let weights: Vec<f64> = blocks.iter().map(|k| k.samples as f64).collect();
+            let se = noise::block_standard_error(&means, &weights, NOISE_BLOCKS)?;
+            sq += se * se;
+        }
+        Some((sq / nb as f64).sqrt())
+    };
+    let lag = lateral.lag();
+    let diff_scale = 1.0 / (2.0 * n_lat * lag);
+    let flc = lc.map(|o| o.per_bin(&particles));
+    let sum = |f: usize| -> f64 { field_sums(blocks, nb, f).iter().sum() };
+    let mobility = (sum(field::MSD_ALL_N) > 0.0).then(|| LateralMobility {
+        lag,
+        diffusion: diff_scale * sum(field::MSD_ALL) / sum(field::MSD_ALL_N),
+        diffusion_clustered: (sum(field::MSD_CL_N) > 0.0)
+            .then(|| diff_scale * sum(field::MSD_CL) / sum(field::MSD_CL_N)),
+        lags: sum(field::MSD_ALL_N) / scene.particles.count.max(1) as f64,
+    });
+    let profile = Profiles {
+        bin_width: bins.width,
+        bin_width_y: bins.is_plane().then_some(bins.width_y),
+        grid: bins.is_plane().then_some((bins.nx, bins.ny)),
+        centres: bins.centres(),
+        centres_y: bins.centres_y(),
+        delta_n_cb: profiles::spread(&n_cb),
+        delta_n_area: profiles::spread(&packing),
+        n_cb_standard_error: block_se(field::BRIDGES, ncb_scale),
+        packing_standard_error: block_se(field::VOLUME, 1.0 / bin_volume),
+        noise_blocks: blocks.len().min(NOISE_BLOCKS),
+        particles,
+        packing,
+        n_cb,
+        n_cb_normalisation: NcbNormalisation::PerAreaAveragedOverHeight,
+        temperature_reduced: ratio(field::T_ALL, field::T_ALL_W, 1.0),
+        temperature_clustered: ratio(field::T_CL, field::T_CL_W, 1.0),
+        clustered: per_sample(field::CLUSTERED),
+        diffusion: ratio(field::MSD_ALL, field::MSD_ALL_N, diff_scale),
+        diffusion_clustered: ratio(field::MSD_CL, field::MSD_CL_N, diff_scale),
+        flc,
+    };
+    (profile, mobility)
+}
+
+/// Blocks the standard error of a profile is taken from (`noise::block_standard_error`
+/// merges the window's blocks down to at most this many).
+pub const NOISE_BLOCKS: usize = 32;

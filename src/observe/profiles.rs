@@ -3,9 +3,10 @@
 //! `Delta n_cb = max n_cb - min n_cb` (MODEL.md Eq. 3.3) and `Delta n_area` likewise.
 //!
 //! - `n_cb(bin)` = bridges whose midpoint (nearest periodic image) lies in the bin, divided by
-//!   the bin's lateral measure (its width in 2D, width times `L_y` in 3D): bridges per lateral
-//!   length (2D) or area (3D), summed over the height. Reported in units of `d^-(D-1)` (multiplied
-//!   by `d^(D-1)`).
+//!   the bin's lateral measure (its width in 2D, its area in 3D) and by the box height `H`:
+//!   bridges per lateral area averaged over the height, as MODEL.md 7 defines it. Reported in
+//!   units of `d^-D` (multiplied by `d^D`). (Before this normalisation the height was summed
+//!   over, not averaged: stored results of that kind are converted by `reclassify`.)
 //! - packing fraction(bin) = summed disk areas `pi r^2` (sphere volumes `4/3 pi r^3`) of the
 //!   particles whose centre lies in the bin, over the bin's area `width * H` (volume
 //!   `width * L_y * H`). A grain straddling a bin edge is counted whole in its centre's bin.
@@ -24,9 +25,11 @@ pub fn bridge_counts(frame: &Frame, bins: &LateralBins) -> Vec<usize> {
     c
 }
 
-/// `n_cb` per bin of one frame, in units of `d^-(D-1)` for mean diameter `d`.
+/// `n_cb` per bin of one frame, in units of `d^-D` for mean diameter `d`: bridges per lateral
+/// measure of the bin and per unit height (MODEL.md 7).
 pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
-    let scale = d.powi(frame.dimension as i32 - 1) / bins.lateral_measure(frame);
+    let height = frame.box_size[frame.dimension - 1];
+    let scale = d.powi(frame.dimension as i32) / (bins.lateral_measure(frame) * height);
     bridge_counts(frame, bins)
         .iter()
         .map(|&c| c as f64 * scale)
@@ -48,7 +51,7 @@ pub fn packing_fraction(frame: &Frame, bins: &LateralBins) -> Vec<f64> {
     let bin_volume = bins.lateral_measure(frame) * height;
     let mut v = vec![0.0; bins.n];
     for i in 0..frame.len() {
-        v[bins.of(frame.x(i)[0])] += particle_volume(frame.dimension, frame.radii[i]);
+        v[bins.of_particle(frame, i)] += particle_volume(frame.dimension, frame.radii[i]);
     }
     v.iter().map(|x| x / bin_volume).collect()
 }
@@ -63,80 +66,18 @@ pub fn spread(profile: &[f64]) -> f64 {
     max - min
 }
 
-/// Accumulates the bridge-density, packing-fraction and occupation profiles over the window,
-/// and the bridge count at every sample.
-#[derive(Debug, Clone)]
+/// The number of bridges per particle at every sample (the profiles themselves are
+/// accumulated by [`super::lateral::LateralObserver`]).
+#[derive(Debug, Clone, Default)]
 pub struct ProfileObserver {
-    bins: LateralBins,
-    diameter: f64,
-    samples: usize,
-    n_cb: Vec<f64>,
-    packing: Vec<f64>,
-    particles: Vec<f64>,
     /// `(t, bridges per particle)` at every sample.
     pub series: Vec<(f64, f64)>,
 }
 
-impl ProfileObserver {
-    pub fn new(bins: LateralBins, diameter: f64) -> Self {
-        let n = bins.n;
-        Self {
-            bins,
-            diameter,
-            samples: 0,
-            n_cb: vec![0.0; n],
-            packing: vec![0.0; n],
-            particles: vec![0.0; n],
-            series: Vec::new(),
-        }
-    }
-
-    fn mean(&self, v: &[f64]) -> Vec<f64> {
-        let s = self.samples.max(1) as f64;
-        v.iter().map(|x| x / s).collect()
-    }
-
-    /// Window-averaged `n_cb` per bin (units `d^-(D-1)`).
-    pub fn n_cb(&self) -> Vec<f64> {
-        self.mean(&self.n_cb)
-    }
-
-    /// Window-averaged packing fraction per bin.
-    pub fn packing(&self) -> Vec<f64> {
-        self.mean(&self.packing)
-    }
-
-    /// Window-averaged particle count per bin.
-    pub fn particles(&self) -> Vec<f64> {
-        self.mean(&self.particles)
-    }
-}
-
 impl Observer for ProfileObserver {
-    fn observe(&mut self, frame: &Frame, in_window: bool) {
+    fn observe(&mut self, frame: &Frame, _in_window: bool) {
         let n = frame.len().max(1) as f64;
         self.series
             .push((frame.time, frame.bridges.len() as f64 / n));
-        if !in_window {
-            return;
-        }
-        self.samples += 1;
-        for (a, x) in self
-            .n_cb
-            .iter_mut()
-            .zip(bridge_density(frame, &self.bins, self.diameter))
-        {
-            *a += x;
-        }
-        for (a, x) in self
-            .packing
-            .iter_mut()
-            .zip(packing_fraction(frame, &self.bins))
-        {
-            *a += x;
-        }
-        for i in 0..frame.len() {
-            self.particles[self.bins.of(frame.x(i)[0])] += 1.0;
-        }
     }
 }

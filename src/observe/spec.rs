@@ -1,6 +1,7 @@
 //! The `[observe]` section of a scene: which observers run, when they sample, and the
 //! stationary window. Pure data plus its validation (errors name the file, key and range).
 
+use super::bins::{Bins3d, LateralBins};
 use crate::scene::{Scene, SceneError};
 use serde::{Deserialize, Serialize};
 
@@ -59,6 +60,14 @@ pub struct ObserveSpec {
     /// counts as stationary (default 0.2).
     #[serde(default = "default_stationarity_tolerance")]
     pub stationarity_tolerance: f64,
+    /// Lag of the mobility measure, in time units `sqrt(d/g)` (default 10): the lateral
+    /// mean-square displacement over this lag gives `D_lat` (`observe::lateral`).
+    #[serde(default = "default_mobility_lag")]
+    pub mobility_lag: f64,
+    /// 3D: lateral bins as square cells over `(x, y)` (`"plane"`, default) or slabs along `x`
+    /// across the whole depth (`"x_slabs"`).
+    #[serde(default)]
+    pub bins_3d: Bins3d,
 }
 
 impl Default for ObserveSpec {
@@ -76,6 +85,8 @@ impl Default for ObserveSpec {
             lc_enter_factor: default_lc_enter_factor(),
             lc_leave_factor: default_lc_leave_factor(),
             stationarity_tolerance: default_stationarity_tolerance(),
+            mobility_lag: default_mobility_lag(),
+            bins_3d: Bins3d::default(),
         }
     }
 }
@@ -107,6 +118,9 @@ fn default_lc_leave_factor() -> f64 {
 fn default_stationarity_tolerance() -> f64 {
     0.2
 }
+fn default_mobility_lag() -> f64 {
+    10.0
+}
 
 /// The period observations are counted in: `2 pi / omega` for a shaken scene, else 1.
 pub fn period_of(scene: &Scene) -> f64 {
@@ -127,12 +141,27 @@ impl ObserveSpec {
         self.transient_periods * period_of(scene)
     }
 
-    /// Number of lateral bins and their width: `n = max(1, round(L_x / bin_width))`,
+    /// Number of lateral bins along `x` and their width: `n = max(1, round(L_x / bin_width))`,
     /// width `L_x / n`.
     pub fn bins(&self, scene: &Scene) -> (usize, f64) {
         let l = scene.container.size[0];
         let n = ((l / self.bin_width).round() as usize).max(1);
         (n, l / n as f64)
+    }
+
+    /// The lateral bins of a scene: slabs along `x` in 2D; in 3D square-ish cells of
+    /// `bin_width` over `(x, y)` (each axis rounded to a whole number of cells), or x-slabs
+    /// with `bins_3d = "x_slabs"`.
+    pub fn lateral_bins(&self, scene: &Scene) -> LateralBins {
+        let (nx, _) = self.bins(scene);
+        let lx = scene.container.size[0];
+        if scene.dimension == 3 && self.bins_3d == Bins3d::Plane {
+            let ly = scene.container.size[1];
+            let ny = ((ly / self.bin_width).round() as usize).max(1);
+            LateralBins::grid(nx, lx, ny, ly)
+        } else {
+            LateralBins::new(nx, lx)
+        }
     }
 
     /// Checks every key of `[observe]` against the rest of the scene.
@@ -212,6 +241,15 @@ impl ObserveSpec {
                 format!(
                     "= {} is out of range: must be finite and > lc_enter_factor = {}",
                     self.lc_leave_factor, self.lc_enter_factor
+                ),
+            ));
+        }
+        if !finite_pos(self.mobility_lag) {
+            return Err(err(
+                "mobility_lag",
+                format!(
+                    "= {} is out of range: must be finite and > 0 (time units)",
+                    self.mobility_lag
                 ),
             ));
         }

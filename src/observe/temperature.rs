@@ -31,7 +31,7 @@ pub fn granular_temperature(frame: &Frame, sel: &[usize]) -> Option<f64> {
 pub fn temperature_profile(frame: &Frame, bins: &LateralBins) -> (Vec<Option<f64>>, Vec<usize>) {
     let mut members: Vec<Vec<usize>> = vec![Vec::new(); bins.n];
     for i in 0..frame.len() {
-        members[bins.of(frame.x(i)[0])].push(i);
+        members[bins.of_particle(frame, i)].push(i);
     }
     let t = members
         .iter()
@@ -40,46 +40,31 @@ pub fn temperature_profile(frame: &Frame, bins: &LateralBins) -> (Vec<Option<f64
     (t, members.iter().map(Vec::len).collect())
 }
 
-/// Time series and window averages of the global and per-bin temperature.
+/// Time series and window mean of the global temperature (the per-bin temperatures are
+/// accumulated by [`super::lateral::LateralObserver`]).
 #[derive(Debug, Clone)]
 pub struct TemperatureObserver {
-    bins: LateralBins,
     /// `E_cb`, or `m g d` for dry scenes.
     unit: f64,
     /// `(t, T_g / unit)` at every sample.
     pub series: Vec<(f64, f64)>,
     window_sum: f64,
     window_samples: usize,
-    bin_sum: Vec<f64>,
-    bin_weight: Vec<f64>,
 }
 
 impl TemperatureObserver {
-    pub fn new(bins: LateralBins, unit: f64) -> Self {
-        let n = bins.n;
+    pub fn new(unit: f64) -> Self {
         Self {
-            bins,
             unit,
             series: Vec::new(),
             window_sum: 0.0,
             window_samples: 0,
-            bin_sum: vec![0.0; n],
-            bin_weight: vec![0.0; n],
         }
     }
 
     /// Window mean of `T_g / unit` (NaN without samples).
     pub fn mean_reduced(&self) -> f64 {
         self.window_sum / self.window_samples as f64
-    }
-
-    /// Window mean of `T_g / unit` per bin (`None` for bins that never held two particles).
-    pub fn profile_reduced(&self) -> Vec<Option<f64>> {
-        self.bin_sum
-            .iter()
-            .zip(&self.bin_weight)
-            .map(|(&s, &w)| (w > 0.0).then(|| s / w))
-            .collect()
     }
 }
 
@@ -88,18 +73,9 @@ impl Observer for TemperatureObserver {
         let all: Vec<usize> = (0..frame.len()).collect();
         let t = granular_temperature(frame, &all).unwrap_or(0.0) / self.unit;
         self.series.push((frame.time, t));
-        if !in_window {
-            return;
-        }
-        self.window_sum += t;
-        self.window_samples += 1;
-        let (profile, counts) = temperature_profile(frame, &self.bins);
-        for b in 0..self.bins.n {
-            if let Some(tb) = profile[b] {
-                let w = counts[b] as f64;
-                self.bin_sum[b] += w * tb / self.unit;
-                self.bin_weight[b] += w;
-            }
+        if in_window {
+            self.window_sum += t;
+            self.window_samples += 1;
         }
     }
 }
