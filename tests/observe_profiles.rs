@@ -63,9 +63,13 @@ fn bridge_density_equals_hand_count() {
     );
     let bins = LateralBins::new(4, 16.0);
     assert_eq!(bridge_counts(&f, &bins), vec![2, 1, 2, 0]);
-    // n_cb = bridges per unit length of x (2D), in units of 1/d with d = 1, then d = 2.
-    assert_eq!(bridge_density(&f, &bins, 1.0), vec![0.5, 0.25, 0.5, 0.0]);
-    assert_eq!(bridge_density(&f, &bins, 2.0), vec![1.0, 0.5, 1.0, 0.0]);
+    // n_cb = bridges per bin area (width 4 x height 4: per unit length of x, averaged over the
+    // height, MODEL.md 7), in units of 1/d^2 with d = 1, then d = 2.
+    assert_eq!(
+        bridge_density(&f, &bins, 1.0),
+        vec![0.125, 0.0625, 0.125, 0.0]
+    );
+    assert_eq!(bridge_density(&f, &bins, 2.0), vec![0.5, 0.25, 0.5, 0.0]);
     // Packing: bin 0 holds particles 0, 1, 2, 7 (4 disks of radius 0.5) in a 4 x 4 bin.
     let phi = packing_fraction(&f, &bins);
     let disk = PI * 0.25;
@@ -105,8 +109,9 @@ fn delta_n_cb_homogeneous_is_zero_and_half_bonded_is_the_jump() {
     let f = frame([16.0, 4.0], &pos, &vel, 0.5, all);
     let n = bridge_density(&f, &bins, 1.0);
     assert_eq!(spread(&n), 0.0, "{n:?}");
-    // Per bin: 4 columns x (3 horizontal + 2 vertical bonds) = 20 bridges over width 4.
-    assert_eq!(n, vec![5.0; 4]);
+    // Per bin: 4 columns x (3 horizontal + 2 vertical bonds) = 20 bridges over the bin's area
+    // 4 x 4.
+    assert_eq!(n, vec![1.25; 4]);
     // Half-bonded: only the horizontal bonds whose midpoints lie in x < 8.
     let mut half = Vec::new();
     for r in 0..3 {
@@ -121,8 +126,8 @@ fn delta_n_cb_homogeneous_is_zero_and_half_bonded_is_the_jump() {
     // bond with midpoint 4.0 -> bin 1 takes midpoints 4, 5, 6, 7.
     let f = frame([16.0, 4.0], &pos, &vel, 0.5, half);
     let n = bridge_density(&f, &bins, 1.0);
-    assert_eq!(n, vec![9.0 / 4.0, 12.0 / 4.0, 0.0, 0.0]);
-    assert_eq!(spread(&n), 3.0);
+    assert_eq!(n, vec![9.0 / 16.0, 12.0 / 16.0, 0.0, 0.0]);
+    assert_eq!(spread(&n), 0.75);
     // The packing fraction of the lattice is the same in every bin: Delta n_area = 0.
     assert_eq!(spread(&packing_fraction(&f, &bins)), 0.0);
 }
