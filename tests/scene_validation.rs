@@ -214,6 +214,12 @@ bad_scenes! {
     classify_gas_below_solid,
     classify_delta_n_cb_infinite,
     classify_mobility_unknown,
+    observe_mobility_lag_zero,
+    observe_bins_3d_unknown,
+    classify_coexistence_level_one,
+    classify_coexistence_contrast_above_one,
+    classify_line_jump_ratio_one,
+    classify_solid_diffusion_negative,
     // Format.
     unknown_key_top_level,
     unknown_key_in_table,

@@ -431,17 +431,41 @@ pub fn observed_text(run: &ObservedRun) -> String {
             sh.cycles.len()
         );
     }
+    if let Some(m) = &o.mobility {
+        let _ = writeln!(
+            s,
+            "  D_lat             {:.4e} (lateral MSD over {:.3} time units; clustered grains {})",
+            m.diffusion,
+            m.lag,
+            m.diffusion_clustered
+                .map_or_else(|| "-".to_string(), |x| format!("{x:.4e}"))
+        );
+    }
     if let Some(l) = &o.location_changes {
         let _ = writeln!(
             s,
-            "  f_lc              {:.6} per particle per period ({} changes, {}, sampled every {:.4})",
-            l.per_particle_per_period, l.count, l.method, l.sample_interval
+            "  f_lc              {:.6} per particle per period, {} per time unit ({} changes, {}, sampled every {:.4})",
+            l.per_particle_per_period,
+            l.per_particle_per_time
+                .map_or_else(|| "-".to_string(), |x| format!("{x:.6}")),
+            l.count,
+            l.method,
+            l.sample_interval
         );
     }
+    let p = &o.profiles;
+    let grid = p
+        .grid
+        .map_or_else(|| format!("{} slabs", p.n_cb.len()), |(nx, ny)| format!("{nx} x {ny} cells"));
+    let se = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |v| format!("{v:.4}"));
     let _ = writeln!(
         s,
-        "  Delta n_cb        {:.4}  (bins of {:.3}; Delta n_area {:.4})",
-        o.profiles.delta_n_cb, o.profiles.bin_width, o.profiles.delta_n_area
+        "  Delta n_cb        {:.4} (per bin error {}; {grid} of {:.3}); Delta n_area {:.4} (error {})",
+        p.delta_n_cb,
+        se(p.n_cb_standard_error),
+        p.bin_width,
+        p.delta_n_area,
+        se(p.packing_standard_error)
     );
     if let Some(d) = &o.diffusion {
         for (k, l) in d.layers.iter().enumerate() {

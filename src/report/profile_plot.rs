@@ -1,5 +1,7 @@
-//! The lateral-profile plot: `T_g / E_cb`, packing fraction, bridge density `n_cb` and (when
-//! observed) `f_lc` against `x`, one stacked panel each, time-averaged over the window.
+//! The lateral-profile plot: `T_g / E_cb`, packing fraction, bridge density `n_cb`, the
+//! mobility `D_lat` and (when observed) `f_lc` against `x`, one stacked panel each,
+//! time-averaged over the window. With 3D plane bins each panel is a map over `(x, y)`
+//! (darker is larger).
 
 use super::svg::{esc, label, n};
 use crate::observe::Observables;
@@ -21,18 +23,27 @@ pub fn profiles_svg(obs: &Observables) -> String {
         ),
         (
             format!(
-                "n_cb (bridges per d{}), Delta n_cb = {}",
-                if obs.dimension == 2 { "" } else { "^2" },
+                "n_cb (bridges per d^{}, averaged over the height), Delta n_cb = {}",
+                obs.dimension,
                 label(p.delta_n_cb)
             ),
             p.n_cb.iter().map(|&x| Some(x)).collect(),
         ),
     ];
+    if !p.diffusion.is_empty() {
+        panels.push((
+            "D_lat (lateral mobility, d^2 per time unit)".to_string(),
+            p.diffusion.clone(),
+        ));
+    }
     if let Some(f) = &p.flc {
         panels.push((
-            "f_lc (per particle per period)".to_string(),
+            "f_lc (per particle per time unit)".to_string(),
             f.iter().map(|&x| Some(x)).collect(),
         ));
+    }
+    if let Some((nx, ny)) = p.grid {
+        return maps_svg(obs, &panels, nx, ny);
     }
     let (w, ph, ml, mr, mt, gap) = (760.0, 120.0, 70.0, 20.0, 44.0, 36.0);
     let h = mt + panels.len() as f64 * (ph + gap) + 10.0;
@@ -130,6 +141,81 @@ pub fn profiles_svg(obs: &Observables) -> String {
         n(ml + pw / 2.0),
         n(h - 2.0)
     );
+    s.push_str("</svg>\n");
+    s
+}
+
+/// The panels as maps over the lateral plane (3D plane bins, numbered `ix + nx iy`).
+fn maps_svg(obs: &Observables, panels: &[(String, Vec<Option<f64>>)], nx: usize, ny: usize) -> String {
+    let p = &obs.profiles;
+    let (ml, mt, gap, pw) = (20.0, 44.0, 40.0, 360.0);
+    let ph = (pw * ny as f64 / nx as f64).min(360.0);
+    let cols = 2usize;
+    let rows = panels.len().div_ceil(cols);
+    let w = ml + cols as f64 * (pw + gap);
+    let h = mt + rows as f64 * (ph + gap) + 10.0;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" \
+         font-family=\"sans-serif\" font-size=\"11\">",
+        n(w),
+        n(h)
+    );
+    let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
+    let _ = writeln!(
+        s,
+        "<text x=\"{ml}\" y=\"16\">lateral maps over (x, y), window t = {:.2} .. {:.2} ({} samples), cells {:.3} x {:.3}</text>",
+        obs.window_start,
+        obs.window_end,
+        obs.window_samples,
+        p.bin_width,
+        p.bin_width_y.unwrap_or(p.bin_width)
+    );
+    let (cw, ch) = (pw / nx as f64, ph / ny as f64);
+    for (k, (name, values)) in panels.iter().enumerate() {
+        let x0 = ml + (k % cols) as f64 * (pw + gap);
+        let y0 = mt + (k / cols) as f64 * (ph + gap);
+        let vals: Vec<f64> = values.iter().flatten().copied().collect();
+        let lo = vals.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = vals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\">{} [{} .. {}]</text>",
+            n(x0),
+            n(y0 - 4.0),
+            esc(name),
+            label(lo),
+            label(hi)
+        );
+        for (b, v) in values.iter().enumerate() {
+            let (ix, iy) = (b % nx, b / nx);
+            let fill = match v {
+                Some(v) if hi > lo => {
+                    let g = (255.0 * (1.0 - (v - lo) / (hi - lo))).round() as u8;
+                    format!("rgb({g},{g},255)")
+                }
+                Some(_) => "rgb(128,128,255)".to_string(),
+                None => "rgb(230,230,230)".to_string(),
+            };
+            let _ = writeln!(
+                s,
+                "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{fill}\"/>",
+                n(x0 + ix as f64 * cw),
+                n(y0 + ph - (iy + 1) as f64 * ch),
+                n(cw + 0.3),
+                n(ch + 0.3)
+            );
+        }
+        let _ = writeln!(
+            s,
+            "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>",
+            n(x0),
+            n(y0),
+            n(pw),
+            n(ph)
+        );
+    }
     s.push_str("</svg>\n");
     s
 }
