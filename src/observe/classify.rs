@@ -188,7 +188,7 @@ fn default_solid_diffusion() -> f64 {
     SOLID_DIFFUSION
 }
 /// Default of `solid_diffusion` (docs/observables.md gives the calibration).
-pub const SOLID_DIFFUSION: f64 = 2e-3;
+pub const SOLID_DIFFUSION: f64 = 1e-3;
 fn default_solid_flc() -> f64 {
     0.02
 }

@@ -130,11 +130,23 @@ pub fn classify_line(
     elastic: bool,
 ) -> Vec<Classification> {
     let first: Vec<Classification> = points.iter().map(|(_, o)| classify(o, th)).collect();
-    let mobile: Vec<(f64, f64)> = points
-        .iter()
-        .zip(&first)
-        .filter(|(_, c)| c.decided_on.whole.phase != Phase::S)
-        .map(|((e, o), _)| (*e, o.granular_temperature_reduced))
+    // Mobile points, replicas of one E* averaged.
+    let mut mobile: Vec<(f64, f64, usize)> = Vec::new();
+    for ((e, o), c) in points.iter().zip(&first) {
+        if c.decided_on.whole.phase == Phase::S {
+            continue;
+        }
+        match mobile.iter_mut().find(|m| m.0 == *e) {
+            Some(m) => {
+                m.1 += o.granular_temperature_reduced;
+                m.2 += 1;
+            }
+            None => mobile.push((*e, o.granular_temperature_reduced, 1)),
+        }
+    }
+    let mobile: Vec<(f64, f64)> = mobile
+        .into_iter()
+        .map(|(e, t, k)| (e, t / k as f64))
         .collect();
     let Some((boundary, method)) = fluid_gas_boundary(&mobile, elastic, th) else {
         return first;

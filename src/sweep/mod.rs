@@ -8,6 +8,7 @@
 pub mod file;
 pub mod job;
 pub mod progress;
+pub mod relabel;
 pub mod runner;
 pub mod spec;
 
