@@ -454,9 +454,10 @@ pub fn observed_text(run: &ObservedRun) -> String {
         );
     }
     let p = &o.profiles;
-    let grid = p
-        .grid
-        .map_or_else(|| format!("{} slabs", p.n_cb.len()), |(nx, ny)| format!("{nx} x {ny} cells"));
+    let grid = p.grid.map_or_else(
+        || format!("{} slabs", p.n_cb.len()),
+        |(nx, ny)| format!("{nx} x {ny} cells"),
+    );
     let se = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |v| format!("{v:.4}"));
     let _ = writeln!(
         s,

@@ -417,8 +417,7 @@ impl LateralObserver {
                 let b = o.bin[i] as usize;
                 count[b] += 1.0;
                 for k in 0..n_lat {
-                    mean[b * n_lat + k] +=
-                        self.unwrapped[i * n_lat + k] - o.lateral[i * n_lat + k];
+                    mean[b * n_lat + k] += self.unwrapped[i * n_lat + k] - o.lateral[i * n_lat + k];
                 }
             }
             for b in 0..nb {

@@ -146,7 +146,12 @@ pub fn profiles_svg(obs: &Observables) -> String {
 }
 
 /// The panels as maps over the lateral plane (3D plane bins, numbered `ix + nx iy`).
-fn maps_svg(obs: &Observables, panels: &[(String, Vec<Option<f64>>)], nx: usize, ny: usize) -> String {
+fn maps_svg(
+    obs: &Observables,
+    panels: &[(String, Vec<Option<f64>>)],
+    nx: usize,
+    ny: usize,
+) -> String {
     let p = &obs.profiles;
     let (ml, mt, gap, pw) = (20.0, 44.0, 40.0, 360.0);
     let ph = (pw * ny as f64 / nx as f64).min(360.0);

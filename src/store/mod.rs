@@ -831,14 +831,15 @@ impl Store {
         self.in_transaction(async |tx| {
             let mut n = 0;
             for (job_id, phase, decided_on) in rows {
-                n += sqlx::query("UPDATE results SET phase = ?2, decided_on = ?3 WHERE job_id = ?1")
-                    .bind(job_id)
-                    .bind(phase)
-                    .bind(decided_on.to_string())
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?
-                    .rows_affected();
+                n +=
+                    sqlx::query("UPDATE results SET phase = ?2, decided_on = ?3 WHERE job_id = ?1")
+                        .bind(job_id)
+                        .bind(phase)
+                        .bind(decided_on.to_string())
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?
+                        .rows_affected();
             }
             Ok(n)
         })

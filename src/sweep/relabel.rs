@@ -63,17 +63,14 @@ pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Rela
         .filter_map(|row| {
             let obs: Observables = serde_json::from_value(row.observables.clone()?).ok()?;
             let scene = &row.spec.scene;
-            let th = thresholds.cloned().unwrap_or_else(|| scene.classify.clone());
+            let th = thresholds
+                .cloned()
+                .unwrap_or_else(|| scene.classify.clone());
             let line = (scene.drive.kind == DriveKind::Sine && obs.shear.is_none())
                 .then(|| gamma_e_star(scene))
                 .flatten()
                 .map(|(g, e)| (line_key(scene, g), g, e));
-            Some(P {
-                row,
-                obs,
-                th,
-                line,
-            })
+            Some(P { row, obs, th, line })
         })
         .collect();
     let mut out: Vec<Option<Classification>> = vec![None; ps.len()];
@@ -104,7 +101,10 @@ pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Rela
             .iter()
             .map(|&k| (ps[k].line.as_ref().expect("member").2, &ps[k].obs))
             .collect();
-        for (k, c) in members.iter().zip(classify_line(gamma, &line, &th, elastic)) {
+        for (k, c) in members
+            .iter()
+            .zip(classify_line(gamma, &line, &th, elastic))
+        {
             out[*k] = Some(c);
         }
     }
