@@ -529,3 +529,34 @@ fn sheared_scenes_are_solid_or_fluid_by_e_par() {
         assert!(c.decided_on.reason.starts_with("sheared"));
     }
 }
+
+/// Inputs close to their thresholds are flagged: the label is uncertain there.
+#[test]
+fn borderline_decisions_are_flagged() {
+    let t = th();
+    let c = classify(&homogeneous(1.5 * t.solid_diffusion, 0.5, 0.0), &t);
+    assert_eq!(c.phase, Phase::F);
+    assert_eq!(
+        c.decided_on.borderline.len(),
+        1,
+        "{:?}",
+        c.decided_on.borderline
+    );
+    assert!(c.decided_on.borderline[0].contains("D_lat"));
+    let c = classify(&homogeneous(0.6 * t.solid_diffusion, 0.5, 0.0), &t);
+    assert_eq!(c.phase, Phase::S);
+    assert_eq!(c.decided_on.borderline.len(), 1);
+    // Far from every threshold: clear.
+    assert!(
+        classify(&homogeneous(100.0 * t.solid_diffusion, 0.5, 0.0), &t)
+            .decided_on
+            .borderline
+            .is_empty()
+    );
+    assert!(
+        classify(&two_regions((0.0, 0.01), (1.0, 10.0)), &t)
+            .decided_on
+            .borderline
+            .is_empty()
+    );
+}

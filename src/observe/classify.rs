@@ -363,8 +363,68 @@ pub struct DecisionInputs {
     /// Sheared scenes: the window mean of `E_par / E_cb` that decided (rule 4).
     #[serde(default)]
     pub shear_e_par: Option<f64>,
+    /// Decisions whose input lies close to its threshold ([`BORDERLINE_FACTOR`]): the label
+    /// is uncertain there and should be read with replicas. Empty when every decision is clear.
+    #[serde(default)]
+    pub borderline: Vec<String>,
     /// The decision in words.
     pub reason: String,
+}
+
+/// A decision is borderline when its input lies within this factor of its threshold (either
+/// side): `D_lat` against `solid_diffusion`, `Delta` against the noise threshold.
+pub const BORDERLINE_FACTOR: f64 = 2.0;
+/// The contrast of a coexistence is borderline within this distance of its threshold.
+pub const BORDERLINE_CONTRAST: f64 = 0.1;
+
+/// Whether `x` lies within [`BORDERLINE_FACTOR`] of a positive threshold `t`.
+fn near(x: f64, t: f64) -> bool {
+    t > 0.0 && x > 0.0 && x / t < BORDERLINE_FACTOR && t / x < BORDERLINE_FACTOR
+}
+
+/// The borderline decisions of a classification (see [`DecisionInputs::borderline`]).
+fn borderline(d: &DecisionInputs) -> Vec<String> {
+    let th = &d.thresholds;
+    let mut out = Vec::new();
+    let regions = [
+        ("whole", Some(&d.whole)),
+        ("dense", d.dense.as_ref()),
+        ("dilute", d.dilute.as_ref()),
+    ];
+    for (name, r) in regions {
+        let Some(r) = r else { continue };
+        if (name == "whole") == d.split {
+            continue;
+        }
+        if let (Mobility::Displacement, Some(x)) = (r.mobility_from, r.diffusion)
+            && near(x, th.solid_diffusion)
+        {
+            out.push(format!(
+                "{name}: D_lat = {x:.3e} near solid_diffusion = {}",
+                th.solid_diffusion
+            ));
+        }
+    }
+    if let Some(t) = &d.coexistence {
+        if let Some(q) = t.noise_threshold
+            && near(t.delta, q)
+            && t.contrast >= th.coexistence_contrast
+        {
+            out.push(format!(
+                "Delta {} = {:.4} near the noise threshold {q:.4}",
+                t.profile, t.delta
+            ));
+        }
+        if t.noise_threshold.is_some_and(|q| t.delta > q)
+            && (t.contrast - th.coexistence_contrast).abs() < BORDERLINE_CONTRAST
+        {
+            out.push(format!(
+                "contrast {:.2} near coexistence_contrast = {}",
+                t.contrast, th.coexistence_contrast
+            ));
+        }
+    }
+    out
 }
 
 fn point_fallback() -> FluidGasFrom {
@@ -472,6 +532,7 @@ pub fn classify_with(
 ) -> Classification {
     let mut c = classify_unsheared(obs, th, gas);
     c.decided_on.fluid_gas = from;
+    c.decided_on.borderline = borderline(&c.decided_on);
     if let Some(sh) = &obs.shear {
         let phase = if sh.e_par <= th.shear_e_par {
             Phase::S
@@ -593,6 +654,7 @@ fn classify_unsheared(
         dilute: None,
         fluid_gas: FluidGasFrom::PointFallback,
         shear_e_par: None,
+        borderline: Vec::new(),
         reason: String::new(),
     };
     if !test.significant {
