@@ -249,12 +249,14 @@ fn the_dense_region_is_its_clustered_grains_not_the_passers_by() {
     }
     let c = classify(&o, &th());
     assert_eq!(c.phase, Phase::Sgc, "{}", c.decided_on.reason);
-    // Without the clustered accumulators (old results), the bins' grains decide: gas.
+    // Without the clustered accumulators (old results), the bins' grains decide: the heated
+    // bins read as mobile and hotter than the gas threshold; only the jump to the far hotter
+    // vapour keeps them condensed (fgc, not the solid the bonded grains show).
     o.profiles.clustered.clear();
     o.profiles.temperature_clustered.clear();
     o.profiles.diffusion_clustered.clear();
     let c = classify(&o, &th());
-    assert_eq!(c.phase, Phase::G, "{}", c.decided_on.reason);
+    assert_eq!(c.phase, Phase::Fgc, "{}", c.decided_on.reason);
     assert_eq!(c.decided_on.dense.as_ref().unwrap().grains, "all");
 }
 
@@ -559,4 +561,21 @@ fn borderline_decisions_are_flagged() {
             .borderline
             .is_empty()
     );
+}
+
+/// A bonded drop in its vapour: the drop's clustered grains are a little hotter than the gas
+/// threshold, but their vapour is far hotter still: fgc. A gas with a weak density modulation
+/// (both regions hot, within the jump ratio of each other) stays g.
+#[test]
+fn a_hot_drop_in_a_much_hotter_vapour_is_a_fluid_gas_coexistence() {
+    let t = th();
+    let c = classify(&two_regions((0.3, 2.2), (4.0, 75.0)), &t);
+    assert_eq!(c.phase, Phase::Fgc, "{}", c.decided_on.reason);
+    let c = classify(&two_regions((2.0, 95.0), (4.0, 233.0)), &t);
+    assert_eq!(c.phase, Phase::G, "{}", c.decided_on.reason);
+    // The line rule does not touch coexistences: above the line's boundary the drop stays.
+    let obs = two_regions((0.3, 2.2), (4.0, 75.0));
+    let c =
+        wetgran::observe::classify::classify_with(&obs, &t, &|_| true, FluidGasFrom::PointFallback);
+    assert_eq!(c.phase, Phase::Fgc);
 }

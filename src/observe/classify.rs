@@ -22,8 +22,11 @@
 //! 3. A coexistence splits the bins into a dense and a dilute class (Otsu's rule,
 //!    [`two_class_split`]). The dense region is described by its *clustered* grains (bonded,
 //!    or closely packed when dry: `observe::lateral`), the dilute region by all of its grains,
-//!    each time-averaged over the samples; each is classified by rule 1. Two different phases
-//!    give their coexistence (sfc, sgc or fgc); the same phase twice gives that phase.
+//!    each time-averaged over the samples; each is classified by rule 1, with the per-point
+//!    gas threshold, except that the dense region also counts as condensed (not gas) when the
+//!    dilute region is at least `line_jump_ratio` times hotter (a bonded drop in its vapour).
+//!    Two different phases give their coexistence (sfc, sgc or fgc); the same phase twice
+//!    gives that phase.
 //! 4. A sheared scene (MODEL.md 4.2) is solid or fluidised by `E_par` alone: solid when the
 //!    window mean of `E_par / E_cb` (`/ (m g d)` dry) is at most `shear_e_par`, else fluid
 //!    (label f). The rules above are still evaluated and recorded, but do not decide.
@@ -523,7 +526,8 @@ pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
     classify_with(obs, th, &|t| t > t_gas, FluidGasFrom::PointFallback)
 }
 
-/// [`classify`] with the fluid-gas decision `gas(T_g / E_cb)` given from outside.
+/// [`classify`] with the fluid-gas decision `gas(T_g / E_cb)` of a homogeneous system given
+/// from outside (the line rule); the regions of a coexistence keep rule 3.
 pub fn classify_with(
     obs: &Observables,
     th: &Thresholds,
@@ -689,12 +693,12 @@ fn classify_unsheared(
         } else {
             (&p.particles, &p.temperature_reduced, &p.diffusion, "all")
         };
-        let t = weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced);
+        let t: f64 = weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced);
         let d = weighted(sel, w, d_bins);
         let f = flc_bins
             .as_ref()
             .and_then(|fb| weighted(sel, &p.particles, fb));
-        region((f, d, t), sel.len(), grains, th, gas)
+        (f, d, t, grains)
     };
     let dilute = {
         let sel = &dilute_bins;
@@ -704,8 +708,19 @@ fn classify_unsheared(
         let f = flc_bins
             .as_ref()
             .and_then(|fb| weighted(sel, &p.particles, fb));
-        region((f, d, t), sel.len(), "all", th, gas)
+        region((f, d, t), sel.len(), "all", th, &|t| t > th.gas_temperature)
     };
+    // The dense region is condensed (solid or fluid) when its clustered grains are no hotter
+    // than the gas threshold, or when the dilute region is hotter by the fluid-gas jump
+    // `line_jump_ratio` (a bonded drop in its vapour); else it is gas-like too.
+    let t_dilute = dilute.temperature;
+    let dense = region(
+        (dense.0, dense.1, dense.2),
+        dense_bins.len(),
+        dense.3,
+        th,
+        &|t| t > th.gas_temperature && t_dilute < th.line_jump_ratio * t,
+    );
     let phase = Phase::coexistence(dense.phase, dilute.phase).unwrap_or(dense.phase);
     decided.reason = format!(
         "coexistence test passed ({}): split at {} = {mid:.4}; dense part ({} bins, {} grains): \

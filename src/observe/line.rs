@@ -121,8 +121,9 @@ pub fn fluid_gas_boundary(
 
 /// Classifies the points `(E*, observables)` of one line of constant `gamma`: each point by
 /// [`classify`], then, where the line's mobile points give a fluid-gas boundary, every point
-/// again with "gas" meaning `E* > E*_boundary` (for the whole system and for the dilute region
-/// of a coexistence). Points of a line without a boundary keep the per-point fallback.
+/// again with "gas" meaning `E* > E*_boundary` for a homogeneous system (the regions of a
+/// coexistence are told apart by their own temperatures, `classify` rule 3). Points of a line
+/// without a boundary keep the per-point fallback.
 pub fn classify_line(
     gamma: f64,
     points: &[(f64, &Observables)],
