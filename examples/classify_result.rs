@@ -1,9 +1,16 @@
 //! Re-classifies saved `wetgran simulate --json` results with the current classifier (and an
-//! optional `[classify]` TOML file), one line each: the study tool behind docs/validation.md.
+//! optional `[classify]` TOML file): the study tool behind docs/validation.md
+//! (`scripts/validation.sh table`).
 //!
-//! `cargo run --release --example classify_result -- [--classify FILE] RESULT.json...`
+//! `cargo run --release --example classify_result -- [--classify FILE] [--json | --table] RESULT.json...`
+//!
+//! Default: one line per result, phase and reason. `--json`: the classification as JSON, one per
+//! line. `--table`: a markdown table row per result, with `Gamma`, `E*` and `eps` read from the
+//! scene file of the same name (`RESULT.toml`).
 
+use std::path::Path;
 use wetgran::observe::{Observables, Thresholds, classify};
+use wetgran::scene::Scene;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
@@ -14,12 +21,56 @@ fn main() {
         th = toml::from_str(&text).expect("a [classify] table's keys");
         args.drain(k..k + 2);
     }
+    let json = args.iter().any(|a| a == "--json");
+    let table = args.iter().any(|a| a == "--table");
+    args.retain(|a| a != "--json" && a != "--table");
+    if table {
+        println!(
+            "| run | Gamma | E* | eps | T_g/E_cb | bridges/grain | D_lat | Delta n_cb | noise threshold | contrast | phase | borderline | halves agree |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    }
     for path in args {
         let text = std::fs::read_to_string(&path).expect("readable result file");
         let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
         let obs: Observables =
             serde_json::from_value(v["observables"].clone()).expect("observables");
         let c = classify(&obs, &th);
-        println!("{path}: {} | {}", c.phase, c.decided_on.reason);
+        if json {
+            println!(
+                "{}",
+                serde_json::to_string(&c).expect("a classification serializes")
+            );
+        } else if table {
+            let p = Path::new(&path);
+            let scene = Scene::load(&p.with_extension("toml")).expect("the run's scene file");
+            let d = &c.decided_on;
+            let test = d.coexistence.as_ref().expect("a coexistence test");
+            let opt = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |v| format!("{v:.3}"));
+            println!(
+                "| {} | {} | {} | {} | {:.3} | {:.2} | {} | {:.3} | {} | {:.2} | {} | {} | {} |",
+                p.file_stem().unwrap_or_default().to_string_lossy(),
+                scene.drive.gamma.unwrap_or(f64::NAN),
+                scene.drive.e_star.unwrap_or(f64::NAN),
+                scene.contact.restitution,
+                obs.granular_temperature_reduced,
+                obs.bridges_per_particle,
+                obs.mobility
+                    .as_ref()
+                    .map_or_else(|| "-".to_string(), |m| format!("{:.2e}", m.diffusion)),
+                test.delta,
+                opt(test.noise_threshold),
+                test.contrast,
+                c.phase,
+                if d.borderline.is_empty() { "" } else { "yes" },
+                if obs.stationarity.stationary {
+                    "yes"
+                } else {
+                    "no"
+                }
+            );
+        } else {
+            println!("{path}: {} | {}", c.phase, c.decided_on.reason);
+        }
     }
 }
