@@ -665,7 +665,7 @@ fn classify_unsheared(
         decided.reason = format!(
             "homogeneous ({}): {}",
             describe_test(&test, th),
-            describe(&whole, th)
+            describe(&whole, th, &obs.temperature_unit_name)
         );
         return Classification {
             phase: whole.phase,
@@ -729,9 +729,9 @@ fn classify_unsheared(
         test.profile,
         dense.bins,
         dense.grains,
-        describe(&dense, th),
+        describe(&dense, th, &obs.temperature_unit_name),
         dilute.bins,
-        describe(&dilute, th)
+        describe(&dilute, th, &obs.temperature_unit_name)
     );
     decided.split = true;
     decided.split_n_cb = Some(mid);
@@ -764,8 +764,8 @@ fn describe_test(t: &CoexistenceTest, th: &Thresholds) -> String {
     }
 }
 
-/// One region's decision in words.
-fn describe(r: &RegionInputs, th: &Thresholds) -> String {
+/// One region's decision in words (`unit`: the temperature unit's name, `E_cb` or `m g d`).
+fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
     let mobility = match (r.mobility_from, r.diffusion, r.flc) {
         (Mobility::Displacement, Some(d), _) => format!(
             "D_lat = {d:.3e} {} {}",
@@ -781,7 +781,7 @@ fn describe(r: &RegionInputs, th: &Thresholds) -> String {
             th.solid_flc
         ),
         _ => format!(
-            "T_g/E_cb = {:.4} {} {}",
+            "T_g/{unit} = {:.4} {} {}",
             r.temperature,
             if r.temperature > th.solid_temperature {
                 ">"
@@ -794,5 +794,5 @@ fn describe(r: &RegionInputs, th: &Thresholds) -> String {
     if r.phase == Phase::S {
         return format!("{mobility} -> s");
     }
-    format!("{mobility}, T_g/E_cb = {:.4} -> {}", r.temperature, r.phase)
+    format!("{mobility}, T_g/{unit} = {:.4} -> {}", r.temperature, r.phase)
 }
