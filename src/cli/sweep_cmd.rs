@@ -176,6 +176,9 @@ pub enum SweepCommand {
         /// The sweep directory (default: `wetgran-slurm/<sweep name>` beside the database).
         #[arg(long)]
         dir: Option<PathBuf>,
+        /// Allow a registered sweep name to get a different grid (as `sweep run --replace`).
+        #[arg(long)]
+        replace: bool,
     },
     /// Read the results of submitted Slurm tasks into the database.
     ///
@@ -307,6 +310,7 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
             dry_run,
             db,
             dir,
+            replace,
         } => {
             if slurm {
                 super::cluster_cmd::submit(
@@ -321,6 +325,7 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
                         array_limit,
                         dry_run,
                         dir,
+                        replace,
                     },
                 )
             } else {
@@ -455,7 +460,7 @@ fn sweep_run(
 
 /// A sweep name registered before with another grid (axes or replicas) is refused unless
 /// `--replace`: the error says what would be replaced.
-fn check_regrid(
+pub(super) fn check_regrid(
     store: &Store,
     old: &SweepRow,
     sweep: &SweepFile,
