@@ -88,7 +88,12 @@ fn flatten(
                 // Nested arrays inside an element stay in that element's series, flattened.
                 flatten_all("", x, &mut leaves);
                 for (leaf, value) in leaves {
-                    series.push((join(prefix, &leaf), k, value));
+                    let name = if leaf.is_empty() {
+                        prefix.to_string()
+                    } else {
+                        join(prefix, &leaf)
+                    };
+                    series.push((name, k, value));
                 }
             }
         }

@@ -1180,6 +1180,93 @@ mod tests {
         (db, id)
     }
 
+    /// Runs raw SQL on the store's single connection.
+    fn exec(store: &Store, sql: &'static str, binds: &[&str]) {
+        let mut q = sqlx::query(sql);
+        for b in binds {
+            q = q.bind(*b);
+        }
+        store.rt.block_on(q.execute(&store.pool)).unwrap();
+    }
+
+    #[test]
+    fn a_database_with_old_job_ids_is_rekeyed_once_and_keeps_its_results() {
+        let dir = tempfile::tempdir().unwrap();
+        let (db, sweep_id) = store_with_jobs(dir.path());
+        let store = Store::open(&db).unwrap();
+        let claim = store.claim(&[sweep_id]).unwrap().unwrap();
+        let result = JobResult {
+            phase: Some("g".into()),
+            decided_on: None,
+            observables: serde_json::json!({"k": 1}),
+            simulated_time: 1.0,
+            wall_seconds: 0.5,
+            events: 3,
+        };
+        assert!(store.finish(&claim, &result).unwrap());
+        let done_id = claim.job_id.clone();
+        // Write the database as the old rule did: ids hashed with the `[classify]` thresholds,
+        // plus a second job that differed from the finished one only in its thresholds.
+        exec(&store, "PRAGMA foreign_keys = OFF", &[]);
+        for p in store.points(sweep_id).unwrap() {
+            let old = crate::sweep::spec::id_of_canonical(&p.spec.canonical_json());
+            assert_ne!(old, p.job_id);
+            for sql in [
+                "UPDATE jobs SET id = ?2 WHERE id = ?1",
+                "UPDATE sweep_points SET job_id = ?2 WHERE job_id = ?1",
+                "UPDATE results SET job_id = ?2 WHERE job_id = ?1",
+                "UPDATE runs SET job_id = ?2 WHERE job_id = ?1",
+            ] {
+                exec(&store, sql, &[&p.job_id, &old]);
+            }
+        }
+        let mut twin = claim.spec.clone();
+        twin.scene.classify.gas_temperature *= 2.0;
+        let twin_old = crate::sweep::spec::id_of_canonical(&twin.canonical_json());
+        exec(
+            &store,
+            "INSERT INTO jobs (id, spec, created_at) VALUES (?1, ?2, 0)",
+            &[&twin_old, &twin.canonical_json()],
+        );
+        exec(
+            &store,
+            "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
+             VALUES (1, 99, 0, '[9]', ?1)",
+            &[&twin_old],
+        );
+        exec(&store, "DELETE FROM meta WHERE key = 'job_ids'", &[]);
+        drop(store);
+
+        let store = Store::open_existing(&db).unwrap();
+        let points = store.points(sweep_id).unwrap();
+        assert_eq!(points.len(), 4);
+        for p in &points {
+            assert_eq!(p.job_id, p.spec.id(), "every job carries its id under the new rule");
+        }
+        // The twin merged into the finished job and shares its result.
+        let twin_row = points.iter().find(|p| p.point == 99).unwrap();
+        assert_eq!(twin_row.job_id, done_id);
+        for p in points.iter().filter(|p| p.job_id == done_id) {
+            assert_eq!(p.status, "done");
+            assert_eq!(p.observables, Some(serde_json::json!({"k": 1})));
+        }
+        let jobs: i64 = store
+            .rt
+            .block_on(sqlx::query_scalar("SELECT count(*) FROM jobs").fetch_one(&store.pool))
+            .unwrap();
+        assert_eq!(jobs, 3);
+        assert_eq!(store.runs_per_job().unwrap(), vec![(done_id.clone(), 1)]);
+        // Marked once: opening again changes nothing.
+        let rule: String = store
+            .rt
+            .block_on(
+                sqlx::query_scalar("SELECT value FROM meta WHERE key = 'job_ids'")
+                    .fetch_one(&store.pool),
+            )
+            .unwrap();
+        assert_eq!(rule, JOB_ID_RULE);
+    }
+
     fn set_owner(store: &Store, job: &str, owner: &str, heartbeat: f64) {
         store
             .rt
