@@ -470,7 +470,10 @@ fn a_stroke_longer_than_the_box_keeps_particles_inside_and_balances_the_ledger()
         for solver in ["exact", "bracket", "table"] {
             let s = large_stroke(omega, solver);
             let (a, _) = s.drive_motion().unwrap();
-            assert!(2.0 * a > s.container.size[1], "the stroke must exceed the box");
+            assert!(
+                2.0 * a > s.container.size[1],
+                "the stroke must exceed the box"
+            );
             let mut e = Engine::<2, true, true>::new(&s);
             let before = e.energy();
             run_checked(&mut e, t_end, 40, Some(5_000_000));
@@ -484,7 +487,10 @@ fn a_stroke_longer_than_the_box_keeps_particles_inside_and_balances_the_ledger()
             let err = rel(after.total_accounted(), before.total_accounted());
             assert!(err < 1e-9, "Gamma {gamma} {solver}: ledger off by {err}");
             if gamma > 1.0 {
-                assert!(after.work_by_drive > 0.0, "{solver}: the plate must heat the bed");
+                assert!(
+                    after.work_by_drive > 0.0,
+                    "{solver}: the plate must heat the bed"
+                );
             }
         }
     }

@@ -87,7 +87,10 @@ fn sweep_expand_lists_the_left_out_points_and_why() {
         .find(|l| l.contains("left out particles.count = "))
         .unwrap_or_else(|| panic!("{err}"));
     assert!(line.contains("5"), "{line}");
-    assert!(line.ends_with("more particles than fit on the initial lattice"), "{line}");
+    assert!(
+        line.ends_with("more particles than fit on the initial lattice"),
+        "{line}"
+    );
 }
 
 #[test]
@@ -119,8 +122,16 @@ fn a_range_of_one_step_between_two_values_is_an_error() {
 fn errors_in_observe_and_classify_name_the_sweep_file_and_line() {
     let dir = tempfile::tempdir().unwrap();
     for (table, line, key) in [
-        ("[classify]\nmobility = \"location_changes\"\ngas_temperature = -1.0\n", 7, "classify.gas_temperature"),
-        ("[observe]\nsamples_per_period = 10\nbogus = 1\n", 7, "observe.bogus"),
+        (
+            "[classify]\nmobility = \"location_changes\"\ngas_temperature = -1.0\n",
+            7,
+            "classify.gas_temperature",
+        ),
+        (
+            "[observe]\nsamples_per_period = 10\nbogus = 1\n",
+            7,
+            "observe.bogus",
+        ),
     ] {
         let p = sweep_file(
             dir.path(),
@@ -138,7 +149,11 @@ fn errors_in_observe_and_classify_name_the_sweep_file_and_line() {
 #[test]
 fn jobs_must_be_between_one_and_the_available_cores() {
     let dir = tempfile::tempdir().unwrap();
-    let p = sweep_file(dir.path(), "j", "[[axis]]\nkey = \"gamma\"\nvalues = [2.0]\n");
+    let p = sweep_file(
+        dir.path(),
+        "j",
+        "[[axis]]\nkey = \"gamma\"\nvalues = [2.0]\n",
+    );
     let db = dir.path().join("w.sqlite");
     let cores = std::thread::available_parallelism().unwrap().get();
     let many = (cores + 1).to_string();
@@ -155,7 +170,9 @@ fn jobs_must_be_between_one_and_the_available_cores() {
         assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
         let err = stderr(&out);
         assert!(
-            err.contains(&format!("--jobs {jobs} is out of range: must be in [1, {cores}]")),
+            err.contains(&format!(
+                "--jobs {jobs} is out of range: must be in [1, {cores}]"
+            )),
             "{err}"
         );
         assert!(!db.exists(), "nothing may be written");
@@ -191,12 +208,29 @@ fn a_new_grid_under_a_registered_name_needs_replace() {
         "grid",
         "[[axis]]\nkey = \"gamma\"\nvalues = [3.0, 4.0, 5.0]\n",
     );
-    let out = run(&["sweep", "run", new.to_str().unwrap(), "--db", db.to_str().unwrap(), "--jobs", "1"]);
+    let out = run(&[
+        "sweep",
+        "run",
+        new.to_str().unwrap(),
+        "--db",
+        db.to_str().unwrap(),
+        "--jobs",
+        "1",
+    ]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     let err = stderr(&out);
-    assert!(err.contains("old grid: Gamma = [2.0, 3.0]; 1 replica(s) (2 job(s))"), "{err}");
-    assert!(err.contains("new grid: Gamma = [3.0, 4.0, 5.0]; 1 replica(s) (3 job(s))"), "{err}");
-    assert!(err.contains("1 job(s) of the old grid, 1 of them with a result"), "{err}");
+    assert!(
+        err.contains("old grid: Gamma = [2.0, 3.0]; 1 replica(s) (2 job(s))"),
+        "{err}"
+    );
+    assert!(
+        err.contains("new grid: Gamma = [3.0, 4.0, 5.0]; 1 replica(s) (3 job(s))"),
+        "{err}"
+    );
+    assert!(
+        err.contains("1 job(s) of the old grid, 1 of them with a result"),
+        "{err}"
+    );
     assert!(err.contains("--replace"), "{err}");
     // The grid in the database is unchanged.
     let store = Store::open_existing(&db).unwrap();
@@ -218,7 +252,10 @@ fn assert_labels_follow(store: &Store, sweep: &str, th: &Thresholds) -> usize {
         let obs: Observables = serde_json::from_value(p.observables.unwrap()).unwrap();
         let c = classify(&obs, th);
         assert_eq!(p.phase.as_deref(), Some(c.phase.to_string().as_str()));
-        assert_eq!(p.decided_on, Some(serde_json::to_value(&c.decided_on).unwrap()));
+        assert_eq!(
+            p.decided_on,
+            Some(serde_json::to_value(&c.decided_on).unwrap())
+        );
         n += 1;
     }
     n
@@ -236,7 +273,15 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
     let first = sweep_file(dir.path(), "cls", &body(""));
     let db = dir.path().join("w.sqlite");
     let db_s = db.to_str().unwrap();
-    ok(&["sweep", "run", first.to_str().unwrap(), "--db", db_s, "--jobs", "1"]);
+    ok(&[
+        "sweep",
+        "run",
+        first.to_str().unwrap(),
+        "--db",
+        db_s,
+        "--jobs",
+        "1",
+    ]);
     let store = Store::open_existing(&db).unwrap();
     assert_eq!(store.runs_started().unwrap(), 4);
     assert_labels_follow(&store, "cls", &Thresholds::default());
@@ -245,9 +290,21 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
     // Only [classify] changes: no simulation, the labels follow the new thresholds.
     let th = "[classify]\nmobility = \"temperature\"\nsolid_temperature = 1e-12\ngas_temperature = 1e-9\n";
     let second = sweep_file(dir.path(), "cls", &body(th));
-    ok(&["sweep", "run", second.to_str().unwrap(), "--db", db_s, "--jobs", "1"]);
+    ok(&[
+        "sweep",
+        "run",
+        second.to_str().unwrap(),
+        "--db",
+        db_s,
+        "--jobs",
+        "1",
+    ]);
     let store = Store::open_existing(&db).unwrap();
-    assert_eq!(store.runs_started().unwrap(), 4, "nothing may be simulated again");
+    assert_eq!(
+        store.runs_started().unwrap(),
+        4,
+        "nothing may be simulated again"
+    );
     let new: Thresholds = toml::from_str(&th.replace("[classify]\n", "")).unwrap();
     assert_eq!(assert_labels_follow(&store, "cls", &new), 4);
 
@@ -263,8 +320,10 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
         .into_iter()
         .map(|p| p.phase)
         .collect();
-    let th_solid: Thresholds =
-        toml::from_str("mobility = \"temperature\"\nsolid_temperature = 1e12\ngas_temperature = 2e12\n").unwrap();
+    let th_solid: Thresholds = toml::from_str(
+        "mobility = \"temperature\"\nsolid_temperature = 1e12\ngas_temperature = 2e12\n",
+    )
+    .unwrap();
     drop(store);
     let text = ok(&[
         "reclassify",
@@ -284,13 +343,23 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
         .map(|p| p.phase)
         .collect();
     let changed = before.iter().zip(&after).filter(|(a, b)| a != b).count();
-    assert!(changed > 0, "the extreme thresholds must change labels: {before:?} {after:?}");
     assert!(
-        text.contains(&format!("4 result(s) re-labelled: {changed} label(s) changed")),
+        changed > 0,
+        "the extreme thresholds must change labels: {before:?} {after:?}"
+    );
+    assert!(
+        text.contains(&format!(
+            "4 result(s) re-labelled: {changed} label(s) changed"
+        )),
         "{text}"
     );
     // No mobile label survives a solid threshold of 1e12 E_cb.
-    assert!(after.iter().all(|p| !matches!(p.as_deref(), Some("f" | "g" | "fgc"))), "{after:?}");
+    assert!(
+        after
+            .iter()
+            .all(|p| !matches!(p.as_deref(), Some("f" | "g" | "fgc"))),
+        "{after:?}"
+    );
     assert_eq!(store.runs_started().unwrap(), 4);
 
     // Export: one row per result, scalar columns only; the series go to their own file.
@@ -310,7 +379,9 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
     assert!(header.len() < 100, "{} columns: {header:?}", header.len());
     assert!(header.contains(&"stationary") && header.contains(&"trust"));
     assert!(
-        !header.iter().any(|h| h.rsplit('.').next().unwrap().parse::<usize>().is_ok()),
+        !header
+            .iter()
+            .any(|h| h.rsplit('.').next().unwrap().parse::<usize>().is_ok()),
         "an array element became a column: {header:?}"
     );
     assert_eq!(csv.lines().count(), 5);

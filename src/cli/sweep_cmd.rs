@@ -487,8 +487,7 @@ pub(super) fn check_regrid(
     if (same_axes && old.replicas == sweep.replicas) || replace {
         return Ok(());
     }
-    let new_ids: std::collections::HashSet<&str> =
-        expanded.iter().map(|j| j.id.as_str()).collect();
+    let new_ids: std::collections::HashSet<&str> = expanded.iter().map(|j| j.id.as_str()).collect();
     let points = store.points(old.id)?;
     let leaving: Vec<_> = points
         .iter()

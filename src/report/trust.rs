@@ -66,7 +66,10 @@ mod tests {
         assert_eq!(stationary(&bad), Some(false));
         let failed = failed_checks(&bad);
         assert_eq!(failed.len(), 1);
-        assert!(failed[0].starts_with("T_g: first half 1.0000"), "{failed:?}");
+        assert!(
+            failed[0].starts_with("T_g: first half 1.0000"),
+            "{failed:?}"
+        );
         let good = json!({"stationarity": {"tolerance": 0.1, "stationary": true, "checks": []}});
         assert_eq!(trust_mark(&good), None);
         assert_eq!(stationary(&json!({})), None);

@@ -431,22 +431,23 @@ impl Store {
     /// rows, runs and cluster tasks follow it; a result is kept (the first one found where the
     /// merged job has none, dropped otherwise: the trajectory is the same).
     fn rekey_jobs(&self) -> Result<(), StoreError> {
-        let rule: Option<String> =
-            self.rt
-                .block_on(
-                    sqlx::query_scalar("SELECT value FROM meta WHERE key = 'job_ids'")
-                        .fetch_optional(&self.pool),
-                )
-                .map_err(|e| self.db(e))?;
+        let rule: Option<String> = self
+            .rt
+            .block_on(
+                sqlx::query_scalar("SELECT value FROM meta WHERE key = 'job_ids'")
+                    .fetch_optional(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
         if rule.as_deref() == Some(JOB_ID_RULE) {
             return Ok(());
         }
         let path = self.path.display().to_string();
         self.in_transaction(async |tx| {
-            let jobs: Vec<(String, String)> = sqlx::query_as("SELECT id, spec FROM jobs ORDER BY rowid")
-                .fetch_all(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+            let jobs: Vec<(String, String)> =
+                sqlx::query_as("SELECT id, spec FROM jobs ORDER BY rowid")
+                    .fetch_all(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
             for (old, text) in jobs {
                 let spec = JobSpec::from_json(&text, &format!("job {old}")).map_err(|e| {
                     StoreError::Damaged {
@@ -458,11 +459,12 @@ impl Store {
                 if new == old {
                     continue;
                 }
-                let exists: Option<String> = sqlx::query_scalar("SELECT id FROM jobs WHERE id = ?1")
-                    .bind(&new)
-                    .fetch_optional(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+                let exists: Option<String> =
+                    sqlx::query_scalar("SELECT id FROM jobs WHERE id = ?1")
+                        .bind(&new)
+                        .fetch_optional(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
                 if exists.is_none() {
                     sqlx::query(
                         "INSERT INTO jobs (id, spec, status, attempts, owner, heartbeat, \
@@ -535,7 +537,10 @@ impl Store {
 
     /// Sets the phase label and the numbers it was decided on of stored results, in one
     /// transaction (`wetgran reclassify`): `(job id, phase, decided_on)`.
-    pub fn relabel(&self, labels: &[(String, String, serde_json::Value)]) -> Result<(), StoreError> {
+    pub fn relabel(
+        &self,
+        labels: &[(String, String, serde_json::Value)],
+    ) -> Result<(), StoreError> {
         self.in_transaction(async |tx| {
             for (job, phase, decided_on) in labels {
                 sqlx::query("UPDATE results SET phase = ?2, decided_on = ?3 WHERE job_id = ?1")
@@ -713,12 +718,12 @@ impl Store {
                 "INSERT INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3) \
                  ON CONFLICT (id) DO UPDATE SET spec = excluded.spec",
             )
-                .bind(&job.id)
-                .bind(job.spec.canonical_json())
-                .bind(t)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+            .bind(&job.id)
+            .bind(job.spec.canonical_json())
+            .bind(t)
+            .execute(&mut **tx)
+            .await
+            .map_err(|e| self.db(e))?;
             sqlx::query(
                 "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
                  VALUES (?1, ?2, ?3, ?4, ?5)",
@@ -1241,7 +1246,11 @@ mod tests {
         let points = store.points(sweep_id).unwrap();
         assert_eq!(points.len(), 4);
         for p in &points {
-            assert_eq!(p.job_id, p.spec.id(), "every job carries its id under the new rule");
+            assert_eq!(
+                p.job_id,
+                p.spec.id(),
+                "every job carries its id under the new rule"
+            );
         }
         // The twin merged into the finished job and shares its result.
         let twin_row = points.iter().find(|p| p.point == 99).unwrap();
