@@ -91,6 +91,28 @@ fn sweep_expand_lists_the_left_out_points_and_why() {
         line.ends_with("more particles than fit on the initial lattice"),
         "{line}"
     );
+    // `sweep status` lists them from the database.
+    let db = dir.path().join("w.sqlite");
+    let db_s = db.to_str().unwrap();
+    let out = run(&[
+        "sweep",
+        "run",
+        p.to_str().unwrap(),
+        "--db",
+        db_s,
+        "--jobs",
+        "1",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let status = stdout(&run(&["sweep", "status", "--db", db_s]));
+    assert!(
+        status.contains("left out 1 grid point(s) (sweep.skip_invalid):"),
+        "{status}"
+    );
+    assert!(
+        status.contains("more particles than fit on the initial lattice"),
+        "{status}"
+    );
 }
 
 #[test]
