@@ -85,8 +85,10 @@ pub struct Header {
     /// Free-text cost note for long runs (shown by `sweep status`).
     #[serde(default)]
     pub cost: Option<String>,
-    /// Leave out grid points whose scene fails validation (e.g. a drive stroke too long for
-    /// the box) instead of rejecting the sweep; they are listed when the sweep is registered.
+    /// Leave out grid points whose scene fails a constraint between keys
+    /// ([`crate::scene::Constraint`], e.g. more grains than fit in the box) instead of rejecting
+    /// the sweep; a key outside its own range is still an error. They are listed by
+    /// `sweep expand`, `sweep run` and `sweep status`.
     #[serde(default)]
     pub skip_invalid: bool,
 }
