@@ -162,7 +162,7 @@ bad_scenes! {
     drive_both_pairs,
     drive_amplitude_negative,
     drive_gamma_zero,
-    drive_stroke_too_long,
+    drive_gap_below_d_max,
     drive_root_tolerance_negative,
     drive_wall_solver_unknown,
     drive_table_cells_too_few,

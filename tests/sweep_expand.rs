@@ -165,7 +165,11 @@ fn canonical_json_is_sorted_round_trips_and_hashes_to_the_id() {
         let back = JobSpec::from_json(&text, "test").unwrap();
         assert_eq!(back, j.spec);
         assert_eq!(back.id(), j.id);
-        assert_eq!(id_of_canonical(&text), j.id);
+        // The id hashes the spec without its `[classify]` thresholds (they only label).
+        let identity = canonical_json(&j.spec.identity());
+        assert!(!identity.contains("\"classify\""), "{identity}");
+        assert_eq!(id_of_canonical(&identity), j.id);
+        assert_ne!(id_of_canonical(&text), j.id);
         // Independent SHA-256 where the system has one.
         if let Ok(out) = std::process::Command::new("sha256sum")
             .stdin(std::process::Stdio::piped())
@@ -173,7 +177,7 @@ fn canonical_json_is_sorted_round_trips_and_hashes_to_the_id() {
             .spawn()
             .and_then(|mut c| {
                 use std::io::Write;
-                c.stdin.take().unwrap().write_all(text.as_bytes())?;
+                c.stdin.take().unwrap().write_all(identity.as_bytes())?;
                 c.wait_with_output()
             })
         {
@@ -302,26 +306,30 @@ fn sweep_file_errors_name_file_line_and_key() {
 }
 
 #[test]
-fn skip_invalid_leaves_out_points_outside_the_scene_range() {
+fn skip_invalid_leaves_out_points_failing_a_scene_constraint() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "tiny.toml", TINY_SCENE);
-    // A = 2 E* E_cb / (Gamma g) must stay below (9 - d_max) / 2 ~ 3.95: E* = 80 gives A = 30
-    // at Gamma = 1.5 and A = 7.6 at Gamma = 6, too long a stroke for the 9 d box.
+    // 20 d x 9 d holds a few hundred disks on the initial lattice, not 5000: each count is in
+    // its own range, the combination with the box is not (Constraint::LatticeFull).
     let text = sweep_text(
         "skip_invalid = true",
-        "[[axis]]\nkey = \"gamma\"\nvalues = [1.5, 6.0]\n[[axis]]\nkey = \"e_star\"\nvalues = [1.0, 80.0]\n",
+        "[[axis]]\nkey = \"gamma\"\nvalues = [1.5, 6.0]\n[[axis]]\nkey = \"particles.count\"\nvalues = [40, 5000]\n",
     );
     let s = load(dir.path(), &text);
     let (jobs, skipped) = s.expand_with_skips().unwrap();
     assert_eq!(jobs.len(), 2);
     assert_eq!(skipped.len(), 2);
     for k in &skipped {
-        assert_eq!(k.coords[1], serde_json::json!(80.0));
-        assert_eq!(k.reason.key, "box.size[1]");
+        assert_eq!(k.coords[1], serde_json::json!(5000));
+        assert_eq!(k.reason.key, "particles.count");
+        assert_eq!(
+            k.reason.constraint,
+            Some(wetgran::scene::Constraint::LatticeFull)
+        );
     }
     // Without the switch the sweep is rejected.
     let e = err(dir.path(), &text.replace("skip_invalid = true", ""));
-    assert!(e.contains("box.size[1]"), "{e}");
+    assert!(e.contains("particles.count"), "{e}");
 }
 
 #[test]

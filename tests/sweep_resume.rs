@@ -178,7 +178,16 @@ fn a_failing_job_is_recorded_and_the_sweep_goes_on() {
     );
     let db = dir.path().join("w.sqlite");
     let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
-    let out = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "2"]);
+    let out = run(&[
+        "sweep",
+        "run",
+        sweep_s,
+        "--db",
+        db_s,
+        "--jobs",
+        "2",
+        "--oversubscribe",
+    ]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(
         stderr(&out).matches("FAILED").count(),

@@ -3,7 +3,7 @@
 //! Exit codes as for the other sweep commands: 0 ok, 2 bad input, 1 any other error; `job run`
 //! exits 1 when the job failed (its error record is written all the same).
 
-use super::sweep_cmd::{Failure, load_sweep, select};
+use super::sweep_cmd::{Failure, load_sweep_left_out, select};
 use crate::cluster::slurm::{self, ArrayScript, Queue, SbatchOptions};
 use crate::cluster::{Collected, Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
 use crate::store::{Store, SweepRow, TaskState};
@@ -25,6 +25,8 @@ pub struct Submit {
     pub array_limit: Option<usize>,
     pub dry_run: bool,
     pub dir: Option<PathBuf>,
+    /// Allow a registered sweep name to get another grid (`--replace`).
+    pub replace: bool,
 }
 
 fn absolute(p: &Path) -> Result<PathBuf, Failure> {
@@ -54,7 +56,7 @@ fn next_array_name(arrays: &Path) -> String {
 
 /// `wetgran sweep submit FILE --slurm`.
 pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> {
-    let (sweep, expanded) = load_sweep(file)?;
+    let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
     let dir = sweep_dir(db, &sweep.name, s.dir.as_deref())?;
     slurm::check_directive("the sweep directory", &dir.display().to_string())
         .map_err(Failure::BadInput)?;
@@ -124,7 +126,11 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
     }
 
     let store = Store::open(db)?;
+    if let Ok(old) = store.sweep(&sweep.name) {
+        super::sweep_cmd::check_regrid(&store, &old, &sweep, &expanded, s.replace)?;
+    }
     let row = store.register_sweep(&sweep, &expanded)?;
+    store.set_left_out(row.id, &left_out)?;
     sd.create()
         .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", dir.display())))?;
     // Results already on disk count before anything is submitted again.

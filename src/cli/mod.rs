@@ -3,6 +3,7 @@
 
 mod cluster_cmd;
 pub mod point_cmd;
+mod reclassify_cmd;
 mod refine_cmd;
 pub mod sweep_cmd;
 
@@ -140,8 +141,9 @@ pub enum Command {
     },
     /// Export all finished jobs with their parameters, phase and observables.
     ///
-    /// For pandas, Julia and friends: CSV with one row per job and the observables flattened to
-    /// dotted `obs.` columns, or JSON with them nested.
+    /// For pandas, Julia and friends: CSV with one row per job, its `stationary` verdict and
+    /// trust mark, and the scalar observables as dotted `obs.` columns (series to --series FILE
+    /// in long format), or JSON with everything nested.
     Export {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
@@ -153,6 +155,26 @@ pub enum Command {
         /// Write to this file instead of standard output.
         #[arg(short = 'o', long = "output")]
         output: Option<PathBuf>,
+        /// With --format csv: write the series (every array of the observables: time series,
+        /// profiles, MSD) to this file in long format, `job_id,series,index,value`.
+        #[arg(long, value_name = "FILE")]
+        series: Option<PathBuf>,
+    },
+    /// Re-label stored results from their stored observables, without simulating.
+    ///
+    /// Calls the phase classifier on each result's observables with each job's own `[classify]`
+    /// thresholds (those of the sweep that last registered it), or with the thresholds of
+    /// --classify FILE (a `[classify]` table or top-level keys); updates the phase and the
+    /// numbers it was decided on, and prints how many labels changed (from -> to).
+    Reclassify {
+        /// Only this sweep's results (default: every sweep's).
+        #[arg(long)]
+        sweep: Option<String>,
+        /// Thresholds file (TOML).
+        #[arg(long, value_name = "FILE")]
+        classify: Option<PathBuf>,
+        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        db: PathBuf,
     },
 }
 
@@ -278,7 +300,14 @@ pub fn main() -> ExitCode {
             sweep,
             format,
             output,
-        } => sweep_cmd::export(&db, sweep.as_deref(), format, output.as_deref()),
+            series,
+        } => sweep_cmd::export(
+            &db,
+            sweep.as_deref(),
+            format,
+            output.as_deref(),
+            series.as_deref(),
+        ),
         Command::Show {
             db,
             job,
@@ -293,6 +322,11 @@ pub fn main() -> ExitCode {
             }
         },
         Command::Inflection { db, sweep } => point_cmd::inflection(&db, sweep.as_deref()),
+        Command::Reclassify {
+            sweep,
+            classify,
+            db,
+        } => reclassify_cmd::reclassify(&db, sweep.as_deref(), classify.as_deref()),
     }
 }
 

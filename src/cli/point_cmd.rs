@@ -80,6 +80,21 @@ pub fn show(
         if let Some(phase) = &p.phase {
             println!("phase       {phase}");
         }
+        if let Some(o) = &p.observables {
+            match crate::report::trust::stationary(o) {
+                Some(true) => println!("stationary  yes"),
+                Some(false) => {
+                    println!(
+                        "stationary  NO ({} in `boundaries`): the averages may still drift",
+                        crate::report::trust::NOT_STATIONARY
+                    );
+                    for c in crate::report::trust::failed_checks(o) {
+                        println!("            {c}");
+                    }
+                }
+                None => println!("stationary  unknown (no check stored)"),
+            }
+        }
         if let Some(d) = &p.decided_on {
             println!(
                 "decided on  {}",

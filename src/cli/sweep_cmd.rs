@@ -5,7 +5,7 @@
 
 use crate::boundary::{Observation, PhaseMap, phase_map};
 use crate::report::{export, plot_phase};
-use crate::store::{Store, StoreError, SweepRow};
+use crate::store::{LeftOut, Store, StoreError, SweepRow};
 use crate::sweep::runner::{point_label, short};
 use crate::sweep::{RunOptions, SweepFile, run_job, run_sweeps};
 use clap::{Subcommand, ValueEnum};
@@ -34,12 +34,20 @@ pub enum SweepCommand {
         /// Database file (created if missing).
         #[arg(long, default_value = DEFAULT_DB)]
         db: PathBuf,
-        /// Worker threads, one simulation each (default: the available cores).
+        /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
         #[arg(long)]
         jobs: Option<usize>,
+        /// Allow --jobs above the available cores (several simulations share a core; each
+        /// runs slower, the sweep no faster).
+        #[arg(long)]
+        oversubscribe: bool,
         /// Put the failed jobs of this sweep back in the queue first.
         #[arg(long)]
         retry_failed: bool,
+        /// Allow a sweep name already in the database to get a different grid (its points not
+        /// in the new grid leave the sweep; their results stay in the database).
+        #[arg(long)]
+        replace: bool,
     },
     /// Continue interrupted sweeps: re-queue the jobs of runners that died, run what is pending.
     ///
@@ -54,6 +62,10 @@ pub enum SweepCommand {
         /// Worker threads (default: the available cores).
         #[arg(long)]
         jobs: Option<usize>,
+        /// Allow --jobs above the available cores (several simulations share a core; each
+        /// runs slower, the sweep no faster).
+        #[arg(long)]
+        oversubscribe: bool,
         /// Put failed jobs back in the queue first.
         #[arg(long)]
         retry_failed: bool,
@@ -122,6 +134,10 @@ pub enum SweepCommand {
         /// Worker threads (default: the available cores).
         #[arg(long)]
         jobs: Option<usize>,
+        /// Allow --jobs above the available cores (several simulations share a core; each
+        /// runs slower, the sweep no faster).
+        #[arg(long)]
+        oversubscribe: bool,
     },
     /// Submit a sweep to a Slurm cluster as job arrays.
     ///
@@ -160,6 +176,9 @@ pub enum SweepCommand {
         /// The sweep directory (default: `wetgran-slurm/<sweep name>` beside the database).
         #[arg(long)]
         dir: Option<PathBuf>,
+        /// Allow a registered sweep name to get a different grid (as `sweep run --replace`).
+        #[arg(long)]
+        replace: bool,
     },
     /// Read the results of submitted Slurm tasks into the database.
     ///
@@ -230,13 +249,32 @@ pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
     }
 }
 
-fn workers(jobs: Option<usize>) -> usize {
-    jobs.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    })
-    .max(1)
+/// The cores this process may use (`std::thread::available_parallelism`, 1 if unknown).
+pub fn available_cores() -> usize {
+    std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+}
+
+/// Worker threads for `--jobs N`: the available cores by default; `N` must be in
+/// `[1, available cores]` unless `oversubscribe` (`--oversubscribe`) allows more.
+pub fn workers(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, String> {
+    let cores = available_cores();
+    match jobs {
+        None => Ok(cores),
+        Some(0) => Err(format!(
+            "--jobs 0 is out of range: must be in [1, {cores}] (the available cores)"
+        )),
+        Some(n) if n > cores && !oversubscribe => Err(format!(
+            "--jobs {n} is out of range: must be in [1, {cores}] (the available cores; one \
+             simulation per worker); add --oversubscribe to start more workers than cores"
+        )),
+        Some(n) => Ok(n),
+    }
+}
+
+fn workers_or_fail(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, Failure> {
+    workers(jobs, oversubscribe).map_err(Failure::BadInput)
 }
 
 /// Runs a `sweep` subcommand.
@@ -246,14 +284,19 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
             file,
             db,
             jobs,
+            oversubscribe,
             retry_failed,
-        } => sweep_run(&file, &db, workers(jobs), retry_failed),
+            replace,
+        } => workers_or_fail(jobs, oversubscribe)
+            .and_then(|n| sweep_run(&file, &db, n, retry_failed, replace)),
         SweepCommand::Resume {
             name,
             db,
             jobs,
+            oversubscribe,
             retry_failed,
-        } => sweep_resume(name.as_deref(), &db, workers(jobs), retry_failed),
+        } => workers_or_fail(jobs, oversubscribe)
+            .and_then(|n| sweep_resume(name.as_deref(), &db, n, retry_failed)),
         SweepCommand::Status { db } => sweep_status(&db),
         SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_job(&spec),
@@ -267,6 +310,7 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
             dry_run,
             db,
             dir,
+            replace,
         } => {
             if slurm {
                 super::cluster_cmd::submit(
@@ -281,6 +325,7 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
                         array_limit,
                         dry_run,
                         dir,
+                        replace,
                     },
                 )
             } else {
@@ -300,38 +345,67 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
             resolution,
             max_replicas,
             jobs,
-        } => super::refine_cmd::refine(
-            &db,
-            sweep.as_deref(),
-            super::refine_cmd::Overrides {
-                budget,
-                rounds,
-                resolution,
-                max_replicas,
-            },
-            workers(jobs),
-        ),
+            oversubscribe,
+        } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
+            super::refine_cmd::refine(
+                &db,
+                sweep.as_deref(),
+                super::refine_cmd::Overrides {
+                    budget,
+                    rounds,
+                    resolution,
+                    max_replicas,
+                },
+                n,
+            )
+        }),
         SweepCommand::Estimate {
             file,
             periods,
             samples,
             cores,
-        } => sweep_estimate(&file, periods, samples, workers(cores)),
+        } => match cores {
+            Some(0) => Err(Failure::BadInput(
+                "--cores 0 is out of range: must be >= 1".to_string(),
+            )),
+            c => sweep_estimate(&file, periods, samples, c.unwrap_or_else(available_cores)),
+        },
     })
 }
 
 pub(super) fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>), Failure> {
+    let (sweep, jobs, _) = load_sweep_left_out(file)?;
+    Ok((sweep, jobs))
+}
+
+/// Loads and expands a sweep file; also returns the grid points `skip_invalid` left out, each
+/// with the scene constraint it fails, after listing them on stderr.
+pub(super) fn load_sweep_left_out(
+    file: &Path,
+) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>, Vec<LeftOut>), Failure> {
     let sweep = SweepFile::load(file).map_err(|e| Failure::BadInput(e.to_string()))?;
     let (jobs, skipped) = sweep
         .expand_with_skips()
         .map_err(|e| Failure::BadInput(e.to_string()))?;
-    if let Some(first) = skipped.first() {
+    let left_out: Vec<LeftOut> = skipped
+        .iter()
+        .map(|k| LeftOut {
+            coords: k.coords.clone(),
+            constraint: k
+                .reason
+                .constraint
+                .map(|c| c.reason().to_string())
+                .unwrap_or_default(),
+            reason: k.reason.to_string(),
+        })
+        .collect();
+    if !left_out.is_empty() {
         eprintln!(
-            "{}: left out {} grid point(s) whose scene is invalid (sweep.skip_invalid), e.g. {}",
+            "{}: left out {} grid point(s) (sweep.skip_invalid: the scene fails a constraint):",
             file.display(),
-            skipped.len(),
-            first.reason
+            left_out.len()
         );
+        eprint!("{}", left_out_text(&sweep.axes, &left_out));
     }
     if jobs.is_empty() {
         return Err(Failure::BadInput(format!(
@@ -339,27 +413,103 @@ pub(super) fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::Sw
             file.display()
         )));
     }
-    Ok((sweep, jobs))
+    Ok((sweep, jobs, left_out))
 }
 
-fn sweep_run(file: &Path, db: &Path, jobs: usize, retry: bool) -> Result<(), Failure> {
+/// One line per left-out point: its coordinates and the constraint it fails.
+pub fn left_out_text(axes: &[crate::sweep::Axis], left_out: &[LeftOut]) -> String {
+    let mut out = String::new();
+    for k in left_out {
+        let coords: Vec<String> = axes
+            .iter()
+            .zip(&k.coords)
+            .map(|(a, v)| match v.as_f64() {
+                Some(x) => format!("{} = {}", a.label, short(x)),
+                None => format!("{} = {v}", a.label),
+            })
+            .collect();
+        let _ = writeln!(out, "  left out {}: {}", coords.join(", "), k.constraint);
+    }
+    out
+}
+
+fn sweep_run(
+    file: &Path,
+    db: &Path,
+    jobs: usize,
+    retry: bool,
+    replace: bool,
+) -> Result<(), Failure> {
     // The file is checked in full before the database is touched.
-    let (sweep, expanded) = load_sweep(file)?;
+    let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
     let store = Store::open(db)?;
-    if let Ok(old) = store.sweep(&sweep.name)
-        && old.file != file.display().to_string()
-    {
-        eprintln!(
-            "sweep {}: registered from {} before, now from {}: its grid is replaced (finished \
-             jobs are kept and reused where their specs match)",
-            sweep.name,
-            old.file,
-            file.display()
-        );
+    if let Ok(old) = store.sweep(&sweep.name) {
+        check_regrid(&store, &old, &sweep, &expanded, replace)?;
     }
     let row = store.register_sweep(&sweep, &expanded)?;
+    store.set_left_out(row.id, &left_out)?;
+    // Results shared with an earlier registration get this file's `[classify]` thresholds.
+    let relabelled =
+        super::reclassify_cmd::relabel_sweeps(&store, std::slice::from_ref(&row), None)?;
+    if relabelled.changed() > 0 {
+        eprintln!("sweep {}: {}", row.name, relabelled.text());
+    }
     run_and_report(&store, std::slice::from_ref(&row), jobs, retry)?;
     super::refine_cmd::continue_refinement(&store, &[row], jobs)
+}
+
+/// A sweep name registered before with another grid (axes or replicas) is refused unless
+/// `--replace`: the error says what would be replaced.
+pub(super) fn check_regrid(
+    store: &Store,
+    old: &SweepRow,
+    sweep: &SweepFile,
+    expanded: &[crate::sweep::SweepJob],
+    replace: bool,
+) -> Result<(), Failure> {
+    let grid = |axes: &[crate::sweep::Axis], replicas: u32| {
+        let mut parts: Vec<String> = axes
+            .iter()
+            .map(|a| {
+                let v: Vec<String> = a.values.iter().map(|v| v.to_string()).collect();
+                format!("{} = [{}]", a.label, v.join(", "))
+            })
+            .collect();
+        parts.push(format!("{replicas} replica(s)"));
+        parts.join("; ")
+    };
+    let same_axes = old.axes.len() == sweep.axes.len()
+        && old
+            .axes
+            .iter()
+            .zip(&sweep.axes)
+            .all(|(a, b)| a.key == b.key && a.values == b.values);
+    if (same_axes && old.replicas == sweep.replicas) || replace {
+        return Ok(());
+    }
+    let new_ids: std::collections::HashSet<&str> = expanded.iter().map(|j| j.id.as_str()).collect();
+    let points = store.points(old.id)?;
+    let leaving: Vec<_> = points
+        .iter()
+        .filter(|p| !new_ids.contains(p.job_id.as_str()))
+        .collect();
+    let with_result = leaving.iter().filter(|p| p.observables.is_some()).count();
+    Err(Failure::BadInput(format!(
+        "{}: sweep `{}` is already in {} with another grid (registered from {}):\n  \
+         old grid: {} ({} job(s))\n  new grid: {} ({} job(s))\n  {} job(s) of the old grid, \
+         {with_result} of them with a result, would no longer be in the sweep (their results \
+         stay in the database); run again with --replace to replace the grid, or give the \
+         sweep another name",
+        sweep.path.display(),
+        sweep.name,
+        store.path().display(),
+        old.file,
+        grid(&old.axes, old.replicas),
+        points.len(),
+        grid(&sweep.axes, sweep.replicas),
+        expanded.len(),
+        leaving.len(),
+    )))
 }
 
 fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Result<(), Failure> {
@@ -471,7 +621,7 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
     if sweeps.is_empty() {
         let _ = writeln!(out, "{}: no sweeps yet", store.path().display());
     }
-    let cores = workers(None);
+    let cores = available_cores();
     for s in &sweeps {
         let c = store.counts(s.id)?;
         let points = store.points(s.id)?;
@@ -522,6 +672,28 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
             "  time   {} spent in finished jobs; {estimate}",
             duration_text(spent)
         );
+        let untrusted: Vec<String> = points
+            .iter()
+            .filter_map(|p| p.observables.as_ref())
+            .filter_map(|o| crate::report::trust::trust_mark(o).map(|m| m.to_string()))
+            .collect();
+        if !untrusted.is_empty() {
+            let _ = writeln!(
+                out,
+                "  trust  {} of {} result(s) not stationary ({} in `boundaries`; see `show JOB`)",
+                untrusted.len(),
+                c.done,
+                crate::report::trust::NOT_STATIONARY
+            );
+        }
+        if !s.left_out.is_empty() {
+            let _ = writeln!(
+                out,
+                "  left out {} grid point(s) (sweep.skip_invalid):",
+                s.left_out.len()
+            );
+            out.push_str(&left_out_text(&s.axes, &s.left_out));
+        }
         for p in points.iter().filter(|p| p.status == "failed") {
             let _ = writeln!(
                 out,
@@ -699,12 +871,15 @@ pub fn boundaries(db: &Path, name: Option<&str>, format: BoundaryFormat) -> Exit
             BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
             BoundaryFormat::Table => {
                 let mut notes = std::collections::HashMap::new();
+                let mut untrusted = std::collections::HashMap::new();
                 for s in &sweeps {
-                    if let Some(n) = chain_model_note(&store.points(s.id)?) {
+                    let points = store.points(s.id)?;
+                    if let Some(n) = chain_model_note(&points) {
                         notes.insert(s.name.clone(), n);
                     }
+                    untrusted.insert(s.name.clone(), untrusted_points(&points));
                 }
-                print!("{}", boundaries_table(&maps, &notes))
+                print!("{}", boundaries_table(&maps, &notes, &untrusted))
             }
         }
         Ok(())
@@ -789,10 +964,24 @@ fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
     ))
 }
 
+/// The grid points (their coordinates as JSON text) with a replica whose result carries a trust
+/// mark (`report::trust`), with the mark.
+fn untrusted_points(points: &[crate::store::PointRow]) -> std::collections::HashMap<String, char> {
+    points
+        .iter()
+        .filter_map(|p| {
+            let mark = crate::report::trust::trust_mark(p.observables.as_ref()?)?;
+            Some((serde_json::Value::from(p.coords.clone()).to_string(), mark))
+        })
+        .collect()
+}
+
 fn boundaries_table(
     maps: &[(&SweepRow, PhaseMap)],
     notes: &std::collections::HashMap<String, String>,
+    untrusted: &std::collections::HashMap<String, std::collections::HashMap<String, char>>,
 ) -> String {
+    let none = std::collections::HashMap::new();
     let mut out = String::new();
     for (s, m) in maps {
         let _ = writeln!(out, "sweep {}", s.name);
@@ -829,7 +1018,8 @@ fn boundaries_table(
                     ys.len()
                 );
             } else {
-                write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys);
+                let marks = untrusted.get(&s.name).unwrap_or(&none);
+                write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys, marks);
             }
             if slice.boundaries.is_empty() {
                 let _ = writeln!(out, "  no boundary: every point has the same phase\n");
@@ -891,17 +1081,31 @@ fn write_grid(
     ya: Option<&crate::boundary::PlaneAxis>,
     xs: &[f64],
     ys: &[f64],
+    marks: &std::collections::HashMap<String, char>,
 ) {
     let ylabel = ya.map(|a| a.label.as_str()).unwrap_or("");
+    let mark_of = |p: &crate::boundary::MapPoint| {
+        marks
+            .get(&serde_json::Value::from(p.coords.clone()).to_string())
+            .copied()
+    };
     let _ = writeln!(
         out,
-        "  phase map ({} down, {} across{}):",
+        "  phase map ({} down, {} across{}{}):",
         if ylabel.is_empty() { "-" } else { ylabel },
         xa.label,
         if slice.points.iter().any(|p| p.tie) {
             "; * = replicas tied"
         } else {
             ""
+        },
+        if slice.points.iter().any(|p| mark_of(p).is_some()) {
+            format!(
+                "; {} = not stationary",
+                crate::report::trust::NOT_STATIONARY
+            )
+        } else {
+            String::new()
         }
     );
     for &yv in ys.iter().rev() {
@@ -918,7 +1122,14 @@ fn write_grid(
                 .points
                 .iter()
                 .find(|p| p.x == xv && p.y == yv)
-                .map(|p| format!("{}{}", p.phase, if p.tie { "*" } else { "" }))
+                .map(|p| {
+                    format!(
+                        "{}{}{}",
+                        p.phase,
+                        if p.tie { "*" } else { "" },
+                        mark_of(p).map(String::from).unwrap_or_default()
+                    )
+                })
                 .unwrap_or_else(|| ".".to_string());
             let _ = write!(row, " {cell:>7}");
         }
@@ -998,6 +1209,7 @@ pub fn export(
     name: Option<&str>,
     format: ExportFormat,
     output: Option<&Path>,
+    series: Option<&Path>,
 ) -> ExitCode {
     exit((|| {
         let store = Store::open_existing(db)?;
@@ -1013,6 +1225,21 @@ pub fn export(
             Some(p) => std::fs::write(p, text)
                 .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", p.display())))?,
             None => print!("{text}"),
+        }
+        match (format, series) {
+            (ExportFormat::Csv, Some(p)) => std::fs::write(p, export::series_csv(&rows))
+                .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", p.display())))?,
+            (ExportFormat::Json, Some(_)) => {
+                return Err(Failure::BadInput(
+                    "--series goes with --format csv (the JSON export holds the series)"
+                        .to_string(),
+                ));
+            }
+            (ExportFormat::Csv, None) => eprintln!(
+                "export: scalar columns only; the series (time series, profiles) go to \
+                 --series FILE or --format json"
+            ),
+            (ExportFormat::Json, None) => {}
         }
         Ok(())
     })())

@@ -197,7 +197,7 @@ pub fn plan_jobs(
                 match (made, step) {
                     (Ok(j), _) => slice_jobs.extend(j),
                     (Err(_), &Step::Point { x, y }) => {
-                        // Outside the valid region (e.g. the stroke exceeds the box): never
+                        // Outside the valid region (a scene constraint fails): never
                         // proposed again, plan the slice anew.
                         blocked.push((x, y));
                         continue 'plan;

@@ -1,6 +1,8 @@
 //! Export of a database's results, one row per finished job with its sweep, grid point, axis
-//! values, container motion, phase and observables: CSV (observables flattened to dotted
-//! columns) for pandas, JSON (nested) for anything else.
+//! values, container motion, phase, trust verdict and observables: CSV for pandas and
+//! spreadsheets (the scalar observables as dotted columns; every array, a time series or a
+//! profile, goes to a separate long-format series CSV `job_id,series,index,value`), JSON
+//! (nested, series included) for anything else.
 
 use crate::store::{PointRow, SweepRow};
 use serde::Serialize;
@@ -64,28 +66,67 @@ pub fn to_json(rows: &[ExportRow]) -> String {
     serde_json::to_string_pretty(rows).expect("rows serialize") + "\n"
 }
 
-/// Scalar leaves of a JSON value with dotted paths (`events.pair_collisions`; arrays `a.0`).
-fn flatten(prefix: &str, v: &serde_json::Value, out: &mut BTreeMap<String, String>) {
+/// Scalar leaves of a JSON value with dotted paths (`events.pair_collisions`) into `out`; every
+/// array is a series and goes to `series` instead: `(name, index, value)` per element leaf, the
+/// name being the array's path plus the leaf's path inside the element
+/// (`obs.stationarity.checks.relative_change`, `obs.location_changes.1`).
+fn flatten(
+    prefix: &str,
+    v: &serde_json::Value,
+    out: &mut BTreeMap<String, String>,
+    series: &mut Vec<(String, usize, String)>,
+) {
     match v {
         serde_json::Value::Object(m) => {
             for (k, x) in m {
-                flatten(&join(prefix, k), x, out);
+                flatten(&join(prefix, k), x, out, series);
             }
         }
         serde_json::Value::Array(a) => {
             for (k, x) in a.iter().enumerate() {
-                flatten(&join(prefix, &k.to_string()), x, out);
+                let mut leaves = BTreeMap::new();
+                // Nested arrays inside an element stay in that element's series, flattened.
+                flatten_all("", x, &mut leaves);
+                for (leaf, value) in leaves {
+                    let name = if leaf.is_empty() {
+                        prefix.to_string()
+                    } else {
+                        join(prefix, &leaf)
+                    };
+                    series.push((name, k, value));
+                }
             }
         }
-        serde_json::Value::Null => {
-            out.insert(prefix.to_string(), String::new());
+        other => {
+            out.insert(prefix.to_string(), scalar_text(other));
         }
-        serde_json::Value::String(s) => {
-            out.insert(prefix.to_string(), s.clone());
+    }
+}
+
+/// Every scalar leaf of a JSON value with dotted paths, arrays indexed (`a.0`).
+fn flatten_all(prefix: &str, v: &serde_json::Value, out: &mut BTreeMap<String, String>) {
+    match v {
+        serde_json::Value::Object(m) => {
+            for (k, x) in m {
+                flatten_all(&join(prefix, k), x, out);
+            }
+        }
+        serde_json::Value::Array(a) => {
+            for (k, x) in a.iter().enumerate() {
+                flatten_all(&join(prefix, &k.to_string()), x, out);
+            }
         }
         other => {
-            out.insert(prefix.to_string(), other.to_string());
+            out.insert(prefix.to_string(), scalar_text(other));
         }
+    }
+}
+
+fn scalar_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Null => String::new(),
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
     }
 }
 
@@ -109,21 +150,44 @@ fn opt<T: ToString>(v: &Option<T>) -> String {
     v.as_ref().map(ToString::to_string).unwrap_or_default()
 }
 
-/// CSV with a header row: fixed columns, then one column per axis key (union over sweeps), then
-/// `obs.`-prefixed flattened observables and `decided_on.`-prefixed decision inputs.
+/// The series of every row in long format: a header `job_id,series,index,value`, then one line
+/// per element of every array of the observables and decision inputs.
+pub fn series_csv(rows: &[ExportRow]) -> String {
+    let mut out = String::from("job_id,series,index,value\n");
+    for r in rows {
+        let (_, series) = scalars_and_series(r);
+        for (name, index, value) in series {
+            out.push_str(&format!(
+                "{},{},{index},{}\n",
+                csv_field(&r.job_id),
+                csv_field(&name),
+                csv_field(&value)
+            ));
+        }
+    }
+    out
+}
+
+/// The scalar columns (`obs.`- and `decided_on.`-prefixed) and the series of a row.
+#[allow(clippy::type_complexity)]
+fn scalars_and_series(r: &ExportRow) -> (BTreeMap<String, String>, Vec<(String, usize, String)>) {
+    let mut m = BTreeMap::new();
+    let mut series = Vec::new();
+    flatten("obs", &r.observables, &mut m, &mut series);
+    if let Some(d) = &r.decided_on {
+        flatten("decided_on", d, &mut m, &mut series);
+    }
+    (m, series)
+}
+
+/// CSV with a header row, one row per result, scalar columns only: fixed columns, then one
+/// column per axis key (union over sweeps), `stationary` and `trust` (the result's trust mark,
+/// `report::trust`), then the `obs.`-prefixed scalar observables and `decided_on.`-prefixed
+/// decision inputs. Arrays are left out: see [`series_csv`].
 pub fn to_csv(rows: &[ExportRow]) -> String {
     let params: BTreeSet<&String> = rows.iter().flat_map(|r| r.params.keys()).collect();
-    let flat: Vec<BTreeMap<String, String>> = rows
-        .iter()
-        .map(|r| {
-            let mut m = BTreeMap::new();
-            flatten("obs", &r.observables, &mut m);
-            if let Some(d) = &r.decided_on {
-                flatten("decided_on", d, &mut m);
-            }
-            m
-        })
-        .collect();
+    let flat: Vec<BTreeMap<String, String>> =
+        rows.iter().map(|r| scalars_and_series(r).0).collect();
     let extra: BTreeSet<&String> = flat.iter().flat_map(|m| m.keys()).collect();
     let mut header: Vec<String> = ["sweep", "point", "replica", "job_id"]
         .iter()
@@ -135,6 +199,8 @@ pub fn to_csv(rows: &[ExportRow]) -> String {
             "amplitude",
             "omega",
             "phase",
+            "stationary",
+            "trust",
             "simulated_time",
             "wall_seconds",
             "events",
@@ -168,6 +234,8 @@ pub fn to_csv(rows: &[ExportRow]) -> String {
             opt(&r.amplitude),
             opt(&r.omega),
             opt(&r.phase),
+            opt(&super::trust::stationary(&r.observables)),
+            opt(&super::trust::trust_mark(&r.observables)),
             opt(&r.simulated_time),
             opt(&r.wall_seconds),
             opt(&r.events),
@@ -200,13 +268,26 @@ mod tests {
     }
 
     #[test]
-    fn flatten_names_nested_leaves() {
-        let v = serde_json::json!({"a": {"b": 1, "c": [2.5, null]}, "d": "x"});
+    fn flatten_keeps_scalars_and_sends_arrays_to_series() {
+        let v = serde_json::json!({"a": {"b": 1, "c": [2.5, null]}, "d": "x",
+            "e": [[0.5, 3.0], [1.0, 4.0]], "f": [{"q": "T", "ok": false}]});
         let mut m = BTreeMap::new();
-        flatten("obs", &v, &mut m);
+        let mut series = Vec::new();
+        flatten("obs", &v, &mut m, &mut series);
+        assert_eq!(m.len(), 2, "{m:?}");
         assert_eq!(m["obs.a.b"], "1");
-        assert_eq!(m["obs.a.c.0"], "2.5");
-        assert_eq!(m["obs.a.c.1"], "");
         assert_eq!(m["obs.d"], "x");
+        let has = |name: &str, k: usize, value: &str| {
+            series
+                .iter()
+                .any(|(n, i, x)| n == name && *i == k && x == value)
+        };
+        assert!(has("obs.a.c", 0, "2.5"), "{series:?}");
+        assert!(has("obs.a.c", 1, ""), "{series:?}");
+        assert!(has("obs.e.0", 1, "1.0"), "{series:?}");
+        assert!(has("obs.e.1", 1, "4.0"), "{series:?}");
+        assert!(has("obs.f.q", 0, "T"), "{series:?}");
+        assert!(has("obs.f.ok", 0, "false"), "{series:?}");
+        assert_eq!(series.len(), 8);
     }
 }

@@ -1,7 +1,8 @@
 //! Pictures and exports of results: snapshots of a configuration (extended XYZ for OVITO, SVG
 //! coloured by kinetic energy or bridge count, with the bridges drawn), the lateral-profile plot
-//! (SVG), the phase-diagram plot of a sweep database (SVG) and the export of all results (CSV,
-//! JSON). Everything takes plain data (a [`Frame`](crate::sim::Frame),
+//! (SVG), the phase-diagram plot of a sweep database (SVG), the export of all results (CSV with
+//! a long-format series file, JSON) and the trust mark of a stored result (`trust`). Everything
+//! takes plain data (a [`Frame`](crate::sim::Frame),
 //! [`Observables`](crate::observe::Observables), stored results), so a stored sweep point can be
 //! drawn as well as a fresh run.
 
@@ -10,6 +11,7 @@ pub mod plot_phase;
 pub mod profile_plot;
 pub mod snapshot;
 mod svg;
+pub mod trust;
 
 pub use profile_plot::profiles_svg;
 pub use snapshot::{ColourBy, snapshot_svg, snapshot_xyz, write_snapshot};

@@ -14,7 +14,7 @@ mod validate;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-pub use validate::{MIN_PERIODIC_CELLS, SceneError};
+pub use validate::{Constraint, MIN_PERIODIC_CELLS, SceneError};
 
 /// One simulation, as read from a scene file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -20,6 +20,48 @@ pub struct SceneError {
     pub key: String,
     /// What is wrong and what is allowed.
     pub message: String,
+    /// The geometric or physical constraint of the scene that failed, when the error is one
+    /// (each key on its own is in range, their combination is not); `None` for a key outside its
+    /// own range. A sweep with `skip_invalid` leaves out only points failing a constraint.
+    pub constraint: Option<Constraint>,
+}
+
+/// The constraints between scene keys that a grid point may fail although every key is in its
+/// own range; `sweep.skip_invalid` leaves such points out (docs/model-choices.md, "Sweeps").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Constraint {
+    /// The gap between the floor and lid (the box height) is not larger than the largest
+    /// diameter `d_max`.
+    GapBelowDiameter,
+    /// More particles than fit on the initial lattice of the box.
+    LatticeFull,
+    /// A periodic axis shorter than the neighbour cells it must hold (event-driven: 4 cells of
+    /// `d_max + s_crit`; time-driven: 3 cells of `d_max + s_crit + skin`).
+    PeriodicAxisTooShort,
+    /// The box would need more neighbour cells than the engine can allocate.
+    TooManyCells,
+}
+
+impl Constraint {
+    /// Every constraint, in the order of the docs.
+    pub const ALL: [Constraint; 4] = [
+        Constraint::GapBelowDiameter,
+        Constraint::LatticeFull,
+        Constraint::PeriodicAxisTooShort,
+        Constraint::TooManyCells,
+    ];
+
+    /// One line saying why a point failing it is left out.
+    pub fn reason(self) -> &'static str {
+        match self {
+            Constraint::GapBelowDiameter => "the floor-to-lid gap does not exceed d_max",
+            Constraint::LatticeFull => "more particles than fit on the initial lattice",
+            Constraint::PeriodicAxisTooShort => {
+                "a periodic axis is shorter than the neighbour cells it must hold"
+            }
+            Constraint::TooManyCells => "the box needs more neighbour cells than allowed",
+        }
+    }
 }
 
 impl SceneError {
@@ -28,7 +70,14 @@ impl SceneError {
             origin: origin.to_string(),
             key: key.to_string(),
             message: message.into(),
+            constraint: None,
         }
+    }
+
+    /// The same error, marked as failing `constraint`.
+    pub(crate) fn failing(mut self, constraint: Constraint) -> Self {
+        self.constraint = Some(constraint);
+        self
     }
 
     pub(crate) fn parse(origin: &str, err: toml::de::Error) -> Self {
@@ -388,18 +437,21 @@ impl Scene {
                         ));
                     }
                 }
-                if let Some((a, _)) = self.drive_motion() {
+                // Floor and lid move together (`z_w(t) = A sin(omega t)`), so the gap between
+                // them is the box height at every phase, whatever the stroke `2 A`: the
+                // geometry only needs the largest particle to fit between them.
+                if self.drive_motion().is_some() {
                     let h = size[dim - 1];
                     let (_, d_max) = self.diameter_range();
-                    if h <= 2.0 * a + d_max {
+                    if h <= d_max {
                         return Err(c.err(
                             &format!("box.size[{}]", dim - 1),
                             format!(
-                                "= {h} is out of range: the shaken box must be taller than \
-                                 2 A + d_max = {:.4}",
-                                2.0 * a + d_max
+                                "= {h} is out of range: the gap between the shaken floor and lid \
+                                 must exceed the largest diameter d_max = {d_max:.4}"
                             ),
-                        ));
+                        )
+            .failing(Constraint::GapBelowDiameter));
                     }
                 }
             }
@@ -459,7 +511,8 @@ impl Scene {
                      spacing {spacing:.4} in this box",
                     p.count
                 ),
-            ));
+            )
+            .failing(Constraint::LatticeFull));
         }
 
         // Run.
@@ -560,7 +613,8 @@ impl Scene {
                         size[k],
                         MIN_PERIODIC_CELLS as f64 * cell
                     ),
-                ));
+                )
+            .failing(Constraint::PeriodicAxisTooShort));
             }
         }
         // A finite but huge box would make the engine allocate a neighbour grid it cannot hold.
@@ -578,7 +632,8 @@ impl Scene {
                      have {cells} cells, must be at most {MAX_CELLS} cells: use a smaller box or \
                      a larger engine.cell_size"
                 ),
-            ));
+            )
+            .failing(Constraint::TooManyCells));
         }
         // Observers and classification.
         self.observe.validate(self, origin)?;
@@ -735,7 +790,8 @@ impl Scene {
                                  axis >= 3 (d_max + s_crit + skin) = {:.4}",
                                 3.0 * range
                             ),
-                        ));
+                        )
+            .failing(Constraint::PeriodicAxisTooShort));
                     }
                 }
             }

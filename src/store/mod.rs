@@ -110,6 +110,18 @@ pub struct SweepRow {
     pub replicas: u32,
     pub created_at: f64,
     pub updated_at: f64,
+    /// Grid points left out by `sweep.skip_invalid` when last registered.
+    pub left_out: Vec<LeftOut>,
+}
+
+/// A grid point left out by `sweep.skip_invalid`, as stored with its sweep.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LeftOut {
+    pub coords: Vec<serde_json::Value>,
+    /// The failed scene constraint, in words ([`crate::scene::Constraint::reason`]).
+    pub constraint: String,
+    /// The full validation message.
+    pub reason: String,
 }
 
 /// A job this runner claimed.
@@ -165,6 +177,10 @@ pub struct PointRow {
 /// Points added by refinement are numbered from here on (grid points are below: a sweep has at
 /// most `MAX_JOBS` jobs).
 pub const REFINED_FROM: i64 = crate::sweep::file::MAX_JOBS as i64;
+
+/// The rule job ids follow (meta key `job_ids`): the spec without its `[classify]` thresholds
+/// ([`JobSpec::identity`]). A database without it is re-keyed when opened.
+pub const JOB_ID_RULE: &str = "spec-without-classify";
 
 /// An open wetgran database.
 #[derive(Debug)]
@@ -333,6 +349,7 @@ impl Store {
             owner: new_owner(),
         };
         store.prepare(existing)?;
+        store.rekey_jobs()?;
         Ok(store)
     }
 
@@ -405,6 +422,144 @@ impl Store {
             })?;
             Ok(())
         })
+    }
+
+    /// Compatibility rule for databases written before job ids left out the `[classify]`
+    /// thresholds (docs/model-choices.md, "Job identity"): once per database (meta key
+    /// `job_ids` = [`JOB_ID_RULE`]), every job is re-keyed to the id its stored spec has now,
+    /// in one transaction. Jobs that differed only in their thresholds become one: its point
+    /// rows, runs and cluster tasks follow it; a result is kept (the first one found where the
+    /// merged job has none, dropped otherwise: the trajectory is the same).
+    fn rekey_jobs(&self) -> Result<(), StoreError> {
+        let rule: Option<String> = self
+            .rt
+            .block_on(
+                sqlx::query_scalar("SELECT value FROM meta WHERE key = 'job_ids'")
+                    .fetch_optional(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        if rule.as_deref() == Some(JOB_ID_RULE) {
+            return Ok(());
+        }
+        let path = self.path.display().to_string();
+        self.in_transaction(async |tx| {
+            let jobs: Vec<(String, String)> =
+                sqlx::query_as("SELECT id, spec FROM jobs ORDER BY rowid")
+                    .fetch_all(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+            for (old, text) in jobs {
+                let spec = JobSpec::from_json(&text, &format!("job {old}")).map_err(|e| {
+                    StoreError::Damaged {
+                        path: path.clone(),
+                        detail: format!("a job spec is not readable: {e}"),
+                    }
+                })?;
+                let new = spec.id();
+                if new == old {
+                    continue;
+                }
+                let exists: Option<String> =
+                    sqlx::query_scalar("SELECT id FROM jobs WHERE id = ?1")
+                        .bind(&new)
+                        .fetch_optional(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                if exists.is_none() {
+                    sqlx::query(
+                        "INSERT INTO jobs (id, spec, status, attempts, owner, heartbeat, \
+                         claimed_at, finished_at, wall_seconds, last_error, created_at) \
+                         SELECT ?2, spec, status, attempts, owner, heartbeat, claimed_at, \
+                         finished_at, wall_seconds, last_error, created_at FROM jobs WHERE id = ?1",
+                    )
+                    .bind(&old)
+                    .bind(&new)
+                    .execute(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+                } else {
+                    // Merging: the merged job takes this one's result if it has none.
+                    let moved = sqlx::query(
+                        "UPDATE results SET job_id = ?2 WHERE job_id = ?1 \
+                         AND NOT EXISTS (SELECT 1 FROM results WHERE job_id = ?2)",
+                    )
+                    .bind(&old)
+                    .bind(&new)
+                    .execute(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+                    if moved.rows_affected() > 0 {
+                        sqlx::query(
+                            "UPDATE jobs SET status = 'done', finished_at = \
+                             (SELECT finished_at FROM jobs WHERE id = ?1), wall_seconds = \
+                             (SELECT wall_seconds FROM jobs WHERE id = ?1), last_error = NULL \
+                             WHERE id = ?2",
+                        )
+                        .bind(&old)
+                        .bind(&new)
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                    }
+                    sqlx::query("DELETE FROM results WHERE job_id = ?1")
+                        .bind(&old)
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                }
+                for sql in [
+                    "UPDATE sweep_points SET job_id = ?2 WHERE job_id = ?1",
+                    "UPDATE runs SET job_id = ?2 WHERE job_id = ?1",
+                    "UPDATE submission_tasks SET job_id = ?2 WHERE job_id = ?1",
+                    "UPDATE results SET job_id = ?2 WHERE job_id = ?1",
+                ] {
+                    sqlx::query(sql)
+                        .bind(&old)
+                        .bind(&new)
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                }
+                sqlx::query("DELETE FROM jobs WHERE id = ?1")
+                    .bind(&old)
+                    .execute(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+            }
+            sqlx::query("INSERT OR REPLACE INTO meta (key, value) VALUES ('job_ids', ?1)")
+                .bind(JOB_ID_RULE)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            Ok(())
+        })
+    }
+
+    /// Sets the phase label and the numbers it was decided on of stored results, in one
+    /// transaction (`wetgran reclassify`): `(job id, phase, decided_on)`.
+    pub fn relabel(
+        &self,
+        labels: &[(String, String, serde_json::Value)],
+    ) -> Result<(), StoreError> {
+        self.in_transaction(async |tx| {
+            for (job, phase, decided_on) in labels {
+                sqlx::query("UPDATE results SET phase = ?2, decided_on = ?3 WHERE job_id = ?1")
+                    .bind(job)
+                    .bind(phase)
+                    .bind(decided_on.to_string())
+                    .execute(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Number of rows in the `runs` table: simulations started, ever, in this database.
+    pub fn runs_started(&self) -> Result<i64, StoreError> {
+        self.rt
+            .block_on(sqlx::query_scalar("SELECT count(*) FROM runs").fetch_one(&self.pool))
+            .map_err(|e| self.db(e))
     }
 
     /// The database file.
@@ -531,6 +686,21 @@ impl Store {
         self.sweep(&file.name)
     }
 
+    /// Records the grid points `skip_invalid` left out of a registered sweep (replacing what
+    /// was recorded before).
+    pub fn set_left_out(&self, sweep_id: i64, left_out: &[LeftOut]) -> Result<(), StoreError> {
+        let text = serde_json::to_string(left_out).expect("left-out points serialize");
+        self.rt
+            .block_on(
+                sqlx::query("UPDATE sweeps SET left_out = ?2 WHERE id = ?1")
+                    .bind(sweep_id)
+                    .bind(text)
+                    .execute(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        Ok(())
+    }
+
     /// Inserts `jobs` (a job already in the database is shared, not duplicated) and their rows
     /// in a sweep's point list, inside an open transaction.
     async fn insert_points(
@@ -541,13 +711,19 @@ impl Store {
         t: f64,
     ) -> Result<(), StoreError> {
         for job in jobs {
-            sqlx::query("INSERT OR IGNORE INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3)")
-                .bind(&job.id)
-                .bind(job.spec.canonical_json())
-                .bind(t)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+            // The id leaves out the `[classify]` thresholds: a job registered again with other
+            // thresholds keeps its id and result, and its stored spec takes the new thresholds
+            // (the ones its next result, or `wetgran reclassify`, labels with).
+            sqlx::query(
+                "INSERT INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3) \
+                 ON CONFLICT (id) DO UPDATE SET spec = excluded.spec",
+            )
+            .bind(&job.id)
+            .bind(job.spec.canonical_json())
+            .bind(t)
+            .execute(&mut **tx)
+            .await
+            .map_err(|e| self.db(e))?;
             sqlx::query(
                 "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
                  VALUES (?1, ?2, ?3, ?4, ?5)",
@@ -598,7 +774,7 @@ impl Store {
             .block_on(
                 sqlx::query(
                     "SELECT id, name, file, description, cost, axes, replicas, created_at, \
-                     updated_at FROM sweeps ORDER BY id",
+                     updated_at, left_out FROM sweeps ORDER BY id",
                 )
                 .fetch_all(&self.pool),
             )
@@ -619,6 +795,13 @@ impl Store {
                     replicas: r.get::<i64, _>("replicas") as u32,
                     created_at: r.get("created_at"),
                     updated_at: r.get("updated_at"),
+                    left_out: match r.get::<Option<String>, _>("left_out") {
+                        None => Vec::new(),
+                        Some(t) => serde_json::from_str(&t).map_err(|e| StoreError::Damaged {
+                            path: self.path.display().to_string(),
+                            detail: format!("left-out points of a sweep are not readable: {e}"),
+                        })?,
+                    },
                 })
             })
             .collect()
@@ -1023,6 +1206,97 @@ mod tests {
         let store = Store::open(&db).unwrap();
         let id = store.register_sweep(&file, &jobs).unwrap().id;
         (db, id)
+    }
+
+    /// Runs raw SQL on the store's single connection.
+    fn exec(store: &Store, sql: &'static str, binds: &[&str]) {
+        let mut q = sqlx::query(sql);
+        for b in binds {
+            q = q.bind(*b);
+        }
+        store.rt.block_on(q.execute(&store.pool)).unwrap();
+    }
+
+    #[test]
+    fn a_database_with_old_job_ids_is_rekeyed_once_and_keeps_its_results() {
+        let dir = tempfile::tempdir().unwrap();
+        let (db, sweep_id) = store_with_jobs(dir.path());
+        let store = Store::open(&db).unwrap();
+        let claim = store.claim(&[sweep_id]).unwrap().unwrap();
+        let result = JobResult {
+            phase: Some("g".into()),
+            decided_on: None,
+            observables: serde_json::json!({"k": 1}),
+            simulated_time: 1.0,
+            wall_seconds: 0.5,
+            events: 3,
+        };
+        assert!(store.finish(&claim, &result).unwrap());
+        let done_id = claim.job_id.clone();
+        // Write the database as the old rule did: ids hashed with the `[classify]` thresholds,
+        // plus a second job that differed from the finished one only in its thresholds.
+        exec(&store, "PRAGMA foreign_keys = OFF", &[]);
+        for p in store.points(sweep_id).unwrap() {
+            let old = crate::sweep::spec::id_of_canonical(&p.spec.canonical_json());
+            assert_ne!(old, p.job_id);
+            for sql in [
+                "UPDATE jobs SET id = ?2 WHERE id = ?1",
+                "UPDATE sweep_points SET job_id = ?2 WHERE job_id = ?1",
+                "UPDATE results SET job_id = ?2 WHERE job_id = ?1",
+                "UPDATE runs SET job_id = ?2 WHERE job_id = ?1",
+            ] {
+                exec(&store, sql, &[&p.job_id, &old]);
+            }
+        }
+        let mut twin = claim.spec.clone();
+        twin.scene.classify.gas_temperature *= 2.0;
+        let twin_old = crate::sweep::spec::id_of_canonical(&twin.canonical_json());
+        exec(
+            &store,
+            "INSERT INTO jobs (id, spec, created_at) VALUES (?1, ?2, 0)",
+            &[&twin_old, &twin.canonical_json()],
+        );
+        exec(
+            &store,
+            "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
+             VALUES (1, 99, 0, '[9]', ?1)",
+            &[&twin_old],
+        );
+        exec(&store, "DELETE FROM meta WHERE key = 'job_ids'", &[]);
+        drop(store);
+
+        let store = Store::open_existing(&db).unwrap();
+        let points = store.points(sweep_id).unwrap();
+        assert_eq!(points.len(), 4);
+        for p in &points {
+            assert_eq!(
+                p.job_id,
+                p.spec.id(),
+                "every job carries its id under the new rule"
+            );
+        }
+        // The twin merged into the finished job and shares its result.
+        let twin_row = points.iter().find(|p| p.point == 99).unwrap();
+        assert_eq!(twin_row.job_id, done_id);
+        for p in points.iter().filter(|p| p.job_id == done_id) {
+            assert_eq!(p.status, "done");
+            assert_eq!(p.observables, Some(serde_json::json!({"k": 1})));
+        }
+        let jobs: i64 = store
+            .rt
+            .block_on(sqlx::query_scalar("SELECT count(*) FROM jobs").fetch_one(&store.pool))
+            .unwrap();
+        assert_eq!(jobs, 3);
+        assert_eq!(store.runs_per_job().unwrap(), vec![(done_id.clone(), 1)]);
+        // Marked once: opening again changes nothing.
+        let rule: String = store
+            .rt
+            .block_on(
+                sqlx::query_scalar("SELECT value FROM meta WHERE key = 'job_ids'")
+                    .fetch_one(&store.pool),
+            )
+            .unwrap();
+        assert_eq!(rule, JOB_ID_RULE);
     }
 
     fn set_owner(store: &Store, job: &str, owner: &str, heartbeat: f64) {

@@ -26,6 +26,9 @@ pub struct SweepError {
     pub key: String,
     /// What is wrong and what is allowed.
     pub message: String,
+    /// The scene constraint the point fails, for an invalid grid point (each key in its own
+    /// range, their combination not); only such points may be left out by `skip_invalid`.
+    pub constraint: Option<crate::scene::Constraint>,
 }
 
 impl SweepError {
@@ -40,6 +43,7 @@ impl SweepError {
             line,
             key: key.to_string(),
             message: message.into(),
+            constraint: None,
         }
     }
 }
@@ -81,8 +85,10 @@ pub struct Header {
     /// Free-text cost note for long runs (shown by `sweep status`).
     #[serde(default)]
     pub cost: Option<String>,
-    /// Leave out grid points whose scene fails validation (e.g. a drive stroke too long for
-    /// the box) instead of rejecting the sweep; they are listed when the sweep is registered.
+    /// Leave out grid points whose scene fails a constraint between keys
+    /// ([`crate::scene::Constraint`], e.g. more grains than fit in the box) instead of rejecting
+    /// the sweep; a key outside its own range is still an error. They are listed by
+    /// `sweep expand`, `sweep run` and `sweep status`.
     #[serde(default)]
     pub skip_invalid: bool,
 }
@@ -492,6 +498,17 @@ impl SweepFile {
                         ),
                     ));
                 }
+                if rv.steps == 1 && rv.from != rv.to {
+                    return Err(err(
+                        rline,
+                        &key,
+                        format!(
+                            "steps = 1 with from = {} != to = {}: a range needs steps >= 2 \
+                             (or write `values = [{}]` for one value)",
+                            rv.from, rv.to, rv.from
+                        ),
+                    ));
+                }
                 if rv.steps > 1 && rv.from == rv.to {
                     return Err(err(
                         rline,
@@ -628,6 +645,13 @@ impl SweepFile {
         let bare = key.split('[').next().unwrap_or(key);
         if let Some(a) = self.axes.iter().find(|a| a.key == bare) {
             return (file, Some(a.line));
+        }
+        // The sweep's own `[observe]` and `[classify]` tables set the scene sections of those
+        // names over the base scene.
+        if (bare.starts_with("observe.") || bare.starts_with("classify."))
+            && let Some(l) = key_line(&self.text, &[], key)
+        {
+            return (file, Some(l));
         }
         if let Some(l) = key_line(&self.text, &["scene"], key) {
             return (file, Some(l));

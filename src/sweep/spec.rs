@@ -4,10 +4,11 @@
 //! A job spec holds the complete, validated scene (every default filled in) and the observer
 //! and classifier settings. Its canonical JSON has the object keys sorted at every level and the
 //! numbers printed by `serde_json` (shortest text that reads back to the same `f64`); its id is
-//! the SHA-256 of that text in hex. So a job written twice, in any key order, with or without
-//! keys at their default, gets one id and is computed once across all sweeps of a database; a
-//! changed parameter is a new job. Nothing in a spec refers to its sweep: the grid coordinates
-//! of a job live beside it in the sweep's point list.
+//! the SHA-256 of that text without the `[classify]` thresholds (which only label a result) in
+//! hex. So a job written twice, in any key order, with or without keys at their default, or with
+//! other thresholds, gets one id and is computed once across all sweeps of a database; a changed
+//! parameter of the trajectory or of the observers is a new job. Nothing in a spec refers to its
+//! sweep: the grid coordinates of a job live beside it in the sweep's point list.
 
 use super::file::{SweepError, SweepFile};
 use crate::scene::Scene;
@@ -42,9 +43,22 @@ impl JobSpec {
         canonical_json(&v)
     }
 
-    /// The job's id: SHA-256 of the canonical JSON, lower-case hex.
+    /// The job's id: SHA-256 of the canonical JSON of [`JobSpec::identity`], lower-case hex.
     pub fn id(&self) -> String {
-        id_of_canonical(&self.canonical_json())
+        id_of_canonical(&canonical_json(&self.identity()))
+    }
+
+    /// What the id hashes: the spec without the scene's `[classify]` thresholds, which do not
+    /// change the trajectory or the observables (they only label a result, and the thresholds
+    /// used are stored with it in `decided_on`; `wetgran reclassify` re-labels). Everything else,
+    /// `[observe]` included, stays: the observables depend on the sampling and the observers
+    /// (docs/model-choices.md, "Job identity").
+    pub fn identity(&self) -> serde_json::Value {
+        let mut v = serde_json::to_value(self).expect("a job spec serializes");
+        if let Some(scene) = v.get_mut("scene").and_then(|s| s.as_object_mut()) {
+            scene.remove("classify");
+        }
+        v
     }
 
     /// Reads a job spec from JSON (any key order) and validates its scene.
@@ -153,7 +167,7 @@ struct Prepared {
 pub struct Skipped {
     pub point: usize,
     pub coords: Vec<serde_json::Value>,
-    /// Why its scene was rejected.
+    /// Why its scene was rejected (`reason.constraint` names the failed scene constraint).
     pub reason: SweepError,
 }
 
@@ -239,7 +253,7 @@ impl SweepFile {
 
     /// Expands the sweep into its jobs: every grid point times every replica, each with a
     /// validated scene. Errors name the sweep file (or base scene), the line and the key. With
-    /// `sweep.skip_invalid` the points whose scene fails validation are left out (see
+    /// `sweep.skip_invalid` the points whose scene fails a scene constraint are left out (see
     /// [`SweepFile::expand_with_skips`]).
     pub fn expand(&self) -> Result<Vec<SweepJob>, SweepError> {
         Ok(self.expand_with_skips()?.0)
@@ -360,7 +374,9 @@ impl SweepFile {
         Ok(Ok(out))
     }
 
-    /// One job; `Ok(Err(_))`: its scene is invalid (skippable), `Err(_)`: the sweep is.
+    /// One job; `Ok(Err(_))`: its scene fails a constraint between keys
+    /// ([`crate::scene::Constraint`], skippable), `Err(_)`: the sweep is invalid (a key outside
+    /// its own range included).
     fn job_at(
         &self,
         prep: &Prepared,
@@ -423,7 +439,10 @@ impl SweepFile {
             }
             let scene = match self.scene_of(&tree, &where_) {
                 Ok(s) => s,
-                Err(e) => return Ok(Err(e)),
+                // A point failing a constraint of the scene may be left out; a key outside its
+                // own range is an error of the sweep file.
+                Err(e) if e.constraint.is_some() => return Ok(Err(e)),
+                Err(e) => return Err(e),
             };
             let period = driving_period(&scene);
             let mut scene = scene;
@@ -502,7 +521,9 @@ impl SweepFile {
                 .filter(|l| !l.starts_with("TOML parse error") && !l.contains('|'))
                 .collect::<Vec<_>>()
                 .join(" ");
-            SweepError::new(&file, line, &e.key, format!("{message}{where_}"))
+            let mut out = SweepError::new(&file, line, &e.key, format!("{message}{where_}"));
+            out.constraint = e.constraint;
+            out
         })
     }
 }
