@@ -57,7 +57,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if name.starts_with("Delta") {
             ys.extend(all.iter().map(|p| p.4));
         }
-        let ys: Vec<f64> = ys.into_iter().filter(|y| y.is_finite() && *y > 0.0).collect();
+        let ys: Vec<f64> = ys
+            .into_iter()
+            .filter(|y| y.is_finite() && *y > 0.0)
+            .collect();
         let (y0, y1) = ys
             .iter()
             .fold((f64::MAX, f64::MIN), |(a, b), &y| (a.min(y), b.max(y)));
@@ -77,10 +80,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, get(p))), c))?
                 .label(lname.as_str())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
-            chart.draw_series(pts.iter().map(|p| Circle::new((p.0, get(p)), 3, c.filled())))?;
-            chart.draw_series(pts.iter().map(|p| {
-                Text::new(p.5.clone(), (p.0, get(p)), ("sans-serif", 12).into_font())
-            }))?;
+            chart.draw_series(
+                pts.iter()
+                    .map(|p| Circle::new((p.0, get(p)), 3, c.filled())),
+            )?;
+            chart
+                .draw_series(pts.iter().map(|p| {
+                    Text::new(p.5.clone(), (p.0, get(p)), ("sans-serif", 12).into_font())
+                }))?;
             if name.starts_with("Delta") {
                 chart.draw_series(DashedLineSeries::new(
                     pts.iter().map(|p| (p.0, p.4)),

@@ -1,12 +1,14 @@
 //! `wetgran reclassify`: re-labels stored results from their stored observables, without
-//! simulating. The labels come from `observe::classify` (the one public classifier entry point)
-//! with either each job's own `[classify]` thresholds (those of the sweep that last registered
-//! it) or the thresholds of a `--classify FILE`. `sweep run` calls the same relabelling after
+//! simulating. The labels come from `sweep::relabel` (`observe::classify` per point, then the
+//! fluid-gas line rule along lines of constant Gamma) with either each job's own `[classify]`
+//! thresholds (those of the sweep that last registered it) or the thresholds of a
+//! `--classify FILE`. `sweep run` calls the same relabelling after
 //! registering a sweep, so a sweep that differs only in `[classify]` gets its labels at once.
 
 use super::sweep_cmd::{Failure, exit, select};
-use crate::observe::{Observables, Thresholds, classify};
+use crate::observe::{Observables, Thresholds};
 use crate::store::{Store, SweepRow};
+use crate::sweep::relabel::relabel;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::ExitCode;
@@ -82,41 +84,62 @@ pub fn thresholds_file(path: &Path) -> Result<Thresholds, String> {
     Ok(th)
 }
 
-/// Re-labels every stored result of `sweeps` (each job once) with `thresholds`, or with the
-/// job's own `[classify]` thresholds when `None`; writes only labels that changed or whose
-/// decision numbers changed.
+/// Re-labels every stored result of `sweeps` from its stored observables with `thresholds`, or
+/// with the job's own `[classify]` thresholds when `None`, the fluid-gas line rule included
+/// (`sweep::relabel`, MODEL.md 7); writes only labels that changed or whose decision numbers
+/// changed. A job shared by several of the given sweeps is counted once (the last sweep's
+/// lines decide its label).
 pub(super) fn relabel_sweeps(
     store: &Store,
     sweeps: &[SweepRow],
     thresholds: Option<&Thresholds>,
 ) -> Result<Relabelled, Failure> {
-    let mut seen = std::collections::HashSet::new();
+    let mut labels: BTreeMap<
+        String,
+        (
+            Option<String>,
+            Option<serde_json::Value>,
+            String,
+            serde_json::Value,
+        ),
+    > = BTreeMap::new();
     let mut out = Relabelled::default();
-    let mut updates = Vec::new();
+    let mut unreadable = std::collections::HashSet::new();
     for s in sweeps {
-        for p in store.points(s.id)? {
-            let (Some(obs), true) = (&p.observables, seen.insert(p.job_id.clone())) else {
-                continue;
-            };
-            // Observables this wetgran cannot read (another version's layout) keep their label.
-            let Ok(obs) = serde_json::from_value::<Observables>(obs.clone()) else {
-                out.unreadable += 1;
-                continue;
-            };
-            let th = thresholds.unwrap_or(&p.spec.scene.classify);
-            let c = classify(&obs, th);
-            let phase = c.phase.to_string();
-            let decided_on = serde_json::to_value(&c.decided_on).expect("decision serializes");
-            out.results += 1;
-            let old = p.phase.clone().unwrap_or_else(|| "-".to_string());
-            if old != phase {
-                *out.changes.entry((old, phase.clone())).or_insert(0) += 1;
-            }
-            if p.phase.as_deref() != Some(phase.as_str())
-                || p.decided_on.as_ref() != Some(&decided_on)
+        let points = store.points(s.id)?;
+        for p in &points {
+            if let Some(o) = &p.observables
+                && serde_json::from_value::<Observables>(o.clone()).is_err()
             {
-                updates.push((p.job_id.clone(), phase, decided_on));
+                // Observables this wetgran cannot read (another version's layout) keep their
+                // label.
+                unreadable.insert(p.job_id.clone());
             }
+        }
+        let before: BTreeMap<&str, &crate::store::PointRow> =
+            points.iter().map(|p| (p.job_id.as_str(), p)).collect();
+        for l in relabel(&points, thresholds) {
+            let p = before[l.job_id.as_str()];
+            let phase = l.classification.phase.to_string();
+            let decided_on =
+                serde_json::to_value(&l.classification.decided_on).expect("decision serializes");
+            labels.insert(
+                l.job_id.clone(),
+                (p.phase.clone(), p.decided_on.clone(), phase, decided_on),
+            );
+        }
+    }
+    out.unreadable = unreadable.len();
+    let mut updates = Vec::new();
+    for (job_id, (old_phase, old_decided, phase, decided_on)) in labels {
+        out.results += 1;
+        let old = old_phase.clone().unwrap_or_else(|| "-".to_string());
+        if old != phase {
+            *out.changes.entry((old, phase.clone())).or_insert(0) += 1;
+        }
+        if old_phase.as_deref() != Some(phase.as_str()) || old_decided.as_ref() != Some(&decided_on)
+        {
+            updates.push((job_id, phase, decided_on));
         }
     }
     store.relabel(&updates)?;

@@ -555,12 +555,13 @@ fn run_and_report(
         summary.wall_seconds
     );
     for s in sweeps {
-        let changed = relabel_sweep(store, s, None)?;
-        if !changed.is_empty() {
+        let relabelled =
+            super::reclassify_cmd::relabel_sweeps(store, std::slice::from_ref(s), None)?;
+        if relabelled.changed() > 0 {
             eprintln!(
-                "sweep {}: {} label(s) set by the fluid-gas line rule (MODEL.md 7)",
+                "sweep {}: labels along lines of constant Gamma (MODEL.md 7): {}",
                 s.name,
-                changed.len()
+                relabelled.text()
             );
         }
         let c = store.counts(s.id)?;
@@ -575,31 +576,6 @@ fn run_and_report(
         }
     }
     Ok(())
-}
-
-/// Re-derives the labels of a sweep's finished points from their stored observables (the
-/// fluid-gas line rule included, `sweep::relabel`) and stores them; returns the labels that
-/// changed as `(job id, old, new)`.
-pub fn relabel_sweep(
-    store: &Store,
-    sweep: &SweepRow,
-    thresholds: Option<&crate::observe::Thresholds>,
-) -> Result<Vec<(String, Option<String>, String)>, StoreError> {
-    let points = store.points(sweep.id)?;
-    let labels = crate::sweep::relabel::relabel(&points, thresholds);
-    let mut rows = Vec::new();
-    let mut changed = Vec::new();
-    for l in labels {
-        let phase = l.classification.phase.to_string();
-        let decided =
-            serde_json::to_value(&l.classification.decided_on).expect("a decision serializes");
-        if l.old.as_deref() != Some(phase.as_str()) {
-            changed.push((l.job_id.clone(), l.old.clone(), phase.clone()));
-        }
-        rows.push((l.job_id, phase, decided));
-    }
-    store.set_classifications(&rows)?;
-    Ok(changed)
 }
 
 fn duration_text(s: f64) -> String {

@@ -794,5 +794,8 @@ fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
     if r.phase == Phase::S {
         return format!("{mobility} -> s");
     }
-    format!("{mobility}, T_g/{unit} = {:.4} -> {}", r.temperature, r.phase)
+    format!(
+        "{mobility}, T_g/{unit} = {:.4} -> {}",
+        r.temperature, r.phase
+    )
 }

@@ -1005,29 +1005,6 @@ impl Store {
         })
     }
 
-    /// Replaces the stored phase and decision of results (re-classification without
-    /// re-simulating: `sweep::relabel`); returns how many rows changed.
-    pub fn set_classifications(
-        &self,
-        rows: &[(String, String, serde_json::Value)],
-    ) -> Result<u64, StoreError> {
-        self.in_transaction(async |tx| {
-            let mut n = 0;
-            for (job_id, phase, decided_on) in rows {
-                n +=
-                    sqlx::query("UPDATE results SET phase = ?2, decided_on = ?3 WHERE job_id = ?1")
-                        .bind(job_id)
-                        .bind(phase)
-                        .bind(decided_on.to_string())
-                        .execute(&mut **tx)
-                        .await
-                        .map_err(|e| self.db(e))?
-                        .rows_affected();
-            }
-            Ok(n)
-        })
-    }
-
     /// Closes an attempt's row in `runs` with its end time and outcome.
     async fn end_run(
         &self,
