@@ -6,7 +6,8 @@
 //!
 //! Default: one line per result, phase and reason. `--json`: the classification as JSON, one per
 //! line. `--table`: a markdown table row per result, with `Gamma`, `E*` and `eps` read from the
-//! scene file of the same name (`RESULT.toml`).
+//! scene file of the same name (`RESULT.toml`). `--line`: the results are one line of constant
+//! Gamma; the fluid-gas line rule (MODEL.md 7, `observe::line`) labels them, as a sweep does.
 
 use std::path::Path;
 use wetgran::observe::{Observables, Thresholds, classify};
@@ -23,32 +24,54 @@ fn main() {
     }
     let json = args.iter().any(|a| a == "--json");
     let table = args.iter().any(|a| a == "--table");
-    args.retain(|a| a != "--json" && a != "--table");
+    let as_line = args.iter().any(|a| a == "--line");
+    args.retain(|a| a != "--json" && a != "--table" && a != "--line");
+    let scene_of = |path: &str| {
+        Scene::load(&Path::new(path).with_extension("toml")).expect("the run's scene file")
+    };
+    let observables_of = |path: &str| -> Observables {
+        let text = std::fs::read_to_string(path).expect("readable result file");
+        let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+        serde_json::from_value(v["observables"].clone()).expect("observables")
+    };
+    // With --line: every result classified on the line first.
+    let line_labels: Option<Vec<wetgran::observe::Classification>> = as_line.then(|| {
+        let scenes: Vec<Scene> = args.iter().map(|a| scene_of(a)).collect();
+        let obs: Vec<Observables> = args.iter().map(|a| observables_of(a)).collect();
+        let pts: Vec<(f64, &Observables)> = scenes
+            .iter()
+            .zip(&obs)
+            .map(|(s, o)| (s.drive.e_star.expect("E* given"), o))
+            .collect();
+        let gamma = scenes[0].drive.gamma.expect("Gamma given");
+        let elastic = scenes[0].contact.restitution >= 1.0;
+        wetgran::observe::line::classify_line(gamma, &pts, &th, elastic)
+    });
     if table {
         println!(
-            "| run | Gamma | E* | eps | T_g/E_cb | bridges/grain | D_lat | Delta n_cb | noise threshold | contrast | phase | borderline | halves agree |"
+            "| run | Gamma | E* | eps | T_g/E_cb | bridges/grain | D_lat | Delta n_cb | noise threshold | contrast | phase | fluid/gas by | borderline | halves agree |"
         );
-        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     }
-    for path in args {
-        let text = std::fs::read_to_string(&path).expect("readable result file");
-        let v: serde_json::Value = serde_json::from_str(&text).expect("JSON");
-        let obs: Observables =
-            serde_json::from_value(v["observables"].clone()).expect("observables");
-        let c = classify(&obs, &th);
+    for (k, path) in args.iter().enumerate() {
+        let obs = observables_of(path);
+        let c = match &line_labels {
+            Some(l) => l[k].clone(),
+            None => classify(&obs, &th),
+        };
         if json {
             println!(
                 "{}",
                 serde_json::to_string(&c).expect("a classification serializes")
             );
         } else if table {
-            let p = Path::new(&path);
-            let scene = Scene::load(&p.with_extension("toml")).expect("the run's scene file");
+            let p = Path::new(path);
+            let scene = scene_of(path);
             let d = &c.decided_on;
             let test = d.coexistence.as_ref().expect("a coexistence test");
             let opt = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |v| format!("{v:.3}"));
             println!(
-                "| {} | {} | {} | {} | {:.3} | {:.2} | {} | {:.3} | {} | {:.2} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {:.3} | {:.2} | {} | {:.3} | {} | {:.2} | {} | {} | {} | {} |",
                 p.file_stem().unwrap_or_default().to_string_lossy(),
                 scene.drive.gamma.unwrap_or(f64::NAN),
                 scene.drive.e_star.unwrap_or(f64::NAN),
@@ -62,6 +85,14 @@ fn main() {
                 opt(test.noise_threshold),
                 test.contrast,
                 c.phase,
+                match &d.fluid_gas {
+                    wetgran::observe::classify::FluidGasFrom::PointFallback => "point".to_string(),
+                    wetgran::observe::classify::FluidGasFrom::Line {
+                        method,
+                        e_star_boundary,
+                        ..
+                    } => format!("{method} at E* = {e_star_boundary:.3}"),
+                },
                 if d.borderline.is_empty() { "" } else { "yes" },
                 if obs.stationarity.stationary {
                     "yes"

@@ -1,31 +1,59 @@
 //! The line study's picture (docs/validation.md): `T_g / E_cb`, bridges per grain and
-//! `Delta n_cb` (with its noise threshold) against `E*`, all on log axes, for one or more lines of saved
+//! `Delta n_cb` (with its noise threshold) against `E*`, all on log axes, labelled by the line
+//! rule (as a sweep labels them), for one or more lines of saved
 //! `wetgran simulate --json` results, each point marked with its label.
 //!
 //! `cargo run --release --example line_plot -- OUT.svg NAME:RESULT.json,RESULT.json,... [NAME:...]`
 
 use plotters::prelude::*;
-use wetgran::observe::{Observables, Thresholds, classify};
+use wetgran::observe::line::classify_line;
+use wetgran::observe::{Observables, Thresholds};
 use wetgran::scene::Scene;
 
 /// One point: `E*`, `T_g/E_cb`, bridges per grain, `Delta n_cb`, noise threshold, label.
 type Point = (f64, f64, f64, f64, f64, String);
 
-fn load(path: &str) -> Point {
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(path).expect("result file")).expect("JSON");
-    let obs: Observables = serde_json::from_value(v["observables"].clone()).expect("observables");
-    let scene = Scene::load(&std::path::Path::new(path).with_extension("toml")).expect("scene");
-    let c = classify(&obs, &Thresholds::default());
-    let t = c.decided_on.coexistence.as_ref().expect("coexistence test");
-    (
-        scene.drive.e_star.expect("E* given"),
-        obs.granular_temperature_reduced,
-        obs.bridges_per_particle,
-        t.delta,
-        t.noise_threshold.unwrap_or(f64::NAN),
-        c.phase.to_string(),
-    )
+/// The points of one line, labelled by the line rule (as a sweep labels them).
+fn load_line(paths: &[&str]) -> Vec<Point> {
+    let mut scenes = Vec::new();
+    let mut obs = Vec::new();
+    for path in paths {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).expect("result file"))
+                .expect("JSON");
+        obs.push(
+            serde_json::from_value::<Observables>(v["observables"].clone()).expect("observables"),
+        );
+        scenes
+            .push(Scene::load(&std::path::Path::new(path).with_extension("toml")).expect("scene"));
+    }
+    let e: Vec<f64> = scenes
+        .iter()
+        .map(|s| s.drive.e_star.expect("E* given"))
+        .collect();
+    let pts: Vec<(f64, &Observables)> = e.iter().copied().zip(&obs).collect();
+    let labels = classify_line(
+        scenes[0].drive.gamma.expect("Gamma given"),
+        &pts,
+        &Thresholds::default(),
+        scenes[0].contact.restitution >= 1.0,
+    );
+    labels
+        .iter()
+        .zip(&obs)
+        .zip(&e)
+        .map(|((c, o), &e)| {
+            let t = c.decided_on.coexistence.as_ref().expect("coexistence test");
+            (
+                e,
+                o.granular_temperature_reduced,
+                o.bridges_per_particle,
+                t.delta,
+                t.noise_threshold.unwrap_or(f64::NAN),
+                c.phase.to_string(),
+            )
+        })
+        .collect()
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -34,7 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut lines: Vec<(String, Vec<Point>)> = Vec::new();
     for a in &args[1..] {
         let (name, files) = a.split_once(':').expect("NAME:FILES");
-        let mut pts: Vec<Point> = files.split(',').map(load).collect();
+        let mut pts: Vec<Point> = load_line(&files.split(',').collect::<Vec<_>>());
         pts.sort_by(|x, y| x.0.total_cmp(&y.0));
         lines.push((name.to_string(), pts));
     }
@@ -73,7 +101,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 (e0 * 0.9..e1 * 1.1).log_scale(),
                 (y0 * 0.7..y1 * 1.4).log_scale(),
             )?;
-        chart.configure_mesh().x_desc("E*").draw()?;
+        chart
+            .configure_mesh()
+            .x_desc("E*")
+            .y_label_formatter(&|y| format!("{y:.3}"))
+            .draw()?;
         for (k, (lname, pts)) in lines.iter().enumerate() {
             let c = colours[k % colours.len()];
             chart

@@ -164,7 +164,7 @@ fn cooling_run_is_flagged_not_stationary() {
     assert!(!t.ok && t.second_half < t.first_half, "{t:?}");
 }
 
-/// 3D: location changes come from neighbour shells, bins are slabs across y.
+/// 3D: location changes come from neighbour shells, bins are square cells over (x, y).
 #[test]
 fn three_dimensional_run_observes_neighbour_shells() {
     let s = common::scene(
@@ -177,11 +177,13 @@ fn three_dimensional_run_observes_neighbour_shells() {
     let lc = o.location_changes.as_ref().unwrap();
     assert_eq!(lc.method, "neighbour_shell");
     assert!(lc.count > 0);
-    assert_eq!(o.profiles.centres.len(), 4);
+    assert_eq!(o.profiles.centres.len(), 16);
+    assert_eq!(o.profiles.grid, Some((4, 4)));
     let total: f64 = o.profiles.particles.iter().sum();
     assert!((total - 120.0).abs() < 1e-9);
-    // n_cb per bin = bridges / (width * L_y); summed over bins times the measure = bridges.
-    let bridges: f64 = o.profiles.n_cb.iter().map(|n| n * 2.0 * 8.0).sum();
+    // n_cb per bin = bridges / (cell area 2 x 2 * height 6); summed over bins times the cell
+    // volume = bridges.
+    let bridges: f64 = o.profiles.n_cb.iter().map(|n| n * 2.0 * 2.0 * 6.0).sum();
     let mean_bridges = o.bridges_per_particle * 120.0;
     assert!(
         (bridges - mean_bridges).abs() < 1e-9 * mean_bridges.max(1.0),
