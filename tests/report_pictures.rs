@@ -89,9 +89,9 @@ fn profile_plot_and_cli_outputs() {
     let s = common::scene(scene_text);
     let (run, _) = run_observed_with_frame(&s, &mut |_| {});
     let svg = profiles_svg(&run.observables);
-    // T_g, packing, n_cb and f_lc panels: one frame and one curve each.
-    assert_eq!(svg.matches("<rect x=").count(), 4);
-    assert_eq!(svg.matches("stroke=\"#1f77b4\"").count(), 4);
+    // T_g, packing, n_cb, D_lat and f_lc panels: one frame and one curve each.
+    assert_eq!(svg.matches("<rect x=").count(), 5);
+    assert_eq!(svg.matches("stroke=\"#1f77b4\"").count(), 5);
 
     let dir = std::env::temp_dir().join(format!("wetgran-report-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -144,4 +144,22 @@ fn profile_plot_and_cli_outputs() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("must end in .xyz or .svg"));
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// 3D plane bins: the profile picture draws one map over (x, y) per observable, one cell per
+/// bin.
+#[test]
+fn three_dimensional_profiles_are_maps_over_the_plane() {
+    let s = common::scene(
+        "dimension = 3\n[box]\nsize = [8.0, 8.0, 6.0]\n[particles]\ncount = 120\n\
+         [capillary]\nmodel = \"thin_thread\"\n[initial]\ntemperature_over_ecb = 5.0\nseed = 1\n\
+         [run]\nduration = 3.0\n[observe]\nbin_width = 2.0\ntransient_periods = 1.0\n\
+         location_changes = false\nmobility_lag = 0.5\n",
+    );
+    let (run, _) = run_observed_with_frame(&s, &mut |_| {});
+    assert_eq!(run.observables.profiles.grid, Some((4, 4)));
+    let svg = profiles_svg(&run.observables);
+    assert!(svg.contains("lateral maps over (x, y)"), "{svg}");
+    // T_g, packing, n_cb and D_lat maps: 16 cells and one frame each, plus the background.
+    assert_eq!(svg.matches("<rect ").count(), 1 + 4 * (16 + 1));
 }
