@@ -189,7 +189,8 @@ fn maps_svg(
             "<text x=\"{}\" y=\"{}\">{} [{} .. {}]</text>",
             n(x0),
             n(y0 - 4.0),
-            esc(name),
+            // The short name: the maps sit side by side.
+            esc(name.split(" (").next().unwrap_or(name).split(',').next().unwrap_or(name)),
             label(lo),
             label(hi)
         );
