@@ -213,6 +213,7 @@ fn base_scene(dimension: usize, gravity: f64, size: Vec<f64>, boundary: Vec<Boun
             max_events: None,
         },
         engine: EngineSpec::default(),
+        convergence: None,
         observe: Default::default(),
         classify: Default::default(),
     }

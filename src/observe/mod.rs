@@ -22,9 +22,11 @@
 
 pub mod bins;
 pub mod classify;
+pub mod convergence;
 pub mod diffusion;
 pub mod line;
 pub mod location_changes;
+pub mod policy;
 pub mod profiles;
 pub mod shear;
 pub mod spec;
@@ -36,11 +38,12 @@ pub use classify::{
 };
 pub use diffusion::{Diffusion, LayerDiffusion};
 pub use line::{Inflection, fluid_gas_inflection};
+pub use policy::ConvergenceSpec;
 pub use spec::{ObserveSpec, period_of};
 pub use stationarity::{Stationarity, StationarityCheck};
 
 use crate::scene::Scene;
-use crate::sim::{Frame, RunReport, run_scene_observed};
+use crate::sim::{Frame, RunReport};
 use bins::LateralBins;
 use location_changes::{LocationChangeCounter, Method};
 use profiles::ProfileObserver;
@@ -148,6 +151,34 @@ pub struct Observables {
     /// Shear drive only: `E_par`, `E_perp` and their cycles ([`shear`](mod@shear)).
     #[serde(default)]
     pub shear: Option<shear::ShearObservables>,
+    /// Run to stationarity (`[convergence]`): the verdict, the window and the block
+    /// statistics ([`convergence`](mod@convergence)); `None` for a fixed-length run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convergence: Option<convergence::Convergence>,
+}
+
+impl Observables {
+    /// Whether the run reached a stationary window: the `[convergence]` verdict where the
+    /// run had a policy, else the first-half/second-half check ([`stationarity`]).
+    pub fn converged(&self) -> bool {
+        self.convergence
+            .as_ref()
+            .map_or(self.stationarity.stationary, |c| c.converged)
+    }
+}
+
+/// [`Observables::converged`] of a stored observables JSON object (`None` if it has neither
+/// a convergence verdict nor a stationarity check).
+pub fn converged_in_json(observables: &serde_json::Value) -> Option<bool> {
+    observables
+        .get("convergence")
+        .and_then(|c| c.get("converged"))
+        .or_else(|| {
+            observables
+                .get("stationarity")
+                .and_then(|s| s.get("stationary"))
+        })
+        .and_then(serde_json::Value::as_bool)
 }
 
 /// What [`run_observed`] returns.
@@ -169,11 +200,205 @@ pub fn run_observed_with_frame(
     scene: &Scene,
     progress: &mut dyn FnMut(f64),
 ) -> (ObservedRun, Frame) {
+    run_observed_from(scene, None, progress)
+}
+
+/// The observers of one window (rebuilt when the run-length policy starts a new window).
+struct ObserverSet {
+    temperature: TemperatureObserver,
+    profiles: ProfileObserver,
+    lc: Option<LocationChangeCounter>,
+    diffusion: Option<diffusion::DiffusionObserver>,
+    shear_obs: Option<shear::ShearObserver>,
+}
+
+impl ObserverSet {
+    fn new(scene: &Scene, bins: &LateralBins, unit: f64, period: f64) -> Self {
+        let spec = &scene.observe;
+        let temperature = TemperatureObserver::new(bins.clone(), unit);
+        let profiles = ProfileObserver::new(bins.clone(), scene.particles.diameter);
+        let lc = spec.location_changes.then(|| {
+            let method = if scene.dimension == 2 {
+                Method::Delaunay {
+                    max_edge: spec.lc_max_edge * scene.particles.diameter,
+                    margin: spec.lc_flip_margin,
+                }
+            } else {
+                Method::NeighbourShell {
+                    enter: spec.lc_enter_factor,
+                    leave: spec.lc_leave_factor,
+                }
+            };
+            LocationChangeCounter::new(method, bins.clone(), period)
+        });
+        let diffusion = spec
+            .diffusion
+            .then(|| diffusion::DiffusionObserver::new(spec.layers.min(scene.particles.count)));
+        let shear_obs = scene
+            .shear_slabs()
+            .is_some()
+            .then(|| shear::ShearObserver::new(unit));
+        Self {
+            temperature,
+            profiles,
+            lc,
+            diffusion,
+            shear_obs,
+        }
+    }
+
+    fn observe(&mut self, frame: &Frame, in_window: bool) {
+        self.temperature.observe(frame, in_window);
+        self.profiles.observe(frame, in_window);
+        if let Some(o) = self.lc.as_mut() {
+            o.observe(frame, in_window);
+        }
+        if let Some(o) = self.diffusion.as_mut() {
+            o.observe(frame, in_window);
+        }
+        if let Some(o) = self.shear_obs.as_mut() {
+            o.observe(frame, in_window);
+        }
+    }
+}
+
+/// The monitored quantities of one observer sample (the convergence test's input):
+/// `T_g / unit`, bridges per particle, `Delta n_cb` of the sample (Eq. 3.3 on one frame).
+#[derive(Debug, Clone, Copy)]
+struct Monitored {
+    time: f64,
+    values: [f64; 3],
+}
+
+/// The observers, the window and the run-length policy, seen by the sampling loop.
+struct Watch<'a> {
+    scene: &'a Scene,
+    bins: LateralBins,
+    unit: f64,
+    period: f64,
+    set: ObserverSet,
+    /// Start of the current window.
+    t_start: f64,
+    eps: f64,
+    first_counts: Option<crate::sim::event_driven::EventCounts>,
+    last: Option<Frame>,
+    window_samples: usize,
+    monitored: Vec<Monitored>,
+    /// The policy in absolute times (`None`: fixed length).
+    schedule: Option<policy::Schedule>,
+    checks: usize,
+    tests: Vec<convergence::BlockTest>,
+    converged: bool,
+    /// End of the whole run so far (for progress).
+    progress_end: f64,
+    progress: &'a mut dyn FnMut(f64),
+}
+
+impl Watch<'_> {
+    /// The tests of the current window `[t_start, t_end]`.
+    fn block_tests(&self, spec: &ConvergenceSpec) -> Vec<convergence::BlockTest> {
+        let names = ["temperature_reduced", "bridges_per_particle", "delta_n_cb"];
+        let floors = [
+            FLOOR_TEMPERATURE,
+            FLOOR_BRIDGES_PER_PARTICLE,
+            convergence::FLOOR_DELTA_N_CB,
+        ];
+        let quantities = if self.scene.is_wet() { 3 } else { 1 };
+        (0..quantities)
+            .map(|q| {
+                let x: Vec<f64> = self
+                    .monitored
+                    .iter()
+                    .filter(|m| m.time >= self.t_start - self.eps)
+                    .map(|m| m.values[q])
+                    .collect();
+                convergence::block_test(
+                    names[q],
+                    &x,
+                    spec.blocks,
+                    spec.sigmas,
+                    spec.rel_tolerance,
+                    floors[q],
+                )
+            })
+            .collect()
+    }
+}
+
+impl crate::sim::Watcher for Watch<'_> {
+    fn observe(&mut self, frame: &Frame) {
+        let in_window = frame.time >= self.t_start - self.eps;
+        self.set.observe(frame, in_window);
+        let n = frame.len().max(1) as f64;
+        let t_g = self.set.temperature.series.last().map_or(f64::NAN, |s| s.1);
+        let delta = profiles::spread(&profiles::bridge_density(
+            frame,
+            &self.bins,
+            self.scene.particles.diameter,
+        ));
+        self.monitored.push(Monitored {
+            time: frame.time,
+            values: [t_g, frame.bridges.len() as f64 / n, delta],
+        });
+        if in_window {
+            self.window_samples += 1;
+            if self.first_counts.is_none() {
+                self.first_counts = Some(frame.counts.clone());
+            }
+        }
+        let t0 = self.progress_end;
+        (self.progress)((frame.time / t0).clamp(0.0, 1.0));
+        self.last = Some(frame.clone());
+    }
+
+    /// The run-length policy (`policy`): test the window; stop if it is stationary or the
+    /// next window would pass the cap, else start a new window here and run one more.
+    fn extend(&mut self, t_end: f64) -> Option<f64> {
+        let schedule = self.schedule?;
+        let spec = self.scene.convergence.as_ref()?;
+        self.checks += 1;
+        self.tests = self.block_tests(spec);
+        self.converged = convergence::Convergence::verdict(&self.tests);
+        let next = t_end + schedule.window;
+        if self.converged || next > schedule.cap * (1.0 + 1e-12) {
+            return None;
+        }
+        // The run so far is transient: fresh observers from the frame at `t_end` on.
+        self.set = ObserverSet::new(self.scene, &self.bins, self.unit, self.period);
+        self.t_start = t_end;
+        self.window_samples = 0;
+        self.first_counts = None;
+        let last = self.last.take().expect("the end frame was observed");
+        self.monitored.pop();
+        self.progress_end = schedule.cap;
+        crate::sim::Watcher::observe(self, &last);
+        Some(next)
+    }
+}
+
+/// Like [`run_observed_with_frame`], starting from a saved state at `t0` (or the scene's
+/// initial state): the run, its transient and its windows are those of a fresh run shifted
+/// by `t0` (`[t0 + transient, t0 + duration]`, and so on). With a `[convergence]` section the
+/// run is extended on the same trajectory until the window is stationary ([`policy`]).
+pub fn run_observed_from(
+    scene: &Scene,
+    start: Option<&crate::sim::EngineState>,
+    progress: &mut dyn FnMut(f64),
+) -> (ObservedRun, Frame) {
     let spec = &scene.observe;
     let period = period_of(scene);
     let dt = spec.sample_interval(scene);
-    let t_start = spec.window_start(scene);
-    let duration = scene.run.duration;
+    let t0 = start.map_or(0.0, |s| s.time);
+    let schedule = scene.convergence.as_ref().map(|c| {
+        let s = c.schedule(scene);
+        policy::Schedule {
+            first_check: t0 + s.first_check,
+            cap: t0 + s.cap,
+            ..s
+        }
+    });
+    let duration = schedule.map_or(t0 + scene.run.duration, |s| s.first_check);
+    let t_start = t0 + spec.window_start(scene);
     let (n_bins, _) = spec.bins(scene);
     let bins = LateralBins::new(n_bins, scene.container.size[0]);
     let e_cb = scene.e_cb();
@@ -184,59 +409,67 @@ pub fn run_observed_with_frame(
         if u > 0.0 { (u, "m g d") } else { (1.0, "1") }
     };
 
-    let mut temperature = TemperatureObserver::new(bins.clone(), unit);
-    let mut profiles = ProfileObserver::new(bins.clone(), scene.particles.diameter);
-    let mut lc = spec.location_changes.then(|| {
-        let method = if scene.dimension == 2 {
-            Method::Delaunay {
-                max_edge: spec.lc_max_edge * scene.particles.diameter,
-                margin: spec.lc_flip_margin,
-            }
-        } else {
-            Method::NeighbourShell {
-                enter: spec.lc_enter_factor,
-                leave: spec.lc_leave_factor,
-            }
-        };
-        LocationChangeCounter::new(method, bins.clone(), period)
-    });
-    let mut diffusion = spec
-        .diffusion
-        .then(|| diffusion::DiffusionObserver::new(spec.layers.min(scene.particles.count)));
-    let mut shear_obs = scene
-        .shear_slabs()
-        .is_some()
-        .then(|| shear::ShearObserver::new(unit));
-    let mut first_counts = None;
-    let mut last: Option<Frame> = None;
-    let mut window_samples = 0usize;
-    let eps = 1e-9 * duration.max(1.0);
-
-    let mut observer = |frame: &Frame| {
-        let in_window = frame.time >= t_start - eps;
-        temperature.observe(frame, in_window);
-        profiles.observe(frame, in_window);
-        if let Some(o) = lc.as_mut() {
-            o.observe(frame, in_window);
-        }
-        if let Some(o) = diffusion.as_mut() {
-            o.observe(frame, in_window);
-        }
-        if let Some(o) = shear_obs.as_mut() {
-            o.observe(frame, in_window);
-        }
-        if in_window {
-            window_samples += 1;
-            if first_counts.is_none() {
-                first_counts = Some(frame.counts.clone());
-            }
-        }
-        progress((frame.time / duration).clamp(0.0, 1.0));
-        last = Some(frame.clone());
+    let set = ObserverSet::new(scene, &bins, unit, period);
+    let mut watch = Watch {
+        scene,
+        bins: bins.clone(),
+        unit,
+        period,
+        set,
+        t_start,
+        eps: 1e-9 * duration.max(1.0),
+        first_counts: None,
+        last: None,
+        window_samples: 0,
+        monitored: Vec::new(),
+        schedule,
+        checks: 0,
+        tests: Vec::new(),
+        converged: false,
+        progress_end: duration,
+        progress,
     };
-    let report = run_scene_observed(scene, dt, &mut observer, &mut |_| {});
+    let mut run_scene = scene.clone();
+    run_scene.run.duration = duration;
+    let report = crate::sim::run_scene_watched(&run_scene, start, dt, &mut watch, &mut |_| {});
+    (watch.progress)(1.0);
+    let Watch {
+        set:
+            ObserverSet {
+                temperature,
+                profiles,
+                lc,
+                diffusion,
+                shear_obs,
+            },
+        t_start,
+        eps,
+        first_counts,
+        last,
+        window_samples,
+        monitored,
+        checks,
+        tests,
+        converged,
+        ..
+    } = watch;
     let last = last.expect("the observer sees at least the initial frame");
     let window_end = last.time;
+    let convergence = schedule.map(|s| {
+        let c = scene.convergence.as_ref().expect("a schedule comes from a policy");
+        convergence::Convergence {
+            converged,
+            window_start: t_start,
+            window_end,
+            checks,
+            first_check: s.first_check,
+            cap: s.cap,
+            blocks: c.blocks,
+            sigmas: c.sigmas,
+            rel_tolerance: c.rel_tolerance,
+            tests,
+        }
+    });
 
     let particles_per_bin = profiles.particles();
     let n_cb = profiles.n_cb();
@@ -316,9 +549,9 @@ pub fn run_observed_with_frame(
     };
     let mean = |v: Vec<f64>| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let series = spec.time_series.then(|| TimeSeries {
-        time: temperature.series.iter().map(|&(t, _)| t).collect(),
-        temperature_reduced: temperature.series.iter().map(|&(_, x)| x).collect(),
-        bridges_per_particle: profiles.series.iter().map(|&(_, x)| x).collect(),
+        time: monitored.iter().map(|m| m.time).collect(),
+        temperature_reduced: monitored.iter().map(|m| m.values[0]).collect(),
+        bridges_per_particle: monitored.iter().map(|m| m.values[1]).collect(),
         location_changes: lc.as_ref().map_or_else(Vec::new, |o| o.series.clone()),
     });
     let observables = Observables {
@@ -340,6 +573,7 @@ pub fn run_observed_with_frame(
         stationarity: stationarity::verdict(tol, checks),
         series,
         shear: shear_obs.as_ref().map(|o| o.finish(spec.time_series)),
+        convergence,
     };
     let classification = classify(&observables, &scene.classify);
     (

@@ -44,6 +44,9 @@ pub struct Scene {
     /// Thresholds of the phase classification (`[classify]`).
     #[serde(default)]
     pub classify: crate::observe::Thresholds,
+    /// Run to stationarity (`[convergence]`); `None`: the fixed length `run.duration`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convergence: Option<crate::observe::ConvergenceSpec>,
 }
 
 /// The simulation box: one size and one boundary kind per axis, the vertical axis last.
