@@ -328,7 +328,10 @@ mod tests {
             let m = x.iter().sum::<f64>() / x.len() as f64;
             (x.iter().map(|a| (a - m).powi(2)).sum::<f64>() / x.len() as f64 / 4095.0).sqrt()
         };
-        assert!((b.standard_error / naive - 1.0).abs() < 0.1, "{b:?} vs {naive}");
+        assert!(
+            (b.standard_error / naive - 1.0).abs() < 0.1,
+            "{b:?} vs {naive}"
+        );
     }
 
     #[test]
@@ -382,7 +385,9 @@ mod tests {
     #[test]
     fn the_tolerance_accepts_a_tiny_drift_of_a_frozen_quantity() {
         // Bridges per particle of a solid: no noise, a drift of 0.1 % over the window.
-        let y: Vec<f64> = (0..400).map(|i| 1.5 * (1.0 + 1e-3 * i as f64 / 400.0)).collect();
+        let y: Vec<f64> = (0..400)
+            .map(|i| 1.5 * (1.0 + 1e-3 * i as f64 / 400.0))
+            .collect();
         assert!(!block_test("b", &y, 4, 3.0, 0.0, 0.1).ok());
         assert!(block_test("b", &y, 4, 3.0, 0.02, 0.1).ok());
         // A constant passes without any tolerance.

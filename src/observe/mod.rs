@@ -456,7 +456,10 @@ pub fn run_observed_from(
     let last = last.expect("the observer sees at least the initial frame");
     let window_end = last.time;
     let convergence = schedule.map(|s| {
-        let c = scene.convergence.as_ref().expect("a schedule comes from a policy");
+        let c = scene
+            .convergence
+            .as_ref()
+            .expect("a schedule comes from a policy");
         convergence::Convergence {
             converged,
             window_start: t_start,

@@ -109,13 +109,19 @@ impl ConvergenceSpec {
         if !nonneg(self.min_periods) {
             return Err(err(
                 "min_periods",
-                format!("= {} is out of range: must be finite and >= 0", self.min_periods),
+                format!(
+                    "= {} is out of range: must be finite and >= 0",
+                    self.min_periods
+                ),
             ));
         }
         if !nonneg(self.min_time) {
             return Err(err(
                 "min_time",
-                format!("= {} is out of range: must be finite and >= 0", self.min_time),
+                format!(
+                    "= {} is out of range: must be finite and >= 0",
+                    self.min_time
+                ),
             ));
         }
         if !(3..=64).contains(&self.blocks) {
@@ -133,7 +139,10 @@ impl ConvergenceSpec {
         if !(self.rel_tolerance.is_finite() && (0.0..1.0).contains(&self.rel_tolerance)) {
             return Err(err(
                 "rel_tolerance",
-                format!("= {} is out of range: must be in [0, 1)", self.rel_tolerance),
+                format!(
+                    "= {} is out of range: must be in [0, 1)",
+                    self.rel_tolerance
+                ),
             ));
         }
         let period = period_of(scene);
@@ -150,7 +159,8 @@ impl ConvergenceSpec {
                 ),
             ));
         }
-        let samples = (t1 - scene.observe.window_start(scene)) / scene.observe.sample_interval(scene);
+        let samples =
+            (t1 - scene.observe.window_start(scene)) / scene.observe.sample_interval(scene);
         if samples < (2 * self.blocks) as f64 {
             return Err(err(
                 "blocks",

@@ -174,31 +174,93 @@ fn run_dispatch(
         if let Some(field) = time_driven::shear::CosineShear::of_scene(scene) {
             // Validation admits the shear drive in 3D only.
             return match (grav, wet) {
-                (false, false) => run_engine(build!(TimeEngine::<3, false, false, _>, scene, st, field), scene, p, o),
-                (false, true) => run_engine(build!(TimeEngine::<3, false, true, _>, scene, st, field), scene, p, o),
-                (true, false) => run_engine(build!(TimeEngine::<3, true, false, _>, scene, st, field), scene, p, o),
-                (true, true) => run_engine(build!(TimeEngine::<3, true, true, _>, scene, st, field), scene, p, o),
+                (false, false) => run_engine(
+                    build!(TimeEngine::<3, false, false, _>, scene, st, field),
+                    scene,
+                    p,
+                    o,
+                ),
+                (false, true) => run_engine(
+                    build!(TimeEngine::<3, false, true, _>, scene, st, field),
+                    scene,
+                    p,
+                    o,
+                ),
+                (true, false) => run_engine(
+                    build!(TimeEngine::<3, true, false, _>, scene, st, field),
+                    scene,
+                    p,
+                    o,
+                ),
+                (true, true) => run_engine(
+                    build!(TimeEngine::<3, true, true, _>, scene, st, field),
+                    scene,
+                    p,
+                    o,
+                ),
             };
         }
         return match (scene.dimension, grav, wet) {
-            (2, false, false) => run_engine(build!(TimeEngine::<2, false, false>, scene, st), scene, p, o),
-            (2, false, true) => run_engine(build!(TimeEngine::<2, false, true>, scene, st), scene, p, o),
-            (2, true, false) => run_engine(build!(TimeEngine::<2, true, false>, scene, st), scene, p, o),
-            (2, true, true) => run_engine(build!(TimeEngine::<2, true, true>, scene, st), scene, p, o),
-            (3, false, false) => run_engine(build!(TimeEngine::<3, false, false>, scene, st), scene, p, o),
-            (3, false, true) => run_engine(build!(TimeEngine::<3, false, true>, scene, st), scene, p, o),
-            (3, true, false) => run_engine(build!(TimeEngine::<3, true, false>, scene, st), scene, p, o),
-            (3, true, true) => run_engine(build!(TimeEngine::<3, true, true>, scene, st), scene, p, o),
+            (2, false, false) => run_engine(
+                build!(TimeEngine::<2, false, false>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (2, false, true) => {
+                run_engine(build!(TimeEngine::<2, false, true>, scene, st), scene, p, o)
+            }
+            (2, true, false) => {
+                run_engine(build!(TimeEngine::<2, true, false>, scene, st), scene, p, o)
+            }
+            (2, true, true) => {
+                run_engine(build!(TimeEngine::<2, true, true>, scene, st), scene, p, o)
+            }
+            (3, false, false) => run_engine(
+                build!(TimeEngine::<3, false, false>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (3, false, true) => {
+                run_engine(build!(TimeEngine::<3, false, true>, scene, st), scene, p, o)
+            }
+            (3, true, false) => {
+                run_engine(build!(TimeEngine::<3, true, false>, scene, st), scene, p, o)
+            }
+            (3, true, true) => {
+                run_engine(build!(TimeEngine::<3, true, true>, scene, st), scene, p, o)
+            }
             (d, _, _) => panic!("dimension {d} passed validation"),
         };
     }
     if scene.shear_slabs().is_some() {
         // Validation admits the shear drive in 3D only.
         return match (grav, wet) {
-            (false, false) => run_engine(build!(Engine::<3, false, false, true>, scene, st), scene, p, o),
-            (false, true) => run_engine(build!(Engine::<3, false, true, true>, scene, st), scene, p, o),
-            (true, false) => run_engine(build!(Engine::<3, true, false, true>, scene, st), scene, p, o),
-            (true, true) => run_engine(build!(Engine::<3, true, true, true>, scene, st), scene, p, o),
+            (false, false) => run_engine(
+                build!(Engine::<3, false, false, true>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (false, true) => run_engine(
+                build!(Engine::<3, false, true, true>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (true, false) => run_engine(
+                build!(Engine::<3, true, false, true>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (true, true) => run_engine(
+                build!(Engine::<3, true, true, true>, scene, st),
+                scene,
+                p,
+                o,
+            ),
         };
     }
     match (scene.dimension, grav, wet) {

@@ -70,7 +70,11 @@ impl EngineState {
         if self.positions.len() != d * self.len() || self.velocities.len() != d * self.len() {
             return Err("the saved state's vectors do not have dimension * count entries".into());
         }
-        if let Some(&(i, j)) = self.bridges.iter().find(|&&(i, j)| i >= j || j >= self.len()) {
+        if let Some(&(i, j)) = self
+            .bridges
+            .iter()
+            .find(|&&(i, j)| i >= j || j >= self.len())
+        {
             return Err(format!("the saved state has a bad bridge ({i}, {j})"));
         }
         Ok(())
