@@ -216,3 +216,81 @@ struct NoWatch;
 impl wetgran::sim::Watcher for NoWatch {
     fn observe(&mut self, _: &wetgran::sim::Frame) {}
 }
+
+#[path = "sweep_common/mod.rs"]
+mod sweep_common;
+
+/// A sweep with a policy stores the verdict and a checkpoint with every result; `sweep status`
+/// counts the unconverged; `sweep resume --extend` continues them from their checkpoints (time
+/// goes on, bridges carried over) and replaces their results.
+#[test]
+fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
+    use sweep_common::*;
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "cool.toml", &cooling(4.0, ""));
+    let sweep = write(
+        dir.path(),
+        "cool_sweep.toml",
+        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\n\
+         [convergence]\nmax_periods = 8.0\n\
+         [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 0.9]\n",
+    );
+    let db = dir.path().join("w.sqlite");
+    let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
+    let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let store = wetgran::store::Store::open_existing(&db).unwrap();
+    let s = store.sweep("cool").unwrap();
+    let before = store.points(s.id).unwrap();
+    assert_eq!(
+        wetgran::store::unconverged_count(&before),
+        (2, 2),
+        "cooling never settles"
+    );
+    let o = run(&["sweep", "status", "--db", db_s]);
+    assert!(
+        stdout(&o).contains("0 of 2 result(s) converged, 2 unconverged"),
+        "{}",
+        stdout(&o)
+    );
+    let states: Vec<EngineState> = before
+        .iter()
+        .map(|p| {
+            store
+                .checkpoint(&p.job_id)
+                .unwrap()
+                .expect("a checkpoint per result")
+        })
+        .collect();
+    for (p, st) in before.iter().zip(&states) {
+        assert_eq!(
+            Some(st.time),
+            p.simulated_time,
+            "the checkpoint is the final state"
+        );
+        assert_eq!(st.time, 8.0);
+    }
+    drop(store);
+    let o = run(&["sweep", "resume", "cool", "--db", db_s, "--extend", "16"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("extended 2 unconverged job(s)"),
+        "{}",
+        stderr(&o)
+    );
+    let store = wetgran::store::Store::open_existing(&db).unwrap();
+    let after = store.points(s.id).unwrap();
+    for ((p, q), old) in before.iter().zip(&after).zip(&states) {
+        assert_eq!(p.job_id, q.job_id, "the same job, its result replaced");
+        let t = q.simulated_time.unwrap();
+        assert!(t > 8.0 && t <= 16.0 + 1e-9, "{t}");
+        let c = &q.observables.as_ref().unwrap()["convergence"];
+        assert!(c["window_start"].as_f64().unwrap() >= 8.0, "{c}");
+        let new = store.checkpoint(&q.job_id).unwrap().unwrap();
+        assert_eq!(new.time, t);
+        // Counts and the ledger continue from the old checkpoint.
+        assert!(new.counts.pair_collisions > old.counts.pair_collisions);
+        assert!(new.ledger.dissipated_restitution > old.ledger.dissipated_restitution);
+    }
+    assert_eq!(store.runs_per_job().unwrap().len(), 2);
+}

@@ -57,6 +57,10 @@ pub enum SweepCommand {
         /// Put failed jobs back in the queue first.
         #[arg(long)]
         retry_failed: bool,
+        /// Afterwards, run the unconverged finished jobs further from their checkpoints, up
+        /// to this many driving periods of total run (docs/observables.md).
+        #[arg(long, value_name = "MAX_PERIODS")]
+        extend: Option<f64>,
     },
     /// Per sweep: jobs by state, failures with their message, time spent and time left.
     Status {
@@ -253,7 +257,8 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
             db,
             jobs,
             retry_failed,
-        } => sweep_resume(name.as_deref(), &db, workers(jobs), retry_failed),
+            extend,
+        } => sweep_resume(name.as_deref(), &db, workers(jobs), retry_failed, extend),
         SweepCommand::Status { db } => sweep_status(&db),
         SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_job(&spec),
@@ -362,7 +367,13 @@ fn sweep_run(file: &Path, db: &Path, jobs: usize, retry: bool) -> Result<(), Fai
     super::refine_cmd::continue_refinement(&store, &[row], jobs)
 }
 
-fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Result<(), Failure> {
+fn sweep_resume(
+    name: Option<&str>,
+    db: &Path,
+    jobs: usize,
+    retry: bool,
+    extend: Option<f64>,
+) -> Result<(), Failure> {
     let store = Store::open_existing(db)?;
     let sweeps = match name {
         Some(n) => vec![store.sweep(n)?],
@@ -375,7 +386,13 @@ fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Resu
         )));
     }
     run_and_report(&store, &sweeps, jobs, retry)?;
-    super::refine_cmd::continue_refinement(&store, &sweeps, jobs)
+    super::refine_cmd::continue_refinement(&store, &sweeps, jobs)?;
+    match extend {
+        Some(max_periods) => {
+            super::extend_cmd::extend_unconverged(&store, &sweeps, max_periods, jobs)
+        }
+        None => Ok(()),
+    }
 }
 
 fn run_and_report(
@@ -465,6 +482,15 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
             c.pending,
             c.failed
         );
+        let (unconverged, checked) = crate::store::unconverged_count(&points);
+        if checked > 0 {
+            let _ = writeln!(
+                out,
+                "  stationary  {} of {checked} result(s) converged, {unconverged} unconverged \
+                 (`sweep resume --extend` runs those further)",
+                checked - unconverged
+            );
+        }
         let spent = store.time_spent(s.id)?;
         let done_walls: Vec<f64> = points
             .iter()
