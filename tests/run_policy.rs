@@ -294,3 +294,46 @@ fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
     }
     assert_eq!(store.runs_per_job().unwrap().len(), 2);
 }
+
+/// The cold start: a bonded bed at rest (bridges between the lattice's close pairs, T_g = 0)
+/// that stays cold and bonded where the hot start of the same scene is a hot gas at first.
+#[test]
+fn the_cold_start_is_a_bonded_bed_at_rest() {
+    let text = cooling(1.0, "");
+    let hot = common::scene(&text);
+    let cold = common::scene(&text.replace("seed = 2\n", "seed = 2\nstart = \"cold\"\n"));
+    assert_eq!(cold.initial.start, wetgran::scene::StartMode::Cold);
+    let state = wetgran::sim::initial::cold_state(&cold);
+    // Every listed pair is closer than s_crit, and no close pair is missing (brute force).
+    let s_crit = cold.s_crit();
+    let gap = |i: usize, j: usize| {
+        let dx = state.positions[2 * i] - state.positions[2 * j];
+        let dx = dx - 30.0 * (dx / 30.0).round();
+        let dz = state.positions[2 * i + 1] - state.positions[2 * j + 1];
+        (dx * dx + dz * dz).sqrt() - state.radii[i] - state.radii[j]
+    };
+    let mut expect = Vec::new();
+    for i in 0..state.len() {
+        for j in i + 1..state.len() {
+            if gap(i, j) < s_crit {
+                expect.push((i, j));
+            }
+        }
+    }
+    assert!(!expect.is_empty());
+    assert_eq!(state.bridges, expect);
+    let c = run_scene(&cold);
+    let h = run_scene(&hot);
+    assert_eq!(c.samples[0].bridges, expect.len(), "starts bonded");
+    assert_eq!(c.samples[0].granular_temperature, 0.0, "starts at rest");
+    assert_eq!(h.samples[0].bridges, 0);
+    assert!(c.bridges >= expect.len() / 2, "still bonded: {}", c.bridges);
+    let e_cb = cold.e_cb();
+    assert!(
+        c.granular_temperature / e_cb < 0.5 && h.granular_temperature / e_cb > 2.0,
+        "cold {} hot {}",
+        c.granular_temperature / e_cb,
+        h.granular_temperature / e_cb
+    );
+    assert!(c.invariant_violation.is_none());
+}

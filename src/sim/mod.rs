@@ -167,7 +167,10 @@ fn run_dispatch(
     {
         panic!("{e}");
     }
-    let st = start;
+    // The cold start is a state of its own (`initial::cold_state`).
+    let cold = (start.is_none() && scene.initial.start == crate::scene::StartMode::Cold)
+        .then(|| initial::cold_state(scene));
+    let st = start.or(cold.as_ref());
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
     if scene.engine.kind == EngineKind::Time {
