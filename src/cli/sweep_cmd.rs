@@ -582,11 +582,20 @@ fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Re
     let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
     let mut per_period = Vec::new();
     let mut full_periods = Vec::new();
+    // With a `[convergence]` policy: the minimum run (first check) and the cap, in periods.
+    let mut cap_periods = Vec::new();
     for &k in &picks {
         let job = &jobs[k];
         let mut spec = job.spec.clone();
         let period = spec.period();
-        full_periods.push(spec.scene.run.duration / period);
+        match spec.scene.convergence.take() {
+            Some(c) => {
+                let s = c.schedule(&spec.scene);
+                full_periods.push(s.first_check / period);
+                cap_periods.push(s.cap / period);
+            }
+            None => full_periods.push(spec.scene.run.duration / period),
+        }
         spec.scene.run.duration = periods * period;
         spec.scene.observe.transient_periods = 0.0;
         let t0 = std::time::Instant::now();
@@ -630,6 +639,15 @@ fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Re
         duration_text(total),
         duration_text(total / cores as f64)
     );
+    if !cap_periods.is_empty() {
+        let cap = cap_periods.iter().sum::<f64>() / cap_periods.len() as f64;
+        println!(
+            "  run to stationarity: that is the minimum run; every job extended to its cap \
+             ({} periods) would cost {} on {cores} core(s)",
+            short(cap),
+            duration_text(mean * cap * jobs.len() as f64 / cores as f64)
+        );
+    }
     println!(
         "  (measured on the first {periods} period(s) from the initial state; the cost per period \
          changes as a run settles, e.g. a bed resting on the plate gets dearer: sample more \
