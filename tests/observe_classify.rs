@@ -75,6 +75,7 @@ fn synthetic(
         },
         series: None,
         shear: None,
+        convergence: None,
     }
 }
 

@@ -21,7 +21,7 @@ pub struct JobResult {
     /// The final state, stored as the job's checkpoint with the result (not part of the
     /// result's JSON: cluster records carry no checkpoint).
     #[serde(skip)]
-    pub checkpoint: Option<crate::sim::EngineState>,
+    pub checkpoint: Option<Box<crate::sim::EngineState>>,
 }
 
 /// Why a job produced no result.
@@ -64,7 +64,7 @@ pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResul
         simulated_time: run.report.simulated_time,
         wall_seconds: run.report.wall_seconds,
         events: run.report.events_total,
-        checkpoint: run.report.final_state.clone(),
+        checkpoint: run.report.final_state.clone().map(Box::new),
     })
 }
 
@@ -115,7 +115,7 @@ pub fn extend_job(
         simulated_time: run.report.simulated_time,
         wall_seconds: run.report.wall_seconds,
         events: run.report.events_total,
-        checkpoint: run.report.final_state.clone(),
+        checkpoint: run.report.final_state.clone().map(Box::new),
     }))
 }
 
