@@ -337,3 +337,37 @@ fn the_cold_start_is_a_bonded_bed_at_rest() {
     );
     assert!(c.invariant_violation.is_none());
 }
+
+/// Hot and cold start compared by an `initial.start` axis: without a drive the cold bed stays
+/// a solid while the hot start is still a hot gas, so the point is hysteretic, and
+/// `sweep status` says so.
+#[test]
+fn hot_and_cold_starts_that_disagree_are_hysteretic() {
+    use sweep_common::*;
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "cool.toml", &cooling(2.0, ""));
+    let sweep = write(
+        dir.path(),
+        "hc_sweep.toml",
+        "[sweep]\nname = \"hc\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 1.0\n\
+         [[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"cold\"]\n",
+    );
+    let db = dir.path().join("w.sqlite");
+    let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
+    let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let store = wetgran::store::Store::open_existing(&db).unwrap();
+    let s = store.sweep("hc").unwrap();
+    let groups = wetgran::store::hysteresis::by_start(&s.axes, &store.points(s.id).unwrap());
+    assert_eq!(groups.len(), 1, "{groups:?}");
+    let g = &groups[0];
+    assert_eq!(g.cold, vec!["s".to_string()], "{g:?}");
+    assert_eq!(g.hot, vec!["g".to_string()], "{g:?}");
+    assert!(g.hysteretic);
+    let o = run(&["sweep", "status", "--db", db_s]);
+    assert!(
+        stdout(&o).contains("1 of 1 point(s) hysteretic"),
+        "{}",
+        stdout(&o)
+    );
+}

@@ -491,6 +491,18 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
                 checked - unconverged
             );
         }
+        let starts = crate::store::hysteresis::by_start(&s.axes, &points);
+        let compared = starts
+            .iter()
+            .filter(|g| !g.hot.is_empty() && !g.cold.is_empty())
+            .count();
+        if compared > 0 {
+            let _ = writeln!(
+                out,
+                "  hysteresis  {} of {compared} point(s) hysteretic (hot and cold start disagree)",
+                starts.iter().filter(|g| g.hysteretic).count()
+            );
+        }
         let spent = store.time_spent(s.id)?;
         let done_walls: Vec<f64> = points
             .iter()

@@ -25,6 +25,7 @@
 //!   already finished is discarded, so a job never has two results.
 
 mod cluster;
+pub mod hysteresis;
 
 pub use cluster::{TaskRow, TaskState};
 
