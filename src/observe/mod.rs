@@ -432,7 +432,14 @@ pub fn run_observed_from(
     let mut run_scene = scene.clone();
     run_scene.run.duration = duration;
     let report = crate::sim::run_scene_watched(&run_scene, start, dt, &mut watch, &mut |_| {});
-    (watch.progress)(1.0);
+    // A policy run that stopped before its cap reports its end as complete.
+    if watch
+        .last
+        .as_ref()
+        .is_some_and(|f| f.time < watch.progress_end)
+    {
+        (watch.progress)(1.0);
+    }
     let Watch {
         set:
             ObserverSet {
