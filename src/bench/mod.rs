@@ -205,6 +205,7 @@ fn base_scene(dimension: usize, gravity: f64, size: Vec<f64>, boundary: Vec<Boun
             temperature_over_ecb: None,
             lattice_spacing: 1.01,
             seed: 1,
+            start: Default::default(),
         },
         run: RunSpec {
             // Not used by the benchmark (it drives the engine itself); must be valid.
@@ -213,6 +214,7 @@ fn base_scene(dimension: usize, gravity: f64, size: Vec<f64>, boundary: Vec<Boun
             max_events: None,
         },
         engine: EngineSpec::default(),
+        convergence: None,
         observe: Default::default(),
         classify: Default::default(),
     }

@@ -2,6 +2,7 @@
 //! `boundaries`, `plot`, `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`].
 
 mod cluster_cmd;
+mod extend_cmd;
 pub mod point_cmd;
 mod reclassify_cmd;
 mod refine_cmd;

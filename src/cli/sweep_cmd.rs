@@ -69,6 +69,10 @@ pub enum SweepCommand {
         /// Put failed jobs back in the queue first.
         #[arg(long)]
         retry_failed: bool,
+        /// Afterwards, run the unconverged finished jobs further from their checkpoints, up
+        /// to this many driving periods of total run (docs/observables.md).
+        #[arg(long, value_name = "MAX_PERIODS")]
+        extend: Option<f64>,
     },
     /// Per sweep: jobs by state, failures with their message, time spent and time left.
     Status {
@@ -295,8 +299,9 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
             jobs,
             oversubscribe,
             retry_failed,
+            extend,
         } => workers_or_fail(jobs, oversubscribe)
-            .and_then(|n| sweep_resume(name.as_deref(), &db, n, retry_failed)),
+            .and_then(|n| sweep_resume(name.as_deref(), &db, n, retry_failed, extend)),
         SweepCommand::Status { db } => sweep_status(&db),
         SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_job(&spec),
@@ -512,7 +517,13 @@ pub(super) fn check_regrid(
     )))
 }
 
-fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Result<(), Failure> {
+fn sweep_resume(
+    name: Option<&str>,
+    db: &Path,
+    jobs: usize,
+    retry: bool,
+    extend: Option<f64>,
+) -> Result<(), Failure> {
     let store = Store::open_existing(db)?;
     let sweeps = match name {
         Some(n) => vec![store.sweep(n)?],
@@ -525,7 +536,13 @@ fn sweep_resume(name: Option<&str>, db: &Path, jobs: usize, retry: bool) -> Resu
         )));
     }
     run_and_report(&store, &sweeps, jobs, retry)?;
-    super::refine_cmd::continue_refinement(&store, &sweeps, jobs)
+    super::refine_cmd::continue_refinement(&store, &sweeps, jobs)?;
+    match extend {
+        Some(max_periods) => {
+            super::extend_cmd::extend_unconverged(&store, &sweeps, max_periods, jobs)
+        }
+        None => Ok(()),
+    }
 }
 
 fn run_and_report(
@@ -624,6 +641,27 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
             c.pending,
             c.failed
         );
+        let (unconverged, checked) = crate::store::unconverged_count(&points);
+        if checked > 0 {
+            let _ = writeln!(
+                out,
+                "  stationary  {} of {checked} result(s) converged, {unconverged} unconverged \
+                 (`sweep resume --extend` runs those further)",
+                checked - unconverged
+            );
+        }
+        let starts = crate::store::hysteresis::by_start(&s.axes, &points);
+        let compared = starts
+            .iter()
+            .filter(|g| !g.hot.is_empty() && !g.cold.is_empty())
+            .count();
+        if compared > 0 {
+            let _ = writeln!(
+                out,
+                "  hysteresis  {} of {compared} point(s) hysteretic (hot and cold start disagree)",
+                starts.iter().filter(|g| g.hysteretic).count()
+            );
+        }
         let spent = store.time_spent(s.id)?;
         let done_walls: Vec<f64> = points
             .iter()
@@ -737,11 +775,20 @@ fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Re
     let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
     let mut per_period = Vec::new();
     let mut full_periods = Vec::new();
+    // With a `[convergence]` policy: the minimum run (first check) and the cap, in periods.
+    let mut cap_periods = Vec::new();
     for &k in &picks {
         let job = &jobs[k];
         let mut spec = job.spec.clone();
         let period = spec.period();
-        full_periods.push(spec.scene.run.duration / period);
+        match spec.scene.convergence.take() {
+            Some(c) => {
+                let s = c.schedule(&spec.scene);
+                full_periods.push(s.first_check / period);
+                cap_periods.push(s.cap / period);
+            }
+            None => full_periods.push(spec.scene.run.duration / period),
+        }
         spec.scene.run.duration = periods * period;
         spec.scene.observe.transient_periods = 0.0;
         let t0 = std::time::Instant::now();
@@ -785,6 +832,15 @@ fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Re
         duration_text(total),
         duration_text(total / cores as f64)
     );
+    if !cap_periods.is_empty() {
+        let cap = cap_periods.iter().sum::<f64>() / cap_periods.len() as f64;
+        println!(
+            "  run to stationarity: that is the minimum run; every job extended to its cap \
+             ({} periods) would cost {} on {cores} core(s)",
+            short(cap),
+            duration_text(mean * cap * jobs.len() as f64 / cores as f64)
+        );
+    }
     println!(
         "  (measured on the first {periods} period(s) from the initial state; the cost per period \
          changes as a run settles, e.g. a bed resting on the plate gets dearer: sample more \

@@ -215,6 +215,7 @@ mod tests {
 
     fn result(x: f64) -> JobResult {
         JobResult {
+            checkpoint: None,
             phase: Some("g".to_string()),
             decided_on: None,
             observables: serde_json::json!({ "x": x }),

@@ -194,6 +194,7 @@ mod tests {
 
     fn result() -> JobResult {
         JobResult {
+            checkpoint: None,
             phase: Some("g".to_string()),
             decided_on: Some(serde_json::json!({"a": 1})),
             observables: serde_json::json!({"granular_temperature_reduced": 0.25}),

@@ -24,11 +24,13 @@
 
 pub mod bins;
 pub mod classify;
+pub mod convergence;
 pub mod diffusion;
 pub mod lateral;
 pub mod line;
 pub mod location_changes;
 pub mod noise;
+pub mod policy;
 pub mod profiles;
 pub mod shear;
 pub mod spec;
@@ -40,11 +42,13 @@ pub use classify::{
 };
 pub use diffusion::{Diffusion, LayerDiffusion};
 pub use line::{Inflection, fluid_gas_inflection};
+pub use policy::ConvergenceSpec;
 pub use spec::{ObserveSpec, period_of};
 pub use stationarity::{Stationarity, StationarityCheck};
 
 use crate::scene::Scene;
-use crate::sim::{Frame, RunReport, run_scene_observed};
+use crate::sim::{Frame, RunReport};
+use bins::LateralBins;
 use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
 use profiles::ProfileObserver;
@@ -220,6 +224,34 @@ pub struct Observables {
     /// Shear drive only: `E_par`, `E_perp` and their cycles ([`shear`](mod@shear)).
     #[serde(default)]
     pub shear: Option<shear::ShearObservables>,
+    /// Run to stationarity (`[convergence]`): the verdict, the window and the block
+    /// statistics ([`convergence`](mod@convergence)); `None` for a fixed-length run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convergence: Option<convergence::Convergence>,
+}
+
+impl Observables {
+    /// Whether the run reached a stationary window: the `[convergence]` verdict where the
+    /// run had a policy, else the first-half/second-half check ([`stationarity`]).
+    pub fn converged(&self) -> bool {
+        self.convergence
+            .as_ref()
+            .map_or(self.stationarity.stationary, |c| c.converged)
+    }
+}
+
+/// [`Observables::converged`] of a stored observables JSON object (`None` if it has neither
+/// a convergence verdict nor a stationarity check).
+pub fn converged_in_json(observables: &serde_json::Value) -> Option<bool> {
+    observables
+        .get("convergence")
+        .and_then(|c| c.get("converged"))
+        .or_else(|| {
+            observables
+                .get("stationarity")
+                .and_then(|s| s.get("stationary"))
+        })
+        .and_then(serde_json::Value::as_bool)
 }
 
 /// What [`run_observed`] returns.
@@ -241,18 +273,184 @@ pub fn run_observed_with_frame(
     scene: &Scene,
     progress: &mut dyn FnMut(f64),
 ) -> (ObservedRun, Frame) {
-    let mut set = ObserverSet::new(scene);
-    let duration = scene.run.duration;
+    run_observed_from(scene, None, progress)
+}
+
+/// The monitored quantities of one observer sample (the convergence test's input):
+/// `T_g / unit`, bridges per particle, `Delta n_cb` of the sample (Eq. 3.3 on one frame).
+#[derive(Debug, Clone, Copy)]
+struct Monitored {
+    time: f64,
+    values: [f64; 3],
+}
+
+/// The observers, the window and the run-length policy, seen by the sampling loop.
+struct Watch<'a> {
+    scene: &'a Scene,
+    bins: LateralBins,
+    set: ObserverSet,
+    eps: f64,
+    monitored: Vec<Monitored>,
+    /// The policy in absolute times (`None`: fixed length).
+    schedule: Option<policy::Schedule>,
+    checks: usize,
+    tests: Vec<convergence::BlockTest>,
+    converged: bool,
+    /// End of the whole run so far (for progress).
+    progress_end: f64,
+    progress: &'a mut dyn FnMut(f64),
+}
+
+impl Watch<'_> {
+    /// The tests of the current window `[t_start, t_end]`.
+    fn block_tests(&self, spec: &ConvergenceSpec) -> Vec<convergence::BlockTest> {
+        let names = ["temperature_reduced", "bridges_per_particle", "delta_n_cb"];
+        let floors = [
+            FLOOR_TEMPERATURE,
+            FLOOR_BRIDGES_PER_PARTICLE,
+            convergence::FLOOR_DELTA_N_CB,
+        ];
+        let quantities = if self.scene.is_wet() { 3 } else { 1 };
+        let t_start = self.set.window_start();
+        (0..quantities)
+            .map(|q| {
+                let x: Vec<f64> = self
+                    .monitored
+                    .iter()
+                    .filter(|m| m.time >= t_start - self.eps)
+                    .map(|m| m.values[q])
+                    .collect();
+                convergence::block_test(
+                    names[q],
+                    &x,
+                    spec.blocks,
+                    spec.sigmas,
+                    spec.rel_tolerance,
+                    floors[q],
+                )
+            })
+            .collect()
+    }
+}
+
+impl crate::sim::Watcher for Watch<'_> {
+    fn observe(&mut self, frame: &Frame) {
+        self.set.observe(frame);
+        let n = frame.len().max(1) as f64;
+        let t_g = self.set.temperature.series.last().map_or(f64::NAN, |s| s.1);
+        let delta = profiles::spread(&profiles::bridge_density(
+            frame,
+            &self.bins,
+            self.scene.particles.diameter,
+        ));
+        self.monitored.push(Monitored {
+            time: frame.time,
+            values: [t_g, frame.bridges.len() as f64 / n, delta],
+        });
+        let t0 = self.progress_end;
+        (self.progress)((frame.time / t0).clamp(0.0, 1.0));
+    }
+
+    /// The run-length policy (`policy`): test the window; stop if it is stationary or the
+    /// next window would pass the cap, else start a new window here and run one more.
+    fn extend(&mut self, t_end: f64) -> Option<f64> {
+        let schedule = self.schedule?;
+        let spec = self.scene.convergence.as_ref()?;
+        self.checks += 1;
+        self.tests = self.block_tests(spec);
+        self.converged = convergence::Convergence::verdict(&self.tests);
+        let next = t_end + schedule.window;
+        if self.converged || next > schedule.cap * (1.0 + 1e-12) {
+            return None;
+        }
+        // The run so far is transient: fresh observers from the frame at `t_end` on.
+        let last = self.set.last.take().expect("the end frame was observed");
+        self.set = ObserverSet::with_window_start(self.scene, t_end);
+        self.monitored.pop();
+        self.progress_end = schedule.cap;
+        crate::sim::Watcher::observe(self, &last);
+        Some(next)
+    }
+}
+
+/// Like [`run_observed_with_frame`], starting from a saved state at `t0` (or the scene's
+/// initial state): the run, its transient and its windows are those of a fresh run shifted
+/// by `t0` (`[t0 + transient, t0 + duration]`, and so on). With a `[convergence]` section the
+/// run is extended on the same trajectory until the window is stationary ([`policy`]).
+pub fn run_observed_from(
+    scene: &Scene,
+    start: Option<&crate::sim::EngineState>,
+    progress: &mut dyn FnMut(f64),
+) -> (ObservedRun, Frame) {
+    let spec = &scene.observe;
+    let t0 = start.map_or(0.0, |s| s.time);
+    let schedule = scene.convergence.as_ref().map(|c| {
+        let s = c.schedule(scene);
+        policy::Schedule {
+            first_check: t0 + s.first_check,
+            cap: t0 + s.cap,
+            ..s
+        }
+    });
+    let duration = schedule.map_or(t0 + scene.run.duration, |s| s.first_check);
+    let set = ObserverSet::with_window_start(scene, t0 + spec.window_start(scene));
     let dt = set.sample_interval();
-    let mut observer = |frame: &Frame| {
-        set.observe(frame);
-        progress((frame.time / duration).clamp(0.0, 1.0));
+    let mut watch = Watch {
+        scene,
+        bins: spec.lateral_bins(scene),
+        set,
+        eps: 1e-9 * duration.max(1.0),
+        monitored: Vec::new(),
+        schedule,
+        checks: 0,
+        tests: Vec::new(),
+        converged: false,
+        progress_end: duration,
+        progress,
     };
-    let report = run_scene_observed(scene, dt, &mut observer, &mut |_| {});
-    let observables = set.finish(scene);
-    let last = set
+    let mut run_scene = scene.clone();
+    run_scene.run.duration = duration;
+    let report = crate::sim::run_scene_watched(&run_scene, start, dt, &mut watch, &mut |_| {});
+    // A policy run that stopped before its cap reports its end as complete.
+    if watch
+        .set
         .last
+        .as_ref()
+        .is_some_and(|f| f.time < watch.progress_end)
+    {
+        (watch.progress)(1.0);
+    }
+    let mut observables = watch.set.finish(scene);
+    let last = watch
+        .set
+        .last
+        .take()
         .expect("the observer sees at least the initial frame");
+    // The time series span the whole run, all windows.
+    if let Some(series) = observables.series.as_mut() {
+        let m = &watch.monitored;
+        series.time = m.iter().map(|x| x.time).collect();
+        series.temperature_reduced = m.iter().map(|x| x.values[0]).collect();
+        series.bridges_per_particle = m.iter().map(|x| x.values[1]).collect();
+    }
+    observables.convergence = schedule.map(|s| {
+        let c = scene
+            .convergence
+            .as_ref()
+            .expect("a schedule comes from a policy");
+        convergence::Convergence {
+            converged: watch.converged,
+            window_start: observables.window_start,
+            window_end: observables.window_end,
+            checks: watch.checks,
+            first_check: s.first_check,
+            cap: s.cap,
+            blocks: c.blocks,
+            sigmas: c.sigmas,
+            rel_tolerance: c.rel_tolerance,
+            tests: std::mem::take(&mut watch.tests),
+        }
+    });
     let classification = classify(&observables, &scene.classify);
     (
         ObservedRun {
@@ -288,8 +486,14 @@ pub struct ObserverSet {
 }
 
 impl ObserverSet {
-    /// The observers of a validated scene.
+    /// The observers of a validated scene, its window starting after `transient_periods`.
     pub fn new(scene: &Scene) -> Self {
+        Self::with_window_start(scene, scene.observe.window_start(scene))
+    }
+
+    /// The observers of a validated scene with the window starting at `t_start` (a run
+    /// continued from a checkpoint, or a new window of the run-length policy).
+    pub fn with_window_start(scene: &Scene, t_start: f64) -> Self {
         let spec = &scene.observe;
         let period = period_of(scene);
         let dt = spec.sample_interval(scene);
@@ -318,8 +522,8 @@ impl ObserverSet {
         Self {
             period,
             dt,
-            t_start: spec.window_start(scene),
-            eps: 1e-9 * scene.run.duration.max(1.0),
+            t_start,
+            eps: 1e-9 * scene.run.duration.max(t_start).max(1.0),
             unit,
             unit_name,
             temperature: TemperatureObserver::new(unit),
@@ -349,6 +553,11 @@ impl ObserverSet {
     /// Interval between two samples.
     pub fn sample_interval(&self) -> f64 {
         self.dt
+    }
+
+    /// Start of the window.
+    pub fn window_start(&self) -> f64 {
+        self.t_start
     }
 
     /// Hands one sampled frame to every observer.
@@ -479,6 +688,7 @@ impl ObserverSet {
             stationarity: stationarity::verdict(tol, checks),
             series,
             shear: self.shear.as_ref().map(|o| o.finish(spec.time_series)),
+            convergence: None,
         }
     }
 }

@@ -44,6 +44,9 @@ pub struct Scene {
     /// Thresholds of the phase classification (`[classify]`).
     #[serde(default)]
     pub classify: crate::observe::Thresholds,
+    /// Run to stationarity (`[convergence]`); `None`: the fixed length `run.duration`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convergence: Option<crate::observe::ConvergenceSpec>,
 }
 
 /// The simulation box: one size and one boundary kind per axis, the vertical axis last.
@@ -305,6 +308,28 @@ pub struct InitialSpec {
     /// Seed of the random number generator (sizes and velocities).
     #[serde(default)]
     pub seed: u64,
+    /// `"hot"` (default): the lattice with Gaussian velocities and no bridges (MODEL.md 1).
+    /// `"cold"`: a bonded bed at rest, the same lattice with zero velocities (the temperature
+    /// keys are ignored) and a bridge between every pair of grains closer than `s_crit`
+    /// (`sim::initial::cold_state`).
+    #[serde(default, skip_serializing_if = "StartMode::is_hot")]
+    pub start: StartMode,
+}
+
+/// How a run starts (`initial.start`); a hot and a cold start that end in different phases
+/// mark a hysteretic point.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartMode {
+    #[default]
+    Hot,
+    Cold,
+}
+
+impl StartMode {
+    pub fn is_hot(&self) -> bool {
+        *self == StartMode::Hot
+    }
 }
 
 /// How long to run and how often to sample.

@@ -638,6 +638,9 @@ impl Scene {
         // Observers and classification.
         self.observe.validate(self, origin)?;
         self.classify.validate(origin)?;
+        if let Some(c) = &self.convergence {
+            c.validate(self, origin)?;
+        }
         Ok(())
     }
 }

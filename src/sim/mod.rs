@@ -6,13 +6,19 @@
 //! so the sampling loop, the observers and the report are the same for both.
 //! [`run_scene_observed`] runs the same loop and also hands a read-only [`Frame`] (a copy of the
 //! configuration in scene order) to an observer at fixed intervals; `crate::observe` builds on it.
+//! [`run_scene_watched`] is the general form: it can start from a saved [`EngineState`] instead
+//! of the scene's initial state, and its [`Watcher`] may extend the run on the same trajectory
+//! when it reaches its end (run to stationarity, `crate::observe::policy`). Every run reports
+//! its final state ([`RunReport::final_state`]) for checkpoints.
 
 pub mod event_driven;
 pub mod frame;
 pub mod initial;
+pub mod state;
 pub mod time_driven;
 
 pub use frame::Frame;
+pub use state::EngineState;
 
 use crate::scene::{EngineKind, Scene};
 use event_driven::{EnergyLedger, Engine, EventCounts};
@@ -62,6 +68,9 @@ pub struct RunReport {
     /// `(accounted_final - accounted_initial) / accounted_initial`: round-off only.
     pub energy_bookkeeping_error: f64,
     pub samples: Vec<Sample>,
+    /// The state at the end of the run (for checkpoints; not part of the JSON report).
+    #[serde(skip)]
+    pub final_state: Option<EngineState>,
 }
 
 /// Runs a validated scene to the end and reports.
@@ -71,7 +80,7 @@ pub fn run_scene(scene: &Scene) -> RunReport {
 
 /// Runs a validated scene, calling `progress` after every sample (for progress displays).
 pub fn run_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&Sample)) -> RunReport {
-    run_dispatch(scene, progress, None)
+    run_dispatch(scene, None, progress, None)
 }
 
 /// Runs a validated scene and hands a [`Frame`] to `observer` at every time `k * interval`
@@ -87,12 +96,81 @@ pub fn run_scene_observed(
         interval > 0.0 && interval.is_finite(),
         "observer interval must be > 0"
     );
-    run_dispatch(scene, progress, Some((interval, observer)))
+    let mut w = FnWatcher(observer);
+    run_dispatch(scene, None, progress, Some((interval, &mut w)))
 }
 
-type Observer<'a> = Option<(f64, &'a mut dyn FnMut(&Frame))>;
+/// What the sampling loop hands frames to, and asks whether to go on at the end of the run.
+pub trait Watcher {
+    /// Sees the frame at every observer time.
+    fn observe(&mut self, frame: &Frame);
+    /// Called when the run reaches its end `t_end` (after the frame at `t_end` was observed):
+    /// a later end time continues the same trajectory to it, `None` stops. Default `None`.
+    fn extend(&mut self, _t_end: f64) -> Option<f64> {
+        None
+    }
+}
 
-fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> RunReport {
+/// A closure as a [`Watcher`] that never extends.
+struct FnWatcher<'a>(&'a mut dyn FnMut(&Frame));
+
+impl Watcher for FnWatcher<'_> {
+    fn observe(&mut self, frame: &Frame) {
+        (self.0)(frame)
+    }
+}
+
+/// [`run_scene_observed`] with a [`Watcher`] that may extend the run, starting from `start`
+/// (a saved state, continued at its time with its counts and ledger) or, with `None`, from
+/// the scene's initial state. `run.duration` is then the end time of the first stretch, in
+/// absolute time (a state saved at `t0` runs from `t0` to `run.duration`).
+pub fn run_scene_watched(
+    scene: &Scene,
+    start: Option<&EngineState>,
+    interval: f64,
+    watcher: &mut dyn Watcher,
+    progress: &mut dyn FnMut(&Sample),
+) -> RunReport {
+    assert!(
+        interval > 0.0 && interval.is_finite(),
+        "observer interval must be > 0"
+    );
+    run_dispatch(scene, start, progress, Some((interval, watcher)))
+}
+
+type Observer<'a> = Option<(f64, &'a mut dyn Watcher)>;
+
+/// Builds the engine `$ty` from the scene or from a saved state.
+macro_rules! build {
+    ($ty:ty, $scene:expr, $start:expr) => {
+        match $start {
+            Some(st) => <$ty>::from_state($scene, st),
+            None => <$ty>::new($scene),
+        }
+    };
+    ($ty:ty, $scene:expr, $start:expr, $field:expr) => {
+        match $start {
+            Some(st) => <$ty>::from_state_with_body_force($scene, st, $field),
+            None => <$ty>::with_body_force($scene, $field),
+        }
+    };
+}
+
+fn run_dispatch(
+    scene: &Scene,
+    start: Option<&EngineState>,
+    p: &mut dyn FnMut(&Sample),
+    o: Observer<'_>,
+) -> RunReport {
+    if let Some(st) = start
+        && let Err(e) = st.check_fits(scene)
+    {
+        panic!("{e}");
+    }
+    // The cold start is a state of its own (`initial::cold_state`).
+    let cold = (start.is_none() && scene.initial.start == crate::scene::StartMode::Cold)
+        .then(|| initial::cold_state(scene));
+    let st = start.or(cold.as_ref());
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
     if scene.engine.kind == EngineKind::Time {
@@ -100,25 +178,25 @@ fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> R
             // Validation admits the shear drive in 3D only.
             return match (grav, wet) {
                 (false, false) => run_engine(
-                    TimeEngine::<3, false, false, _>::with_body_force(scene, field),
+                    build!(TimeEngine::<3, false, false, _>, scene, st, field),
                     scene,
                     p,
                     o,
                 ),
                 (false, true) => run_engine(
-                    TimeEngine::<3, false, true, _>::with_body_force(scene, field),
+                    build!(TimeEngine::<3, false, true, _>, scene, st, field),
                     scene,
                     p,
                     o,
                 ),
                 (true, false) => run_engine(
-                    TimeEngine::<3, true, false, _>::with_body_force(scene, field),
+                    build!(TimeEngine::<3, true, false, _>, scene, st, field),
                     scene,
                     p,
                     o,
                 ),
                 (true, true) => run_engine(
-                    TimeEngine::<3, true, true, _>::with_body_force(scene, field),
+                    build!(TimeEngine::<3, true, true, _>, scene, st, field),
                     scene,
                     p,
                     o,
@@ -126,35 +204,77 @@ fn run_dispatch(scene: &Scene, p: &mut dyn FnMut(&Sample), o: Observer<'_>) -> R
             };
         }
         return match (scene.dimension, grav, wet) {
-            (2, false, false) => run_engine(TimeEngine::<2, false, false>::new(scene), scene, p, o),
-            (2, false, true) => run_engine(TimeEngine::<2, false, true>::new(scene), scene, p, o),
-            (2, true, false) => run_engine(TimeEngine::<2, true, false>::new(scene), scene, p, o),
-            (2, true, true) => run_engine(TimeEngine::<2, true, true>::new(scene), scene, p, o),
-            (3, false, false) => run_engine(TimeEngine::<3, false, false>::new(scene), scene, p, o),
-            (3, false, true) => run_engine(TimeEngine::<3, false, true>::new(scene), scene, p, o),
-            (3, true, false) => run_engine(TimeEngine::<3, true, false>::new(scene), scene, p, o),
-            (3, true, true) => run_engine(TimeEngine::<3, true, true>::new(scene), scene, p, o),
+            (2, false, false) => run_engine(
+                build!(TimeEngine::<2, false, false>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (2, false, true) => {
+                run_engine(build!(TimeEngine::<2, false, true>, scene, st), scene, p, o)
+            }
+            (2, true, false) => {
+                run_engine(build!(TimeEngine::<2, true, false>, scene, st), scene, p, o)
+            }
+            (2, true, true) => {
+                run_engine(build!(TimeEngine::<2, true, true>, scene, st), scene, p, o)
+            }
+            (3, false, false) => run_engine(
+                build!(TimeEngine::<3, false, false>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (3, false, true) => {
+                run_engine(build!(TimeEngine::<3, false, true>, scene, st), scene, p, o)
+            }
+            (3, true, false) => {
+                run_engine(build!(TimeEngine::<3, true, false>, scene, st), scene, p, o)
+            }
+            (3, true, true) => {
+                run_engine(build!(TimeEngine::<3, true, true>, scene, st), scene, p, o)
+            }
             (d, _, _) => panic!("dimension {d} passed validation"),
         };
     }
     if scene.shear_slabs().is_some() {
         // Validation admits the shear drive in 3D only.
         return match (grav, wet) {
-            (false, false) => run_engine(Engine::<3, false, false, true>::new(scene), scene, p, o),
-            (false, true) => run_engine(Engine::<3, false, true, true>::new(scene), scene, p, o),
-            (true, false) => run_engine(Engine::<3, true, false, true>::new(scene), scene, p, o),
-            (true, true) => run_engine(Engine::<3, true, true, true>::new(scene), scene, p, o),
+            (false, false) => run_engine(
+                build!(Engine::<3, false, false, true>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (false, true) => run_engine(
+                build!(Engine::<3, false, true, true>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (true, false) => run_engine(
+                build!(Engine::<3, true, false, true>, scene, st),
+                scene,
+                p,
+                o,
+            ),
+            (true, true) => run_engine(
+                build!(Engine::<3, true, true, true>, scene, st),
+                scene,
+                p,
+                o,
+            ),
         };
     }
     match (scene.dimension, grav, wet) {
-        (2, false, false) => run_engine(Engine::<2, false, false>::new(scene), scene, p, o),
-        (2, false, true) => run_engine(Engine::<2, false, true>::new(scene), scene, p, o),
-        (2, true, false) => run_engine(Engine::<2, true, false>::new(scene), scene, p, o),
-        (2, true, true) => run_engine(Engine::<2, true, true>::new(scene), scene, p, o),
-        (3, false, false) => run_engine(Engine::<3, false, false>::new(scene), scene, p, o),
-        (3, false, true) => run_engine(Engine::<3, false, true>::new(scene), scene, p, o),
-        (3, true, false) => run_engine(Engine::<3, true, false>::new(scene), scene, p, o),
-        (3, true, true) => run_engine(Engine::<3, true, true>::new(scene), scene, p, o),
+        (2, false, false) => run_engine(build!(Engine::<2, false, false>, scene, st), scene, p, o),
+        (2, false, true) => run_engine(build!(Engine::<2, false, true>, scene, st), scene, p, o),
+        (2, true, false) => run_engine(build!(Engine::<2, true, false>, scene, st), scene, p, o),
+        (2, true, true) => run_engine(build!(Engine::<2, true, true>, scene, st), scene, p, o),
+        (3, false, false) => run_engine(build!(Engine::<3, false, false>, scene, st), scene, p, o),
+        (3, false, true) => run_engine(build!(Engine::<3, false, true>, scene, st), scene, p, o),
+        (3, true, false) => run_engine(build!(Engine::<3, true, false>, scene, st), scene, p, o),
+        (3, true, true) => run_engine(build!(Engine::<3, true, true>, scene, st), scene, p, o),
         (d, _, _) => panic!("dimension {d} passed validation"),
     }
 }
@@ -278,7 +398,7 @@ fn run_engine<S: Simulation>(
     let start = Instant::now();
     let energy_initial = engine.energy();
     let mut samples = vec![sample(&engine)];
-    let duration = scene.run.duration;
+    let mut duration = scene.run.duration;
     let interval = if scene.run.sample_interval > 0.0 {
         scene.run.sample_interval
     } else {
@@ -286,17 +406,21 @@ fn run_engine<S: Simulation>(
     };
     let mut stopped_on_cap = false;
     let mut violation = None;
-    // Observer times `j * dt` for `j = 0 ..= last_obs` (none without an observer).
-    let (obs_dt, last_obs) = match &observer {
-        Some((dt, _)) => (*dt, (duration / dt * (1.0 + 1e-12)).floor() as u64),
+    // Observer times `j * dt` for `j = j0 ..= last_obs` (none without an observer); a run from
+    // a saved state at `t0` starts at the first `j0` with `j0 * dt >= t0` (up to round-off).
+    let t0 = engine.time();
+    let last_obs_of = |duration: f64, dt: f64| (duration / dt * (1.0 + 1e-12)).floor() as u64;
+    let (obs_dt, mut last_obs) = match &observer {
+        Some((dt, _)) => (*dt, last_obs_of(duration, *dt)),
         None => (f64::INFINITY, 0),
     };
     let mut j = 0u64;
-    if let Some((_, obs)) = observer.as_mut() {
-        obs(&engine.frame(scene));
-        j = 1;
+    if let Some((dt, obs)) = observer.as_mut() {
+        obs.observe(&engine.frame(scene));
+        j = (t0 / *dt * (1.0 - 1e-12)).floor() as u64 + 1;
     }
-    let mut k = 1u64;
+    // Report samples at `k * interval`, the first after `t0`.
+    let mut k = (t0 / interval * (1.0 - 1e-12)).floor() as u64 + 1;
     loop {
         let target_report = (k as f64 * interval).min(duration);
         let target_obs = if observer.is_some() && j <= last_obs {
@@ -318,7 +442,7 @@ fn run_engine<S: Simulation>(
         }
         if target == target_obs {
             if let Some((_, obs)) = observer.as_mut() {
-                obs(&engine.frame(scene));
+                obs.observe(&engine.frame(scene));
             }
             j += 1;
         }
@@ -332,11 +456,23 @@ fn run_engine<S: Simulation>(
             break;
         }
         if target >= duration {
-            break;
+            // The watcher may continue the same trajectory to a later end.
+            match observer.as_mut().and_then(|(_, obs)| obs.extend(duration)) {
+                Some(end) if end > duration => {
+                    duration = end;
+                    last_obs = last_obs_of(duration, obs_dt);
+                }
+                _ => break,
+            }
         }
         k += 1;
     }
     let energy_final = engine.energy();
+    let final_state = Some(EngineState::of_frame(
+        S::KIND,
+        engine.frame(scene),
+        energy_final.clone(),
+    ));
     let t_g = engine.granular_temperature();
     let e_cb = scene.e_cb();
     let a0 = energy_initial.total_accounted();
@@ -364,5 +500,6 @@ fn run_engine<S: Simulation>(
             a1 - a0
         },
         samples,
+        final_state,
     }
 }

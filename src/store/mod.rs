@@ -25,6 +25,7 @@
 //!   already finished is discarded, so a job never has two results.
 
 mod cluster;
+pub mod hysteresis;
 
 pub use cluster::{TaskRow, TaskState};
 
@@ -172,6 +173,16 @@ pub struct PointRow {
     pub finished_at: Option<f64>,
     /// The runner that committed the result.
     pub result_owner: Option<String>,
+}
+
+/// Results that did not reach a stationary window ([`crate::observe::Observables::converged`]),
+/// and the number of results that carry a verdict at all: `(unconverged, with a verdict)`.
+pub fn unconverged_count(points: &[PointRow]) -> (u64, u64) {
+    let verdicts = points
+        .iter()
+        .filter_map(|p| p.observables.as_ref())
+        .filter_map(crate::observe::converged_in_json);
+    verdicts.fold((0, 0), |(u, n), ok| (u + u64::from(!ok), n + 1))
 }
 
 /// Points added by refinement are numbered from here on (grid points are below: a sweep has at
@@ -628,7 +639,65 @@ impl Store {
         .execute(&mut **tx)
         .await
         .map_err(|e| self.db(e))?;
+        if let Some(state) = &result.checkpoint {
+            sqlx::query(
+                "INSERT OR REPLACE INTO checkpoints (job_id, time, state, created_at) \
+                 VALUES (?1, ?2, ?3, ?4)",
+            )
+            .bind(job_id)
+            .bind(state.time)
+            .bind(serde_json::to_string(state).expect("a state serializes"))
+            .bind(finished_at)
+            .execute(&mut **tx)
+            .await
+            .map_err(|e| self.db(e))?;
+        }
         Ok(())
+    }
+
+    /// Replaces the result and the checkpoint of a finished job (an extension from its
+    /// checkpoint, `sweep resume --extend`) in one transaction.
+    pub fn replace_result(&self, job_id: &str, result: &JobResult) -> Result<(), StoreError> {
+        let t = now();
+        let owner = self.owner.clone();
+        self.in_transaction(async |tx| {
+            sqlx::query("DELETE FROM results WHERE job_id = ?1")
+                .bind(job_id)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            self.insert_result(tx, job_id, result, &owner, t).await?;
+            sqlx::query(
+                "UPDATE jobs SET finished_at = ?2, wall_seconds = coalesce(wall_seconds, 0) + ?3 \
+                 WHERE id = ?1",
+            )
+            .bind(job_id)
+            .bind(t)
+            .bind(result.wall_seconds)
+            .execute(&mut **tx)
+            .await
+            .map_err(|e| self.db(e))?;
+            Ok(())
+        })
+    }
+
+    /// The checkpoint (final state) of a finished job, if one was stored.
+    pub fn checkpoint(&self, job_id: &str) -> Result<Option<crate::sim::EngineState>, StoreError> {
+        let row: Option<(String,)> = self
+            .rt
+            .block_on(
+                sqlx::query_as("SELECT state FROM checkpoints WHERE job_id = ?1")
+                    .bind(job_id)
+                    .fetch_optional(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        row.map(|(s,)| {
+            serde_json::from_str(&s).map_err(|e| StoreError::Damaged {
+                path: self.path.display().to_string(),
+                detail: format!("the checkpoint of job {job_id} is not readable: {e}"),
+            })
+        })
+        .transpose()
     }
 
     /// Registers (or re-registers) a sweep and its jobs in one transaction. Jobs already in the

@@ -3,7 +3,8 @@
 //!
 //! A sweep file has a `[sweep]` header (name, optional base scene file, replicas, run length in
 //! driving periods), an optional inline `[scene]` table merged over the base scene, optional
-//! `[observe]` and `[classify]` tables handed to the observers and the classifier, and one
+//! `[observe]` and `[classify]` tables handed to the observers and the classifier, an optional
+//! `[convergence]` table (the run-length policy, `observe::policy`), and one
 //! `[[axis]]` table per swept scene key. An axis is a list (`values = [...]`), a linear range
 //! (`linear = { from, to, steps }`) or a logarithmic range (`log = { from, to, steps }`).
 //! The shaking axes `gamma` (`drive.gamma`), `e_star` (`drive.e_star`), `e_d_star` (`drive.e_star`
@@ -130,6 +131,9 @@ pub struct RawSweep {
     pub observe: Option<toml::Table>,
     #[serde(default)]
     pub classify: Option<toml::Table>,
+    /// Run to stationarity: the scene's `[convergence]` keys for every job.
+    #[serde(default)]
+    pub convergence: Option<toml::Table>,
     #[serde(default, rename = "axis")]
     pub axes: Vec<RawAxis>,
     #[serde(default)]
@@ -231,6 +235,8 @@ pub struct SweepFile {
     pub scene_tree: toml::Table,
     pub observe: toml::Table,
     pub classify: toml::Table,
+    /// The `[convergence]` table (run-length policy), handed to every job's scene.
+    pub convergence: toml::Table,
     pub axes: Vec<Axis>,
     /// The `[refine]` table, if any.
     pub refine: Option<RefineSection>,
@@ -629,6 +635,7 @@ impl SweepFile {
             scene_tree,
             observe: raw.observe.unwrap_or_default(),
             classify: raw.classify.unwrap_or_default(),
+            convergence: raw.convergence.unwrap_or_default(),
             axes,
         })
     }

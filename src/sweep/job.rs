@@ -18,6 +18,10 @@ pub struct JobResult {
     pub simulated_time: f64,
     pub wall_seconds: f64,
     pub events: u64,
+    /// The final state, stored as the job's checkpoint with the result (not part of the
+    /// result's JSON: cluster records carry no checkpoint).
+    #[serde(skip)]
+    pub checkpoint: Option<Box<crate::sim::EngineState>>,
 }
 
 /// Why a job produced no result.
@@ -60,7 +64,59 @@ pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResul
         simulated_time: run.report.simulated_time,
         wall_seconds: run.report.wall_seconds,
         events: run.report.events_total,
+        checkpoint: run.report.final_state.clone().map(Box::new),
     })
+}
+
+/// Extends a finished job from its checkpoint `state` (its final state) on the same
+/// trajectory, under its `[convergence]` policy (a job without one gets the default policy)
+/// with the cap raised to `max_periods` periods of total run. The observers were not saved, so
+/// the continuation starts a fresh window at the checkpoint, with no transient (the run so far
+/// was the transient): windows of the job's window length `W` follow one another until one is
+/// stationary or the next would pass the cap. `Ok(None)`: the cap leaves no room for one more
+/// window. The result replaces the job's old one (`Store::replace_result`).
+pub fn extend_job(
+    spec: &JobSpec,
+    state: &crate::sim::EngineState,
+    max_periods: f64,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Option<JobResult>, JobError> {
+    let scene = &spec.scene;
+    let period = crate::observe::period_of(scene);
+    let policy = scene.convergence.clone().unwrap_or_default();
+    let window = policy.schedule(scene).window;
+    let room = max_periods * period - state.time;
+    if room < window * (1.0 - 1e-9) {
+        return Ok(None);
+    }
+    let mut ext = scene.clone();
+    ext.run.duration = window;
+    ext.observe.transient_periods = 0.0;
+    ext.convergence = Some(crate::observe::ConvergenceSpec {
+        min_periods: 0.0,
+        min_time: 0.0,
+        max_periods: Some(room / period),
+        ..policy
+    });
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        crate::observe::run_observed_from(&ext, Some(state), progress).0
+    }));
+    let run = match outcome {
+        Ok(r) => r,
+        Err(payload) => return Err(JobError::Panic(panic_message(payload.as_ref()))),
+    };
+    check_guards(&run)?;
+    Ok(Some(JobResult {
+        phase: Some(run.classification.phase.to_string()),
+        decided_on: Some(
+            serde_json::to_value(&run.classification.decided_on).expect("decision serializes"),
+        ),
+        observables: serde_json::to_value(&run.observables).expect("observables serialize"),
+        simulated_time: run.report.simulated_time,
+        wall_seconds: run.report.wall_seconds,
+        events: run.report.events_total,
+        checkpoint: run.report.final_state.clone().map(Box::new),
+    }))
 }
 
 /// The numerical guards: a broken engine invariant, or a stationary temperature that is not a

@@ -394,9 +394,14 @@ impl SweepFile {
         {
             let mut tree = self.scene_tree.clone();
             let where_ = describe_point(self, coords, replica);
-            // The sweep's `[observe]` and `[classify]` tables go into the scene's sections
+            // The sweep's `[observe]`, `[classify]` and `[convergence]` tables go into the
+            // scene's sections
             // of those names (over what the base scene sets), validated with the scene.
-            for (section, table) in [("observe", &self.observe), ("classify", &self.classify)] {
+            for (section, table) in [
+                ("observe", &self.observe),
+                ("classify", &self.classify),
+                ("convergence", &self.convergence),
+            ] {
                 for (key, value) in table {
                     set_key(&mut tree, &format!("{section}.{key}"), value.clone())
                         .map_err(|m| SweepError::new(&file, None, section, m))?;

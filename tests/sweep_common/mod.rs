@@ -66,6 +66,7 @@ pub fn finish_synthetic(
     let mut n = 0;
     while let Some(c) = store.claim(&[sweep_id]).expect("claim") {
         let result = JobResult {
+            checkpoint: None,
             phase: phase(&c.coords, c.replica),
             decided_on: Some(serde_json::json!({"synthetic": true})),
             observables: serde_json::json!({"granular_temperature": 1.5, "n": c.point}),

@@ -36,7 +36,7 @@ use crate::physics::wall_table::{TableHit, WallTable, shared_table};
 use crate::scene::{Boundary, DEFAULT_ROOT_TOLERANCE, RuptureRule, Scene, WallSolverKind};
 use crate::sim::initial::initial_state;
 use nalgebra::SVector;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
 /// A point or velocity in `D` dimensions.
@@ -104,7 +104,7 @@ impl PlaneEvent {
 }
 
 /// Events processed, by kind.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct EventCounts {
     pub pair_collisions: u64,
     pub wall_collisions: u64,
@@ -136,7 +136,7 @@ impl EventCounts {
 }
 
 /// Energy bookkeeping in units of `m g d` (or the scene's energy unit).
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct EnergyLedger {
     pub kinetic: f64,
     pub potential: f64,
@@ -266,6 +266,31 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
 {
     /// Builds the engine for a validated scene: initial state, cells, first predictions.
     pub fn new(scene: &Scene) -> Self {
+        Self::assemble(scene, initial_state(scene), None)
+    }
+
+    /// Rebuilds the engine from a saved state (`sim::state`): every particle at the state's
+    /// time, the bridges bonded, the event counts and the energy ledger continued, cells and
+    /// predictions derived afresh. The TC remedy's last-collision times start unset. A run
+    /// continued from a state follows the uninterrupted run to round-off: predictions are
+    /// recomputed from positions advanced to the common time, which rounds differently
+    /// (`tests/observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
+    pub fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
+        let d = scene.dimension;
+        let init = crate::sim::initial::InitialState {
+            radius: state.radii.clone(),
+            position: state.positions.chunks(d).map(<[f64]>::to_vec).collect(),
+            velocity: state.velocities.chunks(d).map(<[f64]>::to_vec).collect(),
+        };
+        Self::assemble(scene, init, Some(state))
+    }
+
+    fn assemble(
+        scene: &Scene,
+        init: crate::sim::initial::InitialState,
+        start: Option<&crate::sim::EngineState>,
+    ) -> Self {
+        let t0 = start.map_or(0.0, |s| s.time);
         assert_eq!(
             scene.dimension, D,
             "scene dimension does not match the engine"
@@ -286,7 +311,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
             "shear flag does not match the scene"
         );
         assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
-        let init = initial_state(scene);
         let n = init.radius.len();
         let mut size = [0.0; D];
         let mut periodic = [false; D];
@@ -362,11 +386,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
         let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
         let mut engine = Self {
             p,
-            time: 0.0,
+            time: t0,
             body: (0..n)
                 .map(|i| Body {
                     x: to_vec(&init.position[i]),
-                    t: 0.0,
+                    t: t0,
                     v: to_vec(&init.velocity[i]),
                     r: init.radius[i],
                 })
@@ -414,6 +438,22 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
             engine.cell[i] = c;
             let lin = engine.grid.linear(&c);
             engine.grid.insert(i, lin);
+        }
+        if let Some(st) = start {
+            if WET {
+                for &(i, j) in &st.bridges {
+                    engine.add_bond_half(i, j);
+                    engine.add_bond_half(j, i);
+                }
+            }
+            engine.counts = st.counts.clone();
+            let l = &st.ledger;
+            engine.dissipated_restitution = l.dissipated_restitution;
+            engine.dissipated_ruptures = l.dissipated_ruptures;
+            engine.added = l.added_by_collapse_remedies;
+            engine.placement = l.added_by_wall_placement;
+            engine.work_by_drive = l.work_by_drive;
+            engine.next_reorder = engine.counts.total().saturating_add(engine.reorder_every);
         }
         for i in 0..n {
             engine.predict_all(i);

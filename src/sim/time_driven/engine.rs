@@ -136,6 +136,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool> TimeEngine<D, GRAV, WET,
     pub fn new(scene: &Scene) -> Self {
         Self::with_body_force(scene, NoBodyForce)
     }
+
+    /// Rebuilds the engine from a saved state ([`Self::from_state_with_body_force`]).
+    pub fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
+        Self::from_state_with_body_force(scene, state, NoBodyForce)
+    }
 }
 
 impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
@@ -143,10 +148,39 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 {
     /// Builds the engine with a body force.
     pub fn with_body_force(scene: &Scene, body: B) -> Self {
+        Self::assemble(scene, initial_state(scene), None, body)
+    }
+
+    /// Rebuilds the engine from a saved state (`sim::state`): positions, velocities, radii and
+    /// the bridges (flagged bonded in the neighbour list) at the state's time, rounded to a
+    /// whole number of steps; event counts and energy ledger continued. The Gear derivatives
+    /// beyond the velocity are re-initialised as at a start (`r_2` from the forces, higher
+    /// ones zero), so the continuation is physically continuous (same positions, velocities,
+    /// bridges and energy) but not identical to an uninterrupted run; contacts overlapping at
+    /// the state count as new contact onsets.
+    pub fn from_state_with_body_force(
+        scene: &Scene,
+        state: &crate::sim::EngineState,
+        body: B,
+    ) -> Self {
+        let d = scene.dimension;
+        let init = crate::sim::initial::InitialState {
+            radius: state.radii.clone(),
+            position: state.positions.chunks(d).map(<[f64]>::to_vec).collect(),
+            velocity: state.velocities.chunks(d).map(<[f64]>::to_vec).collect(),
+        };
+        Self::assemble(scene, init, Some(state), body)
+    }
+
+    fn assemble(
+        scene: &Scene,
+        init: crate::sim::initial::InitialState,
+        start: Option<&crate::sim::EngineState>,
+        body: B,
+    ) -> Self {
         assert_eq!(scene.dimension, D, "scene dimension does not match");
         assert_eq!(GRAV, scene.gravity > 0.0, "gravity flag does not match");
         assert_eq!(WET, scene.is_wet(), "capillary flag does not match");
-        let init = initial_state(scene);
         let n = init.radius.len();
         let boundaries = scene.boundaries();
         let mut size = [0.0; D];
@@ -238,8 +272,25 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             body,
         };
         engine.list.build(&engine.r[0], &engine.radius);
+        let mut t0 = 0.0;
+        if let Some(st) = start {
+            engine.steps = (st.time / engine.p.dt).round() as u64;
+            t0 = engine.time();
+            if WET {
+                for &(i, j) in &st.bridges {
+                    assert!(
+                        engine.list.set_flag(i, j, BOND),
+                        "saved bridge {i}-{j} is beyond the interaction range"
+                    );
+                }
+            }
+            engine.counts = st.counts.clone();
+            engine.dissipated_damping = st.ledger.dissipated_restitution;
+            engine.dissipated_bridges = st.ledger.dissipated_ruptures;
+            engine.work_by_drive = st.ledger.work_by_drive;
+        }
         // Initial accelerations; the bookkeeping of this evaluation is not a step (dt = 0).
-        engine.compute_forces(0.0, 1.0, 0.0);
+        engine.compute_forces(t0, 1.0, 0.0);
         if engine.p.integrator == IntegratorKind::Gear5 {
             let dt = engine.p.dt;
             for e in 0..D * n {

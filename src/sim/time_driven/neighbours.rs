@@ -255,6 +255,19 @@ impl<const D: usize> NeighbourList<D> {
         self.start[n] = self.partner.len() as u32;
     }
 
+    /// Sets `flag` on the entry of the pair `(i, j)`, `i < j`; false if the pair is not in the
+    /// list (restoring saved bridges, `TimeEngine::from_state`).
+    pub fn set_flag(&mut self, i: usize, j: usize, flag: u8) -> bool {
+        let row = self.start[i] as usize..self.start[i + 1] as usize;
+        match self.partner[row.clone()].binary_search(&(j as u32)) {
+            Ok(k) => {
+                self.flags[row.start + k] |= flag;
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
     /// Pairs with `flag` set, as `(i, j)` with `i < j`, sorted.
     pub fn flagged(&self, flag: u8) -> Vec<(usize, usize)> {
         let n = self.start.len() - 1;

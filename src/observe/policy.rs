@@ -1,0 +1,177 @@
+//! The run-length policy of a scene, section `[convergence]`: run at least a minimum, then
+//! extend the same trajectory window by window until the window is stationary
+//! ([`convergence`](super::convergence)), up to a cap. Pure data plus its validation (errors
+//! name the file, the key and the allowed range). Without the section a run has the fixed
+//! length `run.duration`.
+//!
+//! Windows (docs/observables.md "Run to stationarity"): the first check is at
+//! `t_1 = max(run.duration, min_periods T, min_time)` (`T` the period of [`period_of`]) and
+//! tests the window `[transient, t_1]`, `transient = observe.transient_periods T`. A failed
+//! check extends the run by one window length `W = t_1 - transient`: the next window is
+//! `[t_1, t_1 + W]`, and so on, so the reported window is always the last `W` of the run and
+//! everything before it is transient. The run stops unconverged when the next window would end
+//! after the cap `max_periods T` (default [`DEFAULT_CAP_FACTOR`] `t_1`).
+
+use super::spec::period_of;
+use crate::scene::{Scene, SceneError};
+use serde::{Deserialize, Serialize};
+
+/// Default cap, in units of the first check time.
+pub const DEFAULT_CAP_FACTOR: f64 = 4.0;
+
+/// Scene section `[convergence]` (every key optional).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConvergenceSpec {
+    /// Shortest run in periods (default 0: `run.duration` alone).
+    #[serde(default)]
+    pub min_periods: f64,
+    /// Shortest run in time units (default 0). A high-Gamma period is short: this keeps the
+    /// run long in physical time as well.
+    #[serde(default)]
+    pub min_time: f64,
+    /// Longest run in periods (default `4 t_1 / T`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_periods: Option<f64>,
+    /// Blocks the window is cut into for the tests (default 4, 3 ..= 64).
+    #[serde(default = "default_blocks")]
+    pub blocks: usize,
+    /// `k`: block means must agree within `k` standard errors (default 3, in (0, 10]).
+    #[serde(default = "default_sigmas")]
+    pub sigmas: f64,
+    /// Relative allowance `tol / max(|mean|, floor)` (default 0.02, in [0, 1)).
+    #[serde(default = "default_rel_tolerance")]
+    pub rel_tolerance: f64,
+}
+
+fn default_blocks() -> usize {
+    4
+}
+fn default_sigmas() -> f64 {
+    3.0
+}
+fn default_rel_tolerance() -> f64 {
+    0.02
+}
+
+impl Default for ConvergenceSpec {
+    fn default() -> Self {
+        Self {
+            min_periods: 0.0,
+            min_time: 0.0,
+            max_periods: None,
+            blocks: default_blocks(),
+            sigmas: default_sigmas(),
+            rel_tolerance: default_rel_tolerance(),
+        }
+    }
+}
+
+/// The policy in time units for one scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Schedule {
+    /// First check `t_1`.
+    pub first_check: f64,
+    /// Window length `W = t_1 - transient`.
+    pub window: f64,
+    /// Longest run.
+    pub cap: f64,
+}
+
+impl ConvergenceSpec {
+    /// `t_1 = max(run.duration, min_periods T, min_time)`.
+    pub fn first_check(&self, scene: &Scene) -> f64 {
+        scene
+            .run
+            .duration
+            .max(self.min_periods * period_of(scene))
+            .max(self.min_time)
+    }
+
+    /// The schedule of a validated scene.
+    pub fn schedule(&self, scene: &Scene) -> Schedule {
+        let t1 = self.first_check(scene);
+        let cap = self
+            .max_periods
+            .map_or(DEFAULT_CAP_FACTOR * t1, |p| p * period_of(scene));
+        Schedule {
+            first_check: t1,
+            window: t1 - scene.observe.window_start(scene),
+            cap,
+        }
+    }
+
+    /// Checks every key against the rest of the scene.
+    pub fn validate(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
+        let err =
+            |key: &str, msg: String| SceneError::new(origin, &format!("convergence.{key}"), msg);
+        let nonneg = |v: f64| v.is_finite() && v >= 0.0;
+        if !nonneg(self.min_periods) {
+            return Err(err(
+                "min_periods",
+                format!(
+                    "= {} is out of range: must be finite and >= 0",
+                    self.min_periods
+                ),
+            ));
+        }
+        if !nonneg(self.min_time) {
+            return Err(err(
+                "min_time",
+                format!(
+                    "= {} is out of range: must be finite and >= 0",
+                    self.min_time
+                ),
+            ));
+        }
+        if !(3..=64).contains(&self.blocks) {
+            return Err(err(
+                "blocks",
+                format!("= {} is out of range: must be in 3 ..= 64", self.blocks),
+            ));
+        }
+        if !(self.sigmas.is_finite() && self.sigmas > 0.0 && self.sigmas <= 10.0) {
+            return Err(err(
+                "sigmas",
+                format!("= {} is out of range: must be in (0, 10]", self.sigmas),
+            ));
+        }
+        if !(self.rel_tolerance.is_finite() && (0.0..1.0).contains(&self.rel_tolerance)) {
+            return Err(err(
+                "rel_tolerance",
+                format!(
+                    "= {} is out of range: must be in [0, 1)",
+                    self.rel_tolerance
+                ),
+            ));
+        }
+        let period = period_of(scene);
+        let t1 = self.first_check(scene);
+        if let Some(p) = self.max_periods
+            && !(p.is_finite() && p * period >= t1)
+        {
+            return Err(err(
+                "max_periods",
+                format!(
+                    "= {p} is out of range: must be >= the first check max(run.duration, \
+                     min_periods T, min_time) / T = {:.6} periods (T = {period:.6})",
+                    t1 / period
+                ),
+            ));
+        }
+        let samples =
+            (t1 - scene.observe.window_start(scene)) / scene.observe.sample_interval(scene);
+        if samples < (2 * self.blocks) as f64 {
+            return Err(err(
+                "blocks",
+                format!(
+                    "= {} is out of range: the window holds about {samples:.0} observer samples, \
+                     at least 2 per block are needed (lengthen the run or raise \
+                     observe.samples_per_period)",
+                    self.blocks
+                ),
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,82 @@
+//! [`EngineState`]: a snapshot of a run that an engine can be rebuilt from (`from_state`), so a
+//! run can be continued on the same trajectory later: checkpoints of finished jobs
+//! (`sweep resume --extend`), continuation along a sweep axis, and the cold start.
+//!
+//! What it holds is what the physics needs: time, positions, velocities, radii, the capillary
+//! bridges (bonded pairs) and the accumulated event counts and energy ledger (so counts and
+//! the energy bookkeeping continue). What it does not hold is derived again on restore: cells,
+//! neighbour lists and event predictions; the event engine's per-particle time of the last
+//! collision (the TC collapse remedy) is reset, and the time engine's higher Gear derivatives
+//! are re-initialised from the forces (`sim::time_driven::engine`).
+
+use super::Frame;
+use super::event_driven::{EnergyLedger, EventCounts};
+use serde::{Deserialize, Serialize};
+
+/// A restorable snapshot of a run, vectors flat with stride `dimension`, particles in scene
+/// order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EngineState {
+    /// `"event"` or `"time"`: the engine that wrote it (either engine can read it).
+    pub engine: String,
+    pub dimension: usize,
+    pub time: f64,
+    pub positions: Vec<f64>,
+    pub velocities: Vec<f64>,
+    pub radii: Vec<f64>,
+    /// Bonded pairs `(i, j)`, `i < j`, sorted.
+    pub bridges: Vec<(usize, usize)>,
+    pub counts: EventCounts,
+    /// Ledger at the snapshot (dissipated and injected energy so far).
+    pub ledger: EnergyLedger,
+}
+
+impl EngineState {
+    /// The state of a frame plus the engine's ledger at the frame's time.
+    pub fn of_frame(engine: &str, frame: Frame, ledger: EnergyLedger) -> EngineState {
+        EngineState {
+            engine: engine.to_string(),
+            dimension: frame.dimension,
+            time: frame.time,
+            positions: frame.positions,
+            velocities: frame.velocities,
+            radii: frame.radii,
+            bridges: frame.bridges,
+            counts: frame.counts,
+            ledger,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.radii.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.radii.is_empty()
+    }
+
+    /// Whether the snapshot fits a scene: dimension and particle count.
+    pub fn check_fits(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+        if self.dimension != scene.dimension || self.len() != scene.particles.count {
+            return Err(format!(
+                "the saved state ({}D, {} particles) does not fit the scene ({}D, {} particles)",
+                self.dimension,
+                self.len(),
+                scene.dimension,
+                scene.particles.count
+            ));
+        }
+        let d = self.dimension;
+        if self.positions.len() != d * self.len() || self.velocities.len() != d * self.len() {
+            return Err("the saved state's vectors do not have dimension * count entries".into());
+        }
+        if let Some(&(i, j)) = self
+            .bridges
+            .iter()
+            .find(|&&(i, j)| i >= j || j >= self.len())
+        {
+            return Err(format!("the saved state has a bad bridge ({i}, {j})"));
+        }
+        Ok(())
+    }
+}
