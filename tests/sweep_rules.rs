@@ -460,6 +460,7 @@ fn non_stationary_results_are_counted_and_marked() {
             simulated_time: 1.0,
             wall_seconds: 0.01,
             events: 10,
+            checkpoint: None,
         };
         assert!(store.finish(&c, &result).unwrap());
     }

@@ -1276,6 +1276,7 @@ mod tests {
             simulated_time: 1.0,
             wall_seconds: 0.5,
             events: 3,
+            checkpoint: None,
         };
         assert!(store.finish(&claim, &result).unwrap());
         let done_id = claim.job_id.clone();
