@@ -98,7 +98,7 @@ fn convergence_keys_are_validated_with_their_names() {
         ("rel_tolerance = 1.0", "convergence.rel_tolerance"),
         ("min_time = -1.0", "convergence.min_time"),
         ("min_periods = nan", "convergence.min_periods"),
-        ("max_periods = 4.0", "convergence.max_periods"),
+        ("max_periods = 0.0", "convergence.max_periods"),
         ("window = 3", "window"),
     ];
     for (line, key) in bad {

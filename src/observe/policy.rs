@@ -10,7 +10,8 @@
 //! check extends the run by one window length `W = t_1 - transient`: the next window is
 //! `[t_1, t_1 + W]`, and so on, so the reported window is always the last `W` of the run and
 //! everything before it is transient. The run stops unconverged when the next window would end
-//! after the cap `max_periods T` (default [`DEFAULT_CAP_FACTOR`] `t_1`).
+//! after the cap `max(max_periods T, t_1)` (default [`DEFAULT_CAP_FACTOR`] `t_1`): a cap below the first
+//! check means no extension.
 
 use super::spec::period_of;
 use crate::scene::{Scene, SceneError};
@@ -91,9 +92,12 @@ impl ConvergenceSpec {
     /// The schedule of a validated scene.
     pub fn schedule(&self, scene: &Scene) -> Schedule {
         let t1 = self.first_check(scene);
+        // Never below the first check: where `max_periods T` is shorter than `min_time` (high
+        // Gamma, short periods), the run stops at its first check, converged or not.
         let cap = self
             .max_periods
-            .map_or(DEFAULT_CAP_FACTOR * t1, |p| p * period_of(scene));
+            .map_or(DEFAULT_CAP_FACTOR * t1, |p| p * period_of(scene))
+            .max(t1);
         Schedule {
             first_check: t1,
             window: t1 - scene.observe.window_start(scene),
@@ -148,13 +152,14 @@ impl ConvergenceSpec {
         let period = period_of(scene);
         let t1 = self.first_check(scene);
         if let Some(p) = self.max_periods
-            && !(p.is_finite() && p * period >= t1)
+            && !(p.is_finite() && p > 0.0)
         {
             return Err(err(
                 "max_periods",
                 format!(
-                    "= {p} is out of range: must be >= the first check max(run.duration, \
-                     min_periods T, min_time) / T = {:.6} periods (T = {period:.6})",
+                    "= {p} is out of range: must be finite and > 0 (a cap below the first check \
+                     max(run.duration, min_periods T, min_time) = {:.6} periods, T = \
+                     {period:.6}, means no extension)",
                     t1 / period
                 ),
             ));

@@ -190,7 +190,13 @@ fn maps_svg(
             n(x0),
             n(y0 - 4.0),
             // The short name: the maps sit side by side.
-            esc(name.split(" (").next().unwrap_or(name).split(',').next().unwrap_or(name)),
+            esc(name
+                .split(" (")
+                .next()
+                .unwrap_or(name)
+                .split(',')
+                .next()
+                .unwrap_or(name)),
             label(lo),
             label(hi)
         );

@@ -1,19 +1,16 @@
 //! How far a stored result can be trusted, from its stored observables: the one place the sweep
 //! commands (`sweep status`, `show`, `boundaries`, `export`) read that verdict from. Today it is
-//! the stationarity check (`observables.stationarity.stationary`, docs/observables.md); a
-//! further verdict (e.g. the convergence of a run-length policy) is added here and every command
-//! shows it.
+//! the convergence verdict of the run-length policy where the run had one, else the
+//! stationarity check (`observables.stationarity.stationary`, docs/observables.md).
 
 /// The mark of a result whose stationarity check failed (its averages may still drift).
 pub const NOT_STATIONARY: char = '?';
 
-/// Whether a result's stationarity check passed: `Some(true/false)`, `None` where the stored
+/// Whether a result is stationary: the run-length policy's convergence verdict where the run
+/// had one, else its stationarity check (`observe::converged_in_json`); `None` where the stored
 /// observables carry no verdict (a result written before the check existed).
 pub fn stationary(observables: &serde_json::Value) -> Option<bool> {
-    observables
-        .get("stationarity")
-        .and_then(|s| s.get("stationary"))
-        .and_then(|v| v.as_bool())
+    crate::observe::converged_in_json(observables)
 }
 
 /// The trust mark of a result: `None` for a trusted one, [`NOT_STATIONARY`] for a result whose

@@ -442,6 +442,14 @@ impl SweepFile {
                     run.entry("duration").or_insert(toml::Value::Float(1.0));
                 }
             }
+            // `[convergence]` is checked against the run length, which `sweep.periods` sets
+            // below: it joins the scene after that conversion (a base scene's own run length
+            // would otherwise decide whether its cap is long enough).
+            let convergence = if self.periods.is_some() {
+                tree.remove("convergence")
+            } else {
+                None
+            };
             let scene = match self.scene_of(&tree, &where_) {
                 Ok(s) => s,
                 // A point failing a constraint of the scene may be left out; a key outside its
@@ -453,6 +461,17 @@ impl SweepFile {
             let mut scene = scene;
             if let Some(p) = self.periods {
                 scene.run.duration = p * period;
+            }
+            if let Some(c) = convergence {
+                scene.convergence = Some(c.try_into().map_err(|e: toml::de::Error| {
+                    let (file, line) = self.locate("convergence");
+                    SweepError::new(
+                        &file,
+                        line,
+                        "convergence",
+                        format!("{}{where_}", e.message()),
+                    )
+                })?);
             }
             // Sampling: the sweep's `samples_per_period`, else the scene's own `[observe]`
             // setting if the base scene has one, else the sweep default.
