@@ -349,7 +349,7 @@ fn hot_and_cold_starts_that_disagree_are_hysteretic() {
     let sweep = write(
         dir.path(),
         "hc_sweep.toml",
-        "[sweep]\nname = \"hc\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 1.0\n\
+        "[sweep]\nname = \"hc\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 1.0\nmobility_lag = 0.25\n\
          [[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"cold\"]\n",
     );
     let db = dir.path().join("w.sqlite");
