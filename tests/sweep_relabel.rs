@@ -134,7 +134,7 @@ fn lines_of_constant_gamma_decide_fluid_versus_gas() {
             observables(&template, t),
         ));
     }
-    assert!(MIN_LINE_POINTS > 2);
+    const { assert!(MIN_LINE_POINTS > 2) };
     let labels = relabel(&rows, None);
     assert_eq!(labels.len(), rows.len());
     let phase = |k: usize| labels[k].classification.phase;
