@@ -44,6 +44,19 @@ pub fn normal_pdf(x: f64) -> f64 {
     (-0.5 * x * x).exp() / (2.0 * PI).sqrt()
 }
 
+/// Trapezoid rule over `[-9, 9]` (3600 steps): the integrands here are smooth and negligible
+/// outside.
+fn integrate(f: impl Fn(f64) -> f64) -> f64 {
+    let (lo, hi, n) = (-9.0, 9.0, 3600);
+    let h = (hi - lo) / n as f64;
+    let mut s = 0.0;
+    for k in 0..=n {
+        let w = if k == 0 || k == n { 0.5 } else { 1.0 };
+        s += w * f(lo + k as f64 * h);
+    }
+    s * h
+}
+
 /// `P(R <= r)` for the range `R` of `b` independent standard normal values.
 pub fn range_cdf(b: usize, r: f64) -> f64 {
     if b < 2 {
@@ -52,17 +65,11 @@ pub fn range_cdf(b: usize, r: f64) -> f64 {
     if r <= 0.0 {
         return 0.0;
     }
-    // Trapezoid rule over [-9, 9]: the integrand is smooth and negligible outside.
-    let (lo, hi, n) = (-9.0, 9.0, 3600);
-    let h = (hi - lo) / n as f64;
-    let mut s = 0.0;
-    for k in 0..=n {
-        let x = lo + k as f64 * h;
-        let w = if k == 0 || k == n { 0.5 } else { 1.0 };
+    let s = integrate(|x| {
         let inner = (normal_cdf(x + r) - normal_cdf(x)).max(0.0);
-        s += w * normal_pdf(x) * inner.powi(b as i32 - 1);
-    }
-    (b as f64 * s * h).clamp(0.0, 1.0)
+        normal_pdf(x) * inner.powi(b as i32 - 1)
+    });
+    (b as f64 * s).clamp(0.0, 1.0)
 }
 
 /// The `q` quantile of the range of `b` independent standard normal values (0 for `b < 2`).
@@ -88,16 +95,10 @@ pub fn range_mean(b: usize) -> f64 {
     if b < 2 {
         return 0.0;
     }
-    let (lo, hi, n) = (-9.0, 9.0, 3600);
-    let h = (hi - lo) / n as f64;
-    let mut s = 0.0;
-    for k in 0..=n {
-        let x = lo + k as f64 * h;
-        let w = if k == 0 || k == n { 0.5 } else { 1.0 };
+    integrate(|x| {
         let p = normal_cdf(x);
-        s += w * (1.0 - p.powi(b as i32) - (1.0 - p).powi(b as i32));
-    }
-    s * h
+        1.0 - p.powi(b as i32) - (1.0 - p).powi(b as i32)
+    })
 }
 
 /// Standard error of the mean of a series from its block means: `sd(block means) /
