@@ -47,13 +47,14 @@ impl std::error::Error for JobError {}
 /// Runs a job spec; `progress` gets the completed fraction of the simulated time, in `[0, 1]`.
 /// The observers and thresholds are the scene's `[observe]` and `[classify]` sections.
 pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResult, JobError> {
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        crate::observe::run_observed(&spec.scene, progress)
-    }));
-    let run = match outcome {
-        Ok(r) => r,
-        Err(payload) => return Err(JobError::Panic(panic_message(payload.as_ref()))),
-    };
+    guarded_run(|| crate::observe::run_observed(&spec.scene, progress))
+}
+
+/// Runs `run` with panics caught, checks its guards and turns it into a [`JobResult`] (the
+/// one path of a fresh job and of an extension).
+fn guarded_run(run: impl FnOnce() -> crate::observe::ObservedRun) -> Result<JobResult, JobError> {
+    let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(run))
+        .map_err(|payload| JobError::Panic(panic_message(payload.as_ref())))?;
     check_guards(&run)?;
     Ok(JobResult {
         phase: Some(run.classification.phase.to_string()),
@@ -98,25 +99,7 @@ pub fn extend_job(
         max_periods: Some(room / period),
         ..policy
     });
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        crate::observe::run_observed_from(&ext, Some(state), progress).0
-    }));
-    let run = match outcome {
-        Ok(r) => r,
-        Err(payload) => return Err(JobError::Panic(panic_message(payload.as_ref()))),
-    };
-    check_guards(&run)?;
-    Ok(Some(JobResult {
-        phase: Some(run.classification.phase.to_string()),
-        decided_on: Some(
-            serde_json::to_value(&run.classification.decided_on).expect("decision serializes"),
-        ),
-        observables: serde_json::to_value(&run.observables).expect("observables serialize"),
-        simulated_time: run.report.simulated_time,
-        wall_seconds: run.report.wall_seconds,
-        events: run.report.events_total,
-        checkpoint: run.report.final_state.clone().map(Box::new),
-    }))
+    guarded_run(|| crate::observe::run_observed_from(&ext, Some(state), progress).0).map(Some)
 }
 
 /// The numerical guards: a broken engine invariant, or a stationary temperature that is not a
