@@ -361,8 +361,9 @@ fn hot_and_cold_starts_that_disagree_are_hysteretic() {
     let groups = wetgran::store::hysteresis::by_start(&s.axes, &store.points(s.id).unwrap());
     assert_eq!(groups.len(), 1, "{groups:?}");
     let g = &groups[0];
-    assert_eq!(g.cold, vec!["s".to_string()], "{g:?}");
-    assert_eq!(g.hot, vec!["g".to_string()], "{g:?}");
+    use wetgran::scene::StartMode;
+    assert_eq!(g.by_start[&StartMode::Cold], vec!["s".to_string()], "{g:?}");
+    assert_eq!(g.by_start[&StartMode::Hot], vec!["g".to_string()], "{g:?}");
     assert!(g.hysteretic);
     let o = run(&["sweep", "status", "--db", db_s]);
     assert!(

@@ -73,6 +73,7 @@ fn point(k: usize, scene: Scene, obs: Value) -> PointRow {
         spec: JobSpec {
             format: SPEC_FORMAT,
             scene,
+            start_from: None,
         },
         attempts: 1,
         last_error: None,

@@ -18,7 +18,13 @@
 //!    the plane's units: decades on a log axis) with the edge's interval in axis units, and a
 //!    confidence: the fraction of the votes at the two ends that agree with their end's
 //!    majority.
-//! 4. Physical units: for shaking sweeps every map and boundary point also carries the container
+//! 4. Trust: a point with a voting replica whose run did not converge (the run-length policy's
+//!    verdict, or the stationarity check of a result without one: `report::trust`) is kept on the
+//!    map, marked `converged = false` (hollow in `plot`, `?` in `boundaries`), but left out of
+//!    the triangulation, so no boundary rests on it, unless [`Extraction::include_unconverged`]
+//!    asks for it (`boundaries --include-unconverged`). Its unconverged neighbours are then
+//!    joined to the converged points around them.
+//! 5. Physical units: for shaking sweeps every map and boundary point also carries the container
 //!    motion `(A, omega)` of MODEL.md 4.1, computed from its `(Gamma, E*)` and the scene's
 //!    `E_cb`, `m`, `g` (Scene::drive_motion).
 
@@ -35,8 +41,18 @@ pub struct Observation {
     pub coords: Vec<serde_json::Value>,
     pub replica: i64,
     pub phase: Option<String>,
+    /// Whether the run converged (`false`: unconverged or not stationary; `true` also where the
+    /// result carries no verdict).
+    pub converged: bool,
     /// The job's scene (for physical units).
     pub scene: Scene,
+}
+
+/// How boundaries are extracted.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Extraction {
+    /// Triangulate unconverged points too (default: only converged ones carry boundaries).
+    pub include_unconverged: bool,
 }
 
 /// How an axis of the plane is scaled.
@@ -74,6 +90,8 @@ pub struct MapPoint {
     pub votes: Vec<Option<String>>,
     /// Whether the majority was a tie.
     pub tie: bool,
+    /// Whether every voting replica converged (module doc, 4).
+    pub converged: bool,
     /// Container amplitude `A` and angular frequency `omega` (shaking sweeps).
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
@@ -201,8 +219,18 @@ impl HasPosition for Vertex {
     }
 }
 
-/// Builds the phase map and its boundary points from a sweep's axes and jobs.
+/// Builds the phase map and its boundary points from a sweep's axes and jobs; only converged
+/// points carry boundaries (module doc, 4).
 pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, BoundaryError> {
+    phase_map_with(axes, jobs, Extraction::default())
+}
+
+/// [`phase_map`] with the extraction options.
+pub fn phase_map_with(
+    axes: &[Axis],
+    jobs: &[Observation],
+    how: Extraction,
+) -> Result<PhaseMap, BoundaryError> {
     let (x, y, shaking) = plane_axes(axes);
     let in_plane = |i: usize| {
         x.as_ref().is_some_and(|a| a.index == i) || y.as_ref().is_some_and(|a| a.index == i)
@@ -284,6 +312,7 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
                 continue;
             };
             let job = votes[0].2;
+            let converged = votes.iter().all(|v| v.1.is_none() || v.2.converged);
             let (xv, yv) = (value(job, &x)?, value(job, &y)?);
             let (amplitude, omega) = motion(&job.scene, xv, yv);
             map_points.push(MapPoint {
@@ -293,16 +322,26 @@ pub fn phase_map(axes: &[Axis], jobs: &[Observation]) -> Result<PhaseMap, Bounda
                 phase,
                 votes: phases,
                 tie,
+                converged,
                 amplitude,
                 omega,
             });
             scenes.push(&job.scene);
         }
-        let edges = match (&x, &y) {
-            (Some(xa), Some(ya)) => delaunay_edges(&map_points, xa, ya)?,
-            (Some(xa), None) => line_edges(&map_points, xa),
+        // The points that carry boundaries, and the edges between them (indices into
+        // `map_points`).
+        let carriers: Vec<usize> = (0..map_points.len())
+            .filter(|&i| how.include_unconverged || map_points[i].converged)
+            .collect();
+        let subset: Vec<MapPoint> = carriers.iter().map(|&i| map_points[i].clone()).collect();
+        let edges: Vec<(usize, usize)> = match (&x, &y) {
+            (Some(xa), Some(ya)) => delaunay_edges(&subset, xa, ya)?,
+            (Some(xa), None) => line_edges(&subset, xa),
             _ => Vec::new(),
-        };
+        }
+        .into_iter()
+        .map(|(i, j)| (carriers[i], carriers[j]))
+        .collect();
         let mut boundaries: BTreeMap<String, Vec<BoundaryPoint>> = BTreeMap::new();
         for (i, j) in edges {
             let (a, b) = (&map_points[i], &map_points[j]);
@@ -466,6 +505,7 @@ mod tests {
             coords: vec![serde_json::json!(2.0), serde_json::json!(e)],
             replica: r,
             phase: Some(p.to_string()),
+            converged: true,
             scene: scene.clone(),
         };
         let jobs = vec![
@@ -487,5 +527,62 @@ mod tests {
         );
         // 5 of the 6 votes agree with their point's majority.
         assert!((b.confidence - 5.0 / 6.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn unconverged_points_carry_no_boundary_unless_asked() {
+        let scene = Scene::from_toml_str(
+            "dimension = 2\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
+             [drive]\nkind = \"sine\"\ngamma = 3.0\ne_star = 2.0\n[initial]\nseed = 1\ntemperature = 1.0\n[run]\nduration = 1.0\n",
+            "test",
+        )
+        .unwrap();
+        let axes = vec![Axis {
+            name: "e".into(),
+            key: "drive.e_star".into(),
+            label: "E*".into(),
+            kind: AxisKind::Values,
+            values: vec![],
+            line: 0,
+        }];
+        // A line f (E* 1), g unconverged (E* 2), g (E* 4).
+        let obs = |e: f64, p: &str, converged: bool| Observation {
+            coords: vec![serde_json::json!(e)],
+            replica: 0,
+            phase: Some(p.to_string()),
+            converged,
+            scene: scene.clone(),
+        };
+        let jobs = vec![
+            obs(1.0, "f", true),
+            obs(2.0, "g", false),
+            obs(4.0, "g", true),
+        ];
+        let map = phase_map(&axes, &jobs).unwrap();
+        let slice = &map.slices[0];
+        // The unconverged point stays on the map, marked ...
+        assert_eq!(slice.points.len(), 3);
+        assert_eq!(
+            slice.points.iter().map(|p| p.converged).collect::<Vec<_>>(),
+            [true, false, true]
+        );
+        // ... but the boundary is drawn between the converged neighbours, E* 1 and 4.
+        let b = &slice.boundaries["f|g"];
+        assert_eq!(b.len(), 1);
+        assert_eq!(b[0].x_range, [1.0, 4.0]);
+        assert_eq!(b[0].between, [0, 2]);
+        // Asked to, the extraction uses it: the boundary lies between E* 1 and 2.
+        let all = phase_map_with(
+            &axes,
+            &jobs,
+            Extraction {
+                include_unconverged: true,
+            },
+        )
+        .unwrap();
+        let b = &all.slices[0].boundaries["f|g"];
+        assert_eq!(b.len(), 1);
+        assert_eq!(b[0].x_range, [1.0, 2.0]);
+        assert_eq!(b[0].between, [0, 1]);
     }
 }

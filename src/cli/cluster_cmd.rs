@@ -57,6 +57,16 @@ fn next_array_name(arrays: &Path) -> String {
 /// `wetgran sweep submit FILE --slurm`.
 pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> {
     let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
+    if expanded.iter().any(|j| j.spec.start_from.is_some()) {
+        // Each task of an array runs on its own; a chain needs its predecessor's final state.
+        return Err(Failure::BadInput(format!(
+            "{}: sweep {} continues points along an axis ([sweep.continuation]); Slurm arrays \
+             run their tasks independently, so run it with `wetgran sweep run` (or submit the \
+             same grid without [sweep.continuation])",
+            file.display(),
+            sweep.name
+        )));
+    }
     let dir = sweep_dir(db, &sweep.name, s.dir.as_deref())?;
     slurm::check_directive("the sweep directory", &dir.display().to_string())
         .map_err(Failure::BadInput)?;

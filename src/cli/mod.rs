@@ -9,6 +9,7 @@ mod refine_cmd;
 pub mod sweep_cmd;
 
 use crate::bench;
+use crate::boundary::Extraction;
 use crate::observe::{ObservedRun, run_observed_with_frame};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use crate::scene::Scene;
@@ -86,7 +87,8 @@ pub enum Command {
     /// between two phases; the points are grouped by phase pair (e.g. f|fgc) and given in the
     /// sweep's axes and as container motion (A, omega), with their uncertainty (half the
     /// straddling edge per axis, decades on a log axis) and confidence (the fraction of the
-    /// replicas at both ends agreeing with their point's majority).
+    /// replicas at both ends agreeing with their point's majority). Unconverged points are marked
+    /// `?` and carry no boundary unless asked (`--include-unconverged`).
     Boundaries {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
@@ -95,12 +97,17 @@ pub enum Command {
         sweep: Option<String>,
         #[arg(long, value_enum, default_value = "table")]
         format: sweep_cmd::BoundaryFormat,
+        /// Let unconverged points (marked `?`) carry boundaries too; by default a boundary
+        /// rests only on converged points.
+        #[arg(long)]
+        include_unconverged: bool,
     },
     /// Draw a sweep's phase diagram as SVG.
     ///
     /// E* (log axis) against Gamma, points coloured by phase, the boundary points, and the lines
     /// A = s_crit, A = d and Eq. 4.15 (solid-fluid force balance) drawn over; grey error bars
-    /// span each boundary point's straddling edge.
+    /// span each boundary point's straddling edge; unconverged points are drawn hollow and carry
+    /// no boundary unless asked.
     Plot {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
@@ -110,6 +117,9 @@ pub enum Command {
         /// The SVG file to write.
         #[arg(short = 'o', long = "output")]
         output: PathBuf,
+        /// Let unconverged points (drawn hollow) carry boundaries too.
+        #[arg(long)]
+        include_unconverged: bool,
     },
     /// Show one stored sweep point: phase, the numbers it was decided on, pictures.
     ///
@@ -228,6 +238,15 @@ pub fn main() -> ExitCode {
                 }
             }
             let scene = match Scene::load(&scene) {
+                Ok(s) if s.initial.start == crate::scene::StartMode::Continue => {
+                    eprintln!(
+                        "error: {}: initial.start = \"continue\" needs the final state of a \
+                         neighbouring sweep point ([sweep.continuation] in a sweep file); a scene \
+                         run on its own starts \"hot\" or \"cold\"",
+                        scene.display()
+                    );
+                    return ExitCode::from(2);
+                }
                 Ok(s) => s,
                 Err(e) => {
                     eprintln!("error: {e}");
@@ -292,10 +311,32 @@ pub fn main() -> ExitCode {
         Command::Job {
             action: JobCommand::Run { spec, out },
         } => cluster_cmd::job_run(&spec, out.as_deref()),
-        Command::Boundaries { db, sweep, format } => {
-            sweep_cmd::boundaries(&db, sweep.as_deref(), format)
-        }
-        Command::Plot { db, sweep, output } => sweep_cmd::plot(&db, sweep.as_deref(), &output),
+        Command::Boundaries {
+            db,
+            sweep,
+            format,
+            include_unconverged,
+        } => sweep_cmd::boundaries(
+            &db,
+            sweep.as_deref(),
+            format,
+            Extraction {
+                include_unconverged,
+            },
+        ),
+        Command::Plot {
+            db,
+            sweep,
+            output,
+            include_unconverged,
+        } => sweep_cmd::plot(
+            &db,
+            sweep.as_deref(),
+            &output,
+            Extraction {
+                include_unconverged,
+            },
+        ),
         Command::Export {
             db,
             sweep,

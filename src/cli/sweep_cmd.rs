@@ -3,7 +3,7 @@
 //! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
 //! unknown sweep), 1 any other error.
 
-use crate::boundary::{Observation, PhaseMap, phase_map};
+use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::{export, plot_phase};
 use crate::store::{LeftOut, Store, StoreError, SweepRow};
 use crate::sweep::runner::{point_label, short};
@@ -651,14 +651,11 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
             );
         }
         let starts = crate::store::hysteresis::by_start(&s.axes, &points);
-        let compared = starts
-            .iter()
-            .filter(|g| !g.hot.is_empty() && !g.cold.is_empty())
-            .count();
+        let compared = starts.iter().filter(|g| g.compared()).count();
         if compared > 0 {
             let _ = writeln!(
                 out,
-                "  hysteresis  {} of {compared} point(s) hysteretic (hot and cold start disagree)",
+                "  hysteresis  {} of {compared} point(s) hysteretic (their start modes disagree)",
                 starts.iter().filter(|g| g.hysteretic).count()
             );
         }
@@ -861,18 +858,10 @@ fn sweep_job(path: &Path) -> Result<(), Failure> {
 }
 
 /// The phase map of a sweep, from its stored results.
-fn sweep_map(store: &Store, sweep: &SweepRow) -> Result<PhaseMap, Failure> {
+fn sweep_map(store: &Store, sweep: &SweepRow, how: Extraction) -> Result<PhaseMap, Failure> {
     let points = store.points(sweep.id)?;
-    let obs: Vec<Observation> = points
-        .into_iter()
-        .map(|p| Observation {
-            coords: p.coords,
-            replica: p.replica,
-            phase: p.phase,
-            scene: p.spec.scene,
-        })
-        .collect();
-    phase_map(&sweep.axes, &obs)
+    let obs: Vec<Observation> = points.iter().map(|p| p.observation()).collect();
+    phase_map_with(&sweep.axes, &obs, how)
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
 }
 
@@ -884,13 +873,18 @@ pub(super) fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>,
 }
 
 /// `wetgran boundaries`.
-pub fn boundaries(db: &Path, name: Option<&str>, format: BoundaryFormat) -> ExitCode {
+pub fn boundaries(
+    db: &Path,
+    name: Option<&str>,
+    format: BoundaryFormat,
+    how: Extraction,
+) -> ExitCode {
     exit((|| {
         let store = Store::open_existing(db)?;
         let sweeps = select(&store, name)?;
         let mut maps = Vec::new();
         for s in &sweeps {
-            maps.push((s, sweep_map(&store, s)?));
+            maps.push((s, sweep_map(&store, s, how)?));
         }
         match format {
             BoundaryFormat::Json => {
@@ -911,7 +905,7 @@ pub fn boundaries(db: &Path, name: Option<&str>, format: BoundaryFormat) -> Exit
                     }
                     untrusted.insert(s.name.clone(), untrusted_points(&points));
                 }
-                print!("{}", boundaries_table(&maps, &notes, &untrusted))
+                print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
             }
         }
         Ok(())
@@ -1012,6 +1006,7 @@ fn boundaries_table(
     maps: &[(&SweepRow, PhaseMap)],
     notes: &std::collections::HashMap<String, String>,
     untrusted: &std::collections::HashMap<String, std::collections::HashMap<String, char>>,
+    how: Extraction,
 ) -> String {
     let none = std::collections::HashMap::new();
     let mut out = String::new();
@@ -1052,6 +1047,18 @@ fn boundaries_table(
             } else {
                 let marks = untrusted.get(&s.name).unwrap_or(&none);
                 write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys, marks);
+            }
+            let unconverged = slice.points.iter().filter(|p| !p.converged).count();
+            if unconverged > 0 {
+                let _ = writeln!(
+                    out,
+                    "  {unconverged} unconverged point(s): {}",
+                    if how.include_unconverged {
+                        "used for the boundaries as asked (--include-unconverged)"
+                    } else {
+                        "left out of the boundaries (--include-unconverged uses them)"
+                    }
+                );
             }
             if slice.boundaries.is_empty() {
                 let _ = writeln!(out, "  no boundary: every point has the same phase\n");
@@ -1180,7 +1187,7 @@ fn write_grid(
 }
 
 /// `wetgran plot`.
-pub fn plot(db: &Path, name: Option<&str>, output: &Path) -> ExitCode {
+pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> ExitCode {
     exit((|| {
         let store = Store::open_existing(db)?;
         let sweep = match name {
@@ -1200,7 +1207,7 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path) -> ExitCode {
                 last
             }
         };
-        let map = sweep_map(&store, &sweep)?;
+        let map = sweep_map(&store, &sweep, how)?;
         let points = store.points(sweep.id)?;
         let landmarks = points
             .first()

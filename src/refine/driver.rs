@@ -109,15 +109,8 @@ pub fn plan_jobs(
     settings: &Settings,
 ) -> Result<Vec<SweepJob>, RefineError> {
     let bad = |m: String| RefineError::Bad(format!("sweep {}: {m}", row.name));
-    let obs: Vec<Observation> = rows
-        .iter()
-        .map(|p| Observation {
-            coords: p.coords.clone(),
-            replica: p.replica,
-            phase: p.phase.clone(),
-            scene: p.spec.scene.clone(),
-        })
-        .collect();
+    // Unconverged points carry no boundary, so refinement does not chase them.
+    let obs: Vec<Observation> = rows.iter().map(PointRow::observation).collect();
     let map = phase_map(&row.axes, &obs).map_err(|e| bad(e.to_string()))?;
     let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
         return Err(bad(

@@ -337,16 +337,26 @@ where
     for phase in phases {
         let color = phase_color(phase);
         chart
-            .draw_series(
-                slice
-                    .points
-                    .iter()
-                    .filter(|p| p.phase == phase)
-                    .map(|p| Circle::new((p.x, p.y), radius, color.filled())),
-            )
+            .draw_series(slice.points.iter().filter(|p| p.phase == phase).map(|p| {
+                // Unconverged points hollow: their label may still change.
+                let style = if p.converged {
+                    color.filled()
+                } else {
+                    color.stroke_width(2)
+                };
+                Circle::new((p.x, p.y), radius, style)
+            }))
             .map_err(err)?
             .label(phase)
             .legend(move |(px, py)| Circle::new((px + 9, py), 5, color.filled()));
+    }
+    if slice.points.iter().any(|p| !p.converged) {
+        let grey = RGBColor(90, 90, 90);
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(err)?
+            .label("hollow: unconverged")
+            .legend(move |(px, py)| Circle::new((px + 9, py), 5, grey.stroke_width(2)));
     }
     let boundary: Vec<(f64, f64)> = slice
         .boundaries
@@ -460,6 +470,7 @@ mod tests {
             phase: "s".into(),
             votes: vec![Some("s".into())],
             tie: false,
+            converged: true,
             amplitude: None,
             omega: None,
         };

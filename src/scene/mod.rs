@@ -311,19 +311,34 @@ pub struct InitialSpec {
     /// `"hot"` (default): the lattice with Gaussian velocities and no bridges (MODEL.md 1).
     /// `"cold"`: a bonded bed at rest, the same lattice with zero velocities (the temperature
     /// keys are ignored) and a bridge between every pair of grains closer than `s_crit`
-    /// (`sim::initial::cold_state`).
+    /// (`sim::initial::cold_state`). `"continue"` (sweeps with `[sweep.continuation]` only):
+    /// the final state of the neighbouring point along the continuation axis
+    /// (`sim::EngineState::continued`); the first point of each chain starts as
+    /// `sweep.continuation.first` says.
     #[serde(default, skip_serializing_if = "StartMode::is_hot")]
     pub start: StartMode,
 }
 
-/// How a run starts (`initial.start`); a hot and a cold start that end in different phases
-/// mark a hysteretic point.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+/// How a run starts (`initial.start`); two start modes that end in different phases at one
+/// point mark it hysteretic (`store::hysteresis`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StartMode {
     #[default]
     Hot,
     Cold,
+    /// From the final state of the neighbouring sweep point (a continuation chain).
+    Continue,
+}
+
+impl std::fmt::Display for StartMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            StartMode::Hot => "hot",
+            StartMode::Cold => "cold",
+            StartMode::Continue => "continue",
+        })
+    }
 }
 
 impl StartMode {

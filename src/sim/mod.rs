@@ -167,6 +167,11 @@ fn run_dispatch(
     {
         panic!("{e}");
     }
+    assert!(
+        start.is_some() || scene.initial.start != crate::scene::StartMode::Continue,
+        "initial.start = \"continue\" starts from the final state of a neighbouring sweep point \
+         (`[sweep.continuation]`); a scene run on its own has none: use \"hot\" or \"cold\""
+    );
     // The cold start is a state of its own (`initial::cold_state`).
     let cold = (start.is_none() && scene.initial.start == crate::scene::StartMode::Cold)
         .then(|| initial::cold_state(scene));

@@ -55,6 +55,38 @@ impl EngineState {
         self.radii.is_empty()
     }
 
+    /// The start state of a continuation job: this final state of the neighbouring sweep point,
+    /// whose scene was `prev`, carried into the next point's container. Positions along the
+    /// vertical axis (the last) move into the container frame: the shaken floor and lid of
+    /// `prev` were displaced by `z_w(t) = A sin(omega t)` (MODEL.md 4.1, Eq. B.7) at the state's
+    /// time, and the next run starts at `t = 0` where its own walls are at `z_w = 0`; so every
+    /// grain keeps its distance to floor and lid. Velocities (lab frame) and bridges are kept;
+    /// time, event counts and the ledger start again from zero (the next job's ledger covers
+    /// its own run).
+    pub fn continued(&self, prev: &crate::scene::Scene) -> EngineState {
+        let d = self.dimension;
+        let shift = prev
+            .drive_motion()
+            .map_or(0.0, |(a, w)| a * (w * self.time).sin());
+        let mut positions = self.positions.clone();
+        if d > 0 && shift != 0.0 {
+            for x in positions.chunks_mut(d) {
+                x[d - 1] -= shift;
+            }
+        }
+        EngineState {
+            engine: self.engine.clone(),
+            dimension: d,
+            time: 0.0,
+            positions,
+            velocities: self.velocities.clone(),
+            radii: self.radii.clone(),
+            bridges: self.bridges.clone(),
+            counts: Default::default(),
+            ledger: Default::default(),
+        }
+    }
+
     /// Whether the snapshot fits a scene: dimension and particle count.
     pub fn check_fits(&self, scene: &crate::scene::Scene) -> Result<(), String> {
         if self.dimension != scene.dimension || self.len() != scene.particles.count {

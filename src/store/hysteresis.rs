@@ -1,21 +1,22 @@
 //! Hysteresis of stored results: the phase labels of one grid point by start mode
-//! (`initial.start`, hot or cold) and whether they disagree. A sweep compares the two starts by
-//! an axis `key = "initial.start"`, `values = ["hot", "cold"]`; the points are grouped by their
-//! other coordinates.
+//! (`initial.start`: hot, cold, or continued from the neighbouring point along
+//! `[sweep.continuation]`) and whether they disagree. A sweep compares starts by an axis
+//! `key = "initial.start"`, e.g. `values = ["hot", "cold"]` or `["hot", "continue"]`; the points
+//! are grouped by their other coordinates. The first point of a continuation chain runs as its
+//! `continuation.first` start (hot or cold) and counts as that.
 
 use super::PointRow;
 use crate::scene::StartMode;
 use crate::sweep::file::Axis;
+use std::collections::BTreeMap;
 
 /// The labels of one grid point (coordinates without the start axis) by start mode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StartLabels {
     pub coords: Vec<serde_json::Value>,
-    /// Labels of the hot-start results (one per replica), sorted.
-    pub hot: Vec<String>,
-    /// Labels of the cold-start results, sorted.
-    pub cold: Vec<String>,
-    /// Both starts have results and their label sets differ.
+    /// The labels of the results of each start mode (replicas' labels, sorted, deduplicated).
+    pub by_start: BTreeMap<StartMode, Vec<String>>,
+    /// At least two starts have results and their label sets differ.
     pub hysteretic: bool,
 }
 
@@ -37,24 +38,33 @@ pub fn by_start(axes: &[Axis], points: &[PointRow]) -> Vec<StartLabels> {
             None => {
                 out.push(StartLabels {
                     coords,
-                    hot: Vec::new(),
-                    cold: Vec::new(),
+                    by_start: BTreeMap::new(),
                     hysteretic: false,
                 });
                 out.len() - 1
             }
         };
-        match p.spec.scene.initial.start {
-            StartMode::Hot => out[i].hot.push(phase.clone()),
-            StartMode::Cold => out[i].cold.push(phase.clone()),
-        }
+        out[i]
+            .by_start
+            .entry(p.spec.scene.initial.start)
+            .or_default()
+            .push(phase.clone());
     }
     for g in &mut out {
-        g.hot.sort();
-        g.hot.dedup();
-        g.cold.sort();
-        g.cold.dedup();
-        g.hysteretic = !g.hot.is_empty() && !g.cold.is_empty() && g.hot != g.cold;
+        for labels in g.by_start.values_mut() {
+            labels.sort();
+            labels.dedup();
+        }
+        let mut sets = g.by_start.values();
+        let first = sets.next();
+        g.hysteretic = sets.any(|s| Some(s) != first);
     }
     out
+}
+
+impl StartLabels {
+    /// Whether more than one start mode has results here (the point is compared).
+    pub fn compared(&self) -> bool {
+        self.by_start.len() > 1
+    }
 }

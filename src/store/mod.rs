@@ -136,6 +136,9 @@ pub struct Claim {
     pub point: i64,
     pub replica: i64,
     pub coords: Vec<serde_json::Value>,
+    /// A continuation job's start state (its predecessor's final state carried into its
+    /// container); filled in by the runner, `None` from [`Store::claim`].
+    pub start: Option<Box<crate::sim::EngineState>>,
 }
 
 /// Jobs of a sweep by state (counted per grid point and replica).
@@ -173,6 +176,29 @@ pub struct PointRow {
     pub finished_at: Option<f64>,
     /// The runner that committed the result.
     pub result_owner: Option<String>,
+}
+
+impl PointRow {
+    /// Whether the result may carry a phase boundary: `false` where its run did not converge
+    /// (`observe::converged_in_json`); `true` where it did and where the result carries no
+    /// verdict (or there is no result yet).
+    pub fn converged(&self) -> bool {
+        self.observables
+            .as_ref()
+            .and_then(crate::observe::converged_in_json)
+            != Some(false)
+    }
+
+    /// This row as one vote of the phase map.
+    pub fn observation(&self) -> crate::boundary::Observation {
+        crate::boundary::Observation {
+            coords: self.coords.clone(),
+            replica: self.replica,
+            phase: self.phase.clone(),
+            converged: self.converged(),
+            scene: self.spec.scene.clone(),
+        }
+    }
 }
 
 /// Results that did not reach a stationary window ([`crate::observe::Observables::converged`]),
@@ -681,6 +707,25 @@ impl Store {
         })
     }
 
+    /// The spec of a job, if the database has it.
+    pub fn job_spec(&self, job_id: &str) -> Result<Option<JobSpec>, StoreError> {
+        let row: Option<(String,)> = self
+            .rt
+            .block_on(
+                sqlx::query_as("SELECT spec FROM jobs WHERE id = ?1")
+                    .bind(job_id)
+                    .fetch_optional(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        row.map(|(s,)| {
+            JobSpec::from_json(&s, &format!("job {job_id}")).map_err(|e| StoreError::Damaged {
+                path: self.path.display().to_string(),
+                detail: format!("the spec of job {job_id} is not readable: {e}"),
+            })
+        })
+        .transpose()
+    }
+
     /// The checkpoint (final state) of a finished job, if one was stored.
     pub fn checkpoint(&self, job_id: &str) -> Result<Option<crate::sim::EngineState>, StoreError> {
         let row: Option<(String,)> = self
@@ -957,7 +1002,9 @@ impl Store {
         Ok(total)
     }
 
-    /// Atomically claims the next pending job of any of the given sweeps (grid order).
+    /// Atomically claims the next pending job of any of the given sweeps (grid order). A
+    /// continuation job (`JobSpec::start_from`) is claimable once its predecessor has ended
+    /// (done, or failed: the runner then fails it with the reason).
     pub fn claim(&self, sweep_ids: &[i64]) -> Result<Option<Claim>, StoreError> {
         for &sid in sweep_ids {
             if let Some(c) = self.claim_in(sid)? {
@@ -975,6 +1022,10 @@ impl Store {
                  attempts = attempts + 1 \
                  WHERE id = (SELECT j.id FROM sweep_points p JOIN jobs j ON j.id = p.job_id \
                              WHERE p.sweep_id = ?3 AND j.status = 'pending' \
+                               AND (json_extract(j.spec, '$.start_from') IS NULL \
+                                    OR EXISTS (SELECT 1 FROM jobs d \
+                                               WHERE d.id = json_extract(j.spec, '$.start_from') \
+                                                 AND d.status IN ('done', 'failed'))) \
                              ORDER BY p.point, p.replica LIMIT 1) \
                    AND status = 'pending' \
                  RETURNING id, spec",
@@ -1026,6 +1077,7 @@ impl Store {
             sweep,
             point,
             replica,
+            start: None,
         }))
     }
 

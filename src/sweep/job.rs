@@ -50,6 +50,17 @@ pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResul
     guarded_run(|| crate::observe::run_observed(&spec.scene, progress))
 }
 
+/// Runs a continuation job (`spec.start_from`) from `start`, its predecessor's final state
+/// already carried into its container (`EngineState::continued`): a fresh run of the spec's
+/// length and window from `t = 0`, as [`run_job`] but from that state.
+pub fn run_job_from(
+    spec: &JobSpec,
+    start: &crate::sim::EngineState,
+    progress: &mut dyn FnMut(f64),
+) -> Result<JobResult, JobError> {
+    guarded_run(|| crate::observe::run_observed_from(&spec.scene, Some(start), progress).0)
+}
+
 /// Runs `run` with panics caught, checks its guards and turns it into a [`JobResult`] (the
 /// one path of a fresh job and of an extension).
 fn guarded_run(run: impl FnOnce() -> crate::observe::ObservedRun) -> Result<JobResult, JobError> {

@@ -13,6 +13,6 @@ pub mod runner;
 pub mod spec;
 
 pub use file::{Axis, AxisKind, SweepError, SweepFile};
-pub use job::{JobError, JobResult, run_job};
+pub use job::{JobError, JobResult, run_job, run_job_from};
 pub use runner::{RunOptions, RunSummary, run_sweeps};
 pub use spec::{JobSpec, Skipped, SweepJob};

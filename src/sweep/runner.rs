@@ -5,7 +5,7 @@
 //! send back progress and outcomes. Between messages the calling thread refreshes the heartbeat
 //! of the running jobs every `store::HEARTBEAT_INTERVAL`.
 
-use super::job::{JobError, JobResult, run_job};
+use super::job::{JobError, JobResult, run_job, run_job_from};
 use super::progress::Progress;
 use crate::store::{Claim, HEARTBEAT_INTERVAL, Store, StoreError, SweepRow};
 use std::sync::mpsc;
@@ -150,14 +150,29 @@ pub fn run_sweeps(
     let outcome = (|| -> Result<(), StoreError> {
         loop {
             while let Some(&w) = idle.last() {
-                let Some(claim) = store.claim(&ids)? else {
+                let Some(mut claim) = store.claim(&ids)? else {
                     break;
                 };
-                idle.pop();
                 let sweep = sweeps
                     .iter()
                     .find(|s| s.name == claim.sweep)
                     .expect("claimed from one of these sweeps");
+                if let Some(prev) = claim.spec.start_from.clone() {
+                    match continuation_start(store, &prev)? {
+                        Ok(state) => claim.start = Some(Box::new(state)),
+                        Err(why) => {
+                            store.fail(&claim, &why, 0.0)?;
+                            summary.failed += 1;
+                            let label = point_label(sweep, &claim.coords, claim.replica);
+                            progress.note(&format!(
+                                "FAILED  {label}: {why} (job {})",
+                                &claim.job_id[..12]
+                            ));
+                            continue;
+                        }
+                    }
+                }
+                idle.pop();
                 progress.start(w, &point_label(sweep, &claim.coords, claim.replica));
                 job_tx[w].send(claim).expect("worker alive");
                 busy += 1;
@@ -228,18 +243,44 @@ pub fn run_sweeps(
     Ok(summary)
 }
 
+/// The start state of a continuation job whose predecessor is job `prev`: its checkpoint
+/// carried into the next container (`EngineState::continued`). `Ok(Err(why))`: the predecessor
+/// ended without a final state (it failed), so the job cannot run.
+fn continuation_start(
+    store: &Store,
+    prev: &str,
+) -> Result<Result<crate::sim::EngineState, String>, StoreError> {
+    let short = &prev[..prev.len().min(12)];
+    let Some(spec) = store.job_spec(prev)? else {
+        return Ok(Err(format!(
+            "its predecessor job {short} is not in the database"
+        )));
+    };
+    let Some(state) = store.checkpoint(prev)? else {
+        return Ok(Err(format!(
+            "its predecessor job {short} has no final state (it failed; `sweep resume \
+             --retry-failed` runs both again)"
+        )));
+    };
+    Ok(Ok(state.continued(&spec.scene)))
+}
+
 /// A worker: runs every claim it receives and reports back.
 fn worker(w: usize, jobs: mpsc::Receiver<Claim>, out: mpsc::Sender<Msg>) {
     while let Ok(claim) = jobs.recv() {
         let t0 = Instant::now();
         let mut last = -1.0;
-        let result = run_job(&claim.spec, &mut |f| {
+        let mut report = |f: f64| {
             // At most one message per percent.
             if f - last >= 0.01 || f >= 1.0 {
                 last = f;
                 let _ = out.send(Msg::Progress(w, f));
             }
-        });
+        };
+        let result = match claim.start.as_deref() {
+            Some(state) => run_job_from(&claim.spec, state, &mut report),
+            None => run_job(&claim.spec, &mut report),
+        };
         let wall = t0.elapsed().as_secs_f64();
         if out
             .send(Msg::Finished(w, Box::new(claim), result, wall))

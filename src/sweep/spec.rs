@@ -34,6 +34,11 @@ pub struct JobSpec {
     /// converted from driving periods. Its `[observe]` section (observers, sampling, transient)
     /// and `[classify]` thresholds come from the sweep file's tables of those names.
     pub scene: Scene,
+    /// A continuation job (`initial.start = "continue"`): the id of the job whose final state
+    /// it starts from, its neighbour along the sweep's continuation axis. Part of the id: the
+    /// trajectory depends on it. Absent (and not serialized) for every other job.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_from: Option<String>,
 }
 
 impl JobSpec {
@@ -350,7 +355,81 @@ impl SweepFile {
                 }
             }
         }
+        self.chain_continuations(&mut jobs)?;
         Ok((jobs, skipped))
+    }
+
+    /// Links the continuation chains (`[sweep.continuation]`): the jobs whose
+    /// `initial.start` is `"continue"`, grouped by their other coordinates and replica and
+    /// ordered along the continuation axis. The first of a chain starts as
+    /// `continuation.first` says; every other one names its predecessor in `start_from`, and
+    /// the ids are recomputed in chain order (each id covers its predecessor's). Neighbours
+    /// must share dimension, box, particles and gravity: the state passes between them.
+    fn chain_continuations(&self, jobs: &mut [SweepJob]) -> Result<(), SweepError> {
+        use crate::scene::StartMode;
+        let file = self.path.display().to_string();
+        let continuing = |j: &SweepJob| j.spec.scene.initial.start == StartMode::Continue;
+        let Some(c) = self.continuation else {
+            if let Some(j) = jobs.iter().find(|j| continuing(j)) {
+                let (f, line) = self.locate("initial.start");
+                return Err(SweepError::new(
+                    &f,
+                    line,
+                    "initial.start",
+                    format!(
+                        "= \"continue\"{} needs a `[sweep.continuation]` table naming the axis \
+                         to continue along",
+                        describe_point(self, &j.coords, j.replica)
+                    ),
+                ));
+            }
+            return Ok(());
+        };
+        let mut chains: std::collections::BTreeMap<String, Vec<usize>> = Default::default();
+        for (k, j) in jobs.iter().enumerate().filter(|(_, j)| continuing(j)) {
+            let mut others = j.coords.clone();
+            others.remove(c.axis);
+            let key = format!("{}#{}", serde_json::Value::from(others), j.replica);
+            chains.entry(key).or_default().push(k);
+        }
+        for members in chains.values_mut() {
+            let at = |k: usize| jobs[k].coords[c.axis].as_f64().unwrap_or(f64::NAN);
+            members.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
+            if c.descending {
+                members.reverse();
+            }
+            for w in 0..members.len() {
+                let k = members[w];
+                if w == 0 {
+                    jobs[k].spec.scene.initial.start = c.first;
+                    jobs[k].spec.start_from = None;
+                } else {
+                    let prev = &jobs[members[w - 1]];
+                    let (a, b) = (&prev.spec.scene, &jobs[k].spec.scene);
+                    if a.dimension != b.dimension
+                        || a.container != b.container
+                        || a.particles != b.particles
+                        || a.gravity != b.gravity
+                    {
+                        return Err(SweepError::new(
+                            &file,
+                            Some(c.line),
+                            "sweep.continuation.axis",
+                            format!(
+                                "{} changes the box, the particles or gravity between{} and{}: \
+                                 a state cannot be continued across that",
+                                self.axes[c.axis].key,
+                                describe_point(self, &prev.coords, prev.replica),
+                                describe_point(self, &jobs[k].coords, jobs[k].replica)
+                            ),
+                        ));
+                    }
+                    jobs[k].spec.start_from = Some(prev.id.clone());
+                }
+                jobs[k].id = jobs[k].spec.id();
+            }
+        }
+        Ok(())
     }
 
     /// The jobs of one point at any coordinates (not only the grid's: refinement adds points
@@ -367,7 +446,16 @@ impl SweepFile {
         let mut out = Vec::new();
         for replica in replicas {
             match self.job_at(&prep, point, replica, coords)? {
-                Ok(job) => out.push(job),
+                Ok(mut job) => {
+                    // A point between grid points has no chain: it starts as a chain's first.
+                    if let Some(c) = self.continuation
+                        && job.spec.scene.initial.start == crate::scene::StartMode::Continue
+                    {
+                        job.spec.scene.initial.start = c.first;
+                        job.id = job.spec.id();
+                    }
+                    out.push(job)
+                }
                 Err(e) => return Ok(Err(e)),
             }
         }
@@ -511,6 +599,7 @@ impl SweepFile {
             let spec = JobSpec {
                 format: SPEC_FORMAT,
                 scene,
+                start_from: None,
             };
             let id = spec.id();
             Ok(Ok(SweepJob {
