@@ -157,6 +157,15 @@ fn a_continued_sweep_runs_each_point_from_its_neighbours_final_state() {
     );
     let db = dir.path().join("w.sqlite");
     let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
+    // `sweep expand` names each continued job's predecessor.
+    let o = run(&["sweep", "expand", sweep_s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        stdout(&o).matches("\"continues\"").count(),
+        4,
+        "{}",
+        stdout(&o)
+    );
     let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "2"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let store = Store::open_existing(&db).unwrap();

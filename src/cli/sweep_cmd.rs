@@ -739,6 +739,10 @@ fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
         let mut line = serde_json::json!({
             "id": j.id, "point": j.point, "replica": j.replica, "coords": j.coords,
         });
+        if let Some(prev) = &j.spec.start_from {
+            // A continuation job: the job whose final state it starts from.
+            line["continues"] = serde_json::json!(prev);
+        }
         if specs {
             line["spec"] = serde_json::from_str(&j.spec.canonical_json()).expect("valid JSON");
         }
