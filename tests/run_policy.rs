@@ -371,4 +371,6 @@ fn hot_and_cold_starts_that_disagree_are_hysteretic() {
         "{}",
         stdout(&o)
     );
+    // The point is listed with the labels of each start.
+    assert!(stdout(&o).contains("hot g, cold s"), "{}", stdout(&o));
 }

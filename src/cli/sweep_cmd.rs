@@ -658,6 +658,26 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
                 "  hysteresis  {} of {compared} point(s) hysteretic (their start modes disagree)",
                 starts.iter().filter(|g| g.hysteretic).count()
             );
+            for g in starts.iter().filter(|g| g.hysteretic) {
+                let labels: Vec<String> = g
+                    .by_start
+                    .iter()
+                    .map(|(mode, l)| format!("{mode} {}", l.join("/")))
+                    .collect();
+                let at: Vec<String> = s
+                    .axes
+                    .iter()
+                    .filter(|a| a.key != "initial.start")
+                    .zip(&g.coords)
+                    .map(|(a, v)| format!("{} = {v}", a.label))
+                    .collect();
+                let at = if at.is_empty() {
+                    "the base scene".to_string()
+                } else {
+                    at.join(", ")
+                };
+                let _ = writeln!(out, "    {at}: {}", labels.join(", "));
+            }
         }
         let spent = store.time_spent(s.id)?;
         let done_walls: Vec<f64> = points
