@@ -10,8 +10,10 @@
 //! check extends the run by one window length `W = t_1 - transient`: the next window is
 //! `[t_1, t_1 + W]`, and so on, so the reported window is always the last `W` of the run and
 //! everything before it is transient. The run stops unconverged when the next window would end
-//! after the cap `max(max_periods T, t_1)` (default [`DEFAULT_CAP_FACTOR`] `t_1`): a cap below the first
-//! check means no extension.
+//! after the cap `max(max_periods T, max_time, t_1)` (`max_periods T` defaults to
+//! [`DEFAULT_CAP_FACTOR`] `t_1`): a cap below the first check means no extension. As with the
+//! minimum, the cap has a floor in time units (`max_time`): at high Gamma 800 periods are only
+//! about 100 time units, too short for the standard system to settle (docs/validation.md).
 
 use super::spec::period_of;
 use crate::scene::{Scene, SceneError};
@@ -34,6 +36,10 @@ pub struct ConvergenceSpec {
     /// Longest run in periods (default `4 t_1 / T`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_periods: Option<f64>,
+    /// Longest run in time units, where that is longer than `max_periods` periods (default
+    /// none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_time: Option<f64>,
     /// Blocks the window is cut into for the tests (default 4, 3 ..= 64).
     #[serde(default = "default_blocks")]
     pub blocks: usize,
@@ -61,6 +67,7 @@ impl Default for ConvergenceSpec {
             min_periods: 0.0,
             min_time: 0.0,
             max_periods: None,
+            max_time: None,
             blocks: default_blocks(),
             sigmas: default_sigmas(),
             rel_tolerance: default_rel_tolerance(),
@@ -97,6 +104,7 @@ impl ConvergenceSpec {
         let cap = self
             .max_periods
             .map_or(DEFAULT_CAP_FACTOR * t1, |p| p * period_of(scene))
+            .max(self.max_time.unwrap_or(0.0))
             .max(t1);
         Schedule {
             first_check: t1,
@@ -149,6 +157,14 @@ impl ConvergenceSpec {
                 ),
             ));
         }
+        if let Some(t) = self.max_time
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(err(
+                "max_time",
+                format!("= {t} is out of range: must be finite and > 0"),
+            ));
+        }
         let period = period_of(scene);
         let t1 = self.first_check(scene);
         if let Some(p) = self.max_periods
@@ -178,5 +194,57 @@ impl ConvergenceSpec {
             ));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A shaken scene at Gamma = 30, E* = 1 (period 0.157 time units).
+    fn scene(convergence: &str) -> Scene {
+        Scene::from_toml_str(
+            &format!(
+                "dimension = 2\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
+                 [capillary]\nmodel = \"thin_thread\"\n[drive]\nkind = \"sine\"\ngamma = 30.0\n\
+                 e_star = 1.0\n[initial]\ntemperature = 1.0\n[run]\nduration = 10.0\n\
+                 [observe]\ntransient_periods = 10.0\n[convergence]\n{convergence}\n"
+            ),
+            "test",
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn the_cap_has_a_floor_in_time_units() {
+        let s = scene("min_time = 50.0\nmax_periods = 800.0");
+        let t = period_of(&s);
+        let c = s.convergence.clone().unwrap();
+        // 800 periods are about 126 time units here.
+        assert!((c.schedule(&s).cap - 800.0 * t).abs() < 1e-9);
+        let s = scene("min_time = 50.0\nmax_periods = 800.0\nmax_time = 400.0");
+        let c = s.convergence.clone().unwrap();
+        let sch = c.schedule(&s);
+        assert_eq!(sch.cap, 400.0);
+        assert_eq!(sch.first_check, 50.0);
+        // Where max_periods T is longer, it wins.
+        let s = scene("min_time = 50.0\nmax_periods = 8000.0\nmax_time = 400.0");
+        let c = s.convergence.clone().unwrap();
+        assert!((c.schedule(&s).cap - 8000.0 * t).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_bad_max_time_names_the_key() {
+        let e = Scene::from_toml_str(
+            "dimension = 2\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
+             [initial]\ntemperature = 1.0\n[run]\nduration = 10.0\n[convergence]\nmax_time = -1.0\n",
+            "bad.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("convergence.max_time") && e.contains("> 0"),
+            "{e}"
+        );
     }
 }

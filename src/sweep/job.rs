@@ -108,6 +108,8 @@ pub fn extend_job(
         min_periods: 0.0,
         min_time: 0.0,
         max_periods: Some(room / period),
+        // The cap is `--extend`'s alone.
+        max_time: None,
         ..policy
     });
     guarded_run(|| crate::observe::run_observed_from(&ext, Some(state), progress).0).map(Some)
