@@ -404,6 +404,13 @@ fn fluid_gas_along_a_line() {
         .map(|k| (0.5 + 0.25 * k as f64, 0.5 + 0.3 * k as f64))
         .collect();
     assert!(largest_jump(&smooth, t.line_jump_ratio).is_none());
+    // Regression (the Gamma = 30 line of the seeds study, docs/validation.md): the elastic gas
+    // keeps heating, so the widest step deep in the gas has the largest ratio (28 over
+    // 1.6 -> 2.6); the jump is the steepest step, 1.1 -> 1.6 (ratio 17).
+    let seeds = [(0.7, 2.0), (1.1, 7.3), (1.6, 124.0), (2.6, 3500.0)];
+    let j = largest_jump(&seeds, t.line_jump_ratio).unwrap();
+    assert_eq!(j.bracket, (1.1, 1.6));
+    assert!((j.ratio - 124.0 / 7.3).abs() < 1e-9);
     let obs: Vec<Observables> = smooth
         .iter()
         .map(|&(_, temp)| homogeneous(1.0, temp, 0.0))

@@ -68,7 +68,10 @@ fn the_coexistence_of_the_standard_system_survives_a_doubled_run() {
 fn standard_system_labels_are_invariant() {
     for (e_star, expected) in [(0.7, "f"), (1.1, "fgc"), (2.6, "g")] {
         let runs = [
-            ("base", standard(e_star, 1200, 400.0, SEED, 300.0, 100.0, 20.0)),
+            (
+                "base",
+                standard(e_star, 1200, 400.0, SEED, 300.0, 100.0, 20.0),
+            ),
             (
                 "doubled run",
                 standard(e_star, 1200, 400.0, SEED, 600.0, 100.0, 20.0),

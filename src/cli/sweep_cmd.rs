@@ -1085,7 +1085,20 @@ fn boundaries_table(
                 );
             }
             if slice.boundaries.is_empty() {
-                let _ = writeln!(out, "  no boundary: every point has the same phase\n");
+                let carriers: Vec<&str> = slice
+                    .points
+                    .iter()
+                    .filter(|p| how.include_unconverged || p.converged)
+                    .map(|p| p.phase.as_str())
+                    .collect();
+                let why = if carriers.len() < 2 {
+                    "fewer than two converged points"
+                } else if carriers.iter().all(|p| *p == carriers[0]) {
+                    "every point that carries one has the same phase"
+                } else {
+                    "no two neighbours differ"
+                };
+                let _ = writeln!(out, "  no boundary: {why}\n");
                 continue;
             }
             for (pair, list) in &slice.boundaries {

@@ -35,10 +35,15 @@ pub fn gamma_e_star(scene: &Scene) -> Option<(f64, f64)> {
     (gamma.is_finite() && e_star.is_finite()).then_some((gamma, e_star))
 }
 
-/// The key of a point's line: the scene with its drive energy, seed and thresholds taken out,
-/// and Gamma to 9 significant digits.
+/// The key of a point's line: the scene with its drive energy, seed, thresholds and run length
+/// and sampling taken out, and Gamma to 9 significant digits. A sweep's `periods` and
+/// `samples_per_period` set `run.duration` and `run.sample_interval` in driving periods, which
+/// differ with `E*` along a line of constant Gamma; they say how long and how often a point was
+/// looked at, not where it is.
 fn line_key(scene: &Scene, gamma: f64) -> String {
     let mut s = scene.clone();
+    s.run.duration = 0.0;
+    s.run.sample_interval = 0.0;
     s.drive.amplitude = None;
     s.drive.omega = None;
     s.drive.gamma = None;
@@ -116,4 +121,34 @@ pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Rela
             classification: c.unwrap_or_else(|| classify(&p.obs, &p.th)),
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression: with `sweep.periods` every point of a line of constant Gamma has its own
+    /// run length and sample interval (both in periods of its own drive), and no point found a
+    /// line: the line rule never ran on the shipped sweeps.
+    #[test]
+    fn a_line_spans_points_whose_run_length_is_set_in_periods() {
+        let file = crate::sweep::SweepFile::parse(
+            "[sweep]\nname = \"l\"\nperiods = 10\n[scene]\ndimension = 2\n[scene.box]\n\
+             size = [20.0, 9.0]\n[scene.particles]\ncount = 10\n[scene.capillary]\n\
+             model = \"thin_thread\"\n[scene.drive]\nkind = \"sine\"\n[scene.initial]\n\
+             temperature = 1.0\n[[axis]]\nkey = \"gamma\"\nvalues = [30.0]\n\
+             [[axis]]\nkey = \"e_star\"\nvalues = [0.5, 2.0]\n",
+            std::path::Path::new("l.toml"),
+        )
+        .unwrap();
+        let jobs = file.expand().unwrap();
+        let (a, b) = (&jobs[0].spec.scene, &jobs[1].spec.scene);
+        assert_ne!(a.run.duration, b.run.duration);
+        assert_ne!(a.run.sample_interval, b.run.sample_interval);
+        let (ga, _) = gamma_e_star(a).unwrap();
+        let (gb, _) = gamma_e_star(b).unwrap();
+        assert_eq!(line_key(a, ga), line_key(b, gb));
+        // Another Gamma is another line.
+        assert_ne!(line_key(a, ga), line_key(a, 2.0 * ga));
+    }
 }
