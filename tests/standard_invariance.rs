@@ -2,8 +2,8 @@
 //! 400 d x 9 d, sigma_p = 0.06, thin thread, hot start T_g/E_cb = 20), not on a shrunken
 //! stand-in. In CI: the fluid-gas coexistence of the line Gamma = 30 (E* = 1.1, eps = 1) keeps
 //! its label when the run is doubled. Opt-in (`cargo test --release --test standard_invariance
-//! -- --ignored`, about 15 min on one core): three points of that line (a fluid, the
-//! coexistence, a gas) with the run doubled, another seed, sampling halved and doubled, and the
+//! -- --ignored`, about 15 min on one core): three points of that line (a fluid at E* = 0.5,
+//! the coexistence at 1.1, a gas at 2.6) with the run doubled, another seed, sampling halved and doubled, and the
 //! box doubled at the same number of layers (800 d x 9 d, N = 2400); docs/validation.md has the
 //! study over five seeds with the run-length policy.
 
@@ -66,7 +66,9 @@ fn the_coexistence_of_the_standard_system_survives_a_doubled_run() {
 #[test]
 #[ignore]
 fn standard_system_labels_are_invariant() {
-    for (e_star, expected) in [(0.7, "f"), (1.1, "fgc"), (2.6, "g")] {
+    // E* = 0.5, not 0.7: at 0.7 T_g/E_cb is 1.9-2.03 across seeds, on the per-point fallback
+    // threshold of 2 (these runs have no line; docs/validation.md).
+    for (e_star, expected) in [(0.5, "f"), (1.1, "fgc"), (2.6, "g")] {
         let runs = [
             (
                 "base",

@@ -43,7 +43,7 @@ pub use classify::{
 pub use diffusion::{Diffusion, LayerDiffusion};
 pub use line::{Inflection, fluid_gas_inflection};
 pub use policy::ConvergenceSpec;
-pub use spec::{ObserveSpec, period_of};
+pub use spec::ObserveSpec;
 pub use stationarity::{Stationarity, StationarityCheck};
 
 use crate::scene::Scene;
@@ -495,7 +495,7 @@ impl ObserverSet {
     /// continued from a checkpoint, or a new window of the run-length policy).
     pub fn with_window_start(scene: &Scene, t_start: f64) -> Self {
         let spec = &scene.observe;
-        let period = period_of(scene);
+        let period = scene.driving_period();
         let dt = spec.sample_interval(scene);
         let bins = spec.lateral_bins(scene);
         let e_cb = scene.e_cb();

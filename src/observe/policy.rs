@@ -5,7 +5,7 @@
 //! length `run.duration`.
 //!
 //! Windows (docs/observables.md "Run to stationarity"): the first check is at
-//! `t_1 = max(run.duration, min_periods T, min_time)` (`T` the period of [`period_of`]) and
+//! `t_1 = max(run.duration, min_periods T, min_time)` (`T` the period of [`Scene::driving_period`]) and
 //! tests the window `[transient, t_1]`, `transient = observe.transient_periods T`. A failed
 //! check extends the run by one window length `W = t_1 - transient`: the next window is
 //! `[t_1, t_1 + W]`, and so on, so the reported window is always the last `W` of the run and
@@ -15,7 +15,6 @@
 //! minimum, the cap has a floor in time units (`max_time`): at high Gamma 800 periods are only
 //! about 100 time units, too short for the standard system to settle (docs/validation.md).
 
-use super::spec::period_of;
 use crate::scene::{Scene, SceneError};
 use serde::{Deserialize, Serialize};
 
@@ -92,7 +91,7 @@ impl ConvergenceSpec {
         scene
             .run
             .duration
-            .max(self.min_periods * period_of(scene))
+            .max(self.min_periods * scene.driving_period())
             .max(self.min_time)
     }
 
@@ -103,7 +102,7 @@ impl ConvergenceSpec {
         // Gamma, short periods), the run stops at its first check, converged or not.
         let cap = self
             .max_periods
-            .map_or(DEFAULT_CAP_FACTOR * t1, |p| p * period_of(scene))
+            .map_or(DEFAULT_CAP_FACTOR * t1, |p| p * scene.driving_period())
             .max(self.max_time.unwrap_or(0.0))
             .max(t1);
         Schedule {
@@ -165,7 +164,7 @@ impl ConvergenceSpec {
                 format!("= {t} is out of range: must be finite and > 0"),
             ));
         }
-        let period = period_of(scene);
+        let period = scene.driving_period();
         let t1 = self.first_check(scene);
         if let Some(p) = self.max_periods
             && !(p.is_finite() && p > 0.0)
@@ -218,7 +217,7 @@ mod tests {
     #[test]
     fn the_cap_has_a_floor_in_time_units() {
         let s = scene("min_time = 50.0\nmax_periods = 800.0");
-        let t = period_of(&s);
+        let t = s.driving_period();
         let c = s.convergence.clone().unwrap();
         // 800 periods are about 126 time units here.
         assert!((c.schedule(&s).cap - 800.0 * t).abs() < 1e-9);

@@ -122,23 +122,15 @@ fn default_mobility_lag() -> f64 {
     10.0
 }
 
-/// The period observations are counted in: `2 pi / omega` for a shaken scene, else 1.
-pub fn period_of(scene: &Scene) -> f64 {
-    match scene.drive_motion() {
-        Some((_, omega)) => 2.0 * std::f64::consts::PI / omega,
-        None => 1.0,
-    }
-}
-
 impl ObserveSpec {
     /// Interval between two observer samples: `period / samples_per_period`.
     pub fn sample_interval(&self, scene: &Scene) -> f64 {
-        period_of(scene) / self.samples_per_period
+        scene.driving_period() / self.samples_per_period
     }
 
     /// Start of the stationary window.
     pub fn window_start(&self, scene: &Scene) -> f64 {
-        self.transient_periods * period_of(scene)
+        self.transient_periods * scene.driving_period()
     }
 
     /// Number of lateral bins along `x` and their width: `n = max(1, round(L_x / bin_width))`,
@@ -168,7 +160,7 @@ impl ObserveSpec {
     pub fn validate(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
         let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
         let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        let period = period_of(scene);
+        let period = scene.driving_period();
         let duration = scene.run.duration;
         let t = self.transient_periods;
         if !(t.is_finite() && t >= 0.0 && t * period < duration) {
@@ -261,5 +253,26 @@ impl ObserveSpec {
             ));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression: the sweep counted the periods of an undriven scene in `sqrt(d/g)` and the
+    /// observers in 1; with one definition (`Scene::driving_period`) both use the time unit.
+    #[test]
+    fn an_undriven_scene_counts_periods_in_its_time_unit() {
+        let s = Scene::from_toml_str(
+            "dimension = 2\ngravity = 4.0\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
+             [initial]\ntemperature = 1.0\n[run]\nduration = 10.0\n\
+             [observe]\ntransient_periods = 6.0\nsamples_per_period = 10.0\n",
+            "test",
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.driving_period(), 0.5);
+        assert_eq!(s.observe.window_start(&s), 3.0);
+        assert_eq!(s.observe.sample_interval(&s), 0.05);
     }
 }

@@ -541,6 +541,18 @@ impl Scene {
         })
     }
 
+    /// The period everything "in periods" is counted in (the one definition: `sweep.periods`,
+    /// `observe.transient_periods`, `observe.samples_per_period`, `[convergence]`): one driving
+    /// period `T = 2 pi / omega` of a shaken scene (MODEL.md 4.1), else the scene's time unit
+    /// `sqrt(d/g)`, or 1 without gravity.
+    pub fn driving_period(&self) -> f64 {
+        match self.drive_motion() {
+            Some((_, omega)) if omega > 0.0 => 2.0 * std::f64::consts::PI / omega,
+            _ if self.gravity > 0.0 => (self.particles.diameter / self.gravity).sqrt(),
+            _ => 1.0,
+        }
+    }
+
     /// Container motion `(A, omega)` of a shaken scene, converted from `(Gamma, E*)` where those
     /// are given (MODEL.md 4.1): `v_w = sqrt(2 E* E_cb / m)` (dry: `sqrt(2 E_d* g d)`),
     /// `omega = Gamma g / v_w`, `A = v_w^2 / (Gamma g)`. `None` without a drive.

@@ -94,7 +94,7 @@ pub fn extend_job(
     progress: &mut dyn FnMut(f64),
 ) -> Result<Option<JobResult>, JobError> {
     let scene = &spec.scene;
-    let period = crate::observe::period_of(scene);
+    let period = scene.driving_period();
     let policy = scene.convergence.clone().unwrap_or_default();
     let window = policy.schedule(scene).window;
     let room = max_periods * period - state.time;

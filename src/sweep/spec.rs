@@ -80,19 +80,9 @@ impl JobSpec {
         Ok(spec)
     }
 
-    /// One driving period `T = 2 pi / omega` (MODEL.md 4.1), or one time unit `sqrt(d/g)` when
-    /// the scene has no drive (1 without gravity).
+    /// The scene's period ([`Scene::driving_period`]).
     pub fn period(&self) -> f64 {
-        driving_period(&self.scene)
-    }
-}
-
-/// See [`JobSpec::period`].
-pub fn driving_period(scene: &Scene) -> f64 {
-    match scene.drive_motion() {
-        Some((_, omega)) if omega > 0.0 => 2.0 * std::f64::consts::PI / omega,
-        _ if scene.gravity > 0.0 => (scene.particles.diameter / scene.gravity).sqrt(),
-        _ => 1.0,
+        self.scene.driving_period()
     }
 }
 
@@ -545,7 +535,7 @@ impl SweepFile {
                 Err(e) if e.constraint.is_some() => return Ok(Err(e)),
                 Err(e) => return Err(e),
             };
-            let period = driving_period(&scene);
+            let period = scene.driving_period();
             let mut scene = scene;
             if let Some(p) = self.periods {
                 scene.run.duration = p * period;
