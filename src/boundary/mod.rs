@@ -48,6 +48,19 @@ pub struct Observation {
     pub scene: Scene,
 }
 
+impl Observation {
+    /// A stored result as one vote of the phase map.
+    pub fn of_row(row: &crate::store::PointRow) -> Observation {
+        Observation {
+            coords: row.coords.clone(),
+            replica: row.replica,
+            phase: row.phase.clone(),
+            converged: row.converged(),
+            scene: row.spec.scene.clone(),
+        }
+    }
+}
+
 /// How boundaries are extracted.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Extraction {

@@ -884,7 +884,7 @@ fn sweep_job(path: &Path) -> Result<(), Failure> {
 /// The phase map of a sweep, from its stored results.
 fn sweep_map(store: &Store, sweep: &SweepRow, how: Extraction) -> Result<PhaseMap, Failure> {
     let points = store.points(sweep.id)?;
-    let obs: Vec<Observation> = points.iter().map(|p| p.observation()).collect();
+    let obs: Vec<Observation> = points.iter().map(Observation::of_row).collect();
     phase_map_with(&sweep.axes, &obs, how)
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
 }

@@ -6,17 +6,25 @@
 //! Bins are numbered `ix + nx * iy`.
 
 use crate::sim::Frame;
-use serde::{Deserialize, Serialize};
 
-/// How a 3D box is cut into lateral bins (`observe.bins_3d`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Bins3d {
-    /// Square cells over `(x, y)`.
-    #[default]
-    Plane,
-    /// Slabs along `x` spanning all of `L_y`.
-    XSlabs,
+pub use crate::scene::observe_section::Bins3d;
+use crate::scene::{ObserveSpec, Scene};
+
+impl ObserveSpec {
+    /// The lateral bins of a scene: slabs along `x` in 2D; in 3D square-ish cells of
+    /// `bin_width` over `(x, y)` (each axis rounded to a whole number of cells), or x-slabs
+    /// with `bins_3d = "x_slabs"`.
+    pub fn lateral_bins(&self, scene: &Scene) -> LateralBins {
+        let (nx, _) = self.bins(scene);
+        let lx = scene.container.size[0];
+        if scene.dimension == 3 && self.bins_3d == Bins3d::Plane {
+            let ly = scene.container.size[1];
+            let ny = ((ly / self.bin_width).round() as usize).max(1);
+            LateralBins::grid(nx, lx, ny, ly)
+        } else {
+            LateralBins::new(nx, lx)
+        }
+    }
 }
 
 /// `nx * ny` bins of size `width[0] x width[1]` over `[0, L_x) x [0, L_y)` (`ny = 1`,

@@ -30,20 +30,17 @@ pub mod lateral;
 pub mod line;
 pub mod location_changes;
 pub mod noise;
-pub mod policy;
 pub mod profiles;
 pub mod shear;
-pub mod spec;
 pub mod stationarity;
 pub mod temperature;
 
+pub use crate::scene::{ConvergenceSpec, ObserveSpec};
 pub use classify::{
     Classification, DecisionInputs, Mobility, Phase, RegionInputs, Thresholds, classify,
 };
 pub use diffusion::{Diffusion, LayerDiffusion};
 pub use line::{Inflection, fluid_gas_inflection};
-pub use policy::ConvergenceSpec;
-pub use spec::ObserveSpec;
 pub use stationarity::{Stationarity, StationarityCheck};
 
 use crate::scene::Scene;
@@ -292,7 +289,7 @@ struct Watch<'a> {
     eps: f64,
     monitored: Vec<Monitored>,
     /// The policy in absolute times (`None`: fixed length).
-    schedule: Option<policy::Schedule>,
+    schedule: Option<crate::scene::convergence::Schedule>,
     checks: usize,
     tests: Vec<convergence::BlockTest>,
     converged: bool,
@@ -386,7 +383,7 @@ pub fn run_observed_from(
     let t0 = start.map_or(0.0, |s| s.time);
     let schedule = scene.convergence.as_ref().map(|c| {
         let s = c.schedule(scene);
-        policy::Schedule {
+        crate::scene::convergence::Schedule {
             first_check: t0 + s.first_check,
             cap: t0 + s.cap,
             ..s

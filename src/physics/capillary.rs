@@ -1,7 +1,18 @@
 //! The thin-thread capillary bridge (MODEL.md 3.2): a hysteretic square well of width `s_crit`
 //! and depth `E_cb` that exists only after contact.
 
-use crate::scene::RuptureRule;
+use serde::{Deserialize, Serialize};
+
+/// The energy criterion at `s = s_crit` (MODEL.md 3.2); the scene's `capillary.rupture_rule`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RuptureRule {
+    /// `1/2 mu (v_ij . n)^2 > E_cb` with `mu = m/2`; a rupture removes exactly `E_cb`.
+    #[default]
+    ReducedMass,
+    /// The thesis appendix A: `1/2 m (v_ij . n)^2 > E_cb`; a rupture removes `E_cb / 2`.
+    ThesisAppendix,
+}
 
 /// What happens when a bonded pair separates to `s = s_crit`.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -110,7 +110,7 @@ pub fn plan_jobs(
 ) -> Result<Vec<SweepJob>, RefineError> {
     let bad = |m: String| RefineError::Bad(format!("sweep {}: {m}", row.name));
     // Unconverged points carry no boundary, so refinement does not chase them.
-    let obs: Vec<Observation> = rows.iter().map(PointRow::observation).collect();
+    let obs: Vec<Observation> = rows.iter().map(Observation::of_row).collect();
     let map = phase_map(&row.axes, &obs).map_err(|e| bad(e.to_string()))?;
     let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
         return Err(bad(

@@ -8,12 +8,18 @@
 //! Conventions (MODEL.md section 1): units of mean diameter `d`, particle mass `m`, gravity `g`.
 //! The last axis is vertical (`z`; in 2D the axes are `x, z`); gravity points along `-z`.
 
+pub mod convergence;
 pub mod lattice;
+pub mod observe_section;
+pub mod thresholds;
 mod validate;
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+pub use convergence::ConvergenceSpec;
+pub use observe_section::ObserveSpec;
+pub use thresholds::Thresholds;
 pub use validate::{Constraint, MIN_PERIODIC_CELLS, SceneError};
 
 /// One simulation, as read from a scene file.
@@ -40,13 +46,13 @@ pub struct Scene {
     pub engine: EngineSpec,
     /// Observers, sampling and the stationary window (`[observe]`).
     #[serde(default)]
-    pub observe: crate::observe::ObserveSpec,
+    pub observe: ObserveSpec,
     /// Thresholds of the phase classification (`[classify]`).
     #[serde(default)]
-    pub classify: crate::observe::Thresholds,
+    pub classify: Thresholds,
     /// Run to stationarity (`[convergence]`); `None`: the fixed length `run.duration`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub convergence: Option<crate::observe::ConvergenceSpec>,
+    pub convergence: Option<ConvergenceSpec>,
 }
 
 /// The simulation box: one size and one boundary kind per axis, the vertical axis last.
@@ -171,16 +177,8 @@ pub enum CapillaryModel {
     ThinThread,
 }
 
-/// The energy criterion at `s = s_crit` (MODEL.md 3.2).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RuptureRule {
-    /// `1/2 mu (v_ij . n)^2 > E_cb` with `mu = m/2`; a rupture removes exactly `E_cb`.
-    #[default]
-    ReducedMass,
-    /// The thesis appendix A: `1/2 m (v_ij . n)^2 > E_cb`; a rupture removes `E_cb / 2`.
-    ThesisAppendix,
-}
+/// The energy criterion at `s = s_crit` (MODEL.md 3.2): defined with the physics it selects.
+pub use crate::physics::capillary::RuptureRule;
 
 /// Driving of the container (MODEL.md 4.1): floor and lid move together as
 /// `z_w(t) = A sin(omega t)`. Give either `amplitude` and `omega`, or `gamma` and `e_star`

@@ -8,7 +8,7 @@
 //! configuration in scene order) to an observer at fixed intervals; `crate::observe` builds on it.
 //! [`run_scene_watched`] is the general form: it can start from a saved [`EngineState`] instead
 //! of the scene's initial state, and its [`Watcher`] may extend the run on the same trajectory
-//! when it reaches its end (run to stationarity, `crate::observe::policy`). Every run reports
+//! when it reaches its end (run to stationarity, `crate::scene::convergence`). Every run reports
 //! its final state ([`RunReport::final_state`]) for checkpoints.
 
 pub mod event_driven;

@@ -188,17 +188,6 @@ impl PointRow {
             .and_then(crate::observe::converged_in_json)
             != Some(false)
     }
-
-    /// This row as one vote of the phase map.
-    pub fn observation(&self) -> crate::boundary::Observation {
-        crate::boundary::Observation {
-            coords: self.coords.clone(),
-            replica: self.replica,
-            phase: self.phase.clone(),
-            converged: self.converged(),
-            scene: self.spec.scene.clone(),
-        }
-    }
 }
 
 /// Results that did not reach a stationary window ([`crate::observe::Observables::converged`]),

@@ -4,7 +4,7 @@
 //! A sweep file has a `[sweep]` header (name, optional base scene file, replicas, run length in
 //! driving periods), an optional inline `[scene]` table merged over the base scene, optional
 //! `[observe]` and `[classify]` tables handed to the observers and the classifier, an optional
-//! `[convergence]` table (the run-length policy, `observe::policy`), and one
+//! `[convergence]` table (the run-length policy, `scene::convergence`), and one
 //! `[[axis]]` table per swept scene key. An axis is a list (`values = [...]`), a linear range
 //! (`linear = { from, to, steps }`) or a logarithmic range (`log = { from, to, steps }`).
 //! The shaking axes `gamma` (`drive.gamma`), `e_star` (`drive.e_star`), `e_d_star` (`drive.e_star`

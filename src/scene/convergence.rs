@@ -1,6 +1,6 @@
 //! The run-length policy of a scene, section `[convergence]`: run at least a minimum, then
 //! extend the same trajectory window by window until the window is stationary
-//! ([`convergence`](super::convergence)), up to a cap. Pure data plus its validation (errors
+//! (`observe::convergence` tests the windows, `observe::run_observed_from` runs them), up to a cap. Pure data plus its validation (errors
 //! name the file, the key and the allowed range). Without the section a run has the fixed
 //! length `run.duration`.
 //!
@@ -15,7 +15,7 @@
 //! minimum, the cap has a floor in time units (`max_time`): at high Gamma 800 periods are only
 //! about 100 time units, too short for the standard system to settle (docs/validation.md).
 
-use crate::scene::{Scene, SceneError};
+use super::{Scene, SceneError};
 use serde::{Deserialize, Serialize};
 
 /// Default cap, in units of the first check time.

@@ -1,9 +1,19 @@
 //! The `[observe]` section of a scene: which observers run, when they sample, and the
 //! stationary window. Pure data plus its validation (errors name the file, key and range).
 
-use super::bins::{Bins3d, LateralBins};
-use crate::scene::{Scene, SceneError};
+use super::{Scene, SceneError};
 use serde::{Deserialize, Serialize};
+
+/// How a 3D box is cut into lateral bins (`observe.bins_3d`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Bins3d {
+    /// Square cells over `(x, y)`.
+    #[default]
+    Plane,
+    /// Slabs along `x` spanning all of `L_y`.
+    XSlabs,
+}
 
 /// What to observe and when (scene section `[observe]`; every key optional).
 ///
@@ -139,21 +149,6 @@ impl ObserveSpec {
         let l = scene.container.size[0];
         let n = ((l / self.bin_width).round() as usize).max(1);
         (n, l / n as f64)
-    }
-
-    /// The lateral bins of a scene: slabs along `x` in 2D; in 3D square-ish cells of
-    /// `bin_width` over `(x, y)` (each axis rounded to a whole number of cells), or x-slabs
-    /// with `bins_3d = "x_slabs"`.
-    pub fn lateral_bins(&self, scene: &Scene) -> LateralBins {
-        let (nx, _) = self.bins(scene);
-        let lx = scene.container.size[0];
-        if scene.dimension == 3 && self.bins_3d == Bins3d::Plane {
-            let ly = scene.container.size[1];
-            let ny = ((ly / self.bin_width).round() as usize).max(1);
-            LateralBins::grid(nx, lx, ny, ly)
-        } else {
-            LateralBins::new(nx, lx)
-        }
     }
 
     /// Checks every key of `[observe]` against the rest of the scene.
