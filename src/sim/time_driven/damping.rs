@@ -1,7 +1,8 @@
 //! The damping constants `A_d` of the time-driven engine (MODEL.md 2.2, Eq. 2.7), given directly
 //! (`contact.damping`, `contact.wall_damping`) or derived from a coefficient of restitution
-//! (`contact.restitution`, `contact.wall_restitution`) at a reference impact speed
-//! (`contact.restitution_speed`, default [`DEFAULT_RESTITUTION_SPEED`]).
+//! (`contact.restitution`, `contact.wall_restitution`), by default over the impact speeds of a
+//! Maxwellian gas at the scene's characteristic temperature, or at one impact speed
+//! (`contact.restitution_speed`).
 //!
 //! The damped Hertz contact has no constant restitution: it falls with the impact speed, about
 //! `1 - c v^(1/5)`. A restitution `e` is therefore converted once, at scene start, into the `A_d`
@@ -13,11 +14,46 @@
 //! between the two contact laws (docs/model-choices.md).
 
 use crate::physics::hertz;
-use crate::scene::{DEFAULT_STIFFNESS, Scene};
+use crate::scene::{AutoWord, DEFAULT_STIFFNESS, RestitutionSpeed, Scene, StartMode};
 
-/// Reference impact speed of a restitution given to the time-driven engine, units of
-/// `sqrt(g d)`.
-pub const DEFAULT_RESTITUTION_SPEED: f64 = 1.0;
+/// How a restitution is turned into `A_d`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Calibration {
+    /// Exactly the restitution at one impact speed (`contact.restitution_speed = v`).
+    Speed(f64),
+    /// The same mean energy loss over the impact speeds of a Maxwellian gas at this granular
+    /// temperature (`"auto"`, the default; [`hertz::maxwellian_loss`]).
+    Maxwellian(f64),
+}
+
+/// The calibration a scene asks for: an explicit speed wins; otherwise the Maxwellian one at
+/// `contact.restitution_temperature` or, without it, at [`characteristic_temperature`].
+pub fn calibration(scene: &Scene) -> Calibration {
+    let c = &scene.contact;
+    match c.restitution_speed {
+        Some(RestitutionSpeed::Speed(v)) => Calibration::Speed(v),
+        None | Some(RestitutionSpeed::Word(AutoWord::Auto)) => Calibration::Maxwellian(
+            c.restitution_temperature
+                .unwrap_or_else(|| characteristic_temperature(scene)),
+        ),
+    }
+}
+
+/// The granular temperature scale of a scene (absolute units) for the `"auto"` calibration:
+/// the initial temperature of a hot start; a scene without one (cold start, zero temperature)
+/// falls back to `m g d` (units of `m g d`; 1 without gravity).
+pub fn characteristic_temperature(scene: &Scene) -> f64 {
+    let t0 = scene.initial_temperature();
+    if scene.initial.start == StartMode::Hot && t0 > 0.0 {
+        return t0;
+    }
+    let g = if scene.gravity > 0.0 {
+        scene.gravity
+    } else {
+        1.0
+    };
+    scene.particles.mass * g * scene.particles.diameter
+}
 
 /// `(A_d pairs, A_d walls)` of a scene run by the time-driven engine.
 pub fn contact_damping(scene: &Scene) -> (f64, f64) {
@@ -25,12 +61,18 @@ pub fn contact_damping(scene: &Scene) -> (f64, f64) {
     let k = c.stiffness.unwrap_or(DEFAULT_STIFFNESS);
     let d = scene.particles.diameter;
     let m = scene.particles.mass;
-    let v = c.restitution_speed.unwrap_or(DEFAULT_RESTITUTION_SPEED);
+    let cal = calibration(scene);
     let from = |e: f64, r_eff: f64, mu: f64| {
         if e >= 1.0 {
             0.0
         } else {
-            hertz::damping_for_restitution(k * r_eff.sqrt(), mu, v, e)
+            let kr = k * r_eff.sqrt();
+            match cal {
+                Calibration::Speed(v) => hertz::damping_for_restitution(kr, mu, v, e),
+                Calibration::Maxwellian(t) => {
+                    hertz::damping_for_maxwellian_restitution(kr, mu, t, e)
+                }
+            }
         }
     };
     let pair = c
@@ -83,5 +125,28 @@ mod tests {
             contact_damping(&scene("damping = 2e-4\nwall_damping = 1e-4")),
             (2e-4, 1e-4)
         );
+    }
+
+    #[test]
+    fn auto_is_the_default_and_uses_the_characteristic_temperature() {
+        let auto = scene("restitution = 0.9\nrestitution_speed = \"auto\"");
+        let plain = scene("restitution = 0.9");
+        let t = characteristic_temperature(&plain);
+        assert_eq!(calibration(&plain), Calibration::Maxwellian(t));
+        assert_eq!(contact_damping(&auto), contact_damping(&plain));
+        let given = scene(&format!("restitution = 0.9\nrestitution_temperature = {t}"));
+        assert_eq!(contact_damping(&given), contact_damping(&plain));
+        // Elastic walls stay undamped; the pair damping gives the Maxwellian mean loss.
+        let (pair, wall) = contact_damping(&plain);
+        assert_eq!(wall, 0.0);
+        let kr = DEFAULT_STIFFNESS * 0.25f64.sqrt();
+        let loss = hertz::maxwellian_loss(kr, pair, 0.5, t);
+        assert!((loss / (1.0 - 0.81) - 1.0).abs() < 1e-6, "{loss}");
+        // A hotter calibration temperature means faster impacts, hence less damping.
+        let hot = scene(&format!(
+            "restitution = 0.9\nrestitution_temperature = {}",
+            10.0 * t
+        ));
+        assert!(contact_damping(&hot).0 < pair);
     }
 }
