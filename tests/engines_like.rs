@@ -8,13 +8,14 @@
 //! Scenes: the 2D standard wet system of MODEL.md 1 (N = 1200 in 400 d x 9 d, `s_crit` 0.0711,
 //! `E_cb` 0.2844, `sigma_p` 0.06, elastic walls, hot start `T_g / E_cb = 20`) with `eps = 0.96`
 //! (`sweeps/shaken_2d_eps096.toml`), at a gas (Gamma 2, E* 3), a fluid (Gamma 30, E* 0.7) and a
-//! fluid-gas coexistence (Gamma 30, E* 1.9; docs/validation.md, line eps = 0.96), 300 time units
+//! fluid-gas coexistence (Gamma 30, E* 2.6; docs/validation.md, line eps = 0.96: fgc with the
+//! event engine for seeds 1, 2 and 3, where E* = 1.9 is fgc for seed 1 only), 300 time units
 //! each. Compared: the per-point phase label (`observe::classify`), the window mean of
 //! `T_g / E_cb`, and the bins dilute in both runs (packing below [`DILUTE`]): their mean
 //! `T_g / E_cb` and packing. docs/accuracy.md ("Engines like for like") has the measured table.
 //!
 //! CI runs the reduced gas and fluid (N = 300 in 100 d x 9 d, 60-80 time units): a coexistence
-//! needs the long box (N = 300 in 100 d stays a gas at Gamma 30, E* 1.9). The full system is
+//! needs the long box (N = 300 in 100 d stays a gas at Gamma 30, E* 1.9 and 2.2). The full system is
 //! opt-in: `cargo test --release --test engines_like -- --ignored --nocapture`.
 
 use wetgran::observe::{ObservedRun, run_observed};
@@ -53,7 +54,7 @@ const FLUID: Point = Point {
 const COEXISTENCE: Point = Point {
     label: "coexistence",
     gamma: 30.0,
-    e_star: 1.9,
+    e_star: 2.6,
     duration: 300.0,
     transient: 100.0,
 };
@@ -260,18 +261,29 @@ fn full_standard_system_keeps_its_phases_when_only_the_engine_changes() {
     }
 }
 
-/// Contrast: the single-speed calibration at impact speed 1 (the former default) on the same
-/// gas: the time-driven gas comes out cooler than the event-driven one by more than the
-/// tolerance of the like-for-like check.
+/// Contrast: the single-speed calibration at impact speed 1 (the former default) at the same
+/// three points: the time-driven gas comes out cooler than the event-driven one by more than
+/// the tolerance of the like-for-like check.
 #[test]
 #[ignore]
-fn full_standard_gas_at_speed_one_runs_cooler() {
+fn full_standard_system_at_speed_one_runs_cooler() {
     println!("{HEADER}");
-    let (e, t) = compare(GAS, 1200, 400.0, Some(1.0));
-    assert_eq!(e.phase, t.phase);
+    let rows: Vec<(Point, Summary, Summary)> = std::thread::scope(|sc| {
+        let handles: Vec<_> = [GAS, FLUID, COEXISTENCE]
+            .into_iter()
+            .map(|p| {
+                sc.spawn(move || {
+                    let (e, t) = compare(p, 1200, 400.0, Some(1.0));
+                    (p, e, t)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let (_, e, t) = &rows[0];
     assert!(
         t.temperature < 0.9 * e.temperature,
-        "speed 1: time {} against event {}",
+        "gas at speed 1: time {} against event {}",
         t.temperature,
         e.temperature
     );
