@@ -97,12 +97,12 @@ fn main() {
         let p = &o.profiles;
         let mut dil = (0.0, 0.0, 0usize);
         for b in 0..p.centres.len() {
-            if p.packing[b] < 0.3 {
-                if let Some(tb) = p.temperature_reduced[b] {
-                    dil.0 += tb;
-                    dil.1 += p.packing[b];
-                    dil.2 += 1;
-                }
+            if p.packing[b] < 0.3
+                && let Some(tb) = p.temperature_reduced[b]
+            {
+                dil.0 += tb;
+                dil.1 += p.packing[b];
+                dil.2 += 1;
             }
         }
         let (pmin, pmax) = p
