@@ -12,7 +12,9 @@
 //! stationary window, in the bins that are dilute (packing below [`DILUTE`]) in both runs; the
 //! thin-thread model has no contact force, so dense regions may differ.
 //!
-//! The CI test runs the reduced system (N = 300 in 100 x 9, the phase points of docs/phases/).
+//! The CI test runs the reduced system (N = 300 in 100 x 9) at a gas and at a coexistence seen
+//! 30 periods after the hot start (a snapshot of the cooling: run longer, the point is a fluid;
+//! tests/engines_like.rs compares stationary phases).
 //! The full 2D standard system (N = 1200 in 400 x 9) is opt-in:
 //! `cargo test --release --test time_driven_crosscheck -- --ignored --nocapture`
 //! (it also rewrites docs/tdmd-crosscheck.svg).
