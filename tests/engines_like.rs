@@ -15,7 +15,8 @@
 //! `T_g / E_cb` and packing. docs/accuracy.md ("Engines like for like") has the measured table.
 //!
 //! CI runs the reduced gas and fluid (N = 300 in 100 d x 9 d, 60-80 time units): a coexistence
-//! needs the long box (N = 300 in 100 d stays a gas at Gamma 30, E* 1.9 and 2.2). The full system is
+//! needs the long box and window (N = 300 in 100 d stays a gas at Gamma 30, E* 1.9 to 3; N = 600
+//! in 200 d is fgc or g depending on the seed; docs/accuracy.md). The full system is
 //! opt-in: `cargo test --release --test engines_like -- --ignored --nocapture`.
 
 use wetgran::observe::{ObservedRun, run_observed};
