@@ -62,15 +62,16 @@ pub fn calibration(scene: &Scene) -> Calibration {
 /// The granular temperature scale of a scene (absolute units) for the `"auto"` calibration:
 /// the initial temperature `T_0` of a hot start (`initial.temperature` or
 /// `temperature_over_ecb * E_cb`). Measured on the 2D standard wet system (docs/accuracy.md,
-/// "Engines like for like"), this keeps the phases and `T_g / E_cb` within a few per cent at a
-/// gas, a fluid and a coexistence, where the stationary temperature of the event-driven run
-/// (16 to 1.6 times lower than `T_0` there) leaves the time-driven fluid cooler: wet and
-/// gravity-stratified beds collide faster than a Maxwellian at their mean temperature, and the
-/// calibration depends on `T` only as `T^(1/10)`.
+/// "Engines like for like"), this keeps the phases and `T_g / E_cb` within 3.4 % at a gas, a
+/// fluid and a coexistence (eps = 0.96; their stationary temperatures are 1.6 to 16 times lower
+/// than `T_0`). Calibrating at the event run's own stationary temperature instead left the
+/// time-driven fluid of eps = 0.9 27 % cooler (the one at `T_0`: 11 %): the wet, shaken beds
+/// evidently collide faster than a Maxwellian at their mean temperature; the loss depends on
+/// `T` only as `T^(1/10)`.
 ///
 /// A scene without a hot-start temperature (cold start, or none given) takes the scale of its
 /// drive: `m (A omega)^2` for shaking (MODEL.md 4.1), `F_max d` for shear (MODEL.md 4.2), else
-/// `m g d` (`m d^2` per unit time squared without gravity). These fallbacks are not measured.
+/// `m g d` (`g = 1` without gravity). These fallbacks are not measured.
 pub fn characteristic_temperature(scene: &Scene) -> f64 {
     let t0 = scene.initial_temperature();
     if scene.initial.start == StartMode::Hot && t0 > 0.0 {
