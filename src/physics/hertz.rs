@@ -124,6 +124,80 @@ pub fn damping_for_restitution(kr: f64, mu: f64, v: f64, e: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
+/// Restitution of a head-on collision at approach speed `v`, integrated by [`direct_collision`]
+/// with `steps` RK4 steps per elastic contact time (1000 resolve it to about 1e-6).
+pub fn restitution_at(kr: f64, a_d: f64, mu: f64, v: f64, steps: f64) -> f64 {
+    direct_collision(kr, a_d, mu, v, contact_time(kr, mu, v) / steps).restitution
+}
+
+/// Simpson intervals in `u = sqrt(x)` over `[0, U_MAX]` of [`maxwellian_loss`].
+const LOSS_INTERVALS: usize = 48;
+/// Upper end of the `u` range: the weight `2 u^3 exp(-u^2)` beyond 6 is below 1e-13.
+const LOSS_U_MAX: f64 = 6.0;
+/// RK4 steps per contact time in [`maxwellian_loss`].
+const LOSS_STEPS: f64 = 1000.0;
+
+/// Collision-weighted mean fraction of normal kinetic energy that damped Hertz collisions remove
+/// when the impact speeds are those of a Maxwellian gas at granular temperature `t`
+/// (docs/model-choices.md, "Engines like for like").
+///
+/// In a gas of Maxwellian velocities (temperature `T` per degree of freedom) the relative
+/// normal velocity `v` of a pair is Gaussian with variance `T / mu`; collisions happen at a rate
+/// proportional to `v`, so the impact speeds of the collisions are distributed as
+/// `p(v) ∝ v exp(-mu v^2 / (2 T))`. A collision removes `(1/2) mu v^2 (1 - e(v)^2)` (MODEL.md 2.1:
+/// `E_normal (1 - eps^2)`), and the rate of energy loss is
+/// `∝ ∫ v^3 exp(-mu v^2 / 2T) (1 - e(v)^2) dv`. Relative to the same integral with
+/// `1 - e^2 = 1` this is
+///
+/// ```text
+/// L(A_d, T) = ∫_0^∞ x e^(-x) (1 - e(v(x))^2) dx,   x = mu v^2 / (2 T),  v(x) = sqrt(2 T x / mu)
+/// ```
+///
+/// (the weight `x e^(-x)` has unit integral), which equals `1 - eps^2` for hard spheres of
+/// constant restitution `eps`. Evaluated with Simpson's rule in `u = sqrt(x)` (weight
+/// `2 u^3 exp(-u^2)`, smooth where `1 - e^2 ~ v^(1/5)` is not), `e(v)` by [`restitution_at`].
+/// The particle-wall version is the same with `mu = m` (an infinitely heavy wall).
+pub fn maxwellian_loss(kr: f64, a_d: f64, mu: f64, t: f64) -> f64 {
+    let h = LOSS_U_MAX / LOSS_INTERVALS as f64;
+    let mut sum = 0.0;
+    // u = 0 has zero weight.
+    for i in 1..=LOSS_INTERVALS {
+        let u = i as f64 * h;
+        let w = if i == LOSS_INTERVALS {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        let v = (2.0 * t * u * u / mu).sqrt();
+        let e = restitution_at(kr, a_d, mu, v, LOSS_STEPS);
+        sum += w * 2.0 * u.powi(3) * (-u * u).exp() * (1.0 - e * e);
+    }
+    sum * h / 3.0
+}
+
+/// The damping `A_d` whose [`maxwellian_loss`] at temperature `t` equals that of the constant
+/// restitution `eps` (in (0, 1)), `1 - eps^2`: a damped Hertz gas at `t` then loses energy in
+/// collisions at the rate of a hard-sphere gas with `eps`. Bisection (the loss grows
+/// monotonically with `A_d`).
+pub fn damping_for_maxwellian_restitution(kr: f64, mu: f64, t: f64, eps: f64) -> f64 {
+    let target = 1.0 - eps * eps;
+    let (mut lo, mut hi) = (0.0f64, 1e-2f64);
+    while maxwellian_loss(kr, hi, mu, t) < target {
+        hi *= 2.0;
+    }
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if maxwellian_loss(kr, mid, mu, t) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 /// Minimal capillary model (MODEL.md 3.1): the constant attraction `F_B = E_cb / s_crit` that
 /// acts along the line of centres while a bridge exists (`s <= s_crit`, also during overlap).
 #[inline]
@@ -161,5 +235,88 @@ mod tests {
         assert!((e - 0.9).abs() < 1e-6, "A_d {a} gives e {e}");
         // Restitution of damped Hertz falls with impact speed (Kuwabara & Kono).
         assert!(direct_collision(kr, a, mu, 3.0, h).restitution < e);
+    }
+
+    /// Independent check of [`maxwellian_loss`] and its calibration: sample the collisions of a
+    /// 2D Maxwellian gas directly (two Gaussian velocities, a random contact normal, collision
+    /// rate proportional to the approach speed), integrate each collision with
+    /// [`direct_collision`] at another step, and compare the fraction of the normal kinetic
+    /// energy removed with `1 - eps^2`. A single-speed calibration (impact speed 1) must be
+    /// told apart by the same estimate.
+    #[test]
+    fn maxwellian_calibration_matches_sampled_collisions() {
+        use rand::{Rng, SeedableRng};
+        use rand_distr::StandardNormal;
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(7);
+        let kr_pair = 1e7 * 0.25f64.sqrt();
+        let kr_wall = 1e7 * 0.5f64.sqrt();
+        // (kr, reduced mass, temperature, eps): pairs of unit masses, and a unit mass against a
+        // wall (mu = m: the wall's velocity is zero, one Gaussian velocity).
+        for (kr, mu, t, eps) in [
+            (kr_pair, 0.5, 1.0, 0.9),
+            (kr_pair, 0.5, 0.01, 0.96),
+            (kr_wall, 1.0, 2.0, 0.8),
+        ] {
+            let a_d = damping_for_maxwellian_restitution(kr, mu, t, eps);
+            let a_speed1 = damping_for_restitution(kr, mu, 1.0, eps);
+            let sd = t.sqrt(); // per-component velocity spread of a unit mass
+            let (mut lost, mut lost1, mut total) = (0.0, 0.0, 0.0);
+            let mut n = 0;
+            while n < 3000 {
+                let phi: f64 = rng.gen_range(0.0..std::f64::consts::TAU);
+                let sigma = [phi.cos(), phi.sin()];
+                let vi: [f64; 2] = [rng.sample(StandardNormal), rng.sample(StandardNormal)];
+                let vj: [f64; 2] = if mu < 1.0 {
+                    [rng.sample(StandardNormal), rng.sample(StandardNormal)]
+                } else {
+                    [0.0, 0.0]
+                };
+                let vn = sd * ((vi[0] - vj[0]) * sigma[0] + (vi[1] - vj[1]) * sigma[1]);
+                if vn <= 0.0 {
+                    continue; // separating: no collision
+                }
+                n += 1;
+                // Rate weight vn, energy (1/2) mu vn^2.
+                let w = vn * 0.5 * mu * vn * vn;
+                let h = contact_time(kr, mu, vn) / 3000.0;
+                let e = direct_collision(kr, a_d, mu, vn, h).restitution;
+                let e1 = direct_collision(kr, a_speed1, mu, vn, h).restitution;
+                lost += w * (1.0 - e * e);
+                lost1 += w * (1.0 - e1 * e1);
+                total += w;
+            }
+            let target = 1.0 - eps * eps;
+            let (got, got1) = (lost / total, lost1 / total);
+            println!(
+                "T {t}, eps {eps}: 1 - eps^2 = {target:.5}, sampled loss {got:.5} (speed 1: {got1:.5})"
+            );
+            assert!(
+                (got / target - 1.0).abs() < 0.015,
+                "T {t}, eps {eps}: sampled loss {got} against 1 - eps^2 = {target}"
+            );
+            assert!(
+                (maxwellian_loss(kr, a_d, mu, t) / target - 1.0).abs() < 1e-6,
+                "bisection"
+            );
+            // The single-speed calibration misses by more than the sampling error.
+            assert!(
+                (got1 / target - 1.0).abs() > 0.08,
+                "T {t}, eps {eps}: speed-1 loss {got1} against {target}"
+            );
+        }
+    }
+
+    #[test]
+    fn maxwellian_loss_of_a_constant_restitution_is_one_minus_eps_squared() {
+        // Without damping nothing is lost; and the quadrature weight x e^(-x) integrates to 1:
+        // a collision law that always returns e gives 1 - e^2. Checked through A_d = 0 (e = 1)
+        // and through the scaling e = f(A_d (kr/mu)^(2/5) v^(1/5)): doubling T and dividing
+        // A_d by 2^(1/10) leaves the loss unchanged.
+        let (kr, mu) = (5e6, 0.5);
+        assert!(maxwellian_loss(kr, 0.0, mu, 1.0).abs() < 1e-6);
+        let a = 2e-4;
+        let l1 = maxwellian_loss(kr, a, mu, 1.0);
+        let l2 = maxwellian_loss(kr, a / 2f64.powf(0.1), mu, 2.0);
+        assert!((l1 / l2 - 1.0).abs() < 1e-4, "{l1} {l2}");
     }
 }

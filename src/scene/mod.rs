@@ -111,10 +111,63 @@ pub struct ContactSpec {
     /// Time-driven engine: particle-wall damping `A_d` (default 0, elastic walls).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wall_damping: Option<f64>,
-    /// Time-driven engine: the impact speed at which `restitution` and `wall_restitution` are
-    /// converted into damping constants (`sim::time_driven::damping`; default 1 `sqrt(g d)`).
+    /// Time-driven engine: how `restitution` and `wall_restitution` are converted into damping
+    /// constants (`sim::time_driven::damping`): `"auto"` (the default) matches the mean energy
+    /// loss over the impact speeds of a Maxwellian gas at the scene's characteristic temperature;
+    /// a number (units of `sqrt(g d)`) gives exactly the restitution at that one impact speed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub restitution_speed: Option<f64>,
+    pub restitution_speed: Option<RestitutionSpeed>,
+    /// Time-driven engine: the granular temperature (units of `m g d`, absolute without gravity)
+    /// of the `"auto"` calibration, in place of the scene's characteristic temperature.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restitution_temperature: Option<f64>,
+}
+
+/// `contact.restitution_speed`: `"auto"` or an impact speed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum RestitutionSpeed {
+    /// One impact speed (units of `sqrt(g d)`).
+    Speed(f64),
+    /// The word `"auto"`.
+    Word(AutoWord),
+}
+
+impl<'de> Deserialize<'de> for RestitutionSpeed {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = RestitutionSpeed;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an impact speed (a number, units of sqrt(g d)) or \"auto\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Self::Value, E> {
+                Ok(RestitutionSpeed::Speed(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                Ok(RestitutionSpeed::Speed(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                Ok(RestitutionSpeed::Speed(v as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
+                if v == "auto" {
+                    Ok(RestitutionSpeed::Word(AutoWord::Auto))
+                } else {
+                    Err(E::invalid_value(serde::de::Unexpected::Str(v), &self))
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// The only word `contact.restitution_speed` accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AutoWord {
+    /// The Maxwellian calibration at the characteristic temperature.
+    Auto,
 }
 
 impl Default for ContactSpec {
@@ -126,6 +179,7 @@ impl Default for ContactSpec {
             damping: None,
             wall_damping: None,
             restitution_speed: None,
+            restitution_temperature: None,
         }
     }
 }

@@ -662,6 +662,10 @@ impl Scene {
                     ("contact.damping", ct.damping.is_some()),
                     ("contact.wall_damping", ct.wall_damping.is_some()),
                     ("contact.restitution_speed", ct.restitution_speed.is_some()),
+                    (
+                        "contact.restitution_temperature",
+                        ct.restitution_temperature.is_some(),
+                    ),
                 ];
                 if let Some((key, _)) = time_only.iter().find(|(_, g)| *g) {
                     return Err(c.err(
@@ -740,17 +744,34 @@ impl Scene {
                             key,
                             e_r,
                             "in [0.1, 1] with the time-driven engine (converted into a Hertz \
-                             damping constant at contact.restitution_speed)",
+                             damping constant, contact.restitution_speed)",
                         ));
                     }
                 }
-                if let Some(v) = ct.restitution_speed
-                    && !(v.is_finite() && v > 0.0 && v <= 100.0)
+                if let Some(super::RestitutionSpeed::Speed(v)) = ct.restitution_speed {
+                    if !(v.is_finite() && v > 0.0 && v <= 100.0) {
+                        return Err(c.out_of_range(
+                            "contact.restitution_speed",
+                            v,
+                            "in (0, 100] (units of sqrt(g d)), or \"auto\"",
+                        ));
+                    }
+                    if ct.restitution_temperature.is_some() {
+                        return Err(c.err(
+                            "contact.restitution_temperature",
+                            "is the temperature of restitution_speed = \"auto\", but \
+                             contact.restitution_speed is a number: give one of them"
+                                .into(),
+                        ));
+                    }
+                }
+                if let Some(t) = ct.restitution_temperature
+                    && !(t.is_finite() && t > 0.0 && t <= 1e6)
                 {
                     return Err(c.out_of_range(
-                        "contact.restitution_speed",
-                        v,
-                        "in (0, 100] (units of sqrt(g d))",
+                        "contact.restitution_temperature",
+                        t,
+                        "in (0, 1e6] (a granular temperature, units of m g d)",
                     ));
                 }
                 if let Some(dt) = e.dt
