@@ -417,3 +417,36 @@ fn shear_sweeps_take_f_max_and_an_indexed_box_size_as_axes() {
     let e = err(dir.path(), &bad);
     assert!(e.contains("box.size[5]"), "{e}");
 }
+
+/// Regression (issue 18, engines like for like): the time engine's default damping calibration
+/// changed from impact speed 1 to `"auto"`; a time-engine job that converts a restitution spells
+/// the calibration out, so its id cannot match a result stored under the old default. Jobs with
+/// explicit damping, and event-engine jobs, are unchanged.
+#[test]
+fn a_time_engine_job_spells_out_its_damping_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = |contact: &str, kind: &str| {
+        let text = format!(
+            "[sweep]\nname = \"t\"\n[scene]\ndimension = 2\n[scene.box]\nsize = [20.0, 9.0]\n\
+             [scene.particles]\ncount = 10\n[scene.contact]\n{contact}\n[scene.engine]\nkind = \"{kind}\"\n\
+             [scene.initial]\ntemperature = 1.0\n[scene.run]\nduration = 1.0\n"
+        );
+        let p = dir.path().join("t.toml");
+        std::fs::write(&p, text).unwrap();
+        let job = wetgran::sweep::SweepFile::load(&p)
+            .unwrap()
+            .expand()
+            .unwrap()
+            .remove(0);
+        let c = serde_json::to_value(&job.spec.scene.contact).unwrap();
+        (c.get("restitution_speed").cloned(), job.id)
+    };
+    let (speed, _) = sweep("restitution = 0.9", "time");
+    assert_eq!(speed, Some(serde_json::json!("auto")));
+    let (speed, _) = sweep("damping = 1e-4", "time");
+    assert_eq!(speed, None);
+    let (speed, _) = sweep("restitution = 0.9", "event");
+    assert_eq!(speed, None);
+    let (speed, _) = sweep("restitution = 0.9\nrestitution_speed = 2.5", "time");
+    assert_eq!(speed, Some(serde_json::json!(2.5)));
+}

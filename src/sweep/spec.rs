@@ -586,6 +586,20 @@ impl SweepFile {
                     format!("{}{where_}", e.message),
                 )
             })?;
+            // The time engine's damping calibration is spelled out in the spec: its default
+            // changed (issue 18, "engines like for like"), and a job id must not match a result
+            // computed under the old default (speed 1).
+            let c = &scene.contact;
+            let converts = (c.damping.is_none() && c.restitution < 1.0)
+                || (c.wall_damping.is_none() && c.wall_restitution < 1.0);
+            if scene.engine.kind == crate::scene::EngineKind::Time
+                && converts
+                && c.restitution_speed.is_none()
+            {
+                scene.contact.restitution_speed = Some(crate::scene::RestitutionSpeed::Word(
+                    crate::scene::AutoWord::Auto,
+                ));
+            }
             let spec = JobSpec {
                 format: SPEC_FORMAT,
                 scene,
