@@ -484,3 +484,27 @@ fn non_stationary_results_are_counted_and_marked() {
         .count();
     assert_eq!(falses, 2, "{csv}");
 }
+
+/// Every sweep file shipped under `sweeps/` (the validation sweeps in `sweeps/validation/`
+/// included) parses and expands.
+#[test]
+fn every_shipped_sweep_file_expands() {
+    fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "toml") {
+                out.push(p);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    walk(Path::new("sweeps"), &mut files);
+    assert!(files.len() >= 17, "{files:?}");
+    for f in files {
+        let s = SweepFile::load(&f).unwrap_or_else(|e| panic!("{e}"));
+        let jobs = s.expand().unwrap_or_else(|e| panic!("{e}"));
+        assert!(!jobs.is_empty(), "{}", f.display());
+    }
+}
