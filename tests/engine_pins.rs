@@ -5,12 +5,16 @@
 //! before the refactor); a structural change that keeps the event order must reproduce them bit
 //! for bit. A change that alters the physics or the event order on purpose must re-record them
 //! and say why in its commit.
+//!
+//! Every pinned run is made twice, on the default queue and on the naive reference queue, and
+//! the two trajectories must agree bit for bit (`pinned_run`).
 
 mod common;
 
 use common::scene;
 use wetgran::scene::Scene;
 use wetgran::sim::event_driven::Engine;
+use wetgran::sim::event_driven::queue::{EventQueue, HeapQueue, NaiveQueue};
 
 /// FNV-1a over 64-bit words.
 struct Digest(u64);
@@ -31,8 +35,8 @@ impl Digest {
 }
 
 /// Digest of the full observable state of an engine.
-fn digest<const D: usize, const G: bool, const W: bool, const S: bool>(
-    e: &Engine<D, G, W, S>,
+fn digest<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue>(
+    e: &Engine<D, G, W, S, Q>,
 ) -> u64 {
     let mut h = Digest::new();
     h.float(e.time());
@@ -101,17 +105,32 @@ fn settling_3d() -> Scene {
     scene(&std::fs::read_to_string("scenes/wet_settling_3d.toml").unwrap())
 }
 
-/// Runs `events` events (renumbering in cell order every 20 000, so the pin covers it) and
-/// returns the digest.
-fn pinned_run<const D: usize, const G: bool, const W: bool, const S: bool>(
+/// Runs `events` events on queue `Q` (renumbering in cell order every 20 000, so the pin
+/// covers it) and returns the digest.
+fn run_on<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue>(
     s: &Scene,
     events: u64,
 ) -> u64 {
-    let mut e = Engine::<D, G, W, S>::new(s);
+    let mut e = Engine::<D, G, W, S, Q>::new(s);
     e.set_reorder_interval(20_000);
     e.run_until(f64::INFINITY, Some(events));
     e.sanity_check().unwrap();
     digest(&e)
+}
+
+/// The digest on the default heap queue, after checking that the same engine on the naive
+/// reference queue ([`NaiveQueue`], a linear scan) produced the same trajectory bit for bit.
+fn pinned_run<const D: usize, const G: bool, const W: bool, const S: bool>(
+    s: &Scene,
+    events: u64,
+) -> u64 {
+    let heap = run_on::<D, G, W, S, HeapQueue>(s, events);
+    let naive = run_on::<D, G, W, S, NaiveQueue>(s, events);
+    assert_eq!(
+        heap, naive,
+        "the engine on the heap queue and on the naive queue took different trajectories"
+    );
+    heap
 }
 
 fn check(name: &str, got: u64, pinned: u64) {

@@ -24,7 +24,7 @@
 //!   never recomputed from positions.
 
 use super::cells::CellGrid;
-use super::queue::EventQueue;
+use super::queue::{EventQueue, HeapQueue};
 use super::shear::{FORCE_AXIS, ShearField, pair_times};
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
@@ -210,7 +210,13 @@ const TABLE_PLACEMENT_TOLERANCE: f64 = 1e-2;
 
 /// The event-driven simulation state.
 #[derive(Debug, Clone)]
-pub struct Engine<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool = false> {
+pub struct Engine<
+    const D: usize,
+    const GRAV: bool,
+    const WET: bool,
+    const SHEAR: bool = false,
+    Q: EventQueue = HeapQueue,
+> {
     p: Params<D>,
     /// Current simulation time (time of the last processed event).
     time: f64,
@@ -226,7 +232,7 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool, const SHEAR
     pair_ev: Vec<PairEvent>,
     cross_ev: Vec<PlaneEvent>,
     wall_ev: Vec<PlaneEvent>,
-    queue: EventQueue,
+    queue: Q,
     counts: EventCounts,
     dissipated_restitution: f64,
     dissipated_ruptures: f64,
@@ -261,8 +267,8 @@ pub struct Engine<const D: usize, const GRAV: bool, const WET: bool, const SHEAR
     slab_ev: Vec<PlaneEvent>,
 }
 
-impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
-    Engine<D, GRAV, WET, SHEAR>
+impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: EventQueue>
+    Engine<D, GRAV, WET, SHEAR, Q>
 {
     /// Builds the engine for a validated scene: initial state, cells, first predictions.
     pub fn new(scene: &Scene) -> Self {
@@ -409,7 +415,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
             pair_ev: vec![PairEvent::NEVER; n],
             cross_ev: vec![PlaneEvent::NEVER; n],
             wall_ev: vec![PlaneEvent::NEVER; n],
-            queue: EventQueue::new(n),
+            queue: Q::new(n),
             counts: EventCounts::default(),
             dissipated_restitution: 0.0,
             dissipated_ruptures: 0.0,
@@ -1083,7 +1089,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool>
             let c = self.grid.linear(&self.cell[k]);
             self.grid.insert(k, c);
         }
-        self.queue = EventQueue::new(n);
+        self.queue = Q::new(n);
         for k in 0..n {
             self.queue.update(k, self.queue_key(k));
         }
