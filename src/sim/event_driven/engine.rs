@@ -26,13 +26,14 @@
 use super::cells::CellGrid;
 use super::queue::{EventQueue, HeapQueue};
 use super::shear::{FORCE_AXIS, ShearField, pair_times};
+use super::table_cache::TableCache;
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
 use crate::physics::flight::{
     accelerated_time_to_plane, linear_time_to_plane, parabola_time_down, parabola_time_up,
 };
 use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
-use crate::physics::wall_table::{TableHit, WallTable, shared_table};
+use crate::physics::wall_table::{TableHit, WallTable};
 use crate::scene::{Boundary, DEFAULT_ROOT_TOLERANCE, RuptureRule, Scene, WallSolverKind};
 use crate::sim::initial::initial_state;
 use nalgebra::SVector;
@@ -369,7 +370,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                         g: -scene.gravity,
                         ..floor
                     };
-                    Some([shared_table(floor, spec), shared_table(lid, spec)])
+                    let cache = TableCache::current();
+                    Some([cache.get(floor, spec), cache.get(lid, spec)])
                 }
                 _ => None,
             },

@@ -4,5 +4,6 @@ pub mod cells;
 pub mod engine;
 pub mod queue;
 pub mod shear;
+pub mod table_cache;
 
 pub use engine::{EnergyLedger, Engine, EventCounts, Vector};

@@ -71,7 +71,6 @@ impl EventQueue for HeapQueue {
 }
 
 impl HeapQueue {
-
     /// Strict order on entries; ties broken by particle index so the order is deterministic.
     #[inline]
     fn less(a: (f64, u32), b: (f64, u32)) -> bool {
