@@ -19,20 +19,32 @@ pub struct CellSource<const D: usize> {
     pub cell: Vec<[i32; D]>,
     /// The `3^D` neighbour offsets.
     pub offsets: Vec<[i32; D]>,
+    /// The far slab of the neighbourhood after a crossing along `axis` (index `2 axis + up`):
+    /// the offsets with `+-1` along `axis`, in the order of `offsets`.
+    far: Vec<Vec<[i32; D]>>,
     /// Next crossing of a face of the particle's cell.
     pub ev: Vec<PlaneEvent>,
 }
 
-/// Offsets of the far slab of a neighbourhood (at most `3^(D-1) <= 9` of them).
-pub type SlabOffsets<const D: usize> = ([[i32; D]; 9], usize);
-
 impl<const D: usize> CellSource<D> {
     /// Puts particles at `positions` into `grid`.
     pub fn new(grid: CellGrid<D>, positions: impl Iterator<Item = Vector<D>>) -> Self {
+        let offsets = CellGrid::<D>::neighbour_offsets();
+        let far = (0..2 * D)
+            .map(|m| {
+                let (axis, step) = (m / 2, if m % 2 == 1 { 1 } else { -1 });
+                offsets
+                    .iter()
+                    .filter(|o| o[axis] == step)
+                    .copied()
+                    .collect()
+            })
+            .collect();
         let mut s = Self {
             grid,
             cell: Vec::new(),
-            offsets: CellGrid::<D>::neighbour_offsets(),
+            offsets,
+            far,
             ev: Vec::new(),
         };
         for (i, x) in positions.enumerate() {
@@ -92,15 +104,16 @@ impl<const D: usize> CellSource<D> {
     }
 
     /// Moves `i` (already at the current time) into the neighbouring cell along `axis`,
-    /// wrapping its position across a periodic face, and returns the offsets of the newly
-    /// adjacent slab of cells (offset `+-1` along `axis`, anything across).
+    /// wrapping its position across a periodic face. The newly adjacent cells are then
+    /// [`Self::far_slab`]`(axis, up)`.
+    #[inline]
     pub fn fire<const G: bool, const S: bool>(
         &mut self,
         i: usize,
         axis: usize,
         up: bool,
         bodies: &mut Bodies<D, G, S>,
-    ) -> SlabOffsets<D> {
+    ) {
         let old = self.grid.linear(&self.cell[i]);
         self.grid.remove(i, old);
         let n = self.grid.n[axis];
@@ -120,16 +133,13 @@ impl<const D: usize> CellSource<D> {
         }
         let new = self.grid.linear(&self.cell[i]);
         self.grid.insert(i, new);
-        let step = if up { 1 } else { -1 };
-        let mut slab = [[0i32; D]; 9];
-        let mut m = 0;
-        for o in &self.offsets {
-            if o[axis] == step {
-                slab[m] = *o;
-                m += 1;
-            }
-        }
-        (slab, m)
+    }
+
+    /// Offsets of the far slab of the neighbourhood after a crossing along `axis` (`up`:
+    /// towards larger coordinates): `+-1` along `axis`, anything across.
+    #[inline]
+    pub fn far_slab(&self, axis: usize, up: bool) -> &[[i32; D]] {
+        &self.far[2 * axis + usize::from(up)]
     }
 
     /// Moves `i` to the cell of position `x` (a placement or a set-up): out of its list and

@@ -425,11 +425,18 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             EventKind::Cell { axis, up } => {
                 self.bodies.advance(i, now);
                 self.counts.cell_crossings += 1;
-                let (slab, m) = self.cells.fire(i, axis as usize, up, &mut self.bodies);
+                let axis = axis as usize;
+                self.cells.fire(i, axis, up, &mut self.bodies);
                 // Only the newly adjacent cells can hold an earlier partner; the pair event is
                 // kept.
-                self.pairs
-                    .scan(i, &slab[..m], &self.bodies, &self.cells, &self.slabs, now);
+                self.pairs.scan(
+                    i,
+                    self.cells.far_slab(axis, up),
+                    &self.bodies,
+                    &self.cells,
+                    &self.slabs,
+                    now,
+                );
                 self.cells.predict(i, &self.bodies, now);
                 self.queue.update(i, self.queue_key(i));
             }

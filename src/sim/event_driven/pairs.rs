@@ -226,7 +226,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// Scans the cells at `offsets` around particle `i` (at time `t`) and lowers its pair event
     /// if a partner there gives an earlier one.
-    #[inline]
     pub fn scan<const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -241,7 +240,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let mut best = self.ev[i];
         let interior = grid.is_interior(&c);
         let base = grid.linear(&c);
-        let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
         for o in offsets {
             let cell = if interior {
                 grid.interior_neighbour(base, o)
@@ -255,7 +253,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 if j == i {
                     return;
                 }
-                if let Some((tj, kind)) = self.predict_pair_from(bodies, slabs, &xi, &vi, i, j, t)
+                let bi = &bodies.body[i];
+                if let Some((tj, kind)) =
+                    self.predict_pair_from(bodies, slabs, &bi.x, &bi.v, i, j, t)
                     && tj < best.time
                 {
                     best = PairEvent {
