@@ -9,7 +9,7 @@
 
 use super::bodies::{Bodies, Vector, permuted};
 use super::cells::CellGrid;
-use super::event::{Event, EventKind, PlaneEvent};
+use super::event::{Event, EventKind, EventSource, PlaneEvent};
 
 /// The grid, each particle's cell and its next crossing.
 #[derive(Debug, Clone)]
@@ -58,20 +58,8 @@ impl<const D: usize> CellSource<D> {
         s
     }
 
-    /// The stored crossing of `i` as an event.
-    #[inline]
-    pub fn candidate(&self, i: usize) -> Event {
-        let e = self.ev[i];
-        Event {
-            time: e.time,
-            kind: EventKind::Cell {
-                axis: e.axis,
-                up: e.up,
-            },
-        }
-    }
-
     /// Predicts the next crossing of a face of `i`'s cell (particle at time `now`).
+    #[inline(always)]
     pub fn predict<const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -174,17 +162,6 @@ impl<const D: usize> CellSource<D> {
         order
     }
 
-    /// Renumbers the particles (see [`Bodies::permute`]) and rebuilds the cell lists.
-    pub fn permute(&mut self, order: &[u32]) {
-        self.cell = permuted(&self.cell, order);
-        self.ev = permuted(&self.ev, order);
-        self.grid.clear();
-        for k in 0..self.cell.len() {
-            let c = self.grid.linear(&self.cell[k]);
-            self.grid.insert(k, c);
-        }
-    }
-
     /// Invariant: particle `i` at `x` lies in its cell (edge cells of a wall axis extend
     /// outwards: the shaken floor leaves the grid). Returns the violation, if any.
     pub fn check(&self, i: usize, x: &Vector<D>, periodic: &[bool; D], tol: f64) -> Option<String> {
@@ -199,5 +176,31 @@ impl<const D: usize> CellSource<D> {
             }
         }
         None
+    }
+}
+
+impl<const D: usize> EventSource for CellSource<D> {
+    /// The stored crossing of `i` as an event.
+    #[inline]
+    fn candidate(&self, i: usize) -> Event {
+        let e = self.ev[i];
+        Event {
+            time: e.time,
+            kind: EventKind::Cell {
+                axis: e.axis,
+                up: e.up,
+            },
+        }
+    }
+
+    /// Renumbers the particles (see [`Bodies::permute`]) and rebuilds the cell lists.
+    fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
+        self.cell = permuted(&self.cell, order);
+        self.ev = permuted(&self.ev, order);
+        self.grid.clear();
+        for k in 0..self.cell.len() {
+            let c = self.grid.linear(&self.cell[k]);
+            self.grid.insert(k, c);
+        }
     }
 }

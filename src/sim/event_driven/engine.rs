@@ -3,7 +3,7 @@
 //!
 //! The engine owns the clock, the particles ([`Bodies`]), the queue (`Q`, any [`EventQueue`]),
 //! the books ([`Ledger`], [`EventCounts`]) and four event sources, each of which owns its state
-//! and knows how to predict, fire and renumber its events:
+//! and knows how to predict, fire and renumber its events ([`EventSource`]):
 //! - [`PairSource`] (`pairs.rs`): collisions and, if wet, bridges and well events;
 //! - [`CellSource`] (`cell_source.rs`): the neighbour cells and cell-face crossings;
 //! - [`WallSource`] (`walls.rs`): static walls, or the shaken floor and lid under one
@@ -30,7 +30,7 @@ pub use super::bodies::Vector;
 use super::bodies::{Bodies, Body};
 use super::cell_source::CellSource;
 use super::cells::CellGrid;
-use super::event::{Event, EventKind, NONE};
+use super::event::{Event, EventKind, EventSource, NONE};
 use super::ledger::Ledger;
 pub use super::ledger::{EnergyLedger, EventCounts};
 pub use super::pairs::MAX_BONDS;
@@ -466,9 +466,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         }
         self.bodies.permute(&order);
         self.pairs.permute(&order, &new_of_old);
-        self.cells.permute(&order);
+        self.cells.permute(&order, &new_of_old);
         self.walls.permute(&order, &new_of_old);
-        self.slabs.permute(&order);
+        self.slabs.permute(&order, &new_of_old);
         self.queue = Q::new(n);
         for k in 0..n {
             self.queue.update(k, self.queue_key(k));

@@ -1,6 +1,7 @@
 //! The event value the scheduler pops, validates and dispatches: a time and a kind ([`Event`],
-//! `Copy`, 24 bytes), and the compact per-particle predictions the sources keep
-//! ([`PairEvent`], [`PlaneEvent`]) from which they build it.
+//! `Copy`, 24 bytes); the compact per-particle predictions the sources keep ([`PairEvent`],
+//! [`PlaneEvent`]) from which they build it; and [`EventSource`], what every source offers the
+//! scheduler.
 
 /// Sentinel partner index: no partner.
 pub const NONE: u32 = u32::MAX;
@@ -43,6 +44,20 @@ impl Event {
     pub fn earlier(self, other: Event) -> Event {
         if other.time < self.time { other } else { self }
     }
+}
+
+/// What every event source offers the scheduler. Prediction and firing are the sources' own
+/// methods (`predict`, `fire`, `scan`, `collide`, ...), because each needs different parts of
+/// the engine (a pair scan reads the cells and the slabs, a wall hit may move a particle to
+/// another cell); the scheduler calls them on the concrete source types, so everything is
+/// monomorphised.
+pub trait EventSource {
+    /// The source's stored prediction for particle `i`, as an event (`Event::NEVER`-timed if
+    /// none).
+    fn candidate(&self, i: usize) -> Event;
+    /// Renumbers the particles: new index `k` holds old particle `order[k]`, and
+    /// `new_of_old[old] = new` renames stored particle indices (partners, bonds, memories).
+    fn permute(&mut self, order: &[u32], new_of_old: &[u32]);
 }
 
 /// Kind of a pair event.

@@ -16,7 +16,7 @@
 
 use super::bodies::{Bodies, Vector};
 use super::cell_source::CellSource;
-use super::event::{Event, NONE, PairEvent, PairKind};
+use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
 use super::ledger::{EventCounts, Ledger};
 use super::shear::pair_times;
 use super::slabs::SlabSource;
@@ -60,12 +60,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             },
             bond_len: if WET { vec![0; n] } else { Vec::new() },
         }
-    }
-
-    /// The stored pair event of `i`.
-    #[inline]
-    pub fn candidate(&self, i: usize) -> Event {
-        self.ev[i].event()
     }
 
     // ----- bonds -------------------------------------------------------------------------
@@ -362,10 +356,18 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     }
 
     // ----- renumbering -------------------------------------------------------------------
+}
+
+impl<const D: usize, const WET: bool> EventSource for PairSource<D, WET> {
+    /// The stored pair event of `i`.
+    #[inline]
+    fn candidate(&self, i: usize) -> Event {
+        self.ev[i].event()
+    }
 
     /// Renumbers the particles: new index `k` holds old particle `order[k]`; `new_of_old` maps
     /// back (partner indices in events and bonds are renamed).
-    pub fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
+    fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
         let n = order.len();
         self.ev = order
             .iter()

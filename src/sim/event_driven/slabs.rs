@@ -7,7 +7,7 @@
 //! scheduler re-predicts every event of the particle.
 
 use super::bodies::{Bodies, permuted};
-use super::event::{Event, EventKind, PlaneEvent};
+use super::event::{Event, EventKind, EventSource, PlaneEvent};
 use super::shear::ShearField;
 use crate::physics::flight::linear_time_to_plane;
 
@@ -41,16 +41,6 @@ impl SlabSource {
         match &self.field {
             Some(f) => self.slab.iter().map(|&k| f.accel(k as usize)).collect(),
             None => Vec::new(),
-        }
-    }
-
-    /// The stored crossing of `i` as an event.
-    #[inline]
-    pub fn candidate(&self, i: usize) -> Event {
-        let e = self.ev[i];
-        Event {
-            time: e.time,
-            kind: EventKind::Slab { up: e.up },
         }
     }
 
@@ -103,14 +93,6 @@ impl SlabSource {
         }
     }
 
-    /// Renumbers the particles (see [`Bodies::permute`]).
-    pub fn permute(&mut self, order: &[u32]) {
-        if self.field.is_some() {
-            self.slab = permuted(&self.slab, order);
-            self.ev = permuted(&self.ev, order);
-        }
-    }
-
     /// Invariant: particle `i` at `x` lies in its slab.
     pub fn check(&self, i: usize, x: f64, tol: f64) -> Result<(), String> {
         if let Some(f) = &self.field {
@@ -123,5 +105,25 @@ impl SlabSource {
             }
         }
         Ok(())
+    }
+}
+
+impl EventSource for SlabSource {
+    /// The stored crossing of `i` as an event.
+    #[inline]
+    fn candidate(&self, i: usize) -> Event {
+        let e = self.ev[i];
+        Event {
+            time: e.time,
+            kind: EventKind::Slab { up: e.up },
+        }
+    }
+
+    /// Renumbers the particles (see [`Bodies::permute`]).
+    fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
+        if self.field.is_some() {
+            self.slab = permuted(&self.slab, order);
+            self.ev = permuted(&self.ev, order);
+        }
     }
 }

@@ -13,7 +13,7 @@
 
 use super::bodies::{Bodies, permuted};
 use super::cell_source::CellSource;
-use super::event::{Event, EventKind, PlaneEvent};
+use super::event::{Event, EventKind, EventSource, PlaneEvent};
 use super::ledger::{EventCounts, Ledger};
 use super::table_cache::TableCache;
 use crate::physics::contact::rebound_speed;
@@ -173,23 +173,11 @@ impl WallSource {
         }
     }
 
-    /// The stored wall event of `i`.
-    #[inline]
-    pub fn candidate(&self, i: usize) -> Event {
-        let e = self.ev[i];
-        Event {
-            time: e.time,
-            kind: EventKind::Wall {
-                axis: e.axis,
-                up: e.up,
-            },
-        }
-    }
-
     /// Predicts the next wall collision of `i` (at time `now`; `up`: the lid or upper wall) and
     /// the tabulated approach speed of a shaken-wall hit. Ends the `table` solver's memories of
     /// `i` (edge table after a launch, exact solver after a table error): they serve one
     /// prediction.
+    #[inline(always)]
     pub fn predict<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -428,11 +416,26 @@ impl WallSource {
         bodies.body[i].v[D - 1] = v_new;
         bodies.last_collision[i] = t;
     }
+}
+
+impl EventSource for WallSource {
+    /// The stored wall event of `i`.
+    #[inline]
+    fn candidate(&self, i: usize) -> Event {
+        let e = self.ev[i];
+        Event {
+            time: e.time,
+            kind: EventKind::Wall {
+                axis: e.axis,
+                up: e.up,
+            },
+        }
+    }
 
     /// Renumbers the particles (see [`Bodies::permute`]). The `table` solver's one-particle
     /// memories last one prediction and are always spent between events; they are renamed all
     /// the same.
-    pub fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
+    fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
         self.ev = permuted(&self.ev, order);
         self.vrel = permuted(&self.vrel, order);
         if let WallSolver::Table(s) = &mut self.solver {
