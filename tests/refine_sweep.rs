@@ -131,6 +131,7 @@ fn sweep_run_refines_deterministically_and_an_interrupted_refinement_resumes() {
             jobs: 2,
             retry_failed: false,
             show_progress: false,
+            table_cache_mib: 256,
         };
         run_sweeps(&store, std::slice::from_ref(&row), &opts).unwrap();
         let section = sweep.refine.unwrap();

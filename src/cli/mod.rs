@@ -49,6 +49,10 @@ pub enum Command {
         /// Write the lateral profiles (T_g / E_cb, packing fraction, n_cb, f_lc against x) as SVG.
         #[arg(long, value_name = "FILE.svg")]
         profiles: Option<PathBuf>,
+        /// Cap of the wall-table cache in MiB (`table` wall solver; one drive's tables take
+        /// about 27 MiB at 128 x 128 cells; 0: no caching).
+        #[arg(long, value_name = "MIB", default_value_t = crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB)]
+        table_cache_mib: usize,
     },
     /// Measure the engine's speed on the reference systems and print the figures.
     Bench {
@@ -217,7 +221,11 @@ pub fn main() -> ExitCode {
             snapshot,
             colour_by,
             profiles,
+            table_cache_mib,
         } => {
+            let tables =
+                crate::sim::event_driven::table_cache::TableCache::with_cap_mib(table_cache_mib);
+            let _tables = tables.enter();
             let colour_by: ColourBy = match colour_by.parse() {
                 Ok(c) => c,
                 Err(e) => {

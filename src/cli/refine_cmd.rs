@@ -43,6 +43,7 @@ fn opts(jobs: usize) -> RunOptions {
         jobs,
         retry_failed: false,
         show_progress: true,
+        table_cache_mib: crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB,
     }
 }
 

@@ -5,6 +5,7 @@
 
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::{export, plot_phase};
+use crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 use crate::store::{LeftOut, Store, StoreError, SweepRow};
 use crate::sweep::runner::{point_label, short};
 use crate::sweep::{RunOptions, SweepFile, run_job, run_sweeps};
@@ -48,6 +49,11 @@ pub enum SweepCommand {
         /// in the new grid leave the sweep; their results stay in the database).
         #[arg(long)]
         replace: bool,
+        /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
+        /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
+        /// caching.
+        #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
+        table_cache_mib: usize,
     },
     /// Continue interrupted sweeps: re-queue the jobs of runners that died, run what is pending.
     ///
@@ -73,6 +79,11 @@ pub enum SweepCommand {
         /// to this many driving periods of total run (docs/observables.md).
         #[arg(long, value_name = "MAX_PERIODS")]
         extend: Option<f64>,
+        /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
+        /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
+        /// caching.
+        #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
+        table_cache_mib: usize,
     },
     /// Per sweep: jobs by state, failures with their message, time spent and time left.
     Status {
@@ -291,8 +302,9 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
             oversubscribe,
             retry_failed,
             replace,
+            table_cache_mib,
         } => workers_or_fail(jobs, oversubscribe)
-            .and_then(|n| sweep_run(&file, &db, n, retry_failed, replace)),
+            .and_then(|n| sweep_run(&file, &db, n, retry_failed, replace, table_cache_mib)),
         SweepCommand::Resume {
             name,
             db,
@@ -300,8 +312,17 @@ pub fn sweep(cmd: SweepCommand) -> ExitCode {
             oversubscribe,
             retry_failed,
             extend,
-        } => workers_or_fail(jobs, oversubscribe)
-            .and_then(|n| sweep_resume(name.as_deref(), &db, n, retry_failed, extend)),
+            table_cache_mib,
+        } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
+            sweep_resume(
+                name.as_deref(),
+                &db,
+                n,
+                retry_failed,
+                extend,
+                table_cache_mib,
+            )
+        }),
         SweepCommand::Status { db } => sweep_status(&db),
         SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_job(&spec),
@@ -444,6 +465,7 @@ fn sweep_run(
     jobs: usize,
     retry: bool,
     replace: bool,
+    table_cache_mib: usize,
 ) -> Result<(), Failure> {
     // The file is checked in full before the database is touched.
     let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
@@ -459,7 +481,13 @@ fn sweep_run(
     if relabelled.changed() > 0 {
         eprintln!("sweep {}: {}", row.name, relabelled.text());
     }
-    run_and_report(&store, std::slice::from_ref(&row), jobs, retry)?;
+    run_and_report(
+        &store,
+        std::slice::from_ref(&row),
+        jobs,
+        retry,
+        table_cache_mib,
+    )?;
     super::refine_cmd::continue_refinement(&store, &[row], jobs)
 }
 
@@ -523,6 +551,7 @@ fn sweep_resume(
     jobs: usize,
     retry: bool,
     extend: Option<f64>,
+    table_cache_mib: usize,
 ) -> Result<(), Failure> {
     let store = Store::open_existing(db)?;
     let sweeps = match name {
@@ -535,7 +564,7 @@ fn sweep_resume(
             db.display()
         )));
     }
-    run_and_report(&store, &sweeps, jobs, retry)?;
+    run_and_report(&store, &sweeps, jobs, retry, table_cache_mib)?;
     super::refine_cmd::continue_refinement(&store, &sweeps, jobs)?;
     match extend {
         Some(max_periods) => {
@@ -550,6 +579,7 @@ fn run_and_report(
     sweeps: &[SweepRow],
     jobs: usize,
     retry: bool,
+    table_cache_mib: usize,
 ) -> Result<(), Failure> {
     let summary = run_sweeps(
         store,
@@ -558,6 +588,7 @@ fn run_and_report(
             jobs,
             retry_failed: retry,
             show_progress: true,
+            table_cache_mib,
         },
     )?;
     eprintln!(

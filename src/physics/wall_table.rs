@@ -1,6 +1,6 @@
 //! The thesis's tabulated wall-collision times (MODEL.md 6, Appendix B.4-B.5): a table per
 //! wall motion `(A, omega, g)`, filled once before the run and shared by every particle and every
-//! job with that drive ([`shared_table`]).
+//! job with that drive (the bounded cache `sim::event_driven::table_cache` keeps them).
 //!
 //! In the wall's axis (origin at the wall's mean position, particle on the `+` side) a flight
 //! from a base point `(h0, v0)` at wall phase `phi0` has the gap
@@ -35,9 +35,7 @@
 //! beyond one period: a flight without a hit is queried again one period later.
 
 use super::shaken_wall::WallMotion;
-use std::collections::HashMap;
 use std::f64::consts::TAU;
-use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 /// Most roots of the gap in one period: `s''` changes sign at most twice per period, so `s` has
@@ -742,37 +740,6 @@ fn time_to_reach(z: f64, v: f64, g: f64, plane: f64, up: bool) -> Option<f64> {
         .min_by(f64::total_cmp)
 }
 
-/// Key of the shared-table cache: the bit patterns of the motion and the spec.
-type TableKey = [u64; 8];
-
-fn table_key(w: &WallMotion, s: &TableSpec) -> TableKey {
-    [
-        w.amplitude.to_bits(),
-        w.omega.to_bits(),
-        w.g.to_bits(),
-        s.phase_cells as u64,
-        s.velocity_cells as u64,
-        s.v_min.to_bits(),
-        s.v_max.to_bits(),
-        s.corner_tolerance.map_or(u64::MAX, f64::to_bits),
-    ]
-}
-
-/// The table for `(motion, spec)`, built on first use and shared by every engine in the process
-/// (every particle and every job with that drive). Tables are kept for the process's lifetime.
-pub fn shared_table(motion: WallMotion, spec: TableSpec) -> Arc<WallTable> {
-    static CACHE: OnceLock<Mutex<HashMap<TableKey, Arc<WallTable>>>> = OnceLock::new();
-    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
-    let key = table_key(&motion, &spec);
-    if let Some(t) = cache.lock().expect("table cache").get(&key) {
-        return Arc::clone(t);
-    }
-    // Built outside the lock; two threads may build the same table once each, the first kept.
-    let table = Arc::new(WallTable::build(motion, spec));
-    let mut map = cache.lock().expect("table cache");
-    Arc::clone(map.entry(key).or_insert(table))
-}
-
 /// Default phase (or height) cells of a table.
 pub const DEFAULT_PHASE_CELLS: usize = 128;
 /// Default velocity cells of a table.
@@ -944,22 +911,6 @@ mod tests {
                 }
             }
         }
-    }
-
-    #[test]
-    fn one_table_per_drive_is_shared_across_threads() {
-        let w = standard_motion(3.0, 2.0);
-        let spec = spec_for(&w, 16);
-        let handles: Vec<_> = (0..4)
-            .map(|_| std::thread::spawn(move || shared_table(w, spec)))
-            .collect();
-        let tables: Vec<Arc<WallTable>> = handles.into_iter().map(|h| h.join().unwrap()).collect();
-        assert!(tables.iter().all(|t| Arc::ptr_eq(t, &tables[0])));
-        // Another drive or resolution is another table.
-        let other = shared_table(WallMotion { g: -1.0, ..w }, spec);
-        assert!(!Arc::ptr_eq(&other, &tables[0]));
-        let finer = shared_table(w, spec_for(&w, 20));
-        assert!(!Arc::ptr_eq(&finer, &tables[0]));
     }
 
     /// Sign changes of the gap on a fine grid: an independent count of the roots.

@@ -34,8 +34,14 @@ pub struct Frame {
 
 impl Frame {
     /// Copies the current state of an engine.
-    pub fn of_engine<const D: usize, const G: bool, const W: bool, const S: bool>(
-        engine: &Engine<D, G, W, S>,
+    pub fn of_engine<
+        const D: usize,
+        const G: bool,
+        const W: bool,
+        const S: bool,
+        Q: super::event_driven::queue::EventQueue,
+    >(
+        engine: &Engine<D, G, W, S, Q>,
         scene: &Scene,
     ) -> Frame {
         let flat = |v: Vec<super::event_driven::Vector<D>>| -> Vec<f64> {

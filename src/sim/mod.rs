@@ -21,6 +21,7 @@ pub use frame::Frame;
 pub use state::EngineState;
 
 use crate::scene::{EngineKind, Scene};
+use event_driven::queue::EventQueue;
 use event_driven::{EnergyLedger, Engine, EventCounts};
 use serde::Serialize;
 use std::time::Instant;
@@ -311,8 +312,8 @@ pub trait Simulation {
     }
 }
 
-impl<const D: usize, const G: bool, const W: bool, const S: bool> Simulation
-    for Engine<D, G, W, S>
+impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue> Simulation
+    for Engine<D, G, W, S, Q>
 {
     const KIND: &'static str = "event";
     fn time(&self) -> f64 {

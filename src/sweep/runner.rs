@@ -4,9 +4,15 @@
 //! Only the calling thread talks to the store; workers receive claimed specs over a channel and
 //! send back progress and outcomes. Between messages the calling thread refreshes the heartbeat
 //! of the running jobs every `store::HEARTBEAT_INTERVAL`.
+//!
+//! The runner owns the wall-table cache of its jobs (`table` wall solver): one bounded
+//! [`TableCache`] per run, capped by [`RunOptions::table_cache_mib`], installed on every worker
+//! thread and dropped with the run, so a sweep over many drives keeps at most the cap in
+//! cached tables (plus the two tables each running job holds).
 
 use super::job::{JobError, JobResult, run_job, run_job_from};
 use super::progress::Progress;
+use crate::sim::event_driven::table_cache::TableCache;
 use crate::store::{Claim, HEARTBEAT_INTERVAL, Store, StoreError, SweepRow};
 use std::sync::mpsc;
 use std::thread;
@@ -21,6 +27,9 @@ pub struct RunOptions {
     pub retry_failed: bool,
     /// Show progress (bars on a terminal, plain lines otherwise); `false`: silent.
     pub show_progress: bool,
+    /// Cap of the run's wall-table cache in MiB (least recently used tables out first;
+    /// default `table_cache::DEFAULT_TABLE_CACHE_MIB`; 0: no caching, each job builds its own).
+    pub table_cache_mib: usize,
 }
 
 /// What a run did.
@@ -35,6 +44,9 @@ pub struct RunSummary {
     /// Results dropped because another runner had already finished the job.
     pub discarded: u64,
     pub wall_seconds: f64,
+    /// Wall tables built by the run's cache, and the most bytes it held at once.
+    pub tables_built: u64,
+    pub table_cache_peak_bytes: usize,
 }
 
 enum Msg {
@@ -131,14 +143,19 @@ pub fn run_sweeps(
     let (msg_tx, msg_rx) = mpsc::channel::<Msg>();
     let mut job_tx = Vec::new();
     let mut handles = Vec::new();
+    let tables = TableCache::with_cap_mib(opts.table_cache_mib);
     for w in 0..n_workers {
         let (tx, rx) = mpsc::channel::<Claim>();
         job_tx.push(tx);
         let out = msg_tx.clone();
+        let tables = tables.clone();
         handles.push(
             thread::Builder::new()
                 .name(format!("wetgran-worker-{w}"))
-                .spawn(move || worker(w, rx, out))
+                .spawn(move || {
+                    let _tables = tables.enter();
+                    worker(w, rx, out)
+                })
                 .expect("spawn a worker thread"),
         );
     }
@@ -240,6 +257,8 @@ pub fn run_sweeps(
     progress.close();
     outcome?;
     summary.wall_seconds = start.elapsed().as_secs_f64();
+    summary.tables_built = tables.builds();
+    summary.table_cache_peak_bytes = tables.peak_bytes();
     Ok(summary)
 }
 

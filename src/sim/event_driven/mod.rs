@@ -1,8 +1,26 @@
 //! Event-driven molecular dynamics of hard disks and spheres with thin-thread bridges.
+//!
+//! One role per module (the structure is described in docs/architecture-event-engine.md):
+//! - `engine`: the scheduler (clock, bodies, queue, books: pop, validate, dispatch);
+//! - `event`: the `Copy` event value and the sources' compact predictions;
+//! - `queue`: the `EventQueue` trait, the heap and the naive reference queue;
+//! - `bodies`: delayed particle states and free flight;
+//! - `pairs`, `cell_source`, `walls`, `slabs`: the event sources;
+//! - `cells`: the neighbour grid; `shear`: the shear field and the sheared pair quartics;
+//! - `table_cache`: the bounded cache of the `table` wall solver's tables;
+//! - `ledger`: event counts and energy books.
 
+pub mod bodies;
+pub mod cell_source;
 pub mod cells;
 pub mod engine;
+pub mod event;
+pub mod ledger;
+pub mod pairs;
 pub mod queue;
 pub mod shear;
+pub mod slabs;
+pub mod table_cache;
+pub mod walls;
 
 pub use engine::{EnergyLedger, Engine, EventCounts, Vector};

@@ -1,10 +1,29 @@
-//! The event queue: an indexed 4-ary min-heap with exactly one entry per particle, keyed by the
-//! time of that particle's earliest predicted event.
+//! The event queue: one entry per particle, keyed by the time of that particle's earliest
+//! predicted event, behind the [`EventQueue`] trait so that an engine runs on any
+//! implementation (`Engine<.., Q: EventQueue>`, monomorphised: no dynamic dispatch in the loop).
 //!
-//! Re-predicting a particle changes its key in place (`O(log N)`), so the queue never holds
-//! stale copies; events that became invalid through a partner's collision are detected lazily
-//! with per-particle event counters (see `engine.rs`). [`NaiveQueue`] is the reference
-//! implementation the tests compare against.
+//! Re-predicting a particle changes its key in place, so a queue never holds stale copies;
+//! events that became invalid through a partner's collision are detected lazily with
+//! per-particle event counters (see `engine.rs`). Implementations:
+//! - [`HeapQueue`], the default: an indexed 4-ary min-heap, `O(log N)` per update;
+//! - [`NaiveQueue`], the reference: a linear scan, slow and obviously correct. The tests run
+//!   whole engines on it and compare their trajectories with the heap's bit for bit
+//!   (`tests/engine_pins.rs`).
+//!
+//! Both break ties of equal keys by the smaller particle index, so the event order, and hence
+//! the trajectory, does not depend on the queue.
+
+/// A priority queue over particles `0..n` with one key (event time) each.
+pub trait EventQueue: Clone + std::fmt::Debug {
+    /// A queue for particles `0..n`, all with key `+inf`.
+    fn new(n: usize) -> Self;
+    /// The particle with the earliest key (the smallest index among equal keys) and that key.
+    fn min(&self) -> Option<(usize, f64)>;
+    /// The key of particle `i`.
+    fn key(&self, i: usize) -> f64;
+    /// Sets the key of particle `i`.
+    fn update(&mut self, i: usize, time: f64);
+}
 
 /// Children per heap node.
 const ARITY: usize = 4;
@@ -14,35 +33,32 @@ const ARITY: usize = 4;
 /// about one cache line, which makes the frequent sift-down (the processed particle's next event
 /// is later) cheaper than in a binary heap.
 #[derive(Debug, Clone)]
-pub struct EventQueue {
+pub struct HeapQueue {
     heap: Vec<(f64, u32)>,
     slot: Vec<u32>,
 }
 
-impl EventQueue {
-    /// A queue for particles `0..n`, all with key `+inf`.
-    pub fn new(n: usize) -> Self {
+impl EventQueue for HeapQueue {
+    fn new(n: usize) -> Self {
         Self {
             heap: (0..n as u32).map(|i| (f64::INFINITY, i)).collect(),
             slot: (0..n as u32).collect(),
         }
     }
 
-    /// The particle with the earliest event and its time.
     #[inline]
-    pub fn min(&self) -> Option<(usize, f64)> {
+    fn min(&self) -> Option<(usize, f64)> {
         self.heap.first().map(|&(k, i)| (i as usize, k))
     }
 
-    /// The key of particle `i`.
     #[inline]
-    pub fn key(&self, i: usize) -> f64 {
+    fn key(&self, i: usize) -> f64 {
         self.heap[self.slot[i] as usize].0
     }
 
     /// Sets the key of particle `i` and restores the heap order.
     #[inline]
-    pub fn update(&mut self, i: usize, time: f64) {
+    fn update(&mut self, i: usize, time: f64) {
         let s = self.slot[i] as usize;
         let old = self.heap[s].0;
         self.heap[s].0 = time;
@@ -52,7 +68,9 @@ impl EventQueue {
             self.sift_down(s);
         }
     }
+}
 
+impl HeapQueue {
     /// Strict order on entries; ties broken by particle index so the order is deterministic.
     #[inline]
     fn less(a: (f64, u32), b: (f64, u32)) -> bool {
@@ -105,22 +123,28 @@ impl EventQueue {
     }
 }
 
-/// Reference queue: a linear scan. Slow, obviously correct; used to test [`EventQueue`].
+/// Reference queue: a linear scan over the keys, `O(N)` per pop. Slow, obviously correct; the
+/// tests run engines on it to check [`HeapQueue`] (and any faster queue to come).
 #[derive(Debug, Clone)]
 pub struct NaiveQueue {
     key: Vec<f64>,
 }
 
-impl NaiveQueue {
-    pub fn new(n: usize) -> Self {
+impl EventQueue for NaiveQueue {
+    fn new(n: usize) -> Self {
         Self {
             key: vec![f64::INFINITY; n],
         }
     }
-    pub fn update(&mut self, i: usize, time: f64) {
+    fn key(&self, i: usize) -> f64 {
+        self.key[i]
+    }
+    fn update(&mut self, i: usize, time: f64) {
         self.key[i] = time;
     }
-    pub fn min(&self) -> Option<(usize, f64)> {
+    /// First index with the smallest key (strict `<`: ties go to the smaller index, as in the
+    /// heap).
+    fn min(&self) -> Option<(usize, f64)> {
         let mut best: Option<(usize, f64)> = None;
         for (i, &k) in self.key.iter().enumerate() {
             if best.is_none_or(|(_, b)| k < b) {
@@ -140,7 +164,7 @@ mod tests {
     fn agrees_with_naive_queue_under_random_updates() {
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
         let n = 257;
-        let (mut q, mut r) = (EventQueue::new(n), NaiveQueue::new(n));
+        let (mut q, mut r) = (HeapQueue::new(n), NaiveQueue::new(n));
         for step in 0..200_000 {
             let i = rng.gen_range(0..n);
             // Mix of increases, decreases, repeated values and infinities.
@@ -152,8 +176,10 @@ mod tests {
             q.update(i, t);
             r.update(i, t);
             let (qi, qt) = q.min().unwrap();
-            let (_, rt) = r.min().unwrap();
+            let (ri, rt) = r.min().unwrap();
             assert_eq!(qt, rt, "step {step}");
+            // Same tie-break: the same particle, so engines on either queue agree bitwise.
+            assert_eq!(qi, ri, "step {step}");
             assert_eq!(q.key(qi), qt);
         }
     }

@@ -1,0 +1,206 @@
+//! Event source of the neighbour cells: which cell each particle is in, and its next crossing
+//! of a cell face ([`CellSource`], over the grid of [`super::cells`]).
+//!
+//! Round-off at cell faces: crossing times are clamped at zero by the flight functions and a
+//! particle's cell is tracked by index, never recomputed from its position; crossing a face of
+//! a periodic axis wraps the position. Firing a crossing moves the particle into the
+//! neighbouring cell and returns the offsets of the newly adjacent slab of cells, the only cells
+//! whose partners the pair source must scan (the pair event is kept).
+
+use super::bodies::{Bodies, Vector, permuted};
+use super::cells::CellGrid;
+use super::event::{Event, EventKind, EventSource, PlaneEvent};
+
+/// The grid, each particle's cell and its next crossing.
+#[derive(Debug, Clone)]
+pub struct CellSource<const D: usize> {
+    pub grid: CellGrid<D>,
+    /// Cell of each particle (per-axis indices).
+    pub cell: Vec<[i32; D]>,
+    /// The `3^D` neighbour offsets.
+    pub offsets: Vec<[i32; D]>,
+    /// The far slab of the neighbourhood after a crossing along `axis` (index `2 axis + up`):
+    /// the offsets with `+-1` along `axis`, in the order of `offsets`.
+    far: Vec<Vec<[i32; D]>>,
+    /// Next crossing of a face of the particle's cell.
+    pub ev: Vec<PlaneEvent>,
+}
+
+impl<const D: usize> CellSource<D> {
+    /// Puts particles at `positions` into `grid`.
+    pub fn new(grid: CellGrid<D>, positions: impl Iterator<Item = Vector<D>>) -> Self {
+        let offsets = CellGrid::<D>::neighbour_offsets();
+        let far = (0..2 * D)
+            .map(|m| {
+                let (axis, step) = (m / 2, if m % 2 == 1 { 1 } else { -1 });
+                offsets
+                    .iter()
+                    .filter(|o| o[axis] == step)
+                    .copied()
+                    .collect()
+            })
+            .collect();
+        let mut s = Self {
+            grid,
+            cell: Vec::new(),
+            offsets,
+            far,
+            ev: Vec::new(),
+        };
+        for (i, x) in positions.enumerate() {
+            let arr: [f64; D] = x.into();
+            let c = s.grid.locate(&arr);
+            s.cell.push(c);
+            let lin = s.grid.linear(&c);
+            s.grid.insert(i, lin);
+        }
+        s.ev = vec![PlaneEvent::NEVER; s.cell.len()];
+        s
+    }
+
+    /// Predicts the next crossing of a face of `i`'s cell (particle at time `now`).
+    #[inline(always)]
+    pub fn predict<const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        bodies: &Bodies<D, G, S>,
+        now: f64,
+    ) {
+        let c = self.cell[i];
+        let mut best = PlaneEvent::NEVER;
+        for k in 0..D {
+            let w = self.grid.width[k];
+            let lo = c[k] as f64 * w;
+            let periodic = bodies.periodic[k];
+            // The outer faces of the edge cells of a wall axis are never crossed.
+            let lo = if periodic || c[k] > 0 {
+                lo
+            } else {
+                f64::NEG_INFINITY
+            };
+            let hi = if periodic || c[k] < self.grid.n[k] - 1 {
+                c[k] as f64 * w + w
+            } else {
+                f64::INFINITY
+            };
+            let (t_up, t_down) = bodies.times_to_planes(i, k, lo, hi);
+            best.keep_earlier(t_up, k, true);
+            best.keep_earlier(t_down, k, false);
+        }
+        best.time += now;
+        self.ev[i] = best;
+    }
+
+    /// Moves `i` (already at the current time) into the neighbouring cell along `axis`,
+    /// wrapping its position across a periodic face. The newly adjacent cells are then
+    /// [`Self::far_slab`]`(axis, up)`.
+    #[inline]
+    pub fn fire<const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        axis: usize,
+        up: bool,
+        bodies: &mut Bodies<D, G, S>,
+    ) {
+        let old = self.grid.linear(&self.cell[i]);
+        self.grid.remove(i, old);
+        let n = self.grid.n[axis];
+        let c = &mut self.cell[i][axis];
+        if up {
+            *c += 1;
+            if *c == n {
+                *c = 0;
+                bodies.body[i].x[axis] -= bodies.size[axis];
+            }
+        } else {
+            *c -= 1;
+            if *c < 0 {
+                *c = n - 1;
+                bodies.body[i].x[axis] += bodies.size[axis];
+            }
+        }
+        let new = self.grid.linear(&self.cell[i]);
+        self.grid.insert(i, new);
+    }
+
+    /// Offsets of the far slab of the neighbourhood after a crossing along `axis` (`up`:
+    /// towards larger coordinates): `+-1` along `axis`, anything across.
+    #[inline]
+    pub fn far_slab(&self, axis: usize, up: bool) -> &[[i32; D]] {
+        &self.far[2 * axis + usize::from(up)]
+    }
+
+    /// Moves `i` to the cell of position `x` (a placement or a set-up): out of its list and
+    /// into the new one.
+    pub fn relocate(&mut self, i: usize, x: &Vector<D>) {
+        let old = self.grid.linear(&self.cell[i]);
+        self.grid.remove(i, old);
+        let arr: [f64; D] = (*x).into();
+        self.cell[i] = self.grid.locate(&arr);
+        let new = self.grid.linear(&self.cell[i]);
+        self.grid.insert(i, new);
+    }
+
+    /// Like [`Self::relocate`], but leaves the lists alone when the cell does not change.
+    pub fn relocate_if_moved(&mut self, i: usize, x: &Vector<D>) {
+        let arr: [f64; D] = (*x).into();
+        let c = self.grid.locate(&arr);
+        if c != self.cell[i] {
+            let old = self.grid.linear(&self.cell[i]);
+            self.grid.remove(i, old);
+            self.cell[i] = c;
+            let new = self.grid.linear(&c);
+            self.grid.insert(i, new);
+        }
+    }
+
+    /// The order that sorts the particles by cell (ties by index): the renumbering that puts
+    /// neighbours close together in memory.
+    pub fn cell_order(&self) -> Vec<u32> {
+        let mut order: Vec<u32> = (0..self.cell.len() as u32).collect();
+        order.sort_by_key(|&k| (self.grid.linear(&self.cell[k as usize]), k));
+        order
+    }
+
+    /// Invariant: particle `i` at `x` lies in its cell (edge cells of a wall axis extend
+    /// outwards: the shaken floor leaves the grid). Returns the violation, if any.
+    pub fn check(&self, i: usize, x: &Vector<D>, periodic: &[bool; D], tol: f64) -> Option<String> {
+        for k in 0..D {
+            let w = self.grid.width[k];
+            let c = self.cell[i][k];
+            let open_lo = !periodic[k] && c == 0;
+            let open_hi = !periodic[k] && c == self.grid.n[k] - 1;
+            let (c_lo, c_hi) = (c as f64 * w, (c as f64 + 1.0) * w);
+            if (!open_lo && x[k] < c_lo - tol) || (!open_hi && x[k] > c_hi + tol) {
+                return Some(format!("at {} is not in its cell {c} along axis {k}", x[k]));
+            }
+        }
+        None
+    }
+}
+
+impl<const D: usize> EventSource for CellSource<D> {
+    /// The stored crossing of `i` as an event.
+    #[inline]
+    fn candidate(&self, i: usize) -> Event {
+        let e = self.ev[i];
+        Event {
+            time: e.time,
+            kind: EventKind::Cell {
+                axis: e.axis,
+                up: e.up,
+            },
+        }
+    }
+
+    /// Renumbers the particles (see [`Bodies::permute`]) and rebuilds the cell lists.
+    fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
+        self.cell = permuted(&self.cell, order);
+        self.ev = permuted(&self.ev, order);
+        self.grid.clear();
+        for k in 0..self.cell.len() {
+            let c = self.grid.linear(&self.cell[k]);
+            self.grid.insert(k, c);
+        }
+    }
+}

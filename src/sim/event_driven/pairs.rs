@@ -1,0 +1,398 @@
+//! Event source of particle pairs: hard-core collisions and, with bridges (`WET`), the
+//! thin-thread bridges and their well events (MODEL.md 2.1, 3.2). [`PairSource`] owns each
+//! particle's earliest pair event and the bond lists.
+//!
+//! Prediction: all particles feel the same gravity, so the relative motion of two particles in
+//! the same slab is a straight line and the contact time the root of a quadratic (Eq. B.3); two
+//! particles in slabs of different force (shear drive) need the quartics of
+//! [`super::shear::pair_times`]. A particle's pair event is the earliest over the partners in
+//! its neighbourhood of cells; it remembers the partner's velocity-change count at prediction
+//! time, and the scheduler drops it (and re-predicts) if the count moved on (lazy invalidation).
+//!
+//! Safeguards (each tested in `tests/engine_safeguards.rs`): an overlapping pair that approaches
+//! collides now, one that separates is left alone (B.5.6); collapse: the TC model and the
+//! rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
+//! leaves it at least at the rebound floor.
+
+use super::bodies::{Bodies, Vector};
+use super::cell_source::CellSource;
+use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
+use super::ledger::{EventCounts, Ledger};
+use super::shear::pair_times;
+use super::slabs::SlabSource;
+use crate::physics::capillary::{WellOutcome, well_outcome};
+use crate::physics::contact::rebound_speed;
+use crate::scene::RuptureRule;
+
+/// Most bridges one particle may hold (a guard: more means the packing is unphysical).
+pub const MAX_BONDS: usize = 16;
+
+/// Contact and bridge parameters of the pair source.
+#[derive(Debug, Clone, Copy)]
+pub struct PairParams {
+    pub eps: f64,
+    pub tc: f64,
+    pub min_rebound: f64,
+    pub s_crit: f64,
+    pub e_cb: f64,
+    pub rule: RuptureRule,
+}
+
+/// Each particle's earliest pair event, and the bonds (empty unless `WET`).
+#[derive(Debug, Clone)]
+pub struct PairSource<const D: usize, const WET: bool> {
+    pub p: PairParams,
+    pub ev: Vec<PairEvent>,
+    /// Bond partners of particle `i` in `bonds[i * MAX_BONDS..][..bond_len[i]]`.
+    pub bonds: Vec<u32>,
+    pub bond_len: Vec<u8>,
+}
+
+impl<const D: usize, const WET: bool> PairSource<D, WET> {
+    pub fn new(p: PairParams, n: usize) -> Self {
+        Self {
+            p,
+            ev: vec![PairEvent::NEVER; n],
+            bonds: if WET {
+                vec![NONE; n * MAX_BONDS]
+            } else {
+                Vec::new()
+            },
+            bond_len: if WET { vec![0; n] } else { Vec::new() },
+        }
+    }
+
+    // ----- bonds -------------------------------------------------------------------------
+
+    #[inline]
+    pub fn bonded(&self, i: usize, j: usize) -> bool {
+        if !WET {
+            return false;
+        }
+        let base = i * MAX_BONDS;
+        self.bonds[base..base + self.bond_len[i] as usize]
+            .iter()
+            .any(|&b| b as usize == j)
+    }
+
+    /// Adds `j` to `i`'s bonds (`who` and `time` name the particle in the guard's message).
+    pub fn add_bond_half(&mut self, i: usize, j: usize, who: u32, time: f64) {
+        let len = self.bond_len[i] as usize;
+        assert!(
+            len < MAX_BONDS,
+            "particle {who} (scene index) would hold more than {MAX_BONDS} bridges at t = {time}: \
+             packing is unphysical",
+        );
+        self.bonds[i * MAX_BONDS + len] = j as u32;
+        self.bond_len[i] += 1;
+    }
+
+    pub fn remove_bond_half(&mut self, i: usize, j: usize) {
+        let base = i * MAX_BONDS;
+        let len = self.bond_len[i] as usize;
+        if let Some(k) = self.bonds[base..base + len]
+            .iter()
+            .position(|&b| b as usize == j)
+        {
+            self.bonds[base + k] = self.bonds[base + len - 1];
+            self.bonds[base + len - 1] = NONE;
+            self.bond_len[i] -= 1;
+        }
+    }
+
+    /// Bond partners of `i`.
+    pub fn bonds_of(&self, i: usize) -> &[u32] {
+        if !WET {
+            return &[];
+        }
+        let base = i * MAX_BONDS;
+        &self.bonds[base..base + self.bond_len[i] as usize]
+    }
+
+    /// Number of bridges.
+    pub fn bridge_count(&self) -> usize {
+        if !WET {
+            return 0;
+        }
+        self.bond_len.iter().map(|&l| l as usize).sum::<usize>() / 2
+    }
+
+    // ----- prediction --------------------------------------------------------------------
+
+    /// Earliest pair event of `i`, with state `(xi, vi)` at time `t`, with `j`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub fn predict_pair_from<const G: bool, const S: bool>(
+        &self,
+        bodies: &Bodies<D, G, S>,
+        slabs: &SlabSource,
+        xi: &Vector<D>,
+        vi: &Vector<D>,
+        i: usize,
+        j: usize,
+        t: f64,
+    ) -> Option<(f64, PairKind)> {
+        let (xj, vj) = bodies.state_at(j, t);
+        let r = bodies.min_image(xi - xj);
+        // All particles feel the same gravity, so relative motion is a straight line (Eq. B.3).
+        let v = vi - vj;
+        if S && bodies.accel[i] != bodies.accel[j] {
+            return self.predict_sheared_pair(bodies, slabs, &r, &v, i, j, t);
+        }
+        let b = r.dot(&v);
+        let rr = r.norm_squared();
+        let sigma = bodies.body[i].r + bodies.body[j].r;
+        let vv = v.norm_squared();
+        let mut best: Option<(f64, PairKind)> = None;
+        if b < 0.0 {
+            let c = rr - sigma * sigma;
+            if c <= 0.0 {
+                // Overlap safeguard: approaching while overlapping collides now.
+                return Some((t, PairKind::Collide));
+            }
+            let disc = b * b - vv * c;
+            if disc > 0.0 {
+                // Smaller root of |r + v dt| = sigma, cancellation-free.
+                best = Some((t + c / (-b + disc.sqrt()), PairKind::Collide));
+            }
+        }
+        if WET && self.bonded(i, j) {
+            let lambda = sigma + self.p.s_crit;
+            let c = rr - lambda * lambda;
+            let dt = if b > 0.0 && c >= 0.0 {
+                // At or beyond the well edge (round-off) and separating: the event is now.
+                Some(0.0)
+            } else if vv > 0.0 {
+                // Larger root of |r + v dt| = sigma + s_crit. Right after a bounce off the well
+                // wall the pair sits on the edge (c may be +round-off) and approaches: the root
+                // is then the next exit, not "none" (regression: bonds stretched past s_crit).
+                let disc = (b * b - vv * c).max(0.0);
+                Some(if b > 0.0 {
+                    -c / (b + disc.sqrt())
+                } else {
+                    (-b + disc.sqrt()) / vv
+                })
+            } else {
+                None
+            };
+            if let Some(dt) = dt {
+                let tw = t + dt;
+                if best.is_none_or(|(tb, _)| tw < tb) {
+                    best = Some((tw, PairKind::Well));
+                }
+            }
+        }
+        best
+    }
+
+    /// Pair events of `i` and `j` in slabs of different force (shear drive): the quartics of
+    /// [`super::shear::pair_times`], solved up to the first slab exit of either particle.
+    #[cold]
+    #[allow(clippy::too_many_arguments)]
+    fn predict_sheared_pair<const G: bool, const S: bool>(
+        &self,
+        bodies: &Bodies<D, G, S>,
+        slabs: &SlabSource,
+        r: &Vector<D>,
+        v: &Vector<D>,
+        i: usize,
+        j: usize,
+        t: f64,
+    ) -> Option<(f64, PairKind)> {
+        let horizon = (slabs.ev[i].time.min(slabs.ev[j].time) - t).max(0.0);
+        let sigma = bodies.body[i].r + bodies.body[j].r;
+        let lambda = (WET && self.bonded(i, j)).then_some(sigma + self.p.s_crit);
+        let (contact, well) = pair_times::<D>(
+            &(*r).into(),
+            &(*v).into(),
+            bodies.accel[i] - bodies.accel[j],
+            sigma,
+            lambda,
+            horizon,
+        );
+        match (contact, well) {
+            (Some(c), Some(w)) if w < c => Some((t + w, PairKind::Well)),
+            (Some(c), _) => Some((t + c, PairKind::Collide)),
+            (None, Some(w)) => Some((t + w, PairKind::Well)),
+            (None, None) => None,
+        }
+    }
+
+    /// Scans the cells at `offsets` around particle `i` (at time `t`) and lowers its pair event
+    /// if a partner there gives an earlier one.
+    pub fn scan<const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        offsets: &[[i32; D]],
+        bodies: &Bodies<D, G, S>,
+        cells: &CellSource<D>,
+        slabs: &SlabSource,
+        t: f64,
+    ) {
+        let grid = &cells.grid;
+        let c = cells.cell[i];
+        let mut best = self.ev[i];
+        let interior = grid.is_interior(&c);
+        let base = grid.linear(&c);
+        for o in offsets {
+            let cell = if interior {
+                grid.interior_neighbour(base, o)
+            } else {
+                match grid.shifted(&c, o) {
+                    Some(cell) => cell,
+                    None => continue,
+                }
+            };
+            grid.for_each_in(cell, |j| {
+                if j == i {
+                    return;
+                }
+                let bi = &bodies.body[i];
+                if let Some((tj, kind)) =
+                    self.predict_pair_from(bodies, slabs, &bi.x, &bi.v, i, j, t)
+                    && tj < best.time
+                {
+                    best = PairEvent {
+                        time: tj,
+                        partner: j as u32,
+                        partner_count: bodies.count[j],
+                        kind,
+                    };
+                }
+            });
+        }
+        self.ev[i] = best;
+    }
+
+    // ----- firing ------------------------------------------------------------------------
+
+    /// Unit normal from `j` to `i` and the normal relative velocity, both brought to `t`.
+    fn normal<const G: bool, const S: bool>(
+        bodies: &mut Bodies<D, G, S>,
+        i: usize,
+        j: usize,
+        t: f64,
+    ) -> (Vector<D>, f64) {
+        bodies.advance(i, t);
+        bodies.advance(j, t);
+        let r = bodies.min_image(bodies.body[i].x - bodies.body[j].x);
+        let n = r / r.norm();
+        let u = (bodies.body[i].v - bodies.body[j].v).dot(&n);
+        (n, u)
+    }
+
+    /// Pair collision at `t` with restitution (Eqs. 2.3-2.4) and, if wet, bridge formation.
+    pub fn collide<const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        j: usize,
+        t: f64,
+        bodies: &mut Bodies<D, G, S>,
+        ledger: &mut Ledger,
+        counts: &mut EventCounts,
+    ) {
+        let (n, u) = Self::normal(bodies, i, j, t);
+        bodies.bump(i);
+        bodies.bump(j);
+        if u < 0.0 {
+            let since = t - bodies.last_collision[i].max(bodies.last_collision[j]);
+            let u_out = rebound_speed(-u, self.p.eps, since, self.p.tc, self.p.min_rebound);
+            // Change of the normal relative velocity, shared equally (equal masses).
+            let du = u_out - u;
+            bodies.body[i].v += n * (0.5 * du);
+            bodies.body[j].v -= n * (0.5 * du);
+            ledger.book_restitution(0.5 * bodies.mass, -u, self.p.eps, u_out);
+            bodies.last_collision[i] = t;
+            bodies.last_collision[j] = t;
+        }
+        counts.pair_collisions += 1;
+        if WET && !self.bonded(i, j) {
+            self.add_bond_half(i, j, bodies.id[i], t);
+            self.add_bond_half(j, i, bodies.id[j], t);
+            counts.bridge_formations += 1;
+        }
+    }
+
+    /// Bonded pair at `s = s_crit` at time `t`: bounce or rupture (MODEL.md 3.2).
+    pub fn well_edge<const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        j: usize,
+        t: f64,
+        bodies: &mut Bodies<D, G, S>,
+        ledger: &mut Ledger,
+        counts: &mut EventCounts,
+    ) {
+        let (n, u) = Self::normal(bodies, i, j, t);
+        bodies.bump(i);
+        bodies.bump(j);
+        // A pair on the edge moving tangentially (u <= 0 by round-off) is treated as touching the
+        // wall with zero normal speed.
+        let u_in = u.max(0.0);
+        let u_out = match well_outcome(bodies.mass, u_in, self.p.e_cb, self.p.rule) {
+            WellOutcome::Bounce(reflected) => {
+                counts.well_bounces += 1;
+                // A pair grazing the concave well wall would bounce ever more often (about
+                // pi / angle bounces to slide round): it leaves the wall inwards at least at the
+                // rebound floor, and the energy that adds is booked with the collapse remedies.
+                let u_out = reflected.min(-self.p.min_rebound);
+                ledger.added += 0.25 * bodies.mass * (u_out * u_out - u * u);
+                u_out
+            }
+            WellOutcome::Rupture {
+                new_normal_speed,
+                energy,
+            } => {
+                self.remove_bond_half(i, j);
+                self.remove_bond_half(j, i);
+                ledger.dissipated_ruptures += energy;
+                counts.bridge_ruptures += 1;
+                new_normal_speed
+            }
+        };
+        let du = u_out - u;
+        bodies.body[i].v += n * (0.5 * du);
+        bodies.body[j].v -= n * (0.5 * du);
+    }
+
+    // ----- renumbering -------------------------------------------------------------------
+}
+
+impl<const D: usize, const WET: bool> EventSource for PairSource<D, WET> {
+    /// The stored pair event of `i`.
+    #[inline]
+    fn candidate(&self, i: usize) -> Event {
+        self.ev[i].event()
+    }
+
+    /// Renumbers the particles: new index `k` holds old particle `order[k]`; `new_of_old` maps
+    /// back (partner indices in events and bonds are renamed).
+    fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
+        let n = order.len();
+        self.ev = order
+            .iter()
+            .map(|&k| {
+                let mut e = self.ev[k as usize];
+                if e.partner != NONE {
+                    e.partner = new_of_old[e.partner as usize];
+                }
+                e
+            })
+            .collect();
+        if WET {
+            let mut bonds = vec![NONE; n * MAX_BONDS];
+            let mut bond_len = vec![0u8; n];
+            for (new, &old) in order.iter().enumerate() {
+                let old = old as usize;
+                let len = self.bond_len[old] as usize;
+                for m in 0..len {
+                    bonds[new * MAX_BONDS + m] =
+                        new_of_old[self.bonds[old * MAX_BONDS + m] as usize];
+                }
+                bond_len[new] = len as u8;
+            }
+            self.bonds = bonds;
+            self.bond_len = bond_len;
+        }
+    }
+}

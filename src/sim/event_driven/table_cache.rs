@@ -1,0 +1,335 @@
+//! A bounded cache of the `table` wall solver's tables ([`WallTable`], MODEL.md 6, B.4-B.5):
+//! one table per `(wall motion, table spec)`, built on first use, shared by every engine that
+//! asks for it, and evicted least recently used first once the cached tables exceed a size cap.
+//!
+//! Who owns a cache: the sweep runner (`sweep::runner::run_sweeps`) makes one per run with the
+//! cap of `RunOptions::table_cache_mib` (`wetgran sweep run/resume --table-cache-mib`) and
+//! installs it on each worker thread ([`TableCache::enter`]); `wetgran simulate
+//! --table-cache-mib` does the same on its thread. An engine built on a thread without an
+//! installed cache uses the process's default cache ([`TableCache::process_default`], capped
+//! at [`DEFAULT_TABLE_CACHE_MIB`]), so no path keeps tables without bound.
+//!
+//! The cap bounds what the cache keeps. A running engine holds its two tables (floor and lid)
+//! through `Arc`s, so a table evicted while in use is freed when its last engine ends: the
+//! memory in tables is at most the cap plus two tables per running engine. A table larger than
+//! the whole cap is handed out without being cached (a cap of 0 disables caching: every engine
+//! builds its own tables).
+//!
+//! Sizes: at the default 128 x 128 cells a table takes about 14 MiB, a drive (floor and lid)
+//! about 27 MiB, so the default cap of 256 MiB keeps the tables of the last nine drives.
+
+use crate::physics::shaken_wall::WallMotion;
+use crate::physics::wall_table::{TableSpec, WallTable};
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// Default cap of a table cache, in MiB (2^20 bytes).
+pub const DEFAULT_TABLE_CACHE_MIB: usize = 256;
+
+/// Key of a cached table: the bit patterns of the motion and the spec.
+type TableKey = [u64; 8];
+
+fn table_key(w: &WallMotion, s: &TableSpec) -> TableKey {
+    [
+        w.amplitude.to_bits(),
+        w.omega.to_bits(),
+        w.g.to_bits(),
+        s.phase_cells as u64,
+        s.velocity_cells as u64,
+        s.v_min.to_bits(),
+        s.v_max.to_bits(),
+        s.corner_tolerance.map_or(u64::MAX, f64::to_bits),
+    ]
+}
+
+#[derive(Debug, Default)]
+struct Entries {
+    /// Table and the tick of its last use.
+    map: HashMap<TableKey, (Arc<WallTable>, u64)>,
+    /// Bytes of the cached tables.
+    bytes: usize,
+    /// Use counter (the recency order).
+    tick: u64,
+    /// Tables built by this cache (a measure of what eviction cost).
+    builds: u64,
+    /// Largest `bytes` ever held.
+    peak: usize,
+}
+
+/// A bounded, thread-safe cache of wall tables (least recently used out first). Cloning gives
+/// another handle to the same cache.
+#[derive(Debug, Clone)]
+pub struct TableCache {
+    cap: usize,
+    entries: Arc<Mutex<Entries>>,
+}
+
+thread_local! {
+    /// The cache installed on this thread by [`TableCache::enter`].
+    static CURRENT: RefCell<Option<TableCache>> = const { RefCell::new(None) };
+}
+
+/// Keeps a cache installed on the current thread; dropping it restores the previous one.
+#[must_use = "the cache is installed only while the guard lives"]
+#[derive(Debug)]
+pub struct CacheScope {
+    previous: Option<TableCache>,
+}
+
+impl Drop for CacheScope {
+    fn drop(&mut self) {
+        let previous = self.previous.take();
+        CURRENT.with(|c| *c.borrow_mut() = previous);
+    }
+}
+
+impl TableCache {
+    /// An empty cache that keeps at most `cap_bytes` of tables.
+    pub fn new(cap_bytes: usize) -> Self {
+        Self {
+            cap: cap_bytes,
+            entries: Arc::new(Mutex::new(Entries::default())),
+        }
+    }
+
+    /// An empty cache capped at `mib` MiB.
+    pub fn with_cap_mib(mib: usize) -> Self {
+        Self::new(mib.saturating_mul(1 << 20))
+    }
+
+    /// The cache of engines built on threads without an installed cache, capped at
+    /// [`DEFAULT_TABLE_CACHE_MIB`].
+    pub fn process_default() -> &'static TableCache {
+        static DEFAULT: OnceLock<TableCache> = OnceLock::new();
+        DEFAULT.get_or_init(|| TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB))
+    }
+
+    /// The cache engines on this thread use: the installed one, else the process default.
+    pub fn current() -> TableCache {
+        CURRENT
+            .with(|c| c.borrow().clone())
+            .unwrap_or_else(|| Self::process_default().clone())
+    }
+
+    /// Installs this cache on the current thread until the returned guard is dropped.
+    pub fn enter(&self) -> CacheScope {
+        let previous = CURRENT.with(|c| c.borrow_mut().replace(self.clone()));
+        CacheScope { previous }
+    }
+
+    /// The cap in bytes.
+    pub fn cap(&self) -> usize {
+        self.cap
+    }
+
+    /// Bytes of the tables held now.
+    pub fn bytes(&self) -> usize {
+        self.lock().bytes
+    }
+
+    /// Largest number of bytes held at any time.
+    pub fn peak_bytes(&self) -> usize {
+        self.lock().peak
+    }
+
+    /// Number of tables held now.
+    pub fn len(&self) -> usize {
+        self.lock().map.len()
+    }
+
+    /// Whether the cache holds no table.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Tables built through this cache so far.
+    pub fn builds(&self) -> u64 {
+        self.lock().builds
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Entries> {
+        // A panic while holding the lock leaves the map consistent (every update is one
+        // statement), so a poisoned lock is still usable.
+        self.entries.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// The table for `(motion, spec)`: the cached one, or a new one (built outside the lock:
+    /// two threads may build the same table once each; the first one cached is kept).
+    pub fn get(&self, motion: WallMotion, spec: TableSpec) -> Arc<WallTable> {
+        let key = table_key(&motion, &spec);
+        {
+            let mut e = self.lock();
+            e.tick += 1;
+            let tick = e.tick;
+            if let Some((t, used)) = e.map.get_mut(&key) {
+                *used = tick;
+                return Arc::clone(t);
+            }
+        }
+        let table = Arc::new(WallTable::build(motion, spec));
+        let size = table.bytes();
+        let mut e = self.lock();
+        e.builds += 1;
+        if size > self.cap {
+            return table;
+        }
+        e.tick += 1;
+        let tick = e.tick;
+        if let Some((t, used)) = e.map.get_mut(&key) {
+            *used = tick;
+            return Arc::clone(t);
+        }
+        e.map.insert(key, (Arc::clone(&table), tick));
+        e.bytes += size;
+        while e.bytes > self.cap {
+            let oldest = e
+                .map
+                .iter()
+                .filter(|(k, _)| **k != key)
+                .min_by_key(|(_, (_, used))| *used)
+                .map(|(k, _)| *k);
+            let Some(k) = oldest else { break };
+            let (t, _) = e.map.remove(&k).expect("key just found");
+            e.bytes -= t.bytes();
+        }
+        e.peak = e.peak.max(e.bytes);
+        table
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn motion(gamma: f64, e_star: f64) -> WallMotion {
+        let v_w = (2.0f64 * e_star * 0.2844).sqrt();
+        WallMotion {
+            amplitude: v_w * v_w / gamma,
+            omega: gamma / v_w,
+            g: 1.0,
+        }
+    }
+
+    fn spec(w: &WallMotion, cells: usize) -> TableSpec {
+        let vw = w.amplitude * w.omega;
+        TableSpec {
+            phase_cells: cells,
+            velocity_cells: cells,
+            v_min: 0.05 * vw,
+            v_max: 50.0 * vw,
+            corner_tolerance: Some(1e-3),
+        }
+    }
+
+    #[test]
+    fn one_table_per_drive_is_shared_across_threads() {
+        let cache = TableCache::with_cap_mib(64);
+        let w = motion(3.0, 2.0);
+        let s = spec(&w, 16);
+        let handles: Vec<_> = (0..4)
+            .map(|_| {
+                let c = cache.clone();
+                std::thread::spawn(move || c.get(w, s))
+            })
+            .collect();
+        let tables: Vec<Arc<WallTable>> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+        assert!(tables.iter().all(|t| Arc::ptr_eq(t, &tables[0])));
+        // Another drive or resolution is another table.
+        let other = cache.get(WallMotion { g: -1.0, ..w }, s);
+        assert!(!Arc::ptr_eq(&other, &tables[0]));
+        let finer = cache.get(w, spec(&w, 20));
+        assert!(!Arc::ptr_eq(&finer, &tables[0]));
+        assert_eq!(cache.len(), 3);
+        assert!(Arc::ptr_eq(&cache.get(w, s), &tables[0]));
+    }
+
+    #[test]
+    fn a_sweep_over_many_drives_stays_under_the_cap() {
+        // Room for three tables of this resolution, then forty drives (a small (Gamma, E*)
+        // grid) asked for in turn, each twice (floor, then again as a replica would).
+        let one = WallTable::build(motion(2.0, 1.0), spec(&motion(2.0, 1.0), 12)).bytes();
+        let cache = TableCache::new(3 * one + one / 2);
+        let mut drives = 0;
+        for gamma in [1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0] {
+            for e_star in [0.5, 1.0, 2.0, 5.0, 10.0] {
+                let w = motion(gamma, e_star);
+                let a = cache.get(w, spec(&w, 12));
+                assert_eq!(
+                    a.bytes(),
+                    one,
+                    "every table of this resolution has one size"
+                );
+                let b = cache.get(w, spec(&w, 12));
+                assert!(Arc::ptr_eq(&a, &b), "a table just used is kept");
+                assert!(
+                    cache.bytes() <= cache.cap(),
+                    "{} > {}",
+                    cache.bytes(),
+                    cache.cap()
+                );
+                drives += 1;
+            }
+        }
+        assert_eq!(drives, 40);
+        assert_eq!(cache.len(), 3, "the cache stays full, not emptier");
+        assert!(cache.peak_bytes() <= cache.cap());
+        assert_eq!(cache.builds(), 40, "each drive built once");
+        // Least recently used out first: the last three drives are still there, the first not.
+        let last = motion(10.0, 10.0);
+        let kept = cache.get(last, spec(&last, 12));
+        assert_eq!(cache.builds(), 40);
+        drop(kept);
+        let first = motion(1.5, 0.5);
+        let _ = cache.get(first, spec(&first, 12));
+        assert_eq!(cache.builds(), 41);
+        assert!(cache.bytes() <= cache.cap());
+    }
+
+    #[test]
+    fn recently_used_tables_survive_eviction() {
+        let w = |g: f64| motion(g, 2.0);
+        let one = WallTable::build(w(2.0), spec(&w(2.0), 10)).bytes();
+        let cache = TableCache::new(2 * one);
+        let _ = cache.get(w(2.0), spec(&w(2.0), 10));
+        let _ = cache.get(w(3.0), spec(&w(3.0), 10));
+        // Touch the first: the second is now the least recently used and goes.
+        let _ = cache.get(w(2.0), spec(&w(2.0), 10));
+        let _ = cache.get(w(4.0), spec(&w(4.0), 10));
+        assert_eq!(cache.builds(), 3);
+        let _ = cache.get(w(2.0), spec(&w(2.0), 10));
+        assert_eq!(cache.builds(), 3, "the recently used table was kept");
+        let _ = cache.get(w(3.0), spec(&w(3.0), 10));
+        assert_eq!(
+            cache.builds(),
+            4,
+            "the least recently used table was evicted"
+        );
+    }
+
+    #[test]
+    fn a_cap_of_zero_caches_nothing_and_an_installed_cache_is_scoped() {
+        let cache = TableCache::new(0);
+        let w = motion(3.0, 2.0);
+        let a = cache.get(w, spec(&w, 8));
+        let b = cache.get(w, spec(&w, 8));
+        assert!(!Arc::ptr_eq(&a, &b));
+        assert!(cache.is_empty());
+        assert_eq!(cache.builds(), 2);
+        {
+            let _scope = cache.enter();
+            assert_eq!(TableCache::current().cap(), 0);
+            let inner = TableCache::new(7);
+            {
+                let _s2 = inner.enter();
+                assert_eq!(TableCache::current().cap(), 7);
+            }
+            assert_eq!(TableCache::current().cap(), 0);
+        }
+        assert_eq!(
+            TableCache::current().cap(),
+            DEFAULT_TABLE_CACHE_MIB << 20,
+            "outside a scope: the process default"
+        );
+    }
+}
