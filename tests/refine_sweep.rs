@@ -8,8 +8,9 @@ use std::path::Path;
 use sweep_common::*;
 use wetgran::refine::Settings;
 use wetgran::refine::driver::{plan_jobs, refined_jobs};
+use wetgran::run::{RunOptions, run_sweeps};
 use wetgran::store::{REFINED_FROM, Store};
-use wetgran::sweep::{RunOptions, SweepFile, run_sweeps};
+use wetgran::sweep::SweepFile;
 
 /// 2 x 3 grid (fluid at low E*, gas at high E*), 4 refinement jobs in 2 rounds.
 fn sweep_file(dir: &Path) -> std::path::PathBuf {

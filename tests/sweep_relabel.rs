@@ -1,4 +1,4 @@
-//! Sweep-level classification (`sweep::relabel`): the points of a line of constant Gamma are
+//! Sweep-level classification (`run::relabel`): the points of a line of constant Gamma are
 //! labelled fluid or gas by the line's jump (elastic) or inflection (inelastic) of
 //! `T_g / E_cb(E*)`, every point of the line alike; points of lines too short keep the per-point
 //! fallback and say so; replicas (other seeds) belong to their point's line.
@@ -6,10 +6,10 @@
 use serde_json::{Value, json};
 use wetgran::observe::classify::FluidGasFrom;
 use wetgran::observe::{Phase, run_observed};
+use wetgran::run::relabel::{MIN_LINE_POINTS, relabel};
 use wetgran::scene::Scene;
 use wetgran::store::PointRow;
 use wetgran::sweep::JobSpec;
-use wetgran::sweep::relabel::{MIN_LINE_POINTS, relabel};
 use wetgran::sweep::spec::SPEC_FORMAT;
 
 fn scene(gamma: f64, e_star: f64, restitution: f64, seed: u64) -> Scene {

@@ -5,8 +5,9 @@
 mod sweep_common;
 
 use sweep_common::*;
+use wetgran::run::{RunOptions, run_sweeps};
 use wetgran::store::Store;
-use wetgran::sweep::{RunOptions, SweepFile, run_sweeps};
+use wetgran::sweep::SweepFile;
 
 #[test]
 fn a_table_solver_sweep_over_many_drives_stays_under_the_cache_cap() {

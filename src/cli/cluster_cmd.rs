@@ -6,8 +6,8 @@
 use super::sweep_cmd::{Failure, load_sweep_left_out, select};
 use crate::cluster::slurm::{self, ArrayScript, Queue, SbatchOptions};
 use crate::cluster::{Collected, Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
+use crate::run::runner::point_label;
 use crate::store::{Store, SweepRow, TaskState};
-use crate::sweep::runner::point_label;
 use crate::sweep::{JobSpec, run_job};
 use std::collections::HashMap;
 use std::fmt::Write as _;

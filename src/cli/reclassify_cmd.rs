@@ -1,5 +1,5 @@
 //! `wetgran reclassify`: re-labels stored results from their stored observables, without
-//! simulating. The labels come from `sweep::relabel` (`observe::classify` per point, then the
+//! simulating. The labels come from `run::relabel` (`observe::classify` per point, then the
 //! fluid-gas line rule along lines of constant Gamma) with either each job's own `[classify]`
 //! thresholds (those of the sweep that last registered it) or the thresholds of a
 //! `--classify FILE`. `sweep run` calls the same relabelling after
@@ -7,8 +7,8 @@
 
 use super::sweep_cmd::{Failure, exit, select};
 use crate::observe::{Observables, Thresholds};
+use crate::run::relabel::relabel;
 use crate::store::{Store, SweepRow};
-use crate::sweep::relabel::relabel;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::ExitCode;
@@ -86,7 +86,7 @@ pub fn thresholds_file(path: &Path) -> Result<Thresholds, String> {
 
 /// Re-labels every stored result of `sweeps` from its stored observables with `thresholds`, or
 /// with the job's own `[classify]` thresholds when `None`, the fluid-gas line rule included
-/// (`sweep::relabel`, MODEL.md 7); writes only labels that changed or whose decision numbers
+/// (`run::relabel`, MODEL.md 7); writes only labels that changed or whose decision numbers
 /// changed. A job shared by several of the given sweeps is counted once (the last sweep's
 /// lines decide its label).
 pub(super) fn relabel_sweeps(

@@ -4,8 +4,9 @@
 use super::sweep_cmd::Failure;
 use crate::refine::Settings;
 use crate::refine::driver::{RefineError, refine_sweep, refined_jobs};
+use crate::run::RunOptions;
 use crate::store::{Store, SweepRow};
-use crate::sweep::{RunOptions, SweepFile};
+use crate::sweep::SweepFile;
 use std::path::Path;
 
 /// Command-line overrides of the `[refine]` table.

@@ -5,10 +5,11 @@
 
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::{export, plot_phase};
+use crate::run::runner::{point_label, short};
+use crate::run::{RunOptions, run_sweeps};
 use crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 use crate::store::{LeftOut, Store, StoreError, SweepRow};
-use crate::sweep::runner::{point_label, short};
-use crate::sweep::{RunOptions, SweepFile, run_job, run_sweeps};
+use crate::sweep::{SweepFile, run_job};
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -12,8 +12,9 @@
 
 use super::{Sample, Settings, Step, plan_round};
 use crate::boundary::{Observation, PlaneAxis, phase_map};
+use crate::run::{RunOptions, run_sweeps};
 use crate::store::{PointRow, REFINED_FROM, Store, StoreError, SweepRow};
-use crate::sweep::{RunOptions, SweepFile, SweepJob, run_sweeps};
+use crate::sweep::{SweepFile, SweepJob};
 use std::collections::BTreeMap;
 
 /// What a refinement did.

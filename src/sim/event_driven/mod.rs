@@ -1,6 +1,6 @@
 //! Event-driven molecular dynamics of hard disks and spheres with thin-thread bridges.
 //!
-//! One role per module (the structure is described in docs/architecture-event-engine.md):
+//! One role per module (the structure is described in ARCHITECTURE.md, "Event engine"):
 //! - `engine`: the scheduler (clock, bodies, queue, books: pop, validate, dispatch);
 //! - `event`: the `Copy` event value and the sources' compact predictions;
 //! - `queue`: the `EventQueue` trait, the heap and the naive reference queue;

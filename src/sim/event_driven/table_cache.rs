@@ -2,7 +2,7 @@
 //! one table per `(wall motion, table spec)`, built on first use, shared by every engine that
 //! asks for it, and evicted least recently used first once the cached tables exceed a size cap.
 //!
-//! Who owns a cache: the sweep runner (`sweep::runner::run_sweeps`) makes one per run with the
+//! Who owns a cache: the sweep runner (`run::runner::run_sweeps`) makes one per run with the
 //! cap of `RunOptions::table_cache_mib` (`wetgran sweep run/resume --table-cache-mib`) and
 //! installs it on each worker thread ([`TableCache::enter`]); `wetgran simulate
 //! --table-cache-mib` does the same on its thread. An engine built on a thread without an

@@ -10,10 +10,10 @@
 //! thread and dropped with the run, so a sweep over many drives keeps at most the cap in
 //! cached tables (plus the two tables each running job holds).
 
-use super::job::{JobError, JobResult, run_job, run_job_from};
 use super::progress::Progress;
 use crate::sim::event_driven::table_cache::TableCache;
 use crate::store::{Claim, HEARTBEAT_INTERVAL, Store, StoreError, SweepRow};
+use crate::sweep::job::{JobError, JobResult, run_job, run_job_from};
 use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
