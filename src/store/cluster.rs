@@ -6,7 +6,7 @@
 //! already has a result keeps it and nothing is stored) or its error record
 //! ([`Store::ingest_failure`]: job failed with the message, unless it is done or running here).
 
-use super::{Store, StoreError, now};
+use super::{Store, StoreError, now, queries};
 use crate::sweep::job::JobResult;
 
 /// What `sweep collect` found for a task.
@@ -90,28 +90,23 @@ impl Store {
     ) -> Result<i64, StoreError> {
         let t = now();
         self.in_transaction(async |tx| {
-            let id: i64 = sqlx::query_scalar(
-                "INSERT INTO submissions (sweep_id, dir, script, tasks, submitted_at) \
-                 VALUES (?1, ?2, ?3, ?4, ?5) RETURNING id",
-            )
-            .bind(sweep_id)
-            .bind(dir)
-            .bind(script)
-            .bind(jobs.len() as i64)
-            .bind(t)
-            .fetch_one(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
-            for (k, job) in jobs.iter().enumerate() {
-                sqlx::query(
-                    "INSERT INTO submission_tasks (submission_id, task, job_id) VALUES (?1, ?2, ?3)",
-                )
-                .bind(id)
-                .bind(k as i64)
-                .bind(job)
-                .execute(&mut **tx)
+            let id: i64 = sqlx::query_scalar(queries::INSERT_SUBMISSION)
+                .bind(sweep_id)
+                .bind(dir)
+                .bind(script)
+                .bind(jobs.len() as i64)
+                .bind(t)
+                .fetch_one(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
+            for (k, job) in jobs.iter().enumerate() {
+                sqlx::query(queries::INSERT_SUBMISSION_TASK)
+                    .bind(id)
+                    .bind(k as i64)
+                    .bind(job)
+                    .execute(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
             }
             Ok(id)
         })
@@ -121,7 +116,7 @@ impl Store {
     pub fn set_slurm_job(&self, submission_id: i64, slurm_job: &str) -> Result<(), StoreError> {
         self.rt
             .block_on(
-                sqlx::query("UPDATE submissions SET slurm_job = ?2 WHERE id = ?1")
+                sqlx::query(queries::SET_SLURM_JOB)
                     .bind(submission_id)
                     .bind(slurm_job)
                     .execute(&self.pool),
@@ -134,7 +129,7 @@ impl Store {
     pub fn drop_submission(&self, submission_id: i64) -> Result<(), StoreError> {
         self.rt
             .block_on(
-                sqlx::query("DELETE FROM submissions WHERE id = ?1")
+                sqlx::query(queries::DELETE_SUBMISSION)
                     .bind(submission_id)
                     .execute(&self.pool),
             )
@@ -147,14 +142,9 @@ impl Store {
         let rows: Vec<TaskTuple> = self
             .rt
             .block_on(
-                sqlx::query_as(
-                    "SELECT s.id, s.dir, s.slurm_job, t.task, t.job_id, t.state, t.message, \
-                         s.submitted_at FROM submission_tasks t \
-                         JOIN submissions s ON s.id = t.submission_id \
-                         WHERE s.sweep_id = ?1 ORDER BY s.id, t.task",
-                )
-                .bind(sweep_id)
-                .fetch_all(&self.pool),
+                sqlx::query_as(queries::LIST_TASKS)
+                    .bind(sweep_id)
+                    .fetch_all(&self.pool),
             )
             .map_err(|e| self.db(e))?;
         Ok(rows
@@ -187,15 +177,12 @@ impl Store {
     ) -> Result<(), StoreError> {
         self.rt
             .block_on(
-                sqlx::query(
-                    "UPDATE submission_tasks SET state = ?3, message = ?4 \
-                     WHERE submission_id = ?1 AND task = ?2",
-                )
-                .bind(submission_id)
-                .bind(task)
-                .bind(state.as_str())
-                .bind(message)
-                .execute(&self.pool),
+                sqlx::query(queries::SET_TASK_STATE)
+                    .bind(submission_id)
+                    .bind(task)
+                    .bind(state.as_str())
+                    .bind(message)
+                    .execute(&self.pool),
             )
             .map_err(|e| self.db(e))?;
         Ok(())
@@ -212,7 +199,7 @@ impl Store {
             let s: Option<String> = self
                 .rt
                 .block_on(
-                    sqlx::query_scalar("SELECT status FROM jobs WHERE id = ?1")
+                    sqlx::query_scalar(queries::JOB_STATUS)
                         .bind(id)
                         .fetch_optional(&self.pool),
                 )
@@ -235,19 +222,15 @@ impl Store {
         finished_at: f64,
     ) -> Result<bool, StoreError> {
         self.in_transaction(async |tx| {
-            let n = sqlx::query(
-                "UPDATE jobs SET status = 'done', owner = ?2, heartbeat = NULL, finished_at = ?3, \
-                 wall_seconds = ?4, last_error = NULL, attempts = attempts + 1 \
-                 WHERE id = ?1 AND NOT EXISTS (SELECT 1 FROM results WHERE job_id = ?1)",
-            )
-            .bind(job_id)
-            .bind(owner)
-            .bind(finished_at)
-            .bind(result.wall_seconds)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?
-            .rows_affected();
+            let n = sqlx::query(queries::INGEST_DONE_JOB)
+                .bind(job_id)
+                .bind(owner)
+                .bind(finished_at)
+                .bind(result.wall_seconds)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?
+                .rows_affected();
             if n == 1 {
                 self.insert_result(tx, job_id, result, owner, finished_at)
                     .await?;
@@ -270,20 +253,16 @@ impl Store {
         finished_at: f64,
     ) -> Result<bool, StoreError> {
         self.in_transaction(async |tx| {
-            let n = sqlx::query(
-                "UPDATE jobs SET status = 'failed', owner = ?2, heartbeat = NULL, \
-                 finished_at = ?3, wall_seconds = ?4, last_error = ?5, attempts = attempts + 1 \
-                 WHERE id = ?1 AND status IN ('pending', 'failed')",
-            )
-            .bind(job_id)
-            .bind(owner)
-            .bind(finished_at)
-            .bind(wall_seconds)
-            .bind(message)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?
-            .rows_affected();
+            let n = sqlx::query(queries::INGEST_FAILED_JOB)
+                .bind(job_id)
+                .bind(owner)
+                .bind(finished_at)
+                .bind(wall_seconds)
+                .bind(message)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?
+                .rows_affected();
             if n == 1 {
                 self.insert_remote_run(tx, job_id, owner, wall_seconds, finished_at, "failed")
                     .await?;
@@ -303,18 +282,15 @@ impl Store {
         finished_at: f64,
         outcome: &str,
     ) -> Result<(), StoreError> {
-        sqlx::query(
-            "INSERT INTO runs (job_id, owner, started_at, ended_at, outcome) \
-             VALUES (?1, ?2, ?3, ?4, ?5)",
-        )
-        .bind(job_id)
-        .bind(owner)
-        .bind(finished_at - wall_seconds)
-        .bind(finished_at)
-        .bind(outcome)
-        .execute(&mut **tx)
-        .await
-        .map_err(|e| self.db(e))?;
+        sqlx::query(queries::INSERT_REMOTE_RUN)
+            .bind(job_id)
+            .bind(owner)
+            .bind(finished_at - wall_seconds)
+            .bind(finished_at)
+            .bind(outcome)
+            .execute(&mut **tx)
+            .await
+            .map_err(|e| self.db(e))?;
         Ok(())
     }
 }

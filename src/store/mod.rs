@@ -26,6 +26,7 @@
 
 mod cluster;
 pub mod hysteresis;
+mod queries;
 
 pub use cluster::{TaskRow, TaskState};
 
@@ -394,12 +395,10 @@ impl Store {
             let conn: &mut SqliteConnection = &mut conn;
             match existing {
                 Existing::OtherSqlite => {
-                    let tables: Vec<String> = sqlx::query_scalar(
-                        "SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name",
-                    )
-                    .fetch_all(&mut *conn)
-                    .await
-                    .map_err(damaged)?;
+                    let tables: Vec<String> = sqlx::query_scalar(queries::LIST_TABLES)
+                        .fetch_all(&mut *conn)
+                        .await
+                        .map_err(damaged)?;
                     if !tables.is_empty() {
                         return Err(StoreError::NotWetgran {
                             path: p.clone(),
@@ -408,7 +407,7 @@ impl Store {
                     }
                 }
                 Existing::Ours => {
-                    let check: Vec<String> = sqlx::query_scalar("PRAGMA quick_check")
+                    let check: Vec<String> = sqlx::query_scalar(queries::QUICK_CHECK)
                         .fetch_all(&mut *conn)
                         .await
                         .map_err(damaged)?;
@@ -427,12 +426,12 @@ impl Store {
             };
             if !matches!(existing, Existing::Ours) {
                 // Before WAL mode, so that the id is written to the main file at once.
-                sqlx::query("PRAGMA application_id = 1464291918")
+                sqlx::query(queries::SET_APPLICATION_ID)
                     .execute(&mut *conn)
                     .await
                     .map_err(db)?;
             }
-            let mode: String = sqlx::query_scalar("PRAGMA journal_mode = WAL")
+            let mode: String = sqlx::query_scalar(queries::SET_WAL_MODE)
                 .fetch_one(&mut *conn)
                 .await
                 .map_err(db)?;
@@ -459,21 +458,17 @@ impl Store {
     fn rekey_jobs(&self) -> Result<(), StoreError> {
         let rule: Option<String> = self
             .rt
-            .block_on(
-                sqlx::query_scalar("SELECT value FROM meta WHERE key = 'job_ids'")
-                    .fetch_optional(&self.pool),
-            )
+            .block_on(sqlx::query_scalar(queries::JOB_ID_RULE).fetch_optional(&self.pool))
             .map_err(|e| self.db(e))?;
         if rule.as_deref() == Some(JOB_ID_RULE) {
             return Ok(());
         }
         let path = self.path.display().to_string();
         self.in_transaction(async |tx| {
-            let jobs: Vec<(String, String)> =
-                sqlx::query_as("SELECT id, spec FROM jobs ORDER BY rowid")
-                    .fetch_all(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+            let jobs: Vec<(String, String)> = sqlx::query_as(queries::ALL_JOB_SPECS)
+                .fetch_all(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
             for (old, text) in jobs {
                 let spec = JobSpec::from_json(&text, &format!("job {old}")).map_err(|e| {
                     StoreError::Damaged {
@@ -485,59 +480,45 @@ impl Store {
                 if new == old {
                     continue;
                 }
-                let exists: Option<String> =
-                    sqlx::query_scalar("SELECT id FROM jobs WHERE id = ?1")
-                        .bind(&new)
-                        .fetch_optional(&mut **tx)
-                        .await
-                        .map_err(|e| self.db(e))?;
+                let exists: Option<String> = sqlx::query_scalar(queries::JOB_EXISTS)
+                    .bind(&new)
+                    .fetch_optional(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
                 if exists.is_none() {
-                    sqlx::query(
-                        "INSERT INTO jobs (id, spec, status, attempts, owner, heartbeat, \
-                         claimed_at, finished_at, wall_seconds, last_error, created_at) \
-                         SELECT ?2, spec, status, attempts, owner, heartbeat, claimed_at, \
-                         finished_at, wall_seconds, last_error, created_at FROM jobs WHERE id = ?1",
-                    )
-                    .bind(&old)
-                    .bind(&new)
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
-                } else {
-                    // Merging: the merged job takes this one's result if it has none.
-                    let moved = sqlx::query(
-                        "UPDATE results SET job_id = ?2 WHERE job_id = ?1 \
-                         AND NOT EXISTS (SELECT 1 FROM results WHERE job_id = ?2)",
-                    )
-                    .bind(&old)
-                    .bind(&new)
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
-                    if moved.rows_affected() > 0 {
-                        sqlx::query(
-                            "UPDATE jobs SET status = 'done', finished_at = \
-                             (SELECT finished_at FROM jobs WHERE id = ?1), wall_seconds = \
-                             (SELECT wall_seconds FROM jobs WHERE id = ?1), last_error = NULL \
-                             WHERE id = ?2",
-                        )
+                    sqlx::query(queries::COPY_JOB_TO_NEW_ID)
                         .bind(&old)
                         .bind(&new)
                         .execute(&mut **tx)
                         .await
                         .map_err(|e| self.db(e))?;
+                } else {
+                    // Merging: the merged job takes this one's result if it has none.
+                    let moved = sqlx::query(queries::MOVE_RESULT_IF_NONE)
+                        .bind(&old)
+                        .bind(&new)
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                    if moved.rows_affected() > 0 {
+                        sqlx::query(queries::MARK_MERGED_JOB_DONE)
+                            .bind(&old)
+                            .bind(&new)
+                            .execute(&mut **tx)
+                            .await
+                            .map_err(|e| self.db(e))?;
                     }
-                    sqlx::query("DELETE FROM results WHERE job_id = ?1")
+                    sqlx::query(queries::DELETE_RESULT)
                         .bind(&old)
                         .execute(&mut **tx)
                         .await
                         .map_err(|e| self.db(e))?;
                 }
                 for sql in [
-                    "UPDATE sweep_points SET job_id = ?2 WHERE job_id = ?1",
-                    "UPDATE runs SET job_id = ?2 WHERE job_id = ?1",
-                    "UPDATE submission_tasks SET job_id = ?2 WHERE job_id = ?1",
-                    "UPDATE results SET job_id = ?2 WHERE job_id = ?1",
+                    queries::REKEY_SWEEP_POINTS,
+                    queries::REKEY_RUNS,
+                    queries::REKEY_SUBMISSION_TASKS,
+                    queries::REKEY_RESULTS,
                 ] {
                     sqlx::query(sql)
                         .bind(&old)
@@ -546,13 +527,13 @@ impl Store {
                         .await
                         .map_err(|e| self.db(e))?;
                 }
-                sqlx::query("DELETE FROM jobs WHERE id = ?1")
+                sqlx::query(queries::DELETE_JOB)
                     .bind(&old)
                     .execute(&mut **tx)
                     .await
                     .map_err(|e| self.db(e))?;
             }
-            sqlx::query("INSERT OR REPLACE INTO meta (key, value) VALUES ('job_ids', ?1)")
+            sqlx::query(queries::SET_JOB_ID_RULE)
                 .bind(JOB_ID_RULE)
                 .execute(&mut **tx)
                 .await
@@ -569,7 +550,7 @@ impl Store {
     ) -> Result<(), StoreError> {
         self.in_transaction(async |tx| {
             for (job, phase, decided_on) in labels {
-                sqlx::query("UPDATE results SET phase = ?2, decided_on = ?3 WHERE job_id = ?1")
+                sqlx::query(queries::SET_RESULT_LABEL)
                     .bind(job)
                     .bind(phase)
                     .bind(decided_on.to_string())
@@ -584,7 +565,7 @@ impl Store {
     /// Number of rows in the `runs` table: simulations started, ever, in this database.
     pub fn runs_started(&self) -> Result<i64, StoreError> {
         self.rt
-            .block_on(sqlx::query_scalar("SELECT count(*) FROM runs").fetch_one(&self.pool))
+            .block_on(sqlx::query_scalar(queries::COUNT_RUNS).fetch_one(&self.pool))
             .map_err(|e| self.db(e))
     }
 
@@ -609,7 +590,7 @@ impl Store {
     /// processes cannot both read a job as free and then both write it).
     async fn begin(&self) -> Result<sqlx::Transaction<'_, sqlx::Sqlite>, StoreError> {
         self.pool
-            .begin_with("BEGIN IMMEDIATE")
+            .begin_with(queries::BEGIN_IMMEDIATE)
             .await
             .map_err(|e| self.db(e))
     }
@@ -637,35 +618,28 @@ impl Store {
         owner: &str,
         finished_at: f64,
     ) -> Result<(), StoreError> {
-        sqlx::query(
-            "INSERT INTO results (job_id, phase, decided_on, observables, simulated_time, \
-             wall_seconds, events, owner, finished_at) \
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
-        )
-        .bind(job_id)
-        .bind(&result.phase)
-        .bind(result.decided_on.as_ref().map(|v| v.to_string()))
-        .bind(result.observables.to_string())
-        .bind(result.simulated_time)
-        .bind(result.wall_seconds)
-        .bind(result.events as i64)
-        .bind(owner)
-        .bind(finished_at)
-        .execute(&mut **tx)
-        .await
-        .map_err(|e| self.db(e))?;
-        if let Some(state) = &result.checkpoint {
-            sqlx::query(
-                "INSERT OR REPLACE INTO checkpoints (job_id, time, state, created_at) \
-                 VALUES (?1, ?2, ?3, ?4)",
-            )
+        sqlx::query(queries::INSERT_RESULT)
             .bind(job_id)
-            .bind(state.time)
-            .bind(serde_json::to_string(state).expect("a state serializes"))
+            .bind(&result.phase)
+            .bind(result.decided_on.as_ref().map(|v| v.to_string()))
+            .bind(result.observables.to_string())
+            .bind(result.simulated_time)
+            .bind(result.wall_seconds)
+            .bind(result.events as i64)
+            .bind(owner)
             .bind(finished_at)
             .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
+        if let Some(state) = &result.checkpoint {
+            sqlx::query(queries::UPSERT_CHECKPOINT)
+                .bind(job_id)
+                .bind(state.time)
+                .bind(serde_json::to_string(state).expect("a state serializes"))
+                .bind(finished_at)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
         }
         Ok(())
     }
@@ -676,22 +650,19 @@ impl Store {
         let t = now();
         let owner = self.owner.clone();
         self.in_transaction(async |tx| {
-            sqlx::query("DELETE FROM results WHERE job_id = ?1")
+            sqlx::query(queries::DELETE_RESULT)
                 .bind(job_id)
                 .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
             self.insert_result(tx, job_id, result, &owner, t).await?;
-            sqlx::query(
-                "UPDATE jobs SET finished_at = ?2, wall_seconds = coalesce(wall_seconds, 0) + ?3 \
-                 WHERE id = ?1",
-            )
-            .bind(job_id)
-            .bind(t)
-            .bind(result.wall_seconds)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            sqlx::query(queries::EXTEND_JOB_TIMES)
+                .bind(job_id)
+                .bind(t)
+                .bind(result.wall_seconds)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
             Ok(())
         })
     }
@@ -701,7 +672,7 @@ impl Store {
         let row: Option<(String,)> = self
             .rt
             .block_on(
-                sqlx::query_as("SELECT spec FROM jobs WHERE id = ?1")
+                sqlx::query_as(queries::JOB_SPEC)
                     .bind(job_id)
                     .fetch_optional(&self.pool),
             )
@@ -720,7 +691,7 @@ impl Store {
         let row: Option<(String,)> = self
             .rt
             .block_on(
-                sqlx::query_as("SELECT state FROM checkpoints WHERE job_id = ?1")
+                sqlx::query_as(queries::CHECKPOINT_STATE)
                     .bind(job_id)
                     .fetch_optional(&self.pool),
             )
@@ -748,41 +719,32 @@ impl Store {
         let axes = serde_json::to_string(&file.axes).expect("axes serialize");
         let t = now();
         self.in_transaction(async |tx| {
-            let old_source: Option<String> =
-                sqlx::query_scalar("SELECT source FROM sweeps WHERE name = ?1")
-                    .bind(&file.name)
-                    .fetch_optional(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+            let old_source: Option<String> = sqlx::query_scalar(queries::SWEEP_SOURCE_BY_NAME)
+                .bind(&file.name)
+                .fetch_optional(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
             let changed = old_source.as_deref() != Some(file.text.as_str());
-            let id: i64 = sqlx::query_scalar(
-                "INSERT INTO sweeps (name, file, source, description, cost, axes, replicas, \
-                 created_at, updated_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?8) \
-                 ON CONFLICT (name) DO UPDATE SET file = ?2, source = ?3, description = ?4, \
-                 cost = ?5, axes = ?6, replicas = ?7, updated_at = ?8 RETURNING id",
-            )
-            .bind(&file.name)
-            .bind(file.path.display().to_string())
-            .bind(&file.text)
-            .bind(&file.description)
-            .bind(&file.cost)
-            .bind(&axes)
-            .bind(file.replicas as i64)
-            .bind(t)
-            .fetch_one(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
-            sqlx::query(
-                "DELETE FROM sweep_points WHERE sweep_id = ?1 \
-                 AND (?2 OR (point < ?3 AND replica < ?4))",
-            )
-            .bind(id)
-            .bind(changed)
-            .bind(REFINED_FROM)
-            .bind(file.replicas as i64)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            let id: i64 = sqlx::query_scalar(queries::UPSERT_SWEEP)
+                .bind(&file.name)
+                .bind(file.path.display().to_string())
+                .bind(&file.text)
+                .bind(&file.description)
+                .bind(&file.cost)
+                .bind(&axes)
+                .bind(file.replicas as i64)
+                .bind(t)
+                .fetch_one(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            sqlx::query(queries::DELETE_GRID_POINTS)
+                .bind(id)
+                .bind(changed)
+                .bind(REFINED_FROM)
+                .bind(file.replicas as i64)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
             self.insert_points(tx, id, jobs, t).await?;
             Ok(())
         })?;
@@ -795,7 +757,7 @@ impl Store {
         let text = serde_json::to_string(left_out).expect("left-out points serialize");
         self.rt
             .block_on(
-                sqlx::query("UPDATE sweeps SET left_out = ?2 WHERE id = ?1")
+                sqlx::query(queries::SET_LEFT_OUT)
                     .bind(sweep_id)
                     .bind(text)
                     .execute(&self.pool),
@@ -817,28 +779,22 @@ impl Store {
             // The id leaves out the `[classify]` thresholds: a job registered again with other
             // thresholds keeps its id and result, and its stored spec takes the new thresholds
             // (the ones its next result, or `wetgran reclassify`, labels with).
-            sqlx::query(
-                "INSERT INTO jobs (id, spec, created_at) VALUES (?1, ?2, ?3) \
-                 ON CONFLICT (id) DO UPDATE SET spec = excluded.spec",
-            )
-            .bind(&job.id)
-            .bind(job.spec.canonical_json())
-            .bind(t)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
-            sqlx::query(
-                "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
-                 VALUES (?1, ?2, ?3, ?4, ?5)",
-            )
-            .bind(sweep_id)
-            .bind(job.point as i64)
-            .bind(job.replica as i64)
-            .bind(serde_json::to_string(&job.coords).expect("coords serialize"))
-            .bind(&job.id)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            sqlx::query(queries::UPSERT_JOB)
+                .bind(&job.id)
+                .bind(job.spec.canonical_json())
+                .bind(t)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            sqlx::query(queries::INSERT_SWEEP_POINT)
+                .bind(sweep_id)
+                .bind(job.point as i64)
+                .bind(job.replica as i64)
+                .bind(serde_json::to_string(&job.coords).expect("coords serialize"))
+                .bind(&job.id)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
         }
         Ok(())
     }
@@ -849,7 +805,7 @@ impl Store {
         let t = now();
         self.in_transaction(async |tx| {
             self.insert_points(tx, sweep_id, jobs, t).await?;
-            sqlx::query("UPDATE sweeps SET updated_at = ?2 WHERE id = ?1")
+            sqlx::query(queries::TOUCH_SWEEP)
                 .bind(sweep_id)
                 .bind(t)
                 .execute(&mut **tx)
@@ -863,7 +819,7 @@ impl Store {
     pub fn sweep_source(&self, sweep_id: i64) -> Result<String, StoreError> {
         self.rt
             .block_on(
-                sqlx::query_scalar("SELECT source FROM sweeps WHERE id = ?1")
+                sqlx::query_scalar(queries::SWEEP_SOURCE)
                     .bind(sweep_id)
                     .fetch_one(&self.pool),
             )
@@ -874,13 +830,7 @@ impl Store {
     pub fn sweeps(&self) -> Result<Vec<SweepRow>, StoreError> {
         let rows = self
             .rt
-            .block_on(
-                sqlx::query(
-                    "SELECT id, name, file, description, cost, axes, replicas, created_at, \
-                     updated_at, left_out FROM sweeps ORDER BY id",
-                )
-                .fetch_all(&self.pool),
-            )
+            .block_on(sqlx::query(queries::LIST_SWEEPS).fetch_all(&self.pool))
             .map_err(|e| self.db(e))?;
         rows.iter()
             .map(|r| {
@@ -926,7 +876,7 @@ impl Store {
         let stale_before = now() - STALE_AFTER.as_secs_f64();
         self.rt.block_on(async {
             let running: Vec<(String, Option<String>, Option<f64>)> =
-                sqlx::query_as("SELECT id, owner, heartbeat FROM jobs WHERE status = 'running'")
+                sqlx::query_as(queries::RUNNING_JOBS)
                     .fetch_all(&self.pool)
                     .await
                     .map_err(|e| self.db(e))?;
@@ -941,27 +891,21 @@ impl Store {
                     continue;
                 }
                 let mut tx = self.begin().await?;
-                let n = sqlx::query(
-                    "UPDATE jobs SET status = 'pending', owner = NULL, heartbeat = NULL \
-                     WHERE id = ?1 AND status = 'running' AND owner = ?2",
-                )
-                .bind(&id)
-                .bind(&owner)
-                .execute(&mut *tx)
-                .await
-                .map_err(|e| self.db(e))?
-                .rows_affected();
-                if n == 1 {
-                    sqlx::query(
-                        "UPDATE runs SET outcome = 'orphaned', ended_at = ?3 \
-                         WHERE job_id = ?1 AND owner = ?2 AND outcome IS NULL",
-                    )
+                let n = sqlx::query(queries::REQUEUE_JOB)
                     .bind(&id)
                     .bind(&owner)
-                    .bind(now())
                     .execute(&mut *tx)
                     .await
-                    .map_err(|e| self.db(e))?;
+                    .map_err(|e| self.db(e))?
+                    .rows_affected();
+                if n == 1 {
+                    sqlx::query(queries::MARK_RUNS_ORPHANED)
+                        .bind(&id)
+                        .bind(&owner)
+                        .bind(now())
+                        .execute(&mut *tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
                     requeued.push(id);
                 }
                 tx.commit().await.map_err(|e| self.db(e))?;
@@ -977,13 +921,9 @@ impl Store {
             total += self
                 .rt
                 .block_on(
-                    sqlx::query(
-                        "UPDATE jobs SET status = 'pending', owner = NULL, heartbeat = NULL \
-                         WHERE status = 'failed' AND id IN \
-                         (SELECT job_id FROM sweep_points WHERE sweep_id = ?1)",
-                    )
-                    .bind(sid)
-                    .execute(&self.pool),
+                    sqlx::query(queries::RETRY_FAILED_JOBS)
+                        .bind(sid)
+                        .execute(&self.pool),
                 )
                 .map_err(|e| self.db(e))?
                 .rows_affected();
@@ -1006,47 +946,30 @@ impl Store {
     fn claim_in(&self, sweep_id: i64) -> Result<Option<Claim>, StoreError> {
         let t = now();
         let claimed = self.in_transaction(async |tx| {
-            let row: Option<(String, String)> = sqlx::query_as(
-                "UPDATE jobs SET status = 'running', owner = ?1, heartbeat = ?2, claimed_at = ?2, \
-                 attempts = attempts + 1 \
-                 WHERE id = (SELECT j.id FROM sweep_points p JOIN jobs j ON j.id = p.job_id \
-                             WHERE p.sweep_id = ?3 AND j.status = 'pending' \
-                               AND (json_extract(j.spec, '$.start_from') IS NULL \
-                                    OR EXISTS (SELECT 1 FROM jobs d \
-                                               WHERE d.id = json_extract(j.spec, '$.start_from') \
-                                                 AND d.status IN ('done', 'failed'))) \
-                             ORDER BY p.point, p.replica LIMIT 1) \
-                   AND status = 'pending' \
-                 RETURNING id, spec",
-            )
-            .bind(&self.owner)
-            .bind(t)
-            .bind(sweep_id)
-            .fetch_optional(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            let row: Option<(String, String)> = sqlx::query_as(queries::CLAIM_NEXT_JOB)
+                .bind(&self.owner)
+                .bind(t)
+                .bind(sweep_id)
+                .fetch_optional(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
             let Some((job_id, spec)) = row else {
                 return Ok(None);
             };
-            let run_id: i64 = sqlx::query_scalar(
-                "INSERT INTO runs (job_id, owner, started_at) VALUES (?1, ?2, ?3) RETURNING id",
-            )
-            .bind(&job_id)
-            .bind(&self.owner)
-            .bind(t)
-            .fetch_one(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
-            let (point, replica, coords, sweep): (i64, i64, String, String) = sqlx::query_as(
-                "SELECT p.point, p.replica, p.coords, s.name FROM sweep_points p \
-                 JOIN sweeps s ON s.id = p.sweep_id \
-                 WHERE p.sweep_id = ?1 AND p.job_id = ?2 ORDER BY p.point, p.replica LIMIT 1",
-            )
-            .bind(sweep_id)
-            .bind(&job_id)
-            .fetch_one(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            let run_id: i64 = sqlx::query_scalar(queries::INSERT_RUN)
+                .bind(&job_id)
+                .bind(&self.owner)
+                .bind(t)
+                .fetch_one(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            let (point, replica, coords, sweep): (i64, i64, String, String) =
+                sqlx::query_as(queries::CLAIMED_POINT)
+                    .bind(sweep_id)
+                    .bind(&job_id)
+                    .fetch_one(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
             Ok::<_, StoreError>(Some((job_id, run_id, spec, point, replica, coords, sweep)))
         })?;
         let Some((job_id, run_id, spec, point, replica, coords, sweep)) = claimed else {
@@ -1074,12 +997,10 @@ impl Store {
     pub fn heartbeat(&self) -> Result<(), StoreError> {
         self.rt
             .block_on(
-                sqlx::query(
-                    "UPDATE jobs SET heartbeat = ?1 WHERE owner = ?2 AND status = 'running'",
-                )
-                .bind(now())
-                .bind(&self.owner)
-                .execute(&self.pool),
+                sqlx::query(queries::HEARTBEAT)
+                    .bind(now())
+                    .bind(&self.owner)
+                    .execute(&self.pool),
             )
             .map_err(|e| self.db(e))?;
         Ok(())
@@ -1090,20 +1011,15 @@ impl Store {
     pub fn finish(&self, claim: &Claim, result: &JobResult) -> Result<bool, StoreError> {
         let t = now();
         self.in_transaction(async |tx| {
-            let n = sqlx::query(
-                "UPDATE jobs SET status = 'done', owner = ?2, heartbeat = NULL, finished_at = ?3, \
-                 wall_seconds = ?4, last_error = NULL \
-                 WHERE id = ?1 AND status != 'done' \
-                   AND NOT EXISTS (SELECT 1 FROM results WHERE job_id = ?1)",
-            )
-            .bind(&claim.job_id)
-            .bind(&self.owner)
-            .bind(t)
-            .bind(result.wall_seconds)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?
-            .rows_affected();
+            let n = sqlx::query(queries::FINISH_JOB)
+                .bind(&claim.job_id)
+                .bind(&self.owner)
+                .bind(t)
+                .bind(result.wall_seconds)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?
+                .rows_affected();
             let kept = n == 1;
             if kept {
                 self.insert_result(tx, &claim.job_id, result, &self.owner, t)
@@ -1123,7 +1039,7 @@ impl Store {
         t: f64,
         outcome: &str,
     ) -> Result<(), StoreError> {
-        sqlx::query("UPDATE runs SET ended_at = ?2, outcome = ?3 WHERE id = ?1")
+        sqlx::query(queries::END_RUN)
             .bind(run_id)
             .bind(t)
             .bind(outcome)
@@ -1137,19 +1053,15 @@ impl Store {
     pub fn fail(&self, claim: &Claim, message: &str, wall_seconds: f64) -> Result<(), StoreError> {
         let t = now();
         self.in_transaction(async |tx| {
-            sqlx::query(
-                "UPDATE jobs SET status = 'failed', heartbeat = NULL, finished_at = ?3, \
-                 wall_seconds = ?4, last_error = ?5 \
-                 WHERE id = ?1 AND owner = ?2 AND status = 'running'",
-            )
-            .bind(&claim.job_id)
-            .bind(&self.owner)
-            .bind(t)
-            .bind(wall_seconds)
-            .bind(message)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            sqlx::query(queries::FAIL_JOB)
+                .bind(&claim.job_id)
+                .bind(&self.owner)
+                .bind(t)
+                .bind(wall_seconds)
+                .bind(message)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
             self.end_run(tx, claim.run_id, t, "failed").await?;
             Ok(())
         })
@@ -1160,12 +1072,9 @@ impl Store {
         let rows: Vec<(String, i64)> = self
             .rt
             .block_on(
-                sqlx::query_as(
-                    "SELECT j.status, count(*) FROM sweep_points p JOIN jobs j ON j.id = p.job_id \
-                     WHERE p.sweep_id = ?1 GROUP BY j.status",
-                )
-                .bind(sweep_id)
-                .fetch_all(&self.pool),
+                sqlx::query_as(queries::COUNT_BY_STATUS)
+                    .bind(sweep_id)
+                    .fetch_all(&self.pool),
             )
             .map_err(|e| self.db(e))?;
         let mut c = StateCounts::default();
@@ -1186,16 +1095,9 @@ impl Store {
         let rows = self
             .rt
             .block_on(
-                sqlx::query(
-                    "SELECT p.point, p.replica, p.coords, p.job_id, j.status, j.spec, j.attempts, \
-                     j.last_error, r.phase, r.decided_on, r.observables, r.simulated_time, \
-                     r.wall_seconds, r.events, r.finished_at, r.owner AS result_owner \
-                     FROM sweep_points p JOIN jobs j ON j.id = p.job_id \
-                     LEFT JOIN results r ON r.job_id = p.job_id \
-                     WHERE p.sweep_id = ?1 ORDER BY p.point, p.replica",
-                )
-                .bind(sweep_id)
-                .fetch_all(&self.pool),
+                sqlx::query(queries::SWEEP_POINTS)
+                    .bind(sweep_id)
+                    .fetch_all(&self.pool),
             )
             .map_err(|e| self.db(e))?;
         let path = self.path.display().to_string();
@@ -1240,10 +1142,7 @@ impl Store {
     /// Number of attempts recorded in the `runs` table per job (audit of "no job ran twice").
     pub fn runs_per_job(&self) -> Result<Vec<(String, i64)>, StoreError> {
         self.rt
-            .block_on(
-                sqlx::query_as("SELECT job_id, count(*) FROM runs GROUP BY job_id ORDER BY job_id")
-                    .fetch_all(&self.pool),
-            )
+            .block_on(sqlx::query_as(queries::RUNS_PER_JOB).fetch_all(&self.pool))
             .map_err(|e| self.db(e))
     }
 
@@ -1252,13 +1151,9 @@ impl Store {
         let t: Option<f64> = self
             .rt
             .block_on(
-                sqlx::query_scalar(
-                    "SELECT sum(j.wall_seconds) FROM jobs j WHERE j.id IN \
-                     (SELECT job_id FROM sweep_points WHERE sweep_id = ?1) \
-                     AND j.status IN ('done', 'failed')",
-                )
-                .bind(sweep_id)
-                .fetch_one(&self.pool),
+                sqlx::query_scalar(queries::TIME_SPENT)
+                    .bind(sweep_id)
+                    .fetch_one(&self.pool),
             )
             .map_err(|e| self.db(e))?;
         Ok(t.unwrap_or(0.0))

@@ -1,0 +1,3 @@
+-- Every job's id and stored spec, oldest first (re-keying).
+-- no parameters
+SELECT id, spec FROM jobs ORDER BY rowid

@@ -1,0 +1,3 @@
+-- Opens a write transaction, taking the write lock at once.
+-- no parameters
+BEGIN IMMEDIATE

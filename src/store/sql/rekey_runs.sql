@@ -1,0 +1,3 @@
+-- Points the run rows of a job at its new id.
+-- ?1: old job id, ?2: new job id
+UPDATE runs SET job_id = ?2 WHERE job_id = ?1
