@@ -23,6 +23,13 @@
 //! - A finished job is committed on its own transaction (job row, result row, run row); a crash
 //!   loses at most the jobs that were running. A result arriving for a job that another runner
 //!   already finished is discarded, so a job never has two results.
+//!
+//! SQL: every statement is a file of `sql/` (one statement each, named after what it does, its
+//! bind order in a comment at its top), embedded as a constant of `queries.rs` with
+//! `include_str!`; the code here only binds and reads rows. The statements are not checked at
+//! compile time (no `DATABASE_URL` or offline data in the build); the tests of `queries.rs`
+//! prepare each one against a freshly migrated database. A schema change is a new migration in
+//! `migrations/`.
 
 mod cluster;
 pub mod hysteresis;
@@ -1175,6 +1182,14 @@ mod tests {
     fn application_id_pragma_matches_the_constant() {
         // The PRAGMA text cannot take a bound parameter; keep it in step with the constant.
         assert_eq!(APPLICATION_ID, 1464291918);
+        let statement = queries::SET_APPLICATION_ID
+            .lines()
+            .find(|l| !l.starts_with("--"))
+            .unwrap();
+        assert_eq!(
+            statement,
+            format!("PRAGMA application_id = {APPLICATION_ID}")
+        );
     }
 
     /// A database with one registered sweep of three (never simulated) jobs.
@@ -1274,10 +1289,7 @@ mod tests {
         // Marked once: opening again changes nothing.
         let rule: String = store
             .rt
-            .block_on(
-                sqlx::query_scalar("SELECT value FROM meta WHERE key = 'job_ids'")
-                    .fetch_one(&store.pool),
-            )
+            .block_on(sqlx::query_scalar(queries::JOB_ID_RULE).fetch_one(&store.pool))
             .unwrap();
         assert_eq!(rule, JOB_ID_RULE);
     }

@@ -39,7 +39,8 @@ queries! {
     COUNT_BY_STATUS = "count_by_status";
     /// Rows of the runs table: simulations started, ever.
     COUNT_RUNS = "count_runs";
-    /// Deletes a sweep's grid points before re-registering it (refined ones too if its file changed).
+    /// Deletes a sweep's grid points before re-registering it (refined ones too if its file
+    /// changed).
     DELETE_GRID_POINTS = "delete_grid_points";
     /// Deletes a job row.
     DELETE_JOB = "delete_job";
@@ -225,10 +226,12 @@ mod tests {
                 let want: Vec<usize> = (1..=count).collect();
                 assert_eq!(
                     documented, want,
-                    "{stem}.sql: its comment names parameters {documented:?}, the statement has {count}"
+                    "{stem}.sql: its comment names parameters {documented:?}, the statement has \
+                     {count}"
                 );
                 assert!(
-                    text.lines().any(|l| !l.trim().is_empty() && !l.starts_with("--")),
+                    text.lines()
+                        .any(|l| !l.trim().is_empty() && !l.starts_with("--")),
                     "{stem}.sql: no statement"
                 );
             }
