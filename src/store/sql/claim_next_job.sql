@@ -1,7 +1,7 @@
 -- Claims the next claimable pending job of a sweep (grid order); returns its id and spec.
 -- ?1: owner, ?2: now, ?3: sweep id
 UPDATE jobs SET status = 'running', owner = ?1, heartbeat = ?2, claimed_at = ?2,
-attempts = attempts + 1
+    attempts = attempts + 1
 WHERE id = (SELECT j.id FROM sweep_points p JOIN jobs j ON j.id = p.job_id
             WHERE p.sweep_id = ?3 AND j.status = 'pending'
               AND (json_extract(j.spec, '$.start_from') IS NULL

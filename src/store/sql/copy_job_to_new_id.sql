@@ -1,6 +1,7 @@
 -- Copies a job row under its new id (re-keying).
 -- ?1: old job id, ?2: new job id
 INSERT INTO jobs (id, spec, status, attempts, owner, heartbeat,
-claimed_at, finished_at, wall_seconds, last_error, created_at)
+    claimed_at, finished_at, wall_seconds, last_error, created_at)
 SELECT ?2, spec, status, attempts, owner, heartbeat, claimed_at,
-finished_at, wall_seconds, last_error, created_at FROM jobs WHERE id = ?1
+    finished_at, wall_seconds, last_error, created_at
+FROM jobs WHERE id = ?1

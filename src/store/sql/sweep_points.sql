@@ -1,8 +1,10 @@
 -- Every job of a sweep (grid order) with its result where there is one.
 -- ?1: sweep id
 SELECT p.point, p.replica, p.coords, p.job_id, j.status, j.spec, j.attempts,
-j.last_error, r.phase, r.decided_on, r.observables, r.simulated_time,
-r.wall_seconds, r.events, r.finished_at, r.owner AS result_owner
-FROM sweep_points p JOIN jobs j ON j.id = p.job_id
+    j.last_error, r.phase, r.decided_on, r.observables, r.simulated_time,
+    r.wall_seconds, r.events, r.finished_at, r.owner AS result_owner
+FROM sweep_points p
+JOIN jobs j ON j.id = p.job_id
 LEFT JOIN results r ON r.job_id = p.job_id
-WHERE p.sweep_id = ?1 ORDER BY p.point, p.replica
+WHERE p.sweep_id = ?1
+ORDER BY p.point, p.replica

@@ -1,5 +1,5 @@
 -- Total wall time of a sweep's finished and failed jobs.
 -- ?1: sweep id
-SELECT sum(j.wall_seconds) FROM jobs j WHERE j.id IN
-(SELECT job_id FROM sweep_points WHERE sweep_id = ?1)
-AND j.status IN ('done', 'failed')
+SELECT sum(j.wall_seconds) FROM jobs j
+WHERE j.id IN (SELECT job_id FROM sweep_points WHERE sweep_id = ?1)
+  AND j.status IN ('done', 'failed')
