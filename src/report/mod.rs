@@ -6,11 +6,16 @@
 //! [`Observables`](crate::observe::Observables), stored results), so a stored sweep point can be
 //! drawn as well as a fresh run.
 
+pub mod boundaries_text;
+pub mod cluster_text;
 pub mod export;
 pub mod plot_phase;
+pub mod point_text;
 pub mod profile_plot;
+pub mod run_text;
 pub mod snapshot;
 mod svg;
+pub mod sweep_text;
 pub mod trust;
 
 pub use profile_plot::profiles_svg;
