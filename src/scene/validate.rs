@@ -199,7 +199,7 @@ impl Check<'_> {
 }
 
 impl Scene {
-    /// Validates every key; `origin` names the file in the error.
+    /// Validates every key, section by section; `origin` names the file in the error.
     pub fn validate(&self, origin: &str) -> Result<(), SceneError> {
         let c = Check { origin };
         let dim = self.dimension;
@@ -211,7 +211,27 @@ impl Scene {
         }
         c.non_negative("gravity", self.gravity)?;
 
-        // Box.
+        self.validate_box(&c)?;
+        self.validate_particles(&c)?;
+        self.validate_contact(&c)?;
+        self.validate_capillary(&c)?;
+        self.validate_drive(&c)?;
+        self.validate_initial(&c)?;
+        self.validate_run(&c)?;
+        self.validate_engine(&c)?;
+        self.validate_cells(&c)?;
+        // Observers and classification.
+        self.observe.validate(self, origin)?;
+        self.classify.validate(origin)?;
+        if let Some(c) = &self.convergence {
+            c.validate(self, origin)?;
+        }
+        Ok(())
+    }
+
+    /// `box.size` and `box.boundary`: one entry per axis, walls on the vertical axis with gravity.
+    fn validate_box(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let dim = self.dimension;
         let size = &self.container.size;
         if size.len() != dim {
             return Err(c.err(
@@ -245,8 +265,11 @@ impl Scene {
                     .to_string(),
             ));
         }
+        Ok(())
+    }
 
-        // Particles.
+    /// `[particles]`: count, diameter, mass, polydispersity.
+    fn validate_particles(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let p = &self.particles;
         if p.count == 0 {
             return Err(c.err(
@@ -266,8 +289,11 @@ impl Scene {
                 ),
             ));
         }
+        Ok(())
+    }
 
-        // Contact.
+    /// `[contact]`: the restitution coefficients.
+    fn validate_contact(&self, c: &Check<'_>) -> Result<(), SceneError> {
         c.closed(
             "contact.restitution",
             self.contact.restitution,
@@ -282,8 +308,12 @@ impl Scene {
             1.0,
             "1",
         )?;
+        Ok(())
+    }
 
-        // Capillary bridges.
+    /// `[capillary]`: the bridge keys belong to the thin-thread model; `e_cb` is needed
+    /// without gravity.
+    fn validate_capillary(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let cap = &self.capillary;
         match cap.model {
             CapillaryModel::None => {
@@ -320,8 +350,11 @@ impl Scene {
                 }
             }
         }
+        Ok(())
+    }
 
-        // Drive.
+    /// `[drive]`: no drive keys without a drive, and the keys of each kind.
+    fn validate_drive(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let drive = &self.drive;
         match drive.kind {
             super::DriveKind::None => {
@@ -340,124 +373,150 @@ impl Scene {
                     ));
                 }
             }
-            super::DriveKind::Shear => self.validate_shear(&c)?,
-            super::DriveKind::Sine => {
-                if let Some((key, _)) = shear_keys_given(drive).iter().find(|(_, g)| *g) {
+            super::DriveKind::Shear => self.validate_shear(c)?,
+            super::DriveKind::Sine => self.validate_sine(c)?,
+        }
+        Ok(())
+    }
+
+    /// A sine drive: exactly one pair (amplitude and omega, or gamma and e_star), its solver
+    /// keys, the wall table and the gap between floor and lid.
+    fn validate_sine(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let drive = &self.drive;
+        if let Some((key, _)) = shear_keys_given(drive).iter().find(|(_, g)| *g) {
+            return Err(c.err(
+                key,
+                "is set but drive.kind = \"sine\": it belongs to kind = \"shear\"".into(),
+            ));
+        }
+        if self.gravity <= 0.0 {
+            return Err(c.err(
+                "drive.kind",
+                "= \"sine\" needs gravity > 0 (Gamma and E* are defined through g)".into(),
+            ));
+        }
+        let physical = drive.amplitude.is_some() || drive.omega.is_some();
+        let reduced = drive.gamma.is_some() || drive.e_star.is_some();
+        if physical == reduced {
+            return Err(c.err(
+                "drive",
+                "a sine drive needs exactly one pair: amplitude and omega, or gamma and \
+                     e_star"
+                    .into(),
+            ));
+        }
+        let pairs = if physical {
+            [
+                ("drive.amplitude", drive.amplitude),
+                ("drive.omega", drive.omega),
+            ]
+        } else {
+            [("drive.gamma", drive.gamma), ("drive.e_star", drive.e_star)]
+        };
+        for (key, value) in pairs {
+            match value {
+                None => {
+                    return Err(c.err(key, "is missing: it comes in a pair".into()));
+                }
+                Some(v) if key == "drive.amplitude" => c.non_negative(key, v)?,
+                Some(v) => c.positive(key, v)?,
+            }
+        }
+        if let Some(tol) = drive.root_tolerance {
+            c.positive("drive.root_tolerance", tol)?;
+        }
+        if let Some(t_min) = drive.t_min {
+            c.positive("drive.t_min", t_min)?;
+        }
+        self.validate_wall_table(c)?;
+        self.validate_shaken_gap(c)?;
+        Ok(())
+    }
+
+    /// The `table` wall solver's keys: only with `wall_solver = "table"`, and in range.
+    fn validate_wall_table(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let drive = &self.drive;
+        if drive.wall_solver != super::WallSolverKind::Table
+            && let Some((key, _)) = table_keys_given(drive).iter().find(|(_, g)| *g)
+        {
+            return Err(c.err(
+                    key,
+                    "is set but drive.wall_solver is not \"table\": set wall_solver =                          \"table\" or remove the key"
+                        .into(),
+                ));
+        }
+        if let Some(cells) = drive.table_cells {
+            for (k, n) in cells.iter().enumerate() {
+                if !(4..=4096).contains(n) {
                     return Err(c.err(
-                        key,
-                        "is set but drive.kind = \"sine\": it belongs to kind = \"shear\"".into(),
+                        &format!("drive.table_cells[{k}]"),
+                        format!("= {n} is out of range: must be in [4, 4096]"),
                     ));
-                }
-                if self.gravity <= 0.0 {
-                    return Err(c.err(
-                        "drive.kind",
-                        "= \"sine\" needs gravity > 0 (Gamma and E* are defined through g)".into(),
-                    ));
-                }
-                let physical = drive.amplitude.is_some() || drive.omega.is_some();
-                let reduced = drive.gamma.is_some() || drive.e_star.is_some();
-                if physical == reduced {
-                    return Err(c.err(
-                        "drive",
-                        "a sine drive needs exactly one pair: amplitude and omega, or gamma and \
-                         e_star"
-                            .into(),
-                    ));
-                }
-                let pairs = if physical {
-                    [
-                        ("drive.amplitude", drive.amplitude),
-                        ("drive.omega", drive.omega),
-                    ]
-                } else {
-                    [("drive.gamma", drive.gamma), ("drive.e_star", drive.e_star)]
-                };
-                for (key, value) in pairs {
-                    match value {
-                        None => {
-                            return Err(c.err(key, "is missing: it comes in a pair".into()));
-                        }
-                        Some(v) if key == "drive.amplitude" => c.non_negative(key, v)?,
-                        Some(v) => c.positive(key, v)?,
-                    }
-                }
-                if let Some(tol) = drive.root_tolerance {
-                    c.positive("drive.root_tolerance", tol)?;
-                }
-                if let Some(t_min) = drive.t_min {
-                    c.positive("drive.t_min", t_min)?;
-                }
-                if drive.wall_solver != super::WallSolverKind::Table
-                    && let Some((key, _)) = table_keys_given(drive).iter().find(|(_, g)| *g)
-                {
-                    return Err(c.err(
-                        key,
-                        "is set but drive.wall_solver is not \"table\": set wall_solver =                          \"table\" or remove the key"
-                            .into(),
-                    ));
-                }
-                if let Some(cells) = drive.table_cells {
-                    for (k, n) in cells.iter().enumerate() {
-                        if !(4..=4096).contains(n) {
-                            return Err(c.err(
-                                &format!("drive.table_cells[{k}]"),
-                                format!("= {n} is out of range: must be in [4, 4096]"),
-                            ));
-                        }
-                    }
-                }
-                if let Some(v) = drive.table_v_min {
-                    c.positive("drive.table_v_min", v)?;
-                }
-                if let Some(v) = drive.table_v_max {
-                    c.positive("drive.table_v_max", v)?;
-                    let v_min = drive
-                        .table_v_min
-                        .unwrap_or(crate::physics::wall_table::DEFAULT_V_MIN_OVER_WALL_SPEED);
-                    if v <= v_min {
-                        return Err(c.err(
-                            "drive.table_v_max",
-                            format!(
-                                "= {v} is out of range: must be greater than table_v_min = {v_min}"
-                            ),
-                        ));
-                    }
-                }
-                if let Some(tol) = drive.table_corner_tolerance {
-                    if !(tol > 0.0 && tol <= 1.0) {
-                        return Err(c.err(
-                            "drive.table_corner_tolerance",
-                            format!("= {tol} is out of range: must be in (0, 1] (periods)"),
-                        ));
-                    }
-                    if drive.table_corner_check == Some(false) {
-                        return Err(c.err(
-                            "drive.table_corner_tolerance",
-                            "is set but drive.table_corner_check = false".into(),
-                        ));
-                    }
-                }
-                // Floor and lid move together (`z_w(t) = A sin(omega t)`), so the gap between
-                // them is the box height at every phase, whatever the stroke `2 A`: the
-                // geometry only needs the largest particle to fit between them.
-                if self.drive_motion().is_some() {
-                    let h = size[dim - 1];
-                    let (_, d_max) = self.diameter_range();
-                    if h <= d_max {
-                        return Err(c.err(
-                            &format!("box.size[{}]", dim - 1),
-                            format!(
-                                "= {h} is out of range: the gap between the shaken floor and lid \
-                                 must exceed the largest diameter d_max = {d_max:.4}"
-                            ),
-                        )
-            .failing(Constraint::GapBelowDiameter));
-                    }
                 }
             }
         }
+        if let Some(v) = drive.table_v_min {
+            c.positive("drive.table_v_min", v)?;
+        }
+        if let Some(v) = drive.table_v_max {
+            c.positive("drive.table_v_max", v)?;
+            let v_min = drive
+                .table_v_min
+                .unwrap_or(crate::physics::wall_table::DEFAULT_V_MIN_OVER_WALL_SPEED);
+            if v <= v_min {
+                return Err(c.err(
+                    "drive.table_v_max",
+                    format!("= {v} is out of range: must be greater than table_v_min = {v_min}"),
+                ));
+            }
+        }
+        if let Some(tol) = drive.table_corner_tolerance {
+            if !(tol > 0.0 && tol <= 1.0) {
+                return Err(c.err(
+                    "drive.table_corner_tolerance",
+                    format!("= {tol} is out of range: must be in (0, 1] (periods)"),
+                ));
+            }
+            if drive.table_corner_check == Some(false) {
+                return Err(c.err(
+                    "drive.table_corner_tolerance",
+                    "is set but drive.table_corner_check = false".into(),
+                ));
+            }
+        }
+        Ok(())
+    }
 
-        // Initial state.
+    /// The shaken floor and lid must leave room for the largest particle.
+    fn validate_shaken_gap(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let dim = self.dimension;
+        let size = &self.container.size;
+        // Floor and lid move together (`z_w(t) = A sin(omega t)`), so the gap between
+        // them is the box height at every phase, whatever the stroke `2 A`: the
+        // geometry only needs the largest particle to fit between them.
+        if self.drive_motion().is_some() {
+            let h = size[dim - 1];
+            let (_, d_max) = self.diameter_range();
+            if h <= d_max {
+                return Err(c
+                    .err(
+                        &format!("box.size[{}]", dim - 1),
+                        format!(
+                            "= {h} is out of range: the gap between the shaken floor and lid \
+                             must exceed the largest diameter d_max = {d_max:.4}"
+                        ),
+                    )
+                    .failing(Constraint::GapBelowDiameter));
+            }
+        }
+        Ok(())
+    }
+
+    /// `[initial]`: one temperature, the lattice spacing, and room on the lattice for every
+    /// particle.
+    fn validate_initial(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let size = &self.container.size;
+        let p = &self.particles;
         let init = &self.initial;
         match (init.temperature, init.temperature_over_ecb) {
             (Some(_), Some(_)) => {
@@ -514,8 +573,11 @@ impl Scene {
             )
             .failing(Constraint::LatticeFull));
         }
+        Ok(())
+    }
 
-        // Run.
+    /// `[run]`: duration, sample interval, event cap.
+    fn validate_run(&self, c: &Check<'_>) -> Result<(), SceneError> {
         c.positive("run.duration", self.run.duration)?;
         c.non_negative("run.sample_interval", self.run.sample_interval)?;
         if self.run.sample_interval > 0.0 && self.run.duration / self.run.sample_interval > 1e7 {
@@ -532,9 +594,13 @@ impl Scene {
         if self.run.max_events == Some(0) {
             return Err(c.err("run.max_events", "= 0 is out of range: must be >= 1".into()));
         }
+        Ok(())
+    }
 
-        // Engine.
-        self.validate_engine_kind(&c)?;
+    /// `[engine]`: the keys of the engine kind, the collapse remedies, the overlap tolerance.
+    fn validate_engine(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let p = &self.particles;
+        self.validate_engine_kind(c)?;
         let e = &self.engine;
         c.non_negative("engine.tc", e.tc)?;
         c.non_negative("engine.min_rebound_speed", e.min_rebound_speed)?;
@@ -587,6 +653,17 @@ impl Scene {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// `engine.cell_size` and the neighbour grid it gives the box: enough cells on a periodic
+    /// axis, not too many in all.
+    fn validate_cells(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let dim = self.dimension;
+        let size = &self.container.size;
+        let boundaries = self.boundaries();
+        let (_, d_max) = self.diameter_range();
+        let e = &self.engine;
         c.non_negative("engine.cell_size", e.cell_size)?;
         let range = d_max + self.s_crit();
         if e.cell_size > 0.0 && e.cell_size < range {
@@ -634,12 +711,6 @@ impl Scene {
                 ),
             )
             .failing(Constraint::TooManyCells));
-        }
-        // Observers and classification.
-        self.observe.validate(self, origin)?;
-        self.classify.validate(origin)?;
-        if let Some(c) = &self.convergence {
-            c.validate(self, origin)?;
         }
         Ok(())
     }
