@@ -3,14 +3,13 @@
 //! Exit codes as for the other sweep commands: 0 ok, 2 bad input, 1 any other error; `job run`
 //! exits 1 when the job failed (its error record is written all the same).
 
-use super::sweep_cmd::{Failure, load_sweep_left_out, select};
-use crate::cluster::slurm::{self, ArrayScript, Queue, SbatchOptions};
-use crate::cluster::{Collected, Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
-use crate::run::runner::point_label;
-use crate::store::{Store, SweepRow, TaskState};
+use super::common::{Failure, check_regrid, load_sweep_left_out, read_spec, select};
+use crate::cluster::slurm::{self, ArrayScript, SbatchOptions};
+use crate::cluster::{Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
+use crate::report::cluster_text::collected_text;
+use crate::store::Store;
 use crate::sweep::{JobSpec, run_job};
 use std::collections::HashMap;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -137,7 +136,7 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
 
     let store = Store::open(db)?;
     if let Ok(old) = store.sweep(&sweep.name) {
-        super::sweep_cmd::check_regrid(&store, &old, &sweep, &expanded, s.replace)?;
+        check_regrid(&store, &old, &sweep, &expanded, s.replace)?;
     }
     let row = store.register_sweep(&sweep, &expanded)?;
     store.set_left_out(row.id, &left_out)?;
@@ -146,7 +145,7 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
     // Results already on disk count before anything is submitted again.
     let c = collect(&store, &row, &mut slurm::squeue)?;
     if c.stored.len() + c.failed.len() + c.missing.len() + c.corrupt.len() > 0 {
-        eprint!("{}", collected_text(&store, &row, &c)?);
+        eprint!("{}", collected_text(&row, &store.points(row.id)?, &c));
     }
     let ids = jobs_to_submit(&store, &row)?;
     if ids.is_empty() {
@@ -231,95 +230,6 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
     Ok(())
 }
 
-/// Counts one more `key` in a list of (key, count) kept in order of first appearance.
-fn count(counts: &mut Vec<(String, usize)>, key: String) {
-    match counts.iter_mut().find(|(k, _)| *k == key) {
-        Some((_, n)) => *n += 1,
-        None => counts.push((key, 1)),
-    }
-}
-
-/// `3 running, 1 pending`: the counts in their order.
-fn counts_text(counts: &[(String, usize)]) -> String {
-    counts
-        .iter()
-        .map(|(s, n)| format!("{n} {s}"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-/// The lines `sweep collect` prints for one sweep.
-fn collected_text(store: &Store, sweep: &SweepRow, c: &Collected) -> Result<String, Failure> {
-    let labels: HashMap<String, String> = store
-        .points(sweep.id)?
-        .into_iter()
-        .map(|p| (p.job_id, point_label(sweep, &p.coords, p.replica)))
-        .collect();
-    let label = |id: &str| labels.get(id).cloned().unwrap_or_else(|| "?".to_string());
-    let mut out = String::new();
-    let mut by_state: Vec<(String, usize)> = Vec::new();
-    for (_, s) in &c.waiting {
-        let s = s.clone().unwrap_or_else(|| "state unknown".to_string());
-        count(&mut by_state, s);
-    }
-    let _ = writeln!(
-        out,
-        "sweep {}: {} result(s) stored, {} already stored (not stored twice), {} failed, {} \
-         corrupt, {} missing, {} waiting{}{}",
-        sweep.name,
-        c.stored.len(),
-        c.duplicates.len(),
-        c.failed.len(),
-        c.corrupt.len(),
-        c.missing.len(),
-        c.waiting.len(),
-        if by_state.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", counts_text(&by_state))
-        },
-        if c.earlier > 0 {
-            format!("; {} task(s) collected before", c.earlier)
-        } else {
-            String::new()
-        }
-    );
-    for (what, list) in [
-        ("failed ", &c.failed),
-        ("corrupt", &c.corrupt),
-        ("missing", &c.missing),
-    ] {
-        for t in list {
-            let _ = writeln!(
-                out,
-                "  {what} {} (job {}, task {}_{}): {}",
-                label(&t.job_id),
-                &t.job_id[..12],
-                t.slurm_job.as_deref().unwrap_or("?"),
-                t.task,
-                t.message.as_deref().unwrap_or("")
-            );
-        }
-    }
-    if let Some(note) = &c.queue_note {
-        let _ = writeln!(
-            out,
-            "  (the Slurm queue could not be asked: {note}; tasks without a result count as \
-             waiting)"
-        );
-    }
-    let again = c.failed.len() + c.corrupt.len() + c.missing.len();
-    if again > 0 {
-        let _ = writeln!(
-            out,
-            "  `wetgran sweep submit {} --slurm` submits the {again} failed, corrupt or missing \
-             job(s) again",
-            sweep.file
-        );
-    }
-    Ok(out)
-}
-
 /// `wetgran sweep collect`.
 pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> {
     let store = Store::open_existing(db)?;
@@ -331,7 +241,7 @@ pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> 
         }
         any = true;
         let c = collect(&store, s, &mut slurm::squeue)?;
-        print!("{}", collected_text(&store, s, &c)?);
+        print!("{}", collected_text(s, &store.points(s.id)?, &c));
     }
     if !any {
         println!(
@@ -341,98 +251,6 @@ pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> 
         );
     }
     Ok(())
-}
-
-/// The Slurm part of `sweep status` for one sweep (empty when it was never submitted):
-/// task states as recorded, and for the tasks not yet collected their state in the queue.
-pub fn slurm_status_text(
-    store: &Store,
-    sweep: &SweepRow,
-    queue: &mut dyn FnMut(&str) -> Queue,
-) -> Result<String, Failure> {
-    let tasks = store.tasks(sweep.id)?;
-    if tasks.is_empty() {
-        return Ok(String::new());
-    }
-    let mut arrays: Vec<String> = Vec::new();
-    let mut recorded: HashMap<&'static str, usize> = HashMap::new();
-    let mut queued: Vec<(String, usize)> = Vec::new();
-    let mut queues: HashMap<String, Queue> = HashMap::new();
-    let mut unavailable = None;
-    for t in &tasks {
-        let j = t.slurm_job.clone().unwrap_or_else(|| "?".to_string());
-        if !arrays.contains(&j) {
-            arrays.push(j.clone());
-        }
-        *recorded.entry(t.state.as_str()).or_default() += 1;
-        if t.state != TaskState::Submitted {
-            continue;
-        }
-        let q = queues.entry(j.clone()).or_insert_with(|| queue(&j)).clone();
-        let state = match q {
-            Queue::Unavailable(why) => {
-                unavailable.get_or_insert(why);
-                "state unknown".to_string()
-            }
-            Queue::Tasks(m) => match m.get(&t.task) {
-                Some(s) => s.clone(),
-                None => {
-                    if SweepDir::new(Path::new(&t.dir)).result(&t.job_id).exists() {
-                        "finished, not collected".to_string()
-                    } else {
-                        "left the queue without a result".to_string()
-                    }
-                }
-            },
-        };
-        count(&mut queued, state);
-    }
-    let mut out = String::new();
-    let order = [
-        "submitted",
-        "collected",
-        "duplicate",
-        "failed",
-        "missing",
-        "corrupt",
-    ];
-    let _ = writeln!(
-        out,
-        "  slurm  {} task(s) in {} array(s) (job {}): {}",
-        tasks.len(),
-        arrays.len(),
-        arrays.join(", "),
-        order
-            .iter()
-            .filter_map(|s| recorded.get(s).map(|n| format!("{n} {s}")))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    if !queued.is_empty() {
-        let _ = writeln!(out, "         not collected yet: {}", counts_text(&queued));
-    }
-    if let Some(why) = unavailable {
-        let _ = writeln!(out, "         (no Slurm queue to ask: {why})");
-    }
-    Ok(out)
-}
-
-/// Reads a job spec file: a bare spec or a line of `sweep expand --specs` (`-`: standard input).
-pub(super) fn read_spec(path: &Path) -> Result<JobSpec, Failure> {
-    let text = if path.as_os_str() == "-" {
-        let mut s = String::new();
-        std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
-            .map_err(|e| Failure::Other(format!("reading standard input: {e}")))?;
-        s
-    } else {
-        std::fs::read_to_string(path)
-            .map_err(|e| Failure::BadInput(format!("{}: cannot read: {e}", path.display())))?
-    };
-    let origin = path.display().to_string();
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| Failure::BadInput(format!("{origin}: not JSON: {e}")))?;
-    let spec_value = value.get("spec").cloned().unwrap_or(value);
-    JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)
 }
 
 /// `wetgran job run SPEC [--out RESULT]`: runs one job and writes its result record (to

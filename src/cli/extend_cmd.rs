@@ -2,7 +2,8 @@
 //! from their checkpoints (`sweep::job::extend_job`), on worker threads, and replaces each
 //! result (and checkpoint) as it finishes.
 
-use super::sweep_cmd::Failure;
+use super::common::Failure;
+use crate::report::sweep_text::extended_text;
 use crate::store::{PointRow, Store, SweepRow};
 use std::sync::Mutex;
 
@@ -85,16 +86,15 @@ pub fn extend_unconverged(
         }
     });
     let failed = failed.into_inner().expect("list");
-    eprintln!(
-        "extended {} unconverged job(s) from their checkpoints, {} now converged; {} left as \
-         they were (no checkpoint, or the cap of {max_periods} periods leaves no room); {} failed",
-        extended.into_inner().expect("count"),
-        converged.into_inner().expect("count"),
-        skipped.into_inner().expect("count"),
-        failed.len()
+    eprint!(
+        "{}",
+        extended_text(
+            extended.into_inner().expect("count"),
+            converged.into_inner().expect("count"),
+            skipped.into_inner().expect("count"),
+            max_periods,
+            &failed
+        )
     );
-    for f in &failed {
-        eprintln!("  {f}");
-    }
     Ok(())
 }

@@ -3,8 +3,9 @@
 //! its job spec, which is deterministic) and `wetgran inflection` (the fluid-gas boundary of
 //! inelastic systems along lines of constant Gamma, MODEL.md 7).
 
-use super::sweep_cmd::{Failure, exit, select};
-use crate::observe::{Observables, fluid_gas_inflection, run_observed_with_frame};
+use super::common::{Failure, exit, select};
+use crate::observe::{Observables, run_observed_with_frame};
+use crate::report::point_text::{decision_text, gamma_lines, inflection_text, job_text};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use crate::store::{PointRow, Store};
 use std::path::{Path, PathBuf};
@@ -59,15 +60,7 @@ pub fn show(
         }
         let store = Store::open_existing(db)?;
         let (sweep, p) = find_job(&store, job)?;
-        println!(
-            "job {} (sweep {sweep}, point {}, replica {})",
-            p.job_id, p.point, p.replica
-        );
-        println!("coordinates {}", serde_json::Value::from(p.coords.clone()));
-        println!("status      {}", p.status);
-        if let Some(e) = &p.last_error {
-            println!("last error  {e}");
-        }
+        print!("{}", job_text(&sweep, &p));
         let observables: Option<Observables> = match &p.observables {
             Some(v) => Some(serde_json::from_value(v.clone()).map_err(|e| {
                 Failure::BadInput(format!(
@@ -77,30 +70,7 @@ pub fn show(
             })?),
             None => None,
         };
-        if let Some(phase) = &p.phase {
-            println!("phase       {phase}");
-        }
-        if let Some(o) = &p.observables {
-            match crate::report::trust::stationary(o) {
-                Some(true) => println!("stationary  yes"),
-                Some(false) => {
-                    println!(
-                        "stationary  NO ({} in `boundaries`): the averages may still drift",
-                        crate::report::trust::NOT_STATIONARY
-                    );
-                    for c in crate::report::trust::failed_checks(o) {
-                        println!("            {c}");
-                    }
-                }
-                None => println!("stationary  unknown (no check stored)"),
-            }
-        }
-        if let Some(d) = &p.decided_on {
-            println!(
-                "decided on  {}",
-                serde_json::to_string_pretty(d).expect("JSON prints")
-            );
-        }
+        print!("{}", decision_text(&p));
         if let Some(path) = profiles {
             let Some(o) = &observables else {
                 return Err(Failure::BadInput(format!(
@@ -140,71 +110,15 @@ pub fn show(
     })())
 }
 
-/// `(Gamma, E*)` of a shaken scene (MODEL.md 4.1), from the drive as the scene gives it.
-fn gamma_e_star(scene: &crate::scene::Scene) -> Option<(f64, f64)> {
-    let (a, omega) = scene.drive_motion()?;
-    let unit = if scene.is_wet() && scene.e_cb() > 0.0 {
-        scene.e_cb()
-    } else {
-        scene.particles.mass * scene.gravity * scene.particles.diameter
-    };
-    let gamma = a * omega * omega / scene.gravity;
-    let e_star = 0.5 * scene.particles.mass * (a * omega).powi(2) / unit;
-    Some((gamma, e_star))
-}
-
 /// `wetgran inflection`.
 pub fn inflection(db: &Path, name: Option<&str>) -> ExitCode {
     exit((|| {
         let store = Store::open_existing(db)?;
         for s in select(&store, name)? {
-            // Lines of constant Gamma: (E*, T_g / E_cb) of every finished job.
-            let mut lines: Vec<(f64, Vec<(f64, f64)>)> = Vec::new();
-            for p in store.points(s.id)? {
-                let (Some(obs), Some((gamma, e_star))) =
-                    (&p.observables, gamma_e_star(&p.spec.scene))
-                else {
-                    continue;
-                };
-                let Some(t) = obs["granular_temperature_reduced"].as_f64() else {
-                    continue;
-                };
-                match lines
-                    .iter_mut()
-                    .find(|(g, _)| (g - gamma).abs() <= 1e-9 * gamma.abs())
-                {
-                    Some((_, pts)) => pts.push((e_star, t)),
-                    None => lines.push((gamma, vec![(e_star, t)])),
-                }
-            }
-            lines.sort_by(|a, b| a.0.total_cmp(&b.0));
-            println!(
-                "sweep {}: fluid-gas inflection of T_g/E_cb(E*) along constant Gamma",
-                s.name
+            print!(
+                "{}",
+                inflection_text(&s.name, &gamma_lines(&store.points(s.id)?))
             );
-            println!(
-                "{:>10} {:>7} {:>12} {:>10} {:>22}",
-                "Gamma", "points", "E* inflect.", "max slope", "between E*"
-            );
-            for (gamma, pts) in &lines {
-                match fluid_gas_inflection(pts) {
-                    Some(i) => println!(
-                        "{:>10.4} {:>7} {:>12.4} {:>10.3} {:>10.4} .. {:<10.4}",
-                        gamma,
-                        pts.len(),
-                        i.e_star,
-                        i.max_slope,
-                        i.bracket.0,
-                        i.bracket.1
-                    ),
-                    None => println!(
-                        "{:>10.4} {:>7} {:>12}",
-                        gamma,
-                        pts.len(),
-                        "none (fewer than 4 points, or steepest at an end)"
-                    ),
-                }
-            }
         }
         Ok(())
     })())

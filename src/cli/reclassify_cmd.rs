@@ -5,7 +5,7 @@
 //! `--classify FILE`. `sweep run` calls the same relabelling after
 //! registering a sweep, so a sweep that differs only in `[classify]` gets its labels at once.
 
-use super::sweep_cmd::{Failure, exit, select};
+use super::common::{Failure, exit, select};
 use crate::observe::{Observables, Thresholds};
 use crate::run::relabel::relabel;
 use crate::store::{Store, SweepRow};

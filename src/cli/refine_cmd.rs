@@ -1,12 +1,11 @@
-//! `wetgran sweep refine` and the refinement that `sweep run` / `sweep resume` continue for a
-//! sweep file with a `[refine]` table (rounds in `crate::refine::driver`).
+//! `wetgran sweep refine`: the flags over the sweep file's `[refine]` table, checked (rounds in
+//! `crate::refine::driver`; the refinement that `sweep run` / `sweep resume` continue is
+//! `common::continue_refinement`).
 
-use super::sweep_cmd::Failure;
+use super::common::{Failure, refine_opts, refinement_report};
 use crate::refine::Settings;
-use crate::refine::driver::{RefineError, refine_sweep, refined_jobs};
-use crate::run::RunOptions;
-use crate::store::{Store, SweepRow};
-use crate::sweep::SweepFile;
+use crate::refine::driver::{refine_sweep, refined_jobs, registered_file};
+use crate::store::Store;
 use std::path::Path;
 
 /// Command-line overrides of the `[refine]` table.
@@ -16,50 +15,6 @@ pub struct Overrides {
     pub rounds: Option<usize>,
     pub resolution: Option<f64>,
     pub max_replicas: Option<u32>,
-}
-
-impl From<RefineError> for Failure {
-    fn from(e: RefineError) -> Self {
-        match e {
-            RefineError::Store(e) => e.into(),
-            RefineError::Bad(m) => Failure::BadInput(m),
-        }
-    }
-}
-
-/// The registered sweep file of a stored sweep (its text as registered; the base scene is
-/// read again, relative to the file's path as registered).
-fn registered_file(store: &Store, row: &SweepRow) -> Result<SweepFile, Failure> {
-    let source = store.sweep_source(row.id)?;
-    SweepFile::parse(&source, Path::new(&row.file)).map_err(|e| {
-        Failure::BadInput(format!(
-            "sweep {}: its registered file cannot be read again: {e}",
-            row.name
-        ))
-    })
-}
-
-fn opts(jobs: usize) -> RunOptions {
-    RunOptions {
-        jobs,
-        retry_failed: false,
-        show_progress: true,
-        table_cache_mib: crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB,
-    }
-}
-
-fn report(row: &SweepRow, o: &crate::refine::driver::Outcome) {
-    eprintln!(
-        "sweep {}: refinement added {} job(s) in {} round(s){}",
-        row.name,
-        o.added,
-        o.rounds,
-        if o.resolved {
-            "; every boundary edge is resolved"
-        } else {
-            ""
-        }
-    );
 }
 
 /// `wetgran sweep refine`: `budget` more jobs (default: what is left of the file's `[refine]`
@@ -137,48 +92,8 @@ pub fn refine(db: &Path, name: Option<&str>, over: Overrides, jobs: usize) -> Re
         budget,
         budget.div_ceil(rounds),
         &settings,
-        &opts(jobs),
+        &refine_opts(jobs),
     )?;
-    report(&row, &o);
-    Ok(())
-}
-
-/// After `sweep run` / `sweep resume`: continues the refinement of every given sweep whose file
-/// has a `[refine]` table, up to its budget.
-pub fn continue_refinement(store: &Store, rows: &[SweepRow], jobs: usize) -> Result<(), Failure> {
-    for row in rows {
-        let source = store.sweep_source(row.id)?;
-        let has_refine = toml::from_str::<toml::Table>(&source)
-            .map(|t| t.contains_key("refine"))
-            .unwrap_or(false);
-        if !has_refine {
-            continue;
-        }
-        let file = registered_file(store, row)?;
-        let Some(s) = file.refine else {
-            continue;
-        };
-        let left = s
-            .budget
-            .saturating_sub(refined_jobs(&store.points(row.id)?, row.replicas));
-        if left == 0 {
-            continue;
-        }
-        let settings = Settings {
-            replicas: row.replicas,
-            max_replicas: s.max_replicas,
-            resolution: s.resolution,
-        };
-        let o = refine_sweep(
-            store,
-            &file,
-            row,
-            left,
-            s.budget.div_ceil(s.rounds),
-            &settings,
-            &opts(jobs),
-        )?;
-        report(row, &o);
-    }
+    refinement_report(&row, &o);
     Ok(())
 }

@@ -3,13 +3,24 @@
 //! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
 //! unknown sweep), 1 any other error.
 
+use super::common::{
+    Failure, available_cores, check_regrid, continue_refinement, exit, load_sweep,
+    load_sweep_left_out, read_spec, select,
+};
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
+use crate::report::boundaries_text::{
+    boundaries_csv, boundaries_table, chain_model_note, fixed_text, untrusted_points,
+};
+use crate::report::cluster_text::slurm_status_text;
+use crate::report::sweep_text::{
+    Estimate, coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
+    estimate_text, sweep_status_text,
+};
 use crate::report::{export, plot_phase};
-use crate::run::runner::{point_label, short};
 use crate::run::{RunOptions, run_sweeps};
 use crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
-use crate::store::{LeftOut, Store, StoreError, SweepRow};
-use crate::sweep::{SweepFile, run_job};
+use crate::store::{Store, StoreError, SweepRow};
+use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -233,234 +244,7 @@ pub enum ExportFormat {
     Json,
 }
 
-pub(super) enum Failure {
-    BadInput(String),
-    Other(String),
-}
-
-impl From<StoreError> for Failure {
-    fn from(e: StoreError) -> Self {
-        match e {
-            StoreError::NotSqlite { .. }
-            | StoreError::NotWetgran { .. }
-            | StoreError::Damaged { .. }
-            | StoreError::Missing { .. }
-            | StoreError::NoSuchSweep { .. } => Failure::BadInput(e.to_string()),
-            _ => Failure::Other(e.to_string()),
-        }
-    }
-}
-
-pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
-    match r {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::BadInput(m)) => {
-            eprintln!("error: {m}");
-            ExitCode::from(2)
-        }
-        Err(Failure::Other(m)) => {
-            eprintln!("error: {m}");
-            ExitCode::from(1)
-        }
-    }
-}
-
-/// The cores this process may use (`std::thread::available_parallelism`, 1 if unknown).
-pub fn available_cores() -> usize {
-    std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1)
-}
-
-/// Worker threads for `--jobs N`: the available cores by default; `N` must be in
-/// `[1, available cores]` unless `oversubscribe` (`--oversubscribe`) allows more.
-pub fn workers(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, String> {
-    let cores = available_cores();
-    match jobs {
-        None => Ok(cores),
-        Some(0) => Err(format!(
-            "--jobs 0 is out of range: must be in [1, {cores}] (the available cores)"
-        )),
-        Some(n) if n > cores && !oversubscribe => Err(format!(
-            "--jobs {n} is out of range: must be in [1, {cores}] (the available cores; one \
-             simulation per worker); add --oversubscribe to start more workers than cores"
-        )),
-        Some(n) => Ok(n),
-    }
-}
-
-fn workers_or_fail(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, Failure> {
-    workers(jobs, oversubscribe).map_err(Failure::BadInput)
-}
-
-/// Runs a `sweep` subcommand.
-pub fn sweep(cmd: SweepCommand) -> ExitCode {
-    exit(match cmd {
-        SweepCommand::Run {
-            file,
-            db,
-            jobs,
-            oversubscribe,
-            retry_failed,
-            replace,
-            table_cache_mib,
-        } => workers_or_fail(jobs, oversubscribe)
-            .and_then(|n| sweep_run(&file, &db, n, retry_failed, replace, table_cache_mib)),
-        SweepCommand::Resume {
-            name,
-            db,
-            jobs,
-            oversubscribe,
-            retry_failed,
-            extend,
-            table_cache_mib,
-        } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
-            sweep_resume(
-                name.as_deref(),
-                &db,
-                n,
-                retry_failed,
-                extend,
-                table_cache_mib,
-            )
-        }),
-        SweepCommand::Status { db } => sweep_status(&db),
-        SweepCommand::Expand { file, specs } => sweep_expand(&file, specs),
-        SweepCommand::Job { spec } => sweep_job(&spec),
-        SweepCommand::Submit {
-            file,
-            slurm,
-            partition,
-            time,
-            cpus_per_task,
-            array_limit,
-            dry_run,
-            db,
-            dir,
-            replace,
-        } => {
-            if slurm {
-                super::cluster_cmd::submit(
-                    &file,
-                    &db,
-                    &super::cluster_cmd::Submit {
-                        options: crate::cluster::slurm::SbatchOptions {
-                            partition,
-                            time,
-                            cpus_per_task,
-                        },
-                        array_limit,
-                        dry_run,
-                        dir,
-                        replace,
-                    },
-                )
-            } else {
-                Err(Failure::BadInput(
-                    "sweep submit: give --slurm (the only cluster backend so far)".to_string(),
-                ))
-            }
-        }
-        SweepCommand::Collect { db, sweep } => {
-            super::cluster_cmd::collect_cmd(&db, sweep.as_deref())
-        }
-        SweepCommand::Refine {
-            sweep,
-            db,
-            budget,
-            rounds,
-            resolution,
-            max_replicas,
-            jobs,
-            oversubscribe,
-        } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
-            super::refine_cmd::refine(
-                &db,
-                sweep.as_deref(),
-                super::refine_cmd::Overrides {
-                    budget,
-                    rounds,
-                    resolution,
-                    max_replicas,
-                },
-                n,
-            )
-        }),
-        SweepCommand::Estimate {
-            file,
-            periods,
-            samples,
-            cores,
-        } => match cores {
-            Some(0) => Err(Failure::BadInput(
-                "--cores 0 is out of range: must be >= 1".to_string(),
-            )),
-            c => sweep_estimate(&file, periods, samples, c.unwrap_or_else(available_cores)),
-        },
-    })
-}
-
-pub(super) fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>), Failure> {
-    let (sweep, jobs, _) = load_sweep_left_out(file)?;
-    Ok((sweep, jobs))
-}
-
-/// Loads and expands a sweep file; also returns the grid points `skip_invalid` left out, each
-/// with the scene constraint it fails, after listing them on stderr.
-pub(super) fn load_sweep_left_out(
-    file: &Path,
-) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>, Vec<LeftOut>), Failure> {
-    let sweep = SweepFile::load(file).map_err(|e| Failure::BadInput(e.to_string()))?;
-    let (jobs, skipped) = sweep
-        .expand_with_skips()
-        .map_err(|e| Failure::BadInput(e.to_string()))?;
-    let left_out: Vec<LeftOut> = skipped
-        .iter()
-        .map(|k| LeftOut {
-            coords: k.coords.clone(),
-            constraint: k
-                .reason
-                .constraint
-                .map(|c| c.reason().to_string())
-                .unwrap_or_default(),
-            reason: k.reason.to_string(),
-        })
-        .collect();
-    if !left_out.is_empty() {
-        eprintln!(
-            "{}: left out {} grid point(s) (sweep.skip_invalid: the scene fails a constraint):",
-            file.display(),
-            left_out.len()
-        );
-        eprint!("{}", left_out_text(&sweep.axes, &left_out));
-    }
-    if jobs.is_empty() {
-        return Err(Failure::BadInput(format!(
-            "{}: the sweep has no valid grid point",
-            file.display()
-        )));
-    }
-    Ok((sweep, jobs, left_out))
-}
-
-/// One line per left-out point: its coordinates and the constraint it fails.
-pub fn left_out_text(axes: &[crate::sweep::Axis], left_out: &[LeftOut]) -> String {
-    let mut out = String::new();
-    for k in left_out {
-        let coords: Vec<String> = axes
-            .iter()
-            .zip(&k.coords)
-            .map(|(a, v)| match v.as_f64() {
-                Some(x) => format!("{} = {}", a.label, short(x)),
-                None => format!("{} = {v}", a.label),
-            })
-            .collect();
-        let _ = writeln!(out, "  left out {}: {}", coords.join(", "), k.constraint);
-    }
-    out
-}
-
-fn sweep_run(
+pub(super) fn sweep_run(
     file: &Path,
     db: &Path,
     jobs: usize,
@@ -489,64 +273,10 @@ fn sweep_run(
         retry,
         table_cache_mib,
     )?;
-    super::refine_cmd::continue_refinement(&store, &[row], jobs)
+    continue_refinement(&store, &[row], jobs)
 }
 
-/// A sweep name registered before with another grid (axes or replicas) is refused unless
-/// `--replace`: the error says what would be replaced.
-pub(super) fn check_regrid(
-    store: &Store,
-    old: &SweepRow,
-    sweep: &SweepFile,
-    expanded: &[crate::sweep::SweepJob],
-    replace: bool,
-) -> Result<(), Failure> {
-    let grid = |axes: &[crate::sweep::Axis], replicas: u32| {
-        let mut parts: Vec<String> = axes
-            .iter()
-            .map(|a| {
-                let v: Vec<String> = a.values.iter().map(|v| v.to_string()).collect();
-                format!("{} = [{}]", a.label, v.join(", "))
-            })
-            .collect();
-        parts.push(format!("{replicas} replica(s)"));
-        parts.join("; ")
-    };
-    let same_axes = old.axes.len() == sweep.axes.len()
-        && old
-            .axes
-            .iter()
-            .zip(&sweep.axes)
-            .all(|(a, b)| a.key == b.key && a.values == b.values);
-    if (same_axes && old.replicas == sweep.replicas) || replace {
-        return Ok(());
-    }
-    let new_ids: std::collections::HashSet<&str> = expanded.iter().map(|j| j.id.as_str()).collect();
-    let points = store.points(old.id)?;
-    let leaving: Vec<_> = points
-        .iter()
-        .filter(|p| !new_ids.contains(p.job_id.as_str()))
-        .collect();
-    let with_result = leaving.iter().filter(|p| p.observables.is_some()).count();
-    Err(Failure::BadInput(format!(
-        "{}: sweep `{}` is already in {} with another grid (registered from {}):\n  \
-         old grid: {} ({} job(s))\n  new grid: {} ({} job(s))\n  {} job(s) of the old grid, \
-         {with_result} of them with a result, would no longer be in the sweep (their results \
-         stay in the database); run again with --replace to replace the grid, or give the \
-         sweep another name",
-        sweep.path.display(),
-        sweep.name,
-        store.path().display(),
-        old.file,
-        grid(&old.axes, old.replicas),
-        points.len(),
-        grid(&sweep.axes, sweep.replicas),
-        expanded.len(),
-        leaving.len(),
-    )))
-}
-
-fn sweep_resume(
+pub(super) fn sweep_resume(
     name: Option<&str>,
     db: &Path,
     jobs: usize,
@@ -566,7 +296,7 @@ fn sweep_resume(
         )));
     }
     run_and_report(&store, &sweeps, jobs, retry, table_cache_mib)?;
-    super::refine_cmd::continue_refinement(&store, &sweeps, jobs)?;
+    continue_refinement(&store, &sweeps, jobs)?;
     match extend {
         Some(max_periods) => {
             super::extend_cmd::extend_unconverged(&store, &sweeps, max_periods, jobs)
@@ -627,19 +357,7 @@ fn run_and_report(
     Ok(())
 }
 
-fn duration_text(s: f64) -> String {
-    if s < 120.0 {
-        format!("{s:.1} s")
-    } else if s < 7200.0 {
-        format!("{:.1} min", s / 60.0)
-    } else if s < 3.0 * 86400.0 {
-        format!("{:.1} h", s / 3600.0)
-    } else {
-        format!("{:.1} days", s / 86400.0)
-    }
-}
-
-/// The text of `sweep status`.
+/// The text of `sweep status` (without the Slurm part).
 pub fn status_text(store: &Store) -> Result<String, StoreError> {
     let mut out = String::new();
     let sweeps = store.sweeps()?;
@@ -650,133 +368,19 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
     for s in &sweeps {
         let c = store.counts(s.id)?;
         let points = store.points(s.id)?;
-        let _ = writeln!(
-            out,
-            "sweep {}  ({}; {} point(s) x {} replica(s))",
-            s.name,
-            s.file,
-            points.len() as u64 / s.replicas.max(1) as u64,
-            s.replicas
-        );
-        if let Some(d) = &s.description {
-            let _ = writeln!(out, "  {d}");
-        }
-        if let Some(cost) = &s.cost {
-            let _ = writeln!(out, "  cost: {cost}");
-        }
-        let _ = writeln!(
-            out,
-            "  jobs   {} total: {} done, {} running, {} pending, {} failed",
-            c.total(),
-            c.done,
-            c.running,
-            c.pending,
-            c.failed
-        );
-        let (unconverged, checked) = crate::store::unconverged_count(&points);
-        if checked > 0 {
-            let _ = writeln!(
-                out,
-                "  stationary  {} of {checked} result(s) converged, {unconverged} unconverged \
-                 (`sweep resume --extend` runs those further)",
-                checked - unconverged
-            );
-        }
-        let starts = crate::store::hysteresis::by_start(&s.axes, &points);
-        let compared = starts.iter().filter(|g| g.compared()).count();
-        if compared > 0 {
-            let _ = writeln!(
-                out,
-                "  hysteresis  {} of {compared} point(s) hysteretic (their start modes disagree)",
-                starts.iter().filter(|g| g.hysteretic).count()
-            );
-            for g in starts.iter().filter(|g| g.hysteretic) {
-                let labels: Vec<String> = g
-                    .by_start
-                    .iter()
-                    .map(|(mode, l)| format!("{mode} {}", l.join("/")))
-                    .collect();
-                let at: Vec<String> = s
-                    .axes
-                    .iter()
-                    .filter(|a| a.key != "initial.start")
-                    .zip(&g.coords)
-                    .map(|(a, v)| format!("{} = {v}", a.label))
-                    .collect();
-                let at = if at.is_empty() {
-                    "the base scene".to_string()
-                } else {
-                    at.join(", ")
-                };
-                let _ = writeln!(out, "    {at}: {}", labels.join(", "));
-            }
-        }
         let spent = store.time_spent(s.id)?;
-        let done_walls: Vec<f64> = points
-            .iter()
-            .filter(|p| p.status == "done")
-            .filter_map(|p| p.wall_seconds)
-            .collect();
-        let left = c.pending + c.running;
-        let estimate = if left == 0 {
-            "nothing left".to_string()
-        } else if done_walls.is_empty() {
-            "time left unknown until a job finishes".to_string()
-        } else {
-            let mean = done_walls.iter().sum::<f64>() / done_walls.len() as f64;
-            format!(
-                "about {} left on {cores} core(s) ({left} job(s) x {} mean)",
-                duration_text(mean * left as f64 / cores as f64),
-                duration_text(mean)
-            )
-        };
-        let _ = writeln!(
-            out,
-            "  time   {} spent in finished jobs; {estimate}",
-            duration_text(spent)
-        );
-        let untrusted: Vec<String> = points
-            .iter()
-            .filter_map(|p| p.observables.as_ref())
-            .filter_map(|o| crate::report::trust::trust_mark(o).map(|m| m.to_string()))
-            .collect();
-        if !untrusted.is_empty() {
-            let _ = writeln!(
-                out,
-                "  trust  {} of {} result(s) not stationary ({} in `boundaries`; see `show JOB`)",
-                untrusted.len(),
-                c.done,
-                crate::report::trust::NOT_STATIONARY
-            );
-        }
-        if !s.left_out.is_empty() {
-            let _ = writeln!(
-                out,
-                "  left out {} grid point(s) (sweep.skip_invalid):",
-                s.left_out.len()
-            );
-            out.push_str(&left_out_text(&s.axes, &s.left_out));
-        }
-        for p in points.iter().filter(|p| p.status == "failed") {
-            let _ = writeln!(
-                out,
-                "  failed {} (job {}, {} attempt(s)): {}",
-                point_label(s, &p.coords, p.replica),
-                &p.job_id[..12],
-                p.attempts,
-                p.last_error.as_deref().unwrap_or("no message")
-            );
-        }
+        out.push_str(&sweep_status_text(s, &c, &points, spent, cores));
     }
     Ok(out)
 }
 
-fn sweep_status(db: &Path) -> Result<(), Failure> {
+pub(super) fn sweep_status(db: &Path) -> Result<(), Failure> {
     let store = Store::open_existing(db)?;
     print!("{}", status_text(&store)?);
     for s in store.sweeps()? {
-        let text =
-            super::cluster_cmd::slurm_status_text(&store, &s, &mut crate::cluster::slurm::squeue)?;
+        let tasks = store.tasks(s.id)?;
+        let queue = crate::cluster::queue_states(&tasks, &mut crate::cluster::slurm::squeue);
+        let text = slurm_status_text(&tasks, &queue);
         if !text.is_empty() {
             println!("sweep {} on Slurm", s.name);
             print!("{text}");
@@ -785,7 +389,7 @@ fn sweep_status(db: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
-fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
+pub(super) fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
     let (_, jobs) = load_sweep(file)?;
     for j in &jobs {
         let mut line = serde_json::json!({
@@ -803,7 +407,12 @@ fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
     Ok(())
 }
 
-fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Result<(), Failure> {
+pub(super) fn sweep_estimate(
+    file: &Path,
+    periods: f64,
+    samples: usize,
+    cores: usize,
+) -> Result<(), Failure> {
     if !(periods.is_finite() && periods > 0.0) || samples == 0 {
         return Err(Failure::BadInput(
             "--periods must be > 0 and --samples >= 1".to_string(),
@@ -819,11 +428,14 @@ fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Re
             .map(|k| (k as f64 * (jobs.len() - 1) as f64 / (samples - 1) as f64).round() as usize)
             .collect()
     };
-    println!(
-        "{}: {} job(s); sampling {} for {periods} driving period(s) each, one at a time",
-        file.display(),
-        jobs.len(),
-        picks.len()
+    print!(
+        "{}",
+        estimate_head_text(
+            &file.display().to_string(),
+            jobs.len(),
+            picks.len(),
+            periods
+        )
     );
     let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
     let mut per_period = Vec::new();
@@ -847,25 +459,16 @@ fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Re
         let t0 = std::time::Instant::now();
         let outcome = run_job(&spec, &mut |_| {});
         let wall = t0.elapsed().as_secs_f64();
-        let coords: Vec<String> = labels
-            .iter()
-            .zip(&job.coords)
-            .map(|(l, v)| match v.as_f64() {
-                Some(x) => format!("{l} = {}", short(x)),
-                None => format!("{l} = {v}"),
-            })
-            .collect();
+        let coords = coords_text(&labels, &job.coords);
         match outcome {
             Ok(r) => {
                 per_period.push(wall / periods);
-                println!(
-                    "  {:<40} {:>9.3} s per period  ({} events)",
-                    coords.join(", "),
-                    wall / periods,
-                    r.events
+                print!(
+                    "{}",
+                    estimate_sample_text(&coords, wall / periods, r.events)
                 );
             }
-            Err(e) => println!("  {:<40} failed: {e}", coords.join(", ")),
+            Err(e) => print!("{}", estimate_failed_text(&coords, &e.to_string())),
         }
     }
     if per_period.is_empty() {
@@ -874,36 +477,25 @@ fn sweep_estimate(file: &Path, periods: f64, samples: usize, cores: usize) -> Re
     let mean = per_period.iter().sum::<f64>() / per_period.len() as f64;
     let max = per_period.iter().cloned().fold(0.0, f64::max);
     let run_periods = full_periods.iter().sum::<f64>() / full_periods.len() as f64;
-    let total = mean * run_periods * jobs.len() as f64;
-    println!(
-        "estimate: {:.3} s per period on average (max {:.3}) x {} periods x {} jobs = {} of CPU, \
-         about {} on {cores} core(s)",
-        mean,
-        max,
-        short(run_periods),
-        jobs.len(),
-        duration_text(total),
-        duration_text(total / cores as f64)
-    );
-    if !cap_periods.is_empty() {
-        let cap = cap_periods.iter().sum::<f64>() / cap_periods.len() as f64;
-        println!(
-            "  run to stationarity: that is the minimum run; every job extended to its cap \
-             ({} periods) would cost {} on {cores} core(s)",
-            short(cap),
-            duration_text(mean * cap * jobs.len() as f64 / cores as f64)
-        );
-    }
-    println!(
-        "  (measured on the first {periods} period(s) from the initial state; the cost per period \
-         changes as a run settles, e.g. a bed resting on the plate gets dearer: sample more \
-         periods for a closer figure)"
+    let cap = (!cap_periods.is_empty())
+        .then(|| cap_periods.iter().sum::<f64>() / cap_periods.len() as f64);
+    print!(
+        "{}",
+        estimate_text(&Estimate {
+            mean,
+            max,
+            run_periods,
+            jobs: jobs.len(),
+            cores,
+            cap_periods: cap,
+            sampled_periods: periods,
+        })
     );
     Ok(())
 }
 
-fn sweep_job(path: &Path) -> Result<(), Failure> {
-    let spec = super::cluster_cmd::read_spec(path)?;
+pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
+    let spec = read_spec(path)?;
     let result = run_job(&spec, &mut |_| {}).map_err(|e| Failure::Other(e.to_string()))?;
     let out = serde_json::json!({ "id": spec.id(), "result": result });
     println!(
@@ -919,13 +511,6 @@ fn sweep_map(store: &Store, sweep: &SweepRow, how: Extraction) -> Result<PhaseMa
     let obs: Vec<Observation> = points.iter().map(Observation::of_row).collect();
     phase_map_with(&sweep.axes, &obs, how)
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
-}
-
-pub(super) fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>, Failure> {
-    Ok(match name {
-        Some(n) => vec![store.sweep(n)?],
-        None => store.sweeps()?,
-    })
 }
 
 /// `wetgran boundaries`.
@@ -966,293 +551,6 @@ pub fn boundaries(
         }
         Ok(())
     })())
-}
-
-fn opt_num(v: Option<f64>) -> String {
-    v.map(short).unwrap_or_default()
-}
-
-fn fixed_text(fixed: &[(String, serde_json::Value)]) -> String {
-    fixed
-        .iter()
-        .map(|(l, v)| format!("{l} = {v}"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
-    let mut out = String::from(
-        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence\n",
-    );
-    for (s, m) in maps {
-        let xl = m.x.as_ref().map(|a| a.key.clone()).unwrap_or_default();
-        let yl = m.y.as_ref().map(|a| a.key.clone()).unwrap_or_default();
-        for (k, slice) in m.slices.iter().enumerate() {
-            for p in &slice.points {
-                let _ = writeln!(
-                    out,
-                    "{},{k},point,{},{xl},{},{yl},{},{},{},,,,,",
-                    s.name,
-                    p.phase,
-                    p.x,
-                    p.y,
-                    p.amplitude.map(|v| v.to_string()).unwrap_or_default(),
-                    p.omega.map(|v| v.to_string()).unwrap_or_default()
-                );
-            }
-            for b in slice.boundaries.values().flatten() {
-                let _ = writeln!(
-                    out,
-                    "{},{k},boundary,{},{xl},{},{yl},{},{},{},{},{},{},{},{}",
-                    s.name,
-                    b.pair,
-                    b.x,
-                    b.y,
-                    b.amplitude.map(|v| v.to_string()).unwrap_or_default(),
-                    b.omega.map(|v| v.to_string()).unwrap_or_default(),
-                    b.x_range[0],
-                    b.x_range[1],
-                    b.y_range[0],
-                    b.y_range[1],
-                    b.confidence
-                );
-            }
-        }
-    }
-    out
-}
-
-/// For shear sweeps of wet scenes: the chain model's critical force (MODEL.md 8, Eq. 7.9),
-/// `F_max = 0.9229 F_B d / L_x`, over the sweep's points (a range if the axes change it).
-fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
-    let values: Vec<f64> = points
-        .iter()
-        .filter(|p| p.spec.scene.shear_slabs().is_some())
-        .filter_map(|p| plot_phase::chain_model_f_max(&p.spec.scene))
-        .collect();
-    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    if values.is_empty() {
-        return None;
-    }
-    let value = if hi - lo <= 1e-12 * hi.abs() {
-        format!("F_max = {}", short(lo))
-    } else {
-        format!("F_max from {} to {} over the points", short(lo), short(hi))
-    };
-    Some(format!(
-        "  chain model (MODEL.md 8, Eq. 7.9: solid while F_max L_x / (F_B d) <= {}): {value}",
-        plot_phase::CHAIN_MODEL_CONSTANT
-    ))
-}
-
-/// The grid points (their coordinates as JSON text) with a replica whose result carries a trust
-/// mark (`report::trust`), with the mark.
-fn untrusted_points(points: &[crate::store::PointRow]) -> std::collections::HashMap<String, char> {
-    points
-        .iter()
-        .filter_map(|p| {
-            let mark = crate::report::trust::trust_mark(p.observables.as_ref()?)?;
-            Some((serde_json::Value::from(p.coords.clone()).to_string(), mark))
-        })
-        .collect()
-}
-
-fn boundaries_table(
-    maps: &[(&SweepRow, PhaseMap)],
-    notes: &std::collections::HashMap<String, String>,
-    untrusted: &std::collections::HashMap<String, std::collections::HashMap<String, char>>,
-    how: Extraction,
-) -> String {
-    let none = std::collections::HashMap::new();
-    let mut out = String::new();
-    for (s, m) in maps {
-        let _ = writeln!(out, "sweep {}", s.name);
-        if let Some(n) = notes.get(&s.name) {
-            let _ = writeln!(out, "{n}");
-        }
-        let (Some(xa), ya) = (&m.x, &m.y) else {
-            let _ = writeln!(out, "  no numeric axis: no phase map\n");
-            continue;
-        };
-        let ylabel = ya.as_ref().map(|a| a.label.as_str()).unwrap_or("");
-        for slice in &m.slices {
-            if !slice.fixed.is_empty() {
-                let _ = writeln!(out, "  slice {}", fixed_text(&slice.fixed));
-            }
-            if slice.points.is_empty() {
-                let _ = writeln!(out, "  no classified point yet\n");
-                continue;
-            }
-            // The map as a grid: rows = y (top: largest), columns = x.
-            let mut xs: Vec<f64> = slice.points.iter().map(|p| p.x).collect();
-            let mut ys: Vec<f64> = slice.points.iter().map(|p| p.y).collect();
-            xs.sort_by(f64::total_cmp);
-            xs.dedup();
-            ys.sort_by(f64::total_cmp);
-            ys.dedup();
-            if xs.len() > 24 || ys.len() > 60 {
-                // A refined map is no grid: list counts only (the points are in csv/json).
-                let _ = writeln!(
-                    out,
-                    "  phase map: {} points ({} x values, {} y values; see --format csv)",
-                    slice.points.len(),
-                    xs.len(),
-                    ys.len()
-                );
-            } else {
-                let marks = untrusted.get(&s.name).unwrap_or(&none);
-                write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys, marks);
-            }
-            let unconverged = slice.points.iter().filter(|p| !p.converged).count();
-            if unconverged > 0 {
-                let _ = writeln!(
-                    out,
-                    "  {unconverged} unconverged point(s): {}",
-                    if how.include_unconverged {
-                        "used for the boundaries as asked (--include-unconverged)"
-                    } else {
-                        "left out of the boundaries (--include-unconverged uses them)"
-                    }
-                );
-            }
-            if slice.boundaries.is_empty() {
-                let carriers: Vec<&str> = slice
-                    .points
-                    .iter()
-                    .filter(|p| how.include_unconverged || p.converged)
-                    .map(|p| p.phase.as_str())
-                    .collect();
-                let why = if carriers.len() < 2 {
-                    "fewer than two converged points"
-                } else if carriers.iter().all(|p| *p == carriers[0]) {
-                    "every point that carries one has the same phase"
-                } else {
-                    "no two neighbours differ"
-                };
-                let _ = writeln!(out, "  no boundary: {why}\n");
-                continue;
-            }
-            for (pair, list) in &slice.boundaries {
-                let _ = writeln!(out, "  boundary {pair} ({} point(s))", list.len());
-                let _ = writeln!(
-                    out,
-                    "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",
-                    xa.label,
-                    ylabel,
-                    if m.shaking { "A" } else { "" },
-                    if m.shaking { "omega" } else { "" },
-                    format!("+-{}", if xa.log { "dec" } else { "x" }),
-                    format!(
-                        "+-{}",
-                        if ya.as_ref().is_some_and(|a| a.log) {
-                            "dec"
-                        } else {
-                            "y"
-                        }
-                    ),
-                    "conf"
-                );
-                for b in list {
-                    let _ = writeln!(
-                        out,
-                        "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",
-                        short(b.x),
-                        if ya.is_some() {
-                            short(b.y)
-                        } else {
-                            String::new()
-                        },
-                        opt_num(b.amplitude),
-                        opt_num(b.omega),
-                        short(b.x_half),
-                        if ya.is_some() {
-                            short(b.y_half)
-                        } else {
-                            String::new()
-                        },
-                        format!("{:.2}", b.confidence)
-                    );
-                }
-            }
-            let _ = writeln!(out);
-        }
-    }
-    out
-}
-
-/// The phase map of a slice as a grid: rows = y (top: largest), columns = x.
-fn write_grid(
-    out: &mut String,
-    slice: &crate::boundary::Slice,
-    xa: &crate::boundary::PlaneAxis,
-    ya: Option<&crate::boundary::PlaneAxis>,
-    xs: &[f64],
-    ys: &[f64],
-    marks: &std::collections::HashMap<String, char>,
-) {
-    let ylabel = ya.map(|a| a.label.as_str()).unwrap_or("");
-    let mark_of = |p: &crate::boundary::MapPoint| {
-        marks
-            .get(&serde_json::Value::from(p.coords.clone()).to_string())
-            .copied()
-    };
-    let _ = writeln!(
-        out,
-        "  phase map ({} down, {} across{}{}):",
-        if ylabel.is_empty() { "-" } else { ylabel },
-        xa.label,
-        if slice.points.iter().any(|p| p.tie) {
-            "; * = replicas tied"
-        } else {
-            ""
-        },
-        if slice.points.iter().any(|p| mark_of(p).is_some()) {
-            format!(
-                "; {} = not stationary",
-                crate::report::trust::NOT_STATIONARY
-            )
-        } else {
-            String::new()
-        }
-    );
-    for &yv in ys.iter().rev() {
-        let mut row = format!(
-            "  {:>9} |",
-            if ya.is_some() {
-                short(yv)
-            } else {
-                String::new()
-            }
-        );
-        for &xv in xs {
-            let cell = slice
-                .points
-                .iter()
-                .find(|p| p.x == xv && p.y == yv)
-                .map(|p| {
-                    format!(
-                        "{}{}{}",
-                        p.phase,
-                        if p.tie { "*" } else { "" },
-                        mark_of(p).map(String::from).unwrap_or_default()
-                    )
-                })
-                .unwrap_or_else(|| ".".to_string());
-            let _ = write!(row, " {cell:>7}");
-        }
-        let _ = writeln!(out, "{row}");
-    }
-    let mut axis = format!("  {:>9} +", "");
-    for _ in xs {
-        axis.push_str("--------");
-    }
-    let _ = writeln!(out, "{axis}");
-    let mut labels = format!("  {:>9}  ", xa.label);
-    for &xv in xs {
-        let _ = write!(labels, " {:>7}", short(xv));
-    }
-    let _ = writeln!(out, "{labels}");
 }
 
 /// `wetgran plot`.

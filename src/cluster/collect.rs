@@ -408,3 +408,45 @@ mod tests {
         assert_eq!(runs[&ids[0]], 1);
     }
 }
+
+/// Where the tasks not collected yet stand, for `sweep status`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct QueueStates {
+    /// One per task still marked `submitted`, in task order: its state in the Slurm queue,
+    /// `finished, not collected`, `left the queue without a result` or `state unknown`.
+    pub states: Vec<String>,
+    /// Why the queue could not be asked (the first answer that said so).
+    pub unavailable: Option<String>,
+}
+
+/// Asks the queue (once per Slurm job) where each task still marked `submitted` stands; a task
+/// that left the queue is told apart by its result file.
+pub fn queue_states(tasks: &[TaskRow], queue: &mut dyn FnMut(&str) -> Queue) -> QueueStates {
+    let mut out = QueueStates::default();
+    let mut queues: HashMap<String, Queue> = HashMap::new();
+    for t in tasks {
+        if t.state != TaskState::Submitted {
+            continue;
+        }
+        let j = t.slurm_job.clone().unwrap_or_else(|| "?".to_string());
+        let q = queues.entry(j.clone()).or_insert_with(|| queue(&j)).clone();
+        let state = match q {
+            Queue::Unavailable(why) => {
+                out.unavailable.get_or_insert(why);
+                "state unknown".to_string()
+            }
+            Queue::Tasks(m) => match m.get(&t.task) {
+                Some(s) => s.clone(),
+                None => {
+                    if SweepDir::new(Path::new(&t.dir)).result(&t.job_id).exists() {
+                        "finished, not collected".to_string()
+                    } else {
+                        "left the queue without a result".to_string()
+                    }
+                }
+            },
+        };
+        out.states.push(state);
+    }
+    out
+}

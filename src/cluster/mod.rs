@@ -11,5 +11,5 @@ pub mod collect;
 pub mod record;
 pub mod slurm;
 
-pub use collect::{Collected, collect, jobs_to_submit};
+pub use collect::{Collected, QueueStates, collect, jobs_to_submit, queue_states};
 pub use record::{Outcome, ResultRecord, SweepDir};

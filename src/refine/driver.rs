@@ -221,3 +221,60 @@ fn value(axis: &crate::sweep::Axis, v: f64) -> serde_json::Value {
 fn key(c: &[serde_json::Value]) -> String {
     serde_json::to_string(c).expect("serializes")
 }
+
+/// The registered sweep file of a stored sweep (its text as registered; the base scene is
+/// read again, relative to the file's path as registered).
+pub fn registered_file(store: &Store, row: &SweepRow) -> Result<SweepFile, RefineError> {
+    let source = store.sweep_source(row.id)?;
+    SweepFile::parse(&source, std::path::Path::new(&row.file)).map_err(|e| {
+        RefineError::Bad(format!(
+            "sweep {}: its registered file cannot be read again: {e}",
+            row.name
+        ))
+    })
+}
+
+/// After `sweep run` / `sweep resume`: continues the refinement of every given sweep whose file
+/// has a `[refine]` table, up to its budget; `done` hears of each sweep refined.
+pub fn continue_refinement(
+    store: &Store,
+    rows: &[SweepRow],
+    opts: &RunOptions,
+    done: &mut dyn FnMut(&SweepRow, &Outcome),
+) -> Result<(), RefineError> {
+    for row in rows {
+        let source = store.sweep_source(row.id)?;
+        let has_refine = toml::from_str::<toml::Table>(&source)
+            .map(|t| t.contains_key("refine"))
+            .unwrap_or(false);
+        if !has_refine {
+            continue;
+        }
+        let file = registered_file(store, row)?;
+        let Some(s) = file.refine else {
+            continue;
+        };
+        let left = s
+            .budget
+            .saturating_sub(refined_jobs(&store.points(row.id)?, row.replicas));
+        if left == 0 {
+            continue;
+        }
+        let settings = Settings {
+            replicas: row.replicas,
+            max_replicas: s.max_replicas,
+            resolution: s.resolution,
+        };
+        let o = refine_sweep(
+            store,
+            &file,
+            row,
+            left,
+            s.budget.div_ceil(s.rounds),
+            &settings,
+            opts,
+        )?;
+        done(row, &o);
+    }
+    Ok(())
+}

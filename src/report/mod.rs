@@ -1,16 +1,25 @@
-//! Pictures and exports of results: snapshots of a configuration (extended XYZ for OVITO, SVG
-//! coloured by kinetic energy or bridge count, with the bridges drawn), the lateral-profile plot
-//! (SVG), the phase-diagram plot of a sweep database (SVG), the export of all results (CSV with
-//! a long-format series file, JSON) and the trust mark of a stored result (`trust`). Everything
-//! takes plain data (a [`Frame`](crate::sim::Frame),
-//! [`Observables`](crate::observe::Observables), stored results), so a stored sweep point can be
-//! drawn as well as a fresh run.
+//! Reports of results, as text and pictures. Text (pure functions returning `String`, which the
+//! CLI prints): the run summary of `simulate` (`run_text`), `sweep status`, `sweep estimate`,
+//! left-out points and refinement lines (`sweep_text`), the phase maps and boundary points of
+//! `boundaries` (`boundaries_text`), `sweep collect` and the Slurm part of `sweep status`
+//! (`cluster_text`), `show` and `inflection` (`point_text`). Pictures and exports: snapshots of a
+//! configuration (extended XYZ for OVITO, SVG coloured by kinetic energy or bridge count, with
+//! the bridges drawn), the lateral-profile plot (SVG), the phase-diagram plot of a sweep database
+//! (SVG), the export of all results (CSV with a long-format series file, JSON) and the trust
+//! mark of a stored result (`trust`). Everything takes plain data (a
+//! [`Frame`](crate::sim::Frame), [`Observables`](crate::observe::Observables), stored results),
+//! so a stored sweep point can be drawn as well as a fresh run.
 
+pub mod boundaries_text;
+pub mod cluster_text;
 pub mod export;
 pub mod plot_phase;
+pub mod point_text;
 pub mod profile_plot;
+pub mod run_text;
 pub mod snapshot;
 mod svg;
+pub mod sweep_text;
 pub mod trust;
 
 pub use profile_plot::profiles_svg;

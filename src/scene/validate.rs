@@ -199,7 +199,7 @@ impl Check<'_> {
 }
 
 impl Scene {
-    /// Validates every key; `origin` names the file in the error.
+    /// Validates every key, section by section; `origin` names the file in the error.
     pub fn validate(&self, origin: &str) -> Result<(), SceneError> {
         let c = Check { origin };
         let dim = self.dimension;
@@ -211,7 +211,27 @@ impl Scene {
         }
         c.non_negative("gravity", self.gravity)?;
 
-        // Box.
+        self.validate_box(&c)?;
+        self.validate_particles(&c)?;
+        self.validate_contact(&c)?;
+        self.validate_capillary(&c)?;
+        self.validate_drive(&c)?;
+        self.validate_initial(&c)?;
+        self.validate_run(&c)?;
+        self.validate_engine(&c)?;
+        self.validate_cells(&c)?;
+        // Observers and classification.
+        self.observe.validate(self, origin)?;
+        self.classify.validate(origin)?;
+        if let Some(c) = &self.convergence {
+            c.validate(self, origin)?;
+        }
+        Ok(())
+    }
+
+    /// `box.size` and `box.boundary`: one entry per axis, walls on the vertical axis with gravity.
+    fn validate_box(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let dim = self.dimension;
         let size = &self.container.size;
         if size.len() != dim {
             return Err(c.err(
@@ -245,8 +265,11 @@ impl Scene {
                     .to_string(),
             ));
         }
+        Ok(())
+    }
 
-        // Particles.
+    /// `[particles]`: count, diameter, mass, polydispersity.
+    fn validate_particles(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let p = &self.particles;
         if p.count == 0 {
             return Err(c.err(
@@ -266,8 +289,11 @@ impl Scene {
                 ),
             ));
         }
+        Ok(())
+    }
 
-        // Contact.
+    /// `[contact]`: the restitution coefficients.
+    fn validate_contact(&self, c: &Check<'_>) -> Result<(), SceneError> {
         c.closed(
             "contact.restitution",
             self.contact.restitution,
@@ -282,8 +308,12 @@ impl Scene {
             1.0,
             "1",
         )?;
+        Ok(())
+    }
 
-        // Capillary bridges.
+    /// `[capillary]`: the bridge keys belong to the thin-thread model; `e_cb` is needed
+    /// without gravity.
+    fn validate_capillary(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let cap = &self.capillary;
         match cap.model {
             CapillaryModel::None => {
@@ -320,8 +350,11 @@ impl Scene {
                 }
             }
         }
+        Ok(())
+    }
 
-        // Drive.
+    /// `[drive]`: no drive keys without a drive, and the keys of each kind.
+    fn validate_drive(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let drive = &self.drive;
         match drive.kind {
             super::DriveKind::None => {
@@ -340,124 +373,150 @@ impl Scene {
                     ));
                 }
             }
-            super::DriveKind::Shear => self.validate_shear(&c)?,
-            super::DriveKind::Sine => {
-                if let Some((key, _)) = shear_keys_given(drive).iter().find(|(_, g)| *g) {
+            super::DriveKind::Shear => self.validate_shear(c)?,
+            super::DriveKind::Sine => self.validate_sine(c)?,
+        }
+        Ok(())
+    }
+
+    /// A sine drive: exactly one pair (amplitude and omega, or gamma and e_star), its solver
+    /// keys, the wall table and the gap between floor and lid.
+    fn validate_sine(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let drive = &self.drive;
+        if let Some((key, _)) = shear_keys_given(drive).iter().find(|(_, g)| *g) {
+            return Err(c.err(
+                key,
+                "is set but drive.kind = \"sine\": it belongs to kind = \"shear\"".into(),
+            ));
+        }
+        if self.gravity <= 0.0 {
+            return Err(c.err(
+                "drive.kind",
+                "= \"sine\" needs gravity > 0 (Gamma and E* are defined through g)".into(),
+            ));
+        }
+        let physical = drive.amplitude.is_some() || drive.omega.is_some();
+        let reduced = drive.gamma.is_some() || drive.e_star.is_some();
+        if physical == reduced {
+            return Err(c.err(
+                "drive",
+                "a sine drive needs exactly one pair: amplitude and omega, or gamma and \
+                     e_star"
+                    .into(),
+            ));
+        }
+        let pairs = if physical {
+            [
+                ("drive.amplitude", drive.amplitude),
+                ("drive.omega", drive.omega),
+            ]
+        } else {
+            [("drive.gamma", drive.gamma), ("drive.e_star", drive.e_star)]
+        };
+        for (key, value) in pairs {
+            match value {
+                None => {
+                    return Err(c.err(key, "is missing: it comes in a pair".into()));
+                }
+                Some(v) if key == "drive.amplitude" => c.non_negative(key, v)?,
+                Some(v) => c.positive(key, v)?,
+            }
+        }
+        if let Some(tol) = drive.root_tolerance {
+            c.positive("drive.root_tolerance", tol)?;
+        }
+        if let Some(t_min) = drive.t_min {
+            c.positive("drive.t_min", t_min)?;
+        }
+        self.validate_wall_table(c)?;
+        self.validate_shaken_gap(c)?;
+        Ok(())
+    }
+
+    /// The `table` wall solver's keys: only with `wall_solver = "table"`, and in range.
+    fn validate_wall_table(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let drive = &self.drive;
+        if drive.wall_solver != super::WallSolverKind::Table
+            && let Some((key, _)) = table_keys_given(drive).iter().find(|(_, g)| *g)
+        {
+            return Err(c.err(
+                    key,
+                    "is set but drive.wall_solver is not \"table\": set wall_solver =                          \"table\" or remove the key"
+                        .into(),
+                ));
+        }
+        if let Some(cells) = drive.table_cells {
+            for (k, n) in cells.iter().enumerate() {
+                if !(4..=4096).contains(n) {
                     return Err(c.err(
-                        key,
-                        "is set but drive.kind = \"sine\": it belongs to kind = \"shear\"".into(),
+                        &format!("drive.table_cells[{k}]"),
+                        format!("= {n} is out of range: must be in [4, 4096]"),
                     ));
-                }
-                if self.gravity <= 0.0 {
-                    return Err(c.err(
-                        "drive.kind",
-                        "= \"sine\" needs gravity > 0 (Gamma and E* are defined through g)".into(),
-                    ));
-                }
-                let physical = drive.amplitude.is_some() || drive.omega.is_some();
-                let reduced = drive.gamma.is_some() || drive.e_star.is_some();
-                if physical == reduced {
-                    return Err(c.err(
-                        "drive",
-                        "a sine drive needs exactly one pair: amplitude and omega, or gamma and \
-                         e_star"
-                            .into(),
-                    ));
-                }
-                let pairs = if physical {
-                    [
-                        ("drive.amplitude", drive.amplitude),
-                        ("drive.omega", drive.omega),
-                    ]
-                } else {
-                    [("drive.gamma", drive.gamma), ("drive.e_star", drive.e_star)]
-                };
-                for (key, value) in pairs {
-                    match value {
-                        None => {
-                            return Err(c.err(key, "is missing: it comes in a pair".into()));
-                        }
-                        Some(v) if key == "drive.amplitude" => c.non_negative(key, v)?,
-                        Some(v) => c.positive(key, v)?,
-                    }
-                }
-                if let Some(tol) = drive.root_tolerance {
-                    c.positive("drive.root_tolerance", tol)?;
-                }
-                if let Some(t_min) = drive.t_min {
-                    c.positive("drive.t_min", t_min)?;
-                }
-                if drive.wall_solver != super::WallSolverKind::Table
-                    && let Some((key, _)) = table_keys_given(drive).iter().find(|(_, g)| *g)
-                {
-                    return Err(c.err(
-                        key,
-                        "is set but drive.wall_solver is not \"table\": set wall_solver =                          \"table\" or remove the key"
-                            .into(),
-                    ));
-                }
-                if let Some(cells) = drive.table_cells {
-                    for (k, n) in cells.iter().enumerate() {
-                        if !(4..=4096).contains(n) {
-                            return Err(c.err(
-                                &format!("drive.table_cells[{k}]"),
-                                format!("= {n} is out of range: must be in [4, 4096]"),
-                            ));
-                        }
-                    }
-                }
-                if let Some(v) = drive.table_v_min {
-                    c.positive("drive.table_v_min", v)?;
-                }
-                if let Some(v) = drive.table_v_max {
-                    c.positive("drive.table_v_max", v)?;
-                    let v_min = drive
-                        .table_v_min
-                        .unwrap_or(crate::physics::wall_table::DEFAULT_V_MIN_OVER_WALL_SPEED);
-                    if v <= v_min {
-                        return Err(c.err(
-                            "drive.table_v_max",
-                            format!(
-                                "= {v} is out of range: must be greater than table_v_min = {v_min}"
-                            ),
-                        ));
-                    }
-                }
-                if let Some(tol) = drive.table_corner_tolerance {
-                    if !(tol > 0.0 && tol <= 1.0) {
-                        return Err(c.err(
-                            "drive.table_corner_tolerance",
-                            format!("= {tol} is out of range: must be in (0, 1] (periods)"),
-                        ));
-                    }
-                    if drive.table_corner_check == Some(false) {
-                        return Err(c.err(
-                            "drive.table_corner_tolerance",
-                            "is set but drive.table_corner_check = false".into(),
-                        ));
-                    }
-                }
-                // Floor and lid move together (`z_w(t) = A sin(omega t)`), so the gap between
-                // them is the box height at every phase, whatever the stroke `2 A`: the
-                // geometry only needs the largest particle to fit between them.
-                if self.drive_motion().is_some() {
-                    let h = size[dim - 1];
-                    let (_, d_max) = self.diameter_range();
-                    if h <= d_max {
-                        return Err(c.err(
-                            &format!("box.size[{}]", dim - 1),
-                            format!(
-                                "= {h} is out of range: the gap between the shaken floor and lid \
-                                 must exceed the largest diameter d_max = {d_max:.4}"
-                            ),
-                        )
-            .failing(Constraint::GapBelowDiameter));
-                    }
                 }
             }
         }
+        if let Some(v) = drive.table_v_min {
+            c.positive("drive.table_v_min", v)?;
+        }
+        if let Some(v) = drive.table_v_max {
+            c.positive("drive.table_v_max", v)?;
+            let v_min = drive
+                .table_v_min
+                .unwrap_or(crate::physics::wall_table::DEFAULT_V_MIN_OVER_WALL_SPEED);
+            if v <= v_min {
+                return Err(c.err(
+                    "drive.table_v_max",
+                    format!("= {v} is out of range: must be greater than table_v_min = {v_min}"),
+                ));
+            }
+        }
+        if let Some(tol) = drive.table_corner_tolerance {
+            if !(tol > 0.0 && tol <= 1.0) {
+                return Err(c.err(
+                    "drive.table_corner_tolerance",
+                    format!("= {tol} is out of range: must be in (0, 1] (periods)"),
+                ));
+            }
+            if drive.table_corner_check == Some(false) {
+                return Err(c.err(
+                    "drive.table_corner_tolerance",
+                    "is set but drive.table_corner_check = false".into(),
+                ));
+            }
+        }
+        Ok(())
+    }
 
-        // Initial state.
+    /// The shaken floor and lid must leave room for the largest particle.
+    fn validate_shaken_gap(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let dim = self.dimension;
+        let size = &self.container.size;
+        // Floor and lid move together (`z_w(t) = A sin(omega t)`), so the gap between
+        // them is the box height at every phase, whatever the stroke `2 A`: the
+        // geometry only needs the largest particle to fit between them.
+        if self.drive_motion().is_some() {
+            let h = size[dim - 1];
+            let (_, d_max) = self.diameter_range();
+            if h <= d_max {
+                return Err(c
+                    .err(
+                        &format!("box.size[{}]", dim - 1),
+                        format!(
+                            "= {h} is out of range: the gap between the shaken floor and lid \
+                             must exceed the largest diameter d_max = {d_max:.4}"
+                        ),
+                    )
+                    .failing(Constraint::GapBelowDiameter));
+            }
+        }
+        Ok(())
+    }
+
+    /// `[initial]`: one temperature, the lattice spacing, and room on the lattice for every
+    /// particle.
+    fn validate_initial(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let size = &self.container.size;
+        let p = &self.particles;
         let init = &self.initial;
         match (init.temperature, init.temperature_over_ecb) {
             (Some(_), Some(_)) => {
@@ -514,8 +573,11 @@ impl Scene {
             )
             .failing(Constraint::LatticeFull));
         }
+        Ok(())
+    }
 
-        // Run.
+    /// `[run]`: duration, sample interval, event cap.
+    fn validate_run(&self, c: &Check<'_>) -> Result<(), SceneError> {
         c.positive("run.duration", self.run.duration)?;
         c.non_negative("run.sample_interval", self.run.sample_interval)?;
         if self.run.sample_interval > 0.0 && self.run.duration / self.run.sample_interval > 1e7 {
@@ -532,9 +594,13 @@ impl Scene {
         if self.run.max_events == Some(0) {
             return Err(c.err("run.max_events", "= 0 is out of range: must be >= 1".into()));
         }
+        Ok(())
+    }
 
-        // Engine.
-        self.validate_engine_kind(&c)?;
+    /// `[engine]`: the keys of the engine kind, the collapse remedies, the overlap tolerance.
+    fn validate_engine(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let p = &self.particles;
+        self.validate_engine_kind(c)?;
         let e = &self.engine;
         c.non_negative("engine.tc", e.tc)?;
         c.non_negative("engine.min_rebound_speed", e.min_rebound_speed)?;
@@ -587,6 +653,17 @@ impl Scene {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// `engine.cell_size` and the neighbour grid it gives the box: enough cells on a periodic
+    /// axis, not too many in all.
+    fn validate_cells(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let dim = self.dimension;
+        let size = &self.container.size;
+        let boundaries = self.boundaries();
+        let (_, d_max) = self.diameter_range();
+        let e = &self.engine;
         c.non_negative("engine.cell_size", e.cell_size)?;
         let range = d_max + self.s_crit();
         if e.cell_size > 0.0 && e.cell_size < range {
@@ -635,12 +712,6 @@ impl Scene {
             )
             .failing(Constraint::TooManyCells));
         }
-        // Observers and classification.
-        self.observe.validate(self, origin)?;
-        self.classify.validate(origin)?;
-        if let Some(c) = &self.convergence {
-            c.validate(self, origin)?;
-        }
         Ok(())
     }
 }
@@ -650,174 +721,209 @@ impl Scene {
     /// knobs are range-checked (docs/model-choices.md, "Time-driven engine"). Event-engine keys
     /// with plain-number defaults count as set when they differ from their default.
     fn validate_engine_kind(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        match self.engine.kind {
+            super::EngineKind::Event => self.reject_time_keys(c),
+            super::EngineKind::Time => {
+                self.reject_event_keys(c)?;
+                self.validate_time_contact(c)?;
+                self.validate_time_numbers(c)?;
+                self.validate_verlet_cells(c)
+            }
+        }
+    }
+
+    /// With the event engine: no key of the time-driven engine.
+    fn reject_time_keys(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let e = &self.engine;
         let ct = &self.contact;
-        match e.kind {
-            super::EngineKind::Event => {
-                let time_only = [
-                    ("engine.dt", e.dt.is_some()),
-                    ("engine.integrator", e.integrator.is_some()),
-                    ("engine.skin", e.skin.is_some()),
-                    ("contact.stiffness", ct.stiffness.is_some()),
-                    ("contact.damping", ct.damping.is_some()),
-                    ("contact.wall_damping", ct.wall_damping.is_some()),
-                    ("contact.restitution_speed", ct.restitution_speed.is_some()),
-                    (
-                        "contact.restitution_temperature",
-                        ct.restitution_temperature.is_some(),
+        let time_only = [
+            ("engine.dt", e.dt.is_some()),
+            ("engine.integrator", e.integrator.is_some()),
+            ("engine.skin", e.skin.is_some()),
+            ("contact.stiffness", ct.stiffness.is_some()),
+            ("contact.damping", ct.damping.is_some()),
+            ("contact.wall_damping", ct.wall_damping.is_some()),
+            ("contact.restitution_speed", ct.restitution_speed.is_some()),
+            (
+                "contact.restitution_temperature",
+                ct.restitution_temperature.is_some(),
+            ),
+        ];
+        if let Some((key, _)) = time_only.iter().find(|(_, g)| *g) {
+            return Err(c.err(
+                key,
+                "belongs to the time-driven engine: set engine.kind = \"time\" or remove \
+                 the key"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// With the time-driven engine: no key of the event engine (those with plain-number
+    /// defaults count as set when they differ from their default).
+    fn reject_event_keys(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let e = &self.engine;
+        let d = &self.drive;
+        let event_only = [
+            ("engine.tc", e.tc != super::default_tc()),
+            (
+                "engine.min_rebound_speed",
+                e.min_rebound_speed != super::default_min_rebound(),
+            ),
+            (
+                "engine.overlap_tolerance",
+                e.overlap_tolerance != super::default_overlap_tolerance(),
+            ),
+            ("engine.cell_size", e.cell_size != 0.0),
+            (
+                "capillary.rupture_rule",
+                self.capillary.rupture_rule.is_some(),
+            ),
+            (
+                "drive.wall_solver",
+                d.wall_solver != super::WallSolverKind::Exact,
+            ),
+            ("drive.root_tolerance", d.root_tolerance.is_some()),
+            ("drive.t_min", d.t_min.is_some()),
+            ("drive.slab_width", d.slab_width.is_some()),
+            ("run.max_events", self.run.max_events.is_some()),
+        ];
+        if let Some((key, _)) = event_only
+            .iter()
+            .chain(table_keys_given(d).iter())
+            .find(|(_, g)| *g)
+        {
+            return Err(c.err(
+                key,
+                "belongs to the event-driven engine: remove it or set engine.kind = \
+                 \"event\""
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// With the time-driven engine: restitution or damping (not both), the restitution speed
+    /// or temperature.
+    fn validate_time_contact(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let ct = &self.contact;
+        // A restitution is converted into a damping constant at scene start
+        // (`sim::time_driven::damping`); giving both is ambiguous.
+        for (key, e_r, other, a_d) in [
+            (
+                "contact.restitution",
+                ct.restitution,
+                "contact.damping",
+                ct.damping,
+            ),
+            (
+                "contact.wall_restitution",
+                ct.wall_restitution,
+                "contact.wall_damping",
+                ct.wall_damping,
+            ),
+        ] {
+            if e_r < 1.0 && a_d.is_some() {
+                return Err(c.err(
+                    key,
+                    format!(
+                        "and {other} are both given: the time-driven engine derives the \
+                         damping from the restitution; give one of them"
                     ),
-                ];
-                if let Some((key, _)) = time_only.iter().find(|(_, g)| *g) {
-                    return Err(c.err(
-                        key,
-                        "belongs to the time-driven engine: set engine.kind = \"time\" or remove \
-                         the key"
-                            .into(),
-                    ));
-                }
+                ));
             }
-            super::EngineKind::Time => {
-                let d = &self.drive;
-                let event_only = [
-                    ("engine.tc", e.tc != super::default_tc()),
-                    (
-                        "engine.min_rebound_speed",
-                        e.min_rebound_speed != super::default_min_rebound(),
-                    ),
-                    (
-                        "engine.overlap_tolerance",
-                        e.overlap_tolerance != super::default_overlap_tolerance(),
-                    ),
-                    ("engine.cell_size", e.cell_size != 0.0),
-                    (
-                        "capillary.rupture_rule",
-                        self.capillary.rupture_rule.is_some(),
-                    ),
-                    (
-                        "drive.wall_solver",
-                        d.wall_solver != super::WallSolverKind::Exact,
-                    ),
-                    ("drive.root_tolerance", d.root_tolerance.is_some()),
-                    ("drive.t_min", d.t_min.is_some()),
-                    ("drive.slab_width", d.slab_width.is_some()),
-                    ("run.max_events", self.run.max_events.is_some()),
-                ];
-                if let Some((key, _)) = event_only
-                    .iter()
-                    .chain(table_keys_given(d).iter())
-                    .find(|(_, g)| *g)
-                {
-                    return Err(c.err(
-                        key,
-                        "belongs to the event-driven engine: remove it or set engine.kind = \
-                         \"event\""
-                            .into(),
-                    ));
-                }
-                // A restitution is converted into a damping constant at scene start
-                // (`sim::time_driven::damping`); giving both is ambiguous.
-                for (key, e_r, other, a_d) in [
-                    (
-                        "contact.restitution",
-                        ct.restitution,
-                        "contact.damping",
-                        ct.damping,
-                    ),
-                    (
-                        "contact.wall_restitution",
-                        ct.wall_restitution,
-                        "contact.wall_damping",
-                        ct.wall_damping,
-                    ),
-                ] {
-                    if e_r < 1.0 && a_d.is_some() {
-                        return Err(c.err(
-                            key,
-                            format!(
-                                "and {other} are both given: the time-driven engine derives the \
-                                 damping from the restitution; give one of them"
-                            ),
-                        ));
-                    }
-                    if e_r < 0.1 {
-                        return Err(c.out_of_range(
-                            key,
-                            e_r,
-                            "in [0.1, 1] with the time-driven engine (converted into a Hertz \
-                             damping constant, contact.restitution_speed)",
-                        ));
-                    }
-                }
-                if let Some(super::RestitutionSpeed::Speed(v)) = ct.restitution_speed {
-                    if !(v.is_finite() && v > 0.0 && v <= 100.0) {
-                        return Err(c.out_of_range(
-                            "contact.restitution_speed",
-                            v,
-                            "in (0, 100] (units of sqrt(g d)), or \"auto\"",
-                        ));
-                    }
-                    if ct.restitution_temperature.is_some() {
-                        return Err(c.err(
-                            "contact.restitution_temperature",
-                            "is the temperature of restitution_speed = \"auto\", but \
-                             contact.restitution_speed is a number: give one of them"
-                                .into(),
-                        ));
-                    }
-                }
-                if let Some(t) = ct.restitution_temperature
-                    && !(t.is_finite() && t > 0.0 && t <= 1e6)
-                {
-                    return Err(c.out_of_range(
-                        "contact.restitution_temperature",
-                        t,
-                        "in (0, 1e6] (a granular temperature, units of m g d)",
-                    ));
-                }
-                if let Some(dt) = e.dt
-                    && !(dt.is_finite() && dt > 0.0 && dt <= 1e-2)
-                {
-                    return Err(c.out_of_range("engine.dt", dt, "in (0, 0.01]"));
-                }
-                if let Some(skin) = e.skin
-                    && !(skin.is_finite() && skin > 0.0 && skin <= 1.0)
-                {
-                    return Err(c.out_of_range("engine.skin", skin, "in (0, 1] (units of d)"));
-                }
-                if let Some(k) = ct.stiffness
-                    && !(k.is_finite() && (1e2..=1e12).contains(&k))
-                {
-                    return Err(c.out_of_range("contact.stiffness", k, "in [1e2, 1e12]"));
-                }
-                for (key, v) in [
-                    ("contact.damping", ct.damping),
-                    ("contact.wall_damping", ct.wall_damping),
-                ] {
-                    if let Some(a) = v
-                        && !(a.is_finite() && (0.0..=1.0).contains(&a))
-                    {
-                        return Err(c.out_of_range(key, a, "in [0, 1] (a time)"));
-                    }
-                }
-                // The time engine's neighbour cells hold the Verlet-list range.
-                let dim = self.dimension;
-                let (_, d_max) = self.diameter_range();
-                let range = d_max + self.s_crit() + e.skin.unwrap_or(super::DEFAULT_SKIN);
-                let boundaries = self.boundaries();
-                for k in 0..dim {
-                    let l = self.container.size[k];
-                    if boundaries[k] == Boundary::Periodic && (l / range).floor() < 3.0 {
-                        return Err(c.err(
-                            &format!("box.size[{k}]"),
-                            format!(
-                                "= {l} is out of range: the time-driven engine needs a periodic \
-                                 axis >= 3 (d_max + s_crit + skin) = {:.4}",
-                                3.0 * range
-                            ),
-                        )
-            .failing(Constraint::PeriodicAxisTooShort));
-                    }
-                }
+            if e_r < 0.1 {
+                return Err(c.out_of_range(
+                    key,
+                    e_r,
+                    "in [0.1, 1] with the time-driven engine (converted into a Hertz \
+                     damping constant, contact.restitution_speed)",
+                ));
+            }
+        }
+        if let Some(super::RestitutionSpeed::Speed(v)) = ct.restitution_speed {
+            if !(v.is_finite() && v > 0.0 && v <= 100.0) {
+                return Err(c.out_of_range(
+                    "contact.restitution_speed",
+                    v,
+                    "in (0, 100] (units of sqrt(g d)), or \"auto\"",
+                ));
+            }
+            if ct.restitution_temperature.is_some() {
+                return Err(c.err(
+                    "contact.restitution_temperature",
+                    "is the temperature of restitution_speed = \"auto\", but \
+                     contact.restitution_speed is a number: give one of them"
+                        .into(),
+                ));
+            }
+        }
+        if let Some(t) = ct.restitution_temperature
+            && !(t.is_finite() && t > 0.0 && t <= 1e6)
+        {
+            return Err(c.out_of_range(
+                "contact.restitution_temperature",
+                t,
+                "in (0, 1e6] (a granular temperature, units of m g d)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// With the time-driven engine: time step, skin, stiffness and damping in range.
+    fn validate_time_numbers(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let e = &self.engine;
+        let ct = &self.contact;
+        if let Some(dt) = e.dt
+            && !(dt.is_finite() && dt > 0.0 && dt <= 1e-2)
+        {
+            return Err(c.out_of_range("engine.dt", dt, "in (0, 0.01]"));
+        }
+        if let Some(skin) = e.skin
+            && !(skin.is_finite() && skin > 0.0 && skin <= 1.0)
+        {
+            return Err(c.out_of_range("engine.skin", skin, "in (0, 1] (units of d)"));
+        }
+        if let Some(k) = ct.stiffness
+            && !(k.is_finite() && (1e2..=1e12).contains(&k))
+        {
+            return Err(c.out_of_range("contact.stiffness", k, "in [1e2, 1e12]"));
+        }
+        for (key, v) in [
+            ("contact.damping", ct.damping),
+            ("contact.wall_damping", ct.wall_damping),
+        ] {
+            if let Some(a) = v
+                && !(a.is_finite() && (0.0..=1.0).contains(&a))
+            {
+                return Err(c.out_of_range(key, a, "in [0, 1] (a time)"));
+            }
+        }
+        Ok(())
+    }
+
+    /// With the time-driven engine: a periodic axis holds three Verlet-list ranges.
+    fn validate_verlet_cells(&self, c: &Check<'_>) -> Result<(), SceneError> {
+        let e = &self.engine;
+        // The time engine's neighbour cells hold the Verlet-list range.
+        let dim = self.dimension;
+        let (_, d_max) = self.diameter_range();
+        let range = d_max + self.s_crit() + e.skin.unwrap_or(super::DEFAULT_SKIN);
+        let boundaries = self.boundaries();
+        for k in 0..dim {
+            let l = self.container.size[k];
+            if boundaries[k] == Boundary::Periodic && (l / range).floor() < 3.0 {
+                return Err(c
+                    .err(
+                        &format!("box.size[{k}]"),
+                        format!(
+                            "= {l} is out of range: the time-driven engine needs a periodic \
+                         axis >= 3 (d_max + s_crit + skin) = {:.4}",
+                            3.0 * range
+                        ),
+                    )
+                    .failing(Constraint::PeriodicAxisTooShort));
             }
         }
         Ok(())

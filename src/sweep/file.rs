@@ -359,302 +359,18 @@ impl SweepFile {
     pub fn parse(text: &str, path: &Path) -> Result<SweepFile, SweepError> {
         let file = path.display().to_string();
         let raw: RawSweep = toml::from_str(text).map_err(|e| toml_error(&file, text, &e))?;
-        let err =
-            |line: Option<usize>, key: &str, msg: String| SweepError::new(&file, line, key, msg);
-        let span_line = |start: usize| Some(line_of(text, start));
-
-        let name = raw.sweep.name.get_ref().trim().to_string();
-        if name.is_empty()
-            || !name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
-        {
-            return Err(err(
-                span_line(raw.sweep.name.span().start),
-                "sweep.name",
-                format!(
-                    "= {name:?} is not allowed: must be non-empty letters, digits, '-', '_' or '.'"
-                ),
-            ));
-        }
-        let replicas = *raw.sweep.replicas.get_ref();
-        if !(1..=10_000).contains(&replicas) {
-            return Err(err(
-                key_line(text, &["sweep"], "replicas"),
-                "sweep.replicas",
-                format!("= {replicas} is out of range: must be in [1, 10000]"),
-            ));
-        }
-        let periods = match &raw.sweep.periods {
-            Some(p) => {
-                let v = *p.get_ref();
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(err(
-                        span_line(p.span().start),
-                        "sweep.periods",
-                        format!("= {v} is out of range: must be finite and > 0"),
-                    ));
-                }
-                Some(v)
-            }
-            None => None,
-        };
-
-        // Base scene: the file (relative to the sweep file) merged with the inline [scene].
-        let mut scene_tree = toml::Table::new();
-        let mut base = None;
-        if let Some(b) = &raw.sweep.base {
-            let dir = path.parent().unwrap_or(Path::new(""));
-            let base_path = dir.join(b.get_ref());
-            let base_text = std::fs::read_to_string(&base_path).map_err(|e| {
-                err(
-                    span_line(b.span().start),
-                    "sweep.base",
-                    format!("cannot read the base scene {}: {e}", base_path.display()),
-                )
-            })?;
-            let base_file = base_path.display().to_string();
-            scene_tree =
-                toml::from_str(&base_text).map_err(|e| toml_error(&base_file, &base_text, &e))?;
-            base = Some((base_path, base_text));
-        }
-        if let Some(over) = &raw.scene {
-            merge_tables(&mut scene_tree, over);
-        }
-        if scene_tree.is_empty() {
-            return Err(err(
-                None,
-                "sweep.base",
-                "no scene: give a base scene file (`base = \"scene.toml\"` under [sweep]) or a \
-                 [scene] table"
-                    .to_string(),
-            ));
-        }
-
+        let src = Source { text, file: &file };
+        let (name, replicas, periods) = parse_header(&src, &raw.sweep)?;
+        let (mut scene_tree, base) = parse_base_scene(&src, &raw, path)?;
         let mut axes: Vec<Axis> = Vec::new();
         for a in &raw.axes {
-            let line = line_of(text, a.key.span().start);
-            let name = a.key.get_ref().trim().to_string();
-            let (key, label) = match AXIS_ALIASES.iter().find(|(n, _, _)| *n == name) {
-                Some((_, key, label)) => (key.to_string(), label.to_string()),
-                None => (name.clone(), name.clone()),
-            };
-            // Dotted identifiers; the last part may index an array (`box.size[0]`).
-            let ident =
-                |p: &str| !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-            let parts: Vec<&str> = key.split('.').collect();
-            let last_ok = |p: &str| match p.split_once('[') {
-                Some((name, rest)) => {
-                    ident(name)
-                        && rest
-                            .strip_suffix(']')
-                            .is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()))
-                }
-                None => ident(p),
-            };
-            if key.is_empty()
-                || !parts[..parts.len() - 1].iter().all(|p| ident(p))
-                || !last_ok(parts[parts.len() - 1])
-            {
-                return Err(err(
-                    Some(line),
-                    "axis.key",
-                    format!(
-                        "= {name:?} is not a scene key: write a dotted key such as \
-                         \"drive.gamma\" (or \"box.size[0]\") or one of gamma, e_star, e_d_star, f_max, l_x"
-                    ),
-                ));
-            }
-            if axes.iter().any(|b| b.key == key) {
-                return Err(err(
-                    Some(line),
-                    &key,
-                    "appears on two axes: each scene key may be swept once".to_string(),
-                ));
-            }
-            if key == "initial.seed" && replicas > 1 {
-                return Err(err(
-                    Some(line),
-                    &key,
-                    "is swept while sweep.replicas > 1 also sets the seed: use one of the two"
-                        .to_string(),
-                ));
-            }
-            let given = [a.values.is_some(), a.linear.is_some(), a.log.is_some()];
-            if given.iter().filter(|g| **g).count() != 1 {
-                return Err(err(
-                    Some(line),
-                    &key,
-                    "needs exactly one of `values = [...]`, `linear = { from, to, steps }` or \
-                     `log = { from, to, steps }`"
-                        .to_string(),
-                ));
-            }
-            let (kind, values) = if let Some(v) = &a.values {
-                let vline = Some(line_of(text, v.span().start));
-                if v.get_ref().is_empty() {
-                    return Err(err(vline, &key, "has an empty `values` list".to_string()));
-                }
-                let mut out = Vec::new();
-                for x in v.get_ref() {
-                    if let toml::Value::Float(f) = x
-                        && !f.is_finite()
-                    {
-                        return Err(err(
-                            vline,
-                            &key,
-                            format!("value {f} is not a finite number"),
-                        ));
-                    }
-                    let j = serde_json::to_value(x)
-                        .map_err(|e| err(vline, &key, format!("value {x} cannot be used: {e}")))?;
-                    if out.contains(&j) {
-                        return Err(err(vline, &key, format!("value {x} appears twice")));
-                    }
-                    out.push(j);
-                }
-                (AxisKind::Values, out)
-            } else {
-                let (r, log) = match (&a.linear, &a.log) {
-                    (Some(r), _) => (r, false),
-                    (None, Some(r)) => (r, true),
-                    _ => unreachable!("one of the three is given"),
-                };
-                let rline = Some(line_of(text, r.span().start));
-                let rv = r.get_ref();
-                if !(rv.from.is_finite() && rv.to.is_finite()) {
-                    return Err(err(
-                        rline,
-                        &key,
-                        "range ends must be finite numbers".to_string(),
-                    ));
-                }
-                if rv.steps == 0 || rv.steps > 100_000 {
-                    return Err(err(
-                        rline,
-                        &key,
-                        format!(
-                            "steps = {} is out of range: must be in [1, 100000]",
-                            rv.steps
-                        ),
-                    ));
-                }
-                if rv.steps == 1 && rv.from != rv.to {
-                    return Err(err(
-                        rline,
-                        &key,
-                        format!(
-                            "steps = 1 with from = {} != to = {}: a range needs steps >= 2 \
-                             (or write `values = [{}]` for one value)",
-                            rv.from, rv.to, rv.from
-                        ),
-                    ));
-                }
-                if rv.steps > 1 && rv.from == rv.to {
-                    return Err(err(
-                        rline,
-                        &key,
-                        format!(
-                            "from = to = {} with steps = {}: the values would repeat",
-                            rv.from, rv.steps
-                        ),
-                    ));
-                }
-                if log && !(rv.from > 0.0 && rv.to > 0.0) {
-                    return Err(err(
-                        rline,
-                        &key,
-                        format!(
-                            "log range from {} to {}: both ends must be > 0",
-                            rv.from, rv.to
-                        ),
-                    ));
-                }
-                let vals = range_values(rv, log)
-                    .into_iter()
-                    .map(|x| serde_json::json!(x))
-                    .collect();
-                (if log { AxisKind::Log } else { AxisKind::Linear }, vals)
-            };
-            axes.push(Axis {
-                name,
-                key,
-                label,
-                kind,
-                values,
-                line,
-            });
+            let axis = parse_axis(&src, a, &axes, replicas)?;
+            axes.push(axis);
         }
-        let jobs = axes
-            .iter()
-            .try_fold(replicas as usize, |n, a| n.checked_mul(a.values.len()))
-            .unwrap_or(usize::MAX);
-        if jobs > MAX_JOBS {
-            return Err(err(
-                None,
-                "axis",
-                format!("expands to {jobs} jobs: at most {MAX_JOBS} are allowed"),
-            ));
-        }
+        check_job_count(&src, &axes, replicas)?;
         let refine = match &raw.refine {
             None => None,
-            Some(r) => {
-                let rerr = |key: &str, msg: String| {
-                    err(
-                        key_line(text, &["refine"], key),
-                        &format!("refine.{key}"),
-                        msg,
-                    )
-                };
-                if !(1..=MAX_JOBS).contains(&r.budget) {
-                    return Err(rerr(
-                        "budget",
-                        format!("= {} is out of range: must be in [1, {MAX_JOBS}]", r.budget),
-                    ));
-                }
-                let rounds = r.rounds.unwrap_or(4);
-                if !(1..=r.budget).contains(&rounds) {
-                    return Err(rerr(
-                        "rounds",
-                        format!(
-                            "= {rounds} is out of range: must be in [1, budget = {}]",
-                            r.budget
-                        ),
-                    ));
-                }
-                let resolution = r.resolution.unwrap_or(0.0);
-                if !(0.0..1.0).contains(&resolution) {
-                    return Err(rerr(
-                        "resolution",
-                        format!("= {resolution} is out of range: must be in [0, 1)"),
-                    ));
-                }
-                let max_replicas = r.max_replicas.unwrap_or(3 * replicas);
-                if !(replicas..=10_000).contains(&max_replicas) {
-                    return Err(rerr(
-                        "max_replicas",
-                        format!(
-                            "= {max_replicas} is out of range: must be in [sweep.replicas = \
-                             {replicas}, 10000]"
-                        ),
-                    ));
-                }
-                if axes.iter().any(|a| a.key == "initial.seed") && max_replicas > replicas {
-                    return Err(rerr(
-                        "max_replicas",
-                        format!(
-                            "= {max_replicas} adds replicas (seeds) while an axis sweeps \
-                             initial.seed: set it to sweep.replicas = {replicas}"
-                        ),
-                    ));
-                }
-                Some(RefineSection {
-                    budget: r.budget,
-                    rounds,
-                    resolution,
-                    max_replicas,
-                })
-            }
+            Some(r) => Some(parse_refine(&src, r, replicas, &axes)?),
         };
         let continuation = match &raw.sweep.continuation {
             None => None,
@@ -713,6 +429,347 @@ impl SweepFile {
             None => (file, key_line(&self.text, &[], "scene")),
         }
     }
+}
+
+/// A scene tree with, where there is one, the base scene file's path and text.
+type SceneTree = (toml::Table, Option<(PathBuf, String)>);
+
+/// The text and name of the sweep file being parsed, for errors with a line.
+struct Source<'a> {
+    text: &'a str,
+    file: &'a str,
+}
+
+impl Source<'_> {
+    fn err(&self, line: Option<usize>, key: &str, msg: String) -> SweepError {
+        SweepError::new(self.file, line, key, msg)
+    }
+
+    /// The line of a byte offset into the text.
+    fn span_line(&self, start: usize) -> Option<usize> {
+        Some(line_of(self.text, start))
+    }
+}
+
+/// The `[sweep]` header: name, replicas and run length in periods, checked.
+fn parse_header(src: &Source<'_>, h: &Header) -> Result<(String, u32, Option<f64>), SweepError> {
+    let name = h.name.get_ref().trim().to_string();
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+    {
+        return Err(src.err(
+            src.span_line(h.name.span().start),
+            "sweep.name",
+            format!(
+                "= {name:?} is not allowed: must be non-empty letters, digits, '-', '_' or '.'"
+            ),
+        ));
+    }
+    let replicas = *h.replicas.get_ref();
+    if !(1..=10_000).contains(&replicas) {
+        return Err(src.err(
+            key_line(src.text, &["sweep"], "replicas"),
+            "sweep.replicas",
+            format!("= {replicas} is out of range: must be in [1, 10000]"),
+        ));
+    }
+    let periods = match &h.periods {
+        Some(p) => {
+            let v = *p.get_ref();
+            if !(v.is_finite() && v > 0.0) {
+                return Err(src.err(
+                    src.span_line(p.span().start),
+                    "sweep.periods",
+                    format!("= {v} is out of range: must be finite and > 0"),
+                ));
+            }
+            Some(v)
+        }
+        None => None,
+    };
+    Ok((name, replicas, periods))
+}
+
+/// The base scene: the file (relative to the sweep file) merged with the inline `[scene]`;
+/// also the base file's path and text, for error locations.
+fn parse_base_scene(
+    src: &Source<'_>,
+    raw: &RawSweep,
+    path: &Path,
+) -> Result<SceneTree, SweepError> {
+    let mut scene_tree = toml::Table::new();
+    let mut base = None;
+    if let Some(b) = &raw.sweep.base {
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let base_path = dir.join(b.get_ref());
+        let base_text = std::fs::read_to_string(&base_path).map_err(|e| {
+            src.err(
+                src.span_line(b.span().start),
+                "sweep.base",
+                format!("cannot read the base scene {}: {e}", base_path.display()),
+            )
+        })?;
+        let base_file = base_path.display().to_string();
+        scene_tree =
+            toml::from_str(&base_text).map_err(|e| toml_error(&base_file, &base_text, &e))?;
+        base = Some((base_path, base_text));
+    }
+    if let Some(over) = &raw.scene {
+        merge_tables(&mut scene_tree, over);
+    }
+    if scene_tree.is_empty() {
+        return Err(src.err(
+            None,
+            "sweep.base",
+            "no scene: give a base scene file (`base = \"scene.toml\"` under [sweep]) or a \
+             [scene] table"
+                .to_string(),
+        ));
+    }
+    Ok((scene_tree, base))
+}
+
+/// One `[[axis]]`: its key (or short name), checked against the axes before it, and its values.
+fn parse_axis(
+    src: &Source<'_>,
+    a: &RawAxis,
+    axes: &[Axis],
+    replicas: u32,
+) -> Result<Axis, SweepError> {
+    let line = line_of(src.text, a.key.span().start);
+    let name = a.key.get_ref().trim().to_string();
+    let (key, label) = match AXIS_ALIASES.iter().find(|(n, _, _)| *n == name) {
+        Some((_, key, label)) => (key.to_string(), label.to_string()),
+        None => (name.clone(), name.clone()),
+    };
+    // Dotted identifiers; the last part may index an array (`box.size[0]`).
+    let ident = |p: &str| !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+    let parts: Vec<&str> = key.split('.').collect();
+    let last_ok = |p: &str| match p.split_once('[') {
+        Some((name, rest)) => {
+            ident(name)
+                && rest
+                    .strip_suffix(']')
+                    .is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()))
+        }
+        None => ident(p),
+    };
+    if key.is_empty()
+        || !parts[..parts.len() - 1].iter().all(|p| ident(p))
+        || !last_ok(parts[parts.len() - 1])
+    {
+        return Err(src.err(
+            Some(line),
+            "axis.key",
+            format!(
+                "= {name:?} is not a scene key: write a dotted key such as \
+                 \"drive.gamma\" (or \"box.size[0]\") or one of gamma, e_star, e_d_star, f_max, l_x"
+            ),
+        ));
+    }
+    if axes.iter().any(|b| b.key == key) {
+        return Err(src.err(
+            Some(line),
+            &key,
+            "appears on two axes: each scene key may be swept once".to_string(),
+        ));
+    }
+    if key == "initial.seed" && replicas > 1 {
+        return Err(src.err(
+            Some(line),
+            &key,
+            "is swept while sweep.replicas > 1 also sets the seed: use one of the two".to_string(),
+        ));
+    }
+    let (kind, values) = axis_values(src, a, &key)?;
+    Ok(Axis {
+        name,
+        key,
+        label,
+        kind,
+        values,
+        line,
+    })
+}
+
+/// The values of an axis: exactly one of a `values` list, a `linear` or a `log` range, checked.
+fn axis_values(
+    src: &Source<'_>,
+    a: &RawAxis,
+    key: &str,
+) -> Result<(AxisKind, Vec<serde_json::Value>), SweepError> {
+    let line = line_of(src.text, a.key.span().start);
+    let given = [a.values.is_some(), a.linear.is_some(), a.log.is_some()];
+    if given.iter().filter(|g| **g).count() != 1 {
+        return Err(src.err(
+            Some(line),
+            key,
+            "needs exactly one of `values = [...]`, `linear = { from, to, steps }` or \
+             `log = { from, to, steps }`"
+                .to_string(),
+        ));
+    }
+    let (kind, values) = if let Some(v) = &a.values {
+        let vline = Some(line_of(src.text, v.span().start));
+        if v.get_ref().is_empty() {
+            return Err(src.err(vline, key, "has an empty `values` list".to_string()));
+        }
+        let mut out = Vec::new();
+        for x in v.get_ref() {
+            if let toml::Value::Float(f) = x
+                && !f.is_finite()
+            {
+                return Err(src.err(vline, key, format!("value {f} is not a finite number")));
+            }
+            let j = serde_json::to_value(x)
+                .map_err(|e| src.err(vline, key, format!("value {x} cannot be used: {e}")))?;
+            if out.contains(&j) {
+                return Err(src.err(vline, key, format!("value {x} appears twice")));
+            }
+            out.push(j);
+        }
+        (AxisKind::Values, out)
+    } else {
+        let (r, log) = match (&a.linear, &a.log) {
+            (Some(r), _) => (r, false),
+            (None, Some(r)) => (r, true),
+            _ => unreachable!("one of the three is given"),
+        };
+        let rline = Some(line_of(src.text, r.span().start));
+        let rv = r.get_ref();
+        if !(rv.from.is_finite() && rv.to.is_finite()) {
+            return Err(src.err(rline, key, "range ends must be finite numbers".to_string()));
+        }
+        if rv.steps == 0 || rv.steps > 100_000 {
+            return Err(src.err(
+                rline,
+                key,
+                format!(
+                    "steps = {} is out of range: must be in [1, 100000]",
+                    rv.steps
+                ),
+            ));
+        }
+        if rv.steps == 1 && rv.from != rv.to {
+            return Err(src.err(
+                rline,
+                key,
+                format!(
+                    "steps = 1 with from = {} != to = {}: a range needs steps >= 2 \
+                     (or write `values = [{}]` for one value)",
+                    rv.from, rv.to, rv.from
+                ),
+            ));
+        }
+        if rv.steps > 1 && rv.from == rv.to {
+            return Err(src.err(
+                rline,
+                key,
+                format!(
+                    "from = to = {} with steps = {}: the values would repeat",
+                    rv.from, rv.steps
+                ),
+            ));
+        }
+        if log && !(rv.from > 0.0 && rv.to > 0.0) {
+            return Err(src.err(
+                rline,
+                key,
+                format!(
+                    "log range from {} to {}: both ends must be > 0",
+                    rv.from, rv.to
+                ),
+            ));
+        }
+        let vals = range_values(rv, log)
+            .into_iter()
+            .map(|x| serde_json::json!(x))
+            .collect();
+        (if log { AxisKind::Log } else { AxisKind::Linear }, vals)
+    };
+    Ok((kind, values))
+}
+
+/// The axes and replicas may expand to at most [`MAX_JOBS`] jobs.
+fn check_job_count(src: &Source<'_>, axes: &[Axis], replicas: u32) -> Result<(), SweepError> {
+    let jobs = axes
+        .iter()
+        .try_fold(replicas as usize, |n, a| n.checked_mul(a.values.len()))
+        .unwrap_or(usize::MAX);
+    if jobs > MAX_JOBS {
+        return Err(src.err(
+            None,
+            "axis",
+            format!("expands to {jobs} jobs: at most {MAX_JOBS} are allowed"),
+        ));
+    }
+    Ok(())
+}
+
+/// The `[refine]` table, checked against the header and the axes.
+fn parse_refine(
+    src: &Source<'_>,
+    r: &RawRefine,
+    replicas: u32,
+    axes: &[Axis],
+) -> Result<RefineSection, SweepError> {
+    let rerr = |key: &str, msg: String| {
+        src.err(
+            key_line(src.text, &["refine"], key),
+            &format!("refine.{key}"),
+            msg,
+        )
+    };
+    if !(1..=MAX_JOBS).contains(&r.budget) {
+        return Err(rerr(
+            "budget",
+            format!("= {} is out of range: must be in [1, {MAX_JOBS}]", r.budget),
+        ));
+    }
+    let rounds = r.rounds.unwrap_or(4);
+    if !(1..=r.budget).contains(&rounds) {
+        return Err(rerr(
+            "rounds",
+            format!(
+                "= {rounds} is out of range: must be in [1, budget = {}]",
+                r.budget
+            ),
+        ));
+    }
+    let resolution = r.resolution.unwrap_or(0.0);
+    if !(0.0..1.0).contains(&resolution) {
+        return Err(rerr(
+            "resolution",
+            format!("= {resolution} is out of range: must be in [0, 1)"),
+        ));
+    }
+    let max_replicas = r.max_replicas.unwrap_or(3 * replicas);
+    if !(replicas..=10_000).contains(&max_replicas) {
+        return Err(rerr(
+            "max_replicas",
+            format!(
+                "= {max_replicas} is out of range: must be in [sweep.replicas = \
+                     {replicas}, 10000]"
+            ),
+        ));
+    }
+    if axes.iter().any(|a| a.key == "initial.seed") && max_replicas > replicas {
+        return Err(rerr(
+            "max_replicas",
+            format!(
+                "= {max_replicas} adds replicas (seeds) while an axis sweeps \
+                     initial.seed: set it to sweep.replicas = {replicas}"
+            ),
+        ));
+    }
+    Ok(RefineSection {
+        budget: r.budget,
+        rounds,
+        resolution,
+        max_replicas,
+    })
 }
 
 /// A TOML syntax or type error with its line and (where the message names one) key.

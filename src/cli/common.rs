@@ -1,0 +1,237 @@
+//! What the command modules share: the failure kinds and their exit codes, the worker count
+//! of `--jobs`, choosing sweeps in a database, loading a sweep file (with the grid points it
+//! leaves out), the regrid check of `sweep run` / `sweep submit`, and reading a job spec.
+
+use crate::refine::driver::{Outcome, RefineError};
+use crate::report::sweep_text::left_out_text;
+use crate::report::sweep_text::refinement_text;
+use crate::run::RunOptions;
+use crate::store::{LeftOut, Store, StoreError, SweepRow};
+use crate::sweep::{JobSpec, SweepFile};
+use std::path::Path;
+use std::process::ExitCode;
+
+/// How a command failed: bad input (exit code 2) or anything else (exit code 1).
+pub(super) enum Failure {
+    BadInput(String),
+    Other(String),
+}
+
+impl From<StoreError> for Failure {
+    fn from(e: StoreError) -> Self {
+        match e {
+            StoreError::NotSqlite { .. }
+            | StoreError::NotWetgran { .. }
+            | StoreError::Damaged { .. }
+            | StoreError::Missing { .. }
+            | StoreError::NoSuchSweep { .. } => Failure::BadInput(e.to_string()),
+            _ => Failure::Other(e.to_string()),
+        }
+    }
+}
+
+pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
+    match r {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::BadInput(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Other(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// The cores this process may use (`std::thread::available_parallelism`, 1 if unknown).
+pub fn available_cores() -> usize {
+    std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+}
+
+/// Worker threads for `--jobs N`: the available cores by default; `N` must be in
+/// `[1, available cores]` unless `oversubscribe` (`--oversubscribe`) allows more.
+pub fn workers(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, String> {
+    let cores = available_cores();
+    match jobs {
+        None => Ok(cores),
+        Some(0) => Err(format!(
+            "--jobs 0 is out of range: must be in [1, {cores}] (the available cores)"
+        )),
+        Some(n) if n > cores && !oversubscribe => Err(format!(
+            "--jobs {n} is out of range: must be in [1, {cores}] (the available cores; one \
+             simulation per worker); add --oversubscribe to start more workers than cores"
+        )),
+        Some(n) => Ok(n),
+    }
+}
+
+pub(super) fn workers_or_fail(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, Failure> {
+    workers(jobs, oversubscribe).map_err(Failure::BadInput)
+}
+
+impl From<RefineError> for Failure {
+    fn from(e: RefineError) -> Self {
+        match e {
+            RefineError::Store(e) => e.into(),
+            RefineError::Bad(m) => Failure::BadInput(m),
+        }
+    }
+}
+
+/// The sweep named `name`, or every sweep of the database.
+pub(super) fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>, Failure> {
+    Ok(match name {
+        Some(n) => vec![store.sweep(n)?],
+        None => store.sweeps()?,
+    })
+}
+
+/// Loads and expands a sweep file (the grid points left out are listed on stderr).
+pub(super) fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>), Failure> {
+    let (sweep, jobs, _) = load_sweep_left_out(file)?;
+    Ok((sweep, jobs))
+}
+
+/// Loads and expands a sweep file; also returns the grid points `skip_invalid` left out, each
+/// with the scene constraint it fails, after listing them on stderr.
+pub(super) fn load_sweep_left_out(
+    file: &Path,
+) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>, Vec<LeftOut>), Failure> {
+    let sweep = SweepFile::load(file).map_err(|e| Failure::BadInput(e.to_string()))?;
+    let (jobs, skipped) = sweep
+        .expand_with_skips()
+        .map_err(|e| Failure::BadInput(e.to_string()))?;
+    let left_out: Vec<LeftOut> = skipped
+        .iter()
+        .map(|k| LeftOut {
+            coords: k.coords.clone(),
+            constraint: k
+                .reason
+                .constraint
+                .map(|c| c.reason().to_string())
+                .unwrap_or_default(),
+            reason: k.reason.to_string(),
+        })
+        .collect();
+    if !left_out.is_empty() {
+        eprintln!(
+            "{}: left out {} grid point(s) (sweep.skip_invalid: the scene fails a constraint):",
+            file.display(),
+            left_out.len()
+        );
+        eprint!("{}", left_out_text(&sweep.axes, &left_out));
+    }
+    if jobs.is_empty() {
+        return Err(Failure::BadInput(format!(
+            "{}: the sweep has no valid grid point",
+            file.display()
+        )));
+    }
+    Ok((sweep, jobs, left_out))
+}
+
+/// A sweep name registered before with another grid (axes or replicas) is refused unless
+/// `--replace`: the error says what would be replaced.
+pub(super) fn check_regrid(
+    store: &Store,
+    old: &SweepRow,
+    sweep: &SweepFile,
+    expanded: &[crate::sweep::SweepJob],
+    replace: bool,
+) -> Result<(), Failure> {
+    let grid = |axes: &[crate::sweep::Axis], replicas: u32| {
+        let mut parts: Vec<String> = axes
+            .iter()
+            .map(|a| {
+                let v: Vec<String> = a.values.iter().map(|v| v.to_string()).collect();
+                format!("{} = [{}]", a.label, v.join(", "))
+            })
+            .collect();
+        parts.push(format!("{replicas} replica(s)"));
+        parts.join("; ")
+    };
+    let same_axes = old.axes.len() == sweep.axes.len()
+        && old
+            .axes
+            .iter()
+            .zip(&sweep.axes)
+            .all(|(a, b)| a.key == b.key && a.values == b.values);
+    if (same_axes && old.replicas == sweep.replicas) || replace {
+        return Ok(());
+    }
+    let new_ids: std::collections::HashSet<&str> = expanded.iter().map(|j| j.id.as_str()).collect();
+    let points = store.points(old.id)?;
+    let leaving: Vec<_> = points
+        .iter()
+        .filter(|p| !new_ids.contains(p.job_id.as_str()))
+        .collect();
+    let with_result = leaving.iter().filter(|p| p.observables.is_some()).count();
+    Err(Failure::BadInput(format!(
+        "{}: sweep `{}` is already in {} with another grid (registered from {}):\n  \
+         old grid: {} ({} job(s))\n  new grid: {} ({} job(s))\n  {} job(s) of the old grid, \
+         {with_result} of them with a result, would no longer be in the sweep (their results \
+         stay in the database); run again with --replace to replace the grid, or give the \
+         sweep another name",
+        sweep.path.display(),
+        sweep.name,
+        store.path().display(),
+        old.file,
+        grid(&old.axes, old.replicas),
+        points.len(),
+        grid(&sweep.axes, sweep.replicas),
+        expanded.len(),
+        leaving.len(),
+    )))
+}
+
+/// Reads a job spec file: a bare spec or a line of `sweep expand --specs` (`-`: standard input).
+pub(super) fn read_spec(path: &Path) -> Result<JobSpec, Failure> {
+    let text = if path.as_os_str() == "-" {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
+            .map_err(|e| Failure::Other(format!("reading standard input: {e}")))?;
+        s
+    } else {
+        std::fs::read_to_string(path)
+            .map_err(|e| Failure::BadInput(format!("{}: cannot read: {e}", path.display())))?
+    };
+    let origin = path.display().to_string();
+    let value: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Failure::BadInput(format!("{origin}: not JSON: {e}")))?;
+    let spec_value = value.get("spec").cloned().unwrap_or(value);
+    JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)
+}
+
+/// The run options of refinement rounds: `jobs` workers, progress shown.
+pub(super) fn refine_opts(jobs: usize) -> RunOptions {
+    RunOptions {
+        jobs,
+        retry_failed: false,
+        show_progress: true,
+        table_cache_mib: crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB,
+    }
+}
+
+/// Reports a refinement on stderr.
+pub(super) fn refinement_report(row: &SweepRow, o: &Outcome) {
+    eprintln!(
+        "{}",
+        refinement_text(&row.name, o.added, o.rounds, o.resolved)
+    );
+}
+
+/// After `sweep run` / `sweep resume`: continues the refinement of every given sweep whose file
+/// has a `[refine]` table, up to its budget (`refine::driver::continue_refinement`).
+pub(super) fn continue_refinement(
+    store: &Store,
+    rows: &[SweepRow],
+    jobs: usize,
+) -> Result<(), Failure> {
+    crate::refine::driver::continue_refinement(store, rows, &refine_opts(jobs), &mut |row, o| {
+        refinement_report(row, o)
+    })?;
+    Ok(())
+}

@@ -1,0 +1,304 @@
+//! The text of `wetgran boundaries`: the phase map of each sweep as a grid with its boundary
+//! points (table), or as CSV; the chain-model note of shear sweeps and the trust marks of the
+//! grid points. Pure functions of the phase maps and the stored rows.
+
+use crate::boundary::{Extraction, PhaseMap};
+use crate::report::plot_phase;
+use crate::run::runner::short;
+use crate::store::SweepRow;
+use std::fmt::Write as _;
+
+/// A number in short form, or nothing.
+fn opt_num(v: Option<f64>) -> String {
+    v.map(short).unwrap_or_default()
+}
+
+/// The fixed coordinates of a slice: `label = value, ...`.
+pub fn fixed_text(fixed: &[(String, serde_json::Value)]) -> String {
+    fixed
+        .iter()
+        .map(|(l, v)| format!("{l} = {v}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `boundaries --format csv`: the points and the boundary points of each sweep's map.
+pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
+    let mut out = String::from(
+        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence\n",
+    );
+    for (s, m) in maps {
+        let xl = m.x.as_ref().map(|a| a.key.clone()).unwrap_or_default();
+        let yl = m.y.as_ref().map(|a| a.key.clone()).unwrap_or_default();
+        for (k, slice) in m.slices.iter().enumerate() {
+            for p in &slice.points {
+                let _ = writeln!(
+                    out,
+                    "{},{k},point,{},{xl},{},{yl},{},{},{},,,,,",
+                    s.name,
+                    p.phase,
+                    p.x,
+                    p.y,
+                    p.amplitude.map(|v| v.to_string()).unwrap_or_default(),
+                    p.omega.map(|v| v.to_string()).unwrap_or_default()
+                );
+            }
+            for b in slice.boundaries.values().flatten() {
+                let _ = writeln!(
+                    out,
+                    "{},{k},boundary,{},{xl},{},{yl},{},{},{},{},{},{},{},{}",
+                    s.name,
+                    b.pair,
+                    b.x,
+                    b.y,
+                    b.amplitude.map(|v| v.to_string()).unwrap_or_default(),
+                    b.omega.map(|v| v.to_string()).unwrap_or_default(),
+                    b.x_range[0],
+                    b.x_range[1],
+                    b.y_range[0],
+                    b.y_range[1],
+                    b.confidence
+                );
+            }
+        }
+    }
+    out
+}
+
+/// For shear sweeps of wet scenes: the chain model's critical force (MODEL.md 8, Eq. 7.9),
+/// `F_max = 0.9229 F_B d / L_x`, over the sweep's points (a range if the axes change it).
+pub fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
+    let values: Vec<f64> = points
+        .iter()
+        .filter(|p| p.spec.scene.shear_slabs().is_some())
+        .filter_map(|p| plot_phase::chain_model_f_max(&p.spec.scene))
+        .collect();
+    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if values.is_empty() {
+        return None;
+    }
+    let value = if hi - lo <= 1e-12 * hi.abs() {
+        format!("F_max = {}", short(lo))
+    } else {
+        format!("F_max from {} to {} over the points", short(lo), short(hi))
+    };
+    Some(format!(
+        "  chain model (MODEL.md 8, Eq. 7.9: solid while F_max L_x / (F_B d) <= {}): {value}",
+        plot_phase::CHAIN_MODEL_CONSTANT
+    ))
+}
+
+/// The grid points (their coordinates as JSON text) with a replica whose result carries a trust
+/// mark (`report::trust`), with the mark.
+pub fn untrusted_points(
+    points: &[crate::store::PointRow],
+) -> std::collections::HashMap<String, char> {
+    points
+        .iter()
+        .filter_map(|p| {
+            let mark = crate::report::trust::trust_mark(p.observables.as_ref()?)?;
+            Some((serde_json::Value::from(p.coords.clone()).to_string(), mark))
+        })
+        .collect()
+}
+
+/// `boundaries` (table): per sweep and slice, the phase map as a grid and the boundary
+/// points by phase pair; `notes` (per sweep name) are printed under the sweep's name, `untrusted`
+/// (per sweep name) mark grid points whose results are not stationary.
+pub fn boundaries_table(
+    maps: &[(&SweepRow, PhaseMap)],
+    notes: &std::collections::HashMap<String, String>,
+    untrusted: &std::collections::HashMap<String, std::collections::HashMap<String, char>>,
+    how: Extraction,
+) -> String {
+    let none = std::collections::HashMap::new();
+    let mut out = String::new();
+    for (s, m) in maps {
+        let _ = writeln!(out, "sweep {}", s.name);
+        if let Some(n) = notes.get(&s.name) {
+            let _ = writeln!(out, "{n}");
+        }
+        let (Some(xa), ya) = (&m.x, &m.y) else {
+            let _ = writeln!(out, "  no numeric axis: no phase map\n");
+            continue;
+        };
+        let ylabel = ya.as_ref().map(|a| a.label.as_str()).unwrap_or("");
+        for slice in &m.slices {
+            if !slice.fixed.is_empty() {
+                let _ = writeln!(out, "  slice {}", fixed_text(&slice.fixed));
+            }
+            if slice.points.is_empty() {
+                let _ = writeln!(out, "  no classified point yet\n");
+                continue;
+            }
+            // The map as a grid: rows = y (top: largest), columns = x.
+            let mut xs: Vec<f64> = slice.points.iter().map(|p| p.x).collect();
+            let mut ys: Vec<f64> = slice.points.iter().map(|p| p.y).collect();
+            xs.sort_by(f64::total_cmp);
+            xs.dedup();
+            ys.sort_by(f64::total_cmp);
+            ys.dedup();
+            if xs.len() > 24 || ys.len() > 60 {
+                // A refined map is no grid: list counts only (the points are in csv/json).
+                let _ = writeln!(
+                    out,
+                    "  phase map: {} points ({} x values, {} y values; see --format csv)",
+                    slice.points.len(),
+                    xs.len(),
+                    ys.len()
+                );
+            } else {
+                let marks = untrusted.get(&s.name).unwrap_or(&none);
+                write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys, marks);
+            }
+            let unconverged = slice.points.iter().filter(|p| !p.converged).count();
+            if unconverged > 0 {
+                let _ = writeln!(
+                    out,
+                    "  {unconverged} unconverged point(s): {}",
+                    if how.include_unconverged {
+                        "used for the boundaries as asked (--include-unconverged)"
+                    } else {
+                        "left out of the boundaries (--include-unconverged uses them)"
+                    }
+                );
+            }
+            if slice.boundaries.is_empty() {
+                let carriers: Vec<&str> = slice
+                    .points
+                    .iter()
+                    .filter(|p| how.include_unconverged || p.converged)
+                    .map(|p| p.phase.as_str())
+                    .collect();
+                let why = if carriers.len() < 2 {
+                    "fewer than two converged points"
+                } else if carriers.iter().all(|p| *p == carriers[0]) {
+                    "every point that carries one has the same phase"
+                } else {
+                    "no two neighbours differ"
+                };
+                let _ = writeln!(out, "  no boundary: {why}\n");
+                continue;
+            }
+            for (pair, list) in &slice.boundaries {
+                let _ = writeln!(out, "  boundary {pair} ({} point(s))", list.len());
+                let _ = writeln!(
+                    out,
+                    "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",
+                    xa.label,
+                    ylabel,
+                    if m.shaking { "A" } else { "" },
+                    if m.shaking { "omega" } else { "" },
+                    format!("+-{}", if xa.log { "dec" } else { "x" }),
+                    format!(
+                        "+-{}",
+                        if ya.as_ref().is_some_and(|a| a.log) {
+                            "dec"
+                        } else {
+                            "y"
+                        }
+                    ),
+                    "conf"
+                );
+                for b in list {
+                    let _ = writeln!(
+                        out,
+                        "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",
+                        short(b.x),
+                        if ya.is_some() {
+                            short(b.y)
+                        } else {
+                            String::new()
+                        },
+                        opt_num(b.amplitude),
+                        opt_num(b.omega),
+                        short(b.x_half),
+                        if ya.is_some() {
+                            short(b.y_half)
+                        } else {
+                            String::new()
+                        },
+                        format!("{:.2}", b.confidence)
+                    );
+                }
+            }
+            let _ = writeln!(out);
+        }
+    }
+    out
+}
+
+/// The phase map of a slice as a grid: rows = y (top: largest), columns = x.
+fn write_grid(
+    out: &mut String,
+    slice: &crate::boundary::Slice,
+    xa: &crate::boundary::PlaneAxis,
+    ya: Option<&crate::boundary::PlaneAxis>,
+    xs: &[f64],
+    ys: &[f64],
+    marks: &std::collections::HashMap<String, char>,
+) {
+    let ylabel = ya.map(|a| a.label.as_str()).unwrap_or("");
+    let mark_of = |p: &crate::boundary::MapPoint| {
+        marks
+            .get(&serde_json::Value::from(p.coords.clone()).to_string())
+            .copied()
+    };
+    let _ = writeln!(
+        out,
+        "  phase map ({} down, {} across{}{}):",
+        if ylabel.is_empty() { "-" } else { ylabel },
+        xa.label,
+        if slice.points.iter().any(|p| p.tie) {
+            "; * = replicas tied"
+        } else {
+            ""
+        },
+        if slice.points.iter().any(|p| mark_of(p).is_some()) {
+            format!(
+                "; {} = not stationary",
+                crate::report::trust::NOT_STATIONARY
+            )
+        } else {
+            String::new()
+        }
+    );
+    for &yv in ys.iter().rev() {
+        let mut row = format!(
+            "  {:>9} |",
+            if ya.is_some() {
+                short(yv)
+            } else {
+                String::new()
+            }
+        );
+        for &xv in xs {
+            let cell = slice
+                .points
+                .iter()
+                .find(|p| p.x == xv && p.y == yv)
+                .map(|p| {
+                    format!(
+                        "{}{}{}",
+                        p.phase,
+                        if p.tie { "*" } else { "" },
+                        mark_of(p).map(String::from).unwrap_or_default()
+                    )
+                })
+                .unwrap_or_else(|| ".".to_string());
+            let _ = write!(row, " {cell:>7}");
+        }
+        let _ = writeln!(out, "{row}");
+    }
+    let mut axis = format!("  {:>9} +", "");
+    for _ in xs {
+        axis.push_str("--------");
+    }
+    let _ = writeln!(out, "{axis}");
+    let mut labels = format!("  {:>9}  ", xa.label);
+    for &xv in xs {
+        let _ = write!(labels, " {:>7}", short(xv));
+    }
+    let _ = writeln!(out, "{labels}");
+}

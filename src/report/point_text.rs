@@ -1,0 +1,139 @@
+//! The text of the commands on stored points: `wetgran show` (a job, its phase and the numbers
+//! it was decided on) and `wetgran inflection` (the fluid-gas inflection of T_g/E_cb against E*
+//! along each line of constant Gamma, MODEL.md 7). Pure functions of the stored rows.
+
+use crate::observe::fluid_gas_inflection;
+use crate::store::PointRow;
+use std::fmt::Write as _;
+
+/// The first lines of `show`: the job, its sweep, coordinates and status.
+pub fn job_text(sweep: &str, p: &PointRow) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "job {} (sweep {sweep}, point {}, replica {})",
+        p.job_id, p.point, p.replica
+    );
+    let _ = writeln!(
+        out,
+        "coordinates {}",
+        serde_json::Value::from(p.coords.clone())
+    );
+    let _ = writeln!(out, "status      {}", p.status);
+    if let Some(e) = &p.last_error {
+        let _ = writeln!(out, "last error  {e}");
+    }
+    out
+}
+
+/// The phase of a stored job, whether its run was stationary, and the numbers the phase was
+/// decided on.
+pub fn decision_text(p: &PointRow) -> String {
+    let mut out = String::new();
+    if let Some(phase) = &p.phase {
+        let _ = writeln!(out, "phase       {phase}");
+    }
+    if let Some(o) = &p.observables {
+        match crate::report::trust::stationary(o) {
+            Some(true) => {
+                let _ = writeln!(out, "stationary  yes");
+            }
+            Some(false) => {
+                let _ = writeln!(
+                    out,
+                    "stationary  NO ({} in `boundaries`): the averages may still drift",
+                    crate::report::trust::NOT_STATIONARY
+                );
+                for c in crate::report::trust::failed_checks(o) {
+                    let _ = writeln!(out, "            {c}");
+                }
+            }
+            None => {
+                let _ = writeln!(out, "stationary  unknown (no check stored)");
+            }
+        }
+    }
+    if let Some(d) = &p.decided_on {
+        let _ = writeln!(
+            out,
+            "decided on  {}",
+            serde_json::to_string_pretty(d).expect("JSON prints")
+        );
+    }
+    out
+}
+
+/// `(Gamma, E*)` of a shaken scene (MODEL.md 4.1), from the drive as the scene gives it.
+fn gamma_e_star(scene: &crate::scene::Scene) -> Option<(f64, f64)> {
+    let (a, omega) = scene.drive_motion()?;
+    let unit = if scene.is_wet() && scene.e_cb() > 0.0 {
+        scene.e_cb()
+    } else {
+        scene.particles.mass * scene.gravity * scene.particles.diameter
+    };
+    let gamma = a * omega * omega / scene.gravity;
+    let e_star = 0.5 * scene.particles.mass * (a * omega).powi(2) / unit;
+    Some((gamma, e_star))
+}
+
+/// The lines of constant Gamma of a sweep's stored points: `(Gamma, [(E*, T_g / E_cb)])` of
+/// every finished job of a shaken scene, by increasing Gamma.
+pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<(f64, f64)>)> {
+    let mut lines: Vec<(f64, Vec<(f64, f64)>)> = Vec::new();
+    for p in points {
+        let (Some(obs), Some((gamma, e_star))) = (&p.observables, gamma_e_star(&p.spec.scene))
+        else {
+            continue;
+        };
+        let Some(t) = obs["granular_temperature_reduced"].as_f64() else {
+            continue;
+        };
+        match lines
+            .iter_mut()
+            .find(|(g, _)| (g - gamma).abs() <= 1e-9 * gamma.abs())
+        {
+            Some((_, pts)) => pts.push((e_star, t)),
+            None => lines.push((gamma, vec![(e_star, t)])),
+        }
+    }
+    lines.sort_by(|a, b| a.0.total_cmp(&b.0));
+    lines
+}
+
+/// `inflection` for one sweep: per line of constant Gamma, the inflection point of T_g/E_cb
+/// against E* and the bracket it lies in.
+pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<(f64, f64)>)]) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "sweep {}: fluid-gas inflection of T_g/E_cb(E*) along constant Gamma",
+        sweep
+    );
+    let _ = writeln!(
+        out,
+        "{:>10} {:>7} {:>12} {:>10} {:>22}",
+        "Gamma", "points", "E* inflect.", "max slope", "between E*"
+    );
+    for (gamma, pts) in lines {
+        let _ = match fluid_gas_inflection(pts) {
+            Some(i) => writeln!(
+                out,
+                "{:>10.4} {:>7} {:>12.4} {:>10.3} {:>10.4} .. {:<10.4}",
+                gamma,
+                pts.len(),
+                i.e_star,
+                i.max_slope,
+                i.bracket.0,
+                i.bracket.1
+            ),
+            None => writeln!(
+                out,
+                "{:>10.4} {:>7} {:>12}",
+                gamma,
+                pts.len(),
+                "none (fewer than 4 points, or steepest at an end)"
+            ),
+        };
+    }
+    out
+}

@@ -1,0 +1,284 @@
+//! The text of the sweep commands: `sweep status` per sweep (jobs, convergence, hysteresis, time
+//! spent and left, trust, left-out and failed points), the grid points a sweep file leaves out,
+//! durations, the lines of `sweep estimate`, of `sweep resume --extend` and of a refinement. Pure functions of the stored
+//! rows and the figures measured.
+
+use crate::run::runner::{point_label, short};
+use crate::store::{LeftOut, PointRow, StateCounts, SweepRow};
+use std::fmt::Write as _;
+
+/// A duration in seconds, minutes, hours or days, whichever reads best.
+pub fn duration_text(s: f64) -> String {
+    if s < 120.0 {
+        format!("{s:.1} s")
+    } else if s < 7200.0 {
+        format!("{:.1} min", s / 60.0)
+    } else if s < 3.0 * 86400.0 {
+        format!("{:.1} h", s / 3600.0)
+    } else {
+        format!("{:.1} days", s / 86400.0)
+    }
+}
+
+/// One line per left-out point: its coordinates and the constraint it fails.
+pub fn left_out_text(axes: &[crate::sweep::Axis], left_out: &[LeftOut]) -> String {
+    let mut out = String::new();
+    for k in left_out {
+        let coords: Vec<String> = axes
+            .iter()
+            .zip(&k.coords)
+            .map(|(a, v)| match v.as_f64() {
+                Some(x) => format!("{} = {}", a.label, short(x)),
+                None => format!("{} = {v}", a.label),
+            })
+            .collect();
+        let _ = writeln!(out, "  left out {}: {}", coords.join(", "), k.constraint);
+    }
+    out
+}
+
+/// The `sweep status` lines of one sweep: `c` its job counts, `points` its stored points,
+/// `spent` the wall time of its finished jobs (s), `cores` those the time left is counted on.
+pub fn sweep_status_text(
+    s: &SweepRow,
+    c: &StateCounts,
+    points: &[PointRow],
+    spent: f64,
+    cores: usize,
+) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "sweep {}  ({}; {} point(s) x {} replica(s))",
+        s.name,
+        s.file,
+        points.len() as u64 / s.replicas.max(1) as u64,
+        s.replicas
+    );
+    if let Some(d) = &s.description {
+        let _ = writeln!(out, "  {d}");
+    }
+    if let Some(cost) = &s.cost {
+        let _ = writeln!(out, "  cost: {cost}");
+    }
+    let _ = writeln!(
+        out,
+        "  jobs   {} total: {} done, {} running, {} pending, {} failed",
+        c.total(),
+        c.done,
+        c.running,
+        c.pending,
+        c.failed
+    );
+    let (unconverged, checked) = crate::store::unconverged_count(points);
+    if checked > 0 {
+        let _ = writeln!(
+            out,
+            "  stationary  {} of {checked} result(s) converged, {unconverged} unconverged \
+             (`sweep resume --extend` runs those further)",
+            checked - unconverged
+        );
+    }
+    let starts = crate::store::hysteresis::by_start(&s.axes, points);
+    let compared = starts.iter().filter(|g| g.compared()).count();
+    if compared > 0 {
+        let _ = writeln!(
+            out,
+            "  hysteresis  {} of {compared} point(s) hysteretic (their start modes disagree)",
+            starts.iter().filter(|g| g.hysteretic).count()
+        );
+        for g in starts.iter().filter(|g| g.hysteretic) {
+            let labels: Vec<String> = g
+                .by_start
+                .iter()
+                .map(|(mode, l)| format!("{mode} {}", l.join("/")))
+                .collect();
+            let at: Vec<String> = s
+                .axes
+                .iter()
+                .filter(|a| a.key != "initial.start")
+                .zip(&g.coords)
+                .map(|(a, v)| format!("{} = {v}", a.label))
+                .collect();
+            let at = if at.is_empty() {
+                "the base scene".to_string()
+            } else {
+                at.join(", ")
+            };
+            let _ = writeln!(out, "    {at}: {}", labels.join(", "));
+        }
+    }
+    let done_walls: Vec<f64> = points
+        .iter()
+        .filter(|p| p.status == "done")
+        .filter_map(|p| p.wall_seconds)
+        .collect();
+    let left = c.pending + c.running;
+    let estimate = if left == 0 {
+        "nothing left".to_string()
+    } else if done_walls.is_empty() {
+        "time left unknown until a job finishes".to_string()
+    } else {
+        let mean = done_walls.iter().sum::<f64>() / done_walls.len() as f64;
+        format!(
+            "about {} left on {cores} core(s) ({left} job(s) x {} mean)",
+            duration_text(mean * left as f64 / cores as f64),
+            duration_text(mean)
+        )
+    };
+    let _ = writeln!(
+        out,
+        "  time   {} spent in finished jobs; {estimate}",
+        duration_text(spent)
+    );
+    let untrusted: Vec<String> = points
+        .iter()
+        .filter_map(|p| p.observables.as_ref())
+        .filter_map(|o| crate::report::trust::trust_mark(o).map(|m| m.to_string()))
+        .collect();
+    if !untrusted.is_empty() {
+        let _ = writeln!(
+            out,
+            "  trust  {} of {} result(s) not stationary ({} in `boundaries`; see `show JOB`)",
+            untrusted.len(),
+            c.done,
+            crate::report::trust::NOT_STATIONARY
+        );
+    }
+    if !s.left_out.is_empty() {
+        let _ = writeln!(
+            out,
+            "  left out {} grid point(s) (sweep.skip_invalid):",
+            s.left_out.len()
+        );
+        out.push_str(&left_out_text(&s.axes, &s.left_out));
+    }
+    for p in points.iter().filter(|p| p.status == "failed") {
+        let _ = writeln!(
+            out,
+            "  failed {} (job {}, {} attempt(s)): {}",
+            point_label(s, &p.coords, p.replica),
+            &p.job_id[..12],
+            p.attempts,
+            p.last_error.as_deref().unwrap_or("no message")
+        );
+    }
+    out
+}
+
+/// The line reporting a refinement of sweep `sweep`: jobs added, rounds, whether every boundary
+/// edge is resolved.
+pub fn refinement_text(sweep: &str, added: usize, rounds: usize, resolved: bool) -> String {
+    format!(
+        "sweep {sweep}: refinement added {added} job(s) in {rounds} round(s){}",
+        if resolved {
+            "; every boundary edge is resolved"
+        } else {
+            ""
+        }
+    )
+}
+
+/// `label = value, ...` of a grid point (numbers in short form).
+pub fn coords_text(labels: &[&str], coords: &[serde_json::Value]) -> String {
+    let coords: Vec<String> = labels
+        .iter()
+        .zip(coords)
+        .map(|(l, v)| match v.as_f64() {
+            Some(x) => format!("{l} = {}", short(x)),
+            None => format!("{l} = {v}"),
+        })
+        .collect();
+    coords.join(", ")
+}
+
+/// The first line of `sweep estimate`.
+pub fn estimate_head_text(file: &str, jobs: usize, sampled: usize, periods: f64) -> String {
+    format!(
+        "{file}: {jobs} job(s); sampling {sampled} for {periods} driving period(s) each, one at \
+         a time\n"
+    )
+}
+
+/// The line of one job `sweep estimate` sampled.
+pub fn estimate_sample_text(coords: &str, seconds_per_period: f64, events: u64) -> String {
+    format!("  {coords:<40} {seconds_per_period:>9.3} s per period  ({events} events)\n")
+}
+
+/// The line of a sampled job that failed.
+pub fn estimate_failed_text(coords: &str, error: &str) -> String {
+    format!("  {coords:<40} failed: {error}\n")
+}
+
+/// The figures of a `sweep estimate`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Wall seconds per driving period: mean and maximum over the sampled jobs.
+    pub mean: f64,
+    pub max: f64,
+    /// Mean run length of a job, in periods (the minimum run under a `[convergence]` policy).
+    pub run_periods: f64,
+    pub jobs: usize,
+    pub cores: usize,
+    /// Under a `[convergence]` policy: the mean cap, in periods.
+    pub cap_periods: Option<f64>,
+    /// Periods each sampled job ran.
+    pub sampled_periods: f64,
+}
+
+/// The closing lines of `sweep estimate`: CPU time of the sweep and wall time on the cores.
+pub fn estimate_text(e: &Estimate) -> String {
+    let mut out = String::new();
+    let (cores, periods) = (e.cores, e.sampled_periods);
+    let total = e.mean * e.run_periods * e.jobs as f64;
+    let _ = writeln!(
+        out,
+        "estimate: {:.3} s per period on average (max {:.3}) x {} periods x {} jobs = {} of CPU, \
+         about {} on {cores} core(s)",
+        e.mean,
+        e.max,
+        short(e.run_periods),
+        e.jobs,
+        duration_text(total),
+        duration_text(total / cores as f64)
+    );
+    if let Some(cap) = e.cap_periods {
+        let _ = writeln!(
+            out,
+            "  run to stationarity: that is the minimum run; every job extended to its cap \
+             ({} periods) would cost {} on {cores} core(s)",
+            short(cap),
+            duration_text(e.mean * cap * e.jobs as f64 / cores as f64)
+        );
+    }
+    let _ = writeln!(
+        out,
+        "  (measured on the first {periods} period(s) from the initial state; the cost per period \
+         changes as a run settles, e.g. a bed resting on the plate gets dearer: sample more \
+         periods for a closer figure)"
+    );
+    out
+}
+
+/// What `sweep resume --extend` did: jobs extended, now converged, left as they were under the
+/// cap of `max_periods`, and the failures (one line each).
+pub fn extended_text(
+    extended: usize,
+    converged: usize,
+    skipped: usize,
+    max_periods: f64,
+    failed: &[String],
+) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "extended {extended} unconverged job(s) from their checkpoints, {converged} now \
+         converged; {skipped} left as they were (no checkpoint, or the cap of {max_periods} \
+         periods leaves no room); {} failed",
+        failed.len()
+    );
+    for f in failed {
+        let _ = writeln!(out, "  {f}");
+    }
+    out
+}
