@@ -21,6 +21,17 @@ fn sweep_text(continuation: &str, extra_axis: &str) -> String {
     )
 }
 
+/// The continued tiny sweep written into `dir`: its file and a database path beside it.
+fn continued_sweep(dir: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    write(dir, "tiny.toml", TINY_SCENE);
+    let sweep = write(
+        dir,
+        "cont.toml",
+        &sweep_text("[sweep.continuation]\naxis = \"e_star\"", ""),
+    );
+    (sweep, dir.join("w.sqlite"))
+}
+
 fn parse(dir: &Path, text: &str) -> Result<SweepFile, String> {
     write(dir, "tiny.toml", TINY_SCENE);
     let p = write(dir, "cont.toml", text);
@@ -149,13 +160,7 @@ fn a_bad_continuation_table_is_an_error_naming_the_key() {
 #[test]
 fn a_continued_sweep_runs_each_point_from_its_neighbours_final_state() {
     let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "tiny.toml", TINY_SCENE);
-    let sweep = write(
-        dir.path(),
-        "cont.toml",
-        &sweep_text("[sweep.continuation]\naxis = \"e_star\"", ""),
-    );
-    let db = dir.path().join("w.sqlite");
+    let (sweep, db) = continued_sweep(dir.path());
     let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
     // `sweep expand` names each continued job's predecessor.
     let o = run(&["sweep", "expand", sweep_s]);
@@ -257,13 +262,7 @@ fn a_chain_whose_head_failed_fails_with_the_reason() {
 #[test]
 fn slurm_arrays_refuse_a_continued_sweep() {
     let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "tiny.toml", TINY_SCENE);
-    let sweep = write(
-        dir.path(),
-        "cont.toml",
-        &sweep_text("[sweep.continuation]\naxis = \"e_star\"", ""),
-    );
-    let db = dir.path().join("w.sqlite");
+    let (sweep, db) = continued_sweep(dir.path());
     let o = run(&[
         "sweep",
         "submit",
