@@ -365,3 +365,53 @@ fn a_continued_state_keeps_the_grains_in_the_container() {
         run2.report.energy_bookkeeping_error
     );
 }
+
+/// A chain's next link is claimed before grid order: in a descending chain with a hot start
+/// beside it, the head (the largest E*, last in grid order) goes first, and each continued job
+/// as soon as its predecessor is done, so the serial chain is not left to the end.
+#[test]
+fn the_jobs_a_chain_waits_for_are_claimed_first() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let text = "[sweep]\nname = \"order\"\nbase = \"tiny.toml\"\n\
+                [sweep.continuation]\naxis = \"e_star\"\ndirection = \"descending\"\n\
+                [[axis]]\nkey = \"e_star\"\nvalues = [1.0, 2.0, 3.0]\n\
+                [[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"continue\"]\n";
+    let path = write(dir.path(), "order.toml", text);
+    let store = Store::open(&dir.path().join("w.sqlite")).unwrap();
+    let file = SweepFile::load(&path).unwrap();
+    let s = store
+        .register_sweep(&file, &file.expand().unwrap())
+        .unwrap();
+    let e_star = |c: &wetgran::store::Claim| c.coords[0].as_f64().unwrap();
+    let finish = |c: &wetgran::store::Claim| {
+        let r = wetgran::sweep::JobResult {
+            checkpoint: None,
+            phase: Some("g".into()),
+            decided_on: None,
+            observables: serde_json::json!({}),
+            simulated_time: 1.0,
+            wall_seconds: 0.0,
+            events: 1,
+        };
+        assert!(store.finish(c, &r).unwrap());
+    };
+    // The head at E* = 3 first (grid order would start with the hot job at E* = 1).
+    let head = store.claim(&[s.id]).unwrap().unwrap();
+    assert_eq!(e_star(&head), 3.0);
+    assert_eq!(head.spec.start_from, None);
+    finish(&head);
+    // Then the continued E* = 2, which the continued E* = 1 waits for.
+    let next = store.claim(&[s.id]).unwrap().unwrap();
+    assert_eq!(
+        (e_star(&next), next.coords[1].as_str()),
+        (2.0, Some("continue"))
+    );
+    finish(&next);
+    // Then grid order: the hot job at E* = 1.
+    let third = store.claim(&[s.id]).unwrap().unwrap();
+    assert_eq!(
+        (e_star(&third), third.coords[1].as_str()),
+        (1.0, Some("hot"))
+    );
+}
