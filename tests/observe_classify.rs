@@ -411,6 +411,23 @@ fn fluid_gas_along_a_line() {
     let j = largest_jump(&seeds, t.line_jump_ratio).unwrap();
     assert_eq!(j.bracket, (1.1, 1.6));
     assert!((j.ratio - 124.0 / 7.3).abs() < 1e-9);
+    // The 10-point eps = 1 line of docs/validation.md (its stored T_g/E_cb) keeps its boundary
+    // under the steepest-step rule: 1.1 -> 1.3, E* = 1.196, as under the largest-ratio rule.
+    let line = [
+        (0.5, 1.217),
+        (0.7, 1.888),
+        (0.9, 3.897),
+        (1.1, 11.530),
+        (1.3, 54.479),
+        (1.6, 216.025),
+        (1.9, 458.565),
+        (2.2, 885.862),
+        (2.6, 3182.864),
+        (3.0, 3950.394),
+    ];
+    let j = largest_jump(&line, t.line_jump_ratio).unwrap();
+    assert_eq!(j.bracket, (1.1, 1.3));
+    assert!((j.e_star - 1.196).abs() < 1e-3, "{}", j.e_star);
     let obs: Vec<Observables> = smooth
         .iter()
         .map(|&(_, temp)| homogeneous(1.0, temp, 0.0))
