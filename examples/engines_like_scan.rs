@@ -15,6 +15,11 @@
 use wetgran::observe::run_observed;
 use wetgran::scene::{EngineKind, Scene};
 
+#[path = "../tests/common/standard.rs"]
+mod standard;
+use standard::{STANDARD_SEED, StandardWet, Transient};
+
+/// The scene of the point: the standard system builder of the tests, location changes off.
 fn base(
     eps: f64,
     gamma: f64,
@@ -24,37 +29,12 @@ fn base(
     duration: f64,
     transient: f64,
 ) -> Scene {
-    Scene::from_toml_str(
-        &format!(
-            r#"
-dimension = 2
-[box]
-size = [{lx}, 9.0]
-[particles]
-count = {n}
-polydispersity = 0.06
-[contact]
-restitution = {eps}
-[capillary]
-model = "thin_thread"
-[drive]
-kind = "sine"
-gamma = {gamma}
-e_star = {e_star}
-[initial]
-temperature_over_ecb = 20.0
-seed = {seed}
-[run]
-duration = {duration}
-[observe]
-transient_periods = {transient}
-location_changes = false
-"#,
-            seed = std::env::var("SEED").unwrap_or("1".into())
-        ),
-        "engines_like_scan",
-    )
-    .unwrap_or_else(|e| panic!("{e}"))
+    let seed = std::env::var("SEED").map_or(Ok(STANDARD_SEED), |s| s.parse());
+    let mut s = StandardWet::new(gamma, e_star, eps, duration, Transient::Periods(transient))
+        .sized(n, lx)
+        .seed(seed.unwrap_or_else(|e| panic!("SEED: {e}")));
+    s.location_changes = false;
+    s.scene()
 }
 
 fn main() {

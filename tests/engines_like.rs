@@ -20,7 +20,10 @@
 //! opt-in: `cargo test --release --test engines_like -- --ignored --nocapture`.
 
 use wetgran::observe::{ObservedRun, run_observed};
-use wetgran::scene::{EngineKind, RestitutionSpeed, Scene};
+use wetgran::scene::Scene;
+
+mod common;
+use common::standard::{StandardWet, Transient, time_twin};
 
 /// Largest packing fraction of a bin counted as dilute.
 const DILUTE: f64 = 0.3;
@@ -60,54 +63,19 @@ const COEXISTENCE: Point = Point {
     transient: 100.0,
 };
 
-/// The event-driven scene of a point, `n` grains in `lx x 9`.
+/// The event-driven scene of a point, `n` grains in `lx x 9` (location changes off: they are
+/// not compared).
 fn scene(p: Point, n: usize, lx: f64) -> Scene {
-    // Driving period T = 2 pi v_w / (Gamma g), v_w = sqrt(2 E* E_cb / m) (MODEL.md 4.1).
-    let period = std::f64::consts::TAU * (2.0 * p.e_star * 0.2844f64).sqrt() / p.gamma;
-    let transient = p.transient / period;
-    Scene::from_toml_str(
-        &format!(
-            r#"
-dimension = 2
-[box]
-size = [{lx}, 9.0]
-[particles]
-count = {n}
-polydispersity = 0.06
-[contact]
-restitution = {EPS}
-[capillary]
-model = "thin_thread"
-[drive]
-kind = "sine"
-gamma = {gamma}
-e_star = {e_star}
-[initial]
-temperature_over_ecb = 20.0
-seed = 1
-[run]
-duration = {duration}
-[observe]
-transient_periods = {transient}
-location_changes = false
-"#,
-            gamma = p.gamma,
-            e_star = p.e_star,
-            duration = p.duration,
-        ),
-        p.label,
+    let mut s = StandardWet::new(
+        p.gamma,
+        p.e_star,
+        EPS,
+        p.duration,
+        Transient::Time(p.transient),
     )
-    .unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// The same scene run by the time-driven engine: `engine.kind` is the only change (and
-/// `contact.restitution_speed` where a single-speed calibration is wanted for contrast).
-fn time_twin(s: &Scene, speed: Option<f64>) -> Scene {
-    let mut t = s.clone();
-    t.engine.kind = EngineKind::Time;
-    t.contact.restitution_speed = speed.map(RestitutionSpeed::Speed);
-    t.validate("time twin").unwrap_or_else(|e| panic!("{e}"));
-    t
+    .sized(n, lx);
+    s.location_changes = false;
+    s.scene()
 }
 
 /// What is compared of one run.

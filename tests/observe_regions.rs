@@ -119,10 +119,14 @@ bins_3d = "{bins_3d}"
     ))
 }
 
+/// Seed of the one frame drawn only to count its grains (the frames observed are drawn from the
+/// observer's own stream).
+const FRAME_SIZE_SEED: u64 = 0;
+
 #[test]
 fn a_gas_bubble_in_the_plane_is_seen_by_plane_bins_and_missed_by_slabs() {
     let gas = 40;
-    let n = bubble_frame(&mut Xoshiro256PlusPlus::seed_from_u64(0), gas).len();
+    let n = bubble_frame(&mut Xoshiro256PlusPlus::seed_from_u64(FRAME_SIZE_SEED), gas).len();
     let plane = bubble_scene("plane", n);
     let obs = observe(&plane, |_, rng| bubble_frame(rng, gas));
     assert_eq!(obs.profiles.grid, Some((12, 12)));
@@ -207,7 +211,7 @@ mobility_lag = 2.0
 
 #[test]
 fn a_dry_bed_with_a_dense_cluster_and_a_dilute_region_coexists() {
-    let n = dry_frame(&mut Xoshiro256PlusPlus::seed_from_u64(0)).len();
+    let n = dry_frame(&mut Xoshiro256PlusPlus::seed_from_u64(FRAME_SIZE_SEED)).len();
     let s = dry_scene(n);
     let obs = observe(&s, |_, rng| dry_frame(rng));
     assert_eq!(obs.profiles.delta_n_cb, 0.0);

@@ -8,37 +8,20 @@
 //! study over five seeds with the run-length policy.
 
 use wetgran::observe::run_observed;
-use wetgran::scene::Scene;
+use wetgran::scene::{Boundary, Scene};
 
-/// Seeds of the runs (named, so a failure can be reproduced with the same numbers).
-const SEED: u64 = 1;
-const OTHER_SEED: u64 = 2;
+mod common;
+use common::standard::{OTHER_SEED, STANDARD_SEED as SEED, StandardWet, Transient};
 
-/// The standard system at `(Gamma, E*)`, eps = 1: `duration` and `transient` in time units,
+/// The standard system at `(Gamma = 30, E*)`, eps = 1: `duration` and `transient` in time units,
 /// `spp` observer samples per period.
-fn standard(
-    e_star: f64,
-    n: usize,
-    l_x: f64,
-    seed: u64,
-    duration: f64,
-    transient: f64,
-    spp: f64,
-) -> Scene {
-    let gamma = 30.0;
-    // One period T = 2 pi v_w / (Gamma g), v_w = sqrt(2 E* E_cb / m) (MODEL.md 4.1).
-    let period = 2.0 * std::f64::consts::PI * (2.0 * e_star * 0.2844f64).sqrt() / gamma;
-    let text = format!(
-        "dimension = 2\ngravity = 1.0\n[box]\nsize = [{l_x:?}, 9.0]\nboundary = [\"periodic\", \"wall\"]\n\
-         [particles]\ncount = {n}\npolydispersity = 0.06\n[contact]\nrestitution = 1.0\nwall_restitution = 1.0\n\
-         [capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n\
-         [drive]\nkind = \"sine\"\ngamma = {gamma:?}\ne_star = {e_star:?}\n\
-         [engine]\nmin_rebound_speed = 0.03\n[initial]\ntemperature_over_ecb = 20.0\nseed = {seed}\n\
-         [run]\nduration = {duration:?}\nsample_interval = 10.0\n\
-         [observe]\ntransient_periods = {:?}\nsamples_per_period = {spp:?}\n",
-        transient / period
-    );
-    Scene::from_toml_str(&text, "standard system").unwrap_or_else(|e| panic!("{e}"))
+fn standard(e_star: f64, seed: u64, duration: f64, transient: f64, spp: f64) -> StandardWet {
+    let mut s =
+        StandardWet::new(30.0, e_star, 1.0, duration, Transient::Time(transient)).seed(seed);
+    s.min_rebound_speed = Some(0.03);
+    s.sample_interval = Some(10.0);
+    s.samples_per_period = Some(spp);
+    s
 }
 
 /// The per-point label (fluid vs gas by the per-point fallback: these runs have no line).
@@ -51,13 +34,29 @@ fn label(scene: &Scene) -> (String, f64) {
     )
 }
 
+/// The builder leaves the standard values that are scene defaults out of its text: they must
+/// stay the standard system's (MODEL.md 1).
+#[test]
+fn standard_defaults_are_the_standard_system() {
+    let s = StandardWet::new(30.0, 1.1, 1.0, 10.0, Transient::Periods(1.0)).scene();
+    assert_eq!(s.gravity, 1.0);
+    assert_eq!(s.boundaries(), vec![Boundary::Periodic, Boundary::Wall]);
+    assert_eq!(s.contact.wall_restitution, 1.0);
+    assert_eq!(s.s_crit(), 0.0711);
+    assert_eq!(s.e_cb(), common::standard::E_CB);
+    assert_eq!(
+        (s.particles.count, s.container.size.clone()),
+        (1200, vec![400.0, 9.0])
+    );
+}
+
 #[test]
 fn the_coexistence_of_the_standard_system_survives_a_doubled_run() {
     // 120 time units (window from 40) against 240 (window from 80). Shorter is too short: at 60
     // time units (window from 20) this point still reads `g`, the transient of the hot start
     // (the issue's complaint about labels that change with run length).
-    let (short, t_short) = label(&standard(1.1, 1200, 400.0, SEED, 120.0, 40.0, 20.0));
-    let (long, t_long) = label(&standard(1.1, 1200, 400.0, SEED, 240.0, 80.0, 20.0));
+    let (short, t_short) = label(&standard(1.1, SEED, 120.0, 40.0, 20.0).scene());
+    let (long, t_long) = label(&standard(1.1, SEED, 240.0, 80.0, 20.0).scene());
     println!("E* = 1.1: {short} (T_g/E_cb {t_short:.2}) at 120, {long} ({t_long:.2}) at 240");
     assert_eq!(short, "fgc");
     assert_eq!(long, "fgc");
@@ -70,29 +69,28 @@ fn standard_system_labels_are_invariant() {
     // threshold of 2 (these runs have no line; docs/validation.md).
     for (e_star, expected) in [(0.5, "f"), (1.1, "fgc"), (2.6, "g")] {
         let runs = [
-            (
-                "base",
-                standard(e_star, 1200, 400.0, SEED, 300.0, 100.0, 20.0),
-            ),
+            ("base", standard(e_star, SEED, 300.0, 100.0, 20.0).scene()),
             (
                 "doubled run",
-                standard(e_star, 1200, 400.0, SEED, 600.0, 100.0, 20.0),
+                standard(e_star, SEED, 600.0, 100.0, 20.0).scene(),
             ),
             (
                 "other seed",
-                standard(e_star, 1200, 400.0, OTHER_SEED, 300.0, 100.0, 20.0),
+                standard(e_star, OTHER_SEED, 300.0, 100.0, 20.0).scene(),
             ),
             (
                 "sampling halved",
-                standard(e_star, 1200, 400.0, SEED, 300.0, 100.0, 10.0),
+                standard(e_star, SEED, 300.0, 100.0, 10.0).scene(),
             ),
             (
                 "sampling doubled",
-                standard(e_star, 1200, 400.0, SEED, 300.0, 100.0, 40.0),
+                standard(e_star, SEED, 300.0, 100.0, 40.0).scene(),
             ),
             (
                 "box doubled",
-                standard(e_star, 2400, 800.0, SEED, 300.0, 100.0, 20.0),
+                standard(e_star, SEED, 300.0, 100.0, 20.0)
+                    .sized(2400, 800.0)
+                    .scene(),
             ),
         ];
         for (what, scene) in runs {

@@ -20,50 +20,20 @@
 //! (it also rewrites docs/tdmd-crosscheck.svg).
 
 use wetgran::observe::{ObservedRun, run_observed};
-use wetgran::scene::{EngineKind, Scene};
+use wetgran::scene::Scene;
+
+mod common;
+use common::standard::{StandardWet, Transient, time_twin};
 
 /// Largest packing fraction of a bin counted as dilute.
 const DILUTE: f64 = 0.3;
 
+/// The 2D wet shaken system at (Gamma, E*), restitution 0.9, `n` grains in `lx x 9`.
 fn base(gamma: f64, e_star: f64, n: usize, lx: f64, duration: f64) -> Scene {
-    Scene::from_toml_str(
-        &format!(
-            r#"
-dimension = 2
-[box]
-size = [{lx}, 9.0]
-[particles]
-count = {n}
-polydispersity = 0.06
-[contact]
-restitution = 0.9
-[capillary]
-model = "thin_thread"
-[drive]
-kind = "sine"
-gamma = {gamma}
-e_star = {e_star}
-[initial]
-temperature_over_ecb = 20.0
-seed = 1
-[run]
-duration = {duration}
-[observe]
-transient_periods = 10.0
-location_changes = false
-diffusion = false
-"#
-        ),
-        "crosscheck",
-    )
-    .unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn time_twin(s: &Scene) -> Scene {
-    let mut t = s.clone();
-    t.engine.kind = EngineKind::Time;
-    t.validate("crosscheck time twin").unwrap();
-    t
+    StandardWet::new(gamma, e_star, 0.9, duration, Transient::Periods(10.0))
+        .sized(n, lx)
+        .without_mobility()
+        .scene()
 }
 
 /// Per dilute bin: (centre, T_g/E_cb event, time, packing event, time); and the means.
@@ -75,7 +45,7 @@ struct Comparison {
 
 fn compare(s: &Scene) -> Comparison {
     let event = run_observed(s, &mut |_| {});
-    let time = run_observed(&time_twin(s), &mut |_| {});
+    let time = run_observed(&time_twin(s, None), &mut |_| {});
     let (pe, pt) = (&event.observables.profiles, &time.observables.profiles);
     let mut rows = Vec::new();
     for b in 0..pe.centres.len() {

@@ -245,15 +245,46 @@ pub fn phase_map_with(
     how: Extraction,
 ) -> Result<PhaseMap, BoundaryError> {
     let (x, y, shaking) = plane_axes(axes);
-    let in_plane = |i: usize| {
-        x.as_ref().is_some_and(|a| a.index == i) || y.as_ref().is_some_and(|a| a.index == i)
+    let plane = Plane {
+        x: &x,
+        y: &y,
+        shaking,
     };
-    // Group the jobs: slice key (axes outside the plane) -> point key (all coords) -> votes.
-    type Votes<'a> = Vec<(i64, Option<String>, &'a Observation)>;
-    type Fixed = Vec<(String, serde_json::Value)>;
-    let mut slices: BTreeMap<String, (Fixed, BTreeMap<String, Votes>)> = BTreeMap::new();
-    let mut slice_order: Vec<String> = Vec::new();
-    let mut point_order: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    let mut slices = Vec::new();
+    for group in group_by_slice(axes, jobs, &plane)? {
+        let (points, scenes) = plane.map_points(&group.points)?;
+        let edges = plane.carrier_edges(&points, how)?;
+        let boundaries = plane.boundaries(&points, &scenes, &edges);
+        slices.push(Slice {
+            fixed: group.fixed,
+            points,
+            boundaries,
+        });
+    }
+    Ok(PhaseMap {
+        x,
+        y,
+        shaking,
+        slices,
+    })
+}
+
+/// The jobs of one slice (fixed values of the axes outside the plane), grouped by grid point
+/// in the order of first appearance; each point's replicas in job order.
+struct SliceJobs<'a> {
+    fixed: Vec<(String, serde_json::Value)>,
+    points: Vec<Vec<&'a Observation>>,
+}
+
+/// Groups the jobs by slice, then by grid point, both in the order of first appearance.
+fn group_by_slice<'a>(
+    axes: &[Axis],
+    jobs: &'a [Observation],
+    plane: &Plane,
+) -> Result<Vec<SliceJobs<'a>>, BoundaryError> {
+    let mut slices: Vec<SliceJobs> = Vec::new();
+    let mut slice_of: BTreeMap<String, usize> = BTreeMap::new();
+    let mut point_of: BTreeMap<(usize, String), usize> = BTreeMap::new();
     for job in jobs {
         if job.coords.len() != axes.len() {
             return Err(BoundaryError(format!(
@@ -263,72 +294,87 @@ pub fn phase_map_with(
             )));
         }
         let fixed: Vec<(String, serde_json::Value)> = (0..axes.len())
-            .filter(|&i| !in_plane(i))
+            .filter(|&i| !plane.holds_axis(i))
             .map(|i| (axes[i].label.clone(), job.coords[i].clone()))
             .collect();
         let skey = serde_json::to_string(&fixed).expect("serializes");
+        let s = *slice_of.entry(skey).or_insert_with(|| {
+            slices.push(SliceJobs {
+                fixed,
+                points: Vec::new(),
+            });
+            slices.len() - 1
+        });
         let pkey = serde_json::to_string(&job.coords).expect("serializes");
-        if !slices.contains_key(&skey) {
-            slice_order.push(skey.clone());
-        }
-        let (_, points) = slices
-            .entry(skey.clone())
-            .or_insert_with(|| (fixed, BTreeMap::new()));
-        if !points.contains_key(&pkey) {
-            point_order
-                .entry(skey.clone())
-                .or_default()
-                .push(pkey.clone());
-        }
-        points
-            .entry(pkey)
-            .or_default()
-            .push((job.replica, job.phase.clone(), job));
+        let points = &mut slices[s].points;
+        let p = *point_of.entry((s, pkey)).or_insert_with(|| {
+            points.push(Vec::new());
+            points.len() - 1
+        });
+        points[p].push(job);
     }
-    let value = |job: &Observation, a: &Option<PlaneAxis>| -> Result<f64, BoundaryError> {
-        match a {
-            None => Ok(0.0),
-            Some(a) => {
-                let v = job.coords[a.index].as_f64().ok_or_else(|| {
-                    BoundaryError(format!("axis {} has a non-numeric value", a.label))
-                })?;
-                if a.log && v <= 0.0 {
-                    return Err(BoundaryError(format!(
-                        "axis {} is on a log scale but has the value {v}",
-                        a.label
-                    )));
-                }
-                Ok(v)
-            }
+    Ok(slices)
+}
+
+/// The plane of the map: its axes, and whether points carry the container motion.
+struct Plane<'a> {
+    x: &'a Option<PlaneAxis>,
+    y: &'a Option<PlaneAxis>,
+    shaking: bool,
+}
+
+impl Plane<'_> {
+    /// Whether axis `i` is one of the plane's.
+    fn holds_axis(&self, i: usize) -> bool {
+        [self.x, self.y]
+            .iter()
+            .any(|a| a.as_ref().is_some_and(|a| a.index == i))
+    }
+
+    /// The value of a job's coordinate on a plane axis (0 without one).
+    fn value(job: &Observation, a: &Option<PlaneAxis>) -> Result<f64, BoundaryError> {
+        let Some(a) = a else {
+            return Ok(0.0);
+        };
+        let v = job.coords[a.index]
+            .as_f64()
+            .ok_or_else(|| BoundaryError(format!("axis {} has a non-numeric value", a.label)))?;
+        if a.log && v <= 0.0 {
+            return Err(BoundaryError(format!(
+                "axis {} is on a log scale but has the value {v}",
+                a.label
+            )));
         }
-    };
-    let motion = |scene: &Scene, xv: f64, yv: f64| -> (Option<f64>, Option<f64>) {
-        if !shaking {
-            return (None, None);
-        }
-        match drive_at(scene, yv, xv) {
+        Ok(v)
+    }
+
+    /// The container motion `(A, omega)` at a point of a shaking plane (MODEL.md 4.1).
+    fn motion(&self, scene: &Scene, xv: f64, yv: f64) -> (Option<f64>, Option<f64>) {
+        match self.shaking.then(|| drive_at(scene, yv, xv)).flatten() {
             Some((a, w)) => (Some(a), Some(w)),
             None => (None, None),
         }
-    };
+    }
 
-    let mut out = Vec::new();
-    for skey in &slice_order {
-        let (fixed, points) = &slices[skey];
-        let mut map_points = Vec::new();
-        let mut scenes = Vec::new();
-        for pkey in &point_order[skey] {
-            let mut votes = points[pkey].clone();
-            votes.sort_by_key(|v| v.0);
-            let phases: Vec<Option<String>> = votes.iter().map(|v| v.1.clone()).collect();
+    /// The map points of a slice: each grid point's majority phase (step 1; a point without a
+    /// vote is left out), with the scene of its first replica.
+    fn map_points<'a>(
+        &self,
+        grid: &[Vec<&'a Observation>],
+    ) -> Result<(Vec<MapPoint>, Vec<&'a Scene>), BoundaryError> {
+        let (mut points, mut scenes) = (Vec::new(), Vec::new());
+        for replicas in grid {
+            let mut votes = replicas.clone();
+            votes.sort_by_key(|job| job.replica);
+            let phases: Vec<Option<String>> = votes.iter().map(|job| job.phase.clone()).collect();
             let Some((phase, tie)) = majority(&phases) else {
                 continue;
             };
-            let job = votes[0].2;
-            let converged = votes.iter().all(|v| v.1.is_none() || v.2.converged);
-            let (xv, yv) = (value(job, &x)?, value(job, &y)?);
-            let (amplitude, omega) = motion(&job.scene, xv, yv);
-            map_points.push(MapPoint {
+            let job = votes[0];
+            let converged = votes.iter().all(|v| v.phase.is_none() || v.converged);
+            let (xv, yv) = (Self::value(job, self.x)?, Self::value(job, self.y)?);
+            let (amplitude, omega) = self.motion(&job.scene, xv, yv);
+            points.push(MapPoint {
                 coords: job.coords.clone(),
                 x: xv,
                 y: yv,
@@ -341,49 +387,59 @@ pub fn phase_map_with(
             });
             scenes.push(&job.scene);
         }
-        // The points that carry boundaries, and the edges between them (indices into
-        // `map_points`).
-        let carriers: Vec<usize> = (0..map_points.len())
-            .filter(|&i| how.include_unconverged || map_points[i].converged)
+        Ok((points, scenes))
+    }
+
+    /// The edges between the points that carry boundaries (step 4: the converged ones, unless
+    /// asked otherwise), as indices into `points`: Delaunay edges in the plane, neighbours on a
+    /// line (step 3).
+    fn carrier_edges(
+        &self,
+        points: &[MapPoint],
+        how: Extraction,
+    ) -> Result<Vec<(usize, usize)>, BoundaryError> {
+        let carriers: Vec<usize> = (0..points.len())
+            .filter(|&i| how.include_unconverged || points[i].converged)
             .collect();
-        let subset: Vec<MapPoint> = carriers.iter().map(|&i| map_points[i].clone()).collect();
-        let edges: Vec<(usize, usize)> = match (&x, &y) {
+        let subset: Vec<MapPoint> = carriers.iter().map(|&i| points[i].clone()).collect();
+        let edges = match (self.x, self.y) {
             (Some(xa), Some(ya)) => delaunay_edges(&subset, xa, ya)?,
             (Some(xa), None) => line_edges(&subset, xa),
             _ => Vec::new(),
-        }
-        .into_iter()
-        .map(|(i, j)| (carriers[i], carriers[j]))
-        .collect();
+        };
+        Ok(edges
+            .into_iter()
+            .map(|(i, j)| (carriers[i], carriers[j]))
+            .collect())
+    }
+
+    /// A boundary point at the midpoint (in the scaled plane) of every edge whose ends differ in
+    /// phase, grouped by the pair of phases and sorted along x, then y (step 3).
+    fn boundaries(
+        &self,
+        points: &[MapPoint],
+        scenes: &[&Scene],
+        edges: &[(usize, usize)],
+    ) -> BTreeMap<String, Vec<BoundaryPoint>> {
         let mut boundaries: BTreeMap<String, Vec<BoundaryPoint>> = BTreeMap::new();
-        for (i, j) in edges {
-            let (a, b) = (&map_points[i], &map_points[j]);
+        for &(i, j) in edges {
+            let (a, b) = (&points[i], &points[j]);
             if a.phase == b.phase {
                 continue;
             }
             let mut pair = [a.phase.as_str(), b.phase.as_str()];
             pair.sort();
             let pair = pair.join("|");
-            let xv = x
-                .as_ref()
-                .map_or(0.0, |ax| ax.unscale(0.5 * (ax.scale(a.x) + ax.scale(b.x))));
-            let yv = y
-                .as_ref()
-                .map_or(0.0, |ay| ay.unscale(0.5 * (ay.scale(a.y) + ay.scale(b.y))));
-            let (amplitude, omega) = motion(scenes[i], xv, yv);
+            let mid = |ax: &Option<PlaneAxis>, u: f64, v: f64| {
+                ax.as_ref()
+                    .map_or(0.0, |ax| ax.unscale(0.5 * (ax.scale(u) + ax.scale(v))))
+            };
             let half = |ax: &Option<PlaneAxis>, u: f64, v: f64| {
                 ax.as_ref()
                     .map_or(0.0, |ax| 0.5 * (ax.scale(u) - ax.scale(v)).abs())
             };
-            let agree = |p: &MapPoint| {
-                p.votes
-                    .iter()
-                    .flatten()
-                    .map(|v| usize::from(*v == p.phase))
-                    .sum::<usize>()
-            };
-            let votes = |p: &MapPoint| p.votes.iter().flatten().count();
-            let confidence = (agree(a) + agree(b)) as f64 / (votes(a) + votes(b)) as f64;
+            let (xv, yv) = (mid(self.x, a.x, b.x), mid(self.y, a.y, b.y));
+            let (amplitude, omega) = self.motion(scenes[i], xv, yv);
             boundaries
                 .entry(pair.clone())
                 .or_default()
@@ -392,11 +448,11 @@ pub fn phase_map_with(
                     x: xv,
                     y: yv,
                     between: [i.min(j), i.max(j)],
-                    x_half: half(&x, a.x, b.x),
-                    y_half: half(&y, a.y, b.y),
+                    x_half: half(self.x, a.x, b.x),
+                    y_half: half(self.y, a.y, b.y),
                     x_range: [a.x.min(b.x), a.x.max(b.x)],
                     y_range: [a.y.min(b.y), a.y.max(b.y)],
-                    confidence,
+                    confidence: edge_confidence(a, b),
                     amplitude,
                     omega,
                 });
@@ -404,18 +460,15 @@ pub fn phase_map_with(
         for list in boundaries.values_mut() {
             list.sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
         }
-        out.push(Slice {
-            fixed: fixed.clone(),
-            points: map_points,
-            boundaries,
-        });
+        boundaries
     }
-    Ok(PhaseMap {
-        x,
-        y,
-        shaking,
-        slices: out,
-    })
+}
+
+/// The fraction of the votes at the two ends of an edge that agree with their end's majority.
+fn edge_confidence(a: &MapPoint, b: &MapPoint) -> f64 {
+    let agree = |p: &MapPoint| p.votes.iter().flatten().filter(|v| **v == p.phase).count();
+    let votes = |p: &MapPoint| p.votes.iter().flatten().count();
+    (agree(a) + agree(b)) as f64 / (votes(a) + votes(b)) as f64
 }
 
 /// Undirected Delaunay edges `(i, j)`, `i < j`, of the map points in the scaled plane.

@@ -2,6 +2,8 @@
 //! engine's invariants (`sanity_check`) as it goes.
 #![allow(dead_code)]
 
+pub mod standard;
+
 use wetgran::scene::Scene;
 use wetgran::sim::event_driven::Engine;
 
