@@ -7,6 +7,7 @@ mod extend_cmd;
 pub mod point_cmd;
 mod reclassify_cmd;
 mod refine_cmd;
+mod simulate_cmd;
 pub mod sweep_cmd;
 
 use common::{Failure, available_cores, exit, workers_or_fail};
@@ -14,12 +15,8 @@ use sweep_cmd::SweepCommand;
 
 use crate::bench;
 use crate::boundary::Extraction;
-use crate::observe::run_observed_with_frame;
-use crate::report::run_text::{observed_text, summary_text};
-use crate::report::{ColourBy, profiles_svg, write_snapshot};
-use crate::scene::Scene;
+use crate::report::ColourBy;
 use clap::{Parser, Subcommand};
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -36,28 +33,7 @@ pub struct Cli {
 pub enum Command {
     /// Run one scene file with its observers and print a summary (events by kind, energy,
     /// observables over the stationary window, and the phase).
-    Simulate {
-        /// The scene file (TOML); see scenes/ for examples.
-        scene: PathBuf,
-        /// Print the full result as JSON (run report, observables with time series and profiles,
-        /// classification with the numbers it was decided on) instead of a table.
-        #[arg(long)]
-        json: bool,
-        /// Write the final configuration: extended XYZ (`.xyz`, opens in OVITO) or an SVG picture
-        /// (`.svg`). May be given more than once.
-        #[arg(long, value_name = "FILE")]
-        snapshot: Vec<PathBuf>,
-        /// Colour of the SVG snapshot: `energy` (kinetic energy / E_cb) or `bridges`.
-        #[arg(long, default_value = "energy", value_name = "BY")]
-        colour_by: String,
-        /// Write the lateral profiles (T_g / E_cb, packing fraction, n_cb, f_lc against x) as SVG.
-        #[arg(long, value_name = "FILE.svg")]
-        profiles: Option<PathBuf>,
-        /// Cap of the wall-table cache in MiB (`table` wall solver; one drive's tables take
-        /// about 27 MiB at 128 x 128 cells; 0: no caching).
-        #[arg(long, value_name = "MIB", default_value_t = crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB)]
-        table_cache_mib: usize,
-    },
+    Simulate(simulate_cmd::SimulateArgs),
     /// Measure the engine's speed on the reference systems and print the figures.
     Bench {
         /// Which benchmark: `engine` (collisions/s for the reference systems of the
@@ -219,94 +195,7 @@ pub enum JobCommand {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Simulate {
-            scene,
-            json,
-            snapshot,
-            colour_by,
-            profiles,
-            table_cache_mib,
-        } => {
-            let tables =
-                crate::sim::event_driven::table_cache::TableCache::with_cap_mib(table_cache_mib);
-            let _tables = tables.enter();
-            let colour_by: ColourBy = match colour_by.parse() {
-                Ok(c) => c,
-                Err(e) => {
-                    eprintln!("error: --colour-by: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            for path in &snapshot {
-                if !matches!(
-                    path.extension().and_then(|e| e.to_str()),
-                    Some("xyz" | "svg")
-                ) {
-                    eprintln!(
-                        "error: --snapshot {}: the file name must end in .xyz or .svg",
-                        path.display()
-                    );
-                    return ExitCode::from(2);
-                }
-            }
-            let scene = match Scene::load(&scene) {
-                Ok(s) if s.initial.start == crate::scene::StartMode::Continue => {
-                    eprintln!(
-                        "error: {}: initial.start = \"continue\" needs the final state of a \
-                         neighbouring sweep point ([sweep.continuation] in a sweep file); a scene \
-                         run on its own starts \"hot\" or \"cold\"",
-                        scene.display()
-                    );
-                    return ExitCode::from(2);
-                }
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            let (run, frame) = if std::io::stderr().is_terminal() {
-                let duration = scene.run.duration;
-                let out = run_observed_with_frame(&scene, &mut |f| {
-                    eprint!(
-                        "\r  t = {:.3} / {duration}  ({:.0}%)   ",
-                        f * duration,
-                        100.0 * f
-                    );
-                });
-                eprintln!();
-                out
-            } else {
-                run_observed_with_frame(&scene, &mut |_| {})
-            };
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&run).expect("result serializes")
-                );
-            } else {
-                print!("{}", summary_text(&run.report));
-                print!("{}", observed_text(&run));
-            }
-            let unit = run.observables.temperature_unit;
-            for path in &snapshot {
-                if let Err(e) = write_snapshot(path, &frame, colour_by, unit) {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
-                }
-            }
-            if let Some(path) = &profiles
-                && let Err(e) = std::fs::write(path, profiles_svg(&run.observables))
-            {
-                eprintln!("error: {}: cannot write: {e}", path.display());
-                return ExitCode::from(2);
-            }
-            if let Some(v) = &run.report.invariant_violation {
-                eprintln!("error: the run stopped on a broken invariant: {v}");
-                return ExitCode::from(3);
-            }
-            ExitCode::SUCCESS
-        }
+        Command::Simulate(args) => simulate_cmd::simulate(args),
         Command::Bench {
             which,
             repeat,

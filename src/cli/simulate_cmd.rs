@@ -1,0 +1,119 @@
+//! `wetgran simulate`: one scene file run with its observers, reported as a table or JSON, with
+//! optional snapshots and profile pictures.
+
+use super::common::{Failure, exit};
+use crate::observe::run_observed_with_frame;
+use crate::report::run_text::{observed_text, summary_text};
+use crate::report::{ColourBy, profiles_svg, write_snapshot};
+use crate::scene::{Scene, StartMode};
+use crate::sim::event_driven::table_cache::TableCache;
+use clap::Args;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// The arguments of `wetgran simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// The scene file (TOML); see scenes/ for examples.
+    pub scene: PathBuf,
+    /// Print the full result as JSON (run report, observables with time series and profiles,
+    /// classification with the numbers it was decided on) instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the final configuration: extended XYZ (`.xyz`, opens in OVITO) or an SVG picture
+    /// (`.svg`). May be given more than once.
+    #[arg(long, value_name = "FILE")]
+    pub snapshot: Vec<PathBuf>,
+    /// Colour of the SVG snapshot: `energy` (kinetic energy / E_cb) or `bridges`.
+    #[arg(long, default_value = "energy", value_name = "BY")]
+    pub colour_by: String,
+    /// Write the lateral profiles (T_g / E_cb, packing fraction, n_cb, f_lc against x) as SVG.
+    #[arg(long, value_name = "FILE.svg")]
+    pub profiles: Option<PathBuf>,
+    /// Cap of the wall-table cache in MiB (`table` wall solver; one drive's tables take
+    /// about 27 MiB at 128 x 128 cells; 0: no caching).
+    #[arg(long, value_name = "MIB", default_value_t = crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB)]
+    pub table_cache_mib: usize,
+}
+
+/// Runs the scene; exit status 2 on bad input, 3 when the run stopped on a broken invariant.
+pub(super) fn simulate(args: SimulateArgs) -> ExitCode {
+    match run(&args) {
+        Ok(None) => ExitCode::SUCCESS,
+        Ok(Some(violation)) => {
+            eprintln!("error: the run stopped on a broken invariant: {violation}");
+            ExitCode::from(3)
+        }
+        Err(e) => exit(Err(e)),
+    }
+}
+
+/// The run and its outputs; the broken invariant it stopped on, if any.
+fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
+    let tables = TableCache::with_cap_mib(args.table_cache_mib);
+    let _tables = tables.enter();
+    let colour_by: ColourBy = args
+        .colour_by
+        .parse()
+        .map_err(|e| Failure::BadInput(format!("--colour-by: {e}")))?;
+    for path in &args.snapshot {
+        if !matches!(
+            path.extension().and_then(|e| e.to_str()),
+            Some("xyz" | "svg")
+        ) {
+            return Err(Failure::BadInput(format!(
+                "--snapshot {}: the file name must end in .xyz or .svg",
+                path.display()
+            )));
+        }
+    }
+    let scene = load_scene(&args.scene)?;
+    let (run, frame) = if std::io::stderr().is_terminal() {
+        let duration = scene.run.duration;
+        let out = run_observed_with_frame(&scene, &mut |f| {
+            eprint!(
+                "\r  t = {:.3} / {duration}  ({:.0}%)   ",
+                f * duration,
+                100.0 * f
+            );
+        });
+        eprintln!();
+        out
+    } else {
+        run_observed_with_frame(&scene, &mut |_| {})
+    };
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&run).expect("result serializes")
+        );
+    } else {
+        print!("{}", summary_text(&run.report));
+        print!("{}", observed_text(&run));
+    }
+    let unit = run.observables.temperature_unit;
+    for path in &args.snapshot {
+        write_snapshot(path, &frame, colour_by, unit)
+            .map_err(|e| Failure::BadInput(e.to_string()))?;
+    }
+    if let Some(path) = &args.profiles {
+        std::fs::write(path, profiles_svg(&run.observables))
+            .map_err(|e| Failure::BadInput(format!("{}: cannot write: {e}", path.display())))?;
+    }
+    Ok(run.report.invariant_violation.clone())
+}
+
+/// Loads the scene; a continued start needs a sweep's neighbouring point, so it is refused here.
+fn load_scene(path: &std::path::Path) -> Result<Scene, Failure> {
+    let scene = Scene::load(path).map_err(|e| Failure::BadInput(e.to_string()))?;
+    if scene.initial.start == StartMode::Continue {
+        return Err(Failure::BadInput(format!(
+            "{}: initial.start = \"continue\" needs the final state of a neighbouring sweep point \
+             ([sweep.continuation] in a sweep file); a scene run on its own starts \"hot\" or \
+             \"cold\"",
+            path.display()
+        )));
+    }
+    Ok(scene)
+}
