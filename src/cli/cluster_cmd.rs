@@ -4,10 +4,11 @@
 //! exits 1 when the job failed (its error record is written all the same).
 
 use super::common::{Failure, check_regrid, load_sweep_left_out, read_spec, select};
+use crate::cluster::record::write_atomic;
 use crate::cluster::slurm::{self, ArrayScript, SbatchOptions};
 use crate::cluster::{Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
 use crate::report::cluster_text::collected_text;
-use crate::store::Store;
+use crate::store::{Store, SweepRow};
 use crate::sweep::{JobSpec, run_job};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -66,88 +67,155 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
             sweep.name
         )));
     }
-    let dir = sweep_dir(db, &sweep.name, s.dir.as_deref())?;
-    slurm::check_directive("the sweep directory", &dir.display().to_string())
-        .map_err(Failure::BadInput)?;
-    for (what, v) in [
-        ("--partition", &s.options.partition),
-        ("--time", &s.options.time),
-    ] {
-        if let Some(v) = v {
-            slurm::check_directive(what, v).map_err(Failure::BadInput)?;
-        }
-    }
-    let exe = std::env::current_exe()
-        .map_err(|e| Failure::Other(format!("cannot find the wetgran executable: {e}")))?;
-    let max = slurm::max_array_size();
-    let limit = slurm::array_limit(s.array_limit, max);
-    let sd = SweepDir::new(&dir);
-    // The batch script of an array of `n` tasks whose job ids are listed in `tasks_file`.
-    let array_script = |tasks_file: &Path, n: usize| {
-        slurm::array_script(&ArrayScript {
-            sweep: &sweep.name,
-            dir: &dir,
-            tasks_file,
-            tasks: n,
-            wetgran: &exe,
-            options: &s.options,
-        })
-        .map_err(Failure::BadInput)
-    };
-
+    let target = ArrayTarget::new(db, &sweep.name, s)?;
     if s.dry_run {
-        // Nothing is written: the jobs not done in the database (all where there is none).
-        let mut ids: Vec<String> = Vec::new();
-        for j in &expanded {
-            if !ids.contains(&j.id) {
-                ids.push(j.id.clone());
-            }
-        }
-        if db.exists() {
-            let store = Store::open_existing(db)?;
-            let st = store.job_statuses(&ids)?;
-            ids.retain(|id| st.get(id).map(String::as_str) != Some("done"));
-        }
-        let parts = slurm::split(&ids, limit);
-        println!(
-            "# dry run: {} job(s) to submit as {} array(s) of at most {limit} task(s) ({}); \
-             sweep directory {}",
-            ids.len(),
-            parts.len(),
-            match max {
-                Some(m) => format!("cluster MaxArraySize {m}"),
-                None => "scontrol not available".to_string(),
-            },
-            dir.display()
-        );
-        for (k, part) in parts.iter().enumerate() {
-            let tasks = sd.arrays().join(format!("array-dryrun-{}.tasks", k + 1));
-            let script = array_script(&tasks, part.len())?;
-            println!(
-                "# ---- array {} of {}: {}",
-                k + 1,
-                parts.len(),
-                tasks.display()
-            );
-            print!("{script}");
-        }
-        return Ok(());
+        return dry_run(db, &expanded, &target);
     }
-
     let store = Store::open(db)?;
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, s.replace)?;
     }
     let row = store.register_sweep(&sweep, &expanded)?;
     store.set_left_out(row.id, &left_out)?;
-    sd.create()
-        .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", dir.display())))?;
-    // Results already on disk count before anything is submitted again.
-    let c = collect(&store, &row, &mut slurm::squeue)?;
-    if c.stored.len() + c.failed.len() + c.missing.len() + c.corrupt.len() > 0 {
-        eprint!("{}", collected_text(&row, &store.points(row.id)?, &c));
+    let Some(ids) = jobs_left(&store, &row, db, &target)? else {
+        return Ok(());
+    };
+    write_task_specs(&store, &row, &target.sd, &ids)?;
+    let parts = slurm::split(&ids, target.limit);
+    submit_arrays(&store, &row, &target, &parts)?;
+    eprintln!(
+        "sweep {}: {} job(s) submitted as {} array(s) of at most {} task(s); sweep directory \
+         {}. Watch with `wetgran sweep status --db {db}`, then `wetgran sweep collect --db {db}`",
+        row.name,
+        ids.len(),
+        parts.len(),
+        target.limit,
+        target.dir.display(),
+        db = db.display()
+    );
+    Ok(())
+}
+
+/// Where and how a sweep's arrays go: its sweep directory, the executable the tasks run, the
+/// array size limit and the sbatch options.
+struct ArrayTarget<'a> {
+    sweep: String,
+    dir: PathBuf,
+    sd: SweepDir,
+    exe: PathBuf,
+    /// The cluster's `MaxArraySize` (`None`: scontrol not available).
+    max: Option<usize>,
+    limit: usize,
+    options: &'a SbatchOptions,
+}
+
+impl<'a> ArrayTarget<'a> {
+    /// Checks the directives that go into the batch script.
+    fn new(db: &Path, sweep: &str, s: &'a Submit) -> Result<Self, Failure> {
+        let dir = sweep_dir(db, sweep, s.dir.as_deref())?;
+        slurm::check_directive("the sweep directory", &dir.display().to_string())
+            .map_err(Failure::BadInput)?;
+        for (what, v) in [
+            ("--partition", &s.options.partition),
+            ("--time", &s.options.time),
+        ] {
+            if let Some(v) = v {
+                slurm::check_directive(what, v).map_err(Failure::BadInput)?;
+            }
+        }
+        let exe = std::env::current_exe()
+            .map_err(|e| Failure::Other(format!("cannot find the wetgran executable: {e}")))?;
+        let max = slurm::max_array_size();
+        Ok(ArrayTarget {
+            sweep: sweep.to_string(),
+            sd: SweepDir::new(&dir),
+            dir,
+            exe,
+            max,
+            limit: slurm::array_limit(s.array_limit, max),
+            options: &s.options,
+        })
     }
-    let ids = jobs_to_submit(&store, &row)?;
+
+    /// The batch script of an array of `n` tasks whose job ids are listed in `tasks_file`.
+    fn script(&self, tasks_file: &Path, n: usize) -> Result<String, Failure> {
+        slurm::array_script(&ArrayScript {
+            sweep: &self.sweep,
+            dir: &self.dir,
+            tasks_file,
+            tasks: n,
+            wetgran: &self.exe,
+            options: self.options,
+        })
+        .map_err(Failure::BadInput)
+    }
+}
+
+/// `--dry-run`: prints the arrays that would be submitted (the jobs not done in the database,
+/// all where there is none); writes nothing.
+fn dry_run(
+    db: &Path,
+    expanded: &[crate::sweep::SweepJob],
+    target: &ArrayTarget,
+) -> Result<(), Failure> {
+    let mut ids: Vec<String> = Vec::new();
+    for j in expanded {
+        if !ids.contains(&j.id) {
+            ids.push(j.id.clone());
+        }
+    }
+    if db.exists() {
+        let store = Store::open_existing(db)?;
+        let st = store.job_statuses(&ids)?;
+        ids.retain(|id| st.get(id).map(String::as_str) != Some("done"));
+    }
+    let parts = slurm::split(&ids, target.limit);
+    println!(
+        "# dry run: {} job(s) to submit as {} array(s) of at most {} task(s) ({}); sweep \
+         directory {}",
+        ids.len(),
+        parts.len(),
+        target.limit,
+        match target.max {
+            Some(m) => format!("cluster MaxArraySize {m}"),
+            None => "scontrol not available".to_string(),
+        },
+        target.dir.display()
+    );
+    for (k, part) in parts.iter().enumerate() {
+        let tasks = target
+            .sd
+            .arrays()
+            .join(format!("array-dryrun-{}.tasks", k + 1));
+        let script = target.script(&tasks, part.len())?;
+        println!(
+            "# ---- array {} of {}: {}",
+            k + 1,
+            parts.len(),
+            tasks.display()
+        );
+        print!("{script}");
+    }
+    Ok(())
+}
+
+/// The jobs to submit, after collecting the results already on disk (they count before
+/// anything is submitted again); `None`, with a message, where there are none.
+fn jobs_left(
+    store: &Store,
+    row: &SweepRow,
+    db: &Path,
+    target: &ArrayTarget,
+) -> Result<Option<Vec<String>>, Failure> {
+    target
+        .sd
+        .create()
+        .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", target.dir.display())))?;
+    let c = collect(store, row, &mut slurm::squeue)?;
+    if c.stored.len() + c.failed.len() + c.missing.len() + c.corrupt.len() > 0 {
+        eprint!("{}", collected_text(row, &store.points(row.id)?, &c));
+    }
+    let ids = jobs_to_submit(store, row)?;
     if ids.is_empty() {
         let counts = store.counts(row.id)?;
         eprintln!(
@@ -158,37 +226,60 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
             c.waiting.len(),
             db.display()
         );
-        return Ok(());
+        return Ok(None);
     }
+    Ok(Some(ids))
+}
+
+fn io_failure(p: &Path, e: std::io::Error) -> Failure {
+    Failure::Other(format!("{}: {e}", p.display()))
+}
+
+/// Writes each job's spec file into the sweep directory and removes an earlier task's result
+/// file (its error record or broken file must not pass for the new task's).
+fn write_task_specs(
+    store: &Store,
+    row: &SweepRow,
+    sd: &SweepDir,
+    ids: &[String],
+) -> Result<(), Failure> {
     let specs: HashMap<String, JobSpec> = store
         .points(row.id)?
         .into_iter()
         .map(|p| (p.job_id, p.spec))
         .collect();
-    let io = |p: &Path, e: std::io::Error| Failure::Other(format!("{}: {e}", p.display()));
-    for id in &ids {
-        let spec = &specs[id];
-        sd.write_spec(spec).map_err(|e| io(&sd.spec(id), e))?;
-        // An earlier task's error record or broken file must not pass for the new task's.
+    for id in ids {
+        sd.write_spec(&specs[id])
+            .map_err(|e| io_failure(&sd.spec(id), e))?;
         let old = sd.result(id);
         if old.exists() {
-            std::fs::remove_file(&old).map_err(|e| io(&old, e))?;
+            std::fs::remove_file(&old).map_err(|e| io_failure(&old, e))?;
         }
     }
-    let parts = slurm::split(&ids, limit);
+    Ok(())
+}
+
+/// Writes each array's task list and batch script, records the submission and runs `sbatch`;
+/// a failed `sbatch` drops its submission and names the arrays already submitted.
+fn submit_arrays(
+    store: &Store,
+    row: &SweepRow,
+    target: &ArrayTarget,
+    parts: &[&[String]],
+) -> Result<(), Failure> {
+    let arrays = target.sd.arrays();
     let mut submitted = Vec::new();
-    for part in &parts {
-        let name = next_array_name(&sd.arrays());
-        let tasks = sd.arrays().join(format!("{name}.tasks"));
-        let script_path = sd.arrays().join(format!("{name}.sbatch"));
-        let script = array_script(&tasks, part.len())?;
-        crate::cluster::record::write_atomic(&tasks, (part.join("\n") + "\n").as_bytes())
-            .map_err(|e| io(&tasks, e))?;
-        crate::cluster::record::write_atomic(&script_path, script.as_bytes())
-            .map_err(|e| io(&script_path, e))?;
+    for part in parts {
+        let name = next_array_name(&arrays);
+        let tasks = arrays.join(format!("{name}.tasks"));
+        let script_path = arrays.join(format!("{name}.sbatch"));
+        let script = target.script(&tasks, part.len())?;
+        write_atomic(&tasks, (part.join("\n") + "\n").as_bytes())
+            .map_err(|e| io_failure(&tasks, e))?;
+        write_atomic(&script_path, script.as_bytes()).map_err(|e| io_failure(&script_path, e))?;
         let sub = store.record_submission(
             row.id,
-            &dir.display().to_string(),
+            &target.dir.display().to_string(),
             &script_path.display().to_string(),
             part,
         )?;
@@ -204,29 +295,18 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
             }
             Err(e) => {
                 store.drop_submission(sub)?;
-                return Err(Failure::Other(format!(
-                    "{e}{}",
-                    if submitted.is_empty() {
-                        String::new()
-                    } else {
-                        format!(
-                            " (arrays {} were submitted; submit again for the rest)",
-                            submitted.join(", ")
-                        )
-                    }
-                )));
+                let done = if submitted.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        " (arrays {} were submitted; submit again for the rest)",
+                        submitted.join(", ")
+                    )
+                };
+                return Err(Failure::Other(format!("{e}{done}")));
             }
         }
     }
-    eprintln!(
-        "sweep {}: {} job(s) submitted as {} array(s) of at most {limit} task(s); sweep directory \
-         {}. Watch with `wetgran sweep status --db {db}`, then `wetgran sweep collect --db {db}`",
-        row.name,
-        ids.len(),
-        parts.len(),
-        dir.display(),
-        db = db.display()
-    );
     Ok(())
 }
 
