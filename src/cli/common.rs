@@ -205,13 +205,14 @@ pub(super) fn read_spec(path: &Path) -> Result<JobSpec, Failure> {
     JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)
 }
 
-/// The run options of refinement rounds: `jobs` workers, progress shown.
-pub(super) fn refine_opts(jobs: usize) -> RunOptions {
+/// The run options of refinement rounds: `jobs` workers, progress shown, the wall-table cache
+/// capped at `table_cache_mib`.
+pub(super) fn refine_opts(jobs: usize, table_cache_mib: usize) -> RunOptions {
     RunOptions {
         jobs,
         retry_failed: false,
         show_progress: true,
-        table_cache_mib: crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB,
+        table_cache_mib,
     }
 }
 
@@ -229,8 +230,10 @@ pub(super) fn continue_refinement(
     store: &Store,
     rows: &[SweepRow],
     jobs: usize,
+    table_cache_mib: usize,
 ) -> Result<(), Failure> {
-    crate::refine::driver::continue_refinement(store, rows, &refine_opts(jobs), &mut |row, o| {
+    let opts = refine_opts(jobs, table_cache_mib);
+    crate::refine::driver::continue_refinement(store, rows, &opts, &mut |row, o| {
         refinement_report(row, o)
     })?;
     Ok(())

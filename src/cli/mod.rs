@@ -352,6 +352,7 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
             max_replicas,
             jobs,
             oversubscribe,
+            table_cache_mib,
         } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
             refine_cmd::refine(
                 &db,
@@ -363,6 +364,7 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
                     max_replicas,
                 },
                 n,
+                table_cache_mib,
             )
         }),
         SweepCommand::Estimate {

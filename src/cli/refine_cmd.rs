@@ -19,7 +19,13 @@ pub struct Overrides {
 
 /// `wetgran sweep refine`: `budget` more jobs (default: what is left of the file's `[refine]`
 /// budget).
-pub fn refine(db: &Path, name: Option<&str>, over: Overrides, jobs: usize) -> Result<(), Failure> {
+pub fn refine(
+    db: &Path,
+    name: Option<&str>,
+    over: Overrides,
+    jobs: usize,
+    table_cache_mib: usize,
+) -> Result<(), Failure> {
     let store = Store::open_existing(db)?;
     let row = match name {
         Some(n) => store.sweep(n)?,
@@ -92,7 +98,7 @@ pub fn refine(db: &Path, name: Option<&str>, over: Overrides, jobs: usize) -> Re
         budget,
         budget.div_ceil(rounds),
         &settings,
-        &refine_opts(jobs),
+        &refine_opts(jobs, table_cache_mib),
     )?;
     refinement_report(&row, &o);
     Ok(())

@@ -165,6 +165,9 @@ pub enum SweepCommand {
         /// runs slower, the sweep no faster).
         #[arg(long)]
         oversubscribe: bool,
+        /// Cap of the wall-table cache in MiB, as for `sweep run`.
+        #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
+        table_cache_mib: usize,
     },
     /// Submit a sweep to a Slurm cluster as job arrays.
     ///
@@ -273,7 +276,7 @@ pub(super) fn sweep_run(
         retry,
         table_cache_mib,
     )?;
-    continue_refinement(&store, &[row], jobs)
+    continue_refinement(&store, &[row], jobs, table_cache_mib)
 }
 
 pub(super) fn sweep_resume(
@@ -296,7 +299,7 @@ pub(super) fn sweep_resume(
         )));
     }
     run_and_report(&store, &sweeps, jobs, retry, table_cache_mib)?;
-    continue_refinement(&store, &sweeps, jobs)?;
+    continue_refinement(&store, &sweeps, jobs, table_cache_mib)?;
     match extend {
         Some(max_periods) => {
             super::extend_cmd::extend_unconverged(&store, &sweeps, max_periods, jobs)
