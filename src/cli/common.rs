@@ -238,3 +238,19 @@ pub(super) fn continue_refinement(
     })?;
     Ok(())
 }
+
+/// `--snapshot` files must be named `.xyz` (extended XYZ) or `.svg` (a picture).
+pub(super) fn check_snapshot_names(paths: &[std::path::PathBuf]) -> Result<(), Failure> {
+    for path in paths {
+        if !matches!(
+            path.extension().and_then(|e| e.to_str()),
+            Some("xyz" | "svg")
+        ) {
+            return Err(Failure::BadInput(format!(
+                "--snapshot {}: the file name must end in .xyz or .svg",
+                path.display()
+            )));
+        }
+    }
+    Ok(())
+}

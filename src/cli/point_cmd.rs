@@ -3,7 +3,7 @@
 //! its job spec, which is deterministic) and `wetgran inflection` (the fluid-gas boundary of
 //! inelastic systems along lines of constant Gamma, MODEL.md 7).
 
-use super::common::{Failure, exit, select};
+use super::common::{Failure, check_snapshot_names, exit, select};
 use crate::observe::{Observables, run_observed_with_frame};
 use crate::report::point_text::{decision_text, gamma_lines, inflection_text, job_text};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
@@ -47,17 +47,7 @@ pub fn show(
     profiles: Option<&Path>,
 ) -> ExitCode {
     exit((|| {
-        for path in snapshot {
-            if !matches!(
-                path.extension().and_then(|e| e.to_str()),
-                Some("xyz" | "svg")
-            ) {
-                return Err(Failure::BadInput(format!(
-                    "--snapshot {}: the file name must end in .xyz or .svg",
-                    path.display()
-                )));
-            }
-        }
+        check_snapshot_names(snapshot)?;
         let store = Store::open_existing(db)?;
         let (sweep, p) = find_job(&store, job)?;
         print!("{}", job_text(&sweep, &p));

@@ -1,7 +1,7 @@
 //! `wetgran simulate`: one scene file run with its observers, reported as a table or JSON, with
 //! optional snapshots and profile pictures.
 
-use super::common::{Failure, exit};
+use super::common::{Failure, check_snapshot_names, exit};
 use crate::observe::run_observed_with_frame;
 use crate::report::run_text::{observed_text, summary_text};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
@@ -57,17 +57,7 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         .colour_by
         .parse()
         .map_err(|e| Failure::BadInput(format!("--colour-by: {e}")))?;
-    for path in &args.snapshot {
-        if !matches!(
-            path.extension().and_then(|e| e.to_str()),
-            Some("xyz" | "svg")
-        ) {
-            return Err(Failure::BadInput(format!(
-                "--snapshot {}: the file name must end in .xyz or .svg",
-                path.display()
-            )));
-        }
-    }
+    check_snapshot_names(&args.snapshot)?;
     let scene = load_scene(&args.scene)?;
     let (run, frame) = if std::io::stderr().is_terminal() {
         let duration = scene.run.duration;
