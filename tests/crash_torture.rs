@@ -312,6 +312,29 @@ fn killed_at_each_kind_of_instant_the_sweep_resumes_to_the_uninterrupted_numbers
     }
 }
 
+/// Regression (found by the torture): a sweep killed once in its grid and once in its extension
+/// got other labels than the uninterrupted run, though every number agreed. Refinement rounds
+/// ran without the line-rule relabelling that follows every other run (so the labels of refined
+/// points, and the plan of the next round, depended on whether a resume had relabelled them),
+/// and extended results kept their per-point labels until a resume relabelled them. Now every
+/// run, refinement round and extension ends with the relabelling
+/// (`run::relabel::relabel_stored`).
+#[test]
+fn regression_labels_after_kills_in_the_grid_and_the_extension_equal_the_uninterrupted_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = sweep_file(dir.path());
+    let want = reference(dir.path(), &file);
+    // In the second grid job's commit; then in the second extended result's, after the first
+    // one was committed.
+    let plan = |_: Stage, k: usize, _: &mut rand_xoshiro::Xoshiro256PlusPlus| match k {
+        0 => Kill::At("checkpoint", 2),
+        _ => Kill::At("extend", 2),
+    };
+    let landed = episode(dir.path(), &file, "regression", 1, 2, &plan, &want);
+    let stages: Vec<Stage> = landed.iter().map(|l| l.stage).collect();
+    assert_eq!(stages, [Stage::Grid, Stage::Extend], "{landed:?}");
+}
+
 /// The full torture (opt-in): 4 episodes of 8 kills, each kill after a random delay (half of
 /// them) or at a random pass of a pause point the current stage reaches, seeds 1..=4.
 #[test]
