@@ -258,12 +258,18 @@ fn episode(
     landed
 }
 
-/// A kill at a pause point that the stage reaches, else after a delay.
+/// A kill at a random pass of a pause point that a process started at `stage` reaches: `sweep
+/// resume --extend` runs the grid, then the refinement rounds, then the extension, and jobs
+/// (refined and extended ones too) run windows of the run-length policy.
 fn pause_point_for(stage: Stage, rng: &mut impl Rng) -> Kill {
     let points: &[(&str, u64)] = match stage {
-        Stage::Start | Stage::Grid => &[("checkpoint", 3), ("window", 2)],
-        Stage::Refine => &[("refine", 1), ("checkpoint", 2)],
-        Stage::Extend => &[("extend", 3), ("checkpoint", 3)],
+        Stage::Start | Stage::Grid | Stage::Refine => &[
+            ("checkpoint", 3),
+            ("window", 3),
+            ("refine", 1),
+            ("extend", 3),
+        ],
+        Stage::Extend => &[("checkpoint", 3), ("window", 2), ("extend", 3)],
     };
     let (p, most) = points[rng.gen_range(0..points.len())];
     Kill::At(p, rng.gen_range(1..=most))
@@ -274,7 +280,7 @@ fn summary(landed: &[Landed]) -> String {
     for l in landed {
         let what = match &l.kill {
             Kill::After(_) => format!("random instant, {:?} stage", l.stage),
-            Kill::At(p, _) => format!("pause point `{p}`"),
+            Kill::At(p, _) => format!("pause point `{p}`, {:?} stage", l.stage),
         };
         *by.entry(what).or_default() += 1;
     }
@@ -335,41 +341,53 @@ fn regression_labels_after_kills_in_the_grid_and_the_extension_equal_the_uninter
     assert_eq!(stages, [Stage::Grid, Stage::Extend], "{landed:?}");
 }
 
-/// The full torture (opt-in): 4 episodes of 8 kills, each kill after a random delay (half of
-/// them) or at a random pass of a pause point the current stage reaches, seeds 1..=4.
+/// The full torture (opt-in): episodes of up to 10 kills (seeds 1, 2, ...) until at least 32
+/// kills landed; each kill after a random delay of 0.05-1.5 s (half of them) or at a random
+/// pass of a random pause point (`pause_point_for`). An episode ends early when a `sweep
+/// resume --extend` ends by itself (its pause point was not reached, or its delay was past
+/// its end).
 #[test]
 #[ignore = "full crash torture, ~1 min: cargo test --release --test crash_torture -- --ignored"]
-fn thirty_two_kills_at_random_instants_lose_and_change_nothing() {
+fn at_least_32_kills_at_random_instants_lose_and_change_nothing() {
     let t0 = Instant::now();
     let dir = tempfile::tempdir().unwrap();
     let file = sweep_file(dir.path());
     let want = reference(dir.path(), &file);
     let plan = |stage: Stage, _: usize, rng: &mut rand_xoshiro::Xoshiro256PlusPlus| {
         if rng.gen_bool(0.5) {
-            Kill::After(Duration::from_secs_f64(rng.gen_range(0.02..0.8)))
+            Kill::After(Duration::from_secs_f64(rng.gen_range(0.05..1.5)))
         } else {
             pause_point_for(stage, rng)
         }
     };
     let mut all = Vec::new();
-    for seed in 1..=4 {
+    let mut episodes = 0;
+    while all.len() < 32 {
+        episodes += 1;
+        assert!(episodes <= 20, "too few kills land: {all:?}");
         all.extend(episode(
             dir.path(),
             &file,
-            &format!("full{seed}"),
-            seed,
-            8,
+            &format!("full{episodes}"),
+            episodes,
+            10,
             &plan,
             &want,
         ));
     }
     eprintln!(
-        "crash torture: {} kills survived in {:.1} s; every job one result, numbers equal to \
-         the uninterrupted run ({} jobs):\n{}",
+        "crash torture: {} kills survived in {episodes} episodes, {:.1} s; every job one \
+         result, numbers equal to the uninterrupted run ({} jobs):\n{}",
         all.len(),
         t0.elapsed().as_secs_f64(),
         want.jobs.len(),
         summary(&all)
     );
-    assert!(all.len() >= 20, "{all:?}");
+    for point in ["checkpoint", "window", "refine", "extend"] {
+        assert!(
+            all.iter()
+                .any(|l| matches!(l.kill, Kill::At(p, _) if p == point)),
+            "no kill at `{point}`"
+        );
+    }
 }
