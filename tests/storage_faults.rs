@@ -245,6 +245,14 @@ fn a_database_on_a_read_only_filesystem_is_refused_by_name_and_keeps_its_results
         Some(t) => t.remount("ro"),
         None => set_dir_mode(0o555),
     }
+    eprintln!(
+        "read-only filesystem by {}",
+        if fs.is_some() {
+            "a tmpfs remounted read-only"
+        } else {
+            "chmod 555 on its folder"
+        }
+    );
     let add = ["sweep", "run", s(&second), "--db", s(&db), "--jobs", "1"];
     // SQLite opens the file read-only (code 8) or cannot open it at all, when it cannot create
     // the -wal and -shm files beside it (code 14); both errors say read-only.
@@ -328,6 +336,11 @@ fn a_full_disk_stops_the_run_by_name_and_loses_no_committed_result() {
     for (id, j) in &want.jobs {
         assert_eq!(numbers(j), numbers(&after.jobs[id]), "job {id}");
     }
+    eprintln!(
+        "full disk (tmpfs of 1 MiB): {} of 12 results committed before the disk filled, all \
+         kept; the resume finished 12 of 12 with the numbers of a run with room",
+        lines.len()
+    );
 }
 
 /// Another program's connection holding the write lock (`BEGIN EXCLUSIVE`) until dropped.
@@ -419,6 +432,12 @@ fn a_database_locked_past_the_busy_timeout_stops_the_run_by_name_and_loses_nothi
     let after = snapshot(&db);
     assert_eq!(after.done().len(), 12);
     kept(&before, &after);
+    eprintln!(
+        "locked database: the runner stopped {:.1} s after the lock was taken (busy timeout 1 \
+         s), {} of 12 results committed before, all kept; the resume finished 12 of 12",
+        waited.as_secs_f64(),
+        lines.len()
+    );
 }
 
 #[test]
