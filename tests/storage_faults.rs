@@ -121,9 +121,12 @@ impl Drop for Tmpfs {
     }
 }
 
+/// A result's observables, simulated time (bits) and events; a checkpoint's time (bits) and state.
+type Numbers = (Option<(String, u64, i64)>, Option<(u64, String)>);
+
 /// The numbers of a stored job (its result without the label, and its checkpoint): what a later
 /// relabelling along a longer line may not change.
-fn numbers(j: &StoredJob) -> (Option<(String, u64, i64)>, Option<(u64, String)>) {
+fn numbers(j: &StoredJob) -> Numbers {
     (
         j.result
             .as_ref()
