@@ -240,6 +240,12 @@ fn a_database_on_a_read_only_filesystem_is_refused_by_name_and_keeps_its_results
     let second = small_sweep(dir.path(), "second", "[3.0, 5.0, 7.0]");
     ok(&["sweep", "run", s(&first), "--db", s(&db), "--jobs", "1"]);
     let before = snapshot(&db);
+    // A clean close by the store folds the WAL into the file and removes the -wal and -shm
+    // files (the read-only snapshot leaves them), so that SQLite has to create them.
+    drop(wetgran::store::Store::open_existing(&db).unwrap());
+    for ext in ["sqlite-wal", "sqlite-shm"] {
+        assert!(!db.with_extension(ext).exists(), "{ext} left");
+    }
     let set_dir_mode = |mode: u32| {
         use std::os::unix::fs::PermissionsExt;
         std::fs::set_permissions(&mnt, std::fs::Permissions::from_mode(mode)).unwrap();
@@ -257,10 +263,12 @@ fn a_database_on_a_read_only_filesystem_is_refused_by_name_and_keeps_its_results
         }
     );
     let add = ["sweep", "run", s(&second), "--db", s(&db), "--jobs", "1"];
-    // SQLite opens the file read-only (code 8) or cannot open it at all, when it cannot create
-    // the -wal and -shm files beside it (code 14); both errors say read-only.
-    assert_refused(&add, &db, "read-only");
-    assert_refused(&["sweep", "resume", "--db", s(&db)], &db, "read-only");
+    // SQLite cannot create the -shm file, so the integrity check at open fails (code 14):
+    // a storage fault, not a damaged file (it was reported as damaged, exit status 2, before).
+    let fault = "cannot open the database for writing (a read-only folder or filesystem";
+    assert_refused(&add, &db, fault);
+    assert_refused(&["sweep", "resume", "--db", s(&db)], &db, fault);
+    assert_refused(&["sweep", "status", "--db", s(&db)], &db, fault);
     match &fs {
         Some(t) => t.remount("rw"),
         None => set_dir_mode(0o755),
