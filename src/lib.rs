@@ -7,7 +7,8 @@
 //! [`boundary`], [`cluster`] -> [`refine`], [`report`] -> `cli`.
 //! The physics follows MODEL.md (K. Röller, "Numerical simulations of wet granular matter",
 //! Göttingen 2010); choices where the text is silent or wrong are listed in
-//! docs/model-choices.md.
+//! docs/model-choices.md. [`test_pause`] (a leaf, used by `observe` and `store`) holds the
+//! pause points of the crash-torture tests, inert unless their environment variable is set.
 
 pub mod bench;
 pub mod boundary;
@@ -22,3 +23,4 @@ pub mod scene;
 pub mod sim;
 pub mod store;
 pub mod sweep;
+pub mod test_pause;

@@ -264,8 +264,7 @@ pub(super) fn sweep_run(
     let row = store.register_sweep(&sweep, &expanded)?;
     store.set_left_out(row.id, &left_out)?;
     // Results shared with an earlier registration get this file's `[classify]` thresholds.
-    let relabelled =
-        super::reclassify_cmd::relabel_sweeps(&store, std::slice::from_ref(&row), None)?;
+    let relabelled = crate::run::relabel::relabel_stored(&store, std::slice::from_ref(&row), None)?;
     if relabelled.changed() > 0 {
         eprintln!("sweep {}: {}", row.name, relabelled.text());
     }
@@ -300,12 +299,23 @@ pub(super) fn sweep_resume(
     }
     run_and_report(&store, &sweeps, jobs, retry, table_cache_mib)?;
     continue_refinement(&store, &sweeps, jobs, table_cache_mib)?;
-    match extend {
-        Some(max_periods) => {
-            super::extend_cmd::extend_unconverged(&store, &sweeps, max_periods, jobs)
+    let Some(max_periods) = extend else {
+        return Ok(());
+    };
+    super::extend_cmd::extend_unconverged(&store, &sweeps, max_periods, jobs)?;
+    // Extended results get the line rule's labels too, as after any run.
+    for s in &sweeps {
+        let relabelled =
+            crate::run::relabel::relabel_stored(&store, std::slice::from_ref(s), None)?;
+        if relabelled.changed() > 0 {
+            eprintln!(
+                "sweep {}: labels along lines of constant Gamma (MODEL.md 7): {}",
+                s.name,
+                relabelled.text()
+            );
         }
-        None => Ok(()),
     }
+    Ok(())
 }
 
 fn run_and_report(
@@ -337,8 +347,7 @@ fn run_and_report(
         summary.wall_seconds
     );
     for s in sweeps {
-        let relabelled =
-            super::reclassify_cmd::relabel_sweeps(store, std::slice::from_ref(s), None)?;
+        let relabelled = crate::run::relabel::relabel_stored(store, std::slice::from_ref(s), None)?;
         if relabelled.changed() > 0 {
             eprintln!(
                 "sweep {}: labels along lines of constant Gamma (MODEL.md 7): {}",

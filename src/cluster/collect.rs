@@ -290,6 +290,83 @@ mod tests {
         assert!(jobs_to_submit(&store, &sweep).unwrap().is_empty());
     }
 
+    /// Truncated, empty, binary, foreign (another program's JSON, another job's or version's
+    /// record, a record whose result wetgran never writes) result files: each task reported
+    /// corrupt with the file and the reason, nothing stored, the job still pending and
+    /// submitted again.
+    #[test]
+    fn truncated_and_foreign_result_files_are_reported_never_stored() {
+        let dir = tempfile::tempdir().unwrap();
+        let (store, sweep, ids, sd) = setup(dir.path());
+        // Four jobs: one record of each bad kind per collection round, in two rounds.
+        let record = |id: &str, res: JobResult| {
+            serde_json::to_string(&ResultRecord::new(id, Outcome::Done(res), 0.2)).unwrap()
+        };
+        let with = |f: &dyn Fn(&mut JobResult)| {
+            let mut r = result(1.0);
+            f(&mut r);
+            r
+        };
+        let good = record(&ids[0], result(1.0));
+        let cases: Vec<(String, &str)> = vec![
+            (good[..good.len() / 2].to_string(), "not a result record"),
+            (String::new(), "not a result record"),
+            (
+                "\u{0}\u{1}binary\u{fffd}".to_string(),
+                "not a result record",
+            ),
+            (
+                r#"{"job_id": "x", "result": {"phase": "g"}}"#.to_string(),
+                "not a result record",
+            ),
+            (record("0123abcd", result(1.0)), "not this file's job"),
+            (
+                record(&ids[0], result(1.0)).replace("\"format\":1", "\"format\":7"),
+                "record format 7",
+            ),
+            (
+                record(&ids[0], with(&|r| r.phase = Some("banana".into()))),
+                "unknown phase label `banana`",
+            ),
+            (
+                record(
+                    &ids[0],
+                    with(&|r| r.observables = serde_json::json!([1, 2])),
+                ),
+                "observables are not a JSON object",
+            ),
+            (
+                record(&ids[0], with(&|r| r.simulated_time = -1.0)),
+                "not finite non-negative",
+            ),
+            (
+                record(
+                    &ids[0],
+                    with(&|r| r.decided_on = Some(serde_json::json!(3))),
+                ),
+                "decision numbers are not a JSON object",
+            ),
+        ];
+        for (k, (text, why)) in cases.iter().enumerate() {
+            submit(&store, &sweep, &sd, &ids[..1], &format!("{}", 400 + k));
+            let path = sd.result(&ids[0]);
+            std::fs::write(&path, text).unwrap();
+            let c = collect(&store, &sweep, &mut empty).unwrap();
+            assert!(c.stored.is_empty() && c.duplicates.is_empty(), "case {k}");
+            assert_eq!(c.corrupt.len(), 1, "case {k}: {c:?}");
+            let msg = c.corrupt[0].message.clone().unwrap();
+            assert!(msg.starts_with(&path.display().to_string()), "{msg}");
+            assert!(msg.contains(why), "case {k}: {msg}");
+            assert_eq!(store.job_statuses(&ids).unwrap()[&ids[0]], "pending");
+            assert_eq!(jobs_to_submit(&store, &sweep).unwrap()[0], ids[0]);
+        }
+        assert!(store.runs_per_job().unwrap().is_empty(), "nothing stored");
+        // The good record is stored.
+        submit(&store, &sweep, &sd, &ids[..1], "499");
+        std::fs::write(sd.result(&ids[0]), good).unwrap();
+        assert_eq!(collect(&store, &sweep, &mut empty).unwrap().stored.len(), 1);
+    }
+
     #[test]
     fn a_task_finishing_while_the_queue_is_asked_is_not_missing() {
         let dir = tempfile::tempdir().unwrap();

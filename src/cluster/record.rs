@@ -12,8 +12,9 @@
 //!
 //! A result record is one JSON object: `format`, `job_id`, `outcome` (`{"done": JobResult}` or
 //! `{"failed": "message"}`), `wall_seconds`, `finished_at`, `host` and `slurm_task`
-//! (`ARRAYJOB_TASK` when run under Slurm). A file that does not parse, has another format, or
-//! names another job than its file name is corrupt.
+//! (`ARRAYJOB_TASK` when run under Slurm). A file that does not parse, has another format, names
+//! another job than its file name, or holds a result that is not one wetgran writes (times not
+//! finite and >= 0, an unknown phase label, observables that are not an object) is corrupt.
 
 use crate::sweep::{JobResult, JobSpec};
 use serde::{Deserialize, Serialize};
@@ -158,13 +159,38 @@ impl ResultRecord {
                 r.job_id
             ));
         }
-        if let Outcome::Done(res) = &r.outcome
-            && !(res.simulated_time.is_finite() && res.wall_seconds.is_finite())
-        {
-            return Err("a result with non-finite times".to_string());
+        if let Outcome::Done(res) = &r.outcome {
+            check_result(res)?;
         }
         Ok(Some(r))
     }
+}
+
+/// What a result from elsewhere must be before it is stored: finite non-negative times, a
+/// phase label this wetgran knows (or none), observables and decision numbers that are JSON
+/// objects (or no decision). A record of another program or version that happens to parse is
+/// refused here.
+fn check_result(res: &JobResult) -> Result<(), String> {
+    let time_ok = |t: f64| t.is_finite() && t >= 0.0;
+    if !(time_ok(res.simulated_time) && time_ok(res.wall_seconds)) {
+        return Err(format!(
+            "a result with times that are not finite non-negative numbers (simulated {}, wall \
+             {})",
+            res.simulated_time, res.wall_seconds
+        ));
+    }
+    if let Some(p) = &res.phase
+        && p.parse::<crate::observe::Phase>().is_err()
+    {
+        return Err(format!("a result with an unknown phase label `{p}`"));
+    }
+    if !res.observables.is_object() {
+        return Err("a result whose observables are not a JSON object".to_string());
+    }
+    if res.decided_on.as_ref().is_some_and(|d| !d.is_object()) {
+        return Err("a result whose decision numbers are not a JSON object".to_string());
+    }
+    Ok(())
 }
 
 /// Writes `bytes` to a temporary file beside `path`, syncs it, and renames it over `path`: on a

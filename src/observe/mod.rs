@@ -360,6 +360,7 @@ impl crate::sim::Watcher for Watch<'_> {
         if self.converged || next > schedule.cap * (1.0 + 1e-12) {
             return None;
         }
+        crate::test_pause::pause_at("window");
         // The run so far is transient: fresh observers from the frame at `t_end` on.
         let last = self.set.last.take().expect("the end frame was observed");
         self.set = ObserverSet::with_window_start(self.scene, t_end);

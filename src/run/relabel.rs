@@ -8,7 +8,8 @@
 use crate::observe::line::classify_line;
 use crate::observe::{Classification, Observables, Thresholds, classify};
 use crate::scene::{DriveKind, Scene};
-use crate::store::PointRow;
+use crate::store::{PointRow, Store, StoreError, SweepRow};
+use std::collections::BTreeMap;
 
 /// Fewest distinct `E*` that make a line (the inflection needs four).
 pub const MIN_LINE_POINTS: usize = 4;
@@ -121,6 +122,117 @@ pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Rela
             classification: c.unwrap_or_else(|| classify(&p.obs, &p.th)),
         })
         .collect()
+}
+
+/// What a relabelling changed: label transitions `(from, to)` with their counts, the number of
+/// results re-labelled and of those left alone.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct Relabelled {
+    pub results: usize,
+    /// Results whose stored observables this wetgran cannot read (left as they are).
+    pub unreadable: usize,
+    pub changes: BTreeMap<(String, String), usize>,
+}
+
+impl Relabelled {
+    /// Number of results whose label changed.
+    pub fn changed(&self) -> usize {
+        self.changes.values().sum()
+    }
+
+    /// `n result(s) re-labelled: 3 label(s) changed: f -> g 2, s -> f 1` (or `no label
+    /// changed`).
+    pub fn text(&self) -> String {
+        let mut text = self.changes_text();
+        if self.unreadable > 0 {
+            text.push_str(&format!(
+                "; {} result(s) left as they were (observables not readable by this wetgran)",
+                self.unreadable
+            ));
+        }
+        text
+    }
+
+    fn changes_text(&self) -> String {
+        if self.changes.is_empty() {
+            return format!("{} result(s) re-labelled: no label changed", self.results);
+        }
+        let parts: Vec<String> = self
+            .changes
+            .iter()
+            .map(|((from, to), n)| format!("{from} -> {to} {n}"))
+            .collect();
+        format!(
+            "{} result(s) re-labelled: {} label(s) changed: {}",
+            self.results,
+            self.changed(),
+            parts.join(", ")
+        )
+    }
+}
+
+/// Re-labels every stored result of `sweeps` from its stored observables with `thresholds`, or
+/// with the job's own `[classify]` thresholds when `None`, the fluid-gas line rule included
+/// (`run::relabel`, MODEL.md 7); writes only labels that changed or whose decision numbers
+/// changed. A job shared by several of the given sweeps is counted once (the last sweep's
+/// lines decide its label). The runner's callers relabel after every change of the stored
+/// results (a run, a refinement round, an extension), so that every stored label is the same
+/// function of the stored observables whatever order (or crash) the results came in.
+pub fn relabel_stored(
+    store: &Store,
+    sweeps: &[SweepRow],
+    thresholds: Option<&Thresholds>,
+) -> Result<Relabelled, StoreError> {
+    let mut labels: BTreeMap<
+        String,
+        (
+            Option<String>,
+            Option<serde_json::Value>,
+            String,
+            serde_json::Value,
+        ),
+    > = BTreeMap::new();
+    let mut out = Relabelled::default();
+    let mut unreadable = std::collections::HashSet::new();
+    for s in sweeps {
+        let points = store.points(s.id)?;
+        for p in &points {
+            if let Some(o) = &p.observables
+                && serde_json::from_value::<Observables>(o.clone()).is_err()
+            {
+                // Observables this wetgran cannot read (another version's layout) keep their
+                // label.
+                unreadable.insert(p.job_id.clone());
+            }
+        }
+        let before: BTreeMap<&str, &PointRow> =
+            points.iter().map(|p| (p.job_id.as_str(), p)).collect();
+        for l in relabel(&points, thresholds) {
+            let p = before[l.job_id.as_str()];
+            let phase = l.classification.phase.to_string();
+            let decided_on =
+                serde_json::to_value(&l.classification.decided_on).expect("decision serializes");
+            labels.insert(
+                l.job_id.clone(),
+                (p.phase.clone(), p.decided_on.clone(), phase, decided_on),
+            );
+        }
+    }
+    out.unreadable = unreadable.len();
+    let mut updates = Vec::new();
+    for (job_id, (old_phase, old_decided, phase, decided_on)) in labels {
+        out.results += 1;
+        let old = old_phase.clone().unwrap_or_else(|| "-".to_string());
+        if old != phase {
+            *out.changes.entry((old, phase.clone())).or_insert(0) += 1;
+        }
+        if old_phase.as_deref() != Some(phase.as_str()) || old_decided.as_ref() != Some(&decided_on)
+        {
+            updates.push((job_id, phase, decided_on));
+        }
+    }
+    store.relabel(&updates)?;
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -5,7 +5,14 @@
 //! refused with a message naming the file, before anything is written to it. A new file gets the
 //! wetgran application id (SQLite header offset 68, written before WAL mode so it always lands
 //! in the main file), then WAL mode, then the embedded migrations of `migrations/`. Every
-//! connection waits up to [`BUSY_TIMEOUT`] for a lock held by another process.
+//! connection waits up to [`busy_timeout`] (default [`BUSY_TIMEOUT`]) for a lock held by another
+//! process.
+//!
+//! Storage faults (docs/reliability.md): a database locked for longer than that, a read-only
+//! file, folder or filesystem, a full disk or an I/O error fail the command with an error that
+//! names the file and says which fault it is ([`explain`]); the failed transaction rolls back,
+//! so every result committed before stays, and a file that cannot be opened is never called
+//! damaged.
 //!
 //! Async stays inside: the store owns a one-thread tokio runtime and a one-connection pool, and
 //! every method blocks on it. Only the thread that owns the store talks to the database.
@@ -48,8 +55,12 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 /// SQLite `application_id` of a wetgran database ("WGRN").
 pub const APPLICATION_ID: i32 = 0x5747_524e;
-/// How long a statement waits for another process's lock.
+/// How long a statement waits for another process's lock, unless [`BUSY_TIMEOUT_VAR`] says
+/// otherwise ([`busy_timeout`]).
 pub const BUSY_TIMEOUT: Duration = Duration::from_secs(30);
+/// The environment variable that sets the busy timeout, in seconds (a slow shared filesystem may
+/// want more; the storage-fault tests want less).
+pub const BUSY_TIMEOUT_VAR: &str = "WETGRAN_BUSY_TIMEOUT";
 /// How often a runner refreshes the heartbeat of its running jobs.
 pub const HEARTBEAT_INTERVAL: Duration = Duration::from_secs(5);
 /// A running job whose heartbeat is older than this is re-queued.
@@ -225,6 +236,62 @@ pub struct Store {
     owner: String,
 }
 
+/// How long a statement waits for another process's lock: [`BUSY_TIMEOUT_VAR`] seconds when
+/// set to a number >= 0, else [`BUSY_TIMEOUT`].
+pub fn busy_timeout() -> Duration {
+    std::env::var(BUSY_TIMEOUT_VAR)
+        .ok()
+        .and_then(|s| s.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s >= 0.0)
+        .map(Duration::from_secs_f64)
+        .unwrap_or(BUSY_TIMEOUT)
+}
+
+/// SQLite's primary result code of a database error (`None` for other errors).
+fn sqlite_code(e: &sqlx::Error) -> Option<i64> {
+    match e {
+        sqlx::Error::Database(d) => d.code()?.parse::<i64>().ok().map(|c| c & 0xff),
+        _ => None,
+    }
+}
+
+/// Whether an error is a fault of the file or its storage (locked, read-only, full, cannot be
+/// opened, I/O), not of its content.
+fn is_storage_fault(e: &sqlx::Error) -> bool {
+    matches!(sqlite_code(e), Some(5 | 6 | 8 | 10 | 13 | 14))
+}
+
+/// The text of a database error, led by what it means for the storage faults a user can fix
+/// (SQLite primary result codes 5/6 busy or locked, 8 read-only, 10 I/O error, 13 full, 14
+/// cannot open). A failed statement's transaction is rolled back, so what was committed before
+/// stays.
+fn explain(e: &sqlx::Error) -> String {
+    let text = e.to_string();
+    let hint = match sqlite_code(e) {
+        Some(5 | 6) => format!(
+            "the database is locked by another program for longer than the busy timeout ({} s; \
+             {BUSY_TIMEOUT_VAR} sets it in seconds): stop that program or wait, then run the \
+             command again",
+            busy_timeout().as_secs_f64()
+        ),
+        Some(8) => "the database is read-only (the file, its folder or its filesystem): nothing \
+                    was written; make it writable, or work on a copy"
+            .to_string(),
+        Some(10) => "an I/O error on the database file (a full or failing disk, or a filesystem \
+                     that went away): the last transaction was rolled back"
+            .to_string(),
+        Some(13) => "the disk holding the database is full: the last transaction was rolled \
+                     back, results committed before are kept; free space, then `sweep resume` \
+                     continues"
+            .to_string(),
+        Some(14) => "cannot open the database for writing (a read-only folder or filesystem, or \
+                     its -wal and -shm files cannot be created beside it): nothing was written"
+            .to_string(),
+        _ => return text,
+    };
+    format!("{hint} ({text})")
+}
+
 /// Seconds since the Unix epoch.
 pub fn now() -> f64 {
     SystemTime::now()
@@ -360,19 +427,20 @@ impl Store {
             })?;
         let db = |e: sqlx::Error| StoreError::Db {
             path: p.clone(),
-            detail: e.to_string(),
+            detail: explain(&e),
         };
+        let busy = busy_timeout();
         let opts = SqliteConnectOptions::new()
             .filename(path)
             .create_if_missing(true)
-            .busy_timeout(BUSY_TIMEOUT)
+            .busy_timeout(busy)
             .foreign_keys(true);
         let pool = rt
             .block_on(
                 SqlitePoolOptions::new()
                     .max_connections(1)
                     .min_connections(0)
-                    .acquire_timeout(BUSY_TIMEOUT * 2)
+                    .acquire_timeout(busy * 2 + Duration::from_secs(1))
                     .connect_with(opts),
             )
             .map_err(db)?;
@@ -390,14 +458,24 @@ impl Store {
     /// Checks (read-only) what is in the file, then initialises and migrates it.
     fn prepare(&self, existing: Existing) -> Result<(), StoreError> {
         let p = self.path.display().to_string();
-        let damaged = |e: sqlx::Error| StoreError::Damaged {
-            path: p.clone(),
-            detail: e.to_string(),
+        // A file that cannot be read or written is not a damaged one.
+        let damaged = |e: sqlx::Error| {
+            if is_storage_fault(&e) {
+                StoreError::Db {
+                    path: p.clone(),
+                    detail: explain(&e),
+                }
+            } else {
+                StoreError::Damaged {
+                    path: p.clone(),
+                    detail: e.to_string(),
+                }
+            }
         };
         self.rt.block_on(async {
             let mut conn = self.pool.acquire().await.map_err(|e| StoreError::Db {
                 path: p.clone(),
-                detail: e.to_string(),
+                detail: explain(&e),
             })?;
             let conn: &mut SqliteConnection = &mut conn;
             match existing {
@@ -429,7 +507,7 @@ impl Store {
             }
             let db = |e: sqlx::Error| StoreError::Db {
                 path: p.clone(),
-                detail: e.to_string(),
+                detail: explain(&e),
             };
             if !matches!(existing, Existing::Ours) {
                 // Before WAL mode, so that the id is written to the main file at once.
@@ -450,7 +528,13 @@ impl Store {
             }
             MIGRATOR.run(&mut *conn).await.map_err(|e| StoreError::Db {
                 path: p.clone(),
-                detail: format!("applying the migrations: {e}"),
+                detail: match e {
+                    sqlx::migrate::MigrateError::Execute(e)
+                    | sqlx::migrate::MigrateError::ExecuteMigration(e, _) => {
+                        format!("applying the migrations: {}", explain(&e))
+                    }
+                    e => format!("applying the migrations: {e}"),
+                },
             })?;
             Ok(())
         })
@@ -569,6 +653,14 @@ impl Store {
         })
     }
 
+    /// SQLite's full integrity check (`PRAGMA integrity_check`): `["ok"]` for a sound file, else
+    /// the problems it found.
+    pub fn integrity_check(&self) -> Result<Vec<String>, StoreError> {
+        self.rt
+            .block_on(sqlx::query_scalar(queries::INTEGRITY_CHECK).fetch_all(&self.pool))
+            .map_err(|e| self.db(e))
+    }
+
     /// Number of rows in the `runs` table: simulations started, ever, in this database.
     pub fn runs_started(&self) -> Result<i64, StoreError> {
         self.rt
@@ -589,7 +681,7 @@ impl Store {
     fn db(&self, e: sqlx::Error) -> StoreError {
         StoreError::Db {
             path: self.path.display().to_string(),
-            detail: e.to_string(),
+            detail: explain(&e),
         }
     }
 
@@ -648,6 +740,7 @@ impl Store {
                 .await
                 .map_err(|e| self.db(e))?;
         }
+        crate::test_pause::pause_at("checkpoint");
         Ok(())
     }
 
@@ -662,6 +755,7 @@ impl Store {
                 .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
+            crate::test_pause::pause_at("extend");
             self.insert_result(tx, job_id, result, &owner, t).await?;
             sqlx::query(queries::EXTEND_JOB_TIMES)
                 .bind(job_id)
@@ -818,6 +912,7 @@ impl Store {
                 .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
+            crate::test_pause::pause_at("refine");
             Ok(())
         })
     }

@@ -27,6 +27,8 @@ queries! {
     ALL_JOB_SPECS = "all_job_specs";
     /// Opens a write transaction, taking the write lock at once.
     BEGIN_IMMEDIATE = "begin_immediate";
+    /// SQLite's full integrity check.
+    INTEGRITY_CHECK = "integrity_check";
     /// A job's checkpoint state (JSON).
     CHECKPOINT_STATE = "checkpoint_state";
     /// Claims the next claimable pending job of a sweep (grid order); returns its id and spec.
