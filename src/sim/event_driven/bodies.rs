@@ -51,6 +51,11 @@ pub struct Bodies<const D: usize, const GRAV: bool, const SHEAR: bool> {
     pub field_work: f64,
 }
 
+/// Bytes a vector holds on the heap (its capacity, not its length).
+pub fn vec_bytes<T>(v: &Vec<T>) -> usize {
+    v.capacity() * std::mem::size_of::<T>()
+}
+
 /// `v` reordered so that entry `k` is `v[order[k]]`.
 pub fn permuted<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
     order.iter().map(|&k| v[k as usize]).collect()
@@ -181,6 +186,18 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
                 },
             )
         }
+    }
+
+    /// Heap bytes of each per-particle array (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("bodies.body (x, t, v, r)", vec_bytes(&self.body)),
+            ("bodies.count", vec_bytes(&self.count)),
+            ("bodies.last_collision", vec_bytes(&self.last_collision)),
+            ("bodies.accel", vec_bytes(&self.accel)),
+            ("bodies.id", vec_bytes(&self.id)),
+            ("bodies.slot_of", vec_bytes(&self.slot_of)),
+        ]
     }
 
     /// Renumbers the particles: new index `k` holds old particle `order[k]`.

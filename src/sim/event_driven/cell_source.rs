@@ -7,7 +7,7 @@
 //! neighbouring cell and returns the offsets of the newly adjacent slab of cells, the only cells
 //! whose partners the pair source must scan (the pair event is kept).
 
-use super::bodies::{Bodies, Vector, permuted};
+use super::bodies::{Bodies, Vector, permuted, vec_bytes};
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
 
@@ -56,6 +56,14 @@ impl<const D: usize> CellSource<D> {
         }
         s.ev = vec![PlaneEvent::NEVER; s.cell.len()];
         s
+    }
+
+    /// Heap bytes of the grid and the per-particle arrays (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        let mut out = self.grid.memory();
+        out.push(("cells.cell", vec_bytes(&self.cell)));
+        out.push(("cells.ev", vec_bytes(&self.ev)));
+        out
     }
 
     /// Predicts the next crossing of a face of `i`'s cell (particle at time `now`).

@@ -38,6 +38,16 @@ impl<const D: usize> CellGrid<D> {
         }
     }
 
+    /// Heap bytes of the cell heads and the per-particle links (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        use super::bodies::vec_bytes;
+        vec![
+            ("cells.grid.head (per cell)", vec_bytes(&self.head)),
+            ("cells.grid.next", vec_bytes(&self.next)),
+            ("cells.grid.prev", vec_bytes(&self.prev)),
+        ]
+    }
+
     /// The cell containing coordinate `x` (clamped into the grid).
     pub fn locate(&self, x: &[f64; D]) -> [i32; D] {
         let mut c = [0i32; D];

@@ -622,6 +622,19 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         Ok(())
     }
 
+    /// Heap bytes of every per-particle (and per-cell) array of the engine, by structure, each
+    /// from its capacity and element size (`wetgran bench memory`). The wall tables of the
+    /// `table` solver are shared through the table cache and not counted.
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        let mut out = self.bodies.memory();
+        out.extend(self.pairs.memory());
+        out.extend(self.cells.memory());
+        out.extend(self.walls.memory());
+        out.extend(self.slabs.memory());
+        out.extend(self.queue.memory());
+        out
+    }
+
     // ----- invariants --------------------------------------------------------------------
 
     /// Checks the invariants: finite numbers, every particle inside the box, no pair overlap

@@ -14,7 +14,7 @@
 //! rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
 //! leaves it at least at the rebound floor.
 
-use super::bodies::{Bodies, Vector};
+use super::bodies::{Bodies, Vector, vec_bytes};
 use super::cell_source::CellSource;
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
 use super::ledger::{EventCounts, Ledger};
@@ -60,6 +60,15 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             },
             bond_len: if WET { vec![0; n] } else { Vec::new() },
         }
+    }
+
+    /// Heap bytes of each per-particle array (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("pairs.ev", vec_bytes(&self.ev)),
+            ("pairs.bonds", vec_bytes(&self.bonds)),
+            ("pairs.bond_len", vec_bytes(&self.bond_len)),
+        ]
     }
 
     // ----- bonds -------------------------------------------------------------------------

@@ -23,6 +23,8 @@ pub trait EventQueue: Clone + std::fmt::Debug {
     fn key(&self, i: usize) -> f64;
     /// Sets the key of particle `i`.
     fn update(&mut self, i: usize, time: f64);
+    /// Heap bytes of the queue's arrays, by name (`wetgran bench memory`).
+    fn memory(&self) -> Vec<(&'static str, usize)>;
 }
 
 /// Children per heap node.
@@ -54,6 +56,14 @@ impl EventQueue for HeapQueue {
     #[inline]
     fn key(&self, i: usize) -> f64 {
         self.heap[self.slot[i] as usize].0
+    }
+
+    fn memory(&self) -> Vec<(&'static str, usize)> {
+        use super::bodies::vec_bytes;
+        vec![
+            ("queue.heap", vec_bytes(&self.heap)),
+            ("queue.slot", vec_bytes(&self.slot)),
+        ]
     }
 
     /// Sets the key of particle `i` and restores the heap order.
@@ -141,6 +151,9 @@ impl EventQueue for NaiveQueue {
     }
     fn update(&mut self, i: usize, time: f64) {
         self.key[i] = time;
+    }
+    fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![("queue.key", super::bodies::vec_bytes(&self.key))]
     }
     /// First index with the smallest key (strict `<`: ties go to the smaller index, as in the
     /// heap).

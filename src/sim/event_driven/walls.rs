@@ -11,7 +11,7 @@
 //! next prediction (a table error cannot repeat itself at the same time forever); no grain
 //! leaves the floor slower than the rebound floor.
 
-use super::bodies::{Bodies, permuted};
+use super::bodies::{Bodies, permuted, vec_bytes};
 use super::cell_source::CellSource;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
 use super::ledger::{EventCounts, Ledger};
@@ -171,6 +171,14 @@ impl WallSource {
             ev: vec![PlaneEvent::NEVER; n],
             vrel: vec![f64::NAN; n],
         }
+    }
+
+    /// Heap bytes of the per-particle arrays (`wetgran bench memory`; shared tables excluded).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("walls.ev", vec_bytes(&self.ev)),
+            ("walls.vrel", vec_bytes(&self.vrel)),
+        ]
     }
 
     /// Predicts the next wall collision of `i` (at time `now`; `up`: the lid or upper wall) and
