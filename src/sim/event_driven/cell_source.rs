@@ -7,7 +7,7 @@
 //! neighbouring cell and returns the offsets of the newly adjacent slab of cells, the only cells
 //! whose partners the pair source must scan (the pair event is kept).
 
-use super::bodies::{Bodies, Vector, permuted, vec_bytes};
+use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
 
@@ -28,7 +28,7 @@ pub struct CellSource<const D: usize> {
 
 impl<const D: usize> CellSource<D> {
     /// Puts particles at `positions` into `grid`.
-    pub fn new(grid: CellGrid<D>, positions: impl Iterator<Item = Vector<D>>) -> Self {
+    pub fn new(grid: CellGrid<D>, positions: impl ExactSizeIterator<Item = Vector<D>>) -> Self {
         let offsets = CellGrid::<D>::neighbour_offsets();
         let far = (0..2 * D)
             .map(|m| {
@@ -42,7 +42,7 @@ impl<const D: usize> CellSource<D> {
             .collect();
         let mut s = Self {
             grid,
-            cell: Vec::new(),
+            cell: Vec::with_capacity(positions.len()),
             offsets,
             far,
             ev: Vec::new(),
@@ -166,7 +166,9 @@ impl<const D: usize> CellSource<D> {
     /// neighbours close together in memory.
     pub fn cell_order(&self) -> Vec<u32> {
         let mut order: Vec<u32> = (0..self.cell.len() as u32).collect();
-        order.sort_by_key(|&k| (self.grid.linear(&self.cell[k as usize]), k));
+        // Keys are distinct (the index breaks ties), so the unstable sort (no buffer) gives the
+        // stable order.
+        order.sort_unstable_by_key(|&k| (self.grid.linear(&self.cell[k as usize]), k));
         order
     }
 
@@ -203,8 +205,8 @@ impl<const D: usize> EventSource for CellSource<D> {
 
     /// Renumbers the particles (see [`Bodies::permute`]) and rebuilds the cell lists.
     fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
-        self.cell = permuted(&self.cell, order);
-        self.ev = permuted(&self.ev, order);
+        permute_in_place(&mut self.cell, order);
+        permute_in_place(&mut self.ev, order);
         self.grid.clear();
         for k in 0..self.cell.len() {
             let c = self.grid.linear(&self.cell[k]);

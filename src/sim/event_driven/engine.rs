@@ -40,7 +40,7 @@ use super::shear::{FORCE_AXIS, ShearField};
 use super::slabs::SlabSource;
 use super::walls::{WallSolver, WallSource};
 use crate::scene::{Boundary, Scene};
-use crate::sim::initial::initial_state;
+use crate::sim::initial::{FlatInitialState, initial_state_flat};
 
 /// Events between two renumberings of the particles in cell order (see `reorder_by_cell`).
 fn reorder_interval(n: usize) -> u64 {
@@ -80,7 +80,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
 {
     /// Builds the engine for a validated scene: initial state, cells, first predictions.
     pub fn new(scene: &Scene) -> Self {
-        Self::assemble(scene, initial_state(scene), None)
+        Self::assemble(scene, initial_state_flat(scene), None)
     }
 
     /// Rebuilds the engine from a saved state (`sim::state`): every particle at the state's
@@ -90,18 +90,17 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     /// recomputed from positions advanced to the common time, which rounds differently
     /// (`tests/observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
     pub fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
-        let d = scene.dimension;
-        let init = crate::sim::initial::InitialState {
+        let init = FlatInitialState {
             radius: state.radii.clone(),
-            position: state.positions.chunks(d).map(<[f64]>::to_vec).collect(),
-            velocity: state.velocities.chunks(d).map(<[f64]>::to_vec).collect(),
+            position: state.positions.clone(),
+            velocity: state.velocities.clone(),
         };
         Self::assemble(scene, init, Some(state))
     }
 
     fn assemble(
         scene: &Scene,
-        init: crate::sim::initial::InitialState,
+        init: FlatInitialState,
         start: Option<&crate::sim::EngineState>,
     ) -> Self {
         let t0 = start.map_or(0.0, |s| s.time);
@@ -140,22 +139,31 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             grid.neighbourhood_is_distinct(),
             "box too small for the cell grid (validation should have caught this)"
         );
-        let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
         let field = scene
             .shear_slabs()
             .map(|s| ShearField::new(&s, scene.particles.mass, scene.container.size[0]));
-        let slabs = SlabSource::new(field, init.position.iter().map(|x| x[0]));
+        let slabs = SlabSource::new(field, init.position.chunks(D).map(|x| x[0]));
+        let body: Vec<Body<D>> = (0..n)
+            .map(|i| Body {
+                x: Vector::<D>::from_column_slice(&init.position[i * D..(i + 1) * D]),
+                t: t0,
+                v: Vector::<D>::from_column_slice(&init.velocity[i * D..(i + 1) * D]),
+                r: init.radius[i],
+            })
+            .collect();
+        // The initial state is in the bodies now: free it before the other arrays are built
+        // (the peak memory of the build).
+        drop(init);
+        // Times of the last collisions feed only the TC model (`tc > 0`, MODEL.md 2.1).
+        let tc_model = scene.engine.tc > 0.0;
         let bodies = Bodies {
-            body: (0..n)
-                .map(|i| Body {
-                    x: to_vec(&init.position[i]),
-                    t: t0,
-                    v: to_vec(&init.velocity[i]),
-                    r: init.radius[i],
-                })
-                .collect(),
+            body,
             count: vec![0; n],
-            last_collision: vec![f64::NEG_INFINITY; n],
+            last_collision: if tc_model {
+                vec![f64::NEG_INFINITY; n]
+            } else {
+                Vec::new()
+            },
             accel: slabs.accelerations(),
             id: (0..n as u32).collect(),
             slot_of: (0..n as u32).collect(),
@@ -183,6 +191,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             scene.engine.tc,
             scene.engine.min_rebound_speed,
             n,
+            !periodic.iter().all(|&p| p),
         );
         let mut engine = Self {
             time: t0,
@@ -294,7 +303,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         let key = self.pairs.ev[i]
             .time
             .min(self.cells.ev[i].time)
-            .min(self.walls.ev[i].time);
+            .min(self.walls.time(i));
         if SHEAR {
             key.min(self.slabs.ev[i].time)
         } else {
@@ -469,6 +478,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.cells.permute(&order, &new_of_old);
         self.walls.permute(&order, &new_of_old);
         self.slabs.permute(&order, &new_of_old);
+        // The old queue goes before the new one is built (peak memory).
+        self.queue = Q::new(0);
         self.queue = Q::new(n);
         for k in 0..n {
             self.queue.update(k, self.queue_key(k));

@@ -14,7 +14,7 @@
 //! rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
 //! leaves it at least at the rebound floor.
 
-use super::bodies::{Bodies, Vector, vec_bytes};
+use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cell_source::CellSource;
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
 use super::ledger::{EventCounts, Ledger};
@@ -304,15 +304,15 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         bodies.bump(i);
         bodies.bump(j);
         if u < 0.0 {
-            let since = t - bodies.last_collision[i].max(bodies.last_collision[j]);
+            let since = bodies.since_last_collision(i, j, t);
             let u_out = rebound_speed(-u, self.p.eps, since, self.p.tc, self.p.min_rebound);
             // Change of the normal relative velocity, shared equally (equal masses).
             let du = u_out - u;
             bodies.body[i].v += n * (0.5 * du);
             bodies.body[j].v -= n * (0.5 * du);
             ledger.book_restitution(0.5 * bodies.mass, -u, self.p.eps, u_out);
-            bodies.last_collision[i] = t;
-            bodies.last_collision[j] = t;
+            bodies.record_collision(i, t);
+            bodies.record_collision(j, t);
         }
         counts.pair_collisions += 1;
         if WET && !self.bonded(i, j) {
@@ -378,16 +378,12 @@ impl<const D: usize, const WET: bool> EventSource for PairSource<D, WET> {
     /// back (partner indices in events and bonds are renamed).
     fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
         let n = order.len();
-        self.ev = order
-            .iter()
-            .map(|&k| {
-                let mut e = self.ev[k as usize];
-                if e.partner != NONE {
-                    e.partner = new_of_old[e.partner as usize];
-                }
-                e
-            })
-            .collect();
+        permute_in_place(&mut self.ev, order);
+        for e in &mut self.ev {
+            if e.partner != NONE {
+                e.partner = new_of_old[e.partner as usize];
+            }
+        }
         if WET {
             let mut bonds = vec![NONE; n * MAX_BONDS];
             let mut bond_len = vec![0u8; n];

@@ -6,7 +6,7 @@
 //! the neighbouring slab and changes its acceleration: a course change, after which the
 //! scheduler re-predicts every event of the particle.
 
-use super::bodies::{Bodies, permuted, vec_bytes};
+use super::bodies::{Bodies, permute_in_place, vec_bytes};
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
 use super::shear::ShearField;
 use crate::physics::flight::linear_time_to_plane;
@@ -130,8 +130,8 @@ impl EventSource for SlabSource {
     /// Renumbers the particles (see [`Bodies::permute`]).
     fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
         if self.field.is_some() {
-            self.slab = permuted(&self.slab, order);
-            self.ev = permuted(&self.ev, order);
+            permute_in_place(&mut self.slab, order);
+            permute_in_place(&mut self.ev, order);
         }
     }
 }
