@@ -11,6 +11,20 @@ use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
 
+/// A set of neighbour offsets and, for interior cells, the linear-index change of each.
+#[derive(Debug, Clone)]
+pub struct Neighbourhood<const D: usize> {
+    pub offsets: Vec<[i32; D]>,
+    pub deltas: Vec<isize>,
+}
+
+impl<const D: usize> Neighbourhood<D> {
+    fn new(grid: &CellGrid<D>, offsets: Vec<[i32; D]>) -> Self {
+        let deltas = offsets.iter().map(|o| grid.interior_delta(o)).collect();
+        Self { offsets, deltas }
+    }
+}
+
 /// The grid, each particle's cell and its next crossing.
 #[derive(Debug, Clone)]
 pub struct CellSource<const D: usize> {
@@ -18,10 +32,10 @@ pub struct CellSource<const D: usize> {
     /// Cell of each particle (per-axis indices).
     pub cell: Vec<[i32; D]>,
     /// The `3^D` neighbour offsets.
-    pub offsets: Vec<[i32; D]>,
+    pub all: Neighbourhood<D>,
     /// The far slab of the neighbourhood after a crossing along `axis` (index `2 axis + up`):
-    /// the offsets with `+-1` along `axis`, in the order of `offsets`.
-    far: Vec<Vec<[i32; D]>>,
+    /// the offsets with `+-1` along `axis`, in the order of `all`.
+    far: Vec<Neighbourhood<D>>,
     /// Next crossing of a face of the particle's cell.
     pub ev: Vec<PlaneEvent>,
 }
@@ -33,17 +47,19 @@ impl<const D: usize> CellSource<D> {
         let far = (0..2 * D)
             .map(|m| {
                 let (axis, step) = (m / 2, if m % 2 == 1 { 1 } else { -1 });
-                offsets
+                let slab = offsets
                     .iter()
                     .filter(|o| o[axis] == step)
                     .copied()
-                    .collect()
+                    .collect();
+                Neighbourhood::new(&grid, slab)
             })
             .collect();
+        let all = Neighbourhood::new(&grid, offsets);
         let mut s = Self {
             grid,
             cell: Vec::with_capacity(positions.len()),
-            offsets,
+            all,
             far,
             ev: Vec::new(),
         };
@@ -134,7 +150,7 @@ impl<const D: usize> CellSource<D> {
     /// Offsets of the far slab of the neighbourhood after a crossing along `axis` (`up`:
     /// towards larger coordinates): `+-1` along `axis`, anything across.
     #[inline]
-    pub fn far_slab(&self, axis: usize, up: bool) -> &[[i32; D]] {
+    pub fn far_slab(&self, axis: usize, up: bool) -> &Neighbourhood<D> {
         &self.far[2 * axis + usize::from(up)]
     }
 

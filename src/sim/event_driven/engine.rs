@@ -322,7 +322,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.pairs.ev[i] = super::event::PairEvent::NEVER;
         self.pairs.scan(
             i,
-            &self.cells.offsets,
+            &self.cells.all,
             &self.bodies,
             &self.cells,
             &self.slabs,
@@ -617,7 +617,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             let (xi, vi) = self.bodies.state_at(i, t);
             let now = self
                 .pairs
-                .predict_pair_from(&self.bodies, &self.slabs, &xi, &vi, i, j, t);
+                .predict_pair_from::<_, _, true>(&self.bodies, &self.slabs, &xi, &vi, i, j, t);
             match now {
                 Some((tn, kind))
                     if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3)
@@ -706,7 +706,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         let grid = &self.cells.grid;
         for i in 0..self.len() {
             let si = b.id[i];
-            for o in &self.cells.offsets {
+            for o in &self.cells.all.offsets {
                 let Some(cell) = grid.shifted(&self.cells.cell[i], o) else {
                     continue;
                 };
