@@ -35,7 +35,7 @@ use super::ledger::Ledger;
 pub use super::ledger::{EnergyLedger, EventCounts};
 pub use super::pairs::MAX_BONDS;
 use super::pairs::{PairParams, PairSource};
-use super::queue::{EventQueue, HeapQueue};
+use super::queue::{CalendarQueue, EventQueue};
 use super::shear::{FORCE_AXIS, ShearField};
 use super::slabs::SlabSource;
 use super::walls::{WallSolver, WallSource};
@@ -54,7 +54,7 @@ pub struct Engine<
     const GRAV: bool,
     const WET: bool,
     const SHEAR: bool = false,
-    Q: EventQueue = HeapQueue,
+    Q: EventQueue = CalendarQueue,
 > {
     /// Current simulation time (time of the last processed event).
     time: f64,
@@ -615,9 +615,15 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             }
             let j = pe.partner as usize;
             let (xi, vi) = self.bodies.state_at(i, t);
-            let now = self
-                .pairs
-                .predict_pair_from::<_, _, true>(&self.bodies, &self.slabs, &xi, &vi, i, j, t);
+            let now = self.pairs.predict_pair_from::<_, _, true>(
+                &self.bodies,
+                &self.slabs,
+                &xi,
+                &vi,
+                i,
+                j,
+                t,
+            );
             match now {
                 Some((tn, kind))
                     if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3)
