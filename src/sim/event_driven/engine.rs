@@ -125,6 +125,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         );
         assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
         let n = init.radius.len();
+        // Pair events pack the partner's index into 31 bits (`event::PairEvent`).
+        assert!(
+            n < (1 << 31) - 1,
+            "too many particles for the event engine: {n}"
+        );
         let mut size = [0.0; D];
         let mut periodic = [false; D];
         let boundaries = scene.boundaries();
@@ -610,10 +615,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         let t = self.time;
         for i in 0..self.len() {
             let pe = self.pairs.ev[i];
-            if pe.partner == NONE || self.bodies.count[pe.partner as usize] != pe.partner_count {
+            if pe.partner() == NONE || self.bodies.count[pe.partner() as usize] != pe.partner_count
+            {
                 continue;
             }
-            let j = pe.partner as usize;
+            let j = pe.partner() as usize;
             let (xi, vi) = self.bodies.state_at(i, t);
             let now = self.pairs.predict_pair_from::<_, _, true>(
                 &self.bodies,
@@ -627,11 +633,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             match now {
                 Some((tn, kind))
                     if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3)
-                        && kind == pe.kind => {}
+                        && kind == pe.kind() => {}
                 other => {
                     return Err(format!(
                         "particle {i}: stored {:?} with {j} at {:.17}, recomputed {other:?} at t={t}",
-                        pe.kind, pe.time
+                        pe.kind(),
+                        pe.time
                     ));
                 }
             }

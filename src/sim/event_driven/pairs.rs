@@ -156,6 +156,10 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             return self.predict_sheared_pair(bodies, slabs, &r, &v, i, j, t);
         }
         let b = r.dot(&v);
+        if !WET && b >= 0.0 {
+            // Dry and separating (or sliding): no contact ahead.
+            return None;
+        }
         let rr = r.norm_squared();
         let sigma = bodies.body[i].r + bodies.body[j].r;
         let vv = v.norm_squared();
@@ -289,12 +293,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                     self.predict_pair_from::<G, S, WRAP>(bodies, slabs, &bi.x, &bi.v, i, j, t)
                     && tj < best.time
                 {
-                    best = PairEvent {
-                        time: tj,
-                        partner: j as u32,
-                        partner_count: bodies.count[j],
-                        kind,
-                    };
+                    best = PairEvent::new(tj, j as u32, bodies.count[j], kind);
                 }
             });
         }
@@ -408,9 +407,7 @@ impl<const D: usize, const WET: bool> EventSource for PairSource<D, WET> {
         let n = order.len();
         permute_in_place(&mut self.ev, order);
         for e in &mut self.ev {
-            if e.partner != NONE {
-                e.partner = new_of_old[e.partner as usize];
-            }
+            e.rename_partner(new_of_old);
         }
         if WET {
             let mut bonds = vec![NONE; n * MAX_BONDS];
