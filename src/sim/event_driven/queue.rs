@@ -315,11 +315,19 @@ impl EventQueue for CalendarQueue {
                 let mut k = self.head[list];
                 let mut best = END;
                 let mut best_t = f64::INFINITY;
+                // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
+                // i.e. iff `t / w < cur + 1` before truncation: one product and one compare,
+                // exact while `cur + 1` is an integer an f64 holds exactly.
+                let exact = self.cur < (1 << 52);
+                let end = (self.cur + 1) as f64;
                 while k != END {
                     let t = self.key[k as usize];
-                    if self.bucket(t) == self.cur
-                        && (best == END || t < best_t || (t == best_t && k < best))
-                    {
+                    let due = if exact {
+                        t * self.inv_width < end
+                    } else {
+                        self.bucket(t) == self.cur
+                    };
+                    if due && (best == END || t < best_t || (t == best_t && k < best)) {
                         best = k;
                         best_t = t;
                     }
