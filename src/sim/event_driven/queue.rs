@@ -338,9 +338,11 @@ impl EventQueue for CalendarQueue {
                 }
                 self.cur = self.cur.saturating_add(1);
             }
-            // A year without a due entry: jump to the smallest key's bucket.
+            // A year without a due entry: jump to the smallest key's bucket (without the jump
+            // the walk would take `(gap / w)` steps), and re-estimate the width at the next pop.
             let lo = self.key.iter().copied().fold(f64::INFINITY, f64::min);
             self.cur = self.bucket(lo);
+            self.until_retune = 1;
         }
     }
 
@@ -457,5 +459,29 @@ mod tests {
         q.update(2, 5.0);
         assert_eq!(q.min(), Some((2, 5.0)));
         assert_eq!(CalendarQueue::new(0).min(), None);
+    }
+
+    #[test]
+    fn calendar_jumps_over_a_long_gap_instead_of_walking_it() {
+        // Width 0.1 from keys 0.1..0.4, then every key moved 10^15 ahead: 10^16 empty buckets to
+        // walk without the jump (the thread would not finish), one year of 4 lists with it.
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut q = CalendarQueue::new(4);
+            for i in 0..4 {
+                q.update(i, 0.1 * (i + 1) as f64);
+            }
+            assert_eq!(q.min(), Some((0, 0.1)));
+            for i in (0..4).rev() {
+                q.update(i, 1e15 + i as f64);
+            }
+            let first = q.min();
+            q.update(0, f64::INFINITY);
+            let _ = done.send((first, q.min()));
+        });
+        let got = finished
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .expect("the calendar queue walked the gap bucket by bucket");
+        assert_eq!(got, (Some((0, 1e15)), Some((1, 1e15 + 1.0))));
     }
 }
