@@ -14,7 +14,7 @@ mod common;
 use common::scene;
 use wetgran::scene::Scene;
 use wetgran::sim::event_driven::Engine;
-use wetgran::sim::event_driven::queue::{EventQueue, HeapQueue, NaiveQueue};
+use wetgran::sim::event_driven::queue::{CalendarQueue, EventQueue, HeapQueue, NaiveQueue};
 
 /// FNV-1a over 64-bit words.
 struct Digest(u64);
@@ -118,17 +118,23 @@ fn run_on<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQ
     digest(&e)
 }
 
-/// The digest on the default heap queue, after checking that the same engine on the naive
-/// reference queue ([`NaiveQueue`], a linear scan) produced the same trajectory bit for bit.
+/// The digest on the heap queue, after checking that the same engine on the naive reference
+/// queue ([`NaiveQueue`], a linear scan) and on the default [`CalendarQueue`] produced the same
+/// trajectory bit for bit.
 fn pinned_run<const D: usize, const G: bool, const W: bool, const S: bool>(
     s: &Scene,
     events: u64,
 ) -> u64 {
     let heap = run_on::<D, G, W, S, HeapQueue>(s, events);
     let naive = run_on::<D, G, W, S, NaiveQueue>(s, events);
+    let calendar = run_on::<D, G, W, S, CalendarQueue>(s, events);
     assert_eq!(
         heap, naive,
         "the engine on the heap queue and on the naive queue took different trajectories"
+    );
+    assert_eq!(
+        calendar, naive,
+        "the engine on the calendar queue and on the naive queue took different trajectories"
     );
     heap
 }

@@ -17,7 +17,11 @@
 //!   `sigma_p = 0.06`, thin-thread bridges, particle restitution 0.9, wall restitution 1,
 //!   `T_g / E_cb = 20`;
 //! - (c') the same system dry (no bridges) at the same absolute temperature.
+//!
+//! `wetgran bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
+//! particle, with the breakdown by array.
 
+pub mod memory;
 pub mod shake;
 pub mod slab;
 pub mod tdmd;
@@ -72,6 +76,18 @@ pub fn run_with_svg(
         );
         return Ok(());
     }
+    if which == "memory" {
+        print!("{}", memory::report(&memory::measure(scale)?));
+        return Ok(());
+    }
+    if let Some(n) = which.strip_prefix("memory:") {
+        // The child process of `memory` (one size).
+        let n: usize = n
+            .parse()
+            .map_err(|_| format!("`{which}`: expected memory:N with a particle count N"))?;
+        print!("{}", memory::child_text(&memory::measure_here(n)?));
+        return Ok(());
+    }
     if which == "shake" {
         print!("{}", shake::report(&shake::measure(40, scale)));
         return Ok(());
@@ -81,7 +97,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd` or `slab`"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab` or `memory`"
             ));
         }
     };
@@ -183,7 +199,12 @@ impl Row {
 
 // ----- the reference systems -------------------------------------------------------------
 
-fn base_scene(dimension: usize, gravity: f64, size: Vec<f64>, boundary: Vec<Boundary>) -> Scene {
+pub(crate) fn base_scene(
+    dimension: usize,
+    gravity: f64,
+    size: Vec<f64>,
+    boundary: Vec<Boundary>,
+) -> Scene {
     Scene {
         dimension,
         gravity,

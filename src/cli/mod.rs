@@ -40,7 +40,8 @@ pub enum Command {
         /// performance doc), `wall` (error and cost of the shaken-wall solvers), `shake` (the
         /// shaken standard wet system with each wall solver), `tdmd` (the time-driven engine on
         /// the dry shaken 2D system of issue 6; `scale` = simulated time units timed), `slab`
-        /// (E_par and cost of the shear drive against the slab width).
+        /// (E_par and cost of the shear drive against the slab width), `memory` (peak resident
+        /// memory of the event engine per particle at N = 125 000 and 10^6; `scale` scales N).
         #[arg(default_value = "engine")]
         which: String,
         /// Repetitions per system (the median is reported).

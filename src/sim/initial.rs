@@ -18,12 +18,24 @@ pub struct InitialState {
     pub velocity: Vec<Vec<f64>>,
 }
 
-/// Builds the initial state of a validated scene.
-pub fn initial_state(scene: &Scene) -> InitialState {
+/// Particle radii, positions and velocities, each flattened into one array (`dim` numbers per
+/// particle in `position` and `velocity`): what the event engine builds from, without a heap
+/// allocation per particle (`wetgran bench memory`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlatInitialState {
+    pub radius: Vec<f64>,
+    pub position: Vec<f64>,
+    pub velocity: Vec<f64>,
+}
+
+/// Builds the initial state of a validated scene, flattened.
+pub fn initial_state_flat(scene: &Scene) -> FlatInitialState {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.initial.seed);
     let p = &scene.particles;
     let dim = scene.dimension;
     let diameters = draw_diameters(&mut rng, p.count, p.diameter, p.polydispersity);
+    let radius: Vec<f64> = diameters.iter().map(|d| 0.5 * d).collect();
+    drop(diameters);
     let (_, d_max) = scene.diameter_range();
     let min_spacing = scene.initial.lattice_spacing * d_max;
     let size = &scene.container.size;
@@ -33,22 +45,24 @@ pub fn initial_state(scene: &Scene) -> InitialState {
     } else {
         lattice::uniform_spacing(size, min_spacing, p.count)
     };
-    let position = lattice::site_positions(size, spacing, p.count, from_floor);
+    let position = lattice::site_positions(size, spacing, p.count, from_floor).concat();
 
     let temperature = scene.initial_temperature();
-    let mut velocity: Vec<Vec<f64>> = (0..p.count)
-        .map(|_| (0..dim).map(|_| StandardNormal.sample(&mut rng)).collect())
-        .collect();
+    // Drawn particle by particle, axis by axis.
+    let mut velocity: Vec<f64> = Vec::with_capacity(p.count * dim);
+    for _ in 0..p.count * dim {
+        velocity.push(StandardNormal.sample(&mut rng));
+    }
     // Zero total momentum, then rescale to T_g = m (<v^2> - <v>^2) / f_d exactly (Eq. 3.2).
     let n = p.count as f64;
     let mut mean = vec![0.0; dim];
-    for v in &velocity {
+    for v in velocity.chunks(dim) {
         for k in 0..dim {
             mean[k] += v[k] / n;
         }
     }
     let mut sum_sq = 0.0;
-    for v in &mut velocity {
+    for v in velocity.chunks_mut(dim) {
         for k in 0..dim {
             v[k] -= mean[k];
             sum_sq += v[k] * v[k];
@@ -60,15 +74,25 @@ pub fn initial_state(scene: &Scene) -> InitialState {
     } else {
         0.0
     };
-    for v in &mut velocity {
-        for x in v.iter_mut() {
-            *x *= scale;
-        }
+    for x in velocity.iter_mut() {
+        *x *= scale;
     }
-    InitialState {
-        radius: diameters.iter().map(|d| 0.5 * d).collect(),
+    FlatInitialState {
+        radius,
         position,
         velocity,
+    }
+}
+
+/// Builds the initial state of a validated scene (the numbers of [`initial_state_flat`], one
+/// vector per particle).
+pub fn initial_state(scene: &Scene) -> InitialState {
+    let dim = scene.dimension;
+    let flat = initial_state_flat(scene);
+    InitialState {
+        radius: flat.radius,
+        position: flat.position.chunks(dim).map(<[f64]>::to_vec).collect(),
+        velocity: flat.velocity.chunks(dim).map(<[f64]>::to_vec).collect(),
     }
 }
 

@@ -34,7 +34,7 @@ pub struct Bodies<const D: usize, const GRAV: bool, const SHEAR: bool> {
     pub body: Vec<Body<D>>,
     /// Velocity changes of each particle (lazy invalidation of pair events).
     pub count: Vec<u32>,
-    /// Time of each particle's last collision (TC model).
+    /// Time of each particle's last collision (TC model; empty when `tc = 0`).
     pub last_collision: Vec<f64>,
     /// Shear drive: acceleration along `y` in the particle's slab (empty otherwise).
     pub accel: Vec<f64>,
@@ -51,9 +51,37 @@ pub struct Bodies<const D: usize, const GRAV: bool, const SHEAR: bool> {
     pub field_work: f64,
 }
 
-/// `v` reordered so that entry `k` is `v[order[k]]`.
-pub fn permuted<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
-    order.iter().map(|&k| v[k as usize]).collect()
+/// Bytes a vector holds on the heap (its capacity, not its length).
+pub fn vec_bytes<T>(v: &Vec<T>) -> usize {
+    v.capacity() * std::mem::size_of::<T>()
+}
+
+/// Reorders `v` in place so that entry `k` becomes the old `v[order[k]]`, cycle by cycle of the
+/// permutation (one byte of marks per entry instead of a second copy of `v`: the renumbering
+/// adds no array of the engine's size to its peak memory). An empty `v` stays empty.
+pub fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
+    if v.is_empty() {
+        return;
+    }
+    assert_eq!(v.len(), order.len(), "permutation of another length");
+    let mut done = vec![false; v.len()];
+    for start in 0..v.len() {
+        if done[start] {
+            continue;
+        }
+        let first = v[start];
+        let mut k = start;
+        loop {
+            done[k] = true;
+            let src = order[k] as usize;
+            if src == start {
+                v[k] = first;
+                break;
+            }
+            v[k] = v[src];
+            k = src;
+        }
+    }
 }
 
 impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR> {
@@ -66,6 +94,26 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
     /// Whether there is no particle.
     pub fn is_empty(&self) -> bool {
         self.body.is_empty()
+    }
+
+    /// Time since the later of the last collisions of `i` and `j` at time `t` (TC model; pass
+    /// `j = i` for one particle); `+inf` when the engine keeps no collision times (`tc = 0`, where
+    /// `rebound_speed` never looks at it: `since < 0` cannot hold).
+    #[inline]
+    pub fn since_last_collision(&self, i: usize, j: usize, t: f64) -> f64 {
+        if self.last_collision.is_empty() {
+            f64::INFINITY
+        } else {
+            t - self.last_collision[i].max(self.last_collision[j])
+        }
+    }
+
+    /// Records a collision of `i` at time `t` (TC model; nothing without it).
+    #[inline]
+    pub fn record_collision(&mut self, i: usize, t: f64) {
+        if let Some(last) = self.last_collision.get_mut(i) {
+            *last = t;
+        }
     }
 
     /// Records a velocity change of `i` (invalidates pair events predicted with its old course).
@@ -183,17 +231,46 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
         }
     }
 
+    /// Heap bytes of each per-particle array (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("bodies.body (x, t, v, r)", vec_bytes(&self.body)),
+            ("bodies.count", vec_bytes(&self.count)),
+            ("bodies.last_collision", vec_bytes(&self.last_collision)),
+            ("bodies.accel", vec_bytes(&self.accel)),
+            ("bodies.id", vec_bytes(&self.id)),
+            ("bodies.slot_of", vec_bytes(&self.slot_of)),
+        ]
+    }
+
     /// Renumbers the particles: new index `k` holds old particle `order[k]`.
     pub fn permute(&mut self, order: &[u32]) {
-        self.body = permuted(&self.body, order);
-        self.count = permuted(&self.count, order);
-        self.last_collision = permuted(&self.last_collision, order);
-        if SHEAR {
-            self.accel = permuted(&self.accel, order);
-        }
-        self.id = permuted(&self.id, order);
+        permute_in_place(&mut self.body, order);
+        permute_in_place(&mut self.count, order);
+        permute_in_place(&mut self.last_collision, order);
+        permute_in_place(&mut self.accel, order);
+        permute_in_place(&mut self.id, order);
         for (new, &orig) in self.id.iter().enumerate() {
             self.slot_of[orig as usize] = new as u32;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::permute_in_place;
+
+    #[test]
+    fn permuting_in_place_matches_a_copy() {
+        // A permutation with a fixed point, a 2-cycle and a 4-cycle.
+        let order = [3u32, 0, 2, 5, 6, 1, 4];
+        let old: Vec<u64> = (0..7).map(|k| 100 + k).collect();
+        let copy: Vec<u64> = order.iter().map(|&k| old[k as usize]).collect();
+        let mut v = old.clone();
+        permute_in_place(&mut v, &order);
+        assert_eq!(v, copy);
+        let mut empty: Vec<u64> = Vec::new();
+        permute_in_place(&mut empty, &order);
+        assert!(empty.is_empty());
     }
 }

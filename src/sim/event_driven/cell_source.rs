@@ -7,9 +7,23 @@
 //! neighbouring cell and returns the offsets of the newly adjacent slab of cells, the only cells
 //! whose partners the pair source must scan (the pair event is kept).
 
-use super::bodies::{Bodies, Vector, permuted};
+use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
+
+/// A set of neighbour offsets and, for interior cells, the linear-index change of each.
+#[derive(Debug, Clone)]
+pub struct Neighbourhood<const D: usize> {
+    pub offsets: Vec<[i32; D]>,
+    pub deltas: Vec<isize>,
+}
+
+impl<const D: usize> Neighbourhood<D> {
+    fn new(grid: &CellGrid<D>, offsets: Vec<[i32; D]>) -> Self {
+        let deltas = offsets.iter().map(|o| grid.interior_delta(o)).collect();
+        Self { offsets, deltas }
+    }
+}
 
 /// The grid, each particle's cell and its next crossing.
 #[derive(Debug, Clone)]
@@ -18,32 +32,34 @@ pub struct CellSource<const D: usize> {
     /// Cell of each particle (per-axis indices).
     pub cell: Vec<[i32; D]>,
     /// The `3^D` neighbour offsets.
-    pub offsets: Vec<[i32; D]>,
+    pub all: Neighbourhood<D>,
     /// The far slab of the neighbourhood after a crossing along `axis` (index `2 axis + up`):
-    /// the offsets with `+-1` along `axis`, in the order of `offsets`.
-    far: Vec<Vec<[i32; D]>>,
+    /// the offsets with `+-1` along `axis`, in the order of `all`.
+    far: Vec<Neighbourhood<D>>,
     /// Next crossing of a face of the particle's cell.
     pub ev: Vec<PlaneEvent>,
 }
 
 impl<const D: usize> CellSource<D> {
     /// Puts particles at `positions` into `grid`.
-    pub fn new(grid: CellGrid<D>, positions: impl Iterator<Item = Vector<D>>) -> Self {
+    pub fn new(grid: CellGrid<D>, positions: impl ExactSizeIterator<Item = Vector<D>>) -> Self {
         let offsets = CellGrid::<D>::neighbour_offsets();
         let far = (0..2 * D)
             .map(|m| {
                 let (axis, step) = (m / 2, if m % 2 == 1 { 1 } else { -1 });
-                offsets
+                let slab = offsets
                     .iter()
                     .filter(|o| o[axis] == step)
                     .copied()
-                    .collect()
+                    .collect();
+                Neighbourhood::new(&grid, slab)
             })
             .collect();
+        let all = Neighbourhood::new(&grid, offsets);
         let mut s = Self {
             grid,
-            cell: Vec::new(),
-            offsets,
+            cell: Vec::with_capacity(positions.len()),
+            all,
             far,
             ev: Vec::new(),
         };
@@ -56,6 +72,14 @@ impl<const D: usize> CellSource<D> {
         }
         s.ev = vec![PlaneEvent::NEVER; s.cell.len()];
         s
+    }
+
+    /// Heap bytes of the grid and the per-particle arrays (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        let mut out = self.grid.memory();
+        out.push(("cells.cell", vec_bytes(&self.cell)));
+        out.push(("cells.ev", vec_bytes(&self.ev)));
+        out
     }
 
     /// Predicts the next crossing of a face of `i`'s cell (particle at time `now`).
@@ -126,7 +150,7 @@ impl<const D: usize> CellSource<D> {
     /// Offsets of the far slab of the neighbourhood after a crossing along `axis` (`up`:
     /// towards larger coordinates): `+-1` along `axis`, anything across.
     #[inline]
-    pub fn far_slab(&self, axis: usize, up: bool) -> &[[i32; D]] {
+    pub fn far_slab(&self, axis: usize, up: bool) -> &Neighbourhood<D> {
         &self.far[2 * axis + usize::from(up)]
     }
 
@@ -158,7 +182,9 @@ impl<const D: usize> CellSource<D> {
     /// neighbours close together in memory.
     pub fn cell_order(&self) -> Vec<u32> {
         let mut order: Vec<u32> = (0..self.cell.len() as u32).collect();
-        order.sort_by_key(|&k| (self.grid.linear(&self.cell[k as usize]), k));
+        // Keys are distinct (the index breaks ties), so the unstable sort (no buffer) gives the
+        // stable order.
+        order.sort_unstable_by_key(|&k| (self.grid.linear(&self.cell[k as usize]), k));
         order
     }
 
@@ -195,8 +221,8 @@ impl<const D: usize> EventSource for CellSource<D> {
 
     /// Renumbers the particles (see [`Bodies::permute`]) and rebuilds the cell lists.
     fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
-        self.cell = permuted(&self.cell, order);
-        self.ev = permuted(&self.ev, order);
+        permute_in_place(&mut self.cell, order);
+        permute_in_place(&mut self.ev, order);
         self.grid.clear();
         for k in 0..self.cell.len() {
             let c = self.grid.linear(&self.cell[k]);

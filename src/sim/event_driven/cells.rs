@@ -13,6 +13,11 @@ pub struct CellGrid<const D: usize> {
     pub width: [f64; D],
     /// Whether each axis wraps around.
     pub periodic: [bool; D],
+    /// Whether every periodic axis has at least five cells: then two particles in the
+    /// neighbourhood of an interior cell (one found without wrapping) are less than `2.5` cells
+    /// apart along a periodic axis of at least 5 cells, i.e. less than half the box, so their
+    /// separation needs no minimum image (it would change nothing).
+    pub interior_needs_no_image: bool,
     head: Vec<u32>,
     next: Vec<u32>,
     prev: Vec<u32>,
@@ -32,10 +37,21 @@ impl<const D: usize> CellGrid<D> {
             n,
             width,
             periodic,
+            interior_needs_no_image: (0..D).all(|k| !periodic[k] || n[k] >= 5),
             head: vec![NONE; total],
             next: vec![NONE; particles],
             prev: vec![NONE; particles],
         }
+    }
+
+    /// Heap bytes of the cell heads and the per-particle links (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        use super::bodies::vec_bytes;
+        vec![
+            ("cells.grid.head (per cell)", vec_bytes(&self.head)),
+            ("cells.grid.next", vec_bytes(&self.next)),
+            ("cells.grid.prev", vec_bytes(&self.prev)),
+        ]
     }
 
     /// The cell containing coordinate `x` (clamped into the grid).
@@ -84,13 +100,57 @@ impl<const D: usize> CellGrid<D> {
     /// Linear index of the cell at `offset` from the interior cell with linear index `base`.
     #[inline]
     pub fn interior_neighbour(&self, base: usize, offset: &[i32; D]) -> usize {
+        (base as isize + self.interior_delta(offset)) as usize
+    }
+
+    /// The change of the linear index from an interior cell to its neighbour at `offset` (the
+    /// same for every interior cell: precomputed per offset for the neighbour scans).
+    pub fn interior_delta(&self, offset: &[i32; D]) -> isize {
         let mut delta = 0isize;
         let mut stride = 1isize;
         for k in 0..D {
             delta += offset[k] as isize * stride;
             stride *= self.n[k] as isize;
         }
-        (base as isize + delta) as usize
+        delta
+    }
+
+    /// Per axis `k` and step `s` in `-1, 0, 1`: the part `stride_k * wrap(c_k + s)` of the linear
+    /// index of a neighbour of cell `c`, or `usize::MAX` past a wall. The linear index of
+    /// `c + o` is the sum of the parts `o_k` picks ([`Self::shifted`] without its per-offset
+    /// division; the boundary cells' neighbour scans use it).
+    #[inline]
+    pub fn axis_parts(&self, c: &[i32; D]) -> [[usize; 3]; D] {
+        let mut parts = [[usize::MAX; 3]; D];
+        let mut stride = 1usize;
+        for k in 0..D {
+            for s in 0..3 {
+                let mut v = c[k] + s as i32 - 1;
+                if v < 0 || v >= self.n[k] {
+                    if !self.periodic[k] {
+                        continue;
+                    }
+                    v = v.rem_euclid(self.n[k]);
+                }
+                parts[k][s] = v as usize * stride;
+            }
+            stride *= self.n[k] as usize;
+        }
+        parts
+    }
+
+    /// Linear index of `c + offset` from [`Self::axis_parts`] of `c`; `None` past a wall.
+    #[inline]
+    pub fn from_parts(parts: &[[usize; 3]; D], offset: &[i32; D]) -> Option<usize> {
+        let mut idx = 0usize;
+        for k in 0..D {
+            let p = parts[k][(offset[k] + 1) as usize];
+            if p == usize::MAX {
+                return None;
+            }
+            idx += p;
+        }
+        Some(idx)
     }
 
     /// Empties every cell list (before re-inserting all particles under new indices).
@@ -192,6 +252,13 @@ mod tests {
                 Some(g3.interior_neighbour(g3.linear(&c), &o)),
                 g3.shifted(&c, &o)
             );
+        }
+        // The per-axis parts give the wrap-aware lookup at every cell, edges included.
+        for c in [[0, 0, 0], [9, 9, 9], [0, 5, 9], [4, 1, 8], [9, 0, 0]] {
+            let parts = g3.axis_parts(&c);
+            for o in CellGrid::<3>::neighbour_offsets() {
+                assert_eq!(CellGrid::<3>::from_parts(&parts, &o), g3.shifted(&c, &o));
+            }
         }
     }
 }

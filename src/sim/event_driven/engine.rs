@@ -35,12 +35,12 @@ use super::ledger::Ledger;
 pub use super::ledger::{EnergyLedger, EventCounts};
 pub use super::pairs::MAX_BONDS;
 use super::pairs::{PairParams, PairSource};
-use super::queue::{EventQueue, HeapQueue};
+use super::queue::{CalendarQueue, EventQueue};
 use super::shear::{FORCE_AXIS, ShearField};
 use super::slabs::SlabSource;
 use super::walls::{WallSolver, WallSource};
 use crate::scene::{Boundary, Scene};
-use crate::sim::initial::initial_state;
+use crate::sim::initial::{FlatInitialState, initial_state_flat};
 
 /// Events between two renumberings of the particles in cell order (see `reorder_by_cell`).
 fn reorder_interval(n: usize) -> u64 {
@@ -54,7 +54,7 @@ pub struct Engine<
     const GRAV: bool,
     const WET: bool,
     const SHEAR: bool = false,
-    Q: EventQueue = HeapQueue,
+    Q: EventQueue = CalendarQueue,
 > {
     /// Current simulation time (time of the last processed event).
     time: f64,
@@ -80,7 +80,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
 {
     /// Builds the engine for a validated scene: initial state, cells, first predictions.
     pub fn new(scene: &Scene) -> Self {
-        Self::assemble(scene, initial_state(scene), None)
+        Self::assemble(scene, initial_state_flat(scene), None)
     }
 
     /// Rebuilds the engine from a saved state (`sim::state`): every particle at the state's
@@ -90,18 +90,17 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     /// recomputed from positions advanced to the common time, which rounds differently
     /// (`tests/observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
     pub fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
-        let d = scene.dimension;
-        let init = crate::sim::initial::InitialState {
+        let init = FlatInitialState {
             radius: state.radii.clone(),
-            position: state.positions.chunks(d).map(<[f64]>::to_vec).collect(),
-            velocity: state.velocities.chunks(d).map(<[f64]>::to_vec).collect(),
+            position: state.positions.clone(),
+            velocity: state.velocities.clone(),
         };
         Self::assemble(scene, init, Some(state))
     }
 
     fn assemble(
         scene: &Scene,
-        init: crate::sim::initial::InitialState,
+        init: FlatInitialState,
         start: Option<&crate::sim::EngineState>,
     ) -> Self {
         let t0 = start.map_or(0.0, |s| s.time);
@@ -126,6 +125,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         );
         assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
         let n = init.radius.len();
+        // Pair events pack the partner's index into 31 bits (`event::PairEvent`).
+        assert!(
+            n < (1 << 31) - 1,
+            "too many particles for the event engine: {n}"
+        );
         let mut size = [0.0; D];
         let mut periodic = [false; D];
         let boundaries = scene.boundaries();
@@ -140,22 +144,31 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             grid.neighbourhood_is_distinct(),
             "box too small for the cell grid (validation should have caught this)"
         );
-        let to_vec = |v: &Vec<f64>| Vector::<D>::from_iterator(v.iter().copied());
         let field = scene
             .shear_slabs()
             .map(|s| ShearField::new(&s, scene.particles.mass, scene.container.size[0]));
-        let slabs = SlabSource::new(field, init.position.iter().map(|x| x[0]));
+        let slabs = SlabSource::new(field, init.position.chunks(D).map(|x| x[0]));
+        let body: Vec<Body<D>> = (0..n)
+            .map(|i| Body {
+                x: Vector::<D>::from_column_slice(&init.position[i * D..(i + 1) * D]),
+                t: t0,
+                v: Vector::<D>::from_column_slice(&init.velocity[i * D..(i + 1) * D]),
+                r: init.radius[i],
+            })
+            .collect();
+        // The initial state is in the bodies now: free it before the other arrays are built
+        // (the peak memory of the build).
+        drop(init);
+        // Times of the last collisions feed only the TC model (`tc > 0`, MODEL.md 2.1).
+        let tc_model = scene.engine.tc > 0.0;
         let bodies = Bodies {
-            body: (0..n)
-                .map(|i| Body {
-                    x: to_vec(&init.position[i]),
-                    t: t0,
-                    v: to_vec(&init.velocity[i]),
-                    r: init.radius[i],
-                })
-                .collect(),
+            body,
             count: vec![0; n],
-            last_collision: vec![f64::NEG_INFINITY; n],
+            last_collision: if tc_model {
+                vec![f64::NEG_INFINITY; n]
+            } else {
+                Vec::new()
+            },
             accel: slabs.accelerations(),
             id: (0..n as u32).collect(),
             slot_of: (0..n as u32).collect(),
@@ -183,6 +196,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             scene.engine.tc,
             scene.engine.min_rebound_speed,
             n,
+            !periodic.iter().all(|&p| p),
         );
         let mut engine = Self {
             time: t0,
@@ -294,7 +308,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         let key = self.pairs.ev[i]
             .time
             .min(self.cells.ev[i].time)
-            .min(self.walls.ev[i].time);
+            .min(self.walls.time(i));
         if SHEAR {
             key.min(self.slabs.ev[i].time)
         } else {
@@ -313,7 +327,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.pairs.ev[i] = super::event::PairEvent::NEVER;
         self.pairs.scan(
             i,
-            &self.cells.offsets,
+            &self.cells.all,
             &self.bodies,
             &self.cells,
             &self.slabs,
@@ -469,6 +483,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.cells.permute(&order, &new_of_old);
         self.walls.permute(&order, &new_of_old);
         self.slabs.permute(&order, &new_of_old);
+        // The old queue goes before the new one is built (peak memory).
+        self.queue = Q::new(0);
         self.queue = Q::new(n);
         for k in 0..n {
             self.queue.update(k, self.queue_key(k));
@@ -599,27 +615,48 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         let t = self.time;
         for i in 0..self.len() {
             let pe = self.pairs.ev[i];
-            if pe.partner == NONE || self.bodies.count[pe.partner as usize] != pe.partner_count {
+            if pe.partner() == NONE || self.bodies.count[pe.partner() as usize] != pe.partner_count
+            {
                 continue;
             }
-            let j = pe.partner as usize;
+            let j = pe.partner() as usize;
             let (xi, vi) = self.bodies.state_at(i, t);
-            let now = self
-                .pairs
-                .predict_pair_from(&self.bodies, &self.slabs, &xi, &vi, i, j, t);
+            let now = self.pairs.predict_pair_from::<_, _, true>(
+                &self.bodies,
+                &self.slabs,
+                &xi,
+                &vi,
+                i,
+                j,
+                t,
+            );
             match now {
                 Some((tn, kind))
                     if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3)
-                        && kind == pe.kind => {}
+                        && kind == pe.kind() => {}
                 other => {
                     return Err(format!(
                         "particle {i}: stored {:?} with {j} at {:.17}, recomputed {other:?} at t={t}",
-                        pe.kind, pe.time
+                        pe.kind(),
+                        pe.time
                     ));
                 }
             }
         }
         Ok(())
+    }
+
+    /// Heap bytes of every per-particle (and per-cell) array of the engine, by structure, each
+    /// from its capacity and element size (`wetgran bench memory`). The wall tables of the
+    /// `table` solver are shared through the table cache and not counted.
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        let mut out = self.bodies.memory();
+        out.extend(self.pairs.memory());
+        out.extend(self.cells.memory());
+        out.extend(self.walls.memory());
+        out.extend(self.slabs.memory());
+        out.extend(self.queue.memory());
+        out
     }
 
     // ----- invariants --------------------------------------------------------------------
@@ -682,7 +719,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         let grid = &self.cells.grid;
         for i in 0..self.len() {
             let si = b.id[i];
-            for o in &self.cells.offsets {
+            for o in &self.cells.all.offsets {
                 let Some(cell) = grid.shifted(&self.cells.cell[i], o) else {
                     continue;
                 };

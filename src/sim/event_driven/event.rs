@@ -67,29 +67,73 @@ pub enum PairKind {
     Well,
 }
 
-/// A particle's earliest pair event, as the pair source stores it.
+/// Bit of [`PairEvent`]'s packed partner field that marks a well event.
+const WELL_BIT: u32 = 1 << 31;
+
+/// A particle's earliest pair event, as the pair source stores it: 16 bytes (time, partner
+/// index with the kind in its top bit, the partner's velocity-change count), four to a cache
+/// line. Particle indices stay below `2^31 - 1` (checked when the engine is built).
 #[derive(Debug, Clone, Copy)]
 pub struct PairEvent {
     pub time: f64,
-    pub partner: u32,
+    /// Partner index, `WELL_BIT` set for a well event; `NONE` for no partner.
+    partner_kind: u32,
     pub partner_count: u32,
-    pub kind: PairKind,
 }
 
 impl PairEvent {
     pub const NEVER: PairEvent = PairEvent {
         time: f64::INFINITY,
-        partner: NONE,
+        partner_kind: NONE,
         partner_count: 0,
-        kind: PairKind::Collide,
     };
+
+    /// The event with `partner` (index below `2^31 - 1`) at `time`.
+    #[inline]
+    pub fn new(time: f64, partner: u32, partner_count: u32, kind: PairKind) -> Self {
+        debug_assert!(partner < WELL_BIT - 1);
+        let well = if kind == PairKind::Well { WELL_BIT } else { 0 };
+        PairEvent {
+            time,
+            partner_kind: partner | well,
+            partner_count,
+        }
+    }
+
+    /// The partner's index (`NONE`: no partner).
+    #[inline]
+    pub fn partner(&self) -> u32 {
+        if self.partner_kind == NONE {
+            NONE
+        } else {
+            self.partner_kind & !WELL_BIT
+        }
+    }
+
+    #[inline]
+    pub fn kind(&self) -> PairKind {
+        if self.partner_kind != NONE && self.partner_kind & WELL_BIT != 0 {
+            PairKind::Well
+        } else {
+            PairKind::Collide
+        }
+    }
+
+    /// Renames the partner (renumbering: `new_of_old[old] = new`).
+    #[inline]
+    pub fn rename_partner(&mut self, new_of_old: &[u32]) {
+        if self.partner_kind != NONE {
+            let well = self.partner_kind & WELL_BIT;
+            self.partner_kind = new_of_old[self.partner() as usize] | well;
+        }
+    }
 
     #[inline]
     pub fn event(&self) -> Event {
-        let (partner, partner_count) = (self.partner, self.partner_count);
+        let (partner, partner_count) = (self.partner(), self.partner_count);
         Event {
             time: self.time,
-            kind: match self.kind {
+            kind: match self.kind() {
                 PairKind::Collide => EventKind::Collide {
                     partner,
                     partner_count,
@@ -135,6 +179,32 @@ impl PlaneEvent {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_pair_event_packs_partner_and_kind() {
+        assert_eq!(std::mem::size_of::<PairEvent>(), 16);
+        let mut w = PairEvent::new(2.0, 7, 3, PairKind::Well);
+        assert_eq!(
+            (w.partner(), w.kind(), w.partner_count),
+            (7, PairKind::Well, 3)
+        );
+        let c = PairEvent::new(1.0, (1 << 31) - 2, 0, PairKind::Collide);
+        assert_eq!((c.partner(), c.kind()), ((1 << 31) - 2, PairKind::Collide));
+        assert_eq!(
+            (PairEvent::NEVER.partner(), PairEvent::NEVER.kind()),
+            (NONE, PairKind::Collide)
+        );
+        let new_of_old: Vec<u32> = (0..8).rev().collect();
+        w.rename_partner(&new_of_old);
+        assert_eq!((w.partner(), w.kind()), (0, PairKind::Well));
+        assert_eq!(
+            w.event().kind,
+            EventKind::Well {
+                partner: 0,
+                partner_count: 3
+            }
+        );
+    }
 
     #[test]
     fn the_event_is_small_and_ties_go_to_the_first_candidate() {

@@ -14,8 +14,9 @@
 //! rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
 //! leaves it at least at the rebound floor.
 
-use super::bodies::{Bodies, Vector};
-use super::cell_source::CellSource;
+use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
+use super::cell_source::{CellSource, Neighbourhood};
+use super::cells::CellGrid;
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
 use super::ledger::{EventCounts, Ledger};
 use super::shear::pair_times;
@@ -60,6 +61,15 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             },
             bond_len: if WET { vec![0; n] } else { Vec::new() },
         }
+    }
+
+    /// Heap bytes of each per-particle array (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("pairs.ev", vec_bytes(&self.ev)),
+            ("pairs.bonds", vec_bytes(&self.bonds)),
+            ("pairs.bond_len", vec_bytes(&self.bond_len)),
+        ]
     }
 
     // ----- bonds -------------------------------------------------------------------------
@@ -119,10 +129,12 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     // ----- prediction --------------------------------------------------------------------
 
-    /// Earliest pair event of `i`, with state `(xi, vi)` at time `t`, with `j`.
+    /// Earliest pair event of `i`, with state `(xi, vi)` at time `t`, with `j`. `WRAP`: take
+    /// the minimum image of the separation (`false` only where it cannot change it, see
+    /// [`CellGrid::interior_needs_no_image`]).
     #[inline]
     #[allow(clippy::too_many_arguments)]
-    pub fn predict_pair_from<const G: bool, const S: bool>(
+    pub fn predict_pair_from<const G: bool, const S: bool, const WRAP: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
         slabs: &SlabSource,
@@ -133,13 +145,21 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         t: f64,
     ) -> Option<(f64, PairKind)> {
         let (xj, vj) = bodies.state_at(j, t);
-        let r = bodies.min_image(xi - xj);
+        let r = if WRAP {
+            bodies.min_image(xi - xj)
+        } else {
+            xi - xj
+        };
         // All particles feel the same gravity, so relative motion is a straight line (Eq. B.3).
         let v = vi - vj;
         if S && bodies.accel[i] != bodies.accel[j] {
             return self.predict_sheared_pair(bodies, slabs, &r, &v, i, j, t);
         }
         let b = r.dot(&v);
+        if !WET && b >= 0.0 {
+            // Dry and separating (or sliding): no contact ahead.
+            return None;
+        }
         let rr = r.norm_squared();
         let sigma = bodies.body[i].r + bodies.body[j].r;
         let vv = v.norm_squared();
@@ -218,12 +238,13 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         }
     }
 
-    /// Scans the cells at `offsets` around particle `i` (at time `t`) and lowers its pair event
-    /// if a partner there gives an earlier one.
+    /// Scans the cells of `hood` around particle `i` (at time `t`) and lowers its pair event
+    /// if a partner there gives an earlier one. Cells are visited in the order of `hood`, so
+    /// that among equal times the same partner wins on every path.
     pub fn scan<const G: bool, const S: bool>(
         &mut self,
         i: usize,
-        offsets: &[[i32; D]],
+        hood: &Neighbourhood<D>,
         bodies: &Bodies<D, G, S>,
         cells: &CellSource<D>,
         slabs: &SlabSource,
@@ -231,33 +252,48 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     ) {
         let grid = &cells.grid;
         let c = cells.cell[i];
-        let mut best = self.ev[i];
-        let interior = grid.is_interior(&c);
-        let base = grid.linear(&c);
-        for o in offsets {
-            let cell = if interior {
-                grid.interior_neighbour(base, o)
+        if grid.is_interior(&c) {
+            // Interior: neighbours by a fixed index change, no wrapping.
+            let base = grid.linear(&c) as isize;
+            let around = hood.deltas.iter().map(|&d| (base + d) as usize);
+            if grid.interior_needs_no_image {
+                self.scan_cells::<G, S, false>(i, around, bodies, grid, slabs, t);
             } else {
-                match grid.shifted(&c, o) {
-                    Some(cell) => cell,
-                    None => continue,
-                }
-            };
+                self.scan_cells::<G, S, true>(i, around, bodies, grid, slabs, t);
+            }
+        } else {
+            let parts = grid.axis_parts(&c);
+            let around = hood
+                .offsets
+                .iter()
+                .filter_map(|o| CellGrid::<D>::from_parts(&parts, o));
+            self.scan_cells::<G, S, true>(i, around, bodies, grid, slabs, t);
+        }
+    }
+
+    /// The pair predictions of `i` with every particle of the cells `around`, in order.
+    #[inline(always)]
+    fn scan_cells<const G: bool, const S: bool, const WRAP: bool>(
+        &mut self,
+        i: usize,
+        around: impl Iterator<Item = usize>,
+        bodies: &Bodies<D, G, S>,
+        grid: &CellGrid<D>,
+        slabs: &SlabSource,
+        t: f64,
+    ) {
+        let mut best = self.ev[i];
+        let bi = &bodies.body[i];
+        for cell in around {
             grid.for_each_in(cell, |j| {
                 if j == i {
                     return;
                 }
-                let bi = &bodies.body[i];
                 if let Some((tj, kind)) =
-                    self.predict_pair_from(bodies, slabs, &bi.x, &bi.v, i, j, t)
+                    self.predict_pair_from::<G, S, WRAP>(bodies, slabs, &bi.x, &bi.v, i, j, t)
                     && tj < best.time
                 {
-                    best = PairEvent {
-                        time: tj,
-                        partner: j as u32,
-                        partner_count: bodies.count[j],
-                        kind,
-                    };
+                    best = PairEvent::new(tj, j as u32, bodies.count[j], kind);
                 }
             });
         }
@@ -295,15 +331,15 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         bodies.bump(i);
         bodies.bump(j);
         if u < 0.0 {
-            let since = t - bodies.last_collision[i].max(bodies.last_collision[j]);
+            let since = bodies.since_last_collision(i, j, t);
             let u_out = rebound_speed(-u, self.p.eps, since, self.p.tc, self.p.min_rebound);
             // Change of the normal relative velocity, shared equally (equal masses).
             let du = u_out - u;
             bodies.body[i].v += n * (0.5 * du);
             bodies.body[j].v -= n * (0.5 * du);
             ledger.book_restitution(0.5 * bodies.mass, -u, self.p.eps, u_out);
-            bodies.last_collision[i] = t;
-            bodies.last_collision[j] = t;
+            bodies.record_collision(i, t);
+            bodies.record_collision(j, t);
         }
         counts.pair_collisions += 1;
         if WET && !self.bonded(i, j) {
@@ -369,16 +405,10 @@ impl<const D: usize, const WET: bool> EventSource for PairSource<D, WET> {
     /// back (partner indices in events and bonds are renamed).
     fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
         let n = order.len();
-        self.ev = order
-            .iter()
-            .map(|&k| {
-                let mut e = self.ev[k as usize];
-                if e.partner != NONE {
-                    e.partner = new_of_old[e.partner as usize];
-                }
-                e
-            })
-            .collect();
+        permute_in_place(&mut self.ev, order);
+        for e in &mut self.ev {
+            e.rename_partner(new_of_old);
+        }
         if WET {
             let mut bonds = vec![NONE; n * MAX_BONDS];
             let mut bond_len = vec![0u8; n];

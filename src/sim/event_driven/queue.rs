@@ -5,7 +5,10 @@
 //! Re-predicting a particle changes its key in place, so a queue never holds stale copies;
 //! events that became invalid through a partner's collision are detected lazily with
 //! per-particle event counters (see `engine.rs`). Implementations:
-//! - [`HeapQueue`], the default: an indexed 4-ary min-heap, `O(log N)` per update;
+//! - [`CalendarQueue`], the default: a calendar queue (buckets of equal width in time, a year
+//!   of `2^k >= N` buckets), `O(1)` per update and, with its width re-estimated from the keys
+//!   every `2 N` pops, about one bucket visited per pop;
+//! - [`HeapQueue`]: an indexed 4-ary min-heap, `O(log N)` per update (the default before);
 //! - [`NaiveQueue`], the reference: a linear scan, slow and obviously correct. The tests run
 //!   whole engines on it and compare their trajectories with the heap's bit for bit
 //!   (`tests/engine_pins.rs`).
@@ -17,12 +20,15 @@
 pub trait EventQueue: Clone + std::fmt::Debug {
     /// A queue for particles `0..n`, all with key `+inf`.
     fn new(n: usize) -> Self;
-    /// The particle with the earliest key (the smallest index among equal keys) and that key.
-    fn min(&self) -> Option<(usize, f64)>;
+    /// The particle with the earliest key (the smallest index among equal keys) and that key
+    /// (`&mut`: a queue may move its cursor or re-tune itself on the way).
+    fn min(&mut self) -> Option<(usize, f64)>;
     /// The key of particle `i`.
     fn key(&self, i: usize) -> f64;
     /// Sets the key of particle `i`.
     fn update(&mut self, i: usize, time: f64);
+    /// Heap bytes of the queue's arrays, by name (`wetgran bench memory`).
+    fn memory(&self) -> Vec<(&'static str, usize)>;
 }
 
 /// Children per heap node.
@@ -47,13 +53,21 @@ impl EventQueue for HeapQueue {
     }
 
     #[inline]
-    fn min(&self) -> Option<(usize, f64)> {
+    fn min(&mut self) -> Option<(usize, f64)> {
         self.heap.first().map(|&(k, i)| (i as usize, k))
     }
 
     #[inline]
     fn key(&self, i: usize) -> f64 {
         self.heap[self.slot[i] as usize].0
+    }
+
+    fn memory(&self) -> Vec<(&'static str, usize)> {
+        use super::bodies::vec_bytes;
+        vec![
+            ("queue.heap", vec_bytes(&self.heap)),
+            ("queue.slot", vec_bytes(&self.slot)),
+        ]
     }
 
     /// Sets the key of particle `i` and restores the heap order.
@@ -123,6 +137,225 @@ impl HeapQueue {
     }
 }
 
+/// No particle (end of a bucket list).
+const END: u32 = u32::MAX;
+/// Pops between two re-estimations of the bucket width, per particle.
+const CALENDAR_RETUNE_PER_PARTICLE: u64 = 2;
+/// Keys sampled to estimate the width.
+const CALENDAR_SAMPLE: usize = 512;
+/// Bucket width in units of `(median sampled key - smallest key) / finite keys`: about
+/// `WIDTH_FACTOR ln 2 ~ 1.4` keys per bucket near the front for exponentially spread keys.
+const WIDTH_FACTOR: f64 = 2.0;
+
+/// Calendar queue (R. Brown, Commun. ACM 31, 1220 (1988)) over particle indices. Time is cut
+/// into buckets of width `w`; the key `t` lies in the virtual bucket `floor(t / w)`, stored in
+/// list `floor(t / w) mod 2^k` (a "year" of `2^k >= N` lists, singly linked through `next`, on
+/// average at most one entry each). Infinite keys are in no list.
+///
+/// Order: `floor(t / w)` is monotone in `t` (a correctly rounded product and a truncation are
+/// both monotone), so the earliest key lies in the earliest non-empty virtual bucket; `min`
+/// walks the virtual buckets from the cursor `cur` (no finite key lies in a bucket before it)
+/// and takes the smallest `(key, index)` among the entries of the first bucket that has one,
+/// so ties go to the smaller index exactly as in [`HeapQueue`] and [`NaiveQueue`] and engines
+/// take the same trajectory on all three. The width only changes how much is walked, never the
+/// answer: every `2 N` pops it is re-estimated from a sample of the keys and the lists rebuilt;
+/// if a whole year of buckets holds nothing due, a direct search moves the cursor to the
+/// smallest key.
+#[derive(Debug, Clone)]
+pub struct CalendarQueue {
+    key: Vec<f64>,
+    /// Next entry in the same list (`END`: last).
+    next: Vec<u32>,
+    /// First entry of each list.
+    head: Vec<u32>,
+    /// `1 / w`.
+    inv_width: f64,
+    /// `2^k - 1`.
+    mask: u64,
+    /// The virtual bucket the walk starts from.
+    cur: u64,
+    /// Finite keys.
+    finite: usize,
+    /// Pops left before the next re-estimation (the first `min` estimates at once).
+    until_retune: u64,
+}
+
+impl CalendarQueue {
+    /// Virtual bucket of key `t` (keys below 0 share bucket 0, huge ones saturate).
+    #[inline(always)]
+    fn bucket(&self, t: f64) -> u64 {
+        (t * self.inv_width) as u64
+    }
+
+    #[inline(always)]
+    fn link(&mut self, i: usize, t: f64) {
+        let b = (self.bucket(t) & self.mask) as usize;
+        self.next[i] = self.head[b];
+        self.head[b] = i as u32;
+    }
+
+    #[inline(always)]
+    fn unlink(&mut self, i: usize, t: f64) {
+        let b = (self.bucket(t) & self.mask) as usize;
+        let mut k = self.head[b];
+        if k as usize == i {
+            self.head[b] = self.next[i];
+            return;
+        }
+        while k != END {
+            let nk = self.next[k as usize];
+            if nk as usize == i {
+                self.next[k as usize] = self.next[i];
+                return;
+            }
+            k = nk;
+        }
+        unreachable!("calendar queue: particle {i} not in its list");
+    }
+
+    /// The smallest finite key and a new bucket width from a sample of the keys; relinks every
+    /// entry and puts the cursor on the smallest key's bucket.
+    fn retune(&mut self) {
+        let n = self.key.len();
+        self.until_retune = (CALENDAR_RETUNE_PER_PARTICLE * n as u64).max(1024);
+        let mut lo = f64::INFINITY;
+        for &t in &self.key {
+            if t < lo {
+                lo = t;
+            }
+        }
+        if !lo.is_finite() {
+            return;
+        }
+        let stride = (n / CALENDAR_SAMPLE).max(1);
+        let mut sample: Vec<f64> = self
+            .key
+            .iter()
+            .step_by(stride)
+            .copied()
+            .filter(|t| t.is_finite())
+            .collect();
+        let spread = if sample.is_empty() {
+            0.0
+        } else {
+            let mid = sample.len() / 2;
+            let (_, m, _) = sample.select_nth_unstable_by(mid, f64::total_cmp);
+            *m - lo
+        };
+        let width = WIDTH_FACTOR * spread / self.finite.max(1) as f64;
+        // A width of 0 (all keys equal) or one too small for the keys' magnitude keeps the old
+        // one; the order never depends on it.
+        if width.is_finite() && width > 1e-12 * lo.abs() && width > 0.0 {
+            self.inv_width = 1.0 / width;
+        }
+        self.head.fill(END);
+        for i in 0..n {
+            let t = self.key[i];
+            if t.is_finite() {
+                self.link(i, t);
+            }
+        }
+        self.cur = self.bucket(lo);
+    }
+}
+
+impl EventQueue for CalendarQueue {
+    fn new(n: usize) -> Self {
+        let lists = n.max(1).next_power_of_two();
+        Self {
+            key: vec![f64::INFINITY; n],
+            next: vec![END; n],
+            head: vec![END; lists],
+            inv_width: 1.0,
+            mask: lists as u64 - 1,
+            cur: 0,
+            finite: 0,
+            until_retune: 0,
+        }
+    }
+
+    #[inline]
+    fn key(&self, i: usize) -> f64 {
+        self.key[i]
+    }
+
+    #[inline]
+    fn update(&mut self, i: usize, time: f64) {
+        let old = self.key[i];
+        if old.is_finite() {
+            self.unlink(i, old);
+            self.finite -= 1;
+        }
+        self.key[i] = time;
+        if time.is_finite() {
+            self.link(i, time);
+            self.finite += 1;
+            let b = self.bucket(time);
+            if b < self.cur {
+                self.cur = b;
+            }
+        }
+    }
+
+    fn min(&mut self) -> Option<(usize, f64)> {
+        if self.key.is_empty() {
+            return None;
+        }
+        if self.finite == 0 {
+            // Every key infinite (or NaN): the first particle, as in the other queues.
+            return Some((0, self.key[0]));
+        }
+        if self.until_retune == 0 {
+            self.retune();
+        }
+        self.until_retune -= 1;
+        loop {
+            for _ in 0..=self.mask {
+                let list = (self.cur & self.mask) as usize;
+                let mut k = self.head[list];
+                let mut best = END;
+                let mut best_t = f64::INFINITY;
+                // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
+                // i.e. iff `t / w < cur + 1` before truncation: one product and one compare,
+                // exact while `cur + 1` is an integer an f64 holds exactly.
+                let exact = self.cur < (1 << 52);
+                let end = (self.cur + 1) as f64;
+                while k != END {
+                    let t = self.key[k as usize];
+                    let due = if exact {
+                        t * self.inv_width < end
+                    } else {
+                        self.bucket(t) == self.cur
+                    };
+                    if due && (best == END || t < best_t || (t == best_t && k < best)) {
+                        best = k;
+                        best_t = t;
+                    }
+                    k = self.next[k as usize];
+                }
+                if best != END {
+                    return Some((best as usize, best_t));
+                }
+                self.cur = self.cur.saturating_add(1);
+            }
+            // A year without a due entry: jump to the smallest key's bucket (without the jump
+            // the walk would take `(gap / w)` steps), and re-estimate the width at the next pop.
+            let lo = self.key.iter().copied().fold(f64::INFINITY, f64::min);
+            self.cur = self.bucket(lo);
+            self.until_retune = 1;
+        }
+    }
+
+    fn memory(&self) -> Vec<(&'static str, usize)> {
+        use super::bodies::vec_bytes;
+        vec![
+            ("queue.key", vec_bytes(&self.key)),
+            ("queue.next", vec_bytes(&self.next)),
+            ("queue.head (per list)", vec_bytes(&self.head)),
+        ]
+    }
+}
+
 /// Reference queue: a linear scan over the keys, `O(N)` per pop. Slow, obviously correct; the
 /// tests run engines on it to check [`HeapQueue`] (and any faster queue to come).
 #[derive(Debug, Clone)]
@@ -142,9 +375,12 @@ impl EventQueue for NaiveQueue {
     fn update(&mut self, i: usize, time: f64) {
         self.key[i] = time;
     }
+    fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![("queue.key", super::bodies::vec_bytes(&self.key))]
+    }
     /// First index with the smallest key (strict `<`: ties go to the smaller index, as in the
     /// heap).
-    fn min(&self) -> Option<(usize, f64)> {
+    fn min(&mut self) -> Option<(usize, f64)> {
         let mut best: Option<(usize, f64)> = None;
         for (i, &k) in self.key.iter().enumerate() {
             if best.is_none_or(|(_, b)| k < b) {
@@ -160,19 +396,18 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
-    #[test]
-    fn agrees_with_naive_queue_under_random_updates() {
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
-        let n = 257;
-        let (mut q, mut r) = (HeapQueue::new(n), NaiveQueue::new(n));
+    /// Random updates on `Q` and on the naive queue; the two must pop the same particle with
+    /// the same key after every update.
+    fn agrees_with_naive_queue<Q: EventQueue>(
+        n: usize,
+        seed: u64,
+        draw: impl Fn(usize, &mut rand_xoshiro::Xoshiro256PlusPlus) -> f64,
+    ) {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        let (mut q, mut r) = (Q::new(n), NaiveQueue::new(n));
         for step in 0..200_000 {
             let i = rng.gen_range(0..n);
-            // Mix of increases, decreases, repeated values and infinities.
-            let t = match step % 7 {
-                0 => f64::INFINITY,
-                1 => (rng.gen_range(0..50) as f64) * 0.5,
-                _ => rng.gen_range(0.0..100.0),
-            };
+            let t = draw(step, &mut rng);
             q.update(i, t);
             r.update(i, t);
             let (qi, qt) = q.min().unwrap();
@@ -182,5 +417,71 @@ mod tests {
             assert_eq!(qi, ri, "step {step}");
             assert_eq!(q.key(qi), qt);
         }
+    }
+
+    /// Mix of increases, decreases, repeated values and infinities.
+    fn mixed(step: usize, rng: &mut rand_xoshiro::Xoshiro256PlusPlus) -> f64 {
+        match step % 7 {
+            0 => f64::INFINITY,
+            1 => (rng.gen_range(0..50) as f64) * 0.5,
+            _ => rng.gen_range(0.0..100.0),
+        }
+    }
+
+    #[test]
+    fn heap_agrees_with_naive_queue_under_random_updates() {
+        agrees_with_naive_queue::<HeapQueue>(257, 3, mixed);
+    }
+
+    #[test]
+    fn calendar_agrees_with_naive_queue_under_random_updates() {
+        agrees_with_naive_queue::<CalendarQueue>(257, 3, mixed);
+        // A clock that advances like an engine's, with keys spread over many decades ahead of
+        // it (a year of buckets without a due entry, saturated buckets), exact ties, keys in
+        // the past and 0.
+        let clock = std::cell::Cell::new(0.0f64);
+        agrees_with_naive_queue::<CalendarQueue>(100, 5, |step, rng| {
+            clock.set(clock.get() + 1e-3);
+            let now = clock.get();
+            match step % 11 {
+                0 => f64::INFINITY,
+                1 => now + 10f64.powi(rng.gen_range(-8..12)),
+                2 => now.floor(),
+                3 => 0.0,
+                4 => now - 1e-12,
+                5 => 1e300,
+                _ => now + rng.gen_range(0.0..1.0),
+            }
+        });
+        // Every key infinite, then one finite.
+        let mut q = CalendarQueue::new(3);
+        assert_eq!(q.min(), Some((0, f64::INFINITY)));
+        q.update(2, 5.0);
+        assert_eq!(q.min(), Some((2, 5.0)));
+        assert_eq!(CalendarQueue::new(0).min(), None);
+    }
+
+    #[test]
+    fn calendar_jumps_over_a_long_gap_instead_of_walking_it() {
+        // Width 0.1 from keys 0.1..0.4, then every key moved 10^15 ahead: 10^16 empty buckets to
+        // walk without the jump (the thread would not finish), one year of 4 lists with it.
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut q = CalendarQueue::new(4);
+            for i in 0..4 {
+                q.update(i, 0.1 * (i + 1) as f64);
+            }
+            assert_eq!(q.min(), Some((0, 0.1)));
+            for i in (0..4).rev() {
+                q.update(i, 1e15 + i as f64);
+            }
+            let first = q.min();
+            q.update(0, f64::INFINITY);
+            let _ = done.send((first, q.min()));
+        });
+        let got = finished
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .expect("the calendar queue walked the gap bucket by bucket");
+        assert_eq!(got, (Some((0, 1e15)), Some((1, 1e15 + 1.0))));
     }
 }

@@ -6,7 +6,7 @@
 //! the neighbouring slab and changes its acceleration: a course change, after which the
 //! scheduler re-predicts every event of the particle.
 
-use super::bodies::{Bodies, permuted};
+use super::bodies::{Bodies, permute_in_place, vec_bytes};
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
 use super::shear::ShearField;
 use crate::physics::flight::linear_time_to_plane;
@@ -34,6 +34,14 @@ impl SlabSource {
             Vec::new()
         };
         Self { field, slab, ev }
+    }
+
+    /// Heap bytes of the per-particle arrays (`wetgran bench memory`).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("slabs.slab", vec_bytes(&self.slab)),
+            ("slabs.ev", vec_bytes(&self.ev)),
+        ]
     }
 
     /// The acceleration of every particle in its slab (empty without shear).
@@ -122,8 +130,8 @@ impl EventSource for SlabSource {
     /// Renumbers the particles (see [`Bodies::permute`]).
     fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
         if self.field.is_some() {
-            self.slab = permuted(&self.slab, order);
-            self.ev = permuted(&self.ev, order);
+            permute_in_place(&mut self.slab, order);
+            permute_in_place(&mut self.ev, order);
         }
     }
 }

@@ -11,7 +11,7 @@
 //! next prediction (a table error cannot repeat itself at the same time forever); no grain
 //! leaves the floor slower than the rebound floor.
 
-use super::bodies::{Bodies, permuted};
+use super::bodies::{Bodies, permute_in_place, vec_bytes};
 use super::cell_source::CellSource;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
 use super::ledger::{EventCounts, Ledger};
@@ -155,22 +155,55 @@ pub struct WallSource {
     pub e_wall: f64,
     pub tc: f64,
     pub min_rebound: f64,
+    /// Next wall event of each particle (empty when no axis has walls: every candidate is then
+    /// never).
     pub ev: Vec<PlaneEvent>,
     /// `table` solver: tabulated approach speed of each particle's predicted wall hit (NaN when
-    /// the hit was not tabulated).
+    /// the hit was not tabulated; empty, i.e. NaN throughout, under the other solvers).
     pub vrel: Vec<f64>,
 }
 
 impl WallSource {
-    pub fn new(solver: WallSolver, e_wall: f64, tc: f64, min_rebound: f64, n: usize) -> Self {
+    /// The source for `n` particles; `walls`: whether any axis has walls.
+    pub fn new(
+        solver: WallSolver,
+        e_wall: f64,
+        tc: f64,
+        min_rebound: f64,
+        n: usize,
+        walls: bool,
+    ) -> Self {
+        let tabulated = matches!(solver, WallSolver::Table(_));
         Self {
             solver,
             e_wall,
             tc,
             min_rebound,
-            ev: vec![PlaneEvent::NEVER; n],
-            vrel: vec![f64::NAN; n],
+            ev: if walls {
+                vec![PlaneEvent::NEVER; n]
+            } else {
+                Vec::new()
+            },
+            vrel: if tabulated {
+                vec![f64::NAN; n]
+            } else {
+                Vec::new()
+            },
         }
+    }
+
+    /// Time of the next wall event of `i` (`+inf` without walls).
+    #[inline(always)]
+    pub fn time(&self, i: usize) -> f64 {
+        self.ev.get(i).map_or(f64::INFINITY, |e| e.time)
+    }
+
+    /// Heap bytes of the per-particle arrays (`wetgran bench memory`; shared tables excluded).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("walls.ev", vec_bytes(&self.ev)),
+            ("walls.vrel", vec_bytes(&self.vrel)),
+        ]
     }
 
     /// Predicts the next wall collision of `i` (at time `now`; `up`: the lid or upper wall) and
@@ -184,6 +217,9 @@ impl WallSource {
         bodies: &Bodies<D, G, S>,
         now: f64,
     ) {
+        if self.ev.is_empty() {
+            return;
+        }
         let mut best = PlaneEvent::NEVER;
         let mut vrel = f64::NAN;
         let r = bodies.body[i].r;
@@ -210,7 +246,9 @@ impl WallSource {
         }
         best.time += now;
         self.ev[i] = best;
-        self.vrel[i] = vrel;
+        if let Some(v) = self.vrel.get_mut(i) {
+            *v = vrel;
+        }
         if let WallSolver::Table(s) = &mut self.solver {
             if s.launched.is_some_and(|(j, _)| j == i) {
                 s.launched = None;
@@ -324,7 +362,7 @@ impl WallSource {
         }
         bodies.bump(i);
         counts.wall_collisions += 1;
-        let since = t - bodies.last_collision[i];
+        let since = bodies.since_last_collision(i, i, t);
         let mut u_out = rebound_speed(v.abs(), self.e_wall, since, self.tc, self.min_rebound);
         if floor_under_gravity {
             // Rest on a static floor is the one state an event-driven engine cannot represent
@@ -333,7 +371,7 @@ impl WallSource {
         }
         ledger.book_restitution(bodies.mass, v.abs(), self.e_wall, u_out);
         bodies.body[i].v[axis] = if lid { -u_out } else { u_out };
-        bodies.last_collision[i] = t;
+        bodies.record_collision(i, t);
     }
 
     /// Collision with the shaken floor or lid, `v' = v_w + e_w (v_w - v)` along the normal
@@ -363,7 +401,7 @@ impl WallSource {
         } else {
             (z - b.r - z_w, v_w - vz)
         };
-        let tabulated = self.vrel[i];
+        let tabulated = self.vrel.get(i).copied().unwrap_or(f64::NAN);
         let (contact, approaching) = if tabulated.is_finite() {
             // A tabulated hit (B.5.1): its approach speed is positive by construction (B.5.4);
             // the table's time error is absorbed by placing the particle on the wall.
@@ -401,7 +439,7 @@ impl WallSource {
         }
         bodies.bump(i);
         counts.wall_collisions += 1;
-        let since = t - bodies.last_collision[i];
+        let since = bodies.since_last_collision(i, i, t);
         let mut u_out = rebound_speed(u_in, self.e_wall, since, self.tc, self.min_rebound);
         if !lid {
             // As on the static floor: no grain leaves the floor slower than the rebound floor.
@@ -414,7 +452,7 @@ impl WallSource {
         let de = 0.5 * m * (u_in * u_in - u_out * u_out);
         ledger.work_by_drive += 0.5 * m * (v_new * v_new - vz * vz) + de;
         bodies.body[i].v[D - 1] = v_new;
-        bodies.last_collision[i] = t;
+        bodies.record_collision(i, t);
     }
 }
 
@@ -422,7 +460,7 @@ impl EventSource for WallSource {
     /// The stored wall event of `i`.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
-        let e = self.ev[i];
+        let e = self.ev.get(i).copied().unwrap_or(PlaneEvent::NEVER);
         Event {
             time: e.time,
             kind: EventKind::Wall {
@@ -436,8 +474,8 @@ impl EventSource for WallSource {
     /// memories last one prediction and are always spent between events; they are renamed all
     /// the same.
     fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
-        self.ev = permuted(&self.ev, order);
-        self.vrel = permuted(&self.vrel, order);
+        permute_in_place(&mut self.ev, order);
+        permute_in_place(&mut self.vrel, order);
         if let WallSolver::Table(s) = &mut self.solver {
             s.launched = s.launched.map(|(j, lid)| (new_of_old[j] as usize, lid));
             s.distrusted = s.distrusted.map(|j| new_of_old[j] as usize);
