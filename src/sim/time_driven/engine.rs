@@ -83,6 +83,10 @@ pub const ENTRY_CHUNK: usize = 128;
 /// numbers): a parallel loop costs a few microseconds of hand-over per step.
 pub const PARALLEL_MIN_PARTICLES: usize = 512;
 
+/// Bits of `wall_contact`: touching the lower, the upper wall of the coordinate's axis.
+const WALL_LO: u8 = 1;
+const WALL_HI: u8 = 2;
+
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
 pub const SANITY_OVERLAP: f64 = 0.05;
@@ -583,10 +587,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         true
     }
 
-    /// Whether the loops of a step are split over threads (small systems run them on the
-    /// calling thread, without the pool; the numbers are the same either way).
+    /// Whether the loops of a step are split over threads: on a pool of more than one thread
+    /// and from [`PARALLEL_MIN_PARTICLES`] particles on; otherwise the serial path runs on the
+    /// calling thread, without the pool. The numbers are the same either way.
     fn parallel(&self) -> bool {
-        self.n >= PARALLEL_MIN_PARTICLES
+        self.n >= PARALLEL_MIN_PARTICLES && rayon::current_num_threads() > 1
     }
 
     /// Velocity Verlet's first half on every coordinate (`verlet_drift`), with the wrap of the
@@ -641,8 +646,181 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// both partners; the booked sums (dissipation, drive work, bridge energy) are summed per
     /// chunk, so they differ from a single running sum by round-off.
     fn forces_then(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
+        if self.parallel() {
+            self.forces_then_parallel(t, vs, dt, then)
+        } else {
+            self.forces_then_serial(t, vs, dt, then)
+        }
+    }
+
+    /// [`Self::forces_then`] on the calling thread, as one loop per kind of force: the pair
+    /// loop scatters each pair force to both partners (rows ascending, so every particle
+    /// receives its partners' forces in the order the parallel gather adds them), then walls,
+    /// body force, `1/m` and `then` per axis. The booked sums are taken per chunk as in the
+    /// parallel path, so both paths give the same bits (`tests/time_driven_pins.rs` runs each
+    /// pin on one thread, this path, and on two, the parallel one); this one does less work
+    /// (no per-entry force buffer, no gather).
+    fn forces_then_serial(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
         let n = self.n;
-        let min_len = if self.parallel() { 1 } else { usize::MAX };
+        let p = &self.p;
+        let f = &mut self.acc;
+        let mut init = [0.0; D];
+        if GRAV {
+            // Start from the weight, -m g along the last axis.
+            init[D - 1] = -p.mass * p.gravity;
+        }
+        for k in 0..D {
+            f[k * n..(k + 1) * n].fill(init[k]);
+        }
+        let pc = PairConstants {
+            periodic: p.periodic,
+            size: p.size,
+            stiffness: p.stiffness,
+            damping: p.damping,
+            bridge_force: p.bridge_force,
+            s_crit: p.s_crit,
+            vs,
+            dt,
+        };
+        let list = &mut self.list;
+        let pb = pair_forces_serial::<D, WET>(
+            &pc,
+            &self.r[0],
+            &self.r[1],
+            f,
+            &self.radius,
+            &list.start,
+            &list.rows,
+            &list.partner,
+            &mut list.flags,
+        );
+        self.counts.pair_collisions += pb.onsets;
+        self.counts.bridge_formations += pb.formations;
+        self.counts.bridge_ruptures += pb.ruptures;
+        self.dissipated_bridges += pb.bridge_ledger;
+        let mut diss = pb.dissipated;
+        let mut max_ov = self.max_overlap.max(pb.max_overlap);
+        // Per-chunk partial sums of the walls' dissipation and work, in the chunks of the
+        // parallel path (adding a chunk that booked nothing adds +0 and changes nothing).
+        let mut work = 0.0;
+        let (mut part_diss, mut part_work, mut part_chunk) = (0.0, 0.0, 0usize);
+        let (zw, vw) = match p.drive {
+            Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
+            None => (0.0, 0.0),
+        };
+        let x = &self.r[0];
+        let v = &self.r[1];
+        for k in 0..D {
+            if p.periodic[k] {
+                continue;
+            }
+            let (shift, wv) = if k == D - 1 { (zw, vw) } else { (0.0, 0.0) };
+            let (lo, hi) = (shift, p.size[k] + shift);
+            let xk = &x[k * n..(k + 1) * n];
+            let vk = &v[k * n..(k + 1) * n];
+            let fk = &mut f[k * n..(k + 1) * n];
+            let radius = &self.radius[..n];
+            let wall_kr = &self.wall_kr[..n];
+            let touching = &mut self.wall_contact[k * n..(k + 1) * n];
+            for i in 0..n {
+                let ri = radius[i];
+                let ov_lo = ri - (xk[i] - lo);
+                let ov_hi = xk[i] + ri - hi;
+                if ov_lo <= 0.0 && ov_hi <= 0.0 {
+                    if touching[i] != 0 {
+                        touching[i] = 0;
+                    }
+                    continue;
+                }
+                let (ov, sign, bit) = if ov_lo > 0.0 {
+                    (ov_lo, 1.0, WALL_LO)
+                } else {
+                    (ov_hi, -1.0, WALL_HI)
+                };
+                if touching[i] & bit == 0 {
+                    touching[i] |= bit;
+                    self.counts.wall_collisions += 1;
+                }
+                max_ov = max_ov.max(ov);
+                let chunk = (k * n + i) / PARTICLE_CHUNK;
+                if chunk != part_chunk {
+                    diss += part_diss;
+                    work += part_work;
+                    (part_diss, part_work, part_chunk) = (0.0, 0.0, chunk);
+                }
+                // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
+                let xi_dot = -sign * (vk[i] * vs - wv);
+                let kr = wall_kr[i];
+                let total = hertz::force(kr, ov, xi_dot, p.wall_damping);
+                if p.wall_damping > 0.0 {
+                    part_diss += (total - kr * ov * ov.sqrt()) * xi_dot * dt;
+                }
+                let fw = sign * total;
+                fk[i] += fw;
+                part_work += fw * wv * dt;
+            }
+        }
+        diss += part_diss;
+        work += part_work;
+        if B::ACTIVE {
+            let (mut part, mut part_chunk) = (0.0, 0usize);
+            for i in 0..n {
+                let xi: [f64; D] = std::array::from_fn(|k| x[k * n + i]);
+                let fb = self.body.force(&xi, t);
+                if i / PARTICLE_CHUNK != part_chunk {
+                    work += part;
+                    (part, part_chunk) = (0.0, i / PARTICLE_CHUNK);
+                }
+                for k in 0..D {
+                    f[k * n + i] += fb[k];
+                    part += fb[k] * v[k * n + i] * vs * dt;
+                }
+            }
+            work += part;
+        }
+        // a = F / m.
+        if p.mass != 1.0 {
+            let inv_m = 1.0 / p.mass;
+            for e in f.iter_mut() {
+                *e *= inv_m;
+            }
+        }
+        self.dissipated_damping += diss;
+        self.work_by_drive += work;
+        self.max_overlap = max_ov;
+        let mut moved = [0.0; D];
+        match then {
+            Then::Nothing => {}
+            Then::Gear => {
+                let c = p.gear;
+                let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+                for k in 0..D {
+                    let a = k * n..(k + 1) * n;
+                    moved[k] = gear_correct_predict_axis(
+                        [
+                            &mut r0[a.clone()],
+                            &mut r1[a.clone()],
+                            &mut r2[a.clone()],
+                            &mut r3[a.clone()],
+                            &mut r4[a.clone()],
+                            &mut r5[a.clone()],
+                        ],
+                        &f[a],
+                        0.5 * p.dt * p.dt,
+                        &c,
+                        p.periodic[k].then_some(p.size[k]),
+                    );
+                }
+            }
+            Then::VerletKick => verlet_kick(&mut self.r[1], f, dt),
+        }
+        moved
+    }
+
+    /// [`Self::forces_then`] split over the pool's threads (see there).
+    fn forces_then_parallel(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
+        let n = self.n;
+        let min_len = 1;
         let p = &self.p;
         let entries = self.list.partner.len();
         self.pair_f.resize(D * entries, 0.0);
@@ -1123,6 +1301,144 @@ fn pair_chunk<const D: usize, const WET: bool>(
     b
 }
 
+/// The pair loop of the serial path ([`TimeEngine::forces_then_serial`]): forces (Eq. 2.7 and
+/// MODEL.md 3.1) over the Verlet list, each pair once (Newton's third law), added to `f` (the
+/// partner's share at once, the row's own sum at the end of its row); updates the contact and
+/// bond flags. The same arithmetic as [`pair_chunk`] and the gather of [`particle_chunk`]; the
+/// dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries as there.
+#[allow(clippy::too_many_arguments)]
+fn pair_forces_serial<const D: usize, const WET: bool>(
+    pc: &PairConstants<D>,
+    x: &[f64],
+    v: &[f64],
+    f: &mut [f64],
+    radius: &[f64],
+    start: &[u32],
+    rows: &[u32],
+    partner: &[u32],
+    flags: &mut [u8],
+) -> PairBooks {
+    let n = radius.len();
+    let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
+    let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
+    let mut half = [0.0; D];
+    for k in 0..D {
+        half[k] = 0.5 * pc.size[k];
+    }
+    let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
+    let mut b = PairBooks::default();
+    // Partial sums of the current chunk of entries.
+    let (mut diss, mut ledger, mut boundary) = (0.0, 0.0, ENTRY_CHUNK);
+    for &i in rows {
+        let i = i as usize;
+        let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
+        let mut xi = [0.0; D];
+        let mut vi = [0.0; D];
+        let mut fi = [0.0; D];
+        for k in 0..D {
+            xi[k] = xs[k][i];
+            vi[k] = vsl[k][i];
+        }
+        let ri = radius[i];
+        for q in p0..p1 {
+            if q >= boundary {
+                b.dissipated += diss;
+                b.bridge_ledger += ledger;
+                (diss, ledger) = (0.0, 0.0);
+                boundary = (q / ENTRY_CHUNK + 1) * ENTRY_CHUNK;
+            }
+            let j = partner[q] as usize;
+            let mut d = [0.0; D];
+            let mut r2 = 0.0;
+            for k in 0..D {
+                let mut dk = xi[k] - xs[k][j];
+                if pc.periodic[k] {
+                    if dk > half[k] {
+                        dk -= pc.size[k];
+                    } else if dk < -half[k] {
+                        dk += pc.size[k];
+                    }
+                }
+                d[k] = dk;
+                r2 += dk * dk;
+            }
+            let rj = radius[j];
+            let sig = ri + rj;
+            let fl = flags[q];
+            if r2 >= sig * sig && (!WET || fl & BOND == 0) {
+                if fl & CONTACT != 0 {
+                    flags[q] = fl & !CONTACT;
+                }
+                continue;
+            }
+            let r = r2.sqrt();
+            let inv = 1.0 / r;
+            let overlap = sig - r;
+            let mut fmag = 0.0;
+            let mut new_fl = fl;
+            if overlap > 0.0 {
+                if fl & CONTACT == 0 {
+                    new_fl |= CONTACT;
+                    b.onsets += 1;
+                }
+                b.max_overlap = b.max_overlap.max(overlap);
+                // xi_dot = -(v_i - v_j) . n, n = d / r.
+                let mut vn = 0.0;
+                for k in 0..D {
+                    vn += (vi[k] - vsl[k][j]) * d[k];
+                }
+                let xi_dot = -vn * inv * vs;
+                let kr = k_pair * (ri * rj / sig).sqrt();
+                // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
+                let total = hertz::force(kr, overlap, xi_dot, a_d);
+                if a_d > 0.0 {
+                    let elastic = kr * overlap * overlap.sqrt();
+                    diss += (total - elastic) * xi_dot * dt;
+                }
+                fmag = total;
+                if WET && fl & BOND == 0 {
+                    // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
+                    // F_B (-overlap).
+                    new_fl |= BOND;
+                    b.formations += 1;
+                    ledger += pc.bridge_force * overlap;
+                }
+            } else {
+                new_fl &= !CONTACT;
+            }
+            if WET && new_fl & BOND != 0 {
+                let s = -overlap;
+                if s > pc.s_crit {
+                    // Rupture: the bridge energy F_B s leaves the system.
+                    new_fl &= !BOND;
+                    b.ruptures += 1;
+                    ledger += pc.bridge_force * s;
+                } else {
+                    // MODEL.md 3.1: constant attraction F_B along the line of centres.
+                    fmag -= pc.bridge_force;
+                }
+            }
+            if new_fl != fl {
+                flags[q] = new_fl;
+            }
+            if fmag != 0.0 {
+                let s = fmag * inv;
+                for k in 0..D {
+                    let fk = s * d[k];
+                    fi[k] += fk;
+                    f[k * n + j] -= fk;
+                }
+            }
+        }
+        for k in 0..D {
+            f[k * n + i] += fi[k];
+        }
+    }
+    b.dissipated += diss;
+    b.bridge_ledger += ledger;
+    b
+}
+
 /// What the per-particle phase does after the forces ([`TimeEngine::forces_then`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Then {
@@ -1253,8 +1569,6 @@ fn particle_chunk<const D: usize>(
             let radius = &cx.radius[i0..i0 + m];
             let wall_kr = &cx.wall_kr[i0..i0 + m];
             let touching = &mut touch[o..o + m];
-            const BIT_LO: u8 = 1;
-            const BIT_HI: u8 = 2;
             for i in 0..m {
                 let ri = radius[i];
                 let ov_lo = ri - (xk[i] - lo);
@@ -1266,9 +1580,9 @@ fn particle_chunk<const D: usize>(
                     continue;
                 }
                 let (ov, sign, bit) = if ov_lo > 0.0 {
-                    (ov_lo, 1.0, BIT_LO)
+                    (ov_lo, 1.0, WALL_LO)
                 } else {
-                    (ov_hi, -1.0, BIT_HI)
+                    (ov_hi, -1.0, WALL_HI)
                 };
                 if touching[i] & bit == 0 {
                     touching[i] |= bit;
