@@ -21,9 +21,16 @@ use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
 
-/// Cores of this machine (`std::thread::available_parallelism`, 1 if unknown).
+/// Cores a simulation process may use: `std::thread::available_parallelism` (1 if unknown),
+/// or the environment variable `WETGRAN_THREADS` when it is set to a positive number (e.g.
+/// `WETGRAN_THREADS=1`: every simulation on one thread, as before the engine was parallel; on
+/// a machine shared with other work).
 pub fn available_cores() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+    std::env::var("WETGRAN_THREADS")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 /// The cores of a machine shared among the workers of a sweep run (see the module doc).

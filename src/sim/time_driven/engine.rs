@@ -35,8 +35,8 @@
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
 
 use super::integrator::{
-    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict, gear_unpredict,
-    verlet_drift, verlet_kick,
+    GEAR_FLUSH_EVERY, GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict,
+    gear_unpredict, verlet_drift, verlet_kick,
 };
 use super::neighbours::{BOND, CONTACT, NeighbourList};
 use crate::physics::hertz;
@@ -789,6 +789,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.work_by_drive += work;
         self.max_overlap = max_ov;
         let mut moved = [0.0; D];
+        let flush = self.steps % GEAR_FLUSH_EVERY == 0;
         match then {
             Then::Nothing => {}
             Then::Gear => {
@@ -809,6 +810,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                         0.5 * p.dt * p.dt,
                         &c,
                         p.periodic[k].then_some(p.size[k]),
+                        flush,
                     );
                 }
             }
@@ -928,6 +930,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             then,
             gear: p.gear,
             half_dt2: 0.5 * p.dt * p.dt,
+            flush: self.steps % GEAR_FLUSH_EVERY == 0,
         };
         let [r0, r1, r2, r3, r4, r5] = &mut self.r;
         (
@@ -1341,11 +1344,18 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
         }
         let ri = radius[i];
         for q in p0..p1 {
-            if q >= boundary {
-                b.dissipated += diss;
-                b.bridge_ledger += ledger;
-                (diss, ledger) = (0.0, 0.0);
-                boundary = (q / ENTRY_CHUNK + 1) * ENTRY_CHUNK;
+            // Before booking at entry `q`: close the partial sums of the earlier chunks (only
+            // where something is booked, off the common path; a chunk that booked nothing
+            // would add +0).
+            macro_rules! chunk_of_q {
+                () => {
+                    if q >= boundary {
+                        b.dissipated += diss;
+                        b.bridge_ledger += ledger;
+                        (diss, ledger) = (0.0, 0.0);
+                        boundary = (q / ENTRY_CHUNK + 1) * ENTRY_CHUNK;
+                    }
+                };
             }
             let j = partner[q] as usize;
             let mut d = [0.0; D];
@@ -1393,6 +1403,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                 let total = hertz::force(kr, overlap, xi_dot, a_d);
                 if a_d > 0.0 {
                     let elastic = kr * overlap * overlap.sqrt();
+                    chunk_of_q!();
                     diss += (total - elastic) * xi_dot * dt;
                 }
                 fmag = total;
@@ -1401,6 +1412,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                     // F_B (-overlap).
                     new_fl |= BOND;
                     b.formations += 1;
+                    chunk_of_q!();
                     ledger += pc.bridge_force * overlap;
                 }
             } else {
@@ -1412,6 +1424,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                     // Rupture: the bridge energy F_B s leaves the system.
                     new_fl &= !BOND;
                     b.ruptures += 1;
+                    chunk_of_q!();
                     ledger += pc.bridge_force * s;
                 } else {
                     // MODEL.md 3.1: constant attraction F_B along the line of centres.
@@ -1488,6 +1501,8 @@ struct ChunkContext<'a, const D: usize> {
     then: Then,
     gear: [f64; 6],
     half_dt2: f64,
+    /// Whether this step flushes the Gear derivatives ([`GEAR_FLUSH_EVERY`]).
+    flush: bool,
 }
 
 /// Splits the flat coordinates `e0..e0 + len` (axis-major, `n` per axis) at the axis
@@ -1629,6 +1644,7 @@ fn particle_chunk<const D: usize>(
                     cx.half_dt2,
                     &cx.gear,
                     cx.periodic[k].then_some(cx.size[k]),
+                    cx.flush,
                 );
                 b.moved[k] = max_ignoring_nan(b.moved[k], moved);
             }
