@@ -789,7 +789,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.work_by_drive += work;
         self.max_overlap = max_ov;
         let mut moved = [0.0; D];
-        let flush = self.steps % GEAR_FLUSH_EVERY == 0;
+        let flush = self.steps.is_multiple_of(GEAR_FLUSH_EVERY);
         match then {
             Then::Nothing => {}
             Then::Gear => {
@@ -930,7 +930,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             then,
             gear: p.gear,
             half_dt2: 0.5 * p.dt * p.dt,
-            flush: self.steps % GEAR_FLUSH_EVERY == 0,
+            flush: self.steps.is_multiple_of(GEAR_FLUSH_EVERY),
         };
         let [r0, r1, r2, r3, r4, r5] = &mut self.r;
         (

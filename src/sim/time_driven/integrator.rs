@@ -342,7 +342,7 @@ mod tests {
             let (mut subnormal, mut zero) = (false, false);
             for step in 0..200_000u64 {
                 let [a, b, c, d, e, f] = &mut r;
-                let flush = every.is_some_and(|k| step % k == 0);
+                let flush = every.is_some_and(|k| step.is_multiple_of(k));
                 gear_correct_predict_axis(
                     [a, b, c, d, e, f],
                     &[0.0, 0.0],
