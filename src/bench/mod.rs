@@ -45,15 +45,17 @@ const MIN_WARMUP: u64 = 500;
 /// or `engine:LABELS` with a comma-separated subset of `a,b,c,c'` (e.g. `engine:a` to profile
 /// one system).
 pub fn run(which: &str, repeat: usize, scale: f64) -> Result<(), String> {
-    run_with_svg(which, repeat, scale, None)
+    run_with_svg(which, repeat, scale, None, &[1])
 }
 
-/// Like [`run`]; `wall` also writes its error-against-cost plot to `svg` if given.
+/// Like [`run`]; `wall` also writes its error-against-cost plot to `svg` if given; `tdmd` runs
+/// once per thread count of `threads` (the other benchmarks are single-threaded).
 pub fn run_with_svg(
     which: &str,
     repeat: usize,
     scale: f64,
     svg: Option<&std::path::Path>,
+    threads: &[usize],
 ) -> Result<(), String> {
     if which == "wall" {
         let rows = wall::measure(repeat, scale);
@@ -66,7 +68,10 @@ pub fn run_with_svg(
         return Ok(());
     }
     if which == "tdmd" {
-        print!("{}", tdmd::report(&tdmd::measure(repeat, scale)));
+        print!(
+            "{}",
+            tdmd::report(&tdmd::measure_threads(repeat, scale, threads))
+        );
         return Ok(());
     }
     if which == "slab" {

@@ -11,6 +11,14 @@
 //! repetitions), the ratio of the median to the 0.38 s per time unit a widely used C++ granular
 //! code needs for this system (issue 6; goal: at least 3x faster, i.e. <= 0.127 s), the largest
 //! overlap over the whole run and the neighbour-list builds per step.
+//!
+//! With `--threads 1,2` each repetition runs once per thread count (a rayon pool of that size
+//! installed around it; the counts alternate within a repetition, so slow phases of a shared
+//! machine hit them alike), one row per integrator and count, and the speed-up of the median
+//! wall time against the first count. The trajectory is the same bits for every count
+//! (`tests/time_driven_pins.rs`), so the work is identical. CPU time is that of the whole
+//! process (every thread, from `/proc/self/task/*/schedstat`), so it includes the time the
+//! pool's threads spend waiting for work.
 
 use crate::physics::hertz;
 use crate::scene::{DEFAULT_STIFFNESS, Scene};
@@ -65,10 +73,26 @@ pub fn thread_cpu_seconds() -> Option<f64> {
     Some(ns * 1e-9)
 }
 
+/// CPU time of the whole process (every thread) in seconds, from `/proc/self/task/*/schedstat`
+/// (threads that ended are not counted); `None` without `/proc`.
+pub fn process_cpu_seconds() -> Option<f64> {
+    let mut ns = 0.0;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let path = task.ok()?.path().join("schedstat");
+        let Ok(text) = std::fs::read_to_string(path) else {
+            continue;
+        };
+        ns += text.split_whitespace().next()?.parse::<f64>().ok()?;
+    }
+    Some(ns * 1e-9)
+}
+
 /// One integrator's figures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TdmdRow {
     pub integrator: &'static str,
+    /// Threads of the pool the runs were made on.
+    pub threads: usize,
     /// Wall seconds per simulated time unit, one per repetition.
     pub seconds_per_time: Vec<f64>,
     /// CPU seconds per simulated time unit, one per repetition (empty without `/proc`).
@@ -93,15 +117,32 @@ fn median(v: &[f64]) -> f64 {
     }
 }
 
-/// Runs the benchmark for both integrators.
+/// Runs the benchmark for both integrators on one thread.
 pub fn measure(repeat: usize, scale: f64) -> Vec<TdmdRow> {
+    measure_threads(repeat, scale, &[1])
+}
+
+/// Runs the benchmark for both integrators and each thread count of `threads` (alternating
+/// within each repetition); rows in the order integrator, then thread count.
+pub fn measure_threads(repeat: usize, scale: f64, threads: &[usize]) -> Vec<TdmdRow> {
     let timed = scale.max(0.1);
-    ["gear5", "verlet"]
-        .into_iter()
-        .map(|integ| {
-            let s = scene(integ);
-            let mut row = TdmdRow {
+    let pools: Vec<rayon::ThreadPool> = threads
+        .iter()
+        .map(|&t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t.max(1))
+                .build()
+                .expect("a thread pool")
+        })
+        .collect();
+    let mut rows = Vec::new();
+    for integ in ["gear5", "verlet"] {
+        let s = scene(integ);
+        let first = rows.len();
+        for &t in threads {
+            rows.push(TdmdRow {
                 integrator: integ,
+                threads: t.max(1),
                 seconds_per_time: Vec::new(),
                 cpu_per_time: Vec::new(),
                 pairs_per_particle: 0.0,
@@ -110,28 +151,39 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<TdmdRow> {
                 max_overlap: 0.0,
                 builds_per_step: 0.0,
                 damping: s.contact.damping.unwrap_or(0.0),
-            };
-            for _ in 0..repeat.max(1) {
-                let mut e = TimeEngine::<2, true, false>::new(&s);
-                e.run_until(1.0);
-                let (b0, s0) = (e.list_builds(), e.steps());
-                let cpu0 = thread_cpu_seconds();
-                let start = Instant::now();
-                e.run_until(1.0 + timed);
-                let secs = start.elapsed().as_secs_f64();
-                if let (Some(c0), Some(c1)) = (cpu0, thread_cpu_seconds()) {
-                    row.cpu_per_time.push((c1 - c0) / timed);
-                }
-                row.seconds_per_time.push(secs / timed);
-                row.pairs_per_particle = e.list_entries() as f64 / e.len() as f64;
-                row.max_overlap = row.max_overlap.max(e.max_overlap());
-                row.builds_per_step =
-                    (e.list_builds() - b0) as f64 / (e.steps() - s0).max(1) as f64;
-                e.sanity_check().expect("bench run keeps its invariants");
+            });
+        }
+        for _ in 0..repeat.max(1) {
+            for (pool, row) in pools.iter().zip(&mut rows[first..]) {
+                pool.install(|| {
+                    let mut e = TimeEngine::<2, true, false>::new(&s);
+                    e.run_until(1.0);
+                    let (b0, s0) = (e.list_builds(), e.steps());
+                    let cpu0 = process_cpu_seconds();
+                    let start = Instant::now();
+                    timed_run(&mut e, 1.0 + timed);
+                    let secs = start.elapsed().as_secs_f64();
+                    if let (Some(c0), Some(c1)) = (cpu0, process_cpu_seconds()) {
+                        row.cpu_per_time.push((c1 - c0) / timed);
+                    }
+                    row.seconds_per_time.push(secs / timed);
+                    row.pairs_per_particle = e.list_entries() as f64 / e.len() as f64;
+                    row.max_overlap = row.max_overlap.max(e.max_overlap());
+                    row.builds_per_step =
+                        (e.list_builds() - b0) as f64 / (e.steps() - s0).max(1) as f64;
+                    e.sanity_check().expect("bench run keeps its invariants");
+                });
             }
-            row
-        })
-        .collect()
+        }
+    }
+    rows
+}
+
+/// The timed part of a repetition, a function of its own so that a profiler can select it
+/// (`valgrind --tool=callgrind --toggle-collect='*tdmd*timed_run*'`).
+#[inline(never)]
+pub fn timed_run(e: &mut TimeEngine<2, true, false>, t_end: f64) {
+    e.run_until(t_end);
 }
 
 /// The table.
@@ -143,8 +195,9 @@ pub fn report(rows: &[TdmdRow]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<8} {:>12} {:>11} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}",
+        "{:<8} {:>3} {:>12} {:>11} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}",
         "integr.",
+        "thr",
         "p-steps/s",
         "s/time med",
         "min",
@@ -176,8 +229,9 @@ pub fn report(rows: &[TdmdRow]) -> String {
         };
         let _ = writeln!(
             s,
-            "{:<8} {:>12.3e} {:>11.4} {:>9.4} {:>9.4} {:>9.2}x {:>11} {:>10} {:>10.5} {:>10.4} {:>9.2}",
+            "{:<8} {:>3} {:>12.3e} {:>11.4} {:>9.4} {:>9.4} {:>9.2}x {:>11} {:>10} {:>10.5} {:>10.4} {:>9.2}",
             r.integrator,
+            r.threads,
             psteps,
             med,
             min,
@@ -188,6 +242,26 @@ pub fn report(rows: &[TdmdRow]) -> String {
             r.max_overlap,
             r.builds_per_step,
             r.pairs_per_particle
+        );
+    }
+    for r in rows {
+        let Some(base) = rows
+            .iter()
+            .find(|b| b.integrator == r.integrator && b.threads != r.threads)
+            .filter(|_| r.threads > 1)
+        else {
+            continue;
+        };
+        let (m0, m1) = (median(&base.seconds_per_time), median(&r.seconds_per_time));
+        let _ = writeln!(
+            s,
+            "{}: {} threads {:.2}x faster than {} (median wall time per time unit {:.4} s vs {:.4} s)",
+            r.integrator,
+            r.threads,
+            m0 / m1,
+            base.threads,
+            m1,
+            m0
         );
     }
     if let Some(r) = rows.first() {

@@ -53,6 +53,10 @@ pub enum Command {
         /// `wall` only: also write the error-against-cost plot as SVG to this file.
         #[arg(long)]
         svg: Option<PathBuf>,
+        /// `tdmd` only: thread counts to run on, comma-separated (e.g. `1,2`; the speed-up is
+        /// against the first).
+        #[arg(long, value_delimiter = ',', default_value = "1")]
+        threads: Vec<usize>,
     },
     /// Phase-diagram sweeps: run, resume, status, refine, submit to Slurm and collect (and
     /// expand, job for running elsewhere).
@@ -202,7 +206,8 @@ pub fn main() -> ExitCode {
             repeat,
             scale,
             svg,
-        } => match bench::run_with_svg(&which, repeat.max(1), scale, svg.as_deref()) {
+            threads,
+        } => match bench::run_with_svg(&which, repeat.max(1), scale, svg.as_deref(), &threads) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");

@@ -9,9 +9,17 @@
 //! [`TableCache`] per run, capped by [`RunOptions::table_cache_mib`], installed on every worker
 //! thread and dropped with the run, so a sweep over many drives keeps at most the cap in
 //! cached tables (plus the two tables each running job holds).
+//!
+//! The runner also shares the machine's cores among its jobs ([`CoreShare`], `sim::threads`):
+//! each worker enters the run's share, and the runner tells it how many workers are busy and
+//! whether the queue is empty. While jobs wait, each job gets `cores / workers` threads; once
+//! the queue is empty, the jobs still running get the idle workers' cores (the time-driven
+//! engine's steps are parallel, with the same numbers on any number of threads), so the tail
+//! of a sweep does not leave cores idle.
 
 use super::progress::Progress;
 use crate::sim::event_driven::table_cache::TableCache;
+use crate::sim::threads::{self, CoreShare};
 use crate::store::{Claim, HEARTBEAT_INTERVAL, Store, StoreError, SweepRow};
 use crate::sweep::job::{JobError, JobResult, run_job, run_job_from};
 use std::sync::mpsc;
@@ -144,16 +152,19 @@ pub fn run_sweeps(
     let mut job_tx = Vec::new();
     let mut handles = Vec::new();
     let tables = TableCache::with_cap_mib(opts.table_cache_mib);
+    let cores = CoreShare::new(threads::available_cores(), n_workers);
     for w in 0..n_workers {
         let (tx, rx) = mpsc::channel::<Claim>();
         job_tx.push(tx);
         let out = msg_tx.clone();
         let tables = tables.clone();
+        let cores = cores.clone();
         handles.push(
             thread::Builder::new()
                 .name(format!("wetgran-worker-{w}"))
                 .spawn(move || {
                     let _tables = tables.enter();
+                    let _cores = threads::enter(&cores, w);
                     worker(w, rx, out)
                 })
                 .expect("spawn a worker thread"),
@@ -163,13 +174,18 @@ pub fn run_sweeps(
 
     let mut idle: Vec<usize> = (0..n_workers).rev().collect();
     let mut busy = 0usize;
+    // Whether the last claim found the queue empty (a continuation job may become claimable
+    // later, when its predecessor ends).
+    let mut drained = false;
     let mut last_beat = Instant::now();
     let outcome = (|| -> Result<(), StoreError> {
         loop {
             while let Some(&w) = idle.last() {
                 let Some(mut claim) = store.claim(&ids)? else {
+                    drained = true;
                     break;
                 };
+                drained = false;
                 let sweep = sweeps
                     .iter()
                     .find(|s| s.name == claim.sweep)
@@ -197,6 +213,7 @@ pub fn run_sweeps(
             if busy == 0 {
                 return Ok(());
             }
+            cores.set(busy, drained);
             let wait = HEARTBEAT_INTERVAL.saturating_sub(last_beat.elapsed());
             match msg_rx.recv_timeout(wait.max(Duration::from_millis(10))) {
                 Ok(Msg::Progress(w, f)) => progress.update(w, f),

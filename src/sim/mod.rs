@@ -9,12 +9,14 @@
 //! [`run_scene_watched`] is the general form: it can start from a saved [`EngineState`] instead
 //! of the scene's initial state, and its [`Watcher`] may extend the run on the same trajectory
 //! when it reaches its end (run to stationarity, `crate::scene::convergence`). Every run reports
-//! its final state ([`RunReport::final_state`]) for checkpoints.
+//! its final state ([`RunReport::final_state`]) for checkpoints. [`threads`] chooses how many
+//! threads a simulation uses (the time-driven engine's steps are parallel).
 
 pub mod event_driven;
 pub mod frame;
 pub mod initial;
 pub mod state;
+pub mod threads;
 pub mod time_driven;
 
 pub use frame::Frame;

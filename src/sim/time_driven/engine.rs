@@ -35,19 +35,20 @@
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
 
 use super::integrator::{
-    GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict, gear_unpredict,
-    verlet_drift, verlet_kick,
+    GEAR_FLUSH_EVERY, GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict,
+    gear_unpredict, verlet_drift, verlet_kick,
 };
 use super::neighbours::{BOND, CONTACT, NeighbourList};
 use crate::physics::hertz;
 use crate::scene::{Boundary, DEFAULT_DT, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
 use crate::sim::event_driven::{EnergyLedger, EventCounts};
 use crate::sim::initial::initial_state;
+use rayon::prelude::*;
 use std::borrow::Cow;
 
 /// A force per particle that depends on its position and the time (hook for driving by a body
 /// force, e.g. the shear force of MODEL.md 4.2). Its work is booked in `work_by_drive`.
-pub trait BodyForce<const D: usize> {
+pub trait BodyForce<const D: usize>: Send + Sync {
     /// Whether the force exists (false compiles the call away).
     const ACTIVE: bool;
     /// The force on a particle at `x` at time `t`.
@@ -69,6 +70,22 @@ impl<const D: usize> BodyForce<D> for NoBodyForce {
 /// The exact neighbour-list displacement test runs at least every this many steps (it bounds
 /// the round-off accumulated in the displacement bound of [`TimeEngine::update_list`]).
 pub const EXACT_CHECK_EVERY: u32 = 1024;
+
+/// Coordinates per chunk of the per-particle phase of a step (and of Verlet's drift): the
+/// unit of work of a thread, and the unit over which the booked sums are taken before they are
+/// added up in chunk order (fixed, so the numbers do not depend on the number of threads).
+pub const PARTICLE_CHUNK: usize = 128;
+
+/// Verlet-list entries per chunk of the pair phase of a step (the same role).
+pub const ENTRY_CHUNK: usize = 128;
+
+/// Below this many particles the loops of a step run on the calling thread (same chunks, same
+/// numbers): a parallel loop costs a few microseconds of hand-over per step.
+pub const PARALLEL_MIN_PARTICLES: usize = 512;
+
+/// Bits of `wall_contact`: touching the lower, the upper wall of the coordinate's axis.
+const WALL_LO: u8 = 1;
+const WALL_HI: u8 = 2;
 
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
@@ -113,9 +130,17 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     radius: Vec<f64>,
     /// `k sqrt(R_i)`: the wall prefactor of each particle (`R_eff = R_i`).
     wall_kr: Vec<f64>,
-    /// Per particle: bit 0 touching the lower wall, bit 1 the upper wall, of each axis `k`
-    /// (bits `2k`, `2k + 1`).
+    /// Per coordinate (axis-major): bit 0 touching the lower wall, bit 1 the upper wall of
+    /// that axis.
     wall_contact: Vec<u8>,
+    /// Pair force of each Verlet-list entry on its row's particle, `D` values per entry.
+    pair_f: Vec<f64>,
+    /// Body force per particle, particle-major (empty without one).
+    body_f: Vec<f64>,
+    /// Reused result buffers of the parallel phases (per chunk).
+    pair_books: Vec<PairBooks>,
+    chunk_books: Vec<ChunkBooks<D>>,
+    body_work: Vec<f64>,
     list: NeighbourList<D>,
     /// Upper bound on the displacement of every particle since the last neighbour-list build
     /// (or exact check): the sum over steps of `sqrt(sum_k m_k^2)`, `m_k` the largest move along
@@ -260,7 +285,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             acc: vec![0.0; D * n],
             radius: init.radius,
             wall_kr,
-            wall_contact: vec![0; n],
+            wall_contact: vec![0; D * n],
+            pair_f: Vec::new(),
+            body_f: Vec::new(),
+            pair_books: Vec::new(),
+            chunk_books: Vec::new(),
+            body_work: Vec::new(),
             list,
             moved_bound: 0.0,
             since_check: 0,
@@ -290,7 +320,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             engine.work_by_drive = st.ledger.work_by_drive;
         }
         // Initial accelerations; the bookkeeping of this evaluation is not a step (dt = 0).
-        engine.compute_forces(t0, 1.0, 0.0);
+        engine.forces_then(t0, 1.0, 0.0, Then::Nothing);
         if engine.p.integrator == IntegratorKind::Gear5 {
             let dt = engine.p.dt;
             for e in 0..D * n {
@@ -440,7 +470,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.list.build(&self.r[0], &self.radius);
         self.moved_bound = 0.0;
         let t = self.time();
-        self.compute_forces(t, self.velocity_scale(), 0.0);
+        self.forces_then(t, self.velocity_scale(), 0.0, Then::Nothing);
         if self.p.integrator == IntegratorKind::Gear5 {
             for e in 0..D * n {
                 self.r[2][e] = 0.5 * dt * dt * self.acc[e];
@@ -509,7 +539,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     pub fn step(&mut self) {
         let dt = self.p.dt;
         let t1 = (self.steps + 1) as f64 * dt;
-        let n = self.n;
         match self.p.integrator {
             IntegratorKind::Gear5 => {
                 if !self.predicted {
@@ -519,80 +548,130 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                     self.moved_bound = f64::INFINITY;
                 }
                 self.update_list();
-                self.compute_forces(t1, 1.0 / dt, dt);
-                // Corrector of this step, predictor of the next, the wrap of both positions
-                // and the largest move, in one pass per axis.
-                let c = self.p.gear;
-                let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+                // Forces, then the corrector of this step, the predictor of the next, the wrap
+                // of both positions and the largest move per axis, in one pass per chunk.
+                let moved = self.forces_then(t1, 1.0 / dt, dt, Then::Gear);
                 let mut moved2 = 0.0;
-                for k in 0..D {
-                    let a = k * n..(k + 1) * n;
-                    let m = gear_correct_predict_axis(
-                        [
-                            &mut r0[a.clone()],
-                            &mut r1[a.clone()],
-                            &mut r2[a.clone()],
-                            &mut r3[a.clone()],
-                            &mut r4[a.clone()],
-                            &mut r5[a.clone()],
-                        ],
-                        &self.acc[a],
-                        0.5 * dt * dt,
-                        &c,
-                        self.p.periodic[k].then_some(self.p.size[k]),
-                    );
+                for m in moved {
                     moved2 += m * m;
                 }
                 self.moved_bound += moved2.sqrt();
                 self.predicted = true;
             }
             IntegratorKind::Verlet => {
-                let [x, v, ..] = &mut self.r;
+                let moved = self.verlet_drift_wrap(dt);
                 let mut moved2 = 0.0;
-                for k in 0..D {
-                    let a = k * n..(k + 1) * n;
-                    let m = verlet_drift(&mut x[a.clone()], &mut v[a.clone()], &self.acc[a], dt);
+                for m in moved {
                     moved2 += m * m;
                 }
                 self.moved_bound += moved2.sqrt();
-                self.wrap();
                 self.update_list();
-                self.compute_forces(t1, 1.0, dt);
-                verlet_kick(&mut self.r[1], &self.acc, dt);
+                self.forces_then(t1, 1.0, dt, Then::VerletKick);
             }
         }
         self.steps += 1;
     }
 
     /// Runs until the time is the multiple of `dt` nearest to `t_end`. Always returns true (the
-    /// time engine has no event cap).
+    /// time engine has no event cap). Runs on the thread pool `sim::threads` chooses.
     pub fn run_until(&mut self, t_end: f64) -> bool {
         let target = (t_end / self.p.dt).round().max(0.0) as u64;
-        while self.steps < target {
-            self.step();
+        if self.steps >= target {
+            return true;
         }
+        crate::sim::threads::install(|| {
+            while self.steps < target {
+                self.step();
+            }
+        });
         true
     }
 
-    /// Accelerations at positions `r[0]` and velocities `r[1] * vs` at time `t`; books
-    /// dissipation, drive work, contact onsets and bridge events with weight `dt` (0: a
-    /// re-evaluation that is not a step).
-    fn compute_forces(&mut self, t: f64, vs: f64, dt: f64) {
+    /// Whether the loops of a step are split over threads: on a pool of more than one thread
+    /// and from [`PARALLEL_MIN_PARTICLES`] particles on; otherwise the serial path runs on the
+    /// calling thread, without the pool. The numbers are the same either way.
+    fn parallel(&self) -> bool {
+        self.n >= PARALLEL_MIN_PARTICLES && rayon::current_num_threads() > 1
+    }
+
+    /// Velocity Verlet's first half on every coordinate (`verlet_drift`), with the wrap of the
+    /// periodic axes; returns the largest move per axis.
+    fn verlet_drift_wrap(&mut self, dt: f64) -> [f64; D] {
+        let n = self.n;
+        let min_len = if self.parallel() { 1 } else { usize::MAX };
+        let (periodic, size) = (self.p.periodic, self.p.size);
+        let [x, v, ..] = &mut self.r;
+        let drift = |e0: usize, x: &mut [f64], v: &mut [f64], acc: &[f64]| {
+            let mut moved = [0.0; D];
+            for_each_axis_segment(n, e0, x.len(), |k, o, m| {
+                let (x, v, acc) = (&mut x[o..o + m], &mut v[o..o + m], &acc[o..o + m]);
+                moved[k] = max_ignoring_nan(moved[k], verlet_drift(x, v, acc, dt));
+                if periodic[k] {
+                    wrap_slice(x, size[k]);
+                }
+            });
+            moved
+        };
+        (
+            x.par_chunks_mut(PARTICLE_CHUNK),
+            v.par_chunks_mut(PARTICLE_CHUNK),
+            self.acc.par_chunks(PARTICLE_CHUNK),
+        )
+            .into_par_iter()
+            .enumerate()
+            .with_min_len(min_len)
+            .map(|(c, (x, v, acc))| drift(c * PARTICLE_CHUNK, x, v, acc))
+            .reduce(
+                || [0.0; D],
+                |a, b| std::array::from_fn(|k| max_ignoring_nan(a[k], b[k])),
+            )
+    }
+
+    /// Accelerations at positions `r[0]` and velocities `r[1] * vs` at time `t`, then `then`
+    /// (the Gear corrector-predictor or Verlet's second half); books dissipation, drive work,
+    /// contact onsets and bridge events with weight `dt` (0: a re-evaluation that is not a
+    /// step). Returns the largest move per axis of the Gear update (zeros otherwise).
+    ///
+    /// Two parallel phases, each over fixed chunks whose results are combined in chunk order,
+    /// so the numbers do not depend on the number of threads:
+    ///
+    /// 1. the pair forces of every Verlet-list entry (each pair once), into a buffer, with the
+    ///    contact and bridge flags ([`pair_chunk`], chunks of [`ENTRY_CHUNK`] entries);
+    /// 2. per chunk of [`PARTICLE_CHUNK`] coordinates: the weight, the pair forces gathered in
+    ///    the order the half list's rows visit them (the partners' rows, ascending, then the
+    ///    particle's own row), the walls, the body force, `1/m`, then `then`
+    ///    ([`particle_chunk`]).
+    ///
+    /// The accelerations are the same bits as a single loop that scatters each pair force to
+    /// both partners; the booked sums (dissipation, drive work, bridge energy) are summed per
+    /// chunk, so they differ from a single running sum by round-off.
+    fn forces_then(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
+        if self.parallel() {
+            self.forces_then_parallel(t, vs, dt, then)
+        } else {
+            self.forces_then_serial(t, vs, dt, then)
+        }
+    }
+
+    /// [`Self::forces_then`] on the calling thread, as one loop per kind of force: the pair
+    /// loop scatters each pair force to both partners (rows ascending, so every particle
+    /// receives its partners' forces in the order the parallel gather adds them), then walls,
+    /// body force, `1/m` and `then` per axis. The booked sums are taken per chunk as in the
+    /// parallel path, so both paths give the same bits (`tests/time_driven_pins.rs` runs each
+    /// pin on one thread, this path, and on two, the parallel one); this one does less work
+    /// (no per-entry force buffer, no gather).
+    fn forces_then_serial(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
         let n = self.n;
         let p = &self.p;
-        let x = &self.r[0];
-        let v = &self.r[1];
         let f = &mut self.acc;
-        // Start from the weight, -m g along the last axis.
-        f.fill(0.0);
+        let mut init = [0.0; D];
         if GRAV {
-            f[(D - 1) * n..].fill(-p.mass * p.gravity);
+            // Start from the weight, -m g along the last axis.
+            init[D - 1] = -p.mass * p.gravity;
         }
-        let mut half = [0.0; D];
         for k in 0..D {
-            half[k] = 0.5 * p.size[k];
+            f[k * n..(k + 1) * n].fill(init[k]);
         }
-        let list = &mut self.list;
         let pc = PairConstants {
             periodic: p.periodic,
             size: p.size,
@@ -603,28 +682,34 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             vs,
             dt,
         };
-        let out = pair_forces::<D, WET>(
+        let list = &mut self.list;
+        let pb = pair_forces_serial::<D, WET>(
             &pc,
-            x,
-            v,
+            &self.r[0],
+            &self.r[1],
             f,
             &self.radius,
             &list.start,
             &list.rows,
             &list.partner,
             &mut list.flags,
-            &mut self.counts,
         );
-        let mut diss = out.dissipated;
-        let mut max_ov = self.max_overlap.max(out.max_overlap);
-        self.dissipated_bridges += out.bridge_ledger;
-        // Walls: Hertz with R_eff = R_i on every non-periodic axis; the last axis moves with the
-        // drive, z_w(t) = A sin(omega t) (MODEL.md 4.1).
+        self.counts.pair_collisions += pb.onsets;
+        self.counts.bridge_formations += pb.formations;
+        self.counts.bridge_ruptures += pb.ruptures;
+        self.dissipated_bridges += pb.bridge_ledger;
+        let mut diss = pb.dissipated;
+        let mut max_ov = self.max_overlap.max(pb.max_overlap);
+        // Per-chunk partial sums of the walls' dissipation and work, in the chunks of the
+        // parallel path (adding a chunk that booked nothing adds +0 and changes nothing).
+        let mut work = 0.0;
+        let (mut part_diss, mut part_work, mut part_chunk) = (0.0, 0.0, 0usize);
         let (zw, vw) = match p.drive {
             Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
             None => (0.0, 0.0),
         };
-        let mut work = 0.0;
+        let x = &self.r[0];
+        let v = &self.r[1];
         for k in 0..D {
             if p.periodic[k] {
                 continue;
@@ -636,50 +721,62 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             let fk = &mut f[k * n..(k + 1) * n];
             let radius = &self.radius[..n];
             let wall_kr = &self.wall_kr[..n];
-            let touching = &mut self.wall_contact[..n];
-            let bit_lo = 1u8 << (2 * k);
-            let bit_hi = bit_lo << 1;
+            let touching = &mut self.wall_contact[k * n..(k + 1) * n];
             for i in 0..n {
                 let ri = radius[i];
                 let ov_lo = ri - (xk[i] - lo);
                 let ov_hi = xk[i] + ri - hi;
                 if ov_lo <= 0.0 && ov_hi <= 0.0 {
-                    if touching[i] & (bit_lo | bit_hi) != 0 {
-                        touching[i] &= !(bit_lo | bit_hi);
+                    if touching[i] != 0 {
+                        touching[i] = 0;
                     }
                     continue;
                 }
                 let (ov, sign, bit) = if ov_lo > 0.0 {
-                    (ov_lo, 1.0, bit_lo)
+                    (ov_lo, 1.0, WALL_LO)
                 } else {
-                    (ov_hi, -1.0, bit_hi)
+                    (ov_hi, -1.0, WALL_HI)
                 };
                 if touching[i] & bit == 0 {
                     touching[i] |= bit;
                     self.counts.wall_collisions += 1;
                 }
                 max_ov = max_ov.max(ov);
+                let chunk = (k * n + i) / PARTICLE_CHUNK;
+                if chunk != part_chunk {
+                    diss += part_diss;
+                    work += part_work;
+                    (part_diss, part_work, part_chunk) = (0.0, 0.0, chunk);
+                }
                 // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
                 let xi_dot = -sign * (vk[i] * vs - wv);
                 let kr = wall_kr[i];
                 let total = hertz::force(kr, ov, xi_dot, p.wall_damping);
                 if p.wall_damping > 0.0 {
-                    diss += (total - kr * ov * ov.sqrt()) * xi_dot * dt;
+                    part_diss += (total - kr * ov * ov.sqrt()) * xi_dot * dt;
                 }
                 let fw = sign * total;
                 fk[i] += fw;
-                work += fw * wv * dt;
+                part_work += fw * wv * dt;
             }
         }
+        diss += part_diss;
+        work += part_work;
         if B::ACTIVE {
+            let (mut part, mut part_chunk) = (0.0, 0usize);
             for i in 0..n {
                 let xi: [f64; D] = std::array::from_fn(|k| x[k * n + i]);
                 let fb = self.body.force(&xi, t);
+                if i / PARTICLE_CHUNK != part_chunk {
+                    work += part;
+                    (part, part_chunk) = (0.0, i / PARTICLE_CHUNK);
+                }
                 for k in 0..D {
                     f[k * n + i] += fb[k];
-                    work += fb[k] * v[k * n + i] * vs * dt;
+                    part += fb[k] * v[k * n + i] * vs * dt;
                 }
             }
+            work += part;
         }
         // a = F / m.
         if p.mass != 1.0 {
@@ -691,6 +788,192 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.dissipated_damping += diss;
         self.work_by_drive += work;
         self.max_overlap = max_ov;
+        let mut moved = [0.0; D];
+        let flush = self.steps.is_multiple_of(GEAR_FLUSH_EVERY);
+        match then {
+            Then::Nothing => {}
+            Then::Gear => {
+                let c = p.gear;
+                let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+                for k in 0..D {
+                    let a = k * n..(k + 1) * n;
+                    moved[k] = gear_correct_predict_axis(
+                        [
+                            &mut r0[a.clone()],
+                            &mut r1[a.clone()],
+                            &mut r2[a.clone()],
+                            &mut r3[a.clone()],
+                            &mut r4[a.clone()],
+                            &mut r5[a.clone()],
+                        ],
+                        &f[a],
+                        0.5 * p.dt * p.dt,
+                        &c,
+                        p.periodic[k].then_some(p.size[k]),
+                        flush,
+                    );
+                }
+            }
+            Then::VerletKick => verlet_kick(&mut self.r[1], f, dt),
+        }
+        moved
+    }
+
+    /// [`Self::forces_then`] split over the pool's threads (see there).
+    fn forces_then_parallel(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
+        let n = self.n;
+        let min_len = 1;
+        let p = &self.p;
+        let entries = self.list.partner.len();
+        self.pair_f.resize(D * entries, 0.0);
+        let pc = PairConstants {
+            periodic: p.periodic,
+            size: p.size,
+            stiffness: p.stiffness,
+            damping: p.damping,
+            bridge_force: p.bridge_force,
+            s_crit: p.s_crit,
+            vs,
+            dt,
+        };
+        {
+            let (x, v, radius) = (&self.r[0], &self.r[1], &self.radius);
+            let (row_of, partner) = (&self.list.row_of, &self.list.partner);
+            self.list
+                .flags
+                .par_chunks_mut(ENTRY_CHUNK)
+                .zip(self.pair_f.par_chunks_mut(ENTRY_CHUNK * D))
+                .enumerate()
+                .with_min_len(min_len)
+                .map(|(c, (flags, pf))| {
+                    let q0 = c * ENTRY_CHUNK;
+                    pair_chunk::<D, WET>(
+                        &pc,
+                        x,
+                        v,
+                        radius,
+                        &row_of[q0..],
+                        &partner[q0..],
+                        flags,
+                        pf,
+                    )
+                })
+                .collect_into_vec(&mut self.pair_books);
+        }
+        let mut diss = 0.0;
+        let mut ledger = 0.0;
+        let mut max_ov = self.max_overlap;
+        for b in &self.pair_books {
+            diss += b.dissipated;
+            ledger += b.bridge_ledger;
+            max_ov = max_ov.max(b.max_overlap);
+            self.counts.pair_collisions += b.onsets;
+            self.counts.bridge_formations += b.formations;
+            self.counts.bridge_ruptures += b.ruptures;
+        }
+        self.dissipated_bridges += ledger;
+        // The body force per particle (all axes at once), particle-major, with its work.
+        self.body_work.clear();
+        if B::ACTIVE {
+            self.body_f.resize(D * n, 0.0);
+            let (x, v, body) = (&self.r[0], &self.r[1], &self.body);
+            self.body_f
+                .par_chunks_mut(PARTICLE_CHUNK * D)
+                .enumerate()
+                .with_min_len(min_len)
+                .map(|(c, bf)| {
+                    let i0 = c * PARTICLE_CHUNK;
+                    let mut work = 0.0;
+                    for (m, out) in bf.chunks_mut(D).enumerate() {
+                        let i = i0 + m;
+                        let xi: [f64; D] = std::array::from_fn(|k| x[k * n + i]);
+                        let fb = body.force(&xi, t);
+                        for k in 0..D {
+                            out[k] = fb[k];
+                            work += fb[k] * v[k * n + i] * vs * dt;
+                        }
+                    }
+                    work
+                })
+                .collect_into_vec(&mut self.body_work);
+        }
+        // Walls: Hertz with R_eff = R_i on every non-periodic axis; the last axis moves with the
+        // drive, z_w(t) = A sin(omega t) (MODEL.md 4.1).
+        let (zw, vw) = match p.drive {
+            Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
+            None => (0.0, 0.0),
+        };
+        let mut init = [0.0; D];
+        if GRAV {
+            // Start from the weight, -m g along the last axis.
+            init[D - 1] = -p.mass * p.gravity;
+        }
+        let cx = ChunkContext::<D> {
+            n,
+            pf: &self.pair_f,
+            start: &self.list.start,
+            row_of: &self.list.row_of,
+            partner: &self.list.partner,
+            in_start: &self.list.in_start,
+            in_entry: &self.list.in_entry,
+            radius: &self.radius,
+            wall_kr: &self.wall_kr,
+            body_f: if B::ACTIVE { &self.body_f } else { &[] },
+            init,
+            periodic: p.periodic,
+            size: p.size,
+            wall_shift: std::array::from_fn(|k| if k == D - 1 { (zw, vw) } else { (0.0, 0.0) }),
+            wall_damping: p.wall_damping,
+            inv_mass: (p.mass != 1.0).then(|| 1.0 / p.mass),
+            vs,
+            dt,
+            then,
+            gear: p.gear,
+            half_dt2: 0.5 * p.dt * p.dt,
+            flush: self.steps.is_multiple_of(GEAR_FLUSH_EVERY),
+        };
+        let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+        (
+            self.acc.par_chunks_mut(PARTICLE_CHUNK),
+            r0.par_chunks_mut(PARTICLE_CHUNK),
+            r1.par_chunks_mut(PARTICLE_CHUNK),
+            r2.par_chunks_mut(PARTICLE_CHUNK),
+            r3.par_chunks_mut(PARTICLE_CHUNK),
+            r4.par_chunks_mut(PARTICLE_CHUNK),
+            r5.par_chunks_mut(PARTICLE_CHUNK),
+            self.wall_contact.par_chunks_mut(PARTICLE_CHUNK),
+        )
+            .into_par_iter()
+            .enumerate()
+            .with_min_len(min_len)
+            .map(|(c, (acc, r0, r1, r2, r3, r4, r5, touch))| {
+                particle_chunk(
+                    &cx,
+                    c * PARTICLE_CHUNK,
+                    acc,
+                    [r0, r1, r2, r3, r4, r5],
+                    touch,
+                )
+            })
+            .collect_into_vec(&mut self.chunk_books);
+        let mut work = 0.0;
+        let mut moved = [0.0; D];
+        for b in &self.chunk_books {
+            diss += b.dissipated;
+            work += b.work;
+            max_ov = max_ov.max(b.max_overlap);
+            self.counts.wall_collisions += b.onsets;
+            for k in 0..D {
+                moved[k] = max_ignoring_nan(moved[k], b.moved[k]);
+            }
+        }
+        for w in &self.body_work {
+            work += w;
+        }
+        self.dissipated_damping += diss;
+        self.work_by_drive += work;
+        self.max_overlap = max_ov;
+        moved
     }
 
     /// Energy bookkeeping at the current time (see the module doc for the fields).
@@ -892,18 +1175,142 @@ struct PairConstants<const D: usize> {
     dt: f64,
 }
 
-/// What the pair loop books.
-struct PairOut {
+/// What one chunk of the pair loop books.
+#[derive(Debug, Clone, Copy, Default)]
+struct PairBooks {
     dissipated: f64,
     max_overlap: f64,
     bridge_ledger: f64,
+    onsets: u64,
+    formations: u64,
+    ruptures: u64,
 }
 
-/// Pair forces (Eq. 2.7 and MODEL.md 3.1) over the Verlet list, each pair once (Newton's third
-/// law), added to `f`; updates the contact and bond flags. A free function of slices so that the
-/// compiler keeps every array in a register (no aliasing through `self`).
+/// Pair forces (Eq. 2.7 and MODEL.md 3.1) of the Verlet-list entries of one chunk: entry `m`
+/// is the pair `(row_of[m], partner[m])`; its force on the row's particle goes to
+/// `pf[m * D..(m + 1) * D]` (zeros when the pair does not interact), and its contact and bond
+/// flags are updated. A free function of slices so that the compiler keeps every array in a
+/// register (no aliasing through `self`).
 #[allow(clippy::too_many_arguments)]
-fn pair_forces<const D: usize, const WET: bool>(
+fn pair_chunk<const D: usize, const WET: bool>(
+    pc: &PairConstants<D>,
+    x: &[f64],
+    v: &[f64],
+    radius: &[f64],
+    row_of: &[u32],
+    partner: &[u32],
+    flags: &mut [u8],
+    pf: &mut [f64],
+) -> PairBooks {
+    let n = radius.len();
+    let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
+    let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
+    let mut half = [0.0; D];
+    for k in 0..D {
+        half[k] = 0.5 * pc.size[k];
+    }
+    let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
+    let mut b = PairBooks::default();
+    let len = flags.len();
+    let (row_of, partner, pf) = (&row_of[..len], &partner[..len], &mut pf[..len * D]);
+    for m in 0..len {
+        let i = row_of[m] as usize;
+        let j = partner[m] as usize;
+        let out = &mut pf[m * D..(m + 1) * D];
+        let mut d = [0.0; D];
+        let mut r2 = 0.0;
+        for k in 0..D {
+            let mut dk = xs[k][i] - xs[k][j];
+            if pc.periodic[k] {
+                if dk > half[k] {
+                    dk -= pc.size[k];
+                } else if dk < -half[k] {
+                    dk += pc.size[k];
+                }
+            }
+            d[k] = dk;
+            r2 += dk * dk;
+        }
+        let ri = radius[i];
+        let rj = radius[j];
+        let sig = ri + rj;
+        let fl = flags[m];
+        if r2 >= sig * sig && (!WET || fl & BOND == 0) {
+            if fl & CONTACT != 0 {
+                flags[m] = fl & !CONTACT;
+            }
+            out.fill(0.0);
+            continue;
+        }
+        let r = r2.sqrt();
+        let inv = 1.0 / r;
+        let overlap = sig - r;
+        let mut fmag = 0.0;
+        let mut new_fl = fl;
+        if overlap > 0.0 {
+            if fl & CONTACT == 0 {
+                new_fl |= CONTACT;
+                b.onsets += 1;
+            }
+            b.max_overlap = b.max_overlap.max(overlap);
+            // xi_dot = -(v_i - v_j) . n, n = d / r.
+            let mut vn = 0.0;
+            for k in 0..D {
+                vn += (vsl[k][i] - vsl[k][j]) * d[k];
+            }
+            let xi_dot = -vn * inv * vs;
+            let kr = k_pair * (ri * rj / sig).sqrt();
+            // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
+            let total = hertz::force(kr, overlap, xi_dot, a_d);
+            if a_d > 0.0 {
+                let elastic = kr * overlap * overlap.sqrt();
+                b.dissipated += (total - elastic) * xi_dot * dt;
+            }
+            fmag = total;
+            if WET && fl & BOND == 0 {
+                // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
+                // F_B (-overlap).
+                new_fl |= BOND;
+                b.formations += 1;
+                b.bridge_ledger += pc.bridge_force * overlap;
+            }
+        } else {
+            new_fl &= !CONTACT;
+        }
+        if WET && new_fl & BOND != 0 {
+            let s = -overlap;
+            if s > pc.s_crit {
+                // Rupture: the bridge energy F_B s leaves the system.
+                new_fl &= !BOND;
+                b.ruptures += 1;
+                b.bridge_ledger += pc.bridge_force * s;
+            } else {
+                // MODEL.md 3.1: constant attraction F_B along the line of centres.
+                fmag -= pc.bridge_force;
+            }
+        }
+        if new_fl != fl {
+            flags[m] = new_fl;
+        }
+        if fmag != 0.0 {
+            let s = fmag * inv;
+            for k in 0..D {
+                out[k] = s * d[k];
+            }
+        } else {
+            out.fill(0.0);
+        }
+    }
+    b
+}
+
+/// The pair loop of the serial path ([`TimeEngine::forces_then_serial`]): forces (Eq. 2.7 and
+/// MODEL.md 3.1) over the Verlet list, each pair once (Newton's third law), added to `f` (the
+/// partner's share at once, the row's own sum at the end of its row); updates the contact and
+/// bond flags. The same arithmetic as [`pair_chunk`] and the gather of [`particle_chunk`]; the
+/// dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries as there.
+#[allow(clippy::too_many_arguments)]
+fn pair_forces_serial<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
     x: &[f64],
     v: &[f64],
@@ -913,8 +1320,7 @@ fn pair_forces<const D: usize, const WET: bool>(
     rows: &[u32],
     partner: &[u32],
     flags: &mut [u8],
-    counts: &mut EventCounts,
-) -> PairOut {
+) -> PairBooks {
     let n = radius.len();
     let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
     let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
@@ -923,9 +1329,9 @@ fn pair_forces<const D: usize, const WET: bool>(
         half[k] = 0.5 * pc.size[k];
     }
     let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
-    let mut diss = 0.0;
-    let mut max_ov = 0.0f64;
-    let mut ledger = 0.0;
+    let mut b = PairBooks::default();
+    // Partial sums of the current chunk of entries.
+    let (mut diss, mut ledger, mut boundary) = (0.0, 0.0, ENTRY_CHUNK);
     for &i in rows {
         let i = i as usize;
         let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
@@ -938,6 +1344,19 @@ fn pair_forces<const D: usize, const WET: bool>(
         }
         let ri = radius[i];
         for q in p0..p1 {
+            // Before booking at entry `q`: close the partial sums of the earlier chunks (only
+            // where something is booked, off the common path; a chunk that booked nothing
+            // would add +0).
+            macro_rules! chunk_of_q {
+                () => {
+                    if q >= boundary {
+                        b.dissipated += diss;
+                        b.bridge_ledger += ledger;
+                        (diss, ledger) = (0.0, 0.0);
+                        boundary = (q / ENTRY_CHUNK + 1) * ENTRY_CHUNK;
+                    }
+                };
+            }
             let j = partner[q] as usize;
             let mut d = [0.0; D];
             let mut r2 = 0.0;
@@ -970,9 +1389,9 @@ fn pair_forces<const D: usize, const WET: bool>(
             if overlap > 0.0 {
                 if fl & CONTACT == 0 {
                     new_fl |= CONTACT;
-                    counts.pair_collisions += 1;
+                    b.onsets += 1;
                 }
-                max_ov = max_ov.max(overlap);
+                b.max_overlap = b.max_overlap.max(overlap);
                 // xi_dot = -(v_i - v_j) . n, n = d / r.
                 let mut vn = 0.0;
                 for k in 0..D {
@@ -984,6 +1403,7 @@ fn pair_forces<const D: usize, const WET: bool>(
                 let total = hertz::force(kr, overlap, xi_dot, a_d);
                 if a_d > 0.0 {
                     let elastic = kr * overlap * overlap.sqrt();
+                    chunk_of_q!();
                     diss += (total - elastic) * xi_dot * dt;
                 }
                 fmag = total;
@@ -991,7 +1411,8 @@ fn pair_forces<const D: usize, const WET: bool>(
                     // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
                     // F_B (-overlap).
                     new_fl |= BOND;
-                    counts.bridge_formations += 1;
+                    b.formations += 1;
+                    chunk_of_q!();
                     ledger += pc.bridge_force * overlap;
                 }
             } else {
@@ -1002,7 +1423,8 @@ fn pair_forces<const D: usize, const WET: bool>(
                 if s > pc.s_crit {
                     // Rupture: the bridge energy F_B s leaves the system.
                     new_fl &= !BOND;
-                    counts.bridge_ruptures += 1;
+                    b.ruptures += 1;
+                    chunk_of_q!();
                     ledger += pc.bridge_force * s;
                 } else {
                     // MODEL.md 3.1: constant attraction F_B along the line of centres.
@@ -1025,9 +1447,209 @@ fn pair_forces<const D: usize, const WET: bool>(
             f[k * n + i] += fi[k];
         }
     }
-    PairOut {
-        dissipated: diss,
-        max_overlap: max_ov,
-        bridge_ledger: ledger,
+    b.dissipated += diss;
+    b.bridge_ledger += ledger;
+    b
+}
+
+/// What the per-particle phase does after the forces ([`TimeEngine::forces_then`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Then {
+    /// Nothing (the initial forces, a re-evaluation after `set_state`).
+    Nothing,
+    /// Gear's corrector of this step fused with the predictor of the next.
+    Gear,
+    /// Velocity Verlet's second half, `v += a dt / 2`.
+    VerletKick,
+}
+
+/// What one chunk of the per-particle phase books.
+#[derive(Debug, Clone, Copy)]
+struct ChunkBooks<const D: usize> {
+    dissipated: f64,
+    work: f64,
+    onsets: u64,
+    max_overlap: f64,
+    /// Largest move of a predicted position per axis (Gear).
+    moved: [f64; D],
+}
+
+/// What the per-particle phase reads (shared by every chunk).
+struct ChunkContext<'a, const D: usize> {
+    n: usize,
+    /// Pair forces per list entry, `D` values each ([`pair_chunk`]).
+    pf: &'a [f64],
+    start: &'a [u32],
+    row_of: &'a [u32],
+    partner: &'a [u32],
+    in_start: &'a [u32],
+    in_entry: &'a [u32],
+    radius: &'a [f64],
+    wall_kr: &'a [f64],
+    /// Body force per particle, particle-major (empty without one).
+    body_f: &'a [f64],
+    /// The force every coordinate starts from (the weight on the last axis).
+    init: [f64; D],
+    periodic: [bool; D],
+    size: [f64; D],
+    /// Per axis: the walls' displacement and velocity (the drive moves the last axis).
+    wall_shift: [(f64, f64); D],
+    wall_damping: f64,
+    inv_mass: Option<f64>,
+    vs: f64,
+    dt: f64,
+    then: Then,
+    gear: [f64; 6],
+    half_dt2: f64,
+    /// Whether this step flushes the Gear derivatives ([`GEAR_FLUSH_EVERY`]).
+    flush: bool,
+}
+
+/// Splits the flat coordinates `e0..e0 + len` (axis-major, `n` per axis) at the axis
+/// boundaries and calls `f(k, offset, m)` for each piece: axis `k`, offset in the chunk, length.
+#[inline(always)]
+fn for_each_axis_segment(n: usize, e0: usize, len: usize, mut f: impl FnMut(usize, usize, usize)) {
+    let mut o = 0;
+    while o < len {
+        let e = e0 + o;
+        let m = (len - o).min(n - e % n);
+        f(e / n, o, m);
+        o += m;
     }
+}
+
+/// `b` if it is larger, else `a` (a NaN `b` is ignored): the running maximum of the integrator
+/// loops (`integrator::lane_max`), exact and so independent of the order of the chunks.
+#[inline(always)]
+fn max_ignoring_nan(a: f64, b: f64) -> f64 {
+    if b > a { b } else { a }
+}
+
+/// `x < 0: x + L; x >= L: x - L` on every element.
+fn wrap_slice(xs: &mut [f64], l: f64) {
+    for x in xs {
+        if *x < 0.0 {
+            *x += l;
+        } else if *x >= l {
+            *x -= l;
+        }
+    }
+}
+
+/// The per-particle phase on the flat coordinates `e0..e0 + acc.len()` (one chunk, see
+/// [`TimeEngine::forces_then`]): `acc` is computed (start value, pair forces gathered in the
+/// half list's order, walls, body force, `1/m`), then `cx.then` updates `r`.
+fn particle_chunk<const D: usize>(
+    cx: &ChunkContext<D>,
+    e0: usize,
+    acc: &mut [f64],
+    r: [&mut [f64]; 6],
+    touch: &mut [u8],
+) -> ChunkBooks<D> {
+    let mut b = ChunkBooks {
+        dissipated: 0.0,
+        work: 0.0,
+        onsets: 0,
+        max_overlap: 0.0,
+        moved: [0.0; D],
+    };
+    let n = cx.n;
+    let [r0, r1, r2, r3, r4, r5] = r;
+    for_each_axis_segment(n, e0, acc.len(), |k, o, m| {
+        let i0 = (e0 + o) % n;
+        let acc = &mut acc[o..o + m];
+        acc.fill(cx.init[k]);
+        // The partners' rows, ascending: `f_j -= f_ij`.
+        for &q in &cx.in_entry[cx.in_start[i0] as usize..cx.in_start[i0 + m] as usize] {
+            let q = q as usize;
+            acc[cx.partner[q] as usize - i0] -= cx.pf[q * D + k];
+        }
+        // The particle's own row, summed first: `f_i += sum_j f_ij`.
+        let (mut q, end) = (cx.start[i0] as usize, cx.start[i0 + m] as usize);
+        while q < end {
+            let i = cx.row_of[q] as usize;
+            let row_end = cx.start[i + 1] as usize;
+            let mut own = 0.0;
+            while q < row_end {
+                own += cx.pf[q * D + k];
+                q += 1;
+            }
+            acc[i - i0] += own;
+        }
+        if !cx.periodic[k] {
+            let (shift, wv) = cx.wall_shift[k];
+            let (lo, hi) = (shift, cx.size[k] + shift);
+            let xk = &r0[o..o + m];
+            let vk = &r1[o..o + m];
+            let radius = &cx.radius[i0..i0 + m];
+            let wall_kr = &cx.wall_kr[i0..i0 + m];
+            let touching = &mut touch[o..o + m];
+            for i in 0..m {
+                let ri = radius[i];
+                let ov_lo = ri - (xk[i] - lo);
+                let ov_hi = xk[i] + ri - hi;
+                if ov_lo <= 0.0 && ov_hi <= 0.0 {
+                    if touching[i] != 0 {
+                        touching[i] = 0;
+                    }
+                    continue;
+                }
+                let (ov, sign, bit) = if ov_lo > 0.0 {
+                    (ov_lo, 1.0, WALL_LO)
+                } else {
+                    (ov_hi, -1.0, WALL_HI)
+                };
+                if touching[i] & bit == 0 {
+                    touching[i] |= bit;
+                    b.onsets += 1;
+                }
+                b.max_overlap = b.max_overlap.max(ov);
+                // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
+                let xi_dot = -sign * (vk[i] * cx.vs - wv);
+                let kr = wall_kr[i];
+                let total = hertz::force(kr, ov, xi_dot, cx.wall_damping);
+                if cx.wall_damping > 0.0 {
+                    b.dissipated += (total - kr * ov * ov.sqrt()) * xi_dot * cx.dt;
+                }
+                let fw = sign * total;
+                acc[i] += fw;
+                b.work += fw * wv * cx.dt;
+            }
+        }
+        if !cx.body_f.is_empty() {
+            for i in 0..m {
+                acc[i] += cx.body_f[(i0 + i) * D + k];
+            }
+        }
+        // a = F / m.
+        if let Some(inv_m) = cx.inv_mass {
+            for a in acc.iter_mut() {
+                *a *= inv_m;
+            }
+        }
+        match cx.then {
+            Then::Nothing => {}
+            Then::Gear => {
+                let s = o..o + m;
+                let moved = gear_correct_predict_axis(
+                    [
+                        &mut r0[s.clone()],
+                        &mut r1[s.clone()],
+                        &mut r2[s.clone()],
+                        &mut r3[s.clone()],
+                        &mut r4[s.clone()],
+                        &mut r5[s],
+                    ],
+                    acc,
+                    cx.half_dt2,
+                    &cx.gear,
+                    cx.periodic[k].then_some(cx.size[k]),
+                    cx.flush,
+                );
+                b.moved[k] = max_ignoring_nan(b.moved[k], moved);
+            }
+            Then::VerletKick => verlet_kick(&mut r1[o..o + m], acc, cx.dt),
+        }
+    });
+    b
 }

@@ -166,21 +166,38 @@ pub fn gear_unpredict(p: [f64; 6]) -> [f64; 6] {
 ///
 /// The reduction is written as a compare-and-select, not `f64::max`, so that it compiles to
 /// packed `maxpd` (NaN positions are caught by the engine's sanity check, not here).
+///
+/// With `flush = false` the subnormal safeguard of [`gear_correct`] is left out of this step;
+/// the engine flushes every [`GEAR_FLUSH_EVERY`] steps instead (see there).
 pub fn gear_correct_predict_axis(
     r: [&mut [f64]; 6],
     acc: &[f64],
     half_dt2: f64,
     c: &[f64; 6],
     period: Option<f64>,
+    flush: bool,
 ) -> f64 {
-    match period {
-        Some(l) => fused_axis::<true>(r, acc, half_dt2, c, l),
-        None => fused_axis::<false>(r, acc, half_dt2, c, 0.0),
+    match (period, flush) {
+        (Some(l), true) => fused_axis::<true, true>(r, acc, half_dt2, c, l),
+        (None, true) => fused_axis::<false, true>(r, acc, half_dt2, c, 0.0),
+        (Some(l), false) => fused_axis::<true, false>(r, acc, half_dt2, c, l),
+        (None, false) => fused_axis::<false, false>(r, acc, half_dt2, c, 0.0),
     }
 }
 
+/// The engine applies the subnormal flush of the Gear derivatives ([`GEAR_FLUSH`]) in every
+/// `GEAR_FLUSH_EVERY`-th step only, which takes four compare-and-mask operations per value out
+/// of the other steps. Safe: after a flush every derivative is 0 or at least `1e-200` in
+/// magnitude; one step forms each value from sums of products of such values with
+/// coefficients of at least `1/60`, so a non-zero result is at least `2^-52 / 60` (about
+/// `3.7e-18`) of the smallest non-zero input; in 4 steps a value can shrink to no less than
+/// `1e-200 * (3.7e-18)^4`, about `2e-271`, far above the subnormal range (`< 2.2e-308`; 6 steps
+/// would still be safe). Values between `1e-271` and `1e-200` change the position and the
+/// velocity by nothing (they are below one ulp of either).
+pub const GEAR_FLUSH_EVERY: u64 = 4;
+
 #[inline(always)]
-fn fused_axis<const WRAP: bool>(
+fn fused_axis<const WRAP: bool, const FLUSH: bool>(
     r: [&mut [f64]; 6],
     acc: &[f64],
     half_dt2: f64,
@@ -198,7 +215,13 @@ fn fused_axis<const WRAP: bool>(
         &mut r5[..n],
     );
     let acc = &acc[..n];
-    let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
+    let flush = |x: f64| {
+        if FLUSH && x.abs() < GEAR_FLUSH {
+            0.0
+        } else {
+            x
+        }
+    };
     // `x < 0: x + L; x >= L: x - L`, written as the addition of selected constants (adding or
     // subtracting 0 leaves `x` unchanged) so that it compiles to packed compares and masks,
     // not branches.
@@ -300,6 +323,46 @@ mod tests {
         );
     }
 
+    /// The engine's safeguard: the per-axis loop flushing every [`GEAR_FLUSH_EVERY`] steps
+    /// keeps every derivative of a free flight away from subnormal numbers and drives them to
+    /// exact zeros; without any flush they become subnormal (the test would fail without the
+    /// safeguard).
+    #[test]
+    fn flush_every_few_steps_leaves_no_subnormal_derivatives() {
+        let dt = 1e-4;
+        let run = |every: Option<u64>| {
+            let mut r: [Vec<f64>; 6] = [
+                vec![0.0, 5.0],
+                vec![dt, 0.0],
+                vec![0.0, 0.0],
+                vec![1e-12, -2e-12],
+                vec![-3e-13, 1e-13],
+                vec![1e-14, 3e-15],
+            ];
+            let (mut subnormal, mut zero) = (false, false);
+            for step in 0..200_000u64 {
+                let [a, b, c, d, e, f] = &mut r;
+                let flush = every.is_some_and(|k| step.is_multiple_of(k));
+                gear_correct_predict_axis(
+                    [a, b, c, d, e, f],
+                    &[0.0, 0.0],
+                    0.5 * dt * dt,
+                    &GEAR5,
+                    Some(10.0),
+                    flush,
+                );
+                subnormal |= r[2..].iter().flatten().any(|x| x.is_subnormal());
+                zero |= r[5].iter().all(|&x| x == 0.0);
+            }
+            (subnormal, zero)
+        };
+        assert_eq!(run(Some(GEAR_FLUSH_EVERY)), (false, true));
+        assert!(
+            run(None).0,
+            "without the flush the derivatives go subnormal"
+        );
+    }
+
     /// The fused corrector-predictor is exactly correct-then-predict.
     #[test]
     fn fused_corrector_predictor_matches_the_two_passes() {
@@ -355,6 +418,7 @@ mod tests {
             h,
             &GEAR5_DAMPED_TEST,
             Some(l),
+            true,
         );
         let mut wrapped = 0;
         let mut most = 0.0f64;

@@ -27,6 +27,15 @@ pub struct NeighbourList<const D: usize> {
     /// (in a dilute system most rows are empty, and testing each one costs a mispredicted
     /// branch).
     pub rows: Vec<u32>,
+    /// The row (first particle) of each entry: the pair loop runs over entries in parallel
+    /// chunks.
+    pub row_of: Vec<u32>,
+    /// The transposed list: the entries whose partner is `j` are
+    /// `in_entry[in_start[j]..in_start[j + 1]]`, ascending (so by ascending row). The engine
+    /// gathers each particle's pair forces through it in the order the rows visit them.
+    pub in_start: Vec<u32>,
+    /// Entry indices of the transposed list.
+    pub in_entry: Vec<u32>,
     old_start: Vec<u32>,
     old_partner: Vec<u32>,
     old_flags: Vec<u8>,
@@ -79,6 +88,9 @@ impl<const D: usize> NeighbourList<D> {
             partner: Vec::with_capacity(8 * n),
             flags: Vec::with_capacity(8 * n),
             rows: Vec::with_capacity(n),
+            row_of: Vec::with_capacity(8 * n),
+            in_start: vec![0; n + 1],
+            in_entry: Vec::with_capacity(8 * n),
             old_start: vec![0; n + 1],
             old_partner: Vec::with_capacity(8 * n),
             old_flags: Vec::with_capacity(8 * n),
@@ -154,6 +166,7 @@ impl<const D: usize> NeighbourList<D> {
         self.partner.clear();
         self.flags.clear();
         self.rows.clear();
+        self.row_of.clear();
         self.built_at.copy_from_slice(x);
         self.head.fill(NONE);
         for i in (0..n).rev() {
@@ -231,6 +244,7 @@ impl<const D: usize> NeighbourList<D> {
             }
             self.partner[row.clone()].sort_unstable();
             self.flags.resize(self.partner.len(), 0);
+            self.row_of.resize(self.partner.len(), i as u32);
             // Carry the flags of the old row (both rows sorted).
             let (o0, o1) = (self.old_start[i] as usize, self.old_start[i + 1] as usize);
             if self.builds > 1 {
@@ -253,6 +267,22 @@ impl<const D: usize> NeighbourList<D> {
             }
         }
         self.start[n] = self.partner.len() as u32;
+        // The transposed list, by counting: entries of each partner in ascending order.
+        self.in_start.fill(0);
+        for &j in &self.partner {
+            self.in_start[j as usize + 1] += 1;
+        }
+        for j in 0..n {
+            self.in_start[j + 1] += self.in_start[j];
+        }
+        self.in_entry.resize(self.partner.len(), 0);
+        // `next` (the cell lists) is free now: it serves as the fill cursor of each partner.
+        self.next[..n].copy_from_slice(&self.in_start[..n]);
+        for (q, &j) in self.partner.iter().enumerate() {
+            let c = &mut self.next[j as usize];
+            self.in_entry[*c as usize] = q as u32;
+            *c += 1;
+        }
     }
 
     /// Sets `flag` on the entry of the pair `(i, j)`, `i < j`; false if the pair is not in the
