@@ -54,7 +54,7 @@ pub const INF: u32 = u32::MAX;
 /// Marks a deleted triangle (first vertex) or a deleted site (particle).
 const DEAD: u32 = u32::MAX - 1;
 /// Halvings of a move whose full step inverts a triangle, before a rebuild.
-pub const MAX_BISECTIONS: u32 = 4;
+pub const MAX_BISECTIONS: u32 = 20;
 /// Most images of one particle (shifts -1, 0, 1 on two axes).
 const MAX_IMAGES: usize = 9;
 
@@ -76,7 +76,9 @@ pub struct KineticStats {
     pub degenerate: u64,
     /// Edges flipped because a site crossed them (into the next triangle or out of the hull).
     pub unfolds: u64,
-    /// Moves split into halves (each halving counted).
+    /// Sites held back and moved alone (their move inverted a triangle no flip undoes).
+    pub held: u64,
+    /// Moves of held sites split into halves (each halving counted).
     pub bisections: u64,
     /// Edge flips.
     pub flips: u64,
@@ -371,7 +373,7 @@ impl KineticDelaunay {
         // 1-2: move and flip.
         let start: Vec<[f64; 2]> = from.iter().map(|f| f.1).collect();
         let sites: Vec<u32> = from.iter().map(|f| f.0).collect();
-        self.advance(&sites, &start, &to, 0)?;
+        self.advance(&sites, &start, &to)?;
         // 3: deletions, outermost first (each is a hull vertex when deleted).
         let mut left = leaving;
         while !left.is_empty() {
@@ -400,9 +402,110 @@ impl KineticDelaunay {
         }
     }
 
-    /// Moves `sites` from `from` to `to` and flips to Delaunay; halves the move where the full
-    /// step inverts a triangle.
-    fn advance(
+    /// Moves `sites` from `from` to `to` and flips to Delaunay. Sites of triangles that invert
+    /// in a way no single flip undoes are held back; the others move at once (repaired by
+    /// unfolding flips and Lawson's algorithm over every edge); then the held sites move alone,
+    /// their move halved where it still inverts a triangle ([`Self::advance_local`]).
+    fn advance(&mut self, sites: &[u32], from: &[[f64; 2]], to: &[[f64; 2]]) -> Result<(), Failure> {
+        for (k, &s) in sites.iter().enumerate() {
+            self.pos[s as usize] = to[k];
+        }
+        let mut slot = vec![u32::MAX; self.pos.len()];
+        for (k, &s) in sites.iter().enumerate() {
+            slot[s as usize] = k as u32;
+        }
+        let mut held: Vec<usize> = Vec::new();
+        let all: Vec<usize> = (0..self.tv.len()).collect();
+        loop {
+            let blocked: Vec<usize> = self
+                .inverted_in(&all)
+                .into_iter()
+                .filter(|&(_, crossed)| crossed.is_none())
+                .map(|(t, _)| t)
+                .collect();
+            if blocked.is_empty() {
+                break;
+            }
+            let before = held.len();
+            for t in blocked {
+                for v in self.tv[t] {
+                    let k = slot[v as usize];
+                    if k != u32::MAX && !held.contains(&(k as usize)) {
+                        held.push(k as usize);
+                        self.pos[v as usize] = from[k as usize];
+                    }
+                }
+            }
+            if held.len() == before {
+                return Err(Failure::Inverted);
+            }
+        }
+        self.stack.clear();
+        self.unfold(&all)?;
+        self.stack.clear();
+        for t in 0..self.tv.len() {
+            if self.tv[t][0] == DEAD {
+                continue;
+            }
+            for k in 0..3 {
+                if (t as u32) < self.tn[t][k] {
+                    self.stack.push((t as u32, k as u8));
+                }
+            }
+        }
+        self.lawson()?;
+        if held.is_empty() {
+            return Ok(());
+        }
+        let h_sites: Vec<u32> = held.iter().map(|&k| sites[k]).collect();
+        let h_from: Vec<[f64; 2]> = held.iter().map(|&k| from[k]).collect();
+        let h_to: Vec<[f64; 2]> = held.iter().map(|&k| to[k]).collect();
+        self.stats.held += held.len() as u64;
+        self.advance_local(&h_sites, &h_from, &h_to, 0)
+    }
+
+    /// The live triangles around `sites`.
+    fn stars_of(&self, sites: &[u32]) -> Vec<usize> {
+        let mut tris: Vec<usize> = sites
+            .iter()
+            .flat_map(|&s| self.star(s).into_iter().map(|(t, _)| t))
+            .collect();
+        tris.sort_unstable();
+        tris.dedup();
+        tris
+    }
+
+    /// Flips the edges that sites crossed (see [`Self::inverted_in`]) among `tris` and the
+    /// triangles the flips make, one at a time; fails where an inverted triangle has no such
+    /// edge.
+    fn unfold(&mut self, tris: &[usize]) -> Result<bool, Failure> {
+        let mut tris = tris.to_vec();
+        let mut unfolded = 0;
+        loop {
+            let inverted = self.inverted_in(&tris);
+            let Some(&(t, crossed)) = inverted.first() else {
+                return Ok(true);
+            };
+            if inverted.iter().any(|&(_, h)| h.is_none()) {
+                return if unfolded > 0 { Err(Failure::Check) } else { Ok(false) };
+            }
+            let k = crossed.expect("unfoldable");
+            let u = self.tn[t][k] as usize;
+            let j = self.back_index(u, t as u32);
+            self.flip(t, k, u, j);
+            tris.push(u);
+            self.stats.unfolds += 1;
+            unfolded += 1;
+            if unfolded > self.tv.len() {
+                return Err(Failure::Check);
+            }
+        }
+    }
+
+    /// Moves a few `sites` alone from `from` to `to`: unfolding flips and Lawson's algorithm
+    /// around them only; the move is halved (up to [`MAX_BISECTIONS`] levels) where it inverts
+    /// a triangle that no flip undoes.
+    fn advance_local(
         &mut self,
         sites: &[u32],
         from: &[[f64; 2]],
@@ -412,48 +515,20 @@ impl KineticDelaunay {
         for (k, &s) in sites.iter().enumerate() {
             self.pos[s as usize] = to[k];
         }
-        // Sites that crossed an edge of their triangle (into the neighbour, or out over a hull
-        // edge): flip that edge, one at a time, re-examining after each flip.
-        let mut unfolded = 0;
-        let positive = loop {
-            let inverted = self.inverted();
-            let Some(&(t, hull_edge)) = inverted.first() else {
-                break true;
-            };
-            if inverted.iter().any(|&(_, h)| h.is_none()) {
-                if unfolded > 0 {
-                    return Err(Failure::Check);
-                }
-                break false;
-            }
-            let k = hull_edge.expect("unfoldable");
-            let u = self.tn[t][k] as usize;
-            let j = self.back_index(u, t as u32);
-            self.flip(t, k, u, j);
-            self.stats.unfolds += 1;
-            unfolded += 1;
-            if unfolded > self.tv.len() {
-                return Err(Failure::Check);
-            }
-        };
-        if positive {
-            self.stack.clear();
-            for t in 0..self.tv.len() {
-                if self.tv[t][0] == DEAD {
-                    continue;
-                }
+        self.stack.clear();
+        let star = self.stars_of(sites);
+        if self.unfold(&star)? {
+            for t in self.stars_of(sites) {
                 for k in 0..3 {
-                    if (t as u32) < self.tn[t][k] {
-                        self.stack.push((t as u32, k as u8));
-                    }
+                    self.stack.push((t as u32, k as u8));
                 }
             }
             return self.lawson();
         }
+        for (k, &s) in sites.iter().enumerate() {
+            self.pos[s as usize] = from[k];
+        }
         if depth >= MAX_BISECTIONS {
-            for (k, &s) in sites.iter().enumerate() {
-                self.pos[s as usize] = from[k];
-            }
             return Err(Failure::Inverted);
         }
         self.stats.bisections += 1;
@@ -462,12 +537,8 @@ impl KineticDelaunay {
             .zip(to)
             .map(|(a, b)| [a[0] + 0.5 * (b[0] - a[0]), a[1] + 0.5 * (b[1] - a[1])])
             .collect();
-        // The triangulation is still that of `from`: try the first half.
-        for (k, &s) in sites.iter().enumerate() {
-            self.pos[s as usize] = from[k];
-        }
-        self.advance(sites, from, &mid, depth + 1)?;
-        self.advance(sites, &mid, to, depth + 1)
+        self.advance_local(sites, from, &mid, depth + 1)?;
+        self.advance_local(sites, &mid, to, depth + 1)
     }
 
     /// The finite triangles that are not strictly counter-clockwise; with each, the index `k`
@@ -476,9 +547,10 @@ impl KineticDelaunay {
     /// one, strictly beyond the hull edge. Flipping that edge undoes the crossing (the two
     /// positive triangles it makes cover what the inverted one and its neighbour covered,
     /// counted with sign).
-    fn inverted(&self) -> Vec<(usize, Option<usize>)> {
+    fn inverted_in(&self, tris: &[usize]) -> Vec<(usize, Option<usize>)> {
         let mut out = Vec::new();
-        for (t, v) in self.tv.iter().enumerate() {
+        for &t in tris {
+            let v = self.tv[t];
             if v[0] == DEAD || v.contains(&INF) {
                 continue;
             }
