@@ -3,8 +3,9 @@
 //! sample from scratch (spade): on positions recorded from real runs of the wet shaken 2D
 //! system, laterally periodic (ghost images enter and leave the band), every sample's Delaunay
 //! edges are identical and so are the counts, per interval and per bin. The runs are chosen to
-//! exercise every path: flips only (a fluid sampled finely), halved moves and rebuilds (a gas
-//! sampled coarsely), inserted and deleted ghost images (both).
+//! exercise every path: flips, held-back sites moved alone with halved moves, inserted and
+//! deleted ghost images (a fluid sampled at 20 per period), failed repairs, rebuilds and the
+//! back-off (a gas sampled coarsely).
 
 use wetgran::observe::Observer;
 use wetgran::observe::bins::LateralBins;
@@ -76,6 +77,7 @@ fn compare(frames: &[Frame]) -> wetgran::observe::kinetic_delaunay::KineticStats
     let mut edges = KineticDelaunay::new(8.0);
     for (k, f) in frames.iter().enumerate() {
         assert_eq!(edges.update(f), delaunay_edges(f, 8.0), "sample {k}");
+        edges.links_consistent().unwrap_or_else(|e| panic!("sample {k}: {e}"));
         kinetic.observe(f, true);
         reference.observe(f, true);
     }
@@ -101,14 +103,31 @@ fn incremental_counts_equal_rebuilt_counts_on_a_fluid() {
     let st = compare(&frames);
     assert!(st.incremental as usize >= frames.len() * 9 / 10, "{st:?}");
     assert!(st.inserted > 0 && st.deleted > 0, "{st:?}");
+    assert!(st.held > 0 && st.bisections > 0 && st.unfolds > 0, "{st:?}");
 }
 
 #[test]
 fn incremental_counts_equal_rebuilt_counts_on_a_coarsely_sampled_gas() {
     // Gamma 2, E* 3 (period 4.1): 5 samples per period, 0.8 time units apart, grains move about a
-    // diameter between samples: moves are halved, some samples rebuilt.
+    // diameter between samples: repairs fail, samples are rebuilt.
     let s = scene(300, 100.0, 2.0, 3.0, 40.0);
     let frames = record(&s, s.driving_period() / 5.0, 10.0);
     let st = compare(&frames);
-    assert!(st.inserted > 0 && st.deleted > 0, "{st:?}");
+    assert!(st.rebuild_inverted + st.rebuild_check > 0, "{st:?}");
+    assert!(st.rebuild_backoff > 0, "{st:?}");
+}
+
+#[test]
+fn incremental_counts_equal_rebuilt_counts_in_a_doubly_periodic_gas() {
+    // 120 disks in a 20 x 20 box periodic on both axes (ghost images on all four sides and in
+    // the corners), no gravity, T = 0.5, 20 samples per time unit.
+    let s = Scene::from_toml_str(
+        "dimension = 2\ngravity = 0.0\n[box]\nsize = [20.0, 20.0]\nboundary = [\"periodic\", \"periodic\"]\n\
+         [particles]\ncount = 120\n[initial]\ntemperature = 0.5\nseed = 3\n[run]\nduration = 6.0\n",
+        "doubly periodic gas",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let frames = record(&s, 0.05, 1.0);
+    let st = compare(&frames);
+    assert!(st.incremental > 0 && st.inserted > 0 && st.deleted > 0, "{st:?}");
 }

@@ -18,6 +18,8 @@
 //!   `T_g / E_cb = 20`;
 //! - (c') the same system dry (no bridges) at the same absolute temperature.
 
+pub mod engines;
+pub mod observer;
 pub mod shake;
 pub mod slab;
 pub mod tdmd;
@@ -72,6 +74,17 @@ pub fn run_with_svg(
         );
         return Ok(());
     }
+    if which == "observer" {
+        print!("{}", observer::report(&observer::measure(400, scale)));
+        return Ok(());
+    }
+    if which == "engines" {
+        print!(
+            "{}",
+            engines::report(&engines::measure(repeat, scale), repeat, scale)
+        );
+        return Ok(());
+    }
     if which == "shake" {
         print!("{}", shake::report(&shake::measure(40, scale)));
         return Ok(());
@@ -81,7 +94,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd` or `slab`"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `engines` or `observer`"
             ));
         }
     };

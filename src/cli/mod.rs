@@ -64,7 +64,9 @@ pub enum Command {
         /// performance doc), `wall` (error and cost of the shaken-wall solvers), `shake` (the
         /// shaken standard wet system with each wall solver), `tdmd` (the time-driven engine on
         /// the dry shaken 2D system of issue 6; `scale` = simulated time units timed), `slab`
-        /// (E_par and cost of the shear drive against the slab width).
+        /// (E_par and cost of the shear drive against the slab width), `engines` (event- vs
+        /// time-driven engine on the 2D standard wet system, seconds per time unit), `observer`
+        /// (cost of the location-change observer, rebuilt vs incremental triangulation).
         #[arg(default_value = "engine")]
         which: String,
         /// Repetitions per system (the median is reported).

@@ -55,6 +55,12 @@ pub const INF: u32 = u32::MAX;
 const DEAD: u32 = u32::MAX - 1;
 /// Halvings of a move whose full step inverts a triangle, before a rebuild.
 pub const MAX_BISECTIONS: u32 = 20;
+/// Most sites held back in one sample, as a fraction of all sites, before a rebuild is cheaper.
+pub const MAX_HELD_FRACTION: f64 = 0.15;
+/// Most halvings of held sites' moves in one sample before a rebuild.
+pub const MAX_HALVINGS: u32 = 256;
+/// Longest back-off after failed repairs: `2^4 - 1 = 15` samples rebuilt without trying.
+pub const MAX_BACKOFF_LOG2: u32 = 4;
 /// Most images of one particle (shifts -1, 0, 1 on two axes).
 const MAX_IMAGES: usize = 9;
 
@@ -72,6 +78,9 @@ pub struct KineticStats {
     pub rebuild_images: u64,
     /// Rebuilds because the flip count ran over its cap or the final check failed.
     pub rebuild_check: u64,
+    /// Rebuilds without a repair attempt: after `f` consecutive failed repairs the next
+    /// `2^f - 1` samples (at most `2^MAX_BACKOFF_LOG2 - 1`) are rebuilt at once.
+    pub rebuild_backoff: u64,
     /// Samples triangulated from scratch because the sites are degenerate for spade.
     pub degenerate: u64,
     /// Edges flipped because a site crossed them (into the next triangle or out of the hull).
@@ -90,7 +99,11 @@ pub struct KineticStats {
 impl KineticStats {
     /// All rebuilds, the first sample included.
     pub fn rebuilds(&self) -> u64 {
-        self.rebuild_start + self.rebuild_inverted + self.rebuild_images + self.rebuild_check
+        self.rebuild_start
+            + self.rebuild_inverted
+            + self.rebuild_images
+            + self.rebuild_check
+            + self.rebuild_backoff
     }
 }
 
@@ -129,6 +142,9 @@ pub struct KineticDelaunay {
     /// False while there is no triangulation (degenerate sites): every sample is rebuilt.
     valid: bool,
     stack: Vec<(u32, u8)>,
+    /// Consecutive failed repairs, and samples still to rebuild without trying (`2^f - 1`).
+    failures: u32,
+    skip: u32,
     pub stats: KineticStats,
 }
 
@@ -172,10 +188,20 @@ impl KineticDelaunay {
         if !same_system {
             self.stats.rebuild_start += 1;
             self.rebuild(frame);
+        } else if self.skip > 0 {
+            // Back off after failed repairs: rebuilding at once is cheaper than failing again.
+            self.skip -= 1;
+            self.stats.rebuild_backoff += 1;
+            self.rebuild(frame);
         } else {
             match self.repair(frame) {
-                Ok(()) => self.stats.incremental += 1,
+                Ok(()) => {
+                    self.stats.incremental += 1;
+                    self.failures = 0;
+                }
                 Err(f) => {
+                    self.failures = (self.failures + 1).min(MAX_BACKOFF_LOG2);
+                    self.skip = (1u32 << self.failures) - 1;
                     match f {
                         Failure::Inverted => self.stats.rebuild_inverted += 1,
                         Failure::Images => self.stats.rebuild_images += 1,
@@ -415,6 +441,7 @@ impl KineticDelaunay {
             slot[s as usize] = k as u32;
         }
         let mut held: Vec<usize> = Vec::new();
+        let mut is_held = vec![false; sites.len()];
         let all: Vec<usize> = (0..self.tv.len()).collect();
         loop {
             let blocked: Vec<usize> = self
@@ -430,13 +457,14 @@ impl KineticDelaunay {
             for t in blocked {
                 for v in self.tv[t] {
                     let k = slot[v as usize];
-                    if k != u32::MAX && !held.contains(&(k as usize)) {
+                    if k != u32::MAX && !is_held[k as usize] {
+                        is_held[k as usize] = true;
                         held.push(k as usize);
                         self.pos[v as usize] = from[k as usize];
                     }
                 }
             }
-            if held.len() == before {
+            if held.len() == before || held.len() as f64 > MAX_HELD_FRACTION * sites.len() as f64 {
                 return Err(Failure::Inverted);
             }
         }
@@ -457,11 +485,13 @@ impl KineticDelaunay {
         if held.is_empty() {
             return Ok(());
         }
-        let h_sites: Vec<u32> = held.iter().map(|&k| sites[k]).collect();
-        let h_from: Vec<[f64; 2]> = held.iter().map(|&k| from[k]).collect();
-        let h_to: Vec<[f64; 2]> = held.iter().map(|&k| to[k]).collect();
+        // One held site at a time, with a budget of halvings for the whole sample.
         self.stats.held += held.len() as u64;
-        self.advance_local(&h_sites, &h_from, &h_to, 0)
+        let mut budget = MAX_HALVINGS;
+        for k in held {
+            self.advance_local(&[sites[k]], &[from[k]], &[to[k]], 0, &mut budget)?;
+        }
+        Ok(())
     }
 
     /// The live triangles around `sites`.
@@ -511,6 +541,7 @@ impl KineticDelaunay {
         from: &[[f64; 2]],
         to: &[[f64; 2]],
         depth: u32,
+        budget: &mut u32,
     ) -> Result<(), Failure> {
         for (k, &s) in sites.iter().enumerate() {
             self.pos[s as usize] = to[k];
@@ -528,17 +559,18 @@ impl KineticDelaunay {
         for (k, &s) in sites.iter().enumerate() {
             self.pos[s as usize] = from[k];
         }
-        if depth >= MAX_BISECTIONS {
+        if depth >= MAX_BISECTIONS || *budget == 0 {
             return Err(Failure::Inverted);
         }
+        *budget -= 1;
         self.stats.bisections += 1;
         let mid: Vec<[f64; 2]> = from
             .iter()
             .zip(to)
             .map(|(a, b)| [a[0] + 0.5 * (b[0] - a[0]), a[1] + 0.5 * (b[1] - a[1])])
             .collect();
-        self.advance_local(sites, from, &mid, depth + 1)?;
-        self.advance_local(sites, &mid, to, depth + 1)
+        self.advance_local(sites, from, &mid, depth + 1, budget)?;
+        self.advance_local(sites, &mid, to, depth + 1, budget)
     }
 
     /// The finite triangles that are not strictly counter-clockwise; with each, the index `k`
@@ -752,6 +784,14 @@ impl KineticDelaunay {
         let xl = self.tn[tl][kl];
         let l1 = self.tv[t0][(k0 + 2) % 3];
         let llast = self.tv[tl][(kl + 1) % 3];
+        // A hull neighbour whose only finite triangle is v's would be left without one (its
+        // other hull neighbour is the next vertex of v's link): not merged, rebuilt.
+        let l2 = self.tv[star[1].0][(star[1].1 + 2) % 3];
+        let lm2 = self.tv[star[m - 2].0][(star[m - 2].1 + 1) % 3];
+        let other = |x: u32, l: u32| self.tv[x as usize].into_iter().find(|&y| y != INF && y != l);
+        if other(x0, l1) == Some(l2) || other(xl, llast) == Some(lm2) {
+            return Err(Failure::Images);
+        }
         for &(t, k) in &star[1..m - 1] {
             self.tv[t][k] = INF;
         }
@@ -907,6 +947,32 @@ impl KineticDelaunay {
             turning += (u[0] * w[1] - u[1] * w[0]).atan2(u[0] * w[0] + u[1] * w[1]);
         }
         (turning + std::f64::consts::TAU).abs() < 1e-6
+    }
+
+    /// Whether the neighbour links are consistent: every neighbour links back across the same
+    /// two vertices.
+    pub fn links_consistent(&self) -> Result<(), String> {
+        for (t, v) in self.tv.iter().enumerate() {
+            if v[0] == DEAD {
+                continue;
+            }
+            for k in 0..3 {
+                let u = self.tn[t][k] as usize;
+                if u >= self.tv.len() || self.tv[u][0] == DEAD {
+                    return Err(format!("triangle {t} {v:?}: neighbour {k} dead"));
+                }
+                let j = self.tn[u].iter().position(|&x| x as usize == t);
+                let Some(j) = j else {
+                    return Err(format!("triangle {t} {v:?}: {u} {:?} does not link back", self.tv[u]));
+                };
+                let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
+                let w = self.tv[u];
+                if (w[(j + 1) % 3], w[(j + 2) % 3]) != (b, a) {
+                    return Err(format!("triangle {t} {v:?} and {u} {w:?} share no edge"));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Number of live triangles (finite and infinite), for tests.

@@ -160,17 +160,28 @@ pub(crate) fn edge_between(a: SiteRef, b: SiteRef, opposite: Option<(SiteRef, Si
 /// different periodic images, the shortest (then the smallest midpoint, then the opposite
 /// vertices), a choice that does not depend on the order the triangulation lists its edges in.
 pub(crate) fn finish_edges(edges: &mut Vec<Edge>) {
-    edges.sort_unstable_by(|p, q| {
-        (p.i, p.j)
-            .cmp(&(q.i, q.j))
-            .then(p.length.total_cmp(&q.length))
+    edges.sort_unstable_by_key(|e| ((e.i as u64) << 32) | e.j as u64);
+    // Runs of one pair (copies through periodic images): keep the first by the full key.
+    let better = |p: &Edge, q: &Edge| {
+        let key = |e: &Edge| e.opposite.map(|(c, d, s)| (c, d, s.to_bits()));
+        p.length
+            .total_cmp(&q.length)
             .then(p.mid_x.total_cmp(&q.mid_x))
-            .then_with(|| {
-                let key = |e: &Edge| e.opposite.map(|(c, d, s)| (c, d, s.to_bits()));
-                key(p).cmp(&key(q))
-            })
-    });
-    edges.dedup_by(|p, q| (p.i, p.j) == (q.i, q.j));
+            .then_with(|| key(p).cmp(&key(q)))
+            .is_lt()
+    };
+    let mut w = 0;
+    for r in 0..edges.len() {
+        if w > 0 && (edges[w - 1].i, edges[w - 1].j) == (edges[r].i, edges[r].j) {
+            if better(&edges[r], &edges[w - 1]) {
+                edges[w - 1] = edges[r];
+            }
+        } else {
+            edges[w] = edges[r];
+            w += 1;
+        }
+    }
+    edges.truncate(w);
 }
 
 /// How the neighbour relations are found, with their parameters.
