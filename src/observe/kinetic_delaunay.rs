@@ -47,7 +47,6 @@ use super::location_changes::{Edge, SiteRef, edge_between, finish_edges, images}
 use crate::sim::Frame;
 use robust::{Coord, incircle, orient2d};
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
-use std::collections::HashMap;
 
 /// The vertex at infinity.
 pub const INF: u32 = u32::MAX;
@@ -180,6 +179,13 @@ impl KineticDelaunay {
     /// The Delaunay edges of `frame` (as [`super::location_changes::delaunay_edges`] returns
     /// them), repairing the triangulation of the previous call.
     pub fn update(&mut self, frame: &Frame) -> Vec<Edge> {
+        self.update_for_counter(frame, &[])
+    }
+
+    /// [`update`](Self::update) for the counter: the pairs in `known` (sorted) get no opposite
+    /// vertices (the comparison with the previous sample does not use them), which saves their
+    /// angles.
+    pub fn update_for_counter(&mut self, frame: &Frame, known: &[(u32, u32)]) -> Vec<Edge> {
         assert_eq!(frame.dimension, 2, "Delaunay location changes are 2D");
         let same_system = self.valid
             && self.wrapped.len() == frame.len()
@@ -215,11 +221,11 @@ impl KineticDelaunay {
             self.stats.degenerate += 1;
             return super::location_changes::delaunay_edges(frame, self.ghost_width);
         }
-        self.edges()
+        self.edges(known)
     }
 
     /// The current edges in the observer's format.
-    fn edges(&self) -> Vec<Edge> {
+    fn edges(&self, known: &[(u32, u32)]) -> Vec<Edge> {
         let mut out = Vec::with_capacity(3 * self.wrapped.len());
         let site = |s: u32| SiteRef {
             p: self.pos[s as usize],
@@ -239,7 +245,7 @@ impl KineticDelaunay {
                 let w = self.tv[u as usize];
                 let opposite = (!v.contains(&INF) && !w.contains(&INF))
                     .then(|| (site(v[k]), site(w[self.back_index(u as usize, t as u32)])));
-                if let Some(e) = edge_between(site(a), site(b), opposite) {
+                if let Some(e) = edge_between(site(a), site(b), opposite, known) {
                     out.push(e);
                 }
             }
@@ -295,45 +301,57 @@ impl KineticDelaunay {
         if tri.num_vertices() != self.pos.len() || tri.num_inner_faces() == 0 {
             return;
         }
+        // Finite triangles: spade's inner faces (indices 1.., the outer face is 0), in order.
+        // Face edges e0 = v0 -> v1, e1 = v1 -> v2, e2 = v2 -> v0: the edge opposite v_k is
+        // e_{k+1}. Across a hull edge a -> b lies the infinite triangle (b, a, INF).
+        let mut hull_from = vec![INF; self.pos.len()];
+        let mut hull_to = vec![INF; self.pos.len()];
         for f in tri.inner_faces() {
+            let t = self.tv.len();
+            debug_assert_eq!(f.fix().index(), t + 1);
             let v = f.vertices().map(|h| h.data().site);
-            self.tv.push(v);
-        }
-        // Hull edges: directed edges of finite triangles whose reverse is not one.
-        let mut directed: HashMap<(u32, u32), (u32, u8)> =
-            HashMap::with_capacity(3 * self.tv.len() + 64);
-        for (t, v) in self.tv.iter().enumerate() {
+            let e = f.adjacent_edges();
+            let mut n = [INF; 3];
             for k in 0..3 {
-                directed.insert((v[(k + 1) % 3], v[(k + 2) % 3]), (t as u32, k as u8));
+                n[k] = match e[(k + 1) % 3].rev().face().as_inner() {
+                    Some(g) => (g.fix().index() - 1) as u32,
+                    None => INF - 2, // a hull edge, linked below
+                };
             }
+            self.tv.push(v);
+            self.tn.push(n);
         }
         let finite = self.tv.len();
         for t in 0..finite {
-            let v = self.tv[t];
             for k in 0..3 {
-                let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
-                if !directed.contains_key(&(b, a)) {
-                    self.tv.push([b, a, INF]);
+                if self.tn[t][k] != INF - 2 {
+                    continue;
                 }
+                let v = self.tv[t];
+                let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
+                let x = self.tv.len() as u32;
+                self.tv.push([b, a, INF]);
+                self.tn.push([INF, INF, t as u32]);
+                self.tn[t][k] = x;
+                hull_from[a as usize] = x;
+                hull_to[b as usize] = x;
             }
         }
-        for t in finite..self.tv.len() {
-            let v = self.tv[t];
-            for k in 0..3 {
-                directed.insert((v[(k + 1) % 3], v[(k + 2) % 3]), (t as u32, k as u8));
+        // (b, a, INF): opposite b the edge (a, INF), shared with the triangle of the hull edge
+        // ending at a; opposite a the edge (INF, b), shared with that of the edge starting at b.
+        for x in finite..self.tv.len() {
+            let [b, a, _] = self.tv[x];
+            let (p, q) = (hull_to[a as usize], hull_from[b as usize]);
+            if p == INF || q == INF {
+                return; // not a closed hull: leave invalid
             }
+            self.tn[x][0] = p;
+            self.tn[x][1] = q;
         }
-        self.tn = vec![[INF; 3]; self.tv.len()];
         for t in 0..self.tv.len() {
-            let v = self.tv[t];
-            for k in 0..3 {
-                let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
-                match directed.get(&(b, a)) {
-                    Some(&(u, _)) => self.tn[t][k] = u,
-                    None => return, // not a closed surface: leave invalid
-                }
-                if v[k] != INF {
-                    self.vtri[v[k] as usize] = t as u32;
+            for &v in &self.tv[t] {
+                if v != INF {
+                    self.vtri[v as usize] = t as u32;
                 }
             }
         }

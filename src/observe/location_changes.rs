@@ -14,6 +14,15 @@
 //! once it is decisive (hysteresis `lc_flip_margin`, see [`compare`]): four nearly co-circular
 //! grains would otherwise count every rattle.
 //!
+//! **Kept between samples.** The counter does not triangulate each sample from scratch: it keeps
+//! the triangulation and repairs it ([`super::kinetic_delaunay`]: move the sites, flip the edges
+//! whose in-circle test fails, insert and delete the ghost images that enter and leave the band,
+//! rebuild where a repair fails). The result is the same triangulation, so the same edges and
+//! counts; [`LocationChangeCounter::rebuilding`] keeps the from-scratch method as the reference
+//! (tests/observe_kinetic_delaunay.rs compares them on recorded runs). Where the same pair is an
+//! edge through two periodic images, the shortest copy is kept ([`finish_edges`]), whatever order
+//! the triangulation lists its edges in. 3D has no triangulation and nothing to keep.
+//!
 //! **3D (neighbour shells).** Grains `i, j` become neighbours when their centres come closer
 //! than `lc_enter_factor (r_i + r_j)` and stay neighbours until they separate beyond
 //! `lc_leave_factor (r_i + r_j)` (the hysteresis keeps a rattling pair at the shell's edge from
@@ -137,10 +146,20 @@ fn angle(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 /// The observer's record of the Delaunay edge `ab` (`opposite`: the vertices across it when both
 /// its triangles are finite), or `None` for an edge between two ghosts or between two images of
 /// one particle. Symmetric in `a` and `b`, and in the two opposite vertices, to the last bit.
-pub(crate) fn edge_between(a: SiteRef, b: SiteRef, opposite: Option<(SiteRef, SiteRef)>) -> Option<Edge> {
+///
+/// `known`: pairs tracked from the previous sample (sorted); the comparison never looks at their
+/// opposite vertices, so their angles are not computed (`opposite` is `None`).
+pub(crate) fn edge_between(
+    a: SiteRef,
+    b: SiteRef,
+    opposite: Option<(SiteRef, SiteRef)>,
+    known: &[(u32, u32)],
+) -> Option<Edge> {
     if (a.ghost && b.ghost) || a.id == b.id {
         return None;
     }
+    let pair = (a.id.min(b.id), a.id.max(b.id));
+    let opposite = opposite.filter(|_| known.binary_search(&pair).is_err());
     let opposite = opposite.map(|(c, d)| {
         let sum = angle(a.p, b.p, c.p) + angle(a.p, b.p, d.p);
         (c.id.min(d.id), c.id.max(d.id), sum)
@@ -234,7 +253,7 @@ pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
             (Some(c), Some(d)) => Some((site(c.data()), site(d.data()))),
             _ => None,
         };
-        if let Some(edge) = edge_between(site(a.data()), site(b.data()), opposite) {
+        if let Some(edge) = edge_between(site(a.data()), site(b.data()), opposite, &[]) {
             edges.push(edge);
         }
     }
@@ -478,7 +497,7 @@ impl Observer for LocationChangeCounter {
         self.particles = frame.len();
         let prev_pairs: &[(u32, u32)] = self.previous.as_ref().map_or(&[], |p| &p.2);
         let current = match &mut self.kinetic {
-            Some(k) => k.update(frame),
+            Some(k) => k.update_for_counter(frame, prev_pairs),
             None => edges(frame, self.method, prev_pairs),
         };
         let mut tracked = None;
