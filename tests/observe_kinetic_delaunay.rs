@@ -77,7 +77,9 @@ fn compare(frames: &[Frame]) -> wetgran::observe::kinetic_delaunay::KineticStats
     let mut edges = KineticDelaunay::new(8.0);
     for (k, f) in frames.iter().enumerate() {
         assert_eq!(edges.update(f), delaunay_edges(f, 8.0), "sample {k}");
-        edges.links_consistent().unwrap_or_else(|e| panic!("sample {k}: {e}"));
+        edges
+            .links_consistent()
+            .unwrap_or_else(|e| panic!("sample {k}: {e}"));
         kinetic.observe(f, true);
         reference.observe(f, true);
     }
@@ -129,5 +131,8 @@ fn incremental_counts_equal_rebuilt_counts_in_a_doubly_periodic_gas() {
     .unwrap_or_else(|e| panic!("{e}"));
     let frames = record(&s, 0.05, 1.0);
     let st = compare(&frames);
-    assert!(st.incremental > 0 && st.inserted > 0 && st.deleted > 0, "{st:?}");
+    assert!(
+        st.incremental > 0 && st.inserted > 0 && st.deleted > 0,
+        "{st:?}"
+    );
 }

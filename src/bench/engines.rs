@@ -61,10 +61,7 @@ fn time_one(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
         &mut |_| {},
     );
     let ((w0, c0), (w1, c1)) = (start.expect("warm-up ends"), end.expect("timed part ends"));
-    (
-        (w1 - w0).as_secs_f64(),
-        c0.zip(c1).map(|(a, b)| b - a),
-    )
+    ((w1 - w0).as_secs_f64(), c0.zip(c1).map(|(a, b)| b - a))
 }
 
 /// Measures every point with both engines, interleaved.
@@ -74,16 +71,20 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<EngineRow> {
     let warm = (WARM_UP / measured).ceil() * measured;
     let mut rows = Vec::new();
     for &(label, gamma, e_star) in &POINTS {
-        let mut pair = [("event", EngineKind::Event), ("time", EngineKind::Time)].map(|(name, _)| EngineRow {
-            label,
-            gamma,
-            e_star,
-            engine: name,
-            wall_per_time: Vec::new(),
-            cpu_per_time: Vec::new(),
-        });
+        let mut pair =
+            [("event", EngineKind::Event), ("time", EngineKind::Time)].map(|(name, _)| EngineRow {
+                label,
+                gamma,
+                e_star,
+                engine: name,
+                wall_per_time: Vec::new(),
+                cpu_per_time: Vec::new(),
+            });
         for _ in 0..repeat {
-            for (k, kind) in [EngineKind::Event, EngineKind::Time].into_iter().enumerate() {
+            for (k, kind) in [EngineKind::Event, EngineKind::Time]
+                .into_iter()
+                .enumerate()
+            {
                 let s = scene(gamma, e_star, kind, warm + measured);
                 let (wall, cpu) = time_one(&s, measured);
                 pair[k].wall_per_time.push(wall / measured);

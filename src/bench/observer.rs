@@ -15,8 +15,8 @@
 //! same changes (total and per bin), and how the incremental triangulation was updated.
 
 use super::tdmd::thread_cpu_seconds;
-use crate::observe::location_changes::{LocationChangeCounter, Method};
 use crate::observe::kinetic_delaunay::KineticStats;
+use crate::observe::location_changes::{LocationChangeCounter, Method};
 use crate::observe::{Observer, ObserverSet};
 use crate::scene::Scene;
 use crate::sim::{Frame, run_scene_observed};
@@ -237,7 +237,10 @@ pub fn report(rows: &[ObserverRow]) -> String {
             st.inserted,
             st.deleted,
             r.cpu
-                .map(|c| format!(" | thread CPU {c:.2} s of {:.2} s wall", r.engine + r.others + r.rebuilt + r.incremental))
+                .map(|c| format!(
+                    " | thread CPU {c:.2} s of {:.2} s wall",
+                    r.engine + r.others + r.rebuilt + r.incremental
+                ))
                 .unwrap_or_default()
         );
     }

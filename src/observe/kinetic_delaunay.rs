@@ -450,7 +450,12 @@ impl KineticDelaunay {
     /// in a way no single flip undoes are held back; the others move at once (repaired by
     /// unfolding flips and Lawson's algorithm over every edge); then the held sites move alone,
     /// their move halved where it still inverts a triangle ([`Self::advance_local`]).
-    fn advance(&mut self, sites: &[u32], from: &[[f64; 2]], to: &[[f64; 2]]) -> Result<(), Failure> {
+    fn advance(
+        &mut self,
+        sites: &[u32],
+        from: &[[f64; 2]],
+        to: &[[f64; 2]],
+    ) -> Result<(), Failure> {
         for (k, &s) in sites.iter().enumerate() {
             self.pos[s as usize] = to[k];
         }
@@ -535,7 +540,11 @@ impl KineticDelaunay {
                 return Ok(true);
             };
             if inverted.iter().any(|&(_, h)| h.is_none()) {
-                return if unfolded > 0 { Err(Failure::Check) } else { Ok(false) };
+                return if unfolded > 0 {
+                    Err(Failure::Check)
+                } else {
+                    Ok(false)
+                };
             }
             let k = crossed.expect("unfoldable");
             let u = self.tn[t][k] as usize;
@@ -737,7 +746,10 @@ impl KineticDelaunay {
         let mut out = Vec::with_capacity(8);
         let mut t = start;
         loop {
-            let k = self.tv[t].iter().position(|&x| x == v).expect("v in its star");
+            let k = self.tv[t]
+                .iter()
+                .position(|&x| x == v)
+                .expect("v in its star");
             out.push((t, k));
             t = self.tn[t][(k + 1) % 3] as usize;
             if t == start || out.len() > self.tv.len() {
@@ -790,7 +802,10 @@ impl KineticDelaunay {
         };
         let star: Vec<(usize, usize)> = (0..m).map(|q| star[(r + q) % m]).collect();
         // A vertex on the hull twice (a pinched hull) cannot be merged into INF.
-        if star[1..m - 1].iter().any(|&(t, _)| self.tv[t].contains(&INF)) {
+        if star[1..m - 1]
+            .iter()
+            .any(|&(t, _)| self.tv[t].contains(&INF))
+        {
             return Err(Failure::Images);
         }
         let (t0, k0) = star[0];
@@ -806,7 +821,11 @@ impl KineticDelaunay {
         // other hull neighbour is the next vertex of v's link): not merged, rebuilt.
         let l2 = self.tv[star[1].0][(star[1].1 + 2) % 3];
         let lm2 = self.tv[star[m - 2].0][(star[m - 2].1 + 1) % 3];
-        let other = |x: u32, l: u32| self.tv[x as usize].into_iter().find(|&y| y != INF && y != l);
+        let other = |x: u32, l: u32| {
+            self.tv[x as usize]
+                .into_iter()
+                .find(|&y| y != INF && y != l)
+        };
         if other(x0, l1) == Some(l2) || other(xl, llast) == Some(lm2) {
             return Err(Failure::Images);
         }
@@ -961,7 +980,10 @@ impl KineticDelaunay {
             if orient2d(c(p0), c(p1), c(p2)) > 0.0 {
                 return false;
             }
-            let (u, w) = ([p1[0] - p0[0], p1[1] - p0[1]], [p2[0] - p1[0], p2[1] - p1[1]]);
+            let (u, w) = (
+                [p1[0] - p0[0], p1[1] - p0[1]],
+                [p2[0] - p1[0], p2[1] - p1[1]],
+            );
             turning += (u[0] * w[1] - u[1] * w[0]).atan2(u[0] * w[0] + u[1] * w[1]);
         }
         (turning + std::f64::consts::TAU).abs() < 1e-6
@@ -981,7 +1003,10 @@ impl KineticDelaunay {
                 }
                 let j = self.tn[u].iter().position(|&x| x as usize == t);
                 let Some(j) = j else {
-                    return Err(format!("triangle {t} {v:?}: {u} {:?} does not link back", self.tv[u]));
+                    return Err(format!(
+                        "triangle {t} {v:?}: {u} {:?} does not link back",
+                        self.tv[u]
+                    ));
                 };
                 let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
                 let w = self.tv[u];
