@@ -21,7 +21,9 @@
 //! `wetgran bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
 //! particle, with the breakdown by array.
 
+pub mod engines;
 pub mod memory;
+pub mod observer;
 pub mod shake;
 pub mod slab;
 pub mod tdmd;
@@ -93,6 +95,17 @@ pub fn run_with_svg(
         print!("{}", memory::child_text(&memory::measure_here(n)?));
         return Ok(());
     }
+    if which == "observer" {
+        print!("{}", observer::report(&observer::measure(400, scale)));
+        return Ok(());
+    }
+    if which == "engines" {
+        print!(
+            "{}",
+            engines::report(&engines::measure(repeat, scale), repeat, scale)
+        );
+        return Ok(());
+    }
     if which == "shake" {
         print!("{}", shake::report(&shake::measure(40, scale)));
         return Ok(());
@@ -102,7 +115,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab` or `memory`"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab` `memory`, `engines` or `observer`"
             ));
         }
     };

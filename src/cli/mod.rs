@@ -41,7 +41,9 @@ pub enum Command {
         /// shaken standard wet system with each wall solver), `tdmd` (the time-driven engine on
         /// the dry shaken 2D system of issue 6; `scale` = simulated time units timed), `slab`
         /// (E_par and cost of the shear drive against the slab width), `memory` (peak resident
-        /// memory of the event engine per particle at N = 125 000 and 10^6; `scale` scales N).
+        /// memory of the event engine per particle at N = 125 000 and 10^6; `scale` scales N), `engines` (event- vs
+        /// time-driven engine on the 2D standard wet system, seconds per time unit), `observer`
+        /// (cost of the location-change observer, rebuilt vs incremental triangulation).
         #[arg(default_value = "engine")]
         which: String,
         /// Repetitions per system (the median is reported).

@@ -14,6 +14,15 @@
 //! once it is decisive (hysteresis `lc_flip_margin`, see [`compare`]): four nearly co-circular
 //! grains would otherwise count every rattle.
 //!
+//! **Kept between samples.** The counter does not triangulate each sample from scratch: it keeps
+//! the triangulation and repairs it ([`super::kinetic_delaunay`]: move the sites, flip the edges
+//! whose in-circle test fails, insert and delete the ghost images that enter and leave the band,
+//! rebuild where a repair fails). The result is the same triangulation, so the same edges and
+//! counts; [`LocationChangeCounter::rebuilding`] keeps the from-scratch method as the reference
+//! (tests/observe_kinetic_delaunay.rs compares them on recorded runs). Where the same pair is an
+//! edge through two periodic images, the shortest copy is kept ([`finish_edges`]), whatever order
+//! the triangulation lists its edges in. 3D has no triangulation and nothing to keep.
+//!
 //! **3D (neighbour shells).** Grains `i, j` become neighbours when their centres come closer
 //! than `lc_enter_factor (r_i + r_j)` and stay neighbours until they separate beyond
 //! `lc_leave_factor (r_i + r_j)` (the hysteresis keeps a rattling pair at the shell's edge from
@@ -31,6 +40,7 @@
 
 use super::Observer;
 use super::bins::LateralBins;
+use super::kinetic_delaunay::{KineticDelaunay, KineticStats};
 use crate::sim::Frame;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::collections::HashMap;
@@ -45,7 +55,7 @@ pub struct Edge {
     pub mid_x: f64,
     /// Midpoint `y` (3D; 0 in 2D).
     pub mid_y: f64,
-    /// 2D: the vertices `c, d` opposite the edge in its two triangles and the sum of the angles
+    /// 2D: the vertices `c < d` opposite the edge in its two triangles and the sum of the angles
     /// at `c` and `d`; `None` on the hull (and always for neighbour shells). The edge is Delaunay
     /// while the sum is at most `pi`; `pi - sum` is by how much.
     pub opposite: Option<(u32, u32, f64)>,
@@ -63,6 +73,134 @@ impl HasPosition for Site {
     fn position(&self) -> Point2<f64> {
         self.p
     }
+}
+
+/// A triangulation site as the edge arithmetic sees it: position, particle, whether a ghost.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SiteRef {
+    pub p: [f64; 2],
+    pub id: u32,
+    pub ghost: bool,
+}
+
+/// The sites of one particle: its wrapped position and its images in the ghost band.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Images {
+    pub wrapped: [f64; 2],
+    n: usize,
+    list: [([i32; 2], [f64; 2]); 9],
+}
+
+impl Images {
+    /// `(shift, position)` of each site; shift `[0, 0]` is the particle itself.
+    pub fn as_slice(&self) -> &[([i32; 2], [f64; 2])] {
+        &self.list[..self.n]
+    }
+}
+
+/// The sites of particle `i`: the wrapped position, plus the images shifted by one box length
+/// along a periodic axis that lie within `ghost_width` (at most the box length) of the box.
+/// The rebuild and the incremental triangulation both take their sites from here, so that
+/// both see bit-identical coordinates.
+pub(crate) fn images(frame: &Frame, i: usize, ghost_width: f64) -> Images {
+    let size = [frame.box_size[0], frame.box_size[1]];
+    let x = [frame.wrap(0, frame.x(i)[0]), frame.wrap(1, frame.x(i)[1])];
+    let mut out = Images {
+        wrapped: x,
+        n: 0,
+        list: [([0, 0], [0.0, 0.0]); 9],
+    };
+    for sx in -1i32..=1 {
+        for sz in -1i32..=1 {
+            let shift = [sx, sz];
+            let mut p = x;
+            let mut inside = true;
+            for k in 0..2 {
+                if shift[k] != 0 {
+                    if !frame.periodic[k] {
+                        inside = false;
+                        break;
+                    }
+                    p[k] += shift[k] as f64 * size[k];
+                    let g = ghost_width.min(size[k]);
+                    if p[k] < -g || p[k] >= size[k] + g {
+                        inside = false;
+                    }
+                }
+            }
+            if inside {
+                out.list[out.n] = (shift, p);
+                out.n += 1;
+            }
+        }
+    }
+    out
+}
+
+/// Angle at `c` of the triangle `(a, b, c)` (symmetric in `a` and `b` to the last bit).
+fn angle(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    let (u, v) = ((a[0] - c[0], a[1] - c[1]), (b[0] - c[0], b[1] - c[1]));
+    (u.0 * v.1 - u.1 * v.0).abs().atan2(u.0 * v.0 + u.1 * v.1)
+}
+
+/// The observer's record of the Delaunay edge `ab` (`opposite`: the vertices across it when both
+/// its triangles are finite), or `None` for an edge between two ghosts or between two images of
+/// one particle. Symmetric in `a` and `b`, and in the two opposite vertices, to the last bit.
+///
+/// `known`: pairs tracked from the previous sample (sorted); the comparison never looks at their
+/// opposite vertices, so their angles are not computed (`opposite` is `None`).
+pub(crate) fn edge_between(
+    a: SiteRef,
+    b: SiteRef,
+    opposite: Option<(SiteRef, SiteRef)>,
+    known: &[(u32, u32)],
+) -> Option<Edge> {
+    if (a.ghost && b.ghost) || a.id == b.id {
+        return None;
+    }
+    let pair = (a.id.min(b.id), a.id.max(b.id));
+    let opposite = opposite.filter(|_| known.binary_search(&pair).is_err());
+    let opposite = opposite.map(|(c, d)| {
+        let sum = angle(a.p, b.p, c.p) + angle(a.p, b.p, d.p);
+        (c.id.min(d.id), c.id.max(d.id), sum)
+    });
+    let (dx, dz) = (b.p[0] - a.p[0], b.p[1] - a.p[1]);
+    Some(Edge {
+        i: a.id.min(b.id),
+        j: a.id.max(b.id),
+        length: (dx * dx + dz * dz).sqrt(),
+        mid_x: 0.5 * (a.p[0] + b.p[0]),
+        mid_y: 0.0,
+        opposite,
+    })
+}
+
+/// Sorts the edges by pair and keeps one per pair: of the copies of a pair seen through
+/// different periodic images, the shortest (then the smallest midpoint, then the opposite
+/// vertices), a choice that does not depend on the order the triangulation lists its edges in.
+pub(crate) fn finish_edges(edges: &mut Vec<Edge>) {
+    edges.sort_unstable_by_key(|e| ((e.i as u64) << 32) | e.j as u64);
+    // Runs of one pair (copies through periodic images): keep the first by the full key.
+    let better = |p: &Edge, q: &Edge| {
+        let key = |e: &Edge| e.opposite.map(|(c, d, s)| (c, d, s.to_bits()));
+        p.length
+            .total_cmp(&q.length)
+            .then(p.mid_x.total_cmp(&q.mid_x))
+            .then_with(|| key(p).cmp(&key(q)))
+            .is_lt()
+    };
+    let mut w = 0;
+    for r in 0..edges.len() {
+        if w > 0 && (edges[w - 1].i, edges[w - 1].j) == (edges[r].i, edges[r].j) {
+            if better(&edges[r], &edges[w - 1]) {
+                edges[w - 1] = edges[r];
+            }
+        } else {
+            edges[w] = edges[r];
+            w += 1;
+        }
+    }
+    edges.truncate(w);
 }
 
 /// How the neighbour relations are found, with their parameters.
@@ -85,76 +223,41 @@ impl Method {
     }
 }
 
-/// The Delaunay edges of a 2D frame (sorted by `(i, j)`, each pair once).
+/// The Delaunay edges of a 2D frame (sorted by `(i, j)`, each pair once), triangulated from
+/// scratch by spade: the reference method (the counter keeps a triangulation between samples,
+/// [`KineticDelaunay`], and gives the same edges).
 pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
     assert_eq!(frame.dimension, 2, "Delaunay location changes are 2D");
-    let size = [frame.box_size[0], frame.box_size[1]];
     let mut sites = Vec::with_capacity(frame.len() * 11 / 10 + 8);
     for i in 0..frame.len() {
-        let x = [frame.wrap(0, frame.x(i)[0]), frame.wrap(1, frame.x(i)[1])];
-        for sx in -1i32..=1 {
-            for sz in -1i32..=1 {
-                let shift = [sx, sz];
-                let mut p = x;
-                let mut inside = true;
-                for k in 0..2 {
-                    if shift[k] != 0 {
-                        if !frame.periodic[k] {
-                            inside = false;
-                            break;
-                        }
-                        p[k] += shift[k] as f64 * size[k];
-                        let g = ghost_width.min(size[k]);
-                        if p[k] < -g || p[k] >= size[k] + g {
-                            inside = false;
-                        }
-                    }
-                }
-                if inside {
-                    sites.push(Site {
-                        p: Point2::new(p[0], p[1]),
-                        id: i as u32,
-                        ghost: shift != [0, 0],
-                    });
-                }
-            }
+        for (shift, p) in images(frame, i, ghost_width).as_slice() {
+            sites.push(Site {
+                p: Point2::new(p[0], p[1]),
+                id: i as u32,
+                ghost: *shift != [0, 0],
+            });
         }
     }
     let tri: DelaunayTriangulation<Site> =
         DelaunayTriangulation::bulk_load_stable(sites).expect("finite particle positions");
     let mut edges: Vec<Edge> = Vec::with_capacity(3 * frame.len());
-    // Angle at `c` of the triangle `(a, b, c)`.
-    let angle = |a: Point2<f64>, b: Point2<f64>, c: Point2<f64>| {
-        let (u, v) = ((a.x - c.x, a.y - c.y), (b.x - c.x, b.y - c.y));
-        (u.0 * v.1 - u.1 * v.0).abs().atan2(u.0 * v.0 + u.1 * v.1)
+    let site = |s: &Site| SiteRef {
+        p: [s.p.x, s.p.y],
+        id: s.id,
+        ghost: s.ghost,
     };
     for e in tri.undirected_edges() {
         let [a, b] = e.vertices();
-        let (a, b) = (a.data(), b.data());
-        if (a.ghost && b.ghost) || a.id == b.id {
-            continue;
-        }
         let directed = e.as_directed();
         let opposite = match (directed.opposite_vertex(), directed.rev().opposite_vertex()) {
-            (Some(c), Some(d)) => {
-                let (c, d) = (c.data(), d.data());
-                let sum = angle(a.p, b.p, c.p) + angle(a.p, b.p, d.p);
-                Some((c.id, d.id, sum))
-            }
+            (Some(c), Some(d)) => Some((site(c.data()), site(d.data()))),
             _ => None,
         };
-        let (dx, dz) = (b.p.x - a.p.x, b.p.y - a.p.y);
-        edges.push(Edge {
-            i: a.id.min(b.id),
-            j: a.id.max(b.id),
-            length: (dx * dx + dz * dz).sqrt(),
-            mid_x: a.p.x + 0.5 * dx,
-            mid_y: 0.0,
-            opposite,
-        });
+        if let Some(edge) = edge_between(site(a.data()), site(b.data()), opposite, &[]) {
+            edges.push(edge);
+        }
     }
-    edges.sort_by_key(|p| (p.i, p.j));
-    edges.dedup_by(|p, q| (p.i, p.j) == (q.i, q.j));
+    finish_edges(&mut edges);
     edges
 }
 
@@ -318,12 +421,26 @@ pub struct LocationChangeCounter {
     /// Changes per bin inside the window.
     pub bin_count: Vec<u64>,
     particles: usize,
+    /// 2D: the triangulation kept between samples (`None`: rebuilt at every sample).
+    kinetic: Option<KineticDelaunay>,
 }
 
 impl LocationChangeCounter {
+    /// The counter; in 2D it keeps its Delaunay triangulation between samples and repairs it by
+    /// edge flips ([`KineticDelaunay`]).
     pub fn new(method: Method, bins: LateralBins, period: f64) -> Self {
+        let mut c = Self::rebuilding(method, bins, period);
+        if let Method::Delaunay { max_edge, .. } = method {
+            c.kinetic = Some(KineticDelaunay::new(4.0 * max_edge));
+        }
+        c
+    }
+
+    /// The reference counter: triangulates every sample from scratch ([`delaunay_edges`]).
+    pub fn rebuilding(method: Method, bins: LateralBins, period: f64) -> Self {
         let n = bins.n;
         Self {
+            kinetic: None,
             method,
             bins,
             period,
@@ -339,6 +456,12 @@ impl LocationChangeCounter {
     /// The method in use.
     pub fn method(&self) -> Method {
         self.method
+    }
+
+    /// How the kept triangulation was updated (incremental repairs, rebuilds by reason, flips);
+    /// `None` for the rebuilding counter and for neighbour shells.
+    pub fn kinetic_stats(&self) -> Option<KineticStats> {
+        self.kinetic.as_ref().map(|k| k.stats)
     }
 
     /// `f_lc` over the window: changes per particle per period.
@@ -373,7 +496,10 @@ impl Observer for LocationChangeCounter {
     fn observe(&mut self, frame: &Frame, in_window: bool) {
         self.particles = frame.len();
         let prev_pairs: &[(u32, u32)] = self.previous.as_ref().map_or(&[], |p| &p.2);
-        let current = edges(frame, self.method, prev_pairs);
+        let current = match &mut self.kinetic {
+            Some(k) => k.update_for_counter(frame, prev_pairs),
+            None => edges(frame, self.method, prev_pairs),
+        };
         let mut tracked = None;
         if let Some((t0, was_in_window, prev)) = &self.previous {
             let (fresh, keep) = compare(prev, &current, self.method);

@@ -12,6 +12,7 @@
 //! | [`lateral`] | per-bin block sums: packing, bridges, `T_g` of all and of clustered grains, lateral mobility `D_lat` |
 //! | [`noise`] | statistical error of the profiles and the noise baseline of `Delta n` |
 //! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D) |
+//! | [`kinetic_delaunay`] | the 2D Delaunay triangulation kept between samples, repaired by flips |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
 //! | [`stationarity`] | first versus second half of the window |
 //! | [`shear`](mod@shear) | shear drive: `E_par`, `E_perp`, their window means and extrema per cycle |
@@ -26,6 +27,7 @@ pub mod bins;
 pub mod classify;
 pub mod convergence;
 pub mod diffusion;
+pub mod kinetic_delaunay;
 pub mod lateral;
 pub mod line;
 pub mod location_changes;

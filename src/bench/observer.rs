@@ -1,0 +1,248 @@
+//! `wetgran bench observer`: what the location-change observer costs in a shaken run of the 2D
+//! standard wet system (MODEL.md 1: N = 1200, 400 x 9, eps = 1, the base scene of
+//! `sweeps/shaken_2d_elastic.toml`), triangulating every sample from scratch (the reference,
+//! spade) against keeping the triangulation and repairing it by flips
+//! (`observe::kinetic_delaunay`).
+//!
+//! At each of three points (gas Gamma 2 E* 3, fluid Gamma 30 E* 0.7, coexistence Gamma 30
+//! E* 2.6) the run goes `warm-up` time units unobserved (the hot start cools), then
+//! `samples * scale` samples at 20 per period; at every sample the same frame goes to the other
+//! observers (`ObserverSet` without location changes), to the rebuilding counter and to the
+//! incremental one, each timed on its own. Engine time = wall time between samples outside the
+//! observers (frame copy included). Reported per point: milliseconds per sample of each part,
+//! the share of the location-change observer in the observed run
+//! `lc / (engine + other observers + lc)` for each method, whether both methods counted the
+//! same changes (total and per bin), and how the incremental triangulation was updated.
+
+use super::tdmd::thread_cpu_seconds;
+use crate::observe::kinetic_delaunay::KineticStats;
+use crate::observe::location_changes::{LocationChangeCounter, Method};
+use crate::observe::{Observer, ObserverSet};
+use crate::scene::Scene;
+use crate::sim::{Frame, run_scene_observed};
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// Samples per driving period (the default of `[observe]`).
+pub const SAMPLES_PER_PERIOD: f64 = 20.0;
+/// Time units run before the measured samples.
+pub const WARM_UP: f64 = 20.0;
+
+/// The 2D standard wet system shaken at `(gamma, e_star)` with particle restitution `eps`
+/// (`min_rebound`: `engine.min_rebound_speed`), running `duration` time units, hot start
+/// `T_g / E_cb = 20`, seed 1.
+pub fn standard_shaken(
+    gamma: f64,
+    e_star: f64,
+    eps: f64,
+    min_rebound: Option<f64>,
+    duration: f64,
+) -> Scene {
+    let engine = min_rebound
+        .map(|v| format!("[engine]\nmin_rebound_speed = {v:?}\n"))
+        .unwrap_or_default();
+    let text = format!(
+        r#"
+dimension = 2
+[box]
+size = [400.0, 9.0]
+[particles]
+count = 1200
+polydispersity = 0.06
+[contact]
+restitution = {eps:?}
+[capillary]
+model = "thin_thread"
+[drive]
+kind = "sine"
+gamma = {gamma:?}
+e_star = {e_star:?}
+[initial]
+temperature_over_ecb = 20.0
+seed = 1
+[run]
+duration = {duration:?}
+{engine}"#
+    );
+    Scene::from_toml_str(&text, "bench standard shaken").expect("bench scene is valid")
+}
+
+/// The three points: label, Gamma, E*.
+pub const POINTS: [(&str, f64, f64); 3] = [
+    ("gas", 2.0, 3.0),
+    ("fluid", 30.0, 0.7),
+    ("coexistence", 30.0, 2.6),
+];
+
+/// One point's figures (seconds summed over the measured samples).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObserverRow {
+    pub label: &'static str,
+    pub gamma: f64,
+    pub e_star: f64,
+    pub samples: usize,
+    pub engine: f64,
+    pub others: f64,
+    pub rebuilt: f64,
+    pub incremental: f64,
+    /// CPU seconds of the whole measured part (engine and all observers), when known.
+    pub cpu: Option<f64>,
+    pub changes: u64,
+    pub same_counts: bool,
+    pub stats: KineticStats,
+}
+
+/// Measures every point.
+pub fn measure(samples: usize, scale: f64) -> Vec<ObserverRow> {
+    let samples = ((samples as f64 * scale).round() as usize).max(10);
+    POINTS
+        .iter()
+        .map(|&(label, gamma, e_star)| measure_point(label, gamma, e_star, samples))
+        .collect()
+}
+
+fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -> ObserverRow {
+    let probe = standard_shaken(gamma, e_star, 1.0, Some(0.03), 1.0);
+    let interval = probe.driving_period() / SAMPLES_PER_PERIOD;
+    let first = (WARM_UP / interval).ceil();
+    let duration = (first + samples as f64 - 1.0) * interval;
+    let mut scene = standard_shaken(gamma, e_star, 1.0, Some(0.03), duration);
+    scene.observe.samples_per_period = SAMPLES_PER_PERIOD;
+    scene.observe.location_changes = false;
+    scene.observe.transient_periods = 0.0;
+    let bins = scene.observe.lateral_bins(&scene);
+    let method = Method::Delaunay {
+        max_edge: scene.observe.lc_max_edge * scene.particles.diameter,
+        margin: scene.observe.lc_flip_margin,
+    };
+    let period = scene.driving_period();
+    let mut others = ObserverSet::new(&scene);
+    let mut rebuilt = LocationChangeCounter::rebuilding(method, bins.clone(), period);
+    let mut incremental = LocationChangeCounter::new(method, bins, period);
+    let mut row = ObserverRow {
+        label,
+        gamma,
+        e_star,
+        samples: 0,
+        engine: 0.0,
+        others: 0.0,
+        rebuilt: 0.0,
+        incremental: 0.0,
+        cpu: None,
+        changes: 0,
+        same_counts: false,
+        stats: KineticStats::default(),
+    };
+    let mut last: Option<Instant> = None;
+    let mut cpu_start = None;
+    let t_first = first * interval - 0.5 * interval;
+    run_scene_observed(
+        &scene,
+        interval,
+        &mut |f: &Frame| {
+            if f.time < t_first {
+                return;
+            }
+            let arrived = Instant::now();
+            match last {
+                Some(t) => row.engine += (arrived - t).as_secs_f64(),
+                None => cpu_start = thread_cpu_seconds(),
+            }
+            row.samples += 1;
+            let t0 = Instant::now();
+            others.observe(f);
+            let t1 = Instant::now();
+            rebuilt.observe(f, true);
+            let t2 = Instant::now();
+            incremental.observe(f, true);
+            let t3 = Instant::now();
+            row.others += (t1 - t0).as_secs_f64();
+            row.rebuilt += (t2 - t1).as_secs_f64();
+            row.incremental += (t3 - t2).as_secs_f64();
+            last = Some(Instant::now());
+        },
+        &mut |_| {},
+    );
+    row.cpu = cpu_start.zip(thread_cpu_seconds()).map(|(a, b)| b - a);
+    row.changes = incremental.window_count;
+    row.same_counts = incremental.window_count == rebuilt.window_count
+        && incremental.bin_count == rebuilt.bin_count
+        && incremental.series == rebuilt.series;
+    row.stats = incremental.kinetic_stats().unwrap_or_default();
+    row
+}
+
+/// The table.
+pub fn report(rows: &[ObserverRow]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "location-change observer, 2D standard wet system (N 1200, 400x9, eps 1), {SAMPLES_PER_PERIOD} samples/period after {WARM_UP} time units"
+    );
+    let _ = writeln!(
+        s,
+        "{:<12} {:>5} {:>5} {:>7} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>6}",
+        "point",
+        "Gamma",
+        "E*",
+        "samples",
+        "engine ms",
+        "others ms",
+        "rebuild ms",
+        "incr. ms",
+        "share rb",
+        "share inc",
+        "changes",
+        "equal"
+    );
+    for r in rows {
+        let n = r.samples.max(1) as f64;
+        let share = |lc: f64| lc / (r.engine + r.others + lc);
+        let _ = writeln!(
+            s,
+            "{:<12} {:>5} {:>5} {:>7} {:>9.3} {:>9.3} {:>10.3} {:>9.3} {:>7.1}% {:>8.1}% {:>8} {:>6}",
+            r.label,
+            r.gamma,
+            r.e_star,
+            r.samples,
+            1e3 * r.engine / n,
+            1e3 * r.others / n,
+            1e3 * r.rebuilt / n,
+            1e3 * r.incremental / n,
+            100.0 * share(r.rebuilt),
+            100.0 * share(r.incremental),
+            r.changes,
+            if r.same_counts { "yes" } else { "NO" }
+        );
+    }
+    let _ = writeln!(s, "incremental updates (per point):");
+    for r in rows {
+        let st = &r.stats;
+        let _ = writeln!(
+            s,
+            "  {:<12} repaired {} | rebuilt {} (first {}, inverted {}, images {}, check {}, back-off {}) | degenerate {} | flips {} unfolds {} held {} halvings {} | images in {} out {}{}",
+            r.label,
+            st.incremental,
+            st.rebuilds(),
+            st.rebuild_start,
+            st.rebuild_inverted,
+            st.rebuild_images,
+            st.rebuild_check,
+            st.rebuild_backoff,
+            st.degenerate,
+            st.flips,
+            st.unfolds,
+            st.held,
+            st.bisections,
+            st.inserted,
+            st.deleted,
+            r.cpu
+                .map(|c| format!(
+                    " | thread CPU {c:.2} s of {:.2} s wall",
+                    r.engine + r.others + r.rebuilt + r.incremental
+                ))
+                .unwrap_or_default()
+        );
+    }
+    s
+}
