@@ -20,6 +20,7 @@
 
 pub mod shake;
 pub mod slab;
+pub mod stress;
 pub mod tdmd;
 pub mod wall;
 

@@ -871,12 +871,13 @@ impl Scene {
         Ok(())
     }
 
-    /// With the time-driven engine: time step, skin, stiffness and damping in range.
+    /// With the time-driven engine: time step, skin, stiffness and damping in range, and a time
+    /// step that resolves a Hertz contact ([`Scene::largest_time_step`]).
     fn validate_time_numbers(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let e = &self.engine;
         let ct = &self.contact;
         if let Some(dt) = e.dt
-            && !(dt.is_finite() && dt > 0.0 && dt <= 1e-2)
+            && !(dt.is_finite() && dt > 0.0 && dt <= super::MAX_DT)
         {
             return Err(c.out_of_range("engine.dt", dt, "in (0, 0.01]"));
         }
@@ -899,6 +900,23 @@ impl Scene {
             {
                 return Err(c.out_of_range(key, a, "in [0, 1] (a time)"));
             }
+        }
+        // A step that does not resolve a Hertz contact lets the integrator blow up (found by
+        // `wetgran stress time_largest_dt`: dt = 0.01 at the default stiffness).
+        let dt_max = self.largest_time_step();
+        let dt = e.dt.unwrap_or(super::DEFAULT_DT);
+        if dt > dt_max {
+            return Err(c.out_of_range(
+                "engine.dt",
+                dt,
+                &format!(
+                    "<= {} (an eighth of the Hertz contact time at impact speed 10 sqrt(g d) \
+                     for contact.stiffness = {}: a longer step does not resolve the contact \
+                     and the integrator blows up)",
+                    num(dt_max),
+                    num(self.contact.stiffness.unwrap_or(super::DEFAULT_STIFFNESS))
+                ),
+            ));
         }
         Ok(())
     }
