@@ -307,15 +307,18 @@ impl StressRow {
     }
 }
 
-/// What the checked loop measured (the row without its case and timing).
-struct Measured {
-    work: u64,
-    simulated_time: f64,
-    max_overlap: f64,
-    ledger_error: f64,
-    nan_count: u64,
-    checks: u64,
-    violation: Option<String>,
+/// What a checked run measured (a [`StressRow`] without its case and timing).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measured {
+    pub work: u64,
+    pub simulated_time: f64,
+    pub max_overlap: f64,
+    pub ledger_error: f64,
+    pub nan_count: u64,
+    pub checks: u64,
+    pub violation: Option<String>,
+    /// The engine ran out of events before the work asked (nothing moves).
+    pub exhausted: bool,
 }
 
 /// Runs one case for `events` events (or time steps), checking after each of [`CHECKS`] chunks.
@@ -332,7 +335,13 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
             nan_count: 0,
             checks: 0,
             violation: Some(format!("panicked: {}", panic_text(payload.as_ref()))),
+            exhausted: false,
         });
+    // A hard case that runs out of events tests nothing: a failure.
+    let violation = m.violation.or_else(|| {
+        m.exhausted
+            .then(|| format!("no event left to process after {} events", m.work))
+    });
     StressRow {
         case,
         unit: if case.is_time_driven() {
@@ -347,7 +356,7 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
         nan_count: m.nan_count,
         checks: m.checks,
         wall_seconds: start.elapsed().as_secs_f64(),
-        violation: m.violation,
+        violation,
     }
 }
 
@@ -368,7 +377,7 @@ fn measure(case: StressCase, scene: &Scene, events: u64) -> Measured {
         StressCase::GrazingWalls => {
             let mut e = Engine::<2, true, false>::new(scene);
             slide_along_the_floor(&mut e);
-            checked_run(e, scene, events)
+            checked_run(e, scene, events, CHECKS)
         }
         StressCase::PlantedOverlap => {
             let mut e = Engine::<2, false, false>::new(scene);
@@ -377,10 +386,33 @@ fn measure(case: StressCase, scene: &Scene, events: u64) -> Measured {
             for i in 0..2 {
                 e.set_velocity(i, Vector::<2>::new(1.0, 0.3));
             }
-            checked_run(e, scene, events)
+            checked_run(e, scene, events, CHECKS)
         }
-        _ => with_engine(scene, None, CheckedRun { scene, events }),
+        _ => with_engine(scene, None, CheckedRun { scene, events, checks: CHECKS }),
     }
+}
+
+/// Runs the first `work` events (time steps) of a validated scene from its initial state (hot,
+/// or the cold bonded bed), checking the invariants `checks` times on the way: what the input
+/// fuzzing asks of every scene it got accepted (tests/fuzz_inputs.rs). A continuation scene
+/// (`initial.start = "continue"`) has no state of its own: an error.
+pub fn first_events(scene: &Scene, work: u64, checks: u64) -> Result<Measured, String> {
+    let cold = match scene.initial.start {
+        crate::scene::StartMode::Hot => None,
+        crate::scene::StartMode::Cold => Some(crate::sim::initial::cold_state(scene)),
+        crate::scene::StartMode::Continue => {
+            return Err("initial.start = \"continue\" has no state of its own".into());
+        }
+    };
+    Ok(with_engine(
+        scene,
+        cold.as_ref(),
+        CheckedRun {
+            scene,
+            events: work,
+            checks,
+        },
+    ))
 }
 
 /// Grazing set-up: every disk on the floor (`z = r`), evenly spaced along `x`, sliding at
@@ -401,22 +433,23 @@ fn slide_along_the_floor(e: &mut Engine<2, true, false>) {
 struct CheckedRun<'a> {
     scene: &'a Scene,
     events: u64,
+    checks: u64,
 }
 
 impl EngineVisitor for CheckedRun<'_> {
     type Output = Measured;
     fn visit<S: Simulation>(self, engine: S) -> Measured {
-        checked_run(engine, self.scene, self.events)
+        checked_run(engine, self.scene, self.events, self.checks)
     }
 }
 
-/// Runs `events` units of work in [`CHECKS`] chunks, checking the invariants after each.
-fn checked_run<S: Simulation>(mut e: S, scene: &Scene, events: u64) -> Measured {
-    let chunk = events.div_ceil(CHECKS).max(1);
+/// Runs `events` units of work in `checks` chunks, checking the invariants after each.
+fn checked_run<S: Simulation>(mut e: S, scene: &Scene, events: u64, checks_wanted: u64) -> Measured {
+    let chunk = events.div_ceil(checks_wanted.max(1)).max(1);
     let a0 = e.energy();
     let w0 = e.work_done();
     let (mut max_overlap, mut nan_count, mut checks) = (0.0f64, 0u64, 0u64);
-    let mut violation = None;
+    let (mut violation, mut exhausted) = (None, false);
     while e.work_done() - w0 < events {
         let n = chunk.min(events - (e.work_done() - w0));
         let moved = e.advance_work(n);
@@ -432,10 +465,7 @@ fn checked_run<S: Simulation>(mut e: S, scene: &Scene, events: u64) -> Measured 
             break;
         }
         if !moved {
-            violation = Some(format!(
-                "no event left to process after {} events",
-                e.work_done() - w0
-            ));
+            exhausted = true;
             break;
         }
     }
@@ -447,6 +477,7 @@ fn checked_run<S: Simulation>(mut e: S, scene: &Scene, events: u64) -> Measured 
         nan_count,
         checks,
         violation,
+        exhausted,
     }
 }
 

@@ -14,6 +14,8 @@ pub mod observe_section;
 pub mod thresholds;
 mod validate;
 
+pub(crate) use validate::parse_error_key;
+
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

@@ -101,7 +101,7 @@ impl SceneError {
 
 /// The dotted key a TOML error belongs to (empty for syntax errors): the table path the
 /// deserializer recorded, plus the field of serde's "unknown field" and "missing field" errors.
-fn parse_error_key(err: &toml::de::Error) -> String {
+pub(crate) fn parse_error_key(err: &toml::de::Error) -> String {
     // `toml` prints the recorded path ("in `a.b`") only for an error without source context.
     let mut bare = err.clone();
     bare.set_input(None);
