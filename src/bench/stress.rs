@@ -52,8 +52,10 @@ pub enum StressCase {
     /// comes in at the rebound floor's normal speed (1e-3), a grazing angle of 1e-3.
     GrazingWalls,
     /// Gamma = 1000 with amplitude A = 1e-4 (omega = 3162), wet, 100 disks.
+    #[serde(rename = "gamma_1000")]
     StrongShaking,
     /// Wall speed A omega = 50 sqrt(g d) (A = 2, omega = 25, Gamma = 1250), wet, 100 disks.
+    #[serde(rename = "wall_speed_50")]
     FastWall,
     /// 841 disks on a square lattice at spacing 1.0005 d in a periodic box: every disk nearly
     /// touches four neighbours (dense packing near jamming).
