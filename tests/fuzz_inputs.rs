@@ -148,7 +148,10 @@ fn scene_tree(k: &SceneKnobs) -> toml::Table {
     }
     let mut initial = table(vec![("seed", Value::Integer(k.seed as i64))]);
     if k.wet {
-        initial.insert("temperature_over_ecb".into(), Value::Float(k.temperature * 10.0));
+        initial.insert(
+            "temperature_over_ecb".into(),
+            Value::Float(k.temperature * 10.0),
+        );
     } else {
         initial.insert("temperature".into(), Value::Float(k.temperature));
     }
@@ -359,9 +362,22 @@ fn mutate_toml(tree: toml::Table, m: &Mutation, strip: &str) -> (String, Expect)
         if let [Seg::Key(a), Seg::Idx(i), rest @ ..] = p
             && a == "axis"
         {
-            if let Some(Value::String(k)) = tree_before.get("axis").and_then(|x| x.get(*i)).and_then(|x| x.get("key")) {
-                let alias = [("gamma", "drive.gamma"), ("e_star", "drive.e_star"), ("l_x", "box.size[0]")];
-                names.push(alias.iter().find(|(n, _)| n == k).map_or(k.clone(), |(_, s)| s.to_string()));
+            if let Some(Value::String(k)) = tree_before
+                .get("axis")
+                .and_then(|x| x.get(*i))
+                .and_then(|x| x.get("key"))
+            {
+                let alias = [
+                    ("gamma", "drive.gamma"),
+                    ("e_star", "drive.e_star"),
+                    ("l_x", "box.size[0]"),
+                ];
+                names.push(
+                    alias
+                        .iter()
+                        .find(|(n, _)| n == k)
+                        .map_or(k.clone(), |(_, s)| s.to_string()),
+                );
             }
             names.push(format!("axis.{}", dotted(rest)));
             names.push("axis".into());
@@ -399,7 +415,8 @@ fn mutate_toml(tree: toml::Table, m: &Mutation, strip: &str) -> (String, Expect)
         }
         Mutation::NonFinite(i, kind) if !numeric.is_empty() => {
             let p = i.get(&numeric).clone();
-            *get_mut(&mut root, &p) = Value::Float([f64::NAN, f64::INFINITY, f64::NEG_INFINITY][*kind as usize]);
+            *get_mut(&mut root, &p) =
+                Value::Float([f64::NAN, f64::INFINITY, f64::NEG_INFINITY][*kind as usize]);
             Expect::Key(name(&p))
         }
         Mutation::Extreme(i, kind) if !numeric.is_empty() => {
@@ -418,7 +435,11 @@ fn mutate_toml(tree: toml::Table, m: &Mutation, strip: &str) -> (String, Expect)
             Expect::AnyKey
         }
         Mutation::Remove(i) => {
-            let mut all: Vec<Vec<Seg>> = leaves.iter().chain(tables.iter().filter(|p| !p.is_empty())).cloned().collect();
+            let mut all: Vec<Vec<Seg>> = leaves
+                .iter()
+                .chain(tables.iter().filter(|p| !p.is_empty()))
+                .cloned()
+                .collect();
             all.retain(|p| !matches!(p.last(), Some(Seg::Idx(_))));
             let p = i.get(&all).clone();
             let (last, parent) = p.split_last().unwrap();
@@ -488,7 +509,10 @@ fn check_rejection(
     line: Option<usize>,
     expect: &Expect,
 ) -> Result<(), TestCaseError> {
-    prop_assert!(message.contains(file), "the error does not name the file {file}: {message}");
+    prop_assert!(
+        message.contains(file),
+        "the error does not name the file {file}: {message}"
+    );
     if !key.is_empty() {
         prop_assert!(
             message.contains(&format!("key `{key}`")),
@@ -521,7 +545,12 @@ const FIRST_EVENTS: u64 = 300;
 /// on its own, and `wetgran simulate` refuses it).
 fn check_accepted(scene: &Scene, origin: &str) -> Result<(), TestCaseError> {
     prop_assert!(scene.validate(origin).is_ok());
-    let cells: f64 = scene.container.size.iter().map(|l| (l / 1.1).max(1.0)).product();
+    let cells: f64 = scene
+        .container
+        .size
+        .iter()
+        .map(|l| (l / 1.1).max(1.0))
+        .product();
     if scene.particles.count > 400 || cells > 1e6 {
         return Ok(());
     }
@@ -532,9 +561,18 @@ fn check_accepted(scene: &Scene, origin: &str) -> Result<(), TestCaseError> {
     let m = match run {
         Ok(Ok(m)) => m,
         Ok(Err(e)) => return Err(TestCaseError::fail(format!("{e}"))),
-        Err(p) => return Err(TestCaseError::fail(format!("accepted scene panicked: {}", panic_text(&p)))),
+        Err(p) => {
+            return Err(TestCaseError::fail(format!(
+                "accepted scene panicked: {}",
+                panic_text(&p)
+            )));
+        }
     };
-    prop_assert!(m.violation.is_none(), "accepted scene broke an invariant: {:?}\n{scene:?}", m.violation);
+    prop_assert!(
+        m.violation.is_none(),
+        "accepted scene broke an invariant: {:?}\n{scene:?}",
+        m.violation
+    );
     prop_assert_eq!(m.nan_count, 0);
     Ok(())
 }
@@ -630,7 +668,9 @@ fn sweep_tree() -> impl Strategy<Value = toml::Table> {
                 ]);
                 match kind {
                     _ if integer => {
-                        let v = (0..=steps).map(|s| Value::Integer(1 + 10 * s as i64)).collect();
+                        let v = (0..=steps)
+                            .map(|s| Value::Integer(1 + 10 * s as i64))
+                            .collect();
                         a.insert("values".into(), Value::Array(v));
                     }
                     0 => {
@@ -668,7 +708,12 @@ fn sweep_tree() -> impl Strategy<Value = toml::Table> {
 }
 
 /// A JSON leaf path and every object path of a JSON tree.
-fn walk_json(v: &serde_json::Value, path: &mut Vec<Seg>, leaves: &mut Vec<Vec<Seg>>, objects: &mut Vec<Vec<Seg>>) {
+fn walk_json(
+    v: &serde_json::Value,
+    path: &mut Vec<Seg>,
+    leaves: &mut Vec<Vec<Seg>>,
+    objects: &mut Vec<Vec<Seg>>,
+) {
     match v {
         serde_json::Value::Object(o) => {
             objects.push(path.clone());
@@ -870,8 +915,14 @@ proptest! {
 fn regression_sweep_toml_errors_name_the_dotted_key() {
     let path = Path::new("fuzz/sweep.toml");
     for (text, key) in [
-        ("[sweep]\nname = \"a\"\nzz_not_a_key = 1\n", "sweep.zz_not_a_key"),
-        ("[sweep]\nname = \"a\"\nreplicas = \"x\"\n", "sweep.replicas"),
+        (
+            "[sweep]\nname = \"a\"\nzz_not_a_key = 1\n",
+            "sweep.zz_not_a_key",
+        ),
+        (
+            "[sweep]\nname = \"a\"\nreplicas = \"x\"\n",
+            "sweep.replicas",
+        ),
         (
             "[sweep]\nname = \"a\"\n[[axis]]\nkey = \"gamma\"\nlinear = { from = 1.0, to = 2.0, steps = \"3\" }\n",
             "axis.linear.steps",
@@ -880,7 +931,10 @@ fn regression_sweep_toml_errors_name_the_dotted_key() {
         let e = SweepFile::parse(text, path).unwrap_err();
         assert_eq!(e.key, key, "{e}");
         let shown = e.to_string();
-        assert!(shown.starts_with("fuzz/sweep.toml:") && shown.contains(&format!("key `{key}`")), "{shown}");
+        assert!(
+            shown.starts_with("fuzz/sweep.toml:") && shown.contains(&format!("key `{key}`")),
+            "{shown}"
+        );
     }
 }
 
@@ -893,7 +947,12 @@ fn regression_job_spec_errors_name_the_key_and_unknown_keys_are_refused() {
                 size = [8.0, 8.0]\nboundary = [\"periodic\", \"periodic\"]\n\
                 [scene.particles]\ncount = 4\n[scene.initial]\ntemperature = 1.0\n\
                 [scene.run]\nduration = 2.0\n";
-    let spec = SweepFile::parse(text, Path::new("t.toml")).unwrap().expand().unwrap().remove(0).spec;
+    let spec = SweepFile::parse(text, Path::new("t.toml"))
+        .unwrap()
+        .expand()
+        .unwrap()
+        .remove(0)
+        .spec;
     let good = serde_json::to_value(&spec).unwrap();
     assert!(JobSpec::from_json(&good.to_string(), "s.json").is_ok());
     let mut wrong = good.clone();
@@ -901,7 +960,10 @@ fn regression_job_spec_errors_name_the_key_and_unknown_keys_are_refused() {
     let e = JobSpec::from_json(&wrong.to_string(), "s.json").unwrap_err();
     assert!(e.starts_with("s.json: key `scene.particles.count`:"), "{e}");
     let mut missing = good.clone();
-    missing["scene"]["run"].as_object_mut().unwrap().remove("duration");
+    missing["scene"]["run"]
+        .as_object_mut()
+        .unwrap()
+        .remove("duration");
     let e = JobSpec::from_json(&missing.to_string(), "s.json").unwrap_err();
     assert!(e.starts_with("s.json: key `scene.run.duration`:"), "{e}");
     let mut unknown = good.clone();

@@ -13,8 +13,12 @@ fn stress(args: &[&str]) -> (Option<i32>, Vec<serde_json::Value>) {
         .output()
         .expect("wetgran runs");
     let text = String::from_utf8_lossy(&out.stdout);
-    let rows: Vec<serde_json::Value> = serde_json::from_str(&text)
-        .unwrap_or_else(|e| panic!("not JSON ({e}): {text}\n{}", String::from_utf8_lossy(&out.stderr)));
+    let rows: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap_or_else(|e| {
+        panic!(
+            "not JSON ({e}): {text}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    });
     (out.status.code(), rows)
 }
 
@@ -69,7 +73,10 @@ fn a_planted_overlap_is_reported_as_a_failed_case() {
     assert!(v.contains("particles 0 and 1 overlap by"), "{v}");
     // Found at the first check, 10 events in.
     assert_eq!(r["checks"], 1, "{r}");
-    assert!((r["max_overlap"].as_f64().unwrap() - 0.1).abs() < 1e-9, "{r}");
+    assert!(
+        (r["max_overlap"].as_f64().unwrap() - 0.1).abs() < 1e-9,
+        "{r}"
+    );
 }
 
 #[test]
@@ -80,5 +87,8 @@ fn an_unknown_case_is_refused() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("unknown stress case `no_such_case`") && err.contains("jammed"), "{err}");
+    assert!(
+        err.contains("unknown stress case `no_such_case`") && err.contains("jammed"),
+        "{err}"
+    );
 }

@@ -743,7 +743,9 @@ fn regression_blown_up_time_run_is_a_broken_invariant_not_a_panic() {
     let r = run_scene(&s);
     let v = r.invariant_violation.expect("the blown-up run is stopped");
     assert!(
-        v.contains("left the neighbour list") || v.contains("outside the box") || v.contains("overlap"),
+        v.contains("left the neighbour list")
+            || v.contains("outside the box")
+            || v.contains("overlap"),
         "{v}"
     );
 }

@@ -328,17 +328,19 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
     let scene = case.scene();
     let start = Instant::now();
     // A panic is a failed case, reported like a broken invariant.
-    let m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| measure(case, &scene, events)))
-        .unwrap_or_else(|payload| Measured {
-            work: 0,
-            simulated_time: f64::NAN,
-            max_overlap: f64::NAN,
-            ledger_error: f64::NAN,
-            nan_count: 0,
-            checks: 0,
-            violation: Some(format!("panicked: {}", panic_text(payload.as_ref()))),
-            exhausted: false,
-        });
+    let m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        measure(case, &scene, events)
+    }))
+    .unwrap_or_else(|payload| Measured {
+        work: 0,
+        simulated_time: f64::NAN,
+        max_overlap: f64::NAN,
+        ledger_error: f64::NAN,
+        nan_count: 0,
+        checks: 0,
+        violation: Some(format!("panicked: {}", panic_text(payload.as_ref()))),
+        exhausted: false,
+    });
     // A hard case that runs out of events tests nothing: a failure.
     let violation = m.violation.or_else(|| {
         m.exhausted
@@ -390,7 +392,15 @@ fn measure(case: StressCase, scene: &Scene, events: u64) -> Measured {
             }
             checked_run(e, scene, events, CHECKS)
         }
-        _ => with_engine(scene, None, CheckedRun { scene, events, checks: CHECKS }),
+        _ => with_engine(
+            scene,
+            None,
+            CheckedRun {
+                scene,
+                events,
+                checks: CHECKS,
+            },
+        ),
     }
 }
 
@@ -446,7 +456,12 @@ impl EngineVisitor for CheckedRun<'_> {
 }
 
 /// Runs `events` units of work in `checks` chunks, checking the invariants after each.
-fn checked_run<S: Simulation>(mut e: S, scene: &Scene, events: u64, checks_wanted: u64) -> Measured {
+fn checked_run<S: Simulation>(
+    mut e: S,
+    scene: &Scene,
+    events: u64,
+    checks_wanted: u64,
+) -> Measured {
     let chunk = events.div_ceil(checks_wanted.max(1)).max(1);
     let a0 = e.energy();
     let w0 = e.work_done();

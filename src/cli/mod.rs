@@ -544,10 +544,7 @@ fn stress(case: Option<&str>, events: u64, json: bool) -> ExitCode {
             serde_json::to_string_pretty(&rows).expect("stress rows serialize")
         );
     } else {
-        print!(
-            "{}",
-            crate::report::stress_text::stress_text(&rows, events)
-        );
+        print!("{}", crate::report::stress_text::stress_text(&rows, events));
     }
     if rows.iter().all(|r| r.passed()) {
         ExitCode::SUCCESS

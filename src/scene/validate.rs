@@ -478,17 +478,29 @@ impl Scene {
             (
                 speed_key,
                 !(speed <= MAX_WALL_SPEED),
-                format!("the wall speed A omega = {} sqrt(g d) must be <= {}", num(speed), num(MAX_WALL_SPEED)),
+                format!(
+                    "the wall speed A omega = {} sqrt(g d) must be <= {}",
+                    num(speed),
+                    num(MAX_WALL_SPEED)
+                ),
             ),
             (
                 gamma_key,
                 !(gamma <= MAX_GAMMA),
-                format!("Gamma = A omega^2 / g = {} must be <= {}", num(gamma), num(MAX_GAMMA)),
+                format!(
+                    "Gamma = A omega^2 / g = {} must be <= {}",
+                    num(gamma),
+                    num(MAX_GAMMA)
+                ),
             ),
             (
                 amp_key,
                 !(a / self.particles.diameter <= MAX_AMPLITUDE),
-                format!("the amplitude A = {} d must be <= {} d", num(a / self.particles.diameter), num(MAX_AMPLITUDE)),
+                format!(
+                    "the amplitude A = {} d must be <= {} d",
+                    num(a / self.particles.diameter),
+                    num(MAX_AMPLITUDE)
+                ),
             ),
         ] {
             if excess {

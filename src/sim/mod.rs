@@ -220,7 +220,9 @@ pub fn with_engine<V: EngineVisitor>(scene: &Scene, st: Option<&EngineState>, v:
         if let Some(field) = time_driven::shear::CosineShear::of_scene(scene) {
             // Validation admits the shear drive in 3D only.
             return match (grav, wet) {
-                (false, false) => v.visit(build!(TimeEngine::<3, false, false, _>, scene, st, field)),
+                (false, false) => {
+                    v.visit(build!(TimeEngine::<3, false, false, _>, scene, st, field))
+                }
                 (false, true) => v.visit(build!(TimeEngine::<3, false, true, _>, scene, st, field)),
                 (true, false) => v.visit(build!(TimeEngine::<3, true, false, _>, scene, st, field)),
                 (true, true) => v.visit(build!(TimeEngine::<3, true, true, _>, scene, st, field)),
@@ -228,25 +230,13 @@ pub fn with_engine<V: EngineVisitor>(scene: &Scene, st: Option<&EngineState>, v:
         }
         return match (scene.dimension, grav, wet) {
             (2, false, false) => v.visit(build!(TimeEngine::<2, false, false>, scene, st)),
-            (2, false, true) => {
-                v.visit(build!(TimeEngine::<2, false, true>, scene, st))
-            }
-            (2, true, false) => {
-                v.visit(build!(TimeEngine::<2, true, false>, scene, st))
-            }
-            (2, true, true) => {
-                v.visit(build!(TimeEngine::<2, true, true>, scene, st))
-            }
+            (2, false, true) => v.visit(build!(TimeEngine::<2, false, true>, scene, st)),
+            (2, true, false) => v.visit(build!(TimeEngine::<2, true, false>, scene, st)),
+            (2, true, true) => v.visit(build!(TimeEngine::<2, true, true>, scene, st)),
             (3, false, false) => v.visit(build!(TimeEngine::<3, false, false>, scene, st)),
-            (3, false, true) => {
-                v.visit(build!(TimeEngine::<3, false, true>, scene, st))
-            }
-            (3, true, false) => {
-                v.visit(build!(TimeEngine::<3, true, false>, scene, st))
-            }
-            (3, true, true) => {
-                v.visit(build!(TimeEngine::<3, true, true>, scene, st))
-            }
+            (3, false, true) => v.visit(build!(TimeEngine::<3, false, true>, scene, st)),
+            (3, true, false) => v.visit(build!(TimeEngine::<3, true, false>, scene, st)),
+            (3, true, true) => v.visit(build!(TimeEngine::<3, true, true>, scene, st)),
             (d, _, _) => panic!("dimension {d} passed validation"),
         };
     }
