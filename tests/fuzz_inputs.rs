@@ -758,6 +758,9 @@ fn mutate_json(mut v: serde_json::Value, m: &Mutation) -> (String, Expect) {
         Mutation::WrongType(i, kind) => {
             let p = i.get(&leaves).clone();
             let x = json_at(&mut v, &p);
+            // A `null` leaf is an absent optional key: giving it a value may clash with
+            // another key first (`drive.amplitude` next to `drive.gamma`).
+            let was_null = x.is_null();
             *x = match (kind, &*x) {
                 (0, serde_json::Value::String(_)) => json!(7),
                 (0, _) => json!("seven"),
@@ -769,7 +772,11 @@ fn mutate_json(mut v: serde_json::Value, m: &Mutation) -> (String, Expect) {
                 (_, serde_json::Value::Number(_)) => json!("1.0"),
                 _ => json!(1.5),
             };
-            Expect::KeyOrLine(Some(name(&p)))
+            if was_null {
+                Expect::AnyKey
+            } else {
+                Expect::KeyOrLine(Some(name(&p)))
+            }
         }
         Mutation::NonFinite(i, _) => {
             let p = i.get(&leaves).clone();
