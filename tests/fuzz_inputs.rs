@@ -560,7 +560,7 @@ fn check_accepted(scene: &Scene, origin: &str) -> Result<(), TestCaseError> {
     let run = std::panic::catch_unwind(|| first_events(scene, FIRST_EVENTS, 10));
     let m = match run {
         Ok(Ok(m)) => m,
-        Ok(Err(e)) => return Err(TestCaseError::fail(format!("{e}"))),
+        Ok(Err(e)) => return Err(TestCaseError::fail(e)),
         Err(p) => {
             return Err(TestCaseError::fail(format!(
                 "accepted scene panicked: {}",

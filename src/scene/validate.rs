@@ -477,7 +477,7 @@ impl Scene {
         for (key, excess, what) in [
             (
                 speed_key,
-                !(speed <= MAX_WALL_SPEED),
+                speed.is_nan() || speed > MAX_WALL_SPEED,
                 format!(
                     "the wall speed A omega = {} sqrt(g d) must be <= {}",
                     num(speed),
@@ -486,7 +486,7 @@ impl Scene {
             ),
             (
                 gamma_key,
-                !(gamma <= MAX_GAMMA),
+                gamma.is_nan() || gamma > MAX_GAMMA,
                 format!(
                     "Gamma = A omega^2 / g = {} must be <= {}",
                     num(gamma),
@@ -495,7 +495,8 @@ impl Scene {
             ),
             (
                 amp_key,
-                !(a / self.particles.diameter <= MAX_AMPLITUDE),
+                (a / self.particles.diameter).is_nan()
+                    || a / self.particles.diameter > MAX_AMPLITUDE,
                 format!(
                     "the amplitude A = {} d must be <= {} d",
                     num(a / self.particles.diameter),
@@ -1003,10 +1004,9 @@ impl Scene {
                 "engine.dt",
                 dt,
                 &format!(
-                    "<= {} (an eighth of the Hertz contact time at impact speed 10 sqrt(g d) \
-                     for contact.stiffness = {}: a longer step does not resolve the contact \
-                     and the integrator blows up)",
-                    format!("{dt_max:.3e}"),
+                    "<= {dt_max:.3e} (an eighth of the Hertz contact time at impact speed 10 \
+                     sqrt(g d) for contact.stiffness = {}: a longer step does not resolve the \
+                     contact and the integrator blows up)",
                     num(self.contact.stiffness.unwrap_or(super::DEFAULT_STIFFNESS))
                 ),
             ));
