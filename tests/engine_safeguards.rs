@@ -554,4 +554,18 @@ fn regression_pair_half_a_box_apart_in_four_cells_collides_through_the_seam() {
     );
     let mut e = Engine::<2, false, false>::new(&gas);
     run_checked(&mut e, 5.0, 100, None);
+    // In 3D with four cells along x and y the tie can be on both axes at once: the pair is
+    // then predicted through all three other images (this gas overlapped at t = 1.05 when
+    // only one axis was flipped at a time).
+    let gas3 = scene_with(
+        3,
+        0.0,
+        &[5.280208673499069, 5.280208673499069, 9.787731302017669],
+        &["periodic", "periodic", "wall"],
+        14,
+        "polydispersity = 0.06\n[contact]\nrestitution = 0.3\n[initial]\n\
+         temperature = 2.1232982293637765\nseed = 259\n[run]\nduration = 1.0",
+    );
+    let mut e = Engine::<3, false, false>::new(&gas3);
+    run_checked(&mut e, 5.0, 100, None);
 }

@@ -148,10 +148,17 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         // through its other image, and the earlier collision kept. With five cells or more,
         // partners in adjacent cells are at most `0.4 L` apart and this never runs. (Found by
         // the input fuzzer, tests/fuzz_inputs.rs; regression test in engine_safeguards.rs.)
-        for k in 0..D {
-            if bodies.periodic[k] && r[k].abs() >= FAR_IMAGE * bodies.size[k] {
+        let far = |k: usize| bodies.periodic[k] && r[k].abs() >= FAR_IMAGE * bodies.size[k];
+        if (0..D).any(far) {
+            // Every other image across the far axes (both at a tie on two axes in 3D).
+            for mask in 1..1usize << D {
+                if (0..D).any(|k| mask >> k & 1 == 1 && !far(k)) {
+                    continue;
+                }
                 let mut other = r;
-                other[k] -= bodies.size[k].copysign(r[k]);
+                for k in (0..D).filter(|k| mask >> k & 1 == 1) {
+                    other[k] -= bodies.size[k].copysign(r[k]);
+                }
                 if let Some((t2, PairKind::Collide)) =
                     self.predict_image(bodies, slabs, &other, &v, i, j, t)
                     && best.is_none_or(|(tb, _)| t2 < tb)
