@@ -109,7 +109,8 @@ impl JobSpec {
         spec.scene.validate(origin).map_err(|e| e.to_string())?;
         if spec.format != SPEC_FORMAT {
             return Err(format!(
-                "{origin}: job spec format {} is not supported (this wetgran reads {SPEC_FORMAT})",
+                "{origin}: key `format`: job spec format {} is not supported (this wetgran reads \
+                 {SPEC_FORMAT})",
                 spec.format
             ));
         }
