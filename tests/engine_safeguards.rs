@@ -512,3 +512,60 @@ fn wall_restitution_loses_the_formula_energy() {
         "{v:?}"
     );
 }
+
+#[test]
+fn regression_pair_half_a_box_apart_in_four_cells_collides_through_the_seam() {
+    // Bug found by the input fuzzer (a gravity-free 2D gas in a box 4.5 wide, 4 cells): the
+    // initial lattice put disks at x = 1.125 and 3.375, exactly half the box apart. The minimum
+    // image was the direct one (a tie), along which they separate; through the seam they
+    // approach, and no later cell crossing brought them into a newly adjacent slab again: they
+    // passed into each other (overlap 0.16 at t = 0.31). A pair beyond 0.45 L is now also
+    // predicted through its other image.
+    let s = scene_with(
+        2,
+        0.0,
+        &[4.5, 30.0],
+        &["periodic", "wall"],
+        2,
+        "polydispersity = 0.0\n[initial]\ntemperature = 0.0\n[run]\nduration = 1.0",
+    );
+    let mut e = Engine::<2, false, false>::new(&s);
+    e.set_position(0, Vector::<2>::new(1.125, 3.0));
+    e.set_position(1, Vector::<2>::new(3.375, 3.0));
+    e.set_velocity(0, Vector::<2>::new(-1.0, 0.0));
+    e.set_velocity(1, Vector::<2>::new(1.0, 0.0));
+    run_checked(&mut e, 1.0, 20, None);
+    // Through the seam the gap is 4.5 - 2.25 - 1 = 1.25, closed at relative speed 2: the
+    // elastic head-on collision at t = 0.625 swaps the velocities.
+    assert_eq!(e.counts().pair_collisions, 1, "{:?}", e.counts());
+    let v = e.velocities();
+    assert!(
+        (v[0][0] - 1.0).abs() < 1e-12 && (v[1][0] + 1.0).abs() < 1e-12,
+        "{v:?}"
+    );
+    // The same in the lattice gas where it was found: 30 disks at T = 1.5, checked 100 times.
+    let gas = scene_with(
+        2,
+        0.0,
+        &[4.5, 30.0],
+        &["periodic", "wall"],
+        30,
+        "polydispersity = 0.0\n[initial]\ntemperature = 1.5\nseed = 1\n[run]\nduration = 1.0",
+    );
+    let mut e = Engine::<2, false, false>::new(&gas);
+    run_checked(&mut e, 5.0, 100, None);
+    // In 3D with four cells along x and y the tie can be on both axes at once: the pair is
+    // then predicted through all three other images (this gas overlapped at t = 1.05 when
+    // only one axis was flipped at a time).
+    let gas3 = scene_with(
+        3,
+        0.0,
+        &[5.280208673499069, 5.280208673499069, 9.787731302017669],
+        &["periodic", "periodic", "wall"],
+        14,
+        "polydispersity = 0.06\n[contact]\nrestitution = 0.3\n[initial]\n\
+         temperature = 2.1232982293637765\nseed = 259\n[run]\nduration = 1.0",
+    );
+    let mut e = Engine::<3, false, false>::new(&gas3);
+    run_checked(&mut e, 5.0, 100, None);
+}

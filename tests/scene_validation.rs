@@ -195,6 +195,7 @@ bad_scenes! {
     time_engine_with_wall_solver,
     time_engine_with_max_events,
     time_engine_dt_too_large,
+    time_engine_dt_longer_than_a_hertz_contact,
     time_engine_skin_zero,
     time_engine_stiffness_too_small,
     time_engine_damping_negative,

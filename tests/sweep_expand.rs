@@ -227,7 +227,7 @@ fn sweep_file_errors_name_file_line_and_key() {
             "",
         ),
         // Unknown key in [sweep], line 4.
-        (sweep_text("replica = 3", ""), ":4", "key `replica`"),
+        (sweep_text("replica = 3", ""), ":4", "key `sweep.replica`"),
         // An axis value the scene rejects: the axis line and the scene key.
         (
             sweep_text("", "\n[[axis]]\nkey = \"gamma\"\nvalues = [2.0, -1.0]\n"),

@@ -724,3 +724,28 @@ fn a_stroke_longer_than_the_box_keeps_the_invariants_and_the_ledger() {
         );
     }
 }
+
+/// Bug found by `wetgran stress time_largest_dt`: at `engine.dt = 0.01` (then admitted at the
+/// default stiffness) the integrator blew up and a bonded pair moved out of the Verlet list
+/// between two builds, and the list's rebuild panicked ("flagged pair left the neighbour
+/// list"), taking `wetgran simulate` down. Validation now refuses such a step
+/// (`Scene::largest_time_step`); a run that blows up all the same (here: the step forced past
+/// validation) stops on a broken invariant, reported, not a panic.
+#[test]
+fn regression_blown_up_time_run_is_a_broken_invariant_not_a_panic() {
+    let mut s = wetgran::bench::stress::StressCase::TimeLargestDt.scene();
+    let mut bad = s.clone();
+    bad.engine.dt = Some(0.01);
+    assert!(bad.validate("t").is_err(), "dt = 0.01 must be refused");
+    s.engine.dt = Some(0.01);
+    s.run.duration = 20.0;
+    s.run.sample_interval = 0.5;
+    let r = run_scene(&s);
+    let v = r.invariant_violation.expect("the blown-up run is stopped");
+    assert!(
+        v.contains("left the neighbour list")
+            || v.contains("outside the box")
+            || v.contains("overlap"),
+        "{v}"
+    );
+}

@@ -26,6 +26,7 @@ pub mod memory;
 pub mod observer;
 pub mod shake;
 pub mod slab;
+pub mod stress;
 pub mod tdmd;
 pub mod wall;
 

@@ -60,6 +60,23 @@ pub enum Command {
         #[arg(long, value_delimiter = ',', default_value = "1")]
         threads: Vec<usize>,
     },
+    /// Run the engines' hard cases at length with the invariant checks on, and print per case
+    /// the events (or time steps), simulated time, largest overlap, energy-ledger error, NaN
+    /// count and wall time. Exit status 3 if any case broke an invariant.
+    ///
+    /// Cases: resting_bed, bonded_collapse, grazing_walls, gamma_1000, wall_speed_50, jammed,
+    /// shear_double_roots, time_largest_dt (all by default); planted_overlap (the harness's
+    /// self-check, must fail) only when named.
+    Stress {
+        /// One case (default: every hard case).
+        case: Option<String>,
+        /// Events (time engine: steps) per case.
+        #[arg(long, default_value_t = crate::bench::stress::DEFAULT_EVENTS)]
+        events: u64,
+        /// Print the rows as JSON instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Phase-diagram sweeps: run, resume, status, refine, submit to Slurm and collect (and
     /// expand, job for running elsewhere).
     Sweep {
@@ -216,6 +233,7 @@ pub fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Stress { case, events, json } => stress(case.as_deref(), events, json),
         Command::Sweep { action } => sweep(action),
         Command::Job {
             action: JobCommand::Run { spec, out },
@@ -392,4 +410,44 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
             ),
         },
     })
+}
+
+/// `wetgran stress [CASE] [--events N] [--json]`.
+fn stress(case: Option<&str>, events: u64, json: bool) -> ExitCode {
+    use crate::bench::stress::{StressCase, run_case};
+    let cases: Vec<StressCase> = match case {
+        None => StressCase::ALL.to_vec(),
+        Some(name) => match StressCase::from_name(name) {
+            Some(c) => vec![c],
+            None => {
+                let names: Vec<&str> = StressCase::ALL.iter().map(|c| c.name()).collect();
+                eprintln!(
+                    "error: unknown stress case `{name}`: use one of {}, or planted_overlap",
+                    names.join(", ")
+                );
+                return ExitCode::from(2);
+            }
+        },
+    };
+    let mut rows = Vec::new();
+    for c in cases {
+        let row = run_case(c, events);
+        if !json {
+            eprintln!("{}: {:.1} s", c.name(), row.wall_seconds);
+        }
+        rows.push(row);
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).expect("stress rows serialize")
+        );
+    } else {
+        print!("{}", crate::report::stress_text::stress_text(&rows, events));
+    }
+    if rows.iter().all(|r| r.passed()) {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(3)
+    }
 }

@@ -1,7 +1,8 @@
 //! Reports of results, as text and pictures. Text (pure functions returning `String`, which the
 //! CLI prints): the run summary of `simulate` (`run_text`), `sweep status`, `sweep estimate`,
 //! left-out points and refinement lines (`sweep_text`), the phase maps and boundary points of
-//! `boundaries` (`boundaries_text`), `sweep collect` and the Slurm part of `sweep status`
+//! `boundaries` (`boundaries_text`), the hard-case table of `stress`
+//! (`stress_text`), `sweep collect` and the Slurm part of `sweep status`
 //! (`cluster_text`), `show` and `inflection` (`point_text`). Pictures and exports: snapshots of a
 //! configuration (extended XYZ for OVITO, SVG coloured by kinetic energy or bridge count, with
 //! the bridges drawn), the lateral-profile plot (SVG), the phase-diagram plot of a sweep database
@@ -18,6 +19,7 @@ pub mod point_text;
 pub mod profile_plot;
 pub mod run_text;
 pub mod snapshot;
+pub mod stress_text;
 mod svg;
 pub mod sweep_text;
 pub mod trust;

@@ -14,6 +14,8 @@ pub mod observe_section;
 pub mod thresholds;
 mod validate;
 
+pub(crate) use validate::parse_error_key;
+
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -191,6 +193,14 @@ pub const DEFAULT_STIFFNESS: f64 = 1e7;
 pub const DEFAULT_DT: f64 = 1e-4;
 /// Default Verlet-list skin of the time-driven engine, in units of `d`.
 pub const DEFAULT_SKIN: f64 = 0.1;
+/// Largest time step of the time-driven engine, whatever the stiffness.
+pub const MAX_DT: f64 = 1e-2;
+/// Impact speed, in units of `sqrt(g d)` (absolute without gravity), whose Hertz contact the
+/// time step must resolve ([`Scene::largest_time_step`]).
+pub const DT_REFERENCE_SPEED: f64 = 10.0;
+/// Time steps per Hertz contact at [`DT_REFERENCE_SPEED`] at the least
+/// ([`Scene::largest_time_step`]).
+pub const STEPS_PER_CONTACT: f64 = 8.0;
 
 /// Capillary bridges (MODEL.md 3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -654,6 +664,33 @@ impl Scene {
             } else {
                 None
             },
+        }
+    }
+
+    /// The largest `engine.dt` the time-driven engine is allowed: [`MAX_DT`], or an eighth
+    /// ([`STEPS_PER_CONTACT`]) of the duration of an elastic Hertz contact between two of the
+    /// largest grains at the impact speed `v = 10 sqrt(g d)` ([`DT_REFERENCE_SPEED`]) if that
+    /// is shorter: `t_c = 2.943 xi_max / v`, `xi_max = (5 mu v^2 / (4 k sqrt(R_eff)))^(2/5)`,
+    /// `mu = m/2`, `R_eff = d_max / 4` (MODEL.md Eq. 2.7; `physics::hertz::contact_time`).
+    /// At the default stiffness this is 4.0e-4; a longer step lets the integrator blow up
+    /// (docs/reliability.md, "Hard cases at length").
+    pub fn largest_time_step(&self) -> f64 {
+        use crate::physics::hertz;
+        let (_, d_max) = self.diameter_range();
+        let k = self.contact.stiffness.unwrap_or(DEFAULT_STIFFNESS);
+        let r = 0.5 * d_max;
+        let kr = k * hertz::effective_radius(r, r).sqrt();
+        let unit = if self.gravity > 0.0 {
+            (self.gravity * self.particles.diameter).sqrt()
+        } else {
+            1.0
+        };
+        let v = DT_REFERENCE_SPEED * unit;
+        let t_c = hertz::contact_time(kr, 0.5 * self.particles.mass, v);
+        if t_c.is_finite() && t_c > 0.0 {
+            MAX_DT.min(t_c / STEPS_PER_CONTACT)
+        } else {
+            MAX_DT
         }
     }
 

@@ -11,6 +11,21 @@ const MAX_CELLS: usize = 1 << 28;
 /// Fewest neighbour cells a periodic axis may have (see the check in `validate`).
 pub const MIN_PERIODIC_CELLS: i32 = 4;
 
+/// Largest amplitude `A` of the shaken container, units of `d`: positions are computed next to
+/// a floor displaced by up to `A`, so their round-off (`~ A 1e-16`) stays far below the overlap
+/// tolerance. (Found by the input fuzzer: `e_star = 1e300` put the floor at 1e298.)
+pub const MAX_AMPLITUDE: f64 = 1e4;
+/// Largest peak wall speed `A omega`, units of `sqrt(g d)` (20 times the hardest case of
+/// `wetgran stress`, 50).
+pub const MAX_WALL_SPEED: f64 = 1e3;
+/// Largest peak acceleration `Gamma = A omega^2 / g` (100 times `wetgran stress`'s 1000).
+pub const MAX_GAMMA: f64 = 1e5;
+/// Largest peak shear force `F_max`, units of `m g` (found by the input fuzzer: at `1e300` the
+/// sheared pair quartics lose every digit and pairs pass through each other).
+pub const MAX_SHEAR_FORCE: f64 = 1e3;
+/// Largest gravity, in the scene's units.
+pub const MAX_GRAVITY: f64 = 1e6;
+
 /// Why a scene was rejected.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneError {
@@ -101,7 +116,7 @@ impl SceneError {
 
 /// The dotted key a TOML error belongs to (empty for syntax errors): the table path the
 /// deserializer recorded, plus the field of serde's "unknown field" and "missing field" errors.
-fn parse_error_key(err: &toml::de::Error) -> String {
+pub(crate) fn parse_error_key(err: &toml::de::Error) -> String {
     // `toml` prints the recorded path ("in `a.b`") only for an error without source context.
     let mut bare = err.clone();
     bare.set_input(None);
@@ -210,6 +225,9 @@ impl Scene {
             ));
         }
         c.non_negative("gravity", self.gravity)?;
+        if self.gravity > MAX_GRAVITY {
+            return Err(c.out_of_range("gravity", self.gravity, "in [0, 1e6]"));
+        }
 
         self.validate_box(&c)?;
         self.validate_particles(&c)?;
@@ -422,6 +440,7 @@ impl Scene {
                 Some(v) => c.positive(key, v)?,
             }
         }
+        self.validate_drive_motion(c, physical)?;
         if let Some(tol) = drive.root_tolerance {
             c.positive("drive.root_tolerance", tol)?;
         }
@@ -430,6 +449,68 @@ impl Scene {
         }
         self.validate_wall_table(c)?;
         self.validate_shaken_gap(c)?;
+        Ok(())
+    }
+
+    /// The container motion `(A, omega)` of a sine drive (each key already in its own range):
+    /// amplitude, wall speed and peak acceleration within [`MAX_AMPLITUDE`],
+    /// [`MAX_WALL_SPEED`] and [`MAX_GAMMA`]. The error names the key that sets the excess:
+    /// `amplitude` / `omega` as given, or `e_star` (wall speed) / `gamma` (amplitude, Gamma).
+    fn validate_drive_motion(&self, c: &Check<'_>, physical: bool) -> Result<(), SceneError> {
+        let Some((a, omega)) = self.drive_motion() else {
+            return Ok(());
+        };
+        let unit = (self.gravity * self.particles.diameter).sqrt();
+        let speed = a * omega / unit;
+        let gamma = a * omega * omega / self.gravity;
+        let (amp_key, speed_key, gamma_key) = if physical {
+            ("drive.amplitude", "drive.omega", "drive.omega")
+        } else {
+            ("drive.gamma", "drive.e_star", "drive.gamma")
+        };
+        let value = |key: &str| match key {
+            "drive.amplitude" => a,
+            "drive.omega" => omega,
+            "drive.gamma" => self.drive.gamma.unwrap_or(gamma),
+            _ => self.drive.e_star.unwrap_or(f64::NAN),
+        };
+        for (key, excess, what) in [
+            (
+                speed_key,
+                speed.is_nan() || speed > MAX_WALL_SPEED,
+                format!(
+                    "the wall speed A omega = {} sqrt(g d) must be <= {}",
+                    num(speed),
+                    num(MAX_WALL_SPEED)
+                ),
+            ),
+            (
+                gamma_key,
+                gamma.is_nan() || gamma > MAX_GAMMA,
+                format!(
+                    "Gamma = A omega^2 / g = {} must be <= {}",
+                    num(gamma),
+                    num(MAX_GAMMA)
+                ),
+            ),
+            (
+                amp_key,
+                (a / self.particles.diameter).is_nan()
+                    || a / self.particles.diameter > MAX_AMPLITUDE,
+                format!(
+                    "the amplitude A = {} d must be <= {} d",
+                    num(a / self.particles.diameter),
+                    num(MAX_AMPLITUDE)
+                ),
+            ),
+        ] {
+            if excess {
+                return Err(c.err(
+                    key,
+                    format!("= {} is out of range: {what}", num(value(key))),
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -538,6 +619,19 @@ impl Scene {
             }
             (None, Some(r)) => {
                 c.closed("initial.temperature_over_ecb", r, 0.0, 1e8, "1e8")?;
+                let t = self.initial_temperature();
+                if t > 1e8 {
+                    return Err(c.err(
+                        "initial.temperature_over_ecb",
+                        format!(
+                            "= {} is out of range: with E_cb = {} the temperature {} m g d \
+                             exceeds 1e8",
+                            num(r),
+                            num(self.e_cb()),
+                            num(t)
+                        ),
+                    ));
+                }
                 if !self.is_wet() || self.e_cb() <= 0.0 {
                     return Err(c.err(
                         "initial.temperature_over_ecb",
@@ -871,12 +965,13 @@ impl Scene {
         Ok(())
     }
 
-    /// With the time-driven engine: time step, skin, stiffness and damping in range.
+    /// With the time-driven engine: time step, skin, stiffness and damping in range, and a time
+    /// step that resolves a Hertz contact ([`Scene::largest_time_step`]).
     fn validate_time_numbers(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let e = &self.engine;
         let ct = &self.contact;
         if let Some(dt) = e.dt
-            && !(dt.is_finite() && dt > 0.0 && dt <= 1e-2)
+            && !(dt.is_finite() && dt > 0.0 && dt <= super::MAX_DT)
         {
             return Err(c.out_of_range("engine.dt", dt, "in (0, 0.01]"));
         }
@@ -899,6 +994,22 @@ impl Scene {
             {
                 return Err(c.out_of_range(key, a, "in [0, 1] (a time)"));
             }
+        }
+        // A step that does not resolve a Hertz contact lets the integrator blow up (found by
+        // `wetgran stress time_largest_dt`: dt = 0.01 at the default stiffness).
+        let dt_max = self.largest_time_step();
+        let dt = e.dt.unwrap_or(super::DEFAULT_DT);
+        if dt > dt_max {
+            return Err(c.out_of_range(
+                "engine.dt",
+                dt,
+                &format!(
+                    "<= {dt_max:.3e} (an eighth of the Hertz contact time at impact speed 10 \
+                     sqrt(g d) for contact.stiffness = {}: a longer step does not resolve the \
+                     contact and the integrator blows up)",
+                    num(self.contact.stiffness.unwrap_or(super::DEFAULT_STIFFNESS))
+                ),
+            ));
         }
         Ok(())
     }
@@ -981,7 +1092,12 @@ impl Scene {
                     "is missing: drive.kind = \"shear\" needs the peak force f_max (>= 0)".into(),
                 ));
             }
-            Some(f) => c.non_negative("drive.f_max", f)?,
+            Some(f) => {
+                c.non_negative("drive.f_max", f)?;
+                if f > MAX_SHEAR_FORCE {
+                    return Err(c.out_of_range("drive.f_max", f, "in [0, 1e3]"));
+                }
+            }
         }
         // At least 4 slabs: with 2 the slab centres sit on the zeros of the cosine (no force at
         // all), with 1 the force is uniform (no shear).

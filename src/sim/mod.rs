@@ -179,110 +179,87 @@ fn run_dispatch(
     let cold = (start.is_none() && scene.initial.start == crate::scene::StartMode::Cold)
         .then(|| initial::cold_state(scene));
     let st = start.or(cold.as_ref());
+    with_engine(
+        scene,
+        st,
+        RunVisitor {
+            scene,
+            progress: p,
+            observer: o,
+        },
+    )
+}
+
+/// What [`with_engine`] hands the engine it built to: one generic method, monomorphised for
+/// every engine type a scene can ask for.
+pub trait EngineVisitor {
+    type Output;
+    fn visit<S: Simulation>(self, engine: S) -> Self::Output;
+}
+
+/// The sampling loop of [`run_scene_watched`] as an [`EngineVisitor`].
+struct RunVisitor<'a, 'b> {
+    scene: &'a Scene,
+    progress: &'a mut dyn FnMut(&Sample),
+    observer: Observer<'b>,
+}
+
+impl EngineVisitor for RunVisitor<'_, '_> {
+    type Output = RunReport;
+    fn visit<S: Simulation>(self, engine: S) -> RunReport {
+        run_engine(engine, self.scene, self.progress, self.observer)
+    }
+}
+
+/// Builds the engine a validated scene asks for (engine kind, dimension, gravity on or off,
+/// bridges or none, shear drive or not), from the saved state `start` or, with `None`, from the
+/// scene's initial state (a `"cold"` start is the caller's: pass `initial::cold_state`), and
+/// hands it to `v`.
+pub fn with_engine<V: EngineVisitor>(scene: &Scene, st: Option<&EngineState>, v: V) -> V::Output {
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
     if scene.engine.kind == EngineKind::Time {
         if let Some(field) = time_driven::shear::CosineShear::of_scene(scene) {
             // Validation admits the shear drive in 3D only.
             return match (grav, wet) {
-                (false, false) => run_engine(
-                    build!(TimeEngine::<3, false, false, _>, scene, st, field),
-                    scene,
-                    p,
-                    o,
-                ),
-                (false, true) => run_engine(
-                    build!(TimeEngine::<3, false, true, _>, scene, st, field),
-                    scene,
-                    p,
-                    o,
-                ),
-                (true, false) => run_engine(
-                    build!(TimeEngine::<3, true, false, _>, scene, st, field),
-                    scene,
-                    p,
-                    o,
-                ),
-                (true, true) => run_engine(
-                    build!(TimeEngine::<3, true, true, _>, scene, st, field),
-                    scene,
-                    p,
-                    o,
-                ),
+                (false, false) => {
+                    v.visit(build!(TimeEngine::<3, false, false, _>, scene, st, field))
+                }
+                (false, true) => v.visit(build!(TimeEngine::<3, false, true, _>, scene, st, field)),
+                (true, false) => v.visit(build!(TimeEngine::<3, true, false, _>, scene, st, field)),
+                (true, true) => v.visit(build!(TimeEngine::<3, true, true, _>, scene, st, field)),
             };
         }
         return match (scene.dimension, grav, wet) {
-            (2, false, false) => run_engine(
-                build!(TimeEngine::<2, false, false>, scene, st),
-                scene,
-                p,
-                o,
-            ),
-            (2, false, true) => {
-                run_engine(build!(TimeEngine::<2, false, true>, scene, st), scene, p, o)
-            }
-            (2, true, false) => {
-                run_engine(build!(TimeEngine::<2, true, false>, scene, st), scene, p, o)
-            }
-            (2, true, true) => {
-                run_engine(build!(TimeEngine::<2, true, true>, scene, st), scene, p, o)
-            }
-            (3, false, false) => run_engine(
-                build!(TimeEngine::<3, false, false>, scene, st),
-                scene,
-                p,
-                o,
-            ),
-            (3, false, true) => {
-                run_engine(build!(TimeEngine::<3, false, true>, scene, st), scene, p, o)
-            }
-            (3, true, false) => {
-                run_engine(build!(TimeEngine::<3, true, false>, scene, st), scene, p, o)
-            }
-            (3, true, true) => {
-                run_engine(build!(TimeEngine::<3, true, true>, scene, st), scene, p, o)
-            }
+            (2, false, false) => v.visit(build!(TimeEngine::<2, false, false>, scene, st)),
+            (2, false, true) => v.visit(build!(TimeEngine::<2, false, true>, scene, st)),
+            (2, true, false) => v.visit(build!(TimeEngine::<2, true, false>, scene, st)),
+            (2, true, true) => v.visit(build!(TimeEngine::<2, true, true>, scene, st)),
+            (3, false, false) => v.visit(build!(TimeEngine::<3, false, false>, scene, st)),
+            (3, false, true) => v.visit(build!(TimeEngine::<3, false, true>, scene, st)),
+            (3, true, false) => v.visit(build!(TimeEngine::<3, true, false>, scene, st)),
+            (3, true, true) => v.visit(build!(TimeEngine::<3, true, true>, scene, st)),
             (d, _, _) => panic!("dimension {d} passed validation"),
         };
     }
     if scene.shear_slabs().is_some() {
         // Validation admits the shear drive in 3D only.
         return match (grav, wet) {
-            (false, false) => run_engine(
-                build!(Engine::<3, false, false, true>, scene, st),
-                scene,
-                p,
-                o,
-            ),
-            (false, true) => run_engine(
-                build!(Engine::<3, false, true, true>, scene, st),
-                scene,
-                p,
-                o,
-            ),
-            (true, false) => run_engine(
-                build!(Engine::<3, true, false, true>, scene, st),
-                scene,
-                p,
-                o,
-            ),
-            (true, true) => run_engine(
-                build!(Engine::<3, true, true, true>, scene, st),
-                scene,
-                p,
-                o,
-            ),
+            (false, false) => v.visit(build!(Engine::<3, false, false, true>, scene, st)),
+            (false, true) => v.visit(build!(Engine::<3, false, true, true>, scene, st)),
+            (true, false) => v.visit(build!(Engine::<3, true, false, true>, scene, st)),
+            (true, true) => v.visit(build!(Engine::<3, true, true, true>, scene, st)),
         };
     }
     match (scene.dimension, grav, wet) {
-        (2, false, false) => run_engine(build!(Engine::<2, false, false>, scene, st), scene, p, o),
-        (2, false, true) => run_engine(build!(Engine::<2, false, true>, scene, st), scene, p, o),
-        (2, true, false) => run_engine(build!(Engine::<2, true, false>, scene, st), scene, p, o),
-        (2, true, true) => run_engine(build!(Engine::<2, true, true>, scene, st), scene, p, o),
-        (3, false, false) => run_engine(build!(Engine::<3, false, false>, scene, st), scene, p, o),
-        (3, false, true) => run_engine(build!(Engine::<3, false, true>, scene, st), scene, p, o),
-        (3, true, false) => run_engine(build!(Engine::<3, true, false>, scene, st), scene, p, o),
-        (3, true, true) => run_engine(build!(Engine::<3, true, true>, scene, st), scene, p, o),
+        (2, false, false) => v.visit(build!(Engine::<2, false, false>, scene, st)),
+        (2, false, true) => v.visit(build!(Engine::<2, false, true>, scene, st)),
+        (2, true, false) => v.visit(build!(Engine::<2, true, false>, scene, st)),
+        (2, true, true) => v.visit(build!(Engine::<2, true, true>, scene, st)),
+        (3, false, false) => v.visit(build!(Engine::<3, false, false>, scene, st)),
+        (3, false, true) => v.visit(build!(Engine::<3, false, true>, scene, st)),
+        (3, true, false) => v.visit(build!(Engine::<3, true, false>, scene, st)),
+        (3, true, true) => v.visit(build!(Engine::<3, true, true>, scene, st)),
         (d, _, _) => panic!("dimension {d} passed validation"),
     }
 }
@@ -312,6 +289,12 @@ pub trait Simulation {
     fn max_overlap(&self) -> Option<f64> {
         None
     }
+    /// The engine's units of work done so far: events (event engine) or time steps (time
+    /// engine).
+    fn work_done(&self) -> u64;
+    /// Does `n` more units of work (events or time steps), whatever simulated time they take;
+    /// false when the engine has nothing left to do (an event engine with no event pending).
+    fn advance_work(&mut self, n: u64) -> bool;
 }
 
 impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue> Simulation
@@ -344,6 +327,14 @@ impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue>
     }
     fn frame(&self, scene: &Scene) -> Frame {
         Frame::of_engine(self, scene)
+    }
+    fn work_done(&self) -> u64 {
+        Engine::counts(self).total()
+    }
+    fn advance_work(&mut self, n: u64) -> bool {
+        let before = self.work_done();
+        Engine::run_until(self, f64::INFINITY, Some(before.saturating_add(n)));
+        self.work_done() > before || n == 0
     }
 }
 
@@ -383,6 +374,15 @@ impl<const D: usize, const G: bool, const W: bool, B: BodyForce<D>> Simulation
     }
     fn max_overlap(&self) -> Option<f64> {
         Some(TimeEngine::max_overlap(self))
+    }
+    fn work_done(&self) -> u64 {
+        TimeEngine::steps(self)
+    }
+    fn advance_work(&mut self, n: u64) -> bool {
+        for _ in 0..n {
+            TimeEngine::step(self);
+        }
+        true
     }
 }
 

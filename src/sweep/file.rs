@@ -776,12 +776,9 @@ fn parse_refine(
 fn toml_error(file: &str, text: &str, e: &toml::de::Error) -> SweepError {
     let line = e.span().map(|s| line_of(text, s.start));
     let msg = e.message().trim_end().to_string();
-    let mut key = String::new();
-    for prefix in ["unknown field `", "missing field `"] {
-        if let Some((field, _)) = msg.strip_prefix(prefix).and_then(|r| r.split_once('`')) {
-            key = field.to_string();
-        }
-    }
+    // The table path the deserializer recorded plus the field of an unknown or missing key
+    // (`sweep.replicas`, `axis.linear.steps`), as for a scene.
+    let key = crate::scene::parse_error_key(e);
     let msg = msg
         .replace("expected usize", "expected an integer >= 0")
         .replace("expected u32", "expected an integer >= 0")

@@ -66,14 +66,51 @@ impl JobSpec {
         v
     }
 
-    /// Reads a job spec from JSON (any key order) and validates its scene.
+    /// Reads a job spec from JSON (any key order) and validates its scene. Every error names
+    /// `origin` and, where it has one, the key (`key `scene.particles.count``): the path of
+    /// a value of the wrong type, of a missing or an unknown key.
     pub fn from_json(text: &str, origin: &str) -> Result<JobSpec, String> {
-        let spec: JobSpec =
-            serde_json::from_str(text).map_err(|e| format!("{origin}: not a job spec: {e}"))?;
+        let mut de = serde_json::Deserializer::from_str(text);
+        let spec: JobSpec = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            // serde names a missing field in its message, below the path it recorded.
+            let missing = inner
+                .to_string()
+                .strip_prefix("missing field `")
+                .and_then(|r| r.split_once('`'))
+                .map(|(f, _)| f.to_string());
+            let key = match (path.as_str(), missing) {
+                (".", Some(f)) => f,
+                (p, Some(f)) => format!("{p}.{f}"),
+                (".", None) => String::new(),
+                (p, None) => p.to_string(),
+            };
+            if key.is_empty() {
+                format!("{origin}: not a job spec: {inner}")
+            } else {
+                format!("{origin}: key `{key}`: not a job spec: {inner}")
+            }
+        })?;
+        de.end()
+            .map_err(|e| format!("{origin}: not a job spec: {e}"))?;
+        // The spec itself keeps unknown keys out as the scene does (a misspelt `start_from`
+        // would silently run a continuation job hot).
+        if let Ok(serde_json::Value::Object(top)) = serde_json::from_str::<serde_json::Value>(text)
+            && let Some(k) = top
+                .keys()
+                .find(|k| !["format", "scene", "start_from"].contains(&k.as_str()))
+        {
+            return Err(format!(
+                "{origin}: key `{k}`: not a job spec: unknown field `{k}`, expected one of \
+                 `format`, `scene`, `start_from`"
+            ));
+        }
         spec.scene.validate(origin).map_err(|e| e.to_string())?;
         if spec.format != SPEC_FORMAT {
             return Err(format!(
-                "{origin}: job spec format {} is not supported (this wetgran reads {SPEC_FORMAT})",
+                "{origin}: key `format`: job spec format {} is not supported (this wetgran reads \
+                 {SPEC_FORMAT})",
                 spec.format
             ));
         }

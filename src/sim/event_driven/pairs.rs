@@ -10,7 +10,8 @@
 //! time, and the scheduler drops it (and re-predicts) if the count moved on (lazy invalidation).
 //!
 //! Safeguards (each tested in `tests/engine_safeguards.rs`): an overlapping pair that approaches
-//! collides now, one that separates is left alone (B.5.6); collapse: the TC model and the
+//! collides now, one that separates is left alone (B.5.6); a pair half a periodic box apart (four
+//! cells) is predicted through both images; collapse: the TC model and the
 //! rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
 //! leaves it at least at the rebound floor.
 
@@ -25,6 +26,10 @@ use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
 use crate::scene::RuptureRule;
 
+/// Fraction of a periodic box edge beyond which a pair is also predicted through its other
+/// image (see `PairSource::predict_pair_from`): above the `0.4 L` that partners in adjacent
+/// cells reach with five cells, below the `0.5 L` tie of four.
+const FAR_IMAGE: f64 = 0.45;
 /// Most bridges one particle may hold (a guard: more means the packing is unphysical).
 pub const MAX_BONDS: usize = 16;
 
@@ -150,8 +155,54 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         } else {
             xi - xj
         };
-        // All particles feel the same gravity, so relative motion is a straight line (Eq. B.3).
         let v = vi - vj;
+        let mut best = self.predict_image(bodies, slabs, &r, &v, i, j, t);
+        // Safeguard: with four cells on a periodic axis two partners may sit half a box apart
+        // (the initial lattice puts them there), where the minimum image is a tie and the
+        // collision may come through the other image; no later cell crossing brings them into a
+        // newly adjacent slab again. So a pair beyond `FAR_IMAGE` of the box is also predicted
+        // through its other image, and the earlier collision kept. With five cells or more,
+        // partners in adjacent cells are at most `0.4 L` apart and this never runs. (Found by
+        // the input fuzzer, tests/fuzz_inputs.rs; regression test in engine_safeguards.rs.)
+        // Without `WRAP` every periodic axis has five cells or more: never far.
+        let far = |k: usize| bodies.periodic[k] && r[k].abs() >= FAR_IMAGE * bodies.size[k];
+        if WRAP && (0..D).any(far) {
+            // Every other image across the far axes (both at a tie on two axes in 3D).
+            for mask in 1..1usize << D {
+                if (0..D).any(|k| mask >> k & 1 == 1 && !far(k)) {
+                    continue;
+                }
+                let mut other = r;
+                for k in (0..D).filter(|k| mask >> k & 1 == 1) {
+                    other[k] -= bodies.size[k].copysign(r[k]);
+                }
+                if let Some((t2, PairKind::Collide)) =
+                    self.predict_image(bodies, slabs, &other, &v, i, j, t)
+                    && best.is_none_or(|(tb, _)| t2 < tb)
+                {
+                    best = Some((t2, PairKind::Collide));
+                }
+            }
+        }
+        best
+    }
+
+    /// Earliest pair event of `i` and `j` at time `t` with separation `r` (one periodic image)
+    /// and relative velocity `v`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn predict_image<const G: bool, const S: bool>(
+        &self,
+        bodies: &Bodies<D, G, S>,
+        slabs: &SlabSource,
+        r: &Vector<D>,
+        v: &Vector<D>,
+        i: usize,
+        j: usize,
+        t: f64,
+    ) -> Option<(f64, PairKind)> {
+        let (r, v) = (*r, *v);
+        // All particles feel the same gravity, so relative motion is a straight line (Eq. B.3).
         if S && bodies.accel[i] != bodies.accel[j] {
             return self.predict_sheared_pair(bodies, slabs, &r, &v, i, j, t);
         }

@@ -1108,12 +1108,20 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// Checks the invariants: finite numbers; every centre inside the box (between the walls at
     /// their current position); no pair or wall overlap beyond [`SANITY_OVERLAP`] `d`; no
-    /// bridge stretched beyond `s_crit` by more than the same amount. Returns the first violation.
+    /// bridge stretched beyond `s_crit` by more than the same amount; no pair in contact or
+    /// bonded lost from the neighbour list. Returns the first violation.
     pub fn sanity_check(&self) -> Result<(), String> {
         let n = self.n;
         let t = self.time();
         let tol = SANITY_OVERLAP * self.p.diameter;
         let zw = self.p.drive.map_or(0.0, |(a, w)| a * (w * t).sin());
+        if let Some((i, j)) = self.list.lost_pair {
+            return Err(format!(
+                "flagged pair {i}-{j} (in contact or bonded) left the neighbour list: it moved \
+                 apart by more than the skin between two list builds, a blown-up run (engine.dt \
+                 too large for the speeds reached); at t = {t}"
+            ));
+        }
         for i in 0..n {
             let x = self.position(i);
             let v = self.velocity(i);
