@@ -95,6 +95,7 @@ bad_scenes! {
     dimension_not_2_or_3,
     gravity_negative,
     gravity_infinite,
+    gravity_tiny_leaves_event_times_no_digits,
     dimension_wrong_type,
     // Box.
     box_size_wrong_length,

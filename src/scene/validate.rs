@@ -25,6 +25,8 @@ pub const MAX_GAMMA: f64 = 1e5;
 pub const MAX_SHEAR_FORCE: f64 = 1e3;
 /// Largest gravity, in the scene's units.
 pub const MAX_GRAVITY: f64 = 1e6;
+/// Smallest non-zero gravity: below it the time unit sqrt(d/g) leaves event times no digits.
+pub const MIN_GRAVITY: f64 = 1e-6;
 
 /// Why a scene was rejected.
 #[derive(Debug, Clone, PartialEq)]
@@ -225,8 +227,11 @@ impl Scene {
             ));
         }
         c.non_negative("gravity", self.gravity)?;
-        if self.gravity > MAX_GRAVITY {
-            return Err(c.out_of_range("gravity", self.gravity, "in [0, 1e6]"));
+        // A tiny but non-zero g makes the time unit sqrt(d/g) astronomically long: event times
+        // of 1e151 leave no digits for the motion between them (found by the input fuzzer: a
+        // bond stretched past s_crit at g = 1e-300).
+        if self.gravity > MAX_GRAVITY || (self.gravity > 0.0 && self.gravity < MIN_GRAVITY) {
+            return Err(c.out_of_range("gravity", self.gravity, "0 or in [1e-6, 1e6]"));
         }
 
         self.validate_box(&c)?;
