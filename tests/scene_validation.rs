@@ -116,6 +116,7 @@ bad_scenes! {
     diameter_negative,
     diameter_nan,
     mass_zero,
+    mass_tiny_leaves_the_motion_no_digits,
     polydispersity_above_max,
     polydispersity_at_max,
     polydispersity_negative,
@@ -180,6 +181,7 @@ bad_scenes! {
     classify_shear_e_par_negative,
     engine_min_rebound_speed_negative,
     engine_overlap_tolerance_zero,
+    engine_overlap_tolerance_below_round_off,
     engine_cell_size_negative,
     engine_cell_size_too_small,
     // Engine kind (time-driven engine, issue 6).
