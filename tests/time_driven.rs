@@ -749,3 +749,25 @@ fn regression_blown_up_time_run_is_a_broken_invariant_not_a_panic() {
         "{v}"
     );
 }
+
+/// Found by the input fuzzer through `wetgran simulate`: a run that blows up between two report
+/// samples handed NaN positions to the location-change observer, whose triangulation panicked
+/// ("finite particle positions"). The run loop now checks every observer frame and stops on a
+/// broken invariant before the observers see it.
+#[test]
+fn regression_blown_up_frame_never_reaches_the_observers() {
+    let mut s = wetgran::bench::stress::StressCase::TimeLargestDt.scene();
+    s.engine.dt = Some(0.01);
+    s.run.duration = 20.0;
+    // One report sample at the end; observer frames every period until then.
+    s.run.sample_interval = 20.0;
+    s.observe.location_changes = true;
+    s.observe.transient_periods = 0.0;
+    s.observe.samples_per_period = 20.0;
+    let run = wetgran::observe::run_observed(&s, &mut |_| {});
+    let v = run
+        .report
+        .invariant_violation
+        .expect("the blown-up run is stopped");
+    assert!(run.report.simulated_time < 20.0, "stopped early: {v}");
+}

@@ -116,6 +116,12 @@ fn check(name: &str, want: (u64, u64), run: impl Fn() -> (u64, u64) + Send + Syn
 }
 
 /// The scene of `wetgran bench tdmd` (1200 dry disks, shaken floor and lid, damped contacts).
+///
+/// Re-pinned on 2026-11-23 (issue 17): its `A_d` (restitution 0.9 at impact speed 1) now comes
+/// from the scaled calibration of `physics::hertz::damping_for_restitution`,
+/// 1.4713856731400212e-4 against 1.471385673140047e-4 before: 8 ulp apart, inside the old
+/// bisection's own resolution (1e-2 / 2^50 = 9e-18 absolute). Both integrators' state and books
+/// digests changed with it; nothing else did.
 fn bench_scene(integrator: &str) -> Scene {
     wetgran::bench::tdmd::scene(integrator)
 }
@@ -125,7 +131,7 @@ fn bench_scene_gear() {
     let s = bench_scene("gear5");
     check(
         "bench gear5",
-        (0x9574_cd22_065e_cc46, 0xbc21_1c41_2e6b_2b84),
+        (0x4cef_122d_97f7_9569, 0xe665_810d_3efb_faf6),
         || {
             let mut e = TimeEngine::<2, true, false>::new(&s);
             e.run_until(0.3);
@@ -139,7 +145,7 @@ fn bench_scene_verlet() {
     let s = bench_scene("verlet");
     check(
         "bench verlet",
-        (0xee9e_ac3b_6def_d0ea, 0x11d2_5681_92d4_c224),
+        (0xd19b_9c90_240d_9390, 0x056b_3114_7928_054a),
         || {
             let mut e = TimeEngine::<2, true, false>::new(&s);
             e.run_until(0.3);

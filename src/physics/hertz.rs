@@ -105,17 +105,73 @@ pub fn direct_collision(kr: f64, a_d: f64, mu: f64, v: f64, h: f64) -> Collision
     }
 }
 
-/// The damping `A_d` that gives restitution `e` (in (0, 1)) at approach speed `v`, by bisection
-/// on [`direct_collision`] (restitution falls monotonically with `A_d`).
+/// The damping `A_d` that gives restitution `e` (in (0, 1)) at approach speed `v`.
+///
+/// Scaling the two-body equation by the elastic overlap `xi_0 = (mu v^2 / kr)^(2/5)` and the time
+/// `xi_0 / v` leaves one parameter, `beta = A_d (kr / mu)^(2/5) v^(1/5)`: the restitution is a
+/// function `e(beta)` only. So `A_d = beta_e (mu / kr)^(2/5) v^(-1/5)`, where `beta_e` solves
+/// `e(beta_e) = e` for `kr = mu = v = 1` ([`unit_damping`], by bisection on
+/// [`direct_collision`], remembered per `e`). In scaled form the bisection never meets the
+/// under- or overflow that extreme scales (`v ~ 1e-150`) would cause.
 pub fn damping_for_restitution(kr: f64, mu: f64, v: f64, e: f64) -> f64 {
-    let h = contact_time(kr, mu, v) / 4000.0;
+    unit_damping(UnitCalibration::Speed, e) * (mu / kr).powf(0.4) * v.powf(-0.2)
+}
+
+/// The two dimensionless calibrations of [`unit_damping`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum UnitCalibration {
+    /// `e(beta) = e` at `kr = mu = v = 1` ([`damping_for_restitution`]).
+    Speed,
+    /// `L(B) = 1 - e^2` at `kr = mu = 1`, `T = 1/2` ([`damping_for_maxwellian_restitution`]).
+    Maxwellian,
+}
+
+/// The scaled damping of a calibration for restitution `e`, computed once per process and `e`
+/// (a bisection costs up to a few hundred thousand RK4 collisions; validation and every engine
+/// of a sweep ask for the same few values).
+fn unit_damping(kind: UnitCalibration, e: f64) -> f64 {
+    use std::sync::Mutex;
+    static KNOWN: Mutex<Vec<(UnitCalibration, u64, f64)>> = Mutex::new(Vec::new());
+    let key = e.to_bits();
+    if let Some(&(_, _, b)) = KNOWN
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .iter()
+        .find(|(k, bits, _)| *k == kind && *bits == key)
+    {
+        return b;
+    }
+    let b = match kind {
+        UnitCalibration::Speed => {
+            let h = contact_time(1.0, 1.0, 1.0) / 4000.0;
+            bisect_damping(
+                |a| direct_collision(1.0, a, 1.0, 1.0, h).restitution > e,
+                50,
+            )
+        }
+        UnitCalibration::Maxwellian => {
+            let target = 1.0 - e * e;
+            bisect_damping(|a| maxwellian_loss(1.0, a, 1.0, 0.5) < target, 40)
+        }
+    };
+    KNOWN
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .push((kind, key, b));
+    b
+}
+
+/// The damping where `too_small` turns false (it is monotone: true below, false above): doubled
+/// from `1e-2` until it fails, then `halvings` bisection steps.
+fn bisect_damping(too_small: impl Fn(f64) -> bool, halvings: usize) -> f64 {
     let (mut lo, mut hi) = (0.0f64, 1e-2f64);
-    while direct_collision(kr, hi, mu, v, h).restitution > e {
+    while too_small(hi) {
+        lo = hi;
         hi *= 2.0;
     }
-    for _ in 0..50 {
+    for _ in 0..halvings {
         let mid = 0.5 * (lo + hi);
-        if direct_collision(kr, mid, mu, v, h).restitution > e {
+        if too_small(mid) {
             lo = mid;
         } else {
             hi = mid;
@@ -179,23 +235,16 @@ pub fn maxwellian_loss(kr: f64, a_d: f64, mu: f64, t: f64) -> f64 {
 
 /// The damping `A_d` whose [`maxwellian_loss`] at temperature `t` equals that of the constant
 /// restitution `eps` (in (0, 1)), `1 - eps^2`: a damped Hertz gas at `t` then loses energy in
-/// collisions at the rate of a hard-sphere gas with `eps`. Bisection (the loss grows
-/// monotonically with `A_d`).
+/// collisions at the rate of a hard-sphere gas with `eps`.
+///
+/// With `v(x) = sqrt(2 t x / mu)` the scaled damping of [`damping_for_restitution`] is
+/// `beta(x) = B x^(1/10)`, `B = A_d (kr / mu)^(2/5) (2 t / mu)^(1/10)`, so the loss is a function
+/// of `B` alone: `A_d = B_eps (mu / kr)^(2/5) (mu / (2 t))^(1/10)`, `B_eps` by bisection at
+/// `kr = mu = 1`, `t = 1/2` (the loss grows monotonically with `A_d`), remembered per `eps`.
 pub fn damping_for_maxwellian_restitution(kr: f64, mu: f64, t: f64, eps: f64) -> f64 {
-    let target = 1.0 - eps * eps;
-    let (mut lo, mut hi) = (0.0f64, 1e-2f64);
-    while maxwellian_loss(kr, hi, mu, t) < target {
-        hi *= 2.0;
-    }
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi);
-        if maxwellian_loss(kr, mid, mu, t) < target {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
+    unit_damping(UnitCalibration::Maxwellian, eps)
+        * (mu / kr).powf(0.4)
+        * (mu / (2.0 * t)).powf(0.1)
 }
 
 /// Minimal capillary model (MODEL.md 3.1): the constant attraction `F_B = E_cb / s_crit` that
@@ -235,6 +284,13 @@ mod tests {
         assert!((e - 0.9).abs() < 1e-6, "A_d {a} gives e {e}");
         // Restitution of damped Hertz falls with impact speed (Kuwabara & Kono).
         assert!(direct_collision(kr, a, mu, 3.0, h).restitution < e);
+        // The scaled calibration holds at other scales, checked by integrating there.
+        for (kr, mu, v, want) in [(3e9, 1e-3, 2e-4, 0.3), (1e3, 40.0, 60.0, 0.7)] {
+            let a = damping_for_restitution(kr, mu, v, want);
+            let h = contact_time(kr, mu, v) / 4000.0;
+            let e = direct_collision(kr, a, mu, v, h).restitution;
+            assert!((e - want).abs() < 1e-6, "kr {kr} mu {mu} v {v}: e {e}");
+        }
     }
 
     /// Independent check of [`maxwellian_loss`] and its calibration: sample the collisions of a

@@ -9,6 +9,7 @@
 //! The last axis is vertical (`z`; in 2D the axes are `x, z`); gravity points along `-z`.
 
 pub mod convergence;
+pub mod damping;
 pub mod lattice;
 pub mod observe_section;
 pub mod thresholds;
@@ -201,6 +202,14 @@ pub const DT_REFERENCE_SPEED: f64 = 10.0;
 /// Time steps per Hertz contact at [`DT_REFERENCE_SPEED`] at the least
 /// ([`Scene::largest_time_step`]).
 pub const STEPS_PER_CONTACT: f64 = 8.0;
+/// Weight of the damping rate against the contact frequency in the time-step bound of the Gear
+/// integrator ([`Scene::largest_time_step`]); its velocity-dependent force makes the predictor-
+/// corrector far less stable under damping than Verlet (docs/reliability.md, "Time step and
+/// damping").
+pub const GEAR_DAMPING_WEIGHT: f64 = 2.0;
+/// Weight of the damping rate in the time-step bound of velocity Verlet
+/// ([`Scene::largest_time_step`]).
+pub const VERLET_DAMPING_WEIGHT: f64 = 0.5;
 
 /// Capillary bridges (MODEL.md 3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -460,7 +469,8 @@ pub struct EngineSpec {
     /// `"event"` (default) or `"time"`.
     #[serde(default, skip_serializing_if = "EngineKind::is_event")]
     pub kind: EngineKind,
-    /// Time-driven: the time step (default [`DEFAULT_DT`]).
+    /// Time-driven: the time step (default [`DEFAULT_DT`], or [`Scene::largest_time_step`] where
+    /// that is shorter: [`Scene::time_step`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dt: Option<f64>,
     /// Time-driven: `"gear5"` (default) or `"verlet"`.
@@ -667,31 +677,67 @@ impl Scene {
         }
     }
 
-    /// The largest `engine.dt` the time-driven engine is allowed: [`MAX_DT`], or an eighth
-    /// ([`STEPS_PER_CONTACT`]) of the duration of an elastic Hertz contact between two of the
-    /// largest grains at the impact speed `v = 10 sqrt(g d)` ([`DT_REFERENCE_SPEED`]) if that
-    /// is shorter: `t_c = 2.943 xi_max / v`, `xi_max = (5 mu v^2 / (4 k sqrt(R_eff)))^(2/5)`,
-    /// `mu = m/2`, `R_eff = d_max / 4` (MODEL.md Eq. 2.7; `physics::hertz::contact_time`).
-    /// At the default stiffness this is 4.0e-4; a longer step lets the integrator blow up
+    /// The largest `engine.dt` the time-driven engine is allowed: the smallest of [`MAX_DT`], an
+    /// eighth ([`STEPS_PER_CONTACT`]) of the duration of an elastic Hertz contact between two of
+    /// the largest grains at the impact speed `v = 10 sqrt(g d)` ([`DT_REFERENCE_SPEED`]), and,
+    /// with damping, that eighth shrunk so that the damping is resolved too.
+    ///
+    /// Elastic part: `t_c = 2.943 xi_max / v`, `xi_max = (5 mu v^2 / (4 k sqrt(R_eff)))^(2/5)`,
+    /// `mu = m/2`, `R_eff = d_max / 4` (MODEL.md Eq. 2.7; `physics::hertz::contact_time`). At the
+    /// default stiffness this is 4.0e-4; a longer step lets the integrator blow up
     /// (docs/reliability.md, "Hard cases at length").
+    ///
+    /// Damping: linearised at the overlap `xi_max` of that contact, Eq. 2.7 is an oscillator of
+    /// angular frequency `omega^2 = (3/2) k sqrt(R_eff) sqrt(xi_max) / mu` and damping rate
+    /// `gamma = A_d k sqrt(R_eff) sqrt(xi_max) / mu` (the larger of the pair contact and of the
+    /// wall contact, `R_eff = d_max / 2`, `mu = m`, with their `A_d`, [`damping::contact_damping`]).
+    /// The elastic bound is `omega dt <= 0.504`; with damping it becomes
+    /// `(omega + c gamma) dt <= 0.504`, `c` = [`GEAR_DAMPING_WEIGHT`] for Gear and
+    /// [`VERLET_DAMPING_WEIGHT`] for Verlet: measured limits of stability on shaken and resting
+    /// beds (docs/reliability.md, "Time step and damping") lie 1.5 to 4 times above it.
     pub fn largest_time_step(&self) -> f64 {
         use crate::physics::hertz;
         let (_, d_max) = self.diameter_range();
         let k = self.contact.stiffness.unwrap_or(DEFAULT_STIFFNESS);
-        let r = 0.5 * d_max;
-        let kr = k * hertz::effective_radius(r, r).sqrt();
+        let m = self.particles.mass;
         let unit = if self.gravity > 0.0 {
             (self.gravity * self.particles.diameter).sqrt()
         } else {
             1.0
         };
         let v = DT_REFERENCE_SPEED * unit;
-        let t_c = hertz::contact_time(kr, 0.5 * self.particles.mass, v);
-        if t_c.is_finite() && t_c > 0.0 {
-            MAX_DT.min(t_c / STEPS_PER_CONTACT)
-        } else {
-            MAX_DT
+        let r = 0.5 * d_max;
+        let kr = k * hertz::effective_radius(r, r).sqrt();
+        let t_c = hertz::contact_time(kr, 0.5 * m, v);
+        if !(t_c.is_finite() && t_c > 0.0) {
+            return MAX_DT;
         }
+        let elastic = t_c / STEPS_PER_CONTACT;
+        // Damping rate at the reference contact, per unit `A_d`: `k sqrt(R_eff) sqrt(xi_max) / mu`.
+        let rate = |kr: f64, mu: f64| kr * hertz::max_overlap(kr, mu, v).sqrt() / mu;
+        let omega = (1.5 * rate(kr, 0.5 * m)).sqrt();
+        let (a_pair, a_wall) = damping::contact_damping(self);
+        let gamma = (a_pair * rate(kr, 0.5 * m)).max(a_wall * rate(k * r.sqrt(), m));
+        let weight = match self.engine.integrator.unwrap_or_default() {
+            IntegratorKind::Gear5 => GEAR_DAMPING_WEIGHT,
+            IntegratorKind::Verlet => VERLET_DAMPING_WEIGHT,
+        };
+        let damped = elastic * omega / (omega + weight * gamma);
+        let dt = elastic.min(damped);
+        if dt.is_finite() && dt > 0.0 {
+            MAX_DT.min(dt)
+        } else {
+            0.0
+        }
+    }
+
+    /// The time step of the time-driven engine: `engine.dt`, or [`DEFAULT_DT`] where that is no
+    /// longer than [`Scene::largest_time_step`], else that largest step (a stiff or strongly
+    /// damped scene gets a step it resolves without having to name one).
+    pub fn time_step(&self) -> f64 {
+        self.engine
+            .dt
+            .unwrap_or_else(|| DEFAULT_DT.min(self.largest_time_step()))
     }
 
     /// Initial granular temperature in absolute units.

@@ -33,6 +33,23 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// The first particle whose position or velocity is not finite, as a broken-invariant
+    /// message; `None` for a sound frame. The observers need finite positions (a Delaunay
+    /// triangulation of a NaN is undefined), so a blown-up run stops here.
+    pub fn non_finite(&self) -> Option<String> {
+        let d = self.dimension.max(1);
+        let bad = |v: &[f64]| v.iter().position(|x| !x.is_finite()).map(|k| k / d);
+        let (what, i) = match (bad(&self.positions), bad(&self.velocities)) {
+            (Some(i), _) => ("position", i),
+            (None, Some(i)) => ("velocity", i),
+            (None, None) => return None,
+        };
+        Some(format!(
+            "particle {i} has a non-finite {what} at t = {}: a blown-up run",
+            self.time
+        ))
+    }
+
     /// Copies the current state of an engine.
     pub fn of_engine<
         const D: usize,

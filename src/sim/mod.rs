@@ -450,7 +450,15 @@ fn run_engine<S: Simulation>(
         }
         if target == target_obs {
             if let Some((_, obs)) = observer.as_mut() {
-                obs.observe(&engine.frame(scene));
+                let frame = engine.frame(scene);
+                // A blown-up state between two samples stops the run as a broken invariant
+                // before it reaches the observers.
+                if let Some(bad) = frame.non_finite() {
+                    violation = Some(engine.sanity_check().err().unwrap_or(bad));
+                    samples.push(sample(&engine));
+                    break;
+                }
+                obs.observe(&frame);
             }
             j += 1;
         }

@@ -40,7 +40,7 @@ use super::integrator::{
 };
 use super::neighbours::{BOND, CONTACT, NeighbourList};
 use crate::physics::hertz;
-use crate::scene::{Boundary, DEFAULT_DT, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
+use crate::scene::{Boundary, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
 use crate::sim::event_driven::{EnergyLedger, EventCounts};
 use crate::sim::initial::initial_state;
 use rayon::prelude::*;
@@ -228,7 +228,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             periodic,
             gravity: scene.gravity,
             mass: scene.particles.mass,
-            dt: e.dt.unwrap_or(DEFAULT_DT),
+            dt: scene.time_step(),
             integrator: e.integrator.unwrap_or_default(),
             gear,
             stiffness,

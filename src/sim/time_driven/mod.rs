@@ -1,13 +1,14 @@
 //! Time-driven molecular dynamics of soft (Hertz) disks and spheres with the minimal capillary
 //! model (MODEL.md 2.2, 3.1): the second, independent engine, chosen by `engine.kind = "time"`.
 //!
-//! - `damping.rs`: damping constants, given or derived from a restitution;
+//! - `damping`: damping constants, given or derived from a restitution (`scene::damping`: the
+//!   scene's validation needs them to bound the time step);
 //! - `engine.rs`: state, force accumulation (pairs, walls, bridges, body force), bookkeeping;
 //! - `integrator.rs`: Gear 5th-order predictor-corrector and velocity Verlet;
 //! - `neighbours.rs`: linked cells and the Verlet list with skin;
 //! - `shear.rs`: the continuous Kolmogorov shear force (a [`BodyForce`]).
 
-pub mod damping;
+pub use crate::scene::damping;
 pub mod engine;
 pub mod integrator;
 pub mod neighbours;

@@ -33,8 +33,8 @@
 //! mass `m` against an infinitely heavy wall, the same `T`). A restitution of 1 gives `A_d = 0`
 //! (the elastic walls of MODEL.md 1 stay undamped whatever the calibration).
 
+use super::{AutoWord, DEFAULT_STIFFNESS, DriveKind, RestitutionSpeed, Scene, StartMode};
 use crate::physics::hertz;
-use crate::scene::{AutoWord, DEFAULT_STIFFNESS, DriveKind, RestitutionSpeed, Scene, StartMode};
 
 /// How a restitution is turned into `A_d`.
 #[derive(Debug, Clone, Copy, PartialEq)]
