@@ -39,6 +39,7 @@ use super::integrator::{
     gear_unpredict, verlet_drift, verlet_kick,
 };
 use super::neighbours::{BOND, CONTACT, NeighbourList};
+use super::walls::{WallAxis, WallBooks, wall_forces};
 use crate::physics::hertz;
 use crate::scene::{Boundary, DEFAULT_DT, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
 use crate::sim::event_driven::{EnergyLedger, EventCounts};
@@ -83,10 +84,6 @@ pub const ENTRY_CHUNK: usize = 128;
 /// numbers): a parallel loop costs a few microseconds of hand-over per step.
 pub const PARALLEL_MIN_PARTICLES: usize = 512;
 
-/// Bits of `wall_contact`: touching the lower, the upper wall of the coordinate's axis.
-const WALL_LO: u8 = 1;
-const WALL_HI: u8 = 2;
-
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
 pub const SANITY_OVERLAP: f64 = 0.05;
@@ -111,6 +108,8 @@ struct Params<const D: usize> {
     /// `(A, omega)` of the shaken floor and lid.
     drive: Option<(f64, f64)>,
     diameter: f64,
+    /// The largest particle radius.
+    max_radius: f64,
 }
 
 /// The time-driven simulation state.
@@ -242,6 +241,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             },
             drive: scene.drive_motion(),
             diameter: scene.particles.diameter,
+            max_radius: init.radius.iter().fold(0.0, |a: f64, &r| a.max(r)),
         };
         let skin = e.skin.unwrap_or(DEFAULT_SKIN) * scene.particles.diameter;
         let (_, d_max) = scene.diameter_range();
@@ -700,68 +700,38 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.dissipated_bridges += pb.bridge_ledger;
         let mut diss = pb.dissipated;
         let mut max_ov = self.max_overlap.max(pb.max_overlap);
-        // Per-chunk partial sums of the walls' dissipation and work, in the chunks of the
-        // parallel path (adding a chunk that booked nothing adds +0 and changes nothing).
+        // Walls per chunk of coordinates, the chunks of the parallel path, each chunk's
+        // dissipation and work summed on its own and added in order (a chunk that booked
+        // nothing adds +0 and changes nothing).
         let mut work = 0.0;
-        let (mut part_diss, mut part_work, mut part_chunk) = (0.0, 0.0, 0usize);
-        let (zw, vw) = match p.drive {
-            Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
-            None => (0.0, 0.0),
-        };
+        let walls = wall_axes(p, t, vs, dt);
         let x = &self.r[0];
         let v = &self.r[1];
-        for k in 0..D {
-            if p.periodic[k] {
-                continue;
-            }
-            let (shift, wv) = if k == D - 1 { (zw, vw) } else { (0.0, 0.0) };
-            let (lo, hi) = (shift, p.size[k] + shift);
-            let xk = &x[k * n..(k + 1) * n];
-            let vk = &v[k * n..(k + 1) * n];
-            let fk = &mut f[k * n..(k + 1) * n];
-            let radius = &self.radius[..n];
-            let wall_kr = &self.wall_kr[..n];
-            let touching = &mut self.wall_contact[k * n..(k + 1) * n];
-            for i in 0..n {
-                let ri = radius[i];
-                let ov_lo = ri - (xk[i] - lo);
-                let ov_hi = xk[i] + ri - hi;
-                if ov_lo <= 0.0 && ov_hi <= 0.0 {
-                    if touching[i] != 0 {
-                        touching[i] = 0;
+        if p.periodic.iter().any(|&periodic| !periodic) {
+            for e0 in (0..D * n).step_by(PARTICLE_CHUNK) {
+                let mut part = WallBooks::default();
+                for_each_axis_segment(n, e0, PARTICLE_CHUNK.min(D * n - e0), |k, o, m| {
+                    if p.periodic[k] {
+                        return;
                     }
-                    continue;
-                }
-                let (ov, sign, bit) = if ov_lo > 0.0 {
-                    (ov_lo, 1.0, WALL_LO)
-                } else {
-                    (ov_hi, -1.0, WALL_HI)
-                };
-                if touching[i] & bit == 0 {
-                    touching[i] |= bit;
-                    self.counts.wall_collisions += 1;
-                }
-                max_ov = max_ov.max(ov);
-                let chunk = (k * n + i) / PARTICLE_CHUNK;
-                if chunk != part_chunk {
-                    diss += part_diss;
-                    work += part_work;
-                    (part_diss, part_work, part_chunk) = (0.0, 0.0, chunk);
-                }
-                // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
-                let xi_dot = -sign * (vk[i] * vs - wv);
-                let kr = wall_kr[i];
-                let total = hertz::force(kr, ov, xi_dot, p.wall_damping);
-                if p.wall_damping > 0.0 {
-                    part_diss += (total - kr * ov * ov.sqrt()) * xi_dot * dt;
-                }
-                let fw = sign * total;
-                fk[i] += fw;
-                part_work += fw * wv * dt;
+                    let (e, i) = (e0 + o, e0 + o - k * n);
+                    wall_forces(
+                        &walls[k],
+                        &x[e..e + m],
+                        &v[e..e + m],
+                        &self.radius[i..i + m],
+                        &self.wall_kr[i..i + m],
+                        &mut self.wall_contact[e..e + m],
+                        &mut f[e..e + m],
+                        &mut part,
+                    );
+                });
+                diss += part.dissipated;
+                work += part.work;
+                max_ov = max_ov.max(part.max_overlap);
+                self.counts.wall_collisions += part.onsets;
             }
         }
-        diss += part_diss;
-        work += part_work;
         if B::ACTIVE {
             let (mut part, mut part_chunk) = (0.0, 0usize);
             for i in 0..n {
@@ -897,12 +867,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 })
                 .collect_into_vec(&mut self.body_work);
         }
-        // Walls: Hertz with R_eff = R_i on every non-periodic axis; the last axis moves with the
-        // drive, z_w(t) = A sin(omega t) (MODEL.md 4.1).
-        let (zw, vw) = match p.drive {
-            Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
-            None => (0.0, 0.0),
-        };
         let mut init = [0.0; D];
         if GRAV {
             // Start from the weight, -m g along the last axis.
@@ -922,10 +886,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             init,
             periodic: p.periodic,
             size: p.size,
-            wall_shift: std::array::from_fn(|k| if k == D - 1 { (zw, vw) } else { (0.0, 0.0) }),
-            wall_damping: p.wall_damping,
+            walls: wall_axes(p, t, vs, dt),
             inv_mass: (p.mass != 1.0).then(|| 1.0 / p.mass),
-            vs,
             dt,
             then,
             gear: p.gear,
@@ -959,10 +921,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let mut work = 0.0;
         let mut moved = [0.0; D];
         for b in &self.chunk_books {
-            diss += b.dissipated;
-            work += b.work;
-            max_ov = max_ov.max(b.max_overlap);
-            self.counts.wall_collisions += b.onsets;
+            diss += b.walls.dissipated;
+            work += b.walls.work;
+            max_ov = max_ov.max(b.walls.max_overlap);
+            self.counts.wall_collisions += b.walls.onsets;
             for k in 0..D {
                 moved[k] = max_ignoring_nan(moved[k], b.moved[k]);
             }
@@ -1167,6 +1129,28 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
         Ok(())
     }
+}
+
+/// The walls of every axis at time `t` (used on the non-periodic ones): Hertz with
+/// `R_eff = R_i`; the last axis's walls move with the drive, `z_w(t) = A sin(omega t)`
+/// (MODEL.md 4.1). `vs` turns the velocity array into velocities, `dt` weights the books.
+fn wall_axes<const D: usize>(p: &Params<D>, t: f64, vs: f64, dt: f64) -> [WallAxis; D] {
+    let (zw, vw) = match p.drive {
+        Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
+        None => (0.0, 0.0),
+    };
+    std::array::from_fn(|k| {
+        let (shift, velocity) = if k == D - 1 { (zw, vw) } else { (0.0, 0.0) };
+        WallAxis::new(
+            shift,
+            p.size[k] + shift,
+            velocity,
+            vs,
+            p.wall_damping,
+            dt,
+            p.max_radius,
+        )
+    })
 }
 
 /// What the pair loop needs besides the arrays.
@@ -1474,10 +1458,7 @@ enum Then {
 /// What one chunk of the per-particle phase books.
 #[derive(Debug, Clone, Copy)]
 struct ChunkBooks<const D: usize> {
-    dissipated: f64,
-    work: f64,
-    onsets: u64,
-    max_overlap: f64,
+    walls: WallBooks,
     /// Largest move of a predicted position per axis (Gear).
     moved: [f64; D],
 }
@@ -1500,11 +1481,9 @@ struct ChunkContext<'a, const D: usize> {
     init: [f64; D],
     periodic: [bool; D],
     size: [f64; D],
-    /// Per axis: the walls' displacement and velocity (the drive moves the last axis).
-    wall_shift: [(f64, f64); D],
-    wall_damping: f64,
+    /// Per axis: the walls (used on the non-periodic axes).
+    walls: [WallAxis; D],
     inv_mass: Option<f64>,
-    vs: f64,
     dt: f64,
     then: Then,
     gear: [f64; 6],
@@ -1554,13 +1533,8 @@ fn particle_chunk<const D: usize>(
     r: [&mut [f64]; 6],
     touch: &mut [u8],
 ) -> ChunkBooks<D> {
-    let mut b = ChunkBooks {
-        dissipated: 0.0,
-        work: 0.0,
-        onsets: 0,
-        max_overlap: 0.0,
-        moved: [0.0; D],
-    };
+    let mut walls = WallBooks::default();
+    let mut moved = [0.0; D];
     let n = cx.n;
     let [r0, r1, r2, r3, r4, r5] = r;
     for_each_axis_segment(n, e0, acc.len(), |k, o, m| {
@@ -1585,44 +1559,10 @@ fn particle_chunk<const D: usize>(
             acc[i - i0] += own;
         }
         if !cx.periodic[k] {
-            let (shift, wv) = cx.wall_shift[k];
-            let (lo, hi) = (shift, cx.size[k] + shift);
-            let xk = &r0[o..o + m];
-            let vk = &r1[o..o + m];
             let radius = &cx.radius[i0..i0 + m];
             let wall_kr = &cx.wall_kr[i0..i0 + m];
-            let touching = &mut touch[o..o + m];
-            for i in 0..m {
-                let ri = radius[i];
-                let ov_lo = ri - (xk[i] - lo);
-                let ov_hi = xk[i] + ri - hi;
-                if ov_lo <= 0.0 && ov_hi <= 0.0 {
-                    if touching[i] != 0 {
-                        touching[i] = 0;
-                    }
-                    continue;
-                }
-                let (ov, sign, bit) = if ov_lo > 0.0 {
-                    (ov_lo, 1.0, WALL_LO)
-                } else {
-                    (ov_hi, -1.0, WALL_HI)
-                };
-                if touching[i] & bit == 0 {
-                    touching[i] |= bit;
-                    b.onsets += 1;
-                }
-                b.max_overlap = b.max_overlap.max(ov);
-                // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
-                let xi_dot = -sign * (vk[i] * cx.vs - wv);
-                let kr = wall_kr[i];
-                let total = hertz::force(kr, ov, xi_dot, cx.wall_damping);
-                if cx.wall_damping > 0.0 {
-                    b.dissipated += (total - kr * ov * ov.sqrt()) * xi_dot * cx.dt;
-                }
-                let fw = sign * total;
-                acc[i] += fw;
-                b.work += fw * wv * cx.dt;
-            }
+            let (x, v, touching) = (&r0[o..o + m], &r1[o..o + m], &mut touch[o..o + m]);
+            wall_forces(&cx.walls[k], x, v, radius, wall_kr, touching, acc, &mut walls);
         }
         if !cx.body_f.is_empty() {
             for i in 0..m {
@@ -1639,7 +1579,7 @@ fn particle_chunk<const D: usize>(
             Then::Nothing => {}
             Then::Gear => {
                 let s = o..o + m;
-                let moved = gear_correct_predict_axis(
+                let step_move = gear_correct_predict_axis(
                     [
                         &mut r0[s.clone()],
                         &mut r1[s.clone()],
@@ -1654,10 +1594,10 @@ fn particle_chunk<const D: usize>(
                     cx.periodic[k].then_some(cx.size[k]),
                     cx.flush,
                 );
-                b.moved[k] = max_ignoring_nan(b.moved[k], moved);
+                moved[k] = max_ignoring_nan(moved[k], step_move);
             }
             Then::VerletKick => verlet_kick(&mut r1[o..o + m], acc, cx.dt),
         }
     });
-    b
+    ChunkBooks { walls, moved }
 }
