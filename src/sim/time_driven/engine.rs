@@ -124,8 +124,13 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     /// and velocity of the current step are recovered on demand by inverting the predictor,
     /// [`gear_unpredict`], instead of being stored every step).
     predicted: bool,
-    /// Acceleration of the last force evaluation, axis-major.
+    /// Acceleration of the last force evaluation, axis-major; or, when `acc_is_start`, the
+    /// value every coordinate's force starts from ([`Self::force_start`]).
     acc: Vec<f64>,
+    /// Whether `acc` holds the force start values, written by the last integrator pass (Gear's
+    /// corrector-predictor, Verlet's drift) as it read the accelerations: the next force
+    /// evaluation then needs no pass of its own to initialise the forces.
+    acc_is_start: bool,
     radius: Vec<f64>,
     /// `k sqrt(R_i)`: the wall prefactor of each particle (`R_eff = R_i`).
     wall_kr: Vec<f64>,
@@ -283,6 +288,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             r,
             predicted: false,
             acc: vec![0.0; D * n],
+            acc_is_start: false,
             radius: init.radius,
             wall_kr,
             wall_contact: vec![0; D * n],
@@ -594,18 +600,31 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.n >= PARALLEL_MIN_PARTICLES && rayon::current_num_threads() > 1
     }
 
+    /// The force every coordinate starts from: the weight `-m g` on the last axis (with
+    /// gravity), 0 elsewhere.
+    fn force_start(&self) -> [f64; D] {
+        let mut start = [0.0; D];
+        if GRAV {
+            start[D - 1] = -self.p.mass * self.p.gravity;
+        }
+        start
+    }
+
     /// Velocity Verlet's first half on every coordinate (`verlet_drift`), with the wrap of the
     /// periodic axes; returns the largest move per axis.
     fn verlet_drift_wrap(&mut self, dt: f64) -> [f64; D] {
         let n = self.n;
         let min_len = if self.parallel() { 1 } else { usize::MAX };
         let (periodic, size) = (self.p.periodic, self.p.size);
+        let start = self.force_start();
+        self.acc_is_start = true;
         let [x, v, ..] = &mut self.r;
-        let drift = |e0: usize, x: &mut [f64], v: &mut [f64], acc: &[f64]| {
+        let drift = |e0: usize, x: &mut [f64], v: &mut [f64], acc: &mut [f64]| {
             let mut moved = [0.0; D];
             for_each_axis_segment(n, e0, x.len(), |k, o, m| {
-                let (x, v, acc) = (&mut x[o..o + m], &mut v[o..o + m], &acc[o..o + m]);
-                moved[k] = max_ignoring_nan(moved[k], verlet_drift(x, v, acc, dt));
+                let (x, v, acc) = (&mut x[o..o + m], &mut v[o..o + m], &mut acc[o..o + m]);
+                let step_move = verlet_drift(x, v, acc, start[k], dt);
+                moved[k] = max_ignoring_nan(moved[k], step_move);
                 if periodic[k] {
                     wrap_slice(x, size[k]);
                 }
@@ -615,7 +634,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         (
             x.par_chunks_mut(PARTICLE_CHUNK),
             v.par_chunks_mut(PARTICLE_CHUNK),
-            self.acc.par_chunks(PARTICLE_CHUNK),
+            self.acc.par_chunks_mut(PARTICLE_CHUNK),
         )
             .into_par_iter()
             .enumerate()
@@ -662,16 +681,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// (no per-entry force buffer, no gather).
     fn forces_then_serial(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
         let n = self.n;
+        let init = self.force_start();
         let p = &self.p;
         let f = &mut self.acc;
-        let mut init = [0.0; D];
-        if GRAV {
-            // Start from the weight, -m g along the last axis.
-            init[D - 1] = -p.mass * p.gravity;
+        if !self.acc_is_start {
+            for k in 0..D {
+                f[k * n..(k + 1) * n].fill(init[k]);
+            }
         }
-        for k in 0..D {
-            f[k * n..(k + 1) * n].fill(init[k]);
-        }
+        // The integrator pass below leaves the start values for the next evaluation.
+        self.acc_is_start = then == Then::Gear;
         let pc = PairConstants {
             periodic: p.periodic,
             size: p.size,
@@ -776,7 +795,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                             &mut r4[a.clone()],
                             &mut r5[a.clone()],
                         ],
-                        &f[a],
+                        &mut f[a],
+                        init[k],
                         0.5 * p.dt * p.dt,
                         &c,
                         p.periodic[k].then_some(p.size[k]),
@@ -867,11 +887,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 })
                 .collect_into_vec(&mut self.body_work);
         }
-        let mut init = [0.0; D];
-        if GRAV {
-            // Start from the weight, -m g along the last axis.
-            init[D - 1] = -p.mass * p.gravity;
-        }
+        let init = self.force_start();
+        // The Gear pass leaves the start values for the next evaluation.
+        self.acc_is_start = then == Then::Gear;
         let cx = ChunkContext::<D> {
             n,
             pf: &self.pair_f,
@@ -1589,6 +1607,7 @@ fn particle_chunk<const D: usize>(
                         &mut r5[s],
                     ],
                     acc,
+                    cx.init[k],
                     cx.half_dt2,
                     &cx.gear,
                     cx.periodic[k].then_some(cx.size[k]),
