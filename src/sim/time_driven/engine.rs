@@ -1342,16 +1342,16 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
     let mut b = PairBooks::default();
     // Partial sums of the current chunk of entries.
     let (mut diss, mut ledger, mut boundary) = (0.0, 0.0, ENTRY_CHUNK);
+    let radius = &radius[..n];
+    let periodic = pc.periodic;
     for &i in rows {
         let i = i as usize;
         let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
-        let mut xi = [0.0; D];
-        let mut vi = [0.0; D];
+        let xi: [f64; D] = std::array::from_fn(|k| xs[k][i]);
         let mut fi = [0.0; D];
-        for k in 0..D {
-            xi[k] = xs[k][i];
-            vi[k] = vsl[k][i];
-        }
+        // Whether some pair of the row exerts a force (else the row adds nothing to `f[i]`:
+        // `f[i] + 0` is `f[i]`, as a force sum is never -0).
+        let mut row_force = false;
         let ri = radius[i];
         for q in p0..p1 {
             // Before booking at entry `q`: close the partial sums of the earlier chunks (only
@@ -1372,7 +1372,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
             let mut r2 = 0.0;
             for k in 0..D {
                 let mut dk = xi[k] - xs[k][j];
-                if pc.periodic[k] {
+                if periodic[k] {
                     if dk > half[k] {
                         dk -= pc.size[k];
                     } else if dk < -half[k] {
@@ -1405,7 +1405,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                 // xi_dot = -(v_i - v_j) . n, n = d / r.
                 let mut vn = 0.0;
                 for k in 0..D {
-                    vn += (vi[k] - vsl[k][j]) * d[k];
+                    vn += (vsl[k][i] - vsl[k][j]) * d[k];
                 }
                 let xi_dot = -vn * inv * vs;
                 let kr = k_pair * (ri * rj / sig).sqrt();
@@ -1445,6 +1445,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                 flags[q] = new_fl;
             }
             if fmag != 0.0 {
+                row_force = true;
                 let s = fmag * inv;
                 for k in 0..D {
                     let fk = s * d[k];
@@ -1453,8 +1454,10 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                 }
             }
         }
-        for k in 0..D {
-            f[k * n + i] += fi[k];
+        if row_force {
+            for k in 0..D {
+                f[k * n + i] += fi[k];
+            }
         }
     }
     b.dissipated += diss;
