@@ -1583,7 +1583,16 @@ fn particle_chunk<const D: usize>(
             let radius = &cx.radius[i0..i0 + m];
             let wall_kr = &cx.wall_kr[i0..i0 + m];
             let (x, v, touching) = (&r0[o..o + m], &r1[o..o + m], &mut touch[o..o + m]);
-            wall_forces(&cx.walls[k], x, v, radius, wall_kr, touching, acc, &mut walls);
+            wall_forces(
+                &cx.walls[k],
+                x,
+                v,
+                radius,
+                wall_kr,
+                touching,
+                acc,
+                &mut walls,
+            );
         }
         if !cx.body_f.is_empty() {
             for i in 0..m {

@@ -467,7 +467,10 @@ mod tests {
             );
         }
         assert!(wrapped >= 2, "the face particles wrap");
-        assert!(acc_left.iter().all(|&a| a == -0.25), "acc is left at the force start");
+        assert!(
+            acc_left.iter().all(|&a| a == -0.25),
+            "acc is left at the force start"
+        );
         assert_eq!(moved, most);
     }
 

@@ -172,7 +172,9 @@ mod tests {
     #[test]
     fn screening_changes_no_bit() {
         let m = 203; // not a multiple of the block: exercises the tail
-        let radius: Vec<f64> = (0..m).map(|i| 0.5 + 0.03 * ((i % 5) as f64 - 2.0)).collect();
+        let radius: Vec<f64> = (0..m)
+            .map(|i| 0.5 + 0.03 * ((i % 5) as f64 - 2.0))
+            .collect();
         let w = WallAxis::new(0.013, 9.013, 0.7, 1e4, 1.5e-4, 1e-4, 0.56);
         let x: Vec<f64> = (0..m)
             .map(|i| match i % 37 {
@@ -262,7 +264,10 @@ mod tests {
                     }
                 }
             }
-            assert!(passed > 3000, "the band's edges are exercised from both sides");
+            assert!(
+                passed > 3000,
+                "the band's edges are exercised from both sides"
+            );
         }
     }
 }
