@@ -191,3 +191,26 @@ fn three_dimensional_run_observes_neighbour_shells() {
     );
     assert_eq!(o.diffusion.as_ref().unwrap().layers.len(), 3);
 }
+
+/// The location-change counter runs beside the other observers on a pool of more than one
+/// thread: the observables and the classification are the same on one thread and on two.
+#[test]
+fn observing_on_two_threads_gives_the_same_observables() {
+    let s = common::scene(&standard_2d(20.0, 54, 2.0, 1.0, 4.0, 1.0));
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a pool")
+            .install(|| {
+                let run = run_observed(&s, &mut |_| {});
+                (
+                    serde_json::to_string(&run.observables).expect("observables serialise"),
+                    run.classification.phase,
+                )
+            })
+    };
+    let (one, two) = (on(1), on(2));
+    assert!(one.0.contains("location_changes"), "{}", one.0);
+    assert_eq!(one, two);
+}

@@ -36,6 +36,9 @@ pub struct WallRow {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TableCost {
     pub build_seconds: f64,
+    /// CPU seconds of the whole process (every thread) during the builds; NaN without `/proc`.
+    /// The cells are filled on the pool `sim::threads` chooses (`WETGRAN_THREADS` caps it).
+    pub build_cpu_seconds: f64,
     pub bytes: usize,
     pub fallback_fraction: f64,
 }
@@ -141,10 +144,16 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
             g: -floor.g,
             ..floor
         };
+        let cpu = crate::bench::tdmd::process_cpu_seconds;
+        let cpu0 = cpu();
         let tables = Arc::new([
             WallTable::build(floor, spec),
             WallTable::build(lid_motion, spec),
         ]);
+        let build_cpu_seconds = match (cpu0, cpu()) {
+            (Some(a), Some(b)) => b - a,
+            _ => f64::NAN,
+        };
         let fallbacks = shots
             .iter()
             .filter(|s| {
@@ -154,6 +163,7 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
             .count();
         costs.push(Some(TableCost {
             build_seconds: tables[0].build_seconds + tables[1].build_seconds,
+            build_cpu_seconds,
             bytes: tables[0].bytes() + tables[1].bytes(),
             fallback_fraction: fallbacks as f64 / shots.len() as f64,
         }));
@@ -219,11 +229,13 @@ pub fn report(rows: &[WallRow]) -> String {
         "wetgran bench wall: shaken-wall root solvers against exact_root at tol 1e-15\n\
          drive: Gamma 5, E* 10 (2D standard wet system), 3/4 floor shots, 1/4 lid shots\n\
          time errors in units of sqrt(d/g); wrong = other root or missed (> 1e-2 T off)\n\
-         table: build s and MiB for floor + lid tables; exact % = queries the exact solver answers\n"
+         table: build s (wall, CPU of every thread) and MiB for floor + lid tables; exact % = queries the exact solver answers\n\
+         the tables are built on {} thread(s) (WETGRAN_THREADS caps them)\n",
+        crate::sim::threads::available_cores()
     );
     let _ = writeln!(
         s,
-        "{:<8} {:<16} {:>12} {:>12} {:>9} {:>12} {:>9} {:>9} {:>8}",
+        "{:<8} {:<16} {:>12} {:>12} {:>9} {:>12} {:>9} {:>9} {:>9} {:>8}",
         "solver",
         "knob",
         "mean |dt|",
@@ -231,6 +243,7 @@ pub fn report(rows: &[WallRow]) -> String {
         "wrong %",
         "ns/predict",
         "build s",
+        "cpu s",
         "MiB",
         "exact %"
     );
@@ -248,8 +261,9 @@ pub fn report(rows: &[WallRow]) -> String {
         if let Some(c) = r.table {
             let _ = write!(
                 s,
-                " {:>9.3} {:>9.1} {:>8.2}",
+                " {:>9.3} {:>9.3} {:>9.1} {:>8.2}",
                 c.build_seconds,
+                c.build_cpu_seconds,
                 c.bytes as f64 / (1024.0 * 1024.0),
                 100.0 * c.fallback_fraction
             );

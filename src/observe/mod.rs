@@ -560,22 +560,44 @@ impl ObserverSet {
         self.t_start
     }
 
-    /// Hands one sampled frame to every observer.
+    /// Hands one sampled frame to every observer. The location-change counter (a triangulation
+    /// per frame, by far the dearest) runs beside the others (`rayon::join`) when the pool that
+    /// `sim::threads` chooses for this job has more than one thread; the observers share no
+    /// state, so the results are the same either way.
     pub fn observe(&mut self, frame: &Frame) {
         let in_window = frame.time >= self.t_start - self.eps;
-        self.temperature.observe(frame, in_window);
-        self.profiles.observe(frame, in_window);
-        if in_window {
-            self.lateral.observe(frame);
-        }
-        if let Some(o) = self.lc.as_mut() {
-            o.observe(frame, in_window);
-        }
-        if let Some(o) = self.diffusion.as_mut() {
-            o.observe(frame, in_window);
-        }
-        if let Some(o) = self.shear.as_mut() {
-            o.observe(frame, in_window);
+        let Self {
+            temperature,
+            profiles,
+            lateral,
+            lc,
+            diffusion,
+            shear,
+            ..
+        } = self;
+        let mut others = || {
+            temperature.observe(frame, in_window);
+            profiles.observe(frame, in_window);
+            if in_window {
+                lateral.observe(frame);
+            }
+            if let Some(o) = diffusion.as_mut() {
+                o.observe(frame, in_window);
+            }
+            if let Some(o) = shear.as_mut() {
+                o.observe(frame, in_window);
+            }
+        };
+        match lc.as_mut() {
+            Some(lc) => crate::sim::threads::install(|| {
+                if rayon::current_num_threads() > 1 {
+                    rayon::join(|| lc.observe(frame, in_window), others);
+                } else {
+                    lc.observe(frame, in_window);
+                    others();
+                }
+            }),
+            None => others(),
         }
         if in_window {
             self.window_samples += 1;

@@ -35,6 +35,7 @@
 //! beyond one period: a flight without a hit is queried again one period later.
 
 use super::shaken_wall::WallMotion;
+use rayon::prelude::*;
 use std::f64::consts::TAU;
 use std::time::Instant;
 
@@ -133,6 +134,15 @@ pub struct BuildStats {
     pub exact_only_cells: usize,
 }
 
+impl BuildStats {
+    fn add(&mut self, other: &BuildStats) {
+        self.cells += other.cells;
+        self.shrunk_derivatives += other.shrunk_derivatives;
+        self.rereferenced_cells += other.rereferenced_cells;
+        self.exact_only_cells += other.exact_only_cells;
+    }
+}
+
 /// Tabulated collision times for one wall motion.
 #[derive(Debug, Clone)]
 pub struct WallTable {
@@ -145,14 +155,23 @@ pub struct WallTable {
 }
 
 impl WallTable {
-    /// Fills the four edge tables for `motion` (a pure function of its inputs).
+    /// Fills the four edge tables for `motion` (a pure function of its inputs). The cells are
+    /// filled in parallel on the pool `sim::threads` chooses (a sweep job's share of the cores,
+    /// else all of them); each cell is a function of its indices alone and the counters are
+    /// integer sums, so the table is the same bits on any number of threads.
     pub fn build(motion: WallMotion, spec: TableSpec) -> WallTable {
         let start = Instant::now();
-        let mut stats = BuildStats::default();
-        let edges = EDGES
-            .iter()
-            .map(|&e| build_edge(&motion, &spec, e, &mut stats))
-            .collect();
+        let (edges, stats) = crate::sim::threads::install(|| {
+            let built: Vec<(EdgeTable, BuildStats)> = EDGES
+                .par_iter()
+                .map(|&e| build_edge(&motion, &spec, e))
+                .collect();
+            let mut stats = BuildStats::default();
+            for (_, s) in &built {
+                stats.add(s);
+            }
+            (built.into_iter().map(|(e, _)| e).collect(), stats)
+        });
         WallTable {
             motion,
             spec,
@@ -552,7 +571,11 @@ pub fn all_roots(
 }
 
 /// Builds one edge's table (see the module header for the safeguards).
-fn build_edge(w: &WallMotion, spec: &TableSpec, edge: Edge, stats: &mut BuildStats) -> EdgeTable {
+/// Cells per unit of parallel work in [`build_edge`] (a cell costs five root searches).
+const CELLS_PER_TASK: usize = 64;
+
+/// The table of one edge, its cells filled in parallel (see [`WallTable::build`]).
+fn build_edge(w: &WallMotion, spec: &TableSpec, edge: Edge) -> (EdgeTable, BuildStats) {
     let a = w.amplitude;
     let u_max = (spec.v_max / spec.v_min).ln_1p();
     let (lo, hi) = match edge {
@@ -562,81 +585,104 @@ fn build_edge(w: &WallMotion, spec: &TableSpec, edge: Edge, stats: &mut BuildSta
     let n = [spec.phase_cells, spec.velocity_cells];
     let width = [(hi[0] - lo[0]) / n[0] as f64, (hi[1] - lo[1]) / n[1] as f64];
     let period = w.period();
-    let mut cells = Vec::with_capacity(n[0] * n[1]);
-    for i0 in 0..n[0] {
-        for i1 in 0..n[1] {
-            let corner = |c0: f64, c1: f64| {
-                [
-                    lo[0] + (i0 as f64 + c0) * width[0],
-                    lo[1] + (i1 as f64 + c1) * width[1],
-                ]
-            };
-            let mid = corner(0.5, 0.5);
-            let mut cell = tabulate(w, spec, edge, mid, period);
-            let corners = [
-                corner(0.0, 0.0),
-                corner(1.0, 0.0),
-                corner(0.0, 1.0),
-                corner(1.0, 1.0),
-            ];
-            let at_corners = corners.map(|c| tabulate(w, spec, edge, c, period));
-            // B.5.5: a cell that escapes at its midpoint but hits at a corner is re-referenced
-            // to the corner that hits earliest.
-            if entering_count(&cell) == 0 {
-                let best = at_corners
-                    .iter()
-                    .filter(|c| entering_count(c) > 0)
-                    .min_by(|x, y| first_entering(x).total_cmp(&first_entering(y)));
-                if let Some(c) = best {
-                    cell = *c;
-                    stats.rereferenced_cells += 1;
-                }
-            }
-            // B.5.4: every corner extrapolates to tau >= 0 and v_rel > 0.
-            for k in 0..cell.count as usize {
-                let entering = (k % 2 == 0) != cell.starts_inside;
-                let r = &mut cell.roots[k];
-                let mut shrunk = false;
-                for attempt in 0..12 {
-                    let ok = corners.iter().all(|c| {
-                        let d = [c[0] - cell.reference[0], c[1] - cell.reference[1]];
-                        extrapolate(r.tau, r.dtau, d) >= 0.0
-                            && (!entering || extrapolate(r.vrel, r.dvrel, d) > 0.0)
-                    });
-                    if ok {
-                        break;
-                    }
-                    shrunk = true;
-                    if attempt == 11 {
-                        r.dtau = [0.0; 2];
-                        r.dvrel = [0.0; 2];
-                    } else {
-                        for j in 0..2 {
-                            r.dtau[j] *= 0.5;
-                            r.dvrel[j] *= 0.5;
-                        }
-                    }
-                }
-                if shrunk {
-                    stats.shrunk_derivatives += 1;
-                }
-            }
-            if let Some(tol) = spec.corner_tolerance
-                && !model_matches(&cell, &at_corners, tol * period)
-            {
-                cell.exact_only = true;
-                stats.exact_only_cells += 1;
-            }
-            stats.cells += 1;
-            cells.push(cell);
+    let built: Vec<(Cell, BuildStats)> = (0..n[0] * n[1])
+        .into_par_iter()
+        .with_min_len(CELLS_PER_TASK)
+        .map(|c| build_cell(w, spec, edge, (lo, width), [c / n[1], c % n[1]], period))
+        .collect();
+    let mut stats = BuildStats::default();
+    let mut cells = Vec::with_capacity(built.len());
+    for (cell, s) in built {
+        stats.add(&s);
+        cells.push(cell);
+    }
+    (
+        EdgeTable {
+            lo,
+            width,
+            n,
+            cells,
+        },
+        stats,
+    )
+}
+
+/// Cell `[i0, i1]` of an edge table with lower corner `lo` and cell widths `width`: the roots
+/// at its midpoint, with the safeguards of B.5.4 and B.5.5 and the corner check; the counters
+/// say which safeguards acted.
+fn build_cell(
+    w: &WallMotion,
+    spec: &TableSpec,
+    edge: Edge,
+    (lo, width): ([f64; 2], [f64; 2]),
+    [i0, i1]: [usize; 2],
+    period: f64,
+) -> (Cell, BuildStats) {
+    let mut stats = BuildStats::default();
+    let corner = |c0: f64, c1: f64| {
+        [
+            lo[0] + (i0 as f64 + c0) * width[0],
+            lo[1] + (i1 as f64 + c1) * width[1],
+        ]
+    };
+    let mid = corner(0.5, 0.5);
+    let mut cell = tabulate(w, spec, edge, mid, period);
+    let corners = [
+        corner(0.0, 0.0),
+        corner(1.0, 0.0),
+        corner(0.0, 1.0),
+        corner(1.0, 1.0),
+    ];
+    let at_corners = corners.map(|c| tabulate(w, spec, edge, c, period));
+    // B.5.5: a cell that escapes at its midpoint but hits at a corner is re-referenced
+    // to the corner that hits earliest.
+    if entering_count(&cell) == 0 {
+        let best = at_corners
+            .iter()
+            .filter(|c| entering_count(c) > 0)
+            .min_by(|x, y| first_entering(x).total_cmp(&first_entering(y)));
+        if let Some(c) = best {
+            cell = *c;
+            stats.rereferenced_cells += 1;
         }
     }
-    EdgeTable {
-        lo,
-        width,
-        n,
-        cells,
+    // B.5.4: every corner extrapolates to tau >= 0 and v_rel > 0.
+    for k in 0..cell.count as usize {
+        let entering = (k % 2 == 0) != cell.starts_inside;
+        let r = &mut cell.roots[k];
+        let mut shrunk = false;
+        for attempt in 0..12 {
+            let ok = corners.iter().all(|c| {
+                let d = [c[0] - cell.reference[0], c[1] - cell.reference[1]];
+                extrapolate(r.tau, r.dtau, d) >= 0.0
+                    && (!entering || extrapolate(r.vrel, r.dvrel, d) > 0.0)
+            });
+            if ok {
+                break;
+            }
+            shrunk = true;
+            if attempt == 11 {
+                r.dtau = [0.0; 2];
+                r.dvrel = [0.0; 2];
+            } else {
+                for j in 0..2 {
+                    r.dtau[j] *= 0.5;
+                    r.dvrel[j] *= 0.5;
+                }
+            }
+        }
+        if shrunk {
+            stats.shrunk_derivatives += 1;
+        }
     }
+    if let Some(tol) = spec.corner_tolerance
+        && !model_matches(&cell, &at_corners, tol * period)
+    {
+        cell.exact_only = true;
+        stats.exact_only_cells += 1;
+    }
+    stats.cells += 1;
+    (cell, stats)
 }
 
 /// Whether the cell's linear model reproduces the true roots at every corner within `tol`.
@@ -774,6 +820,49 @@ mod tests {
             v_min: DEFAULT_V_MIN_OVER_WALL_SPEED * vw,
             v_max: DEFAULT_V_MAX_OVER_WALL_SPEED * vw,
             corner_tolerance: Some(1e-3),
+        }
+    }
+
+    /// Every number of a table as bits (cells in order, every field).
+    fn table_bits(t: &WallTable) -> Vec<u64> {
+        let mut bits = Vec::new();
+        for e in &t.edges {
+            bits.extend(e.lo.iter().chain(&e.width).map(|x| x.to_bits()));
+            bits.extend(e.n.iter().map(|&n| n as u64));
+            for c in &e.cells {
+                bits.extend(c.reference.iter().map(|x| x.to_bits()));
+                bits.push(u64::from(c.starts_inside) | u64::from(c.exact_only) << 1);
+                bits.push(u64::from(c.count));
+                for r in &c.roots {
+                    bits.push(r.tau.to_bits());
+                    bits.push(r.vrel.to_bits());
+                    bits.extend(r.dtau.iter().chain(&r.dvrel).map(|x| x.to_bits()));
+                }
+            }
+        }
+        bits
+    }
+
+    /// The parallel build gives the same table, bit for bit, and the same counters on one
+    /// thread and on two (each a rayon pool installed around the build), for a fluid and a
+    /// strongly shaken motion whose safeguards all act.
+    #[test]
+    fn the_table_is_the_same_bits_on_one_and_two_threads() {
+        for (gamma, e_star) in [(5.0, 10.0), (15.0, 1.0)] {
+            let w = standard_motion(gamma, e_star);
+            let spec = spec_for(&w, 48);
+            let on = |threads: usize| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .expect("a pool")
+                    .install(|| WallTable::build(w, spec))
+            };
+            let (one, two) = (on(1), on(2));
+            assert_eq!(table_bits(&one), table_bits(&two));
+            assert_eq!(one.stats, two.stats);
+            assert_eq!(one.stats.cells, 4 * 48 * 48);
+            assert!(one.stats.exact_only_cells > 0 && one.stats.shrunk_derivatives > 0);
         }
     }
 

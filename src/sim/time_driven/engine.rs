@@ -39,6 +39,7 @@ use super::integrator::{
     gear_unpredict, verlet_drift, verlet_kick,
 };
 use super::neighbours::{BOND, CONTACT, NeighbourList};
+use super::walls::{WallAxis, WallBooks, wall_forces};
 use crate::physics::hertz;
 use crate::scene::{Boundary, DEFAULT_SKIN, DEFAULT_STIFFNESS, IntegratorKind, Scene};
 use crate::sim::event_driven::{EnergyLedger, EventCounts};
@@ -83,10 +84,6 @@ pub const ENTRY_CHUNK: usize = 128;
 /// numbers): a parallel loop costs a few microseconds of hand-over per step.
 pub const PARALLEL_MIN_PARTICLES: usize = 512;
 
-/// Bits of `wall_contact`: touching the lower, the upper wall of the coordinate's axis.
-const WALL_LO: u8 = 1;
-const WALL_HI: u8 = 2;
-
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
 pub const SANITY_OVERLAP: f64 = 0.05;
@@ -111,6 +108,8 @@ struct Params<const D: usize> {
     /// `(A, omega)` of the shaken floor and lid.
     drive: Option<(f64, f64)>,
     diameter: f64,
+    /// The largest particle radius.
+    max_radius: f64,
 }
 
 /// The time-driven simulation state.
@@ -125,8 +124,13 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     /// and velocity of the current step are recovered on demand by inverting the predictor,
     /// [`gear_unpredict`], instead of being stored every step).
     predicted: bool,
-    /// Acceleration of the last force evaluation, axis-major.
+    /// Acceleration of the last force evaluation, axis-major; or, when `acc_is_start`, the
+    /// value every coordinate's force starts from ([`Self::force_start`]).
     acc: Vec<f64>,
+    /// Whether `acc` holds the force start values, written by the last integrator pass (Gear's
+    /// corrector-predictor, Verlet's drift) as it read the accelerations: the next force
+    /// evaluation then needs no pass of its own to initialise the forces.
+    acc_is_start: bool,
     radius: Vec<f64>,
     /// `k sqrt(R_i)`: the wall prefactor of each particle (`R_eff = R_i`).
     wall_kr: Vec<f64>,
@@ -242,6 +246,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             },
             drive: scene.drive_motion(),
             diameter: scene.particles.diameter,
+            max_radius: init.radius.iter().fold(0.0, |a: f64, &r| a.max(r)),
         };
         let skin = e.skin.unwrap_or(DEFAULT_SKIN) * scene.particles.diameter;
         let (_, d_max) = scene.diameter_range();
@@ -283,6 +288,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             r,
             predicted: false,
             acc: vec![0.0; D * n],
+            acc_is_start: false,
             radius: init.radius,
             wall_kr,
             wall_contact: vec![0; D * n],
@@ -594,18 +600,31 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.n >= PARALLEL_MIN_PARTICLES && rayon::current_num_threads() > 1
     }
 
+    /// The force every coordinate starts from: the weight `-m g` on the last axis (with
+    /// gravity), 0 elsewhere.
+    fn force_start(&self) -> [f64; D] {
+        let mut start = [0.0; D];
+        if GRAV {
+            start[D - 1] = -self.p.mass * self.p.gravity;
+        }
+        start
+    }
+
     /// Velocity Verlet's first half on every coordinate (`verlet_drift`), with the wrap of the
     /// periodic axes; returns the largest move per axis.
     fn verlet_drift_wrap(&mut self, dt: f64) -> [f64; D] {
         let n = self.n;
         let min_len = if self.parallel() { 1 } else { usize::MAX };
         let (periodic, size) = (self.p.periodic, self.p.size);
+        let start = self.force_start();
+        self.acc_is_start = true;
         let [x, v, ..] = &mut self.r;
-        let drift = |e0: usize, x: &mut [f64], v: &mut [f64], acc: &[f64]| {
+        let drift = |e0: usize, x: &mut [f64], v: &mut [f64], acc: &mut [f64]| {
             let mut moved = [0.0; D];
             for_each_axis_segment(n, e0, x.len(), |k, o, m| {
-                let (x, v, acc) = (&mut x[o..o + m], &mut v[o..o + m], &acc[o..o + m]);
-                moved[k] = max_ignoring_nan(moved[k], verlet_drift(x, v, acc, dt));
+                let (x, v, acc) = (&mut x[o..o + m], &mut v[o..o + m], &mut acc[o..o + m]);
+                let step_move = verlet_drift(x, v, acc, start[k], dt);
+                moved[k] = max_ignoring_nan(moved[k], step_move);
                 if periodic[k] {
                     wrap_slice(x, size[k]);
                 }
@@ -615,7 +634,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         (
             x.par_chunks_mut(PARTICLE_CHUNK),
             v.par_chunks_mut(PARTICLE_CHUNK),
-            self.acc.par_chunks(PARTICLE_CHUNK),
+            self.acc.par_chunks_mut(PARTICLE_CHUNK),
         )
             .into_par_iter()
             .enumerate()
@@ -662,16 +681,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// (no per-entry force buffer, no gather).
     fn forces_then_serial(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
         let n = self.n;
+        let init = self.force_start();
         let p = &self.p;
         let f = &mut self.acc;
-        let mut init = [0.0; D];
-        if GRAV {
-            // Start from the weight, -m g along the last axis.
-            init[D - 1] = -p.mass * p.gravity;
+        if !self.acc_is_start {
+            for k in 0..D {
+                f[k * n..(k + 1) * n].fill(init[k]);
+            }
         }
-        for k in 0..D {
-            f[k * n..(k + 1) * n].fill(init[k]);
-        }
+        // The integrator pass below leaves the start values for the next evaluation.
+        self.acc_is_start = then == Then::Gear;
         let pc = PairConstants {
             periodic: p.periodic,
             size: p.size,
@@ -700,68 +719,38 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.dissipated_bridges += pb.bridge_ledger;
         let mut diss = pb.dissipated;
         let mut max_ov = self.max_overlap.max(pb.max_overlap);
-        // Per-chunk partial sums of the walls' dissipation and work, in the chunks of the
-        // parallel path (adding a chunk that booked nothing adds +0 and changes nothing).
+        // Walls per chunk of coordinates, the chunks of the parallel path, each chunk's
+        // dissipation and work summed on its own and added in order (a chunk that booked
+        // nothing adds +0 and changes nothing).
         let mut work = 0.0;
-        let (mut part_diss, mut part_work, mut part_chunk) = (0.0, 0.0, 0usize);
-        let (zw, vw) = match p.drive {
-            Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
-            None => (0.0, 0.0),
-        };
+        let walls = wall_axes(p, t, vs, dt);
         let x = &self.r[0];
         let v = &self.r[1];
-        for k in 0..D {
-            if p.periodic[k] {
-                continue;
-            }
-            let (shift, wv) = if k == D - 1 { (zw, vw) } else { (0.0, 0.0) };
-            let (lo, hi) = (shift, p.size[k] + shift);
-            let xk = &x[k * n..(k + 1) * n];
-            let vk = &v[k * n..(k + 1) * n];
-            let fk = &mut f[k * n..(k + 1) * n];
-            let radius = &self.radius[..n];
-            let wall_kr = &self.wall_kr[..n];
-            let touching = &mut self.wall_contact[k * n..(k + 1) * n];
-            for i in 0..n {
-                let ri = radius[i];
-                let ov_lo = ri - (xk[i] - lo);
-                let ov_hi = xk[i] + ri - hi;
-                if ov_lo <= 0.0 && ov_hi <= 0.0 {
-                    if touching[i] != 0 {
-                        touching[i] = 0;
+        if p.periodic.iter().any(|&periodic| !periodic) {
+            for e0 in (0..D * n).step_by(PARTICLE_CHUNK) {
+                let mut part = WallBooks::default();
+                for_each_axis_segment(n, e0, PARTICLE_CHUNK.min(D * n - e0), |k, o, m| {
+                    if p.periodic[k] {
+                        return;
                     }
-                    continue;
-                }
-                let (ov, sign, bit) = if ov_lo > 0.0 {
-                    (ov_lo, 1.0, WALL_LO)
-                } else {
-                    (ov_hi, -1.0, WALL_HI)
-                };
-                if touching[i] & bit == 0 {
-                    touching[i] |= bit;
-                    self.counts.wall_collisions += 1;
-                }
-                max_ov = max_ov.max(ov);
-                let chunk = (k * n + i) / PARTICLE_CHUNK;
-                if chunk != part_chunk {
-                    diss += part_diss;
-                    work += part_work;
-                    (part_diss, part_work, part_chunk) = (0.0, 0.0, chunk);
-                }
-                // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
-                let xi_dot = -sign * (vk[i] * vs - wv);
-                let kr = wall_kr[i];
-                let total = hertz::force(kr, ov, xi_dot, p.wall_damping);
-                if p.wall_damping > 0.0 {
-                    part_diss += (total - kr * ov * ov.sqrt()) * xi_dot * dt;
-                }
-                let fw = sign * total;
-                fk[i] += fw;
-                part_work += fw * wv * dt;
+                    let (e, i) = (e0 + o, e0 + o - k * n);
+                    wall_forces(
+                        &walls[k],
+                        &x[e..e + m],
+                        &v[e..e + m],
+                        &self.radius[i..i + m],
+                        &self.wall_kr[i..i + m],
+                        &mut self.wall_contact[e..e + m],
+                        &mut f[e..e + m],
+                        &mut part,
+                    );
+                });
+                diss += part.dissipated;
+                work += part.work;
+                max_ov = max_ov.max(part.max_overlap);
+                self.counts.wall_collisions += part.onsets;
             }
         }
-        diss += part_diss;
-        work += part_work;
         if B::ACTIVE {
             let (mut part, mut part_chunk) = (0.0, 0usize);
             for i in 0..n {
@@ -806,7 +795,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                             &mut r4[a.clone()],
                             &mut r5[a.clone()],
                         ],
-                        &f[a],
+                        &mut f[a],
+                        init[k],
                         0.5 * p.dt * p.dt,
                         &c,
                         p.periodic[k].then_some(p.size[k]),
@@ -897,17 +887,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 })
                 .collect_into_vec(&mut self.body_work);
         }
-        // Walls: Hertz with R_eff = R_i on every non-periodic axis; the last axis moves with the
-        // drive, z_w(t) = A sin(omega t) (MODEL.md 4.1).
-        let (zw, vw) = match p.drive {
-            Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
-            None => (0.0, 0.0),
-        };
-        let mut init = [0.0; D];
-        if GRAV {
-            // Start from the weight, -m g along the last axis.
-            init[D - 1] = -p.mass * p.gravity;
-        }
+        let init = self.force_start();
+        // The Gear pass leaves the start values for the next evaluation.
+        self.acc_is_start = then == Then::Gear;
         let cx = ChunkContext::<D> {
             n,
             pf: &self.pair_f,
@@ -922,10 +904,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             init,
             periodic: p.periodic,
             size: p.size,
-            wall_shift: std::array::from_fn(|k| if k == D - 1 { (zw, vw) } else { (0.0, 0.0) }),
-            wall_damping: p.wall_damping,
+            walls: wall_axes(p, t, vs, dt),
             inv_mass: (p.mass != 1.0).then(|| 1.0 / p.mass),
-            vs,
             dt,
             then,
             gear: p.gear,
@@ -959,10 +939,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let mut work = 0.0;
         let mut moved = [0.0; D];
         for b in &self.chunk_books {
-            diss += b.dissipated;
-            work += b.work;
-            max_ov = max_ov.max(b.max_overlap);
-            self.counts.wall_collisions += b.onsets;
+            diss += b.walls.dissipated;
+            work += b.walls.work;
+            max_ov = max_ov.max(b.walls.max_overlap);
+            self.counts.wall_collisions += b.walls.onsets;
             for k in 0..D {
                 moved[k] = max_ignoring_nan(moved[k], b.moved[k]);
             }
@@ -1169,6 +1149,28 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     }
 }
 
+/// The walls of every axis at time `t` (used on the non-periodic ones): Hertz with
+/// `R_eff = R_i`; the last axis's walls move with the drive, `z_w(t) = A sin(omega t)`
+/// (MODEL.md 4.1). `vs` turns the velocity array into velocities, `dt` weights the books.
+fn wall_axes<const D: usize>(p: &Params<D>, t: f64, vs: f64, dt: f64) -> [WallAxis; D] {
+    let (zw, vw) = match p.drive {
+        Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
+        None => (0.0, 0.0),
+    };
+    std::array::from_fn(|k| {
+        let (shift, velocity) = if k == D - 1 { (zw, vw) } else { (0.0, 0.0) };
+        WallAxis::new(
+            shift,
+            p.size[k] + shift,
+            velocity,
+            vs,
+            p.wall_damping,
+            dt,
+            p.max_radius,
+        )
+    })
+}
+
 /// What the pair loop needs besides the arrays.
 struct PairConstants<const D: usize> {
     periodic: [bool; D],
@@ -1340,16 +1342,16 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
     let mut b = PairBooks::default();
     // Partial sums of the current chunk of entries.
     let (mut diss, mut ledger, mut boundary) = (0.0, 0.0, ENTRY_CHUNK);
+    let radius = &radius[..n];
+    let periodic = pc.periodic;
     for &i in rows {
         let i = i as usize;
         let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
-        let mut xi = [0.0; D];
-        let mut vi = [0.0; D];
+        let xi: [f64; D] = std::array::from_fn(|k| xs[k][i]);
         let mut fi = [0.0; D];
-        for k in 0..D {
-            xi[k] = xs[k][i];
-            vi[k] = vsl[k][i];
-        }
+        // Whether some pair of the row exerts a force (else the row adds nothing to `f[i]`:
+        // `f[i] + 0` is `f[i]`, as a force sum is never -0).
+        let mut row_force = false;
         let ri = radius[i];
         for q in p0..p1 {
             // Before booking at entry `q`: close the partial sums of the earlier chunks (only
@@ -1370,7 +1372,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
             let mut r2 = 0.0;
             for k in 0..D {
                 let mut dk = xi[k] - xs[k][j];
-                if pc.periodic[k] {
+                if periodic[k] {
                     if dk > half[k] {
                         dk -= pc.size[k];
                     } else if dk < -half[k] {
@@ -1403,7 +1405,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                 // xi_dot = -(v_i - v_j) . n, n = d / r.
                 let mut vn = 0.0;
                 for k in 0..D {
-                    vn += (vi[k] - vsl[k][j]) * d[k];
+                    vn += (vsl[k][i] - vsl[k][j]) * d[k];
                 }
                 let xi_dot = -vn * inv * vs;
                 let kr = k_pair * (ri * rj / sig).sqrt();
@@ -1443,6 +1445,7 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                 flags[q] = new_fl;
             }
             if fmag != 0.0 {
+                row_force = true;
                 let s = fmag * inv;
                 for k in 0..D {
                     let fk = s * d[k];
@@ -1451,8 +1454,10 @@ fn pair_forces_serial<const D: usize, const WET: bool>(
                 }
             }
         }
-        for k in 0..D {
-            f[k * n + i] += fi[k];
+        if row_force {
+            for k in 0..D {
+                f[k * n + i] += fi[k];
+            }
         }
     }
     b.dissipated += diss;
@@ -1474,10 +1479,7 @@ enum Then {
 /// What one chunk of the per-particle phase books.
 #[derive(Debug, Clone, Copy)]
 struct ChunkBooks<const D: usize> {
-    dissipated: f64,
-    work: f64,
-    onsets: u64,
-    max_overlap: f64,
+    walls: WallBooks,
     /// Largest move of a predicted position per axis (Gear).
     moved: [f64; D],
 }
@@ -1500,11 +1502,9 @@ struct ChunkContext<'a, const D: usize> {
     init: [f64; D],
     periodic: [bool; D],
     size: [f64; D],
-    /// Per axis: the walls' displacement and velocity (the drive moves the last axis).
-    wall_shift: [(f64, f64); D],
-    wall_damping: f64,
+    /// Per axis: the walls (used on the non-periodic axes).
+    walls: [WallAxis; D],
     inv_mass: Option<f64>,
-    vs: f64,
     dt: f64,
     then: Then,
     gear: [f64; 6],
@@ -1554,13 +1554,8 @@ fn particle_chunk<const D: usize>(
     r: [&mut [f64]; 6],
     touch: &mut [u8],
 ) -> ChunkBooks<D> {
-    let mut b = ChunkBooks {
-        dissipated: 0.0,
-        work: 0.0,
-        onsets: 0,
-        max_overlap: 0.0,
-        moved: [0.0; D],
-    };
+    let mut walls = WallBooks::default();
+    let mut moved = [0.0; D];
     let n = cx.n;
     let [r0, r1, r2, r3, r4, r5] = r;
     for_each_axis_segment(n, e0, acc.len(), |k, o, m| {
@@ -1585,44 +1580,19 @@ fn particle_chunk<const D: usize>(
             acc[i - i0] += own;
         }
         if !cx.periodic[k] {
-            let (shift, wv) = cx.wall_shift[k];
-            let (lo, hi) = (shift, cx.size[k] + shift);
-            let xk = &r0[o..o + m];
-            let vk = &r1[o..o + m];
             let radius = &cx.radius[i0..i0 + m];
             let wall_kr = &cx.wall_kr[i0..i0 + m];
-            let touching = &mut touch[o..o + m];
-            for i in 0..m {
-                let ri = radius[i];
-                let ov_lo = ri - (xk[i] - lo);
-                let ov_hi = xk[i] + ri - hi;
-                if ov_lo <= 0.0 && ov_hi <= 0.0 {
-                    if touching[i] != 0 {
-                        touching[i] = 0;
-                    }
-                    continue;
-                }
-                let (ov, sign, bit) = if ov_lo > 0.0 {
-                    (ov_lo, 1.0, WALL_LO)
-                } else {
-                    (ov_hi, -1.0, WALL_HI)
-                };
-                if touching[i] & bit == 0 {
-                    touching[i] |= bit;
-                    b.onsets += 1;
-                }
-                b.max_overlap = b.max_overlap.max(ov);
-                // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
-                let xi_dot = -sign * (vk[i] * cx.vs - wv);
-                let kr = wall_kr[i];
-                let total = hertz::force(kr, ov, xi_dot, cx.wall_damping);
-                if cx.wall_damping > 0.0 {
-                    b.dissipated += (total - kr * ov * ov.sqrt()) * xi_dot * cx.dt;
-                }
-                let fw = sign * total;
-                acc[i] += fw;
-                b.work += fw * wv * cx.dt;
-            }
+            let (x, v, touching) = (&r0[o..o + m], &r1[o..o + m], &mut touch[o..o + m]);
+            wall_forces(
+                &cx.walls[k],
+                x,
+                v,
+                radius,
+                wall_kr,
+                touching,
+                acc,
+                &mut walls,
+            );
         }
         if !cx.body_f.is_empty() {
             for i in 0..m {
@@ -1639,7 +1609,7 @@ fn particle_chunk<const D: usize>(
             Then::Nothing => {}
             Then::Gear => {
                 let s = o..o + m;
-                let moved = gear_correct_predict_axis(
+                let step_move = gear_correct_predict_axis(
                     [
                         &mut r0[s.clone()],
                         &mut r1[s.clone()],
@@ -1649,15 +1619,16 @@ fn particle_chunk<const D: usize>(
                         &mut r5[s],
                     ],
                     acc,
+                    cx.init[k],
                     cx.half_dt2,
                     &cx.gear,
                     cx.periodic[k].then_some(cx.size[k]),
                     cx.flush,
                 );
-                b.moved[k] = max_ignoring_nan(b.moved[k], moved);
+                moved[k] = max_ignoring_nan(moved[k], step_move);
             }
             Then::VerletKick => verlet_kick(&mut r1[o..o + m], acc, cx.dt),
         }
     });
-    b
+    ChunkBooks { walls, moved }
 }

@@ -169,19 +169,24 @@ pub fn gear_unpredict(p: [f64; 6]) -> [f64; 6] {
 ///
 /// With `flush = false` the subnormal safeguard of [`gear_correct`] is left out of this step;
 /// the engine flushes every [`GEAR_FLUSH_EVERY`] steps instead (see there).
+///
+/// Each `acc[e]` is set to `force_start` once read: the engine's next force evaluation starts
+/// from it (the weight, or 0) without a pass of its own over the array.
 pub fn gear_correct_predict_axis(
     r: [&mut [f64]; 6],
-    acc: &[f64],
+    acc: &mut [f64],
+    force_start: f64,
     half_dt2: f64,
     c: &[f64; 6],
     period: Option<f64>,
     flush: bool,
 ) -> f64 {
+    let h = (half_dt2, force_start);
     match (period, flush) {
-        (Some(l), true) => fused_axis::<true, true>(r, acc, half_dt2, c, l),
-        (None, true) => fused_axis::<false, true>(r, acc, half_dt2, c, 0.0),
-        (Some(l), false) => fused_axis::<true, false>(r, acc, half_dt2, c, l),
-        (None, false) => fused_axis::<false, false>(r, acc, half_dt2, c, 0.0),
+        (Some(l), true) => fused_axis::<true, true>(r, acc, h, c, l),
+        (None, true) => fused_axis::<false, true>(r, acc, h, c, 0.0),
+        (Some(l), false) => fused_axis::<true, false>(r, acc, h, c, l),
+        (None, false) => fused_axis::<false, false>(r, acc, h, c, 0.0),
     }
 }
 
@@ -199,8 +204,8 @@ pub const GEAR_FLUSH_EVERY: u64 = 4;
 #[inline(always)]
 fn fused_axis<const WRAP: bool, const FLUSH: bool>(
     r: [&mut [f64]; 6],
-    acc: &[f64],
-    half_dt2: f64,
+    acc: &mut [f64],
+    (half_dt2, force_start): (f64, f64),
     c: &[f64; 6],
     l: f64,
 ) -> f64 {
@@ -214,7 +219,7 @@ fn fused_axis<const WRAP: bool, const FLUSH: bool>(
         &mut r4[..n],
         &mut r5[..n],
     );
-    let acc = &acc[..n];
+    let acc = &mut acc[..n];
     let flush = |x: f64| {
         if FLUSH && x.abs() < GEAR_FLUSH {
             0.0
@@ -237,10 +242,11 @@ fn fused_axis<const WRAP: bool, const FLUSH: bool>(
     // One element `e` of the arrays `r0 .. r5, acc` (slices, or blocks of them): the fused update; evaluates to the move `|r0_new - r0_old|` before the
     // wrap.
     macro_rules! update {
-        ([$r0:ident, $r1:ident, $r2:ident, $r3:ident, $r4:ident, $r5:ident, $acc:ident], $e:expr) => {{
+        ([$r0:ident, $r1:ident, $r2:ident, $r3:ident, $r4:ident, $r5:ident, $acc:ident $(,)?], $e:expr) => {{
             let e = $e;
             let old = $r0[e];
             let delta = $acc[e] * half_dt2 - $r2[e];
+            $acc[e] = force_start;
             let a0 = old + c[0] * delta;
             let a1 = $r1[e] + c[1] * delta;
             let a2 = flush($r2[e] + c[2] * delta);
@@ -257,24 +263,32 @@ fn fused_axis<const WRAP: bool, const FLUSH: bool>(
             (p0 - old).abs()
         }};
     }
-    lane_max!(n, update, mut [r0, r1, r2, r3, r4, r5], [acc])
+    lane_max!(n, update, mut [r0, r1, r2, r3, r4, r5, acc], [])
 }
 
 /// Velocity Verlet, first half: `v += a dt/2; x += v dt`. Returns `max_e |v dt|`, the largest
-/// move of this step (see [`gear_correct_predict_axis`]; the engine calls this per axis).
-pub fn verlet_drift(x: &mut [f64], v: &mut [f64], acc: &[f64], dt: f64) -> f64 {
+/// move of this step (see [`gear_correct_predict_axis`]; the engine calls this per axis). Each
+/// `acc[e]` is set to `force_start` once read (as in [`gear_correct_predict_axis`]).
+pub fn verlet_drift(
+    x: &mut [f64],
+    v: &mut [f64],
+    acc: &mut [f64],
+    force_start: f64,
+    dt: f64,
+) -> f64 {
     let n = x.len();
-    let (v, acc) = (&mut v[..n], &acc[..n]);
+    let (v, acc) = (&mut v[..n], &mut acc[..n]);
     macro_rules! drift {
-        ([$x:ident, $v:ident, $acc:ident], $e:expr) => {{
+        ([$x:ident, $v:ident, $acc:ident $(,)?], $e:expr) => {{
             let e = $e;
             $v[e] += 0.5 * dt * $acc[e];
+            $acc[e] = force_start;
             let step = dt * $v[e];
             $x[e] += step;
             step.abs()
         }};
     }
-    lane_max!(n, drift, mut [x, v], [acc])
+    lane_max!(n, drift, mut [x, v, acc], [])
 }
 
 /// Velocity Verlet, second half: `v += a dt/2` with the new acceleration.
@@ -345,7 +359,8 @@ mod tests {
                 let flush = every.is_some_and(|k| step.is_multiple_of(k));
                 gear_correct_predict_axis(
                     [a, b, c, d, e, f],
-                    &[0.0, 0.0],
+                    &mut [0.0, 0.0],
+                    0.0,
                     0.5 * dt * dt,
                     &GEAR5,
                     Some(10.0),
@@ -412,9 +427,11 @@ mod tests {
         gear_correct_predict(&mut want, &mut now, &acc, h, &GEAR5_DAMPED_TEST);
         let mut got = init.clone();
         let [g0, g1, g2, g3, g4, g5] = &mut got;
+        let mut acc_left = acc.clone();
         let moved = gear_correct_predict_axis(
             [g0, g1, g2, g3, g4, g5],
-            &acc,
+            &mut acc_left,
+            -0.25,
             h,
             &GEAR5_DAMPED_TEST,
             Some(l),
@@ -450,6 +467,10 @@ mod tests {
             );
         }
         assert!(wrapped >= 2, "the face particles wrap");
+        assert!(
+            acc_left.iter().all(|&a| a == -0.25),
+            "acc is left at the force start"
+        );
         assert_eq!(moved, most);
     }
 
@@ -478,7 +499,7 @@ mod tests {
                     let acc = [-r[0][0]];
                     gear_correct(&mut r, &acc, 0.5 * dt * dt, &GEAR5);
                 } else {
-                    verlet_drift(&mut x, &mut v, &a, dt);
+                    verlet_drift(&mut x, &mut v, &mut a, 0.0, dt);
                     a[0] = -x[0];
                     verlet_kick(&mut v, &a, dt);
                 }

@@ -6,12 +6,14 @@
 //! - `engine.rs`: state, force accumulation (pairs, walls, bridges, body force), bookkeeping;
 //! - `integrator.rs`: Gear 5th-order predictor-corrector and velocity Verlet;
 //! - `neighbours.rs`: linked cells and the Verlet list with skin;
-//! - `shear.rs`: the continuous Kolmogorov shear force (a [`BodyForce`]).
+//! - `shear.rs`: the continuous Kolmogorov shear force (a [`BodyForce`]);
+//! - `walls.rs`: the Hertz floor, lid and side walls (a screened pass over the particles).
 
 pub use crate::scene::damping;
 pub mod engine;
 pub mod integrator;
 pub mod neighbours;
 pub mod shear;
+mod walls;
 
 pub use engine::{BodyForce, NoBodyForce, SANITY_OVERLAP, TimeEngine};
