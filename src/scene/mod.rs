@@ -115,7 +115,7 @@ pub struct ContactSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wall_damping: Option<f64>,
     /// Time-driven engine: how `restitution` and `wall_restitution` are converted into damping
-    /// constants (`sim::time_driven::damping`): `"auto"` (the default) matches the mean energy
+    /// constants (`scene::damping`): `"auto"` (the default) matches the mean energy
     /// loss over the impact speeds of a Maxwellian gas at the scene's characteristic temperature;
     /// a number (units of `sqrt(g d)`) gives exactly the restitution at that one impact speed.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -936,7 +936,7 @@ impl Scene {
     fn validate_time_contact(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let ct = &self.contact;
         // A restitution is converted into a damping constant at scene start
-        // (`sim::time_driven::damping`); giving both is ambiguous.
+        // (`scene::damping`); giving both is ambiguous.
         for (key, e_r, other, a_d) in [
             (
                 "contact.restitution",
