@@ -348,16 +348,17 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         t: f64,
     ) {
         let mut best = self.ev[i];
-        let bi = &bodies.body[i];
+        // Copies, so that the loop keeps them in registers.
+        let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
         for (cell, shift) in around {
             grid.for_each_in(cell, |j| {
                 if j == i {
                     return;
                 }
                 let predicted = if SHIFT {
-                    self.predict_pair_shifted(bodies, slabs, &bi.x, &bi.v, i, j, t, &shift)
+                    self.predict_pair_shifted(bodies, slabs, &xi, &vi, i, j, t, &shift)
                 } else {
-                    self.predict_pair_from::<G, S, WRAP>(bodies, slabs, &bi.x, &bi.v, i, j, t)
+                    self.predict_pair_from::<G, S, WRAP>(bodies, slabs, &xi, &vi, i, j, t)
                 };
                 if let Some((tj, kind)) = predicted
                     && tj < best.time
