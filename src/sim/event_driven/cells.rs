@@ -309,7 +309,11 @@ mod tests {
                 for (fi, fj) in [(0.0, 0.999), (0.999, 0.0), (0.5, 0.5)] {
                     for k in 0..3 {
                         let ck = c[k] + o[k];
-                        let cj = if g5.periodic[k] { ck.rem_euclid(g5.n[k]) } else { ck };
+                        let cj = if g5.periodic[k] {
+                            ck.rem_euclid(g5.n[k])
+                        } else {
+                            ck
+                        };
                         let xi = (c[k] as f64 + fi) * w[k];
                         let xj = (cj as f64 + fj) * w[k];
                         let mut r = xi - xj;
