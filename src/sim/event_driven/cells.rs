@@ -139,6 +139,44 @@ impl<const D: usize> CellGrid<D> {
         parts
     }
 
+    /// [`Self::axis_parts`], and per axis `k` and step `s` the image shift of the partners in
+    /// that slab of cells: `-size[k]` where `c_k + s` wraps past the upper face of a periodic
+    /// axis, `+size[k]` past the lower face, `0` otherwise. With five cells or more on every
+    /// periodic axis (`interior_needs_no_image`) this is the minimum image of every pair in
+    /// neighbouring cells: two particles `n_k - 1 >= 4` cells apart along `k` are more than
+    /// `0.6 L` apart, so `Bodies::min_image` shifts them by exactly `size[k]`; two particles in
+    /// cells at most one apart are less than `2 / 5 L` apart, and it leaves them alone.
+    #[inline]
+    pub fn axis_parts_and_shifts(
+        &self,
+        c: &[i32; D],
+        size: &[f64; D],
+    ) -> ([[usize; 3]; D], [[f64; 3]; D]) {
+        let parts = self.axis_parts(c);
+        let mut shifts = [[0.0; 3]; D];
+        for k in 0..D {
+            if self.periodic[k] {
+                if c[k] == 0 {
+                    shifts[k][0] = size[k];
+                }
+                if c[k] == self.n[k] - 1 {
+                    shifts[k][2] = -size[k];
+                }
+            }
+        }
+        (parts, shifts)
+    }
+
+    /// The image shift of the cell at `offset` from [`Self::axis_parts_and_shifts`].
+    #[inline]
+    pub fn shift_of(shifts: &[[f64; 3]; D], offset: &[i32; D]) -> [f64; D] {
+        let mut s = [0.0; D];
+        for k in 0..D {
+            s[k] = shifts[k][(offset[k] + 1) as usize];
+        }
+        s
+    }
+
     /// Linear index of `c + offset` from [`Self::axis_parts`] of `c`; `None` past a wall.
     #[inline]
     pub fn from_parts(parts: &[[usize; 3]; D], offset: &[i32; D]) -> Option<usize> {
@@ -252,6 +290,42 @@ mod tests {
                 Some(g3.interior_neighbour(g3.linear(&c), &o)),
                 g3.shifted(&c, &o)
             );
+        }
+        // The image shifts are the minimum image of points in neighbouring cells (five cells
+        // or more on each periodic axis), at the cells' corners and centres.
+        let g5 = CellGrid::<3>::new([10.0, 7.5, 6.0], [true, true, false], 1.2, 1);
+        assert!(g5.interior_needs_no_image);
+        let size = [10.0, 7.5, 6.0];
+        let w = g5.width;
+        for c in [[0, 0, 0], [7, 5, 4], [0, 5, 2], [7, 0, 4], [3, 3, 0]] {
+            assert!((0..3).all(|k| c[k] < g5.n[k]));
+            let (parts, shifts) = g5.axis_parts_and_shifts(&c, &size);
+            for o in CellGrid::<3>::neighbour_offsets() {
+                let Some(cell) = CellGrid::<3>::from_parts(&parts, &o) else {
+                    continue;
+                };
+                assert_eq!(Some(cell), g5.shifted(&c, &o));
+                let s = CellGrid::<3>::shift_of(&shifts, &o);
+                for (fi, fj) in [(0.0, 0.999), (0.999, 0.0), (0.5, 0.5)] {
+                    for k in 0..3 {
+                        let ck = c[k] + o[k];
+                        let cj = if g5.periodic[k] {
+                            ck.rem_euclid(g5.n[k])
+                        } else {
+                            ck
+                        };
+                        let xi = (c[k] as f64 + fi) * w[k];
+                        let xj = (cj as f64 + fj) * w[k];
+                        let mut r = xi - xj;
+                        if g5.periodic[k] && r > 0.5 * size[k] {
+                            r -= size[k];
+                        } else if g5.periodic[k] && r < -0.5 * size[k] {
+                            r += size[k];
+                        }
+                        assert_eq!(r, xi - xj + s[k], "cell {c:?} offset {o:?} axis {k}");
+                    }
+                }
+            }
         }
         // The per-axis parts give the wrap-aware lookup at every cell, edges included.
         for c in [[0, 0, 0], [9, 9, 9], [0, 5, 9], [4, 1, 8], [9, 0, 0]] {

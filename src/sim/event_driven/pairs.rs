@@ -303,45 +303,64 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     ) {
         let grid = &cells.grid;
         let c = cells.cell[i];
+        let no_shift = [0.0; D];
         if grid.is_interior(&c) {
             // Interior: neighbours by a fixed index change, no wrapping.
             let base = grid.linear(&c) as isize;
-            let around = hood.deltas.iter().map(|&d| (base + d) as usize);
+            let around = hood.deltas.iter().map(|&d| ((base + d) as usize, no_shift));
             if grid.interior_needs_no_image {
-                self.scan_cells::<G, S, false>(i, around, bodies, grid, slabs, t);
+                self.scan_cells::<G, S, false, false>(i, around, bodies, grid, slabs, t);
             } else {
-                self.scan_cells::<G, S, true>(i, around, bodies, grid, slabs, t);
+                self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
             }
+        } else if grid.interior_needs_no_image {
+            // Boundary cell, every periodic axis of five cells or more: a partner in a cell
+            // reached across a periodic face is exactly one box edge away along that axis, the
+            // others less than `0.4 L` (see `CellGrid::axis_parts_and_shifts`), so the known
+            // shift gives the minimum image (no test per partner) and no pair is far.
+            let (parts, shifts) = grid.axis_parts_and_shifts(&c, &bodies.size);
+            let around = hood.offsets.iter().filter_map(|o| {
+                CellGrid::<D>::from_parts(&parts, o)
+                    .map(|cell| (cell, CellGrid::<D>::shift_of(&shifts, o)))
+            });
+            self.scan_cells::<G, S, false, true>(i, around, bodies, grid, slabs, t);
         } else {
             let parts = grid.axis_parts(&c);
             let around = hood
                 .offsets
                 .iter()
-                .filter_map(|o| CellGrid::<D>::from_parts(&parts, o));
-            self.scan_cells::<G, S, true>(i, around, bodies, grid, slabs, t);
+                .filter_map(|o| CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, no_shift)));
+            self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
         }
     }
 
-    /// The pair predictions of `i` with every particle of the cells `around`, in order.
+    /// The pair predictions of `i` with every particle of the cells `around`, in order. Each
+    /// cell comes with the image shift of its partners (`SHIFT`: added to the separation on
+    /// the axes where it is not zero; the minimum image then needs no `WRAP`).
     #[inline(always)]
-    fn scan_cells<const G: bool, const S: bool, const WRAP: bool>(
+    fn scan_cells<const G: bool, const S: bool, const WRAP: bool, const SHIFT: bool>(
         &mut self,
         i: usize,
-        around: impl Iterator<Item = usize>,
+        around: impl Iterator<Item = (usize, [f64; D])>,
         bodies: &Bodies<D, G, S>,
         grid: &CellGrid<D>,
         slabs: &SlabSource,
         t: f64,
     ) {
         let mut best = self.ev[i];
-        let bi = &bodies.body[i];
-        for cell in around {
+        // Copies, so that the loop keeps them in registers.
+        let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
+        for (cell, shift) in around {
             grid.for_each_in(cell, |j| {
                 if j == i {
                     return;
                 }
-                if let Some((tj, kind)) =
-                    self.predict_pair_from::<G, S, WRAP>(bodies, slabs, &bi.x, &bi.v, i, j, t)
+                let predicted = if SHIFT {
+                    self.predict_pair_shifted(bodies, slabs, &xi, &vi, i, j, t, &shift)
+                } else {
+                    self.predict_pair_from::<G, S, WRAP>(bodies, slabs, &xi, &vi, i, j, t)
+                };
+                if let Some((tj, kind)) = predicted
                     && tj < best.time
                 {
                     best = PairEvent::new(tj, j as u32, bodies.count[j], kind);
@@ -349,6 +368,34 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             });
         }
         self.ev[i] = best;
+    }
+
+    /// [`Self::predict_pair_from`] for a partner `j` whose minimum image is `shift` away: the
+    /// separation `xi - xj`, plus `shift[k]` on each axis where it is not zero. Bit for bit the
+    /// minimum image where that shifts by exactly `shift` (`Bodies::min_image` subtracts or
+    /// adds the box edge, the same operation), and where the pair is never far.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn predict_pair_shifted<const G: bool, const S: bool>(
+        &self,
+        bodies: &Bodies<D, G, S>,
+        slabs: &SlabSource,
+        xi: &Vector<D>,
+        vi: &Vector<D>,
+        i: usize,
+        j: usize,
+        t: f64,
+        shift: &[f64; D],
+    ) -> Option<(f64, PairKind)> {
+        let (xj, vj) = bodies.state_at(j, t);
+        let mut r = xi - xj;
+        for k in 0..D {
+            if shift[k] != 0.0 {
+                r[k] += shift[k];
+            }
+        }
+        let v = vi - vj;
+        self.predict_image(bodies, slabs, &r, &v, i, j, t)
     }
 
     // ----- firing ------------------------------------------------------------------------
