@@ -608,7 +608,11 @@ fn check_sweep_text(text: &str, expect: &Expect) -> Result<(), TestCaseError> {
         Err(e) => check_rejection(&e.to_string(), file, &e.key, e.line, expect),
         Ok(jobs) => {
             for j in &jobs {
-                prop_assert!(j.spec.scene.validate(file).is_ok());
+                if let Err(e) = j.spec.scene.validate(file) {
+                    return Err(TestCaseError::fail(format!(
+                        "an expanded job does not validate: {e}\n{text}"
+                    )));
+                }
             }
             if let Some(j) = jobs.iter().find(|j| j.spec.start_from.is_none()) {
                 check_accepted(&j.spec.scene, file)?;
@@ -950,6 +954,40 @@ fn regression_sweep_toml_errors_name_the_dotted_key() {
             shown.starts_with("fuzz/sweep.toml:") && shown.contains(&format!("key `{key}`")),
             "{shown}"
         );
+    }
+}
+
+/// Bug found by the sweep-file fuzzer: a time-driven continuation sweep along `capillary.e_cb`
+/// at `temperature_over_ecb = 1e-300` expanded, although its chain's first job, once given its
+/// hot start, calibrated the damping at `T_0 = 1e-301` (`A_d = 1.4e26`) and failed validation:
+/// the jobs were validated as `"continue"` members, calibrated at the drive's scale. Chain
+/// members are now calibrated as their point with a hot start (one contact law along a chain),
+/// and a chain's first job is validated again with its real start.
+#[test]
+fn regression_continuation_jobs_are_validated_with_the_start_they_run() {
+    let text = "[[axis]]\nkey = \"capillary.e_cb\"\n[axis.linear]\nfrom = 0.1\nsteps = 2\nto = 1.0\n\
+                [scene]\ndimension = 3\ngravity = 0.0\n[scene.box]\nsize = [5.0, 5.0, 5.64]\n\
+                [scene.capillary]\ne_cb = 0.2844\nmodel = \"thin_thread\"\n\
+                [scene.contact]\nrestitution = 0.91\n[scene.engine]\ndt = 0.00001\nkind = \"time\"\n\
+                [scene.initial]\nseed = 0\ntemperature_over_ecb = 1e-300\n\
+                [scene.particles]\ncount = 1\n[scene.run]\nduration = 1.0\n\
+                [sweep]\nname = \"fuzz\"\nperiods = 0.5\n[sweep.continuation]\naxis = \"capillary.e_cb\"\n";
+    let e = SweepFile::parse(text, Path::new("fuzz/sweep.toml"))
+        .and_then(|f| f.expand())
+        .err()
+        .expect("the sweep must be refused");
+    assert_eq!(e.key, "contact.restitution", "{e}");
+    // The same sweep at a sound temperature expands, and its jobs validate as they will run.
+    let sound = text.replace(
+        "temperature_over_ecb = 1e-300",
+        "temperature_over_ecb = 20.0",
+    );
+    let jobs = SweepFile::parse(&sound, Path::new("fuzz/sweep.toml"))
+        .and_then(|f| f.expand())
+        .expect("a sound sweep");
+    assert_eq!(jobs.len(), 2);
+    for j in &jobs {
+        j.spec.scene.validate("job").expect("validates as it runs");
     }
 }
 

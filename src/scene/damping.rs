@@ -74,7 +74,10 @@ pub fn calibration(scene: &Scene) -> Calibration {
 /// `m g d` (`g = 1` without gravity). These fallbacks are not measured.
 pub fn characteristic_temperature(scene: &Scene) -> f64 {
     let t0 = scene.initial_temperature();
-    if scene.initial.start == StartMode::Hot && t0 > 0.0 {
+    // A member of a continuation chain (`"continue"`) is calibrated as its point would be with a
+    // hot start, as the chain's first job usually is: the contact law must not change along the
+    // chain (before, the first job took `T_0` and the others the drive's scale).
+    if matches!(scene.initial.start, StartMode::Hot | StartMode::Continue) && t0 > 0.0 {
         return t0;
     }
     let m = scene.particles.mass;

@@ -430,6 +430,21 @@ impl SweepFile {
                 if w == 0 {
                     jobs[k].spec.scene.initial.start = c.first;
                     jobs[k].spec.start_from = None;
+                    // The start mode is part of what validation checks (the time engine's
+                    // damping calibration reads it).
+                    let (j, scene) = (&jobs[k], &jobs[k].spec.scene);
+                    if let Err(e) = scene.validate(&file) {
+                        return Err(SweepError::new(
+                            &file,
+                            Some(c.line),
+                            &e.key,
+                            format!(
+                                "{} as the first job of its continuation chain{}",
+                                e.message,
+                                describe_point(self, &j.coords, j.replica)
+                            ),
+                        ));
+                    }
                 } else {
                     let prev = &jobs[members[w - 1]];
                     let (a, b) = (&prev.spec.scene, &jobs[k].spec.scene);
@@ -480,6 +495,15 @@ impl SweepFile {
                     {
                         job.spec.scene.initial.start = c.first;
                         job.id = job.spec.id();
+                        let file = self.path.display().to_string();
+                        if let Err(e) = job.spec.scene.validate(&file) {
+                            return Ok(Err(SweepError::new(
+                                &file,
+                                Some(c.line),
+                                &e.key,
+                                format!("{} with the chain's first start", e.message),
+                            )));
+                        }
                     }
                     out.push(job)
                 }
