@@ -11,7 +11,7 @@
 //!
 //! **Structure.** Triangles with their three neighbours, closed into a sphere by one vertex at
 //! infinity ([`INF`]): each hull edge `a -> b` (interior on its left) carries the infinite
-//! triangle `(b, a, INF)`. The predicates are exact (`robust`: Shewchuk's adaptive
+//! triangle `(b, a, INF)`. The predicates are exact ([`super::predicates`]: Shewchuk's adaptive
 //! `orient2d`, `incircle`), so the triangulation is the unique Delaunay triangulation whenever no
 //! four sites are co-circular, the same one the rebuild (spade, also exact) finds.
 //!
@@ -58,8 +58,8 @@
 //! first sample, when the number of particles or the box changes, and whenever a step fails
 //! (more than [`MAX_HELD_FRACTION`] of the sites held back, a held move that still inverts a
 //! triangle after [`MAX_BISECTIONS`] halvings or beyond the budget, a site exactly on an edge, a
-//! leaving site not on the hull, more flips than [`flip_cap`], a failed final check). Every
-//! fallback is counted by reason in [`KineticStats`]. Where spade cannot triangulate (fewer than
+//! leaving site not on the hull, more flips than [`flip_cap`], a failed final check, the pair
+//! bookkeeping found broken). Every fallback is counted by reason in [`KineticStats`]. Where spade cannot triangulate (fewer than
 //! three sites, all collinear, two sites at the same position) the structure stays empty and
 //! each sample is triangulated from scratch.
 
@@ -67,7 +67,8 @@ use super::location_changes::{Edge, SiteRef, delaunay_edges, edge_between, finis
 use super::pair_edges::{PairEdges, PairKey, PairMap, pair_key, pair_of};
 use super::slack::{edge_slack, orientation_slack};
 use crate::sim::Frame;
-use robust::{Coord, incircle, orient2d};
+use super::predicates::{incircle, orient2d};
+use robust::Coord;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 
 /// The vertex at infinity.
@@ -80,15 +81,24 @@ pub const MAX_BISECTIONS: u32 = 20;
 pub const MAX_HELD_FRACTION: f64 = 0.15;
 /// Most halvings of held sites' moves in one sample before a rebuild.
 pub const MAX_HALVINGS: u32 = 256;
+/// Most loose sites in a sample, as a fraction of all sites, for the certificates to pay: above
+/// it, certifying the tests around the loose sites costs more than testing every triangle.
+pub const MAX_LOOSE_FRACTION: f64 = 0.2;
+/// Samples tested in full, without certificates, after a sample with too many loose sites.
+pub const CERTIFY_PAUSE: u32 = 15;
 /// Longest back-off after failed repairs: `2^4 - 1 = 15` samples rebuilt without trying.
 pub const MAX_BACKOFF_LOG2: u32 = 4;
 /// Most images of one particle (shifts -1, 0, 1 on two axes).
 const MAX_IMAGES: usize = 9;
 
-/// Most flips of one Lawson pass over `triangles` live and free triangle slots: `64 triangles +
-/// 1024` (a pass that flips more is cycling on a broken structure; the repair gives up).
-pub fn flip_cap(triangles: usize) -> u64 {
-    64 * triangles as u64 + 1024
+/// Flips per triangle slot allowed in one Lawson pass ([`flip_cap`]).
+pub const FLIPS_PER_TRIANGLE: u64 = 64;
+
+/// Most flips of one Lawson pass over `triangles` live and free triangle slots, allowing
+/// `per_triangle` flips per slot: `per_triangle * triangles + 1024` (a pass that flips more
+/// costs more than a rebuild, or cycles on a broken structure; the repair gives up).
+pub fn flip_cap(triangles: usize, per_triangle: u64) -> u64 {
+    per_triangle * triangles as u64 + 1024
 }
 
 /// How often each path was taken.
@@ -127,6 +137,8 @@ pub struct KineticStats {
     pub loose: u64,
     /// Sites anchored again after a repaired sample (loose or touched by a change).
     pub anchored: u64,
+    /// Repaired samples that tested every triangle (no site certified).
+    pub full_tests: u64,
     /// Final hull checks run (samples where a site was loose or the triangulation changed).
     pub hull_checks: u64,
 }
@@ -156,8 +168,9 @@ enum Failure {
 pub struct Safeguards {
     /// The final hull check.
     pub hull_check: bool,
-    /// The cap on flips per Lawson pass ([`flip_cap`]).
-    pub flip_cap: bool,
+    /// The cap on flips per Lawson pass: flips allowed per triangle ([`flip_cap`]; `None`:
+    /// no cap).
+    pub flips_per_triangle: Option<u64>,
     /// The budget of halvings per sample ([`MAX_HALVINGS`]).
     pub halving_budget: bool,
     /// The limit on held sites ([`MAX_HELD_FRACTION`]).
@@ -170,7 +183,7 @@ impl Default for Safeguards {
     fn default() -> Self {
         Self {
             hull_check: true,
-            flip_cap: true,
+            flips_per_triangle: Some(FLIPS_PER_TRIANGLE),
             halving_budget: true,
             held_limit: true,
             slack: true,
@@ -227,6 +240,10 @@ pub struct KineticDelaunay {
     stamp: u32,
     /// An infinite triangle, where the hull walk starts (checked before use).
     hull_hint: usize,
+    /// Whether the sites are certified (else every site is loose), and the samples still to
+    /// test in full before certifying again ([`CERTIFY_PAUSE`]).
+    certified: bool,
+    certify_pause: u32,
     safeguards: Safeguards,
     pub stats: KineticStats,
 }
@@ -552,6 +569,7 @@ impl KineticDelaunay {
         self.anchor.clone_from(&self.pos);
         self.slack2.clear();
         self.slack2.resize(self.pos.len(), -1.0);
+        self.certified = false;
         self.site_mark.clear();
         self.site_mark.resize(self.pos.len(), 0);
         self.tv.clear();
@@ -768,25 +786,6 @@ impl KineticDelaunay {
             }
             self.sites_of[i] = new_sites;
         }
-        if std::env::var_os("KD_DEBUG").is_some() {
-            let mut r: Vec<f64> = (0..self.pos.len())
-                .filter(|&s| self.particle[s] != DEAD)
-                .map(|s| dist2(self.pos[s], self.prev[s]).sqrt())
-                .collect();
-            let mut sl: Vec<f64> = (0..self.pos.len())
-                .filter(|&s| self.particle[s] != DEAD)
-                .map(|s| self.slack2[s].max(0.0).sqrt())
-                .collect();
-            let mut da: Vec<f64> = (0..self.pos.len())
-                .filter(|&s| self.particle[s] != DEAD)
-                .map(|s| dist2(self.pos[s], self.anchor[s]).sqrt())
-                .collect();
-            r.sort_by(f64::total_cmp);
-            sl.sort_by(f64::total_cmp);
-            da.sort_by(f64::total_cmp);
-            let q = |v: &Vec<f64>| format!("{:.4} {:.4} {:.4}", v[v.len() / 10], v[v.len() / 2], v[9 * v.len() / 10]);
-            eprintln!("step {} | slack {} | from anchor {} | loose {}/{}", q(&r), q(&sl), q(&da), self.loose.len(), moved);
-        }
         self.stats.moved += moved as u64;
         self.stats.loose += self.loose.len() as u64;
         // 1-2: move and flip.
@@ -820,8 +819,28 @@ impl KineticDelaunay {
         if self.safeguards.hull_check && !self.hull_is_convex_once() {
             return Err(Failure::Check);
         }
-        self.anchor_again();
+        self.certify_or_pause(moved);
         Ok(())
+    }
+
+    /// After a repaired sample: certifies the tests around the loose and touched sites, unless
+    /// too many sites were loose for that to pay; then every site stays uncertified (every
+    /// triangle is tested) for [`CERTIFY_PAUSE`] samples, after which all are certified anew.
+    fn certify_or_pause(&mut self, moved: usize) {
+        let too_loose = self.loose.len() as f64 > MAX_LOOSE_FRACTION * moved as f64;
+        if self.certified && too_loose {
+            self.certify_pause = CERTIFY_PAUSE;
+            self.slack2.iter_mut().for_each(|x| *x = -1.0);
+            self.certified = false;
+        }
+        if !self.certified && self.certify_pause > 0 {
+            self.certify_pause -= 1;
+            self.loose.clear();
+            self.touched.clear();
+            return;
+        }
+        self.anchor_again();
+        self.certified = true;
     }
 
     /// Anchors the loose and the touched sites where they are and certifies every test around
@@ -870,12 +889,11 @@ impl KineticDelaunay {
         let v = self.tv[t];
         let a = |s: u32| self.anchor[s as usize];
         let inf = v.iter().position(|&x| x == INF);
-        let mut tests: [([u32; 4], f64); 4] = [([INF; 4], 0.0); 4];
+        // Up to four tests: sites and their slacks.
+        let mut tests: [([u32; 4], [f64; 4]); 4] = [([INF; 4], [0.0; 4]); 4];
         if inf.is_none() {
-            tests[3] = (
-                [v[0], v[1], v[2], INF],
-                orientation_slack(a(v[0]), a(v[1]), a(v[2])),
-            );
+            let s = orientation_slack(a(v[0]), a(v[1]), a(v[2]));
+            tests[3] = ([v[0], v[1], v[2], INF], [s[0], s[1], s[2], 0.0]);
         }
         for k in 0..3 {
             let u = self.tn[t][k] as usize;
@@ -891,14 +909,15 @@ impl KineticDelaunay {
                 Some(i) => {
                     // No conflict: d not strictly beyond the hull edge (x, y).
                     let (x, y) = (v[(i + 1) % 3], v[(i + 2) % 3]);
-                    ([y, x, d, INF], orientation_slack(a(y), a(x), a(d)))
+                    let s = orientation_slack(a(y), a(x), a(d));
+                    ([y, x, d, INF], [s[0], s[1], s[2], 0.0])
                 }
             };
         }
         for (sites, slack) in tests {
-            let s2 = if slack > 0.0 { slack * slack } else { -1.0 };
-            for s in sites {
+            for (s, x) in sites.into_iter().zip(slack) {
                 if s != INF {
+                    let s2 = if x > 0.0 { x * x } else { -1.0 };
                     let m = &mut self.slack2[s as usize];
                     *m = m.min(s2);
                 }
@@ -937,7 +956,23 @@ impl KineticDelaunay {
     /// algorithm); then the held sites move alone, their move halved where it still inverts a
     /// triangle ([`Self::advance_local`]).
     fn advance_sites(&mut self, moved: usize) -> Result<(), Failure> {
-        let tris = self.stars_of_loose();
+        let tris = if self.certified {
+            self.stars_of_loose()
+        } else {
+            // Every site loose: every live triangle.
+            self.stats.full_tests += 1;
+            self.next_stamp();
+            let stamp = self.stamp;
+            let mut all = Vec::with_capacity(self.tv.len());
+            for t in 0..self.tv.len() {
+                if self.tv[t][0] != DEAD {
+                    self.tri_mark[t] = stamp;
+                    all.push(t);
+                }
+            }
+            all
+        };
+        let tri_stamp = self.stamp;
         let mut finite: Vec<usize> = tris
             .iter()
             .copied()
@@ -981,7 +1016,19 @@ impl KineticDelaunay {
             if self.tv[t][0] == DEAD {
                 continue;
             }
+            let in_set = self.tri_mark[t] == tri_stamp;
             for k in 0..3 {
+                // An edge between two triangles of the set is tested once, from the lower one,
+                // where both are finite (the test is then the same from either side).
+                let u = self.tn[t][k] as usize;
+                if in_set
+                    && u < t
+                    && self.tri_mark[u] == tri_stamp
+                    && !self.tv[t].contains(&INF)
+                    && !self.tv[u].contains(&INF)
+                {
+                    continue;
+                }
                 self.stack.push((t as u32, k as u8));
             }
         }
@@ -1142,7 +1189,10 @@ impl KineticDelaunay {
 
     /// Lawson's algorithm from the edges on the stack.
     fn lawson(&mut self) -> Result<(), Failure> {
-        let cap = flip_cap(self.tv.len());
+        let cap = self
+            .safeguards
+            .flips_per_triangle
+            .map_or(u64::MAX, |f| flip_cap(self.tv.len(), f));
         let mut flips = 0u64;
         while let Some((t, k)) = self.stack.pop() {
             let (t, k) = (t as usize, k as usize);
@@ -1156,7 +1206,7 @@ impl KineticDelaunay {
                 continue;
             }
             flips += 1;
-            if flips > cap && self.safeguards.flip_cap {
+            if flips > cap {
                 return Err(Failure::Check);
             }
             self.flip(t, k, u, j);
@@ -1533,3 +1583,4 @@ impl KineticDelaunay {
         self.tv.iter().filter(|v| v[0] != DEAD).count()
     }
 }
+

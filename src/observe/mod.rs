@@ -33,6 +33,7 @@ pub mod line;
 pub mod location_changes;
 pub mod noise;
 pub mod pair_edges;
+pub mod predicates;
 pub mod profiles;
 pub mod shear;
 pub mod slack;
