@@ -109,7 +109,10 @@ pub fn run_with_svg(
                 "unknown observer point `{bad}`: use gas, fluid, coexistence"
             ));
         }
-        print!("{}", observer::report(&observer::measure(400, scale, &only)));
+        print!(
+            "{}",
+            observer::report(&observer::measure(400, scale, &only))
+        );
         return Ok(());
     }
     if which == "engines" {

@@ -65,9 +65,9 @@
 
 use super::location_changes::{Edge, SiteRef, delaunay_edges, edge_between, finish_edges, images};
 use super::pair_edges::{PairEdges, PairKey, PairMap, pair_key, pair_of};
+use super::predicates::{incircle, orient2d};
 use super::slack::{edge_slack, orientation_slack};
 use crate::sim::Frame;
-use super::predicates::{incircle, orient2d};
 use robust::Coord;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 
@@ -389,8 +389,8 @@ impl KineticDelaunay {
                     let w = v[(k + 2) % 3];
                     let u = self.tn[t][(k + 2) % 3] as usize;
                     let o = self.tv[u][self.back_index(u, t as u32)];
-                    let opposite = (w != INF && o != INF)
-                        .then(|| (self.site_ref(w), self.site_ref(o)));
+                    let opposite =
+                        (w != INF && o != INF).then(|| (self.site_ref(w), self.site_ref(o)));
                     if let Some(e) = edge_between(self.site_ref(s), self.site_ref(b), opposite, &[])
                     {
                         copies.push(e);
@@ -429,7 +429,10 @@ impl KineticDelaunay {
             for (&k, &n) in self.pairs.copies() {
                 let copies = self.site_edges_of(k);
                 if copies != n as usize {
-                    return Err(format!("pair {:?}: {n} copies kept, {copies} found", pair_of(k)));
+                    return Err(format!(
+                        "pair {:?}: {n} copies kept, {copies} found",
+                        pair_of(k)
+                    ));
                 }
             }
         }
@@ -667,7 +670,6 @@ impl KineticDelaunay {
             self.pairs.replace_all(map);
         }
     }
-
 
     // ---------------------------------------------------------------------------------------
     // Incremental repair
@@ -1244,7 +1246,8 @@ impl KineticDelaunay {
         // The edge (b, cc) gives way to (a, d).
         self.count_edge(b, cc, false);
         self.count_edge(a, d, true);
-        self.touched.extend([a, b, cc, d].into_iter().filter(|&x| x != INF));
+        self.touched
+            .extend([a, b, cc, d].into_iter().filter(|&x| x != INF));
         self.tv[t] = [a, b, d];
         self.tn[t] = [n_bd, u as u32, n_ab];
         self.tv[u] = [a, d, cc];
@@ -1584,3 +1587,161 @@ impl KineticDelaunay {
     }
 }
 
+#[cfg(test)]
+mod tests {
+    //! The safeguards, each on a configuration built to need it; every test fails with its
+    //! safeguard switched off ([`Safeguards`]).
+
+    use super::*;
+
+    /// A frame of `points` in a closed `size x size` box (no ghost images).
+    fn frame(points: &[[f64; 2]], size: f64) -> Frame {
+        Frame::from_parts(
+            2,
+            vec![size, size],
+            vec![false, false],
+            points.iter().flat_map(|p| *p).collect(),
+            vec![0.0; 2 * points.len()],
+            vec![0.1; points.len()],
+            Vec::new(),
+        )
+    }
+
+    /// `n` points from a small deterministic generator (xorshift) in `[0, size)^2`.
+    fn points(n: usize, size: f64, seed: u64) -> Vec<[f64; 2]> {
+        let mut s = seed;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n).map(|_| [size * next(), size * next()]).collect()
+    }
+
+    fn off(f: impl FnOnce(&mut Safeguards)) -> Safeguards {
+        let mut s = Safeguards::default();
+        f(&mut s);
+        s
+    }
+
+    /// Triangulates `first`, then updates to `second`; returns the structure and whether its
+    /// edges are those triangulated from scratch.
+    fn step(
+        safeguards: Safeguards,
+        first: &[[f64; 2]],
+        second: &[[f64; 2]],
+    ) -> (KineticDelaunay, bool) {
+        let mut k = KineticDelaunay::with_safeguards(0.0, safeguards);
+        k.advance(&frame(first, 10.0));
+        let f = frame(second, 10.0);
+        let same = k.update(&f) == delaunay_edges(&f, 0.0);
+        k.links_consistent().unwrap();
+        (k, same)
+    }
+
+    #[test]
+    fn flip_cap_gives_up_on_a_pass_with_more_flips() {
+        // Stretching 1000 points ten-thousandfold along x inverts no triangle but changes
+        // nearly every edge: about 5000 flips, more than one per triangle slot plus 1024.
+        let p = points(1000, 10.0, 12345);
+        let q: Vec<[f64; 2]> = p.iter().map(|x| [1e4 * x[0], x[1]]).collect();
+        let (k, same) = step(off(|s| s.flips_per_triangle = Some(1)), &p, &q);
+        assert!(same);
+        assert_eq!(k.stats.rebuild_check, 1, "{:?}", k.stats);
+        assert_eq!(k.stats.incremental, 0, "{:?}", k.stats);
+    }
+
+    #[test]
+    fn held_limit_gives_up_before_moving_many_sites_alone() {
+        // A third of 300 sites jump 3 units (about ten triangles) at once: their triangles
+        // invert in ways no single flip undoes.
+        let p = points(300, 10.0, 777);
+        let q: Vec<[f64; 2]> = p
+            .iter()
+            .enumerate()
+            .map(|(i, x)| if i % 3 == 0 { [x[0] + 3.0, x[1]] } else { *x })
+            .collect();
+        let (k, same) = step(Safeguards::default(), &p, &q);
+        assert!(same);
+        assert_eq!(k.stats.rebuild_inverted, 1, "{:?}", k.stats);
+        assert_eq!(
+            k.stats.bisections, 0,
+            "gave up before halving: {:?}",
+            k.stats
+        );
+    }
+
+    #[test]
+    fn halving_budget_bounds_the_halvings_of_a_sample() {
+        // 50 of 2000 sites (2.5 %, below the held limit) jump 1 unit (a few triangles): moved
+        // alone, their moves need 356 halvings in all (counted without the budget), more than
+        // the budget allows.
+        let p = points(2000, 10.0, 17);
+        let q: Vec<[f64; 2]> = p
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                if i % 40 == 0 {
+                    [x[0] + 1.0, x[1] + 0.3]
+                } else {
+                    *x
+                }
+            })
+            .collect();
+        let (k, same) = step(Safeguards::default(), &p, &q);
+        assert!(same);
+        assert!(k.stats.held > 0, "{:?}", k.stats);
+        assert!(k.stats.bisections <= MAX_HALVINGS as u64, "{:?}", k.stats);
+        assert_eq!(k.stats.rebuild_inverted, 1, "{:?}", k.stats);
+    }
+
+    #[test]
+    fn hull_check_catches_a_hull_vertex_that_was_wrongly_left_untested() {
+        // A fault injected into the slack bookkeeping: every site claims a huge slack except
+        // one, far from the hull vertex that moves halfway to the centre. Only the loose site's
+        // triangles are tested; the hull, now reflex, is wrong, and only the final check sees it.
+        let p = points(200, 10.0, 99);
+        let mut k = KineticDelaunay::with_safeguards(0.0, Safeguards::default());
+        let mut hull_check_off =
+            KineticDelaunay::with_safeguards(0.0, off(|s| s.hull_check = false));
+        for k in [&mut k, &mut hull_check_off] {
+            k.advance(&frame(&p, 10.0));
+        }
+        let t = (0..k.tv.len())
+            .find(|&t| k.tv[t][0] != DEAD && k.tv[t].contains(&INF))
+            .unwrap();
+        let v = *k.tv[t].iter().find(|&&x| x != INF).unwrap() as usize;
+        let far = (0..p.len())
+            .max_by(|&a, &b| dist2(p[a], p[v]).total_cmp(&dist2(p[b], p[v])))
+            .unwrap();
+        let mut q = p.clone();
+        q[v] = [0.5 * (p[v][0] + 5.0), 0.5 * (p[v][1] + 5.0)];
+        q[far][0] += 1e-6;
+        let f = frame(&q, 10.0);
+        let mut same = Vec::new();
+        for k in [&mut k, &mut hull_check_off] {
+            k.certified = true;
+            for s in 0..k.pos.len() {
+                k.anchor[s] = q[s];
+                k.slack2[s] = if s == far { -1.0 } else { 1e300 };
+            }
+            same.push(k.update(&f) == delaunay_edges(&f, 0.0));
+        }
+        assert_eq!(same, [true, false], "{:?}", k.stats);
+        assert_eq!(k.stats.rebuild_check, 1);
+    }
+
+    #[test]
+    fn a_broken_pair_bookkeeping_forces_a_rebuild() {
+        // A fault injected: a copy removed that was never there.
+        let p = points(100, 10.0, 5);
+        let mut k = KineticDelaunay::new(0.0);
+        k.advance(&frame(&p, 10.0));
+        k.pairs.remove(pair_key(0, 0));
+        let f = frame(&p, 10.0);
+        k.advance(&f);
+        assert_eq!(k.stats.rebuild_check, 1, "{:?}", k.stats);
+        k.pairs_consistent().unwrap();
+    }
+}

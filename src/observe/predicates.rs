@@ -98,7 +98,10 @@ mod tests {
                 robust::incircle(p[0], p[1], p[2], p[3]),
             );
             assert_eq!(i_fast.partial_cmp(&0.0), i_exact.partial_cmp(&0.0), "{p:?}");
-            let line = c(p[0].x + 2.0 * (p[1].x - p[0].x), p[0].y + 2.0 * (p[1].y - p[0].y));
+            let line = c(
+                p[0].x + 2.0 * (p[1].x - p[0].x),
+                p[0].y + 2.0 * (p[1].y - p[0].y),
+            );
             for q in [p[2], line] {
                 let (o_fast, o_exact) = (orient2d(p[0], p[1], q), robust::orient2d(p[0], p[1], q));
                 assert_eq!(o_fast.partial_cmp(&0.0), o_exact.partial_cmp(&0.0), "{p:?}");

@@ -87,7 +87,11 @@ pub fn edge_slack(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> [f64; 4
     let lambda_c = (cm[0] * cm[0] + cm[1] * cm[1] - half2) / (2.0 * hc);
     let lambda_d = (dm[0] * dm[0] + dm[1] * dm[1] - half2) / (2.0 * hd);
     // c strictly on n's side, d strictly on the other, a non-empty interval of centres.
-    if !(hc > 0.0 && hd < 0.0 && lambda_d < lambda_c && lambda_c.is_finite() && lambda_d.is_finite())
+    if !(hc > 0.0
+        && hd < 0.0
+        && lambda_d < lambda_c
+        && lambda_c.is_finite()
+        && lambda_d.is_finite())
     {
         return [0.0; 4];
     }
@@ -148,7 +152,10 @@ mod tests {
             assert!(s.iter().all(|&x| x >= 0.0));
             for _ in 0..20 {
                 let m = moved(&[a, b, q], &s, &mut state);
-                assert!(orient2d(c(m[0]), c(m[1]), c(m[2])) > 0.0, "{a:?} {b:?} {q:?} {s:?}");
+                assert!(
+                    orient2d(c(m[0]), c(m[1]), c(m[2])) > 0.0,
+                    "{a:?} {b:?} {q:?} {s:?}"
+                );
             }
             // The bound is not hopelessly loose: five times the slack can invert it.
             let m = moved(&[a, b, q], &s.map(|x| 5.0 * x + 1e-9), &mut state);
