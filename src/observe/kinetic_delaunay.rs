@@ -690,7 +690,8 @@ impl KineticDelaunay {
         let k = s as usize;
         self.prev[k] = self.pos[k];
         self.pos[k] = p;
-        if !(dist2(p, self.anchor[k]) < self.slack2[k]) || !self.safeguards.slack {
+        let inside = dist2(p, self.anchor[k]) < self.slack2[k]; // false for NaN
+        if !inside || !self.safeguards.slack {
             self.loose.push(s);
         }
     }

@@ -50,7 +50,7 @@ pub fn orientation_slack(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> [f64; 3] {
     let longest = opposite[0].max(opposite[1]).max(opposite[2]);
     let err = rounding_allowance(magnitude(&[a, b, c])) * (1.0 + longest * longest);
     let det = det - err;
-    if !(det > 0.0) {
+    if det.is_nan() || det <= 0.0 {
         return [0.0; 3];
     }
     let cap = 0.25 * det.sqrt();
@@ -77,7 +77,7 @@ pub fn edge_slack(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> [f64; 4
     let m = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
     let e = sub(b, a);
     let len = norm(e);
-    if !(len > 0.0) {
+    if len.is_nan() || len <= 0.0 {
         return [0.0; 4];
     }
     let n = [-e[1] / len, e[0] / len];
