@@ -80,6 +80,9 @@ fn compare(frames: &[Frame]) -> wetgran::observe::kinetic_delaunay::KineticStats
         edges
             .links_consistent()
             .unwrap_or_else(|e| panic!("sample {k}: {e}"));
+        edges
+            .pairs_consistent()
+            .unwrap_or_else(|e| panic!("sample {k}: {e}"));
         kinetic.observe(f, true);
         reference.observe(f, true);
     }

@@ -96,8 +96,23 @@ pub fn run_with_svg(
         print!("{}", memory::child_text(&memory::measure_here(n)?));
         return Ok(());
     }
-    if which == "observer" {
-        print!("{}", observer::report(&observer::measure(400, scale)));
+    if which == "observer" || which.starts_with("observer:") {
+        let only: Vec<&str> = which
+            .strip_prefix("observer:")
+            .map(|l| l.split(',').map(str::trim).collect())
+            .unwrap_or_default();
+        if let Some(bad) = only
+            .iter()
+            .find(|l| !observer::POINTS.iter().any(|p| p.0 == **l))
+        {
+            return Err(format!(
+                "unknown observer point `{bad}`: use gas, fluid, coexistence"
+            ));
+        }
+        print!(
+            "{}",
+            observer::report(&observer::measure(400, scale, &only))
+        );
         return Ok(());
     }
     if which == "engines" {
@@ -116,7 +131,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab` `memory`, `engines` or `observer`"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab` `memory`, `engines`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
             ));
         }
     };

@@ -11,7 +11,7 @@
 //!
 //! **Structure.** Triangles with their three neighbours, closed into a sphere by one vertex at
 //! infinity ([`INF`]): each hull edge `a -> b` (interior on its left) carries the infinite
-//! triangle `(b, a, INF)`. The predicates are exact (`robust`: Shewchuk's adaptive
+//! triangle `(b, a, INF)`. The predicates are exact ([`super::predicates`]: Shewchuk's adaptive
 //! `orient2d`, `incircle`), so the triangulation is the unique Delaunay triangulation whenever no
 //! four sites are co-circular, the same one the rebuild (spade, also exact) finds.
 //!
@@ -22,30 +22,53 @@
 //! triangle on this side (Lawson's algorithm); across an edge `(c, INF)` this removes a reflex
 //! hull vertex `c`.
 //!
-//! **One update** ([`KineticDelaunay::update`]):
-//! 1. every kept site moves to its new position; if a finite triangle is not strictly positive
-//!    (it inverted or went flat) the move is split into halves, recursively up to
-//!    [`MAX_BISECTIONS`] levels, flipping to Delaunay after each part (the final triangulation
-//!    does not depend on the path);
-//! 2. Lawson flips from every edge until no edge conflicts;
+//! **Slack** ([`super::slack`]). Every test (a finite triangle strictly positive, an edge not in
+//! conflict) passed at some positions of its sites holds as long as each of those sites stays
+//! within the test's slack of them. Each site keeps an anchor (its position when its tests were
+//! last certified) and the smallest slack of the tests it takes part in; a site is *loose* when
+//! it is no longer strictly within that distance of its anchor. A test none of whose sites is
+//! loose still holds, so a sample tests only the triangles around loose sites. After a sample
+//! the loose sites and every site a flip, insertion or deletion touched are anchored again and
+//! the tests around them certified anew (a test is certified at the anchors of all its sites,
+//! and the slack of every site in it shrinks to the test's; a test that cannot be certified
+//! makes its sites loose for the next sample). After a rebuild no site is certified.
+//!
+//! **One update** ([`KineticDelaunay::advance`]):
+//! 1. every kept site moves to its new position; the finite triangles around loose sites that
+//!    are not strictly positive (inverted or flat) hold their sites back: these move alone
+//!    afterwards, their move split into halves, recursively up to [`MAX_BISECTIONS`] levels
+//!    (with a budget of [`MAX_HALVINGS`] per sample), flipping to Delaunay after each part (the
+//!    final triangulation does not depend on the path);
+//! 2. Lawson flips from every edge of the triangles around loose sites until no edge conflicts;
 //! 3. sites that left the ghost band are deleted (each is then the outermost site on its side,
 //!    hence a hull vertex: it is merged into `INF` and the hull made convex again by flips);
 //! 4. sites that entered the band are inserted (split the containing triangle, or the infinite
 //!    triangle whose hull edge they lie beyond, then flips);
-//! 5. a final check: every finite triangle positive and the hull a convex polygon that turns
-//!    once (total turning `2 pi`); with both, the triangles tile the hull exactly once.
+//! 5. a final check, whenever a site was loose or the triangulation changed: the hull a convex
+//!    polygon that turns once (total turning `2 pi`); with every finite triangle positive (tested
+//!    or certified), the triangles then tile the hull exactly once.
+//!
+//! **Edges** ([`super::pair_edges`]): the particle pairs joined by an edge are kept with the
+//! triangulation (each flip removes one and adds one, insertions and deletions add and remove a
+//! site's edges, a particle crossing a periodic face renames its images and with them which
+//! edges join a ghost to a ghost, a rebuild is diffed against the kept set), and the pairs that
+//! changed are listed for the location-change counter ([`super::tracked_pairs`]).
 //!
 //! **Fallback**: a rebuild from scratch (spade's bulk load, converted into this structure) at the
 //! first sample, when the number of particles or the box changes, and whenever a step fails
-//! (a move that still inverts a triangle after [`MAX_BISECTIONS`] halvings, a site exactly on an
-//! edge, a leaving site not on the hull, too many flips, a failed final check). Every fallback is
-//! counted by reason in [`KineticStats`]. Where spade cannot triangulate (fewer than three
-//! sites, all collinear, two sites at the same position) the structure stays empty and each
-//! sample is triangulated from scratch.
+//! (more than [`MAX_HELD_FRACTION`] of the sites held back, a held move that still inverts a
+//! triangle after [`MAX_BISECTIONS`] halvings or beyond the budget, a site exactly on an edge, a
+//! leaving site not on the hull, more flips than [`flip_cap`], a failed final check, the pair
+//! bookkeeping found broken). Every fallback is counted by reason in [`KineticStats`]. Where spade cannot triangulate (fewer than
+//! three sites, all collinear, two sites at the same position) the structure stays empty and
+//! each sample is triangulated from scratch.
 
-use super::location_changes::{Edge, SiteRef, edge_between, finish_edges, images};
+use super::location_changes::{Edge, SiteRef, delaunay_edges, edge_between, finish_edges, images};
+use super::pair_edges::{PairEdges, PairKey, PairMap, pair_key, pair_of};
+use super::predicates::{incircle, orient2d};
+use super::slack::{edge_slack, orientation_slack};
 use crate::sim::Frame;
-use robust::{Coord, incircle, orient2d};
+use robust::Coord;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 
 /// The vertex at infinity.
@@ -58,10 +81,25 @@ pub const MAX_BISECTIONS: u32 = 20;
 pub const MAX_HELD_FRACTION: f64 = 0.15;
 /// Most halvings of held sites' moves in one sample before a rebuild.
 pub const MAX_HALVINGS: u32 = 256;
+/// Most loose sites in a sample, as a fraction of all sites, for the certificates to pay: above
+/// it, certifying the tests around the loose sites costs more than testing every triangle.
+pub const MAX_LOOSE_FRACTION: f64 = 0.2;
+/// Samples tested in full, without certificates, after a sample with too many loose sites.
+pub const CERTIFY_PAUSE: u32 = 15;
 /// Longest back-off after failed repairs: `2^4 - 1 = 15` samples rebuilt without trying.
 pub const MAX_BACKOFF_LOG2: u32 = 4;
 /// Most images of one particle (shifts -1, 0, 1 on two axes).
 const MAX_IMAGES: usize = 9;
+
+/// Flips per triangle slot allowed in one Lawson pass ([`flip_cap`]).
+pub const FLIPS_PER_TRIANGLE: u64 = 64;
+
+/// Most flips of one Lawson pass over `triangles` live and free triangle slots, allowing
+/// `per_triangle` flips per slot: `per_triangle * triangles + 1024` (a pass that flips more
+/// costs more than a rebuild, or cycles on a broken structure; the repair gives up).
+pub fn flip_cap(triangles: usize, per_triangle: u64) -> u64 {
+    per_triangle * triangles as u64 + 1024
+}
 
 /// How often each path was taken.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -93,6 +131,16 @@ pub struct KineticStats {
     /// Ghost images inserted and deleted incrementally.
     pub inserted: u64,
     pub deleted: u64,
+    /// Sites moved in repaired samples, and those of them that were loose (moved beyond their
+    /// slack, so that the tests around them were repeated).
+    pub moved: u64,
+    pub loose: u64,
+    /// Sites anchored again after a repaired sample (loose or touched by a change).
+    pub anchored: u64,
+    /// Repaired samples that tested every triangle (no site certified).
+    pub full_tests: u64,
+    /// Final hull checks run (samples where a site was loose or the triangulation changed).
+    pub hull_checks: u64,
 }
 
 impl KineticStats {
@@ -114,6 +162,35 @@ enum Failure {
     Check,
 }
 
+/// The safeguards, each of which can be switched off in tests to show that a test needs it
+/// (`tests/observe_kinetic_delaunay.rs`, `observe::kinetic_delaunay::tests`). All on by default.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Safeguards {
+    /// The final hull check.
+    pub hull_check: bool,
+    /// The cap on flips per Lawson pass: flips allowed per triangle ([`flip_cap`]; `None`:
+    /// no cap).
+    pub flips_per_triangle: Option<u64>,
+    /// The budget of halvings per sample ([`MAX_HALVINGS`]).
+    pub halving_budget: bool,
+    /// The limit on held sites ([`MAX_HELD_FRACTION`]).
+    pub held_limit: bool,
+    /// Skipping the tests of sites within their slack (off: every site is loose).
+    pub slack: bool,
+}
+
+impl Default for Safeguards {
+    fn default() -> Self {
+        Self {
+            hull_check: true,
+            flips_per_triangle: Some(FLIPS_PER_TRIANGLE),
+            halving_budget: true,
+            held_limit: true,
+            slack: true,
+        }
+    }
+}
+
 /// The kept triangulation. See the module header.
 #[derive(Debug, Clone, Default)]
 pub struct KineticDelaunay {
@@ -122,6 +199,12 @@ pub struct KineticDelaunay {
     periodic: [bool; 2],
     /// Site positions.
     pos: Vec<[f64; 2]>,
+    /// Position of each site at the previous sample.
+    prev: Vec<[f64; 2]>,
+    /// Where each site's tests were last certified, and the square of the smallest slack of
+    /// those tests (`<= 0`: not certified, loose at the next sample).
+    anchor: Vec<[f64; 2]>,
+    slack2: Vec<f64>,
     /// Particle of each site (`DEAD` for a free slot).
     particle: Vec<u32>,
     /// Image shift of each site relative to its particle's wrapped position.
@@ -144,6 +227,24 @@ pub struct KineticDelaunay {
     /// Consecutive failed repairs, and samples still to rebuild without trying (`2^f - 1`).
     failures: u32,
     skip: u32,
+    /// The pairs joined by edges.
+    pairs: PairEdges,
+    /// The edges of a degenerate sample (triangulated from scratch, sorted).
+    scratch: Vec<Edge>,
+    /// Sites loose in this sample, and sites a change touched (with repeats).
+    loose: Vec<u32>,
+    touched: Vec<u32>,
+    /// Per-site and per-triangle marks: equal to `stamp` when set in the current pass.
+    site_mark: Vec<u32>,
+    tri_mark: Vec<u32>,
+    stamp: u32,
+    /// An infinite triangle, where the hull walk starts (checked before use).
+    hull_hint: usize,
+    /// Whether the sites are certified (else every site is loose), and the samples still to
+    /// test in full before certifying again ([`CERTIFY_PAUSE`]).
+    certified: bool,
+    certify_pause: u32,
+    safeguards: Safeguards,
     pub stats: KineticStats,
 }
 
@@ -166,26 +267,44 @@ fn c(p: [f64; 2]) -> Coord<f64> {
     Coord { x: p[0], y: p[1] }
 }
 
+#[inline]
+fn dist2(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (a[0] - b[0], a[1] - b[1]);
+    dx * dx + dy * dy
+}
+
 impl KineticDelaunay {
     /// An empty triangulation for ghost bands of width `ghost_width`; the first
-    /// [`update`](Self::update) builds it.
+    /// [`advance`](Self::advance) builds it.
     pub fn new(ghost_width: f64) -> Self {
         Self {
             ghost_width,
+            safeguards: Safeguards::default(),
             ..Self::default()
+        }
+    }
+
+    /// The same with some safeguards switched off (tests only: shows what each one catches).
+    pub fn with_safeguards(ghost_width: f64, safeguards: Safeguards) -> Self {
+        Self {
+            safeguards,
+            ..Self::new(ghost_width)
         }
     }
 
     /// The Delaunay edges of `frame` (as [`super::location_changes::delaunay_edges`] returns
     /// them), repairing the triangulation of the previous call.
     pub fn update(&mut self, frame: &Frame) -> Vec<Edge> {
-        self.update_for_counter(frame, &[])
+        self.advance(frame);
+        if !self.valid {
+            return self.scratch.clone();
+        }
+        self.edges()
     }
 
-    /// [`update`](Self::update) for the counter: the pairs in `known` (sorted) get no opposite
-    /// vertices (the comparison with the previous sample does not use them), which saves their
-    /// angles.
-    pub fn update_for_counter(&mut self, frame: &Frame, known: &[(u32, u32)]) -> Vec<Edge> {
+    /// Brings the triangulation and the set of joined pairs to `frame`: repairs the
+    /// triangulation of the previous call, or rebuilds it.
+    pub fn advance(&mut self, frame: &Frame) {
         assert_eq!(frame.dimension, 2, "Delaunay location changes are 2D");
         let same_system = self.valid
             && self.wrapped.len() == frame.len()
@@ -219,19 +338,182 @@ impl KineticDelaunay {
         }
         if !self.valid {
             self.stats.degenerate += 1;
-            return super::location_changes::delaunay_edges(frame, self.ghost_width);
+            self.scratch = delaunay_edges(frame, self.ghost_width);
+            let mut map = PairMap::default();
+            for e in &self.scratch {
+                map.insert(pair_key(e.i, e.j), 1);
+            }
+            self.pairs.replace_all(map);
         }
-        self.edges(known)
     }
 
-    /// The current edges in the observer's format.
-    fn edges(&self, known: &[(u32, u32)]) -> Vec<Edge> {
-        let mut out = Vec::with_capacity(3 * self.wrapped.len());
-        let site = |s: u32| SiteRef {
+    /// The pairs whose edge may have appeared or disappeared since the last call (see
+    /// [`PairEdges::take_changed`]), in `out`.
+    pub fn take_changed_pairs(&mut self, out: &mut Vec<PairKey>) {
+        self.pairs.take_changed(out);
+    }
+
+    /// Whether the pair is joined by an edge now.
+    #[inline]
+    pub fn has_pair(&self, key: PairKey) -> bool {
+        self.pairs.contains(key)
+    }
+
+    /// The pairs joined by an edge now, in no particular order.
+    pub fn pair_keys(&self) -> impl Iterator<Item = PairKey> + '_ {
+        self.pairs.keys()
+    }
+
+    /// The edge of a joined pair in the observer's format, as
+    /// [`delaunay_edges`] gives it (of its copies through periodic images the one
+    /// [`finish_edges`] keeps, with its opposite vertices); `None` if the pair is not joined.
+    pub fn edge_of(&self, key: PairKey) -> Option<Edge> {
+        let (i, j) = pair_of(key);
+        if !self.valid {
+            return self
+                .scratch
+                .binary_search_by_key(&(i, j), |e| (e.i, e.j))
+                .ok()
+                .map(|k| self.scratch[k]);
+        }
+        let mut copies = Vec::new();
+        for &s in self.sites_of[i as usize].iter().take_while(|&&s| s != INF) {
+            let start = self.vtri[s as usize] as usize;
+            let mut t = start;
+            loop {
+                let v = self.tv[t];
+                let k = self.index_in(t, s);
+                let b = v[(k + 1) % 3];
+                if b != INF && self.particle[b as usize] == j && self.counted(s, b).is_some() {
+                    // The edge (s, b) is opposite v[k + 2] in t.
+                    let w = v[(k + 2) % 3];
+                    let u = self.tn[t][(k + 2) % 3] as usize;
+                    let o = self.tv[u][self.back_index(u, t as u32)];
+                    let opposite =
+                        (w != INF && o != INF).then(|| (self.site_ref(w), self.site_ref(o)));
+                    if let Some(e) = edge_between(self.site_ref(s), self.site_ref(b), opposite, &[])
+                    {
+                        copies.push(e);
+                    }
+                }
+                t = self.tn[t][(k + 1) % 3] as usize;
+                if t == start {
+                    break;
+                }
+            }
+        }
+        finish_edges(&mut copies);
+        copies.first().copied()
+    }
+
+    /// Whether the kept pairs are exactly the pairs of the current edges (for tests).
+    pub fn pairs_consistent(&self) -> Result<(), String> {
+        let listed: Vec<PairKey> = if self.valid {
+            self.edges().iter().map(|e| pair_key(e.i, e.j)).collect()
+        } else {
+            self.scratch.iter().map(|e| pair_key(e.i, e.j)).collect()
+        };
+        let mut kept: Vec<PairKey> = self.pairs.keys().collect();
+        kept.sort_unstable();
+        if self.pairs.is_broken() {
+            return Err("a removed pair was not kept".into());
+        }
+        if kept != listed {
+            return Err(format!(
+                "{} pairs kept, {} edges listed",
+                kept.len(),
+                listed.len()
+            ));
+        }
+        if self.valid {
+            for (&k, &n) in self.pairs.copies() {
+                let copies = self.site_edges_of(k);
+                if copies != n as usize {
+                    return Err(format!(
+                        "pair {:?}: {n} copies kept, {copies} found",
+                        pair_of(k)
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of counted site edges joining the pair (for [`Self::pairs_consistent`]).
+    fn site_edges_of(&self, key: PairKey) -> usize {
+        let (i, j) = pair_of(key);
+        let mut n = 0;
+        for &s in self.sites_of[i as usize].iter().take_while(|&&s| s != INF) {
+            for (t, k) in self.star(s) {
+                let b = self.tv[t][(k + 1) % 3];
+                if b != INF && self.particle[b as usize] == j && self.counted(s, b).is_some() {
+                    n += 1;
+                }
+            }
+        }
+        n
+    }
+
+    #[inline]
+    fn site_ref(&self, s: u32) -> SiteRef {
+        SiteRef {
             p: self.pos[s as usize],
             id: self.particle[s as usize],
             ghost: self.shift[s as usize] != [0, 0],
-        };
+        }
+    }
+
+    /// The pair that the site edge `(a, b)` joins, if it counts: not to `INF`, not between two
+    /// images of one particle, not between two ghosts (as [`edge_between`] decides).
+    #[inline]
+    fn counted(&self, a: u32, b: u32) -> Option<PairKey> {
+        if a == INF || b == INF {
+            return None;
+        }
+        let (pa, pb) = (self.particle[a as usize], self.particle[b as usize]);
+        if pa == pb || (self.shift[a as usize] != [0, 0] && self.shift[b as usize] != [0, 0]) {
+            return None;
+        }
+        Some(pair_key(pa, pb))
+    }
+
+    /// Adds (`add`) or removes the copy of the site edge `(a, b)`, if it counts.
+    #[inline]
+    fn count_edge(&mut self, a: u32, b: u32, add: bool) {
+        if let Some(k) = self.counted(a, b) {
+            if add {
+                self.pairs.add(k);
+            } else {
+                self.pairs.remove(k);
+            }
+        }
+    }
+
+    /// Adds or removes the copies of every edge of site `s`.
+    fn count_star(&mut self, s: u32, add: bool) {
+        for (t, k) in self.star(s) {
+            let b = self.tv[t][(k + 1) % 3];
+            self.count_edge(s, b, add);
+        }
+    }
+
+    /// The index of site `s` in triangle `t`.
+    #[inline]
+    fn index_in(&self, t: usize, s: u32) -> usize {
+        let v = self.tv[t];
+        if v[0] == s {
+            0
+        } else if v[1] == s {
+            1
+        } else {
+            debug_assert_eq!(v[2], s);
+            2
+        }
+    }
+
+    /// The current edges in the observer's format (opposite vertices for every edge).
+    fn edges(&self) -> Vec<Edge> {
+        let mut out = Vec::with_capacity(3 * self.wrapped.len());
         for (t, v) in self.tv.iter().enumerate() {
             if v[0] == DEAD {
                 continue;
@@ -243,9 +525,13 @@ impl KineticDelaunay {
                     continue;
                 }
                 let w = self.tv[u as usize];
-                let opposite = (!v.contains(&INF) && !w.contains(&INF))
-                    .then(|| (site(v[k]), site(w[self.back_index(u as usize, t as u32)])));
-                if let Some(e) = edge_between(site(a), site(b), opposite, known) {
+                let opposite = (!v.contains(&INF) && !w.contains(&INF)).then(|| {
+                    (
+                        self.site_ref(v[k]),
+                        self.site_ref(w[self.back_index(u as usize, t as u32)]),
+                    )
+                });
+                if let Some(e) = edge_between(self.site_ref(a), self.site_ref(b), opposite, &[]) {
                     out.push(e);
                 }
             }
@@ -257,7 +543,6 @@ impl KineticDelaunay {
     // ---------------------------------------------------------------------------------------
     // Rebuild
 
-    /// Rebuilds from scratch: the sites of `frame`, spade's Delaunay triangulation, converted.
     fn rebuild(&mut self, frame: &Frame) {
         let n = frame.len();
         self.box_size = [frame.box_size[0], frame.box_size[1]];
@@ -282,6 +567,14 @@ impl KineticDelaunay {
         }
         self.vtri.clear();
         self.vtri.resize(self.pos.len(), INF);
+        // Positions as they are; no site certified.
+        self.prev.clone_from(&self.pos);
+        self.anchor.clone_from(&self.pos);
+        self.slack2.clear();
+        self.slack2.resize(self.pos.len(), -1.0);
+        self.certified = false;
+        self.site_mark.clear();
+        self.site_mark.resize(self.pos.len(), 0);
         self.tv.clear();
         self.tn.clear();
         self.free_tris.clear();
@@ -356,42 +649,124 @@ impl KineticDelaunay {
             }
         }
         self.valid = self.vtri.iter().all(|&t| t != INF);
+        self.tri_mark.clear();
+        self.tri_mark.resize(self.tv.len(), 0);
+        self.hull_hint = finite;
+        if self.valid {
+            // The joined pairs, diffed against those kept.
+            let mut map = PairMap::default();
+            map.reserve(3 * n);
+            for t in 0..self.tv.len() {
+                for k in 0..3 {
+                    let u = self.tn[t][k];
+                    if (t as u32) < u {
+                        let v = self.tv[t];
+                        if let Some(key) = self.counted(v[(k + 1) % 3], v[(k + 2) % 3]) {
+                            *map.entry(key).or_insert(0) += 1;
+                        }
+                    }
+                }
+            }
+            self.pairs.replace_all(map);
+        }
     }
 
     // ---------------------------------------------------------------------------------------
     // Incremental repair
 
+    /// Starts a pass of marks: every site and triangle unmarked.
+    fn next_stamp(&mut self) {
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.site_mark.iter_mut().for_each(|m| *m = 0);
+            self.tri_mark.iter_mut().for_each(|m| *m = 0);
+            self.stamp = 1;
+        }
+    }
+
+    /// Moves site `s` to `p`; it is loose unless strictly within its slack of its anchor.
+    #[inline]
+    fn move_site(&mut self, s: u32, p: [f64; 2]) {
+        let k = s as usize;
+        self.prev[k] = self.pos[k];
+        self.pos[k] = p;
+        let inside = dist2(p, self.anchor[k]) < self.slack2[k]; // false for NaN
+        if !inside || !self.safeguards.slack {
+            self.loose.push(s);
+        }
+    }
+
+    /// Gives site `s` the image shift `shift`; where that makes it a ghost or no longer one, the
+    /// pairs its edges join change (an edge between two ghosts does not count).
+    fn rename(&mut self, s: u32, shift: [i32; 2]) {
+        let was_ghost = self.shift[s as usize] != [0, 0];
+        if was_ghost == (shift != [0, 0]) {
+            self.shift[s as usize] = shift;
+            return;
+        }
+        self.count_star(s, false);
+        self.shift[s as usize] = shift;
+        self.count_star(s, true);
+    }
+
     /// Moves, deletes and inserts sites to match `frame`; Delaunay again on success.
     fn repair(&mut self, frame: &Frame) -> Result<(), Failure> {
         let n = frame.len();
-        // Plan: new position of every kept site; sites leaving; images entering.
-        let mut from: Vec<(u32, [f64; 2])> = Vec::with_capacity(self.pos.len());
-        let mut to: Vec<[f64; 2]> = Vec::with_capacity(self.pos.len());
+        self.loose.clear();
+        self.touched.clear();
+        if self.pairs.is_broken() {
+            return Err(Failure::Check);
+        }
+        // A particle whose wrapped position is farther than its ghost band (and a rounding
+        // margin) from every periodic face has no image: it keeps its one site.
+        let mut inner = [(f64::NEG_INFINITY, f64::INFINITY); 2];
+        for k in 0..2 {
+            if self.periodic[k] {
+                let (l, g) = (self.box_size[k], self.ghost_width.min(self.box_size[k]));
+                let tol = 1e-9 * (l + g);
+                inner[k] = (g + tol, l - g - tol);
+            }
+        }
         let mut leaving: Vec<u32> = Vec::new();
         let mut entering: Vec<(u32, [i32; 2], [f64; 2])> = Vec::new();
+        let mut moved = 0usize;
         for i in 0..n {
+            let x = frame.x(i);
+            let w = [frame.wrap(0, x[0]), frame.wrap(1, x[1])];
+            let sites = self.sites_of[i];
+            let old = self.wrapped[i];
+            let plain = sites[1] == INF
+                && (0..2).all(|k| {
+                    w[k] > inner[k].0
+                        && w[k] < inner[k].1
+                        && (w[k] - old[k]).abs() < 0.5 * self.box_size[k]
+                });
+            self.wrapped[i] = w;
+            if plain {
+                moved += 1;
+                self.move_site(sites[0], w);
+                continue;
+            }
+            // Near a face, or crossing one: the images as the rebuild makes them.
             let img = images(frame, i, self.ghost_width);
-            let (w, imgs) = (img.wrapped, img.as_slice());
+            let imgs = img.as_slice();
             let mut delta = [0i32; 2];
             for k in 0..2 {
                 if self.periodic[k] {
-                    delta[k] = ((w[k] - self.wrapped[i][k]) / self.box_size[k]).round() as i32;
+                    delta[k] = ((w[k] - old[k]) / self.box_size[k]).round() as i32;
                 }
             }
-            self.wrapped[i] = w;
             let mut kept = [false; MAX_IMAGES];
-            let old = self.sites_of[i];
             let mut new_sites = [INF; MAX_IMAGES];
             let mut m = 0;
-            for &s in old.iter().take_while(|&&s| s != INF) {
+            for &s in sites.iter().take_while(|&&s| s != INF) {
                 let sh = self.shift[s as usize];
                 let sh = [sh[0] - delta[0], sh[1] - delta[1]];
-                self.shift[s as usize] = sh;
+                self.rename(s, sh);
                 match imgs.iter().position(|(s2, _)| *s2 == sh) {
                     Some(k) => {
                         kept[k] = true;
-                        from.push((s, self.pos[s as usize]));
-                        to.push(imgs[k].1);
+                        self.move_site(s, imgs[k].1);
                         new_sites[m] = s;
                         m += 1;
                     }
@@ -401,12 +776,12 @@ impl KineticDelaunay {
                             w[0] + sh[0] as f64 * self.box_size[0],
                             w[1] + sh[1] as f64 * self.box_size[1],
                         ];
-                        from.push((s, self.pos[s as usize]));
-                        to.push(p);
+                        self.move_site(s, p);
                         leaving.push(s);
                     }
                 }
             }
+            moved += sites.iter().take_while(|&&s| s != INF).count();
             for (k, (sh, p)) in imgs.iter().enumerate() {
                 if !kept[k] {
                     entering.push((i as u32, *sh, *p));
@@ -414,10 +789,10 @@ impl KineticDelaunay {
             }
             self.sites_of[i] = new_sites;
         }
+        self.stats.moved += moved as u64;
+        self.stats.loose += self.loose.len() as u64;
         // 1-2: move and flip.
-        let start: Vec<[f64; 2]> = from.iter().map(|f| f.1).collect();
-        let sites: Vec<u32> = from.iter().map(|f| f.0).collect();
-        self.advance(&sites, &start, &to)?;
+        self.advance_sites(moved)?;
         // 3: deletions, outermost first (each is a hull vertex when deleted).
         let mut left = leaving;
         while !left.is_empty() {
@@ -429,46 +804,190 @@ impl KineticDelaunay {
         }
         // 4: insertions.
         for (i, sh, p) in entering {
-            let s = self.insert(p)?;
-            self.particle[s as usize] = i;
-            self.shift[s as usize] = sh;
+            let s = self.insert(p, i, sh)?;
             let slot = self.sites_of[i as usize]
                 .iter()
                 .position(|&x| x == INF)
                 .expect("at most nine images");
             self.sites_of[i as usize][slot] = s;
         }
-        // 5: final check.
-        if self.hull_is_convex_once() {
-            Ok(())
-        } else {
-            Err(Failure::Check)
+        if self.pairs.is_broken() {
+            return Err(Failure::Check);
+        }
+        // 5: final check, where anything moved beyond its slack or changed.
+        if self.loose.is_empty() && self.touched.is_empty() {
+            return Ok(());
+        }
+        self.stats.hull_checks += 1;
+        if self.safeguards.hull_check && !self.hull_is_convex_once() {
+            return Err(Failure::Check);
+        }
+        self.certify_or_pause(moved);
+        Ok(())
+    }
+
+    /// After a repaired sample: certifies the tests around the loose and touched sites, unless
+    /// too many sites were loose for that to pay; then every site stays uncertified (every
+    /// triangle is tested) for [`CERTIFY_PAUSE`] samples, after which all are certified anew.
+    fn certify_or_pause(&mut self, moved: usize) {
+        let too_loose = self.loose.len() as f64 > MAX_LOOSE_FRACTION * moved as f64;
+        if self.certified && too_loose {
+            self.certify_pause = CERTIFY_PAUSE;
+            self.slack2.iter_mut().for_each(|x| *x = -1.0);
+            self.certified = false;
+        }
+        if !self.certified && self.certify_pause > 0 {
+            self.certify_pause -= 1;
+            self.loose.clear();
+            self.touched.clear();
+            return;
+        }
+        self.anchor_again();
+        self.certified = true;
+    }
+
+    /// Anchors the loose and the touched sites where they are and certifies every test around
+    /// them (module header, "Slack").
+    fn anchor_again(&mut self) {
+        self.next_stamp();
+        let mut sites = std::mem::take(&mut self.loose);
+        sites.append(&mut self.touched);
+        let stamp = self.stamp;
+        sites.retain(|&s| {
+            let k = s as usize;
+            if self.particle[k] == DEAD || self.site_mark[k] == stamp {
+                return false;
+            }
+            self.site_mark[k] = stamp;
+            true
+        });
+        for &s in &sites {
+            self.anchor[s as usize] = self.pos[s as usize];
+            self.slack2[s as usize] = f64::INFINITY;
+        }
+        self.stats.anchored += sites.len() as u64;
+        for &s in &sites {
+            let start = self.vtri[s as usize] as usize;
+            let mut t = start;
+            loop {
+                if self.tri_mark[t] != stamp {
+                    self.tri_mark[t] = stamp;
+                    self.certify(t);
+                }
+                let k = self.index_in(t, s);
+                t = self.tn[t][(k + 1) % 3] as usize;
+                if t == start {
+                    break;
+                }
+            }
+        }
+        sites.clear();
+        self.loose = sites;
+    }
+
+    /// Certifies the tests of triangle `t` at the anchors: its orientation (finite) and the
+    /// conflict test of each of its edges; the slack of every site in a test shrinks to the
+    /// test's.
+    fn certify(&mut self, t: usize) {
+        let v = self.tv[t];
+        let a = |s: u32| self.anchor[s as usize];
+        let inf = v.iter().position(|&x| x == INF);
+        // Up to four tests: sites and their slacks.
+        let mut tests: [([u32; 4], [f64; 4]); 4] = [([INF; 4], [0.0; 4]); 4];
+        if inf.is_none() {
+            let s = orientation_slack(a(v[0]), a(v[1]), a(v[2]));
+            tests[3] = ([v[0], v[1], v[2], INF], [s[0], s[1], s[2], 0.0]);
+        }
+        for k in 0..3 {
+            let u = self.tn[t][k] as usize;
+            let d = self.tv[u][self.back_index(u, t as u32)];
+            if d == INF {
+                continue; // a finite triangle never conflicts with INF
+            }
+            tests[k] = match inf {
+                None => {
+                    let (p, q, r) = (v[(k + 1) % 3], v[(k + 2) % 3], v[k]);
+                    ([p, q, r, d], edge_slack(a(p), a(q), a(r), a(d)))
+                }
+                Some(i) => {
+                    // No conflict: d not strictly beyond the hull edge (x, y).
+                    let (x, y) = (v[(i + 1) % 3], v[(i + 2) % 3]);
+                    let s = orientation_slack(a(y), a(x), a(d));
+                    ([y, x, d, INF], [s[0], s[1], s[2], 0.0])
+                }
+            };
+        }
+        for (sites, slack) in tests {
+            for (s, x) in sites.into_iter().zip(slack) {
+                if s != INF {
+                    let s2 = if x > 0.0 { x * x } else { -1.0 };
+                    let m = &mut self.slack2[s as usize];
+                    *m = m.min(s2);
+                }
+            }
         }
     }
 
-    /// Moves `sites` from `from` to `to` and flips to Delaunay. Sites of triangles that invert
-    /// in a way no single flip undoes are held back; the others move at once (repaired by
-    /// unfolding flips and Lawson's algorithm over every edge); then the held sites move alone,
-    /// their move halved where it still inverts a triangle ([`Self::advance_local`]).
-    fn advance(
-        &mut self,
-        sites: &[u32],
-        from: &[[f64; 2]],
-        to: &[[f64; 2]],
-    ) -> Result<(), Failure> {
-        for (k, &s) in sites.iter().enumerate() {
-            self.pos[s as usize] = to[k];
+    /// The live triangles around the loose sites (each once).
+    fn stars_of_loose(&mut self) -> Vec<usize> {
+        self.next_stamp();
+        let stamp = self.stamp;
+        let mut out = Vec::with_capacity(8 * self.loose.len());
+        for q in 0..self.loose.len() {
+            let s = self.loose[q];
+            let start = self.vtri[s as usize] as usize;
+            let mut t = start;
+            loop {
+                if self.tri_mark[t] != stamp {
+                    self.tri_mark[t] = stamp;
+                    out.push(t);
+                }
+                let k = self.index_in(t, s);
+                t = self.tn[t][(k + 1) % 3] as usize;
+                if t == start {
+                    break;
+                }
+            }
         }
-        let mut slot = vec![u32::MAX; self.pos.len()];
-        for (k, &s) in sites.iter().enumerate() {
-            slot[s as usize] = k as u32;
-        }
-        let mut held: Vec<usize> = Vec::new();
-        let mut is_held = vec![false; sites.len()];
-        let all: Vec<usize> = (0..self.tv.len()).collect();
+        out
+    }
+
+    /// Sites have moved (`moved` of them; `prev` holds where they were) and flips bring the
+    /// triangulation to Delaunay again. Only the triangles around loose sites are tested: the
+    /// others hold by their slack. Sites of triangles that invert in a way no single flip
+    /// undoes are held back; the others move at once (repaired by unfolding flips and Lawson's
+    /// algorithm); then the held sites move alone, their move halved where it still inverts a
+    /// triangle ([`Self::advance_local`]).
+    fn advance_sites(&mut self, moved: usize) -> Result<(), Failure> {
+        let tris = if self.certified {
+            self.stars_of_loose()
+        } else {
+            // Every site loose: every live triangle.
+            self.stats.full_tests += 1;
+            self.next_stamp();
+            let stamp = self.stamp;
+            let mut all = Vec::with_capacity(self.tv.len());
+            for t in 0..self.tv.len() {
+                if self.tv[t][0] != DEAD {
+                    self.tri_mark[t] = stamp;
+                    all.push(t);
+                }
+            }
+            all
+        };
+        let tri_stamp = self.stamp;
+        let mut finite: Vec<usize> = tris
+            .iter()
+            .copied()
+            .filter(|&t| !self.tv[t].contains(&INF))
+            .collect();
+        // Held sites, with where they go (they wait at their previous position).
+        let mut held: Vec<(u32, [f64; 2])> = Vec::new();
+        self.next_stamp();
+        let stamp = self.stamp;
         loop {
             let blocked: Vec<usize> = self
-                .inverted_in(&all)
+                .inverted_in(&finite)
                 .into_iter()
                 .filter(|&(_, crossed)| crossed.is_none())
                 .map(|(t, _)| t)
@@ -479,29 +998,41 @@ impl KineticDelaunay {
             let before = held.len();
             for t in blocked {
                 for v in self.tv[t] {
-                    let k = slot[v as usize];
-                    if k != u32::MAX && !is_held[k as usize] {
-                        is_held[k as usize] = true;
-                        held.push(k as usize);
-                        self.pos[v as usize] = from[k as usize];
+                    if self.site_mark[v as usize] != stamp {
+                        self.site_mark[v as usize] = stamp;
+                        held.push((v, self.pos[v as usize]));
+                        self.pos[v as usize] = self.prev[v as usize];
                     }
                 }
             }
-            if held.len() == before || held.len() as f64 > MAX_HELD_FRACTION * sites.len() as f64 {
+            if held.len() == before
+                || (self.safeguards.held_limit
+                    && held.len() as f64 > MAX_HELD_FRACTION * moved as f64)
+            {
                 return Err(Failure::Inverted);
             }
         }
         self.stack.clear();
-        self.unfold(&all)?;
+        self.unfold(&mut finite)?;
         self.stack.clear();
-        for t in 0..self.tv.len() {
+        for &t in tris.iter().chain(&finite) {
             if self.tv[t][0] == DEAD {
                 continue;
             }
+            let in_set = self.tri_mark[t] == tri_stamp;
             for k in 0..3 {
-                if (t as u32) < self.tn[t][k] {
-                    self.stack.push((t as u32, k as u8));
+                // An edge between two triangles of the set is tested once, from the lower one,
+                // where both are finite (the test is then the same from either side).
+                let u = self.tn[t][k] as usize;
+                if in_set
+                    && u < t
+                    && self.tri_mark[u] == tri_stamp
+                    && !self.tv[t].contains(&INF)
+                    && !self.tv[u].contains(&INF)
+                {
+                    continue;
                 }
+                self.stack.push((t as u32, k as u8));
             }
         }
         self.lawson()?;
@@ -511,13 +1042,14 @@ impl KineticDelaunay {
         // One held site at a time, with a budget of halvings for the whole sample.
         self.stats.held += held.len() as u64;
         let mut budget = MAX_HALVINGS;
-        for k in held {
-            self.advance_local(&[sites[k]], &[from[k]], &[to[k]], 0, &mut budget)?;
+        for (s, to) in held {
+            let from = self.prev[s as usize];
+            self.touched.push(s);
+            self.advance_local(&[s], &[from], &[to], 0, &mut budget)?;
         }
         Ok(())
     }
 
-    /// The live triangles around `sites`.
     fn stars_of(&self, sites: &[u32]) -> Vec<usize> {
         let mut tris: Vec<usize> = sites
             .iter()
@@ -531,11 +1063,10 @@ impl KineticDelaunay {
     /// Flips the edges that sites crossed (see [`Self::inverted_in`]) among `tris` and the
     /// triangles the flips make, one at a time; fails where an inverted triangle has no such
     /// edge.
-    fn unfold(&mut self, tris: &[usize]) -> Result<bool, Failure> {
-        let mut tris = tris.to_vec();
+    fn unfold(&mut self, tris: &mut Vec<usize>) -> Result<bool, Failure> {
         let mut unfolded = 0;
         loop {
-            let inverted = self.inverted_in(&tris);
+            let inverted = self.inverted_in(tris);
             let Some(&(t, crossed)) = inverted.first() else {
                 return Ok(true);
             };
@@ -574,8 +1105,8 @@ impl KineticDelaunay {
             self.pos[s as usize] = to[k];
         }
         self.stack.clear();
-        let star = self.stars_of(sites);
-        if self.unfold(&star)? {
+        let mut star = self.stars_of(sites);
+        if self.unfold(&mut star)? {
             for t in self.stars_of(sites) {
                 for k in 0..3 {
                     self.stack.push((t as u32, k as u8));
@@ -586,10 +1117,10 @@ impl KineticDelaunay {
         for (k, &s) in sites.iter().enumerate() {
             self.pos[s as usize] = from[k];
         }
-        if depth >= MAX_BISECTIONS || *budget == 0 {
+        if depth >= MAX_BISECTIONS || (*budget == 0 && self.safeguards.halving_budget) {
             return Err(Failure::Inverted);
         }
-        *budget -= 1;
+        *budget = budget.saturating_sub(1);
         self.stats.bisections += 1;
         let mid: Vec<[f64; 2]> = from
             .iter()
@@ -661,7 +1192,10 @@ impl KineticDelaunay {
 
     /// Lawson's algorithm from the edges on the stack.
     fn lawson(&mut self) -> Result<(), Failure> {
-        let cap = 64 * self.tv.len() as u64 + 1024;
+        let cap = self
+            .safeguards
+            .flips_per_triangle
+            .map_or(u64::MAX, |f| flip_cap(self.tv.len(), f));
         let mut flips = 0u64;
         while let Some((t, k)) = self.stack.pop() {
             let (t, k) = (t as usize, k as usize);
@@ -710,6 +1244,11 @@ impl KineticDelaunay {
         let n_ab = self.tn[t][(k + 2) % 3];
         let n_bd = self.tn[u][(j + 1) % 3];
         let n_dc = self.tn[u][(j + 2) % 3];
+        // The edge (b, cc) gives way to (a, d).
+        self.count_edge(b, cc, false);
+        self.count_edge(a, d, true);
+        self.touched
+            .extend([a, b, cc, d].into_iter().filter(|&x| x != INF));
         self.tv[t] = [a, b, d];
         self.tn[t] = [n_bd, u as u32, n_ab];
         self.tv[u] = [a, d, cc];
@@ -773,6 +1312,7 @@ impl KineticDelaunay {
             None => {
                 self.tv.push(v);
                 self.tn.push(n);
+                self.tri_mark.push(0);
                 self.tv.len() - 1
             }
         }
@@ -829,6 +1369,13 @@ impl KineticDelaunay {
         if other(x0, l1) == Some(l2) || other(xl, llast) == Some(lm2) {
             return Err(Failure::Images);
         }
+        for &(t, k) in &star {
+            let b = self.tv[t][(k + 1) % 3];
+            self.count_edge(v, b, false);
+            if b != INF {
+                self.touched.push(b);
+            }
+        }
         for &(t, k) in &star[1..m - 1] {
             self.tv[t][k] = INF;
         }
@@ -857,21 +1404,29 @@ impl KineticDelaunay {
         self.lawson()
     }
 
-    /// Inserts a site at `p` (its particle and shift are set by the caller); returns its index.
-    fn insert(&mut self, p: [f64; 2]) -> Result<u32, Failure> {
+    /// Inserts the image `shift` of `particle` at `p`; returns its site.
+    fn insert(&mut self, p: [f64; 2], particle: u32, shift: [i32; 2]) -> Result<u32, Failure> {
         let s = match self.free_sites.pop() {
-            Some(s) => {
-                self.pos[s as usize] = p;
-                s
-            }
+            Some(s) => s,
             None => {
                 self.pos.push(p);
+                self.prev.push(p);
+                self.anchor.push(p);
+                self.slack2.push(-1.0);
+                self.site_mark.push(0);
                 self.particle.push(DEAD);
                 self.shift.push([0, 0]);
                 self.vtri.push(INF);
                 (self.pos.len() - 1) as u32
             }
         };
+        let k = s as usize;
+        self.pos[k] = p;
+        self.prev[k] = p;
+        self.anchor[k] = p;
+        self.slack2[k] = -1.0;
+        self.particle[k] = particle;
+        self.shift[k] = shift;
         let pc = c(p);
         // Locate: a finite triangle containing p strictly, else an infinite one that p lies
         // strictly beyond.
@@ -913,6 +1468,8 @@ impl KineticDelaunay {
         let Some((t, k)) = found else {
             return Err(Failure::Images);
         };
+        // Not in the triangulation yet: a free slot again if the insertion fails below.
+        self.vtri[s as usize] = INF;
         // t = (a, b, cc) rotated so that a = tv[t][k]; split into (a,b,p), (b,cc,p), (cc,a,p).
         let a = self.tv[t][k];
         let b = self.tv[t][(k + 1) % 3];
@@ -936,6 +1493,11 @@ impl KineticDelaunay {
                 self.vtri[v as usize] = t as u32;
             }
         }
+        for v in [a, b, cc] {
+            self.count_edge(s, v, true);
+        }
+        self.touched
+            .extend([s, a, b, cc].into_iter().filter(|&x| x != INF));
         self.stack.clear();
         self.stack.push((t as u32, 2));
         self.stack.push((t1 as u32, 2));
@@ -946,14 +1508,16 @@ impl KineticDelaunay {
     }
 
     /// The final check: the hull, walked around `INF`, has no reflex vertex and turns once.
-    fn hull_is_convex_once(&self) -> bool {
-        let Some(t0) = self
-            .tv
-            .iter()
-            .position(|v| v[0] != DEAD && v.contains(&INF))
-        else {
-            return false;
+    fn hull_is_convex_once(&mut self) -> bool {
+        let is_infinite = |v: &[u32; 3]| v[0] != DEAD && v.contains(&INF);
+        let t0 = match self.tv.get(self.hull_hint) {
+            Some(v) if is_infinite(v) => self.hull_hint,
+            _ => match self.tv.iter().position(is_infinite) {
+                Some(t) => t,
+                None => return false,
+            },
         };
+        self.hull_hint = t0;
         // Around INF: triangles (INF, x_j, x_{j+1}); the hull sequence x_j.
         let mut hull = Vec::new();
         let mut t = t0;
@@ -1021,5 +1585,164 @@ impl KineticDelaunay {
     /// Number of live triangles (finite and infinite), for tests.
     pub fn triangle_count(&self) -> usize {
         self.tv.iter().filter(|v| v[0] != DEAD).count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The safeguards, each on a configuration built to need it; every test fails with its
+    //! safeguard switched off ([`Safeguards`]).
+
+    use super::*;
+
+    /// A frame of `points` in a closed `size x size` box (no ghost images).
+    fn frame(points: &[[f64; 2]], size: f64) -> Frame {
+        Frame::from_parts(
+            2,
+            vec![size, size],
+            vec![false, false],
+            points.iter().flat_map(|p| *p).collect(),
+            vec![0.0; 2 * points.len()],
+            vec![0.1; points.len()],
+            Vec::new(),
+        )
+    }
+
+    /// `n` points from a small deterministic generator (xorshift) in `[0, size)^2`.
+    fn points(n: usize, size: f64, seed: u64) -> Vec<[f64; 2]> {
+        let mut s = seed;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n).map(|_| [size * next(), size * next()]).collect()
+    }
+
+    fn off(f: impl FnOnce(&mut Safeguards)) -> Safeguards {
+        let mut s = Safeguards::default();
+        f(&mut s);
+        s
+    }
+
+    /// Triangulates `first`, then updates to `second`; returns the structure and whether its
+    /// edges are those triangulated from scratch.
+    fn step(
+        safeguards: Safeguards,
+        first: &[[f64; 2]],
+        second: &[[f64; 2]],
+    ) -> (KineticDelaunay, bool) {
+        let mut k = KineticDelaunay::with_safeguards(0.0, safeguards);
+        k.advance(&frame(first, 10.0));
+        let f = frame(second, 10.0);
+        let same = k.update(&f) == delaunay_edges(&f, 0.0);
+        k.links_consistent().unwrap();
+        (k, same)
+    }
+
+    #[test]
+    fn flip_cap_gives_up_on_a_pass_with_more_flips() {
+        // Stretching 1000 points ten-thousandfold along x inverts no triangle but changes
+        // nearly every edge: about 5000 flips, more than one per triangle slot plus 1024.
+        let p = points(1000, 10.0, 12345);
+        let q: Vec<[f64; 2]> = p.iter().map(|x| [1e4 * x[0], x[1]]).collect();
+        let (k, same) = step(off(|s| s.flips_per_triangle = Some(1)), &p, &q);
+        assert!(same);
+        assert_eq!(k.stats.rebuild_check, 1, "{:?}", k.stats);
+        assert_eq!(k.stats.incremental, 0, "{:?}", k.stats);
+    }
+
+    #[test]
+    fn held_limit_gives_up_before_moving_many_sites_alone() {
+        // A third of 300 sites jump 3 units (about ten triangles) at once: their triangles
+        // invert in ways no single flip undoes.
+        let p = points(300, 10.0, 777);
+        let q: Vec<[f64; 2]> = p
+            .iter()
+            .enumerate()
+            .map(|(i, x)| if i % 3 == 0 { [x[0] + 3.0, x[1]] } else { *x })
+            .collect();
+        let (k, same) = step(Safeguards::default(), &p, &q);
+        assert!(same);
+        assert_eq!(k.stats.rebuild_inverted, 1, "{:?}", k.stats);
+        assert_eq!(
+            k.stats.bisections, 0,
+            "gave up before halving: {:?}",
+            k.stats
+        );
+    }
+
+    #[test]
+    fn halving_budget_bounds_the_halvings_of_a_sample() {
+        // 50 of 2000 sites (2.5 %, below the held limit) jump 1 unit (a few triangles): moved
+        // alone, their moves need 356 halvings in all (counted without the budget), more than
+        // the budget allows.
+        let p = points(2000, 10.0, 17);
+        let q: Vec<[f64; 2]> = p
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                if i % 40 == 0 {
+                    [x[0] + 1.0, x[1] + 0.3]
+                } else {
+                    *x
+                }
+            })
+            .collect();
+        let (k, same) = step(Safeguards::default(), &p, &q);
+        assert!(same);
+        assert!(k.stats.held > 0, "{:?}", k.stats);
+        assert!(k.stats.bisections <= MAX_HALVINGS as u64, "{:?}", k.stats);
+        assert_eq!(k.stats.rebuild_inverted, 1, "{:?}", k.stats);
+    }
+
+    #[test]
+    fn hull_check_catches_a_hull_vertex_that_was_wrongly_left_untested() {
+        // A fault injected into the slack bookkeeping: every site claims a huge slack except
+        // one, far from the hull vertex that moves halfway to the centre. Only the loose site's
+        // triangles are tested; the hull, now reflex, is wrong, and only the final check sees it.
+        let p = points(200, 10.0, 99);
+        let mut k = KineticDelaunay::with_safeguards(0.0, Safeguards::default());
+        let mut hull_check_off =
+            KineticDelaunay::with_safeguards(0.0, off(|s| s.hull_check = false));
+        for k in [&mut k, &mut hull_check_off] {
+            k.advance(&frame(&p, 10.0));
+        }
+        let t = (0..k.tv.len())
+            .find(|&t| k.tv[t][0] != DEAD && k.tv[t].contains(&INF))
+            .unwrap();
+        let v = *k.tv[t].iter().find(|&&x| x != INF).unwrap() as usize;
+        let far = (0..p.len())
+            .max_by(|&a, &b| dist2(p[a], p[v]).total_cmp(&dist2(p[b], p[v])))
+            .unwrap();
+        let mut q = p.clone();
+        q[v] = [0.5 * (p[v][0] + 5.0), 0.5 * (p[v][1] + 5.0)];
+        q[far][0] += 1e-6;
+        let f = frame(&q, 10.0);
+        let mut same = Vec::new();
+        for k in [&mut k, &mut hull_check_off] {
+            k.certified = true;
+            for s in 0..k.pos.len() {
+                k.anchor[s] = q[s];
+                k.slack2[s] = if s == far { -1.0 } else { 1e300 };
+            }
+            same.push(k.update(&f) == delaunay_edges(&f, 0.0));
+        }
+        assert_eq!(same, [true, false], "{:?}", k.stats);
+        assert_eq!(k.stats.rebuild_check, 1);
+    }
+
+    #[test]
+    fn a_broken_pair_bookkeeping_forces_a_rebuild() {
+        // A fault injected: a copy removed that was never there.
+        let p = points(100, 10.0, 5);
+        let mut k = KineticDelaunay::new(0.0);
+        k.advance(&frame(&p, 10.0));
+        k.pairs.remove(pair_key(0, 0));
+        let f = frame(&p, 10.0);
+        k.advance(&f);
+        assert_eq!(k.stats.rebuild_check, 1, "{:?}", k.stats);
+        k.pairs_consistent().unwrap();
     }
 }

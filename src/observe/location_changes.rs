@@ -17,11 +17,15 @@
 //! **Kept between samples.** The counter does not triangulate each sample from scratch: it keeps
 //! the triangulation and repairs it ([`super::kinetic_delaunay`]: move the sites, flip the edges
 //! whose in-circle test fails, insert and delete the ghost images that enter and leave the band,
-//! rebuild where a repair fails). The result is the same triangulation, so the same edges and
-//! counts; [`LocationChangeCounter::rebuilding`] keeps the from-scratch method as the reference
-//! (tests/observe_kinetic_delaunay.rs compares them on recorded runs). Where the same pair is an
-//! edge through two periodic images, the shortest copy is kept ([`finish_edges`]), whatever order
-//! the triangulation lists its edges in. 3D has no triangulation and nothing to keep.
+//! rebuild where a repair fails). The result is the same triangulation, so the same edges. Nor
+//! does it list and compare all edges: the triangulation keeps the set of joined pairs and lists
+//! those that changed ([`super::pair_edges`]), and the hysteresis records of [`compare`] are
+//! updated for those pairs only ([`super::tracked_pairs`]), with the same counts.
+//! [`LocationChangeCounter::rebuilding`] keeps the from-scratch method (triangulate, list,
+//! [`compare`]) as the reference (tests/observe_kinetic_delaunay.rs compares them on recorded
+//! runs). Where the same pair is an edge through two periodic images, the shortest copy is kept
+//! ([`finish_edges`]), whatever order the triangulation lists its edges in. 3D has no
+//! triangulation and nothing to keep.
 //!
 //! **3D (neighbour shells).** Grains `i, j` become neighbours when their centres come closer
 //! than `lc_enter_factor (r_i + r_j)` and stay neighbours until they separate beyond
@@ -41,6 +45,8 @@
 use super::Observer;
 use super::bins::LateralBins;
 use super::kinetic_delaunay::{KineticDelaunay, KineticStats};
+use super::pair_edges::PairKey;
+use super::tracked_pairs::TrackedPairs;
 use crate::sim::Frame;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::collections::HashMap;
@@ -402,8 +408,13 @@ pub fn compare(
     (fresh, tracked)
 }
 
-/// The previous sample: its time, whether it lay in the window, and the tracked relations.
-type Tracked = (f64, bool, Vec<(u32, u32)>);
+/// The kept triangulation with the records of the tracked pairs.
+#[derive(Debug, Clone)]
+struct Kept {
+    triangulation: KineticDelaunay,
+    tracked: TrackedPairs,
+    changed: Vec<PairKey>,
+}
 
 /// Counts location changes sample by sample.
 #[derive(Debug, Clone)]
@@ -411,7 +422,10 @@ pub struct LocationChangeCounter {
     method: Method,
     bins: LateralBins,
     period: f64,
-    previous: Option<Tracked>,
+    /// The previous sample: its time and whether it lay in the window.
+    previous: Option<(f64, bool)>,
+    /// The relations tracked since the previous sample (sorted; the rebuilding counter).
+    tracked: Vec<(u32, u32)>,
     /// `(t, location changes per particle per period)` over each sample interval ending at `t`.
     pub series: Vec<(f64, f64)>,
     /// Changes counted in intervals inside the window.
@@ -422,7 +436,7 @@ pub struct LocationChangeCounter {
     pub bin_count: Vec<u64>,
     particles: usize,
     /// 2D: the triangulation kept between samples (`None`: rebuilt at every sample).
-    kinetic: Option<KineticDelaunay>,
+    kinetic: Option<Kept>,
 }
 
 impl LocationChangeCounter {
@@ -431,7 +445,11 @@ impl LocationChangeCounter {
     pub fn new(method: Method, bins: LateralBins, period: f64) -> Self {
         let mut c = Self::rebuilding(method, bins, period);
         if let Method::Delaunay { max_edge, .. } = method {
-            c.kinetic = Some(KineticDelaunay::new(4.0 * max_edge));
+            c.kinetic = Some(Kept {
+                triangulation: KineticDelaunay::new(4.0 * max_edge),
+                tracked: TrackedPairs::default(),
+                changed: Vec::new(),
+            });
         }
         c
     }
@@ -445,6 +463,7 @@ impl LocationChangeCounter {
             bins,
             period,
             previous: None,
+            tracked: Vec::new(),
             series: Vec::new(),
             window_count: 0,
             window_time: 0.0,
@@ -461,7 +480,7 @@ impl LocationChangeCounter {
     /// How the kept triangulation was updated (incremental repairs, rebuilds by reason, flips);
     /// `None` for the rebuilding counter and for neighbour shells.
     pub fn kinetic_stats(&self) -> Option<KineticStats> {
-        self.kinetic.as_ref().map(|k| k.stats)
+        self.kinetic.as_ref().map(|k| k.triangulation.stats)
     }
 
     /// `f_lc` over the window: changes per particle per period.
@@ -495,15 +514,39 @@ impl LocationChangeCounter {
 impl Observer for LocationChangeCounter {
     fn observe(&mut self, frame: &Frame, in_window: bool) {
         self.particles = frame.len();
-        let prev_pairs: &[(u32, u32)] = self.previous.as_ref().map_or(&[], |p| &p.2);
-        let current = match &mut self.kinetic {
-            Some(k) => k.update_for_counter(frame, prev_pairs),
-            None => edges(frame, self.method, prev_pairs),
+        let first = self.previous.is_none();
+        let fresh = match (&mut self.kinetic, self.method) {
+            (Some(k), Method::Delaunay { max_edge, margin }) => {
+                let tri = &mut k.triangulation;
+                tri.advance(frame);
+                tri.take_changed_pairs(&mut k.changed);
+                if first {
+                    k.tracked.start(tri.pair_keys());
+                    Vec::new()
+                } else {
+                    let tri = &k.triangulation;
+                    k.tracked.advance(
+                        &k.changed,
+                        |p| tri.has_pair(p),
+                        |p| tri.edge_of(p).expect("a joined pair has an edge"),
+                        max_edge,
+                        margin,
+                    )
+                }
+            }
+            _ => {
+                let current = edges(frame, self.method, &self.tracked);
+                if first {
+                    self.tracked = current.iter().map(|e| (e.i, e.j)).collect();
+                    Vec::new()
+                } else {
+                    let (fresh, keep) = compare(&self.tracked, &current, self.method);
+                    self.tracked = keep;
+                    fresh
+                }
+            }
         };
-        let mut tracked = None;
-        if let Some((t0, was_in_window, prev)) = &self.previous {
-            let (fresh, keep) = compare(prev, &current, self.method);
-            tracked = Some(keep);
+        if let Some((t0, was_in_window)) = self.previous {
             let dt = frame.time - t0;
             if dt > 0.0 {
                 self.series.push((
@@ -511,7 +554,7 @@ impl Observer for LocationChangeCounter {
                     fresh.len() as f64 / (frame.len() as f64 * dt / self.period),
                 ));
             }
-            if in_window && *was_in_window {
+            if in_window && was_in_window {
                 self.window_count += fresh.len() as u64;
                 self.window_time += dt;
                 for e in &fresh {
@@ -519,7 +562,6 @@ impl Observer for LocationChangeCounter {
                 }
             }
         }
-        let pairs = tracked.unwrap_or_else(|| current.iter().map(|e| (e.i, e.j)).collect());
-        self.previous = Some((frame.time, in_window, pairs));
+        self.previous = Some((frame.time, in_window));
     }
 }

@@ -32,10 +32,14 @@ pub mod lateral;
 pub mod line;
 pub mod location_changes;
 pub mod noise;
+pub mod pair_edges;
+pub mod predicates;
 pub mod profiles;
 pub mod shear;
+pub mod slack;
 pub mod stationarity;
 pub mod temperature;
+pub mod tracked_pairs;
 
 pub use crate::scene::{ConvergenceSpec, ObserveSpec};
 pub use classify::{
