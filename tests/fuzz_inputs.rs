@@ -974,8 +974,7 @@ fn regression_continuation_jobs_are_validated_with_the_start_they_run() {
                 [sweep]\nname = \"fuzz\"\nperiods = 0.5\n[sweep.continuation]\naxis = \"capillary.e_cb\"\n";
     let e = SweepFile::parse(text, Path::new("fuzz/sweep.toml"))
         .and_then(|f| f.expand())
-        .err()
-        .expect("the sweep must be refused");
+        .expect_err("the sweep must be refused");
     assert_eq!(e.key, "contact.restitution", "{e}");
     // The same sweep at a sound temperature expands, and its jobs validate as they will run.
     let sound = text.replace(
