@@ -592,3 +592,24 @@ fn tabulated_wall_placement_never_pushes_a_grain_into_its_neighbour() {
     assert_eq!(run.report.invariant_violation, None);
     assert!(run.report.energy_final.added_by_wall_placement != 0.0);
 }
+
+/// OPEN finding of the sweep-file fuzzer (seed 7, after 3 328 cases; not fixed, hence ignored):
+/// three disks over a 16 x 16 wall table at Gamma = 0.3, E* = 11.5 (amplitude 38 d): within 30
+/// events one disk ends 0.021 d behind the shaken floor, twice the table's placement tolerance.
+/// The same happens with the wall code before the placement cut of 2026-11-23, so it is older
+/// than that. `cargo test --release --test engine_safeguards -- --ignored open_`.
+#[test]
+#[ignore = "open finding: a grain 0.021 d behind the floor with a 16 x 16 table"]
+fn open_coarse_table_leaves_a_grain_behind_the_floor() {
+    let s = wetgran::scene::Scene::from_toml_str(
+        "dimension = 2\ngravity = 1.0\n[box]\nsize = [11.2961119195911, 4.986169866029122]\n\
+         [particles]\ncount = 3\npolydispersity = 0.07414066405078824\n[contact]\nrestitution = 0.3\n\
+         [drive]\nkind = \"sine\"\ngamma = 0.3\ne_star = 11.510145747008325\n\
+         wall_solver = \"table\"\ntable_cells = [16, 16]\n[initial]\nseed = 107\n\
+         temperature = 3.5518651948612208\n[run]\nduration = 1.0\n",
+        "fuzz case",
+    )
+    .expect("valid scene");
+    let m = wetgran::bench::stress::first_events(&s, 300, 10).expect("runs");
+    assert_eq!(m.violation, None);
+}

@@ -175,6 +175,7 @@ bad_scenes! {
     shear_f_max_negative,
     shear_f_max_missing,
     shear_slab_width_too_large,
+    shear_slab_width_tiny,
     shear_box_wall_in_x,
     shear_with_amplitude,
     shear_f_max_without_shear,

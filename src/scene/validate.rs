@@ -23,6 +23,10 @@ pub const MAX_GAMMA: f64 = 1e5;
 /// Largest peak shear force `F_max`, units of `m g` (found by the input fuzzer: at `1e300` the
 /// sheared pair quartics lose every digit and pairs pass through each other).
 pub const MAX_SHEAR_FORCE: f64 = 1e3;
+/// Narrowest shear slab, in units of `d` (`drive.slab_width`).
+const MIN_SLAB_WIDTH: f64 = 1e-3;
+/// Most shear slabs along `L_x` (`drive.slab_width`).
+const MAX_SHEAR_SLABS: f64 = 1e6;
 /// Largest gravity, in the scene's units.
 pub const MAX_GRAVITY: f64 = 1e6;
 /// Range of `particles.diameter` and `particles.mass`, in the scene's units.
@@ -1206,15 +1210,25 @@ impl Scene {
         }
         // At least 4 slabs: with 2 the slab centres sit on the zeros of the cosine (no force at
         // all), with 1 the force is uniform (no shear).
+        // At most MAX_SHEAR_SLABS slabs, each at least MIN_SLAB_WIDTH d wide: the engine keeps one
+        // acceleration per slab (found by the job-spec fuzzer: `slab_width = 1e-300` asked for
+        // 5e300 slabs and the allocation panicked).
         let l_x = self.container.size[0];
-        let w = drive.slab_width.unwrap_or(self.particles.diameter);
-        if !(w.is_finite() && w > 0.0 && (l_x / w).round() >= 4.0) {
+        let d = self.particles.diameter;
+        let w = drive.slab_width.unwrap_or(d);
+        if !(w.is_finite()
+            && w >= MIN_SLAB_WIDTH * d
+            && (l_x / w).round() >= 4.0
+            && (l_x / w).round() <= MAX_SHEAR_SLABS)
+        {
             return Err(c.out_of_range(
                 "drive.slab_width",
                 w,
                 &format!(
-                    "in (0, L_x / 3.5 = {:.4}] (at least 4 slabs along L_x = {l_x}; with 2 the \
+                    "in [{}, L_x / 3.5 = {:.4}] (at least {MIN_SLAB_WIDTH} d and at most \
+                     {MAX_SHEAR_SLABS:e} slabs; at least 4 slabs along L_x = {l_x}: with 2 the \
                      slab centres sit on the zeros of the cosine)",
+                    num((MIN_SLAB_WIDTH * d).max(l_x / MAX_SHEAR_SLABS)),
                     l_x / 3.5
                 ),
             ));
