@@ -88,6 +88,8 @@ fn digest<const D: usize, const G: bool, const W: bool, B: BodyForce<D>>(
 
 /// Runs `run` on a rayon pool of `threads` threads and returns its digests.
 fn on_threads(threads: usize, run: impl FnOnce() -> (u64, u64) + Send) -> (u64, u64) {
+    // The parallel path from the old threshold on, so that these sizes exercise it.
+    wetgran::sim::time_driven::engine::set_parallel_min_particles(512);
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -248,7 +250,7 @@ fn sheared_3d_gear() {
 }
 
 /// The parallel path on every effect at once (bridges, shaken walls, the body force, 3D):
-/// 600 wet spheres (above `PARALLEL_MIN_PARTICLES`, so the loops are split over the threads)
+/// 600 wet spheres (above the threshold `on_threads` sets, so the loops are split over the threads)
 /// give the same bits on one, two and three threads.
 #[test]
 fn threads_do_not_change_a_wet_sheared_run() {
@@ -261,7 +263,8 @@ fn threads_do_not_change_a_wet_sheared_run() {
         "[contact]\ndamping = 1.5e-4\n[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n\
          [drive]\nkind = \"shear\"\nf_max = 0.5\n[initial]\ntemperature = 2.0\n[engine]\nkind = \"time\"\n",
     );
-    assert!(s.particles.count >= wetgran::sim::time_driven::engine::PARALLEL_MIN_PARTICLES);
+    wetgran::sim::time_driven::engine::set_parallel_min_particles(512);
+    assert!(s.particles.count >= wetgran::sim::time_driven::engine::parallel_min_particles());
     let field = CosineShear::of_scene(&s).expect("a shear scene");
     let run = || {
         let mut e = TimeEngine::<3, false, true, CosineShear>::with_body_force(&s, field);

@@ -125,6 +125,11 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<TdmdRow> {
 /// Runs the benchmark for both integrators and each thread count of `threads` (alternating
 /// within each repetition); rows in the order integrator, then thread count.
 pub fn measure_threads(repeat: usize, scale: f64, threads: &[usize]) -> Vec<TdmdRow> {
+    // The bench measures the parallel path itself: split the step whatever the system size
+    // (an engine below the default threshold would run serially on any pool).
+    if threads.iter().any(|&t| t > 1) {
+        crate::sim::time_driven::engine::set_parallel_min_particles(0);
+    }
     let timed = scale.max(0.1);
     let pools: Vec<rayon::ThreadPool> = threads
         .iter()

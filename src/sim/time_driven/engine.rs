@@ -80,9 +80,27 @@ pub const PARTICLE_CHUNK: usize = 128;
 /// Verlet-list entries per chunk of the pair phase of a step (the same role).
 pub const ENTRY_CHUNK: usize = 128;
 
-/// Below this many particles the loops of a step run on the calling thread (same chunks, same
-/// numbers): a parallel loop costs a few microseconds of hand-over per step.
-pub const PARALLEL_MIN_PARTICLES: usize = 512;
+/// Below this many particles (the default of [`parallel_min_particles`]) the loops of a step
+/// run on the calling thread (same chunks, same numbers): a parallel loop costs a few
+/// microseconds of hand-over per step. Measured on a quiet 2-core machine (docs/performance.md,
+/// "Quiet-machine figures"): two threads made the N = 1200 bench 0.69x as fast, 4 800 disks
+/// about even, 19 200 at most 1.37x; 512 before that measurement.
+pub const PARALLEL_MIN_PARTICLES: usize = 16_384;
+
+static PARALLEL_MIN: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(PARALLEL_MIN_PARTICLES);
+
+/// The fewest particles for which a step is split over threads (process-wide; default
+/// [`PARALLEL_MIN_PARTICLES`]).
+pub fn parallel_min_particles() -> usize {
+    PARALLEL_MIN.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Sets [`parallel_min_particles`] for the whole process: tests and `bench tdmd --threads` use a
+/// small value to run the parallel path on small systems (the numbers do not depend on it).
+pub fn set_parallel_min_particles(n: usize) {
+    PARALLEL_MIN.store(n, std::sync::atomic::Ordering::Relaxed);
+}
 
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
@@ -594,10 +612,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     }
 
     /// Whether the loops of a step are split over threads: on a pool of more than one thread
-    /// and from [`PARALLEL_MIN_PARTICLES`] particles on; otherwise the serial path runs on the
+    /// and from [`parallel_min_particles`] particles on; otherwise the serial path runs on the
     /// calling thread, without the pool. The numbers are the same either way.
     fn parallel(&self) -> bool {
-        self.n >= PARALLEL_MIN_PARTICLES && rayon::current_num_threads() > 1
+        self.n >= parallel_min_particles() && rayon::current_num_threads() > 1
     }
 
     /// The force every coordinate starts from: the weight `-m g` on the last axis (with
