@@ -10,7 +10,7 @@
 //! parameter of the trajectory or of the observers is a new job. Nothing in a spec refers to its
 //! sweep: the grid coordinates of a job live beside it in the sweep's point list.
 
-use super::file::{SweepError, SweepFile};
+use super::file::{Continuation, SweepError, SweepFile};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -428,23 +428,7 @@ impl SweepFile {
             for w in 0..members.len() {
                 let k = members[w];
                 if w == 0 {
-                    jobs[k].spec.scene.initial.start = c.first;
-                    jobs[k].spec.start_from = None;
-                    // The start mode is part of what validation checks (the time engine's
-                    // damping calibration reads it).
-                    let (j, scene) = (&jobs[k], &jobs[k].spec.scene);
-                    if let Err(e) = scene.validate(&file) {
-                        return Err(SweepError::new(
-                            &file,
-                            Some(c.line),
-                            &e.key,
-                            format!(
-                                "{} as the first job of its continuation chain{}",
-                                e.message,
-                                describe_point(self, &j.coords, j.replica)
-                            ),
-                        ));
-                    }
+                    self.start_as_chain_head(&mut jobs[k], c)?;
                 } else {
                     let prev = &jobs[members[w - 1]];
                     let (a, b) = (&prev.spec.scene, &jobs[k].spec.scene);
@@ -474,6 +458,27 @@ impl SweepFile {
         Ok(())
     }
 
+    /// Gives `job` the start of a continuation chain's first job (`continuation.first`, no
+    /// predecessor) and validates it again: the start mode is part of what validation checks
+    /// (the time engine's damping calibration reads it). The caller recomputes the id.
+    fn start_as_chain_head(&self, job: &mut SweepJob, c: Continuation) -> Result<(), SweepError> {
+        job.spec.scene.initial.start = c.first;
+        job.spec.start_from = None;
+        let file = self.path.display().to_string();
+        job.spec.scene.validate(&file).map_err(|e| {
+            SweepError::new(
+                &file,
+                Some(c.line),
+                &e.key,
+                format!(
+                    "{} as the first job of its continuation chain{}",
+                    e.message,
+                    describe_point(self, &job.coords, job.replica)
+                ),
+            )
+        })
+    }
+
     /// The jobs of one point at any coordinates (not only the grid's: refinement adds points
     /// between grid points), replicas `replicas`, expanded and validated as in
     /// [`SweepFile::expand`]. An invalid scene is an error here whatever `sweep.skip_invalid`
@@ -493,17 +498,10 @@ impl SweepFile {
                     if let Some(c) = self.continuation
                         && job.spec.scene.initial.start == crate::scene::StartMode::Continue
                     {
-                        job.spec.scene.initial.start = c.first;
-                        job.id = job.spec.id();
-                        let file = self.path.display().to_string();
-                        if let Err(e) = job.spec.scene.validate(&file) {
-                            return Ok(Err(SweepError::new(
-                                &file,
-                                Some(c.line),
-                                &e.key,
-                                format!("{} with the chain's first start", e.message),
-                            )));
+                        if let Err(e) = self.start_as_chain_head(&mut job, c) {
+                            return Ok(Err(e));
                         }
+                        job.id = job.spec.id();
                     }
                     out.push(job)
                 }
