@@ -139,3 +139,62 @@ fn incremental_counts_equal_rebuilt_counts_in_a_doubly_periodic_gas() {
         "{st:?}"
     );
 }
+
+/// Two consecutive frames of a shaken run, read from `tests/data/tangled_delaunay_frames.txt`.
+fn tangled_frames() -> [Frame; 2] {
+    let text = include_str!("data/tangled_delaunay_frames.txt");
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let head: Vec<&str> = lines.next().expect("header").split_whitespace().collect();
+    let (lx, ly): (f64, f64) = (head[1].parse().unwrap(), head[2].parse().unwrap());
+    let n: usize = head[7].parse().unwrap();
+    let mut positions: Vec<f64> = lines
+        .flat_map(|l| l.split_whitespace().map(|x| x.parse::<f64>().unwrap()))
+        .collect();
+    assert_eq!(positions.len(), 4 * n);
+    let second = positions.split_off(2 * n);
+    let frame = |p: Vec<f64>| {
+        Frame::from_parts(
+            2,
+            vec![lx, ly],
+            vec![true, false],
+            p,
+            vec![0.0; 2 * n],
+            vec![0.5; n],
+            Vec::new(),
+        )
+    };
+    [frame(positions), frame(second)]
+}
+
+/// Regression: in `sweeps/shaken_2d_elastic.toml` at `Gamma = 0.71, E* = 17.8` the kept
+/// triangulation, advancing a held-back site, flipped an edge that joined two sites joined
+/// already; the doubled edge broke the next walk around a site ("v in its star") and the job
+/// failed. From the triangulation of the first frame, the step to the second must give the
+/// edges triangulated from scratch; with the check against such flips switched off
+/// (`Safeguards::joined_flip_check`) it panics or corrupts the structure.
+#[test]
+fn a_tangled_step_never_doubles_an_edge() {
+    use wetgran::observe::kinetic_delaunay::Safeguards;
+    let [a, b] = tangled_frames();
+    let step = |safeguards: Safeguards| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut k = KineticDelaunay::with_safeguards(8.0, safeguards);
+            k.advance(&a);
+            let same = k.update(&b) == delaunay_edges(&b, 8.0);
+            (
+                same,
+                k.links_consistent().is_ok() && k.pairs_consistent().is_ok(),
+            )
+        }))
+    };
+    assert_eq!(step(Safeguards::default()).ok(), Some((true, true)));
+    let unchecked = step(Safeguards {
+        joined_flip_check: false,
+        ..Safeguards::default()
+    });
+    assert_ne!(
+        unchecked.ok(),
+        Some((true, true)),
+        "without the check this step should corrupt the triangulation"
+    );
+}
