@@ -396,8 +396,10 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
         SweepCommand::Estimate {
             file,
             periods,
+            settle,
             samples,
             cores,
+            db,
         } => match cores {
             Some(0) => Err(Failure::BadInput(
                 "--cores 0 is out of range: must be >= 1".to_string(),
@@ -405,8 +407,10 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
             c => sweep_cmd::sweep_estimate(
                 &file,
                 periods,
+                settle,
                 samples,
                 c.unwrap_or_else(available_cores),
+                &db,
             ),
         },
     })

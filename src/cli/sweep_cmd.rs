@@ -13,8 +13,8 @@ use crate::report::boundaries_text::{
 };
 use crate::report::cluster_text::slurm_status_text;
 use crate::report::sweep_text::{
-    Estimate, coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
-    estimate_text, sweep_status_text,
+    coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
+    estimate_stored_text, estimate_text, sweep_status_text,
 };
 use crate::report::{export, plot_phase};
 use crate::run::{RunOptions, run_sweeps};
@@ -112,22 +112,34 @@ pub enum SweepCommand {
         #[arg(long)]
         specs: bool,
     },
-    /// Estimate what a sweep costs from a few sampled jobs.
+    /// Estimate what a sweep costs from a few sampled jobs and the stored results.
     ///
     /// Runs a few of its jobs (spread over the grid) for a few driving periods each, one at a
-    /// time, and scales the measured wall time per period to the sweep's run length and job
-    /// count. Writes nothing to any database.
+    /// time, after some settling periods, and measures their wall time per simulated time
+    /// unit. Each job then costs the rate of the nearest sampled (or stored) job times its run
+    /// length: its first check (the minimum), its cap, and, when `--db` holds finished jobs of
+    /// the sweep (same ids: a line of it run first), the run length those actually needed.
+    /// The wall time on the cores replays the runner's claim order (chains wait for their
+    /// predecessors; a lone long job at the end is a tail). Writes nothing to any database.
     Estimate {
         file: PathBuf,
-        /// Driving periods to run per sampled job (after a transient of none).
+        /// Driving periods timed per sampled job.
         #[arg(long, default_value_t = 2.0)]
         periods: f64,
+        /// Simulated time units `sqrt(d/g)` each sampled job runs untimed first: a hot start
+        /// cools and a bed settles, and the cost per period changes (0: time from the start).
+        #[arg(long, default_value_t = DEFAULT_ESTIMATE_SETTLE)]
+        settle: f64,
         /// Number of jobs to sample.
         #[arg(long, default_value_t = 6)]
         samples: usize,
         /// Cores the estimate is for (default: the available cores).
         #[arg(long)]
         cores: Option<usize>,
+        /// A database whose finished jobs of this sweep count with their measured cost and run
+        /// length (any sweep's jobs with the same ids); may be given more than once.
+        #[arg(long)]
+        db: Vec<PathBuf>,
     },
     /// Refine a sweep's phase boundaries: add points where neighbours differ in phase.
     ///
@@ -419,18 +431,32 @@ pub(super) fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Simulated time units `sweep estimate` runs a sampled job before it times it.
+pub const DEFAULT_ESTIMATE_SETTLE: f64 = 20.0;
+
 pub(super) fn sweep_estimate(
     file: &Path,
     periods: f64,
+    settle: f64,
     samples: usize,
     cores: usize,
+    dbs: &[PathBuf],
 ) -> Result<(), Failure> {
+    use crate::sweep::estimate::{RateSample, RunLength, job_seconds, measured_runs, sweep_cost};
     if !(periods.is_finite() && periods > 0.0) || samples == 0 {
         return Err(Failure::BadInput(
             "--periods must be > 0 and --samples >= 1".to_string(),
         ));
     }
+    if !(settle.is_finite() && settle >= 0.0) {
+        return Err(Failure::BadInput("--settle must be >= 0".to_string()));
+    }
     let (sweep, jobs) = load_sweep(file)?;
+    let mut stored = std::collections::HashMap::new();
+    for path in dbs {
+        stored.extend(Store::open_existing(path)?.finished_job_costs()?);
+    }
+    let planned = planned_jobs(&sweep, &jobs, &stored);
     let picks: Vec<usize> = if samples >= jobs.len() {
         (0..jobs.len()).collect()
     } else if samples == 1 {
@@ -446,64 +472,165 @@ pub(super) fn sweep_estimate(
             &file.display().to_string(),
             jobs.len(),
             picks.len(),
-            periods
+            periods,
+            settle
         )
     );
     let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
-    let mut per_period = Vec::new();
-    let mut full_periods = Vec::new();
-    // With a `[convergence]` policy: the minimum run (first check) and the cap, in periods.
-    let mut cap_periods = Vec::new();
+    let mut rates = Vec::new();
     for &k in &picks {
         let job = &jobs[k];
-        let mut spec = job.spec.clone();
-        let period = spec.period();
-        match spec.scene.convergence.take() {
-            Some(c) => {
-                let s = c.schedule(&spec.scene);
-                full_periods.push(s.first_check / period);
-                cap_periods.push(s.cap / period);
-            }
-            None => full_periods.push(spec.scene.run.duration / period),
-        }
-        spec.scene.run.duration = periods * period;
-        spec.scene.observe.transient_periods = 0.0;
-        let t0 = std::time::Instant::now();
-        let outcome = run_job(&spec, &mut |_| {});
-        let wall = t0.elapsed().as_secs_f64();
         let coords = coords_text(&labels, &job.coords);
+        if let Some(m) = planned[k].measured {
+            // The database has its run: its rate is known, nothing to sample.
+            print!(
+                "{}",
+                estimate_stored_text(&coords, m.wall_seconds / m.simulated_time)
+            );
+            continue;
+        }
+        let mut spec = job.spec.clone();
+        if spec.start_from.take().is_some() {
+            // A continuation job is sampled from the start of its chain's first job.
+            if let Some(c) = &sweep.continuation {
+                spec.scene.initial.start = c.first;
+            }
+        }
+        let period = spec.period();
+        spec.scene.convergence = None;
+        spec.scene.run.duration = settle + periods * period;
+        spec.scene.observe.transient_periods = 0.0;
+        // The clock starts at the first progress report past the settling time.
+        let settled = settle / spec.scene.run.duration;
+        let mut mark: Option<(std::time::Instant, f64)> = None;
+        let t0 = std::time::Instant::now();
+        let outcome = run_job(&spec, &mut |f| {
+            if mark.is_none() && f >= settled {
+                mark = Some((std::time::Instant::now(), f));
+            }
+        });
+        let (start, from) = mark.unwrap_or((t0, 0.0));
+        let wall = start.elapsed().as_secs_f64();
         match outcome {
             Ok(r) => {
-                per_period.push(wall / periods);
+                let timed = (1.0 - from) * r.simulated_time;
+                let rate = wall / timed;
+                rates.push(RateSample {
+                    position: planned[k].position.clone(),
+                    seconds_per_time: rate,
+                });
                 print!(
                     "{}",
-                    estimate_sample_text(&coords, wall / periods, r.events)
+                    estimate_sample_text(&coords, rate * period, rate, r.events)
                 );
             }
             Err(e) => print!("{}", estimate_failed_text(&coords, &e.to_string())),
         }
     }
-    if per_period.is_empty() {
+    let measured = measured_runs(&planned);
+    if rates.is_empty() && measured.is_none() {
         return Err(Failure::Other("every sampled job failed".to_string()));
     }
-    let mean = per_period.iter().sum::<f64>() / per_period.len() as f64;
-    let max = per_period.iter().cloned().fold(0.0, f64::max);
-    let run_periods = full_periods.iter().sum::<f64>() / full_periods.len() as f64;
-    let cap = (!cap_periods.is_empty())
-        .then(|| cap_periods.iter().sum::<f64>() / cap_periods.len() as f64);
+    let policy = jobs.iter().any(|j| j.spec.scene.convergence.is_some());
+    let mut lines = Vec::new();
+    let mut add = |label: &str, length: RunLength| {
+        let whole = sweep_cost(
+            &planned,
+            &job_seconds(&planned, &rates, length, false),
+            cores,
+        );
+        let left = sweep_cost(
+            &planned,
+            &job_seconds(&planned, &rates, length, true),
+            cores,
+        );
+        lines.push((label.to_string(), whole, left));
+    };
+    if policy {
+        add(
+            "minimum (every job stationary at its first check)",
+            RunLength::FirstCheck,
+        );
+        if let Some(m) = measured {
+            add(
+                &format!(
+                    "likely (the stored runs' {:.2} x their first check)",
+                    m.mean_length_factor
+                ),
+                RunLength::Extended(m.mean_length_factor),
+            );
+        }
+        add("cap (every job run to its cap)", RunLength::Cap);
+    } else {
+        add("the sweep's run length", RunLength::FirstCheck);
+    }
     print!(
         "{}",
-        estimate_text(&Estimate {
-            mean,
-            max,
-            run_periods,
-            jobs: jobs.len(),
+        estimate_text(
+            jobs.len(),
             cores,
-            cap_periods: cap,
-            sampled_periods: periods,
-        })
+            measured.as_ref(),
+            &lines,
+            settle,
+            periods
+        )
     );
     Ok(())
+}
+
+/// The jobs as `sweep estimate` sees them: grid position, run lengths, predecessor, and the
+/// stored cost of those the database has finished.
+fn planned_jobs(
+    sweep: &crate::sweep::SweepFile,
+    jobs: &[crate::sweep::SweepJob],
+    stored: &std::collections::HashMap<String, crate::store::FinishedCost>,
+) -> Vec<crate::sweep::estimate::PlannedJob> {
+    use crate::sweep::estimate::{MeasuredCost, PlannedJob};
+    let lens: Vec<usize> = sweep.axes.iter().map(|a| a.values.len().max(1)).collect();
+    let index: std::collections::HashMap<&str, usize> = jobs
+        .iter()
+        .enumerate()
+        .map(|(k, j)| (j.id.as_str(), k))
+        .collect();
+    jobs.iter()
+        .map(|j| {
+            // Row-major grid index, the last axis fastest.
+            let mut rest = j.point;
+            let mut position = vec![0.0; lens.len()];
+            for (a, &len) in lens.iter().enumerate().rev() {
+                let i = rest % len;
+                rest /= len;
+                position[a] = if len > 1 {
+                    i as f64 / (len - 1) as f64
+                } else {
+                    0.0
+                };
+            }
+            let scene = &j.spec.scene;
+            let (first_check, cap) = match &scene.convergence {
+                Some(c) => {
+                    let s = c.schedule(scene);
+                    (s.first_check, s.cap)
+                }
+                None => (scene.run.duration, scene.run.duration),
+            };
+            PlannedJob {
+                position,
+                first_check,
+                cap,
+                predecessor: j
+                    .spec
+                    .start_from
+                    .as_deref()
+                    .and_then(|p| index.get(p).copied()),
+                measured: stored.get(&j.id).map(|c| MeasuredCost {
+                    wall_seconds: c.wall_seconds,
+                    simulated_time: c.simulated_time,
+                    converged: c.converged,
+                }),
+            }
+        })
+        .collect()
 }
 
 pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {

@@ -193,16 +193,41 @@ pub fn coords_text(labels: &[&str], coords: &[serde_json::Value]) -> String {
 }
 
 /// The first line of `sweep estimate`.
-pub fn estimate_head_text(file: &str, jobs: usize, sampled: usize, periods: f64) -> String {
+pub fn estimate_head_text(
+    file: &str,
+    jobs: usize,
+    sampled: usize,
+    periods: f64,
+    settle: f64,
+) -> String {
+    let after = if settle > 0.0 {
+        format!(" after {} settling time unit(s)", short(settle))
+    } else {
+        " from the initial state".to_string()
+    };
     format!(
-        "{file}: {jobs} job(s); sampling {sampled} for {periods} driving period(s) each, one at \
-         a time\n"
+        "{file}: {jobs} job(s); sampling {sampled} for {} driving period(s) each{after}, one at \
+         a time\n",
+        short(periods)
     )
 }
 
 /// The line of one job `sweep estimate` sampled.
-pub fn estimate_sample_text(coords: &str, seconds_per_period: f64, events: u64) -> String {
-    format!("  {coords:<40} {seconds_per_period:>9.3} s per period  ({events} events)\n")
+pub fn estimate_sample_text(
+    coords: &str,
+    seconds_per_period: f64,
+    seconds_per_time: f64,
+    events: u64,
+) -> String {
+    format!(
+        "  {coords:<40} {seconds_per_period:>9.3} s per period, {seconds_per_time:>9.5} s per \
+         time unit  ({events} events run)\n"
+    )
+}
+
+/// The line of a sampled job whose result the database holds.
+pub fn estimate_stored_text(coords: &str, seconds_per_time: f64) -> String {
+    format!("  {coords:<40} stored: {seconds_per_time:>9.5} s per time unit over its whole run\n")
 }
 
 /// The line of a sampled job that failed.
@@ -210,52 +235,64 @@ pub fn estimate_failed_text(coords: &str, error: &str) -> String {
     format!("  {coords:<40} failed: {error}\n")
 }
 
-/// The figures of a `sweep estimate`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Estimate {
-    /// Wall seconds per driving period: mean and maximum over the sampled jobs.
-    pub mean: f64,
-    pub max: f64,
-    /// Mean run length of a job, in periods (the minimum run under a `[convergence]` policy).
-    pub run_periods: f64,
-    pub jobs: usize,
-    pub cores: usize,
-    /// Under a `[convergence]` policy: the mean cap, in periods.
-    pub cap_periods: Option<f64>,
-    /// Periods each sampled job ran.
-    pub sampled_periods: f64,
-}
-
-/// The closing lines of `sweep estimate`: CPU time of the sweep and wall time on the cores.
-pub fn estimate_text(e: &Estimate) -> String {
+/// The closing lines of `sweep estimate`: what the stored results say, then per assumption on
+/// the run lengths the CPU time and the wall time on the cores, of the whole sweep and of what
+/// is left to run.
+pub fn estimate_text(
+    jobs: usize,
+    cores: usize,
+    measured: Option<&crate::sweep::estimate::MeasuredRuns>,
+    lines: &[(
+        String,
+        crate::sweep::estimate::SweepCost,
+        crate::sweep::estimate::SweepCost,
+    )],
+    settle: f64,
+    periods: f64,
+) -> String {
     let mut out = String::new();
-    let (cores, periods) = (e.cores, e.sampled_periods);
-    let total = e.mean * e.run_periods * e.jobs as f64;
-    let _ = writeln!(
-        out,
-        "estimate: {:.3} s per period on average (max {:.3}) x {} periods x {} jobs = {} of CPU, \
-         about {} on {cores} core(s)",
-        e.mean,
-        e.max,
-        short(e.run_periods),
-        e.jobs,
-        duration_text(total),
-        duration_text(total / cores as f64)
-    );
-    if let Some(cap) = e.cap_periods {
+    if let Some(m) = measured {
         let _ = writeln!(
             out,
-            "  run to stationarity: that is the minimum run; every job extended to its cap \
-             ({} periods) would cost {} on {cores} core(s)",
-            short(cap),
-            duration_text(e.mean * cap * e.jobs as f64 / cores as f64)
+            "stored: {} of the {jobs} jobs finished in the database ({} of job time); their runs \
+             were {:.2} x their first check on average, {} ran past it, {} unconverged at the cap",
+            m.jobs,
+            duration_text(m.wall_seconds),
+            m.mean_length_factor,
+            m.extended,
+            m.unconverged
         );
     }
     let _ = writeln!(
         out,
-        "  (measured on the first {periods} period(s) from the initial state; the cost per period \
-         changes as a run settles, e.g. a bed resting on the plate gets dearer: sample more \
-         periods for a closer figure)"
+        "estimate on {cores} worker(s), the runner's claim order (wall time of the whole sweep; \
+         of what is left to run):"
+    );
+    for (label, whole, left) in lines {
+        let _ = write!(
+            out,
+            "  {label}:\n    {} of CPU, {} wall (longest job {})",
+            duration_text(whole.cpu_seconds),
+            duration_text(whole.wall_seconds),
+            duration_text(whole.longest_job)
+        );
+        if measured.is_some() {
+            let _ = write!(out, "; left: {} wall", duration_text(left.wall_seconds));
+        }
+        out.push('\n');
+    }
+    let _ = writeln!(
+        out,
+        "  (unstored jobs: the rate of the nearest sampled or stored job on the grid, from {} \
+         period(s){}; a stored job counts what it cost)",
+        short(periods),
+        if settle > 0.0 {
+            format!(" after {} settling time unit(s)", short(settle))
+        } else {
+            " from the initial state: a settled run can cost more or less per period, use \
+             --settle"
+                .to_string()
+        }
     );
     out
 }

@@ -175,6 +175,17 @@ impl StateCounts {
     }
 }
 
+/// What one finished job cost (`Store::finished_job_costs`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FinishedCost {
+    /// The simulated time its run ended at.
+    pub simulated_time: f64,
+    /// Wall seconds of the attempt that finished, plus any extensions.
+    pub wall_seconds: f64,
+    /// Its convergence verdict; `None` for a run without a run-length policy.
+    pub converged: Option<bool>,
+}
+
 /// One job of a sweep with everything known about it (for boundaries, plots, exports).
 #[derive(Debug, Clone)]
 pub struct PointRow {
@@ -1246,6 +1257,28 @@ impl Store {
         self.rt
             .block_on(sqlx::query_as(queries::RUNS_PER_JOB).fetch_all(&self.pool))
             .map_err(|e| self.db(e))
+    }
+
+    /// What every finished job in the database cost, by job id (any sweep): the simulated time
+    /// its run ended at, its wall seconds (with extensions) and its convergence verdict.
+    pub fn finished_job_costs(
+        &self,
+    ) -> Result<std::collections::HashMap<String, FinishedCost>, StoreError> {
+        let rows: Vec<(String, f64, f64, Option<i64>)> = self
+            .rt
+            .block_on(sqlx::query_as(queries::FINISHED_JOB_COSTS).fetch_all(&self.pool))
+            .map_err(|e| self.db(e))?;
+        Ok(rows
+            .into_iter()
+            .map(|(id, simulated_time, wall_seconds, converged)| {
+                let cost = FinishedCost {
+                    simulated_time,
+                    wall_seconds,
+                    converged: converged.map(|c| c != 0),
+                };
+                (id, cost)
+            })
+            .collect())
     }
 
     /// Total wall time of the finished and failed attempts of a sweep's jobs, in seconds.

@@ -37,6 +37,8 @@ queries! {
     CLAIMED_POINT = "claimed_point";
     /// Copies a job row under its new id (re-keying).
     COPY_JOB_TO_NEW_ID = "copy_job_to_new_id";
+    /// Every finished job's simulated time, wall seconds and convergence (`sweep estimate`).
+    FINISHED_JOB_COSTS = "finished_job_costs";
     /// A sweep's jobs counted by status.
     COUNT_BY_STATUS = "count_by_status";
     /// Rows of the runs table: simulations started, ever.

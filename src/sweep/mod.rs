@@ -5,6 +5,7 @@
 //! Data flow (DESIGN.md): sweep file --expand--> job specs --schedule--> workers --run_job-->
 //! results --store--> SQLite.
 
+pub mod estimate;
 pub mod file;
 pub mod job;
 pub mod spec;

@@ -1,0 +1,341 @@
+//! What a sweep costs, before or while it runs (`wetgran sweep estimate`).
+//!
+//! Each job's wall time is a rate times a run length. The rate (wall seconds per simulated
+//! time unit) comes from the job's own stored result when the database has it, else from the
+//! nearest rate known on the grid: sampled short runs or other stored results. The run length
+//! is what the job's policy sets: its first check (the minimum run), that times the extension
+//! factor measured on the stored results of the sweep, or its cap. The wall time of the whole
+//! sweep on `w` workers is not `CPU / w`: [`makespan`] replays the runner's claim order (a
+//! continuation job only once its predecessor has ended; a chain's next link before grid
+//! order, as `claim_next_job.sql`), so the tail of lone long jobs and the waits along chains
+//! are counted.
+
+/// One job as the estimate sees it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedJob {
+    /// Its grid point's index along each axis, scaled to `[0, 1]` (an axis of one value: 0).
+    pub position: Vec<f64>,
+    /// Simulated time of its minimum run (the first check under a `[convergence]` policy, the
+    /// run length without one).
+    pub first_check: f64,
+    /// The longest run its policy allows (`first_check` without a policy).
+    pub cap: f64,
+    /// Index (in the job list) of the job whose final state it starts from.
+    pub predecessor: Option<usize>,
+    /// Its stored result's cost, if the database has one.
+    pub measured: Option<MeasuredCost>,
+}
+
+/// A finished job's measured cost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasuredCost {
+    pub wall_seconds: f64,
+    /// The simulated time its run ended at.
+    pub simulated_time: f64,
+    /// Its convergence verdict (`None` without a policy).
+    pub converged: Option<bool>,
+}
+
+/// A measured rate at a grid position.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RateSample {
+    pub position: Vec<f64>,
+    /// Wall seconds per simulated time unit.
+    pub seconds_per_time: f64,
+}
+
+/// The run length an unmeasured job is assumed to run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RunLength {
+    /// Stationary at its first check.
+    FirstCheck,
+    /// Its first check times a factor (the stored runs' mean), at most its cap.
+    Extended(f64),
+    /// Run to its cap.
+    Cap,
+}
+
+/// The cost of a sweep under one assumption on the run lengths.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepCost {
+    /// Sum of the jobs' wall times (CPU seconds of one core each).
+    pub cpu_seconds: f64,
+    /// Wall time on the workers in the runner's claim order.
+    pub wall_seconds: f64,
+    /// The dearest single job.
+    pub longest_job: f64,
+}
+
+/// What the stored results of a sweep's jobs say about run lengths.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasuredRuns {
+    pub jobs: usize,
+    /// Mean of `simulated time / first check` over them.
+    pub mean_length_factor: f64,
+    /// How many ran beyond their first check.
+    pub extended: usize,
+    /// How many ended unconverged (at their cap).
+    pub unconverged: usize,
+    /// Their summed wall seconds.
+    pub wall_seconds: f64,
+}
+
+/// Summary of the measured jobs; `None` if there are none.
+pub fn measured_runs(jobs: &[PlannedJob]) -> Option<MeasuredRuns> {
+    let measured: Vec<(&PlannedJob, &MeasuredCost)> = jobs
+        .iter()
+        .filter_map(|j| j.measured.as_ref().map(|m| (j, m)))
+        .collect();
+    if measured.is_empty() {
+        return None;
+    }
+    let n = measured.len();
+    let factor = measured
+        .iter()
+        .map(|(j, m)| m.simulated_time / j.first_check)
+        .sum::<f64>()
+        / n as f64;
+    Some(MeasuredRuns {
+        jobs: n,
+        mean_length_factor: factor,
+        // A run that ended more than a part in 10^6 past its first check was extended.
+        extended: measured
+            .iter()
+            .filter(|(j, m)| m.simulated_time > j.first_check * (1.0 + 1e-6))
+            .count(),
+        unconverged: measured
+            .iter()
+            .filter(|(_, m)| m.converged == Some(false))
+            .count(),
+        wall_seconds: measured.iter().map(|(_, m)| m.wall_seconds).sum(),
+    })
+}
+
+/// The rate known nearest to `position` (Euclidean distance in the scaled grid; ties: the
+/// first sample). `None` without samples.
+pub fn nearest_rate(samples: &[RateSample], position: &[f64]) -> Option<f64> {
+    let dist = |s: &RateSample| -> f64 {
+        s.position
+            .iter()
+            .zip(position)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum()
+    };
+    let mut best: Option<(f64, f64)> = None;
+    for s in samples {
+        let d = dist(s);
+        if best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, s.seconds_per_time));
+        }
+    }
+    best.map(|(_, r)| r)
+}
+
+/// Each job's wall seconds under `length`: a measured job costs what it cost; another one its
+/// nearest rate (`samples`, plus the rates of the measured jobs) times its run length.
+/// `left_only`: measured jobs cost nothing (what is left to run).
+pub fn job_seconds(
+    jobs: &[PlannedJob],
+    samples: &[RateSample],
+    length: RunLength,
+    left_only: bool,
+) -> Vec<f64> {
+    let mut rates: Vec<RateSample> = samples.to_vec();
+    rates.extend(jobs.iter().filter_map(|j| {
+        let m = j.measured?;
+        (m.simulated_time > 0.0).then(|| RateSample {
+            position: j.position.clone(),
+            seconds_per_time: m.wall_seconds / m.simulated_time,
+        })
+    }));
+    jobs.iter()
+        .map(|j| match (j.measured, left_only) {
+            (Some(_), true) => 0.0,
+            (Some(m), false) => m.wall_seconds,
+            (None, _) => {
+                let run = match length {
+                    RunLength::FirstCheck => j.first_check,
+                    RunLength::Extended(f) => (j.first_check * f).min(j.cap),
+                    RunLength::Cap => j.cap,
+                };
+                nearest_rate(&rates, &j.position).unwrap_or(0.0) * run
+            }
+        })
+        .collect()
+}
+
+/// CPU and wall time of jobs costing `seconds` each on `workers` workers.
+pub fn sweep_cost(jobs: &[PlannedJob], seconds: &[f64], workers: usize) -> SweepCost {
+    let predecessors: Vec<Option<usize>> = jobs.iter().map(|j| j.predecessor).collect();
+    SweepCost {
+        cpu_seconds: seconds.iter().sum(),
+        wall_seconds: makespan(seconds, &predecessors, workers),
+        longest_job: seconds.iter().cloned().fold(0.0, f64::max),
+    }
+}
+
+/// Wall time of running jobs of the given durations on `workers` workers, each free worker
+/// claiming as the runner does (`claim_next_job.sql`): among the jobs whose predecessor has
+/// ended (or that have none), first those a pending job waits for, then the lowest index. A
+/// worker that finds nothing ready waits for the next job to end.
+pub fn makespan(seconds: &[f64], predecessor: &[Option<usize>], workers: usize) -> f64 {
+    let n = seconds.len();
+    let workers = workers.max(1);
+    let mut has_successor = vec![false; n];
+    for p in predecessor.iter().flatten() {
+        has_successor[*p] = true;
+    }
+    // End time of each claimed job; `None` while pending.
+    let mut ends: Vec<Option<f64>> = vec![None; n];
+    // Time at which each worker is free.
+    let mut free = vec![0.0_f64; workers];
+    let mut claimed = 0;
+    while claimed < n {
+        // The worker free first claims next.
+        let w = (0..workers)
+            .min_by(|&a, &b| free[a].total_cmp(&free[b]))
+            .expect("at least one worker");
+        let now = free[w];
+        let ready = |k: usize| -> bool {
+            ends[k].is_none() && predecessor[k].is_none_or(|p| ends[p].is_some_and(|e| e <= now))
+        };
+        let pick = (0..n)
+            .filter(|&k| ready(k))
+            .min_by_key(|&k| (!has_successor[k], k));
+        match pick {
+            Some(k) => {
+                ends[k] = Some(now + seconds[k]);
+                free[w] = now + seconds[k];
+                claimed += 1;
+            }
+            None => {
+                // Nothing ready: wait for the next end after `now` (a pending job's
+                // predecessor is claimed, since chains are claimed in order).
+                let next = ends
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|&e| e > now)
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    next.is_finite(),
+                    "a job waits for a predecessor never claimed"
+                );
+                free[w] = next;
+            }
+        }
+    }
+    ends.iter().flatten().copied().fold(0.0, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn job(position: f64, first_check: f64, cap: f64) -> PlannedJob {
+        PlannedJob {
+            position: vec![position],
+            first_check,
+            cap,
+            predecessor: None,
+            measured: None,
+        }
+    }
+
+    #[test]
+    fn independent_jobs_fill_the_workers_in_grid_order() {
+        // Two workers, grid order 3, 3, 2, 2, 2: w0 runs 3 then 2 (ends 5) then 2 (ends 7),
+        // w1 runs 3 then 2 (ends 5): 7.
+        assert_eq!(makespan(&[3.0, 3.0, 2.0, 2.0, 2.0], &[None; 5], 2), 7.0);
+        // One worker: the sum.
+        assert_eq!(makespan(&[3.0, 3.0, 2.0, 2.0, 2.0], &[None; 5], 1), 12.0);
+        // More workers than jobs: the longest.
+        assert_eq!(makespan(&[3.0, 1.0], &[None; 2], 8), 3.0);
+        // A long job last is a tail: 1 + 1 then 10 alone.
+        assert_eq!(makespan(&[1.0, 1.0, 1.0, 10.0], &[None; 4], 2), 11.0);
+        assert_eq!(makespan(&[], &[], 2), 0.0);
+    }
+
+    #[test]
+    fn a_chain_runs_in_order_and_leaves_a_worker_idle() {
+        // One chain 0 -> 1 -> 2 of 2 s each and one lone job of 1 s on two workers: the chain
+        // takes 6 s whatever the workers; the lone job runs beside it.
+        let pred = [None, Some(0), Some(1), None];
+        assert_eq!(makespan(&[2.0, 2.0, 2.0, 1.0], &pred, 2), 6.0);
+        // Two chains of two jobs on two workers: 2 + 2.
+        let pred = [None, Some(0), None, Some(2)];
+        assert_eq!(makespan(&[2.0, 2.0, 2.0, 2.0], &pred, 2), 4.0);
+        // A chain's next link goes before grid order: chain 0 -> 3 and lone jobs 1, 2 on one
+        // worker run 0, 3, 1, 2 (the sum either way, but the order shows in two workers):
+        // w0: 0 (0-1), then 3 is ready at 1 and beats 2: w0 3 (1-5); w1: 1 (0-1), 2 (1-2).
+        let pred = [None, None, None, Some(0)];
+        assert_eq!(makespan(&[1.0, 1.0, 1.0, 4.0], &pred, 2), 5.0);
+    }
+
+    #[test]
+    fn unmeasured_jobs_take_the_nearest_rate_and_their_run_length() {
+        let mut jobs = vec![
+            job(0.0, 10.0, 40.0),
+            job(0.4, 20.0, 80.0),
+            job(1.0, 30.0, 120.0),
+        ];
+        let samples = [
+            RateSample {
+                position: vec![0.0],
+                seconds_per_time: 1.0,
+            },
+            RateSample {
+                position: vec![1.0],
+                seconds_per_time: 3.0,
+            },
+        ];
+        assert_eq!(
+            job_seconds(&jobs, &samples, RunLength::FirstCheck, false),
+            vec![10.0, 20.0, 90.0]
+        );
+        assert_eq!(
+            job_seconds(&jobs, &samples, RunLength::Cap, false),
+            vec![40.0, 80.0, 360.0]
+        );
+        // The factor is capped per job: 1.5 x 10, 1.5 x 20, 1.5 x 30.
+        assert_eq!(
+            job_seconds(&jobs, &samples, RunLength::Extended(1.5), false),
+            vec![15.0, 30.0, 135.0]
+        );
+        assert_eq!(
+            job_seconds(&jobs, &samples, RunLength::Extended(100.0), false),
+            vec![40.0, 80.0, 360.0]
+        );
+        // A measured job costs what it cost, lends its rate (8 / 40 = 0.2) to its nearest
+        // neighbour (0.4 is nearer 0.5 than 0.0), and nothing when only what is left counts.
+        jobs.push(job(0.5, 20.0, 80.0));
+        jobs[3].measured = Some(MeasuredCost {
+            wall_seconds: 8.0,
+            simulated_time: 40.0,
+            converged: Some(true),
+        });
+        assert_eq!(
+            job_seconds(&jobs, &samples, RunLength::FirstCheck, false),
+            vec![10.0, 4.0, 90.0, 8.0]
+        );
+        assert_eq!(
+            job_seconds(&jobs, &samples, RunLength::FirstCheck, true),
+            vec![10.0, 4.0, 90.0, 0.0]
+        );
+        let runs = measured_runs(&jobs).unwrap();
+        assert_eq!((runs.jobs, runs.extended, runs.unconverged), (1, 1, 0));
+        assert_eq!(runs.mean_length_factor, 2.0);
+        assert_eq!(runs.wall_seconds, 8.0);
+        let cost = sweep_cost(&jobs, &[10.0, 4.0, 90.0, 8.0], 2);
+        assert_eq!(cost.cpu_seconds, 112.0);
+        assert_eq!(cost.longest_job, 90.0);
+        // w0: 10 (0-10), then 8 (10-18); w1: 4 (0-4), then 90 (4-94).
+        assert_eq!(cost.wall_seconds, 94.0);
+    }
+
+    #[test]
+    fn no_samples_no_rate() {
+        assert_eq!(nearest_rate(&[], &[0.5]), None);
+        assert!(measured_runs(&[job(0.0, 1.0, 2.0)]).is_none());
+    }
+}
