@@ -6,7 +6,7 @@
 //! events that became invalid through a partner's collision are detected lazily with
 //! per-particle event counters (see `engine.rs`). Implementations:
 //! - [`CalendarQueue`], the default: a calendar queue (buckets of equal width in time, a year
-//!   of `2^k >= N` buckets), `O(1)` per update and, with its width re-estimated from the keys
+//!   of `2^k >= N` doubly linked buckets), `O(1)` per update and, with its width re-estimated from the keys
 //!   every `2 N` pops, about one bucket visited per pop;
 //! - [`HeapQueue`]: an indexed 4-ary min-heap, `O(log N)` per update (the default before);
 //! - [`NaiveQueue`], the reference: a linear scan, slow and obviously correct. The tests run
@@ -149,7 +149,7 @@ const WIDTH_FACTOR: f64 = 2.0;
 
 /// Calendar queue (R. Brown, Commun. ACM 31, 1220 (1988)) over particle indices. Time is cut
 /// into buckets of width `w`; the key `t` lies in the virtual bucket `floor(t / w)`, stored in
-/// list `floor(t / w) mod 2^k` (a "year" of `2^k >= N` lists, singly linked through `next`, on
+/// list `floor(t / w) mod 2^k` (a "year" of `2^k >= N` lists, doubly linked, on
 /// average at most one entry each). Infinite keys are in no list.
 ///
 /// Order: `floor(t / w)` is monotone in `t` (a correctly rounded product and a truncation are
@@ -164,10 +164,15 @@ const WIDTH_FACTOR: f64 = 2.0;
 #[derive(Debug, Clone)]
 pub struct CalendarQueue {
     key: Vec<f64>,
-    /// Next entry in the same list (`END`: last).
+    /// Links of the doubly linked lists over one index space: `0..n` are the particles,
+    /// `n + b` is the head of list `b`. `next[n + b]` is the first entry of list `b`,
+    /// `next[i]` the entry after `i` (`END`: last); `prev[i]` the node before particle `i`
+    /// (another particle or its list's head), so that a particle leaves its list in `O(1)`
+    /// without recomputing its bucket.
     next: Vec<u32>,
-    /// First entry of each list.
-    head: Vec<u32>,
+    prev: Vec<u32>,
+    /// `n`: where the list heads start in `next`.
+    heads: usize,
     /// `1 / w`.
     inv_width: f64,
     /// `2^k - 1`.
@@ -187,30 +192,29 @@ impl CalendarQueue {
         (t * self.inv_width) as u64
     }
 
+    /// Puts `i` (key `t`, finite) at the front of its list; returns its virtual bucket.
     #[inline(always)]
-    fn link(&mut self, i: usize, t: f64) {
-        let b = (self.bucket(t) & self.mask) as usize;
-        self.next[i] = self.head[b];
-        self.head[b] = i as u32;
+    fn link(&mut self, i: usize, t: f64) -> u64 {
+        let bucket = self.bucket(t);
+        let head = self.heads + (bucket & self.mask) as usize;
+        let first = self.next[head];
+        self.next[i] = first;
+        self.prev[i] = head as u32;
+        if first != END {
+            self.prev[first as usize] = i as u32;
+        }
+        self.next[head] = i as u32;
+        bucket
     }
 
+    /// Takes `i` out of its list.
     #[inline(always)]
-    fn unlink(&mut self, i: usize, t: f64) {
-        let b = (self.bucket(t) & self.mask) as usize;
-        let mut k = self.head[b];
-        if k as usize == i {
-            self.head[b] = self.next[i];
-            return;
+    fn unlink(&mut self, i: usize) {
+        let (before, after) = (self.prev[i], self.next[i]);
+        self.next[before as usize] = after;
+        if after != END {
+            self.prev[after as usize] = before;
         }
-        while k != END {
-            let nk = self.next[k as usize];
-            if nk as usize == i {
-                self.next[k as usize] = self.next[i];
-                return;
-            }
-            k = nk;
-        }
-        unreachable!("calendar queue: particle {i} not in its list");
     }
 
     /// The smallest finite key and a new bucket width from a sample of the keys; relinks every
@@ -248,7 +252,7 @@ impl CalendarQueue {
         if width.is_finite() && width > 1e-12 * lo.abs() && width > 0.0 {
             self.inv_width = 1.0 / width;
         }
-        self.head.fill(END);
+        self.next[n..].fill(END);
         for i in 0..n {
             let t = self.key[i];
             if t.is_finite() {
@@ -264,8 +268,9 @@ impl EventQueue for CalendarQueue {
         let lists = n.max(1).next_power_of_two();
         Self {
             key: vec![f64::INFINITY; n],
-            next: vec![END; n],
-            head: vec![END; lists],
+            next: vec![END; n + lists],
+            prev: vec![END; n],
+            heads: n,
             inv_width: 1.0,
             mask: lists as u64 - 1,
             cur: 0,
@@ -283,14 +288,13 @@ impl EventQueue for CalendarQueue {
     fn update(&mut self, i: usize, time: f64) {
         let old = self.key[i];
         if old.is_finite() {
-            self.unlink(i, old);
+            self.unlink(i);
             self.finite -= 1;
         }
         self.key[i] = time;
         if time.is_finite() {
-            self.link(i, time);
+            let b = self.link(i, time);
             self.finite += 1;
-            let b = self.bucket(time);
             if b < self.cur {
                 self.cur = b;
             }
@@ -312,7 +316,7 @@ impl EventQueue for CalendarQueue {
         loop {
             for _ in 0..=self.mask {
                 let list = (self.cur & self.mask) as usize;
-                let mut k = self.head[list];
+                let mut k = self.next[self.heads + list];
                 let mut best = END;
                 let mut best_t = f64::INFINITY;
                 // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
@@ -350,8 +354,8 @@ impl EventQueue for CalendarQueue {
         use super::bodies::vec_bytes;
         vec![
             ("queue.key", vec_bytes(&self.key)),
-            ("queue.next", vec_bytes(&self.next)),
-            ("queue.head (per list)", vec_bytes(&self.head)),
+            ("queue.next (per particle and list)", vec_bytes(&self.next)),
+            ("queue.prev", vec_bytes(&self.prev)),
         ]
     }
 }
