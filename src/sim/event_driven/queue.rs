@@ -261,6 +261,74 @@ impl CalendarQueue {
         }
         self.cur = self.bucket(lo);
     }
+    /// `min` when no key is finite (the first particle, as in the other queues; `None` for
+    /// no particle) or a re-estimation of the width is due.
+    #[cold]
+    #[inline(never)]
+    fn min_rare(&mut self) -> Option<(usize, f64)> {
+        if self.key.is_empty() {
+            return None;
+        }
+        if self.finite == 0 {
+            // Every key infinite (or NaN): the first particle, as in the other queues.
+            return Some((0, self.key[0]));
+        }
+        self.retune();
+        self.until_retune -= 1;
+        self.walk_a_year()
+            .or_else(|| self.min_after_empty_year())
+    }
+
+    /// Walks at most one year of virtual buckets from the cursor and returns the smallest
+    /// `(key, index)` of the first bucket holding a due entry, the cursor left on it.
+    #[inline(always)]
+    fn walk_a_year(&mut self) -> Option<(usize, f64)> {
+        for _ in 0..=self.mask {
+            let list = (self.cur & self.mask) as usize;
+            let mut k = self.next[self.heads + list];
+            let mut best = END;
+            let mut best_t = f64::INFINITY;
+            // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
+            // i.e. iff `t / w < cur + 1` before truncation: one product and one compare,
+            // exact while `cur + 1` is an integer an f64 holds exactly.
+            let exact = self.cur < (1 << 52);
+            let end = (self.cur + 1) as f64;
+            while k != END {
+                let t = self.key[k as usize];
+                let due = if exact {
+                    t * self.inv_width < end
+                } else {
+                    self.bucket(t) == self.cur
+                };
+                if due && (best == END || t < best_t || (t == best_t && k < best)) {
+                    best = k;
+                    best_t = t;
+                }
+                k = self.next[k as usize];
+            }
+            if best != END {
+                return Some((best as usize, best_t));
+            }
+            self.cur = self.cur.saturating_add(1);
+        }
+        None
+    }
+
+    /// A year without a due entry: jump to the smallest key's bucket (without the jump the
+    /// walk would take `(gap / w)` steps), walk from there, and re-estimate the width at the
+    /// next pop.
+    #[cold]
+    #[inline(never)]
+    fn min_after_empty_year(&mut self) -> Option<(usize, f64)> {
+        loop {
+            let lo = self.key.iter().copied().fold(f64::INFINITY, f64::min);
+            self.cur = self.bucket(lo);
+            self.until_retune = 1;
+            if let Some(found) = self.walk_a_year() {
+                return Some(found);
+            }
+        }
+    }
 }
 
 impl EventQueue for CalendarQueue {
@@ -301,53 +369,16 @@ impl EventQueue for CalendarQueue {
         }
     }
 
+    /// The walk over the buckets from the cursor, inlined into the caller; the rare cases (no
+    /// finite key, a re-estimation due, a year without a due entry) are out of line, so that
+    /// the common pop sets up little more than the walk.
+    #[inline]
     fn min(&mut self) -> Option<(usize, f64)> {
-        if self.key.is_empty() {
-            return None;
-        }
-        if self.finite == 0 {
-            // Every key infinite (or NaN): the first particle, as in the other queues.
-            return Some((0, self.key[0]));
-        }
-        if self.until_retune == 0 {
-            self.retune();
+        if self.finite == 0 || self.until_retune == 0 {
+            return self.min_rare();
         }
         self.until_retune -= 1;
-        loop {
-            for _ in 0..=self.mask {
-                let list = (self.cur & self.mask) as usize;
-                let mut k = self.next[self.heads + list];
-                let mut best = END;
-                let mut best_t = f64::INFINITY;
-                // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
-                // i.e. iff `t / w < cur + 1` before truncation: one product and one compare,
-                // exact while `cur + 1` is an integer an f64 holds exactly.
-                let exact = self.cur < (1 << 52);
-                let end = (self.cur + 1) as f64;
-                while k != END {
-                    let t = self.key[k as usize];
-                    let due = if exact {
-                        t * self.inv_width < end
-                    } else {
-                        self.bucket(t) == self.cur
-                    };
-                    if due && (best == END || t < best_t || (t == best_t && k < best)) {
-                        best = k;
-                        best_t = t;
-                    }
-                    k = self.next[k as usize];
-                }
-                if best != END {
-                    return Some((best as usize, best_t));
-                }
-                self.cur = self.cur.saturating_add(1);
-            }
-            // A year without a due entry: jump to the smallest key's bucket (without the jump
-            // the walk would take `(gap / w)` steps), and re-estimate the width at the next pop.
-            let lo = self.key.iter().copied().fold(f64::INFINITY, f64::min);
-            self.cur = self.bucket(lo);
-            self.until_retune = 1;
-        }
+        self.walk_a_year().or_else(|| self.min_after_empty_year())
     }
 
     fn memory(&self) -> Vec<(&'static str, usize)> {
