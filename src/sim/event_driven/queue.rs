@@ -140,7 +140,7 @@ impl HeapQueue {
 /// No particle (end of a bucket list).
 const END: u32 = u32::MAX;
 /// Pops between two re-estimations of the bucket width, per particle.
-const CALENDAR_RETUNE_PER_PARTICLE: u64 = 2;
+const CALENDAR_RETUNE_PER_PARTICLE: u64 = 8;
 /// Keys sampled to estimate the width.
 const CALENDAR_SAMPLE: usize = 512;
 /// Bucket width in units of `(median sampled key - smallest key) / finite keys`: about
