@@ -6,8 +6,8 @@
 //! events that became invalid through a partner's collision are detected lazily with
 //! per-particle event counters (see `engine.rs`). Implementations:
 //! - [`CalendarQueue`], the default: a calendar queue (buckets of equal width in time, a year
-//!   of `2^k >= N` doubly linked buckets), `O(1)` per update and, with its width re-estimated from the keys
-//!   every `2 N` pops, about one bucket visited per pop;
+//!   of `2^k >= N` doubly linked buckets), `O(1)` per update and, with its width
+//!   re-estimated from the keys every `8 N` pops, about one bucket visited per pop;
 //! - [`HeapQueue`]: an indexed 4-ary min-heap, `O(log N)` per update (the default before);
 //! - [`NaiveQueue`], the reference: a linear scan, slow and obviously correct. The tests run
 //!   whole engines on it and compare their trajectories with the heap's bit for bit
@@ -139,7 +139,8 @@ impl HeapQueue {
 
 /// No particle (end of a bucket list).
 const END: u32 = u32::MAX;
-/// Pops between two re-estimations of the bucket width, per particle.
+/// Pops between two re-estimations of the bucket width, per particle (8 against 2: fewer
+/// instructions on all four reference systems, docs/performance.md "Third round").
 const CALENDAR_RETUNE_PER_PARTICLE: u64 = 8;
 /// Keys sampled to estimate the width.
 const CALENDAR_SAMPLE: usize = 512;
@@ -158,7 +159,7 @@ const WIDTH_FACTOR: f64 = 2.0;
 /// and takes the smallest `(key, index)` among the entries of the first bucket that has one,
 /// so ties go to the smaller index exactly as in [`HeapQueue`] and [`NaiveQueue`] and engines
 /// take the same trajectory on all three. The width only changes how much is walked, never the
-/// answer: every `2 N` pops it is re-estimated from a sample of the keys and the lists rebuilt;
+/// answer: every `8 N` pops it is re-estimated from a sample of the keys and the lists rebuilt;
 /// if a whole year of buckets holds nothing due, a direct search moves the cursor to the
 /// smallest key.
 #[derive(Debug, Clone)]
@@ -275,8 +276,7 @@ impl CalendarQueue {
         }
         self.retune();
         self.until_retune -= 1;
-        self.walk_a_year()
-            .or_else(|| self.min_after_empty_year())
+        self.walk_a_year().or_else(|| self.min_after_empty_year())
     }
 
     /// Walks at most one year of virtual buckets from the cursor and returns the smallest
