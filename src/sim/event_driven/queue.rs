@@ -6,8 +6,8 @@
 //! events that became invalid through a partner's collision are detected lazily with
 //! per-particle event counters (see `engine.rs`). Implementations:
 //! - [`CalendarQueue`], the default: a calendar queue (buckets of equal width in time, a year
-//!   of `2^k >= N` buckets), `O(1)` per update and, with its width re-estimated from the keys
-//!   every `2 N` pops, about one bucket visited per pop;
+//!   of `2^k >= N` doubly linked buckets), `O(1)` per update and, with its width
+//!   re-estimated from the keys every `8 N` pops, about one bucket visited per pop;
 //! - [`HeapQueue`]: an indexed 4-ary min-heap, `O(log N)` per update (the default before);
 //! - [`NaiveQueue`], the reference: a linear scan, slow and obviously correct. The tests run
 //!   whole engines on it and compare their trajectories with the heap's bit for bit
@@ -139,8 +139,9 @@ impl HeapQueue {
 
 /// No particle (end of a bucket list).
 const END: u32 = u32::MAX;
-/// Pops between two re-estimations of the bucket width, per particle.
-const CALENDAR_RETUNE_PER_PARTICLE: u64 = 2;
+/// Pops between two re-estimations of the bucket width, per particle (8 against 2: fewer
+/// instructions on all four reference systems, docs/performance.md "Third round").
+const CALENDAR_RETUNE_PER_PARTICLE: u64 = 8;
 /// Keys sampled to estimate the width.
 const CALENDAR_SAMPLE: usize = 512;
 /// Bucket width in units of `(median sampled key - smallest key) / finite keys`: about
@@ -149,7 +150,7 @@ const WIDTH_FACTOR: f64 = 2.0;
 
 /// Calendar queue (R. Brown, Commun. ACM 31, 1220 (1988)) over particle indices. Time is cut
 /// into buckets of width `w`; the key `t` lies in the virtual bucket `floor(t / w)`, stored in
-/// list `floor(t / w) mod 2^k` (a "year" of `2^k >= N` lists, singly linked through `next`, on
+/// list `floor(t / w) mod 2^k` (a "year" of `2^k >= N` lists, doubly linked, on
 /// average at most one entry each). Infinite keys are in no list.
 ///
 /// Order: `floor(t / w)` is monotone in `t` (a correctly rounded product and a truncation are
@@ -158,16 +159,21 @@ const WIDTH_FACTOR: f64 = 2.0;
 /// and takes the smallest `(key, index)` among the entries of the first bucket that has one,
 /// so ties go to the smaller index exactly as in [`HeapQueue`] and [`NaiveQueue`] and engines
 /// take the same trajectory on all three. The width only changes how much is walked, never the
-/// answer: every `2 N` pops it is re-estimated from a sample of the keys and the lists rebuilt;
+/// answer: every `8 N` pops it is re-estimated from a sample of the keys and the lists rebuilt;
 /// if a whole year of buckets holds nothing due, a direct search moves the cursor to the
 /// smallest key.
 #[derive(Debug, Clone)]
 pub struct CalendarQueue {
     key: Vec<f64>,
-    /// Next entry in the same list (`END`: last).
+    /// Links of the doubly linked lists over one index space: `0..n` are the particles,
+    /// `n + b` is the head of list `b`. `next[n + b]` is the first entry of list `b`,
+    /// `next[i]` the entry after `i` (`END`: last); `prev[i]` the node before particle `i`
+    /// (another particle or its list's head), so that a particle leaves its list in `O(1)`
+    /// without recomputing its bucket.
     next: Vec<u32>,
-    /// First entry of each list.
-    head: Vec<u32>,
+    prev: Vec<u32>,
+    /// `n`: where the list heads start in `next`.
+    heads: usize,
     /// `1 / w`.
     inv_width: f64,
     /// `2^k - 1`.
@@ -187,30 +193,29 @@ impl CalendarQueue {
         (t * self.inv_width) as u64
     }
 
+    /// Puts `i` (key `t`, finite) at the front of its list; returns its virtual bucket.
     #[inline(always)]
-    fn link(&mut self, i: usize, t: f64) {
-        let b = (self.bucket(t) & self.mask) as usize;
-        self.next[i] = self.head[b];
-        self.head[b] = i as u32;
+    fn link(&mut self, i: usize, t: f64) -> u64 {
+        let bucket = self.bucket(t);
+        let head = self.heads + (bucket & self.mask) as usize;
+        let first = self.next[head];
+        self.next[i] = first;
+        self.prev[i] = head as u32;
+        if first != END {
+            self.prev[first as usize] = i as u32;
+        }
+        self.next[head] = i as u32;
+        bucket
     }
 
+    /// Takes `i` out of its list.
     #[inline(always)]
-    fn unlink(&mut self, i: usize, t: f64) {
-        let b = (self.bucket(t) & self.mask) as usize;
-        let mut k = self.head[b];
-        if k as usize == i {
-            self.head[b] = self.next[i];
-            return;
+    fn unlink(&mut self, i: usize) {
+        let (before, after) = (self.prev[i], self.next[i]);
+        self.next[before as usize] = after;
+        if after != END {
+            self.prev[after as usize] = before;
         }
-        while k != END {
-            let nk = self.next[k as usize];
-            if nk as usize == i {
-                self.next[k as usize] = self.next[i];
-                return;
-            }
-            k = nk;
-        }
-        unreachable!("calendar queue: particle {i} not in its list");
     }
 
     /// The smallest finite key and a new bucket width from a sample of the keys; relinks every
@@ -248,7 +253,7 @@ impl CalendarQueue {
         if width.is_finite() && width > 1e-12 * lo.abs() && width > 0.0 {
             self.inv_width = 1.0 / width;
         }
-        self.head.fill(END);
+        self.next[n..].fill(END);
         for i in 0..n {
             let t = self.key[i];
             if t.is_finite() {
@@ -257,6 +262,73 @@ impl CalendarQueue {
         }
         self.cur = self.bucket(lo);
     }
+    /// `min` when no key is finite (the first particle, as in the other queues; `None` for
+    /// no particle) or a re-estimation of the width is due.
+    #[cold]
+    #[inline(never)]
+    fn min_rare(&mut self) -> Option<(usize, f64)> {
+        if self.key.is_empty() {
+            return None;
+        }
+        if self.finite == 0 {
+            // Every key infinite (or NaN): the first particle, as in the other queues.
+            return Some((0, self.key[0]));
+        }
+        self.retune();
+        self.until_retune -= 1;
+        self.walk_a_year().or_else(|| self.min_after_empty_year())
+    }
+
+    /// Walks at most one year of virtual buckets from the cursor and returns the smallest
+    /// `(key, index)` of the first bucket holding a due entry, the cursor left on it.
+    #[inline(always)]
+    fn walk_a_year(&mut self) -> Option<(usize, f64)> {
+        for _ in 0..=self.mask {
+            let list = (self.cur & self.mask) as usize;
+            let mut k = self.next[self.heads + list];
+            let mut best = END;
+            let mut best_t = f64::INFINITY;
+            // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
+            // i.e. iff `t / w < cur + 1` before truncation: one product and one compare,
+            // exact while `cur + 1` is an integer an f64 holds exactly.
+            let exact = self.cur < (1 << 52);
+            let end = (self.cur + 1) as f64;
+            while k != END {
+                let t = self.key[k as usize];
+                let due = if exact {
+                    t * self.inv_width < end
+                } else {
+                    self.bucket(t) == self.cur
+                };
+                if due && (best == END || t < best_t || (t == best_t && k < best)) {
+                    best = k;
+                    best_t = t;
+                }
+                k = self.next[k as usize];
+            }
+            if best != END {
+                return Some((best as usize, best_t));
+            }
+            self.cur = self.cur.saturating_add(1);
+        }
+        None
+    }
+
+    /// A year without a due entry: jump to the smallest key's bucket (without the jump the
+    /// walk would take `(gap / w)` steps), walk from there, and re-estimate the width at the
+    /// next pop.
+    #[cold]
+    #[inline(never)]
+    fn min_after_empty_year(&mut self) -> Option<(usize, f64)> {
+        loop {
+            let lo = self.key.iter().copied().fold(f64::INFINITY, f64::min);
+            self.cur = self.bucket(lo);
+            self.until_retune = 1;
+            if let Some(found) = self.walk_a_year() {
+                return Some(found);
+            }
+        }
+    }
 }
 
 impl EventQueue for CalendarQueue {
@@ -264,8 +336,9 @@ impl EventQueue for CalendarQueue {
         let lists = n.max(1).next_power_of_two();
         Self {
             key: vec![f64::INFINITY; n],
-            next: vec![END; n],
-            head: vec![END; lists],
+            next: vec![END; n + lists],
+            prev: vec![END; n],
+            heads: n,
             inv_width: 1.0,
             mask: lists as u64 - 1,
             cur: 0,
@@ -283,75 +356,37 @@ impl EventQueue for CalendarQueue {
     fn update(&mut self, i: usize, time: f64) {
         let old = self.key[i];
         if old.is_finite() {
-            self.unlink(i, old);
+            self.unlink(i);
             self.finite -= 1;
         }
         self.key[i] = time;
         if time.is_finite() {
-            self.link(i, time);
+            let b = self.link(i, time);
             self.finite += 1;
-            let b = self.bucket(time);
             if b < self.cur {
                 self.cur = b;
             }
         }
     }
 
+    /// The walk over the buckets from the cursor, inlined into the caller; the rare cases (no
+    /// finite key, a re-estimation due, a year without a due entry) are out of line, so that
+    /// the common pop sets up little more than the walk.
+    #[inline]
     fn min(&mut self) -> Option<(usize, f64)> {
-        if self.key.is_empty() {
-            return None;
-        }
-        if self.finite == 0 {
-            // Every key infinite (or NaN): the first particle, as in the other queues.
-            return Some((0, self.key[0]));
-        }
-        if self.until_retune == 0 {
-            self.retune();
+        if self.finite == 0 || self.until_retune == 0 {
+            return self.min_rare();
         }
         self.until_retune -= 1;
-        loop {
-            for _ in 0..=self.mask {
-                let list = (self.cur & self.mask) as usize;
-                let mut k = self.head[list];
-                let mut best = END;
-                let mut best_t = f64::INFINITY;
-                // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
-                // i.e. iff `t / w < cur + 1` before truncation: one product and one compare,
-                // exact while `cur + 1` is an integer an f64 holds exactly.
-                let exact = self.cur < (1 << 52);
-                let end = (self.cur + 1) as f64;
-                while k != END {
-                    let t = self.key[k as usize];
-                    let due = if exact {
-                        t * self.inv_width < end
-                    } else {
-                        self.bucket(t) == self.cur
-                    };
-                    if due && (best == END || t < best_t || (t == best_t && k < best)) {
-                        best = k;
-                        best_t = t;
-                    }
-                    k = self.next[k as usize];
-                }
-                if best != END {
-                    return Some((best as usize, best_t));
-                }
-                self.cur = self.cur.saturating_add(1);
-            }
-            // A year without a due entry: jump to the smallest key's bucket (without the jump
-            // the walk would take `(gap / w)` steps), and re-estimate the width at the next pop.
-            let lo = self.key.iter().copied().fold(f64::INFINITY, f64::min);
-            self.cur = self.bucket(lo);
-            self.until_retune = 1;
-        }
+        self.walk_a_year().or_else(|| self.min_after_empty_year())
     }
 
     fn memory(&self) -> Vec<(&'static str, usize)> {
         use super::bodies::vec_bytes;
         vec![
             ("queue.key", vec_bytes(&self.key)),
-            ("queue.next", vec_bytes(&self.next)),
-            ("queue.head (per list)", vec_bytes(&self.head)),
+            ("queue.next (per particle and list)", vec_bytes(&self.next)),
+            ("queue.prev", vec_bytes(&self.prev)),
         ]
     }
 }
