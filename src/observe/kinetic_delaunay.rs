@@ -86,6 +86,9 @@ pub const MAX_HALVINGS: u32 = 256;
 pub const MAX_LOOSE_FRACTION: f64 = 0.2;
 /// Samples tested in full, without certificates, after a sample with too many loose sites.
 pub const CERTIFY_PAUSE: u32 = 15;
+/// Most doublings of [`CERTIFY_PAUSE`] after certifications that did not pay (at most
+/// `15 * 2^6 = 960` samples tested in full before the next try).
+pub const MAX_PAUSE_DOUBLINGS: u32 = 6;
 /// Longest back-off after failed repairs: `2^4 - 1 = 15` samples rebuilt without trying.
 pub const MAX_BACKOFF_LOG2: u32 = 4;
 /// Most images of one particle (shifts -1, 0, 1 on two axes).
@@ -244,6 +247,8 @@ pub struct KineticDelaunay {
     /// test in full before certifying again ([`CERTIFY_PAUSE`]).
     certified: bool,
     certify_pause: u32,
+    /// Consecutive certifications that did not pay (the pause doubles with each).
+    pause_doublings: u32,
     safeguards: Safeguards,
     pub stats: KineticStats,
 }
@@ -828,13 +833,18 @@ impl KineticDelaunay {
 
     /// After a repaired sample: certifies the tests around the loose and touched sites, unless
     /// too many sites were loose for that to pay; then every site stays uncertified (every
-    /// triangle is tested) for [`CERTIFY_PAUSE`] samples, after which all are certified anew.
+    /// triangle is tested) for [`CERTIFY_PAUSE`] samples, after which all are certified anew;
+    /// the pause doubles after each certification that did not pay, up to
+    /// [`MAX_PAUSE_DOUBLINGS`] times (certifying every test costs several full tests).
     fn certify_or_pause(&mut self, moved: usize) {
         let too_loose = self.loose.len() as f64 > MAX_LOOSE_FRACTION * moved as f64;
         if self.certified && too_loose {
-            self.certify_pause = CERTIFY_PAUSE;
+            self.certify_pause = CERTIFY_PAUSE << self.pause_doublings;
+            self.pause_doublings = (self.pause_doublings + 1).min(MAX_PAUSE_DOUBLINGS);
             self.slack2.iter_mut().for_each(|x| *x = -1.0);
             self.certified = false;
+        } else if self.certified {
+            self.pause_doublings = 0;
         }
         if !self.certified && self.certify_pause > 0 {
             self.certify_pause -= 1;
@@ -981,22 +991,26 @@ impl KineticDelaunay {
             .copied()
             .filter(|&t| !self.tv[t].contains(&INF))
             .collect();
-        // Held sites, with where they go (they wait at their previous position).
+        // Held sites, with where they go (they wait at their previous position). Holding a site
+        // changes only the triangles around it: after the first scan, only the inverted
+        // triangles and the stars of the sites held since are tested again.
         let mut held: Vec<(u32, [f64; 2])> = Vec::new();
         self.next_stamp();
         let stamp = self.stamp;
+        let mut inverted: Vec<usize> = finite
+            .iter()
+            .copied()
+            .filter(|&t| self.inversion(t).is_some())
+            .collect();
         loop {
-            let blocked: Vec<usize> = self
-                .inverted_in(&finite)
-                .into_iter()
-                .filter(|&(_, crossed)| crossed.is_none())
-                .map(|(t, _)| t)
-                .collect();
-            if blocked.is_empty() {
-                break;
-            }
             let before = held.len();
-            for t in blocked {
+            let mut blocked = false;
+            for q in 0..inverted.len() {
+                let t = inverted[q];
+                if self.inversion(t) != Some(None) {
+                    continue;
+                }
+                blocked = true;
                 for v in self.tv[t] {
                     if self.site_mark[v as usize] != stamp {
                         self.site_mark[v as usize] = stamp;
@@ -1005,34 +1019,48 @@ impl KineticDelaunay {
                     }
                 }
             }
+            if !blocked {
+                break;
+            }
             if held.len() == before
                 || (self.safeguards.held_limit
                     && held.len() as f64 > MAX_HELD_FRACTION * moved as f64)
             {
                 return Err(Failure::Inverted);
             }
+            let newly: Vec<u32> = held[before..].iter().map(|&(v, _)| v).collect();
+            inverted.extend(self.stars_of(&newly));
+            inverted.sort_unstable();
+            inverted.dedup();
+            inverted.retain(|&t| self.inversion(t).is_some());
         }
         self.stack.clear();
-        self.unfold(&mut finite)?;
+        let scanned = finite.len();
+        self.unfold(&inverted, &mut finite)?;
+        // Lawson seeds: every edge of the set and of the triangles unfolding made, tested here
+        // (an edge whose triangles no later flip changes keeps its outcome; a flip pushes the
+        // edges it changes), so that only the conflicting ones go on the stack.
         self.stack.clear();
-        for &t in tris.iter().chain(&finite) {
-            if self.tv[t][0] == DEAD {
+        for &t in tris.iter().chain(&finite[scanned..]) {
+            let v = self.tv[t];
+            if v[0] == DEAD {
                 continue;
             }
             let in_set = self.tri_mark[t] == tri_stamp;
+            let t_finite = !v.contains(&INF);
             for k in 0..3 {
                 // An edge between two triangles of the set is tested once, from the lower one,
                 // where both are finite (the test is then the same from either side).
                 let u = self.tn[t][k] as usize;
-                if in_set
-                    && u < t
-                    && self.tri_mark[u] == tri_stamp
-                    && !self.tv[t].contains(&INF)
-                    && !self.tv[u].contains(&INF)
-                {
+                let w = self.tv[u];
+                let u_finite = !w.contains(&INF);
+                if in_set && u < t && self.tri_mark[u] == tri_stamp && t_finite && u_finite {
                     continue;
                 }
-                self.stack.push((t as u32, k as u8));
+                let d = w[self.back_index(u, t as u32)];
+                if self.conflicts(t, d) {
+                    self.stack.push((t as u32, k as u8));
+                }
             }
         }
         self.lawson()?;
@@ -1060,33 +1088,53 @@ impl KineticDelaunay {
         tris
     }
 
-    /// Flips the edges that sites crossed (see [`Self::inverted_in`]) among `tris` and the
-    /// triangles the flips make, one at a time; fails where an inverted triangle has no such
-    /// edge.
-    fn unfold(&mut self, tris: &mut Vec<usize>) -> Result<bool, Failure> {
-        let mut unfolded = 0;
-        loop {
-            let inverted = self.inverted_in(tris);
-            let Some(&(t, crossed)) = inverted.first() else {
-                return Ok(true);
-            };
-            if inverted.iter().any(|&(_, h)| h.is_none()) {
-                return if unfolded > 0 {
-                    Err(Failure::Check)
-                } else {
-                    Ok(false)
-                };
+    /// Flips the edges that sites crossed (see [`Self::inversion`]) among the triangles `scan`
+    /// and those the flips make, one at a time; the triangles a flip made are appended to
+    /// `tris`. Returns `Ok(false)`, having flipped nothing, where an inverted triangle of `scan`
+    /// has no such edge; fails where one is left after flips. A flip changes only its two
+    /// triangles, so after one scan only those are tested again (a worklist).
+    fn unfold(&mut self, scan: &[usize], tris: &mut Vec<usize>) -> Result<bool, Failure> {
+        let mut work: Vec<usize> = Vec::new();
+        for &t in scan {
+            match self.inversion(t) {
+                None => {}
+                Some(None) => return Ok(false),
+                Some(Some(_)) => work.push(t),
             }
-            let k = crossed.expect("unfoldable");
-            let u = self.tn[t][k] as usize;
-            let j = self.back_index(u, t as u32);
-            self.flip(t, k, u, j);
-            tris.push(u);
-            self.stats.unfolds += 1;
-            unfolded += 1;
-            if unfolded > self.tv.len() {
+        }
+        let mut blocked: Vec<usize> = Vec::new();
+        let mut unfolded = 0usize;
+        loop {
+            while let Some(t) = work.pop() {
+                let k = match self.inversion(t) {
+                    None => continue,
+                    Some(None) => {
+                        // Perhaps unblocked by a later flip: looked at again below.
+                        blocked.push(t);
+                        continue;
+                    }
+                    Some(Some(k)) => k,
+                };
+                let u = self.tn[t][k] as usize;
+                let j = self.back_index(u, t as u32);
+                self.flip(t, k, u, j);
+                tris.push(u);
+                work.push(t);
+                work.push(u);
+                self.stats.unfolds += 1;
+                unfolded += 1;
+                if unfolded > self.tv.len() {
+                    return Err(Failure::Check);
+                }
+            }
+            blocked.retain(|&b| self.inversion(b).is_some());
+            if blocked.is_empty() {
+                return Ok(true);
+            }
+            if blocked.iter().all(|&b| self.inversion(b) == Some(None)) {
                 return Err(Failure::Check);
             }
+            work.append(&mut blocked);
         }
     }
 
@@ -1106,7 +1154,8 @@ impl KineticDelaunay {
         }
         self.stack.clear();
         let mut star = self.stars_of(sites);
-        if self.unfold(&mut star)? {
+        let scan = star.clone();
+        if self.unfold(&scan, &mut star)? {
             for t in self.stars_of(sites) {
                 for k in 0..3 {
                     self.stack.push((t as u32, k as u8));
@@ -1131,40 +1180,42 @@ impl KineticDelaunay {
         self.advance_local(sites, &mid, to, depth + 1, budget)
     }
 
-    /// The finite triangles that are not strictly counter-clockwise; with each, the index `k`
-    /// of a vertex that crossed its opposite edge into the neighbouring triangle: it lies
-    /// strictly inside that neighbour, or, where the neighbour is the triangle's only infinite
-    /// one, strictly beyond the hull edge. Flipping that edge undoes the crossing (the two
-    /// positive triangles it makes cover what the inverted one and its neighbour covered,
-    /// counted with sign).
-    fn inverted_in(&self, tris: &[usize]) -> Vec<(usize, Option<usize>)> {
-        let mut out = Vec::new();
-        for &t in tris {
-            let v = self.tv[t];
-            if v[0] == DEAD || v.contains(&INF) {
-                continue;
-            }
-            let p = v.map(|x| c(self.pos[x as usize]));
-            if orient2d(p[0], p[1], p[2]) > 0.0 {
-                continue;
-            }
-            let infinite = (0..3)
-                .filter(|&k| self.tv[self.tn[t][k] as usize].contains(&INF))
-                .count();
-            let crossed = (0..3).find(|&k| {
-                let u = self.tn[t][k] as usize;
-                let w = self.tv[u];
-                if w.contains(&INF) {
-                    return infinite == 1;
-                }
-                let q = w.map(|x| c(self.pos[x as usize]));
-                orient2d(q[0], q[1], p[k]) > 0.0
-                    && orient2d(q[1], q[2], p[k]) > 0.0
-                    && orient2d(q[2], q[0], p[k]) > 0.0
-            });
-            out.push((t, crossed));
+    /// `None` where triangle `t` is dead, infinite or strictly counter-clockwise; else
+    /// `Some(crossed)`, with `crossed` the index `k` of a vertex that crossed its opposite edge
+    /// into the neighbouring triangle: it lies strictly inside that neighbour, or, where the
+    /// neighbour is the triangle's only infinite one, strictly beyond the hull edge. Flipping
+    /// that edge undoes the crossing (the two positive triangles it makes cover what the
+    /// inverted one and its neighbour covered, counted with sign).
+    #[inline]
+    fn inversion(&self, t: usize) -> Option<Option<usize>> {
+        let v = self.tv[t];
+        if v[0] == DEAD || v.contains(&INF) {
+            return None;
         }
-        out
+        let p = v.map(|x| c(self.pos[x as usize]));
+        if orient2d(p[0], p[1], p[2]) > 0.0 {
+            return None;
+        }
+        Some(self.crossed_edge(t, p))
+    }
+
+    /// See [`Self::inversion`]: the crossed edge of the inverted triangle `t` (vertices at `p`).
+    #[cold]
+    fn crossed_edge(&self, t: usize, p: [Coord<f64>; 3]) -> Option<usize> {
+        let infinite = (0..3)
+            .filter(|&k| self.tv[self.tn[t][k] as usize].contains(&INF))
+            .count();
+        (0..3).find(|&k| {
+            let u = self.tn[t][k] as usize;
+            let w = self.tv[u];
+            if w.contains(&INF) {
+                return infinite == 1;
+            }
+            let q = w.map(|x| c(self.pos[x as usize]));
+            orient2d(q[0], q[1], p[k]) > 0.0
+                && orient2d(q[1], q[2], p[k]) > 0.0
+                && orient2d(q[2], q[0], p[k]) > 0.0
+        })
     }
 
     /// Whether site `d` conflicts with triangle `t` (module header).
