@@ -3,9 +3,11 @@
 //! one, an inserted site adds its edges, a deleted one removes them, a rebuild is diffed
 //! against the set kept. A pair can be joined through several periodic images, so each pair
 //! holds the number of site edges (copies) that join it; it is an edge while that number is
-//! positive. The pairs whose membership may have changed since the last
-//! [`take_changed`](PairEdges::take_changed) are listed, so that the location-change counter
-//! ([`super::tracked_pairs`]) looks at those only.
+//! positive. The pairs whose membership changed since the last
+//! [`take_changed`](PairEdges::take_changed) are listed (each once, with its membership before
+//! the first change, so that a pair that left and came back, as the edges of a relocated site
+//! mostly do, is not listed), so that the location-change counter ([`super::tracked_pairs`])
+//! looks at those only.
 
 use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
@@ -59,7 +61,9 @@ pub type PairSet = HashSet<PairKey, BuildHasherDefault<PairHasher>>;
 #[derive(Debug, Clone, Default)]
 pub struct PairEdges {
     copies: PairMap<u32>,
-    changed: Vec<PairKey>,
+    /// Each pair whose membership changed since the last look, with its membership then (the
+    /// first change records it; a pair that left and came back is dropped at the look).
+    changed: PairMap<bool>,
     /// A copy was removed that was not there: the bookkeeping is wrong (a bug), and the owner
     /// must rebuild and [`replace_all`](Self::replace_all).
     broken: bool,
@@ -72,7 +76,7 @@ impl PairEdges {
         let c = self.copies.entry(key).or_insert(0);
         *c += 1;
         if *c == 1 {
-            self.changed.push(key);
+            self.changed.entry(key).or_insert(false);
         }
     }
 
@@ -83,7 +87,7 @@ impl PairEdges {
             Some(c) if *c > 1 => *c -= 1,
             Some(_) => {
                 self.copies.remove(&key);
-                self.changed.push(key);
+                self.changed.entry(key).or_insert(true);
             }
             None => self.broken = true,
         }
@@ -125,23 +129,29 @@ impl PairEdges {
     pub fn replace_all(&mut self, new: PairMap<u32>) {
         for k in self.copies.keys() {
             if !new.contains_key(k) {
-                self.changed.push(*k);
+                self.changed.entry(*k).or_insert(true);
             }
         }
         for k in new.keys() {
             if !self.copies.contains_key(k) {
-                self.changed.push(*k);
+                self.changed.entry(*k).or_insert(false);
             }
         }
         self.copies = new;
         self.broken = false;
     }
 
-    /// The pairs whose membership may have changed since the last call (a superset: a pair
-    /// that left and came back is listed too, some more than once), in `out` (cleared first).
+    /// The pairs whose membership changed since the last call (each once; a pair that left
+    /// and came back is not listed), in `out` (cleared first), in no particular order.
     pub fn take_changed(&mut self, out: &mut Vec<PairKey>) {
         out.clear();
-        std::mem::swap(out, &mut self.changed);
+        let copies = &self.copies;
+        out.extend(
+            self.changed
+                .drain()
+                .filter(|&(k, before)| copies.contains_key(&k) != before)
+                .map(|(k, _)| k),
+        );
     }
 }
 
@@ -161,6 +171,11 @@ mod tests {
         let mut out = Vec::new();
         p.take_changed(&mut out);
         assert_eq!(out, vec![k]);
+        // Left and came back: no change.
+        p.remove(k);
+        p.add(k);
+        p.take_changed(&mut out);
+        assert!(out.is_empty());
         p.remove(k);
         assert!(!p.contains(k));
         p.take_changed(&mut out);
