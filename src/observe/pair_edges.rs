@@ -64,6 +64,10 @@ pub struct PairEdges {
     /// Each pair whose membership changed since the last look, with its membership then (the
     /// first change records it; a pair that left and came back is dropped at the look).
     changed: PairMap<bool>,
+    /// The pairs a rebuild's diff changed while `changed` was empty (nothing else changed since
+    /// the last look): listed as they are, without a map entry each; moved into `changed`
+    /// before any further change.
+    diffed: Vec<PairKey>,
     /// A copy was removed that was not there: the bookkeeping is wrong (a bug), and the owner
     /// must rebuild and [`replace_all`](Self::replace_all).
     broken: bool,
@@ -73,6 +77,7 @@ impl PairEdges {
     /// One more copy of `key`.
     #[inline]
     pub fn add(&mut self, key: PairKey) {
+        self.settle_diff();
         let c = self.copies.entry(key).or_insert(0);
         *c += 1;
         if *c == 1 {
@@ -83,6 +88,7 @@ impl PairEdges {
     /// One copy of `key` less.
     #[inline]
     pub fn remove(&mut self, key: PairKey) {
+        self.settle_diff();
         match self.copies.get_mut(&key) {
             Some(c) if *c > 1 => *c -= 1,
             Some(_) => {
@@ -90,6 +96,19 @@ impl PairEdges {
                 self.changed.entry(key).or_insert(true);
             }
             None => self.broken = true,
+        }
+    }
+
+    /// Moves the pairs of a rebuild's diff into `changed` (each with its membership before the
+    /// diff, the opposite of now), before a further change.
+    #[inline]
+    fn settle_diff(&mut self) {
+        if self.diffed.is_empty() {
+            return;
+        }
+        for k in std::mem::take(&mut self.diffed) {
+            let now = self.copies.contains_key(&k);
+            self.changed.insert(k, !now);
         }
     }
 
@@ -127,6 +146,16 @@ impl PairEdges {
     /// Replaces the whole set (after a rebuild): the pairs that appear or disappear are listed
     /// as changed (a hash diff, linear in the number of pairs).
     pub fn replace_all(&mut self, new: PairMap<u32>) {
+        self.settle_diff();
+        if self.changed.is_empty() {
+            // Nothing changed since the last look: the diff is the exact list.
+            self.diffed.extend(self.copies.keys().filter(|k| !new.contains_key(k)));
+            self.diffed
+                .extend(new.keys().filter(|k| !self.copies.contains_key(k)));
+            self.copies = new;
+            self.broken = false;
+            return;
+        }
         for k in self.copies.keys() {
             if !new.contains_key(k) {
                 self.changed.entry(*k).or_insert(true);
@@ -145,6 +174,7 @@ impl PairEdges {
     /// and came back is not listed), in `out` (cleared first), in no particular order.
     pub fn take_changed(&mut self, out: &mut Vec<PairKey>) {
         out.clear();
+        out.append(&mut self.diffed);
         let copies = &self.copies;
         out.extend(
             self.changed
@@ -189,5 +219,18 @@ mod tests {
         assert!(!p.is_broken());
         p.take_changed(&mut out);
         assert_eq!(out, vec![pair_key(1, 2)]);
+        // A rebuild's diff, then changes before the look: (1, 2) left and came back.
+        let mut new = PairMap::default();
+        new.insert(pair_key(3, 4), 1);
+        p.replace_all(new.clone());
+        p.add(pair_key(1, 2));
+        p.add(pair_key(5, 6));
+        p.remove(pair_key(3, 4));
+        p.take_changed(&mut out);
+        assert_eq!(out, vec![pair_key(5, 6)]);
+        p.replace_all(new);
+        p.take_changed(&mut out);
+        out.sort_unstable();
+        assert_eq!(out, vec![pair_key(1, 2), pair_key(3, 4), pair_key(5, 6)]);
     }
 }
