@@ -3,7 +3,7 @@
 //! sample from scratch (spade): on positions recorded from real runs of the wet shaken 2D
 //! system, laterally periodic (ghost images enter and leave the band), every sample's Delaunay
 //! edges are identical and so are the counts, per interval and per bin. The runs are chosen to
-//! exercise every path: flips, held-back sites moved alone with halved moves, inserted and
+//! exercise every path: flips, held-back sites relocated, inserted and
 //! deleted ghost images (a fluid sampled at 20 per period), failed repairs, rebuilds and the
 //! back-off (a gas sampled coarsely).
 
@@ -108,7 +108,9 @@ fn incremental_counts_equal_rebuilt_counts_on_a_fluid() {
     let st = compare(&frames);
     assert!(st.incremental as usize >= frames.len() * 9 / 10, "{st:?}");
     assert!(st.inserted > 0 && st.deleted > 0, "{st:?}");
-    assert!(st.held > 0 && st.bisections > 0 && st.unfolds > 0, "{st:?}");
+    // Held sites are relocated (the halving fallback of hull sites has its unit test in
+    // `observe::kinetic_delaunay`).
+    assert!(st.held > 0, "{st:?}");
 }
 
 #[test]

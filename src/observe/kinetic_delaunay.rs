@@ -35,11 +35,17 @@
 //!
 //! **One update** ([`KineticDelaunay::advance`]):
 //! 1. every kept site moves to its new position; the finite triangles around loose sites that
-//!    are not strictly positive (inverted or flat) hold their sites back: these move alone
-//!    afterwards, their move split into halves, recursively up to [`MAX_BISECTIONS`] levels
-//!    (with a budget of [`MAX_HALVINGS`] per sample), flipping to Delaunay after each part (the
-//!    final triangulation does not depend on the path);
+//!    are not strictly positive (inverted or flat) hold their sites back (at their previous
+//!    positions, again until no triangle around them is inverted);
 //! 2. Lawson flips from every edge of the triangles around loose sites until no edge conflicts;
+//!    then each held site is relocated ([`KineticDelaunay::relocate`]): taken out (flips that
+//!    keep both new triangles positive bring an inner site's degree down to three, its three
+//!    triangles merge; a hull site is merged into `INF`), Lawson flips, and put in again at its
+//!    new position, found by a visibility walk, then flipped in. A hull site that cannot be
+//!    merged into `INF` moves alone instead, its move split into halves, recursively up to
+//!    [`MAX_BISECTIONS`] levels (with a budget of [`MAX_HALVINGS`] per sample), unfolding the
+//!    edges it crosses and flipping to Delaunay after each part (the final triangulation does
+//!    not depend on the path);
 //! 3. sites that left the ghost band are deleted (each is then the outermost site on its side,
 //!    hence a hull vertex: it is merged into `INF` and the hull made convex again by flips);
 //! 4. sites that entered the band are inserted (split the containing triangle, or the infinite
@@ -57,8 +63,9 @@
 //! **Fallback**: a rebuild from scratch (spade's bulk load, converted into this structure) at the
 //! first sample, when the number of particles or the box changes, and whenever a step fails
 //! (more than [`MAX_HELD_FRACTION`] of the sites held back, a held move that still inverts a
-//! triangle after [`MAX_BISECTIONS`] halvings or beyond the budget, a site exactly on an edge, a
-//! leaving site not on the hull, more flips than [`flip_cap`], a failed final check, the pair
+//! triangle after [`MAX_BISECTIONS`] halvings or beyond the budget, a relocated site whose
+//! degree no flip lowers (counted as `check`), a site exactly on an edge, a leaving site not on
+//! the hull, more flips than [`flip_cap`], a failed final check, the pair
 //! bookkeeping found broken). Every fallback is counted by reason in [`KineticStats`]. Where spade cannot triangulate (fewer than
 //! three sites, all collinear, two sites at the same position) the structure stays empty and
 //! each sample is triangulated from scratch.
