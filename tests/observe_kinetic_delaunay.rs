@@ -3,7 +3,7 @@
 //! sample from scratch (spade): on positions recorded from real runs of the wet shaken 2D
 //! system, laterally periodic (ghost images enter and leave the band), every sample's Delaunay
 //! edges are identical and so are the counts, per interval and per bin. The runs are chosen to
-//! exercise every path: flips, held-back sites moved alone with halved moves, inserted and
+//! exercise every path: flips, held-back sites relocated, inserted and
 //! deleted ghost images (a fluid sampled at 20 per period), failed repairs, rebuilds and the
 //! back-off (a gas sampled coarsely).
 
@@ -108,7 +108,9 @@ fn incremental_counts_equal_rebuilt_counts_on_a_fluid() {
     let st = compare(&frames);
     assert!(st.incremental as usize >= frames.len() * 9 / 10, "{st:?}");
     assert!(st.inserted > 0 && st.deleted > 0, "{st:?}");
-    assert!(st.held > 0 && st.bisections > 0 && st.unfolds > 0, "{st:?}");
+    // Held sites are relocated (the halving fallback of hull sites has its unit test in
+    // `observe::kinetic_delaunay`).
+    assert!(st.held > 0, "{st:?}");
 }
 
 #[test]
@@ -170,8 +172,8 @@ fn tangled_frames() -> [Frame; 2] {
 /// triangulation, advancing a held-back site, flipped an edge that joined two sites joined
 /// already; the doubled edge broke the next walk around a site ("v in its star") and the job
 /// failed. From the triangulation of the first frame, the step to the second must give the
-/// edges triangulated from scratch; with the check against such flips switched off
-/// (`Safeguards::joined_flip_check`) it panics or corrupts the structure.
+/// edges triangulated from scratch (before the held sites were relocated, it panicked or
+/// corrupted the structure with `Safeguards::joined_flip_check` off).
 #[test]
 fn a_tangled_step_never_doubles_an_edge() {
     use wetgran::observe::kinetic_delaunay::Safeguards;
@@ -188,13 +190,16 @@ fn a_tangled_step_never_doubles_an_edge() {
         }))
     };
     assert_eq!(step(Safeguards::default()).ok(), Some((true, true)));
-    let unchecked = step(Safeguards {
-        joined_flip_check: false,
-        ..Safeguards::default()
-    });
-    assert_ne!(
-        unchecked.ok(),
-        Some((true, true)),
-        "without the check this step should corrupt the triangulation"
+    // With the held sites relocated (round 3 of docs/performance.md) instead of unfolded and
+    // halved, this recorded step no longer reaches the doubling flip even with
+    // `joined_flip_check` off: the check stays as a guard of the structure, and this test
+    // keeps the recorded step that once failed.
+    assert_eq!(
+        step(Safeguards {
+            joined_flip_check: false,
+            ..Safeguards::default()
+        })
+        .ok(),
+        Some((true, true))
     );
 }

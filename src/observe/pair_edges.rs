@@ -3,9 +3,11 @@
 //! one, an inserted site adds its edges, a deleted one removes them, a rebuild is diffed
 //! against the set kept. A pair can be joined through several periodic images, so each pair
 //! holds the number of site edges (copies) that join it; it is an edge while that number is
-//! positive. The pairs whose membership may have changed since the last
-//! [`take_changed`](PairEdges::take_changed) are listed, so that the location-change counter
-//! ([`super::tracked_pairs`]) looks at those only.
+//! positive. The pairs whose membership changed since the last
+//! [`take_changed`](PairEdges::take_changed) are listed (each once, with its membership before
+//! the first change, so that a pair that left and came back, as the edges of a relocated site
+//! mostly do, is not listed), so that the location-change counter ([`super::tracked_pairs`])
+//! looks at those only.
 
 use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
@@ -59,7 +61,13 @@ pub type PairSet = HashSet<PairKey, BuildHasherDefault<PairHasher>>;
 #[derive(Debug, Clone, Default)]
 pub struct PairEdges {
     copies: PairMap<u32>,
-    changed: Vec<PairKey>,
+    /// Each pair whose membership changed since the last look, with its membership then (the
+    /// first change records it; a pair that left and came back is dropped at the look).
+    changed: PairMap<bool>,
+    /// The pairs a rebuild's diff changed while `changed` was empty (nothing else changed since
+    /// the last look): listed as they are, without a map entry each; moved into `changed`
+    /// before any further change.
+    diffed: Vec<PairKey>,
     /// A copy was removed that was not there: the bookkeeping is wrong (a bug), and the owner
     /// must rebuild and [`replace_all`](Self::replace_all).
     broken: bool,
@@ -69,23 +77,38 @@ impl PairEdges {
     /// One more copy of `key`.
     #[inline]
     pub fn add(&mut self, key: PairKey) {
+        self.settle_diff();
         let c = self.copies.entry(key).or_insert(0);
         *c += 1;
         if *c == 1 {
-            self.changed.push(key);
+            self.changed.entry(key).or_insert(false);
         }
     }
 
     /// One copy of `key` less.
     #[inline]
     pub fn remove(&mut self, key: PairKey) {
+        self.settle_diff();
         match self.copies.get_mut(&key) {
             Some(c) if *c > 1 => *c -= 1,
             Some(_) => {
                 self.copies.remove(&key);
-                self.changed.push(key);
+                self.changed.entry(key).or_insert(true);
             }
             None => self.broken = true,
+        }
+    }
+
+    /// Moves the pairs of a rebuild's diff into `changed` (each with its membership before the
+    /// diff, the opposite of now), before a further change.
+    #[inline]
+    fn settle_diff(&mut self) {
+        if self.diffed.is_empty() {
+            return;
+        }
+        for k in std::mem::take(&mut self.diffed) {
+            let now = self.copies.contains_key(&k);
+            self.changed.insert(k, !now);
         }
     }
 
@@ -123,25 +146,43 @@ impl PairEdges {
     /// Replaces the whole set (after a rebuild): the pairs that appear or disappear are listed
     /// as changed (a hash diff, linear in the number of pairs).
     pub fn replace_all(&mut self, new: PairMap<u32>) {
+        self.settle_diff();
+        if self.changed.is_empty() {
+            // Nothing changed since the last look: the diff is the exact list.
+            self.diffed
+                .extend(self.copies.keys().filter(|k| !new.contains_key(k)));
+            self.diffed
+                .extend(new.keys().filter(|k| !self.copies.contains_key(k)));
+            self.copies = new;
+            self.broken = false;
+            return;
+        }
         for k in self.copies.keys() {
             if !new.contains_key(k) {
-                self.changed.push(*k);
+                self.changed.entry(*k).or_insert(true);
             }
         }
         for k in new.keys() {
             if !self.copies.contains_key(k) {
-                self.changed.push(*k);
+                self.changed.entry(*k).or_insert(false);
             }
         }
         self.copies = new;
         self.broken = false;
     }
 
-    /// The pairs whose membership may have changed since the last call (a superset: a pair
-    /// that left and came back is listed too, some more than once), in `out` (cleared first).
+    /// The pairs whose membership changed since the last call (each once; a pair that left
+    /// and came back is not listed), in `out` (cleared first), in no particular order.
     pub fn take_changed(&mut self, out: &mut Vec<PairKey>) {
         out.clear();
-        std::mem::swap(out, &mut self.changed);
+        out.append(&mut self.diffed);
+        let copies = &self.copies;
+        out.extend(
+            self.changed
+                .drain()
+                .filter(|&(k, before)| copies.contains_key(&k) != before)
+                .map(|(k, _)| k),
+        );
     }
 }
 
@@ -161,6 +202,11 @@ mod tests {
         let mut out = Vec::new();
         p.take_changed(&mut out);
         assert_eq!(out, vec![k]);
+        // Left and came back: no change.
+        p.remove(k);
+        p.add(k);
+        p.take_changed(&mut out);
+        assert!(out.is_empty());
         p.remove(k);
         assert!(!p.contains(k));
         p.take_changed(&mut out);
@@ -174,5 +220,18 @@ mod tests {
         assert!(!p.is_broken());
         p.take_changed(&mut out);
         assert_eq!(out, vec![pair_key(1, 2)]);
+        // A rebuild's diff, then changes before the look: (1, 2) left and came back.
+        let mut new = PairMap::default();
+        new.insert(pair_key(3, 4), 1);
+        p.replace_all(new.clone());
+        p.add(pair_key(1, 2));
+        p.add(pair_key(5, 6));
+        p.remove(pair_key(3, 4));
+        p.take_changed(&mut out);
+        assert_eq!(out, vec![pair_key(5, 6)]);
+        p.replace_all(new);
+        p.take_changed(&mut out);
+        out.sort_unstable();
+        assert_eq!(out, vec![pair_key(1, 2), pair_key(3, 4), pair_key(5, 6)]);
     }
 }
