@@ -340,7 +340,7 @@ pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> 
 pub fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
     let t0 = std::time::Instant::now();
     let (record, code) = match read_spec(spec_path) {
-        Err(Failure::BadInput(m) | Failure::Other(m)) => {
+        Err(Failure::BadInput(m) | Failure::JobsFailed(m) | Failure::Other(m)) => {
             eprintln!("error: {m}");
             let id = spec_path
                 .file_stem()

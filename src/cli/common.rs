@@ -11,9 +11,11 @@ use crate::sweep::{JobSpec, SweepFile};
 use std::path::Path;
 use std::process::ExitCode;
 
-/// How a command failed: bad input (exit code 2) or anything else (exit code 1).
+/// How a command failed: bad input (exit code 2), a sweep that finished with failed jobs
+/// (exit code 4: everything else was done and stored) or anything else (exit code 1).
 pub(super) enum Failure {
     BadInput(String),
+    JobsFailed(String),
     Other(String),
 }
 
@@ -30,12 +32,20 @@ impl From<StoreError> for Failure {
     }
 }
 
+/// Exit status of `sweep run` / `sweep resume` when the sweep ran to its end but some jobs
+/// failed (3 is taken by a broken engine invariant in `simulate` and by `stress`).
+pub const JOBS_FAILED_EXIT: u8 = 4;
+
 pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
     match r {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::BadInput(m)) => {
             eprintln!("error: {m}");
             ExitCode::from(2)
+        }
+        Err(Failure::JobsFailed(m)) => {
+            eprintln!("error: {m}");
+            ExitCode::from(JOBS_FAILED_EXIT)
         }
         Err(Failure::Other(m)) => {
             eprintln!("error: {m}");

@@ -40,7 +40,8 @@ pub enum SweepCommand {
     /// whose id is the hash of its canonical spec: jobs already computed (by this or any other
     /// sweep in the database) are not run again. Each finished job is committed on its own, so
     /// an interrupted run loses at most the jobs that were running; `sweep resume` continues it.
-    /// Progress: bars on a terminal, one line per finished job otherwise.
+    /// Progress: bars on a terminal, one line per finished job otherwise. Exit status 4 when the
+    /// sweep ran to its end but some jobs failed (`sweep status` says why).
     Run {
         /// The sweep file.
         file: PathBuf,
@@ -287,7 +288,27 @@ pub(super) fn sweep_run(
         retry,
         table_cache_mib,
     )?;
-    continue_refinement(&store, &[row], jobs, table_cache_mib)
+    let rows = [row];
+    continue_refinement(&store, &rows, jobs, table_cache_mib)?;
+    fail_if_jobs_failed(&store, &rows)
+}
+
+/// After a run: `Failure::JobsFailed` (exit status 4) when any job of `sweeps` is stored as
+/// failed, so that a script (`sweep run F && boundaries`) does not take a partial diagram for
+/// a whole one. The finished jobs are stored either way.
+fn fail_if_jobs_failed(store: &Store, sweeps: &[SweepRow]) -> Result<(), Failure> {
+    let mut failed = 0;
+    for s in sweeps {
+        failed += store.counts(s.id)?.failed;
+    }
+    if failed == 0 {
+        return Ok(());
+    }
+    Err(Failure::JobsFailed(format!(
+        "{failed} job(s) failed (the others are stored): `wetgran sweep status --db {}` shows \
+         why, `wetgran sweep resume --retry-failed` runs them again",
+        store.path().display()
+    )))
 }
 
 pub(super) fn sweep_resume(
@@ -312,7 +333,7 @@ pub(super) fn sweep_resume(
     run_and_report(&store, &sweeps, jobs, retry, table_cache_mib)?;
     continue_refinement(&store, &sweeps, jobs, table_cache_mib)?;
     let Some(max_periods) = extend else {
-        return Ok(());
+        return fail_if_jobs_failed(&store, &sweeps);
     };
     super::extend_cmd::extend_unconverged(&store, &sweeps, max_periods, jobs)?;
     // Extended results get the line rule's labels too, as after any run.
@@ -327,7 +348,7 @@ pub(super) fn sweep_resume(
             );
         }
     }
-    Ok(())
+    fail_if_jobs_failed(&store, &sweeps)
 }
 
 fn run_and_report(
