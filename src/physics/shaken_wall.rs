@@ -413,6 +413,52 @@ mod tests {
     }
 
     #[test]
+    fn bracket_root_ends_on_the_particle_side_for_any_tolerance_and_clock() {
+        // Fuzz of the thesis's solver at the edges of its inputs: gap tolerances at and below
+        // the gap's round-off (0, 1e-300), clocks far from the origin (t0 up to 1e7, where an
+        // ulp of t is 2e-9), coarse and fine marching steps. Every search must end, and a hit
+        // must never put the particle inside the wall: `refine` returns the bracket's particle
+        // side when the tolerance cannot be met, so the gap there, evaluated by the same
+        // function, is >= 0 exactly (returning the wall side `b` instead fails here). A hit is also never earlier than the earliest root found by
+        // conservative advancement with a tolerance the clock can resolve.
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(41);
+        let mut hits = 0;
+        for i in 0..3000 {
+            let w = random_motion(&mut rng);
+            let t0 = match i % 3 {
+                0 => rng.gen_range(0.0..w.period()),
+                1 => rng.gen_range(1e3..1e5),
+                _ => rng.gen_range(1e6..1e7),
+            };
+            let h = rng
+                .gen_range(0.0..(w.amplitude + 3.0))
+                .max(w.position(t0) + 1e-9);
+            let v = rng.gen_range(-3.0..3.0);
+            let tol = [0.0, 1e-300, 1e-13, 1e-6][i % 4];
+            let t_min = w.period() * [1e-4, 1e-2, 0.2][i % 3];
+            match bracket_root(&w, h, v, t0, t_min, tol, 20.0) {
+                WallRoot::Hit(t) => {
+                    hits += 1;
+                    assert!(t >= 0.0 && t.is_finite(), "{t}");
+                    let (gap, _) = w.gap(h, v, t0, t);
+                    assert!(
+                        gap >= 0.0,
+                        "inside the wall: gap {gap} at {t}, {w:?} h={h} v={v} t0={t0} tol={tol}"
+                    );
+                    if let WallRoot::Hit(e) = exact_root(&w, h, v, t0, 1e-9, 20.0) {
+                        assert!(t >= e - 1e-6, "bracket {t} before the earliest root {e}");
+                    }
+                }
+                WallRoot::None => {}
+            }
+        }
+        assert!(
+            hits > 1500,
+            "{hits} hits: the shots should mostly reach the wall"
+        );
+    }
+
+    #[test]
     fn grazing_shot_is_caught() {
         // Particle at rest relative to a wall at its lowest point... choose a trajectory that
         // touches the wall's crest: h(t) = A + small, apex at the crest time.
