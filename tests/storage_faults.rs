@@ -505,7 +505,7 @@ fn a_damaged_checkpoint_is_reported_and_never_used() {
         let s = store.sweep("cap").unwrap();
         store.points(s.id).unwrap()
     };
-    let log = ok(&[
+    let out = run(&[
         "sweep",
         "resume",
         "--db",
@@ -515,6 +515,13 @@ fn a_damaged_checkpoint_is_reported_and_never_used() {
         "--jobs",
         "1",
     ]);
+    let log = stderr(&out);
+    // The other extensions are stored; the exit status says that one failed.
+    assert_eq!(out.status.code(), Some(4), "{log}");
+    assert!(
+        log.contains("error: 1 extension(s) failed (the others are stored)"),
+        "{log}"
+    );
     assert!(
         log.contains(&format!("the checkpoint of job {victim} is not readable")),
         "{log}"

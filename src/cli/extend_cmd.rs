@@ -96,5 +96,13 @@ pub fn extend_unconverged(
             &failed
         )
     );
-    Ok(())
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        // The extensions that worked are stored; the exit status says that some did not.
+        Err(Failure::JobsFailed(format!(
+            "{} extension(s) failed (the others are stored)",
+            failed.len()
+        )))
+    }
 }
