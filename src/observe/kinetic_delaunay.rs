@@ -70,7 +70,9 @@
 //! three sites, all collinear, two sites at the same position) the structure stays empty and
 //! each sample is triangulated from scratch.
 
-use super::location_changes::{Edge, SiteRef, delaunay_edges, edge_between, finish_edges, images};
+use super::location_changes::{
+    Edge, SiteRef, better_copy, delaunay_edges, edge_between, finish_edges, images,
+};
 use super::pair_edges::{PairEdges, PairKey, PairMap, pair_key, pair_of};
 use super::predicates::{incircle, orient2d};
 use super::slack::{edge_slack, orientation_slack};
@@ -408,7 +410,9 @@ impl KineticDelaunay {
                 .ok()
                 .map(|k| self.scratch[k]);
         }
-        let mut copies = Vec::new();
+        // The best copy so far under the order of `finish_edges` (a running minimum: no list of
+        // copies, no sort).
+        let mut best: Option<Edge> = None;
         for &s in self.sites_of[i as usize].iter().take_while(|&&s| s != INF) {
             let start = self.vtri[s as usize] as usize;
             let mut t = start;
@@ -424,8 +428,9 @@ impl KineticDelaunay {
                     let opposite =
                         (w != INF && o != INF).then(|| (self.site_ref(w), self.site_ref(o)));
                     if let Some(e) = edge_between(self.site_ref(s), self.site_ref(b), opposite, &[])
+                        && best.is_none_or(|q| better_copy(&e, &q))
                     {
-                        copies.push(e);
+                        best = Some(e);
                     }
                 }
                 t = self.tn[t][(k + 1) % 3] as usize;
@@ -434,8 +439,7 @@ impl KineticDelaunay {
                 }
             }
         }
-        finish_edges(&mut copies);
-        copies.first().copied()
+        best
     }
 
     /// Whether the kept pairs are exactly the pairs of the current edges (for tests).
@@ -1082,7 +1086,10 @@ impl KineticDelaunay {
         // flip changes keeps its outcome; a flip pushes the edges it changes), so that only the
         // conflicting ones go on the stack.
         self.stack.clear();
-        for &t in &tris {
+        if !self.certified {
+            self.seed_every_edge();
+        }
+        for &t in tris.iter().filter(|_| self.certified) {
             let v = self.tv[t];
             if v[0] == DEAD {
                 continue;
@@ -1119,6 +1126,45 @@ impl KineticDelaunay {
             }
         }
         Ok(())
+    }
+
+    /// The Lawson seeds where every triangle is in the set (no site certified): the same edges
+    /// in the same order as the loop over the set in [`Self::advance_sites`] (every live
+    /// triangle in slot order; an edge between two finite triangles from the lower one), with
+    /// a finite triangle's corners loaded once for its edges (an edge between a finite and an
+    /// infinite triangle never conflicts from the finite side: the vertex across is `INF`).
+    fn seed_every_edge(&mut self) {
+        for t in 0..self.tv.len() {
+            let v = self.tv[t];
+            if v[0] == DEAD {
+                continue;
+            }
+            if v.contains(&INF) {
+                for k in 0..3 {
+                    let u = self.tn[t][k] as usize;
+                    let d = self.tv[u][self.back_index(u, t as u32)];
+                    if self.conflicts(t, d) {
+                        self.stack.push((t as u32, k as u8));
+                    }
+                }
+                continue;
+            }
+            let p = v.map(|x| c(self.pos[x as usize]));
+            for k in 0..3 {
+                let u = self.tn[t][k] as usize;
+                if u < t {
+                    continue; // tested from u (finite) or never conflicting (u infinite)
+                }
+                let w = self.tv[u];
+                if w.contains(&INF) {
+                    continue;
+                }
+                let d = w[self.back_index(u, t as u32)];
+                if incircle(p[0], p[1], p[2], c(self.pos[d as usize])) > 0.0 {
+                    self.stack.push((t as u32, k as u8));
+                }
+            }
+        }
     }
 
     fn stars_of(&self, sites: &[u32]) -> Vec<usize> {
