@@ -1017,39 +1017,30 @@ impl KineticDelaunay {
     /// algorithm); then the held sites move alone, their move halved where it still inverts a
     /// triangle ([`Self::advance_local`]).
     fn advance_sites(&mut self, moved: usize) -> Result<(), Failure> {
-        let tris = if self.certified {
-            self.stars_of_loose()
-        } else {
-            // Every site loose: every live triangle.
+        self.stack.clear();
+        let full = !self.certified;
+        let (tris, tri_stamp, mut inverted) = if full {
+            // Every site loose: every live triangle, scanned once for its orientation and the
+            // Lawson seeds together ([`Self::scan_every_triangle`]).
             self.stats.full_tests += 1;
-            self.next_stamp();
-            let stamp = self.stamp;
-            let mut all = Vec::with_capacity(self.tv.len());
-            for t in 0..self.tv.len() {
-                if self.tv[t][0] != DEAD {
-                    self.tri_mark[t] = stamp;
-                    all.push(t);
-                }
-            }
-            all
+            let inverted = self.scan_every_triangle();
+            (Vec::new(), 0, inverted)
+        } else {
+            let tris = self.stars_of_loose();
+            let tri_stamp = self.stamp;
+            let inverted: Vec<usize> = tris
+                .iter()
+                .copied()
+                .filter(|&t| self.inversion(t).is_some())
+                .collect();
+            (tris, tri_stamp, inverted)
         };
-        let tri_stamp = self.stamp;
-        let finite: Vec<usize> = tris
-            .iter()
-            .copied()
-            .filter(|&t| !self.tv[t].contains(&INF))
-            .collect();
         // Held sites, with where they go (they wait at their previous position). Holding a site
         // changes only the triangles around it: after the first scan, only the inverted
         // triangles and the stars of the sites held since are tested again.
         let mut held: Vec<(u32, [f64; 2])> = Vec::new();
         self.next_stamp();
         let stamp = self.stamp;
-        let mut inverted: Vec<usize> = finite
-            .iter()
-            .copied()
-            .filter(|&t| self.inversion(t).is_some())
-            .collect();
         loop {
             let before = held.len();
             let mut blocked = false;
@@ -1084,12 +1075,19 @@ impl KineticDelaunay {
         }
         // Lawson seeds: every edge of the set, tested here (an edge whose triangles no later
         // flip changes keeps its outcome; a flip pushes the edges it changes), so that only the
-        // conflicting ones go on the stack.
-        self.stack.clear();
-        if !self.certified {
-            self.seed_every_edge();
+        // conflicting ones go on the stack. In the full scan they were tested before the held
+        // sites went back: every edge of a triangle around a held site goes on the stack
+        // untested (an edge whose test involves a held site is an edge of a triangle around it;
+        // Lawson tests each edge it pops).
+        if full && !held.is_empty() {
+            let sites: Vec<u32> = held.iter().map(|&(v, _)| v).collect();
+            for t in self.stars_of(&sites) {
+                for k in 0..3u8 {
+                    self.stack.push((t as u32, k));
+                }
+            }
         }
-        for &t in tris.iter().filter(|_| self.certified) {
+        for &t in &tris {
             let v = self.tv[t];
             if v[0] == DEAD {
                 continue;
@@ -1128,12 +1126,15 @@ impl KineticDelaunay {
         Ok(())
     }
 
-    /// The Lawson seeds where every triangle is in the set (no site certified): the same edges
-    /// in the same order as the loop over the set in [`Self::advance_sites`] (every live
-    /// triangle in slot order; an edge between two finite triangles from the lower one), with
-    /// a finite triangle's corners loaded once for its edges (an edge between a finite and an
-    /// infinite triangle never conflicts from the finite side: the vertex across is `INF`).
-    fn seed_every_edge(&mut self) {
+    /// Where every triangle is in the set (no site certified), one pass over the live
+    /// triangles in slot order: returns the finite triangles that are not strictly positive
+    /// (as [`Self::inversion`] finds them) and puts the Lawson seeds on the stack, the edges
+    /// the loop over the set in [`Self::advance_sites`] would (an edge between two finite
+    /// triangles from the lower one; an edge between a finite and an infinite triangle never
+    /// conflicts from the finite side, the vertex across is `INF`), with a finite triangle's
+    /// corners loaded once for its orientation and its edges.
+    fn scan_every_triangle(&mut self) -> Vec<usize> {
+        let mut inverted = Vec::new();
         for t in 0..self.tv.len() {
             let v = self.tv[t];
             if v[0] == DEAD {
@@ -1150,6 +1151,9 @@ impl KineticDelaunay {
                 continue;
             }
             let p = v.map(|x| c(self.pos[x as usize]));
+            if orient2d(p[0], p[1], p[2]) <= 0.0 {
+                inverted.push(t); // as `inversion(t).is_some()`
+            }
             for k in 0..3 {
                 let u = self.tn[t][k] as usize;
                 if u < t {
@@ -1165,6 +1169,7 @@ impl KineticDelaunay {
                 }
             }
         }
+        inverted
     }
 
     fn stars_of(&self, sites: &[u32]) -> Vec<usize> {
