@@ -1173,10 +1173,12 @@ impl KineticDelaunay {
     }
 
     fn stars_of(&self, sites: &[u32]) -> Vec<usize> {
-        let mut tris: Vec<usize> = sites
-            .iter()
-            .flat_map(|&s| self.star(s).into_iter().map(|(t, _)| t))
-            .collect();
+        let mut tris: Vec<usize> = Vec::with_capacity(8 * sites.len());
+        let mut star = Vec::with_capacity(16);
+        for &s in sites {
+            self.star_into(s, &mut star);
+            tris.extend(star.iter().map(|&(t, _)| t));
+        }
         tris.sort_unstable();
         tris.dedup();
         tris
@@ -1438,8 +1440,15 @@ impl KineticDelaunay {
 
     /// The triangles around site `v`, counter-clockwise, each with `v`'s index in it.
     fn star(&self, v: u32) -> Vec<(usize, usize)> {
-        let start = self.vtri[v as usize] as usize;
         let mut out = Vec::with_capacity(8);
+        self.star_into(v, &mut out);
+        out
+    }
+
+    /// [`Self::star`] into `out` (cleared first): no allocation where `out` has the room.
+    fn star_into(&self, v: u32, out: &mut Vec<(usize, usize)>) {
+        out.clear();
+        let start = self.vtri[v as usize] as usize;
         let mut t = start;
         loop {
             let k = self.tv[t]
@@ -1449,7 +1458,7 @@ impl KineticDelaunay {
             out.push((t, k));
             t = self.tn[t][(k + 1) % 3] as usize;
             if t == start || out.len() > self.tv.len() {
-                return out;
+                return;
             }
         }
     }
@@ -1671,7 +1680,7 @@ impl KineticDelaunay {
             let kk = (k0 + 1) % 3;
             let j = self.back_index(t1, t0 as u32);
             self.flip(t0, kk, t1, j);
-            star = self.star(v);
+            self.star_into(v, &mut star);
         }
         // Three triangles (v, x_q, x_{q+1}) merge into (x_0, x_1, x_2).
         let [(t0, k0), (t1, k1), (t2, k2)] = [star[0], star[1], star[2]];
