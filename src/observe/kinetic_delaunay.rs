@@ -1050,12 +1050,17 @@ impl KineticDelaunay {
                     continue;
                 }
                 blocked = true;
-                for v in self.tv[t] {
-                    if self.site_mark[v as usize] != stamp {
-                        self.site_mark[v as usize] = stamp;
-                        held.push((v, self.pos[v as usize]));
-                        self.pos[v as usize] = self.prev[v as usize];
-                    }
+                // One site at a time: the one of the triangle that moved farthest and is not
+                // held yet (the triangle is tested again below, with the sites held since).
+                let far = self.tv[t]
+                    .into_iter()
+                    .filter(|&v| self.site_mark[v as usize] != stamp)
+                    .map(|v| (dist2(self.pos[v as usize], self.prev[v as usize]), v))
+                    .max_by(|a, b| a.0.total_cmp(&b.0));
+                if let Some((_, v)) = far {
+                    self.site_mark[v as usize] = stamp;
+                    held.push((v, self.pos[v as usize]));
+                    self.pos[v as usize] = self.prev[v as usize];
                 }
             }
             if !blocked {
