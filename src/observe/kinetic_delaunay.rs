@@ -34,9 +34,10 @@
 //! makes its sites loose for the next sample). After a rebuild no site is certified.
 //!
 //! **One update** ([`KineticDelaunay::advance`]):
-//! 1. every kept site moves to its new position; the finite triangles around loose sites that
-//!    are not strictly positive (inverted or flat) hold their sites back (at their previous
-//!    positions, again until no triangle around them is inverted);
+//! 1. every kept site moves to its new position; a finite triangle around loose sites that is
+//!    not strictly positive (inverted or flat) holds back the one of its sites that moved
+//!    farthest (at its previous position; again, with the triangles around the sites held
+//!    since, until no triangle is inverted);
 //! 2. Lawson flips from every edge of the triangles around loose sites until no edge conflicts;
 //!    then each held site is relocated ([`KineticDelaunay::relocate`]): taken out (flips that
 //!    keep both new triangles positive bring an inner site's degree down to three, its three
@@ -1012,10 +1013,11 @@ impl KineticDelaunay {
 
     /// Sites have moved (`moved` of them; `prev` holds where they were) and flips bring the
     /// triangulation to Delaunay again. Only the triangles around loose sites are tested: the
-    /// others hold by their slack. Sites of triangles that invert in a way no single flip
-    /// undoes are held back; the others move at once (repaired by unfolding flips and Lawson's
-    /// algorithm); then the held sites move alone, their move halved where it still inverts a
-    /// triangle ([`Self::advance_local`]).
+    /// others hold by their slack. A triangle that inverts holds back one of its sites (the one
+    /// that moved farthest) until none is inverted; the others move at once (Lawson's
+    /// algorithm); then the held sites are relocated one at a time ([`Self::relocate`]), or
+    /// move alone with their move halved where it still inverts a triangle
+    /// ([`Self::advance_local`]).
     fn advance_sites(&mut self, moved: usize) -> Result<(), Failure> {
         self.stack.clear();
         let full = !self.certified;
