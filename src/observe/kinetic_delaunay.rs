@@ -34,9 +34,10 @@
 //! makes its sites loose for the next sample). After a rebuild no site is certified.
 //!
 //! **One update** ([`KineticDelaunay::advance`]):
-//! 1. every kept site moves to its new position; the finite triangles around loose sites that
-//!    are not strictly positive (inverted or flat) hold their sites back (at their previous
-//!    positions, again until no triangle around them is inverted);
+//! 1. every kept site moves to its new position; a finite triangle around loose sites that is
+//!    not strictly positive (inverted or flat) holds back the one of its sites that moved
+//!    farthest (at its previous position; again, with the triangles around the sites held
+//!    since, until no triangle is inverted);
 //! 2. Lawson flips from every edge of the triangles around loose sites until no edge conflicts;
 //!    then each held site is relocated ([`KineticDelaunay::relocate`]): taken out (flips that
 //!    keep both new triangles positive bring an inner site's degree down to three, its three
@@ -70,7 +71,9 @@
 //! three sites, all collinear, two sites at the same position) the structure stays empty and
 //! each sample is triangulated from scratch.
 
-use super::location_changes::{Edge, SiteRef, delaunay_edges, edge_between, finish_edges, images};
+use super::location_changes::{
+    Edge, SiteRef, better_copy, delaunay_edges, edge_between, finish_edges, images,
+};
 use super::pair_edges::{PairEdges, PairKey, PairMap, pair_key, pair_of};
 use super::predicates::{incircle, orient2d};
 use super::slack::{edge_slack, orientation_slack};
@@ -408,7 +411,9 @@ impl KineticDelaunay {
                 .ok()
                 .map(|k| self.scratch[k]);
         }
-        let mut copies = Vec::new();
+        // The best copy so far under the order of `finish_edges` (a running minimum: no list of
+        // copies, no sort).
+        let mut best: Option<Edge> = None;
         for &s in self.sites_of[i as usize].iter().take_while(|&&s| s != INF) {
             let start = self.vtri[s as usize] as usize;
             let mut t = start;
@@ -424,8 +429,9 @@ impl KineticDelaunay {
                     let opposite =
                         (w != INF && o != INF).then(|| (self.site_ref(w), self.site_ref(o)));
                     if let Some(e) = edge_between(self.site_ref(s), self.site_ref(b), opposite, &[])
+                        && best.is_none_or(|q| better_copy(&e, &q))
                     {
-                        copies.push(e);
+                        best = Some(e);
                     }
                 }
                 t = self.tn[t][(k + 1) % 3] as usize;
@@ -434,8 +440,7 @@ impl KineticDelaunay {
                 }
             }
         }
-        finish_edges(&mut copies);
-        copies.first().copied()
+        best
     }
 
     /// Whether the kept pairs are exactly the pairs of the current edges (for tests).
@@ -1008,44 +1013,36 @@ impl KineticDelaunay {
 
     /// Sites have moved (`moved` of them; `prev` holds where they were) and flips bring the
     /// triangulation to Delaunay again. Only the triangles around loose sites are tested: the
-    /// others hold by their slack. Sites of triangles that invert in a way no single flip
-    /// undoes are held back; the others move at once (repaired by unfolding flips and Lawson's
-    /// algorithm); then the held sites move alone, their move halved where it still inverts a
-    /// triangle ([`Self::advance_local`]).
+    /// others hold by their slack. A triangle that inverts holds back one of its sites (the one
+    /// that moved farthest) until none is inverted; the others move at once (Lawson's
+    /// algorithm); then the held sites are relocated one at a time ([`Self::relocate`]), or
+    /// move alone with their move halved where it still inverts a triangle
+    /// ([`Self::advance_local`]).
     fn advance_sites(&mut self, moved: usize) -> Result<(), Failure> {
-        let tris = if self.certified {
-            self.stars_of_loose()
-        } else {
-            // Every site loose: every live triangle.
+        self.stack.clear();
+        let full = !self.certified;
+        let (tris, tri_stamp, mut inverted) = if full {
+            // Every site loose: every live triangle, scanned once for its orientation and the
+            // Lawson seeds together ([`Self::scan_every_triangle`]).
             self.stats.full_tests += 1;
-            self.next_stamp();
-            let stamp = self.stamp;
-            let mut all = Vec::with_capacity(self.tv.len());
-            for t in 0..self.tv.len() {
-                if self.tv[t][0] != DEAD {
-                    self.tri_mark[t] = stamp;
-                    all.push(t);
-                }
-            }
-            all
+            let inverted = self.scan_every_triangle();
+            (Vec::new(), 0, inverted)
+        } else {
+            let tris = self.stars_of_loose();
+            let tri_stamp = self.stamp;
+            let inverted: Vec<usize> = tris
+                .iter()
+                .copied()
+                .filter(|&t| self.inversion(t).is_some())
+                .collect();
+            (tris, tri_stamp, inverted)
         };
-        let tri_stamp = self.stamp;
-        let finite: Vec<usize> = tris
-            .iter()
-            .copied()
-            .filter(|&t| !self.tv[t].contains(&INF))
-            .collect();
         // Held sites, with where they go (they wait at their previous position). Holding a site
         // changes only the triangles around it: after the first scan, only the inverted
         // triangles and the stars of the sites held since are tested again.
         let mut held: Vec<(u32, [f64; 2])> = Vec::new();
         self.next_stamp();
         let stamp = self.stamp;
-        let mut inverted: Vec<usize> = finite
-            .iter()
-            .copied()
-            .filter(|&t| self.inversion(t).is_some())
-            .collect();
         loop {
             let before = held.len();
             let mut blocked = false;
@@ -1055,12 +1052,17 @@ impl KineticDelaunay {
                     continue;
                 }
                 blocked = true;
-                for v in self.tv[t] {
-                    if self.site_mark[v as usize] != stamp {
-                        self.site_mark[v as usize] = stamp;
-                        held.push((v, self.pos[v as usize]));
-                        self.pos[v as usize] = self.prev[v as usize];
-                    }
+                // One site at a time: the one of the triangle that moved farthest and is not
+                // held yet (the triangle is tested again below, with the sites held since).
+                let far = self.tv[t]
+                    .into_iter()
+                    .filter(|&v| self.site_mark[v as usize] != stamp)
+                    .map(|v| (dist2(self.pos[v as usize], self.prev[v as usize]), v))
+                    .max_by(|a, b| a.0.total_cmp(&b.0));
+                if let Some((_, v)) = far {
+                    self.site_mark[v as usize] = stamp;
+                    held.push((v, self.pos[v as usize]));
+                    self.pos[v as usize] = self.prev[v as usize];
                 }
             }
             if !blocked {
@@ -1080,8 +1082,18 @@ impl KineticDelaunay {
         }
         // Lawson seeds: every edge of the set, tested here (an edge whose triangles no later
         // flip changes keeps its outcome; a flip pushes the edges it changes), so that only the
-        // conflicting ones go on the stack.
-        self.stack.clear();
+        // conflicting ones go on the stack. In the full scan they were tested before the held
+        // sites went back: every edge of a triangle around a held site goes on the stack
+        // untested (an edge whose test involves a held site is an edge of a triangle around it;
+        // Lawson tests each edge it pops).
+        if full && !held.is_empty() {
+            let sites: Vec<u32> = held.iter().map(|&(v, _)| v).collect();
+            for t in self.stars_of(&sites) {
+                for k in 0..3u8 {
+                    self.stack.push((t as u32, k));
+                }
+            }
+        }
         for &t in &tris {
             let v = self.tv[t];
             if v[0] == DEAD {
@@ -1121,11 +1133,59 @@ impl KineticDelaunay {
         Ok(())
     }
 
+    /// Where every triangle is in the set (no site certified), one pass over the live
+    /// triangles in slot order: returns the finite triangles that are not strictly positive
+    /// (as [`Self::inversion`] finds them) and puts the Lawson seeds on the stack, the edges
+    /// the loop over the set in [`Self::advance_sites`] would (an edge between two finite
+    /// triangles from the lower one; an edge between a finite and an infinite triangle never
+    /// conflicts from the finite side, the vertex across is `INF`), with a finite triangle's
+    /// corners loaded once for its orientation and its edges.
+    fn scan_every_triangle(&mut self) -> Vec<usize> {
+        let mut inverted = Vec::new();
+        for t in 0..self.tv.len() {
+            let v = self.tv[t];
+            if v[0] == DEAD {
+                continue;
+            }
+            if v.contains(&INF) {
+                for k in 0..3 {
+                    let u = self.tn[t][k] as usize;
+                    let d = self.tv[u][self.back_index(u, t as u32)];
+                    if self.conflicts(t, d) {
+                        self.stack.push((t as u32, k as u8));
+                    }
+                }
+                continue;
+            }
+            let p = v.map(|x| c(self.pos[x as usize]));
+            if orient2d(p[0], p[1], p[2]) <= 0.0 {
+                inverted.push(t); // as `inversion(t).is_some()`
+            }
+            for k in 0..3 {
+                let u = self.tn[t][k] as usize;
+                if u < t {
+                    continue; // tested from u (finite) or never conflicting (u infinite)
+                }
+                let w = self.tv[u];
+                if w.contains(&INF) {
+                    continue;
+                }
+                let d = w[self.back_index(u, t as u32)];
+                if incircle(p[0], p[1], p[2], c(self.pos[d as usize])) > 0.0 {
+                    self.stack.push((t as u32, k as u8));
+                }
+            }
+        }
+        inverted
+    }
+
     fn stars_of(&self, sites: &[u32]) -> Vec<usize> {
-        let mut tris: Vec<usize> = sites
-            .iter()
-            .flat_map(|&s| self.star(s).into_iter().map(|(t, _)| t))
-            .collect();
+        let mut tris: Vec<usize> = Vec::with_capacity(8 * sites.len());
+        let mut star = Vec::with_capacity(16);
+        for &s in sites {
+            self.star_into(s, &mut star);
+            tris.extend(star.iter().map(|&(t, _)| t));
+        }
         tris.sort_unstable();
         tris.dedup();
         tris
@@ -1387,8 +1447,15 @@ impl KineticDelaunay {
 
     /// The triangles around site `v`, counter-clockwise, each with `v`'s index in it.
     fn star(&self, v: u32) -> Vec<(usize, usize)> {
-        let start = self.vtri[v as usize] as usize;
         let mut out = Vec::with_capacity(8);
+        self.star_into(v, &mut out);
+        out
+    }
+
+    /// [`Self::star`] into `out` (cleared first): no allocation where `out` has the room.
+    fn star_into(&self, v: u32, out: &mut Vec<(usize, usize)>) {
+        out.clear();
+        let start = self.vtri[v as usize] as usize;
         let mut t = start;
         loop {
             let k = self.tv[t]
@@ -1398,7 +1465,7 @@ impl KineticDelaunay {
             out.push((t, k));
             t = self.tn[t][(k + 1) % 3] as usize;
             if t == start || out.len() > self.tv.len() {
-                return out;
+                return;
             }
         }
     }
@@ -1620,7 +1687,7 @@ impl KineticDelaunay {
             let kk = (k0 + 1) % 3;
             let j = self.back_index(t1, t0 as u32);
             self.flip(t0, kk, t1, j);
-            star = self.star(v);
+            self.star_into(v, &mut star);
         }
         // Three triangles (v, x_q, x_{q+1}) merge into (x_0, x_1, x_2).
         let [(t0, k0), (t1, k1), (t2, k2)] = [star[0], star[1], star[2]];

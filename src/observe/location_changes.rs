@@ -181,20 +181,26 @@ pub(crate) fn edge_between(
     })
 }
 
+/// Whether the copy `p` of a pair's edge is kept before the copy `q` ([`finish_edges`]):
+/// shorter, then the smaller midpoint, then the smaller opposite vertices and angle sum. A
+/// total order on copies: two copies equal under it are equal in every field.
+#[inline]
+pub(crate) fn better_copy(p: &Edge, q: &Edge) -> bool {
+    let key = |e: &Edge| e.opposite.map(|(c, d, s)| (c, d, s.to_bits()));
+    p.length
+        .total_cmp(&q.length)
+        .then(p.mid_x.total_cmp(&q.mid_x))
+        .then_with(|| key(p).cmp(&key(q)))
+        .is_lt()
+}
+
 /// Sorts the edges by pair and keeps one per pair: of the copies of a pair seen through
 /// different periodic images, the shortest (then the smallest midpoint, then the opposite
 /// vertices), a choice that does not depend on the order the triangulation lists its edges in.
 pub(crate) fn finish_edges(edges: &mut Vec<Edge>) {
     edges.sort_unstable_by_key(|e| ((e.i as u64) << 32) | e.j as u64);
     // Runs of one pair (copies through periodic images): keep the first by the full key.
-    let better = |p: &Edge, q: &Edge| {
-        let key = |e: &Edge| e.opposite.map(|(c, d, s)| (c, d, s.to_bits()));
-        p.length
-            .total_cmp(&q.length)
-            .then(p.mid_x.total_cmp(&q.mid_x))
-            .then_with(|| key(p).cmp(&key(q)))
-            .is_lt()
-    };
+    let better = better_copy;
     let mut w = 0;
     for r in 0..edges.len() {
         if w > 0 && (edges[w - 1].i, edges[w - 1].j) == (edges[r].i, edges[r].j) {
