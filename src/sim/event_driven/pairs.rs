@@ -347,27 +347,62 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         slabs: &SlabSource,
         t: f64,
     ) {
-        let mut best = self.ev[i];
+        let this = &*self;
+        let mut best = this.ev[i];
         // Copies, so that the loop keeps them in registers.
         let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
-        for (cell, shift) in around {
-            grid.for_each_in(cell, |j| {
-                if j == i {
-                    return;
-                }
-                let predicted = if SHIFT {
-                    self.predict_pair_shifted(bodies, slabs, &xi, &vi, i, j, t, &shift)
-                } else {
-                    self.predict_pair_from::<G, S, WRAP>(bodies, slabs, &xi, &vi, i, j, t)
-                };
-                if let Some((tj, kind)) = predicted
-                    && tj < best.time
-                {
-                    best = PairEvent::new(tj, j as u32, bodies.count[j], kind);
+        if SHIFT {
+            for (cell, shift) in around {
+                grid.for_each_in(cell, |j| {
+                    this.consider::<G, S, WRAP, SHIFT>(
+                        bodies, slabs, &xi, &vi, i, j, t, &shift, &mut best,
+                    );
+                });
+            }
+        } else {
+            // No shifts: the partners of all cells gathered in batches first, so that the
+            // cells' occupancies cost no mispredicted branches (`CellGrid::for_each_batch`).
+            let no_shift = [0.0; D];
+            grid.for_each_batch(around.map(|(cell, _)| cell), |batch| {
+                for &j in batch {
+                    this.consider::<G, S, WRAP, SHIFT>(
+                        bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best,
+                    );
                 }
             });
         }
         self.ev[i] = best;
+    }
+
+    /// Lowers `best` (the pair event of `i`, state `(xi, vi)` at `t`) if partner `j` gives an
+    /// earlier one (`j == i` is skipped). `shift`: see [`Self::scan_cells`].
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn consider<const G: bool, const S: bool, const WRAP: bool, const SHIFT: bool>(
+        &self,
+        bodies: &Bodies<D, G, S>,
+        slabs: &SlabSource,
+        xi: &Vector<D>,
+        vi: &Vector<D>,
+        i: usize,
+        j: usize,
+        t: f64,
+        shift: &[f64; D],
+        best: &mut PairEvent,
+    ) {
+        if j == i {
+            return;
+        }
+        let predicted = if SHIFT {
+            self.predict_pair_shifted(bodies, slabs, xi, vi, i, j, t, shift)
+        } else {
+            self.predict_pair_from::<G, S, WRAP>(bodies, slabs, xi, vi, i, j, t)
+        };
+        if let Some((tj, kind)) = predicted
+            && tj < best.time
+        {
+            *best = PairEvent::new(tj, j as u32, bodies.count[j], kind);
+        }
     }
 
     /// [`Self::predict_pair_from`] for a partner `j` whose minimum image is `shift` away: the
