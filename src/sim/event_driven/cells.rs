@@ -11,7 +11,8 @@
 /// of the reference systems (0.5 particles per cell in 3D) more than two particles in a cell
 /// are rare (1.4 % of the cells), and those fall back to the loop.
 const GATHER_STEPS: usize = 2;
-/// Particle indices [`CellGrid::for_each_batch`] gathers before it hands them on.
+/// Particle indices [`CellGrid::for_each_batch`] gathers before it hands them on (a power of
+/// two).
 const BATCH: usize = 64;
 
 /// A regular grid of `n[0] x ... x n[D-1]` cells.
@@ -262,7 +263,8 @@ impl<const D: usize> CellGrid<D> {
             }
             let mut j = self.head[cell];
             for _ in 0..GATHER_STEPS {
-                buf[len] = j;
+                // `len < BATCH` here; the mask only spares the bounds test.
+                buf[len % BATCH] = j;
                 len += usize::from(j != end);
                 j = self.next[j as usize];
             }

@@ -363,15 +363,87 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // No shifts: the partners of all cells gathered in batches first, so that the
             // cells' occupancies cost no mispredicted branches (`CellGrid::for_each_batch`).
             let no_shift = [0.0; D];
-            grid.for_each_batch(around.map(|(cell, _)| cell), |batch| {
-                for &j in batch {
-                    this.consider::<G, S, WRAP, SHIFT>(
-                        bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best,
-                    );
+            if !WET && !S && !WRAP {
+                // Dry, one force for all, no image: the prediction without branches.
+                let (mut best_t, mut best_j) = (best.time, NONE);
+                grid.for_each_batch(around.map(|(cell, _)| cell), |batch| {
+                    for &j in batch {
+                        Self::consider_dry::<G, S, SHIFT>(
+                            bodies,
+                            &xi,
+                            &vi,
+                            i,
+                            j,
+                            t,
+                            &no_shift,
+                            &mut best_t,
+                            &mut best_j,
+                        );
+                    }
+                });
+                if best_j != NONE {
+                    let j = best_j as usize;
+                    best = PairEvent::new(best_t, best_j, bodies.count[j], PairKind::Collide);
                 }
-            });
+            } else {
+                grid.for_each_batch(around.map(|(cell, _)| cell), |batch| {
+                    for &j in batch {
+                        this.consider::<G, S, WRAP, SHIFT>(
+                            bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best,
+                        );
+                    }
+                });
+            }
         }
         self.ev[i] = best;
+    }
+
+    /// [`Self::consider`] for a dry pair under one force for all and without minimum image,
+    /// as selects instead of branches: whether the pair approaches (`b < 0`) and whether its
+    /// paths meet (`disc > 0`) are coin tosses a processor mispredicts about every other
+    /// partner, so every partner pays the whole arithmetic and the result is chosen. The same
+    /// operations on the same operands as [`Self::predict_image`] (Eq. B.3, the overlap
+    /// safeguard: `t` itself), so the same bits; the earliest time and its partner are kept
+    /// in `best_t`, `best_j` (`NONE`: no partner earlier than the initial `best_t`).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn consider_dry<const G: bool, const S: bool, const SHIFT: bool>(
+        bodies: &Bodies<D, G, S>,
+        xi: &Vector<D>,
+        vi: &Vector<D>,
+        i: usize,
+        j: u32,
+        t: f64,
+        shift: &[f64; D],
+        best_t: &mut f64,
+        best_j: &mut u32,
+    ) {
+        let (xj, vj) = bodies.state_at(j as usize, t);
+        let mut r = xi - xj;
+        if SHIFT {
+            for k in 0..D {
+                if shift[k] != 0.0 {
+                    r[k] += shift[k];
+                }
+            }
+        }
+        let v = vi - vj;
+        let b = r.dot(&v);
+        let rr = r.norm_squared();
+        let sigma = bodies.body[i].r + bodies.body[j as usize].r;
+        let vv = v.norm_squared();
+        let c = rr - sigma * sigma;
+        let disc = b * b - vv * c;
+        // The smaller root, cancellation-free; overlapping and approaching (`c <= 0`, the
+        // quotient `<= 0`): now. A pair that does not meet gets `+inf` added (an integer mask,
+        // so that the compiler has no condition to branch on).
+        let dt = (c / (-b + disc.max(0.0).sqrt())).max(0.0);
+        let miss = !(b < 0.0) | ((c > 0.0) & !(disc > 0.0)) | (j as usize == i);
+        let never = f64::from_bits(f64::INFINITY.to_bits() & 0u64.wrapping_sub(u64::from(miss)));
+        let tj = t + dt + never;
+        let better = tj < *best_t;
+        *best_t = if better { tj } else { *best_t };
+        *best_j = if better { j } else { *best_j };
     }
 
     /// Lowers `best` (the pair event of `i`, state `(xi, vi)` at `t`) if partner `j` gives an
