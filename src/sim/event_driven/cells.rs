@@ -247,38 +247,48 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Calls `f` with the particles of the cells `cells`, in the order [`Self::for_each_in`]
-    /// visits them cell after cell, handed on in batches. The indices are gathered first: the
-    /// first [`GATHER_STEPS`] steps of each list walk store the index and count it only if it
-    /// is not the sentinel (no branch on the cell's occupancy); longer lists continue in a
+    /// visits them cell after cell, handed on in batches, each particle with the tag that came
+    /// with its cell (`TAGGED`; else the tags are not stored). The indices are gathered first:
+    /// the first [`GATHER_STEPS`] steps of each list walk store the index and count it only if
+    /// it is not the sentinel (no branch on the cell's occupancy); longer lists continue in a
     /// loop.
     #[inline(always)]
-    pub fn for_each_batch(&self, cells: impl Iterator<Item = usize>, mut f: impl FnMut(&[u32])) {
+    pub fn for_each_batch<const TAGGED: bool>(
+        &self,
+        cells: impl Iterator<Item = (usize, u8)>,
+        mut f: impl FnMut(&[u32], &[u8]),
+    ) {
         let end = self.end;
         let mut buf = [0u32; BATCH];
+        let mut tags = [0u8; BATCH];
         let mut len = 0usize;
-        for cell in cells {
+        for (cell, tag) in cells {
             if len > BATCH - GATHER_STEPS {
-                f(&buf[..len]);
+                f(&buf[..len], &tags[..len]);
                 len = 0;
             }
             let mut j = self.head[cell];
             for _ in 0..GATHER_STEPS {
                 // `len < BATCH` here; the mask only spares the bounds test.
                 buf[len % BATCH] = j;
+                if TAGGED {
+                    tags[len % BATCH] = tag;
+                }
                 len += usize::from(j != end);
                 j = self.next[j as usize];
             }
             while j != end {
                 if len == BATCH {
-                    f(&buf[..len]);
+                    f(&buf[..len], &tags[..len]);
                     len = 0;
                 }
                 buf[len] = j;
+                tags[len] = tag;
                 len += 1;
                 j = self.next[j as usize];
             }
         }
-        f(&buf[..len]);
+        f(&buf[..len], &tags[..len]);
     }
 
     /// All `3^D` neighbour offsets (including the cell itself).

@@ -319,6 +319,19 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // others less than `0.4 L` (see `CellGrid::axis_parts_and_shifts`), so the known
             // shift gives the minimum image (no test per partner) and no pair is far.
             let (parts, shifts) = grid.axis_parts_and_shifts(&c, &bodies.size);
+            if !WET && !S {
+                // Dry, one force for all: gathered with each cell's offset as tag (at most
+                // 27), the shifts looked up per partner, and no branches (see `scan_cells`).
+                let mut table = [[0.0; D]; 27];
+                for (m, o) in hood.offsets.iter().enumerate() {
+                    table[m] = CellGrid::<D>::shift_of(&shifts, o);
+                }
+                let around = hood.offsets.iter().enumerate().filter_map(|(m, o)| {
+                    CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, m as u8))
+                });
+                self.scan_dry_tagged::<G, S>(i, around, bodies, grid, &table, t);
+                return;
+            }
             let around = hood.offsets.iter().filter_map(|o| {
                 CellGrid::<D>::from_parts(&parts, o)
                     .map(|cell| (cell, CellGrid::<D>::shift_of(&shifts, o)))
@@ -366,9 +379,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             if !WET && !S && !WRAP {
                 // Dry, one force for all, no image: the prediction without branches.
                 let (mut best_t, mut best_j) = (best.time, NONE);
-                grid.for_each_batch(around.map(|(cell, _)| cell), |batch| {
+                grid.for_each_batch::<false>(around.map(|(cell, _)| (cell, 0)), |batch, _| {
                     for &j in batch {
-                        Self::consider_dry::<G, S, SHIFT>(
+                        Self::consider_dry::<G, S, false>(
                             bodies,
                             &xi,
                             &vi,
@@ -386,7 +399,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                     best = PairEvent::new(best_t, best_j, bodies.count[j], PairKind::Collide);
                 }
             } else {
-                grid.for_each_batch(around.map(|(cell, _)| cell), |batch| {
+                grid.for_each_batch::<false>(around.map(|(cell, _)| (cell, 0)), |batch, _| {
                     for &j in batch {
                         this.consider::<G, S, WRAP, SHIFT>(
                             bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best,
@@ -396,6 +409,41 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             }
         }
         self.ev[i] = best;
+    }
+
+    /// The dry scan of a boundary cell (see [`Self::scan`]): `around` gives each neighbour
+    /// cell with the index of its image shift in `table`.
+    #[inline(always)]
+    fn scan_dry_tagged<const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        around: impl Iterator<Item = (usize, u8)>,
+        bodies: &Bodies<D, G, S>,
+        grid: &CellGrid<D>,
+        table: &[[f64; D]; 27],
+        t: f64,
+    ) {
+        let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
+        let (mut best_t, mut best_j) = (self.ev[i].time, NONE);
+        grid.for_each_batch::<true>(around, |batch, tags| {
+            for (&j, &tag) in batch.iter().zip(tags) {
+                Self::consider_dry::<G, S, true>(
+                    bodies,
+                    &xi,
+                    &vi,
+                    i,
+                    j,
+                    t,
+                    &table[tag as usize],
+                    &mut best_t,
+                    &mut best_j,
+                );
+            }
+        });
+        if best_j != NONE {
+            let j = best_j as usize;
+            self.ev[i] = PairEvent::new(best_t, best_j, bodies.count[j], PairKind::Collide);
+        }
     }
 
     /// [`Self::consider`] for a dry pair under one force for all and without minimum image,
@@ -421,10 +469,10 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let (xj, vj) = bodies.state_at(j as usize, t);
         let mut r = xi - xj;
         if SHIFT {
+            // Adding a zero shift changes no bit that matters: at most `-0.0` becomes `+0.0`,
+            // which no product, sum or test below tells apart.
             for k in 0..D {
-                if shift[k] != 0.0 {
-                    r[k] += shift[k];
-                }
+                r[k] += shift[k];
             }
         }
         let v = vi - vj;
