@@ -13,7 +13,15 @@
 const GATHER_STEPS: usize = 2;
 /// Particle indices [`CellGrid::for_each_batch`] gathers before it hands them on (a power of
 /// two).
-const BATCH: usize = 64;
+pub const BATCH: usize = 64;
+
+/// Where [`CellGrid::gather`] stopped: the rest of a list (`j`, the sentinel if none) and
+/// its cell's tag.
+#[derive(Debug, Clone, Copy)]
+pub struct Gather {
+    j: u32,
+    tag: u8,
+}
 
 /// A regular grid of `n[0] x ... x n[D-1]` cells.
 #[derive(Debug, Clone)]
@@ -244,6 +252,75 @@ impl<const D: usize> CellGrid<D> {
             f(j as usize);
             j = self.next[j as usize];
         }
+    }
+
+    /// The state of [`Self::gather`] before its first call.
+    pub fn gather_start(&self) -> Gather {
+        Gather {
+            j: self.end,
+            tag: 0,
+        }
+    }
+
+    /// Gathers into `buf` the particles of the cells `cells` yields, in the order
+    /// [`Self::for_each_in`] visits them cell after cell, each with the tag that came with its
+    /// cell in `tags` (`TAGGED`; else the tags are not stored): the first [`GATHER_STEPS`]
+    /// steps of each list walk store the index and count it only if it is not the sentinel
+    /// (no branch on the cell's occupancy); longer lists continue in a loop. Returns how many
+    /// it gathered and whether to call again (the buffer was full; `state` remembers where
+    /// it stopped).
+    #[inline(always)]
+    pub fn gather<const TAGGED: bool>(
+        &self,
+        cells: &mut impl Iterator<Item = (usize, u8)>,
+        state: &mut Gather,
+        buf: &mut [u32; BATCH],
+        tags: &mut [u8; BATCH],
+    ) -> (usize, bool) {
+        let end = self.end;
+        let mut len = 0usize;
+        // The rest of a list cut short by a full buffer.
+        let (mut j, tag) = (state.j, state.tag);
+        while j != end {
+            if len == BATCH {
+                *state = Gather { j, tag };
+                return (len, true);
+            }
+            buf[len] = j;
+            tags[len] = tag;
+            len += 1;
+            j = self.next[j as usize];
+        }
+        state.j = end;
+        if len > BATCH - GATHER_STEPS {
+            return (len, true);
+        }
+        for (cell, tag) in cells.by_ref() {
+            let mut j = self.head[cell];
+            for _ in 0..GATHER_STEPS {
+                // `len <= BATCH - GATHER_STEPS` here; the mask only spares the bounds test.
+                buf[len % BATCH] = j;
+                if TAGGED {
+                    tags[len % BATCH] = tag;
+                }
+                len += usize::from(j != end);
+                j = self.next[j as usize];
+            }
+            while j != end {
+                if len == BATCH {
+                    *state = Gather { j, tag };
+                    return (len, true);
+                }
+                buf[len] = j;
+                tags[len] = tag;
+                len += 1;
+                j = self.next[j as usize];
+            }
+            if len > BATCH - GATHER_STEPS {
+                return (len, true);
+            }
+        }
+        (len, false)
     }
 
     /// Calls `f` with the particles of the cells `cells`, in the order [`Self::for_each_in`]

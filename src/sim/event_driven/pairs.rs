@@ -17,7 +17,7 @@
 
 use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cell_source::{CellSource, Neighbourhood};
-use super::cells::CellGrid;
+use super::cells::{BATCH, CellGrid};
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
 use super::ledger::{EventCounts, Ledger};
 use super::shear::pair_times;
@@ -308,7 +308,11 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // Interior: neighbours by a fixed index change, no wrapping.
             let base = grid.linear(&c) as isize;
             let around = hood.deltas.iter().map(|&d| ((base + d) as usize, no_shift));
-            if grid.interior_needs_no_image {
+            if !WET && !S && grid.interior_needs_no_image {
+                let zero = [[0.0; D]; 27];
+                let around = around.map(|(cell, _)| (cell, 0));
+                self.scan_dry::<G, S, false>(i, around, bodies, grid, &zero, t);
+            } else if grid.interior_needs_no_image {
                 self.scan_cells::<G, S, false, false>(i, around, bodies, grid, slabs, t);
             } else {
                 self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
@@ -329,7 +333,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 let around = hood.offsets.iter().enumerate().filter_map(|(m, o)| {
                     CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, m as u8))
                 });
-                self.scan_dry_tagged::<G, S>(i, around, bodies, grid, &table, t);
+                self.scan_dry::<G, S, true>(i, around, bodies, grid, &table, t);
                 return;
             }
             let around = hood.offsets.iter().filter_map(|o| {
@@ -376,29 +380,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // No shifts: the partners of all cells gathered in batches first, so that the
             // cells' occupancies cost no mispredicted branches (`CellGrid::for_each_batch`).
             let no_shift = [0.0; D];
-            if !WET && !S && !WRAP {
-                // Dry, one force for all, no image: the prediction without branches.
-                let (mut best_t, mut best_j) = (best.time, NONE);
-                grid.for_each_batch::<false>(around.map(|(cell, _)| (cell, 0)), |batch, _| {
-                    for &j in batch {
-                        Self::consider_dry::<G, S, false>(
-                            bodies,
-                            &xi,
-                            &vi,
-                            i,
-                            j,
-                            t,
-                            &no_shift,
-                            &mut best_t,
-                            &mut best_j,
-                        );
-                    }
-                });
-                if best_j != NONE {
-                    let j = best_j as usize;
-                    best = PairEvent::new(best_t, best_j, bodies.count[j], PairKind::Collide);
-                }
-            } else {
+            {
                 grid.for_each_batch::<false>(around.map(|(cell, _)| (cell, 0)), |batch, _| {
                     for &j in batch {
                         this.consider::<G, S, WRAP, SHIFT>(
@@ -411,61 +393,66 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         self.ev[i] = best;
     }
 
-    /// The dry scan of a boundary cell (see [`Self::scan`]): `around` gives each neighbour
-    /// cell with the index of its image shift in `table`.
+    /// The scan of a dry pair source under one force for all and without minimum image (see
+    /// [`Self::scan`]): `around` gives each neighbour cell with the index of its partners'
+    /// image shift in `table` (used if `SHIFT`). The partners are gathered first
+    /// ([`CellGrid::gather`]: the cells' occupancies cost no mispredicted branches), then
+    /// predicted in one loop without branches ([`Self::dry_time`]); among equal times the
+    /// first in the cells' order wins, as in [`Self::scan_cells`].
     #[inline(always)]
-    fn scan_dry_tagged<const G: bool, const S: bool>(
+    fn scan_dry<const G: bool, const S: bool, const SHIFT: bool>(
         &mut self,
         i: usize,
-        around: impl Iterator<Item = (usize, u8)>,
+        mut around: impl Iterator<Item = (usize, u8)>,
         bodies: &Bodies<D, G, S>,
         grid: &CellGrid<D>,
         table: &[[f64; D]; 27],
         t: f64,
     ) {
-        let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
+        let (xi, vi, ri) = (bodies.body[i].x, bodies.body[i].v, bodies.body[i].r);
         let (mut best_t, mut best_j) = (self.ev[i].time, NONE);
-        grid.for_each_batch::<true>(around, |batch, tags| {
-            for (&j, &tag) in batch.iter().zip(tags) {
-                Self::consider_dry::<G, S, true>(
-                    bodies,
-                    &xi,
-                    &vi,
-                    i,
-                    j,
-                    t,
-                    &table[tag as usize],
-                    &mut best_t,
-                    &mut best_j,
-                );
+        let mut gather = grid.gather_start();
+        let mut buf = [0u32; BATCH];
+        let mut tags = [0u8; BATCH];
+        loop {
+            let (len, more) = grid.gather::<SHIFT>(&mut around, &mut gather, &mut buf, &mut tags);
+            for m in 0..len.min(BATCH) {
+                let j = buf[m];
+                let shift = &table[if SHIFT { tags[m] as usize } else { 0 }];
+                let tj = Self::dry_time::<G, S, SHIFT>(bodies, &xi, &vi, ri, i, j, t, shift);
+                let better = tj < best_t;
+                best_t = if better { tj } else { best_t };
+                best_j = if better { j } else { best_j };
             }
-        });
+            if !more {
+                break;
+            }
+        }
         if best_j != NONE {
             let j = best_j as usize;
             self.ev[i] = PairEvent::new(best_t, best_j, bodies.count[j], PairKind::Collide);
         }
     }
 
-    /// [`Self::consider`] for a dry pair under one force for all and without minimum image,
-    /// as selects instead of branches: whether the pair approaches (`b < 0`) and whether its
-    /// paths meet (`disc > 0`) are coin tosses a processor mispredicts about every other
-    /// partner, so every partner pays the whole arithmetic and the result is chosen. The same
-    /// operations on the same operands as [`Self::predict_image`] (Eq. B.3, the overlap
-    /// safeguard: `t` itself), so the same bits; the earliest time and its partner are kept
-    /// in `best_t`, `best_j` (`NONE`: no partner earlier than the initial `best_t`).
+    /// The time of the dry pair event of `i` (radius `ri`) with `j` (`+inf` if none, or if
+    /// `j == i`), for a pair under one force for all and without minimum image (`shift`: the
+    /// partner's image shift, if `SHIFT`), without branches: whether the pair approaches
+    /// (`b < 0`) and whether its paths meet (`disc > 0`) are coin tosses a processor
+    /// mispredicts about every other partner, so every partner pays the whole arithmetic and
+    /// the result is chosen. The same operations on the same operands as
+    /// [`Self::predict_image`] (Eq. B.3, the overlap safeguard: `t` itself), so the same bits.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn consider_dry<const G: bool, const S: bool, const SHIFT: bool>(
+    fn dry_time<const G: bool, const S: bool, const SHIFT: bool>(
         bodies: &Bodies<D, G, S>,
         xi: &Vector<D>,
         vi: &Vector<D>,
+        ri: f64,
         i: usize,
         j: u32,
         t: f64,
         shift: &[f64; D],
-        best_t: &mut f64,
-        best_j: &mut u32,
-    ) {
+    ) -> f64 {
         let (xj, vj) = bodies.state_at(j as usize, t);
         let mut r = xi - xj;
         if SHIFT {
@@ -478,7 +465,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let v = vi - vj;
         let b = r.dot(&v);
         let rr = r.norm_squared();
-        let sigma = bodies.body[i].r + bodies.body[j as usize].r;
+        let sigma = ri + bodies.body[j as usize].r;
         let vv = v.norm_squared();
         let c = rr - sigma * sigma;
         let disc = b * b - vv * c;
@@ -488,10 +475,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let dt = (c / (-b + disc.max(0.0).sqrt())).max(0.0);
         let miss = !(b < 0.0) | ((c > 0.0) & !(disc > 0.0)) | (j as usize == i);
         let never = f64::from_bits(f64::INFINITY.to_bits() & 0u64.wrapping_sub(u64::from(miss)));
-        let tj = t + dt + never;
-        let better = tj < *best_t;
-        *best_t = if better { tj } else { *best_t };
-        *best_j = if better { j } else { *best_j };
+        t + dt + never
     }
 
     /// Lowers `best` (the pair event of `i`, state `(xi, vi)` at `t`) if partner `j` gives an
