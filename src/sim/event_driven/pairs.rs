@@ -473,6 +473,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         // quotient `<= 0`): now. A pair that does not meet gets `+inf` added (an integer mask,
         // so that the compiler has no condition to branch on).
         let dt = (c / (-b + disc.max(0.0).sqrt())).max(0.0);
+        // Negated tests, as in `predict_image` (`b >= 0` there): whatever is not approaching
+        // or not meeting is a miss.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
         let miss = !(b < 0.0) | ((c > 0.0) & !(disc > 0.0)) | (j as usize == i);
         let never = f64::from_bits(f64::INFINITY.to_bits() & 0u64.wrapping_sub(u64::from(miss)));
         t + dt + never
