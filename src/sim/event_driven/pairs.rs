@@ -308,7 +308,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // Interior: neighbours by a fixed index change, no wrapping.
             let base = grid.linear(&c) as isize;
             let around = hood.deltas.iter().map(|&d| ((base + d) as usize, no_shift));
-            if !WET && !S && grid.interior_needs_no_image {
+            if !S && grid.interior_needs_no_image {
                 let zero = [[0.0; D]; 27];
                 let around = around.map(|(cell, _)| (cell, 0));
                 self.scan_dry::<G, S, false>(i, around, bodies, grid, &zero, t);
@@ -323,8 +323,8 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // others less than `0.4 L` (see `CellGrid::axis_parts_and_shifts`), so the known
             // shift gives the minimum image (no test per partner) and no pair is far.
             let (parts, shifts) = grid.axis_parts_and_shifts(&c, &bodies.size);
-            if !WET && !S {
-                // Dry, one force for all: gathered with each cell's offset as tag (at most
+            if !S {
+                // One force for all: gathered with each cell's offset as tag (at most
                 // 27), the shifts looked up per partner, and no branches (see `scan_cells`).
                 let mut table = [[0.0; D]; 27];
                 for (m, o) in hood.offsets.iter().enumerate() {
@@ -410,7 +410,11 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         t: f64,
     ) {
         let (xi, vi, ri) = (bodies.body[i].x, bodies.body[i].v, bodies.body[i].r);
-        let (mut best_t, mut best_j) = (self.ev[i].time, NONE);
+        let (mut best_t, mut best_j, mut best_well) = (self.ev[i].time, NONE, false);
+        // Wet: the bonds of `i`, searched whole for each partner (the same number of steps
+        // for every partner of the scan).
+        let bonds = self.bonds_of(i);
+        let s_crit = self.p.s_crit;
         let mut gather = grid.gather_start();
         let mut buf = [0u32; BATCH];
         let mut tags = [0u8; BATCH];
@@ -419,10 +423,24 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             for m in 0..len.min(BATCH) {
                 let j = buf[m];
                 let shift = &table[if SHIFT { tags[m] as usize } else { 0 }];
-                let tj = Self::dry_time::<G, S, SHIFT>(bodies, &xi, &vi, ri, i, j, t, shift);
+                let (mut tj, b, rr, vv, sigma) =
+                    Self::dry_time::<G, S, SHIFT>(bodies, &xi, &vi, ri, i, j, t, shift);
+                let mut well = false;
+                if WET && bonds.iter().fold(false, |a, &k| a | (k == j)) {
+                    // The well event of `predict_image`, the same operations: it wins only
+                    // if strictly earlier than the contact (an overlapping pair's contact at
+                    // `t` wins, as the early return there).
+                    if let Some(tw) = Self::well_time(b, rr, vv, sigma + s_crit, t)
+                        && tw < tj
+                    {
+                        tj = tw;
+                        well = true;
+                    }
+                }
                 let better = tj < best_t;
                 best_t = if better { tj } else { best_t };
                 best_j = if better { j } else { best_j };
+                best_well = if better { well } else { best_well };
             }
             if !more {
                 break;
@@ -430,12 +448,37 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         }
         if best_j != NONE {
             let j = best_j as usize;
-            self.ev[i] = PairEvent::new(best_t, best_j, bodies.count[j], PairKind::Collide);
+            let kind = if best_well {
+                PairKind::Well
+            } else {
+                PairKind::Collide
+            };
+            self.ev[i] = PairEvent::new(best_t, best_j, bodies.count[j], kind);
         }
     }
 
-    /// The time of the dry pair event of `i` (radius `ri`) with `j` (`+inf` if none, or if
-    /// `j == i`), for a pair under one force for all and without minimum image (`shift`: the
+    /// Time of the well event of a bonded pair (`lambda = sigma + s_crit`) from `b`, `r^2`,
+    /// `v^2` at `t`: as in [`Self::predict_image`].
+    #[inline(always)]
+    fn well_time(b: f64, rr: f64, vv: f64, lambda: f64, t: f64) -> Option<f64> {
+        let c = rr - lambda * lambda;
+        let dt = if b > 0.0 && c >= 0.0 {
+            Some(0.0)
+        } else if vv > 0.0 {
+            let disc = (b * b - vv * c).max(0.0);
+            Some(if b > 0.0 {
+                -c / (b + disc.sqrt())
+            } else {
+                (-b + disc.sqrt()) / vv
+            })
+        } else {
+            None
+        };
+        dt.map(|dt| t + dt)
+    }
+
+    /// The time of the contact of `i` (radius `ri`) with `j` (`+inf` if none, or if
+    /// `j == i`), and the `b`, `r^2`, `v^2`, `sigma` it used, for a pair under one force for all and without minimum image (`shift`: the
     /// partner's image shift, if `SHIFT`), without branches: whether the pair approaches
     /// (`b < 0`) and whether its paths meet (`disc > 0`) are coin tosses a processor
     /// mispredicts about every other partner, so every partner pays the whole arithmetic and
@@ -452,7 +495,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         j: u32,
         t: f64,
         shift: &[f64; D],
-    ) -> f64 {
+    ) -> (f64, f64, f64, f64, f64) {
         let (xj, vj) = bodies.state_at(j as usize, t);
         let mut r = xi - xj;
         if SHIFT {
@@ -478,7 +521,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
         let miss = !(b < 0.0) | ((c > 0.0) & !(disc > 0.0)) | (j as usize == i);
         let never = f64::from_bits(f64::INFINITY.to_bits() & 0u64.wrapping_sub(u64::from(miss)));
-        t + dt + never
+        (t + dt + never, b, rr, vv, sigma)
     }
 
     /// Lowers `best` (the pair event of `i`, state `(xi, vi)` at `t`) if partner `j` gives an
