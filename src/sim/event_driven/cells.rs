@@ -4,8 +4,9 @@
 //!
 //! The lists end in a sentinel index one past the last particle, whose own link points back at
 //! itself, so that a neighbour scan may take the first steps of a list walk without asking
-//! whether the list has ended ([`CellGrid::for_each_batch`]): the occupancy of a cell (0, 1 or
-//! 2 particles, at random) is then no branch for the processor to mispredict.
+//! whether the list has ended ([`CellGrid::gather`], [`CellGrid::for_each_batch`]): the
+//! occupancy of a cell (0, 1 or 2 particles, at random) is then no branch for the processor to
+//! mispredict.
 
 /// List steps [`CellGrid::for_each_batch`] takes per cell without a branch: at the densities
 /// of the reference systems (0.5 particles per cell in 3D) more than two particles in a cell
@@ -395,6 +396,60 @@ impl<const D: usize> CellGrid<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gathering_visits_the_lists_in_order_across_full_buffers() {
+        // Cells with 0, 1, 2, 3, 70 and 127 particles (more than a buffer: the walk resumes in the
+        // middle of a list and after it), in a deliberately mixed insertion order.
+        let sizes = [0usize, 1, 2, 3, 127, 0, 2, 70, 1];
+        let n: usize = sizes.iter().sum();
+        let mut g = CellGrid::<2>::new([9.0, 1.0], [true, false], 1.0, n);
+        assert_eq!(g.n, [9, 1]);
+        let mut k = 0;
+        for (cell, &m) in sizes.iter().enumerate() {
+            for _ in 0..m {
+                g.insert(k, cell);
+                k += 1;
+            }
+        }
+        // Particles 6..133 are in cell 4: one of them moved to the head of its list.
+        g.remove(10, 4);
+        g.insert(10, 4);
+        assert_eq!(
+            (0..g.head.len())
+                .map(|c| {
+                    let mut m = 0;
+                    g.for_each_in(c, |_| m += 1);
+                    m
+                })
+                .sum::<usize>(),
+            n
+        );
+        let order = [4usize, 2, 0, 7, 3, 4, 8, 1, 6, 5];
+        let mut want = vec![];
+        for &c in &order {
+            g.for_each_in(c, |j| want.push((j as u32, c as u8)));
+        }
+        let mut got = vec![];
+        let mut cells = order.iter().map(|&c| (c, c as u8));
+        let mut state = g.gather_start();
+        let (mut buf, mut tags) = ([0u32; BATCH], [0u8; BATCH]);
+        loop {
+            let (len, more) = g.gather::<true>(&mut cells, &mut state, &mut buf, &mut tags);
+            assert!(len <= BATCH);
+            got.extend(buf[..len].iter().copied().zip(tags[..len].iter().copied()));
+            if !more {
+                break;
+            }
+        }
+        assert_eq!(got, want);
+        let mut batched = vec![];
+        let cells = order.iter().map(|&c| (c, c as u8));
+        g.for_each_batch::<true>(cells, |b, t| {
+            batched.extend(b.iter().copied().zip(t.iter().copied()))
+        });
+        assert_eq!(batched, want);
+    }
 
     #[test]
     fn lists_follow_insert_and_remove() {

@@ -9,6 +9,11 @@
 //! its neighbourhood of cells; it remembers the partner's velocity-change count at prediction
 //! time, and the scheduler drops it (and re-predicts) if the count moved on (lazy invalidation).
 //!
+//! Scans without shear or minimum image gather the partners of the neighbour cells first and
+//! predict the contacts without branches (`scan_dry`, `dry_time`): whether a pair approaches
+//! and meets is a coin toss per partner, which a processor mispredicts (docs/performance.md,
+//! fourth round); the same operations as `predict_image`, so the same events.
+//!
 //! Safeguards (each tested in `tests/engine_safeguards.rs`): an overlapping pair that approaches
 //! collides now, one that separates is left alone (B.5.6); a pair half a periodic box apart (four
 //! cells) is predicted through both images; collapse: the TC model and the
@@ -393,12 +398,13 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         self.ev[i] = best;
     }
 
-    /// The scan of a dry pair source under one force for all and without minimum image (see
-    /// [`Self::scan`]): `around` gives each neighbour cell with the index of its partners'
-    /// image shift in `table` (used if `SHIFT`). The partners are gathered first
-    /// ([`CellGrid::gather`]: the cells' occupancies cost no mispredicted branches), then
-    /// predicted in one loop without branches ([`Self::dry_time`]); among equal times the
-    /// first in the cells' order wins, as in [`Self::scan_cells`].
+    /// The scan under one force for all and without minimum image (see [`Self::scan`]):
+    /// `around` gives each neighbour cell with the index of its partners' image shift in
+    /// `table` (used if `SHIFT`). The partners are gathered first ([`CellGrid::gather`]: the
+    /// cells' occupancies cost no mispredicted branches), then predicted in one loop whose
+    /// contacts have no branches ([`Self::dry_time`]); wet, a bonded partner's well event
+    /// follows ([`Self::well_time`]). Among equal times the first in the cells' order wins,
+    /// as in [`Self::scan_cells`]: the same events, bit for bit.
     #[inline(always)]
     fn scan_dry<const G: bool, const S: bool, const SHIFT: bool>(
         &mut self,
