@@ -9,6 +9,11 @@
 //! its neighbourhood of cells; it remembers the partner's velocity-change count at prediction
 //! time, and the scheduler drops it (and re-predicts) if the count moved on (lazy invalidation).
 //!
+//! Scans without shear or minimum image gather the partners of the neighbour cells first and
+//! predict the contacts without branches (`scan_dry`, `dry_time`): whether a pair approaches
+//! and meets is a coin toss per partner, which a processor mispredicts (docs/performance.md,
+//! fourth round); the same operations as `predict_image`, so the same events.
+//!
 //! Safeguards (each tested in `tests/engine_safeguards.rs`): an overlapping pair that approaches
 //! collides now, one that separates is left alone (B.5.6); a pair half a periodic box apart (four
 //! cells) is predicted through both images; collapse: the TC model and the
@@ -17,7 +22,7 @@
 
 use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cell_source::{CellSource, Neighbourhood};
-use super::cells::CellGrid;
+use super::cells::{BATCH, CellGrid};
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
 use super::ledger::{EventCounts, Ledger};
 use super::shear::pair_times;
@@ -308,7 +313,11 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // Interior: neighbours by a fixed index change, no wrapping.
             let base = grid.linear(&c) as isize;
             let around = hood.deltas.iter().map(|&d| ((base + d) as usize, no_shift));
-            if grid.interior_needs_no_image {
+            if !S && grid.interior_needs_no_image {
+                let zero = [[0.0; D]; 27];
+                let around = around.map(|(cell, _)| (cell, 0));
+                self.scan_dry::<G, S, false>(i, around, bodies, grid, &zero, t);
+            } else if grid.interior_needs_no_image {
                 self.scan_cells::<G, S, false, false>(i, around, bodies, grid, slabs, t);
             } else {
                 self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
@@ -319,6 +328,19 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // others less than `0.4 L` (see `CellGrid::axis_parts_and_shifts`), so the known
             // shift gives the minimum image (no test per partner) and no pair is far.
             let (parts, shifts) = grid.axis_parts_and_shifts(&c, &bodies.size);
+            if !S {
+                // One force for all: gathered with each cell's offset as tag (at most
+                // 27), the shifts looked up per partner, and no branches (see `scan_cells`).
+                let mut table = [[0.0; D]; 27];
+                for (m, o) in hood.offsets.iter().enumerate() {
+                    table[m] = CellGrid::<D>::shift_of(&shifts, o);
+                }
+                let around = hood.offsets.iter().enumerate().filter_map(|(m, o)| {
+                    CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, m as u8))
+                });
+                self.scan_dry::<G, S, true>(i, around, bodies, grid, &table, t);
+                return;
+            }
             let around = hood.offsets.iter().filter_map(|o| {
                 CellGrid::<D>::from_parts(&parts, o)
                     .map(|cell| (cell, CellGrid::<D>::shift_of(&shifts, o)))
@@ -347,27 +369,196 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         slabs: &SlabSource,
         t: f64,
     ) {
-        let mut best = self.ev[i];
+        let this = &*self;
+        let mut best = this.ev[i];
         // Copies, so that the loop keeps them in registers.
         let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
-        for (cell, shift) in around {
-            grid.for_each_in(cell, |j| {
-                if j == i {
-                    return;
-                }
-                let predicted = if SHIFT {
-                    self.predict_pair_shifted(bodies, slabs, &xi, &vi, i, j, t, &shift)
-                } else {
-                    self.predict_pair_from::<G, S, WRAP>(bodies, slabs, &xi, &vi, i, j, t)
-                };
-                if let Some((tj, kind)) = predicted
-                    && tj < best.time
-                {
-                    best = PairEvent::new(tj, j as u32, bodies.count[j], kind);
-                }
-            });
+        if SHIFT {
+            for (cell, shift) in around {
+                grid.for_each_in(cell, |j| {
+                    this.consider::<G, S, WRAP, SHIFT>(
+                        bodies, slabs, &xi, &vi, i, j, t, &shift, &mut best,
+                    );
+                });
+            }
+        } else {
+            // No shifts: the partners of all cells gathered in batches first, so that the
+            // cells' occupancies cost no mispredicted branches (`CellGrid::for_each_batch`).
+            let no_shift = [0.0; D];
+            {
+                grid.for_each_batch::<false>(around.map(|(cell, _)| (cell, 0)), |batch, _| {
+                    for &j in batch {
+                        this.consider::<G, S, WRAP, SHIFT>(
+                            bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best,
+                        );
+                    }
+                });
+            }
         }
         self.ev[i] = best;
+    }
+
+    /// The scan under one force for all and without minimum image (see [`Self::scan`]):
+    /// `around` gives each neighbour cell with the index of its partners' image shift in
+    /// `table` (used if `SHIFT`). The partners are gathered first ([`CellGrid::gather`]: the
+    /// cells' occupancies cost no mispredicted branches), then predicted in one loop whose
+    /// contacts have no branches ([`Self::dry_time`]); wet, a bonded partner's well event
+    /// follows ([`Self::well_time`]). Among equal times the first in the cells' order wins,
+    /// as in [`Self::scan_cells`]: the same events, bit for bit.
+    #[inline(always)]
+    fn scan_dry<const G: bool, const S: bool, const SHIFT: bool>(
+        &mut self,
+        i: usize,
+        mut around: impl Iterator<Item = (usize, u8)>,
+        bodies: &Bodies<D, G, S>,
+        grid: &CellGrid<D>,
+        table: &[[f64; D]; 27],
+        t: f64,
+    ) {
+        let (xi, vi, ri) = (bodies.body[i].x, bodies.body[i].v, bodies.body[i].r);
+        let (mut best_t, mut best_j, mut best_well) = (self.ev[i].time, NONE, false);
+        // Wet: the bonds of `i`, searched whole for each partner (the same number of steps
+        // for every partner of the scan).
+        let bonds = self.bonds_of(i);
+        let s_crit = self.p.s_crit;
+        let mut gather = grid.gather_start();
+        let mut buf = [0u32; BATCH];
+        let mut tags = [0u8; BATCH];
+        loop {
+            let (len, more) = grid.gather::<SHIFT>(&mut around, &mut gather, &mut buf, &mut tags);
+            for m in 0..len.min(BATCH) {
+                let j = buf[m];
+                let shift = &table[if SHIFT { tags[m] as usize } else { 0 }];
+                let (mut tj, b, rr, vv, sigma) =
+                    Self::dry_time::<G, S, SHIFT>(bodies, &xi, &vi, ri, i, j, t, shift);
+                let mut well = false;
+                if WET && bonds.iter().fold(false, |a, &k| a | (k == j)) {
+                    // The well event of `predict_image`, the same operations: it wins only
+                    // if strictly earlier than the contact (an overlapping pair's contact at
+                    // `t` wins, as the early return there).
+                    if let Some(tw) = Self::well_time(b, rr, vv, sigma + s_crit, t)
+                        && tw < tj
+                    {
+                        tj = tw;
+                        well = true;
+                    }
+                }
+                let better = tj < best_t;
+                best_t = if better { tj } else { best_t };
+                best_j = if better { j } else { best_j };
+                best_well = if better { well } else { best_well };
+            }
+            if !more {
+                break;
+            }
+        }
+        if best_j != NONE {
+            let j = best_j as usize;
+            let kind = if best_well {
+                PairKind::Well
+            } else {
+                PairKind::Collide
+            };
+            self.ev[i] = PairEvent::new(best_t, best_j, bodies.count[j], kind);
+        }
+    }
+
+    /// Time of the well event of a bonded pair (`lambda = sigma + s_crit`) from `b`, `r^2`,
+    /// `v^2` at `t`: as in [`Self::predict_image`].
+    #[inline(always)]
+    fn well_time(b: f64, rr: f64, vv: f64, lambda: f64, t: f64) -> Option<f64> {
+        let c = rr - lambda * lambda;
+        let dt = if b > 0.0 && c >= 0.0 {
+            Some(0.0)
+        } else if vv > 0.0 {
+            let disc = (b * b - vv * c).max(0.0);
+            Some(if b > 0.0 {
+                -c / (b + disc.sqrt())
+            } else {
+                (-b + disc.sqrt()) / vv
+            })
+        } else {
+            None
+        };
+        dt.map(|dt| t + dt)
+    }
+
+    /// The time of the contact of `i` (radius `ri`) with `j` (`+inf` if none, or if
+    /// `j == i`), and the `b`, `r^2`, `v^2`, `sigma` it used, for a pair under one force for all and without minimum image (`shift`: the
+    /// partner's image shift, if `SHIFT`), without branches: whether the pair approaches
+    /// (`b < 0`) and whether its paths meet (`disc > 0`) are coin tosses a processor
+    /// mispredicts about every other partner, so every partner pays the whole arithmetic and
+    /// the result is chosen. The same operations on the same operands as
+    /// [`Self::predict_image`] (Eq. B.3, the overlap safeguard: `t` itself), so the same bits.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn dry_time<const G: bool, const S: bool, const SHIFT: bool>(
+        bodies: &Bodies<D, G, S>,
+        xi: &Vector<D>,
+        vi: &Vector<D>,
+        ri: f64,
+        i: usize,
+        j: u32,
+        t: f64,
+        shift: &[f64; D],
+    ) -> (f64, f64, f64, f64, f64) {
+        let (xj, vj) = bodies.state_at(j as usize, t);
+        let mut r = xi - xj;
+        if SHIFT {
+            // Adding a zero shift changes no bit that matters: at most `-0.0` becomes `+0.0`,
+            // which no product, sum or test below tells apart.
+            for k in 0..D {
+                r[k] += shift[k];
+            }
+        }
+        let v = vi - vj;
+        let b = r.dot(&v);
+        let rr = r.norm_squared();
+        let sigma = ri + bodies.body[j as usize].r;
+        let vv = v.norm_squared();
+        let c = rr - sigma * sigma;
+        let disc = b * b - vv * c;
+        // The smaller root, cancellation-free; overlapping and approaching (`c <= 0`, the
+        // quotient `<= 0`): now. A pair that does not meet gets `+inf` added (an integer mask,
+        // so that the compiler has no condition to branch on).
+        let dt = (c / (-b + disc.max(0.0).sqrt())).max(0.0);
+        // Negated tests, as in `predict_image` (`b >= 0` there): whatever is not approaching
+        // or not meeting is a miss.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        let miss = !(b < 0.0) | ((c > 0.0) & !(disc > 0.0)) | (j as usize == i);
+        let never = f64::from_bits(f64::INFINITY.to_bits() & 0u64.wrapping_sub(u64::from(miss)));
+        (t + dt + never, b, rr, vv, sigma)
+    }
+
+    /// Lowers `best` (the pair event of `i`, state `(xi, vi)` at `t`) if partner `j` gives an
+    /// earlier one (`j == i` is skipped). `shift`: see [`Self::scan_cells`].
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn consider<const G: bool, const S: bool, const WRAP: bool, const SHIFT: bool>(
+        &self,
+        bodies: &Bodies<D, G, S>,
+        slabs: &SlabSource,
+        xi: &Vector<D>,
+        vi: &Vector<D>,
+        i: usize,
+        j: usize,
+        t: f64,
+        shift: &[f64; D],
+        best: &mut PairEvent,
+    ) {
+        if j == i {
+            return;
+        }
+        let predicted = if SHIFT {
+            self.predict_pair_shifted(bodies, slabs, xi, vi, i, j, t, shift)
+        } else {
+            self.predict_pair_from::<G, S, WRAP>(bodies, slabs, xi, vi, i, j, t)
+        };
+        if let Some((tj, kind)) = predicted
+            && tj < best.time
+        {
+            *best = PairEvent::new(tj, j as u32, bodies.count[j], kind);
+        }
     }
 
     /// [`Self::predict_pair_from`] for a partner `j` whose minimum image is `shift` away: the
