@@ -7,7 +7,7 @@
 //! At each of three points (gas Gamma 2 E* 3, fluid Gamma 30 E* 0.7, coexistence Gamma 30
 //! E* 2.6), `repeat` times, alternately event then time engine: a fresh engine (same seed) runs
 //! [`WARM_UP`] time units untimed (the hot start cools), then `MEASURED * scale` time units
-//! timed, wall clock and the thread's CPU time. Reported per point and engine: the medians of
+//! timed on one core (a one-thread pool), wall clock and the thread's CPU time. Reported per point and engine: the medians of
 //! wall and CPU seconds per simulated time unit, and the ratio time / event (CPU where known).
 //! The engines run in one process, one after the other, so both see the same machine load.
 
@@ -44,8 +44,20 @@ pub fn scene(gamma: f64, e_star: f64, kind: EngineKind, duration: f64) -> Scene 
     s
 }
 
-/// Wall and CPU seconds of the timed part of one run.
+/// Wall and CPU seconds of the timed part of one run, on one core: the run happens inside an
+/// installed one-thread rayon pool, so the time-driven engine steps on the thread whose CPU time
+/// is read (without it the engine ran on a pool thread of its own and the calling thread's CPU
+/// time was about zero).
 fn time_one(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("one-thread pool");
+    pool.install(|| time_one_here(scene, measured))
+}
+
+/// [`time_one`] on the calling thread.
+fn time_one_here(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
     let mut start: Option<(Instant, Option<f64>)> = None;
     let mut end = None;
     run_scene_observed(
