@@ -232,31 +232,12 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 best = Some((t + c / (-b + disc.sqrt()), PairKind::Collide));
             }
         }
-        if WET && self.bonded(i, j) {
-            let lambda = sigma + self.p.s_crit;
-            let c = rr - lambda * lambda;
-            let dt = if b > 0.0 && c >= 0.0 {
-                // At or beyond the well edge (round-off) and separating: the event is now.
-                Some(0.0)
-            } else if vv > 0.0 {
-                // Larger root of |r + v dt| = sigma + s_crit. Right after a bounce off the well
-                // wall the pair sits on the edge (c may be +round-off) and approaches: the root
-                // is then the next exit, not "none" (regression: bonds stretched past s_crit).
-                let disc = (b * b - vv * c).max(0.0);
-                Some(if b > 0.0 {
-                    -c / (b + disc.sqrt())
-                } else {
-                    (-b + disc.sqrt()) / vv
-                })
-            } else {
-                None
-            };
-            if let Some(dt) = dt {
-                let tw = t + dt;
-                if best.is_none_or(|(tb, _)| tw < tb) {
-                    best = Some((tw, PairKind::Well));
-                }
-            }
+        if WET
+            && self.bonded(i, j)
+            && let Some(tw) = Self::well_time(b, rr, vv, sigma + self.p.s_crit, t)
+            && best.is_none_or(|(tb, _)| tw < tb)
+        {
+            best = Some((tw, PairKind::Well));
         }
         best
     }
@@ -464,13 +445,17 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     }
 
     /// Time of the well event of a bonded pair (`lambda = sigma + s_crit`) from `b`, `r^2`,
-    /// `v^2` at `t`: as in [`Self::predict_image`].
+    /// `v^2` at `t` (both scans: [`Self::predict_image`] and [`Self::scan_dry`]).
     #[inline(always)]
     fn well_time(b: f64, rr: f64, vv: f64, lambda: f64, t: f64) -> Option<f64> {
         let c = rr - lambda * lambda;
         let dt = if b > 0.0 && c >= 0.0 {
+            // At or beyond the well edge (round-off) and separating: the event is now.
             Some(0.0)
         } else if vv > 0.0 {
+            // Larger root of |r + v dt| = sigma + s_crit. Right after a bounce off the well
+            // wall the pair sits on the edge (c may be +round-off) and approaches: the root
+            // is then the next exit, not "none" (regression: bonds stretched past s_crit).
             let disc = (b * b - vv * c).max(0.0);
             Some(if b > 0.0 {
                 -c / (b + disc.sqrt())
