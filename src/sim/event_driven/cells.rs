@@ -8,11 +8,11 @@
 //! occupancy of a cell (0, 1 or 2 particles, at random) is then no branch for the processor to
 //! mispredict.
 
-/// List steps [`CellGrid::for_each_batch`] takes per cell without a branch: at the densities
+/// List steps [`CellGrid::gather`] takes per cell without a branch: at the densities
 /// of the reference systems (0.5 particles per cell in 3D) more than two particles in a cell
 /// are rare (1.4 % of the cells), and those fall back to the loop.
 const GATHER_STEPS: usize = 2;
-/// Particle indices [`CellGrid::for_each_batch`] gathers before it hands them on (a power of
+/// Particle indices [`CellGrid::gather`] gathers before it hands them on (a power of
 /// two).
 pub const BATCH: usize = 64;
 
@@ -325,48 +325,25 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Calls `f` with the particles of the cells `cells`, in the order [`Self::for_each_in`]
-    /// visits them cell after cell, handed on in batches, each particle with the tag that came
-    /// with its cell (`TAGGED`; else the tags are not stored). The indices are gathered first:
-    /// the first [`GATHER_STEPS`] steps of each list walk store the index and count it only if
-    /// it is not the sentinel (no branch on the cell's occupancy); longer lists continue in a
-    /// loop.
+    /// visits them cell after cell, handed on in batches of at most [`BATCH`], each particle
+    /// with the tag that came with its cell (`TAGGED`; else the tags are not stored): the
+    /// batches of [`Self::gather`].
     #[inline(always)]
     pub fn for_each_batch<const TAGGED: bool>(
         &self,
-        cells: impl Iterator<Item = (usize, u8)>,
+        mut cells: impl Iterator<Item = (usize, u8)>,
         mut f: impl FnMut(&[u32], &[u8]),
     ) {
-        let end = self.end;
+        let mut state = self.gather_start();
         let mut buf = [0u32; BATCH];
         let mut tags = [0u8; BATCH];
-        let mut len = 0usize;
-        for (cell, tag) in cells {
-            if len > BATCH - GATHER_STEPS {
-                f(&buf[..len], &tags[..len]);
-                len = 0;
-            }
-            let mut j = self.head[cell];
-            for _ in 0..GATHER_STEPS {
-                // `len < BATCH` here; the mask only spares the bounds test.
-                buf[len % BATCH] = j;
-                if TAGGED {
-                    tags[len % BATCH] = tag;
-                }
-                len += usize::from(j != end);
-                j = self.next[j as usize];
-            }
-            while j != end {
-                if len == BATCH {
-                    f(&buf[..len], &tags[..len]);
-                    len = 0;
-                }
-                buf[len] = j;
-                tags[len] = tag;
-                len += 1;
-                j = self.next[j as usize];
+        loop {
+            let (len, more) = self.gather::<TAGGED>(&mut cells, &mut state, &mut buf, &mut tags);
+            f(&buf[..len], &tags[..len]);
+            if !more {
+                return;
             }
         }
-        f(&buf[..len], &tags[..len]);
     }
 
     /// All `3^D` neighbour offsets (including the cell itself).

@@ -366,15 +366,13 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // No shifts: the partners of all cells gathered in batches first, so that the
             // cells' occupancies cost no mispredicted branches (`CellGrid::for_each_batch`).
             let no_shift = [0.0; D];
-            {
-                grid.for_each_batch::<false>(around.map(|(cell, _)| (cell, 0)), |batch, _| {
-                    for &j in batch {
-                        this.consider::<G, S, WRAP, SHIFT>(
-                            bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best,
-                        );
-                    }
-                });
-            }
+            grid.for_each_batch::<false>(around.map(|(cell, _)| (cell, 0)), |batch, _| {
+                for &j in batch {
+                    this.consider::<G, S, WRAP, SHIFT>(
+                        bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best,
+                    );
+                }
+            });
         }
         self.ev[i] = best;
     }
