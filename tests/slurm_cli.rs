@@ -223,6 +223,16 @@ fn submit_splits_at_max_array_size_and_records_the_slurm_ids() {
     let mut want: Vec<String> = tasks.iter().map(|t| t.job_id.clone()).collect();
     want.sort();
     assert_eq!(listed, want);
+    // Tasks still in the queue are no failure: a collect stores nothing and exits with 0.
+    std::fs::write(
+        bin.join("squeue"),
+        "#!/bin/sh\nfor t in 0 1; do echo \"${6}_$t PENDING\"; done\n",
+    )
+    .unwrap();
+    let out = on_path(&bin, &["sweep", "collect", "--db"], &db);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_has(&stdout(&out), "0 failed, 0 corrupt, 0 missing");
+    std::fs::write(bin.join("squeue"), "#!/bin/sh\nexit 0\n").unwrap();
     // One task wrote an error record; the queue (empty) no longer has the others and no result
     // came: submitting again collects 1 failed and 3 missing and submits all four again.
     let failed = sd.join("results").join(format!("{}.json", tasks[0].job_id));
@@ -239,6 +249,9 @@ fn submit_splits_at_max_array_size_and_records_the_slurm_ids() {
     assert!(!failed.exists());
     let out = on_path(&bin, &["sweep", "collect", "--db"], &db);
     assert_has(&stdout(&out), "0 failed, 0 corrupt, 4 missing");
+    // Lost tasks make a partial diagram: exit status 4, as `sweep run` with failed jobs.
+    assert_eq!(out.status.code(), Some(4), "{}", stderr(&out));
+    assert_has(&stderr(&out), "4 lost");
 }
 
 #[test]

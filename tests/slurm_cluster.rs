@@ -102,6 +102,12 @@ fn ok(o: &std::process::Output) -> String {
     format!("{}{}", stdout(o), stderr(o))
 }
 
+/// The output of a `sweep collect` that found failed or lost jobs (exit status 4).
+fn partial(o: &std::process::Output) -> String {
+    assert_eq!(o.status.code(), Some(4), "{}\n{}", stdout(o), stderr(o));
+    format!("{}{}", stdout(o), stderr(o))
+}
+
 /// The numbers of a stored job that must not depend on where it ran.
 fn numbers(
     p: &PointRow,
@@ -210,7 +216,8 @@ fn a_sweep_submitted_to_slurm_equals_a_local_run() {
         .expect("a successful task")
         .clone();
     std::fs::remove_file(sd.join("results").join(format!("{}.json", lost.job_id))).unwrap();
-    let out = ok(&run(&["sweep", "collect", "--db", db_s]));
+    let out = partial(&run(&["sweep", "collect", "--db", db_s]));
+    assert!(out.contains("2 job(s) failed and 1 lost"), "{out}");
     assert!(
         out.contains("1 result(s) stored, 0 already stored (not stored twice), 2 failed, 0 corrupt, 1 missing"),
         "{out}"
@@ -221,7 +228,7 @@ fn a_sweep_submitted_to_slurm_equals_a_local_run() {
         "{out}"
     );
     // Collecting again stores nothing more.
-    let out = ok(&run(&["sweep", "collect", "--db", db_s]));
+    let out = partial(&run(&["sweep", "collect", "--db", db_s]));
     assert!(out.contains("0 result(s) stored"), "{out}");
     assert!(out.contains("4 task(s) collected before"), "{out}");
 
@@ -229,9 +236,10 @@ fn a_sweep_submitted_to_slurm_equals_a_local_run() {
     let out = ok(&run(&["sweep", "submit", sweep_s, "--slurm", "--db", db_s]));
     assert!(out.contains("3 job(s) submitted as 1 array(s)"), "{out}");
     wait_for(&store, id);
-    let out = ok(&run(&["sweep", "collect", "--db", db_s]));
+    let out = partial(&run(&["sweep", "collect", "--db", db_s]));
     assert!(out.contains("1 result(s) stored"), "{out}");
     assert!(out.contains("2 failed"), "{out}");
+    assert!(out.contains("2 job(s) failed and 0 lost"), "{out}");
     let c = store.counts(id).unwrap();
     assert_eq!((c.done, c.failed, c.pending), (2, 2, 0));
     let states: Vec<TaskState> = store.tasks(id).unwrap().iter().map(|t| t.state).collect();

@@ -315,13 +315,18 @@ pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> 
     let store = Store::open_existing(db)?;
     let sweeps = select(&store, name)?;
     let mut any = false;
+    let (mut total_failed, mut total_lost) = (0, 0);
     for s in &sweeps {
         if store.tasks(s.id)?.is_empty() {
             continue;
         }
         any = true;
         let c = collect(&store, s, &mut slurm::squeue)?;
-        print!("{}", collected_text(s, &store.points(s.id)?, &c));
+        let points = store.points(s.id)?;
+        print!("{}", collected_text(s, &points, &c));
+        let (failed, lost) = unfinished_for_good(&points, &store.tasks(s.id)?);
+        total_failed += failed;
+        total_lost += lost;
     }
     if !any {
         println!(
@@ -330,7 +335,46 @@ pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> 
             db.display()
         );
     }
-    Ok(())
+    if total_failed + total_lost == 0 {
+        return Ok(());
+    }
+    // Exit status 4, as `sweep run` with failed jobs: a script (`sweep collect && sweep
+    // boundaries`) must not take a partial diagram for a whole one. Tasks still queued or
+    // running are not a failure.
+    Err(Failure::JobsFailed(format!(
+        "{total_failed} job(s) failed and {total_lost} lost (no result, or an unreadable one, \
+         and no longer queued); the others are stored: `wetgran sweep submit FILE --slurm` \
+         submits them again"
+    )))
+}
+
+/// Jobs of a sweep that will not finish without a new submission: `(failed, lost)`. A job's
+/// latest task decides (earlier tasks were submitted again): lost jobs have no result and a
+/// latest task that is missing or corrupt (no result file, or an unreadable one, and no longer
+/// in the queue); failed jobs wrote an error record and were not submitted again since. A job
+/// with a result counts as neither; one whose latest task is still queued is waiting.
+fn unfinished_for_good(
+    points: &[crate::store::PointRow],
+    tasks: &[crate::store::TaskRow],
+) -> (usize, usize) {
+    use crate::store::TaskState;
+    let mut latest: HashMap<&str, &crate::store::TaskRow> = HashMap::new();
+    for t in tasks {
+        let e = latest.entry(t.job_id.as_str()).or_insert(t);
+        if (t.submission_id, t.task) > (e.submission_id, e.task) {
+            *e = t;
+        }
+    }
+    let (mut failed, mut lost) = (0, 0);
+    for p in points.iter().filter(|p| p.status != "done") {
+        match latest.get(p.job_id.as_str()).map(|t| t.state) {
+            Some(TaskState::Missing | TaskState::Corrupt) => lost += 1,
+            Some(TaskState::Submitted) => {}
+            _ if p.status == "failed" => failed += 1,
+            _ => {}
+        }
+    }
+    (failed, lost)
 }
 
 /// `wetgran job run SPEC [--out RESULT]`: runs one job and writes its result record (to

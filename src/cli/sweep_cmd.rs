@@ -227,7 +227,8 @@ pub enum SweepCommand {
     ///
     /// Idempotent: a result already stored is not stored again. Reports failed tasks (with the
     /// job's error), corrupt result files, and missing ones (no result and no longer queued:
-    /// killed at a limit, node failure); `sweep submit` submits those again.
+    /// killed at a limit, node failure); `sweep submit` submits those again. Exit status 4 when
+    /// failed or lost jobs remain (tasks still queued are no failure).
     Collect {
         #[arg(long, default_value = DEFAULT_DB)]
         db: PathBuf,
