@@ -21,6 +21,7 @@
 //! `wetgran bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
 //! particle, with the breakdown by array.
 
+pub mod barrier;
 pub mod engines;
 pub mod memory;
 pub mod observer;
@@ -122,6 +123,13 @@ pub fn run_with_svg(
         );
         return Ok(());
     }
+    if which == "barrier" {
+        print!(
+            "{}",
+            barrier::report(&barrier::measure(repeat, scale), repeat)
+        );
+        return Ok(());
+    }
     if which == "shake" {
         print!("{}", shake::report(&shake::measure(40, scale)));
         return Ok(());
@@ -131,7 +139,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab` `memory`, `engines`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
             ));
         }
     };

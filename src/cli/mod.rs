@@ -43,7 +43,8 @@ pub enum Command {
         /// (E_par and cost of the shear drive against the slab width), `memory` (peak resident
         /// memory of the event engine per particle at N = 125 000 and 10^6; `scale` scales N), `engines` (event- vs
         /// time-driven engine on the 2D standard wet system, seconds per time unit), `observer`
-        /// (cost of the location-change observer, rebuilt vs incremental triangulation).
+        /// (cost of the location-change observer, rebuilt vs incremental triangulation),
+        /// `barrier` (what two threads meeting twice per step can gain on this machine).
         #[arg(default_value = "engine")]
         which: String,
         /// Repetitions per system (the median is reported).
