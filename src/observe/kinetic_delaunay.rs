@@ -71,6 +71,7 @@
 //! three sites, all collinear, two sites at the same position) the structure stays empty and
 //! each sample is triangulated from scratch.
 
+use super::flat_check::FlatCheck;
 use super::location_changes::{
     Edge, SiteRef, better_copy, delaunay_edges, edge_between, finish_edges, images,
 };
@@ -1916,6 +1917,56 @@ impl KineticDelaunay {
     /// Number of live triangles (finite and infinite), for tests.
     pub fn triangle_count(&self) -> usize {
         self.tv.iter().filter(|v| v[0] != DEAD).count()
+    }
+
+    /// The topology in flat lists for the lower-bound kernel ([`FlatCheck`]; a measurement).
+    pub fn flat_check(&self) -> FlatCheck {
+        let mut f = FlatCheck {
+            particle: self
+                .particle
+                .iter()
+                .map(|&i| if i == DEAD { u32::MAX } else { i })
+                .collect(),
+            offset: self
+                .shift
+                .iter()
+                .map(|s| {
+                    [
+                        s[0] as f64 * self.box_size[0],
+                        s[1] as f64 * self.box_size[1],
+                    ]
+                })
+                .collect(),
+            ..FlatCheck::default()
+        };
+        if !self.valid {
+            return f;
+        }
+        for (t, &v) in self.tv.iter().enumerate() {
+            if v[0] == DEAD {
+                continue;
+            }
+            let inf = v.iter().position(|&x| x == INF);
+            if inf.is_none() {
+                f.tri.push(v);
+            }
+            for k in 0..3 {
+                let u = self.tn[t][k] as usize;
+                let w = self.tv[u];
+                let d = w[self.back_index(u, t as u32)];
+                if d == INF {
+                    continue;
+                }
+                match inf {
+                    None if u > t && !w.contains(&INF) => {
+                        f.quad.push([v[(k + 1) % 3], v[(k + 2) % 3], v[k], d]);
+                    }
+                    None => {}
+                    Some(i) => f.hull.push([v[(i + 1) % 3], v[(i + 2) % 3], d]),
+                }
+            }
+        }
+        f
     }
 }
 
