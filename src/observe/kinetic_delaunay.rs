@@ -90,6 +90,11 @@ const DEAD: u32 = u32::MAX - 1;
 pub const MAX_BISECTIONS: u32 = 20;
 /// Most sites held back in one sample, as a fraction of all sites, before a rebuild is cheaper.
 pub const MAX_HELD_FRACTION: f64 = 0.15;
+/// Most finite triangles inverted by the sites' moves, as a fraction of the moved sites, for a
+/// repair to be tried: above it the sample is rebuilt at once (docs/performance.md, Round 5: at
+/// the bench points the fluid inverts at most 0.9 % and the coexistence at most 3.6 %, the gas
+/// 11-16 %, where repairs that went on failed at the held limit as often as they succeeded).
+pub const MAX_INVERTED_FRACTION: f64 = 0.08;
 /// Most halvings of held sites' moves in one sample before a rebuild.
 pub const MAX_HALVINGS: u32 = 256;
 /// Most loose sites in a sample, as a fraction of all sites, for the certificates to pay: above
@@ -189,6 +194,8 @@ pub struct Safeguards {
     pub halving_budget: bool,
     /// The limit on held sites ([`MAX_HELD_FRACTION`]).
     pub held_limit: bool,
+    /// The limit on inverted triangles before any site is held ([`MAX_INVERTED_FRACTION`]).
+    pub inverted_limit: bool,
     /// Skipping the tests of sites within their slack (off: every site is loose).
     pub slack: bool,
     /// No flip joins two sites that are joined already (or makes a hull vertex of one that is
@@ -205,6 +212,7 @@ impl Default for Safeguards {
             flips_per_triangle: Some(FLIPS_PER_TRIANGLE),
             halving_budget: true,
             held_limit: true,
+            inverted_limit: true,
             slack: true,
             joined_flip_check: true,
         }
@@ -1038,6 +1046,13 @@ impl KineticDelaunay {
                 .collect();
             (tris, tri_stamp, inverted)
         };
+        // Too many inverted triangles: the repair would hold back about as many sites and then
+        // give up at the held limit, or succeed at more than a rebuild's cost (the gas).
+        if self.safeguards.inverted_limit
+            && inverted.len() as f64 > MAX_INVERTED_FRACTION * moved as f64
+        {
+            return Err(Failure::Inverted);
+        }
         // Held sites, with where they go (they wait at their previous position). Holding a site
         // changes only the triangles around it: after the first scan, only the inverted
         // triangles and the stars of the sites held since are tested again.
@@ -1141,6 +1156,7 @@ impl KineticDelaunay {
     /// triangles from the lower one; an edge between a finite and an infinite triangle never
     /// conflicts from the finite side, the vertex across is `INF`), with a finite triangle's
     /// corners loaded once for its orientation and its edges.
+    #[inline(never)]
     fn scan_every_triangle(&mut self) -> Vec<usize> {
         let mut inverted = Vec::new();
         for t in 0..self.tv.len() {
@@ -2045,7 +2061,8 @@ mod tests {
             .enumerate()
             .map(|(i, x)| if i % 3 == 0 { [x[0] + 3.0, x[1]] } else { *x })
             .collect();
-        let (k, same) = step(Safeguards::default(), &p, &q);
+        // The inverted limit off, so that the held limit is what gives up.
+        let (k, same) = step(off(|s| s.inverted_limit = false), &p, &q);
         assert!(same);
         assert_eq!(k.stats.rebuild_inverted, 1, "{:?}", k.stats);
         assert_eq!(
@@ -2053,6 +2070,36 @@ mod tests {
             "gave up before halving: {:?}",
             k.stats
         );
+    }
+
+    #[test]
+    fn inverted_limit_gives_up_before_holding_any_site() {
+        // A tenth of 2000 sites jump 1 unit (a few triangles each): more than
+        // `MAX_INVERTED_FRACTION` of the moved sites' count of triangles invert, and the sample
+        // is rebuilt before any site is held back. Without the limit the repair holds sites.
+        let p = points(2000, 10.0, 5);
+        let q: Vec<[f64; 2]> = p
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                if i % 10 == 0 {
+                    [x[0] + 1.0, x[1] + 0.3]
+                } else {
+                    *x
+                }
+            })
+            .collect();
+        let (k, same) = step(Safeguards::default(), &p, &q);
+        assert!(same);
+        assert_eq!(
+            (k.stats.rebuild_inverted, k.stats.held),
+            (1, 0),
+            "{:?}",
+            k.stats
+        );
+        let (k, same) = step(off(|s| s.inverted_limit = false), &p, &q);
+        assert!(same);
+        assert!(k.stats.held > 0, "{:?}", k.stats);
     }
 
     #[test]
