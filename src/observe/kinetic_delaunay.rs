@@ -2073,6 +2073,23 @@ mod tests {
     }
 
     #[test]
+    fn flat_check_passes_a_delaunay_triangulation_and_catches_a_jump() {
+        // The lower-bound kernel tests what the triangulation's full pass tests: nothing fails
+        // where the sites are (a Delaunay triangulation); a site that jumps breaks some test.
+        let p = points(500, 10.0, 3);
+        let mut k = KineticDelaunay::new(0.0);
+        k.advance(&frame(&p, 10.0));
+        let mut f = k.flat_check();
+        let finite = f.tri.len();
+        assert!(finite > 0 && f.quad.len() > finite && !f.hull.is_empty());
+        assert_eq!(f.verify(&frame(&p, 10.0)), (0, 0));
+        let mut q = p.clone();
+        q[7] = [q[7][0] + 1.0, q[7][1] + 0.3];
+        let (inverted, conflicts) = f.verify(&frame(&q, 10.0));
+        assert!(inverted + conflicts > 0);
+    }
+
+    #[test]
     fn inverted_limit_gives_up_before_holding_any_site() {
         // A tenth of 2000 sites jump 1 unit (a few triangles each): more than
         // `MAX_INVERTED_FRACTION` of the moved sites' count of triangles invert, and the sample
