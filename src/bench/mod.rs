@@ -145,7 +145,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab` `memory`, `engines`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab` `memory`, `engines`, `observer`, `observer:POINTS` or `observer-kernel:POINTS` (POINTS from gas,fluid,coexistence)"
             ));
         }
     };
