@@ -15,6 +15,7 @@
 //! same changes (total and per bin), and how the incremental triangulation was updated.
 
 use super::tdmd::thread_cpu_seconds;
+use crate::observe::flat_check::FlatCheck;
 use crate::observe::kinetic_delaunay::KineticStats;
 use crate::observe::location_changes::{LocationChangeCounter, Method};
 use crate::observe::{Observer, ObserverSet};
@@ -112,6 +113,76 @@ fn observe_rebuilding(counter: &mut LocationChangeCounter, frame: &Frame) {
 #[inline(never)]
 fn observe_incremental(counter: &mut LocationChangeCounter, frame: &Frame) {
     counter.observe(frame, true);
+}
+
+/// The lower-bound kernel ([`crate::observe::flat_check`]) at the points labelled in `only`:
+/// at every sample after the first the kept triangulation of the previous sample is copied into
+/// flat lists (`flat_lists`) and tested at the new positions (`FlatCheck::verify`), then the
+/// kept counter advances as in [`measure`]. Per point: samples, triangles, edges and hull tests
+/// tested per sample, and the failed tests summed over the samples. Profile with callgrind:
+/// `verify`'s inclusive instructions over its calls is the kernel's cost per sample.
+pub fn measure_kernel(samples: usize, scale: f64, only: &[&str]) -> String {
+    let samples = ((samples as f64 * scale).round() as usize).max(10);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<12} {:>7} {:>9} {:>7} {:>6} {:>9} {:>9}",
+        "point", "samples", "triangles", "edges", "hull", "inverted", "conflicts"
+    );
+    for &(label, gamma, e_star) in POINTS
+        .iter()
+        .filter(|p| only.is_empty() || only.contains(&p.0))
+    {
+        let probe = standard_shaken(gamma, e_star, 1.0, Some(0.03), 1.0);
+        let interval = probe.driving_period() / SAMPLES_PER_PERIOD;
+        let first = (WARM_UP / interval).ceil();
+        let duration = (first + samples as f64 - 1.0) * interval;
+        let mut scene = standard_shaken(gamma, e_star, 1.0, Some(0.03), duration);
+        scene.observe.samples_per_period = SAMPLES_PER_PERIOD;
+        scene.observe.location_changes = false;
+        scene.observe.transient_periods = 0.0;
+        let bins = scene.observe.lateral_bins(&scene);
+        let method = Method::Delaunay {
+            max_edge: scene.observe.lc_max_edge * scene.particles.diameter,
+            margin: scene.observe.lc_flip_margin,
+        };
+        let mut incremental = LocationChangeCounter::new(method, bins, scene.driving_period());
+        let t_first = first * interval - 0.5 * interval;
+        let (mut n, mut sizes, mut failed) = (0usize, [0usize; 3], [0usize; 2]);
+        run_scene_observed(
+            &scene,
+            interval,
+            &mut |f: &Frame| {
+                if f.time < t_first {
+                    return;
+                }
+                if let Some(tri) = incremental.kept_triangulation()
+                    && n > 0
+                {
+                    let mut flat = flat_lists(tri);
+                    sizes = [flat.tri.len(), flat.quad.len(), flat.hull.len()];
+                    let (a, b) = flat.verify(f);
+                    failed[0] += a;
+                    failed[1] += b;
+                }
+                n += 1;
+                observe_incremental(&mut incremental, f);
+            },
+            &mut |_| {},
+        );
+        let _ = writeln!(
+            s,
+            "{label:<12} {n:>7} {:>9} {:>7} {:>6} {:>9} {:>9}",
+            sizes[0], sizes[1], sizes[2], failed[0], failed[1]
+        );
+    }
+    s
+}
+
+/// The flat lists of the kernel (its own function, so that a profile tells it apart).
+#[inline(never)]
+fn flat_lists(tri: &crate::observe::kinetic_delaunay::KineticDelaunay) -> FlatCheck {
+    tri.flat_check()
 }
 
 fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -> ObserverRow {

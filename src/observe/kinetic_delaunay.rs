@@ -71,6 +71,7 @@
 //! three sites, all collinear, two sites at the same position) the structure stays empty and
 //! each sample is triangulated from scratch.
 
+use super::flat_check::FlatCheck;
 use super::location_changes::{
     Edge, SiteRef, better_copy, delaunay_edges, edge_between, finish_edges, images,
 };
@@ -89,6 +90,11 @@ const DEAD: u32 = u32::MAX - 1;
 pub const MAX_BISECTIONS: u32 = 20;
 /// Most sites held back in one sample, as a fraction of all sites, before a rebuild is cheaper.
 pub const MAX_HELD_FRACTION: f64 = 0.15;
+/// Most finite triangles inverted by the sites' moves, as a fraction of the moved sites, for a
+/// repair to be tried: above it the sample is rebuilt at once (docs/performance.md, Round 5: at
+/// the bench points the fluid inverts at most 0.9 % and the coexistence at most 3.6 %, the gas
+/// 11-16 %, where repairs that went on failed at the held limit as often as they succeeded).
+pub const MAX_INVERTED_FRACTION: f64 = 0.08;
 /// Most halvings of held sites' moves in one sample before a rebuild.
 pub const MAX_HALVINGS: u32 = 256;
 /// Most loose sites in a sample, as a fraction of all sites, for the certificates to pay: above
@@ -188,6 +194,8 @@ pub struct Safeguards {
     pub halving_budget: bool,
     /// The limit on held sites ([`MAX_HELD_FRACTION`]).
     pub held_limit: bool,
+    /// The limit on inverted triangles before any site is held ([`MAX_INVERTED_FRACTION`]).
+    pub inverted_limit: bool,
     /// Skipping the tests of sites within their slack (off: every site is loose).
     pub slack: bool,
     /// No flip joins two sites that are joined already (or makes a hull vertex of one that is
@@ -204,6 +212,7 @@ impl Default for Safeguards {
             flips_per_triangle: Some(FLIPS_PER_TRIANGLE),
             halving_budget: true,
             held_limit: true,
+            inverted_limit: true,
             slack: true,
             joined_flip_check: true,
         }
@@ -1037,6 +1046,13 @@ impl KineticDelaunay {
                 .collect();
             (tris, tri_stamp, inverted)
         };
+        // Too many inverted triangles: the repair would hold back about as many sites and then
+        // give up at the held limit, or succeed at more than a rebuild's cost (the gas).
+        if self.safeguards.inverted_limit
+            && inverted.len() as f64 > MAX_INVERTED_FRACTION * moved as f64
+        {
+            return Err(Failure::Inverted);
+        }
         // Held sites, with where they go (they wait at their previous position). Holding a site
         // changes only the triangles around it: after the first scan, only the inverted
         // triangles and the stars of the sites held since are tested again.
@@ -1140,6 +1156,7 @@ impl KineticDelaunay {
     /// triangles from the lower one; an edge between a finite and an infinite triangle never
     /// conflicts from the finite side, the vertex across is `INF`), with a finite triangle's
     /// corners loaded once for its orientation and its edges.
+    #[inline(never)]
     fn scan_every_triangle(&mut self) -> Vec<usize> {
         let mut inverted = Vec::new();
         for t in 0..self.tv.len() {
@@ -1917,6 +1934,56 @@ impl KineticDelaunay {
     pub fn triangle_count(&self) -> usize {
         self.tv.iter().filter(|v| v[0] != DEAD).count()
     }
+
+    /// The topology in flat lists for the lower-bound kernel ([`FlatCheck`]; a measurement).
+    pub fn flat_check(&self) -> FlatCheck {
+        let mut f = FlatCheck {
+            particle: self
+                .particle
+                .iter()
+                .map(|&i| if i == DEAD { u32::MAX } else { i })
+                .collect(),
+            offset: self
+                .shift
+                .iter()
+                .map(|s| {
+                    [
+                        s[0] as f64 * self.box_size[0],
+                        s[1] as f64 * self.box_size[1],
+                    ]
+                })
+                .collect(),
+            ..FlatCheck::default()
+        };
+        if !self.valid {
+            return f;
+        }
+        for (t, &v) in self.tv.iter().enumerate() {
+            if v[0] == DEAD {
+                continue;
+            }
+            let inf = v.iter().position(|&x| x == INF);
+            if inf.is_none() {
+                f.tri.push(v);
+            }
+            for k in 0..3 {
+                let u = self.tn[t][k] as usize;
+                let w = self.tv[u];
+                let d = w[self.back_index(u, t as u32)];
+                if d == INF {
+                    continue;
+                }
+                match inf {
+                    None if u > t && !w.contains(&INF) => {
+                        f.quad.push([v[(k + 1) % 3], v[(k + 2) % 3], v[k], d]);
+                    }
+                    None => {}
+                    Some(i) => f.hull.push([v[(i + 1) % 3], v[(i + 2) % 3], d]),
+                }
+            }
+        }
+        f
+    }
 }
 
 #[cfg(test)]
@@ -1994,7 +2061,8 @@ mod tests {
             .enumerate()
             .map(|(i, x)| if i % 3 == 0 { [x[0] + 3.0, x[1]] } else { *x })
             .collect();
-        let (k, same) = step(Safeguards::default(), &p, &q);
+        // The inverted limit off, so that the held limit is what gives up.
+        let (k, same) = step(off(|s| s.inverted_limit = false), &p, &q);
         assert!(same);
         assert_eq!(k.stats.rebuild_inverted, 1, "{:?}", k.stats);
         assert_eq!(
@@ -2002,6 +2070,53 @@ mod tests {
             "gave up before halving: {:?}",
             k.stats
         );
+    }
+
+    #[test]
+    fn flat_check_passes_a_delaunay_triangulation_and_catches_a_jump() {
+        // The lower-bound kernel tests what the triangulation's full pass tests: nothing fails
+        // where the sites are (a Delaunay triangulation); a site that jumps breaks some test.
+        let p = points(500, 10.0, 3);
+        let mut k = KineticDelaunay::new(0.0);
+        k.advance(&frame(&p, 10.0));
+        let mut f = k.flat_check();
+        let finite = f.tri.len();
+        assert!(finite > 0 && f.quad.len() > finite && !f.hull.is_empty());
+        assert_eq!(f.verify(&frame(&p, 10.0)), (0, 0));
+        let mut q = p.clone();
+        q[7] = [q[7][0] + 1.0, q[7][1] + 0.3];
+        let (inverted, conflicts) = f.verify(&frame(&q, 10.0));
+        assert!(inverted + conflicts > 0);
+    }
+
+    #[test]
+    fn inverted_limit_gives_up_before_holding_any_site() {
+        // A tenth of 2000 sites jump 1 unit (a few triangles each): more than
+        // `MAX_INVERTED_FRACTION` of the moved sites' count of triangles invert, and the sample
+        // is rebuilt before any site is held back. Without the limit the repair holds sites.
+        let p = points(2000, 10.0, 5);
+        let q: Vec<[f64; 2]> = p
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                if i % 10 == 0 {
+                    [x[0] + 1.0, x[1] + 0.3]
+                } else {
+                    *x
+                }
+            })
+            .collect();
+        let (k, same) = step(Safeguards::default(), &p, &q);
+        assert!(same);
+        assert_eq!(
+            (k.stats.rebuild_inverted, k.stats.held),
+            (1, 0),
+            "{:?}",
+            k.stats
+        );
+        let (k, same) = step(off(|s| s.inverted_limit = false), &p, &q);
+        assert!(same);
+        assert!(k.stats.held > 0, "{:?}", k.stats);
     }
 
     #[test]

@@ -489,6 +489,11 @@ impl LocationChangeCounter {
         self.kinetic.as_ref().map(|k| k.triangulation.stats)
     }
 
+    /// The kept triangulation, if any (for measurements).
+    pub fn kept_triangulation(&self) -> Option<&KineticDelaunay> {
+        self.kinetic.as_ref().map(|k| &k.triangulation)
+    }
+
     /// `f_lc` over the window: changes per particle per period.
     pub fn per_particle_per_period(&self) -> f64 {
         self.window_count as f64 / (self.particles as f64 * self.window_time / self.period)

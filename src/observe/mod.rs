@@ -27,6 +27,7 @@ pub mod bins;
 pub mod classify;
 pub mod convergence;
 pub mod diffusion;
+pub mod flat_check;
 pub mod kinetic_delaunay;
 pub mod lateral;
 pub mod line;
