@@ -20,7 +20,7 @@ pub fn linear_time_to_plane(x0: f64, v: f64, plane: f64, upward: bool) -> f64 {
 }
 
 /// The earlier of the two straight-flight times to the faces of a cell `[lo, lo + w]` and
-/// whether it is the upper face: the same number as the smaller of
+/// whether it is the upper face: for a finite (or NaN) `v`, the same number as the smaller of
 /// `linear_time_to_plane(x0, v, hi, true)` and `linear_time_to_plane(x0, v, lo, false)` with
 /// `hi = lo + w` (at most one of them is finite; `+inf` for `v = 0` or NaN), where a face
 /// marked `closed` (the outer face of an edge cell of a wall axis) counts as a plane at
@@ -186,6 +186,8 @@ mod tests {
 
     #[test]
     fn faces_match_the_two_plane_times() {
+        // Finite speeds and NaN (an infinite speed towards a closed face gives `inf / inf`,
+        // so 0, in the two-plane form and `+inf` here; no flight has one).
         let speeds = [
             -2.5,
             -1.0,
@@ -196,8 +198,6 @@ mod tests {
             0.3,
             1.0,
             2.5,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
             f64::NAN,
         ];
         let (lo, w) = (1.0, 0.75);
