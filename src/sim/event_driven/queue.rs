@@ -163,11 +163,10 @@ const WIDTH_FACTOR: f64 = 2.0;
 ///
 /// Branches: every list ends in one sentinel node `n` whose key is `+inf` and whose link points
 /// to itself, so linking and unlinking write the neighbour's back link without testing for the
-/// end, and the walk takes the first two entries of a bucket without a branch (a step past the
-/// end reads the sentinel, which is never due) and chooses the smallest due `(key, index)` by
-/// bit masks; only longer lists loop. The lengths of the lists are a coin toss at about one
-/// entry per list, so these were the queue's mispredicted branches (docs/performance.md, "Fifth
-/// round").
+/// end of the list (a coin toss at about one entry per list). The walk keeps its branches: a
+/// branch-free walk (two unconditional steps, the minimum chosen by bit masks) had fewer
+/// mispredicted branches in valgrind's model but took more CPU time (docs/performance.md,
+/// "Fifth round").
 #[derive(Debug, Clone)]
 pub struct CalendarQueue {
     /// Keys of the particles `0..n`, then the sentinel's `+inf`.
@@ -305,33 +304,19 @@ impl CalendarQueue {
                     (t * inv_width) as u64 == cur
                 }
             };
-            // The smallest `(key, index)` among the due entries, `(+inf, _)` if none: an entry
-            // not due competes with the key `+inf` and so never beats a due one; chosen by bit
-            // masks (no branch on the data).
+            // The smallest `(key, index)` among the due entries.
+            let mut k = self.next[self.heads + list];
             let mut best = end_node;
             let mut best_t = f64::INFINITY;
-            let mut offer = |k: u32, t: f64| {
-                let due_mask = 0u64.wrapping_sub(u64::from(due(t)));
-                let c = f64::from_bits(
-                    (t.to_bits() & due_mask) | (f64::INFINITY.to_bits() & !due_mask),
-                );
-                let better = (c < best_t) | ((c == best_t) & (k < best));
-                let m = 0u64.wrapping_sub(u64::from(better));
-                best = ((u64::from(k) & m) | (u64::from(best) & !m)) as u32;
-                best_t = f64::from_bits((c.to_bits() & m) | (best_t.to_bits() & !m));
-            };
-            // Two steps without a branch (past the end they read the sentinel: key `+inf`,
-            // never due, and it links to itself), then the rest of a longer list.
-            let k0 = self.next[self.heads + list];
-            let k1 = self.next[k0 as usize];
-            offer(k0, self.key[k0 as usize]);
-            offer(k1, self.key[k1 as usize]);
-            let mut k = self.next[k1 as usize];
             while k != end_node {
-                offer(k, self.key[k as usize]);
+                let t = self.key[k as usize];
+                if due(t) && (best == end_node || t < best_t || (t == best_t && k < best)) {
+                    best = k;
+                    best_t = t;
+                }
                 k = self.next[k as usize];
             }
-            if best_t < f64::INFINITY {
+            if best != end_node {
                 return Some((best as usize, best_t));
             }
             self.cur = self.cur.saturating_add(1);
