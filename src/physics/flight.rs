@@ -19,6 +19,40 @@ pub fn linear_time_to_plane(x0: f64, v: f64, plane: f64, upward: bool) -> f64 {
     }
 }
 
+/// The earlier of the two straight-flight times to the faces of a cell `[lo, lo + w]` and
+/// whether it is the upper face: for a finite (or NaN) `v`, the same number as the smaller of
+/// `linear_time_to_plane(x0, v, hi, true)` and `linear_time_to_plane(x0, v, lo, false)` with
+/// `hi = lo + w` (at most one of them is finite; `+inf` for `v = 0` or NaN), where a face
+/// marked `closed` (the outer face of an edge cell of a wall axis) counts as a plane at
+/// infinity. Computed without a branch on the sign of `v`, which is a coin toss for cell faces
+/// (docs/performance.md, "Fifth round"): the face is `lo + w * [v > 0]` (`lo + w` is how `hi`
+/// is formed, and `lo + 0.0` is `lo` for the `lo >= 0` of a cell corner), the time
+/// `(plane - x0) / v` clamped at zero as there, and `+inf` added when the particle does not
+/// move along the axis or moves towards a closed face (`0 / 0` or `+-inf` before that; the
+/// added `0.0` otherwise can only turn a `-0.0` into `+0.0`, which no compare tells apart).
+/// Written as a product with an opaque 0 or 1: with a bit-mask choice of the two faces, or
+/// `f64::from(up)`, the compiler emitted a branch again.
+#[inline(always)]
+pub fn linear_time_to_faces(
+    x0: f64,
+    v: f64,
+    lo: f64,
+    w: f64,
+    lo_closed: bool,
+    hi_closed: bool,
+) -> (f64, bool) {
+    let up = v > 0.0;
+    let down = v < 0.0;
+    // The 0 or 1 and the mask go through `black_box` so that the compiler cannot see they
+    // come from a flag: it turns `f64::from(flag)`, a bit-mask choice between the two faces
+    // and the masked `+inf` into selects, and a select of floats into a branch.
+    let plane = lo + w * f64::from(std::hint::black_box(i32::from(up)));
+    let never_reached = !(up | down) | (up & hi_closed) | (down & lo_closed);
+    let mask = std::hint::black_box(0u64.wrapping_sub(u64::from(never_reached)));
+    let never = f64::from_bits(f64::INFINITY.to_bits() & mask);
+    (((plane - x0) / v).max(0.0) + never, up)
+}
+
 /// Time until the parabola `z(t) = z0 + v t - g t^2 / 2` (`g > 0`) reaches `plane` from below
 /// while rising (the first root), `+inf` if it turns before. Cancellation-free form
 /// `t = 2 dz / (v + sqrt(v^2 - 2 g dz))`, `dz = plane - z0`.
@@ -148,6 +182,53 @@ mod tests {
         let td = parabola_time_down(1.0, 0.5, g, 1.0);
         assert!((td - 1.0).abs() < 1e-14);
         assert_eq!(parabola_time_up(0.0, 1.0, g, 1.0), f64::INFINITY);
+    }
+
+    #[test]
+    fn faces_match_the_two_plane_times() {
+        // Finite speeds and NaN (an infinite speed towards a closed face gives `inf / inf`,
+        // so 0, in the two-plane form and `+inf` here; no flight has one).
+        let speeds = [
+            -2.5,
+            -1.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            1e-300,
+            0.3,
+            1.0,
+            2.5,
+            f64::NAN,
+        ];
+        let (lo, w) = (1.0, 0.75);
+        for &x0 in &[1.5, 1.0, 1.75, 1.75 + 1e-15, 1.0 - 1e-15, 1.25] {
+            for &v in &speeds {
+                for (lo_closed, hi_closed) in
+                    [(false, false), (true, false), (false, true), (true, true)]
+                {
+                    let hi = if hi_closed { f64::INFINITY } else { lo + w };
+                    let lo_plane = if lo_closed { f64::NEG_INFINITY } else { lo };
+                    let up = linear_time_to_plane(x0, v, hi, true);
+                    let down = linear_time_to_plane(x0, v, lo_plane, false);
+                    let (t, is_up) = linear_time_to_faces(x0, v, lo, w, lo_closed, hi_closed);
+                    let want = if down < up { down } else { up };
+                    // Equal as numbers (a zero's sign is invisible to every later compare and
+                    // to `now + t`).
+                    assert!(
+                        t == want,
+                        "x0={x0} v={v} closed={lo_closed},{hi_closed}: {t} against {want}"
+                    );
+                    if want.is_finite() {
+                        assert_eq!(is_up, up.is_finite(), "x0={x0} v={v}");
+                    }
+                }
+            }
+        }
+        // The lower face of the first cell: `0 + 0.0` is `+0.0`.
+        assert_eq!(
+            linear_time_to_faces(0.5, -1.0, 0.0, 1.0, false, false),
+            (0.5, false)
+        );
     }
 
     #[test]

@@ -10,6 +10,8 @@
 use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
+use super::shear::FORCE_AXIS;
+use crate::physics::flight::linear_time_to_faces;
 
 /// A set of neighbour offsets and, for interior cells, the linear-index change of each.
 #[derive(Debug, Clone)]
@@ -107,9 +109,20 @@ impl<const D: usize> CellSource<D> {
             } else {
                 f64::INFINITY
             };
-            let (t_up, t_down) = bodies.times_to_planes(i, k, lo, hi);
-            best.keep_earlier(t_up, k, true);
-            best.keep_earlier(t_down, k, false);
+            if (S && k == FORCE_AXIS) || (G && k == D - 1) {
+                let (t_up, t_down) = bodies.times_to_planes(i, k, lo, hi);
+                best.keep_earlier(t_up, k, true);
+                best.keep_earlier(t_down, k, false);
+            } else {
+                // Straight flight: at most one of the two faces is ahead, chosen by the sign
+                // of `v` without a branch; the same time and the same winner among equal
+                // times as the two calls above (an infinite time never replaces `best`).
+                let (x, v) = (bodies.body[i].x[k], bodies.body[i].v[k]);
+                let lo_closed = !periodic & (c[k] == 0);
+                let hi_closed = !periodic & (c[k] == self.grid.n[k] - 1);
+                let (t, up) = linear_time_to_faces(x, v, c[k] as f64 * w, w, lo_closed, hi_closed);
+                best.keep_earlier(t, k, up);
+            }
         }
         best.time += now;
         self.ev[i] = best;

@@ -137,8 +137,6 @@ impl HeapQueue {
     }
 }
 
-/// No particle (end of a bucket list).
-const END: u32 = u32::MAX;
 /// Pops between two re-estimations of the bucket width, per particle (8 against 2: fewer
 /// instructions on all four reference systems, docs/performance.md "Third round").
 const CALENDAR_RETUNE_PER_PARTICLE: u64 = 8;
@@ -162,17 +160,28 @@ const WIDTH_FACTOR: f64 = 2.0;
 /// answer: every `8 N` pops it is re-estimated from a sample of the keys and the lists rebuilt;
 /// if a whole year of buckets holds nothing due, a direct search moves the cursor to the
 /// smallest key.
+///
+/// Branches: every list ends in one sentinel node `n` whose key is `+inf` and whose link points
+/// to itself, so linking and unlinking write the neighbour's back link without testing for the
+/// end of the list (a coin toss at about one entry per list). The walk keeps its branches: a
+/// branch-free walk (two unconditional steps, the minimum chosen by bit masks) had fewer
+/// mispredicted branches in valgrind's model but took more CPU time (docs/performance.md,
+/// "Fifth round").
 #[derive(Debug, Clone)]
 pub struct CalendarQueue {
+    /// Keys of the particles `0..n`, then the sentinel's `+inf`.
     key: Vec<f64>,
-    /// Links of the doubly linked lists over one index space: `0..n` are the particles,
-    /// `n + b` is the head of list `b`. `next[n + b]` is the first entry of list `b`,
-    /// `next[i]` the entry after `i` (`END`: last); `prev[i]` the node before particle `i`
-    /// (another particle or its list's head), so that a particle leaves its list in `O(1)`
-    /// without recomputing its bucket.
+    /// Links of the doubly linked lists over one index space: `0..n` are the particles, `n` is
+    /// the sentinel that ends every list (`next[n] = n`), `n + 1 + b` is the head of list `b`.
+    /// `next[n + 1 + b]` is the first entry of list `b`, `next[i]` the entry after `i`;
+    /// `prev[i]` the node before particle `i` (another particle or its list's head), so that a
+    /// particle leaves its list in `O(1)` without recomputing its bucket (`prev[n]` is written
+    /// and never read).
     next: Vec<u32>,
     prev: Vec<u32>,
-    /// `n`: where the list heads start in `next`.
+    /// `n`: the sentinel, and the number of particles.
+    end: usize,
+    /// `n + 1`: where the list heads start in `next`.
     heads: usize,
     /// `1 / w`.
     inv_width: f64,
@@ -201,9 +210,7 @@ impl CalendarQueue {
         let first = self.next[head];
         self.next[i] = first;
         self.prev[i] = head as u32;
-        if first != END {
-            self.prev[first as usize] = i as u32;
-        }
+        self.prev[first as usize] = i as u32;
         self.next[head] = i as u32;
         bucket
     }
@@ -213,18 +220,16 @@ impl CalendarQueue {
     fn unlink(&mut self, i: usize) {
         let (before, after) = (self.prev[i], self.next[i]);
         self.next[before as usize] = after;
-        if after != END {
-            self.prev[after as usize] = before;
-        }
+        self.prev[after as usize] = before;
     }
 
     /// The smallest finite key and a new bucket width from a sample of the keys; relinks every
     /// entry and puts the cursor on the smallest key's bucket.
     fn retune(&mut self) {
-        let n = self.key.len();
+        let n = self.end;
         self.until_retune = (CALENDAR_RETUNE_PER_PARTICLE * n as u64).max(1024);
         let mut lo = f64::INFINITY;
-        for &t in &self.key {
+        for &t in &self.key[..n] {
             if t < lo {
                 lo = t;
             }
@@ -233,8 +238,7 @@ impl CalendarQueue {
             return;
         }
         let stride = (n / CALENDAR_SAMPLE).max(1);
-        let mut sample: Vec<f64> = self
-            .key
+        let mut sample: Vec<f64> = self.key[..n]
             .iter()
             .step_by(stride)
             .copied()
@@ -253,7 +257,7 @@ impl CalendarQueue {
         if width.is_finite() && width > 1e-12 * lo.abs() && width > 0.0 {
             self.inv_width = 1.0 / width;
         }
-        self.next[n..].fill(END);
+        self.next[n..].fill(n as u32);
         for i in 0..n {
             let t = self.key[i];
             if t.is_finite() {
@@ -267,7 +271,7 @@ impl CalendarQueue {
     #[cold]
     #[inline(never)]
     fn min_rare(&mut self) -> Option<(usize, f64)> {
-        if self.key.is_empty() {
+        if self.end == 0 {
             return None;
         }
         if self.finite == 0 {
@@ -283,30 +287,36 @@ impl CalendarQueue {
     /// `(key, index)` of the first bucket holding a due entry, the cursor left on it.
     #[inline(always)]
     fn walk_a_year(&mut self) -> Option<(usize, f64)> {
+        let end_node = self.end as u32;
         for _ in 0..=self.mask {
             let list = (self.cur & self.mask) as usize;
-            let mut k = self.next[self.heads + list];
-            let mut best = END;
-            let mut best_t = f64::INFINITY;
             // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
             // i.e. iff `t / w < cur + 1` before truncation: one product and one compare,
             // exact while `cur + 1` is an integer an f64 holds exactly.
             let exact = self.cur < (1 << 52);
             let end = (self.cur + 1) as f64;
-            while k != END {
-                let t = self.key[k as usize];
-                let due = if exact {
-                    t * self.inv_width < end
+            let cur = self.cur;
+            let inv_width = self.inv_width;
+            let due = |t: f64| {
+                if exact {
+                    t * inv_width < end
                 } else {
-                    self.bucket(t) == self.cur
-                };
-                if due && (best == END || t < best_t || (t == best_t && k < best)) {
+                    (t * inv_width) as u64 == cur
+                }
+            };
+            // The smallest `(key, index)` among the due entries.
+            let mut k = self.next[self.heads + list];
+            let mut best = end_node;
+            let mut best_t = f64::INFINITY;
+            while k != end_node {
+                let t = self.key[k as usize];
+                if due(t) && (best == end_node || t < best_t || (t == best_t && k < best)) {
                     best = k;
                     best_t = t;
                 }
                 k = self.next[k as usize];
             }
-            if best != END {
+            if best != end_node {
                 return Some((best as usize, best_t));
             }
             self.cur = self.cur.saturating_add(1);
@@ -321,7 +331,10 @@ impl CalendarQueue {
     #[inline(never)]
     fn min_after_empty_year(&mut self) -> Option<(usize, f64)> {
         loop {
-            let lo = self.key.iter().copied().fold(f64::INFINITY, f64::min);
+            let lo = self.key[..self.end]
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
             self.cur = self.bucket(lo);
             self.until_retune = 1;
             if let Some(found) = self.walk_a_year() {
@@ -335,10 +348,11 @@ impl EventQueue for CalendarQueue {
     fn new(n: usize) -> Self {
         let lists = n.max(1).next_power_of_two();
         Self {
-            key: vec![f64::INFINITY; n],
-            next: vec![END; n + lists],
-            prev: vec![END; n],
-            heads: n,
+            key: vec![f64::INFINITY; n + 1],
+            next: vec![n as u32; n + 1 + lists],
+            prev: vec![n as u32; n + 1],
+            end: n,
+            heads: n + 1,
             inv_width: 1.0,
             mask: lists as u64 - 1,
             cur: 0,
