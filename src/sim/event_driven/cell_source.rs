@@ -167,6 +167,18 @@ impl<const D: usize> CellSource<D> {
         &self.far[2 * axis + usize::from(up)]
     }
 
+    /// Calls `f(j)` for every particle `j` in the `3^D` cells around the cell of `i` (`i`
+    /// itself included; cells beyond a closed face skipped). The plain, branchy
+    /// walk for the rare callers (placements, invariant checks); the event scans use
+    /// [`CellGrid::gather`].
+    pub fn for_each_near(&self, i: usize, mut f: impl FnMut(usize)) {
+        for o in &self.all.offsets {
+            if let Some(cell) = self.grid.shifted(&self.cell[i], o) {
+                self.grid.for_each_in(cell, &mut f);
+            }
+        }
+    }
+
     /// Moves `i` to the cell of position `x` (a placement or a set-up): out of its list and
     /// into the new one.
     pub fn relocate(&mut self, i: usize, x: &Vector<D>) {

@@ -734,31 +734,25 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                 ));
             }
         }
-        let grid = &self.cells.grid;
         for i in 0..self.len() {
             let si = b.id[i];
-            for o in &self.cells.all.offsets {
-                let Some(cell) = grid.shifted(&self.cells.cell[i], o) else {
-                    continue;
-                };
-                let mut err = None;
-                grid.for_each_in(cell, |j| {
-                    if j <= i || err.is_some() {
-                        return;
-                    }
-                    let sj = b.id[j];
-                    let r = b.min_image(states[i].0 - states[j].0).norm();
-                    let sigma = b.body[i].r + b.body[j].r;
-                    if r < sigma - tol {
-                        err = Some(format!(
-                            "particles {si} and {sj} overlap by {} at t = {t}",
-                            sigma - r
-                        ));
-                    }
-                });
-                if let Some(e) = err {
-                    return Err(e);
+            let mut err = None;
+            self.cells.for_each_near(i, |j| {
+                if j <= i || err.is_some() {
+                    return;
                 }
+                let sj = b.id[j];
+                let r = b.min_image(states[i].0 - states[j].0).norm();
+                let sigma = b.body[i].r + b.body[j].r;
+                if r < sigma - tol {
+                    err = Some(format!(
+                        "particles {si} and {sj} overlap by {} at t = {t}",
+                        sigma - r
+                    ));
+                }
+            });
+            if let Some(e) = err {
+                return Err(e);
             }
             if WET {
                 for &j in self.pairs.bonds_of(i) {

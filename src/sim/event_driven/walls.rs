@@ -488,29 +488,23 @@ fn placement_room<const D: usize, const G: bool, const S: bool>(
     let mut room = want.abs();
     let (xi, _) = bodies.state_at(i, t);
     let ri = bodies.body[i].r;
-    let grid = &cells.grid;
-    for o in &cells.all.offsets {
-        let Some(cell) = grid.shifted(&cells.cell[i], o) else {
-            continue;
-        };
-        grid.for_each_in(cell, |j| {
-            if j == i {
-                return;
-            }
-            let (xj, _) = bodies.state_at(j, t);
-            let d = bodies.min_image(xj - xi);
-            let sigma = ri + bodies.body[j].r;
-            let c = d.norm_squared() - sigma * sigma;
-            // Along the shift: `dz > 0` means the neighbour lies ahead.
-            let dz = if up { d[D - 1] } else { -d[D - 1] };
-            let disc = dz * dz - c;
-            if c < 0.0 || dz <= 0.0 || disc < 0.0 {
-                // Already overlapping (left to the pair events), behind, or missed by the shift.
-                return;
-            }
-            room = room.min(dz - disc.sqrt());
-        });
-    }
+    cells.for_each_near(i, |j| {
+        if j == i {
+            return;
+        }
+        let (xj, _) = bodies.state_at(j, t);
+        let d = bodies.min_image(xj - xi);
+        let sigma = ri + bodies.body[j].r;
+        let c = d.norm_squared() - sigma * sigma;
+        // Along the shift: `dz > 0` means the neighbour lies ahead.
+        let dz = if up { d[D - 1] } else { -d[D - 1] };
+        let disc = dz * dz - c;
+        if c < 0.0 || dz <= 0.0 || disc < 0.0 {
+            // Already overlapping (left to the pair events), behind, or missed by the shift.
+            return;
+        }
+        room = room.min(dz - disc.sqrt());
+    });
     let room = room.max(0.0);
     if up { room } else { -room }
 }
