@@ -6,11 +6,15 @@
 //! per step (after the forces, after the integration). This benchmark measures the ceiling
 //! that sets, with no engine in the way: each round, one thread does two units of a fixed
 //! integer work (a multiply-xorshift chain, no memory traffic) while two threads do one unit
-//! each and then meet at a spin barrier twice. Reported per unit size: the serial and the
-//! two-thread time per round (median over the repetitions) and their ratio, the speed-up a
-//! perfectly split step of that length could reach. If it is far below 2 at the step length of
-//! an engine, no parallel algorithm of that engine can do better; if it is near 2, the
-//! engine's parallel overhead (extra instructions, serial parts) is what is left to remove.
+//! each and then meet at a spin barrier twice. A second table adds the hand-over of data: each
+//! thread writes its half of a shared buffer (as a split step publishes its particles'
+//! positions and velocities), the barrier, then it reads the other thread's half (the cache
+//! lines move between the cores), the barrier; the serial round writes and reads both halves.
+//! Reported per row: the serial and the two-thread time per round (median over the
+//! repetitions) and their ratio, the speed-up a perfectly split step of that length and
+//! hand-over could reach. If it is far below 2 at the step length of an engine, no parallel
+//! algorithm of that engine that hands over that much per step can do better; if it is near 2,
+//! the engine's parallel overhead (extra instructions, serial parts) is what is left to remove.
 
 use super::Spread;
 use std::hint::black_box;
@@ -19,6 +23,15 @@ use std::time::Instant;
 
 /// Units of work per thread per round (iterations of the chain), from about 0.4 us to 15 us.
 pub const UNITS: [u64; 6] = [250, 500, 1000, 2000, 4000, 8000];
+
+/// The unit of the exchange rows: about 4 us per thread, so that a round of one thread (two
+/// units) is about as long as a Gear step of the standard N = 1200 system on one core.
+pub const EXCHANGE_UNIT: u64 = 1000;
+
+/// Data each thread publishes per round in the exchange rows, in KiB, read by the other after
+/// the first barrier. A split Gear step of the 2D N = 1200 system publishes positions and
+/// velocities of its half: 600 x 2 x 2 x 8 B = 19 KiB per thread; N = 4800: 75 KiB.
+pub const EXCHANGE_KIB: [usize; 5] = [0, 4, 19, 38, 75];
 
 /// One unit of work: `n` dependent multiply-add-xorshift steps.
 fn work(n: u64, seed: u64) -> u64 {
@@ -74,6 +87,8 @@ impl SpinBarrier {
 #[derive(Debug, Clone)]
 pub struct Row {
     pub unit: u64,
+    /// KiB each thread publishes per round for the other to read (0: none).
+    pub exchange_kib: usize,
     pub rounds: u64,
     pub serial_us: Spread,
     pub parallel_us: Spread,
@@ -84,19 +99,37 @@ fn rounds_for(unit: u64, scale: f64) -> u64 {
     ((150_000.0 * 1000.0 / unit as f64 / 3.7 * scale) as u64).max(100)
 }
 
-fn serial_round_us(unit: u64, rounds: u64) -> f64 {
+fn serial_round_us(unit: u64, rounds: u64, words: usize) -> f64 {
+    let shared: Vec<AtomicU64> = (0..2 * words).map(|_| AtomicU64::new(0)).collect();
     let t = Instant::now();
     let mut s = 0;
     for r in 0..rounds {
         s ^= work(unit, r);
         s ^= work(unit, r + 1);
+        publish(&shared, s);
+        s ^= read_back(&shared);
     }
     black_box(s);
     t.elapsed().as_secs_f64() / rounds as f64 * 1e6
 }
 
-fn parallel_round_us(unit: u64, rounds: u64) -> f64 {
+/// Writes `words` values derived from `s` (relaxed stores, plain moves on x86, as the engines
+/// publish positions and velocities to the other thread).
+fn publish(half: &[AtomicU64], s: u64) {
+    for (k, w) in half.iter().enumerate() {
+        w.store(s.wrapping_add(k as u64), Ordering::Relaxed);
+    }
+}
+
+fn read_back(half: &[AtomicU64]) -> u64 {
+    half.iter()
+        .fold(0u64, |a, w| a.wrapping_add(w.load(Ordering::Relaxed)))
+}
+
+fn parallel_round_us(unit: u64, rounds: u64, words: usize) -> f64 {
     let barrier = SpinBarrier::new(2);
+    let shared: Vec<AtomicU64> = (0..2 * words).map(|_| AtomicU64::new(0)).collect();
+    let (first, second) = shared.split_at(words);
     let t = Instant::now();
     std::thread::scope(|scope| {
         let b = &barrier;
@@ -104,7 +137,9 @@ fn parallel_round_us(unit: u64, rounds: u64) -> f64 {
             let mut s = 0;
             for r in 0..rounds {
                 s ^= work(unit, r + 1);
+                publish(second, s);
                 b.wait();
+                s ^= read_back(first);
                 b.wait();
             }
             s
@@ -112,7 +147,9 @@ fn parallel_round_us(unit: u64, rounds: u64) -> f64 {
         let mut s = 0;
         for r in 0..rounds {
             s ^= work(unit, r);
+            publish(first, s);
             b.wait();
+            s ^= read_back(second);
             b.wait();
         }
         black_box(s ^ other.join().expect("barrier bench thread"));
@@ -120,26 +157,32 @@ fn parallel_round_us(unit: u64, rounds: u64) -> f64 {
     t.elapsed().as_secs_f64() / rounds as f64 * 1e6
 }
 
-/// Measures every unit size of [`UNITS`], `repeat` times each (serial and two-thread runs
-/// alternate).
+fn measure_one(unit: u64, exchange_kib: usize, repeat: usize, scale: f64) -> Row {
+    let rounds = rounds_for(unit, scale);
+    let words = exchange_kib * 1024 / 8;
+    let (mut s, mut p) = (Vec::new(), Vec::new());
+    for _ in 0..repeat.max(1) {
+        s.push(serial_round_us(unit, rounds, words));
+        p.push(parallel_round_us(unit, rounds, words));
+    }
+    Row {
+        unit,
+        exchange_kib,
+        rounds,
+        serial_us: Spread::of(s),
+        parallel_us: Spread::of(p),
+    }
+}
+
+/// Measures every unit size of [`UNITS`] without data exchange, then [`EXCHANGE_UNIT`] with
+/// every size of [`EXCHANGE_KIB`]; `repeat` times each (serial and two-thread runs alternate).
 pub fn measure(repeat: usize, scale: f64) -> Vec<Row> {
-    UNITS
+    let plain = UNITS.iter().map(|&u| measure_one(u, 0, repeat, scale));
+    let exchange = EXCHANGE_KIB
         .iter()
-        .map(|&unit| {
-            let rounds = rounds_for(unit, scale);
-            let (mut s, mut p) = (Vec::new(), Vec::new());
-            for _ in 0..repeat.max(1) {
-                s.push(serial_round_us(unit, rounds));
-                p.push(parallel_round_us(unit, rounds));
-            }
-            Row {
-                unit,
-                rounds,
-                serial_us: Spread::of(s),
-                parallel_us: Spread::of(p),
-            }
-        })
-        .collect()
+        .filter(|&&k| k > 0)
+        .map(|&k| measure_one(EXCHANGE_UNIT, k, repeat, scale));
+    plain.chain(exchange).collect()
 }
 
 pub fn report(rows: &[Row], repeat: usize) -> String {
@@ -150,12 +193,13 @@ pub fn report(rows: &[Row], repeat: usize) -> String {
         repeat.max(1)
     );
     out.push_str(
-        "unit    rounds   1 thread us/round   2 threads us/round   speed-up (median, min..max of 2-thread times)\n",
+        "unit  KiB/thread    rounds   1 thread us/round   2 threads us/round   speed-up (min..max of 2-thread times)\n",
     );
     for r in rows {
         out.push_str(&format!(
-            "{:>5} {:>9} {:>19.3} {:>20.3} {:>10.2}x  ({:.3}..{:.3} us)\n",
+            "{:>5} {:>10} {:>9} {:>19.3} {:>20.3} {:>10.2}x  ({:.3}..{:.3} us)\n",
             r.unit,
+            r.exchange_kib,
             r.rounds,
             r.serial_us.median,
             r.parallel_us.median,
@@ -165,9 +209,10 @@ pub fn report(rows: &[Row], repeat: usize) -> String {
         ));
     }
     out.push_str(
-        "1 thread: two units per round; 2 threads: one unit each, then two barriers. The speed-up \
-         at a round as long as one engine step on one thread is the most any split of that step \
-         over two threads can give here.\n",
+        "1 thread: two units per round and both halves written and read; 2 threads: one unit \
+         each, its half written (KiB/thread), barrier, the other's half read, barrier. The \
+         speed-up at a round as long as one engine step on one thread, with the data that step \
+         must hand over, is the most any split of that step over two threads can give here.\n",
     );
     out
 }
