@@ -71,7 +71,7 @@ impl SpinBarrier {
             let mut spins = 0u32;
             while self.generation.load(Ordering::Acquire) == g {
                 spins = spins.wrapping_add(1);
-                if spins % 4096 == 0 {
+                if spins.is_multiple_of(4096) {
                     // A machine with fewer free cores than threads must not livelock.
                     std::thread::yield_now();
                 } else {
