@@ -133,19 +133,13 @@ pub fn measure_kernel(samples: usize, scale: f64, only: &[&str]) -> String {
         .iter()
         .filter(|p| only.is_empty() || only.contains(&p.0))
     {
-        let probe = standard_shaken(gamma, e_star, 1.0, Some(0.03), 1.0);
-        let interval = probe.driving_period() / SAMPLES_PER_PERIOD;
-        let first = (WARM_UP / interval).ceil();
-        let duration = (first + samples as f64 - 1.0) * interval;
-        let mut scene = standard_shaken(gamma, e_star, 1.0, Some(0.03), duration);
-        scene.observe.samples_per_period = SAMPLES_PER_PERIOD;
-        scene.observe.location_changes = false;
-        scene.observe.transient_periods = 0.0;
-        let bins = scene.observe.lateral_bins(&scene);
-        let method = Method::Delaunay {
-            max_edge: scene.observe.lc_max_edge * scene.particles.diameter,
-            margin: scene.observe.lc_flip_margin,
-        };
+        let BenchPoint {
+            scene,
+            interval,
+            first,
+            method,
+            bins,
+        } = bench_point(gamma, e_star, samples);
         let mut incremental = LocationChangeCounter::new(method, bins, scene.driving_period());
         let t_first = first * interval - 0.5 * interval;
         let (mut n, mut sizes, mut failed) = (0usize, [0usize; 3], [0usize; 2]);
@@ -185,7 +179,17 @@ fn flat_lists(tri: &crate::observe::kinetic_delaunay::KineticDelaunay) -> FlatCh
     tri.flat_check()
 }
 
-fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -> ObserverRow {
+/// The scene of a bench point, run long enough for the warm-up and `samples` samples, with
+/// the sampling interval, the index of the first timed sample and the observer's settings.
+struct BenchPoint {
+    scene: Scene,
+    interval: f64,
+    first: f64,
+    method: Method,
+    bins: crate::observe::bins::LateralBins,
+}
+
+fn bench_point(gamma: f64, e_star: f64, samples: usize) -> BenchPoint {
     let probe = standard_shaken(gamma, e_star, 1.0, Some(0.03), 1.0);
     let interval = probe.driving_period() / SAMPLES_PER_PERIOD;
     let first = (WARM_UP / interval).ceil();
@@ -199,6 +203,23 @@ fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -
         max_edge: scene.observe.lc_max_edge * scene.particles.diameter,
         margin: scene.observe.lc_flip_margin,
     };
+    BenchPoint {
+        scene,
+        interval,
+        first,
+        method,
+        bins,
+    }
+}
+
+fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -> ObserverRow {
+    let BenchPoint {
+        scene,
+        interval,
+        first,
+        method,
+        bins,
+    } = bench_point(gamma, e_star, samples);
     let period = scene.driving_period();
     let mut others = ObserverSet::new(&scene);
     let mut rebuilt = LocationChangeCounter::rebuilding(method, bins.clone(), period);
