@@ -44,7 +44,9 @@ pub enum Command {
         /// memory of the event engine per particle at N = 125 000 and 10^6; `scale` scales N), `engines` (event- vs
         /// time-driven engine on the 2D standard wet system, seconds per time unit), `observer`
         /// (cost of the location-change observer, rebuilt vs incremental triangulation),
-        /// `barrier` (what two threads meeting twice per step can gain on this machine).
+        /// `observer-kernel:POINTS` (the leanest per-sample re-test of the kept triangulation,
+        /// a lower bound), `barrier` (what two threads meeting twice per step, with and without
+        /// a hand-over of data, can gain on this machine).
         #[arg(default_value = "engine")]
         which: String,
         /// Repetitions per system (the median is reported).
