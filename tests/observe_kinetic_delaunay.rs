@@ -193,7 +193,8 @@ fn a_tangled_step_never_doubles_an_edge() {
     // With the held sites relocated (round 3 of docs/performance.md) instead of unfolded and
     // halved, this recorded step no longer reaches the doubling flip even with
     // `joined_flip_check` off: the check stays as a guard of the structure, and this test
-    // keeps the recorded step that once failed.
+    // keeps the recorded step that once failed. The check itself fails a test without it on
+    // a built tangle: `joined_flip_check_stops_lawson_before_it_doubles_an_edge` (unit test).
     assert_eq!(
         step(Safeguards {
             joined_flip_check: false,

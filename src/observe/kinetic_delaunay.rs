@@ -2039,6 +2039,54 @@ mod tests {
         (k, same)
     }
 
+    /// Undirected edges of the live triangles that are the side of more than two triangles
+    /// (a doubled edge: two edges between the same two sites).
+    fn doubled_edges(k: &KineticDelaunay) -> usize {
+        let mut count: std::collections::HashMap<(u32, u32), usize> = Default::default();
+        for v in k.tv.iter().filter(|v| v[0] != DEAD) {
+            for e in 0..3 {
+                let (a, b) = (v[(e + 1) % 3], v[(e + 2) % 3]);
+                *count.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        count.values().filter(|&&n| n > 2).count()
+    }
+
+    /// A tangle: the triangulation of `p`, then site `s` put at `to` without any repair, and
+    /// every edge on Lawson's stack.
+    fn tangled(p: &[[f64; 2]], s: usize, to: [f64; 2], safeguards: Safeguards) -> KineticDelaunay {
+        let mut k = KineticDelaunay::with_safeguards(0.0, safeguards);
+        k.advance(&frame(p, 10.0));
+        let site = k.sites_of[s][0] as usize;
+        k.pos[site] = to;
+        k.stack.clear();
+        for t in 0..k.tv.len() {
+            if k.tv[t][0] != DEAD {
+                for e in 0..3u8 {
+                    k.stack.push((t as u32, e));
+                }
+            }
+        }
+        k
+    }
+
+    #[test]
+    fn joined_flip_check_stops_lawson_before_it_doubles_an_edge() {
+        // Site 1 of twelve put far from its place with no repair: the triangles around it
+        // fold over others, and Lawson's pass over every edge meets a conflict whose flip
+        // would join two sites joined already. Without the check it makes that flip (a doubled
+        // edge, which breaks every later walk around those sites); with it the pass fails and
+        // the sample is rebuilt.
+        let p = points(12, 10.0, 1);
+        let to = points(2, 10.0, 1 + 99991)[1];
+        let mut unchecked = tangled(&p, 1, to, off(|g| g.joined_flip_check = false));
+        assert!(unchecked.lawson().is_ok());
+        assert_eq!(doubled_edges(&unchecked), 1);
+        let mut checked = tangled(&p, 1, to, Safeguards::default());
+        assert!(matches!(checked.lawson(), Err(Failure::Check)));
+        assert_eq!(doubled_edges(&checked), 0);
+    }
+
     #[test]
     fn flip_cap_gives_up_on_a_pass_with_more_flips() {
         // Stretching 1000 points ten-thousandfold along x inverts no triangle but changes
