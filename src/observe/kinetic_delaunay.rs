@@ -2088,6 +2088,28 @@ mod tests {
     }
 
     #[test]
+    fn joined_flip_check_keeps_unfolding_from_doubling_an_edge() {
+        // The other use of the check: an unfolding flip (`crossed_edge`) that would join two
+        // sites joined already. Site 1 of twelve put far away with no repair; unfolding every
+        // triangle. Without the check the unfolding reports success with a doubled edge in the
+        // structure (its links still consistent, so nothing else would notice); with it that
+        // triangle stays blocked and the move is halved instead (`Ok(false)`).
+        let p = points(12, 10.0, 159);
+        let to = points(3, 10.0, 159 + 99991)[1];
+        let unfold = |g: Safeguards| {
+            let mut k = tangled(&p, 1, to, g);
+            let scan: Vec<usize> = (0..k.tv.len()).filter(|&t| k.tv[t][0] != DEAD).collect();
+            let r = k.unfold(&scan, &mut Vec::new());
+            (r.ok(), doubled_edges(&k))
+        };
+        assert_eq!(
+            unfold(off(|g| g.joined_flip_check = false)),
+            (Some(true), 1)
+        );
+        assert_eq!(unfold(Safeguards::default()), (Some(false), 0));
+    }
+
+    #[test]
     fn flip_cap_gives_up_on_a_pass_with_more_flips() {
         // Stretching 1000 points ten-thousandfold along x inverts no triangle but changes
         // nearly every edge: about 5000 flips, more than one per triangle slot plus 1024.
