@@ -12,9 +12,9 @@
 //! The lists would be patched only where flips happen; what patching costs is not part of the
 //! bound.
 
+use super::kinetic_delaunay::{c, wrap_fast};
 use super::predicates::{incircle, orient2d};
 use crate::sim::Frame;
-use robust::Coord;
 
 /// The flat lists (see the module header).
 #[derive(Debug, Clone, Default)]
@@ -33,34 +33,18 @@ pub struct FlatCheck {
     pub pos: Vec<[f64; 2]>,
 }
 
-#[inline]
-fn c(p: [f64; 2]) -> Coord<f64> {
-    Coord { x: p[0], y: p[1] }
-}
-
 impl FlatCheck {
     /// Moves the sites to `frame` and tests every triangle and edge: `(triangles not strictly
     /// positive, edges and hull tests in conflict)`.
     #[inline(never)]
     pub fn verify(&mut self, frame: &Frame) -> (usize, usize) {
-        let (l0, l1) = (frame.box_size[0], frame.box_size[1]);
-        let (p0, p1) = (frame.periodic[0], frame.periodic[1]);
         self.pos.resize(self.particle.len(), [0.0; 2]);
         for ((p, &i), o) in self.pos.iter_mut().zip(&self.particle).zip(&self.offset) {
             if i == u32::MAX {
                 continue;
             }
             let x = frame.x(i as usize);
-            let w0 = if p0 && !(x[0] >= 0.0 && x[0] < l0) {
-                frame.wrap(0, x[0])
-            } else {
-                x[0]
-            };
-            let w1 = if p1 && !(x[1] >= 0.0 && x[1] < l1) {
-                frame.wrap(1, x[1])
-            } else {
-                x[1]
-            };
+            let (w0, w1) = (wrap_fast(frame, 0, x[0]), wrap_fast(frame, 1, x[1]));
             *p = [w0 + o[0], w1 + o[1]];
         }
         let pos = &self.pos;

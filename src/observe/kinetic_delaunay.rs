@@ -296,13 +296,13 @@ impl HasPosition for SpadeSite {
 }
 
 #[inline]
-fn c(p: [f64; 2]) -> Coord<f64> {
+pub(super) fn c(p: [f64; 2]) -> Coord<f64> {
     Coord { x: p[0], y: p[1] }
 }
 
 /// `frame.wrap(k, x)`, bit for bit, without the remainder where `x` is already in the box.
 #[inline]
-fn wrap_fast(frame: &Frame, k: usize, x: f64) -> f64 {
+pub(super) fn wrap_fast(frame: &Frame, k: usize, x: f64) -> f64 {
     if frame.periodic[k] && x >= 0.0 && x < frame.box_size[k] {
         x
     } else {
