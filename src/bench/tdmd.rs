@@ -22,7 +22,7 @@
 
 use crate::physics::hertz;
 use crate::scene::{DEFAULT_STIFFNESS, Scene};
-use crate::sim::time_driven::TimeEngine;
+use crate::sim::time_driven::{DomainMode, TimeEngine};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -141,8 +141,14 @@ pub fn measure_threads(repeat: usize, scale: f64, threads: &[usize]) -> Vec<Tdmd
         })
         .collect();
     let mut rows = Vec::new();
-    for integ in ["gear5", "verlet"] {
-        let s = scene(integ);
+    // `gear5` runs its default path (for N = 1200 the spatial domains, `domains.rs`),
+    // `gear5-ser` the same integrator on the serial (with several threads: rayon-split) path.
+    for (integ, mode) in [
+        ("gear5", DomainMode::Auto),
+        ("gear5-ser", DomainMode::Never),
+        ("verlet", DomainMode::Auto),
+    ] {
+        let s = scene(&integ[..integ.find('-').unwrap_or(integ.len())]);
         let first = rows.len();
         for &t in threads {
             rows.push(TdmdRow {
@@ -162,6 +168,7 @@ pub fn measure_threads(repeat: usize, scale: f64, threads: &[usize]) -> Vec<Tdmd
             for (pool, row) in pools.iter().zip(&mut rows[first..]) {
                 pool.install(|| {
                     let mut e = TimeEngine::<2, true, false>::new(&s);
+                    e.set_domain_mode(mode);
                     e.run_until(1.0);
                     let (b0, s0) = (e.list_builds(), e.steps());
                     let cpu0 = process_cpu_seconds();
@@ -200,7 +207,7 @@ pub fn report(rows: &[TdmdRow]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<8} {:>3} {:>12} {:>11} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}",
+        "{:<9} {:>3} {:>12} {:>11} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}",
         "integr.",
         "thr",
         "p-steps/s",
@@ -234,7 +241,7 @@ pub fn report(rows: &[TdmdRow]) -> String {
         };
         let _ = writeln!(
             s,
-            "{:<8} {:>3} {:>12.3e} {:>11.4} {:>9.4} {:>9.4} {:>9.2}x {:>11} {:>10} {:>10.5} {:>10.4} {:>9.2}",
+            "{:<9} {:>3} {:>12.3e} {:>11.4} {:>9.4} {:>9.4} {:>9.2}x {:>11} {:>10} {:>10.5} {:>10.4} {:>9.2}",
             r.integrator,
             r.threads,
             psteps,
@@ -268,6 +275,22 @@ pub fn report(rows: &[TdmdRow]) -> String {
             m1,
             m0
         );
+    }
+    for r in rows.iter().filter(|r| r.integrator == "gear5") {
+        if let Some(b) = rows
+            .iter()
+            .find(|b| b.integrator == "gear5-ser" && b.threads == 1)
+        {
+            let (m0, m1) = (median(&b.seconds_per_time), median(&r.seconds_per_time));
+            let _ = writeln!(
+                s,
+                "gear5 on {} thread(s) {:.2}x faster than gear5-ser on 1 (the serial path; {:.4} s vs {:.4} s)",
+                r.threads,
+                m0 / m1,
+                m1,
+                m0
+            );
+        }
     }
     if let Some(r) = rows.first() {
         let _ = writeln!(

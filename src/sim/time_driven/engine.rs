@@ -34,6 +34,7 @@
 //! The sums over `dt` are rectangle rules at the force evaluations, so the ledger closes to the
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
 
+use super::domains::{DOMAIN_MIN_PARTICLES, DOMAINS, Decomposition, EngineArrays, StepConstants};
 use super::integrator::{
     GEAR_FLUSH_EVERY, GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict,
     gear_unpredict, verlet_drift, verlet_kick,
@@ -101,6 +102,23 @@ pub fn parallel_min_particles() -> usize {
 pub fn set_parallel_min_particles(n: usize) {
     PARALLEL_MIN.store(n, std::sync::atomic::Ordering::Relaxed);
 }
+
+/// Which Gear steps run on the spatial domains (`domains.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DomainMode {
+    /// From [`DOMAIN_MIN_PARTICLES`] particles on (the default).
+    #[default]
+    Auto,
+    /// Always (tests of small systems).
+    Always,
+    /// Never: the serial (or rayon-split) step (tests and benches comparing the paths).
+    Never,
+}
+
+/// The spatial decomposition in use (`domains.rs`), if any; a clone carries it (its partition
+/// was made at an earlier build and sets the round-off of the steps that follow).
+#[derive(Debug, Default, Clone)]
+struct DomainCache<const D: usize>(Option<Box<Decomposition<D>>>);
 
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
@@ -176,6 +194,10 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     work_by_drive: f64,
     max_overlap: f64,
     body: B,
+    domain_mode: DomainMode,
+    domains: DomainCache<D>,
+    /// Gear steps run on the domains with a team of more than one thread.
+    team_steps: u64,
 }
 
 impl<const D: usize, const GRAV: bool, const WET: bool> TimeEngine<D, GRAV, WET, NoBodyForce> {
@@ -324,6 +346,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             work_by_drive: 0.0,
             max_overlap: 0.0,
             body,
+            domain_mode: DomainMode::Auto,
+            domains: DomainCache::default(),
+            team_steps: 0,
         };
         engine.list.build(&engine.r[0], &engine.radius);
         let mut t0 = 0.0;
@@ -492,6 +517,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
         }
         self.list.build(&self.r[0], &self.radius);
+        self.domains.0 = None;
         self.moved_bound = 0.0;
         let t = self.time();
         self.forces_then(t, self.velocity_scale(), 0.0, Then::Nothing);
@@ -561,6 +587,16 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// One time step of the scene's integrator.
     pub fn step(&mut self) {
+        if self.predicted && self.uses_domains() {
+            let target = self.steps + 1;
+            self.domain_region(target);
+            return;
+        }
+        self.step_alone();
+    }
+
+    /// One step of the serial (or rayon-split) path.
+    fn step_alone(&mut self) {
         let dt = self.p.dt;
         let t1 = (self.steps + 1) as f64 * dt;
         match self.p.integrator {
@@ -605,10 +641,200 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
         crate::sim::threads::install(|| {
             while self.steps < target {
-                self.step();
+                if self.predicted && self.uses_domains() {
+                    self.domain_region(target);
+                } else {
+                    self.step_alone();
+                }
             }
         });
         true
+    }
+
+    /// Chooses which Gear steps run on the spatial domains ([`DomainMode`]; tests and benches).
+    pub fn set_domain_mode(&mut self, mode: DomainMode) {
+        self.domain_mode = mode;
+    }
+
+    /// Gear steps so far that ran on the domains with a team of more than one thread (the
+    /// others ran on one thread, which gives the same numbers).
+    pub fn team_steps(&self) -> u64 {
+        self.team_steps
+    }
+
+    /// Whether the Gear steps run on the spatial domains: Gear, no body force, and
+    /// [`DOMAIN_MIN_PARTICLES`] particles or more (or as [`Self::set_domain_mode`] says). The
+    /// number of threads plays no part, so the numbers do not depend on it.
+    fn uses_domains(&self) -> bool {
+        self.p.integrator == IntegratorKind::Gear5
+            && !B::ACTIVE
+            && self.n >= DOMAINS
+            && match self.domain_mode {
+                DomainMode::Auto => self.n >= DOMAIN_MIN_PARTICLES,
+                DomainMode::Always => true,
+                DomainMode::Never => false,
+            }
+    }
+
+    /// Runs Gear steps on the spatial domains (`domains.rs`) until `target` or until the
+    /// neighbour list must be rebuilt: the list check of the first step, the decomposition of
+    /// the current build (made once per build, from the positions of the build), the state
+    /// copied into the domains, the steps on a team of up to [`DOMAINS`] threads of the current
+    /// pool (or on the calling thread alone), the state and the books copied back (the books
+    /// step by step, domains in order, as one sum per step).
+    fn domain_region(&mut self, target: u64) {
+        self.update_list();
+        let first = self.steps;
+        let builds = self.list.builds;
+        let kept = match self.domains.0.take() {
+            Some(d)
+                if d.holds_step == Some(first)
+                    && (d.built_for == builds || !d.wants_new_partition(builds)) =>
+            {
+                Some(d)
+            }
+            Some(mut old) => {
+                // The engine's arrays must hold the whole state before a new partition (the
+                // flags came back at the end of the last region; the list is new since).
+                if old.partial {
+                    let mut arrays = EngineArrays {
+                        r: &mut self.r,
+                        acc: &mut self.acc,
+                        wall_contact: &mut self.wall_contact,
+                        radius: &self.radius,
+                        wall_kr: &self.wall_kr,
+                    };
+                    old.store(&mut arrays, None, true);
+                }
+                None
+            }
+            None => None,
+        };
+        let mut dec = match kept {
+            Some(mut d) => {
+                if d.built_for != builds {
+                    d.split_lists(
+                        builds,
+                        &self.list.start,
+                        &self.list.partner,
+                        &self.list.flags,
+                        self.list.built_at(),
+                        &self.radius,
+                    );
+                }
+                d
+            }
+            None => {
+                let mut d = Box::new(Decomposition::new(builds, self.p.size, self.list.built_at()));
+                d.split_lists(
+                    builds,
+                    &self.list.start,
+                    &self.list.partner,
+                    &self.list.flags,
+                    self.list.built_at(),
+                    &self.radius,
+                );
+                let arrays = EngineArrays {
+                    r: &mut self.r,
+                    acc: &mut self.acc,
+                    wall_contact: &mut self.wall_contact,
+                    radius: &self.radius,
+                    wall_kr: &self.wall_kr,
+                };
+                d.load(&arrays, self.acc_is_start, first);
+                d
+            }
+        };
+        dec.begin(self.moved_bound, self.since_check, first);
+        let init = self.force_start();
+        let p = &self.p;
+        let dt = p.dt;
+        let c = StepConstants {
+            periodic: p.periodic,
+            size: p.size,
+            stiffness: p.stiffness,
+            damping: p.damping,
+            bridge_force: p.bridge_force,
+            s_crit: p.s_crit,
+            dt,
+            inv_mass: (p.mass != 1.0).then(|| 1.0 / p.mass),
+            init,
+            gear: p.gear,
+            half_skin: 0.5 * self.list.skin(),
+        };
+        let walls_at = |s: u64| wall_axes(p, s as f64 * dt, 1.0 / dt, dt);
+        let flush_at = |s: u64| s.is_multiple_of(GEAR_FLUSH_EVERY);
+        let dec_ref: &Decomposition<D> = &dec;
+        let ((done, rebuild), members) = if rayon::current_num_threads() > 1 {
+            let out = super::team::run(DOMAINS, |m| {
+                (
+                    dec_ref.run_member::<WET>(
+                        &c,
+                        &walls_at,
+                        &flush_at,
+                        m.slot,
+                        m.members,
+                        first,
+                        target,
+                        &|| m.wait(),
+                    ),
+                    m.members,
+                )
+            });
+            out[0]
+        } else {
+            super::team::solo(|m| {
+                (
+                    dec_ref.run_member::<WET>(
+                        &c, &walls_at, &flush_at, 0, 1, first, target, &|| m.wait(),
+                    ),
+                    1,
+                )
+            })
+        };
+        self.acc_is_start = true;
+        self.steps += done;
+        if members > 1 {
+            self.team_steps += done;
+        }
+        // Between regions of one run only the positions (for the list build) and the flags
+        // come back; at the end of the run everything does.
+        let full = !(rebuild && self.steps < target);
+        let mut arrays = EngineArrays {
+            r: &mut self.r,
+            acc: &mut self.acc,
+            wall_contact: &mut self.wall_contact,
+            radius: &self.radius,
+            wall_kr: &self.wall_kr,
+        };
+        dec.store(&mut arrays, Some(&mut self.list.flags), full);
+        dec.partial = !full;
+        dec.holds_step = Some(self.steps);
+        let (books, bound, since) = dec.books();
+        self.domains.0 = Some(dec);
+        for s in 0..done as usize {
+            for (_, steps) in &books {
+                let [diss, ledger, work] = steps[s];
+                self.dissipated_damping += diss;
+                self.dissipated_bridges += ledger;
+                self.work_by_drive += work;
+            }
+        }
+        for (b, _) in &books {
+            self.max_overlap = self.max_overlap.max(b.max_overlap);
+            self.counts.pair_collisions += b.pair_onsets;
+            self.counts.wall_collisions += b.wall_onsets;
+            self.counts.bridge_formations += b.formations;
+            self.counts.bridge_ruptures += b.ruptures;
+        }
+        if rebuild {
+            // The check of the next step found a particle beyond half the skin: the next
+            // `update_list` runs the exact test (and rebuilds).
+            self.moved_bound = f64::INFINITY;
+        } else {
+            self.moved_bound = bound;
+            self.since_check = since;
+        }
     }
 
     /// Whether the loops of a step are split over threads: on a pool of more than one thread
@@ -1190,28 +1416,28 @@ fn wall_axes<const D: usize>(p: &Params<D>, t: f64, vs: f64, dt: f64) -> [WallAx
 }
 
 /// What the pair loop needs besides the arrays.
-struct PairConstants<const D: usize> {
-    periodic: [bool; D],
-    size: [f64; D],
-    stiffness: f64,
-    damping: f64,
-    bridge_force: f64,
-    s_crit: f64,
+pub(super) struct PairConstants<const D: usize> {
+    pub periodic: [bool; D],
+    pub size: [f64; D],
+    pub stiffness: f64,
+    pub damping: f64,
+    pub bridge_force: f64,
+    pub s_crit: f64,
     /// Factor turning the velocity array into velocities.
-    vs: f64,
+    pub vs: f64,
     /// Weight of the bookkeeping (the step, or 0).
-    dt: f64,
+    pub dt: f64,
 }
 
 /// What one chunk of the pair loop books.
 #[derive(Debug, Clone, Copy, Default)]
-struct PairBooks {
-    dissipated: f64,
-    max_overlap: f64,
-    bridge_ledger: f64,
-    onsets: u64,
-    formations: u64,
-    ruptures: u64,
+pub(super) struct PairBooks {
+    pub dissipated: f64,
+    pub max_overlap: f64,
+    pub bridge_ledger: f64,
+    pub onsets: u64,
+    pub formations: u64,
+    pub ruptures: u64,
 }
 
 /// Pair forces (Eq. 2.7 and MODEL.md 3.1) of the Verlet-list entries of one chunk: entry `m`
@@ -1338,7 +1564,7 @@ fn pair_chunk<const D: usize, const WET: bool>(
 /// bond flags. The same arithmetic as [`pair_chunk`] and the gather of [`particle_chunk`]; the
 /// dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries as there.
 #[allow(clippy::too_many_arguments)]
-fn pair_forces_serial<const D: usize, const WET: bool>(
+pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
     x: &[f64],
     v: &[f64],

@@ -3,17 +3,22 @@
 //!
 //! - `damping`: damping constants, given or derived from a restitution (`scene::damping`: the
 //!   scene's validation needs them to bound the time step);
+//! - `domains.rs`: the Gear step on two spatial domains (threads exchange only a halo);
 //! - `engine.rs`: state, force accumulation (pairs, walls, bridges, body force), bookkeeping;
 //! - `integrator.rs`: Gear 5th-order predictor-corrector and velocity Verlet;
 //! - `neighbours.rs`: linked cells and the Verlet list with skin;
 //! - `shear.rs`: the continuous Kolmogorov shear force (a [`BodyForce`]);
+//! - `team.rs`: a team of threads that runs many steps with one barrier per step;
 //! - `walls.rs`: the Hertz floor, lid and side walls (a screened pass over the particles).
 
 pub use crate::scene::damping;
+mod domains;
 pub mod engine;
 pub mod integrator;
 pub mod neighbours;
 pub mod shear;
+mod team;
 mod walls;
 
-pub use engine::{BodyForce, NoBodyForce, SANITY_OVERLAP, TimeEngine};
+pub use domains::{DOMAIN_MIN_PARTICLES, DOMAINS};
+pub use engine::{BodyForce, DomainMode, NoBodyForce, SANITY_OVERLAP, TimeEngine};

@@ -115,6 +115,11 @@ impl<const D: usize> NeighbourList<D> {
         }
     }
 
+    /// Positions (axis-major) at the last build.
+    pub fn built_at(&self) -> &[f64] {
+        &self.built_at
+    }
+
     /// The skin (the list holds pairs up to `skin` beyond their interaction range).
     pub fn skin(&self) -> f64 {
         self.skin

@@ -1,0 +1,842 @@
+//! Spatial domain decomposition of the time-driven Gear step (issue 15 item 4): the box is cut
+//! across its longest axis into [`DOMAINS`] slabs of equal particle counts, each slab's
+//! particles are copied into a [`Domain`] of their own (contiguous local arrays, sorted along
+//! the cut axis), and a team of threads (`team.rs`) runs whole steps on the domains with one
+//! barrier per step. What crosses between the threads per step is only the **halo**: position
+//! and velocity of the particles that some pair of the other domain reaches (a few dozen near
+//! the two cuts), published into a double buffer.
+//!
+//! Per domain and step (MODEL.md 2.2, Eq. 2.7 and 3.1; the same kernels as the serial step):
+//!
+//! 1. the pairs inside the domain, each once (Newton's third law, `pair_forces_serial`);
+//! 2. the **cross pairs** (one end in each domain), each computed by *both* domains, each
+//!    for its own particle only, from the other end's halo copy. The arithmetic is exactly
+//!    antisymmetric (`x_i - x_j` and `x_j - x_i` are exact negatives, every later operation
+//!    is symmetric or multiplies by them), so both copies of a cross pair take the same
+//!    contact and bond decisions and exert exactly opposite forces; only domain 0 books them
+//!    (dissipation, onsets, formations, ruptures);
+//! 3. the walls, `1/m`, Gear's fused corrector-predictor (`integrator.rs`);
+//! 4. the halo of the next step into the other parity of the double buffer, and the
+//!    neighbour-list check for the next step (the displacement bound of the engine's
+//!    `update_list`, per domain, with the exact test on the domain's particles where the bound
+//!    says it might fire).
+//!
+//! A region of steps ends when a domain's check says the list must be rebuilt (every domain
+//! sees it after the barrier, so all stop at the same step) or at the run's target step; the
+//! engine then copies the state back, rebuilds the list where needed and starts the next
+//! region. The decomposition (which particle is in which domain, local order, lists, halo) is
+//! made at the first region after a list build and kept until the next build, so where the
+//! regions end (samples, checkpoints) changes no number.
+//!
+//! **Determinism.** Which thread runs a domain changes no operation: one thread runs the
+//! domains in turn with the same code (the halo double buffer makes the order irrelevant), so
+//! one, two or three threads give the same bits. Against the serial step the force on a
+//! particle is summed in another order (domain pairs, then cross pairs), a round-off change
+//! (engine test `domains_change_the_serial_trajectory_by_round_off`), which is why the engine
+//! chooses the path by the number of particles alone, never by the threads.
+
+use super::integrator::gear_correct_predict_axis;
+use super::neighbours::{BOND, CONTACT};
+use super::walls::{WallAxis, WallBooks, wall_forces};
+use crate::physics::hertz;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, RwLock};
+
+/// Domains the box is cut into (fixed, so the numbers do not depend on the thread count; a
+/// team has at most this many members).
+pub const DOMAINS: usize = 2;
+
+/// From this many particles on, every Gear step of a scene without a body force runs on the
+/// domains, on any number of threads (below, a step is too short for two threads to gain:
+/// docs/performance.md, "Sixth round").
+pub const DOMAIN_MIN_PARTICLES: usize = 1024;
+
+/// What a domain step needs besides its own arrays (the same for every domain of a step).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct StepConstants<const D: usize> {
+    pub periodic: [bool; D],
+    pub size: [f64; D],
+    pub stiffness: f64,
+    pub damping: f64,
+    pub bridge_force: f64,
+    pub s_crit: f64,
+    pub dt: f64,
+    pub inv_mass: Option<f64>,
+    /// The force every coordinate starts from (the weight on the last axis).
+    pub init: [f64; D],
+    pub gear: [f64; 6],
+    /// Half the neighbour list's skin: the largest displacement the list tolerates.
+    pub half_skin: f64,
+}
+
+/// The counts and the largest overlap a domain booked in a region (the sums are kept per step,
+/// [`Domain::step_books`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct DomainBooks {
+    pub max_overlap: f64,
+    pub pair_onsets: u64,
+    pub wall_onsets: u64,
+    pub formations: u64,
+    pub ruptures: u64,
+}
+
+/// One domain: its particles' state in local order, its lists and its halo bookkeeping.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Domain<const D: usize> {
+    /// Scene index of each local particle.
+    pub ids: Vec<u32>,
+    /// Gear's scaled derivatives, local, axis-major (`r[q][k * m + i]`).
+    pub r: [Vec<f64>; 6],
+    /// Forces (start values between steps).
+    pub acc: Vec<f64>,
+    pub acc_is_start: bool,
+    pub radius: Vec<f64>,
+    pub wall_kr: Vec<f64>,
+    pub wall_contact: Vec<u8>,
+    /// Positions at the last list build (local, axis-major).
+    pub built_at: Vec<f64>,
+    /// The half list of the pairs inside the domain (compressed rows, local indices).
+    pub start: Vec<u32>,
+    pub rows: Vec<u32>,
+    pub partner: Vec<u32>,
+    pub flags: Vec<u8>,
+    /// The engine's list entry of each inner entry.
+    pub inner_src: Vec<u32>,
+    /// Cross pairs: own local index (ascending), ghost number, flags, the engine's entry.
+    pub cross_own: Vec<u32>,
+    pub cross_ghost: Vec<u32>,
+    pub cross_flags: Vec<u8>,
+    pub cross_src: Vec<u32>,
+    /// Ghosts (the other domain's particles the cross pairs reach), read from its halo.
+    pub ghosts: usize,
+    /// Radius of each ghost.
+    pub ghost_radius: Vec<f64>,
+    /// Own particles (local, ascending) that are ghosts of the other domain, in its ghost
+    /// order: published into the halo after each step.
+    pub halo_out: Vec<u32>,
+    /// Whether this domain books the cross pairs (domain 0).
+    pub books_cross: bool,
+    /// Displacement bound and steps since the exact test (the engine's `update_list`).
+    pub bound: f64,
+    pub since_check: u32,
+    /// Counts and largest overlap booked in the region.
+    pub books: DomainBooks,
+    /// Per step of the region: dissipation, bridge ledger, drive work (the engine adds them
+    /// step by step, domains in order, so where regions end changes no sum).
+    pub step_books: Vec<[f64; 3]>,
+}
+
+/// Which particle is in which domain, the domains, and the shared halo buffers.
+///
+/// The **partition** (the cut) is made at a list build and kept over later builds until the
+/// cross pairs outnumber twice those of the partition (plus [`REPARTITION_SLACK`]) or
+/// [`REPARTITION_EVERY`] builds have passed: particles drift across the cut only slowly, any
+/// partition is valid (it only sets which pairs are cross pairs), and a kept partition keeps
+/// the state in the domains (no copy at the build but the positions). Both rules depend on the
+/// trajectory alone, so the partitions, and the numbers, do not depend on the threads or on
+/// where regions end.
+#[derive(Debug)]
+pub(super) struct Decomposition<const D: usize> {
+    /// The list build whose entries the domains' lists hold (`NeighbourList::builds`).
+    pub built_for: u64,
+    /// The list build at which the partition was made.
+    pub partitioned_at: u64,
+    /// Cross entries (per domain, summed) right after the partition.
+    pub cross_at_partition: usize,
+    /// Domain and local index of each particle (scene order).
+    pub dom: Vec<u8>,
+    pub local: Vec<u32>,
+    pub domains: Vec<Mutex<Domain<D>>>,
+    /// Per domain, the halo of the two step parities: `2 D` values per halo particle
+    /// (position, then the velocity array's value).
+    pub halo: Vec<[RwLock<Vec<f64>>; 2]>,
+    /// Per domain and step parity: the list must be rebuilt before the next step.
+    pub stop: Vec<[AtomicBool; 2]>,
+    /// The step whose state the domains hold (`None`: not loaded yet, or the engine's state
+    /// was changed outside the domains).
+    pub holds_step: Option<u64>,
+    /// Whether the engine's arrays hold only the positions of that step (the rest is in the
+    /// domains): between the regions of one run.
+    pub partial: bool,
+}
+
+/// A partition is remade when the cross entries exceed twice those at the partition plus this.
+pub const REPARTITION_SLACK: usize = 16;
+
+/// A partition is remade at the latest this many list builds after it was made.
+pub const REPARTITION_EVERY: u64 = 64;
+
+impl<const D: usize> Clone for Decomposition<D> {
+    fn clone(&self) -> Self {
+        Self {
+            built_for: self.built_for,
+            partitioned_at: self.partitioned_at,
+            cross_at_partition: self.cross_at_partition,
+            dom: self.dom.clone(),
+            local: self.local.clone(),
+            domains: self
+                .domains
+                .iter()
+                .map(|d| Mutex::new(lock(d).clone()))
+                .collect(),
+            halo: self
+                .halo
+                .iter()
+                .map(|h| [RwLock::new(read(&h[0]).clone()), RwLock::new(read(&h[1]).clone())])
+                .collect(),
+            stop: self
+                .stop
+                .iter()
+                .map(|s| {
+                    [
+                        AtomicBool::new(s[0].load(Ordering::Relaxed)),
+                        AtomicBool::new(s[1].load(Ordering::Relaxed)),
+                    ]
+                })
+                .collect(),
+            holds_step: self.holds_step,
+            partial: self.partial,
+        }
+    }
+}
+
+/// Locks a mutex, ignoring poisoning (a member that panicked poisons the team, which re-raises
+/// the panic on the caller; the data is not used after that).
+pub(super) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+fn read<T>(m: &RwLock<T>) -> std::sync::RwLockReadGuard<'_, T> {
+    m.read().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+fn write<T>(m: &RwLock<T>) -> std::sync::RwLockWriteGuard<'_, T> {
+    m.write().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+fn get<T>(m: &mut Mutex<T>) -> &mut T {
+    m.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// The engine's arrays a decomposition reads and writes (scene order, axis-major).
+pub(super) struct EngineArrays<'a> {
+    pub r: &'a mut [Vec<f64>; 6],
+    pub acc: &'a mut [f64],
+    pub wall_contact: &'a mut [u8],
+    pub radius: &'a [f64],
+    pub wall_kr: &'a [f64],
+}
+
+impl<const D: usize> Decomposition<D> {
+    /// Cuts the particles at positions `x` (axis-major; the engine passes those of the list
+    /// build) across the longest axis of `size` at the median (ties in the coordinate broken
+    /// by the index), [`DOMAINS`] = 2 domains of `n / 2` and `n - n / 2` particles, each in
+    /// ascending scene order. The lists are split by [`Self::split_lists`], the state loaded
+    /// by [`Self::load`].
+    pub fn new(build: u64, size: [f64; D], x: &[f64]) -> Self {
+        let n = x.len() / D;
+        let mut axis = 0;
+        for k in 1..D {
+            if size[k] > size[axis] {
+                axis = k;
+            }
+        }
+        let xa = &x[axis * n..(axis + 1) * n];
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let half = n / 2;
+        let mut dom = vec![1u8; n];
+        if half > 0 {
+            order.select_nth_unstable_by(half - 1, |&a, &b| {
+                xa[a as usize].total_cmp(&xa[b as usize]).then(a.cmp(&b))
+            });
+            for &i in &order[..half] {
+                dom[i as usize] = 0;
+            }
+        }
+        let mut local = vec![0u32; n];
+        let mut domains: Vec<Domain<D>> = (0..DOMAINS).map(|_| Domain::default()).collect();
+        for i in 0..n {
+            let d = dom[i] as usize;
+            local[i] = domains[d].ids.len() as u32;
+            domains[d].ids.push(i as u32);
+        }
+        for (d, dm) in domains.iter_mut().enumerate() {
+            let m = dm.ids.len();
+            dm.books_cross = d == 0;
+            for q in &mut dm.r {
+                *q = vec![0.0; D * m];
+            }
+            dm.acc = vec![0.0; D * m];
+            dm.wall_contact = vec![0; D * m];
+            dm.radius = vec![0.0; m];
+            dm.wall_kr = vec![0.0; m];
+            dm.built_at = vec![0.0; D * m];
+        }
+        Self {
+            built_for: 0,
+            partitioned_at: build,
+            cross_at_partition: 0,
+            dom,
+            local,
+            domains: domains.into_iter().map(Mutex::new).collect(),
+            halo: (0..DOMAINS)
+                .map(|_| [RwLock::new(Vec::new()), RwLock::new(Vec::new())])
+                .collect(),
+            stop: (0..DOMAINS)
+                .map(|_| [AtomicBool::new(false), AtomicBool::new(false)])
+                .collect(),
+            holds_step: None,
+            partial: false,
+        }
+    }
+
+    /// Whether the partition is to be remade at list build `build` (see the type's doc).
+    pub fn wants_new_partition(&self, build: u64) -> bool {
+        let cross: usize = self.domains.iter().map(|d| lock(d).cross_own.len()).sum();
+        build >= self.partitioned_at + REPARTITION_EVERY
+            || cross > 2 * self.cross_at_partition + REPARTITION_SLACK
+    }
+
+    /// Splits the half list of build `build` (`start`, `partner`, `flags`, scene indices)
+    /// into each domain's inner list and cross list, numbers the ghosts, and takes the
+    /// positions of the build (`built_at`, axis-major) and the radii. Every buffer is reused.
+    #[allow(clippy::too_many_arguments)]
+    pub fn split_lists(
+        &mut self,
+        build: u64,
+        start: &[u32],
+        partner: &[u32],
+        flags: &[u8],
+        built_at: &[f64],
+        radius: &[f64],
+    ) {
+        let n = start.len() - 1;
+        let (dom, local) = (&self.dom, &self.local);
+        let mut doms: Vec<&mut Domain<D>> = self.domains.iter_mut().map(get).collect();
+        // Inner entries as (row, partner, entry); cross entries as (own, other's local, entry).
+        let mut inner: Vec<Vec<(u32, u32, u32)>> = vec![Vec::new(); DOMAINS];
+        let mut cross: Vec<Vec<(u32, u32, u32)>> = vec![Vec::new(); DOMAINS];
+        for i in 0..n {
+            for q in start[i] as usize..start[i + 1] as usize {
+                let j = partner[q] as usize;
+                let (di, dj) = (dom[i] as usize, dom[j] as usize);
+                if di == dj {
+                    inner[di].push((local[i], local[j], q as u32));
+                } else {
+                    cross[di].push((local[i], local[j], q as u32));
+                    cross[dj].push((local[j], local[i], q as u32));
+                }
+            }
+        }
+        // Ghost numbers: the other domain's locals, ascending.
+        let ghost_of: Vec<Vec<u32>> = cross
+            .iter_mut()
+            .map(|c| {
+                c.sort_unstable();
+                let mut g: Vec<u32> = c.iter().map(|e| e.1).collect();
+                g.sort_unstable();
+                g.dedup();
+                g
+            })
+            .collect();
+        for d in 0..DOMAINS {
+            let other = 1 - d;
+            let other_ids = doms[other].ids.clone();
+            let dm = &mut *doms[d];
+            let m = dm.ids.len();
+            dm.ghosts = ghost_of[d].len();
+            dm.ghost_radius.clear();
+            dm.ghost_radius
+                .extend(ghost_of[d].iter().map(|&lj| radius[other_ids[lj as usize] as usize]));
+            dm.halo_out.clear();
+            dm.halo_out.extend_from_slice(&ghost_of[other]);
+            // Inner half list, rows by counting (entries come in ascending rows already).
+            let e = &inner[d];
+            dm.start.clear();
+            dm.start.resize(m + 1, 0);
+            for &(li, _, _) in e {
+                dm.start[li as usize + 1] += 1;
+            }
+            for li in 0..m {
+                dm.start[li + 1] += dm.start[li];
+            }
+            dm.partner.clear();
+            dm.partner.extend(e.iter().map(|t| t.1));
+            dm.inner_src.clear();
+            dm.inner_src.extend(e.iter().map(|t| t.2));
+            dm.flags.clear();
+            dm.flags.extend(e.iter().map(|t| flags[t.2 as usize]));
+            dm.rows.clear();
+            for li in 0..m {
+                if dm.start[li + 1] > dm.start[li] {
+                    dm.rows.push(li as u32);
+                }
+            }
+            let c = &cross[d];
+            let g = &ghost_of[d];
+            dm.cross_own.clear();
+            dm.cross_own.extend(c.iter().map(|t| t.0));
+            dm.cross_ghost.clear();
+            dm.cross_ghost.extend(
+                c.iter()
+                    .map(|t| g.binary_search(&t.1).expect("ghost listed") as u32),
+            );
+            dm.cross_src.clear();
+            dm.cross_src.extend(c.iter().map(|t| t.2));
+            dm.cross_flags.clear();
+            dm.cross_flags.extend(c.iter().map(|t| flags[t.2 as usize]));
+            for (li, &i) in dm.ids.iter().enumerate() {
+                for k in 0..D {
+                    dm.built_at[k * m + li] = built_at[k * n + i as usize];
+                }
+            }
+        }
+        for (d, h) in self.halo.iter_mut().enumerate() {
+            let len = 2 * D * doms[d].halo_out.len();
+            for b in h.iter_mut() {
+                let b = b.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner);
+                b.clear();
+                b.resize(len, 0.0);
+            }
+        }
+        if build == self.partitioned_at {
+            self.cross_at_partition = doms.iter().map(|d| d.cross_own.len()).sum();
+        }
+        self.built_for = build;
+    }
+
+    /// Copies the engine's state into the domains (Gear derivatives, forces, wall contacts,
+    /// radii) and marks them as holding step `step`.
+    pub fn load(&mut self, e: &EngineArrays<'_>, acc_is_start: bool, step: u64) {
+        let n = e.radius.len();
+        for dm in &mut self.domains {
+            let dm = get(dm);
+            let m = dm.ids.len();
+            for k in 0..D {
+                for (q, dst) in dm.r.iter_mut().enumerate() {
+                    let src = &e.r[q][k * n..(k + 1) * n];
+                    for (o, &i) in dst[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
+                        *o = src[i as usize];
+                    }
+                }
+                let src = &e.acc[k * n..(k + 1) * n];
+                for (o, &i) in dm.acc[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
+                    *o = src[i as usize];
+                }
+                let src = &e.wall_contact[k * n..(k + 1) * n];
+                for (o, &i) in dm.wall_contact[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
+                    *o = src[i as usize];
+                }
+            }
+            for (li, &i) in dm.ids.iter().enumerate() {
+                dm.radius[li] = e.radius[i as usize];
+                dm.wall_kr[li] = e.wall_kr[i as usize];
+            }
+            dm.acc_is_start = acc_is_start;
+        }
+        self.holds_step = Some(step);
+    }
+
+    /// Prepares a region starting at step `step`: the list check's bound and count, empty
+    /// books, and the halo of the step's parity.
+    pub fn begin(&mut self, bound: f64, since_check: u32, step: u64) {
+        let parity = (step % 2) as usize;
+        for (d, dm) in self.domains.iter_mut().enumerate() {
+            let dm = get(dm);
+            dm.bound = bound;
+            dm.since_check = since_check;
+            dm.books = DomainBooks::default();
+            dm.step_books.clear();
+            let h = self.halo[d][parity]
+                .get_mut()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            dm.publish(h);
+        }
+    }
+
+    /// Copies the domains' state back into the engine's arrays: all of it (`full`), or only
+    /// the positions (`r[0]`, what a list build reads); and the list flags where `flags` is
+    /// given (the list of the domains' build; cross pairs from the booking domain).
+    pub fn store(&mut self, e: &mut EngineArrays<'_>, flags: Option<&mut [u8]>, full: bool) {
+        let mut flags = flags;
+        let n = e.radius.len();
+        for dm in &mut self.domains {
+            let dm = get(dm);
+            let m = dm.ids.len();
+            for k in 0..D {
+                let arrays = if full { 6 } else { 1 };
+                for (q, src) in dm.r.iter().enumerate().take(arrays) {
+                    let dst = &mut e.r[q][k * n..(k + 1) * n];
+                    for (&v, &i) in src[k * m..(k + 1) * m].iter().zip(&dm.ids) {
+                        dst[i as usize] = v;
+                    }
+                }
+                if full {
+                    let dst = &mut e.acc[k * n..(k + 1) * n];
+                    for (&v, &i) in dm.acc[k * m..(k + 1) * m].iter().zip(&dm.ids) {
+                        dst[i as usize] = v;
+                    }
+                    let dst = &mut e.wall_contact[k * n..(k + 1) * n];
+                    for (&v, &i) in dm.wall_contact[k * m..(k + 1) * m].iter().zip(&dm.ids) {
+                        dst[i as usize] = v;
+                    }
+                }
+            }
+            let Some(flags) = flags.as_deref_mut() else {
+                continue;
+            };
+            for (&f, &q) in dm.flags.iter().zip(&dm.inner_src) {
+                flags[q as usize] = f;
+            }
+            if dm.books_cross {
+                for (&f, &q) in dm.cross_flags.iter().zip(&dm.cross_src) {
+                    flags[q as usize] = f;
+                }
+            }
+        }
+    }
+
+    /// The books of every domain in order (counts and largest overlap; per-step sums), and
+    /// the largest displacement bound and step count since the exact test.
+    pub fn books(&mut self) -> (Vec<(DomainBooks, Vec<[f64; 3]>)>, f64, u32) {
+        let (mut bound, mut since) = (0.0f64, 0u32);
+        let mut books = Vec::with_capacity(DOMAINS);
+        for dm in &mut self.domains {
+            let dm = get(dm);
+            books.push((dm.books, std::mem::take(&mut dm.step_books)));
+            bound = bound.max(dm.bound);
+            since = since.max(dm.since_check);
+        }
+        (books, bound, since)
+    }
+
+    /// Test aid: whether both copies of every cross pair hold the same flags (they must: the
+    /// two domains take the same decisions on exactly antisymmetric numbers).
+    pub fn cross_flags_agree(&mut self) -> bool {
+        let mut by_entry: Vec<(u32, u8)> = Vec::new();
+        let mut other: Vec<(u32, u8)> = Vec::new();
+        for (d, dm) in self.domains.iter_mut().enumerate() {
+            let dm = dm.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let v: Vec<(u32, u8)> = dm
+                .cross_src
+                .iter()
+                .copied()
+                .zip(dm.cross_flags.iter().copied())
+                .collect();
+            if d == 0 { by_entry = v } else { other = v }
+        }
+        by_entry.sort_unstable();
+        other.sort_unstable();
+        by_entry == other
+    }
+
+    /// Runs the steps of one member of a team of `members` (it takes domains `slot`,
+    /// `slot + members`, ...): global steps `first..` until `target` or until some domain's
+    /// check asks for a rebuild. `wait` is the team's barrier. Returns the steps taken and
+    /// whether the region stopped for a rebuild. Every member returns the same.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_member<const WET: bool>(
+        &self,
+        c: &StepConstants<D>,
+        walls_at: &(dyn Fn(u64) -> [WallAxis; D] + Sync),
+        flush_at: &(dyn Fn(u64) -> bool + Sync),
+        slot: usize,
+        members: usize,
+        first: u64,
+        target: u64,
+        wait: &dyn Fn(),
+    ) -> (u64, bool) {
+        let mine: Vec<usize> = (slot..DOMAINS).step_by(members.max(1)).collect();
+        let mut guards: Vec<_> = mine.iter().map(|&d| lock(&self.domains[d])).collect();
+        let mut s = first;
+        loop {
+            let parity = (s % 2) as usize;
+            let walls = walls_at(s + 1);
+            let flush = flush_at(s);
+            for (g, &d) in guards.iter_mut().zip(&mine) {
+                let other = 1 - d;
+                let ghosts = read(&self.halo[other][parity]);
+                let mut next = write(&self.halo[d][1 - parity]);
+                let stop = g.step::<WET>(c, &walls, flush, &ghosts, &mut next);
+                self.stop[d][1 - parity].store(stop, Ordering::Relaxed);
+            }
+            wait();
+            s += 1;
+            let rebuild = (0..DOMAINS).any(|d| self.stop[d][1 - parity].load(Ordering::Relaxed));
+            if rebuild || s >= target {
+                return (s - first, rebuild);
+            }
+        }
+    }
+}
+
+impl<const D: usize> Domain<D> {
+    /// Writes the halo (position, then velocity array value, per published particle).
+    fn publish(&self, out: &mut [f64]) {
+        let m = self.ids.len();
+        for (h, &li) in out.chunks_exact_mut(2 * D).zip(&self.halo_out) {
+            let li = li as usize;
+            for k in 0..D {
+                h[k] = self.r[0][k * m + li];
+                h[D + k] = self.r[1][k * m + li];
+            }
+        }
+    }
+
+    /// One Gear step of this domain (see the module doc); `ghosts` holds the other domain's
+    /// halo of this step, `next` receives this domain's halo of the next. Returns whether the
+    /// neighbour list must be rebuilt before the next step.
+    fn step<const WET: bool>(
+        &mut self,
+        c: &StepConstants<D>,
+        walls: &[WallAxis; D],
+        flush: bool,
+        ghosts: &[f64],
+        next: &mut [f64],
+    ) -> bool {
+        let m = self.ids.len();
+        let dt = c.dt;
+        if !self.acc_is_start {
+            for k in 0..D {
+                self.acc[k * m..(k + 1) * m].fill(c.init[k]);
+            }
+        }
+        self.acc_is_start = true;
+        let pc = super::engine::PairConstants {
+            periodic: c.periodic,
+            size: c.size,
+            stiffness: c.stiffness,
+            damping: c.damping,
+            bridge_force: c.bridge_force,
+            s_crit: c.s_crit,
+            vs: 1.0 / dt,
+            dt,
+        };
+        let pb = super::engine::pair_forces_serial::<D, WET>(
+            &pc,
+            &self.r[0],
+            &self.r[1],
+            &mut self.acc,
+            &self.radius,
+            &self.start,
+            &self.rows,
+            &self.partner,
+            &mut self.flags,
+        );
+        let b = &mut self.books;
+        let mut sums = [pb.dissipated, pb.bridge_ledger, 0.0];
+        b.max_overlap = b.max_overlap.max(pb.max_overlap);
+        b.pair_onsets += pb.onsets;
+        b.formations += pb.formations;
+        b.ruptures += pb.ruptures;
+        let cb = cross_forces::<D, WET>(
+            &pc,
+            &self.r[0],
+            &self.r[1],
+            &mut self.acc,
+            &self.radius,
+            ghosts,
+            &self.ghost_radius,
+            &self.cross_own,
+            &self.cross_ghost,
+            &mut self.cross_flags,
+        );
+        if self.books_cross {
+            sums[0] += cb.dissipated;
+            sums[1] += cb.bridge_ledger;
+            b.max_overlap = b.max_overlap.max(cb.max_overlap);
+            b.pair_onsets += cb.onsets;
+            b.formations += cb.formations;
+            b.ruptures += cb.ruptures;
+        }
+        for k in 0..D {
+            if c.periodic[k] {
+                continue;
+            }
+            let a = k * m..(k + 1) * m;
+            let mut part = WallBooks::default();
+            wall_forces(
+                &walls[k],
+                &self.r[0][a.clone()],
+                &self.r[1][a.clone()],
+                &self.radius,
+                &self.wall_kr,
+                &mut self.wall_contact[a.clone()],
+                &mut self.acc[a],
+                &mut part,
+            );
+            sums[0] += part.dissipated;
+            sums[2] += part.work;
+            b.max_overlap = b.max_overlap.max(part.max_overlap);
+            b.wall_onsets += part.onsets;
+        }
+        self.step_books.push(sums);
+        if let Some(inv_m) = c.inv_mass {
+            for e in &mut self.acc {
+                *e *= inv_m;
+            }
+        }
+        let mut moved2 = 0.0;
+        let [r0, r1, r2, r3, r4, r5] = &mut self.r;
+        for k in 0..D {
+            let a = k * m..(k + 1) * m;
+            let mk = gear_correct_predict_axis(
+                [
+                    &mut r0[a.clone()],
+                    &mut r1[a.clone()],
+                    &mut r2[a.clone()],
+                    &mut r3[a.clone()],
+                    &mut r4[a.clone()],
+                    &mut r5[a.clone()],
+                ],
+                &mut self.acc[a],
+                c.init[k],
+                0.5 * dt * dt,
+                &c.gear,
+                c.periodic[k].then_some(c.size[k]),
+                flush,
+            );
+            moved2 += mk * mk;
+        }
+        self.publish(next);
+        // The list check of the next step (the engine's `update_list`, on this domain).
+        self.bound += moved2.sqrt();
+        self.since_check += 1;
+        if self.bound < c.half_skin * (1.0 - 1e-6) && self.since_check < super::engine::EXACT_CHECK_EVERY
+        {
+            return false;
+        }
+        self.since_check = 0;
+        let worst = max_displacement_sq::<D>(&self.r[0], &self.built_at);
+        if worst > c.half_skin * c.half_skin {
+            true
+        } else {
+            self.bound = worst.sqrt();
+            false
+        }
+    }
+}
+
+/// The largest squared displacement between `x` and `built_at` (axis-major, same length),
+/// without the periodic image (as `NeighbourList::max_displacement_sq`).
+fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
+    let m = x.len() / D;
+    let mut worst = 0.0f64;
+    for i in 0..m {
+        let mut a = 0.0;
+        for k in 0..D {
+            let d = x[k * m + i] - built_at[k * m + i];
+            a += d * d;
+        }
+        worst = if a > worst { a } else { worst };
+    }
+    worst
+}
+
+/// Forces of the cross pairs on this domain's particles (Eq. 2.7 and MODEL.md 3.1, the
+/// arithmetic of `pair_forces_serial` with the partner read from the halo `ghosts`: `2 D`
+/// values per ghost, position then velocity array value); updates the pairs' flags; returns
+/// the books (the caller keeps them in one domain only).
+#[allow(clippy::too_many_arguments)]
+fn cross_forces<const D: usize, const WET: bool>(
+    pc: &super::engine::PairConstants<D>,
+    x: &[f64],
+    v: &[f64],
+    f: &mut [f64],
+    radius: &[f64],
+    ghosts: &[f64],
+    ghost_radius: &[f64],
+    own: &[u32],
+    ghost: &[u32],
+    flags: &mut [u8],
+) -> super::engine::PairBooks {
+    let m = radius.len();
+    let mut b = super::engine::PairBooks::default();
+    let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
+    let (own, ghost) = (&own[..flags.len()], &ghost[..flags.len()]);
+    for q in 0..flags.len() {
+        let i = own[q] as usize;
+        let g = &ghosts[ghost[q] as usize * 2 * D..(ghost[q] as usize + 1) * 2 * D];
+        let mut d = [0.0; D];
+        let mut r2 = 0.0;
+        for k in 0..D {
+            let mut dk = x[k * m + i] - g[k];
+            if pc.periodic[k] {
+                let half = 0.5 * pc.size[k];
+                if dk > half {
+                    dk -= pc.size[k];
+                } else if dk < -half {
+                    dk += pc.size[k];
+                }
+            }
+            d[k] = dk;
+            r2 += dk * dk;
+        }
+        let ri = radius[i];
+        let rj = ghost_radius[ghost[q] as usize];
+        let sig = ri + rj;
+        let fl = flags[q];
+        if r2 >= sig * sig && (!WET || fl & BOND == 0) {
+            if fl & CONTACT != 0 {
+                flags[q] = fl & !CONTACT;
+            }
+            continue;
+        }
+        let r = r2.sqrt();
+        let inv = 1.0 / r;
+        let overlap = sig - r;
+        let mut fmag = 0.0;
+        let mut new_fl = fl;
+        if overlap > 0.0 {
+            if fl & CONTACT == 0 {
+                new_fl |= CONTACT;
+                b.onsets += 1;
+            }
+            b.max_overlap = b.max_overlap.max(overlap);
+            // xi_dot = -(v_i - v_j) . n, n = d / r.
+            let mut vn = 0.0;
+            for k in 0..D {
+                vn += (v[k * m + i] - g[D + k]) * d[k];
+            }
+            let xi_dot = -vn * inv * vs;
+            let kr = k_pair * (ri * rj / sig).sqrt();
+            // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
+            let total = hertz::force(kr, overlap, xi_dot, a_d);
+            if a_d > 0.0 {
+                let elastic = kr * overlap * overlap.sqrt();
+                b.dissipated += (total - elastic) * xi_dot * dt;
+            }
+            fmag = total;
+            if WET && fl & BOND == 0 {
+                // MODEL.md 3.1: a bridge forms at contact.
+                new_fl |= BOND;
+                b.formations += 1;
+                b.bridge_ledger += pc.bridge_force * overlap;
+            }
+        } else {
+            new_fl &= !CONTACT;
+        }
+        if WET && new_fl & BOND != 0 {
+            let s = -overlap;
+            if s > pc.s_crit {
+                // Rupture: the bridge energy F_B s leaves the system.
+                new_fl &= !BOND;
+                b.ruptures += 1;
+                b.bridge_ledger += pc.bridge_force * s;
+            } else {
+                // MODEL.md 3.1: constant attraction F_B along the line of centres.
+                fmag -= pc.bridge_force;
+            }
+        }
+        if new_fl != fl {
+            flags[q] = new_fl;
+        }
+        if fmag != 0.0 {
+            let s = fmag * inv;
+            for k in 0..D {
+                f[k * m + i] += s * d[k];
+            }
+        }
+    }
+    b
+}
