@@ -198,6 +198,11 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     domains: DomainCache<D>,
     /// Gear steps run on the domains with a team of more than one thread.
     team_steps: u64,
+    /// Partitions made (`domains.rs`).
+    partitions: u64,
+    /// How long a region waits for the pool's threads to join its team (`team::DOOR_WAIT`;
+    /// tests lengthen it so that a loaded machine still runs two members).
+    team_door: std::time::Duration,
 }
 
 impl<const D: usize, const GRAV: bool, const WET: bool> TimeEngine<D, GRAV, WET, NoBodyForce> {
@@ -349,6 +354,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             domain_mode: DomainMode::Auto,
             domains: DomainCache::default(),
             team_steps: 0,
+            partitions: 0,
+            team_door: super::team::DOOR_WAIT,
         };
         engine.list.build(&engine.r[0], &engine.radius);
         let mut t0 = 0.0;
@@ -725,6 +732,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 d
             }
             None => {
+                self.partitions += 1;
                 let mut d = Box::new(Decomposition::new(builds, self.p.size, self.list.built_at()));
                 d.split_lists(
                     builds,
@@ -766,7 +774,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let flush_at = |s: u64| s.is_multiple_of(GEAR_FLUSH_EVERY);
         let dec_ref: &Decomposition<D> = &dec;
         let ((done, rebuild), members) = if rayon::current_num_threads() > 1 {
-            let out = super::team::run(DOMAINS, |m| {
+            let out = super::team::run_with_door(DOMAINS, self.team_door, |m| {
                 (
                     dec_ref.run_member::<WET>(
                         &c,
@@ -1875,4 +1883,161 @@ fn particle_chunk<const D: usize>(
         }
     });
     ChunkBooks { walls, moved }
+}
+
+#[cfg(test)]
+mod domain_tests {
+    //! The spatial domains (`domains.rs`) against the serial step and against themselves.
+    use super::*;
+
+    /// A shaken wet bed of 360 disks in a 120 x 9 box (bridges form and rupture, across the
+    /// cut too).
+    fn wet_bed() -> Scene {
+        let text = "dimension = 2\ngravity = 1.0\n[box]\nsize = [120.0, 9.0]\n\
+            boundary = [\"periodic\", \"wall\"]\n[particles]\ncount = 360\npolydispersity = 0.06\n\
+            [contact]\ndamping = 1.5e-4\n[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\n\
+            e_cb = 0.2844\n[drive]\nkind = \"sine\"\ngamma = 5.0\ne_star = 10.0\n\
+            [initial]\ntemperature_over_ecb = 20.0\nseed = 3\n[run]\nduration = 1.0\n\
+            [engine]\nkind = \"time\"\n";
+        Scene::from_toml_str(text, "domain test").expect("valid scene")
+    }
+
+    type Wet = TimeEngine<2, true, true>;
+
+    fn engine(mode: DomainMode) -> Wet {
+        let mut e = Wet::new(&wet_bed());
+        e.set_domain_mode(mode);
+        e.team_door = std::time::Duration::from_secs(60);
+        e
+    }
+
+    /// Every bit of the state and of the books.
+    fn bits(e: &Wet) -> Vec<u64> {
+        let mut v: Vec<u64> = e.positions_flat().iter().map(|x| x.to_bits()).collect();
+        v.extend(e.velocities_flat().iter().map(|x| x.to_bits()));
+        let c = e.counts();
+        v.extend([
+            c.pair_collisions,
+            c.wall_collisions,
+            c.bridge_formations,
+            c.bridge_ruptures,
+            e.steps(),
+            e.list_builds(),
+        ]);
+        v.extend(e.bridges().iter().flat_map(|&(i, j)| [i as u64, j as u64]));
+        let l = e.energy();
+        v.extend(
+            [
+                l.kinetic,
+                l.potential,
+                l.dissipated_restitution,
+                l.dissipated_ruptures,
+                l.work_by_drive,
+                e.max_overlap(),
+            ]
+            .map(f64::to_bits),
+        );
+        v
+    }
+
+    fn pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a pool")
+    }
+
+    /// The cross pairs bonded in domain 0's copy.
+    fn cross_bonds(e: &Wet) -> usize {
+        let dec = e.domains.0.as_ref().expect("a decomposition");
+        let d0 = super::super::domains::lock(&dec.domains[0]);
+        d0.cross_flags.iter().filter(|&&f| f & BOND != 0).count()
+    }
+
+    #[test]
+    fn one_two_and_three_threads_give_the_same_bits() {
+        let run = |threads: usize| {
+            pool(threads).install(|| {
+                let mut e = engine(DomainMode::Always);
+                e.run_until(1.0);
+                assert!(e.counts().bridge_ruptures > 0, "bridges rupture");
+                (bits(&e), e.team_steps(), e.steps())
+            })
+        };
+        let (one, team1, _) = run(1);
+        let (two, team2, steps) = run(2);
+        let (three, team3, _) = run(3);
+        assert_eq!(team1, 0, "one thread runs no team");
+        // The long door admits both members: nearly every step ran on two threads (the first,
+        // predicting, step runs alone).
+        assert!(team2 + 1 >= steps && team3 + 1 >= steps, "{team2} {team3} of {steps}");
+        assert!(one == two, "one and two threads differ");
+        assert!(one == three, "one and three threads differ");
+    }
+
+    #[test]
+    fn where_regions_end_changes_no_number() {
+        let whole = pool(2).install(|| {
+            let mut e = engine(DomainMode::Always);
+            e.run_until(1.0);
+            bits(&e)
+        });
+        let pieces = pool(2).install(|| {
+            let mut e = engine(DomainMode::Always);
+            let mut t = 0.0f64;
+            while t < 1.0 {
+                t = (t + 0.0173).min(1.0);
+                e.run_until(t);
+            }
+            bits(&e)
+        });
+        assert!(whole == pieces, "a run in pieces differs from one in one go");
+    }
+
+    #[test]
+    fn both_copies_of_a_cross_pair_take_the_same_decisions() {
+        let mut e = engine(DomainMode::Always);
+        let mut bonded = 0;
+        for k in 1..=20 {
+            e.run_until(0.05 * k as f64);
+            let dec = e.domains.0.as_mut().expect("a decomposition");
+            assert!(dec.cross_flags_agree(), "cross flags differ at t = {}", e.time());
+            bonded = bonded.max(cross_bonds(&e));
+        }
+        assert!(bonded > 0, "some cross pair is bonded");
+    }
+
+    /// The domains change the serial trajectory by round-off only: the same list builds,
+    /// counts and (to round-off) positions and books, over a run long enough for several
+    /// partitions. The books would differ by the cross pairs' share if both domains booked
+    /// them.
+    #[test]
+    fn domains_change_the_serial_trajectory_by_round_off() {
+        let mut serial = engine(DomainMode::Never);
+        let mut split = engine(DomainMode::Always);
+        let t = 1.2;
+        serial.run_until(t);
+        split.run_until(t);
+        assert!(split.partitions > 1, "{} partitions", split.partitions);
+        assert_eq!(serial.list_builds(), split.list_builds());
+        let (cs, cd) = (serial.counts(), split.counts());
+        assert_eq!(cs.pair_collisions, cd.pair_collisions);
+        assert_eq!(cs.wall_collisions, cd.wall_collisions);
+        assert_eq!(cs.bridge_formations, cd.bridge_formations);
+        assert_eq!(cs.bridge_ruptures, cd.bridge_ruptures);
+        assert_eq!(serial.bridges(), split.bridges());
+        let (xs, xd) = (serial.positions_flat(), split.positions_flat());
+        let dx = xs.iter().zip(&xd).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(dx < 1e-9, "positions differ by {dx}");
+        assert!(dx > 0.0, "the summation order differs, so some bit should");
+        let (ls, ld) = (serial.energy(), split.energy());
+        for (a, b, what) in [
+            (ls.dissipated_restitution, ld.dissipated_restitution, "damping"),
+            (ls.dissipated_ruptures, ld.dissipated_ruptures, "ruptures"),
+            (ls.work_by_drive, ld.work_by_drive, "drive work"),
+            (ls.kinetic, ld.kinetic, "kinetic"),
+        ] {
+            assert!((a - b).abs() <= 1e-9 * a.abs().max(1.0), "{what}: {a} vs {b}");
+        }
+    }
 }
