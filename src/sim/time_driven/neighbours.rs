@@ -49,7 +49,15 @@ pub struct NeighbourList<const D: usize> {
     size: [f64; D],
     head: Vec<u32>,
     next: Vec<u32>,
-    cell_of: Vec<u32>,
+    /// Cell coordinates of each particle at the last build, `D` per particle.
+    cell_at: Vec<u32>,
+    /// Per axis `k` and cell coordinate `c`: the coordinates of the cells at offsets -1, 0, +1
+    /// (`3 c + o + 1`), periodic images wrapped, [`NONE`] beyond a wall or where a periodic
+    /// axis has fewer than 3 cells (two offsets would name one cell twice); the build walks
+    /// the `3^D` neighbour cells from these tables, without a division.
+    axis_next: [Vec<u32>; D],
+    /// Stride of each axis in the cell index.
+    stride: [usize; D],
     /// Interaction range beyond contact (`s_crit` or 0) plus the skin.
     extra: f64,
     skin: f64,
@@ -107,7 +115,29 @@ impl<const D: usize> NeighbourList<D> {
             size,
             head: vec![NONE; total],
             next: vec![NONE; n],
-            cell_of: vec![0; n],
+            cell_at: vec![0; D * n],
+            axis_next: std::array::from_fn(|k| {
+                let m = cells[k];
+                let mut t = vec![NONE; 3 * m];
+                for c in 0..m {
+                    for o in 0..3usize {
+                        let v = c as i64 + o as i64 - 1;
+                        t[3 * c + o] = if periodic[k] {
+                            if m < 3 && o != 1 {
+                                NONE
+                            } else {
+                                v.rem_euclid(m as i64) as u32
+                            }
+                        } else if v < 0 || v >= m as i64 {
+                            NONE
+                        } else {
+                            v as u32
+                        };
+                    }
+                }
+                t
+            }),
+            stride: std::array::from_fn(|k| cells[..k].iter().product()),
             extra,
             skin,
             builds: 0,
@@ -191,40 +221,30 @@ impl<const D: usize> NeighbourList<D> {
                 };
             }
             let idx = self.cell_index(&c);
-            self.cell_of[i] = idx as u32;
+            for k in 0..D {
+                self.cell_at[D * i + k] = c[k] as u32;
+            }
             self.next[i] = self.head[idx];
             self.head[idx] = i as u32;
         }
         let stencil = 3usize.pow(D as u32);
         for i in 0..n {
             self.start[i] = self.partner.len() as u32;
-            let mut c = [0usize; D];
-            let mut rest = self.cell_of[i] as usize;
-            for k in 0..D {
-                c[k] = rest % self.cells[k];
-                rest /= self.cells[k];
-            }
+            let c: [usize; D] = std::array::from_fn(|k| self.cell_at[D * i + k] as usize);
             'cells: for s in 0..stencil {
+                // Offset digits of `s` (base 3, axis 0 fastest), from the per-axis tables.
                 let mut code = s;
-                let mut nc = [0usize; D];
+                let mut idx = 0;
                 for k in 0..D {
-                    let o = (code % 3) as i64 - 1;
+                    let o = code % 3;
                     code /= 3;
-                    let m = self.cells[k] as i64;
-                    let v = c[k] as i64 + o;
-                    if self.periodic[k] {
-                        // With fewer than 3 cells two offsets would name one cell twice.
-                        if m < 3 && o != 0 {
-                            continue 'cells;
-                        }
-                        nc[k] = v.rem_euclid(m) as usize;
-                    } else if v < 0 || v >= m {
+                    let v = self.axis_next[k][3 * c[k] + o];
+                    if v == NONE {
                         continue 'cells;
-                    } else {
-                        nc[k] = v as usize;
                     }
+                    idx += v as usize * self.stride[k];
                 }
-                let mut j = self.head[self.cell_index(&nc)];
+                let mut j = self.head[idx];
                 while j != NONE {
                     let ju = j as usize;
                     if ju > i {
