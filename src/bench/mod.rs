@@ -49,17 +49,19 @@ const MIN_WARMUP: u64 = 500;
 /// or `engine:LABELS` with a comma-separated subset of `a,b,c,c'` (e.g. `engine:a` to profile
 /// one system).
 pub fn run(which: &str, repeat: usize, scale: f64) -> Result<(), String> {
-    run_with_svg(which, repeat, scale, None, &[1])
+    run_with_svg(which, repeat, scale, None, &[1], 1)
 }
 
 /// Like [`run`]; `wall` also writes its error-against-cost plot to `svg` if given; `tdmd` runs
-/// once per thread count of `threads` (the other benchmarks are single-threaded).
+/// once per thread count of `threads` (the other benchmarks are single-threaded), on its
+/// system widened `n_factor` times.
 pub fn run_with_svg(
     which: &str,
     repeat: usize,
     scale: f64,
     svg: Option<&std::path::Path>,
     threads: &[usize],
+    n_factor: usize,
 ) -> Result<(), String> {
     if which == "wall" {
         let rows = wall::measure(repeat, scale);
@@ -74,7 +76,7 @@ pub fn run_with_svg(
     if which == "tdmd" {
         print!(
             "{}",
-            tdmd::report(&tdmd::measure_threads(repeat, scale, threads))
+            tdmd::report(&tdmd::measure_threads(repeat, scale, threads, n_factor))
         );
         return Ok(());
     }

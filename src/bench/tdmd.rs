@@ -31,6 +31,12 @@ pub const BASELINE_SECONDS_PER_TIME_UNIT: f64 = 0.38;
 
 /// The benchmark scene for one integrator (`"gear5"` or `"verlet"`).
 pub fn scene(integrator: &str) -> Scene {
+    scene_widened(integrator, 1)
+}
+
+/// The benchmark scene with `k` times the particles in a box `k` times as wide (same density;
+/// `--n-factor`).
+pub fn scene_widened(integrator: &str, k: usize) -> Scene {
     let kr = DEFAULT_STIFFNESS * 0.25f64.sqrt();
     let a_d = hertz::damping_for_restitution(kr, 0.5, 1.0, 0.9);
     let text = format!(
@@ -38,10 +44,10 @@ pub fn scene(integrator: &str) -> Scene {
 dimension = 2
 gravity = 1.0
 [box]
-size = [400.0, 9.0]
+size = [{width:?}, 9.0]
 boundary = ["periodic", "wall"]
 [particles]
-count = 1200
+count = {count}
 polydispersity = 0.06
 [contact]
 damping = {a_d}
@@ -59,7 +65,9 @@ kind = "time"
 dt = 1e-4
 integrator = "{integrator}"
 "#,
-        omega = (15.0f64 / 0.05).sqrt()
+        omega = (15.0f64 / 0.05).sqrt(),
+        width = 400.0 * k as f64,
+        count = 1200 * k,
     );
     Scene::from_toml_str(&text, "bench tdmd").expect("bench scene is valid")
 }
@@ -119,18 +127,25 @@ fn median(v: &[f64]) -> f64 {
 
 /// Runs the benchmark for both integrators on one thread.
 pub fn measure(repeat: usize, scale: f64) -> Vec<TdmdRow> {
-    measure_threads(repeat, scale, &[1])
+    measure_threads(repeat, scale, &[1], 1)
 }
 
 /// Runs the benchmark for both integrators and each thread count of `threads` (alternating
-/// within each repetition); rows in the order integrator, then thread count.
-pub fn measure_threads(repeat: usize, scale: f64, threads: &[usize]) -> Vec<TdmdRow> {
+/// within each repetition); rows in the order integrator, then thread count. `n_factor`: the
+/// system widened ([`scene_widened`]); the timed span is divided by it (at least 0.02 time
+/// units), so that a repetition costs about the same.
+pub fn measure_threads(
+    repeat: usize,
+    scale: f64,
+    threads: &[usize],
+    n_factor: usize,
+) -> Vec<TdmdRow> {
     // The bench measures the parallel path itself: split the step whatever the system size
     // (an engine below the default threshold would run serially on any pool).
     if threads.iter().any(|&t| t > 1) {
         crate::sim::time_driven::engine::set_parallel_min_particles(0);
     }
-    let timed = scale.max(0.1);
+    let timed = (scale.max(0.1) / n_factor.max(1) as f64).max(0.02);
     let pools: Vec<rayon::ThreadPool> = threads
         .iter()
         .map(|&t| {
@@ -148,7 +163,7 @@ pub fn measure_threads(repeat: usize, scale: f64, threads: &[usize]) -> Vec<Tdmd
         ("gear5-ser", DomainMode::Never),
         ("verlet", DomainMode::Auto),
     ] {
-        let s = scene(&integ[..integ.find('-').unwrap_or(integ.len())]);
+        let s = scene_widened(&integ[..integ.find('-').unwrap_or(integ.len())], n_factor.max(1));
         let first = rows.len();
         for &t in threads {
             rows.push(TdmdRow {
@@ -201,9 +216,11 @@ pub fn timed_run(e: &mut TimeEngine<2, true, false>, t_end: f64) {
 /// The table.
 pub fn report(rows: &[TdmdRow]) -> String {
     let mut s = String::new();
+    let n = rows.first().map_or(1200, |r| r.particles);
     let _ = writeln!(
         s,
-        "time-driven engine, dry shaken 2D: N = 1200, sigma_p 0.06, box 400 x 9, A = 0.05, Gamma = 15, dt = 1e-4"
+        "time-driven engine, dry shaken 2D: N = {n}, sigma_p 0.06, box {} x 9, A = 0.05, Gamma = 15, dt = 1e-4",
+        n / 3
     );
     let _ = writeln!(
         s,

@@ -62,6 +62,9 @@ pub enum Command {
         /// against the first).
         #[arg(long, value_delimiter = ',', default_value = "1")]
         threads: Vec<usize>,
+        /// `tdmd` only: `K` times the particles in a box `K` times as wide (same density).
+        #[arg(long, default_value_t = 1)]
+        n_factor: usize,
     },
     /// Run the engines' hard cases at length with the invariant checks on, and print per case
     /// the events (or time steps), simulated time, largest overlap, energy-ledger error, NaN
@@ -229,7 +232,15 @@ pub fn main() -> ExitCode {
             scale,
             svg,
             threads,
-        } => match bench::run_with_svg(&which, repeat.max(1), scale, svg.as_deref(), &threads) {
+            n_factor,
+        } => match bench::run_with_svg(
+            &which,
+            repeat.max(1),
+            scale,
+            svg.as_deref(),
+            &threads,
+            n_factor.max(1),
+        ) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");
