@@ -128,12 +128,17 @@ fn bench_scene(integrator: &str) -> Scene {
     wetgran::bench::tdmd::scene(integrator)
 }
 
+/// Gear on this scene (1200 particles) runs on the spatial domains (`domains.rs`, issue 15
+/// item 4) since 2026-11-26: the state digest is unchanged (within 0.3 time units the changed
+/// order of the force sums changed no bit of this dilute, dry system), the books digest was
+/// re-pinned (0xe665_810d_3efb_faf6 before): the dissipation and the drive work are now summed
+/// per domain and step, not per chunk of 128 coordinates or entries, a round-off change.
 #[test]
 fn bench_scene_gear() {
     let s = bench_scene("gear5");
     check(
         "bench gear5",
-        (0x4cef_122d_97f7_9569, 0xe665_810d_3efb_faf6),
+        (0x4cef_122d_97f7_9569, 0x7a37_ea3b_3ce6_04de),
         || {
             let mut e = TimeEngine::<2, true, false>::new(&s);
             e.run_until(0.3);

@@ -163,7 +163,10 @@ pub fn measure_threads(
         ("gear5-ser", DomainMode::Never),
         ("verlet", DomainMode::Auto),
     ] {
-        let s = scene_widened(&integ[..integ.find('-').unwrap_or(integ.len())], n_factor.max(1));
+        let s = scene_widened(
+            &integ[..integ.find('-').unwrap_or(integ.len())],
+            n_factor.max(1),
+        );
         let first = rows.len();
         for &t in threads {
             rows.push(TdmdRow {

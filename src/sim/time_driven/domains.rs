@@ -182,7 +182,12 @@ impl<const D: usize> Clone for Decomposition<D> {
             halo: self
                 .halo
                 .iter()
-                .map(|h| [RwLock::new(read(&h[0]).clone()), RwLock::new(read(&h[1]).clone())])
+                .map(|h| {
+                    [
+                        RwLock::new(read(&h[0]).clone()),
+                        RwLock::new(read(&h[1]).clone()),
+                    ]
+                })
                 .collect(),
             stop: self
                 .stop
@@ -215,7 +220,8 @@ fn write<T>(m: &RwLock<T>) -> std::sync::RwLockWriteGuard<'_, T> {
 }
 
 fn get<T>(m: &mut Mutex<T>) -> &mut T {
-    m.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner)
+    m.get_mut()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// The engine's arrays a decomposition reads and writes (scene order, axis-major).
@@ -346,8 +352,11 @@ impl<const D: usize> Decomposition<D> {
             let m = dm.ids.len();
             dm.ghosts = ghost_of[d].len();
             dm.ghost_radius.clear();
-            dm.ghost_radius
-                .extend(ghost_of[d].iter().map(|&lj| radius[other_ids[lj as usize] as usize]));
+            dm.ghost_radius.extend(
+                ghost_of[d]
+                    .iter()
+                    .map(|&lj| radius[other_ids[lj as usize] as usize]),
+            );
             dm.halo_out.clear();
             dm.halo_out.extend_from_slice(&ghost_of[other]);
             // Inner half list, rows by counting (entries come in ascending rows already).
@@ -394,7 +403,9 @@ impl<const D: usize> Decomposition<D> {
         for (d, h) in self.halo.iter_mut().enumerate() {
             let len = 2 * D * doms[d].halo_out.len();
             for b in h.iter_mut() {
-                let b = b.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner);
+                let b = b
+                    .get_mut()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
                 b.clear();
                 b.resize(len, 0.0);
             }
@@ -516,7 +527,9 @@ impl<const D: usize> Decomposition<D> {
         let mut by_entry: Vec<(u32, u8)> = Vec::new();
         let mut other: Vec<(u32, u8)> = Vec::new();
         for (d, dm) in self.domains.iter_mut().enumerate() {
-            let dm = dm.get_mut().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let dm = dm
+                .get_mut()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
             let v: Vec<(u32, u8)> = dm
                 .cross_src
                 .iter()
@@ -702,7 +715,8 @@ impl<const D: usize> Domain<D> {
         // The list check of the next step (the engine's `update_list`, on this domain).
         self.bound += moved2.sqrt();
         self.since_check += 1;
-        if self.bound < c.half_skin * (1.0 - 1e-6) && self.since_check < super::engine::EXACT_CHECK_EVERY
+        if self.bound < c.half_skin * (1.0 - 1e-6)
+            && self.since_check < super::engine::EXACT_CHECK_EVERY
         {
             return false;
         }

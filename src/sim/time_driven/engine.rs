@@ -733,7 +733,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
             None => {
                 self.partitions += 1;
-                let mut d = Box::new(Decomposition::new(builds, self.p.size, self.list.built_at()));
+                let mut d = Box::new(Decomposition::new(
+                    builds,
+                    self.p.size,
+                    self.list.built_at(),
+                ));
                 d.split_lists(
                     builds,
                     &self.list.start,
@@ -794,7 +798,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             super::team::solo(|m| {
                 (
                     dec_ref.run_member::<WET>(
-                        &c, &walls_at, &flush_at, 0, 1, first, target, &|| m.wait(),
+                        &c,
+                        &walls_at,
+                        &flush_at,
+                        0,
+                        1,
+                        first,
+                        target,
+                        &|| m.wait(),
                     ),
                     1,
                 )
@@ -1970,7 +1981,10 @@ mod domain_tests {
         assert_eq!(team1, 0, "one thread runs no team");
         // The long door admits both members: nearly every step ran on two threads (the first,
         // predicting, step runs alone).
-        assert!(team2 + 1 >= steps && team3 + 1 >= steps, "{team2} {team3} of {steps}");
+        assert!(
+            team2 + 1 >= steps && team3 + 1 >= steps,
+            "{team2} {team3} of {steps}"
+        );
         assert!(one == two, "one and two threads differ");
         assert!(one == three, "one and three threads differ");
     }
@@ -1991,7 +2005,10 @@ mod domain_tests {
             }
             bits(&e)
         });
-        assert!(whole == pieces, "a run in pieces differs from one in one go");
+        assert!(
+            whole == pieces,
+            "a run in pieces differs from one in one go"
+        );
     }
 
     /// On one thread (the domains in turn), so that a domain reading a halo of the wrong step
@@ -2005,7 +2022,11 @@ mod domain_tests {
             for k in 1..=20 {
                 e.run_until(0.05 * k as f64);
                 let dec = e.domains.0.as_mut().expect("a decomposition");
-                assert!(dec.cross_flags_agree(), "cross flags differ at t = {}", e.time());
+                assert!(
+                    dec.cross_flags_agree(),
+                    "cross flags differ at t = {}",
+                    e.time()
+                );
                 bonded = bonded.max(cross_bonds(&e));
             }
             assert!(bonded > 0, "some cross pair is bonded");
@@ -2032,17 +2053,28 @@ mod domain_tests {
         assert_eq!(cs.bridge_ruptures, cd.bridge_ruptures);
         assert_eq!(serial.bridges(), split.bridges());
         let (xs, xd) = (serial.positions_flat(), split.positions_flat());
-        let dx = xs.iter().zip(&xd).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let dx = xs
+            .iter()
+            .zip(&xd)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         assert!(dx < 1e-9, "positions differ by {dx}");
         assert!(dx > 0.0, "the summation order differs, so some bit should");
         let (ls, ld) = (serial.energy(), split.energy());
         for (a, b, what) in [
-            (ls.dissipated_restitution, ld.dissipated_restitution, "damping"),
+            (
+                ls.dissipated_restitution,
+                ld.dissipated_restitution,
+                "damping",
+            ),
             (ls.dissipated_ruptures, ld.dissipated_ruptures, "ruptures"),
             (ls.work_by_drive, ld.work_by_drive, "drive work"),
             (ls.kinetic, ld.kinetic, "kinetic"),
         ] {
-            assert!((a - b).abs() <= 1e-9 * a.abs().max(1.0), "{what}: {a} vs {b}");
+            assert!(
+                (a - b).abs() <= 1e-9 * a.abs().max(1.0),
+                "{what}: {a} vs {b}"
+            );
         }
     }
 }

@@ -309,7 +309,13 @@ impl<const D: usize> NeighbourList<D> {
 
     /// The rows `range` of a build (after the binning): each row's partners, sorted, with the
     /// flags carried from the old list, appended to `out` (cleared first).
-    fn scan_rows(&self, x: &[f64], radius: &[f64], range: std::ops::Range<usize>, out: &mut RowScan) {
+    fn scan_rows(
+        &self,
+        x: &[f64],
+        radius: &[f64],
+        range: std::ops::Range<usize>,
+        out: &mut RowScan,
+    ) {
         out.clear();
         let n = radius.len();
         let stencil = 3usize.pow(D as u32);
