@@ -80,6 +80,10 @@ pub(super) struct DomainBooks {
     pub ruptures: u64,
 }
 
+/// What each domain booked in a region, in domain order: counts and largest overlap, and the
+/// per-step sums (dissipation, bridge ledger, drive work).
+pub(super) type RegionBooks = Vec<(DomainBooks, Vec<[f64; 3]>)>;
+
 /// One domain: its particles' state in local order, its lists and its halo bookkeeping.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Domain<const D: usize> {
@@ -509,7 +513,7 @@ impl<const D: usize> Decomposition<D> {
 
     /// The books of every domain in order (counts and largest overlap; per-step sums), and
     /// the largest displacement bound and step count since the exact test.
-    pub fn books(&mut self) -> (Vec<(DomainBooks, Vec<[f64; 3]>)>, f64, u32) {
+    pub fn books(&mut self) -> (RegionBooks, f64, u32) {
         let (mut bound, mut since) = (0.0f64, 0u32);
         let mut books = Vec::with_capacity(DOMAINS);
         for dm in &mut self.domains {
@@ -521,6 +525,7 @@ impl<const D: usize> Decomposition<D> {
         (books, bound, since)
     }
 
+    #[cfg(test)]
     /// Test aid: whether both copies of every cross pair hold the same flags (they must: the
     /// two domains take the same decisions on exactly antisymmetric numbers).
     pub fn cross_flags_agree(&mut self) -> bool {

@@ -1,8 +1,9 @@
 //! A team of threads that runs many time steps in one parallel region (SPMD): one closure on
 //! every thread of the current rayon pool ([`rayon::broadcast`], so no thread beyond the pool
-//! the job was given: the `sim::threads` core share is respected), the members synchronised
-//! per phase of a step by a spin barrier ([`Member::wait`]) instead of handing work over
-//! through rayon twice per step.
+//! the job was given: the `sim::threads` core share is respected; at most as many members as
+//! the caller asks for), the members synchronised once per step by a spin barrier
+//! ([`Member::wait`]) instead of handing work over through rayon twice per step. Used by the
+//! spatial domains of the Gear step (`domains.rs`).
 //!
 //! - **Admission** (the door): a pool thread joins when its copy of the closure starts; the
 //!   door closes when every thread of the pool has joined or after [`DOOR_WAIT`] (then the
@@ -19,15 +20,15 @@
 //!   re-raises a panic on the caller. No member waits for a dead one.
 //!
 //! The work of a member must not depend on how many members there are for its numbers: the
-//! engine gives each member a fixed set of fixed chunks and combines chunk results in chunk
-//! order.
+//! engine gives each member fixed domains (one member runs both in turn) and combines their
+//! results in domain order.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-/// How long a waiting member spins before it starts yielding its core (a wait this long is
-/// counted as slow, [`Member::slow_waits`]: on a quiet machine a barrier of the time-driven step
-/// takes a few microseconds; longer means a member is not running).
+/// How long a waiting member spins before it starts yielding its core (on a quiet machine a
+/// barrier of the time-driven step takes well under a microsecond; longer means a member is
+/// not running).
 pub const SPIN_TIME: Duration = Duration::from_micros(50);
 
 /// How long the first members wait at the door for the other threads of the pool to start.
@@ -51,8 +52,6 @@ pub struct Team {
     generation: AtomicUsize,
     /// Set by a member that panics.
     poison: AtomicBool,
-    /// Waits that spun longer than [`SPIN_TIME`].
-    slow: AtomicUsize,
 }
 
 /// One member's view of the team.
@@ -78,17 +77,14 @@ impl Drop for PoisonOnUnwind<'_> {
 
 /// The state of one wait: spin rounds so far, and when spinning began (read every 64 rounds).
 struct Pause {
-    /// Whether a long wait counts as slow (barriers; not the door).
-    counts: bool,
     rounds: u32,
     since: Option<Instant>,
     yielding: bool,
 }
 
 impl Pause {
-    fn new(counts: bool) -> Self {
+    fn new() -> Self {
         Self {
-            counts,
             rounds: 0,
             since: None,
             yielding: false,
@@ -112,9 +108,6 @@ impl Pause {
             let since = *self.since.get_or_insert_with(Instant::now);
             if since.elapsed() >= SPIN_TIME {
                 self.yielding = true;
-                if self.counts {
-                    team.slow.fetch_add(1, Ordering::Relaxed);
-                }
             }
         }
     }
@@ -133,21 +126,10 @@ impl Member<'_> {
             team.generation.store(generation + 1, Ordering::Release);
             return;
         }
-        let mut pause = Pause::new(true);
+        let mut pause = Pause::new();
         while team.generation.load(Ordering::Acquire) == generation {
             pause.pause(team);
         }
-    }
-
-    /// Waits so far (by any member) that spun longer than [`SPIN_TIME`]; a member's count is
-    /// up to date for its own waits, others' may arrive later.
-    pub fn slow_waits(&self) -> usize {
-        self.team.slow.load(Ordering::Relaxed)
-    }
-
-    /// Threads of the pool (the door may have admitted fewer members).
-    pub fn threads(&self) -> usize {
-        self.team.threads
     }
 }
 
@@ -160,7 +142,6 @@ impl Team {
             arrived: AtomicUsize::new(0),
             generation: AtomicUsize::new(0),
             poison: AtomicBool::new(false),
-            slow: AtomicUsize::new(0),
         }
     }
 
@@ -183,7 +164,7 @@ impl Team {
             self.joined.fetch_or(CLOSED, Ordering::AcqRel);
         }
         let since = Instant::now();
-        let mut pause = Pause::new(false);
+        let mut pause = Pause::new();
         let members = loop {
             let c = self.joined.load(Ordering::Acquire);
             if c & CLOSED != 0 {
@@ -203,14 +184,6 @@ impl Team {
     }
 }
 
-/// Runs `work` once per member of a team of the current pool's threads, at most `max_members`
-/// of them (see the module doc)
-/// and returns the members' results in slot order (at least one: the calling thread is always
-/// admitted or another thread is). A panic of any member is re-raised here.
-pub fn run<R: Send>(max_members: usize, work: impl Fn(Member<'_>) -> R + Sync) -> Vec<R> {
-    run_with_door(max_members, DOOR_WAIT, work)
-}
-
 /// Runs `work` as the only member of a team on the calling thread (no pool thread, no door;
 /// its barriers return at once): the same code as [`run`] on one thread.
 pub fn solo<R>(work: impl FnOnce(Member<'_>) -> R) -> R {
@@ -222,7 +195,11 @@ pub fn solo<R>(work: impl FnOnce(Member<'_>) -> R) -> R {
     })
 }
 
-/// [`run`] with another door wait (tests: a long one, so that every thread is admitted).
+/// Runs `work` once per member of a team of the current pool's threads, at most `max_members`
+/// of them (see the module doc), the door open for `door` ([`DOOR_WAIT`]; tests use a long one,
+/// so that every thread is admitted), and returns the members' results in slot order (at least
+/// one: the calling thread is always admitted or another thread is). A panic of any member is
+/// re-raised here.
 pub(crate) fn run_with_door<R: Send>(
     max_members: usize,
     door: Duration,
@@ -256,7 +233,7 @@ mod tests {
     fn members_pass_barriers_in_step() {
         let counter = AtomicUsize::new(0);
         let seen = pool(3).install(|| {
-            run(usize::MAX, |m| {
+            run_with_door(usize::MAX, DOOR_WAIT, |m| {
                 let mut seen = Vec::new();
                 for round in 0..200 {
                     counter.fetch_add(1, Ordering::Relaxed);
@@ -303,8 +280,8 @@ mod tests {
         // spin at barriers, so without the door one member of each would wait forever.
         p.install(|| {
             rayon::join(
-                || run(usize::MAX, |m| (0..1000).for_each(|_| m.wait())).len(),
-                || run(usize::MAX, |m| (0..1000).for_each(|_| m.wait())).len(),
+                || run_with_door(usize::MAX, DOOR_WAIT, |m| (0..1000).for_each(|_| m.wait())).len(),
+                || run_with_door(usize::MAX, DOOR_WAIT, |m| (0..1000).for_each(|_| m.wait())).len(),
             )
         });
     }
