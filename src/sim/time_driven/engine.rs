@@ -2033,6 +2033,36 @@ mod domain_tests {
         });
     }
 
+    /// The point of the domains: in the bench system (1200 disks, 400 x 9, cut across x)
+    /// the threads exchange only a small halo per step. Prints the figures quoted in
+    /// docs/performance.md ("Sixth round").
+    #[test]
+    fn the_halo_is_a_small_part_of_the_bench_system() {
+        let s = crate::bench::tdmd::scene("gear5");
+        let mut e = TimeEngine::<2, true, false>::new(&s);
+        assert!(e.uses_domains(), "N = 1200 runs on the domains by default");
+        e.run_until(0.5);
+        let dec = e.domains.0.as_ref().expect("a decomposition");
+        for (d, dm) in dec.domains.iter().enumerate() {
+            let dm = super::super::domains::lock(dm);
+            let m = dm.ids.len();
+            println!(
+                "domain {d}: {m} particles, {} inner entries, {} cross entries, {} ghosts, {} published",
+                dm.partner.len(),
+                dm.cross_own.len(),
+                dm.ghosts,
+                dm.halo_out.len()
+            );
+            assert_eq!(m, 600);
+            assert!(dm.ghosts > 0 && dm.ghosts * 10 < m, "{} ghosts", dm.ghosts);
+        }
+        println!(
+            "{} partitions over {} list builds",
+            e.partitions,
+            e.list_builds()
+        );
+    }
+
     /// The domains change the serial trajectory by round-off only: the same list builds,
     /// counts and (to round-off) positions and books, over a run long enough for several
     /// partitions. The books would differ by the cross pairs' share if both domains booked
