@@ -683,6 +683,20 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
     }
 
+    /// The arrays the domains copy from and to, and the list flags.
+    fn domain_arrays(&mut self) -> (EngineArrays<'_>, &mut [u8]) {
+        (
+            EngineArrays {
+                r: &mut self.r,
+                acc: &mut self.acc,
+                wall_contact: &mut self.wall_contact,
+                radius: &self.radius,
+                wall_kr: &self.wall_kr,
+            },
+            &mut self.list.flags,
+        )
+    }
+
     /// Runs Gear steps on the spatial domains (`domains.rs`) until `target` or until the
     /// neighbour list must be rebuilt: the list check of the first step, the decomposition of
     /// the current build (made once per build, from the positions of the build), the state
@@ -704,13 +718,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 // The engine's arrays must hold the whole state before a new partition (the
                 // flags came back at the end of the last region; the list is new since).
                 if old.partial {
-                    let mut arrays = EngineArrays {
-                        r: &mut self.r,
-                        acc: &mut self.acc,
-                        wall_contact: &mut self.wall_contact,
-                        radius: &self.radius,
-                        wall_kr: &self.wall_kr,
-                    };
+                    let (mut arrays, _) = self.domain_arrays();
                     old.store(&mut arrays, None, true);
                 }
                 None
@@ -746,14 +754,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                     self.list.built_at(),
                     &self.radius,
                 );
-                let arrays = EngineArrays {
-                    r: &mut self.r,
-                    acc: &mut self.acc,
-                    wall_contact: &mut self.wall_contact,
-                    radius: &self.radius,
-                    wall_kr: &self.wall_kr,
-                };
-                d.load(&arrays, self.acc_is_start, first);
+                let acc_is_start = self.acc_is_start;
+                let (arrays, _) = self.domain_arrays();
+                d.load(&arrays, acc_is_start, first);
                 d
             }
         };
@@ -819,14 +822,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         // Between regions of one run only the positions (for the list build) and the flags
         // come back; at the end of the run everything does.
         let full = !(rebuild && self.steps < target);
-        let mut arrays = EngineArrays {
-            r: &mut self.r,
-            acc: &mut self.acc,
-            wall_contact: &mut self.wall_contact,
-            radius: &self.radius,
-            wall_kr: &self.wall_kr,
-        };
-        dec.store(&mut arrays, Some(&mut self.list.flags), full);
+        let (mut arrays, flags) = self.domain_arrays();
+        dec.store(&mut arrays, Some(flags), full);
         dec.partial = !full;
         dec.holds_step = Some(self.steps);
         let (books, bound, since) = dec.books();
