@@ -2030,6 +2030,77 @@ mod domain_tests {
         });
     }
 
+    /// 3D (the same code): 400 wet spheres, cut across the longest (periodic) axis; one and
+    /// two threads give the same bits, and the serial path agrees to round-off.
+    #[test]
+    fn spheres_on_domains_agree_with_the_serial_step() {
+        let text = "dimension = 3\ngravity = 1.0\n[box]\nsize = [16.0, 8.0, 8.0]\n\
+            boundary = [\"periodic\", \"periodic\", \"wall\"]\n[particles]\ncount = 400\n\
+            polydispersity = 0.06\n[contact]\ndamping = 1.5e-4\n[capillary]\n\
+            model = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n[drive]\nkind = \"sine\"\n\
+            gamma = 5.0\ne_star = 10.0\n[initial]\ntemperature_over_ecb = 20.0\nseed = 5\n\
+            [run]\nduration = 1.0\n[engine]\nkind = \"time\"\n";
+        let scene = Scene::from_toml_str(text, "domain test 3D").expect("valid scene");
+        let run = |mode: DomainMode, threads: usize| {
+            pool(threads).install(|| {
+                let mut e = TimeEngine::<3, true, true>::new(&scene);
+                e.set_domain_mode(mode);
+                e.team_door = std::time::Duration::from_secs(60);
+                e.run_until(0.4);
+                e
+            })
+        };
+        let one = run(DomainMode::Always, 1);
+        let two = run(DomainMode::Always, 2);
+        let serial = run(DomainMode::Never, 1);
+        assert!(
+            two.team_steps() + 1 >= two.steps(),
+            "two members ran the steps"
+        );
+        assert!(one.counts().bridge_formations > 0, "bridges form");
+        let bits = |e: &TimeEngine<3, true, true>| -> Vec<u64> {
+            let mut v: Vec<u64> = e.positions_flat().iter().map(|x| x.to_bits()).collect();
+            v.extend(e.velocities_flat().iter().map(|x| x.to_bits()));
+            let l = e.energy();
+            v.extend(
+                [
+                    l.dissipated_restitution,
+                    l.dissipated_ruptures,
+                    l.work_by_drive,
+                ]
+                .map(f64::to_bits),
+            );
+            v.extend([
+                e.counts().pair_collisions,
+                e.counts().bridge_ruptures,
+                e.list_builds(),
+            ]);
+            v
+        };
+        assert!(bits(&one) == bits(&two), "one and two threads differ");
+        assert_eq!(serial.list_builds(), one.list_builds());
+        assert_eq!(
+            serial.counts().pair_collisions,
+            one.counts().pair_collisions
+        );
+        assert_eq!(
+            serial.counts().bridge_formations,
+            one.counts().bridge_formations
+        );
+        assert_eq!(
+            serial.counts().bridge_ruptures,
+            one.counts().bridge_ruptures
+        );
+        assert_eq!(serial.bridges(), one.bridges());
+        let dx = serial
+            .positions_flat()
+            .iter()
+            .zip(&one.positions_flat())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(dx < 1e-9, "positions differ by {dx}");
+    }
+
     /// The point of the domains: in the bench system (1200 disks, 400 x 9, cut across x)
     /// the threads exchange only a small halo per step. Prints the figures quoted in
     /// docs/performance.md ("Sixth round").
