@@ -38,7 +38,6 @@
 use super::integrator::gear_correct_predict_axis;
 use super::neighbours::{BOND, CONTACT};
 use super::walls::{WallAxis, WallBooks, wall_forces};
-use crate::physics::hertz;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, RwLock};
 
@@ -771,7 +770,6 @@ fn cross_forces<const D: usize, const WET: bool>(
 ) -> super::engine::PairBooks {
     let m = radius.len();
     let mut b = super::engine::PairBooks::default();
-    let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
     let (own, ghost) = (&own[..flags.len()], &ghost[..flags.len()]);
     for q in 0..flags.len() {
         let i = own[q] as usize;
@@ -801,57 +799,31 @@ fn cross_forces<const D: usize, const WET: bool>(
             }
             continue;
         }
-        let r = r2.sqrt();
-        let inv = 1.0 / r;
-        let overlap = sig - r;
-        let mut fmag = 0.0;
-        let mut new_fl = fl;
-        if overlap > 0.0 {
-            if fl & CONTACT == 0 {
-                new_fl |= CONTACT;
-                b.onsets += 1;
-            }
-            b.max_overlap = b.max_overlap.max(overlap);
-            // xi_dot = -(v_i - v_j) . n, n = d / r.
-            let mut vn = 0.0;
-            for k in 0..D {
-                vn += (v[k * m + i] - g[D + k]) * d[k];
-            }
-            let xi_dot = -vn * inv * vs;
-            let kr = k_pair * (ri * rj / sig).sqrt();
-            // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
-            let total = hertz::force(kr, overlap, xi_dot, a_d);
-            if a_d > 0.0 {
-                let elastic = kr * overlap * overlap.sqrt();
-                b.dissipated += (total - elastic) * xi_dot * dt;
-            }
-            fmag = total;
-            if WET && fl & BOND == 0 {
-                // MODEL.md 3.1: a bridge forms at contact.
-                new_fl |= BOND;
-                b.formations += 1;
-                b.bridge_ledger += pc.bridge_force * overlap;
-            }
-        } else {
-            new_fl &= !CONTACT;
+        let pr = super::engine::pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| {
+            v[k * m + i] - g[D + k]
+        });
+        if pr.onset {
+            b.onsets += 1;
         }
-        if WET && new_fl & BOND != 0 {
-            let s = -overlap;
-            if s > pc.s_crit {
-                // Rupture: the bridge energy F_B s leaves the system.
-                new_fl &= !BOND;
-                b.ruptures += 1;
-                b.bridge_ledger += pc.bridge_force * s;
-            } else {
-                // MODEL.md 3.1: constant attraction F_B along the line of centres.
-                fmag -= pc.bridge_force;
-            }
+        if pr.overlap > 0.0 {
+            b.max_overlap = b.max_overlap.max(pr.overlap);
         }
-        if new_fl != fl {
-            flags[q] = new_fl;
+        if pr.damped {
+            b.dissipated += pr.dissipated;
         }
-        if fmag != 0.0 {
-            let s = fmag * inv;
+        if pr.formation {
+            b.formations += 1;
+            b.bridge_ledger += pr.ledger;
+        }
+        if pr.rupture {
+            b.ruptures += 1;
+            b.bridge_ledger += pr.ledger;
+        }
+        if pr.flags != fl {
+            flags[q] = pr.flags;
+        }
+        if pr.fmag != 0.0 {
+            let s = pr.fmag * pr.inv;
             for k in 0..D {
                 f[k * m + i] += s * d[k];
             }

@@ -726,19 +726,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             None => None,
         };
         let mut dec = match kept {
-            Some(mut d) => {
-                if d.built_for != builds {
-                    d.split_lists(
-                        builds,
-                        &self.list.start,
-                        &self.list.partner,
-                        &self.list.flags,
-                        self.list.built_at(),
-                        &self.radius,
-                    );
-                }
-                d
-            }
+            Some(d) => d,
             None => {
                 self.partitions += 1;
                 let mut d = Box::new(Decomposition::new(
@@ -746,20 +734,23 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                     self.p.size,
                     self.list.built_at(),
                 ));
-                d.split_lists(
-                    builds,
-                    &self.list.start,
-                    &self.list.partner,
-                    &self.list.flags,
-                    self.list.built_at(),
-                    &self.radius,
-                );
                 let acc_is_start = self.acc_is_start;
                 let (arrays, _) = self.domain_arrays();
                 d.load(&arrays, acc_is_start, first);
                 d
             }
         };
+        // A new decomposition has no lists yet; a kept one re-splits after a build.
+        if dec.built_for != builds {
+            dec.split_lists(
+                builds,
+                &self.list.start,
+                &self.list.partner,
+                &self.list.flags,
+                self.list.built_at(),
+                &self.radius,
+            );
+        }
         dec.begin(self.moved_bound, self.since_check, first);
         let init = self.force_start();
         let p = &self.p;
@@ -1479,7 +1470,6 @@ fn pair_chunk<const D: usize, const WET: bool>(
     for k in 0..D {
         half[k] = 0.5 * pc.size[k];
     }
-    let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
     let mut b = PairBooks::default();
     let len = flags.len();
     let (row_of, partner, pf) = (&row_of[..len], &partner[..len], &mut pf[..len * D]);
@@ -1512,58 +1502,29 @@ fn pair_chunk<const D: usize, const WET: bool>(
             out.fill(0.0);
             continue;
         }
-        let r = r2.sqrt();
-        let inv = 1.0 / r;
-        let overlap = sig - r;
-        let mut fmag = 0.0;
-        let mut new_fl = fl;
-        if overlap > 0.0 {
-            if fl & CONTACT == 0 {
-                new_fl |= CONTACT;
-                b.onsets += 1;
-            }
-            b.max_overlap = b.max_overlap.max(overlap);
-            // xi_dot = -(v_i - v_j) . n, n = d / r.
-            let mut vn = 0.0;
-            for k in 0..D {
-                vn += (vsl[k][i] - vsl[k][j]) * d[k];
-            }
-            let xi_dot = -vn * inv * vs;
-            let kr = k_pair * (ri * rj / sig).sqrt();
-            // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
-            let total = hertz::force(kr, overlap, xi_dot, a_d);
-            if a_d > 0.0 {
-                let elastic = kr * overlap * overlap.sqrt();
-                b.dissipated += (total - elastic) * xi_dot * dt;
-            }
-            fmag = total;
-            if WET && fl & BOND == 0 {
-                // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
-                // F_B (-overlap).
-                new_fl |= BOND;
-                b.formations += 1;
-                b.bridge_ledger += pc.bridge_force * overlap;
-            }
-        } else {
-            new_fl &= !CONTACT;
+        let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| vsl[k][i] - vsl[k][j]);
+        if pr.onset {
+            b.onsets += 1;
         }
-        if WET && new_fl & BOND != 0 {
-            let s = -overlap;
-            if s > pc.s_crit {
-                // Rupture: the bridge energy F_B s leaves the system.
-                new_fl &= !BOND;
-                b.ruptures += 1;
-                b.bridge_ledger += pc.bridge_force * s;
-            } else {
-                // MODEL.md 3.1: constant attraction F_B along the line of centres.
-                fmag -= pc.bridge_force;
-            }
+        if pr.overlap > 0.0 {
+            b.max_overlap = b.max_overlap.max(pr.overlap);
         }
-        if new_fl != fl {
-            flags[m] = new_fl;
+        if pr.damped {
+            b.dissipated += pr.dissipated;
         }
-        if fmag != 0.0 {
-            let s = fmag * inv;
+        if pr.formation {
+            b.formations += 1;
+            b.bridge_ledger += pr.ledger;
+        }
+        if pr.rupture {
+            b.ruptures += 1;
+            b.bridge_ledger += pr.ledger;
+        }
+        if pr.flags != fl {
+            flags[m] = pr.flags;
+        }
+        if pr.fmag != 0.0 {
+            let s = pr.fmag * pr.inv;
             for k in 0..D {
                 out[k] = s * d[k];
             }
@@ -1572,6 +1533,103 @@ fn pair_chunk<const D: usize, const WET: bool>(
         }
     }
     b
+}
+
+/// The response of one pair within reach (Eq. 2.7 and MODEL.md 3.1): force magnitude along the
+/// line of centres, new contact and bond flags, and what the step books. Shared by every pair
+/// loop (the serial loop, the parallel chunks, the spatial domains' cross pairs), so that they
+/// take the same decisions with the same arithmetic; `vrel(k)` is `v_i - v_j` along axis `k`
+/// (velocity array units), `d` the nearest-image `x_i - x_j`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PairResponse {
+    /// Force magnitude on `i` along `d / r` (0: no force).
+    pub fmag: f64,
+    /// `1 / r`.
+    pub inv: f64,
+    /// The pair's new flags.
+    pub flags: u8,
+    /// `R_i + R_j - r` (booked as the largest overlap when positive).
+    pub overlap: f64,
+    pub onset: bool,
+    pub formation: bool,
+    pub rupture: bool,
+    /// Whether the damping did work, and that work `(F - F_elastic) xi_dot dt`.
+    pub damped: bool,
+    pub dissipated: f64,
+    /// The bridge energy booked at a formation (`F_B overlap`) or rupture (`F_B s`).
+    pub ledger: f64,
+}
+
+/// See [`PairResponse`]; `fl` the pair's flags at the last evaluation.
+#[inline(always)]
+pub(super) fn pair_response<const D: usize, const WET: bool>(
+    pc: &PairConstants<D>,
+    d: &[f64; D],
+    r2: f64,
+    ri: f64,
+    rj: f64,
+    fl: u8,
+    vrel: impl Fn(usize) -> f64,
+) -> PairResponse {
+    let sig = ri + rj;
+    let r = r2.sqrt();
+    let inv = 1.0 / r;
+    let overlap = sig - r;
+    let mut out = PairResponse {
+        fmag: 0.0,
+        inv,
+        flags: fl,
+        overlap,
+        onset: false,
+        formation: false,
+        rupture: false,
+        damped: false,
+        dissipated: 0.0,
+        ledger: 0.0,
+    };
+    if overlap > 0.0 {
+        if fl & CONTACT == 0 {
+            out.flags |= CONTACT;
+            out.onset = true;
+        }
+        // xi_dot = -(v_i - v_j) . n, n = d / r.
+        let mut vn = 0.0;
+        for k in 0..D {
+            vn += vrel(k) * d[k];
+        }
+        let xi_dot = -vn * inv * pc.vs;
+        let kr = pc.stiffness * (ri * rj / sig).sqrt();
+        // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
+        let total = hertz::force(kr, overlap, xi_dot, pc.damping);
+        if pc.damping > 0.0 {
+            let elastic = kr * overlap * overlap.sqrt();
+            out.damped = true;
+            out.dissipated = (total - elastic) * xi_dot * pc.dt;
+        }
+        out.fmag = total;
+        if WET && fl & BOND == 0 {
+            // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
+            // F_B (-overlap).
+            out.flags |= BOND;
+            out.formation = true;
+            out.ledger = pc.bridge_force * overlap;
+        }
+    } else {
+        out.flags &= !CONTACT;
+    }
+    if WET && out.flags & BOND != 0 {
+        let s = -overlap;
+        if s > pc.s_crit {
+            // Rupture: the bridge energy F_B s leaves the system.
+            out.flags &= !BOND;
+            out.rupture = true;
+            out.ledger = pc.bridge_force * s;
+        } else {
+            // MODEL.md 3.1: constant attraction F_B along the line of centres.
+            out.fmag -= pc.bridge_force;
+        }
+    }
+    out
 }
 
 /// The pair loop of the serial path ([`TimeEngine::forces_then_serial`]): forces (Eq. 2.7 and
@@ -1598,7 +1656,6 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     for k in 0..D {
         half[k] = 0.5 * pc.size[k];
     }
-    let (k_pair, a_d, vs, dt) = (pc.stiffness, pc.damping, pc.vs, pc.dt);
     let mut b = PairBooks::default();
     // Partial sums of the current chunk of entries.
     let (mut diss, mut ledger, mut boundary) = (0.0, 0.0, ENTRY_CHUNK);
@@ -1651,62 +1708,33 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
                 }
                 continue;
             }
-            let r = r2.sqrt();
-            let inv = 1.0 / r;
-            let overlap = sig - r;
-            let mut fmag = 0.0;
-            let mut new_fl = fl;
-            if overlap > 0.0 {
-                if fl & CONTACT == 0 {
-                    new_fl |= CONTACT;
-                    b.onsets += 1;
-                }
-                b.max_overlap = b.max_overlap.max(overlap);
-                // xi_dot = -(v_i - v_j) . n, n = d / r.
-                let mut vn = 0.0;
-                for k in 0..D {
-                    vn += (vsl[k][i] - vsl[k][j]) * d[k];
-                }
-                let xi_dot = -vn * inv * vs;
-                let kr = k_pair * (ri * rj / sig).sqrt();
-                // Eq. 2.7: k sqrt(R_eff) (xi^(3/2) + A_d sqrt(xi) dxi/dt), never a pull.
-                let total = hertz::force(kr, overlap, xi_dot, a_d);
-                if a_d > 0.0 {
-                    let elastic = kr * overlap * overlap.sqrt();
-                    chunk_of_q!();
-                    diss += (total - elastic) * xi_dot * dt;
-                }
-                fmag = total;
-                if WET && fl & BOND == 0 {
-                    // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
-                    // F_B (-overlap).
-                    new_fl |= BOND;
-                    b.formations += 1;
-                    chunk_of_q!();
-                    ledger += pc.bridge_force * overlap;
-                }
-            } else {
-                new_fl &= !CONTACT;
+            let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| vsl[k][i] - vsl[k][j]);
+            if pr.onset {
+                b.onsets += 1;
             }
-            if WET && new_fl & BOND != 0 {
-                let s = -overlap;
-                if s > pc.s_crit {
-                    // Rupture: the bridge energy F_B s leaves the system.
-                    new_fl &= !BOND;
-                    b.ruptures += 1;
-                    chunk_of_q!();
-                    ledger += pc.bridge_force * s;
-                } else {
-                    // MODEL.md 3.1: constant attraction F_B along the line of centres.
-                    fmag -= pc.bridge_force;
-                }
+            if pr.overlap > 0.0 {
+                b.max_overlap = b.max_overlap.max(pr.overlap);
             }
-            if new_fl != fl {
-                flags[q] = new_fl;
+            if pr.damped {
+                chunk_of_q!();
+                diss += pr.dissipated;
             }
-            if fmag != 0.0 {
+            if pr.formation {
+                b.formations += 1;
+                chunk_of_q!();
+                ledger += pr.ledger;
+            }
+            if pr.rupture {
+                b.ruptures += 1;
+                chunk_of_q!();
+                ledger += pr.ledger;
+            }
+            if pr.flags != fl {
+                flags[q] = pr.flags;
+            }
+            if pr.fmag != 0.0 {
                 row_force = true;
-                let s = fmag * inv;
+                let s = pr.fmag * pr.inv;
                 for k in 0..D {
                     let fk = s * d[k];
                     fi[k] += fk;
