@@ -802,23 +802,7 @@ fn cross_forces<const D: usize, const WET: bool>(
         let pr = super::engine::pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| {
             v[k * m + i] - g[D + k]
         });
-        if pr.onset {
-            b.onsets += 1;
-        }
-        if pr.overlap > 0.0 {
-            b.max_overlap = b.max_overlap.max(pr.overlap);
-        }
-        if pr.damped {
-            b.dissipated += pr.dissipated;
-        }
-        if pr.formation {
-            b.formations += 1;
-            b.bridge_ledger += pr.ledger;
-        }
-        if pr.rupture {
-            b.ruptures += 1;
-            b.bridge_ledger += pr.ledger;
-        }
+        b.book(&pr);
         if pr.flags != fl {
             flags[q] = pr.flags;
         }

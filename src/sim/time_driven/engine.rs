@@ -1503,23 +1503,7 @@ fn pair_chunk<const D: usize, const WET: bool>(
             continue;
         }
         let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| vsl[k][i] - vsl[k][j]);
-        if pr.onset {
-            b.onsets += 1;
-        }
-        if pr.overlap > 0.0 {
-            b.max_overlap = b.max_overlap.max(pr.overlap);
-        }
-        if pr.damped {
-            b.dissipated += pr.dissipated;
-        }
-        if pr.formation {
-            b.formations += 1;
-            b.bridge_ledger += pr.ledger;
-        }
-        if pr.rupture {
-            b.ruptures += 1;
-            b.bridge_ledger += pr.ledger;
-        }
+        b.book(&pr);
         if pr.flags != fl {
             flags[m] = pr.flags;
         }
@@ -1558,6 +1542,31 @@ pub(super) struct PairResponse {
     pub dissipated: f64,
     /// The bridge energy booked at a formation (`F_B overlap`) or rupture (`F_B s`).
     pub ledger: f64,
+}
+
+impl PairBooks {
+    /// Books one pair's response in full (the parallel chunks and the domains' cross pairs;
+    /// the serial loop books the sums per chunk of entries itself).
+    #[inline(always)]
+    pub(super) fn book(&mut self, pr: &PairResponse) {
+        if pr.onset {
+            self.onsets += 1;
+        }
+        if pr.overlap > 0.0 {
+            self.max_overlap = self.max_overlap.max(pr.overlap);
+        }
+        if pr.damped {
+            self.dissipated += pr.dissipated;
+        }
+        if pr.formation {
+            self.formations += 1;
+            self.bridge_ledger += pr.ledger;
+        }
+        if pr.rupture {
+            self.ruptures += 1;
+            self.bridge_ledger += pr.ledger;
+        }
+    }
 }
 
 /// See [`PairResponse`]; `fl` the pair's flags at the last evaluation.
