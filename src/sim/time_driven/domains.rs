@@ -36,9 +36,10 @@
 //! chooses the path by the number of particles alone, never by the threads.
 
 use super::integrator::gear_correct_predict_axis;
+use super::neighbours::NeighbourList;
 use super::neighbours::{BOND, CONTACT};
 use super::walls::{WallAxis, WallBooks, wall_forces};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, RwLock};
 
 /// Domains the box is cut into (fixed, so the numbers do not depend on the thread count; a
@@ -141,7 +142,7 @@ pub(super) struct Domain<const D: usize> {
 #[derive(Debug)]
 pub(super) struct Decomposition<const D: usize> {
     /// The list build whose entries the domains' lists hold (`NeighbourList::builds`).
-    pub built_for: u64,
+    built_for: AtomicU64,
     /// The list build at which the partition was made.
     pub partitioned_at: u64,
     /// Cross entries (per domain, summed) right after the partition.
@@ -172,7 +173,7 @@ pub const REPARTITION_EVERY: u64 = 64;
 impl<const D: usize> Clone for Decomposition<D> {
     fn clone(&self) -> Self {
         Self {
-            built_for: self.built_for,
+            built_for: AtomicU64::new(self.built_for()),
             partitioned_at: self.partitioned_at,
             cross_at_partition: self.cross_at_partition,
             dom: self.dom.clone(),
@@ -282,7 +283,7 @@ impl<const D: usize> Decomposition<D> {
             dm.built_at = vec![0.0; D * m];
         }
         Self {
-            built_for: 0,
+            built_for: AtomicU64::new(0),
             partitioned_at: build,
             cross_at_partition: 0,
             dom,
@@ -306,117 +307,116 @@ impl<const D: usize> Decomposition<D> {
             || cross > 2 * self.cross_at_partition + REPARTITION_SLACK
     }
 
-    /// Splits the half list of build `build` (`start`, `partner`, `flags`, scene indices)
-    /// into each domain's inner list and cross list, numbers the ghosts, and takes the
-    /// positions of the build (`built_at`, axis-major) and the radii. Every buffer is reused.
-    #[allow(clippy::too_many_arguments)]
-    pub fn split_lists(
-        &mut self,
-        build: u64,
-        start: &[u32],
-        partner: &[u32],
-        flags: &[u8],
-        built_at: &[f64],
-        radius: &[f64],
-    ) {
+    /// Splits the half list of `list` (scene indices) into each domain's inner list and
+    /// cross list, numbers the ghosts, and takes the positions of the build and the radii
+    /// ([`Self::split_domain`] for every domain).
+    pub fn split_lists(&mut self, list: &NeighbourList<D>, radius: &[f64]) {
+        for d in 0..DOMAINS {
+            self.split_domain(d, list, radius);
+        }
+        if list.builds == self.partitioned_at {
+            self.cross_at_partition = self
+                .domains
+                .iter_mut()
+                .map(|d| get(d).cross_own.len())
+                .sum();
+        }
+        self.built_for.store(list.builds, Ordering::Relaxed);
+    }
+
+    /// The list build whose entries the domains' lists hold (`NeighbourList::builds`; 0: none).
+    pub fn built_for(&self) -> u64 {
+        self.built_for.load(Ordering::Relaxed)
+    }
+
+    /// Domain `d`'s part of [`Self::split_lists`]: its inner half list (rows and partners in
+    /// local indices, ascending as in the list), its cross entries sorted by own particle,
+    /// ghost and entry, its ghosts (the other domain's particles in cross pairs, by ascending
+    /// local index), the own particles it publishes into its halo (those in cross pairs,
+    /// ascending: the other domain's ghosts, in the other domain's ghost order), and the halo
+    /// buffers of both parities sized for them. Reads only the list and what the partition
+    /// fixed, writes only domain `d`, so the domains can be split at once by different threads.
+    pub fn split_domain(&self, d: usize, list: &NeighbourList<D>, radius: &[f64]) {
+        let (start, partner, flags) = (&list.start, &list.partner, &list.flags);
+        let built_at = list.built_at();
         let n = start.len() - 1;
         let (dom, local) = (&self.dom, &self.local);
-        let mut doms: Vec<&mut Domain<D>> = self.domains.iter_mut().map(get).collect();
-        // Inner entries as (row, partner, entry); cross entries as (own, other's local, entry).
-        let mut inner: Vec<Vec<(u32, u32, u32)>> = vec![Vec::new(); DOMAINS];
-        let mut cross: Vec<Vec<(u32, u32, u32)>> = vec![Vec::new(); DOMAINS];
+        let mut dm = lock(&self.domains[d]);
+        let dm = &mut *dm;
+        let m = dm.ids.len();
+        // Inner entries are written at once (rows come ascending); cross entries are
+        // collected as (own local, other's local, entry, other's scene index) and sorted.
+        let mut cross: Vec<(u32, u32, u32, u32)> = Vec::new();
+        dm.start.clear();
+        dm.start.resize(m + 1, 0);
+        dm.partner.clear();
+        dm.inner_src.clear();
+        dm.flags.clear();
+        dm.rows.clear();
+        let d8 = d as u8;
         for i in 0..n {
-            for q in start[i] as usize..start[i + 1] as usize {
-                let j = partner[q] as usize;
-                let (di, dj) = (dom[i] as usize, dom[j] as usize);
-                if di == dj {
-                    inner[di].push((local[i], local[j], q as u32));
-                } else {
-                    cross[di].push((local[i], local[j], q as u32));
-                    cross[dj].push((local[j], local[i], q as u32));
+            let row = start[i] as usize..start[i + 1] as usize;
+            if dom[i] == d8 {
+                let li = local[i] as usize;
+                for q in row {
+                    let j = partner[q] as usize;
+                    if dom[j] == d8 {
+                        dm.partner.push(local[j]);
+                        dm.inner_src.push(q as u32);
+                        dm.flags.push(flags[q]);
+                    } else {
+                        cross.push((local[i], local[j], q as u32, j as u32));
+                    }
                 }
-            }
-        }
-        // Ghost numbers: the other domain's locals, ascending.
-        let ghost_of: Vec<Vec<u32>> = cross
-            .iter_mut()
-            .map(|c| {
-                c.sort_unstable();
-                let mut g: Vec<u32> = c.iter().map(|e| e.1).collect();
-                g.sort_unstable();
-                g.dedup();
-                g
-            })
-            .collect();
-        for d in 0..DOMAINS {
-            let other = 1 - d;
-            let other_ids = doms[other].ids.clone();
-            let dm = &mut *doms[d];
-            let m = dm.ids.len();
-            dm.ghosts = ghost_of[d].len();
-            dm.ghost_radius.clear();
-            dm.ghost_radius.extend(
-                ghost_of[d]
-                    .iter()
-                    .map(|&lj| radius[other_ids[lj as usize] as usize]),
-            );
-            dm.halo_out.clear();
-            dm.halo_out.extend_from_slice(&ghost_of[other]);
-            // Inner half list, rows by counting (entries come in ascending rows already).
-            let e = &inner[d];
-            dm.start.clear();
-            dm.start.resize(m + 1, 0);
-            for &(li, _, _) in e {
-                dm.start[li as usize + 1] += 1;
-            }
-            for li in 0..m {
-                dm.start[li + 1] += dm.start[li];
-            }
-            dm.partner.clear();
-            dm.partner.extend(e.iter().map(|t| t.1));
-            dm.inner_src.clear();
-            dm.inner_src.extend(e.iter().map(|t| t.2));
-            dm.flags.clear();
-            dm.flags.extend(e.iter().map(|t| flags[t.2 as usize]));
-            dm.rows.clear();
-            for li in 0..m {
+                dm.start[li + 1] = dm.partner.len() as u32;
                 if dm.start[li + 1] > dm.start[li] {
                     dm.rows.push(li as u32);
                 }
-            }
-            let c = &cross[d];
-            let g = &ghost_of[d];
-            dm.cross_own.clear();
-            dm.cross_own.extend(c.iter().map(|t| t.0));
-            dm.cross_ghost.clear();
-            dm.cross_ghost.extend(
-                c.iter()
-                    .map(|t| g.binary_search(&t.1).expect("ghost listed") as u32),
-            );
-            dm.cross_src.clear();
-            dm.cross_src.extend(c.iter().map(|t| t.2));
-            dm.cross_flags.clear();
-            dm.cross_flags.extend(c.iter().map(|t| flags[t.2 as usize]));
-            for (li, &i) in dm.ids.iter().enumerate() {
-                for k in 0..D {
-                    dm.built_at[k * m + li] = built_at[k * n + i as usize];
+            } else {
+                for q in row {
+                    let j = partner[q] as usize;
+                    if dom[j] == d8 {
+                        cross.push((local[j], local[i], q as u32, i as u32));
+                    }
                 }
             }
         }
-        for (d, h) in self.halo.iter_mut().enumerate() {
-            let len = 2 * D * doms[d].halo_out.len();
-            for b in h.iter_mut() {
-                let b = b
-                    .get_mut()
-                    .unwrap_or_else(std::sync::PoisonError::into_inner);
-                b.clear();
-                b.resize(len, 0.0);
+        cross.sort_unstable();
+        // Ghost numbers: the other domain's locals, ascending.
+        let mut ghosts: Vec<(u32, u32)> = cross.iter().map(|e| (e.1, e.3)).collect();
+        ghosts.sort_unstable();
+        ghosts.dedup();
+        dm.ghosts = ghosts.len();
+        dm.ghost_radius.clear();
+        dm.ghost_radius
+            .extend(ghosts.iter().map(|&(_, j)| radius[j as usize]));
+        dm.halo_out.clear();
+        dm.halo_out.extend(cross.iter().map(|e| e.0));
+        dm.halo_out.dedup();
+        dm.cross_own.clear();
+        dm.cross_own.extend(cross.iter().map(|e| e.0));
+        dm.cross_ghost.clear();
+        dm.cross_ghost.extend(cross.iter().map(|e| {
+            ghosts
+                .binary_search_by_key(&e.1, |g| g.0)
+                .expect("ghost listed") as u32
+        }));
+        dm.cross_src.clear();
+        dm.cross_src.extend(cross.iter().map(|e| e.2));
+        dm.cross_flags.clear();
+        dm.cross_flags
+            .extend(cross.iter().map(|e| flags[e.2 as usize]));
+        for (li, &i) in dm.ids.iter().enumerate() {
+            for k in 0..D {
+                dm.built_at[k * m + li] = built_at[k * n + i as usize];
             }
         }
-        if build == self.partitioned_at {
-            self.cross_at_partition = doms.iter().map(|d| d.cross_own.len()).sum();
+        let len = 2 * D * dm.halo_out.len();
+        for b in &self.halo[d] {
+            let mut b = write(b);
+            b.clear();
+            b.resize(len, 0.0);
         }
-        self.built_for = build;
     }
 
     /// Copies the engine's state into the domains (Gear derivatives, forces, wall contacts,

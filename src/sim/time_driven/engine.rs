@@ -710,7 +710,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let kept = match self.domains.0.take() {
             Some(d)
                 if d.holds_step == Some(first)
-                    && (d.built_for == builds || !d.wants_new_partition(builds)) =>
+                    && (d.built_for() == builds || !d.wants_new_partition(builds)) =>
             {
                 Some(d)
             }
@@ -741,15 +741,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
         };
         // A new decomposition has no lists yet; a kept one re-splits after a build.
-        if dec.built_for != builds {
-            dec.split_lists(
-                builds,
-                &self.list.start,
-                &self.list.partner,
-                &self.list.flags,
-                self.list.built_at(),
-                &self.radius,
-            );
+        if dec.built_for() != builds {
+            dec.split_lists(&self.list, &self.radius);
         }
         dec.begin(self.moved_bound, self.since_check, first);
         let init = self.force_start();

@@ -81,7 +81,7 @@ pub const PARALLEL_BUILD_MIN: usize = 1024;
 
 /// The rows of part of a build: partners, flags, row lengths, the first lost flagged pair.
 #[derive(Debug, Clone, Default)]
-struct RowScan {
+pub struct RowScan {
     partner: Vec<u32>,
     flags: Vec<u8>,
     len: Vec<u32>,
@@ -224,8 +224,30 @@ impl<const D: usize> NeighbourList<D> {
 
     /// Rebuilds the list from positions `x` (axis-major) and radii, keeping the flags of pairs
     /// that stay listed (a flagged pair always does: it is within `s_crit` of contact).
+    ///
+    /// The three phases ([`Self::begin_build`], [`Self::scan_part`] for both parts,
+    /// [`Self::finish_build`]) can also be run by a team of threads (the spatial domains build
+    /// the list inside their team, `domains.rs`); the list is the same either way.
     pub fn build(&mut self, x: &[f64], radius: &[f64]) {
-        let n = radius.len();
+        self.begin_build(x);
+        let [mut lo, mut hi] = self.take_scans();
+        if radius.len() >= PARALLEL_BUILD_MIN && rayon::current_num_threads() > 1 {
+            let this = &*self;
+            rayon::join(
+                || this.scan_part(radius, 0, &mut lo),
+                || this.scan_part(radius, 1, &mut hi),
+            );
+        } else {
+            self.scan_part(radius, 0, &mut lo);
+            self.scan_part(radius, 1, &mut hi);
+        }
+        self.finish_build([lo, hi]);
+    }
+
+    /// First phase of a build: the old rows kept for the flags, the positions of the build
+    /// (`x`, axis-major) and the particles binned into the cells.
+    pub fn begin_build(&mut self, x: &[f64]) {
+        let n = self.next.len();
         self.builds += 1;
         std::mem::swap(&mut self.start, &mut self.old_start);
         std::mem::swap(&mut self.partner, &mut self.old_partner);
@@ -253,23 +275,28 @@ impl<const D: usize> NeighbourList<D> {
             self.next[i] = self.head[idx];
             self.head[idx] = i as u32;
         }
-        // The rows: on two threads from this size on (the rows are independent; the same
-        // list either way), else on the calling thread.
-        let mut lo = std::mem::take(&mut self.scan[0]);
-        let mut hi = std::mem::take(&mut self.scan[1]);
-        if n >= PARALLEL_BUILD_MIN && rayon::current_num_threads() > 1 {
-            let h = n / 2;
-            let this = &*self;
-            rayon::join(
-                || this.scan_rows(x, radius, 0..h, &mut lo),
-                || this.scan_rows(x, radius, h..n, &mut hi),
-            );
-        } else {
-            self.scan_rows(x, radius, 0..n, &mut lo);
-            hi.clear();
-        }
+    }
+
+    /// The reused buffers of the two parts of the row scan (give them back through
+    /// [`Self::finish_build`]).
+    pub fn take_scans(&mut self) -> [RowScan; 2] {
+        std::mem::take(&mut self.scan)
+    }
+
+    /// Second phase of a build: the rows of part `part` (0: the first `n / 2` particles, 1:
+    /// the rest) into `out`. The parts are independent: two threads may scan them at once.
+    pub fn scan_part(&self, radius: &[f64], part: usize, out: &mut RowScan) {
+        let n = radius.len();
+        let h = n / 2;
+        let range = if part == 0 { 0..h } else { h..n };
+        self.scan_rows(&self.built_at, radius, range, out);
+    }
+
+    /// Last phase of a build: the parts' rows joined into the list, and the transposed list.
+    pub fn finish_build(&mut self, parts: [RowScan; 2]) {
+        let n = self.next.len();
         let mut i = 0;
-        for part in [&lo, &hi] {
+        for part in &parts {
             let base = self.partner.len();
             self.partner.extend_from_slice(&part.partner);
             self.flags.extend_from_slice(&part.flags);
@@ -287,7 +314,7 @@ impl<const D: usize> NeighbourList<D> {
                 self.lost_pair = part.lost;
             }
         }
-        self.scan = [lo, hi];
+        self.scan = parts;
         self.start[n] = self.partner.len() as u32;
         // The transposed list, by counting: entries of each partner in ascending order.
         self.in_start.fill(0);
