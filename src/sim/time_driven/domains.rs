@@ -36,8 +36,8 @@
 //! chooses the path by the number of particles alone, never by the threads.
 
 use super::integrator::gear_correct_predict_axis;
-use super::neighbours::NeighbourList;
 use super::neighbours::{BOND, CONTACT};
+use super::neighbours::{NeighbourList, RowScan};
 use super::walls::{WallAxis, WallBooks, wall_forces};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, RwLock};
@@ -83,6 +83,48 @@ pub(super) struct DomainBooks {
 /// What each domain booked in a region, in domain order: counts and largest overlap, and the
 /// per-step sums (dissipation, bridge ledger, drive work).
 pub(super) type RegionBooks = Vec<(DomainBooks, Vec<[f64; 3]>)>;
+
+/// How a region of domain steps ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum RegionEnd {
+    /// At the run's target step.
+    Target,
+    /// A domain's check asks for a list build before the next step (at the target step, or
+    /// without a [`TeamBuild`]).
+    Rebuild,
+    /// The team rebuilt the list and the build calls for a new partition
+    /// ([`Decomposition::wants_new_partition`]); the domains still hold the lists of the
+    /// build before.
+    Repartition,
+}
+
+/// What a team needs to rebuild the neighbour list without leaving its region (the threads
+/// stay awake: a build handed to a sleeping pool thread runs serially in effect): the engine's
+/// list and positions, the radii, the two parts of the row scan. The list is the one the
+/// engine's `update_list` would build (same positions, same code), so a region that builds
+/// inside the team gives the numbers of one that stops for the build.
+pub(super) struct TeamBuild<'a, const D: usize> {
+    list: RwLock<&'a mut NeighbourList<D>>,
+    x: Mutex<&'a mut [f64]>,
+    radius: &'a [f64],
+    scans: [Mutex<RowScan>; 2],
+    /// Set by member 0 when the new build calls for a new partition.
+    repartition: AtomicBool,
+}
+
+impl<'a, const D: usize> TeamBuild<'a, D> {
+    /// The engine's list, its positions `x` (axis-major, written back before a build) and
+    /// the radii.
+    pub fn new(list: &'a mut NeighbourList<D>, x: &'a mut [f64], radius: &'a [f64]) -> Self {
+        Self {
+            list: RwLock::new(list),
+            x: Mutex::new(x),
+            radius,
+            scans: Default::default(),
+            repartition: AtomicBool::new(false),
+        }
+    }
+}
 
 /// One domain: its particles' state in local order, its lists and its halo bookkeeping.
 #[derive(Debug, Clone, Default)]
@@ -476,36 +518,16 @@ impl<const D: usize> Decomposition<D> {
         let n = e.radius.len();
         for dm in &mut self.domains {
             let dm = get(dm);
-            let m = dm.ids.len();
-            for k in 0..D {
-                let arrays = if full { 6 } else { 1 };
-                for (q, src) in dm.r.iter().enumerate().take(arrays) {
-                    let dst = &mut e.r[q][k * n..(k + 1) * n];
-                    for (&v, &i) in src[k * m..(k + 1) * m].iter().zip(&dm.ids) {
-                        dst[i as usize] = v;
-                    }
-                }
-                if full {
-                    let dst = &mut e.acc[k * n..(k + 1) * n];
-                    for (&v, &i) in dm.acc[k * m..(k + 1) * m].iter().zip(&dm.ids) {
-                        dst[i as usize] = v;
-                    }
-                    let dst = &mut e.wall_contact[k * n..(k + 1) * n];
-                    for (&v, &i) in dm.wall_contact[k * m..(k + 1) * m].iter().zip(&dm.ids) {
-                        dst[i as usize] = v;
-                    }
-                }
+            let arrays = if full { 6 } else { 1 };
+            for (src, dst) in dm.r.iter().zip(e.r.iter_mut()).take(arrays) {
+                dm.scatter(src, dst, n);
             }
-            let Some(flags) = flags.as_deref_mut() else {
-                continue;
-            };
-            for (&f, &q) in dm.flags.iter().zip(&dm.inner_src) {
-                flags[q as usize] = f;
+            if full {
+                dm.scatter(&dm.acc, e.acc, n);
+                dm.scatter(&dm.wall_contact, e.wall_contact, n);
             }
-            if dm.books_cross {
-                for (&f, &q) in dm.cross_flags.iter().zip(&dm.cross_src) {
-                    flags[q as usize] = f;
-                }
+            if let Some(flags) = flags.as_deref_mut() {
+                dm.scatter_flags(flags);
             }
         }
     }
@@ -549,45 +571,169 @@ impl<const D: usize> Decomposition<D> {
 
     /// Runs the steps of one member of a team of `members` (it takes domains `slot`,
     /// `slot + members`, ...): global steps `first..` until `target` or until some domain's
-    /// check asks for a rebuild. `wait` is the team's barrier. Returns the steps taken and
-    /// whether the region stopped for a rebuild. Every member returns the same.
+    /// check asks for a list build. With `build`, the team builds the list itself
+    /// ([`Self::build_in_team`]) and goes on, unless the build calls for a new partition.
+    /// `wait` is the team's barrier. Returns the steps taken and how the region ended. Every
+    /// member returns the same.
     #[allow(clippy::too_many_arguments)]
     pub fn run_member<const WET: bool>(
         &self,
         c: &StepConstants<D>,
         walls_at: &(dyn Fn(u64) -> [WallAxis; D] + Sync),
         flush_at: &(dyn Fn(u64) -> bool + Sync),
+        build: Option<&TeamBuild<'_, D>>,
         slot: usize,
         members: usize,
         first: u64,
         target: u64,
         wait: &dyn Fn(),
-    ) -> (u64, bool) {
+    ) -> (u64, RegionEnd) {
         let mine: Vec<usize> = (slot..DOMAINS).step_by(members.max(1)).collect();
-        let mut guards: Vec<_> = mine.iter().map(|&d| lock(&self.domains[d])).collect();
         let mut s = first;
         loop {
-            let parity = (s % 2) as usize;
-            let walls = walls_at(s + 1);
-            let flush = flush_at(s);
-            for (g, &d) in guards.iter_mut().zip(&mine) {
-                let other = 1 - d;
-                let ghosts = read(&self.halo[other][parity]);
-                let mut next = write(&self.halo[d][1 - parity]);
-                let stop = g.step::<WET>(c, &walls, flush, &ghosts, &mut next);
-                self.stop[d][1 - parity].store(stop, Ordering::Relaxed);
+            let mut guards: Vec<_> = mine.iter().map(|&d| lock(&self.domains[d])).collect();
+            let rebuild = loop {
+                let parity = (s % 2) as usize;
+                let walls = walls_at(s + 1);
+                let flush = flush_at(s);
+                for (g, &d) in guards.iter_mut().zip(&mine) {
+                    let other = 1 - d;
+                    let ghosts = read(&self.halo[other][parity]);
+                    let mut next = write(&self.halo[d][1 - parity]);
+                    let stop = g.step::<WET>(c, &walls, flush, &ghosts, &mut next);
+                    self.stop[d][1 - parity].store(stop, Ordering::Relaxed);
+                }
+                wait();
+                s += 1;
+                let rebuild =
+                    (0..DOMAINS).any(|d| self.stop[d][1 - parity].load(Ordering::Relaxed));
+                if rebuild || s >= target {
+                    break rebuild;
+                }
+            };
+            drop(guards);
+            match build {
+                Some(b) if rebuild && s < target => {
+                    if !self.build_in_team(b, &mine, slot, members, s, wait) {
+                        return (s - first, RegionEnd::Repartition);
+                    }
+                }
+                _ => {
+                    let end = if rebuild {
+                        RegionEnd::Rebuild
+                    } else {
+                        RegionEnd::Target
+                    };
+                    return (s - first, end);
+                }
             }
-            wait();
-            s += 1;
-            let rebuild = (0..DOMAINS).any(|d| self.stop[d][1 - parity].load(Ordering::Relaxed));
-            if rebuild || s >= target {
-                return (s - first, rebuild);
+        }
+    }
+
+    /// The list build of step `step` by the team (every member calls it; `mine` are the
+    /// member's domains, which it no longer holds): member 0 writes the positions and the
+    /// flags back and bins the particles, the members scan the two parts of the rows at once,
+    /// member 0 joins them and decides on the partition; then, unless a new partition is
+    /// due, each member splits the new list for its own domains, resets their list checks
+    /// (as `update_list` does at a build) and publishes their halo of the step. Returns
+    /// whether the region goes on.
+    fn build_in_team(
+        &self,
+        b: &TeamBuild<'_, D>,
+        mine: &[usize],
+        slot: usize,
+        members: usize,
+        step: u64,
+        wait: &dyn Fn(),
+    ) -> bool {
+        wait();
+        if slot == 0 {
+            let mut list = write(&b.list);
+            let mut x = lock(&b.x);
+            self.store_positions_and_flags(&mut x, &mut list.flags);
+            list.begin_build(&x);
+            let [lo, hi] = list.take_scans();
+            *lock(&b.scans[0]) = lo;
+            *lock(&b.scans[1]) = hi;
+        }
+        wait();
+        {
+            let list = read(&b.list);
+            for part in (slot..2).step_by(members.max(1)) {
+                list.scan_part(b.radius, part, &mut lock(&b.scans[part]));
             }
+        }
+        wait();
+        if slot == 0 {
+            let mut list = write(&b.list);
+            let parts = [
+                std::mem::take(&mut *lock(&b.scans[0])),
+                std::mem::take(&mut *lock(&b.scans[1])),
+            ];
+            list.finish_build(parts);
+            let again = self.wants_new_partition(list.builds);
+            b.repartition.store(again, Ordering::Relaxed);
+            if !again {
+                self.built_for.store(list.builds, Ordering::Relaxed);
+            }
+        }
+        wait();
+        if b.repartition.load(Ordering::Relaxed) {
+            return false;
+        }
+        {
+            let list = read(&b.list);
+            let parity = (step % 2) as usize;
+            for &d in mine {
+                self.split_domain(d, &list, b.radius);
+                let mut dm = lock(&self.domains[d]);
+                dm.bound = 0.0;
+                dm.since_check = 0;
+                dm.publish(&mut write(&self.halo[d][parity]));
+            }
+        }
+        wait();
+        true
+    }
+
+    /// Writes the domains' positions into `x` (scene order, axis-major) and the flags of
+    /// their lists into the engine list's `flags` (cross pairs from the booking domain).
+    fn store_positions_and_flags(&self, x: &mut [f64], flags: &mut [u8]) {
+        let n = x.len() / D;
+        for dm in &self.domains {
+            let dm = lock(dm);
+            dm.scatter(&dm.r[0], x, n);
+            dm.scatter_flags(flags);
         }
     }
 }
 
 impl<const D: usize> Domain<D> {
+    /// Writes the local axis-major array `src` into the scene-order array `dst` (`n`
+    /// particles).
+    fn scatter<T: Copy>(&self, src: &[T], dst: &mut [T], n: usize) {
+        let m = self.ids.len();
+        for k in 0..D {
+            let dst = &mut dst[k * n..(k + 1) * n];
+            for (&v, &i) in src[k * m..(k + 1) * m].iter().zip(&self.ids) {
+                dst[i as usize] = v;
+            }
+        }
+    }
+
+    /// Writes the flags of the inner entries, and of the cross entries if this domain books
+    /// them, into the engine list's `flags`.
+    fn scatter_flags(&self, flags: &mut [u8]) {
+        for (&f, &q) in self.flags.iter().zip(&self.inner_src) {
+            flags[q as usize] = f;
+        }
+        if self.books_cross {
+            for (&f, &q) in self.cross_flags.iter().zip(&self.cross_src) {
+                flags[q as usize] = f;
+            }
+        }
+    }
+
     /// Writes the halo (position, then velocity array value, per published particle).
     fn publish(&self, out: &mut [f64]) {
         let m = self.ids.len();

@@ -34,7 +34,9 @@
 //! The sums over `dt` are rectangle rules at the force evaluations, so the ledger closes to the
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
 
-use super::domains::{DOMAIN_MIN_PARTICLES, DOMAINS, Decomposition, EngineArrays, StepConstants};
+use super::domains::{
+    DOMAIN_MIN_PARTICLES, DOMAINS, Decomposition, EngineArrays, RegionEnd, StepConstants, TeamBuild,
+};
 use super::integrator::{
     GEAR_FLUSH_EVERY, GEAR5, GEAR5_C0_VELOCITY_DEPENDENT, gear_correct_predict_axis, gear_predict,
     gear_unpredict, verlet_drift, verlet_kick,
@@ -764,40 +766,30 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let walls_at = |s: u64| wall_axes(p, s as f64 * dt, 1.0 / dt, dt);
         let flush_at = |s: u64| s.is_multiple_of(GEAR_FLUSH_EVERY);
         let dec_ref: &Decomposition<D> = &dec;
-        let ((done, rebuild), members) = if rayon::current_num_threads() > 1 {
+        // The team rebuilds the list itself (its threads stay awake) and goes on.
+        let build = TeamBuild::new(&mut self.list, &mut self.r[0], &self.radius);
+        let member = |slot: usize, members: usize, wait: &dyn Fn()| {
+            dec_ref.run_member::<WET>(
+                &c,
+                &walls_at,
+                &flush_at,
+                Some(&build),
+                slot,
+                members,
+                first,
+                target,
+                wait,
+            )
+        };
+        let ((done, end), members) = if rayon::current_num_threads() > 1 {
             let out = super::team::run_with_door(DOMAINS, self.team_door, |m| {
-                (
-                    dec_ref.run_member::<WET>(
-                        &c,
-                        &walls_at,
-                        &flush_at,
-                        m.slot,
-                        m.members,
-                        first,
-                        target,
-                        &|| m.wait(),
-                    ),
-                    m.members,
-                )
+                (member(m.slot, m.members, &|| m.wait()), m.members)
             });
             out[0]
         } else {
-            super::team::solo(|m| {
-                (
-                    dec_ref.run_member::<WET>(
-                        &c,
-                        &walls_at,
-                        &flush_at,
-                        0,
-                        1,
-                        first,
-                        target,
-                        &|| m.wait(),
-                    ),
-                    1,
-                )
-            })
+            super::team::solo(|m| (member(0, 1, &|| m.wait()), 1))
         };
+        drop(build);
         self.acc_is_start = true;
         self.steps += done;
         if members > 1 {
@@ -805,9 +797,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
         // Between regions of one run only the positions (for the list build) and the flags
         // come back; at the end of the run everything does.
-        let full = !(rebuild && self.steps < target);
+        let full = end == RegionEnd::Target || self.steps >= target;
+        // After a build for a new partition the domains' lists are those of the build before:
+        // their flags are in the list already.
+        let lists_current = dec.built_for() == self.list.builds;
         let (mut arrays, flags) = self.domain_arrays();
-        dec.store(&mut arrays, Some(flags), full);
+        dec.store(&mut arrays, lists_current.then_some(flags), full);
         dec.partial = !full;
         dec.holds_step = Some(self.steps);
         let (books, bound, since) = dec.books();
@@ -827,13 +822,20 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             self.counts.bridge_formations += b.formations;
             self.counts.bridge_ruptures += b.ruptures;
         }
-        if rebuild {
+        match end {
             // The check of the next step found a particle beyond half the skin: the next
             // `update_list` runs the exact test (and rebuilds).
-            self.moved_bound = f64::INFINITY;
-        } else {
-            self.moved_bound = bound;
-            self.since_check = since;
+            RegionEnd::Rebuild => self.moved_bound = f64::INFINITY,
+            // The team built the list (as `update_list` would have); the next region makes
+            // the new partition.
+            RegionEnd::Repartition => {
+                self.moved_bound = 0.0;
+                self.since_check = 0;
+            }
+            RegionEnd::Target => {
+                self.moved_bound = bound;
+                self.since_check = since;
+            }
         }
     }
 
