@@ -202,6 +202,8 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
     team_steps: u64,
     /// Partitions made (`domains.rs`).
     partitions: u64,
+    /// Regions of domain steps run (`domain_region`; a region goes on through list builds).
+    regions: u64,
     /// How long a region waits for the pool's threads to join its team (`team::DOOR_WAIT`;
     /// tests lengthen it so that a loaded machine still runs two members).
     team_door: std::time::Duration,
@@ -357,6 +359,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             domains: DomainCache::default(),
             team_steps: 0,
             partitions: 0,
+            regions: 0,
             team_door: super::team::DOOR_WAIT,
         };
         engine.list.build(&engine.r[0], &engine.radius);
@@ -765,6 +768,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         };
         let walls_at = |s: u64| wall_axes(p, s as f64 * dt, 1.0 / dt, dt);
         let flush_at = |s: u64| s.is_multiple_of(GEAR_FLUSH_EVERY);
+        self.regions += 1;
         let dec_ref: &Decomposition<D> = &dec;
         // The team rebuilds the list itself (its threads stay awake) and goes on.
         let build = TeamBuild::new(&mut self.list, &mut self.r[0], &self.radius);
@@ -2016,6 +2020,31 @@ mod domain_tests {
         );
         assert!(one == two, "one and two threads differ");
         assert!(one == three, "one and three threads differ");
+    }
+
+    /// A region goes on through the list builds (the team builds the list itself): one run
+    /// takes far fewer regions than builds, and the same bits come out as when every build
+    /// ends the region (a region per step, which builds between regions).
+    #[test]
+    fn the_team_builds_the_list_without_leaving_its_region() {
+        let (whole, regions, builds, partitions) = pool(2).install(|| {
+            let mut e = engine(DomainMode::Always);
+            e.run_until(1.0);
+            (bits(&e), e.regions, e.list_builds(), e.partitions)
+        });
+        assert!(builds > 20, "{builds} builds");
+        assert!(
+            regions <= partitions + 1,
+            "{regions} regions for {builds} builds and {partitions} partitions"
+        );
+        let stepwise = pool(2).install(|| {
+            let mut e = engine(DomainMode::Always);
+            while e.time() < 1.0 - 0.5 * e.p.dt {
+                e.step();
+            }
+            bits(&e)
+        });
+        assert!(whole == stepwise, "builds inside the team change numbers");
     }
 
     #[test]
