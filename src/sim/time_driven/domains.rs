@@ -21,12 +21,17 @@
 //!    `update_list`, per domain, with the exact test on the domain's particles where the bound
 //!    says it might fire).
 //!
-//! A region of steps ends when a domain's check says the list must be rebuilt (every domain
-//! sees it after the barrier, so all stop at the same step) or at the run's target step; the
-//! engine then copies the state back, rebuilds the list where needed and starts the next
-//! region. The decomposition (which particle is in which domain, local order, lists, halo) is
-//! made at the first region after a list build and kept until the next build, so where the
-//! regions end (samples, checkpoints) changes no number.
+//! When a domain's check says the list must be rebuilt (every domain sees it after the
+//! barrier, so all stop at the same step), the **team builds the list itself** and goes on
+//! ([`Decomposition::build_in_team`]): member 0 writes the positions and flags back into the
+//! engine's list and bins the particles, both members scan half the rows each while they are
+//! awake (a build handed to a sleeping pool thread runs serially in effect), member 0 joins the
+//! rows, and each member splits the new list for its own domain. The list is the one the
+//! engine's `update_list` would build at that step (same positions, same code). A region ends
+//! at the run's target step, or when a build calls for a new partition; the engine then copies
+//! the state back and starts the next region with it. The partition (which particle is in
+//! which domain, local order) is made at a list build and kept over later builds (see
+//! [`Decomposition`]), so where the regions end (samples, checkpoints) changes no number.
 //!
 //! **Determinism.** Which thread runs a domain changes no operation: one thread runs the
 //! domains in turn with the same code (the halo double buffer makes the order irrelevant), so
@@ -37,7 +42,7 @@
 
 use super::integrator::gear_correct_predict_axis;
 use super::neighbours::{BOND, CONTACT};
-use super::neighbours::{NeighbourList, RowScan};
+use super::neighbours::{NeighbourList, RowScan, max_displacement_sq};
 use super::walls::{WallAxis, WallBooks, wall_forces};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, RwLock};
@@ -879,22 +884,6 @@ impl<const D: usize> Domain<D> {
             false
         }
     }
-}
-
-/// The largest squared displacement between `x` and `built_at` (axis-major, same length),
-/// without the periodic image (as `NeighbourList::max_displacement_sq`).
-fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
-    let m = x.len() / D;
-    let mut worst = 0.0f64;
-    for i in 0..m {
-        let mut a = 0.0;
-        for k in 0..D {
-            let d = x[k * m + i] - built_at[k * m + i];
-            a += d * d;
-        }
-        worst = if a > worst { a } else { worst };
-    }
-    worst
 }
 
 /// Forces of the cross pairs on this domain's particles (Eq. 2.7 and MODEL.md 3.1, the

@@ -702,12 +702,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         )
     }
 
-    /// Runs Gear steps on the spatial domains (`domains.rs`) until `target` or until the
-    /// neighbour list must be rebuilt: the list check of the first step, the decomposition of
-    /// the current build (made once per build, from the positions of the build), the state
-    /// copied into the domains, the steps on a team of up to [`DOMAINS`] threads of the current
-    /// pool (or on the calling thread alone), the state and the books copied back (the books
-    /// step by step, domains in order, as one sum per step).
+    /// Runs Gear steps on the spatial domains (`domains.rs`) until `target` or until a list
+    /// build calls for a new partition: the list check of the first step, the decomposition
+    /// (kept from the last region, or made from the positions of the current build), the
+    /// state copied into the domains, the steps on a team of up to [`DOMAINS`] threads of the
+    /// current pool (or on the calling thread alone; the team rebuilds the list itself where
+    /// the check asks for it), the state and the books copied back (the books step by step,
+    /// domains in order, as one sum per step).
     fn domain_region(&mut self, target: u64) {
         self.update_list();
         let first = self.steps;
