@@ -1062,6 +1062,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// [`Self::forces_then`] split over the pool's threads (see there).
     fn forces_then_parallel(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
+        self.list.ensure_transposed();
         let n = self.n;
         let min_len = 1;
         let p = &self.p;

@@ -28,7 +28,8 @@ pub struct NeighbourList<const D: usize> {
     /// branch).
     pub rows: Vec<u32>,
     /// The row (first particle) of each entry: the pair loop runs over entries in parallel
-    /// chunks.
+    /// chunks. Made, with the transposed list, by [`Self::ensure_transposed`] (only the
+    /// rayon-split step reads them).
     pub row_of: Vec<u32>,
     /// The transposed list: the entries whose partner is `j` are
     /// `in_entry[in_start[j]..in_start[j + 1]]`, ascending (so by ascending row). The engine
@@ -65,6 +66,8 @@ pub struct NeighbourList<const D: usize> {
     skin: f64,
     /// Builds so far.
     pub builds: u64,
+    /// The build for which `row_of` and the transposed list were made (0: none).
+    transposed_at: u64,
     /// The first flagged pair `(i, j)` found missing from a rebuilt list (its flags dropped):
     /// it moved apart by more than the skin within one list's life, which only a blown-up run
     /// does (a time step too large for the speeds reached). The engine's `sanity_check`
@@ -194,6 +197,7 @@ impl<const D: usize> NeighbourList<D> {
             extra,
             skin,
             builds: 0,
+            transposed_at: 0,
             lost_pair: None,
         }
     }
@@ -262,7 +266,6 @@ impl<const D: usize> NeighbourList<D> {
         self.partner.clear();
         self.flags.clear();
         self.rows.clear();
-        self.row_of.clear();
         self.built_at.copy_from_slice(x);
         self.head.fill(NONE);
         for i in (0..n).rev() {
@@ -314,7 +317,6 @@ impl<const D: usize> NeighbourList<D> {
                     self.rows.push(i as u32);
                 }
                 q += len as usize;
-                self.row_of.resize(q, i as u32);
                 i += 1;
             }
             if self.lost_pair.is_none() {
@@ -323,6 +325,21 @@ impl<const D: usize> NeighbourList<D> {
         }
         self.scan = parts;
         self.start[n] = self.partner.len() as u32;
+    }
+
+    /// Makes `row_of` and the transposed list (`in_start`, `in_entry`) of the current build,
+    /// unless they are made already: the rayon-split step needs them, the serial step and the
+    /// domains do not, so a build does not pay for them.
+    pub fn ensure_transposed(&mut self) {
+        if self.transposed_at == self.builds {
+            return;
+        }
+        self.transposed_at = self.builds;
+        let n = self.next.len();
+        self.row_of.clear();
+        for i in 0..n {
+            self.row_of.resize(self.start[i + 1] as usize, i as u32);
+        }
         // The transposed list, by counting: entries of each partner in ascending order.
         self.in_start.fill(0);
         for &j in &self.partner {
@@ -332,7 +349,8 @@ impl<const D: usize> NeighbourList<D> {
             self.in_start[j + 1] += self.in_start[j];
         }
         self.in_entry.resize(self.partner.len(), 0);
-        // `next` (the cell lists) is free now: it serves as the fill cursor of each partner.
+        // `next` (the cell lists) is free after a build: it serves as the fill cursor of each
+        // partner.
         self.next[..n].copy_from_slice(&self.in_start[..n]);
         for (q, &j) in self.partner.iter().enumerate() {
             let c = &mut self.next[j as usize];
