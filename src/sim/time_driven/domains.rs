@@ -656,7 +656,7 @@ impl<const D: usize> Decomposition<D> {
             let mut list = write(&b.list);
             let mut x = lock(&b.x);
             self.store_positions_and_flags(&mut x, &mut list.flags);
-            list.begin_build(&x);
+            list.begin_build(&x, b.radius);
             let [lo, hi] = list.take_scans();
             *lock(&b.scans[0]) = lo;
             *lock(&b.scans[1]) = hi;

@@ -1,4 +1,5 @@
-//! Verlet neighbour list with skin, built from linked cells, for the time-driven engine.
+//! Verlet neighbour list with skin, built from cells (a counting sort by cell), for the
+//! time-driven engine.
 //!
 //! The list is a half list in compressed-row form: row `i` holds the partners `j > i` whose
 //! centres were closer than `R_i + R_j + s_crit + skin` when the list was built, sorted by `j`.
@@ -48,8 +49,17 @@ pub struct NeighbourList<const D: usize> {
     lower: [f64; D],
     periodic: [bool; D],
     size: [f64; D],
-    head: Vec<u32>,
-    next: Vec<u32>,
+    /// The particles binned by cell (counting sort): cell `c` holds
+    /// `order[cell_start[c]..cell_start[c + 1]]`, ascending; `sorted_x` (axis-major) and
+    /// `sorted_r` are their positions and radii in that order, so that the scan reads the
+    /// candidates of a row of neighbour cells as one contiguous run.
+    cell_start: Vec<u32>,
+    order: Vec<u32>,
+    sorted_x: Vec<f64>,
+    sorted_r: Vec<f64>,
+    /// Per particle: its cell at the last build; after a build, the fill cursor of the
+    /// transposed list.
+    scratch: Vec<u32>,
     /// Cell coordinates of each particle at the last build, `D` per particle.
     cell_at: Vec<u32>,
     /// Per axis `k` and cell coordinate `c`: the coordinates of the cells at offsets -1, 0, +1
@@ -168,8 +178,11 @@ impl<const D: usize> NeighbourList<D> {
             lower,
             periodic,
             size,
-            head: vec![NONE; total],
-            next: vec![NONE; n],
+            cell_start: vec![0; total + 1],
+            order: vec![0; n],
+            sorted_x: vec![0.0; D * n],
+            sorted_r: vec![0.0; n],
+            scratch: vec![0; n],
             cell_at: vec![0; D * n],
             axis_next: std::array::from_fn(|k| {
                 let m = cells[k];
@@ -240,7 +253,7 @@ impl<const D: usize> NeighbourList<D> {
     /// [`Self::finish_build`]) can also be run by a team of threads (the spatial domains build
     /// the list inside their team, `domains.rs`); the list is the same either way.
     pub fn build(&mut self, x: &[f64], radius: &[f64]) {
-        self.begin_build(x);
+        self.begin_build(x, radius);
         let [mut lo, mut hi] = self.take_scans();
         if radius.len() >= PARALLEL_BUILD_MIN && rayon::current_num_threads() > 1 {
             let this = &*self;
@@ -256,9 +269,10 @@ impl<const D: usize> NeighbourList<D> {
     }
 
     /// First phase of a build: the old rows kept for the flags, the positions of the build
-    /// (`x`, axis-major) and the particles binned into the cells.
-    pub fn begin_build(&mut self, x: &[f64]) {
-        let n = self.next.len();
+    /// (`x`, axis-major) and the particles binned into the cells (a counting sort by cell,
+    /// ascending index within a cell), with their positions and radii in that order.
+    pub fn begin_build(&mut self, x: &[f64], radius: &[f64]) {
+        let n = self.scratch.len();
         self.builds += 1;
         std::mem::swap(&mut self.start, &mut self.old_start);
         std::mem::swap(&mut self.partner, &mut self.old_partner);
@@ -267,8 +281,8 @@ impl<const D: usize> NeighbourList<D> {
         self.flags.clear();
         self.rows.clear();
         self.built_at.copy_from_slice(x);
-        self.head.fill(NONE);
-        for i in (0..n).rev() {
+        self.cell_start.fill(0);
+        for i in 0..n {
             let mut c = [0usize; D];
             for k in 0..D {
                 let f = ((x[k * n + i] - self.lower[k]) / self.width[k]).floor();
@@ -282,9 +296,29 @@ impl<const D: usize> NeighbourList<D> {
             for k in 0..D {
                 self.cell_at[D * i + k] = c[k] as u32;
             }
-            self.next[i] = self.head[idx];
-            self.head[idx] = i as u32;
+            self.scratch[i] = idx as u32;
+            self.cell_start[idx + 1] += 1;
         }
+        let total = self.cell_start.len() - 1;
+        for c in 0..total {
+            self.cell_start[c + 1] += self.cell_start[c];
+        }
+        // Fill: `cell_start[c]` runs to the end of cell `c` (the start of `c + 1`), then the
+        // starts are shifted back by one cell.
+        for i in 0..n {
+            let c = self.scratch[i] as usize;
+            let p = self.cell_start[c] as usize;
+            self.cell_start[c] += 1;
+            self.order[p] = i as u32;
+            for k in 0..D {
+                self.sorted_x[k * n + p] = x[k * n + i];
+            }
+            self.sorted_r[p] = radius[i];
+        }
+        for c in (1..=total).rev() {
+            self.cell_start[c] = self.cell_start[c - 1];
+        }
+        self.cell_start[0] = 0;
     }
 
     /// The reused buffers of the two parts of the row scan (give them back through
@@ -299,12 +333,12 @@ impl<const D: usize> NeighbourList<D> {
         let n = radius.len();
         let h = n / 2;
         let range = if part == 0 { 0..h } else { h..n };
-        self.scan_rows(&self.built_at, radius, range, out);
+        self.scan_rows(radius, range, out);
     }
 
     /// Last phase of a build: the parts' rows joined into the list, and the transposed list.
     pub fn finish_build(&mut self, parts: [RowScan; 2]) {
-        let n = self.next.len();
+        let n = self.scratch.len();
         let mut i = 0;
         for part in &parts {
             let base = self.partner.len();
@@ -335,7 +369,7 @@ impl<const D: usize> NeighbourList<D> {
             return;
         }
         self.transposed_at = self.builds;
-        let n = self.next.len();
+        let n = self.scratch.len();
         self.row_of.clear();
         for i in 0..n {
             self.row_of.resize(self.start[i + 1] as usize, i as u32);
@@ -349,51 +383,70 @@ impl<const D: usize> NeighbourList<D> {
             self.in_start[j + 1] += self.in_start[j];
         }
         self.in_entry.resize(self.partner.len(), 0);
-        // `next` (the cell lists) is free after a build: it serves as the fill cursor of each
+        // `scratch` (the cells) is free after a build: it serves as the fill cursor of each
         // partner.
-        self.next[..n].copy_from_slice(&self.in_start[..n]);
+        self.scratch[..n].copy_from_slice(&self.in_start[..n]);
         for (q, &j) in self.partner.iter().enumerate() {
-            let c = &mut self.next[j as usize];
+            let c = &mut self.scratch[j as usize];
             self.in_entry[*c as usize] = q as u32;
             *c += 1;
         }
     }
 
     /// The rows `range` of a build (after the binning): each row's partners, sorted, with the
-    /// flags carried from the old list, appended to `out` (cleared first).
-    fn scan_rows(
-        &self,
-        x: &[f64],
-        radius: &[f64],
-        range: std::ops::Range<usize>,
-        out: &mut RowScan,
-    ) {
+    /// flags carried from the old list, appended to `out` (cleared first). The neighbour
+    /// cells of a row along axis 0 are adjacent in the cell order (stride 1), so each row of
+    /// up to three cells is read as one or two contiguous runs of the sorted arrays (two where
+    /// a periodic axis wraps); the test `j > i` is combined with the distance test, so the
+    /// loop has no data-dependent branch but the rare push.
+    fn scan_rows(&self, radius: &[f64], range: std::ops::Range<usize>, out: &mut RowScan) {
         out.clear();
         let n = radius.len();
-        let stencil = 3usize.pow(D as u32);
+        let x = &self.built_at;
+        let rest = 3usize.pow(D as u32 - 1);
         for i in range {
             let row_start = out.partner.len();
             let c: [usize; D] = std::array::from_fn(|k| self.cell_at[D * i + k] as usize);
-            'cells: for s in 0..stencil {
-                // Offset digits of `s` (base 3, axis 0 fastest), from the per-axis tables.
+            let xi: [f64; D] = std::array::from_fn(|k| x[k * n + i]);
+            let ri = radius[i];
+            // Runs of consecutive cells along axis 0: (first, last) coordinates.
+            let mut runs = [(0u32, 0u32); 3];
+            let mut nruns = 0;
+            for &v in &self.axis_next[0][3 * c[0]..3 * c[0] + 3] {
+                if v == NONE {
+                    continue;
+                }
+                if nruns > 0 && runs[nruns - 1].1 + 1 == v {
+                    runs[nruns - 1].1 = v;
+                } else {
+                    runs[nruns] = (v, v);
+                    nruns += 1;
+                }
+            }
+            'rows: for s in 0..rest {
+                // Offset digits of `s` (base 3) on axes 1.., from the per-axis tables.
                 let mut code = s;
-                let mut idx = 0;
-                for k in 0..D {
+                let mut base = 0;
+                for k in 1..D {
                     let o = code % 3;
                     code /= 3;
                     let v = self.axis_next[k][3 * c[k] + o];
                     if v == NONE {
-                        continue 'cells;
+                        continue 'rows;
                     }
-                    idx += v as usize * self.stride[k];
+                    base += v as usize * self.stride[k];
                 }
-                let mut j = self.head[idx];
-                while j != NONE {
-                    let ju = j as usize;
-                    if ju > i {
+                for &(first, last) in &runs[..nruns] {
+                    let p0 = self.cell_start[base + first as usize] as usize;
+                    let p1 = self.cell_start[base + last as usize + 1] as usize;
+                    let order = &self.order[p0..p1];
+                    let rs = &self.sorted_r[p0..p1];
+                    let xs: [&[f64]; D] =
+                        std::array::from_fn(|k| &self.sorted_x[k * n + p0..k * n + p1]);
+                    for (p, (&j, &rj)) in order.iter().zip(rs).enumerate() {
                         let mut r2 = 0.0;
                         for k in 0..D {
-                            let mut d = x[k * n + i] - x[k * n + ju];
+                            let mut d = xi[k] - xs[k][p];
                             if self.periodic[k] {
                                 let l = self.size[k];
                                 if d > 0.5 * l {
@@ -404,12 +457,11 @@ impl<const D: usize> NeighbourList<D> {
                             }
                             r2 += d * d;
                         }
-                        let cut = radius[i] + radius[ju] + self.extra;
-                        if r2 < cut * cut {
+                        let cut = ri + rj + self.extra;
+                        if (j as usize > i) & (r2 < cut * cut) {
                             out.partner.push(j);
                         }
                     }
-                    j = self.next[ju];
                 }
             }
             let row = row_start..out.partner.len();
@@ -471,5 +523,92 @@ impl<const D: usize> NeighbourList<D> {
     /// Number of entries with `flag` set.
     pub fn count(&self, flag: u8) -> usize {
         self.flags.iter().filter(|&&f| f & flag != 0).count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The list against a brute-force pass over all pairs (the independent method).
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// Every pair `i < j` with `|x_i - x_j| < R_i + R_j + extra` (nearest image on the
+    /// periodic axes, the list's arithmetic), as sorted rows.
+    fn brute<const D: usize>(
+        x: &[f64],
+        radius: &[f64],
+        periodic: [bool; D],
+        size: [f64; D],
+        extra: f64,
+    ) -> Vec<Vec<u32>> {
+        let n = radius.len();
+        (0..n)
+            .map(|i| {
+                (i + 1..n)
+                    .filter(|&j| {
+                        let mut r2 = 0.0;
+                        for k in 0..D {
+                            let mut d = x[k * n + i] - x[k * n + j];
+                            if periodic[k] {
+                                let l = size[k];
+                                if d > 0.5 * l {
+                                    d -= l;
+                                } else if d < -0.5 * l {
+                                    d += l;
+                                }
+                            }
+                            r2 += d * d;
+                        }
+                        let cut = radius[i] + radius[j] + extra;
+                        r2 < cut * cut
+                    })
+                    .map(|j| j as u32)
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Builds lists of random particles three times (the rows carry flags over) and compares
+    /// each with [`brute`]; some particles lie beyond the wall bounds (clamped into the edge
+    /// cells).
+    fn check<const D: usize>(n: usize, size: [f64; D], periodic: [bool; D], seed: u64) {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let (extra, skin, rmax) = (0.07, 0.3, 0.53);
+        let lower = [0.0; D];
+        let range = 2.0 * rmax + extra + skin;
+        let mut list =
+            NeighbourList::<D>::new(n, size, periodic, lower, size, extra + skin, skin, range);
+        let radius: Vec<f64> = (0..n).map(|_| rng.gen_range(0.47..rmax)).collect();
+        for round in 0..3 {
+            let mut x = vec![0.0; D * n];
+            for k in 0..D {
+                for i in 0..n {
+                    let margin = if periodic[k] { 0.0 } else { 0.4 };
+                    x[k * n + i] = rng.gen_range(-margin..size[k] + margin);
+                }
+            }
+            list.build(&x, &radius);
+            let want = brute(&x, &radius, periodic, size, extra + skin);
+            let mut entries = 0;
+            for (i, row) in want.iter().enumerate() {
+                let got = &list.partner[list.start[i] as usize..list.start[i + 1] as usize];
+                assert_eq!(got, &row[..], "row {i}, round {round}");
+                entries += row.len();
+            }
+            assert!(entries > n / 4, "a dense enough test: {entries} entries");
+            assert_eq!(list.lost_pair, None);
+        }
+    }
+
+    #[test]
+    fn the_list_holds_exactly_the_pairs_in_range() {
+        // 2D: a periodic axis of 3 cells (the runs of neighbour cells wrap at both ends), and a
+        // wide one; walls on the other axis.
+        check::<2>(60, [4.5, 6.0], [true, false], 1);
+        check::<2>(400, [60.0, 9.0], [true, false], 2);
+        check::<2>(300, [20.0, 20.0], [false, false], 3);
+        // 3D: two periodic axes, walls on the third.
+        check::<3>(500, [8.0, 6.0, 7.0], [true, true, false], 4);
+        check::<3>(200, [4.5, 4.5, 4.5], [true, true, true], 5);
     }
 }
