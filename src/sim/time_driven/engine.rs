@@ -2024,6 +2024,31 @@ mod domain_tests {
         assert!(one == three, "one and three threads differ");
     }
 
+    /// Regions with a door of 20 us, so that the pool's second thread joins some regions and
+    /// not others, as on a busy machine, give the bits of one thread. (On the development VM
+    /// about a quarter of the steps ran on two members; the mix depends on the machine and is
+    /// printed, not asserted.)
+    #[test]
+    fn a_team_of_changing_size_changes_no_number() {
+        let one = pool(1).install(|| {
+            let mut e = engine(DomainMode::Always);
+            e.run_until(1.0);
+            bits(&e)
+        });
+        let varying = pool(2).install(|| {
+            let mut e = engine(DomainMode::Always);
+            e.team_door = std::time::Duration::from_micros(20);
+            let mut t = 0.0f64;
+            while t < 1.0 {
+                t = (t + 0.01).min(1.0);
+                e.run_until(t);
+            }
+            println!("{} of {} steps on a team of two", e.team_steps(), e.steps());
+            bits(&e)
+        });
+        assert!(one == varying, "a team of changing size changes numbers");
+    }
+
     /// A region goes on through the list builds (the team builds the list itself): one run
     /// takes far fewer regions than builds, and the same bits come out as when every build
     /// ends the region (a region per step, which builds between regions).
