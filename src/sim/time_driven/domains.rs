@@ -209,6 +209,12 @@ pub(super) struct Decomposition<const D: usize> {
     /// Whether the engine's arrays hold only the positions of that step (the rest is in the
     /// domains): between the regions of one run.
     pub partial: bool,
+    /// The step whose list check is done already (by the domains' last step, each domain with
+    /// its own displacement bound and count, or by the team's build): the next region starts
+    /// without the engine's `update_list` and keeps the domains' own bounds, so where regions
+    /// end does not move the exact displacement tests (which decide the rebuilds caused by a
+    /// periodic wrap).
+    pub checked_for: Option<u64>,
 }
 
 /// A partition is remade when the cross entries exceed twice those at the partition plus this.
@@ -252,6 +258,7 @@ impl<const D: usize> Clone for Decomposition<D> {
                 .collect(),
             holds_step: self.holds_step,
             partial: self.partial,
+            checked_for: self.checked_for,
         }
     }
 }
@@ -344,6 +351,7 @@ impl<const D: usize> Decomposition<D> {
                 .collect(),
             holds_step: None,
             partial: false,
+            checked_for: None,
         }
     }
 
@@ -498,14 +506,17 @@ impl<const D: usize> Decomposition<D> {
         self.holds_step = Some(step);
     }
 
-    /// Prepares a region starting at step `step`: the list check's bound and count, empty
-    /// books, and the halo of the step's parity.
-    pub fn begin(&mut self, bound: f64, since_check: u32, step: u64) {
+    /// Prepares a region starting at step `step`: the list check's bound and count (the
+    /// engine's, unless `own_checks`: then each domain keeps its own, see
+    /// [`Self::checked_for`]), empty books, and the halo of the step's parity.
+    pub fn begin(&mut self, bound: f64, since_check: u32, step: u64, own_checks: bool) {
         let parity = (step % 2) as usize;
         for (d, dm) in self.domains.iter_mut().enumerate() {
             let dm = get(dm);
-            dm.bound = bound;
-            dm.since_check = since_check;
+            if !own_checks {
+                dm.bound = bound;
+                dm.since_check = since_check;
+            }
             dm.books = DomainBooks::default();
             dm.step_books.clear();
             let h = self.halo[d][parity]
