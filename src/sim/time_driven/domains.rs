@@ -94,8 +94,8 @@ pub(super) type RegionBooks = Vec<(DomainBooks, Vec<[f64; 3]>)>;
 pub(super) enum RegionEnd {
     /// At the run's target step.
     Target,
-    /// A domain's check asks for a list build before the next step (at the target step, or
-    /// without a [`TeamBuild`]).
+    /// At the run's target step, where a domain's check asks for a list build before the next
+    /// step (the engine's `update_list` builds it when the run goes on).
     Rebuild,
     /// The team rebuilt the list and the build calls for a new partition
     /// ([`Decomposition::wants_new_partition`]); the domains still hold the lists of the
@@ -587,7 +587,7 @@ impl<const D: usize> Decomposition<D> {
 
     /// Runs the steps of one member of a team of `members` (it takes domains `slot`,
     /// `slot + members`, ...): global steps `first..` until `target` or until some domain's
-    /// check asks for a list build. With `build`, the team builds the list itself
+    /// check asks for a list build before `target`: then the team builds the list itself
     /// ([`Self::build_in_team`]) and goes on, unless the build calls for a new partition.
     /// `wait` is the team's barrier. Returns the steps taken and how the region ended. Every
     /// member returns the same.
@@ -597,7 +597,7 @@ impl<const D: usize> Decomposition<D> {
         c: &StepConstants<D>,
         walls_at: &(dyn Fn(u64) -> [WallAxis; D] + Sync),
         flush_at: &(dyn Fn(u64) -> bool + Sync),
-        build: Option<&TeamBuild<'_, D>>,
+        build: &TeamBuild<'_, D>,
         slot: usize,
         members: usize,
         first: u64,
@@ -628,20 +628,16 @@ impl<const D: usize> Decomposition<D> {
                 }
             };
             drop(guards);
-            match build {
-                Some(b) if rebuild && s < target => {
-                    if !self.build_in_team(b, &mine, slot, members, s, wait) {
-                        return (s - first, RegionEnd::Repartition);
-                    }
-                }
-                _ => {
-                    let end = if rebuild {
-                        RegionEnd::Rebuild
-                    } else {
-                        RegionEnd::Target
-                    };
-                    return (s - first, end);
-                }
+            if s >= target {
+                let end = if rebuild {
+                    RegionEnd::Rebuild
+                } else {
+                    RegionEnd::Target
+                };
+                return (s - first, end);
+            }
+            if !self.build_in_team(build, &mine, slot, members, s, wait) {
+                return (s - first, RegionEnd::Repartition);
             }
         }
     }

@@ -782,15 +782,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let build = TeamBuild::new(&mut self.list, &mut self.r[0], &self.radius);
         let member = |slot: usize, members: usize, wait: &dyn Fn()| {
             dec_ref.run_member::<WET>(
-                &c,
-                &walls_at,
-                &flush_at,
-                Some(&build),
-                slot,
-                members,
-                first,
-                target,
-                wait,
+                &c, &walls_at, &flush_at, &build, slot, members, first, target, wait,
             )
         };
         let ((done, end), members) = if rayon::current_num_threads() > 1 {
@@ -2039,6 +2031,15 @@ mod domain_tests {
         assert!(one == three, "one and three threads differ");
     }
 
+    /// Runs `e` to 1 time unit in `run_until` pieces of `piece` time units.
+    fn run_in_pieces(e: &mut Wet, piece: f64) {
+        let mut t = 0.0f64;
+        while t < 1.0 {
+            t = (t + piece).min(1.0);
+            e.run_until(t);
+        }
+    }
+
     /// Regions with a door of 20 us, so that the pool's second thread joins some regions and
     /// not others, as on a busy machine, give the bits of one thread. (On the development VM
     /// about a quarter of the steps ran on two members; the mix depends on the machine and is
@@ -2053,11 +2054,7 @@ mod domain_tests {
         let varying = pool(2).install(|| {
             let mut e = engine(DomainMode::Always);
             e.team_door = std::time::Duration::from_micros(20);
-            let mut t = 0.0f64;
-            while t < 1.0 {
-                t = (t + 0.01).min(1.0);
-                e.run_until(t);
-            }
+            run_in_pieces(&mut e, 0.01);
             println!("{} of {} steps on a team of two", e.team_steps(), e.steps());
             bits(&e)
         });
@@ -2098,11 +2095,7 @@ mod domain_tests {
         });
         let pieces = pool(2).install(|| {
             let mut e = engine(DomainMode::Always);
-            let mut t = 0.0f64;
-            while t < 1.0 {
-                t = (t + 0.0173).min(1.0);
-                e.run_until(t);
-            }
+            run_in_pieces(&mut e, 0.0173);
             bits(&e)
         });
         assert!(
