@@ -2031,6 +2031,15 @@ mod domain_tests {
         assert!(one == three, "one and three threads differ");
     }
 
+    /// The bits after one `run_until(1.0)` of the bed on a pool of `threads`.
+    fn bits_of_one_run(threads: usize) -> Vec<u64> {
+        pool(threads).install(|| {
+            let mut e = engine(DomainMode::Always);
+            e.run_until(1.0);
+            bits(&e)
+        })
+    }
+
     /// Runs `e` to 1 time unit in `run_until` pieces of `piece` time units.
     fn run_in_pieces(e: &mut Wet, piece: f64) {
         let mut t = 0.0f64;
@@ -2046,11 +2055,7 @@ mod domain_tests {
     /// printed, not asserted.)
     #[test]
     fn a_team_of_changing_size_changes_no_number() {
-        let one = pool(1).install(|| {
-            let mut e = engine(DomainMode::Always);
-            e.run_until(1.0);
-            bits(&e)
-        });
+        let one = bits_of_one_run(1);
         let varying = pool(2).install(|| {
             let mut e = engine(DomainMode::Always);
             e.team_door = std::time::Duration::from_micros(20);
@@ -2088,11 +2093,7 @@ mod domain_tests {
 
     #[test]
     fn where_regions_end_changes_no_number() {
-        let whole = pool(2).install(|| {
-            let mut e = engine(DomainMode::Always);
-            e.run_until(1.0);
-            bits(&e)
-        });
+        let whole = bits_of_one_run(2);
         let pieces = pool(2).install(|| {
             let mut e = engine(DomainMode::Always);
             run_in_pieces(&mut e, 0.0173);
