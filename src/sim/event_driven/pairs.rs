@@ -37,10 +37,11 @@ use crate::scene::RuptureRule;
 const FAR_IMAGE: f64 = 0.45;
 /// Size of the particle records (`Bodies::body`) from which a scan reads its partners' records
 /// once before predicting (`PairSource::scan_dry`). Below it the records stay in the core's
-/// caches and the extra loads only cost time (the 2D standard systems, N = 1200, 77 kB: about
-/// 5 % slower); above it the overlapped misses win (N = 32 000 in 3D, 2 MB: 1.15-1.3x). Measured
-/// on system (a) at other N (docs/performance.md, "Sixth round"): from about 10 000 spheres
-/// (640 kB) on, touching was faster. Only the time depends on it, never a number.
+/// caches and the extra loads only cost time (the 2D standard systems, N = 1200, 77 kB: 3-6 %
+/// slower); above it the overlapped misses win (system (a), N = 32 000 in 3D, 2 MB: 1.1-1.2x).
+/// System (a) at other N (docs/performance.md, "Sixth round (event engine)"): 6 000 spheres no
+/// difference, 12 000 up to 5 % faster, 20 000 11-15 %. Only the time depends on it, never a
+/// number (`tests/engine_pins.rs`).
 const TOUCH_FROM_BYTES: usize = 512 * 1024;
 /// Most bridges one particle may hold (a guard: more means the packing is unphysical).
 pub const MAX_BONDS: usize = 16;
@@ -308,7 +309,11 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             if !S && grid.interior_needs_no_image {
                 let zero = [[0.0; D]; 27];
                 let around = around.map(|(cell, _)| (cell, 0));
-                self.scan_dry::<G, S, false>(i, around, bodies, grid, &zero, t);
+                if self.touches(bodies) {
+                    self.scan_dry::<G, S, false, true>(i, around, bodies, grid, &zero, t);
+                } else {
+                    self.scan_dry::<G, S, false, false>(i, around, bodies, grid, &zero, t);
+                }
             } else if grid.interior_needs_no_image {
                 self.scan_cells::<G, S, false, false>(i, around, bodies, grid, slabs, t);
             } else {
@@ -330,7 +335,11 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 let around = hood.offsets.iter().enumerate().filter_map(|(m, o)| {
                     CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, m as u8))
                 });
-                self.scan_dry::<G, S, true>(i, around, bodies, grid, &table, t);
+                if self.touches(bodies) {
+                    self.scan_dry::<G, S, true, true>(i, around, bodies, grid, &table, t);
+                } else {
+                    self.scan_dry::<G, S, true, false>(i, around, bodies, grid, &table, t);
+                }
                 return;
             }
             let around = hood.offsets.iter().filter_map(|o| {
@@ -346,6 +355,13 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 .filter_map(|o| CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, no_shift)));
             self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
         }
+    }
+
+    /// Whether a scan reads its partners' records once before predicting: when the particle
+    /// records are at least `touch_from_bytes` ([`TOUCH_FROM_BYTES`]).
+    #[inline(always)]
+    fn touches<const G: bool, const S: bool>(&self, bodies: &Bodies<D, G, S>) -> bool {
+        bodies.len() * std::mem::size_of::<Body<D>>() >= self.touch_from_bytes
     }
 
     /// The pair predictions of `i` with every particle of the cells `around`, in order. Each
@@ -396,7 +412,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// follows ([`Self::well_time`]). Among equal times the first in the cells' order wins,
     /// as in [`Self::scan_cells`]: the same events, bit for bit.
     #[inline(always)]
-    fn scan_dry<const G: bool, const S: bool, const SHIFT: bool>(
+    fn scan_dry<const G: bool, const S: bool, const SHIFT: bool, const TOUCH: bool>(
         &mut self,
         i: usize,
         mut around: impl Iterator<Item = (usize, u8)>,
@@ -411,13 +427,12 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         // for every partner of the scan).
         let bonds = self.bonds_of(i);
         let s_crit = self.p.s_crit;
-        let touch = bodies.len() * std::mem::size_of::<Body<D>>() >= self.touch_from_bytes;
         let mut gather = grid.gather_start();
         let mut buf = [0u32; BATCH];
         let mut tags = [0u8; BATCH];
         loop {
             let (len, more) = grid.gather::<SHIFT>(&mut around, &mut gather, &mut buf, &mut tags);
-            if touch {
+            if TOUCH {
                 // Every partner's record read once first: independent loads, so that their
                 // cache misses overlap instead of each waiting, partner after partner, behind
                 // the predictions' square roots and divisions (see `TOUCH_FROM_BYTES`). The
