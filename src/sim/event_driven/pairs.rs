@@ -299,6 +299,25 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         slabs: &SlabSource,
         t: f64,
     ) {
+        if self.touches(bodies) {
+            self.scan_with::<G, S, true>(i, hood, bodies, cells, slabs, t);
+        } else {
+            self.scan_with::<G, S, false>(i, hood, bodies, cells, slabs, t);
+        }
+    }
+
+    /// [`Self::scan`], the gathered scans reading their partners' records once first if
+    /// `TOUCH` (decided once per scan, so that the scans of small systems stay as they were).
+    #[inline(never)]
+    fn scan_with<const G: bool, const S: bool, const TOUCH: bool>(
+        &mut self,
+        i: usize,
+        hood: &Neighbourhood<D>,
+        bodies: &Bodies<D, G, S>,
+        cells: &CellSource<D>,
+        slabs: &SlabSource,
+        t: f64,
+    ) {
         let grid = &cells.grid;
         let c = cells.cell[i];
         let no_shift = [0.0; D];
@@ -309,11 +328,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             if !S && grid.interior_needs_no_image {
                 let zero = [[0.0; D]; 27];
                 let around = around.map(|(cell, _)| (cell, 0));
-                if self.touches(bodies) {
-                    self.scan_dry::<G, S, false, true>(i, around, bodies, grid, &zero, t);
-                } else {
-                    self.scan_dry::<G, S, false, false>(i, around, bodies, grid, &zero, t);
-                }
+                self.scan_dry::<G, S, false, TOUCH>(i, around, bodies, grid, &zero, t);
             } else if grid.interior_needs_no_image {
                 self.scan_cells::<G, S, false, false>(i, around, bodies, grid, slabs, t);
             } else {
@@ -335,11 +350,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 let around = hood.offsets.iter().enumerate().filter_map(|(m, o)| {
                     CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, m as u8))
                 });
-                if self.touches(bodies) {
-                    self.scan_dry::<G, S, true, true>(i, around, bodies, grid, &table, t);
-                } else {
-                    self.scan_dry::<G, S, true, false>(i, around, bodies, grid, &table, t);
-                }
+                self.scan_dry::<G, S, true, TOUCH>(i, around, bodies, grid, &table, t);
                 return;
             }
             let around = hood.offsets.iter().filter_map(|o| {
