@@ -12,7 +12,9 @@
 //! Scans without shear or minimum image gather the partners of the neighbour cells first and
 //! predict the contacts without branches (`scan_dry`, `dry_time`): whether a pair approaches
 //! and meets is a coin toss per partner, which a processor mispredicts (docs/performance.md,
-//! fourth round); the same operations as `predict_image`, so the same events.
+//! fourth round); the same operations as `predict_image`, so the same events. When the particle
+//! records outgrow the core's caches (`TOUCH_FROM_BYTES`), such a scan first reads every gathered
+//! partner's record once, so that their cache misses overlap (sixth round); no number changes.
 //!
 //! Safeguards (each tested in `tests/engine_safeguards.rs`): an overlapping pair that approaches
 //! collides now, one that separates is left alone (B.5.6); a pair half a periodic box apart (four
