@@ -18,12 +18,29 @@ use crate::physics::flight::linear_time_to_faces;
 pub struct Neighbourhood<const D: usize> {
     pub offsets: Vec<[i32; D]>,
     pub deltas: Vec<isize>,
+    /// For a cell next to walls but inside along every periodic axis, indexed by its
+    /// [`CellGrid::wall_class`]: the index changes of the offsets that stay inside the walls,
+    /// in the order of `offsets`.
+    pub deltas_by_wall_class: Vec<Vec<isize>>,
 }
 
 impl<const D: usize> Neighbourhood<D> {
     fn new(grid: &CellGrid<D>, offsets: Vec<[i32; D]>) -> Self {
         let deltas = offsets.iter().map(|o| grid.interior_delta(o)).collect();
-        Self { offsets, deltas }
+        let deltas_by_wall_class = (0..CellGrid::<D>::WALL_CLASSES)
+            .map(|class| {
+                offsets
+                    .iter()
+                    .filter(|o| CellGrid::<D>::inside_walls(class, o))
+                    .map(|o| grid.interior_delta(o))
+                    .collect()
+            })
+            .collect();
+        Self {
+            offsets,
+            deltas,
+            deltas_by_wall_class,
+        }
     }
 }
 
@@ -253,5 +270,69 @@ impl<const D: usize> EventSource for CellSource<D> {
             let c = self.grid.linear(&self.cell[k]);
             self.grid.insert(k, c);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The neighbours of a cell `c` as the general path finds them: every offset of `hood`
+    /// through [`CellGrid::shifted`] (wrapping on periodic axes, `None` past a wall), in order.
+    fn shifted_neighbours<const D: usize>(
+        grid: &CellGrid<D>,
+        hood: &Neighbourhood<D>,
+        c: &[i32; D],
+    ) -> Vec<usize> {
+        hood.offsets
+            .iter()
+            .filter_map(|o| grid.shifted(c, o))
+            .collect()
+    }
+
+    /// Every cell with a wall class (inside along the periodic axes, anywhere along the wall
+    /// axes, including single layers) finds by its class's index changes exactly the
+    /// neighbours, in the same order, that the general path finds: for the whole neighbourhood
+    /// and for each far slab of a crossing.
+    fn wall_classes_find_the_neighbours_of<const D: usize>(n: [usize; D], periodic: [bool; D]) {
+        let size = n.map(|k| k as f64);
+        let grid = CellGrid::<D>::new(size, periodic, 1.0, 1);
+        let source = CellSource::new(grid, std::iter::once(Vector::<D>::zeros()));
+        let grid = &source.grid;
+        let total: usize = n.iter().product();
+        let mut classed = 0;
+        for linear in 0..total {
+            let mut c = [0i32; D];
+            let mut r = linear;
+            for k in 0..D {
+                c[k] = (r % n[k]) as i32;
+                r /= n[k];
+            }
+            let Some(class) = grid.wall_class(&c) else {
+                assert!((0..D).any(|k| periodic[k] && (c[k] == 0 || c[k] == n[k] as i32 - 1)));
+                continue;
+            };
+            classed += 1;
+            let base = grid.linear(&c) as isize;
+            for hood in std::iter::once(&source.all).chain(source.far.iter()) {
+                let fast: Vec<usize> = hood.deltas_by_wall_class[class]
+                    .iter()
+                    .map(|&d| (base + d) as usize)
+                    .collect();
+                assert_eq!(fast, shifted_neighbours(grid, hood, &c), "cell {c:?}");
+            }
+        }
+        assert!(classed > 0);
+    }
+
+    #[test]
+    fn wall_classes_find_the_same_neighbours_as_the_general_path() {
+        // The standard 2D box's layout: periodic along x, walls along y; and 3D with a floor
+        // and lid, walls on two axes, and a single layer of cells between walls.
+        wall_classes_find_the_neighbours_of::<2>([7, 4], [true, false]);
+        wall_classes_find_the_neighbours_of::<2>([6, 1], [true, false]);
+        wall_classes_find_the_neighbours_of::<3>([5, 6, 4], [true, true, false]);
+        wall_classes_find_the_neighbours_of::<3>([5, 3, 2], [true, false, false]);
+        wall_classes_find_the_neighbours_of::<3>([3, 4, 1], [false, false, false]);
     }
 }

@@ -126,6 +126,40 @@ impl<const D: usize> CellGrid<D> {
         (base as isize + self.interior_delta(offset)) as usize
     }
 
+    /// Number of wall classes ([`Self::wall_class`]): two bits per axis.
+    pub const WALL_CLASSES: usize = 1 << (2 * D);
+
+    /// The wall class of cell `c`, if it is inside along every periodic axis (no neighbour
+    /// found by wrapping): per axis, bit `2k` set at the low face of a wall axis (`c_k = 0`),
+    /// bit `2k + 1` at its high face (`c_k = n_k - 1`; both for a single layer of cells).
+    /// `None` on the edge of a periodic axis. With the class, the neighbours of `c` are found
+    /// by the interior index changes of the offsets that stay inside the walls
+    /// ([`Self::inside_walls`]): the fast path of scans next to a wall.
+    #[inline]
+    pub fn wall_class(&self, c: &[i32; D]) -> Option<usize> {
+        let mut class = 0usize;
+        for k in 0..D {
+            let (low, high) = (c[k] == 0, c[k] == self.n[k] - 1);
+            if self.periodic[k] {
+                if low || high {
+                    return None;
+                }
+            } else {
+                class |= (usize::from(low) | (usize::from(high) << 1)) << (2 * k);
+            }
+        }
+        Some(class)
+    }
+
+    /// Whether a cell of wall class `class` has a neighbour at `offset` (it does not step
+    /// through the face of a wall it lies on).
+    pub fn inside_walls(class: usize, offset: &[i32; D]) -> bool {
+        (0..D).all(|k| {
+            let (low, high) = ((class >> (2 * k)) & 1 == 1, (class >> (2 * k + 1)) & 1 == 1);
+            !((low && offset[k] < 0) || (high && offset[k] > 0))
+        })
+    }
+
     /// The change of the linear index from an interior cell to its neighbour at `offset` (the
     /// same for every interior cell: precomputed per offset for the neighbour scans).
     pub fn interior_delta(&self, offset: &[i32; D]) -> isize {

@@ -336,6 +336,20 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             } else {
                 self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
             }
+        } else if !S
+            && grid.interior_needs_no_image
+            && let Some(class) = grid.wall_class(&c)
+        {
+            // Next to a wall, inside along every periodic axis: the neighbours that exist are
+            // the interior ones that stay inside the walls, found by the same index changes,
+            // in the order of `hood`; no wrap and no image shift (the general boundary path
+            // below would give each of them the shift 0).
+            let base = grid.linear(&c) as isize;
+            let around = hood.deltas_by_wall_class[class]
+                .iter()
+                .map(|&d| ((base + d) as usize, 0));
+            let zero = [[0.0; D]; 27];
+            self.scan_dry::<G, S, false, TOUCH>(i, around, bodies, grid, &zero, t);
         } else if grid.interior_needs_no_image {
             // Boundary cell, every periodic axis of five cells or more: a partner in a cell
             // reached across a periodic face is exactly one box edge away along that axis, the
