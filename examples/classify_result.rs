@@ -10,8 +10,8 @@
 //! Gamma; the fluid-gas line rule (MODEL.md 7, `observe::line`) labels them, as a sweep does.
 
 use std::path::Path;
-use wetgran::observe::{Observables, Thresholds, classify};
-use wetgran::scene::Scene;
+use wetgran_core::observe::{Observables, Thresholds, classify};
+use wetgran_core::scene::Scene;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
@@ -35,7 +35,7 @@ fn main() {
         serde_json::from_value(v["observables"].clone()).expect("observables")
     };
     // With --line: every result classified on the line first.
-    let line_labels: Option<Vec<wetgran::observe::Classification>> = as_line.then(|| {
+    let line_labels: Option<Vec<wetgran_core::observe::Classification>> = as_line.then(|| {
         let scenes: Vec<Scene> = args.iter().map(|a| scene_of(a)).collect();
         let obs: Vec<Observables> = args.iter().map(|a| observables_of(a)).collect();
         let pts: Vec<(f64, &Observables)> = scenes
@@ -45,7 +45,7 @@ fn main() {
             .collect();
         let gamma = scenes[0].drive.gamma.expect("Gamma given");
         let elastic = scenes[0].contact.restitution >= 1.0;
-        wetgran::observe::line::classify_line(gamma, &pts, &th, elastic)
+        wetgran_core::observe::line::classify_line(gamma, &pts, &th, elastic)
     });
     if table {
         println!(
@@ -86,8 +86,9 @@ fn main() {
                 test.contrast,
                 c.phase,
                 match &d.fluid_gas {
-                    wetgran::observe::classify::FluidGasFrom::PointFallback => "point".to_string(),
-                    wetgran::observe::classify::FluidGasFrom::Line {
+                    wetgran_core::observe::classify::FluidGasFrom::PointFallback =>
+                        "point".to_string(),
+                    wetgran_core::observe::classify::FluidGasFrom::Line {
                         method,
                         e_star_boundary,
                         ..

@@ -12,10 +12,10 @@
 //! Each CAL is `event` (the event engine), `auto` (time engine, default calibration), `vV`
 //! (time engine, `contact.restitution_speed = V`) or `tT` (time engine,
 //! `contact.restitution_temperature = T`, units of m g d).
-use wetgran::observe::run_observed;
-use wetgran::scene::{EngineKind, Scene};
+use wetgran_core::observe::run_observed;
+use wetgran_core::scene::{EngineKind, Scene};
 
-#[path = "../tests/common/standard.rs"]
+#[path = "../crates/core/tests/common/standard.rs"]
 mod standard;
 use standard::{STANDARD_SEED, StandardWet, Transient};
 
@@ -60,15 +60,16 @@ fn main() {
         if cal != "event" {
             t.engine.kind = EngineKind::Time;
             if let Some(v) = cal.strip_prefix("v") {
-                t.contact.restitution_speed =
-                    Some(wetgran::scene::RestitutionSpeed::Speed(v.parse().unwrap()));
+                t.contact.restitution_speed = Some(wetgran_core::scene::RestitutionSpeed::Speed(
+                    v.parse().unwrap(),
+                ));
             } else if let Some(tc) = cal.strip_prefix("t") {
                 t.contact.restitution_temperature = Some(tc.parse().unwrap());
             }
             t.validate("t").unwrap();
         }
         let ad = if cal != "event" {
-            wetgran::sim::time_driven::damping::contact_damping(&t).0
+            wetgran_core::sim::time_driven::damping::contact_damping(&t).0
         } else {
             0.0
         };

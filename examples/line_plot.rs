@@ -6,9 +6,9 @@
 //! `cargo run --release --example line_plot -- OUT.svg NAME:RESULT.json,RESULT.json,... [NAME:...]`
 
 use plotters::prelude::*;
-use wetgran::observe::line::classify_line;
-use wetgran::observe::{Observables, Thresholds};
-use wetgran::scene::Scene;
+use wetgran_core::observe::line::classify_line;
+use wetgran_core::observe::{Observables, Thresholds};
+use wetgran_core::scene::Scene;
 
 /// One point: `E*`, `T_g/E_cb`, bridges per grain, `Delta n_cb`, noise threshold, label.
 type Point = (f64, f64, f64, f64, f64, String);

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Load-independent share of the location-change observer (docs/performance.md, "Location-change
-# observer"): callgrind instruction counts of `wetgran bench observer:POINT` at two scales; the
+# observer"): callgrind instruction counts of `wetgran-bench observer:POINT` at two scales; the
 # difference between them removes the start-up and the unobserved warm-up. Per extra sample:
 #   observer = instructions in observe_incremental (the kept counter),
 #   reference = instructions in observe_rebuilding (the from-scratch counter, not part of a run),
@@ -8,7 +8,7 @@
 #   share = observer / (run + observer).
 # Usage: scripts/observer_share.sh [BINARY] [POINTS] [SCALE_LOW] [SCALE_HIGH]
 set -euo pipefail
-bin=${1:-./target/release/wetgran}
+bin=${1:-./target/release/wetgran-bench}
 points=${2:-gas fluid coexistence}
 lo=${3:-0.05}
 hi=${4:-0.15}
@@ -18,7 +18,7 @@ for p in $points; do
   declare -A tot inc reb
   for s in $lo $hi; do
     nice -n 19 valgrind --tool=callgrind --callgrind-out-file="$out/$p-$s.out" \
-      "$bin" bench "observer:$p" --scale "$s" > "$out/$p-$s.txt" 2>/dev/null
+      "$bin" "observer:$p" --scale "$s" > "$out/$p-$s.txt" 2>/dev/null
     ann=$(callgrind_annotate --inclusive=yes "$out/$p-$s.out" 2>/dev/null)
     tot[$s]=$(echo "$ann" | grep "PROGRAM TOTALS" | awk '{gsub(",","",$1); print $1}')
     inc[$s]=$(echo "$ann" | grep "observer::observe_incremental \[" | awk '{gsub(",","",$1); print $1}')

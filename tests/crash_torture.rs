@@ -1,6 +1,6 @@
 //! Crash torture (issue 17, docs/reliability.md "Crash torture"): `wetgran sweep run` / `sweep
 //! resume --extend` as child processes, killed with SIGKILL again and again at instants drawn
-//! from a seeded RNG (after a random delay, or at a pause point of `wetgran::test_pause`: inside
+//! from a seeded RNG (after a random delay, or at a pause point of `wetgran_core::test_pause`: inside
 //! the transaction that writes a result and its checkpoint, inside the replacement of an
 //! extended result, inside the transaction that adds a refinement round, at the start of a
 //! run-length window), resumed each time. After every kill the database passes SQLite's full
@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 use store_inspect::{Snapshot, differences, integrity, snapshot};
 use sweep_common::*;
 use wetgran::store::{REFINED_FROM, Store};
-use wetgran::test_pause::{MARKER, PAUSE_AT_VAR, PAUSE_SECS_VAR};
+use wetgran_core::test_pause::{MARKER, PAUSE_AT_VAR, PAUSE_SECS_VAR};
 
 /// Periods of total run `sweep resume --extend` takes the unconverged jobs to.
 const EXTEND_TO: &str = "240";

@@ -2,12 +2,13 @@
 //! every grain (and its periodic image at the seam) and every bridge, the profile plot has one
 //! panel per profile, and `wetgran simulate` writes them all.
 
+#[path = "../crates/core/tests/common/mod.rs"]
 mod common;
 
 use std::process::Command;
-use wetgran::observe::run_observed_with_frame;
 use wetgran::report::{ColourBy, profiles_svg, snapshot_svg, snapshot_xyz};
-use wetgran::sim::Frame;
+use wetgran_core::observe::run_observed_with_frame;
+use wetgran_core::sim::Frame;
 
 fn small_frame() -> Frame {
     // Box 10 x 4, periodic in x; grain 2 straddles the seam (x = 0.2 < r), bridge 2-3 crosses it.

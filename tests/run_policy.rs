@@ -2,11 +2,12 @@
 //! by window up to its cap and stores the verdict; its keys are validated; engines rebuilt from
 //! a saved state continue the run (event engine to round-off, time engine physically).
 
+#[path = "../crates/core/tests/common/mod.rs"]
 mod common;
 
-use wetgran::observe::{run_observed, run_observed_from};
-use wetgran::scene::Scene;
-use wetgran::sim::{EngineState, run_scene};
+use wetgran_core::observe::{run_observed, run_observed_from};
+use wetgran_core::scene::Scene;
+use wetgran_core::sim::{EngineState, run_scene};
 
 /// A wet 2D gas cooling without a drive (the standard `s_crit`, `E_cb`, eps 0.9): `T_g`
 /// drifts down for the whole run.
@@ -57,7 +58,7 @@ fn a_drifting_run_is_extended_on_one_trajectory_up_to_the_cap() {
     assert!((series.time.last().unwrap() - 24.0).abs() < 1e-9);
     // The verdict survives the JSON round trip of the store.
     let json = serde_json::to_value(o).unwrap();
-    assert_eq!(wetgran::observe::converged_in_json(&json), Some(false));
+    assert_eq!(wetgran_core::observe::converged_in_json(&json), Some(false));
 }
 
 #[test]
@@ -135,7 +136,7 @@ fn checkpoint_continues_the_event_trajectory() {
     assert_eq!(a.time, 2.0 * t);
     // The same physical events; stale predictions (`invalidated`) depend on when they were
     // made, which the restore changes.
-    let physical = |c: &wetgran::sim::event_driven::EventCounts| {
+    let physical = |c: &wetgran_core::sim::event_driven::EventCounts| {
         let mut c = c.clone();
         c.invalidated = 0;
         c
@@ -180,7 +181,7 @@ fn checkpoint_restores_the_time_engine_continuously() {
     let mut zero = s.clone();
     zero.run.duration = state.time;
     let restored =
-        wetgran::sim::run_scene_watched(&zero, Some(&state), 1.0, &mut NoWatch, &mut |_| {});
+        wetgran_core::sim::run_scene_watched(&zero, Some(&state), 1.0, &mut NoWatch, &mut |_| {});
     let r = restored.final_state.unwrap();
     assert_eq!(r.time, state.time);
     assert_eq!(r.bridges, state.bridges);
@@ -213,8 +214,8 @@ fn checkpoint_restores_the_time_engine_continuously() {
 }
 
 struct NoWatch;
-impl wetgran::sim::Watcher for NoWatch {
-    fn observe(&mut self, _: &wetgran::sim::Frame) {}
+impl wetgran_core::sim::Watcher for NoWatch {
+    fn observe(&mut self, _: &wetgran_core::sim::Frame) {}
 }
 
 #[path = "sweep_common/mod.rs"]
@@ -302,8 +303,8 @@ fn the_cold_start_is_a_bonded_bed_at_rest() {
     let text = cooling(1.0, "");
     let hot = common::scene(&text);
     let cold = common::scene(&text.replace("seed = 2\n", "seed = 2\nstart = \"cold\"\n"));
-    assert_eq!(cold.initial.start, wetgran::scene::StartMode::Cold);
-    let state = wetgran::sim::initial::cold_state(&cold);
+    assert_eq!(cold.initial.start, wetgran_core::scene::StartMode::Cold);
+    let state = wetgran_core::sim::initial::cold_state(&cold);
     // Every listed pair is closer than s_crit, and no close pair is missing (brute force).
     let s_crit = cold.s_crit();
     let gap = |i: usize, j: usize| {
@@ -361,7 +362,7 @@ fn hot_and_cold_starts_that_disagree_are_hysteretic() {
     let groups = wetgran::store::hysteresis::by_start(&s.axes, &store.points(s.id).unwrap());
     assert_eq!(groups.len(), 1, "{groups:?}");
     let g = &groups[0];
-    use wetgran::scene::StartMode;
+    use wetgran_core::scene::StartMode;
     assert_eq!(g.by_start[&StartMode::Cold], vec!["s".to_string()], "{g:?}");
     assert_eq!(g.by_start[&StartMode::Hot], vec!["g".to_string()], "{g:?}");
     assert!(g.hysteretic);

@@ -475,7 +475,7 @@ fn a_damaged_checkpoint_is_reported_and_never_used() {
         .filter(|p| {
             p.observables
                 .as_ref()
-                .and_then(wetgran::observe::converged_in_json)
+                .and_then(wetgran_core::observe::converged_in_json)
                 == Some(false)
         })
         .map(|p| p.job_id)

@@ -7,9 +7,9 @@ mod sweep_common;
 
 use std::path::Path;
 use sweep_common::*;
-use wetgran::scene::StartMode;
 use wetgran::store::Store;
 use wetgran::sweep::{SweepFile, run_job_from};
+use wetgran_core::scene::StartMode;
 
 /// A tiny wet shaken sweep over E* (3 values) and Gamma (2 values), continued along E*.
 fn sweep_text(continuation: &str, extra_axis: &str) -> String {
@@ -324,12 +324,12 @@ fn hot_and_continued_starts_are_compared_for_hysteresis() {
 /// with the engine's invariants intact and its energy ledger closed.
 #[test]
 fn a_continued_state_keeps_the_grains_in_the_container() {
-    let first = wetgran::scene::Scene::from_toml_str(TINY_SCENE, "tiny").unwrap();
+    let first = wetgran_core::scene::Scene::from_toml_str(TINY_SCENE, "tiny").unwrap();
     let (a, w) = first.drive_motion().unwrap();
     let period = 2.0 * std::f64::consts::PI / w;
     let mut s1 = first.clone();
     s1.run.duration = 20.75 * period;
-    let (run1, _) = wetgran::observe::run_observed_from(&s1, None, &mut |_| {});
+    let (run1, _) = wetgran_core::observe::run_observed_from(&s1, None, &mut |_| {});
     let end = run1.report.final_state.expect("a final state");
     let floor = a * (w * end.time).sin();
     assert!((floor + a).abs() < 1e-6 * a, "floor at {floor}, A = {a}");
@@ -357,7 +357,7 @@ fn a_continued_state_keeps_the_grains_in_the_container() {
     let mut s2 = first.clone();
     s2.drive.e_star = Some(1.0);
     s2.run.duration = 5.0 * period;
-    let (run2, _) = wetgran::observe::run_observed_from(&s2, Some(&cont), &mut |_| {});
+    let (run2, _) = wetgran_core::observe::run_observed_from(&s2, Some(&cont), &mut |_| {});
     assert_eq!(run2.report.invariant_violation, None);
     assert!(
         run2.report.energy_bookkeeping_error < 1e-6,

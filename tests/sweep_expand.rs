@@ -324,7 +324,7 @@ fn skip_invalid_leaves_out_points_failing_a_scene_constraint() {
         assert_eq!(k.reason.key, "particles.count");
         assert_eq!(
             k.reason.constraint,
-            Some(wetgran::scene::Constraint::LatticeFull)
+            Some(wetgran_core::scene::Constraint::LatticeFull)
         );
     }
     // Without the switch the sweep is rejected.

@@ -4,13 +4,13 @@
 //! fallback and say so; replicas (other seeds) belong to their point's line.
 
 use serde_json::{Value, json};
-use wetgran::observe::classify::FluidGasFrom;
-use wetgran::observe::{Phase, run_observed};
 use wetgran::run::relabel::{MIN_LINE_POINTS, relabel};
-use wetgran::scene::Scene;
 use wetgran::store::PointRow;
 use wetgran::sweep::JobSpec;
 use wetgran::sweep::spec::SPEC_FORMAT;
+use wetgran_core::observe::classify::FluidGasFrom;
+use wetgran_core::observe::{Phase, run_observed};
+use wetgran_core::scene::Scene;
 
 fn scene(gamma: f64, e_star: f64, restitution: f64, seed: u64) -> Scene {
     Scene::from_toml_str(

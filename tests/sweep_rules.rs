@@ -8,9 +8,9 @@ mod sweep_common;
 
 use std::path::Path;
 use sweep_common::*;
-use wetgran::observe::{Observables, Thresholds, classify};
 use wetgran::store::Store;
 use wetgran::sweep::SweepFile;
+use wetgran_core::observe::{Observables, Thresholds, classify};
 
 fn sweep_file(dir: &Path, name: &str, body: &str) -> std::path::PathBuf {
     write(dir, "tiny.toml", TINY_SCENE);

@@ -52,18 +52,18 @@ fn a_table_solver_sweep_over_many_drives_stays_under_the_cache_cap() {
         summary.table_cache_peak_bytes
     );
     // The bound bites: the tables built add up to more than twice the cap.
-    let w = wetgran::physics::shaken_wall::WallMotion {
+    let w = wetgran_core::physics::shaken_wall::WallMotion {
         amplitude: 1.0,
         omega: 1.0,
         g: 1.0,
     };
-    let spec = wetgran::physics::wall_table::TableSpec {
+    let spec = wetgran_core::physics::wall_table::TableSpec {
         phase_cells: 16,
         velocity_cells: 16,
         v_min: 0.05,
         v_max: 50.0,
         corner_tolerance: Some(1e-3),
     };
-    let one = wetgran::physics::wall_table::WallTable::build(w, spec).bytes();
+    let one = wetgran_core::physics::wall_table::WallTable::build(w, spec).bytes();
     assert!(24 * one > 2 * cap, "one table {one} bytes");
 }

@@ -28,11 +28,11 @@
 //!    motion `(A, omega)` of MODEL.md 4.1, computed from its `(Gamma, E*)` and the scene's
 //!    `E_cb`, `m`, `g` (Scene::drive_motion).
 
-use crate::scene::{DriveKind, Scene};
 use crate::sweep::file::{Axis, AxisKind};
 use serde::Serialize;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::collections::BTreeMap;
+use wetgran_core::scene::{DriveKind, Scene};
 
 /// One job's contribution to the map.
 #[derive(Debug, Clone)]

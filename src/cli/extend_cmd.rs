@@ -27,7 +27,7 @@ pub fn extend_unconverged(
             let unconverged = p.status == "done"
                 && p.observables
                     .as_ref()
-                    .and_then(crate::observe::converged_in_json)
+                    .and_then(wetgran_core::observe::converged_in_json)
                     == Some(false);
             if unconverged && seen.insert(p.job_id.clone()) {
                 todo.push(p);

@@ -1,5 +1,6 @@
-//! The command line: `wetgran simulate`, `wetgran bench`, and the sweep commands (`sweep`,
-//! `boundaries`, `plot`, `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`].
+//! The command line: `wetgran simulate` and the sweep commands (`sweep`, `boundaries`, `plot`,
+//! `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`]. The benchmarks and the stress
+//! cases are the binary of the crate `wetgran-bench`.
 
 mod cluster_cmd;
 mod common;
@@ -13,7 +14,6 @@ pub mod sweep_cmd;
 use common::{Failure, available_cores, exit, workers_or_fail};
 use sweep_cmd::SweepCommand;
 
-use crate::bench;
 use crate::boundary::Extraction;
 use crate::report::ColourBy;
 use clap::{Parser, Subcommand};
@@ -34,55 +34,6 @@ pub enum Command {
     /// Run one scene file with its observers and print a summary (events by kind, energy,
     /// observables over the stationary window, and the phase).
     Simulate(simulate_cmd::SimulateArgs),
-    /// Measure the engine's speed on the reference systems and print the figures.
-    Bench {
-        /// Which benchmark: `engine` (collisions/s for the reference systems of the
-        /// performance doc), `wall` (error and cost of the shaken-wall solvers), `shake` (the
-        /// shaken standard wet system with each wall solver), `tdmd` (the time-driven engine on
-        /// the dry shaken 2D system of issue 6; `scale` = simulated time units timed), `slab`
-        /// (E_par and cost of the shear drive against the slab width), `memory` (peak resident
-        /// memory of the event engine per particle at N = 125 000 and 10^6; `scale` scales N), `engines` (event- vs
-        /// time-driven engine on the 2D standard wet system, seconds per time unit), `observer`
-        /// (cost of the location-change observer, rebuilt vs incremental triangulation),
-        /// `observer-kernel:POINTS` (the leanest per-sample re-test of the kept triangulation,
-        /// a lower bound), `barrier` (what two threads meeting twice per step, with and without
-        /// a hand-over of data, can gain on this machine).
-        #[arg(default_value = "engine")]
-        which: String,
-        /// Repetitions per system (the median is reported).
-        #[arg(long, default_value_t = 3)]
-        repeat: usize,
-        /// Scale the run lengths (events per repetition) by this factor.
-        #[arg(long, default_value_t = 1.0)]
-        scale: f64,
-        /// `wall` only: also write the error-against-cost plot as SVG to this file.
-        #[arg(long)]
-        svg: Option<PathBuf>,
-        /// `tdmd` only: thread counts to run on, comma-separated (e.g. `1,2`; the speed-up is
-        /// against the first).
-        #[arg(long, value_delimiter = ',', default_value = "1")]
-        threads: Vec<usize>,
-        /// `tdmd` only: `K` times the particles in a box `K` times as wide (same density).
-        #[arg(long, default_value_t = 1)]
-        n_factor: usize,
-    },
-    /// Run the engines' hard cases at length with the invariant checks on, and print per case
-    /// the events (or time steps), simulated time, largest overlap, energy-ledger error, NaN
-    /// count and wall time. Exit status 3 if any case broke an invariant.
-    ///
-    /// Cases: resting_bed, bonded_collapse, grazing_walls, gamma_1000, wall_speed_50, jammed,
-    /// shear_double_roots, time_largest_dt (all by default); planted_overlap (the harness's
-    /// self-check, must fail) only when named.
-    Stress {
-        /// One case (default: every hard case).
-        case: Option<String>,
-        /// Events (time engine: steps) per case.
-        #[arg(long, default_value_t = crate::bench::stress::DEFAULT_EVENTS)]
-        events: u64,
-        /// Print the rows as JSON instead of the table.
-        #[arg(long)]
-        json: bool,
-    },
     /// Phase-diagram sweeps: run, resume, status, refine, submit to Slurm and collect (and
     /// expand, job for running elsewhere).
     Sweep {
@@ -226,28 +177,6 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Simulate(args) => simulate_cmd::simulate(args),
-        Command::Bench {
-            which,
-            repeat,
-            scale,
-            svg,
-            threads,
-            n_factor,
-        } => match bench::run_with_svg(
-            &which,
-            repeat.max(1),
-            scale,
-            svg.as_deref(),
-            &threads,
-            n_factor.max(1),
-        ) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
-        Command::Stress { case, events, json } => stress(case.as_deref(), events, json),
         Command::Sweep { action } => sweep(action),
         Command::Job {
             action: JobCommand::Run { spec, out },
@@ -428,44 +357,4 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
             ),
         },
     })
-}
-
-/// `wetgran stress [CASE] [--events N] [--json]`.
-fn stress(case: Option<&str>, events: u64, json: bool) -> ExitCode {
-    use crate::bench::stress::{StressCase, run_case};
-    let cases: Vec<StressCase> = match case {
-        None => StressCase::ALL.to_vec(),
-        Some(name) => match StressCase::from_name(name) {
-            Some(c) => vec![c],
-            None => {
-                let names: Vec<&str> = StressCase::ALL.iter().map(|c| c.name()).collect();
-                eprintln!(
-                    "error: unknown stress case `{name}`: use one of {}, or planted_overlap",
-                    names.join(", ")
-                );
-                return ExitCode::from(2);
-            }
-        },
-    };
-    let mut rows = Vec::new();
-    for c in cases {
-        let row = run_case(c, events);
-        if !json {
-            eprintln!("{}: {:.1} s", c.name(), row.wall_seconds);
-        }
-        rows.push(row);
-    }
-    if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&rows).expect("stress rows serialize")
-        );
-    } else {
-        print!("{}", crate::report::stress_text::stress_text(&rows, events));
-    }
-    if rows.iter().all(|r| r.passed()) {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(3)
-    }
 }

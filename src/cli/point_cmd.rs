@@ -4,12 +4,12 @@
 //! inelastic systems along lines of constant Gamma, MODEL.md 7).
 
 use super::common::{Failure, check_snapshot_names, exit, select};
-use crate::observe::{Observables, run_observed_with_frame};
 use crate::report::point_text::{decision_text, gamma_lines, inflection_text, job_text};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use crate::store::{PointRow, Store};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use wetgran_core::observe::{Observables, run_observed_with_frame};
 
 /// The stored job whose id starts with `prefix` (at least 6 characters), with its sweep's name.
 fn find_job(store: &Store, prefix: &str) -> Result<(String, PointRow), Failure> {

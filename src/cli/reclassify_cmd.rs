@@ -7,11 +7,11 @@
 //! once.
 
 use super::common::{Failure, exit, select};
-use crate::observe::Thresholds;
 use crate::run::relabel::relabel_stored;
 use crate::store::Store;
 use std::path::Path;
 use std::process::ExitCode;
+use wetgran_core::observe::Thresholds;
 
 /// Reads classifier thresholds from a TOML file: a `[classify]` table, or the keys at the top
 /// level; missing keys take their defaults (docs/observables.md). Errors name the file.

@@ -2,15 +2,15 @@
 //! optional snapshots and profile pictures.
 
 use super::common::{Failure, check_snapshot_names, exit};
-use crate::observe::run_observed_with_frame;
 use crate::report::run_text::{observed_text, summary_text};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
-use crate::scene::{Scene, StartMode};
-use crate::sim::event_driven::table_cache::TableCache;
 use clap::Args;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use wetgran_core::observe::run_observed_with_frame;
+use wetgran_core::scene::{Scene, StartMode};
+use wetgran_core::sim::event_driven::table_cache::TableCache;
 
 /// The arguments of `wetgran simulate`.
 #[derive(Debug, Args)]
@@ -33,7 +33,7 @@ pub struct SimulateArgs {
     pub profiles: Option<PathBuf>,
     /// Cap of the wall-table cache in MiB (`table` wall solver; one drive's tables take
     /// about 27 MiB at 128 x 128 cells; 0: no caching).
-    #[arg(long, value_name = "MIB", default_value_t = crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB)]
+    #[arg(long, value_name = "MIB", default_value_t = wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB)]
     pub table_cache_mib: usize,
 }
 

@@ -18,13 +18,13 @@ use crate::report::sweep_text::{
 };
 use crate::report::{export, plot_phase};
 use crate::run::{RunOptions, run_sweeps};
-use crate::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 use crate::store::{Store, StoreError, SweepRow};
 use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 
 /// Default database file, in the working directory.
 pub const DEFAULT_DB: &str = "wetgran.sqlite";

@@ -180,7 +180,7 @@ fn check_result(res: &JobResult) -> Result<(), String> {
         ));
     }
     if let Some(p) = &res.phase
-        && p.parse::<crate::observe::Phase>().is_err()
+        && p.parse::<wetgran_core::observe::Phase>().is_err()
     {
         return Err(format!("a result with an unknown phase label `{p}`"));
     }

@@ -8,7 +8,7 @@
 //! the bridges drawn), the lateral-profile plot (SVG), the phase-diagram plot of a sweep database
 //! (SVG), the export of all results (CSV with a long-format series file, JSON) and the trust
 //! mark of a stored result (`trust`). Everything takes plain data (a
-//! [`Frame`](crate::sim::Frame), [`Observables`](crate::observe::Observables), stored results),
+//! [`Frame`](wetgran_core::sim::Frame), [`Observables`](wetgran_core::observe::Observables), stored results),
 //! so a stored sweep point can be drawn as well as a fresh run.
 
 pub mod boundaries_text;
@@ -19,7 +19,6 @@ pub mod point_text;
 pub mod profile_plot;
 pub mod run_text;
 pub mod snapshot;
-pub mod stress_text;
 mod svg;
 pub mod sweep_text;
 pub mod trust;

@@ -13,10 +13,10 @@
 //! scene (the other axis may change `L_x`, `E_cb`, `s_crit` or anything else).
 
 use crate::boundary::{PhaseMap, PlaneAxis, Slice};
-use crate::scene::Scene;
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
+use wetgran_core::scene::Scene;
 
 /// Colour of a phase label (unknown labels grey).
 pub fn phase_color(phase: &str) -> RGBColor {

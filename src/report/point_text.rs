@@ -2,9 +2,9 @@
 //! it was decided on) and `wetgran inflection` (the fluid-gas inflection of T_g/E_cb against E*
 //! along each line of constant Gamma, MODEL.md 7). Pure functions of the stored rows.
 
-use crate::observe::fluid_gas_inflection;
 use crate::store::PointRow;
 use std::fmt::Write as _;
+use wetgran_core::observe::fluid_gas_inflection;
 
 /// The first lines of `show`: the job, its sweep, coordinates and status.
 pub fn job_text(sweep: &str, p: &PointRow) -> String {
@@ -64,7 +64,7 @@ pub fn decision_text(p: &PointRow) -> String {
 }
 
 /// `(Gamma, E*)` of a shaken scene (MODEL.md 4.1), from the drive as the scene gives it.
-fn gamma_e_star(scene: &crate::scene::Scene) -> Option<(f64, f64)> {
+fn gamma_e_star(scene: &wetgran_core::scene::Scene) -> Option<(f64, f64)> {
     let (a, omega) = scene.drive_motion()?;
     let unit = if scene.is_wet() && scene.e_cb() > 0.0 {
         scene.e_cb()

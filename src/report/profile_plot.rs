@@ -4,8 +4,8 @@
 //! (darker is larger).
 
 use super::svg::{esc, label, n};
-use crate::observe::Observables;
 use std::fmt::Write;
+use wetgran_core::observe::Observables;
 
 /// SVG of the lateral profiles of one result.
 pub fn profiles_svg(obs: &Observables) -> String {

@@ -1,8 +1,8 @@
 //! The text of `wetgran simulate`: the run summary (events by kind, energy books) and the
 //! observables with the classification, from a [`RunReport`] and an [`ObservedRun`].
 
-use crate::observe::ObservedRun;
-use crate::sim::RunReport;
+use wetgran_core::observe::ObservedRun;
+use wetgran_core::sim::RunReport;
 
 /// Human-readable summary of a run.
 pub fn summary_text(r: &RunReport) -> String {

@@ -10,9 +10,9 @@
 //!   it); the container's floor and lid at their current height.
 
 use super::svg::{category, colour, esc, n};
-use crate::sim::Frame;
 use std::fmt::Write;
 use std::path::Path;
+use wetgran_core::sim::Frame;
 
 /// What colours the disks of an SVG snapshot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

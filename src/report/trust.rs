@@ -10,7 +10,7 @@ pub const NOT_STATIONARY: char = '?';
 /// had one, else its stationarity check (`observe::converged_in_json`); `None` where the stored
 /// observables carry no verdict (a result written before the check existed).
 pub fn stationary(observables: &serde_json::Value) -> Option<bool> {
-    crate::observe::converged_in_json(observables)
+    wetgran_core::observe::converged_in_json(observables)
 }
 
 /// The trust mark of a result: `None` for a trusted one, [`NOT_STATIONARY`] for a result whose

@@ -5,11 +5,11 @@
 //! [`MIN_LINE_POINTS`] distinct `E*`; points on shorter lines (or in sweeps without a Gamma
 //! axis) keep the per-point fallback, and say so in their `decided_on.fluid_gas`.
 
-use crate::observe::line::classify_line;
-use crate::observe::{Classification, Observables, Thresholds, classify};
-use crate::scene::{DriveKind, Scene};
 use crate::store::{PointRow, Store, StoreError, SweepRow};
 use std::collections::BTreeMap;
+use wetgran_core::observe::line::classify_line;
+use wetgran_core::observe::{Classification, Observables, Thresholds, classify};
+use wetgran_core::scene::{DriveKind, Scene};
 
 /// Fewest distinct `E*` that make a line (the inflection needs four).
 pub const MIN_LINE_POINTS: usize = 4;

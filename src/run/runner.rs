@@ -18,13 +18,13 @@
 //! of a sweep does not leave cores idle.
 
 use super::progress::Progress;
-use crate::sim::event_driven::table_cache::TableCache;
-use crate::sim::threads::{self, CoreShare};
 use crate::store::{Claim, HEARTBEAT_INTERVAL, Store, StoreError, SweepRow};
 use crate::sweep::job::{JobError, JobResult, run_job, run_job_from};
 use std::sync::mpsc;
 use std::thread;
 use std::time::{Duration, Instant};
+use wetgran_core::sim::event_driven::table_cache::TableCache;
+use wetgran_core::sim::threads::{self, CoreShare};
 
 /// How to run.
 #[derive(Debug, Clone)]
@@ -285,7 +285,7 @@ pub fn run_sweeps(
 fn continuation_start(
     store: &Store,
     prev: &str,
-) -> Result<Result<crate::sim::EngineState, String>, StoreError> {
+) -> Result<Result<wetgran_core::sim::EngineState, String>, StoreError> {
     let short = &prev[..prev.len().min(12)];
     let Some(spec) = store.job_spec(prev)? else {
         return Ok(Err(format!(

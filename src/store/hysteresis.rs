@@ -6,9 +6,9 @@
 //! `continuation.first` start (hot or cold) and counts as that.
 
 use super::PointRow;
-use crate::scene::StartMode;
 use crate::sweep::file::Axis;
 use std::collections::BTreeMap;
+use wetgran_core::scene::StartMode;
 
 /// The labels of one grid point (coordinates without the start axis) by start mode.
 #[derive(Debug, Clone, PartialEq)]

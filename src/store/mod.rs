@@ -138,7 +138,7 @@ pub struct SweepRow {
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LeftOut {
     pub coords: Vec<serde_json::Value>,
-    /// The failed scene constraint, in words ([`crate::scene::Constraint::reason`]).
+    /// The failed scene constraint, in words ([`wetgran_core::scene::Constraint::reason`]).
     pub constraint: String,
     /// The full validation message.
     pub reason: String,
@@ -157,7 +157,7 @@ pub struct Claim {
     pub coords: Vec<serde_json::Value>,
     /// A continuation job's start state (its predecessor's final state carried into its
     /// container); filled in by the runner, `None` from [`Store::claim`].
-    pub start: Option<Box<crate::sim::EngineState>>,
+    pub start: Option<Box<wetgran_core::sim::EngineState>>,
 }
 
 /// Jobs of a sweep by state (counted per grid point and replica).
@@ -215,18 +215,18 @@ impl PointRow {
     pub fn converged(&self) -> bool {
         self.observables
             .as_ref()
-            .and_then(crate::observe::converged_in_json)
+            .and_then(wetgran_core::observe::converged_in_json)
             != Some(false)
     }
 }
 
-/// Results that did not reach a stationary window ([`crate::observe::Observables::converged`]),
+/// Results that did not reach a stationary window ([`wetgran_core::observe::Observables::converged`]),
 /// and the number of results that carry a verdict at all: `(unconverged, with a verdict)`.
 pub fn unconverged_count(points: &[PointRow]) -> (u64, u64) {
     let verdicts = points
         .iter()
         .filter_map(|p| p.observables.as_ref())
-        .filter_map(crate::observe::converged_in_json);
+        .filter_map(wetgran_core::observe::converged_in_json);
     verdicts.fold((0, 0), |(u, n), ok| (u + u64::from(!ok), n + 1))
 }
 
@@ -751,7 +751,7 @@ impl Store {
                 .await
                 .map_err(|e| self.db(e))?;
         }
-        crate::test_pause::pause_at("checkpoint");
+        wetgran_core::test_pause::pause_at("checkpoint");
         Ok(())
     }
 
@@ -766,7 +766,7 @@ impl Store {
                 .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
-            crate::test_pause::pause_at("extend");
+            wetgran_core::test_pause::pause_at("extend");
             self.insert_result(tx, job_id, result, &owner, t).await?;
             sqlx::query(queries::EXTEND_JOB_TIMES)
                 .bind(job_id)
@@ -799,7 +799,10 @@ impl Store {
     }
 
     /// The checkpoint (final state) of a finished job, if one was stored.
-    pub fn checkpoint(&self, job_id: &str) -> Result<Option<crate::sim::EngineState>, StoreError> {
+    pub fn checkpoint(
+        &self,
+        job_id: &str,
+    ) -> Result<Option<wetgran_core::sim::EngineState>, StoreError> {
         let row: Option<(String,)> = self
             .rt
             .block_on(
@@ -923,7 +926,7 @@ impl Store {
                 .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
-            crate::test_pause::pause_at("refine");
+            wetgran_core::test_pause::pause_at("refine");
             Ok(())
         })
     }

@@ -29,7 +29,7 @@ pub struct SweepError {
     pub message: String,
     /// The scene constraint the point fails, for an invalid grid point (each key in its own
     /// range, their combination not); only such points may be left out by `skip_invalid`.
-    pub constraint: Option<crate::scene::Constraint>,
+    pub constraint: Option<wetgran_core::scene::Constraint>,
 }
 
 impl SweepError {
@@ -87,7 +87,7 @@ pub struct Header {
     #[serde(default)]
     pub cost: Option<String>,
     /// Leave out grid points whose scene fails a constraint between keys
-    /// ([`crate::scene::Constraint`], e.g. more grains than fit in the box) instead of rejecting
+    /// ([`wetgran_core::scene::Constraint`], e.g. more grains than fit in the box) instead of rejecting
     /// the sweep; a key outside its own range is still an error. They are listed by
     /// `sweep expand`, `sweep run` and `sweep status`.
     #[serde(default)]
@@ -122,7 +122,7 @@ pub struct Continuation {
     /// Chains run from the largest value down.
     pub descending: bool,
     /// The start of each chain's first point (hot or cold).
-    pub first: crate::scene::StartMode,
+    pub first: wetgran_core::scene::StartMode,
     /// Line of `[sweep.continuation]` in the sweep file.
     pub line: usize,
 }
@@ -778,7 +778,7 @@ fn toml_error(file: &str, text: &str, e: &toml::de::Error) -> SweepError {
     let msg = e.message().trim_end().to_string();
     // The table path the deserializer recorded plus the field of an unknown or missing key
     // (`sweep.replicas`, `axis.linear.steps`), as for a scene.
-    let key = crate::scene::parse_error_key(e);
+    let key = wetgran_core::scene::parse_error_key(e);
     let msg = msg
         .replace("expected usize", "expected an integer >= 0")
         .replace("expected u32", "expected an integer >= 0")
@@ -851,8 +851,8 @@ fn parse_continuation(
         }
     };
     let first = match raw.first.as_ref().map(|d| (d, d.get_ref().as_str())) {
-        None | Some((_, "hot")) => crate::scene::StartMode::Hot,
-        Some((_, "cold")) => crate::scene::StartMode::Cold,
+        None | Some((_, "hot")) => wetgran_core::scene::StartMode::Hot,
+        Some((_, "cold")) => wetgran_core::scene::StartMode::Cold,
         Some((d, other)) => {
             return Err(SweepError::new(
                 file,

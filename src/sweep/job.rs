@@ -21,7 +21,7 @@ pub struct JobResult {
     /// The final state, stored as the job's checkpoint with the result (not part of the
     /// result's JSON: cluster records carry no checkpoint).
     #[serde(skip)]
-    pub checkpoint: Option<Box<crate::sim::EngineState>>,
+    pub checkpoint: Option<Box<wetgran_core::sim::EngineState>>,
 }
 
 /// Why a job produced no result.
@@ -47,7 +47,7 @@ impl std::error::Error for JobError {}
 /// Runs a job spec; `progress` gets the completed fraction of the simulated time, in `[0, 1]`.
 /// The observers and thresholds are the scene's `[observe]` and `[classify]` sections.
 pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResult, JobError> {
-    guarded_run(|| crate::observe::run_observed(&spec.scene, progress))
+    guarded_run(|| wetgran_core::observe::run_observed(&spec.scene, progress))
 }
 
 /// Runs a continuation job (`spec.start_from`) from `start`, its predecessor's final state
@@ -55,15 +55,17 @@ pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResul
 /// length and window from `t = 0`, as [`run_job`] but from that state.
 pub fn run_job_from(
     spec: &JobSpec,
-    start: &crate::sim::EngineState,
+    start: &wetgran_core::sim::EngineState,
     progress: &mut dyn FnMut(f64),
 ) -> Result<JobResult, JobError> {
-    guarded_run(|| crate::observe::run_observed_from(&spec.scene, Some(start), progress).0)
+    guarded_run(|| wetgran_core::observe::run_observed_from(&spec.scene, Some(start), progress).0)
 }
 
 /// Runs `run` with panics caught, checks its guards and turns it into a [`JobResult`] (the
 /// one path of a fresh job and of an extension).
-fn guarded_run(run: impl FnOnce() -> crate::observe::ObservedRun) -> Result<JobResult, JobError> {
+fn guarded_run(
+    run: impl FnOnce() -> wetgran_core::observe::ObservedRun,
+) -> Result<JobResult, JobError> {
     let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(run))
         .map_err(|payload| JobError::Panic(panic_message(payload.as_ref())))?;
     check_guards(&run)?;
@@ -89,7 +91,7 @@ fn guarded_run(run: impl FnOnce() -> crate::observe::ObservedRun) -> Result<JobR
 /// window. The result replaces the job's old one (`Store::replace_result`).
 pub fn extend_job(
     spec: &JobSpec,
-    state: &crate::sim::EngineState,
+    state: &wetgran_core::sim::EngineState,
     max_periods: f64,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Option<JobResult>, JobError> {
@@ -104,7 +106,7 @@ pub fn extend_job(
     let mut ext = scene.clone();
     ext.run.duration = window;
     ext.observe.transient_periods = 0.0;
-    ext.convergence = Some(crate::observe::ConvergenceSpec {
+    ext.convergence = Some(wetgran_core::observe::ConvergenceSpec {
         min_periods: 0.0,
         min_time: 0.0,
         max_periods: Some(room / period),
@@ -112,12 +114,13 @@ pub fn extend_job(
         max_time: None,
         ..policy
     });
-    guarded_run(|| crate::observe::run_observed_from(&ext, Some(state), progress).0).map(Some)
+    guarded_run(|| wetgran_core::observe::run_observed_from(&ext, Some(state), progress).0)
+        .map(Some)
 }
 
 /// The numerical guards: a broken engine invariant, or a stationary temperature that is not a
 /// finite number (no sample in the window, or a blown-up run), fails the job.
-fn check_guards(run: &crate::observe::ObservedRun) -> Result<(), JobError> {
+fn check_guards(run: &wetgran_core::observe::ObservedRun) -> Result<(), JobError> {
     let report = &run.report;
     if let Some(v) = &report.invariant_violation {
         return Err(JobError::Numerical(format!(
@@ -178,8 +181,8 @@ mod tests {
         let mut fractions = Vec::new();
         let r = run_job(&spec, &mut |f| fractions.push(f)).unwrap();
         // The classifier ran and kept the numbers it decided on.
-        let phase: crate::observe::Phase = r.phase.as_deref().unwrap().parse().unwrap();
-        assert!(crate::observe::Phase::ALL.contains(&phase));
+        let phase: wetgran_core::observe::Phase = r.phase.as_deref().unwrap().parse().unwrap();
+        assert!(wetgran_core::observe::Phase::ALL.contains(&phase));
         assert!(r.decided_on.is_some());
         // Elastic disks, no gravity, fully periodic: kinetic energy and momentum (zero) are
         // conserved, so T_g stays the initial 1.0 (unit 1 without gravity) at every sample.

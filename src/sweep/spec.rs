@@ -11,9 +11,9 @@
 //! sweep: the grid coordinates of a job live beside it in the sweep's point list.
 
 use super::file::{Continuation, SweepError, SweepFile};
-use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
+use wetgran_core::scene::Scene;
 
 /// Version of the job-spec layout; part of the hashed text, so a change of layout is a new job.
 pub const SPEC_FORMAT: u32 = 1;
@@ -393,7 +393,7 @@ impl SweepFile {
     /// the ids are recomputed in chain order (each id covers its predecessor's). Neighbours
     /// must share dimension, box, particles and gravity: the state passes between them.
     fn chain_continuations(&self, jobs: &mut [SweepJob]) -> Result<(), SweepError> {
-        use crate::scene::StartMode;
+        use wetgran_core::scene::StartMode;
         let file = self.path.display().to_string();
         let continuing = |j: &SweepJob| j.spec.scene.initial.start == StartMode::Continue;
         let Some(c) = self.continuation else {
@@ -496,7 +496,7 @@ impl SweepFile {
                 Ok(mut job) => {
                     // A point between grid points has no chain: it starts as a chain's first.
                     if let Some(c) = self.continuation
-                        && job.spec.scene.initial.start == crate::scene::StartMode::Continue
+                        && job.spec.scene.initial.start == wetgran_core::scene::StartMode::Continue
                     {
                         if let Err(e) = self.start_as_chain_head(&mut job, c) {
                             return Ok(Err(e));
@@ -512,7 +512,7 @@ impl SweepFile {
     }
 
     /// One job; `Ok(Err(_))`: its scene fails a constraint between keys
-    /// ([`crate::scene::Constraint`], skippable), `Err(_)`: the sweep is invalid (a key outside
+    /// ([`wetgran_core::scene::Constraint`], skippable), `Err(_)`: the sweep is invalid (a key outside
     /// its own range included).
     fn job_at(
         &self,
@@ -651,13 +651,14 @@ impl SweepFile {
             let c = &scene.contact;
             let converts = (c.damping.is_none() && c.restitution < 1.0)
                 || (c.wall_damping.is_none() && c.wall_restitution < 1.0);
-            if scene.engine.kind == crate::scene::EngineKind::Time
+            if scene.engine.kind == wetgran_core::scene::EngineKind::Time
                 && converts
                 && c.restitution_speed.is_none()
             {
-                scene.contact.restitution_speed = Some(crate::scene::RestitutionSpeed::Word(
-                    crate::scene::AutoWord::Auto,
-                ));
+                scene.contact.restitution_speed =
+                    Some(wetgran_core::scene::RestitutionSpeed::Word(
+                        wetgran_core::scene::AutoWord::Auto,
+                    ));
             }
             let spec = JobSpec {
                 format: SPEC_FORMAT,

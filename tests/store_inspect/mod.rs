@@ -156,7 +156,7 @@ pub fn snapshot(db: &Path) -> Snapshot {
             let id: String = row.get(0);
             let time: f64 = row.get(1);
             let state: String = row.get(2);
-            let parsed: wetgran::sim::EngineState = serde_json::from_str(&state)
+            let parsed: wetgran_core::sim::EngineState = serde_json::from_str(&state)
                 .unwrap_or_else(|e| panic!("job {id}: the checkpoint does not parse: {e}"));
             assert_eq!(parsed.time.to_bits(), time.to_bits(), "job {id}");
             let job = jobs.get_mut(&id).unwrap_or_else(|| {

@@ -1,0 +1,523 @@
+//! `wetgran-bench`: engine speed on the reference systems of docs/performance.md.
+//!
+//! `wetgran-bench engine [--repeat R] [--scale S]` builds each reference system as a [`Scene`]
+//! in code, runs a warm-up (10 % of the measured events, not timed), then times a fixed number of
+//! events with `Engine::run_until(f64::INFINITY, Some(cap))`. Every repetition starts from a
+//! fresh engine built from the same scene (same seed), so the repetitions time the same work and
+//! their spread is machine noise. Reported: events/s and collisions/s (pair + wall collisions)
+//! as median, minimum and maximum over the repetitions, the simulated time one repetition covers
+//! and the events per unit of simulated time.
+//!
+//! The reference systems:
+//! - (a) 3D bulk: 32000 elastic monodisperse spheres, number density 0.5 (periodic cube of side
+//!   40), no gravity, `T = 1`;
+//! - (b) 3D gravity: 32000 elastic spheres, `g = 1`, box 80 x 80 x 40 periodic laterally with
+//!   floor and lid, `T = 1`;
+//! - (c) the 2D standard wet system (scenes/standard_wet_2d.toml): 1200 disks, box 400 x 9,
+//!   `sigma_p = 0.06`, thin-thread bridges, particle restitution 0.9, wall restitution 1,
+//!   `T_g / E_cb = 20`;
+//! - (c') the same system dry (no bridges) at the same absolute temperature.
+//!
+//! `wetgran-bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
+//! particle, with the breakdown by array.
+
+pub mod barrier;
+pub mod engines;
+pub mod memory;
+pub mod observer;
+pub mod shake;
+pub mod slab;
+pub mod stress;
+pub mod stress_text;
+pub mod tdmd;
+pub mod wall;
+
+use std::fmt::Write as _;
+use std::hint::black_box;
+use std::time::Instant;
+use wetgran_core::scene::reference::{system_a, system_b, system_c, system_c_dry};
+use wetgran_core::scene::{Scene, lattice};
+use wetgran_core::sim::event_driven::Engine;
+
+/// Fewest events timed per repetition, whatever `scale` says (keeps tiny scales meaningful).
+const MIN_EVENTS: u64 = 5_000;
+/// Fewest warm-up events.
+const MIN_WARMUP: u64 = 500;
+
+/// Runs the benchmark `which` and prints its table to stdout: `engine` (all reference systems)
+/// or `engine:LABELS` with a comma-separated subset of `a,b,c,c'` (e.g. `engine:a` to profile
+/// one system).
+pub fn run(which: &str, repeat: usize, scale: f64) -> Result<(), String> {
+    run_with_svg(which, repeat, scale, None, &[1], 1)
+}
+
+/// Like [`run`]; `wall` also writes its error-against-cost plot to `svg` if given; `tdmd` runs
+/// once per thread count of `threads` (the other benchmarks are single-threaded), on its
+/// system widened `n_factor` times.
+pub fn run_with_svg(
+    which: &str,
+    repeat: usize,
+    scale: f64,
+    svg: Option<&std::path::Path>,
+    threads: &[usize],
+    n_factor: usize,
+) -> Result<(), String> {
+    if which == "wall" {
+        let rows = wall::measure(repeat, scale);
+        print!("{}", wall::report(&rows));
+        if let Some(path) = svg {
+            std::fs::write(path, wall::svg(&rows))
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            println!("plot written to {}", path.display());
+        }
+        return Ok(());
+    }
+    if which == "tdmd" {
+        print!(
+            "{}",
+            tdmd::report(&tdmd::measure_threads(repeat, scale, threads, n_factor))
+        );
+        return Ok(());
+    }
+    if which == "slab" {
+        print!(
+            "{}",
+            slab::report(&slab::measure(repeat, scale), repeat, scale)
+        );
+        return Ok(());
+    }
+    if which == "memory" {
+        print!("{}", memory::report(&memory::measure(scale)?));
+        return Ok(());
+    }
+    if let Some(n) = which.strip_prefix("memory:") {
+        // The child process of `memory` (one size).
+        let n: usize = n
+            .parse()
+            .map_err(|_| format!("`{which}`: expected memory:N with a particle count N"))?;
+        print!("{}", memory::child_text(&memory::measure_here(n)?));
+        return Ok(());
+    }
+    if let Some(points) = which.strip_prefix("observer-kernel:") {
+        // The lower-bound verification kernel (docs/performance.md, Round 5), for callgrind.
+        let only: Vec<&str> = points.split(',').map(str::trim).collect();
+        if let Some(bad) = only
+            .iter()
+            .find(|l| !observer::POINTS.iter().any(|p| p.0 == **l))
+        {
+            return Err(format!(
+                "unknown observer point `{bad}`: use gas, fluid, coexistence"
+            ));
+        }
+        print!("{}", observer::measure_kernel(400, scale, &only));
+        return Ok(());
+    }
+    if which == "observer" || which.starts_with("observer:") {
+        let only: Vec<&str> = which
+            .strip_prefix("observer:")
+            .map(|l| l.split(',').map(str::trim).collect())
+            .unwrap_or_default();
+        if let Some(bad) = only
+            .iter()
+            .find(|l| !observer::POINTS.iter().any(|p| p.0 == **l))
+        {
+            return Err(format!(
+                "unknown observer point `{bad}`: use gas, fluid, coexistence"
+            ));
+        }
+        print!(
+            "{}",
+            observer::report(&observer::measure(400, scale, &only))
+        );
+        return Ok(());
+    }
+    if which == "engines" {
+        print!(
+            "{}",
+            engines::report(&engines::measure(repeat, scale), repeat, scale)
+        );
+        return Ok(());
+    }
+    if which == "barrier" {
+        print!(
+            "{}",
+            barrier::report(&barrier::measure(repeat, scale), repeat)
+        );
+        return Ok(());
+    }
+    if which == "shake" {
+        print!("{}", shake::report(&shake::measure(40, scale)));
+        return Ok(());
+    }
+    let only: Option<Vec<&str>> = match which.split_once(':') {
+        None if which == "engine" => None,
+        Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
+        _ => {
+            return Err(format!(
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `observer`, `observer:POINTS` or `observer-kernel:POINTS` (POINTS from gas,fluid,coexistence)"
+            ));
+        }
+    };
+    let rows = engine_bench_only(repeat, scale, only.as_deref())?;
+    print!("{}", engine_report(&rows, repeat, scale));
+    Ok(())
+}
+
+/// One reference system of the engine benchmark.
+#[derive(Debug, Clone)]
+pub struct System {
+    /// Short label used in the table: `a`, `b`, `c`, `c'`.
+    pub label: &'static str,
+    /// One line saying what the system is.
+    pub description: String,
+    pub scene: Scene,
+    /// Events timed per repetition at `scale = 1`.
+    pub base_events: u64,
+}
+
+/// What one repetition measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Repetition {
+    pub wall_seconds: f64,
+    /// Events processed in the timed part (`EventCounts::total`).
+    pub events: u64,
+    /// Pair plus wall collisions in the timed part.
+    pub collisions: u64,
+    /// Simulated time covered by the timed part.
+    pub simulated_time: f64,
+}
+
+impl Repetition {
+    pub fn events_per_second(&self) -> f64 {
+        self.events as f64 / self.wall_seconds.max(1e-12)
+    }
+    pub fn collisions_per_second(&self) -> f64 {
+        self.collisions as f64 / self.wall_seconds.max(1e-12)
+    }
+}
+
+/// All repetitions of one system.
+#[derive(Debug, Clone)]
+pub struct Row {
+    pub label: &'static str,
+    pub description: String,
+    pub particles: usize,
+    /// Events requested per repetition (after scaling).
+    pub target_events: u64,
+    pub warmup_events: u64,
+    pub reps: Vec<Repetition>,
+}
+
+/// Median, minimum and maximum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spread {
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Spread {
+    pub fn of(values: impl IntoIterator<Item = f64>) -> Spread {
+        let mut v: Vec<f64> = values.into_iter().collect();
+        assert!(!v.is_empty(), "spread of no values");
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        let median = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        };
+        Spread {
+            median,
+            min: v[0],
+            max: v[n - 1],
+        }
+    }
+}
+
+impl Row {
+    pub fn events_per_second(&self) -> Spread {
+        Spread::of(self.reps.iter().map(Repetition::events_per_second))
+    }
+    pub fn collisions_per_second(&self) -> Spread {
+        Spread::of(self.reps.iter().map(Repetition::collisions_per_second))
+    }
+    /// Simulated time of the timed part (identical across repetitions; the median is taken).
+    pub fn simulated_time(&self) -> f64 {
+        Spread::of(self.reps.iter().map(|r| r.simulated_time)).median
+    }
+    pub fn events(&self) -> u64 {
+        self.reps[0].events
+    }
+    pub fn collisions(&self) -> u64 {
+        self.reps[0].collisions
+    }
+}
+
+/// How the initial lattice of a scene is filled, e.g. `39x39 sites per layer, 21.04 layers`.
+fn lattice_fill(scene: &Scene) -> String {
+    let (_, d_max) = scene.diameter_range();
+    let a = scene.initial.lattice_spacing * d_max;
+    let n = lattice::sites_per_axis(&scene.container.size, a);
+    let d = scene.dimension;
+    let per_layer: usize = n[..d - 1].iter().product();
+    let lateral: Vec<String> = n[..d - 1].iter().map(|k| k.to_string()).collect();
+    format!(
+        "lattice spacing {a:.4}: {} sites per layer, {:.2} of {} layers filled",
+        lateral.join("x"),
+        scene.particles.count as f64 / per_layer as f64,
+        n[d - 1]
+    )
+}
+
+/// The four reference systems, validated.
+pub fn systems() -> Result<Vec<System>, String> {
+    let list = vec![
+        System {
+            label: "a",
+            description:
+                "3D bulk: 32000 elastic spheres, density 0.5, periodic cube 40^3, g = 0, T = 1"
+                    .into(),
+            scene: system_a(),
+            base_events: 2_000_000,
+        },
+        System {
+            label: "b",
+            description: "3D gravity: 32000 elastic spheres, g = 1, box 80x80x40 periodic in x,y, \
+                          floor and lid, T = 1"
+                .into(),
+            scene: system_b(),
+            base_events: 2_000_000,
+        },
+        System {
+            label: "c",
+            description: "2D standard wet: 1200 disks, 400x9, sigma_p 0.06, thin thread s_crit \
+                          0.0711, E_cb 0.2844, eps 0.9, e_w 1, T/E_cb = 20"
+                .into(),
+            scene: system_c(),
+            base_events: 1_000_000,
+        },
+        System {
+            label: "c'",
+            description: "2D standard dry: as (c) without bridges, T = 20 * 0.2844".into(),
+            scene: system_c_dry(),
+            base_events: 1_000_000,
+        },
+    ];
+    for s in &list {
+        s.scene
+            .validate(&format!("bench system ({})", s.label))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(list)
+}
+
+// ----- measurement -------------------------------------------------------------------------
+
+/// Warm-up, then `events` timed events, on a fresh engine of type `Engine<D, G, W>`.
+fn measure_once<const D: usize, const G: bool, const W: bool>(
+    scene: &Scene,
+    warmup: u64,
+    events: u64,
+) -> Repetition {
+    let mut engine = Engine::<D, G, W>::new(scene);
+    engine.run_until(f64::INFINITY, Some(warmup));
+    let c0 = engine.counts().clone();
+    let t0 = engine.time();
+    let cap = c0.total() + events;
+    let start = Instant::now();
+    let stopped_on_cap = !black_box(&mut engine).run_until(f64::INFINITY, Some(cap));
+    let wall_seconds = start.elapsed().as_secs_f64();
+    black_box(stopped_on_cap);
+    let c1 = engine.counts();
+    Repetition {
+        wall_seconds,
+        events: c1.total() - c0.total(),
+        collisions: (c1.pair_collisions + c1.wall_collisions)
+            - (c0.pair_collisions + c0.wall_collisions),
+        simulated_time: engine.time() - t0,
+    }
+}
+
+/// Picks the engine type the scene needs (only the combinations of the reference systems).
+fn measure(scene: &Scene, warmup: u64, events: u64) -> Result<Repetition, String> {
+    let grav = scene.gravity > 0.0;
+    let wet = scene.is_wet();
+    Ok(match (scene.dimension, grav, wet) {
+        (3, false, false) => measure_once::<3, false, false>(scene, warmup, events),
+        (3, true, false) => measure_once::<3, true, false>(scene, warmup, events),
+        (2, true, true) => measure_once::<2, true, true>(scene, warmup, events),
+        (2, true, false) => measure_once::<2, true, false>(scene, warmup, events),
+        (d, g, w) => {
+            return Err(format!(
+                "no benchmark engine for dimension {d}, gravity {g}, bridges {w}"
+            ));
+        }
+    })
+}
+
+/// Events timed per repetition and warm-up events for a base count and a scale.
+pub fn event_budget(base_events: u64, scale: f64) -> (u64, u64) {
+    let events = ((base_events as f64 * scale).round() as u64).max(MIN_EVENTS);
+    let warmup = (events / 10).max(MIN_WARMUP);
+    (events, warmup)
+}
+
+/// Runs every reference system `repeat` times.
+pub fn engine_bench(repeat: usize, scale: f64) -> Result<Vec<Row>, String> {
+    engine_bench_only(repeat, scale, None)
+}
+
+/// Runs the reference systems whose labels are in `only` (all if `None`) `repeat` times.
+pub fn engine_bench_only(
+    repeat: usize,
+    scale: f64,
+    only: Option<&[&str]>,
+) -> Result<Vec<Row>, String> {
+    if repeat == 0 {
+        return Err("--repeat must be >= 1".into());
+    }
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(format!("--scale = {scale} must be a finite number > 0"));
+    }
+    let all = systems()?;
+    if let Some(bad) = only
+        .unwrap_or(&[])
+        .iter()
+        .find(|l| !all.iter().any(|s| s.label == **l))
+    {
+        return Err(format!(
+            "unknown system `{bad}`: the systems are a, b, c, c'"
+        ));
+    }
+    let mut rows = Vec::new();
+    for sys in all {
+        if only.is_some_and(|o| !o.contains(&sys.label)) {
+            continue;
+        }
+        let (events, warmup) = event_budget(sys.base_events, scale);
+        let mut reps = Vec::with_capacity(repeat);
+        for _ in 0..repeat {
+            reps.push(measure(&sys.scene, warmup, events)?);
+        }
+        rows.push(Row {
+            label: sys.label,
+            description: format!("{}; {}", sys.description, lattice_fill(&sys.scene)),
+            particles: sys.scene.particles.count,
+            target_events: events,
+            warmup_events: warmup,
+            reps,
+        });
+    }
+    Ok(rows)
+}
+
+fn mega(x: f64) -> String {
+    format!("{:.3}", x / 1e6)
+}
+
+/// The printed table.
+pub fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "wetgran-bench engine: repeat = {repeat}, scale = {scale}; each repetition: fresh engine, \
+         untimed warm-up, then the timed events"
+    );
+    let _ = writeln!(s, "systems:");
+    for r in rows {
+        let _ = writeln!(s, "  ({}) {}", r.label, r.description);
+    }
+    let _ = writeln!(
+        s,
+        "collisions = pair + wall collisions; events = all processed events (collisions, cell \
+         crossings, well events, stale re-predictions)"
+    );
+    let _ = writeln!(
+        s,
+        "rates in millions per wall-clock second: median [min, max] over {repeat} repetition(s)"
+    );
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "{:<4} {:>6} {:>9} {:>8} {:>26} {:>26} {:>10} {:>11} {:>7}",
+        "sys",
+        "N",
+        "events",
+        "warm-up",
+        "events/s [M]",
+        "collisions/s [M]",
+        "sim. time",
+        "events/t",
+        "coll.%"
+    );
+    for r in rows {
+        let ev = r.events_per_second();
+        let co = r.collisions_per_second();
+        let t = r.simulated_time();
+        let _ = writeln!(
+            s,
+            "{:<4} {:>6} {:>9} {:>8} {:>26} {:>26} {:>10.4} {:>11.4e} {:>7.1}",
+            format!("({})", r.label),
+            r.particles,
+            r.events(),
+            r.warmup_events,
+            format!("{} [{}, {}]", mega(ev.median), mega(ev.min), mega(ev.max)),
+            format!("{} [{}, {}]", mega(co.median), mega(co.min), mega(co.max)),
+            t,
+            r.events() as f64 / t,
+            100.0 * r.collisions() as f64 / r.events().max(1) as f64,
+        );
+    }
+    let wet = rows.iter().find(|r| r.label == "c");
+    let dry = rows.iter().find(|r| r.label == "c'");
+    if let (Some(wet), Some(dry)) = (wet, dry) {
+        let _ = writeln!(s);
+        let _ = writeln!(
+            s,
+            "dry/wet events-per-second ratio (c')/(c): {:.3} (collisions per second: {:.3})",
+            dry.events_per_second().median / wet.events_per_second().median,
+            dry.collisions_per_second().median / wet.collisions_per_second().median,
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiny_engine_bench_runs_every_system() {
+        let rows = engine_bench(1, 0.001).expect("bench runs");
+        assert_eq!(rows.len(), 4);
+        for r in &rows {
+            assert_eq!(r.reps.len(), 1);
+            let rep = r.reps[0];
+            assert!(
+                rep.events >= MIN_EVENTS,
+                "({}) timed {} events",
+                r.label,
+                rep.events
+            );
+            assert!(rep.collisions > 0 && rep.collisions <= rep.events);
+            assert!(rep.simulated_time > 0.0 && rep.wall_seconds > 0.0);
+        }
+        let text = engine_report(&rows, 1, 0.001);
+        assert!(text.contains("dry/wet events-per-second ratio"));
+        assert!(run("engine:c'", 1, 0.001).is_ok());
+        assert!(run("nonsense", 1, 1.0).is_err());
+        assert!(run("engine:x", 1, 1.0).is_err());
+        assert_eq!(engine_bench_only(1, 0.001, Some(&["c'"])).unwrap().len(), 1);
+        assert!(engine_bench(1, 0.0).is_err());
+    }
+
+    #[test]
+    fn spread_and_budget() {
+        let s = Spread::of([3.0, 1.0, 2.0]);
+        assert_eq!((s.median, s.min, s.max), (2.0, 1.0, 3.0));
+        assert_eq!(Spread::of([1.0, 4.0]).median, 2.5);
+        assert_eq!(event_budget(2_000_000, 1.0), (2_000_000, 200_000));
+        assert_eq!(event_budget(2_000_000, 0.001), (MIN_EVENTS, MIN_WARMUP));
+    }
+}

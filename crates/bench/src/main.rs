@@ -1,0 +1,143 @@
+//! The `wetgran-bench` binary: the benchmark figures (`wetgran-bench engine`, `wall`, `shake`,
+//! ...) and the engines' hard cases (`wetgran-bench stress`).
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use wetgran_bench::stress::{DEFAULT_EVENTS, StressCase, run_case};
+
+/// Benchmarks and stress cases of wetgran's engines.
+#[derive(Debug, Parser)]
+#[command(
+    name = "wetgran-bench",
+    version,
+    about,
+    args_conflicts_with_subcommands = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    figures: Figures,
+}
+
+/// Measure the engine's speed on the reference systems and print the figures.
+#[derive(Debug, Args)]
+struct Figures {
+    /// Which benchmark: `engine` (collisions/s for the reference systems of the
+    /// performance doc), `wall` (error and cost of the shaken-wall solvers), `shake` (the
+    /// shaken standard wet system with each wall solver), `tdmd` (the time-driven engine on
+    /// the dry shaken 2D system of issue 6; `scale` = simulated time units timed), `slab`
+    /// (E_par and cost of the shear drive against the slab width), `memory` (peak resident
+    /// memory of the event engine per particle at N = 125 000 and 10^6; `scale` scales N),
+    /// `engines` (event- vs time-driven engine on the 2D standard wet system, seconds per time
+    /// unit), `observer` (cost of the location-change observer, rebuilt vs incremental
+    /// triangulation), `observer-kernel:POINTS` (the leanest per-sample re-test of the kept
+    /// triangulation, a lower bound), `barrier` (what two threads meeting twice per step, with
+    /// and without a hand-over of data, can gain on this machine).
+    #[arg(default_value = "engine")]
+    which: String,
+    /// Repetitions per system (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
+    /// Scale the run lengths (events per repetition) by this factor.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// `wall` only: also write the error-against-cost plot as SVG to this file.
+    #[arg(long)]
+    svg: Option<PathBuf>,
+    /// `tdmd` only: thread counts to run on, comma-separated (e.g. `1,2`; the speed-up is
+    /// against the first).
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    threads: Vec<usize>,
+    /// `tdmd` only: `K` times the particles in a box `K` times as wide (same density).
+    #[arg(long, default_value_t = 1)]
+    n_factor: usize,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run the engines' hard cases at length with the invariant checks on, and print per case
+    /// the events (or time steps), simulated time, largest overlap, energy-ledger error, NaN
+    /// count and wall time. Exit status 3 if any case broke an invariant.
+    ///
+    /// Cases: resting_bed, bonded_collapse, grazing_walls, gamma_1000, wall_speed_50, jammed,
+    /// shear_double_roots, time_largest_dt (all by default); planted_overlap (the harness's
+    /// self-check, must fail) only when named.
+    Stress {
+        /// One case (default: every hard case).
+        case: Option<String>,
+        /// Events (time engine: steps) per case.
+        #[arg(long, default_value_t = DEFAULT_EVENTS)]
+        events: u64,
+        /// Print the rows as JSON instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Some(Command::Stress { case, events, json }) => stress(case.as_deref(), events, json),
+        None => figures(&cli.figures),
+    }
+}
+
+/// `wetgran-bench [WHICH] [--repeat R] [--scale S] ...`.
+fn figures(f: &Figures) -> ExitCode {
+    match wetgran_bench::run_with_svg(
+        &f.which,
+        f.repeat.max(1),
+        f.scale,
+        f.svg.as_deref(),
+        &f.threads,
+        f.n_factor.max(1),
+    ) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// `wetgran-bench stress [CASE] [--events N] [--json]`; exit status 3 if a case broke an
+/// invariant.
+fn stress(case: Option<&str>, events: u64, json: bool) -> ExitCode {
+    let cases: Vec<StressCase> = match case {
+        None => StressCase::ALL.to_vec(),
+        Some(name) => match StressCase::from_name(name) {
+            Some(c) => vec![c],
+            None => {
+                let names: Vec<&str> = StressCase::ALL.iter().map(|c| c.name()).collect();
+                eprintln!(
+                    "error: unknown stress case `{name}`: use one of {}, or planted_overlap",
+                    names.join(", ")
+                );
+                return ExitCode::from(2);
+            }
+        },
+    };
+    let mut rows = Vec::new();
+    for c in cases {
+        let row = run_case(c, events);
+        if !json {
+            eprintln!("{}: {:.1} s", c.name(), row.wall_seconds);
+        }
+        rows.push(row);
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).expect("stress rows serialize")
+        );
+    } else {
+        print!("{}", wetgran_bench::stress_text::stress_text(&rows, events));
+    }
+    if rows.iter().all(|r| r.passed()) {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(3)
+    }
+}

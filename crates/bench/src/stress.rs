@@ -1,0 +1,557 @@
+//! `wetgran-bench stress`: the hard cases of the engines run at length (10^7 events or time steps each
+//! by default) with the invariant checks on.
+//!
+//! Each [`StressCase`] is one situation that has broken, or could break, an engine: a bed resting
+//! on the shaken plate below Gamma = 1, inelastic collapse in a dense bonded cluster, grazing
+//! wall hits, Gamma = 1000 with a tiny amplitude, a wall speed of 50 `sqrt(g d)`, a packing near
+//! jamming, the shear drive's quartic pair predictions near double roots, and the time-driven
+//! engine at the largest time step validation admits. [`run_case`] builds the case's scene (the
+//! library's builders where one exists: `bench::shake::shaken_standard` for the standard wet system), runs it
+//! in [`CHECKS`] chunks and after every chunk
+//!
+//! - runs the engine's own `sanity_check` (finite states, inside the box, no overlap beyond the
+//!   tolerance, no over-stretched bond, no event in the past, ...): the first violation stops
+//!   the case and is reported;
+//! - counts the non-finite numbers in the state and in the energy ledger;
+//! - records the largest pair overlap (event engine: from the configuration, all pairs under
+//!   the minimum image; time engine: the engine's own running maximum of pair and wall overlaps).
+//!
+//! The energy-ledger error is `|A(end) - A(0)| / S`, `A` the accounted total
+//! ([`EnergyLedger::total_accounted`]: kinetic + potential + dissipated - injected), `S =
+//! |K(0)| + |P(0)| + ` every energy that went through the ledger (restitution, ruptures, collapse
+//! remedies, wall placement, `|drive work|`): round-off for the event engine, the integrator's
+//! error for the time engine (docs/accuracy.md).
+//!
+//! [`StressCase::PlantedOverlap`] is not a hard case but the harness's self-check: two disks
+//! planted overlapping, moving together, so the first check must report the overlap. It runs
+//! only when named.
+
+use serde::Serialize;
+use std::time::Instant;
+use wetgran_core::scene::reference::shaken_standard;
+use wetgran_core::scene::{Scene, WallSolverKind};
+use wetgran_core::sim::event_driven::{EnergyLedger, Engine, Vector};
+use wetgran_core::sim::{EngineVisitor, Frame, Simulation, with_engine};
+
+/// Events (or time steps) per case by default.
+pub const DEFAULT_EVENTS: u64 = 10_000_000;
+/// Invariant checks per case: one after each of this many equal chunks of the run.
+pub const CHECKS: u64 = 100;
+
+/// One hard case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StressCase {
+    /// The standard wet system (MODEL.md 1, 1200 disks) on the plate at Gamma = 0.5, E* = 0.1:
+    /// the bed rides the plate, grains rest on it and on each other (rebound floor at work).
+    RestingBed,
+    /// A dense cluster of wet disks (no gravity, `E_cb` far above the kinetic energy) with
+    /// restitution 0.3: every collision bonds, the cluster collapses inelastically.
+    BondedCollapse,
+    /// Disks sliding along a static floor under gravity at lateral speed 1: every floor hit
+    /// comes in at the rebound floor's normal speed (1e-3), a grazing angle of 1e-3.
+    GrazingWalls,
+    /// Gamma = 1000 with amplitude A = 1e-4 (omega = 3162), wet, 100 disks.
+    #[serde(rename = "gamma_1000")]
+    StrongShaking,
+    /// Wall speed A omega = 50 sqrt(g d) (A = 2, omega = 25, Gamma = 1250), wet, 100 disks.
+    #[serde(rename = "wall_speed_50")]
+    FastWall,
+    /// 841 disks on a square lattice at spacing 1.0005 d in a periodic box: every disk nearly
+    /// touches four neighbours (dense packing near jamming).
+    Jammed,
+    /// A dense sheared wet 3D packing (380 spheres, F_max = 1.5) with slabs of a quarter
+    /// diameter: most pairs straddle slab faces, so their predictions are quartics, and bonded
+    /// pairs graze the well wall (near-double roots).
+    ShearDoubleRoots,
+    /// The time-driven engine at the largest time step validation admits
+    /// (`Scene::largest_time_step`: 3.36e-4 here at the default stiffness, with the bound on the
+    /// damping of its restitution; 3.94e-4 before that bound), on a small shaken
+    /// wet 2D system (20 disks, Gamma = 5, E* = 10, started hot).
+    TimeLargestDt,
+    /// Self-check of the harness (run only when named): two disks planted overlapping by 0.1 d,
+    /// moving together; the first check must report the overlap.
+    PlantedOverlap,
+}
+
+impl StressCase {
+    /// The hard cases `wetgran-bench stress` runs without a case name, in order.
+    pub const ALL: [StressCase; 8] = [
+        StressCase::RestingBed,
+        StressCase::BondedCollapse,
+        StressCase::GrazingWalls,
+        StressCase::StrongShaking,
+        StressCase::FastWall,
+        StressCase::Jammed,
+        StressCase::ShearDoubleRoots,
+        StressCase::TimeLargestDt,
+    ];
+
+    /// The name on the command line and in the report.
+    pub fn name(self) -> &'static str {
+        match self {
+            StressCase::RestingBed => "resting_bed",
+            StressCase::BondedCollapse => "bonded_collapse",
+            StressCase::GrazingWalls => "grazing_walls",
+            StressCase::StrongShaking => "gamma_1000",
+            StressCase::FastWall => "wall_speed_50",
+            StressCase::Jammed => "jammed",
+            StressCase::ShearDoubleRoots => "shear_double_roots",
+            StressCase::TimeLargestDt => "time_largest_dt",
+            StressCase::PlantedOverlap => "planted_overlap",
+        }
+    }
+
+    /// The case of a name (the hard cases and `planted_overlap`).
+    pub fn from_name(name: &str) -> Option<StressCase> {
+        Self::ALL
+            .iter()
+            .chain([StressCase::PlantedOverlap].iter())
+            .copied()
+            .find(|c| c.name() == name)
+    }
+
+    /// Whether the case runs the time-driven engine (its work is counted in time steps).
+    pub fn is_time_driven(self) -> bool {
+        self == StressCase::TimeLargestDt
+    }
+
+    /// The case's scene (validated).
+    pub fn scene(self) -> Scene {
+        let s = match self {
+            StressCase::RestingBed => shaken_standard(0.5, 0.1, WallSolverKind::Exact),
+            StressCase::BondedCollapse => parse(BONDED_COLLAPSE),
+            StressCase::GrazingWalls => parse(GRAZING_WALLS),
+            StressCase::StrongShaking => shaken_motion(1e-4, (1000.0f64 / 1e-4).sqrt()),
+            StressCase::FastWall => shaken_motion(2.0, 25.0),
+            StressCase::Jammed => parse(JAMMED),
+            StressCase::ShearDoubleRoots => parse(SHEAR_DOUBLE_ROOTS),
+            StressCase::TimeLargestDt => {
+                let mut s = parse(TIME_LARGEST_DT);
+                s.engine.dt = Some(s.largest_time_step());
+                s
+            }
+            StressCase::PlantedOverlap => parse(PLANTED_OVERLAP),
+        };
+        s.validate(self.name())
+            .unwrap_or_else(|e| panic!("stress case scene: {e}"));
+        s
+    }
+}
+
+/// Parses one of the case scenes below.
+fn parse(text: &str) -> Scene {
+    Scene::from_toml_str(text, "stress case").unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The standard wet system's material in a 30 x 9 box, 100 disks, shaken at `(A, omega)`
+/// (the geometry of crates/core/tests/shaken_container.rs, `strong_shaking_with_a_tiny_amplitude_stays_inside`).
+fn shaken_motion(amplitude: f64, omega: f64) -> Scene {
+    let mut s = shaken_standard(1.0, 1.0, WallSolverKind::Exact);
+    s.container.size = vec![30.0, 9.0];
+    s.particles.count = 100;
+    s.drive.gamma = None;
+    s.drive.e_star = None;
+    s.drive.amplitude = Some(amplitude);
+    s.drive.omega = Some(omega);
+    s.initial.seed = 3;
+    s
+}
+
+const BONDED_COLLAPSE: &str = r#"
+dimension = 2
+gravity = 0.0
+[box]
+size = [14.0, 30.0]
+boundary = ["periodic", "periodic"]
+[particles]
+count = 130
+polydispersity = 0.06
+[contact]
+restitution = 0.3
+[capillary]
+model = "thin_thread"
+s_crit = 0.0711
+e_cb = 100.0
+[initial]
+temperature = 0.5
+seed = 7
+[run]
+duration = 1.0
+"#;
+
+const GRAZING_WALLS: &str = r#"
+dimension = 2
+gravity = 1.0
+[box]
+size = [60.0, 6.0]
+boundary = ["periodic", "wall"]
+[particles]
+count = 30
+[initial]
+temperature = 0.0
+seed = 1
+[run]
+duration = 1.0
+"#;
+
+const JAMMED: &str = r#"
+dimension = 2
+gravity = 0.0
+[box]
+size = [29.02, 29.02]
+boundary = ["periodic", "periodic"]
+[particles]
+count = 841
+[initial]
+temperature = 1.0
+lattice_spacing = 1.0005
+seed = 3
+[run]
+duration = 1.0
+"#;
+
+const SHEAR_DOUBLE_ROOTS: &str = r#"
+dimension = 3
+gravity = 1.0
+[box]
+size = [10.0, 10.0, 6.0]
+boundary = ["periodic", "periodic", "wall"]
+[particles]
+count = 380
+[contact]
+restitution = 0.9
+[capillary]
+model = "thin_thread"
+s_crit = 0.0625
+e_cb = 0.375
+[engine]
+min_rebound_speed = 0.03
+[drive]
+kind = "shear"
+f_max = 1.5
+slab_width = 0.25
+[initial]
+temperature_over_ecb = 5.0
+seed = 4
+[run]
+duration = 1.0
+"#;
+
+const TIME_LARGEST_DT: &str = r#"
+dimension = 2
+gravity = 1.0
+[box]
+size = [10.0, 9.0]
+boundary = ["periodic", "wall"]
+[particles]
+count = 20
+polydispersity = 0.06
+[contact]
+restitution = 0.9
+[capillary]
+model = "thin_thread"
+s_crit = 0.0711
+e_cb = 0.2844
+[drive]
+kind = "sine"
+gamma = 5.0
+e_star = 10.0
+[engine]
+kind = "time"
+[initial]
+temperature_over_ecb = 20.0
+seed = 5
+[run]
+duration = 1.0
+"#;
+
+const PLANTED_OVERLAP: &str = r#"
+dimension = 2
+gravity = 0.0
+[box]
+size = [20.0, 20.0]
+boundary = ["periodic", "periodic"]
+[particles]
+count = 2
+[initial]
+temperature = 0.0
+[run]
+duration = 1.0
+"#;
+
+/// What one case measured.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StressRow {
+    pub case: StressCase,
+    /// `"events"` (event engine) or `"steps"` (time engine).
+    pub unit: &'static str,
+    /// Events or time steps done.
+    pub work: u64,
+    pub simulated_time: f64,
+    /// Largest pair overlap seen at the checks (time engine: pair or wall, at every step), in
+    /// units of the mean diameter.
+    pub max_overlap: f64,
+    /// `|A(end) - A(0)| / S` (module header).
+    pub ledger_error: f64,
+    /// Non-finite numbers in the state and the ledger, summed over the checks.
+    pub nan_count: u64,
+    /// Invariant checks run.
+    pub checks: u64,
+    pub wall_seconds: f64,
+    /// The first broken invariant; the case stopped there.
+    pub violation: Option<String>,
+}
+
+impl StressRow {
+    /// No broken invariant and no non-finite number.
+    pub fn passed(&self) -> bool {
+        self.violation.is_none() && self.nan_count == 0
+    }
+}
+
+/// What a checked run measured (a [`StressRow`] without its case and timing).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measured {
+    pub work: u64,
+    pub simulated_time: f64,
+    pub max_overlap: f64,
+    pub ledger_error: f64,
+    pub nan_count: u64,
+    pub checks: u64,
+    pub violation: Option<String>,
+    /// The engine ran out of events before the work asked (nothing moves).
+    pub exhausted: bool,
+}
+
+/// Runs one case for `events` events (or time steps), checking after each of [`CHECKS`] chunks.
+pub fn run_case(case: StressCase, events: u64) -> StressRow {
+    let scene = case.scene();
+    let start = Instant::now();
+    // A panic is a failed case, reported like a broken invariant.
+    let m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        measure(case, &scene, events)
+    }))
+    .unwrap_or_else(|payload| Measured {
+        work: 0,
+        simulated_time: f64::NAN,
+        max_overlap: f64::NAN,
+        ledger_error: f64::NAN,
+        nan_count: 0,
+        checks: 0,
+        violation: Some(format!("panicked: {}", panic_text(payload.as_ref()))),
+        exhausted: false,
+    });
+    // A hard case that runs out of events tests nothing: a failure.
+    let violation = m.violation.or_else(|| {
+        m.exhausted
+            .then(|| format!("no event left to process after {} events", m.work))
+    });
+    StressRow {
+        case,
+        unit: if case.is_time_driven() {
+            "steps"
+        } else {
+            "events"
+        },
+        work: m.work,
+        simulated_time: m.simulated_time,
+        max_overlap: m.max_overlap,
+        ledger_error: m.ledger_error,
+        nan_count: m.nan_count,
+        checks: m.checks,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        violation,
+    }
+}
+
+/// The text of a panic payload.
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        s.to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "unknown panic payload".to_string()
+    }
+}
+
+/// Builds the case's engine from `scene`, sets it up and runs it checked.
+fn measure(case: StressCase, scene: &Scene, events: u64) -> Measured {
+    match case {
+        StressCase::GrazingWalls => {
+            let mut e = Engine::<2, true, false>::new(scene);
+            slide_along_the_floor(&mut e);
+            checked_run(e, scene, events, CHECKS)
+        }
+        StressCase::PlantedOverlap => {
+            let mut e = Engine::<2, false, false>::new(scene);
+            e.set_position(0, Vector::<2>::new(5.0, 5.0));
+            e.set_position(1, Vector::<2>::new(5.9, 5.0));
+            for i in 0..2 {
+                e.set_velocity(i, Vector::<2>::new(1.0, 0.3));
+            }
+            checked_run(e, scene, events, CHECKS)
+        }
+        _ => with_engine(
+            scene,
+            None,
+            CheckedRun {
+                scene,
+                events,
+                checks: CHECKS,
+            },
+        ),
+    }
+}
+
+/// Runs the first `work` events (time steps) of a validated scene from its initial state (hot,
+/// or the cold bonded bed), checking the invariants `checks` times on the way: what the input
+/// fuzzing asks of every scene it got accepted (crates/bench/tests/fuzz_inputs.rs). A continuation scene
+/// (`initial.start = "continue"`) has no state of its own: an error.
+pub fn first_events(scene: &Scene, work: u64, checks: u64) -> Result<Measured, String> {
+    let cold = match scene.initial.start {
+        wetgran_core::scene::StartMode::Hot => None,
+        wetgran_core::scene::StartMode::Cold => Some(wetgran_core::sim::initial::cold_state(scene)),
+        wetgran_core::scene::StartMode::Continue => {
+            return Err("initial.start = \"continue\" has no state of its own".into());
+        }
+    };
+    Ok(with_engine(
+        scene,
+        cold.as_ref(),
+        CheckedRun {
+            scene,
+            events: work,
+            checks,
+        },
+    ))
+}
+
+/// Grazing set-up: every disk on the floor (`z = r`), evenly spaced along `x`, sliding at
+/// lateral speed 1 (alternating directions, so neighbours meet head-on), no vertical speed.
+fn slide_along_the_floor(e: &mut Engine<2, true, false>) {
+    let n = e.len();
+    let radii = e.radii();
+    let l_x = 60.0;
+    for i in 0..n {
+        let x = (i as f64 + 0.5) * l_x / n as f64;
+        e.set_position(i, Vector::<2>::new(x, radii[i]));
+        let vx = if i % 2 == 0 { 1.0 } else { -1.0 };
+        e.set_velocity(i, Vector::<2>::new(vx, 0.0));
+    }
+}
+
+/// [`checked_run`] as an [`EngineVisitor`], for the cases built by [`with_engine`].
+struct CheckedRun<'a> {
+    scene: &'a Scene,
+    events: u64,
+    checks: u64,
+}
+
+impl EngineVisitor for CheckedRun<'_> {
+    type Output = Measured;
+    fn visit<S: Simulation>(self, engine: S) -> Measured {
+        checked_run(engine, self.scene, self.events, self.checks)
+    }
+}
+
+/// Runs `events` units of work in `checks` chunks, checking the invariants after each.
+fn checked_run<S: Simulation>(
+    mut e: S,
+    scene: &Scene,
+    events: u64,
+    checks_wanted: u64,
+) -> Measured {
+    let chunk = events.div_ceil(checks_wanted.max(1)).max(1);
+    let a0 = e.energy();
+    let w0 = e.work_done();
+    let (mut max_overlap, mut nan_count, mut checks) = (0.0f64, 0u64, 0u64);
+    let (mut violation, mut exhausted) = (None, false);
+    while e.work_done() - w0 < events {
+        let n = chunk.min(events - (e.work_done() - w0));
+        let moved = e.advance_work(n);
+        checks += 1;
+        let frame = e.frame(scene);
+        nan_count += non_finite(&frame, &e.energy());
+        let overlap = e
+            .max_overlap()
+            .unwrap_or_else(|| largest_pair_overlap(&frame));
+        max_overlap = max_overlap.max(overlap / scene.particles.diameter);
+        if let Err(m) = e.sanity_check() {
+            violation = Some(m);
+            break;
+        }
+        if !moved {
+            exhausted = true;
+            break;
+        }
+    }
+    Measured {
+        work: e.work_done() - w0,
+        simulated_time: e.time(),
+        max_overlap,
+        ledger_error: ledger_error(&a0, &e.energy()),
+        nan_count,
+        checks,
+        violation,
+        exhausted,
+    }
+}
+
+/// `|A1 - A0| / S` (module header).
+pub fn ledger_error(a0: &EnergyLedger, a1: &EnergyLedger) -> f64 {
+    let through = a1.dissipated_restitution.abs()
+        + a1.dissipated_ruptures.abs()
+        + a1.added_by_collapse_remedies.abs()
+        + a1.added_by_wall_placement.abs()
+        + a1.work_by_drive.abs();
+    let scale = a0.kinetic.abs() + a0.potential.abs() + through;
+    let diff = (a1.total_accounted() - a0.total_accounted()).abs();
+    if scale > 0.0 { diff / scale } else { diff }
+}
+
+/// Non-finite numbers in a frame's positions and velocities and in a ledger.
+fn non_finite(frame: &Frame, ledger: &EnergyLedger) -> u64 {
+    let books = [
+        ledger.kinetic,
+        ledger.potential,
+        ledger.dissipated_restitution,
+        ledger.dissipated_ruptures,
+        ledger.added_by_collapse_remedies,
+        ledger.added_by_wall_placement,
+        ledger.work_by_drive,
+    ];
+    frame
+        .positions
+        .iter()
+        .chain(&frame.velocities)
+        .chain(&books)
+        .filter(|x| !x.is_finite())
+        .count() as u64
+}
+
+/// Largest `r_i + r_j - |x_i - x_j|` over all pairs (minimum image along periodic axes), 0 if
+/// no pair overlaps. All pairs: the cases are small enough.
+pub fn largest_pair_overlap(f: &Frame) -> f64 {
+    let d = f.dimension;
+    let n = f.radii.len();
+    let mut worst = 0.0f64;
+    for i in 0..n {
+        for j in i + 1..n {
+            let mut r2 = 0.0;
+            for k in 0..d {
+                let mut dx = f.positions[i * d + k] - f.positions[j * d + k];
+                if f.periodic[k] {
+                    let l = f.box_size[k];
+                    dx -= l * (dx / l).round();
+                }
+                r2 += dx * dx;
+            }
+            let overlap = f.radii[i] + f.radii[j] - r2.sqrt();
+            // `max` keeps a NaN out; the NaN count reports it.
+            worst = worst.max(overlap);
+        }
+    }
+    worst
+}

@@ -1,0 +1,46 @@
+//! The text of `wetgran-bench stress`: one line per hard case (work done, simulated time, largest
+//! overlap, energy-ledger error, non-finite numbers, wall time, verdict), the broken invariant
+//! of a failed case below the table.
+
+use crate::stress::StressRow;
+use std::fmt::Write as _;
+
+/// The table of a stress run; `events` the work asked of each case.
+pub fn stress_text(rows: &[StressRow], events: u64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "stress: {events} events (time engine: steps) per case, invariants checked {} times per case",
+        crate::stress::CHECKS
+    );
+    let _ = writeln!(
+        s,
+        "{:<20} {:>12} {:>6} {:>12} {:>12} {:>12} {:>5} {:>9}  verdict",
+        "case", "work", "unit", "sim. time", "max overlap", "ledger err", "NaN", "wall s"
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{:<20} {:>12} {:>6} {:>12.4e} {:>12.3e} {:>12.3e} {:>5} {:>9.2}  {}",
+            r.case.name(),
+            r.work,
+            r.unit,
+            r.simulated_time,
+            r.max_overlap,
+            r.ledger_error,
+            r.nan_count,
+            r.wall_seconds,
+            if r.passed() { "ok" } else { "FAILED" }
+        );
+    }
+    for r in rows.iter().filter(|r| !r.passed()) {
+        let why = r
+            .violation
+            .clone()
+            .unwrap_or_else(|| format!("{} non-finite numbers", r.nan_count));
+        let _ = writeln!(s, "{}: {why}", r.case.name());
+    }
+    let failed = rows.iter().filter(|r| !r.passed()).count();
+    let _ = writeln!(s, "{} passed, {failed} failed", rows.len() - failed);
+    s
+}

@@ -1,0 +1,784 @@
+//! The event-driven engine for hard disks (`D = 2`) and spheres (`D = 3`): a small scheduler
+//! over event sources.
+//!
+//! The engine owns the clock, the particles ([`Bodies`]), the queue (`Q`, any [`EventQueue`]),
+//! the books ([`Ledger`], [`EventCounts`]) and four event sources, each of which owns its state
+//! and knows how to predict, fire and renumber its events ([`EventSource`]):
+//! - [`PairSource`] (`pairs.rs`): collisions and, if wet, bridges and well events;
+//! - [`CellSource`] (`cell_source.rs`): the neighbour cells and cell-face crossings;
+//! - [`WallSource`] (`walls.rs`): static walls, or the shaken floor and lid under one
+//!   [`super::walls::WallSolver`] (exact, bracket or table, which owns its tables);
+//! - [`SlabSource`] (`slabs.rs`): the slabs of the shear drive (empty unless `SHEAR`).
+//!
+//! One step: pop the particle with the earliest key, ask each source for its candidate
+//! [`Event`] (pair, slab, wall, cell: among equal times the earlier-named source wins), validate
+//! it (a pair event whose partner changed course since the prediction is stale and only
+//! re-predicted: lazy invalidation with per-particle counters), dispatch it to its source, and
+//! re-predict the particles whose course changed. Every `reorder_interval` events the particles
+//! are renumbered in cell order (`reorder_by_cell`): each source permutes its own arrays.
+//!
+//! Effects are chosen once, at scene start, as compile-time parameters: `GRAV` (parabolic
+//! flights and the vertical-root formulas), `WET` (bridges and their bookkeeping), `SHEAR`
+//! (slab events, flights accelerated along `y`, quartic pair predictions) and the queue `Q`.
+//! Everything is monomorphised: the inner loop has no dynamic dispatch, and a dry, gravity-free
+//! or unsheared scene runs code in which the other branches do not exist.
+//!
+//! Numerical safeguards live with the source they protect (see each module's header) and are
+//! each tested in `crates/core/tests/engine_safeguards.rs`.
+
+pub use super::bodies::Vector;
+use super::bodies::{Bodies, Body};
+use super::cell_source::CellSource;
+use super::cells::CellGrid;
+use super::event::{Event, EventKind, EventSource, NONE};
+use super::ledger::Ledger;
+pub use super::ledger::{EnergyLedger, EventCounts};
+pub use super::pairs::MAX_BONDS;
+use super::pairs::{PairParams, PairSource};
+use super::queue::{CalendarQueue, EventQueue};
+use super::shear::{FORCE_AXIS, ShearField};
+use super::slabs::SlabSource;
+use super::walls::{WallSolver, WallSource};
+use crate::scene::{Boundary, Scene};
+use crate::sim::initial::{FlatInitialState, initial_state_flat};
+
+/// Events between two renumberings of the particles in cell order (see `reorder_by_cell`).
+fn reorder_interval(n: usize) -> u64 {
+    (20 * n as u64).max(100_000)
+}
+
+/// The event-driven simulation state.
+#[derive(Debug, Clone)]
+pub struct Engine<
+    const D: usize,
+    const GRAV: bool,
+    const WET: bool,
+    const SHEAR: bool = false,
+    Q: EventQueue = CalendarQueue,
+> {
+    /// Current simulation time (time of the last processed event).
+    time: f64,
+    bodies: Bodies<D, GRAV, SHEAR>,
+    queue: Q,
+    pairs: PairSource<D, WET>,
+    cells: CellSource<D>,
+    walls: WallSource,
+    slabs: SlabSource,
+    counts: EventCounts,
+    ledger: Ledger,
+    /// Largest overlap the invariant check tolerates.
+    overlap_tolerance: f64,
+    /// Events whose time lay before the current time by more than round-off (must stay 0).
+    time_reversals: u64,
+    /// Event count at which particles are next renumbered in cell order, and the interval.
+    next_reorder: u64,
+    reorder_every: u64,
+}
+
+impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: EventQueue>
+    Engine<D, GRAV, WET, SHEAR, Q>
+{
+    /// Builds the engine for a validated scene: initial state, cells, first predictions.
+    pub fn new(scene: &Scene) -> Self {
+        Self::assemble(scene, initial_state_flat(scene), None)
+    }
+
+    /// Rebuilds the engine from a saved state (`sim::state`): every particle at the state's
+    /// time, the bridges bonded, the event counts and the energy ledger continued, cells and
+    /// predictions derived afresh. The TC remedy's last-collision times start unset. A run
+    /// continued from a state follows the uninterrupted run to round-off: predictions are
+    /// recomputed from positions advanced to the common time, which rounds differently
+    /// (`crates/core/tests/observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
+    pub fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
+        let init = FlatInitialState {
+            radius: state.radii.clone(),
+            position: state.positions.clone(),
+            velocity: state.velocities.clone(),
+        };
+        Self::assemble(scene, init, Some(state))
+    }
+
+    fn assemble(
+        scene: &Scene,
+        init: FlatInitialState,
+        start: Option<&crate::sim::EngineState>,
+    ) -> Self {
+        let t0 = start.map_or(0.0, |s| s.time);
+        assert_eq!(
+            scene.dimension, D,
+            "scene dimension does not match the engine"
+        );
+        assert_eq!(
+            GRAV,
+            scene.gravity > 0.0,
+            "gravity flag does not match the scene"
+        );
+        assert_eq!(
+            WET,
+            scene.is_wet(),
+            "capillary flag does not match the scene"
+        );
+        assert_eq!(
+            SHEAR,
+            scene.shear_slabs().is_some(),
+            "shear flag does not match the scene"
+        );
+        assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
+        let n = init.radius.len();
+        // Pair events pack the partner's index into 31 bits (`event::PairEvent`).
+        assert!(
+            n < (1 << 31) - 1,
+            "too many particles for the event engine: {n}"
+        );
+        let mut size = [0.0; D];
+        let mut periodic = [false; D];
+        let boundaries = scene.boundaries();
+        for k in 0..D {
+            size[k] = scene.container.size[k];
+            periodic[k] = boundaries[k] == Boundary::Periodic;
+        }
+        let (_, d_max) = scene.diameter_range();
+        let range = (d_max + scene.s_crit()).max(scene.engine.cell_size);
+        let grid = CellGrid::new(size, periodic, range, n);
+        assert!(
+            grid.neighbourhood_is_distinct(),
+            "box too small for the cell grid (validation should have caught this)"
+        );
+        let field = scene
+            .shear_slabs()
+            .map(|s| ShearField::new(&s, scene.particles.mass, scene.container.size[0]));
+        let slabs = SlabSource::new(field, init.position.chunks(D).map(|x| x[0]));
+        let body: Vec<Body<D>> = (0..n)
+            .map(|i| Body {
+                x: Vector::<D>::from_column_slice(&init.position[i * D..(i + 1) * D]),
+                t: t0,
+                v: Vector::<D>::from_column_slice(&init.velocity[i * D..(i + 1) * D]),
+                r: init.radius[i],
+            })
+            .collect();
+        // The initial state is in the bodies now: free it before the other arrays are built
+        // (the peak memory of the build).
+        drop(init);
+        // Times of the last collisions feed only the TC model (`tc > 0`, MODEL.md 2.1).
+        let tc_model = scene.engine.tc > 0.0;
+        let bodies = Bodies {
+            body,
+            count: vec![0; n],
+            last_collision: if tc_model {
+                vec![f64::NEG_INFINITY; n]
+            } else {
+                Vec::new()
+            },
+            accel: slabs.accelerations(),
+            id: (0..n as u32).collect(),
+            slot_of: (0..n as u32).collect(),
+            size,
+            periodic,
+            gravity: scene.gravity,
+            mass: scene.particles.mass,
+            field_work: 0.0,
+        };
+        let cells = CellSource::new(grid, bodies.body.iter().map(|b| b.x));
+        let pairs = PairSource::new(
+            PairParams {
+                eps: scene.contact.restitution,
+                tc: scene.engine.tc,
+                min_rebound: scene.engine.min_rebound_speed,
+                s_crit: scene.s_crit(),
+                e_cb: scene.e_cb(),
+                rule: scene.rupture_rule(),
+            },
+            n,
+        );
+        let walls = WallSource::new(
+            WallSolver::from_scene(scene),
+            scene.contact.wall_restitution,
+            scene.engine.tc,
+            scene.engine.min_rebound_speed,
+            n,
+            !periodic.iter().all(|&p| p),
+        );
+        let mut engine = Self {
+            time: t0,
+            bodies,
+            queue: Q::new(n),
+            pairs,
+            cells,
+            walls,
+            slabs,
+            counts: EventCounts::default(),
+            ledger: Ledger::default(),
+            overlap_tolerance: scene.engine.overlap_tolerance,
+            time_reversals: 0,
+            next_reorder: reorder_interval(n),
+            reorder_every: reorder_interval(n),
+        };
+        if let Some(st) = start {
+            if WET {
+                for &(i, j) in &st.bridges {
+                    let (id_i, id_j) = (engine.bodies.id[i], engine.bodies.id[j]);
+                    engine.pairs.add_bond_half(i, j, id_i, t0);
+                    engine.pairs.add_bond_half(j, i, id_j, t0);
+                }
+            }
+            engine.counts = st.counts.clone();
+            let l = &st.ledger;
+            engine.ledger.dissipated_restitution = l.dissipated_restitution;
+            engine.ledger.dissipated_ruptures = l.dissipated_ruptures;
+            engine.ledger.added = l.added_by_collapse_remedies;
+            engine.ledger.placement = l.added_by_wall_placement;
+            if SHEAR {
+                // The shear field's work is summed where the flights are done.
+                engine.bodies.field_work = l.work_by_drive;
+            } else {
+                engine.ledger.work_by_drive = l.work_by_drive;
+            }
+            engine.next_reorder = engine.counts.total().saturating_add(engine.reorder_every);
+        }
+        for i in 0..n {
+            engine.predict_all(i);
+        }
+        engine
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// Whether the system holds no particle.
+    pub fn is_empty(&self) -> bool {
+        self.bodies.is_empty()
+    }
+
+    /// Current simulation time.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Events processed so far.
+    pub fn counts(&self) -> &EventCounts {
+        &self.counts
+    }
+
+    /// Number of capillary bridges.
+    pub fn bridge_count(&self) -> usize {
+        self.pairs.bridge_count()
+    }
+
+    /// The capillary bridges as pairs of scene indices `(i, j)`, `i < j`, sorted (empty for dry
+    /// scenes). Read-only view for the observers.
+    pub fn bridges(&self) -> Vec<(usize, usize)> {
+        if !WET {
+            return Vec::new();
+        }
+        let mut out = Vec::with_capacity(self.bridge_count());
+        for k in 0..self.len() {
+            for &b in self.pairs.bonds_of(k) {
+                let (i, j) = (
+                    self.bodies.id[k] as usize,
+                    self.bodies.id[b as usize] as usize,
+                );
+                if i < j {
+                    out.push((i, j));
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    // ----- scheduling --------------------------------------------------------------------
+
+    /// The earliest candidate event of `i` over the sources (pair, slab, wall, cell; ties go to
+    /// the earlier-named source).
+    #[inline]
+    fn next_event(&self, i: usize) -> Event {
+        let mut e = self.pairs.candidate(i);
+        if SHEAR {
+            e = e.earlier(self.slabs.candidate(i));
+        }
+        e.earlier(self.walls.candidate(i))
+            .earlier(self.cells.candidate(i))
+    }
+
+    /// Queue key of `i`: the time of its earliest candidate.
+    #[inline]
+    fn queue_key(&self, i: usize) -> f64 {
+        let key = self.pairs.ev[i]
+            .time
+            .min(self.cells.ev[i].time)
+            .min(self.walls.time(i));
+        if SHEAR {
+            key.min(self.slabs.ev[i].time)
+        } else {
+            key
+        }
+    }
+
+    /// Full re-prediction of every event of `i` (brought to the current time first).
+    fn predict_all(&mut self, i: usize) {
+        let t = self.time;
+        self.bodies.advance(i, t);
+        if SHEAR {
+            // Before the pair scan: sheared pair predictions stop at the first slab exit.
+            self.slabs.predict(i, &self.bodies, t);
+        }
+        self.pairs.ev[i] = super::event::PairEvent::NEVER;
+        self.pairs.scan(
+            i,
+            &self.cells.all,
+            &self.bodies,
+            &self.cells,
+            &self.slabs,
+            t,
+        );
+        self.cells.predict(i, &self.bodies, t);
+        self.walls.predict(i, &self.bodies, t);
+        self.queue.update(i, self.queue_key(i));
+    }
+
+    /// Processes every event up to time `t_end` (exclusive of later ones) or until `max_events`
+    /// events have been processed in total; leaves the clock at `t_end` if it got there.
+    /// Returns `false` if it stopped on the event cap.
+    pub fn run_until(&mut self, t_end: f64, max_events: Option<u64>) -> bool {
+        loop {
+            if let Some(cap) = max_events
+                && self.counts.total() >= cap
+            {
+                return false;
+            }
+            let Some((i, t)) = self.queue.min() else {
+                break;
+            };
+            if t > t_end || t == f64::INFINITY {
+                break;
+            }
+            self.step(i, t);
+            if self.counts.total() >= self.next_reorder {
+                self.reorder_by_cell();
+            }
+        }
+        if t_end.is_finite() {
+            self.time = self.time.max(t_end);
+        }
+        true
+    }
+
+    /// Processes the earliest event, which belongs to particle `i` at time `t`: validate, then
+    /// dispatch to its source.
+    fn step(&mut self, i: usize, t: f64) {
+        if t < self.time {
+            // Predictions are clamped at "now", so this only reflects round-off in the clock.
+            if t < self.time - 1e-12 * self.time.abs().max(1.0) {
+                self.time_reversals += 1;
+            }
+        } else {
+            self.time = t;
+        }
+        let now = self.time;
+        match self.next_event(i).kind {
+            EventKind::Collide {
+                partner,
+                partner_count,
+            }
+            | EventKind::Well {
+                partner,
+                partner_count,
+            } if self.bodies.count[partner as usize] != partner_count => {
+                self.counts.invalidated += 1;
+                self.predict_all(i);
+            }
+            EventKind::Collide { partner, .. } => {
+                let j = partner as usize;
+                self.pairs.collide(
+                    i,
+                    j,
+                    now,
+                    &mut self.bodies,
+                    &mut self.ledger,
+                    &mut self.counts,
+                );
+                self.predict_all(i);
+                self.predict_all(j);
+            }
+            EventKind::Well { partner, .. } => {
+                let j = partner as usize;
+                self.pairs.well_edge(
+                    i,
+                    j,
+                    now,
+                    &mut self.bodies,
+                    &mut self.ledger,
+                    &mut self.counts,
+                );
+                self.predict_all(i);
+                self.predict_all(j);
+            }
+            EventKind::Slab { up } => {
+                self.bodies.advance(i, now);
+                self.counts.slab_crossings += 1;
+                self.slabs.fire(i, up, &mut self.bodies);
+                // The force changed: a course change.
+                self.bodies.bump(i);
+                self.predict_all(i);
+            }
+            EventKind::Wall { axis, up } => {
+                self.walls.fire(
+                    i,
+                    axis as usize,
+                    up,
+                    now,
+                    &mut self.bodies,
+                    &mut self.cells,
+                    &mut self.ledger,
+                    &mut self.counts,
+                );
+                self.predict_all(i);
+            }
+            EventKind::Cell { axis, up } => {
+                self.bodies.advance(i, now);
+                self.counts.cell_crossings += 1;
+                let axis = axis as usize;
+                self.cells.fire(i, axis, up, &mut self.bodies);
+                // Only the newly adjacent cells can hold an earlier partner; the pair event is
+                // kept.
+                self.pairs.scan(
+                    i,
+                    self.cells.far_slab(axis, up),
+                    &self.bodies,
+                    &self.cells,
+                    &self.slabs,
+                    now,
+                );
+                self.cells.predict(i, &self.bodies, now);
+                self.queue.update(i, self.queue_key(i));
+            }
+            EventKind::Never => unreachable!("a particle with a finite key has an event"),
+        }
+    }
+
+    /// Sets how many events pass between two renumberings in cell order (`u64::MAX`: never).
+    /// The default grows with the particle count; tests use this to prove the renumbering is a
+    /// pure relabelling.
+    pub fn set_reorder_interval(&mut self, events: u64) {
+        self.reorder_every = events;
+        self.next_reorder = self.counts.total().saturating_add(events);
+    }
+
+    /// Sets the size of the particle records from which pair scans read their partners'
+    /// records once before predicting (a cache measure that changes no number; the default
+    /// touches from 512 KiB). Tests use this to prove both paths give the same trajectory.
+    pub fn set_partner_touch_from(&mut self, bytes: usize) {
+        self.pairs.touch_from_bytes = bytes;
+    }
+
+    /// Renumbers the particles in cell order so that neighbours sit close together in memory
+    /// (a pair scan then mostly hits cache lines already loaded). A pure relabelling: no state,
+    /// prediction or event time changes; the public API keeps speaking in scene order. Each
+    /// source permutes its own per-particle state.
+    fn reorder_by_cell(&mut self) {
+        let n = self.len();
+        self.next_reorder = self.counts.total().saturating_add(self.reorder_every);
+        let order = self.cells.cell_order();
+        let mut new_of_old = vec![0u32; n];
+        for (new, &old) in order.iter().enumerate() {
+            new_of_old[old as usize] = new as u32;
+        }
+        self.bodies.permute(&order);
+        self.pairs.permute(&order, &new_of_old);
+        self.cells.permute(&order, &new_of_old);
+        self.walls.permute(&order, &new_of_old);
+        self.slabs.permute(&order, &new_of_old);
+        // The old queue goes before the new one is built (peak memory).
+        self.queue = Q::new(0);
+        self.queue = Q::new(n);
+        for k in 0..n {
+            self.queue.update(k, self.queue_key(k));
+        }
+    }
+
+    // ----- observables -------------------------------------------------------------------
+
+    /// Position and velocity of every particle at the current time, in internal order. The
+    /// stored delayed states are left as they are: observing never changes the round-off of a
+    /// trajectory, so the sampling interval cannot change the physics.
+    fn current_states(&self) -> Vec<(Vector<D>, Vector<D>)> {
+        (0..self.len())
+            .map(|i| self.bodies.state_at(i, self.time))
+            .collect()
+    }
+
+    /// Energy bookkeeping at the current time.
+    pub fn energy(&self) -> EnergyLedger {
+        let m = self.bodies.mass;
+        let states = self.current_states();
+        let kinetic = states.iter().map(|(_, v)| 0.5 * m * v.norm_squared()).sum();
+        let potential = if GRAV {
+            states
+                .iter()
+                .map(|(x, _)| m * self.bodies.gravity * x[D - 1])
+                .sum()
+        } else {
+            0.0
+        };
+        // The drive's work: the shaken walls', or the shear field's including the flights not
+        // yet brought to the current time (the two drives exclude each other).
+        let work_by_drive = if SHEAR {
+            let pending: f64 = states
+                .iter()
+                .enumerate()
+                .map(|(i, (x, _))| self.bodies.field_work(i, x))
+                .sum();
+            self.bodies.field_work + pending
+        } else {
+            self.ledger.work_by_drive
+        };
+        EnergyLedger {
+            kinetic,
+            potential,
+            dissipated_restitution: self.ledger.dissipated_restitution,
+            dissipated_ruptures: self.ledger.dissipated_ruptures,
+            added_by_collapse_remedies: self.ledger.added,
+            added_by_wall_placement: self.ledger.placement,
+            work_by_drive,
+        }
+    }
+
+    /// Total momentum.
+    pub fn momentum(&self) -> Vector<D> {
+        let states = self.current_states();
+        states.iter().fold(Vector::<D>::zeros(), |a, (_, v)| a + v) * self.bodies.mass
+    }
+
+    /// Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (Eq. 3.2, `k_B = 1`, `f_d = D`).
+    pub fn granular_temperature(&self) -> f64 {
+        let states = self.current_states();
+        let n = self.len() as f64;
+        let mean = states.iter().fold(Vector::<D>::zeros(), |a, (_, v)| a + v) / n;
+        let mean_sq = states.iter().map(|(_, v)| v.norm_squared()).sum::<f64>() / n;
+        self.bodies.mass * (mean_sq - mean.norm_squared()) / D as f64
+    }
+
+    /// Positions at the current time, in scene order.
+    pub fn positions(&self) -> Vec<Vector<D>> {
+        let states = self.current_states();
+        self.bodies
+            .slot_of
+            .iter()
+            .map(|&k| states[k as usize].0)
+            .collect()
+    }
+
+    /// Velocities at the current time, in scene order.
+    pub fn velocities(&self) -> Vec<Vector<D>> {
+        let states = self.current_states();
+        self.bodies
+            .slot_of
+            .iter()
+            .map(|&k| states[k as usize].1)
+            .collect()
+    }
+
+    /// Particle radii, in scene order.
+    pub fn radii(&self) -> Vec<f64> {
+        self.bodies
+            .slot_of
+            .iter()
+            .map(|&k| self.bodies.body[k as usize].r)
+            .collect()
+    }
+
+    /// Number of events processed out of time order beyond round-off (must be 0).
+    pub fn time_reversals(&self) -> u64 {
+        self.time_reversals
+    }
+
+    /// Overwrites the velocity of particle `i` at the current time (tests and set-ups) and
+    /// re-predicts its events.
+    pub fn set_velocity(&mut self, i: usize, v: Vector<D>) {
+        let i = self.bodies.slot_of[i] as usize;
+        self.bodies.advance(i, self.time);
+        self.bodies.body[i].v = v;
+        self.bodies.bump(i);
+        self.predict_all(i);
+    }
+
+    /// Overwrites the position of particle `i` at the current time (tests and set-ups), moves
+    /// it to its new cell (and slab) and re-predicts its events.
+    pub fn set_position(&mut self, i: usize, x: Vector<D>) {
+        let i = self.bodies.slot_of[i] as usize;
+        self.bodies.advance(i, self.time);
+        self.bodies.body[i].x = x;
+        self.cells.relocate(i, &x);
+        self.slabs.relocate(i, x[0], &mut self.bodies);
+        self.bodies.bump(i);
+        self.predict_all(i);
+    }
+
+    /// Recomputes every still-valid pair event from the current states and reports the first
+    /// one that disagrees with the stored prediction (debugging aid for lazy invalidation).
+    pub fn check_predictions(&self) -> Result<(), String> {
+        let t = self.time;
+        for i in 0..self.len() {
+            let pe = self.pairs.ev[i];
+            if pe.partner() == NONE || self.bodies.count[pe.partner() as usize] != pe.partner_count
+            {
+                continue;
+            }
+            let j = pe.partner() as usize;
+            let (xi, vi) = self.bodies.state_at(i, t);
+            let now = self.pairs.predict_pair_from::<_, _, true>(
+                &self.bodies,
+                &self.slabs,
+                &xi,
+                &vi,
+                i,
+                j,
+                t,
+            );
+            match now {
+                Some((tn, kind))
+                    if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3)
+                        && kind == pe.kind() => {}
+                other => {
+                    return Err(format!(
+                        "particle {i}: stored {:?} with {j} at {:.17}, recomputed {other:?} at t={t}",
+                        pe.kind(),
+                        pe.time
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Heap bytes of every per-particle (and per-cell) array of the engine, by structure, each
+    /// from its capacity and element size (`wetgran-bench memory`). The wall tables of the
+    /// `table` solver are shared through the table cache and not counted.
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        let mut out = self.bodies.memory();
+        out.extend(self.pairs.memory());
+        out.extend(self.cells.memory());
+        out.extend(self.walls.memory());
+        out.extend(self.slabs.memory());
+        out.extend(self.queue.memory());
+        out
+    }
+
+    // ----- invariants --------------------------------------------------------------------
+
+    /// Checks the invariants: finite numbers, every particle inside the box, no pair overlap
+    /// and no bonded pair beyond `s_crit` by more than the tolerance, every particle in the
+    /// cell (and slab) its position says, no event scheduled in the past, no time reversal.
+    /// With the `table` solver a particle may lie behind a shaken wall by up to its placement
+    /// tolerance (`walls::TABLE_PLACEMENT_TOLERANCE`, the error that solver admits by design).
+    /// Returns a description of the first violation.
+    pub fn sanity_check(&self) -> Result<(), String> {
+        let states = self.current_states();
+        let tol = self.overlap_tolerance;
+        let t = self.time;
+        let b = &self.bodies;
+        if self.time_reversals > 0 {
+            return Err(format!(
+                "{} events processed out of time order",
+                self.time_reversals
+            ));
+        }
+        let drive = self.walls.solver.motion();
+        for i in 0..self.len() {
+            // Messages name particles by their scene index.
+            let si = b.id[i];
+            let (x, v) = states[i];
+            if !x.iter().chain(v.iter()).all(|a| a.is_finite()) {
+                return Err(format!("particle {si} has a non-finite state at t = {t}"));
+            }
+            for k in 0..D {
+                // The shaken floor and lid move by z_w(t).
+                let shift = match drive {
+                    Some(w) if k == D - 1 => w.position(t),
+                    _ => 0.0,
+                };
+                let r = b.body[i].r;
+                let (lo, hi) = if b.periodic[k] {
+                    (0.0, b.size[k])
+                } else {
+                    (r + shift, b.size[k] - r + shift)
+                };
+                // The `table` solver places a particle on the shaken wall only as far as its
+                // neighbours leave room (`walls::placement_room`): what is left of the table's
+                // gap, at most its placement tolerance, may stay behind the wall until the
+                // particle leaves it (its next wall event is at once if it approaches).
+                let behind = if x[k] < lo - tol {
+                    Some(lo - x[k])
+                } else if x[k] > hi + tol {
+                    Some(x[k] - hi)
+                } else {
+                    None
+                };
+                let table_residual = |depth: f64| {
+                    k == D - 1
+                        && depth <= super::walls::TABLE_PLACEMENT_TOLERANCE
+                        && matches!(self.walls.solver, super::walls::WallSolver::Table(_))
+                };
+                if behind.is_some_and(|b| !table_residual(b)) {
+                    return Err(format!(
+                        "particle {si} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
+                        x[k]
+                    ));
+                }
+            }
+            if let Some(e) = self.cells.check(i, &x, &b.periodic, tol) {
+                return Err(format!("particle {si} {e} at t = {t}"));
+            }
+            if SHEAR && let Err(e) = self.slabs.check(i, x[0], tol) {
+                return Err(format!("particle {si} {e} at t = {t}"));
+            }
+            if self.queue.key(i) < t - 1e-9 * t.abs().max(1.0) {
+                return Err(format!(
+                    "particle {si} has an event in the past: {} < {t}",
+                    self.queue.key(i)
+                ));
+            }
+        }
+        for i in 0..self.len() {
+            let si = b.id[i];
+            let mut err = None;
+            self.cells.for_each_near(i, |j| {
+                if j <= i || err.is_some() {
+                    return;
+                }
+                let sj = b.id[j];
+                let r = b.min_image(states[i].0 - states[j].0).norm();
+                let sigma = b.body[i].r + b.body[j].r;
+                if r < sigma - tol {
+                    err = Some(format!(
+                        "particles {si} and {sj} overlap by {} at t = {t}",
+                        sigma - r
+                    ));
+                }
+            });
+            if let Some(e) = err {
+                return Err(e);
+            }
+            if WET {
+                for &j in self.pairs.bonds_of(i) {
+                    let j = j as usize;
+                    let sj = b.id[j];
+                    let r = b.min_image(states[i].0 - states[j].0).norm();
+                    let lambda = b.body[i].r + b.body[j].r + self.pairs.p.s_crit;
+                    if r > lambda + tol {
+                        return Err(format!(
+                            "bonded pair {si}-{sj} stretched beyond s_crit by {} at t = {t}",
+                            r - lambda
+                        ));
+                    }
+                    if !self.pairs.bonded(j, i) {
+                        return Err(format!("bond {si}-{sj} is one-sided"));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

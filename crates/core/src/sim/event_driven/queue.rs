@@ -1,0 +1,536 @@
+//! The event queue: one entry per particle, keyed by the time of that particle's earliest
+//! predicted event, behind the [`EventQueue`] trait so that an engine runs on any
+//! implementation (`Engine<.., Q: EventQueue>`, monomorphised: no dynamic dispatch in the loop).
+//!
+//! Re-predicting a particle changes its key in place, so a queue never holds stale copies;
+//! events that became invalid through a partner's collision are detected lazily with
+//! per-particle event counters (see `engine.rs`). Implementations:
+//! - [`CalendarQueue`], the default: a calendar queue (buckets of equal width in time, a year
+//!   of `2^k >= N` doubly linked buckets), `O(1)` per update and, with its width
+//!   re-estimated from the keys every `8 N` pops, about one bucket visited per pop;
+//! - [`HeapQueue`]: an indexed 4-ary min-heap, `O(log N)` per update (the default before);
+//! - [`NaiveQueue`], the reference: a linear scan, slow and obviously correct. The tests run
+//!   whole engines on it and compare their trajectories with the heap's bit for bit
+//!   (`crates/core/tests/engine_pins.rs`).
+//!
+//! Both break ties of equal keys by the smaller particle index, so the event order, and hence
+//! the trajectory, does not depend on the queue.
+
+/// A priority queue over particles `0..n` with one key (event time) each.
+pub trait EventQueue: Clone + std::fmt::Debug {
+    /// A queue for particles `0..n`, all with key `+inf`.
+    fn new(n: usize) -> Self;
+    /// The particle with the earliest key (the smallest index among equal keys) and that key
+    /// (`&mut`: a queue may move its cursor or re-tune itself on the way).
+    fn min(&mut self) -> Option<(usize, f64)>;
+    /// The key of particle `i`.
+    fn key(&self, i: usize) -> f64;
+    /// Sets the key of particle `i`.
+    fn update(&mut self, i: usize, time: f64);
+    /// Heap bytes of the queue's arrays, by name (`wetgran-bench memory`).
+    fn memory(&self) -> Vec<(&'static str, usize)>;
+}
+
+/// Children per heap node.
+const ARITY: usize = 4;
+
+/// Indexed 4-ary min-heap over particle indices. Each heap slot stores its key next to the
+/// particle index, so sifting compares without an indirection; four children of 16 bytes share
+/// about one cache line, which makes the frequent sift-down (the processed particle's next event
+/// is later) cheaper than in a binary heap.
+#[derive(Debug, Clone)]
+pub struct HeapQueue {
+    heap: Vec<(f64, u32)>,
+    slot: Vec<u32>,
+}
+
+impl EventQueue for HeapQueue {
+    fn new(n: usize) -> Self {
+        Self {
+            heap: (0..n as u32).map(|i| (f64::INFINITY, i)).collect(),
+            slot: (0..n as u32).collect(),
+        }
+    }
+
+    #[inline]
+    fn min(&mut self) -> Option<(usize, f64)> {
+        self.heap.first().map(|&(k, i)| (i as usize, k))
+    }
+
+    #[inline]
+    fn key(&self, i: usize) -> f64 {
+        self.heap[self.slot[i] as usize].0
+    }
+
+    fn memory(&self) -> Vec<(&'static str, usize)> {
+        use super::bodies::vec_bytes;
+        vec![
+            ("queue.heap", vec_bytes(&self.heap)),
+            ("queue.slot", vec_bytes(&self.slot)),
+        ]
+    }
+
+    /// Sets the key of particle `i` and restores the heap order.
+    #[inline]
+    fn update(&mut self, i: usize, time: f64) {
+        let s = self.slot[i] as usize;
+        let old = self.heap[s].0;
+        self.heap[s].0 = time;
+        if time < old {
+            self.sift_up(s);
+        } else if time > old {
+            self.sift_down(s);
+        }
+    }
+}
+
+impl HeapQueue {
+    /// Strict order on entries; ties broken by particle index so the order is deterministic.
+    #[inline]
+    fn less(a: (f64, u32), b: (f64, u32)) -> bool {
+        a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+    }
+
+    fn sift_up(&mut self, mut s: usize) {
+        let entry = self.heap[s];
+        while s > 0 {
+            let parent = (s - 1) / ARITY;
+            let p = self.heap[parent];
+            if Self::less(entry, p) {
+                self.heap[s] = p;
+                self.slot[p.1 as usize] = s as u32;
+                s = parent;
+            } else {
+                break;
+            }
+        }
+        self.heap[s] = entry;
+        self.slot[entry.1 as usize] = s as u32;
+    }
+
+    fn sift_down(&mut self, mut s: usize) {
+        let n = self.heap.len();
+        let entry = self.heap[s];
+        loop {
+            let first = ARITY * s + 1;
+            if first >= n {
+                break;
+            }
+            let last = (first + ARITY).min(n);
+            let mut child = first;
+            for k in first + 1..last {
+                if Self::less(self.heap[k], self.heap[child]) {
+                    child = k;
+                }
+            }
+            let c = self.heap[child];
+            if Self::less(c, entry) {
+                self.heap[s] = c;
+                self.slot[c.1 as usize] = s as u32;
+                s = child;
+            } else {
+                break;
+            }
+        }
+        self.heap[s] = entry;
+        self.slot[entry.1 as usize] = s as u32;
+    }
+}
+
+/// Pops between two re-estimations of the bucket width, per particle (8 against 2: fewer
+/// instructions on all four reference systems, docs/performance.md "Third round").
+const CALENDAR_RETUNE_PER_PARTICLE: u64 = 8;
+/// Keys sampled to estimate the width.
+const CALENDAR_SAMPLE: usize = 512;
+/// Bucket width in units of `(median sampled key - smallest key) / finite keys`: about
+/// `WIDTH_FACTOR ln 2 ~ 1.4` keys per bucket near the front for exponentially spread keys.
+const WIDTH_FACTOR: f64 = 2.0;
+
+/// Calendar queue (R. Brown, Commun. ACM 31, 1220 (1988)) over particle indices. Time is cut
+/// into buckets of width `w`; the key `t` lies in the virtual bucket `floor(t / w)`, stored in
+/// list `floor(t / w) mod 2^k` (a "year" of `2^k >= N` lists, doubly linked, on
+/// average at most one entry each). Infinite keys are in no list.
+///
+/// Order: `floor(t / w)` is monotone in `t` (a correctly rounded product and a truncation are
+/// both monotone), so the earliest key lies in the earliest non-empty virtual bucket; `min`
+/// walks the virtual buckets from the cursor `cur` (no finite key lies in a bucket before it)
+/// and takes the smallest `(key, index)` among the entries of the first bucket that has one,
+/// so ties go to the smaller index exactly as in [`HeapQueue`] and [`NaiveQueue`] and engines
+/// take the same trajectory on all three. The width only changes how much is walked, never the
+/// answer: every `8 N` pops it is re-estimated from a sample of the keys and the lists rebuilt;
+/// if a whole year of buckets holds nothing due, a direct search moves the cursor to the
+/// smallest key.
+///
+/// Branches: every list ends in one sentinel node `n` whose key is `+inf` and whose link points
+/// to itself, so linking and unlinking write the neighbour's back link without testing for the
+/// end of the list (a coin toss at about one entry per list). The walk keeps its branches: a
+/// branch-free walk (two unconditional steps, the minimum chosen by bit masks) had fewer
+/// mispredicted branches in valgrind's model but took more CPU time (docs/performance.md,
+/// "Fifth round").
+#[derive(Debug, Clone)]
+pub struct CalendarQueue {
+    /// Keys of the particles `0..n`, then the sentinel's `+inf`.
+    key: Vec<f64>,
+    /// Links of the doubly linked lists over one index space: `0..n` are the particles, `n` is
+    /// the sentinel that ends every list (`next[n] = n`), `n + 1 + b` is the head of list `b`.
+    /// `next[n + 1 + b]` is the first entry of list `b`, `next[i]` the entry after `i`;
+    /// `prev[i]` the node before particle `i` (another particle or its list's head), so that a
+    /// particle leaves its list in `O(1)` without recomputing its bucket (`prev[n]` is written
+    /// and never read).
+    next: Vec<u32>,
+    prev: Vec<u32>,
+    /// `n`: the sentinel, and the number of particles.
+    end: usize,
+    /// `n + 1`: where the list heads start in `next`.
+    heads: usize,
+    /// `1 / w`.
+    inv_width: f64,
+    /// `2^k - 1`.
+    mask: u64,
+    /// The virtual bucket the walk starts from.
+    cur: u64,
+    /// Finite keys.
+    finite: usize,
+    /// Pops left before the next re-estimation (the first `min` estimates at once).
+    until_retune: u64,
+}
+
+impl CalendarQueue {
+    /// Virtual bucket of key `t` (keys below 0 share bucket 0, huge ones saturate).
+    #[inline(always)]
+    fn bucket(&self, t: f64) -> u64 {
+        (t * self.inv_width) as u64
+    }
+
+    /// Puts `i` (key `t`, finite) at the front of its list; returns its virtual bucket.
+    #[inline(always)]
+    fn link(&mut self, i: usize, t: f64) -> u64 {
+        let bucket = self.bucket(t);
+        let head = self.heads + (bucket & self.mask) as usize;
+        let first = self.next[head];
+        self.next[i] = first;
+        self.prev[i] = head as u32;
+        self.prev[first as usize] = i as u32;
+        self.next[head] = i as u32;
+        bucket
+    }
+
+    /// Takes `i` out of its list.
+    #[inline(always)]
+    fn unlink(&mut self, i: usize) {
+        let (before, after) = (self.prev[i], self.next[i]);
+        self.next[before as usize] = after;
+        self.prev[after as usize] = before;
+    }
+
+    /// The smallest finite key and a new bucket width from a sample of the keys; relinks every
+    /// entry and puts the cursor on the smallest key's bucket.
+    fn retune(&mut self) {
+        let n = self.end;
+        self.until_retune = (CALENDAR_RETUNE_PER_PARTICLE * n as u64).max(1024);
+        let mut lo = f64::INFINITY;
+        for &t in &self.key[..n] {
+            if t < lo {
+                lo = t;
+            }
+        }
+        if !lo.is_finite() {
+            return;
+        }
+        let stride = (n / CALENDAR_SAMPLE).max(1);
+        let mut sample: Vec<f64> = self.key[..n]
+            .iter()
+            .step_by(stride)
+            .copied()
+            .filter(|t| t.is_finite())
+            .collect();
+        let spread = if sample.is_empty() {
+            0.0
+        } else {
+            let mid = sample.len() / 2;
+            let (_, m, _) = sample.select_nth_unstable_by(mid, f64::total_cmp);
+            *m - lo
+        };
+        let width = WIDTH_FACTOR * spread / self.finite.max(1) as f64;
+        // A width of 0 (all keys equal) or one too small for the keys' magnitude keeps the old
+        // one; the order never depends on it.
+        if width.is_finite() && width > 1e-12 * lo.abs() && width > 0.0 {
+            self.inv_width = 1.0 / width;
+        }
+        self.next[n..].fill(n as u32);
+        for i in 0..n {
+            let t = self.key[i];
+            if t.is_finite() {
+                self.link(i, t);
+            }
+        }
+        self.cur = self.bucket(lo);
+    }
+    /// `min` when no key is finite (the first particle, as in the other queues; `None` for
+    /// no particle) or a re-estimation of the width is due.
+    #[cold]
+    #[inline(never)]
+    fn min_rare(&mut self) -> Option<(usize, f64)> {
+        if self.end == 0 {
+            return None;
+        }
+        if self.finite == 0 {
+            // Every key infinite (or NaN): the first particle, as in the other queues.
+            return Some((0, self.key[0]));
+        }
+        self.retune();
+        self.until_retune -= 1;
+        self.walk_a_year().or_else(|| self.min_after_empty_year())
+    }
+
+    /// Walks at most one year of virtual buckets from the cursor and returns the smallest
+    /// `(key, index)` of the first bucket holding a due entry, the cursor left on it.
+    #[inline(always)]
+    fn walk_a_year(&mut self) -> Option<(usize, f64)> {
+        let end_node = self.end as u32;
+        for _ in 0..=self.mask {
+            let list = (self.cur & self.mask) as usize;
+            // An entry of this list is due iff its virtual bucket is `cur` (none is earlier),
+            // i.e. iff `t / w < cur + 1` before truncation: one product and one compare,
+            // exact while `cur + 1` is an integer an f64 holds exactly.
+            let exact = self.cur < (1 << 52);
+            let end = (self.cur + 1) as f64;
+            let cur = self.cur;
+            let inv_width = self.inv_width;
+            let due = |t: f64| {
+                if exact {
+                    t * inv_width < end
+                } else {
+                    (t * inv_width) as u64 == cur
+                }
+            };
+            // The smallest `(key, index)` among the due entries.
+            let mut k = self.next[self.heads + list];
+            let mut best = end_node;
+            let mut best_t = f64::INFINITY;
+            while k != end_node {
+                let t = self.key[k as usize];
+                if due(t) && (best == end_node || t < best_t || (t == best_t && k < best)) {
+                    best = k;
+                    best_t = t;
+                }
+                k = self.next[k as usize];
+            }
+            if best != end_node {
+                return Some((best as usize, best_t));
+            }
+            self.cur = self.cur.saturating_add(1);
+        }
+        None
+    }
+
+    /// A year without a due entry: jump to the smallest key's bucket (without the jump the
+    /// walk would take `(gap / w)` steps), walk from there, and re-estimate the width at the
+    /// next pop.
+    #[cold]
+    #[inline(never)]
+    fn min_after_empty_year(&mut self) -> Option<(usize, f64)> {
+        loop {
+            let lo = self.key[..self.end]
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            self.cur = self.bucket(lo);
+            self.until_retune = 1;
+            if let Some(found) = self.walk_a_year() {
+                return Some(found);
+            }
+        }
+    }
+}
+
+impl EventQueue for CalendarQueue {
+    fn new(n: usize) -> Self {
+        let lists = n.max(1).next_power_of_two();
+        Self {
+            key: vec![f64::INFINITY; n + 1],
+            next: vec![n as u32; n + 1 + lists],
+            prev: vec![n as u32; n + 1],
+            end: n,
+            heads: n + 1,
+            inv_width: 1.0,
+            mask: lists as u64 - 1,
+            cur: 0,
+            finite: 0,
+            until_retune: 0,
+        }
+    }
+
+    #[inline]
+    fn key(&self, i: usize) -> f64 {
+        self.key[i]
+    }
+
+    #[inline]
+    fn update(&mut self, i: usize, time: f64) {
+        let old = self.key[i];
+        if old.is_finite() {
+            self.unlink(i);
+            self.finite -= 1;
+        }
+        self.key[i] = time;
+        if time.is_finite() {
+            let b = self.link(i, time);
+            self.finite += 1;
+            if b < self.cur {
+                self.cur = b;
+            }
+        }
+    }
+
+    /// The walk over the buckets from the cursor, inlined into the caller; the rare cases (no
+    /// finite key, a re-estimation due, a year without a due entry) are out of line, so that
+    /// the common pop sets up little more than the walk.
+    #[inline]
+    fn min(&mut self) -> Option<(usize, f64)> {
+        if self.finite == 0 || self.until_retune == 0 {
+            return self.min_rare();
+        }
+        self.until_retune -= 1;
+        self.walk_a_year().or_else(|| self.min_after_empty_year())
+    }
+
+    fn memory(&self) -> Vec<(&'static str, usize)> {
+        use super::bodies::vec_bytes;
+        vec![
+            ("queue.key", vec_bytes(&self.key)),
+            ("queue.next (per particle and list)", vec_bytes(&self.next)),
+            ("queue.prev", vec_bytes(&self.prev)),
+        ]
+    }
+}
+
+/// Reference queue: a linear scan over the keys, `O(N)` per pop. Slow, obviously correct; the
+/// tests run engines on it to check [`HeapQueue`] (and any faster queue to come).
+#[derive(Debug, Clone)]
+pub struct NaiveQueue {
+    key: Vec<f64>,
+}
+
+impl EventQueue for NaiveQueue {
+    fn new(n: usize) -> Self {
+        Self {
+            key: vec![f64::INFINITY; n],
+        }
+    }
+    fn key(&self, i: usize) -> f64 {
+        self.key[i]
+    }
+    fn update(&mut self, i: usize, time: f64) {
+        self.key[i] = time;
+    }
+    fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![("queue.key", super::bodies::vec_bytes(&self.key))]
+    }
+    /// First index with the smallest key (strict `<`: ties go to the smaller index, as in the
+    /// heap).
+    fn min(&mut self) -> Option<(usize, f64)> {
+        let mut best: Option<(usize, f64)> = None;
+        for (i, &k) in self.key.iter().enumerate() {
+            if best.is_none_or(|(_, b)| k < b) {
+                best = Some((i, k));
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// Random updates on `Q` and on the naive queue; the two must pop the same particle with
+    /// the same key after every update.
+    fn agrees_with_naive_queue<Q: EventQueue>(
+        n: usize,
+        seed: u64,
+        draw: impl Fn(usize, &mut rand_xoshiro::Xoshiro256PlusPlus) -> f64,
+    ) {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        let (mut q, mut r) = (Q::new(n), NaiveQueue::new(n));
+        for step in 0..200_000 {
+            let i = rng.gen_range(0..n);
+            let t = draw(step, &mut rng);
+            q.update(i, t);
+            r.update(i, t);
+            let (qi, qt) = q.min().unwrap();
+            let (ri, rt) = r.min().unwrap();
+            assert_eq!(qt, rt, "step {step}");
+            // Same tie-break: the same particle, so engines on either queue agree bitwise.
+            assert_eq!(qi, ri, "step {step}");
+            assert_eq!(q.key(qi), qt);
+        }
+    }
+
+    /// Mix of increases, decreases, repeated values and infinities.
+    fn mixed(step: usize, rng: &mut rand_xoshiro::Xoshiro256PlusPlus) -> f64 {
+        match step % 7 {
+            0 => f64::INFINITY,
+            1 => (rng.gen_range(0..50) as f64) * 0.5,
+            _ => rng.gen_range(0.0..100.0),
+        }
+    }
+
+    #[test]
+    fn heap_agrees_with_naive_queue_under_random_updates() {
+        agrees_with_naive_queue::<HeapQueue>(257, 3, mixed);
+    }
+
+    #[test]
+    fn calendar_agrees_with_naive_queue_under_random_updates() {
+        agrees_with_naive_queue::<CalendarQueue>(257, 3, mixed);
+        // A clock that advances like an engine's, with keys spread over many decades ahead of
+        // it (a year of buckets without a due entry, saturated buckets), exact ties, keys in
+        // the past and 0.
+        let clock = std::cell::Cell::new(0.0f64);
+        agrees_with_naive_queue::<CalendarQueue>(100, 5, |step, rng| {
+            clock.set(clock.get() + 1e-3);
+            let now = clock.get();
+            match step % 11 {
+                0 => f64::INFINITY,
+                1 => now + 10f64.powi(rng.gen_range(-8..12)),
+                2 => now.floor(),
+                3 => 0.0,
+                4 => now - 1e-12,
+                5 => 1e300,
+                _ => now + rng.gen_range(0.0..1.0),
+            }
+        });
+        // Every key infinite, then one finite.
+        let mut q = CalendarQueue::new(3);
+        assert_eq!(q.min(), Some((0, f64::INFINITY)));
+        q.update(2, 5.0);
+        assert_eq!(q.min(), Some((2, 5.0)));
+        assert_eq!(CalendarQueue::new(0).min(), None);
+    }
+
+    #[test]
+    fn calendar_jumps_over_a_long_gap_instead_of_walking_it() {
+        // Width 0.1 from keys 0.1..0.4, then every key moved 10^15 ahead: 10^16 empty buckets to
+        // walk without the jump (the thread would not finish), one year of 4 lists with it.
+        let (done, finished) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut q = CalendarQueue::new(4);
+            for i in 0..4 {
+                q.update(i, 0.1 * (i + 1) as f64);
+            }
+            assert_eq!(q.min(), Some((0, 0.1)));
+            for i in (0..4).rev() {
+                q.update(i, 1e15 + i as f64);
+            }
+            let first = q.min();
+            q.update(0, f64::INFINITY);
+            let _ = done.send((first, q.min()));
+        });
+        let got = finished
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .expect("the calendar queue walked the gap bucket by bucket");
+        assert_eq!(got, (Some((0, 1e15)), Some((1, 1e15 + 1.0))));
+    }
+}

@@ -1,0 +1,537 @@
+//! Event source of the walls: static flat walls on every non-periodic axis and the shaken floor
+//! and lid (MODEL.md 4.1, 6) under one of three solvers, chosen once at scene start as a
+//! [`WallSolver`] that owns its state (the `table` solver's two tables and its one-particle
+//! memories). [`WallSource`] keeps each particle's next wall event.
+//!
+//! Safeguards (tested in `crates/core/tests/engine_safeguards.rs` and `crates/core/tests/shaken_container.rs`): a
+//! particle found behind a wall and approaching collides now, one separating is left alone
+//! (B.5.6); a wall event that finds the particle away from the wall is a re-check that changes
+//! nothing; a tabulated hit places the particle exactly on the wall only within
+//! [`TABLE_PLACEMENT_TOLERANCE`] (B.5.1) or when it is late (behind the wall and approaching:
+//! placed whatever the depth), else the exact solver answers for that particle's next
+//! prediction (a table error cannot repeat itself at the same time forever), and only as
+//! far as its neighbours leave room (the rest of the gap stays behind the wall until the
+//! particle leaves it: `placement_room`); no grain leaves the floor slower than the rebound
+//! floor.
+
+use super::bodies::{Bodies, permute_in_place, vec_bytes};
+use super::cell_source::CellSource;
+use super::event::{Event, EventKind, EventSource, PlaneEvent};
+use super::ledger::{EventCounts, Ledger};
+use super::table_cache::TableCache;
+use crate::physics::contact::rebound_speed;
+use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
+use crate::physics::wall_table::{TableHit, WallTable};
+use crate::scene::{DEFAULT_ROOT_TOLERANCE, Scene, WallSolverKind};
+use std::sync::Arc;
+
+/// Largest gap (in units of `d`) at which a tabulated wall hit is accepted and the particle
+/// placed on the wall (B.5.1); a larger gap makes the event a re-check. Bounds the
+/// displacement a table error can cause.
+pub const TABLE_PLACEMENT_TOLERANCE: f64 = 1e-2;
+
+/// State of the `table` solver (B.4-B.5).
+#[derive(Debug, Clone)]
+pub struct TableState {
+    pub motion: WallMotion,
+    /// Gap tolerance of the exact solver it falls back on.
+    pub tol: f64,
+    /// The tables of the floor and of the lid (gravity pointing away), from the thread's
+    /// [`TableCache`].
+    pub tables: [Arc<WallTable>; 2],
+    /// The particle that has just left the floor (`false`) or lid (`true`); its next wall
+    /// prediction uses the wall-edge table (B.5.2).
+    pub launched: Option<(usize, bool)>,
+    /// The particle whose tabulated hit found it away from the wall; its next wall prediction
+    /// comes from the exact solver.
+    pub distrusted: Option<usize>,
+}
+
+/// How wall collision times are found: static walls, or the shaken floor and lid with one of
+/// the solvers of `physics::shaken_wall` / `physics::wall_table`.
+#[derive(Debug, Clone)]
+pub enum WallSolver {
+    /// Static flat walls: straight or parabolic flights to the planes.
+    Static,
+    /// Conservative advancement with the curvature bound `g + A omega^2` (cannot skip a root).
+    Exact { motion: WallMotion, tol: f64 },
+    /// The thesis's reference algorithm (B.3): march by `t_min`, refine by safeguarded Newton.
+    Bracket {
+        motion: WallMotion,
+        tol: f64,
+        t_min: f64,
+    },
+    /// The thesis's tabulated method (B.4-B.5), with the exact solver where the table does not
+    /// answer.
+    Table(Box<TableState>),
+}
+
+impl WallSolver {
+    /// The solver the scene asks for (its table from the thread's [`TableCache`]).
+    pub fn from_scene(scene: &Scene) -> Self {
+        let Some((amplitude, omega)) = scene.drive_motion() else {
+            return WallSolver::Static;
+        };
+        let motion = WallMotion {
+            amplitude,
+            omega,
+            g: scene.gravity,
+        };
+        let tol = scene.drive.root_tolerance.unwrap_or(DEFAULT_ROOT_TOLERANCE);
+        match scene.drive.wall_solver {
+            WallSolverKind::Bracket => WallSolver::Bracket {
+                motion,
+                tol,
+                t_min: scene
+                    .drive
+                    .t_min
+                    .unwrap_or(2.0 * std::f64::consts::PI / omega / 1000.0),
+            },
+            WallSolverKind::Table if amplitude > 0.0 => {
+                let spec = scene.wall_table_spec(amplitude, omega);
+                let lid = WallMotion {
+                    g: -scene.gravity,
+                    ..motion
+                };
+                let cache = TableCache::current();
+                WallSolver::Table(Box::new(TableState {
+                    motion,
+                    tol,
+                    tables: [cache.get(motion, spec), cache.get(lid, spec)],
+                    launched: None,
+                    distrusted: None,
+                }))
+            }
+            _ => WallSolver::Exact { motion, tol },
+        }
+    }
+
+    /// The floor's motion, `None` for static walls.
+    pub fn motion(&self) -> Option<WallMotion> {
+        match self {
+            WallSolver::Static => None,
+            WallSolver::Exact { motion, .. } | WallSolver::Bracket { motion, .. } => Some(*motion),
+            WallSolver::Table(s) => Some(s.motion),
+        }
+    }
+
+    /// Time until a flight from gap `h` with velocity `v` at `t0` meets `w` (shaken wall frame),
+    /// with the exact or bracket solver, and the tabulated approach speed (NaN: not tabulated);
+    /// `miss` if none within `horizon`.
+    fn exact(
+        &self,
+        w: &WallMotion,
+        h: f64,
+        v: f64,
+        t0: f64,
+        miss: f64,
+        horizon: f64,
+    ) -> (f64, f64) {
+        let root = match self {
+            WallSolver::Bracket { tol, t_min, .. } => {
+                bracket_root(w, h, v, t0, *t_min, *tol, horizon)
+            }
+            WallSolver::Exact { tol, .. } => exact_root(w, h, v, t0, *tol, horizon),
+            WallSolver::Table(s) => exact_root(w, h, v, t0, s.tol, horizon),
+            WallSolver::Static => unreachable!("static walls have no shaken-wall roots"),
+        };
+        match root {
+            WallRoot::Hit(dt) => (dt, f64::NAN),
+            WallRoot::None => (miss, f64::NAN),
+        }
+    }
+
+    fn tol(&self) -> f64 {
+        match self {
+            WallSolver::Static => DEFAULT_ROOT_TOLERANCE,
+            WallSolver::Exact { tol, .. } | WallSolver::Bracket { tol, .. } => *tol,
+            WallSolver::Table(s) => s.tol,
+        }
+    }
+}
+
+/// Each particle's next wall event and the solver.
+#[derive(Debug, Clone)]
+pub struct WallSource {
+    pub solver: WallSolver,
+    /// Wall restitution and the collapse remedies.
+    pub e_wall: f64,
+    pub tc: f64,
+    pub min_rebound: f64,
+    /// Next wall event of each particle (empty when no axis has walls: every candidate is then
+    /// never).
+    pub ev: Vec<PlaneEvent>,
+    /// `table` solver: tabulated approach speed of each particle's predicted wall hit (NaN when
+    /// the hit was not tabulated; empty, i.e. NaN throughout, under the other solvers).
+    pub vrel: Vec<f64>,
+}
+
+impl WallSource {
+    /// The source for `n` particles; `walls`: whether any axis has walls.
+    pub fn new(
+        solver: WallSolver,
+        e_wall: f64,
+        tc: f64,
+        min_rebound: f64,
+        n: usize,
+        walls: bool,
+    ) -> Self {
+        let tabulated = matches!(solver, WallSolver::Table(_));
+        Self {
+            solver,
+            e_wall,
+            tc,
+            min_rebound,
+            ev: if walls {
+                vec![PlaneEvent::NEVER; n]
+            } else {
+                Vec::new()
+            },
+            vrel: if tabulated {
+                vec![f64::NAN; n]
+            } else {
+                Vec::new()
+            },
+        }
+    }
+
+    /// Time of the next wall event of `i` (`+inf` without walls).
+    #[inline(always)]
+    pub fn time(&self, i: usize) -> f64 {
+        self.ev.get(i).map_or(f64::INFINITY, |e| e.time)
+    }
+
+    /// Heap bytes of the per-particle arrays (`wetgran-bench memory`; shared tables excluded).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        vec![
+            ("walls.ev", vec_bytes(&self.ev)),
+            ("walls.vrel", vec_bytes(&self.vrel)),
+        ]
+    }
+
+    /// Predicts the next wall collision of `i` (at time `now`; `up`: the lid or upper wall) and
+    /// the tabulated approach speed of a shaken-wall hit. Ends the `table` solver's memories of
+    /// `i` (edge table after a launch, exact solver after a table error): they serve one
+    /// prediction.
+    #[inline(always)]
+    pub fn predict<const D: usize, const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        bodies: &Bodies<D, G, S>,
+        now: f64,
+    ) {
+        if self.ev.is_empty() {
+            return;
+        }
+        let mut best = PlaneEvent::NEVER;
+        let mut vrel = f64::NAN;
+        let r = bodies.body[i].r;
+        let drive = self.solver.motion();
+        for k in 0..D {
+            if bodies.periodic[k] {
+                continue;
+            }
+            let ((t_lid, v_lid), (t_floor, v_floor)) = match drive {
+                Some(w) if k == D - 1 => self.shaken_wall_times(i, &w, bodies, now),
+                _ => {
+                    let (lid, floor) = bodies.times_to_planes(i, k, r, bodies.size[k] - r);
+                    ((lid, f64::NAN), (floor, f64::NAN))
+                }
+            };
+            if t_lid < best.time {
+                vrel = v_lid;
+            }
+            best.keep_earlier(t_lid, k, true);
+            if t_floor < best.time {
+                vrel = v_floor;
+            }
+            best.keep_earlier(t_floor, k, false);
+        }
+        best.time += now;
+        self.ev[i] = best;
+        if let Some(v) = self.vrel.get_mut(i) {
+            *v = vrel;
+        }
+        if let WallSolver::Table(s) = &mut self.solver {
+            if s.launched.is_some_and(|(j, _)| j == i) {
+                s.launched = None;
+            }
+            if s.distrusted == Some(i) {
+                s.distrusted = None;
+            }
+        }
+    }
+
+    /// Times until particle `i` meets the shaken lid and floor (MODEL.md 6), with the scene's
+    /// solver. The search looks two periods ahead; a particle that meets neither gets a
+    /// re-check at the horizon (a wall event that finds no contact and only re-predicts). The
+    /// lid is the floor problem mirrored: depth below the lid's mean position, velocity
+    /// reversed, gravity pointing away, wall phase shifted by pi.
+    fn shaken_wall_times<const D: usize, const G: bool, const S: bool>(
+        &self,
+        i: usize,
+        w: &WallMotion,
+        bodies: &Bodies<D, G, S>,
+        t: f64,
+    ) -> ((f64, f64), (f64, f64)) {
+        let b = &bodies.body[i];
+        let (z, vz, r) = (b.x[D - 1], b.v[D - 1], b.r);
+        let horizon = 2.0 * w.period();
+        let half_period = 0.5 * w.period();
+        let lid_motion = WallMotion { g: -w.g, ..*w };
+        let h_lid = bodies.size[D - 1] - z - r;
+        let solver = &self.solver;
+        let table = match solver {
+            WallSolver::Table(s) if s.distrusted != Some(i) => Some(s),
+            _ => None,
+        };
+        let Some(state) = table else {
+            return (
+                solver.exact(
+                    &lid_motion,
+                    h_lid,
+                    -vz,
+                    t + half_period,
+                    f64::INFINITY,
+                    horizon,
+                ),
+                solver.exact(w, z - r, vz, t, horizon, horizon),
+            );
+        };
+        // The `table` solver (B.4-B.5), with the exact solver where the table does not answer.
+        let tol = state.tol;
+        let tabulated = |k: usize, h: f64, v: f64, t0: f64, miss: f64| {
+            let table = &state.tables[k];
+            let answer = match state.launched {
+                Some((j, lid)) if j == i && lid == (k == 1) => {
+                    // Just left this wall, placed on it: the wall-edge table (B.5.2).
+                    let v_rel = v - table.motion().velocity(t0);
+                    table.next_hit_after_wall(v_rel, t0, horizon)
+                }
+                _ => table.next_hit(h, v, t0, horizon),
+            };
+            match answer {
+                TableHit::Hit { dt, v_rel } => (dt, v_rel),
+                // Behind the wall by the table's roots: collide now if the gap agrees (B.5.6),
+                // else the table erred near a root and the exact solver decides.
+                TableHit::Now if h - table.motion().position(t0) <= 1e3 * tol + 1e-12 => {
+                    (0.0, f64::NAN)
+                }
+                TableHit::Now => solver.exact(table.motion(), h, v, t0, miss, horizon),
+                TableHit::None => (miss, f64::NAN),
+                TableHit::OutOfRange => solver.exact(table.motion(), h, v, t0, miss, horizon),
+            }
+        };
+        (
+            tabulated(1, h_lid, -vz, t + half_period, f64::INFINITY),
+            tabulated(0, z - r, vz, t, horizon),
+        )
+    }
+
+    /// Carries out the wall event of `i` at time `t` along `axis` (`lid`: the upper wall); the
+    /// caller re-predicts every event of `i` afterwards.
+    #[allow(clippy::too_many_arguments)]
+    pub fn fire<const D: usize, const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        axis: usize,
+        lid: bool,
+        t: f64,
+        bodies: &mut Bodies<D, G, S>,
+        cells: &mut CellSource<D>,
+        ledger: &mut Ledger,
+        counts: &mut EventCounts,
+    ) {
+        if let Some(w) = self.solver.motion()
+            && axis == D - 1
+        {
+            self.shaken_collision(i, &w, lid, t, bodies, cells, ledger, counts);
+            return;
+        }
+        bodies.advance(i, t);
+        let v = bodies.body[i].v[axis];
+        // A grain exactly at rest on a floor under gravity is pressed into it: approaching.
+        let floor_under_gravity = G && axis == D - 1 && !lid;
+        let approaching = if lid {
+            v > 0.0
+        } else if floor_under_gravity {
+            v <= 0.0
+        } else {
+            v < 0.0
+        };
+        if !approaching {
+            // Round-off put the event a hair late: nothing to do (the caller re-predicts).
+            return;
+        }
+        bodies.bump(i);
+        counts.wall_collisions += 1;
+        let since = bodies.since_last_collision(i, i, t);
+        let mut u_out = rebound_speed(v.abs(), self.e_wall, since, self.tc, self.min_rebound);
+        if floor_under_gravity {
+            // Rest on a static floor is the one state an event-driven engine cannot represent
+            // (zero-time bounces): no grain leaves the floor slower than the rebound floor.
+            u_out = u_out.max(self.min_rebound);
+        }
+        ledger.book_restitution(bodies.mass, v.abs(), self.e_wall, u_out);
+        bodies.body[i].v[axis] = if lid { -u_out } else { u_out };
+        bodies.record_collision(i, t);
+    }
+
+    /// Collision with the shaken floor or lid, `v' = v_w + e_w (v_w - v)` along the normal
+    /// (MODEL.md 4.1), with the collapse remedies applied to the speed relative to the wall. An
+    /// event that finds the particle away from the wall is a re-check and changes nothing.
+    #[allow(clippy::too_many_arguments)]
+    fn shaken_collision<const D: usize, const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        w: &WallMotion,
+        lid: bool,
+        t: f64,
+        bodies: &mut Bodies<D, G, S>,
+        cells: &mut CellSource<D>,
+        ledger: &mut Ledger,
+        counts: &mut EventCounts,
+    ) {
+        bodies.advance(i, t);
+        let b = bodies.body[i];
+        let (z, vz) = (b.x[D - 1], b.v[D - 1]);
+        let (z_w, v_w) = (w.position(t), w.velocity(t));
+        let h = bodies.size[D - 1];
+        // Gap and approach speed in the wall's frame, both positive when the particle is on the
+        // right side and approaching.
+        let (gap, mut u_in) = if lid {
+            (h + z_w - z - b.r, vz - v_w)
+        } else {
+            (z - b.r - z_w, v_w - vz)
+        };
+        let tabulated = self.vrel.get(i).copied().unwrap_or(f64::NAN);
+        let (contact, approaching) = if tabulated.is_finite() {
+            // A tabulated hit (B.5.1): its approach speed is positive by construction (B.5.4);
+            // the table's time error is absorbed by placing the particle on the wall. A hit
+            // found early by more than the tolerance is a re-check (the exact solver finds the
+            // later one); one found late, the particle behind the wall and still approaching,
+            // is placed whatever the depth: no later prediction can undo a late one (found by
+            // the input fuzzer: a 16 x 16 table 2.9e-3 late left a grain 0.021 d behind the
+            // floor, colliding there).
+            let late = gap < 0.0 && u_in > 0.0;
+            (gap.abs() <= TABLE_PLACEMENT_TOLERANCE || late, true)
+        } else {
+            (
+                gap <= 1e3 * self.solver.tol() + 1e-12,
+                if lid { u_in > 0.0 } else { u_in >= 0.0 },
+            )
+        };
+        if !(contact && approaching) {
+            // The caller re-predicts (with the exact solver after a table error).
+            counts.wall_rechecks += 1;
+            if tabulated.is_finite()
+                && let WallSolver::Table(s) = &mut self.solver
+            {
+                s.distrusted = Some(i);
+            }
+            return;
+        }
+        if tabulated.is_finite() {
+            u_in = tabulated;
+            let z_wall = if lid { h + z_w - b.r } else { z_w + b.r };
+            // Placed on the wall as far as the neighbours leave room: a full shift could push
+            // the particle into a grain resting a hair above it (found by the input fuzzer:
+            // an overlap of 1.2e-3 d after a late tabulated floor hit under a stacked grain).
+            // What is left of the gap stays, and the particle leaves the wall at once.
+            let z_new = z + placement_room(i, z_wall - z, t, bodies, cells);
+            if G {
+                ledger.placement += bodies.mass * bodies.gravity * (z_new - z);
+            }
+            bodies.body[i].x[D - 1] = z_new;
+            // The shift may cross a cell face: keep the cell lists right (the caller rescans
+            // the neighbourhood).
+            let x = bodies.body[i].x;
+            cells.relocate_if_moved(i, &x);
+            if let WallSolver::Table(s) = &mut self.solver {
+                s.launched = Some((i, lid));
+            }
+        }
+        bodies.bump(i);
+        counts.wall_collisions += 1;
+        let since = bodies.since_last_collision(i, i, t);
+        let mut u_out = rebound_speed(u_in, self.e_wall, since, self.tc, self.min_rebound);
+        if !lid {
+            // As on the static floor: no grain leaves the floor slower than the rebound floor.
+            u_out = u_out.max(self.min_rebound);
+        }
+        let v_new = if lid { v_w - u_out } else { v_w + u_out };
+        let m = bodies.mass;
+        // Loss in the wall's frame; the rest of the kinetic energy change is the wall's work.
+        ledger.book_restitution(m, u_in, self.e_wall, u_out);
+        let de = 0.5 * m * (u_in * u_in - u_out * u_out);
+        ledger.work_by_drive += 0.5 * m * (v_new * v_new - vz * vz) + de;
+        bodies.body[i].v[D - 1] = v_new;
+        bodies.record_collision(i, t);
+    }
+}
+
+/// The shift `s` along the vertical axis, of the sign of `want` and at most `|want|`, that
+/// particle `i` can make at time `t` without coming closer than contact to any neighbour it does
+/// not already overlap: the smallest positive root of `|d - s e_z|^2 = sigma^2` over the
+/// neighbours (`d` the separation to the neighbour, `sigma` the contact distance). Neighbours
+/// are those of the `3^D` cells around `i`; the cell edge is at least the largest diameter, and a
+/// shift is at most [`TABLE_PLACEMENT_TOLERANCE`], so a grain farther than one cell can reach
+/// contact only if the edge is within that tolerance of the largest diameter (not excluded).
+fn placement_room<const D: usize, const G: bool, const S: bool>(
+    i: usize,
+    want: f64,
+    t: f64,
+    bodies: &Bodies<D, G, S>,
+    cells: &CellSource<D>,
+) -> f64 {
+    let up = want >= 0.0;
+    let mut room = want.abs();
+    let (xi, _) = bodies.state_at(i, t);
+    let ri = bodies.body[i].r;
+    cells.for_each_near(i, |j| {
+        if j == i {
+            return;
+        }
+        let (xj, _) = bodies.state_at(j, t);
+        let d = bodies.min_image(xj - xi);
+        let sigma = ri + bodies.body[j].r;
+        let c = d.norm_squared() - sigma * sigma;
+        // Along the shift: `dz > 0` means the neighbour lies ahead.
+        let dz = if up { d[D - 1] } else { -d[D - 1] };
+        let disc = dz * dz - c;
+        if c < 0.0 || dz <= 0.0 || disc < 0.0 {
+            // Already overlapping (left to the pair events), behind, or missed by the shift.
+            return;
+        }
+        room = room.min(dz - disc.sqrt());
+    });
+    let room = room.max(0.0);
+    if up { room } else { -room }
+}
+
+impl EventSource for WallSource {
+    /// The stored wall event of `i`.
+    #[inline]
+    fn candidate(&self, i: usize) -> Event {
+        let e = self.ev.get(i).copied().unwrap_or(PlaneEvent::NEVER);
+        Event {
+            time: e.time,
+            kind: EventKind::Wall {
+                axis: e.axis,
+                up: e.up,
+            },
+        }
+    }
+
+    /// Renumbers the particles (see [`Bodies::permute`]). The `table` solver's one-particle
+    /// memories last one prediction and are always spent between events; they are renamed all
+    /// the same.
+    fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
+        permute_in_place(&mut self.ev, order);
+        permute_in_place(&mut self.vrel, order);
+        if let WallSolver::Table(s) = &mut self.solver {
+            s.launched = s.launched.map(|(j, lid)| (new_of_old[j] as usize, lid));
+            s.distrusted = s.distrusted.map(|j| new_of_old[j] as usize);
+        }
+    }
+}
