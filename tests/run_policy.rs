@@ -136,7 +136,7 @@ fn checkpoint_continues_the_event_trajectory() {
     assert_eq!(a.time, 2.0 * t);
     // The same physical events; stale predictions (`invalidated`) depend on when they were
     // made, which the restore changes.
-    let physical = |c: &wetgran_core::sim::event_driven::EventCounts| {
+    let physical = |c: &wetgran_core::sim::EventCounts| {
         let mut c = c.clone();
         c.invalidated = 0;
         c

@@ -30,7 +30,8 @@ use serde::Serialize;
 use std::time::Instant;
 use wetgran_core::scene::reference::shaken_standard;
 use wetgran_core::scene::{Scene, WallSolverKind};
-use wetgran_core::sim::event_driven::{EnergyLedger, Engine, Vector};
+use wetgran_core::sim::EnergyLedger;
+use wetgran_core::sim::event_driven::{Engine, Vector};
 use wetgran_core::sim::{EngineVisitor, Frame, Simulation, with_engine};
 
 /// Events (or time steps) per case by default.

@@ -484,7 +484,7 @@ pub struct ObserverSet {
     lc: Option<LocationChangeCounter>,
     diffusion: Option<diffusion::DiffusionObserver>,
     shear: Option<shear::ShearObserver>,
-    first_counts: Option<crate::sim::event_driven::EventCounts>,
+    first_counts: Option<crate::sim::EventCounts>,
     window_samples: usize,
     /// The last frame seen.
     pub last: Option<Frame>,

@@ -156,22 +156,21 @@ pub struct WallTable {
 
 impl WallTable {
     /// Fills the four edge tables for `motion` (a pure function of its inputs). The cells are
-    /// filled in parallel on the pool `sim::threads` chooses (a sweep job's share of the cores,
-    /// else all of them); each cell is a function of its indices alone and the counters are
-    /// integer sums, so the table is the same bits on any number of threads.
+    /// filled in parallel on the rayon pool the caller runs this in (the engine's table cache
+    /// installs the pool `sim::threads` chooses: a sweep job's share of the cores, else all of
+    /// them); each cell is a function of its indices alone and the counters are integer sums,
+    /// so the table is the same bits on any number of threads.
     pub fn build(motion: WallMotion, spec: TableSpec) -> WallTable {
         let start = Instant::now();
-        let (edges, stats) = crate::sim::threads::install(|| {
-            let built: Vec<(EdgeTable, BuildStats)> = EDGES
-                .par_iter()
-                .map(|&e| build_edge(&motion, &spec, e))
-                .collect();
-            let mut stats = BuildStats::default();
-            for (_, s) in &built {
-                stats.add(s);
-            }
-            (built.into_iter().map(|(e, _)| e).collect(), stats)
-        });
+        let built: Vec<(EdgeTable, BuildStats)> = EDGES
+            .par_iter()
+            .map(|&e| build_edge(&motion, &spec, e))
+            .collect();
+        let mut stats = BuildStats::default();
+        for (_, s) in &built {
+            stats.add(s);
+        }
+        let edges = built.into_iter().map(|(e, _)| e).collect();
         WallTable {
             motion,
             spec,

@@ -2,7 +2,8 @@
 //! event counts) in scene order, independent of the engine's dimension and type parameters.
 //! Observers and pictures work on frames; the engine never sees them.
 
-use super::event_driven::{Engine, EventCounts};
+use super::books::EventCounts;
+use super::event_driven::Engine;
 use super::time_driven::TimeEngine;
 use crate::scene::{Boundary, Scene};
 use serde::Serialize;

@@ -12,6 +12,7 @@
 //! its final state ([`RunReport::final_state`]) for checkpoints. [`threads`] chooses how many
 //! threads a simulation uses (the time-driven engine's steps are parallel).
 
+pub mod books;
 pub mod event_driven;
 pub mod frame;
 pub mod initial;
@@ -19,12 +20,13 @@ pub mod state;
 pub mod threads;
 pub mod time_driven;
 
+pub use books::{EnergyLedger, EventCounts};
 pub use frame::Frame;
 pub use state::EngineState;
 
 use crate::scene::{EngineKind, Scene};
+use event_driven::Engine;
 use event_driven::queue::EventQueue;
-use event_driven::{EnergyLedger, Engine, EventCounts};
 use serde::Serialize;
 use std::time::Instant;
 use time_driven::{BodyForce, TimeEngine};

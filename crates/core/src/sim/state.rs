@@ -10,7 +10,7 @@
 //! are re-initialised from the forces (`sim::time_driven::engine`).
 
 use super::Frame;
-use super::event_driven::{EnergyLedger, EventCounts};
+use super::books::{EnergyLedger, EventCounts};
 use serde::{Deserialize, Serialize};
 
 /// A restorable snapshot of a run, vectors flat with stride `dimension`, particles in scene

@@ -32,7 +32,6 @@ use super::cell_source::CellSource;
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, NONE};
 use super::ledger::Ledger;
-pub use super::ledger::{EnergyLedger, EventCounts};
 pub use super::pairs::MAX_BONDS;
 use super::pairs::{PairParams, PairSource};
 use super::queue::{CalendarQueue, EventQueue};
@@ -40,6 +39,7 @@ use super::shear::{FORCE_AXIS, ShearField};
 use super::slabs::SlabSource;
 use super::walls::{WallSolver, WallSource};
 use crate::scene::{Boundary, Scene};
+use crate::sim::books::{EnergyLedger, EventCounts};
 use crate::sim::initial::{FlatInitialState, initial_state_flat};
 
 /// Events between two renumberings of the particles in cell order (see `reorder_by_cell`).

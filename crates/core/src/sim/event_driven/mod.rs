@@ -8,7 +8,7 @@
 //! - `pairs`, `cell_source`, `walls`, `slabs`: the event sources;
 //! - `cells`: the neighbour grid; `shear`: the shear field and the sheared pair quartics;
 //! - `table_cache`: the bounded cache of the `table` wall solver's tables;
-//! - `ledger`: event counts and energy books.
+//! - `ledger`: the running sums of the energy exchanged at events.
 
 pub mod bodies;
 pub mod cell_source;
@@ -23,4 +23,4 @@ pub mod slabs;
 pub mod table_cache;
 pub mod walls;
 
-pub use engine::{EnergyLedger, Engine, EventCounts, Vector};
+pub use engine::{Engine, Vector};

@@ -26,12 +26,13 @@ use super::bodies::{Bodies, Body, Vector, permute_in_place, vec_bytes};
 use super::cell_source::{CellSource, Neighbourhood};
 use super::cells::{BATCH, CellGrid};
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
-use super::ledger::{EventCounts, Ledger};
+use super::ledger::Ledger;
 use super::shear::pair_times;
 use super::slabs::SlabSource;
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
 use crate::scene::RuptureRule;
+use crate::sim::books::EventCounts;
 
 /// Fraction of a periodic box edge beyond which a pair is also predicted through its other
 /// image (see `PairSource::predict_pair_from`): above the `0.4 L` that partners in adjacent

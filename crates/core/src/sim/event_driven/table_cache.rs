@@ -167,7 +167,9 @@ impl TableCache {
                 return Arc::clone(t);
             }
         }
-        let table = Arc::new(WallTable::build(motion, spec));
+        let table = Arc::new(crate::sim::threads::install(|| {
+            WallTable::build(motion, spec)
+        }));
         let size = table.bytes();
         let mut e = self.lock();
         e.builds += 1;

@@ -17,12 +17,13 @@
 use super::bodies::{Bodies, permute_in_place, vec_bytes};
 use super::cell_source::CellSource;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
-use super::ledger::{EventCounts, Ledger};
+use super::ledger::Ledger;
 use super::table_cache::TableCache;
 use crate::physics::contact::rebound_speed;
 use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
 use crate::physics::wall_table::{TableHit, WallTable};
 use crate::scene::{DEFAULT_ROOT_TOLERANCE, Scene, WallSolverKind};
+use crate::sim::books::EventCounts;
 use std::sync::Arc;
 
 /// Largest gap (in units of `d`) at which a tabulated wall hit is accepted and the particle

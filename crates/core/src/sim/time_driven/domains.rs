@@ -42,7 +42,8 @@
 
 use super::integrator::gear_correct_predict_axis;
 use super::neighbours::{BOND, CONTACT};
-use super::neighbours::{NeighbourList, RowScan, max_displacement_sq};
+use super::neighbours::{EXACT_CHECK_EVERY, NeighbourList, RowScan, max_displacement_sq};
+use super::pair_kernel::{PairBooks, PairConstants, pair_forces_serial, pair_response};
 use super::walls::{WallAxis, WallBooks, wall_forces};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, RwLock};
@@ -777,7 +778,7 @@ impl<const D: usize> Domain<D> {
             }
         }
         self.acc_is_start = true;
-        let pc = super::engine::PairConstants {
+        let pc = PairConstants {
             periodic: c.periodic,
             size: c.size,
             stiffness: c.stiffness,
@@ -787,7 +788,7 @@ impl<const D: usize> Domain<D> {
             vs: 1.0 / dt,
             dt,
         };
-        let pb = super::engine::pair_forces_serial::<D, WET>(
+        let pb = pair_forces_serial::<D, WET>(
             &pc,
             &self.r[0],
             &self.r[1],
@@ -877,9 +878,7 @@ impl<const D: usize> Domain<D> {
         // The list check of the next step (the engine's `update_list`, on this domain).
         self.bound += moved2.sqrt();
         self.since_check += 1;
-        if self.bound < c.half_skin * (1.0 - 1e-6)
-            && self.since_check < super::engine::EXACT_CHECK_EVERY
-        {
+        if self.bound < c.half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
             return false;
         }
         self.since_check = 0;
@@ -899,7 +898,7 @@ impl<const D: usize> Domain<D> {
 /// the books (the caller keeps them in one domain only).
 #[allow(clippy::too_many_arguments)]
 fn cross_forces<const D: usize, const WET: bool>(
-    pc: &super::engine::PairConstants<D>,
+    pc: &PairConstants<D>,
     x: &[f64],
     v: &[f64],
     f: &mut [f64],
@@ -909,9 +908,9 @@ fn cross_forces<const D: usize, const WET: bool>(
     own: &[u32],
     ghost: &[u32],
     flags: &mut [u8],
-) -> super::engine::PairBooks {
+) -> PairBooks {
     let m = radius.len();
-    let mut b = super::engine::PairBooks::default();
+    let mut b = PairBooks::default();
     let (own, ghost) = (&own[..flags.len()], &ghost[..flags.len()]);
     for q in 0..flags.len() {
         let i = own[q] as usize;
@@ -941,9 +940,7 @@ fn cross_forces<const D: usize, const WET: bool>(
             }
             continue;
         }
-        let pr = super::engine::pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| {
-            v[k * m + i] - g[D + k]
-        });
+        let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| v[k * m + i] - g[D + k]);
         b.book(&pr);
         if pr.flags != fl {
             flags[q] = pr.flags;

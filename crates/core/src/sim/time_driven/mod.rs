@@ -16,6 +16,7 @@ mod domains;
 pub mod engine;
 pub mod integrator;
 pub mod neighbours;
+mod pair_kernel;
 pub mod shear;
 mod team;
 mod walls;
