@@ -2,7 +2,9 @@
 //!
 //! A citation is the document's path followed by a section number, "docs/model.md 3.2", also
 //! with "section" or "Sec." before the number, across a line break (a comment's marker on the
-//! next line is skipped), and with further numbers joined by "and" ("4.1 and 6"). A section
+//! next line is skipped), and with further numbers joined by "and" or a comma ("4.1 and 6",
+//! "2.1, 3.2"; after a comma a number of more than two leading digits is a count, not a
+//! section: "docs/model.md 1, 1200 disks" cites section 1). A section
 //! exists when a heading of docs/model.md starts with its number ("## 3. Capillary bridges",
 //! "### 3.2 Thin-thread model"). The test reads every .rs, .md, .toml and .sh file under the
 //! repository root, leaving out `target/` and `.git/`.
@@ -102,10 +104,19 @@ fn cited_sections(text: &str) -> Vec<String> {
             continue;
         };
         cited.push(number.to_string());
-        while let Some(r) = after.strip_prefix(" and ") {
+        loop {
+            let (r, comma) = match (after.strip_prefix(" and "), after.strip_prefix(", ")) {
+                (Some(r), _) => (r, false),
+                (None, Some(r)) => (r, true),
+                (None, None) => break,
+            };
             let Some((number, a)) = leading_number(r) else {
                 break;
             };
+            // After a comma only a plausible section ("4.1, 6"), not a count ("1, 1200 disks").
+            if comma && number.split('.').next().is_some_and(|top| top.len() > 2) {
+                break;
+            }
             cited.push(number.to_string());
             after = a;
         }
@@ -196,11 +207,12 @@ fn the_parser_finds_citations_and_headings() {
 
     let text = format!(
         "see {DOC} 3.2; ({DOC} 4.1 and 6), {DOC}'s 2D system, {DOC} section 5, {DOC} 7.\n\
+         ({DOC} 2.1, 3.2), {DOC} 6, B.5.6,\n\
          /// wrapped ({DOC}\n/// 8), the file {DOC} itself, {DOC} 2D, {DOC} 1, 1200 disks"
     );
     assert_eq!(
         cited_sections(&text),
-        ["3.2", "4.1", "6", "5", "7", "8", "1"]
+        ["3.2", "4.1", "6", "5", "7", "2.1", "3.2", "6", "8", "1"]
     );
 
     // A citation of a section without a heading is reported with its file and line.
