@@ -97,11 +97,6 @@ pub fn measure_threads(
     threads: &[usize],
     n_factor: usize,
 ) -> Vec<TdmdRow> {
-    // The bench measures the parallel path itself: split the step whatever the system size
-    // (an engine below the default threshold would run serially on any pool).
-    if threads.iter().any(|&t| t > 1) {
-        wetgran_core::sim::time_driven::engine::set_parallel_min_particles(0);
-    }
     let timed = (scale.max(0.1) / n_factor.max(1) as f64).max(0.02);
     let pools: Vec<rayon::ThreadPool> = threads
         .iter()
@@ -144,6 +139,11 @@ pub fn measure_threads(
                 pool.install(|| {
                     let mut e = TimeEngine::<2, true, false>::new(&s);
                     e.set_domain_mode(mode);
+                    // The bench measures the parallel path itself: split the step whatever
+                    // the system size (below the default threshold it would run serially).
+                    if threads.iter().any(|&t| t > 1) {
+                        e.set_parallel_min_particles(0);
+                    }
                     e.run_until(1.0);
                     let (b0, s0) = (e.list_builds(), e.steps());
                     let cpu0 = process_cpu_seconds();

@@ -86,10 +86,12 @@ fn digest<const D: usize, const G: bool, const W: bool, B: BodyForce<D>>(
     (state, h.0)
 }
 
+/// Every engine here splits its steps over the threads from this many particles on (the old
+/// default threshold), so that these sizes exercise the parallel path.
+const SPLIT_FROM: usize = 512;
+
 /// Runs `run` on a rayon pool of `threads` threads and returns its digests.
 fn on_threads(threads: usize, run: impl FnOnce() -> (u64, u64) + Send) -> (u64, u64) {
-    // The parallel path from the old threshold on, so that these sizes exercise it.
-    wetgran_core::sim::time_driven::engine::set_parallel_min_particles(512);
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -141,6 +143,7 @@ fn bench_scene_gear() {
         (0x4cef_122d_97f7_9569, 0x7a37_ea3b_3ce6_04de),
         || {
             let mut e = TimeEngine::<2, true, false>::new(&s);
+            e.set_parallel_min_particles(SPLIT_FROM);
             e.run_until(0.3);
             digest(&e)
         },
@@ -155,6 +158,7 @@ fn bench_scene_verlet() {
         (0xd19b_9c90_240d_9390, 0x056b_3114_7928_054a),
         || {
             let mut e = TimeEngine::<2, true, false>::new(&s);
+            e.set_parallel_min_particles(SPLIT_FROM);
             e.run_until(0.3);
             digest(&e)
         },
@@ -185,6 +189,7 @@ fn wet_2d_gear() {
         (0x5cf0_9ae3_7594_a66a, 0x7b4d_fcee_2b9e_47bc),
         || {
             let mut e = TimeEngine::<2, true, true>::new(&s);
+            e.set_parallel_min_particles(SPLIT_FROM);
             e.run_until(1.5);
             assert!(e.counts().bridge_ruptures > 0, "the run ruptures bridges");
             digest(&e)
@@ -200,6 +205,7 @@ fn wet_2d_verlet() {
         (0xdaec_5b1f_afe8_a063, 0xbf20_8030_40b7_bcd9),
         || {
             let mut e = TimeEngine::<2, true, true>::new(&s);
+            e.set_parallel_min_particles(SPLIT_FROM);
             e.run_until(1.5);
             digest(&e)
         },
@@ -224,6 +230,7 @@ fn wet_3d_gear() {
         (0x0d73_c090_5dd6_d1c1, 0xf150_4364_fc96_d60c),
         || {
             let mut e = TimeEngine::<3, true, true>::new(&s);
+            e.set_parallel_min_particles(SPLIT_FROM);
             e.run_until(0.5);
             digest(&e)
         },
@@ -248,6 +255,7 @@ fn sheared_3d_gear() {
         (0xf930_23bd_a721_634c, 0xa188_7632_67d8_c325),
         || {
             let mut e = TimeEngine::<3, false, false, CosineShear>::with_body_force(&s, field);
+            e.set_parallel_min_particles(SPLIT_FROM);
             e.run_until(0.5);
             digest(&e)
         },
@@ -268,11 +276,11 @@ fn threads_do_not_change_a_wet_sheared_run() {
         "[contact]\ndamping = 1.5e-4\n[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n\
          [drive]\nkind = \"shear\"\nf_max = 0.5\n[initial]\ntemperature = 2.0\n[engine]\nkind = \"time\"\n",
     );
-    wetgran_core::sim::time_driven::engine::set_parallel_min_particles(512);
-    assert!(s.particles.count >= wetgran_core::sim::time_driven::engine::parallel_min_particles());
+    assert!(s.particles.count >= SPLIT_FROM);
     let field = CosineShear::of_scene(&s).expect("a shear scene");
     let run = || {
         let mut e = TimeEngine::<3, false, true, CosineShear>::with_body_force(&s, field);
+        e.set_parallel_min_particles(SPLIT_FROM);
         e.run_until(0.2);
         assert!(e.counts().bridge_formations > 0, "bridges form");
         digest(&e)

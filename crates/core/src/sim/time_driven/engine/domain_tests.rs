@@ -1,0 +1,339 @@
+//! The spatial domains (`domains.rs`) against the serial step and against themselves.
+use super::*;
+
+/// A shaken wet bed of 360 disks in a 120 x 9 box (bridges form and rupture, across the
+/// cut too).
+fn wet_bed() -> Scene {
+    let text = "dimension = 2\ngravity = 1.0\n[box]\nsize = [120.0, 9.0]\n\
+        boundary = [\"periodic\", \"wall\"]\n[particles]\ncount = 360\npolydispersity = 0.06\n\
+        [contact]\ndamping = 1.5e-4\n[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\n\
+        e_cb = 0.2844\n[drive]\nkind = \"sine\"\ngamma = 5.0\ne_star = 10.0\n\
+        [initial]\ntemperature_over_ecb = 20.0\nseed = 3\n[run]\nduration = 1.0\n\
+        [engine]\nkind = \"time\"\n";
+    Scene::from_toml_str(text, "domain test").expect("valid scene")
+}
+
+type Wet = TimeEngine<2, true, true>;
+
+fn engine(mode: DomainMode) -> Wet {
+    let mut e = Wet::new(&wet_bed());
+    e.set_domain_mode(mode);
+    e.team_door = std::time::Duration::from_secs(60);
+    e
+}
+
+/// Every bit of the state and of the books.
+fn bits(e: &Wet) -> Vec<u64> {
+    let mut v: Vec<u64> = e.positions_flat().iter().map(|x| x.to_bits()).collect();
+    v.extend(e.velocities_flat().iter().map(|x| x.to_bits()));
+    let c = e.counts();
+    v.extend([
+        c.pair_collisions,
+        c.wall_collisions,
+        c.bridge_formations,
+        c.bridge_ruptures,
+        e.steps(),
+        e.list_builds(),
+    ]);
+    v.extend(e.bridges().iter().flat_map(|&(i, j)| [i as u64, j as u64]));
+    // The list checks' state: where the next exact displacement test falls.
+    if let Some(dec) = e.domains.0.as_ref() {
+        for dm in &dec.domains {
+            let dm = super::super::domains::lock(dm);
+            v.extend([dm.bound.to_bits(), u64::from(dm.since_check)]);
+        }
+    }
+    let l = e.energy();
+    v.extend(
+        [
+            l.kinetic,
+            l.potential,
+            l.dissipated_restitution,
+            l.dissipated_ruptures,
+            l.work_by_drive,
+            e.max_overlap(),
+        ]
+        .map(f64::to_bits),
+    );
+    v
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a pool")
+}
+
+/// The cross pairs bonded in domain 0's copy.
+fn cross_bonds(e: &Wet) -> usize {
+    let dec = e.domains.0.as_ref().expect("a decomposition");
+    let d0 = super::super::domains::lock(&dec.domains[0]);
+    d0.cross_flags.iter().filter(|&&f| f & BOND != 0).count()
+}
+
+#[test]
+fn one_two_and_three_threads_give_the_same_bits() {
+    let run = |threads: usize| {
+        pool(threads).install(|| {
+            let mut e = engine(DomainMode::Always);
+            e.run_until(1.0);
+            assert!(e.counts().bridge_ruptures > 0, "bridges rupture");
+            (bits(&e), e.team_steps(), e.steps())
+        })
+    };
+    let (one, team1, _) = run(1);
+    let (two, team2, steps) = run(2);
+    let (three, team3, _) = run(3);
+    assert_eq!(team1, 0, "one thread runs no team");
+    // The long door admits both members: nearly every step ran on two threads (the first,
+    // predicting, step runs alone).
+    assert!(
+        team2 + 1 >= steps && team3 + 1 >= steps,
+        "{team2} {team3} of {steps}"
+    );
+    assert!(one == two, "one and two threads differ");
+    assert!(one == three, "one and three threads differ");
+}
+
+/// The bits after one `run_until(1.0)` of the bed on a pool of `threads`.
+fn bits_of_one_run(threads: usize) -> Vec<u64> {
+    pool(threads).install(|| {
+        let mut e = engine(DomainMode::Always);
+        e.run_until(1.0);
+        bits(&e)
+    })
+}
+
+/// Runs `e` to 1 time unit in `run_until` pieces of `piece` time units.
+fn run_in_pieces(e: &mut Wet, piece: f64) {
+    let mut t = 0.0f64;
+    while t < 1.0 {
+        t = (t + piece).min(1.0);
+        e.run_until(t);
+    }
+}
+
+/// Regions with a door of 20 us, so that the pool's second thread joins some regions and
+/// not others, as on a busy machine, give the bits of one thread. (On the development VM
+/// about a quarter of the steps ran on two members; the mix depends on the machine and is
+/// printed, not asserted.)
+#[test]
+fn a_team_of_changing_size_changes_no_number() {
+    let one = bits_of_one_run(1);
+    let varying = pool(2).install(|| {
+        let mut e = engine(DomainMode::Always);
+        e.team_door = std::time::Duration::from_micros(20);
+        run_in_pieces(&mut e, 0.01);
+        println!("{} of {} steps on a team of two", e.team_steps(), e.steps());
+        bits(&e)
+    });
+    assert!(one == varying, "a team of changing size changes numbers");
+}
+
+/// A region goes on through the list builds (the team builds the list itself): one run
+/// takes far fewer regions than builds, and the same bits come out as when every build
+/// ends the region (a region per step, which builds between regions).
+#[test]
+fn the_team_builds_the_list_without_leaving_its_region() {
+    let (whole, regions, builds, partitions) = pool(2).install(|| {
+        let mut e = engine(DomainMode::Always);
+        e.run_until(1.0);
+        (bits(&e), e.regions, e.list_builds(), e.partitions)
+    });
+    assert!(builds > 20, "{builds} builds");
+    assert!(
+        regions <= partitions + 1,
+        "{regions} regions for {builds} builds and {partitions} partitions"
+    );
+    let stepwise = pool(2).install(|| {
+        let mut e = engine(DomainMode::Always);
+        while e.time() < 1.0 - 0.5 * e.p.dt {
+            e.step();
+        }
+        bits(&e)
+    });
+    assert!(whole == stepwise, "builds inside the team change numbers");
+}
+
+#[test]
+fn where_regions_end_changes_no_number() {
+    let whole = bits_of_one_run(2);
+    let pieces = pool(2).install(|| {
+        let mut e = engine(DomainMode::Always);
+        run_in_pieces(&mut e, 0.0173);
+        bits(&e)
+    });
+    assert!(
+        whole == pieces,
+        "a run in pieces differs from one in one go"
+    );
+}
+
+/// On one thread (the domains in turn), so that a domain reading a halo of the wrong step
+/// parity sees the other's newer state and fails here (on two threads the halo locks
+/// would then deadlock instead).
+#[test]
+fn both_copies_of_a_cross_pair_take_the_same_decisions() {
+    pool(1).install(|| {
+        let mut e = engine(DomainMode::Always);
+        let mut bonded = 0;
+        for k in 1..=20 {
+            e.run_until(0.05 * k as f64);
+            let dec = e.domains.0.as_mut().expect("a decomposition");
+            assert!(
+                dec.cross_flags_agree(),
+                "cross flags differ at t = {}",
+                e.time()
+            );
+            bonded = bonded.max(cross_bonds(&e));
+        }
+        assert!(bonded > 0, "some cross pair is bonded");
+    });
+}
+
+/// 3D (the same code): 400 wet spheres, cut across the longest (periodic) axis; one and
+/// two threads give the same bits, and the serial path agrees to round-off.
+#[test]
+fn spheres_on_domains_agree_with_the_serial_step() {
+    let text = "dimension = 3\ngravity = 1.0\n[box]\nsize = [16.0, 8.0, 8.0]\n\
+        boundary = [\"periodic\", \"periodic\", \"wall\"]\n[particles]\ncount = 400\n\
+        polydispersity = 0.06\n[contact]\ndamping = 1.5e-4\n[capillary]\n\
+        model = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n[drive]\nkind = \"sine\"\n\
+        gamma = 5.0\ne_star = 10.0\n[initial]\ntemperature_over_ecb = 20.0\nseed = 5\n\
+        [run]\nduration = 1.0\n[engine]\nkind = \"time\"\n";
+    let scene = Scene::from_toml_str(text, "domain test 3D").expect("valid scene");
+    let run = |mode: DomainMode, threads: usize| {
+        pool(threads).install(|| {
+            let mut e = TimeEngine::<3, true, true>::new(&scene);
+            e.set_domain_mode(mode);
+            e.team_door = std::time::Duration::from_secs(60);
+            e.run_until(0.4);
+            e
+        })
+    };
+    let one = run(DomainMode::Always, 1);
+    let two = run(DomainMode::Always, 2);
+    let serial = run(DomainMode::Never, 1);
+    assert!(
+        two.team_steps() + 1 >= two.steps(),
+        "two members ran the steps"
+    );
+    assert!(one.counts().bridge_formations > 0, "bridges form");
+    let bits = |e: &TimeEngine<3, true, true>| -> Vec<u64> {
+        let mut v: Vec<u64> = e.positions_flat().iter().map(|x| x.to_bits()).collect();
+        v.extend(e.velocities_flat().iter().map(|x| x.to_bits()));
+        let l = e.energy();
+        v.extend(
+            [
+                l.dissipated_restitution,
+                l.dissipated_ruptures,
+                l.work_by_drive,
+            ]
+            .map(f64::to_bits),
+        );
+        v.extend([
+            e.counts().pair_collisions,
+            e.counts().bridge_ruptures,
+            e.list_builds(),
+        ]);
+        v
+    };
+    assert!(bits(&one) == bits(&two), "one and two threads differ");
+    assert_eq!(serial.list_builds(), one.list_builds());
+    assert_eq!(
+        serial.counts().pair_collisions,
+        one.counts().pair_collisions
+    );
+    assert_eq!(
+        serial.counts().bridge_formations,
+        one.counts().bridge_formations
+    );
+    assert_eq!(
+        serial.counts().bridge_ruptures,
+        one.counts().bridge_ruptures
+    );
+    assert_eq!(serial.bridges(), one.bridges());
+    let dx = serial
+        .positions_flat()
+        .iter()
+        .zip(&one.positions_flat())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(dx < 1e-9, "positions differ by {dx}");
+}
+
+/// The point of the domains: in the bench system (1200 disks, 400 x 9, cut across x)
+/// the threads exchange only a small halo per step. Prints the figures quoted in
+/// docs/performance.md ("Sixth round").
+#[test]
+fn the_halo_is_a_small_part_of_the_bench_system() {
+    let s = crate::scene::reference::dry_shaken_time_driven("gear5");
+    let mut e = TimeEngine::<2, true, false>::new(&s);
+    assert!(e.uses_domains(), "N = 1200 runs on the domains by default");
+    e.run_until(0.5);
+    let dec = e.domains.0.as_ref().expect("a decomposition");
+    for (d, dm) in dec.domains.iter().enumerate() {
+        let dm = super::super::domains::lock(dm);
+        let m = dm.ids.len();
+        println!(
+            "domain {d}: {m} particles, {} inner entries, {} cross entries, {} ghosts, {} published",
+            dm.partner.len(),
+            dm.cross_own.len(),
+            dm.ghosts,
+            dm.halo_out.len()
+        );
+        assert_eq!(m, 600);
+        assert!(dm.ghosts > 0 && dm.ghosts * 10 < m, "{} ghosts", dm.ghosts);
+    }
+    println!(
+        "{} partitions over {} list builds",
+        e.partitions,
+        e.list_builds()
+    );
+}
+
+/// The domains change the serial trajectory by round-off only: the same list builds,
+/// counts and (to round-off) positions and books, over a run long enough for several
+/// partitions. The books would differ by the cross pairs' share if both domains booked
+/// them.
+#[test]
+fn domains_change_the_serial_trajectory_by_round_off() {
+    let mut serial = engine(DomainMode::Never);
+    let mut split = engine(DomainMode::Always);
+    let t = 1.2;
+    serial.run_until(t);
+    split.run_until(t);
+    assert!(split.partitions > 1, "{} partitions", split.partitions);
+    assert_eq!(serial.list_builds(), split.list_builds());
+    let (cs, cd) = (serial.counts(), split.counts());
+    assert_eq!(cs.pair_collisions, cd.pair_collisions);
+    assert_eq!(cs.wall_collisions, cd.wall_collisions);
+    assert_eq!(cs.bridge_formations, cd.bridge_formations);
+    assert_eq!(cs.bridge_ruptures, cd.bridge_ruptures);
+    assert_eq!(serial.bridges(), split.bridges());
+    let (xs, xd) = (serial.positions_flat(), split.positions_flat());
+    let dx = xs
+        .iter()
+        .zip(&xd)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(dx < 1e-9, "positions differ by {dx}");
+    assert!(dx > 0.0, "the summation order differs, so some bit should");
+    let (ls, ld) = (serial.energy(), split.energy());
+    for (a, b, what) in [
+        (
+            ls.dissipated_restitution,
+            ld.dissipated_restitution,
+            "damping",
+        ),
+        (ls.dissipated_ruptures, ld.dissipated_ruptures, "ruptures"),
+        (ls.work_by_drive, ld.work_by_drive, "drive work"),
+        (ls.kinetic, ld.kinetic, "kinetic"),
+    ] {
+        assert!(
+            (a - b).abs() <= 1e-9 * a.abs().max(1.0),
+            "{what}: {a} vs {b}"
+        );
+    }
+}
