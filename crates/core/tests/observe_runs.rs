@@ -18,7 +18,7 @@ fn standard_2d(lx: f64, n: usize, gamma: f64, e_star: f64, periods: f64, transie
          [contact]\nrestitution = 0.9\n[capillary]\nmodel = \"thin_thread\"\n\
          [drive]\nkind = \"sine\"\ngamma = {gamma:?}\ne_star = {e_star:?}\n\
          [initial]\ntemperature_over_ecb = 20.0\nseed = 1\n\
-         [run]\nduration = {:?}\n[observe]\ntransient_periods = {transient:?}\n",
+         [run]\nduration = {:?}\n[observe]\ntransient_periods = {transient:?}\nlocation_changes = true\n",
         periods * period
     )
 }
@@ -170,7 +170,7 @@ fn three_dimensional_run_observes_neighbour_shells() {
     let s = common::scene(
         "dimension = 3\n[box]\nsize = [8.0, 8.0, 6.0]\n[particles]\ncount = 120\n\
          [capillary]\nmodel = \"thin_thread\"\n[initial]\ntemperature_over_ecb = 5.0\nseed = 1\n\
-         [run]\nduration = 3.0\n[observe]\nbin_width = 2.0\ntransient_periods = 1.0\n",
+         [run]\nduration = 3.0\n[observe]\nbin_width = 2.0\ntransient_periods = 1.0\nlocation_changes = true\n",
     );
     let run = run_observed(&s, &mut |_| {});
     let o = &run.observables;
