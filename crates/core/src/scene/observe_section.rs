@@ -252,6 +252,15 @@ impl ObserveSpec {
                 ),
             ));
         }
+        if self.location_changes == Some(false) && scene.classify.mobility == Mobility::LocationChanges
+        {
+            return Err(err(
+                "location_changes",
+                "= false, but classify.mobility = \"location_changes\" decides solid versus \
+                 mobile by f_lc, which only this observer measures: set it true or leave it out"
+                    .into(),
+            ));
+        }
         let tol = self.stationarity_tolerance;
         if !(tol.is_finite() && tol > 0.0) {
             return Err(err(
