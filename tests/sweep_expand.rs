@@ -459,7 +459,7 @@ fn a_time_engine_job_spells_out_its_damping_calibration() {
 /// from main at f1bbb82), so results stored before stay found by asking for the observer.
 #[test]
 fn a_job_spec_names_whether_it_counts_location_changes() {
-    const OLD_DEFAULT_ID: &str = "PLACEHOLDER";
+    const OLD_DEFAULT_ID: &str = "4f90a49189ecc12c5cc642d1433d24f4650c237159fb39a10e912b8157f3ec37";
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "tiny.toml", TINY_SCENE);
     let axes = "[[axis]]\nkey = \"gamma\"\nvalues = [2.0]\n";
@@ -478,7 +478,10 @@ fn a_job_spec_names_whether_it_counts_location_changes() {
             .contains("\"location_changes\":false")
     );
     let by_classifier = job("[classify]\nmobility = \"location_changes\"");
-    assert_eq!(by_classifier.spec.scene.observe.location_changes, Some(true));
+    assert_eq!(
+        by_classifier.spec.scene.observe.location_changes,
+        Some(true)
+    );
     assert_ne!(by_classifier.id, default.id);
     let by_hand = job("[observe]\nlocation_changes = true");
     assert_eq!(by_hand.spec.scene.observe.location_changes, Some(true));

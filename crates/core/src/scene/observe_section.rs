@@ -252,7 +252,8 @@ impl ObserveSpec {
                 ),
             ));
         }
-        if self.location_changes == Some(false) && scene.classify.mobility == Mobility::LocationChanges
+        if self.location_changes == Some(false)
+            && scene.classify.mobility == Mobility::LocationChanges
         {
             return Err(err(
                 "location_changes",
