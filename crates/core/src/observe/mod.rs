@@ -11,7 +11,7 @@
 //! | [`profiles`] | lateral profiles of `n_cb` and of the packing fraction; `Delta n_cb` (Eq. 3.3), `Delta n_area` |
 //! | [`lateral`] | per-bin block sums: packing, bridges, `T_g` of all and of clustered grains, lateral mobility `D_lat` |
 //! | [`noise`] | statistical error of the profiles and the noise baseline of `Delta n` |
-//! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D) |
+//! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D), only when asked for |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
 //! | [`stationarity`] | first versus second half of the window |
 //! | [`shear`](mod@shear) | shear drive: `E_par`, `E_perp`, their window means and extrema per cycle |

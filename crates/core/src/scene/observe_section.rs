@@ -33,8 +33,9 @@ pub struct ObserveSpec {
     pub bin_width: f64,
     /// Observer samples per period (default 20). The location-change counter needs it fine
     /// enough (docs/observables.md). A run takes `run.duration / period * samples_per_period`
-    /// samples, each costing a Delaunay triangulation in 2D; like `run.duration`, that is the
-    /// user's choice and not capped (a scene run without observers never samples).
+    /// samples, each costing a Delaunay triangulation in 2D where location changes are counted;
+    /// like `run.duration`, that is the user's choice and not capped (a scene run without
+    /// observers never samples).
     #[serde(default = "default_samples_per_period")]
     pub samples_per_period: f64,
     /// Count location changes (`f_lc`; Delaunay in 2D, neighbour shells in 3D). Left out, it
