@@ -199,17 +199,8 @@ pub fn report(rows: &[ObserverRow]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<12} {:>5} {:>5} {:>7} {:>9} {:>9} {:>9} {:>8} {:>8}  {}",
-        "point",
-        "Gamma",
-        "E*",
-        "samples",
-        "engine ms",
-        "others ms",
-        "lc ms",
-        "lc share",
-        "changes",
-        "thread CPU / wall"
+        "{:<12} {:>5} {:>5} {:>7} {:>9} {:>9} {:>9} {:>8} {:>8}  thread CPU / wall",
+        "point", "Gamma", "E*", "samples", "engine ms", "others ms", "lc ms", "lc share", "changes",
     );
     for r in rows {
         let n = r.samples.max(1) as f64;
