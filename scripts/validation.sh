@@ -55,6 +55,8 @@ sample_interval = 10.0
 [observe]
 transient_periods = $tp
 samples_per_period = $spp
+# f_lc is reported by the sampling set (docs/validation.md) and enters "halves agree".
+location_changes = true
 EOT
     echo "$name: Gamma = $g, E* = $e, eps = $eps, $dur time units (transient $tt), $spp samples/period, N = $n, L_x = $lx, seed $seed" >&2
     "$bin" simulate --json "$out/$name.toml" > "$out/$name.json"

@@ -86,7 +86,7 @@ fn profile_plot_and_cli_outputs() {
          [contact]\nrestitution = 0.9\n[capillary]\nmodel = \"thin_thread\"\n\
          [drive]\nkind = \"sine\"\ngamma = 4.0\ne_star = 3.0\n\
          [initial]\ntemperature_over_ecb = 20.0\nseed = 1\n[run]\nduration = 8.0\n\
-         [observe]\ntransient_periods = 1.0\n";
+         [observe]\ntransient_periods = 1.0\nlocation_changes = true\n";
     let s = common::scene(scene_text);
     let (run, _) = run_observed_with_frame(&s, &mut |_| {});
     let svg = profiles_svg(&run.observables);

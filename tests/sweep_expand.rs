@@ -450,3 +450,50 @@ fn a_time_engine_job_spells_out_its_damping_calibration() {
     let (speed, _) = sweep("restitution = 0.9\nrestitution_speed = 2.5", "time");
     assert_eq!(speed, Some(serde_json::json!(2.5)));
 }
+
+/// The location-change observer is off unless asked for, and a job spec names the choice: left
+/// out it reads `false`; `classify.mobility = "location_changes"` turns it on (another job: its
+/// observables hold `f_lc`); `location_changes = true` spelled out is the same job as that (the
+/// thresholds are not part of the id), with the id the job had while the observer was on by
+/// default (`OLD_DEFAULT_ID`: `wetgran sweep expand` of the same file without the key, built
+/// from main at f1bbb82), so results stored before stay found by asking for the observer.
+#[test]
+fn a_job_spec_names_whether_it_counts_location_changes() {
+    const OLD_DEFAULT_ID: &str = "4f90a49189ecc12c5cc642d1433d24f4650c237159fb39a10e912b8157f3ec37";
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let axes = "[[axis]]\nkey = \"gamma\"\nvalues = [2.0]\n";
+    let job = |header: &str| {
+        load(dir.path(), &sweep_text(header, axes))
+            .expand()
+            .unwrap()
+            .remove(0)
+    };
+    let default = job("");
+    assert_eq!(default.spec.scene.observe.location_changes, Some(false));
+    assert!(
+        default
+            .spec
+            .canonical_json()
+            .contains("\"location_changes\":false")
+    );
+    let by_classifier = job("[classify]\nmobility = \"location_changes\"");
+    assert_eq!(
+        by_classifier.spec.scene.observe.location_changes,
+        Some(true)
+    );
+    assert_ne!(by_classifier.id, default.id);
+    let by_hand = job("[observe]\nlocation_changes = true");
+    assert_eq!(by_hand.spec.scene.observe.location_changes, Some(true));
+    assert_eq!(by_hand.id, by_classifier.id);
+    assert_eq!(by_hand.id, OLD_DEFAULT_ID);
+    // Switched off by hand while the classifier reads f_lc: an error naming the key.
+    let e = err(
+        dir.path(),
+        &sweep_text(
+            "[observe]\nlocation_changes = false\n[classify]\nmobility = \"location_changes\"",
+            axes,
+        ),
+    );
+    assert!(e.contains("observe.location_changes"), "{e}");
+}

@@ -71,7 +71,7 @@ impl JobSpec {
     /// a value of the wrong type, of a missing or an unknown key.
     pub fn from_json(text: &str, origin: &str) -> Result<JobSpec, String> {
         let mut de = serde_json::Deserializer::from_str(text);
-        let spec: JobSpec = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let mut spec: JobSpec = serde_path_to_error::deserialize(&mut de).map_err(|e| {
             let path = e.path().to_string();
             let inner = e.into_inner();
             // serde names a missing field in its message, below the path it recorded.
@@ -106,6 +106,7 @@ impl JobSpec {
                  `format`, `scene`, `start_from`"
             ));
         }
+        spec.scene.resolve_observers();
         spec.scene.validate(origin).map_err(|e| e.to_string())?;
         if spec.format != SPEC_FORMAT {
             return Err(format!(

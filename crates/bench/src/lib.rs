@@ -98,20 +98,6 @@ pub fn run_with_svg(
         print!("{}", memory::child_text(&memory::measure_here(n)?));
         return Ok(());
     }
-    if let Some(points) = which.strip_prefix("observer-kernel:") {
-        // The lower-bound verification kernel (docs/performance.md, Round 5), for callgrind.
-        let only: Vec<&str> = points.split(',').map(str::trim).collect();
-        if let Some(bad) = only
-            .iter()
-            .find(|l| !observer::POINTS.iter().any(|p| p.0 == **l))
-        {
-            return Err(format!(
-                "unknown observer point `{bad}`: use gas, fluid, coexistence"
-            ));
-        }
-        print!("{}", observer::measure_kernel(400, scale, &only));
-        return Ok(());
-    }
     if which == "observer" || which.starts_with("observer:") {
         let only: Vec<&str> = which
             .strip_prefix("observer:")
@@ -154,7 +140,7 @@ pub fn run_with_svg(
         Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `observer`, `observer:POINTS` or `observer-kernel:POINTS` (POINTS from gas,fluid,coexistence)"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
             ));
         }
     };

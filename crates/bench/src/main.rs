@@ -31,9 +31,8 @@ struct Figures {
     /// (E_par and cost of the shear drive against the slab width), `memory` (peak resident
     /// memory of the event engine per particle at N = 125 000 and 10^6; `scale` scales N),
     /// `engines` (event- vs time-driven engine on the 2D standard wet system, seconds per time
-    /// unit), `observer` (cost of the location-change observer, rebuilt vs incremental
-    /// triangulation), `observer-kernel:POINTS` (the leanest per-sample re-test of the kept
-    /// triangulation, a lower bound), `barrier` (what two threads meeting twice per step, with
+    /// unit), `observer` (cost of the location-change observer as a share of an observed
+    /// run; `observer:POINTS` for some of gas, fluid, coexistence), `barrier` (what two threads meeting twice per step, with
     /// and without a hand-over of data, can gain on this machine).
     #[arg(default_value = "engine")]
     which: String,

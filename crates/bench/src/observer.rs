@@ -1,24 +1,20 @@
 //! `wetgran-bench observer`: what the location-change observer costs in a shaken run of the 2D
 //! standard wet system (MODEL.md 1: N = 1200, 400 x 9, eps = 1, the base scene of
-//! `sweeps/shaken_2d_elastic.toml`), triangulating every sample from scratch (the reference,
-//! spade) against keeping the triangulation and repairing it by flips
-//! (`observe::kinetic_delaunay`).
+//! `sweeps/shaken_2d_elastic.toml`): the counter triangulates every sample from scratch
+//! (spade), and a run that asks for `f_lc` (`observe.location_changes`) pays for it.
 //!
 //! At each of three points (gas Gamma 2 E* 3, fluid Gamma 30 E* 0.7, coexistence Gamma 30
 //! E* 2.6) the run goes `warm-up` time units unobserved (the hot start cools), then
 //! `samples * scale` samples at 20 per period; at every sample the same frame goes to the other
-//! observers (`ObserverSet` without location changes), to the rebuilding counter and to the
-//! incremental one, each timed on its own. Engine time = wall time between samples outside the
-//! observers (frame copy included). Reported per point: milliseconds per sample of each part,
-//! the share of the location-change observer in the observed run
-//! `lc / (engine + other observers + lc)` for each method, whether both methods counted the
-//! same changes (total and per bin), and how the incremental triangulation was updated.
+//! observers (`ObserverSet` without location changes) and to the location-change counter, each
+//! timed on its own. Engine time = wall time between samples outside the observers (frame copy
+//! included). Reported per point: milliseconds per sample of each part, the share of the
+//! location-change observer in the observed run `lc / (engine + other observers + lc)`, and the
+//! changes counted.
 
 use super::tdmd::thread_cpu_seconds;
 use std::fmt::Write as _;
 use std::time::Instant;
-use wetgran_core::observe::flat_check::FlatCheck;
-use wetgran_core::observe::kinetic_delaunay::KineticStats;
 use wetgran_core::observe::location_changes::{LocationChangeCounter, Method};
 use wetgran_core::observe::{Observer, ObserverSet};
 use wetgran_core::scene::Scene;
@@ -84,13 +80,11 @@ pub struct ObserverRow {
     pub samples: usize,
     pub engine: f64,
     pub others: f64,
-    pub rebuilt: f64,
-    pub incremental: f64,
+    /// The location-change counter.
+    pub counter: f64,
     /// CPU seconds of the whole measured part (engine and all observers), when known.
     pub cpu: Option<f64>,
     pub changes: u64,
-    pub same_counts: bool,
-    pub stats: KineticStats,
 }
 
 /// Measures the points labelled in `only` (every point when empty).
@@ -103,80 +97,10 @@ pub fn measure(samples: usize, scale: f64, only: &[&str]) -> Vec<ObserverRow> {
         .collect()
 }
 
-/// The reference counter's sample (its own function, so that a profile tells it apart).
+/// The counter's sample (its own function, so that a profile tells it apart).
 #[inline(never)]
-fn observe_rebuilding(counter: &mut LocationChangeCounter, frame: &Frame) {
+fn observe_counter(counter: &mut LocationChangeCounter, frame: &Frame) {
     counter.observe(frame, std::hint::black_box(true));
-}
-
-/// The kept counter's sample (its own function, so that a profile tells it apart).
-#[inline(never)]
-fn observe_incremental(counter: &mut LocationChangeCounter, frame: &Frame) {
-    counter.observe(frame, true);
-}
-
-/// The lower-bound kernel ([`wetgran_core::observe::flat_check`]) at the points labelled in `only`:
-/// at every sample after the first the kept triangulation of the previous sample is copied into
-/// flat lists (`flat_lists`) and tested at the new positions (`FlatCheck::verify`), then the
-/// kept counter advances as in [`measure`]. Per point: samples, triangles, edges and hull tests
-/// tested per sample, and the failed tests summed over the samples. Profile with callgrind:
-/// `verify`'s inclusive instructions over its calls is the kernel's cost per sample.
-pub fn measure_kernel(samples: usize, scale: f64, only: &[&str]) -> String {
-    let samples = ((samples as f64 * scale).round() as usize).max(10);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{:<12} {:>7} {:>9} {:>7} {:>6} {:>9} {:>9}",
-        "point", "samples", "triangles", "edges", "hull", "inverted", "conflicts"
-    );
-    for &(label, gamma, e_star) in POINTS
-        .iter()
-        .filter(|p| only.is_empty() || only.contains(&p.0))
-    {
-        let BenchPoint {
-            scene,
-            interval,
-            first,
-            method,
-            bins,
-        } = bench_point(gamma, e_star, samples);
-        let mut incremental = LocationChangeCounter::new(method, bins, scene.driving_period());
-        let t_first = first * interval - 0.5 * interval;
-        let (mut n, mut sizes, mut failed) = (0usize, [0usize; 3], [0usize; 2]);
-        run_scene_observed(
-            &scene,
-            interval,
-            &mut |f: &Frame| {
-                if f.time < t_first {
-                    return;
-                }
-                if let Some(tri) = incremental.kept_triangulation()
-                    && n > 0
-                {
-                    let mut flat = flat_lists(tri);
-                    sizes = flat.sizes();
-                    let (a, b) = flat.verify(f);
-                    failed[0] += a;
-                    failed[1] += b;
-                }
-                n += 1;
-                observe_incremental(&mut incremental, f);
-            },
-            &mut |_| {},
-        );
-        let _ = writeln!(
-            s,
-            "{label:<12} {n:>7} {:>9} {:>7} {:>6} {:>9} {:>9}",
-            sizes[0], sizes[1], sizes[2], failed[0], failed[1]
-        );
-    }
-    s
-}
-
-/// The flat lists of the kernel (its own function, so that a profile tells it apart).
-#[inline(never)]
-fn flat_lists(tri: &wetgran_core::observe::kinetic_delaunay::KineticDelaunay) -> FlatCheck {
-    tri.flat_check()
 }
 
 /// The scene of a bench point, run long enough for the warm-up and `samples` samples, with
@@ -196,7 +120,7 @@ fn bench_point(gamma: f64, e_star: f64, samples: usize) -> BenchPoint {
     let duration = (first + samples as f64 - 1.0) * interval;
     let mut scene = standard_shaken(gamma, e_star, 1.0, Some(0.03), duration);
     scene.observe.samples_per_period = SAMPLES_PER_PERIOD;
-    scene.observe.location_changes = false;
+    scene.observe.location_changes = Some(false);
     scene.observe.transient_periods = 0.0;
     let bins = scene.observe.lateral_bins(&scene);
     let method = Method::Delaunay {
@@ -222,8 +146,7 @@ fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -
     } = bench_point(gamma, e_star, samples);
     let period = scene.driving_period();
     let mut others = ObserverSet::new(&scene);
-    let mut rebuilt = LocationChangeCounter::rebuilding(method, bins.clone(), period);
-    let mut incremental = LocationChangeCounter::new(method, bins, period);
+    let mut counter = LocationChangeCounter::new(method, bins, period);
     let mut row = ObserverRow {
         label,
         gamma,
@@ -231,12 +154,9 @@ fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -
         samples: 0,
         engine: 0.0,
         others: 0.0,
-        rebuilt: 0.0,
-        incremental: 0.0,
+        counter: 0.0,
         cpu: None,
         changes: 0,
-        same_counts: false,
-        stats: KineticStats::default(),
     };
     let mut last: Option<Instant> = None;
     let mut cpu_start = None;
@@ -257,23 +177,16 @@ fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -
             let t0 = Instant::now();
             others.observe(f);
             let t1 = Instant::now();
-            observe_rebuilding(&mut rebuilt, f);
+            observe_counter(&mut counter, f);
             let t2 = Instant::now();
-            observe_incremental(&mut incremental, f);
-            let t3 = Instant::now();
             row.others += (t1 - t0).as_secs_f64();
-            row.rebuilt += (t2 - t1).as_secs_f64();
-            row.incremental += (t3 - t2).as_secs_f64();
+            row.counter += (t2 - t1).as_secs_f64();
             last = Some(Instant::now());
         },
         &mut |_| {},
     );
     row.cpu = cpu_start.zip(thread_cpu_seconds()).map(|(a, b)| b - a);
-    row.changes = incremental.window_count;
-    row.same_counts = incremental.window_count == rebuilt.window_count
-        && incremental.bin_count == rebuilt.bin_count
-        && incremental.series == rebuilt.series;
-    row.stats = incremental.kinetic_stats().unwrap_or_default();
+    row.changes = counter.window_count;
     row
 }
 
@@ -286,67 +199,27 @@ pub fn report(rows: &[ObserverRow]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<12} {:>5} {:>5} {:>7} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>6}",
-        "point",
-        "Gamma",
-        "E*",
-        "samples",
-        "engine ms",
-        "others ms",
-        "rebuild ms",
-        "incr. ms",
-        "share rb",
-        "share inc",
-        "changes",
-        "equal"
+        "{:<12} {:>5} {:>5} {:>7} {:>9} {:>9} {:>9} {:>8} {:>8}  thread CPU / wall",
+        "point", "Gamma", "E*", "samples", "engine ms", "others ms", "lc ms", "lc share", "changes",
     );
     for r in rows {
         let n = r.samples.max(1) as f64;
-        let share = |lc: f64| lc / (r.engine + r.others + lc);
+        let wall = r.engine + r.others + r.counter;
         let _ = writeln!(
             s,
-            "{:<12} {:>5} {:>5} {:>7} {:>9.3} {:>9.3} {:>10.3} {:>9.3} {:>7.1}% {:>8.1}% {:>8} {:>6}",
+            "{:<12} {:>5} {:>5} {:>7} {:>9.3} {:>9.3} {:>9.3} {:>7.1}% {:>8}  {}",
             r.label,
             r.gamma,
             r.e_star,
             r.samples,
             1e3 * r.engine / n,
             1e3 * r.others / n,
-            1e3 * r.rebuilt / n,
-            1e3 * r.incremental / n,
-            100.0 * share(r.rebuilt),
-            100.0 * share(r.incremental),
+            1e3 * r.counter / n,
+            100.0 * r.counter / wall,
             r.changes,
-            if r.same_counts { "yes" } else { "NO" }
-        );
-    }
-    let _ = writeln!(s, "incremental updates (per point):");
-    for r in rows {
-        let st = &r.stats;
-        let _ = writeln!(
-            s,
-            "  {:<12} repaired {} | rebuilt {} (first {}, inverted {}, images {}, check {}, back-off {}) | degenerate {} | flips {} unfolds {} held {} halvings {} | images in {} out {}{}",
-            r.label,
-            st.incremental,
-            st.rebuilds(),
-            st.rebuild_start,
-            st.rebuild_inverted,
-            st.rebuild_images,
-            st.rebuild_check,
-            st.rebuild_backoff,
-            st.degenerate,
-            st.flips,
-            st.unfolds,
-            st.held,
-            st.bisections,
-            st.inserted,
-            st.deleted,
             r.cpu
-                .map(|c| format!(
-                    " | thread CPU {c:.2} s of {:.2} s wall",
-                    r.engine + r.others + r.rebuilt + r.incremental
-                ))
-                .unwrap_or_default()
+                .map(|c| format!("{c:.2} s / {wall:.2} s"))
+                .unwrap_or_else(|| "-".into())
         );
     }
     s

@@ -60,7 +60,7 @@ fn regression_blown_up_frame_never_reaches_the_observers() {
     s.run.duration = 20.0;
     // One report sample at the end; observer frames every period until then.
     s.run.sample_interval = 20.0;
-    s.observe.location_changes = true;
+    s.observe.location_changes = Some(true);
     s.observe.transient_periods = 0.0;
     s.observe.samples_per_period = 20.0;
     let run = wetgran_core::observe::run_observed(&s, &mut |_| {});

@@ -236,7 +236,7 @@ fn dilute_gas_rate_grows_with_temperature() {
         let s = common::scene(&format!(
             "dimension = 2\ngravity = 0.0\n[box]\nsize = [20.0, 20.0]\nboundary = [\"periodic\", \"periodic\"]\n\
              [particles]\ncount = 120\n[initial]\ntemperature = {t:?}\nseed = 3\n\
-             [run]\nduration = 6.0\n[observe]\ntransient_periods = 1.0\nsamples_per_period = 20.0\n"
+             [run]\nduration = 6.0\n[observe]\ntransient_periods = 1.0\nsamples_per_period = 20.0\nlocation_changes = true\n"
         ));
         let run = run_observed(&s, &mut |_| {});
         run.observables
@@ -263,7 +263,7 @@ fn count_converges_with_finer_sampling() {
         let s = common::scene(&format!(
             "dimension = 2\ngravity = 0.0\n[box]\nsize = [24.0, 24.0]\nboundary = [\"periodic\", \"periodic\"]\n\
              [particles]\ncount = 150\n[initial]\ntemperature = 0.02\nlattice_spacing = 1.5\nseed = 5\n\
-             [run]\nduration = 20.0\n[observe]\nsamples_per_period = {samples:?}\n"
+             [run]\nduration = 20.0\n[observe]\nsamples_per_period = {samples:?}\nlocation_changes = true\n"
         ));
         run_observed(&s, &mut |_| {})
             .observables

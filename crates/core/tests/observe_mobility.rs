@@ -84,7 +84,11 @@ fn mobility_does_not_depend_on_the_sampling_rate() {
 fn mobility_does_not_fall_like_one_over_gamma() {
     let runs: Vec<Observables> = [2.0, 10.0, 50.0]
         .iter()
-        .map(|&g| observed(&shaken(g, 1.0, 60.0, 20.0, 20.0)))
+        .map(|&g| {
+            let mut s = shaken(g, 1.0, 60.0, 20.0, 20.0);
+            s.observe.location_changes = Some(true);
+            observed(&s)
+        })
         .collect();
     let d: Vec<f64> = runs
         .iter()

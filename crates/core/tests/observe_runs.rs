@@ -18,7 +18,7 @@ fn standard_2d(lx: f64, n: usize, gamma: f64, e_star: f64, periods: f64, transie
          [contact]\nrestitution = 0.9\n[capillary]\nmodel = \"thin_thread\"\n\
          [drive]\nkind = \"sine\"\ngamma = {gamma:?}\ne_star = {e_star:?}\n\
          [initial]\ntemperature_over_ecb = 20.0\nseed = 1\n\
-         [run]\nduration = {:?}\n[observe]\ntransient_periods = {transient:?}\n",
+         [run]\nduration = {:?}\n[observe]\ntransient_periods = {transient:?}\nlocation_changes = true\n",
         periods * period
     )
 }
@@ -170,7 +170,7 @@ fn three_dimensional_run_observes_neighbour_shells() {
     let s = common::scene(
         "dimension = 3\n[box]\nsize = [8.0, 8.0, 6.0]\n[particles]\ncount = 120\n\
          [capillary]\nmodel = \"thin_thread\"\n[initial]\ntemperature_over_ecb = 5.0\nseed = 1\n\
-         [run]\nduration = 3.0\n[observe]\nbin_width = 2.0\ntransient_periods = 1.0\n",
+         [run]\nduration = 3.0\n[observe]\nbin_width = 2.0\ntransient_periods = 1.0\nlocation_changes = true\n",
     );
     let run = run_observed(&s, &mut |_| {});
     let o = &run.observables;
@@ -213,4 +213,44 @@ fn observing_on_two_threads_gives_the_same_observables() {
     let (one, two) = (on(1), on(2));
     assert!(one.0.contains("location_changes"), "{}", one.0);
     assert_eq!(one, two);
+}
+
+/// `observe.location_changes` is opt-in: left out, the counter does not run and `f_lc` is
+/// absent (no value, no profile, no series, no stationarity check); `classify.mobility =
+/// "location_changes"` turns it on, and so does setting it. Each scene names the resolved
+/// choice, and observing or not never changes the trajectory.
+#[test]
+fn location_changes_are_counted_only_when_asked_for() {
+    let on = standard_2d(20.0, 54, 2.0, 1.0, 3.0, 1.0);
+    assert!(on.contains("location_changes = true\n"));
+    let off = on.replace("location_changes = true\n", "");
+    let by_classifier = format!("{off}[classify]\nmobility = \"location_changes\"\n");
+    let mut runs = Vec::new();
+    for (text, counted) in [(&off, false), (&on, true), (&by_classifier, true)] {
+        let s = common::scene(text);
+        assert_eq!(s.observe.location_changes, Some(counted), "{text}");
+        let o = run_observed(&s, &mut |_| {}).observables;
+        assert_eq!(o.location_changes.is_some(), counted, "{text}");
+        assert_eq!(o.profiles.flc.is_some(), counted, "{text}");
+        let series = o.series.as_ref().unwrap();
+        assert_eq!(series.location_changes.is_empty(), !counted, "{text}");
+        let checked = o
+            .stationarity
+            .checks
+            .iter()
+            .any(|c| c.quantity == "location_changes");
+        assert_eq!(checked, counted, "{text}");
+        runs.push(o);
+    }
+    // The same trajectory, observed with and without the counter.
+    assert_eq!(
+        runs[0].granular_temperature_reduced,
+        runs[1].granular_temperature_reduced
+    );
+    assert_eq!(runs[0].counts, runs[1].counts);
+    assert_eq!(runs[0].profiles.n_cb, runs[1].profiles.n_cb);
+    // Turned on by the classifier or by hand: the same counter, the same count.
+    let lc = |o: &wetgran_core::observe::Observables| o.location_changes.clone().unwrap();
+    assert!(lc(&runs[1]).count > 0);
+    assert_eq!(lc(&runs[1]), lc(&runs[2]));
 }

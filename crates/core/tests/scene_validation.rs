@@ -228,6 +228,7 @@ bad_scenes! {
     classify_mobility_unknown,
     observe_mobility_lag_zero,
     observe_bins_3d_unknown,
+    observe_location_changes_off_but_classified_by_it,
     classify_coexistence_level_one,
     classify_coexistence_contrast_above_one,
     classify_line_jump_ratio_one,

@@ -14,18 +14,12 @@
 //! once it is decisive (hysteresis `lc_flip_margin`, see [`compare`]): four nearly co-circular
 //! grains would otherwise count every rattle.
 //!
-//! **Kept between samples.** The counter does not triangulate each sample from scratch: it keeps
-//! the triangulation and repairs it ([`super::kinetic_delaunay`]: move the sites, flip the edges
-//! whose in-circle test fails, insert and delete the ghost images that enter and leave the band,
-//! rebuild where a repair fails). The result is the same triangulation, so the same edges. Nor
-//! does it list and compare all edges: the triangulation keeps the set of joined pairs and lists
-//! those that changed ([`super::pair_edges`]), and the hysteresis records of [`compare`] are
-//! updated for those pairs only ([`super::tracked_pairs`]), with the same counts.
-//! [`LocationChangeCounter::rebuilding`] keeps the from-scratch method (triangulate, list,
-//! [`compare`]) as the reference (crates/core/tests/observe_kinetic_delaunay.rs compares them on recorded
-//! runs). Where the same pair is an edge through two periodic images, the shortest copy is kept
-//! ([`finish_edges`]), whatever order the triangulation lists its edges in. 3D has no
-//! triangulation and nothing to keep.
+//! **Rebuilt at every sample.** Each sample is triangulated from scratch ([`delaunay_edges`]),
+//! its edges listed and compared with the pairs tracked from the previous sample
+//! ([`compare`]). Where the same pair is an edge through two periodic images, the shortest copy
+//! is kept ([`finish_edges`]), whatever order the triangulation lists its edges in. The observer
+//! is off unless asked for (`observe.location_changes`, or `classify.mobility =
+//! "location_changes"`, which reads `f_lc`; docs/observables.md).
 //!
 //! **3D (neighbour shells).** Grains `i, j` become neighbours when their centres come closer
 //! than `lc_enter_factor (r_i + r_j)` and stay neighbours until they separate beyond
@@ -44,9 +38,6 @@
 
 use super::Observer;
 use super::bins::LateralBins;
-use super::kinetic_delaunay::{KineticDelaunay, KineticStats};
-use super::pair_edges::PairKey;
-use super::tracked_pairs::TrackedPairs;
 use crate::sim::Frame;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::collections::HashMap;
@@ -83,7 +74,7 @@ impl HasPosition for Site {
 
 /// A triangulation site as the edge arithmetic sees it: position, particle, whether a ghost.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct SiteRef {
+struct SiteRef {
     pub p: [f64; 2],
     pub id: u32,
     pub ghost: bool,
@@ -91,28 +82,24 @@ pub(crate) struct SiteRef {
 
 /// The sites of one particle: its wrapped position and its images in the ghost band.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Images {
-    pub wrapped: [f64; 2],
+struct Images {
     n: usize,
     list: [([i32; 2], [f64; 2]); 9],
 }
 
 impl Images {
     /// `(shift, position)` of each site; shift `[0, 0]` is the particle itself.
-    pub fn as_slice(&self) -> &[([i32; 2], [f64; 2])] {
+    fn as_slice(&self) -> &[([i32; 2], [f64; 2])] {
         &self.list[..self.n]
     }
 }
 
 /// The sites of particle `i`: the wrapped position, plus the images shifted by one box length
 /// along a periodic axis that lie within `ghost_width` (at most the box length) of the box.
-/// The rebuild and the incremental triangulation both take their sites from here, so that
-/// both see bit-identical coordinates.
-pub(crate) fn images(frame: &Frame, i: usize, ghost_width: f64) -> Images {
+fn images(frame: &Frame, i: usize, ghost_width: f64) -> Images {
     let size = [frame.box_size[0], frame.box_size[1]];
     let x = [frame.wrap(0, frame.x(i)[0]), frame.wrap(1, frame.x(i)[1])];
     let mut out = Images {
-        wrapped: x,
         n: 0,
         list: [([0, 0], [0.0, 0.0]); 9],
     };
@@ -152,20 +139,10 @@ fn angle(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 /// The observer's record of the Delaunay edge `ab` (`opposite`: the vertices across it when both
 /// its triangles are finite), or `None` for an edge between two ghosts or between two images of
 /// one particle. Symmetric in `a` and `b`, and in the two opposite vertices, to the last bit.
-///
-/// `known`: pairs tracked from the previous sample (sorted); the comparison never looks at their
-/// opposite vertices, so their angles are not computed (`opposite` is `None`).
-pub(crate) fn edge_between(
-    a: SiteRef,
-    b: SiteRef,
-    opposite: Option<(SiteRef, SiteRef)>,
-    known: &[(u32, u32)],
-) -> Option<Edge> {
+fn edge_between(a: SiteRef, b: SiteRef, opposite: Option<(SiteRef, SiteRef)>) -> Option<Edge> {
     if (a.ghost && b.ghost) || a.id == b.id {
         return None;
     }
-    let pair = (a.id.min(b.id), a.id.max(b.id));
-    let opposite = opposite.filter(|_| known.binary_search(&pair).is_err());
     let opposite = opposite.map(|(c, d)| {
         let sum = angle(a.p, b.p, c.p) + angle(a.p, b.p, d.p);
         (c.id.min(d.id), c.id.max(d.id), sum)
@@ -185,7 +162,7 @@ pub(crate) fn edge_between(
 /// shorter, then the smaller midpoint, then the smaller opposite vertices and angle sum. A
 /// total order on copies: two copies equal under it are equal in every field.
 #[inline]
-pub(crate) fn better_copy(p: &Edge, q: &Edge) -> bool {
+fn better_copy(p: &Edge, q: &Edge) -> bool {
     let key = |e: &Edge| e.opposite.map(|(c, d, s)| (c, d, s.to_bits()));
     p.length
         .total_cmp(&q.length)
@@ -197,7 +174,7 @@ pub(crate) fn better_copy(p: &Edge, q: &Edge) -> bool {
 /// Sorts the edges by pair and keeps one per pair: of the copies of a pair seen through
 /// different periodic images, the shortest (then the smallest midpoint, then the opposite
 /// vertices), a choice that does not depend on the order the triangulation lists its edges in.
-pub(crate) fn finish_edges(edges: &mut Vec<Edge>) {
+fn finish_edges(edges: &mut Vec<Edge>) {
     edges.sort_unstable_by_key(|e| ((e.i as u64) << 32) | e.j as u64);
     // Runs of one pair (copies through periodic images): keep the first by the full key.
     let better = better_copy;
@@ -236,8 +213,7 @@ impl Method {
 }
 
 /// The Delaunay edges of a 2D frame (sorted by `(i, j)`, each pair once), triangulated from
-/// scratch by spade: the reference method (the counter keeps a triangulation between samples,
-/// [`KineticDelaunay`], and gives the same edges).
+/// scratch by spade.
 pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
     assert_eq!(frame.dimension, 2, "Delaunay location changes are 2D");
     let mut sites = Vec::with_capacity(frame.len() * 11 / 10 + 8);
@@ -265,7 +241,7 @@ pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
             (Some(c), Some(d)) => Some((site(c.data()), site(d.data()))),
             _ => None,
         };
-        if let Some(edge) = edge_between(site(a.data()), site(b.data()), opposite, &[]) {
+        if let Some(edge) = edge_between(site(a.data()), site(b.data()), opposite) {
             edges.push(edge);
         }
     }
@@ -414,14 +390,6 @@ pub fn compare(
     (fresh, tracked)
 }
 
-/// The kept triangulation with the records of the tracked pairs.
-#[derive(Debug, Clone)]
-struct Kept {
-    triangulation: KineticDelaunay,
-    tracked: TrackedPairs,
-    changed: Vec<PairKey>,
-}
-
 /// Counts location changes sample by sample.
 #[derive(Debug, Clone)]
 pub struct LocationChangeCounter {
@@ -430,7 +398,7 @@ pub struct LocationChangeCounter {
     period: f64,
     /// The previous sample: its time and whether it lay in the window.
     previous: Option<(f64, bool)>,
-    /// The relations tracked since the previous sample (sorted; the rebuilding counter).
+    /// The relations tracked since the previous sample (sorted).
     tracked: Vec<(u32, u32)>,
     /// `(t, location changes per particle per period)` over each sample interval ending at `t`.
     pub series: Vec<(f64, f64)>,
@@ -441,30 +409,13 @@ pub struct LocationChangeCounter {
     /// Changes per bin inside the window.
     pub bin_count: Vec<u64>,
     particles: usize,
-    /// 2D: the triangulation kept between samples (`None`: rebuilt at every sample).
-    kinetic: Option<Kept>,
 }
 
 impl LocationChangeCounter {
-    /// The counter; in 2D it keeps its Delaunay triangulation between samples and repairs it by
-    /// edge flips ([`KineticDelaunay`]).
+    /// The counter; it triangulates (2D) or searches the neighbour shells (3D) at every sample.
     pub fn new(method: Method, bins: LateralBins, period: f64) -> Self {
-        let mut c = Self::rebuilding(method, bins, period);
-        if let Method::Delaunay { max_edge, .. } = method {
-            c.kinetic = Some(Kept {
-                triangulation: KineticDelaunay::new(4.0 * max_edge),
-                tracked: TrackedPairs::default(),
-                changed: Vec::new(),
-            });
-        }
-        c
-    }
-
-    /// The reference counter: triangulates every sample from scratch ([`delaunay_edges`]).
-    pub fn rebuilding(method: Method, bins: LateralBins, period: f64) -> Self {
         let n = bins.n;
         Self {
-            kinetic: None,
             method,
             bins,
             period,
@@ -481,17 +432,6 @@ impl LocationChangeCounter {
     /// The method in use.
     pub fn method(&self) -> Method {
         self.method
-    }
-
-    /// How the kept triangulation was updated (incremental repairs, rebuilds by reason, flips);
-    /// `None` for the rebuilding counter and for neighbour shells.
-    pub fn kinetic_stats(&self) -> Option<KineticStats> {
-        self.kinetic.as_ref().map(|k| k.triangulation.stats)
-    }
-
-    /// The kept triangulation, if any (for measurements).
-    pub fn kept_triangulation(&self) -> Option<&KineticDelaunay> {
-        self.kinetic.as_ref().map(|k| &k.triangulation)
     }
 
     /// `f_lc` over the window: changes per particle per period.
@@ -526,36 +466,14 @@ impl Observer for LocationChangeCounter {
     fn observe(&mut self, frame: &Frame, in_window: bool) {
         self.particles = frame.len();
         let first = self.previous.is_none();
-        let fresh = match (&mut self.kinetic, self.method) {
-            (Some(k), Method::Delaunay { max_edge, margin }) => {
-                let tri = &mut k.triangulation;
-                tri.advance(frame);
-                tri.take_changed_pairs(&mut k.changed);
-                if first {
-                    k.tracked.start(tri.pair_keys());
-                    Vec::new()
-                } else {
-                    let tri = &k.triangulation;
-                    k.tracked.advance(
-                        &k.changed,
-                        |p| tri.has_pair(p),
-                        |p| tri.edge_of(p).expect("a joined pair has an edge"),
-                        max_edge,
-                        margin,
-                    )
-                }
-            }
-            _ => {
-                let current = edges(frame, self.method, &self.tracked);
-                if first {
-                    self.tracked = current.iter().map(|e| (e.i, e.j)).collect();
-                    Vec::new()
-                } else {
-                    let (fresh, keep) = compare(&self.tracked, &current, self.method);
-                    self.tracked = keep;
-                    fresh
-                }
-            }
+        let current = edges(frame, self.method, &self.tracked);
+        let fresh = if first {
+            self.tracked = current.iter().map(|e| (e.i, e.j)).collect();
+            Vec::new()
+        } else {
+            let (fresh, keep) = compare(&self.tracked, &current, self.method);
+            self.tracked = keep;
+            fresh
         };
         if let Some((t0, was_in_window)) = self.previous {
             let dt = frame.time - t0;

@@ -11,8 +11,7 @@
 //! | [`profiles`] | lateral profiles of `n_cb` and of the packing fraction; `Delta n_cb` (Eq. 3.3), `Delta n_area` |
 //! | [`lateral`] | per-bin block sums: packing, bridges, `T_g` of all and of clustered grains, lateral mobility `D_lat` |
 //! | [`noise`] | statistical error of the profiles and the noise baseline of `Delta n` |
-//! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D) |
-//! | [`kinetic_delaunay`] | the 2D Delaunay triangulation kept between samples, repaired by flips |
+//! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D), only when asked for |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
 //! | [`stationarity`] | first versus second half of the window |
 //! | [`shear`](mod@shear) | shear drive: `E_par`, `E_perp`, their window means and extrema per cycle |
@@ -27,20 +26,14 @@ pub mod bins;
 pub mod classify;
 pub mod convergence;
 pub mod diffusion;
-pub mod flat_check;
-pub mod kinetic_delaunay;
 pub mod lateral;
 pub mod line;
 pub mod location_changes;
 pub mod noise;
-pub mod pair_edges;
-pub mod predicates;
 pub mod profiles;
 pub mod shear;
-pub mod slack;
 pub mod stationarity;
 pub mod temperature;
-pub mod tracked_pairs;
 
 pub use crate::scene::{ConvergenceSpec, ObserveSpec};
 pub use classify::{
@@ -510,7 +503,7 @@ impl ObserverSet {
             let u = scene.particles.mass * scene.gravity.max(0.0) * scene.particles.diameter;
             if u > 0.0 { (u, "m g d") } else { (1.0, "1") }
         };
-        let lc = spec.location_changes.then(|| {
+        let lc = spec.counts_location_changes(&scene.classify).then(|| {
             let method = if scene.dimension == 2 {
                 Method::Delaunay {
                     max_edge: spec.lc_max_edge * scene.particles.diameter,

@@ -538,9 +538,19 @@ pub const DEFAULT_BRIDGE_FORCE_OVER_MG: f64 = 4.0;
 impl Scene {
     /// Parses and validates a scene; `origin` names the file in error messages.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::parse(origin, e))?;
+        let mut scene: Scene = toml::from_str(text).map_err(|e| SceneError::parse(origin, e))?;
+        scene.resolve_observers();
         scene.validate(origin)?;
         Ok(scene)
+    }
+
+    /// Fills in the observers left to their default by what the rest of the scene needs:
+    /// `observe.location_changes` becomes `Some(on)`, on where `[classify]` reads `f_lc`
+    /// ([`ObserveSpec::counts_location_changes`]). A job spec then names every observer it
+    /// runs, so its id tells a result with `f_lc` from one without.
+    pub fn resolve_observers(&mut self) {
+        let on = self.observe.counts_location_changes(&self.classify);
+        self.observe.location_changes = Some(on);
     }
 
     /// Reads, parses and validates a scene file.

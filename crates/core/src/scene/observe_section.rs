@@ -1,7 +1,8 @@
 //! The `[observe]` section of a scene: which observers run, when they sample, and the
 //! stationary window. Pure data plus its validation (errors name the file, key and range).
 
-use super::{Scene, SceneError};
+use super::thresholds::Mobility;
+use super::{Scene, SceneError, Thresholds};
 use serde::{Deserialize, Serialize};
 
 /// How a 3D box is cut into lateral bins (`observe.bins_3d`).
@@ -32,13 +33,17 @@ pub struct ObserveSpec {
     pub bin_width: f64,
     /// Observer samples per period (default 20). The location-change counter needs it fine
     /// enough (docs/observables.md). A run takes `run.duration / period * samples_per_period`
-    /// samples, each costing a Delaunay triangulation in 2D; like `run.duration`, that is the
-    /// user's choice and not capped (a scene run without observers never samples).
+    /// samples, each costing a Delaunay triangulation in 2D where location changes are counted;
+    /// like `run.duration`, that is the user's choice and not capped (a scene run without
+    /// observers never samples).
     #[serde(default = "default_samples_per_period")]
     pub samples_per_period: f64,
-    /// Count location changes (`f_lc`; Delaunay in 2D, neighbour shells in 3D). Default on.
-    #[serde(default = "yes")]
-    pub location_changes: bool,
+    /// Count location changes (`f_lc`; Delaunay in 2D, neighbour shells in 3D). Left out, it
+    /// is on only where the classifier reads `f_lc` (`classify.mobility =
+    /// "location_changes"`): [`ObserveSpec::counts_location_changes`]. A scene read from text
+    /// has it resolved to `Some` ([`Scene::resolve_observers`]), so a job spec names it.
+    #[serde(default)]
+    pub location_changes: Option<bool>,
     /// Per-layer lateral mean-square displacement and diffusion coefficient. Default on.
     #[serde(default = "yes")]
     pub diffusion: bool,
@@ -86,7 +91,7 @@ impl Default for ObserveSpec {
             transient_periods: 0.0,
             bin_width: default_bin_width(),
             samples_per_period: default_samples_per_period(),
-            location_changes: true,
+            location_changes: None,
             diffusion: true,
             layers: default_layers(),
             time_series: true,
@@ -133,6 +138,14 @@ fn default_mobility_lag() -> f64 {
 }
 
 impl ObserveSpec {
+    /// Whether the location-change counter runs: as set, else only where `classify` decides
+    /// mobility by `f_lc`. The counter triangulates every sample (2D) and can cost as much as
+    /// the engine, so nothing pays for it unless asked (docs/observables.md).
+    pub fn counts_location_changes(&self, classify: &Thresholds) -> bool {
+        self.location_changes
+            .unwrap_or(classify.mobility == Mobility::LocationChanges)
+    }
+
     /// Interval between two observer samples: `period / samples_per_period`.
     pub fn sample_interval(&self, scene: &Scene) -> f64 {
         scene.driving_period() / self.samples_per_period
@@ -238,6 +251,16 @@ impl ObserveSpec {
                     "= {} is out of range: must be finite and > 0 (time units)",
                     self.mobility_lag
                 ),
+            ));
+        }
+        if self.location_changes == Some(false)
+            && scene.classify.mobility == Mobility::LocationChanges
+        {
+            return Err(err(
+                "location_changes",
+                "= false, but classify.mobility = \"location_changes\" decides solid versus \
+                 mobile by f_lc, which only this observer measures: set it true or leave it out"
+                    .into(),
             ));
         }
         let tol = self.stationarity_tolerance;
