@@ -7,7 +7,7 @@
 //! Default: one line per result, phase and reason. `--json`: the classification as JSON, one per
 //! line. `--table`: a markdown table row per result, with `Gamma`, `E*` and `eps` read from the
 //! scene file of the same name (`RESULT.toml`). `--line`: the results are one line of constant
-//! Gamma; the fluid-gas line rule (MODEL.md 7, `observe::line`) labels them, as a sweep does.
+//! Gamma; the fluid-gas line rule (docs/model.md 7, `observe::line`) labels them, as a sweep does.
 
 use std::path::Path;
 use wetgran_core::observe::{Observables, Thresholds, classify};

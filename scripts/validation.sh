@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Validation runs on the 2D standard wet system (MODEL.md 1: N = 1200, 400 d x 9 d, sigma_p 0.06,
+# Validation runs on the 2D standard wet system (docs/model.md 1: N = 1200, 400 d x 9 d, sigma_p 0.06,
 # thin thread, hot start T_g/E_cb = 20), one `wetgran simulate --json` per point, then the
 # classification table of docs/validation.md. Opt-in and long (about 1-3 min per point on one
 # core of the development machine); see docs/validation.md for the sets.
@@ -21,7 +21,7 @@ build() { (cd "$root" && cargo build --release --bin wetgran --example classify_
 point() {
     local name=$1 g=$2 e=$3 eps=${4:-1.0} dur=${5:-300} tt=${6:-100} spp=${7:-20} n=${8:-1200} lx=${9:-400.0} seed=${10:-1}
     # Transient given in time units; the scene counts it in driving periods T = 2 pi v_w / (Gamma g),
-    # v_w = sqrt(2 E* E_cb / m) (MODEL.md 4.1).
+    # v_w = sqrt(2 E* E_cb / m) (docs/model.md 4.1).
     local tp
     tp=$(awk -v g="$g" -v e="$e" -v tt="$tt" 'BEGIN { vw = sqrt(2 * e * 0.2844); T = 2 * 3.141592653589793 * vw / g; printf "%.10g", tt / T }')
     cat > "$out/$name.toml" <<EOT

@@ -4,7 +4,7 @@
 //! `wetgran_core` (physics, scene, sim, observe): [`sweep`] (sweep files, job specs, `run_job`)
 //! -> [`store`] (which stores those types) -> [`run`] (the scheduler that claims jobs,
 //! relabelling), [`boundary`], [`cluster`] -> [`refine`], [`report`] -> `cli`.
-//! The physics follows MODEL.md (K. Röller, "Numerical simulations of wet granular
+//! The physics follows docs/model.md (K. Röller, "Numerical simulations of wet granular
 //! matter", Göttingen 2010); choices where the text is silent or wrong are listed in
 //! docs/model-choices.md.
 

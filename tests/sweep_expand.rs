@@ -93,7 +93,7 @@ fn run_length_transient_and_sampling_are_converted_from_driving_periods() {
     );
     for j in s.expand().unwrap() {
         let gamma = j.coords[0].as_f64().unwrap();
-        // MODEL.md 4.1, independently: v_w = sqrt(2 E* E_cb / m), omega = Gamma g / v_w.
+        // docs/model.md 4.1, independently: v_w = sqrt(2 E* E_cb / m), omega = Gamma g / v_w.
         let e_cb: f64 = 4.0 * 0.0711;
         let v_w = (2.0 * 2.0 * e_cb).sqrt();
         let period = 2.0 * std::f64::consts::PI / (gamma / v_w);
@@ -390,7 +390,7 @@ fn jobs_at_a_grid_point_are_the_grid_jobs_and_extra_replicas_take_the_next_seeds
 
 #[test]
 fn shear_sweeps_take_f_max_and_an_indexed_box_size_as_axes() {
-    // MODEL.md 4.2 / issue 7: sweeps over F_max and L_x (`l_x` = `box.size[0]`).
+    // docs/model.md 4.2 / issue 7: sweeps over F_max and L_x (`l_x` = `box.size[0]`).
     let dir = tempfile::tempdir().unwrap();
     write(
         dir.path(),

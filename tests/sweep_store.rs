@@ -279,7 +279,7 @@ fn boundary_points_of_a_straight_synthetic_boundary_lie_on_it() {
             "{b} is {} off",
             g - gamma_b(e)
         );
-        // Physical units from MODEL.md 4.1 with E_cb = 0.002.
+        // Physical units from docs/model.md 4.1 with E_cb = 0.002.
         let v_w = (2.0 * e * 0.002_f64).sqrt();
         let (a, w) = (
             b["amplitude"].as_f64().unwrap(),

@@ -1,4 +1,4 @@
-//! Phase-boundary extraction (MODEL.md 7, last paragraph): the phase map of a sweep and the
+//! Phase-boundary extraction (docs/model.md 7, last paragraph): the phase map of a sweep and the
 //! boundary points between its phases.
 //!
 //! 1. Phase map: the replicas of a grid point vote; the point takes the majority phase. A tie
@@ -25,7 +25,7 @@
 //!    asks for it (`boundaries --include-unconverged`). Its unconverged neighbours are then
 //!    joined to the converged points around them.
 //! 5. Physical units: for shaking sweeps every map and boundary point also carries the container
-//!    motion `(A, omega)` of MODEL.md 4.1, computed from its `(Gamma, E*)` and the scene's
+//!    motion `(A, omega)` of docs/model.md 4.1, computed from its `(Gamma, E*)` and the scene's
 //!    `E_cb`, `m`, `g` (Scene::drive_motion).
 
 use crate::sweep::file::{Axis, AxisKind};
@@ -209,7 +209,7 @@ pub fn majority(votes: &[Option<String>]) -> Option<(String, bool)> {
     Some((phase.to_string(), tied.len() > 1))
 }
 
-/// `(A, omega)` of MODEL.md 4.1 at `(Gamma, E*)` for the given scene's `E_cb`, `m`, `g`.
+/// `(A, omega)` of docs/model.md 4.1 at `(Gamma, E*)` for the given scene's `E_cb`, `m`, `g`.
 pub fn drive_at(scene: &Scene, gamma: f64, e_star: f64) -> Option<(f64, f64)> {
     let mut s = scene.clone();
     s.drive.kind = DriveKind::Sine;
@@ -348,7 +348,7 @@ impl Plane<'_> {
         Ok(v)
     }
 
-    /// The container motion `(A, omega)` at a point of a shaking plane (MODEL.md 4.1).
+    /// The container motion `(A, omega)` at a point of a shaking plane (docs/model.md 4.1).
     fn motion(&self, scene: &Scene, xv: f64, yv: f64) -> (Option<f64>, Option<f64>) {
         match self.shaking.then(|| drive_at(scene, yv, xv)).flatten() {
             Some((a, w)) => (Some(a), Some(w)),

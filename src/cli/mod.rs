@@ -47,7 +47,7 @@ pub enum Command {
     },
     /// Print the phase map of each sweep and its boundary points.
     ///
-    /// MODEL.md 7: the grid points (majority phase of their replicas) are Delaunay-triangulated
+    /// docs/model.md 7: the grid points (majority phase of their replicas) are Delaunay-triangulated
     /// in the (log E*, Gamma) plane and a boundary point is put at the midpoint of every edge
     /// between two phases; the points are grouped by phase pair (e.g. f|fgc) and given in the
     /// sweep's axes and as container motion (A, omega), with their uncertainty (half the
@@ -107,7 +107,7 @@ pub enum Command {
         profiles: Option<PathBuf>,
     },
     /// The fluid-gas boundary of inelastic systems: the inflection point of T_g/E_cb against
-    /// E* along each line of constant Gamma of a sweep (MODEL.md 7).
+    /// E* along each line of constant Gamma of a sweep (docs/model.md 7).
     Inflection {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,

@@ -1,7 +1,7 @@
 //! Commands on stored results: `wetgran show` (one sweep point: its phase and the numbers it
 //! was decided on, its lateral profiles from the stored observables, and a snapshot by re-running
 //! its job spec, which is deterministic) and `wetgran inflection` (the fluid-gas boundary of
-//! inelastic systems along lines of constant Gamma, MODEL.md 7).
+//! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
 use super::common::{Failure, check_snapshot_names, exit, select};
 use crate::report::point_text::{decision_text, gamma_lines, inflection_text, job_text};

@@ -343,7 +343,7 @@ pub(super) fn sweep_resume(
             crate::run::relabel::relabel_stored(&store, std::slice::from_ref(s), None)?;
         if relabelled.changed() > 0 {
             eprintln!(
-                "sweep {}: labels along lines of constant Gamma (MODEL.md 7): {}",
+                "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
                 s.name,
                 relabelled.text()
             );
@@ -384,7 +384,7 @@ fn run_and_report(
         let relabelled = crate::run::relabel::relabel_stored(store, std::slice::from_ref(s), None)?;
         if relabelled.changed() > 0 {
             eprintln!(
-                "sweep {}: labels along lines of constant Gamma (MODEL.md 7): {}",
+                "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
                 s.name,
                 relabelled.text()
             );

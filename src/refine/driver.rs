@@ -84,7 +84,7 @@ pub fn refine_sweep(
         let relabelled = relabel_stored(store, std::slice::from_ref(row), None)?;
         if opts.show_progress && relabelled.changed() > 0 {
             eprintln!(
-                "sweep {}: labels along lines of constant Gamma (MODEL.md 7): {}",
+                "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
                 row.name,
                 relabelled.text()
             );

@@ -65,7 +65,7 @@ pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
     out
 }
 
-/// For shear sweeps of wet scenes: the chain model's critical force (MODEL.md 8, Eq. 7.9),
+/// For shear sweeps of wet scenes: the chain model's critical force (docs/model.md 8, Eq. 7.9),
 /// `F_max = 0.9229 F_B d / L_x`, over the sweep's points (a range if the axes change it).
 pub fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
     let values: Vec<f64> = points
@@ -84,7 +84,7 @@ pub fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
         format!("F_max from {} to {} over the points", short(lo), short(hi))
     };
     Some(format!(
-        "  chain model (MODEL.md 8, Eq. 7.9: solid while F_max L_x / (F_B d) <= {}): {value}",
+        "  chain model (docs/model.md 8, Eq. 7.9: solid while F_max L_x / (F_B d) <= {}): {value}",
         plot_phase::CHAIN_MODEL_CONSTANT
     ))
 }

@@ -17,7 +17,7 @@ pub struct ExportRow {
     pub job_id: String,
     /// Axis values by scene key (`drive.gamma`).
     pub params: BTreeMap<String, serde_json::Value>,
-    /// Container amplitude and angular frequency of a shaken scene (MODEL.md 4.1).
+    /// Container amplitude and angular frequency of a shaken scene (docs/model.md 4.1).
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
     pub phase: Option<String>,

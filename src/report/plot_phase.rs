@@ -1,5 +1,5 @@
 //! The phase diagram as SVG (plotters): map points coloured by phase, boundary points, and for
-//! shaking sweeps the landmark lines of MODEL.md 4.1 and 8 drawn over, on `E*` (log axis)
+//! shaking sweeps the landmark lines of docs/model.md 4.1 and 8 drawn over, on `E*` (log axis)
 //! against `Gamma`:
 //! - `A = s_crit`: `Gamma = 2 E* E_cb / (m g s_crit)` (wet scenes),
 //! - `A = d`:      `Gamma = 2 E* E_cb / (m g d)` (with `m g d` in place of `E_cb` for `E_d*`),
@@ -8,7 +8,7 @@
 //!   `N d^2 / (L_x L_y)` in 3D (wet scenes).
 //!
 //! On shear sweeps whose plane has the `F_max` axis (`drive.f_max`), the chain model of
-//! MODEL.md 8 (Eq. 7.9) is drawn: the solid is stable while `F_max L_x / (F_B d) <= 0.9229`, so
+//! docs/model.md 8 (Eq. 7.9) is drawn: the solid is stable while `F_max L_x / (F_B d) <= 0.9229`, so
 //! the line `F_max = 0.9229 F_B d / L_x` (`F_B = E_cb / s_crit`) evaluated on each point's own
 //! scene (the other axis may change `L_x`, `E_cb`, `s_crit` or anything else).
 
@@ -68,7 +68,7 @@ impl Landmarks {
         })
     }
 
-    /// `Gamma` on the line where the drive amplitude equals `a` (MODEL.md 4.1).
+    /// `Gamma` on the line where the drive amplitude equals `a` (docs/model.md 4.1).
     pub fn gamma_at_amplitude(&self, e_star: f64, a: f64) -> f64 {
         2.0 * e_star * self.energy_unit / (self.mass * self.gravity * a)
     }
@@ -85,7 +85,7 @@ impl Landmarks {
 /// The constant of the chain model, Eq. 7.9: solid while `F_max L_x / (F_B d) <= 0.9229`.
 pub const CHAIN_MODEL_CONSTANT: f64 = 0.9229;
 
-/// The chain model's critical force `F_max = 0.9229 F_B d / L_x` (MODEL.md 8, Eq. 7.9) with
+/// The chain model's critical force `F_max = 0.9229 F_B d / L_x` (docs/model.md 8, Eq. 7.9) with
 /// `F_B = E_cb / s_crit`; `None` for dry scenes.
 pub fn chain_model_f_max(scene: &Scene) -> Option<f64> {
     if !scene.is_wet() || scene.e_cb() <= 0.0 {
@@ -430,7 +430,7 @@ mod tests {
 
     #[test]
     fn chain_model_matches_eq_7_9() {
-        // The shear set-up of MODEL.md 1: F_B = E_cb / s_crit = 6 m g, L_x = 60 d:
+        // The shear set-up of docs/model.md 1: F_B = E_cb / s_crit = 6 m g, L_x = 60 d:
         // F_max = 0.9229 * 6 / 60 = 0.09229 (the value quoted in sweeps/shear_3d.toml).
         let text = include_str!("../../tests/scenes/good/shear_3d.toml")
             .replace("size = [12.0, 12.0, 6.0]", "size = [60.0, 12.0, 6.0]");

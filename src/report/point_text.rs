@@ -1,6 +1,6 @@
 //! The text of the commands on stored points: `wetgran show` (a job, its phase and the numbers
 //! it was decided on) and `wetgran inflection` (the fluid-gas inflection of T_g/E_cb against E*
-//! along each line of constant Gamma, MODEL.md 7). Pure functions of the stored rows.
+//! along each line of constant Gamma, docs/model.md 7). Pure functions of the stored rows.
 
 use crate::store::PointRow;
 use std::fmt::Write as _;
@@ -63,7 +63,7 @@ pub fn decision_text(p: &PointRow) -> String {
     out
 }
 
-/// `(Gamma, E*)` of a shaken scene (MODEL.md 4.1), from the drive as the scene gives it.
+/// `(Gamma, E*)` of a shaken scene (docs/model.md 4.1), from the drive as the scene gives it.
 fn gamma_e_star(scene: &wetgran_core::scene::Scene) -> Option<(f64, f64)> {
     let (a, omega) = scene.drive_motion()?;
     let unit = if scene.is_wet() && scene.e_cb() > 0.0 {

@@ -1,5 +1,5 @@
 //! Sweep-level classification: the per-point labels of a sweep's stored results, re-derived
-//! from their stored observables with the line rule for fluid versus gas (MODEL.md 7,
+//! from their stored observables with the line rule for fluid versus gas (docs/model.md 7,
 //! `observe::line`). Points of one line share everything but `E*` and the seed: the same
 //! Gamma, restitution, box, grains and run settings. A line needs at least
 //! [`MIN_LINE_POINTS`] distinct `E*`; points on shorter lines (or in sweeps without a Gamma
@@ -23,7 +23,7 @@ pub struct Relabel {
     pub classification: Classification,
 }
 
-/// `(Gamma, E*)` of a shaken scene (MODEL.md 4.1), from its container motion.
+/// `(Gamma, E*)` of a shaken scene (docs/model.md 4.1), from its container motion.
 pub fn gamma_e_star(scene: &Scene) -> Option<(f64, f64)> {
     let (a, w) = scene.drive_motion()?;
     let energy_unit = if scene.is_wet() && scene.e_cb() > 0.0 {
@@ -173,7 +173,7 @@ impl Relabelled {
 
 /// Re-labels every stored result of `sweeps` from its stored observables with `thresholds`, or
 /// with the job's own `[classify]` thresholds when `None`, the fluid-gas line rule included
-/// (`run::relabel`, MODEL.md 7); writes only labels that changed or whose decision numbers
+/// (`run::relabel`, docs/model.md 7); writes only labels that changed or whose decision numbers
 /// changed. A job shared by several of the given sweeps is counted once (the last sweep's
 /// lines decide its label). The runner's callers relabel after every change of the stored
 /// results (a run, a refinement round, an extension), so that every stored label is the same

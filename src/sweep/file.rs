@@ -112,7 +112,7 @@ pub struct RawContinuation {
     pub first: Option<Spanned<String>>,
 }
 
-/// A continuation along one axis (MODEL.md 7 hysteresis; issue "runs to stationarity"): the
+/// A continuation along one axis (docs/model.md 7 hysteresis; issue "runs to stationarity"): the
 /// jobs whose `initial.start` is `"continue"` form one chain per combination of the other axes
 /// and replica; each starts from the final state of its predecessor along `axis`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -229,11 +229,11 @@ pub struct Axis {
 }
 
 impl Axis {
-    /// Whether this axis is the peak acceleration `Gamma` (MODEL.md 4.1).
+    /// Whether this axis is the peak acceleration `Gamma` (docs/model.md 4.1).
     pub fn is_gamma(&self) -> bool {
         self.key == "drive.gamma"
     }
-    /// Whether this axis is the driving energy `E*` or `E_d*` (MODEL.md 4.1).
+    /// Whether this axis is the driving energy `E*` or `E_d*` (docs/model.md 4.1).
     pub fn is_e_star(&self) -> bool {
         self.key == "drive.e_star"
     }

@@ -1,5 +1,5 @@
 //! `wetgran-bench engines`: the event-driven and the time-driven engine on the same scene, the
-//! 2D standard wet system (MODEL.md 1: N = 1200, 400 x 9, `sigma_p` 0.06, thin thread, elastic
+//! 2D standard wet system (docs/model.md 1: N = 1200, 400 x 9, `sigma_p` 0.06, thin thread, elastic
 //! walls, eps 0.96, hot start `T_g / E_cb = 20`; the scene of crates/core/tests/engines_like.rs), whose
 //! time-driven twin differs only in `engine.kind = "time"` (restitution converted by the
 //! default calibration, `contact.restitution_speed = "auto"`).

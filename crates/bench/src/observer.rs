@@ -1,5 +1,5 @@
 //! `wetgran-bench observer`: what the location-change observer costs in a shaken run of the 2D
-//! standard wet system (MODEL.md 1: N = 1200, 400 x 9, eps = 1, the base scene of
+//! standard wet system (docs/model.md 1: N = 1200, 400 x 9, eps = 1, the base scene of
 //! `sweeps/shaken_2d_elastic.toml`): the counter triangulates every sample from scratch
 //! (spade), and a run that asks for `f_lc` (`observe.location_changes`) pays for it.
 //!

@@ -1,4 +1,4 @@
-//! `wetgran-bench shake`: the 2D standard wet system (MODEL.md 1, N = 1200) in the shaken
+//! `wetgran-bench shake`: the 2D standard wet system (docs/model.md 1, N = 1200) in the shaken
 //! container at a cool and a hot point of the (Gamma, E*) plane, a fixed number of driving
 //! periods with each wall solver (`table/raw`: the table without the corner check, as the
 //! thesis printed it; table build time is excluded, `bench wall` reports it): wall time per

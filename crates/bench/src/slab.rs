@@ -1,4 +1,4 @@
-//! `wetgran-bench slab`: what the slab width of the shear drive costs and buys (MODEL.md 4.2).
+//! `wetgran-bench slab`: what the slab width of the shear drive costs and buys (docs/model.md 4.2).
 //!
 //! The event-driven engine replaces `F_max cos(2 pi x / L_x)` by its value at the centre of
 //! each slab; narrower slabs approach the continuous force and cost more slab-crossing events

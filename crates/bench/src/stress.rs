@@ -43,7 +43,7 @@ pub const CHECKS: u64 = 100;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StressCase {
-    /// The standard wet system (MODEL.md 1, 1200 disks) on the plate at Gamma = 0.5, E* = 0.1:
+    /// The standard wet system (docs/model.md 1, 1200 disks) on the plate at Gamma = 0.5, E* = 0.1:
     /// the bed rides the plate, grains rest on it and on each other (rebound floor at work).
     RestingBed,
     /// A dense cluster of wet disks (no gravity, `E_cb` far above the kinetic energy) with

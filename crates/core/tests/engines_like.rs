@@ -5,7 +5,7 @@
 //! energy loss of a Maxwellian gas at the scene's characteristic temperature equals
 //! `1 - eps^2`).
 //!
-//! Scenes: the 2D standard wet system of MODEL.md 1 (N = 1200 in 400 d x 9 d, `s_crit` 0.0711,
+//! Scenes: the 2D standard wet system of docs/model.md 1 (N = 1200 in 400 d x 9 d, `s_crit` 0.0711,
 //! `E_cb` 0.2844, `sigma_p` 0.06, elastic walls, hot start `T_g / E_cb = 20`) with `eps = 0.96`
 //! (`sweeps/shaken_2d_eps096.toml`), at a gas (Gamma 2, E* 3), a fluid (Gamma 30, E* 0.7) and a
 //! fluid-gas coexistence (Gamma 30, E* 2.6; docs/validation.md, line eps = 0.96: fgc with the

@@ -1,4 +1,4 @@
-//! The location-change counter (`f_lc`, MODEL.md 7): zero for a static lattice, exact counts
+//! The location-change counter (`f_lc`, docs/model.md 7): zero for a static lattice, exact counts
 //! for prescribed neighbour exchanges, a rate that grows with temperature in a dilute gas, and a
 //! count that converges as the sampling gets finer.
 

@@ -64,7 +64,7 @@ fn bridge_density_equals_hand_count() {
     let bins = LateralBins::new(4, 16.0);
     assert_eq!(bridge_counts(&f, &bins), vec![2, 1, 2, 0]);
     // n_cb = bridges per bin area (width 4 x height 4: per unit length of x, averaged over the
-    // height, MODEL.md 7), in units of 1/d^2 with d = 1, then d = 2.
+    // height, docs/model.md 7), in units of 1/d^2 with d = 1, then d = 2.
     assert_eq!(
         bridge_density(&f, &bins, 1.0),
         vec![0.125, 0.0625, 0.125, 0.0]

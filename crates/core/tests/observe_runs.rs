@@ -1,4 +1,4 @@
-//! Observers on real short runs: a small version of the 2D standard wet system (MODEL.md 1:
+//! Observers on real short runs: a small version of the 2D standard wet system (docs/model.md 1:
 //! `s_crit` 0.0711, `E_cb` 0.2844, `sigma_p` 0.06, eps 0.9, height 9, three layers) shaken at
 //! Gamma < 1 with small E* is solid, strongly driven and dilute it is a gas; observing never
 //! changes a trajectory; bookkeeping identities of the profiles and counts; stationarity flags a

@@ -1,4 +1,4 @@
-//! The sinusoidally shaken container (MODEL.md 4.1, 6): exact energy bookkeeping with the
+//! The sinusoidally shaken container (docs/model.md 4.1, 6): exact energy bookkeeping with the
 //! drive's work, the A = 0 limit, nothing leaving the box, re-checks; the hard cases run with the
 //! exact solver and with the tabulated one (`table`, B.4-B.5).
 
@@ -378,7 +378,7 @@ fn tabulated_lid_hit_places_the_disk_on_the_lid_and_books_the_shift() {
 
 #[test]
 fn standard_wet_system_ten_million_events_stays_inside() {
-    // MODEL.md 1's 2D standard wet system at a bonded, a gas-like and a riding point: 10^7
+    // docs/model.md 1's 2D standard wet system at a bonded, a gas-like and a riding point: 10^7
     // events each in total; invariants (nothing below the floor or above the lid beyond
     // tolerance, no overlap, no NaN) checked every 10^6 events; the event rate stays bounded.
     use wetgran_core::scene::WallSolverKind;

@@ -1,4 +1,4 @@
-//! The shear drive in the event-driven engine (MODEL.md 4.2): a single particle follows the
+//! The shear drive in the event-driven engine (docs/model.md 4.2): a single particle follows the
 //! analytic piecewise trajectory across slabs; in elastic dry runs the work booked for the field
 //! equals the change of kinetic energy; a dense sheared wet packing keeps its invariants.
 

@@ -1,7 +1,7 @@
-//! The shear drive in the time-driven engine (MODEL.md 4.2, Eq. 2.20): the continuous force
+//! The shear drive in the time-driven engine (docs/model.md 4.2, Eq. 2.20): the continuous force
 //! `F_max cos(2 pi x / L_x)` along `y`. A single particle follows the analytic trajectory; in
 //! elastic dry runs the booked work of the field equals the change of kinetic energy; the small
-//! wet shear scene is solid below and fluidised above the chain-model force (MODEL.md 8).
+//! wet shear scene is solid below and fluidised above the chain-model force (docs/model.md 8).
 
 mod common;
 

@@ -1,4 +1,4 @@
-//! Invariance of the phase labels on the 2D standard wet system itself (MODEL.md 1: N = 1200 in
+//! Invariance of the phase labels on the 2D standard wet system itself (docs/model.md 1: N = 1200 in
 //! 400 d x 9 d, sigma_p = 0.06, thin thread, hot start T_g/E_cb = 20), not on a shrunken
 //! stand-in. In CI: the fluid-gas coexistence of the line Gamma = 30 (E* = 1.1, eps = 1) keeps
 //! its label when the run is doubled. Opt-in (`cargo test --release --test standard_invariance
@@ -35,7 +35,7 @@ fn label(scene: &Scene) -> (String, f64) {
 }
 
 /// The builder leaves the standard values that are scene defaults out of its text: they must
-/// stay the standard system's (MODEL.md 1).
+/// stay the standard system's (docs/model.md 1).
 #[test]
 fn standard_defaults_are_the_standard_system() {
     let s = StandardWet::new(30.0, 1.1, 1.0, 10.0, Transient::Periods(1.0)).scene();

@@ -214,7 +214,7 @@ fn damped_restitution_matches_direct_integration() {
 
 const WET: &str = "[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844";
 
-/// Minimal capillary model (MODEL.md 3.1), `F_B = E_cb / s_crit = 4`: a pair that meets
+/// Minimal capillary model (docs/model.md 3.1), `F_B = E_cb / s_crit = 4`: a pair that meets
 /// elastically forms a bridge; leaving contact with normal kinetic energy `mu u^2 / 2` below
 /// `E_cb` it stays bonded (turning at `s = KE / F_B < s_crit`), above it the bridge ruptures and
 /// the work done on the pair up to rupture is `F_B s_crit = E_cb`.

@@ -1,4 +1,4 @@
-//! Phase classification: maps [`Observables`] to one of s, f, g, sfc, sgc, fgc (MODEL.md 7)
+//! Phase classification: maps [`Observables`] to one of s, f, g, sfc, sgc, fgc (docs/model.md 7)
 //! with the thresholds of the scene's `[classify]` section, and records every number the
 //! decision used so that a result can be re-classified later without re-simulating
 //! (`wetgran reclassify`). docs/observables.md gives the reasoning and the evidence.
@@ -27,11 +27,11 @@
 //!    dilute region is at least `line_jump_ratio` times hotter (a bonded drop in its vapour).
 //!    Two different phases give their coexistence (sfc, sgc or fgc); the same phase twice
 //!    gives that phase.
-//! 4. A sheared scene (MODEL.md 4.2) is solid or fluidised by `E_par` alone: solid when the
+//! 4. A sheared scene (docs/model.md 4.2) is solid or fluidised by `E_par` alone: solid when the
 //!    window mean of `E_par / E_cb` (`/ (m g d)` dry) is at most `shear_e_par`, else fluid
 //!    (label f). The rules above are still evaluated and recorded, but do not decide.
 //!
-//! Along a line of constant Gamma (sweeps), fluid versus gas follows MODEL.md 7: the jump of
+//! Along a line of constant Gamma (sweeps), fluid versus gas follows docs/model.md 7: the jump of
 //! `T_g / E_cb(E*)` for elastic grains, its inflection for inelastic ones ([`super::line`]).
 //!
 //! A value equal to a threshold stays on the calmer side (solid, not gas, homogeneous).
@@ -40,7 +40,7 @@ use super::{Observables, noise};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
-/// The six phases of MODEL.md 7.
+/// The six phases of docs/model.md 7.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Phase {

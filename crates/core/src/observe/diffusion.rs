@@ -1,4 +1,4 @@
-//! Per-layer lateral mean-square displacement and diffusion coefficient (MODEL.md 7, surface
+//! Per-layer lateral mean-square displacement and diffusion coefficient (docs/model.md 7, surface
 //! melting).
 //!
 //! At the first sample of the window the particles are sorted by height and cut into `layers`

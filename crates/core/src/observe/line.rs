@@ -1,5 +1,5 @@
 //! Line analyses over a set of results: the fluid-gas boundary along a line of constant Gamma
-//! (MODEL.md 7) and the relabelling of the line's points by it ([`classify_line`]). For elastic
+//! (docs/model.md 7) and the relabelling of the line's points by it ([`classify_line`]). For elastic
 //! grains the boundary is the jump of `T_g / E_cb(E*)` ([`largest_jump`]); for inelastic ones
 //! the inflection point ([`fluid_gas_inflection`]). Only the line's *mobile* points (not solid
 //! by rule 1 as a whole) enter: the step from a solid to a fluid is not the fluid-gas jump.

@@ -1,4 +1,4 @@
-//! Frequency of location changes `f_lc` (MODEL.md 7): how often a grain moves into a
+//! Frequency of location changes `f_lc` (docs/model.md 7): how often a grain moves into a
 //! neighbour's place.
 //!
 //! **2D (Delaunay).** At every sample the particle centres are triangulated (spade's robust

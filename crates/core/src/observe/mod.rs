@@ -1,4 +1,4 @@
-//! Observers, order parameters and the phase classification (MODEL.md 7).
+//! Observers, order parameters and the phase classification (docs/model.md 7).
 //!
 //! [`run_observed`] runs a scene and hands a [`Frame`] to every observer the scene's `[observe]`
 //! section asks for, `samples_per_period` times per period (the driving period `2 pi / omega`,
@@ -88,9 +88,9 @@ pub struct LocationChanges {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum NcbNormalisation {
-    /// Bridges per lateral measure of the bin and per unit height, units `d^-D` (MODEL.md 7).
+    /// Bridges per lateral measure of the bin and per unit height, units `d^-D` (docs/model.md 7).
     PerAreaAveragedOverHeight,
-    /// Results stored before the MODEL.md 7 normalisation: bridges per lateral measure summed
+    /// Results stored before the docs/model.md 7 normalisation: bridges per lateral measure summed
     /// over the height, units `d^-(D-1)`; divide by `H` to convert.
     #[default]
     PerLateralMeasureSummedOverHeight,
@@ -751,7 +751,7 @@ fn lateral_profiles(
         bins.width * scene.container.size[1]
     };
     let bin_volume = lateral_measure * height;
-    // n_cb: bridges per lateral measure per unit height, units d^-D (MODEL.md 7, Eq. 3.3).
+    // n_cb: bridges per lateral measure per unit height, units d^-D (docs/model.md 7, Eq. 3.3).
     let ncb_scale = d.powi(dim as i32) / bin_volume;
     let n_cb: Vec<f64> = per_sample(field::BRIDGES)
         .into_iter()

@@ -1,4 +1,4 @@
-//! Noise baselines for the coexistence test (MODEL.md 7, Eq. 3.3).
+//! Noise baselines for the coexistence test (docs/model.md 7, Eq. 3.3).
 //!
 //! `Delta n = max_b n_b - min_b n_b` over `B` lateral bins is never zero in a finite run: each
 //! bin's time average `n_b` carries a statistical error `se_b`. In a homogeneous state the `n_b`

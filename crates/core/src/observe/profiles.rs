@@ -1,10 +1,10 @@
 //! Lateral profiles of the capillary-bridge density `n_cb` and of the packing fraction
 //! (areal in 2D, volume in 3D), time-averaged over the window, with
-//! `Delta n_cb = max n_cb - min n_cb` (MODEL.md Eq. 3.3) and `Delta n_area` likewise.
+//! `Delta n_cb = max n_cb - min n_cb` (docs/model.md Eq. 3.3) and `Delta n_area` likewise.
 //!
 //! - `n_cb(bin)` = bridges whose midpoint (nearest periodic image) lies in the bin, divided by
 //!   the bin's lateral measure (its width in 2D, its area in 3D) and by the box height `H`:
-//!   bridges per lateral area averaged over the height, as MODEL.md 7 defines it. Reported in
+//!   bridges per lateral area averaged over the height, as docs/model.md 7 defines it. Reported in
 //!   units of `d^-D` (multiplied by `d^D`). (Before this normalisation the height was summed
 //!   over, not averaged: stored results of that kind are converted by `reclassify`.)
 //! - packing fraction(bin) = summed disk areas `pi r^2` (sphere volumes `4/3 pi r^3`) of the
@@ -26,7 +26,7 @@ pub fn bridge_counts(frame: &Frame, bins: &LateralBins) -> Vec<usize> {
 }
 
 /// `n_cb` per bin of one frame, in units of `d^-D` for mean diameter `d`: bridges per lateral
-/// measure of the bin and per unit height (MODEL.md 7).
+/// measure of the bin and per unit height (docs/model.md 7).
 pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
     let height = frame.box_size[frame.dimension - 1];
     let scale = d.powi(frame.dimension as i32) / (bins.lateral_measure(frame) * height);

@@ -1,4 +1,4 @@
-//! Order parameters of the shear drive (MODEL.md 4.2 and 7): `E_par`, the mean kinetic energy
+//! Order parameters of the shear drive (docs/model.md 4.2 and 7): `E_par`, the mean kinetic energy
 //! along `y` (the direction of the force), and `E_perp`, along `x` (the direction of the force's
 //! variation),
 //!

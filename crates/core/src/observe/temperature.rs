@@ -1,4 +1,4 @@
-//! Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (MODEL.md Eq. 3.2, `k_B = 1`,
+//! Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (docs/model.md Eq. 3.2, `k_B = 1`,
 //! `f_d = D`), globally and per lateral bin, reported in units of `E_cb` (of `m g d` for dry
 //! scenes). Each bin uses its own mean velocity; time averages over the window are
 //! particle-weighted per bin (a bin's sample counts as often as it holds particles).

@@ -1,9 +1,9 @@
-//! The thin-thread capillary bridge (MODEL.md 3.2): a hysteretic square well of width `s_crit`
+//! The thin-thread capillary bridge (docs/model.md 3.2): a hysteretic square well of width `s_crit`
 //! and depth `E_cb` that exists only after contact.
 
 use serde::{Deserialize, Serialize};
 
-/// The energy criterion at `s = s_crit` (MODEL.md 3.2); the scene's `capillary.rupture_rule`.
+/// The energy criterion at `s = s_crit` (docs/model.md 3.2); the scene's `capillary.rupture_rule`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RuptureRule {

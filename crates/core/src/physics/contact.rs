@@ -1,4 +1,4 @@
-//! Hard-core collisions with restitution (MODEL.md 2.1, Eqs. 2.2-2.6) and wall reflection.
+//! Hard-core collisions with restitution (docs/model.md 2.1, Eqs. 2.2-2.6) and wall reflection.
 
 /// Normal impulse factor for two equal masses (Eqs. 2.3-2.4): with `u = v_ij . sigma < 0`,
 /// `v_i' = v_i - (1 + eps)/2 u sigma` and `v_j' = v_j + (1 + eps)/2 u sigma`.
@@ -17,7 +17,7 @@ pub fn pair_dissipation(mass: f64, normal_speed: f64, eps: f64) -> f64 {
 
 /// Outgoing normal speed of a collision with incoming normal speed `u_in > 0` and coefficient
 /// `e` (particle-particle `eps` or particle-wall `e_w`), including the collapse remedies of the
-/// event-driven engine (MODEL.md 2.1, documented in docs/model-choices.md):
+/// event-driven engine (docs/model.md 2.1, documented in docs/model-choices.md):
 ///
 /// - TC model (Luding & McNamara 1998): if either partner collided less than `tc` ago, the
 ///   collision is elastic;

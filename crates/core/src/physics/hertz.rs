@@ -1,5 +1,5 @@
-//! Hertz contact with damping (MODEL.md 2.2, Eq. 2.7) and the minimal capillary force
-//! (MODEL.md 3.1), as pure functions, plus two reference results the time-driven engine is tested
+//! Hertz contact with damping (docs/model.md 2.2, Eq. 2.7) and the minimal capillary force
+//! (docs/model.md 3.1), as pure functions, plus two reference results the time-driven engine is tested
 //! against: the analytic contact time of an elastic Hertz collision and the restitution of a
 //! damped one by direct integration of the two-body equation.
 //!
@@ -200,7 +200,7 @@ const LOSS_STEPS: f64 = 1000.0;
 /// In a gas of Maxwellian velocities (temperature `T` per degree of freedom) the relative
 /// normal velocity `v` of a pair is Gaussian with variance `T / mu`; collisions happen at a rate
 /// proportional to `v`, so the impact speeds of the collisions are distributed as
-/// `p(v) ∝ v exp(-mu v^2 / (2 T))`. A collision removes `(1/2) mu v^2 (1 - e(v)^2)` (MODEL.md 2.1:
+/// `p(v) ∝ v exp(-mu v^2 / (2 T))`. A collision removes `(1/2) mu v^2 (1 - e(v)^2)` (docs/model.md 2.1:
 /// `E_normal (1 - eps^2)`), and the rate of energy loss is
 /// `∝ ∫ v^3 exp(-mu v^2 / 2T) (1 - e(v)^2) dv`. Relative to the same integral with
 /// `1 - e^2 = 1` this is
@@ -247,7 +247,7 @@ pub fn damping_for_maxwellian_restitution(kr: f64, mu: f64, t: f64, eps: f64) ->
         * (mu / (2.0 * t)).powf(0.1)
 }
 
-/// Minimal capillary model (MODEL.md 3.1): the constant attraction `F_B = E_cb / s_crit` that
+/// Minimal capillary model (docs/model.md 3.1): the constant attraction `F_B = E_cb / s_crit` that
 /// acts along the line of centres while a bridge exists (`s <= s_crit`, also during overlap).
 #[inline]
 pub fn bridge_force(e_cb: f64, s_crit: f64) -> f64 {

@@ -1,7 +1,7 @@
 //! Pure physics: contact laws, capillary bridge rules, free flight, size distributions.
 //!
 //! Everything here is a plain function of its arguments, shared by the engines and tested on its
-//! own against the formulas of MODEL.md.
+//! own against the formulas of docs/model.md.
 
 pub mod capillary;
 pub mod contact;

@@ -1,5 +1,5 @@
 //! Earliest root of a polynomial of degree at most 4 on an interval: the pair-event solver of
-//! the shear drive (MODEL.md 4.2).
+//! the shear drive (docs/model.md 4.2).
 //!
 //! Two particles in slabs of different force have a constant relative acceleration `a`, so their
 //! squared distance minus the contact distance squared,
@@ -247,7 +247,7 @@ impl Poly {
 /// Earliest `t` in `[0, horizon]` at which `p(t) <= 0` while `p` is not increasing, or `None`.
 ///
 /// - `p(0) <= 0` and `p` decreasing at 0: returns 0 (overlap safeguard: approaching while
-///   overlapping acts now, MODEL.md 6 B.5.6).
+///   overlapping acts now, docs/model.md 6 B.5.6).
 /// - Pieces where `p` increases are skipped (touching but separating: no event).
 /// - On a decreasing piece `[x0, x1]`: `p(x0) <= 0` gives `x0` (a local maximum still at or
 ///   below zero: contact held, now approaching); a sign change gives the refined root (the last

@@ -1,5 +1,5 @@
 //! Collision times of a particle flying on a parabola with a sinusoidally moving flat wall
-//! (MODEL.md 6, Appendix B of the thesis).
+//! (docs/model.md 6, Appendix B of the thesis).
 //!
 //! In the wall's axis, origin at the wall's mean position, particle on the `+` side, the gap is
 //!
@@ -74,7 +74,7 @@ pub enum WallRoot {
 
 /// Earliest time the gap closes, by conservative advancement, to gap tolerance `tol`:
 /// the returned `dt` satisfies `0 <= s_rel(dt) <= tol` and no root lies in `[0, dt)`.
-/// A particle that already overlaps the wall and approaches it hits now (MODEL.md 6, B.5.6).
+/// A particle that already overlaps the wall and approaches it hits now (docs/model.md 6, B.5.6).
 /// The search gives up after `horizon` (returns [`WallRoot::None`]); with `g > 0` every flight
 /// comes back, so callers pass a horizon beyond which they re-query.
 pub fn exact_root(w: &WallMotion, h: f64, v: f64, t0: f64, tol: f64, horizon: f64) -> WallRoot {

@@ -1,4 +1,4 @@
-//! Size distributions (MODEL.md section 5, Eqs. 2.21-2.22).
+//! Size distributions (docs/model.md section 5, Eqs. 2.21-2.22).
 
 use rand::Rng;
 

@@ -1,4 +1,4 @@
-//! The thesis's tabulated wall-collision times (MODEL.md 6, Appendix B.4-B.5): a table per
+//! The thesis's tabulated wall-collision times (docs/model.md 6, Appendix B.4-B.5): a table per
 //! wall motion `(A, omega, g)`, filled once before the run and shared by every particle and every
 //! job with that drive (the bounded cache `sim::event_driven::table_cache` keeps them).
 //!

@@ -1,4 +1,4 @@
-//! The damping constants `A_d` of the time-driven engine (MODEL.md 2.2, Eq. 2.7), given directly
+//! The damping constants `A_d` of the time-driven engine (docs/model.md 2.2, Eq. 2.7), given directly
 //! (`contact.damping`, `contact.wall_damping`) or derived from a coefficient of restitution
 //! (`contact.restitution`, `contact.wall_restitution`), so that a sweep file switches engines by
 //! `engine.kind` alone and the scene keeps its phases (docs/model-choices.md, "Engines like for
@@ -14,7 +14,7 @@
 //! - **`"auto"` (default): the Maxwellian mean energy loss.** In a gas at granular temperature
 //!   `T` the impact speeds are distributed as `p(v) ∝ v exp(-mu v^2 / 2T)` (collision rate
 //!   proportional to the approach speed), a collision removes `(1/2) mu v^2 (1 - e(v)^2)`
-//!   (MODEL.md 2.1: `E_normal (1 - eps^2)`), so the rate of collisional loss is proportional to
+//!   (docs/model.md 2.1: `E_normal (1 - eps^2)`), so the rate of collisional loss is proportional to
 //!   `∫ v^3 exp(-mu v^2 / 2T) (1 - e(v)^2) dv`. `A_d` is chosen so that this equals the hard-sphere
 //!   value with `e = eps` (`physics::hertz::maxwellian_loss`, `damping_for_maxwellian_restitution`):
 //!
@@ -31,7 +31,7 @@
 //! Both by bisection on direct RK4 integrations of head-on collisions: particle pairs with two
 //! mean-size particles (`R_eff = d/4`, reduced mass `m/2`), the wall with one (`R_eff = d/2`,
 //! mass `m` against an infinitely heavy wall, the same `T`). A restitution of 1 gives `A_d = 0`
-//! (the elastic walls of MODEL.md 1 stay undamped whatever the calibration).
+//! (the elastic walls of docs/model.md 1 stay undamped whatever the calibration).
 
 use super::{AutoWord, DEFAULT_STIFFNESS, DriveKind, RestitutionSpeed, Scene, StartMode};
 use crate::physics::hertz;
@@ -70,7 +70,7 @@ pub fn calibration(scene: &Scene) -> Calibration {
 /// `T` only as `T^(1/10)`.
 ///
 /// A scene without a hot-start temperature (cold start, or none given) takes the scale of its
-/// drive: `m (A omega)^2` for shaking (MODEL.md 4.1), `F_max d` for shear (MODEL.md 4.2), else
+/// drive: `m (A omega)^2` for shaking (docs/model.md 4.1), `F_max d` for shear (docs/model.md 4.2), else
 /// `m g d` (`g = 1` without gravity). These fallbacks are not measured.
 pub fn characteristic_temperature(scene: &Scene) -> f64 {
     let t0 = scene.initial_temperature();
@@ -214,7 +214,7 @@ mod tests {
         };
         let hot = shaken("hot");
         assert!((characteristic_temperature(&hot) - 20.0 * hot.e_cb()).abs() < 1e-12);
-        // Cold start: m v_w^2 = 2 E* E_cb (MODEL.md 4.1).
+        // Cold start: m v_w^2 = 2 E* E_cb (docs/model.md 4.1).
         let cold = shaken("cold");
         let want = 2.0 * 3.0 * cold.e_cb();
         assert!((characteristic_temperature(&cold) - want).abs() < 1e-9 * want);

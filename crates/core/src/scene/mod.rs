@@ -5,7 +5,7 @@
 //! knobs. [`Scene::from_toml_str`] parses and validates; every rejected value produces a
 //! [`SceneError`] that names the file, the key and the allowed range (see `validate.rs`).
 //!
-//! Conventions (MODEL.md section 1): units of mean diameter `d`, particle mass `m`, gravity `g`.
+//! Conventions (docs/model.md section 1): units of mean diameter `d`, particle mass `m`, gravity `g`.
 //! The last axis is vertical (`z`; in 2D the axes are `x, z`); gravity points along `-z`.
 
 pub mod convergence;
@@ -86,7 +86,7 @@ pub struct ParticleSpec {
     /// Mean diameter (1 in the standard units).
     #[serde(default = "one")]
     pub diameter: f64,
-    /// `sigma_p` of MODEL.md Eq. 2.22: diameters uniform on `d (1 +- sqrt(3) sigma_p)`.
+    /// `sigma_p` of docs/model.md Eq. 2.22: diameters uniform on `d (1 +- sqrt(3) sigma_p)`.
     #[serde(default)]
     pub polydispersity: f64,
     /// Mass of every particle, whatever its size.
@@ -94,7 +94,7 @@ pub struct ParticleSpec {
     pub mass: f64,
 }
 
-/// Hard-core contact law (MODEL.md 2.1).
+/// Hard-core contact law (docs/model.md 2.1).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
@@ -104,7 +104,7 @@ pub struct ContactSpec {
     /// Particle-wall coefficient of normal restitution `e_w`.
     #[serde(default = "one")]
     pub wall_restitution: f64,
-    /// Time-driven engine: Hertz prefactor `k = 2 Y / (3 (1 - nu^2))` of MODEL.md Eq. 2.7, in
+    /// Time-driven engine: Hertz prefactor `k = 2 Y / (3 (1 - nu^2))` of docs/model.md Eq. 2.7, in
     /// units of `m g / d^2` (default [`DEFAULT_STIFFNESS`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<f64>,
@@ -212,7 +212,7 @@ pub const GEAR_DAMPING_WEIGHT: f64 = 2.0;
 /// ([`Scene::largest_time_step`]).
 pub const VERLET_DAMPING_WEIGHT: f64 = 0.5;
 
-/// Capillary bridges (MODEL.md 3).
+/// Capillary bridges (docs/model.md 3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CapillarySpec {
@@ -224,7 +224,7 @@ pub struct CapillarySpec {
     /// Bridge rupture energy `E_cb` (default `F_B s_crit` with `F_B = 4 m g`).
     #[serde(default)]
     pub e_cb: Option<f64>,
-    /// Which kinetic energy pays for a rupture (MODEL.md 3.2); default `reduced_mass`.
+    /// Which kinetic energy pays for a rupture (docs/model.md 3.2); default `reduced_mass`.
     #[serde(default)]
     pub rupture_rule: Option<RuptureRule>,
 }
@@ -247,16 +247,16 @@ pub enum CapillaryModel {
     /// Dry grains.
     #[default]
     None,
-    /// The hysteretic square well of MODEL.md 3.2 (event-driven engine).
+    /// The hysteretic square well of docs/model.md 3.2 (event-driven engine).
     ThinThread,
 }
 
-/// The energy criterion at `s = s_crit` (MODEL.md 3.2): defined with the physics it selects.
+/// The energy criterion at `s = s_crit` (docs/model.md 3.2): defined with the physics it selects.
 pub use crate::physics::capillary::RuptureRule;
 
-/// Driving of the container (MODEL.md 4.1): floor and lid move together as
+/// Driving of the container (docs/model.md 4.1): floor and lid move together as
 /// `z_w(t) = A sin(omega t)`. Give either `amplitude` and `omega`, or `gamma` and `e_star`
-/// (`E*` for wet scenes, `E_d*` for dry ones), converted as in MODEL.md 4.1.
+/// (`E*` for wet scenes, `E_d*` for dry ones), converted as in docs/model.md 4.1.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DriveSpec {
@@ -281,7 +281,7 @@ pub struct DriveSpec {
     /// Gap tolerance of the wall-root solver, in units of `d` (default 1e-10).
     #[serde(default)]
     pub root_tolerance: Option<f64>,
-    /// Step of the `bracket` solver (MODEL.md 6, B.3), default a thousandth of a period.
+    /// Step of the `bracket` solver (docs/model.md 6, B.3), default a thousandth of a period.
     #[serde(default)]
     pub t_min: Option<f64>,
     /// `table` solver: cells along the phase (or height) and along the mapped velocity
@@ -305,7 +305,7 @@ pub struct DriveSpec {
     #[serde(default)]
     pub table_corner_tolerance: Option<f64>,
     /// `shear`: peak body force `F_max` of `F_s(x) = F_max cos(2 pi x / L_x)` along `y`
-    /// (MODEL.md 4.2, Eq. 2.20), in units of `m g` (absolute force units without gravity).
+    /// (docs/model.md 4.2, Eq. 2.20), in units of `m g` (absolute force units without gravity).
     #[serde(default)]
     pub f_max: Option<f64>,
     /// `shear`: requested width of the slabs of constant force (event-driven engine), in units
@@ -323,12 +323,12 @@ pub enum DriveKind {
     None,
     /// Floor and lid shaken sinusoidally along the vertical axis.
     Sine,
-    /// Kolmogorov flow (MODEL.md 4.2): the body force `F_max cos(2 pi x / L_x)` along `y`,
+    /// Kolmogorov flow (docs/model.md 4.2): the body force `F_max cos(2 pi x / L_x)` along `y`,
     /// static floor and lid; 3D only (a 2D box has no axis `y` across the force's variation).
     Shear,
 }
 
-/// The slabs of constant force of a shear drive (event-driven engine, MODEL.md 4.2).
+/// The slabs of constant force of a shear drive (event-driven engine, docs/model.md 4.2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShearSlabs {
     /// Peak force `F_max`.
@@ -348,7 +348,7 @@ impl ShearSlabs {
     }
 }
 
-/// Wall-collision solver for the shaken container (MODEL.md 6).
+/// Wall-collision solver for the shaken container (docs/model.md 6).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum WallSolverKind {
@@ -380,7 +380,7 @@ pub struct InitialSpec {
     /// Seed of the random number generator (sizes and velocities).
     #[serde(default)]
     pub seed: u64,
-    /// `"hot"` (default): the lattice with Gaussian velocities and no bridges (MODEL.md 1).
+    /// `"hot"` (default): the lattice with Gaussian velocities and no bridges (docs/model.md 1).
     /// `"cold"`: a bonded bed at rest, the same lattice with zero velocities (the temperature
     /// keys are ignored) and a bridge between every pair of grains closer than `s_crit`
     /// (`sim::initial::cold_state`). `"continue"` (sweeps with `[sweep.continuation]` only):
@@ -530,9 +530,9 @@ fn default_overlap_tolerance() -> f64 {
     1e-6
 }
 
-/// Thin-thread default rupture separation (MODEL.md 1).
+/// Thin-thread default rupture separation (docs/model.md 1).
 pub const DEFAULT_S_CRIT: f64 = 0.0711;
-/// Default bridge force in units of `m g` (MODEL.md 1): `E_cb = F_B s_crit`.
+/// Default bridge force in units of `m g` (docs/model.md 1): `E_cb = F_B s_crit`.
 pub const DEFAULT_BRIDGE_FORCE_OVER_MG: f64 = 4.0;
 
 impl Scene {
@@ -602,7 +602,7 @@ impl Scene {
         )
     }
 
-    /// Smallest and largest diameter (MODEL.md Eq. 2.22: `d (1 -+ sqrt(3) sigma_p)`).
+    /// Smallest and largest diameter (docs/model.md Eq. 2.22: `d (1 -+ sqrt(3) sigma_p)`).
     pub fn diameter_range(&self) -> (f64, f64) {
         crate::physics::size::diameter_range(self.particles.diameter, self.particles.polydispersity)
     }
@@ -626,7 +626,7 @@ impl Scene {
 
     /// The period everything "in periods" is counted in (the one definition: `sweep.periods`,
     /// `observe.transient_periods`, `observe.samples_per_period`, `[convergence]`): one driving
-    /// period `T = 2 pi / omega` of a shaken scene (MODEL.md 4.1), else the scene's time unit
+    /// period `T = 2 pi / omega` of a shaken scene (docs/model.md 4.1), else the scene's time unit
     /// `sqrt(d/g)`, or 1 without gravity.
     pub fn driving_period(&self) -> f64 {
         match self.drive_motion() {
@@ -637,7 +637,7 @@ impl Scene {
     }
 
     /// Container motion `(A, omega)` of a shaken scene, converted from `(Gamma, E*)` where those
-    /// are given (MODEL.md 4.1): `v_w = sqrt(2 E* E_cb / m)` (dry: `sqrt(2 E_d* g d)`),
+    /// are given (docs/model.md 4.1): `v_w = sqrt(2 E* E_cb / m)` (dry: `sqrt(2 E_d* g d)`),
     /// `omega = Gamma g / v_w`, `A = v_w^2 / (Gamma g)`. `None` without a drive.
     pub fn drive_motion(&self) -> Option<(f64, f64)> {
         let d = &self.drive;
@@ -694,7 +694,7 @@ impl Scene {
     /// with damping, that eighth shrunk so that the damping is resolved too.
     ///
     /// Elastic part: `t_c = 2.943 xi_max / v`, `xi_max = (5 mu v^2 / (4 k sqrt(R_eff)))^(2/5)`,
-    /// `mu = m/2`, `R_eff = d_max / 4` (MODEL.md Eq. 2.7; `physics::hertz::contact_time`). At the
+    /// `mu = m/2`, `R_eff = d_max / 4` (docs/model.md Eq. 2.7; `physics::hertz::contact_time`). At the
     /// default stiffness this is 4.0e-4; a longer step lets the integrator blow up
     /// (docs/reliability.md, "Hard cases at length").
     ///

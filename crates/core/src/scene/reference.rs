@@ -5,7 +5,7 @@
 //!   40), no gravity, `T = 1` ([`system_a`]);
 //! - (b) 3D gravity: 32000 elastic spheres, `g = 1`, box 80 x 80 x 40 periodic laterally with
 //!   floor and lid, `T = 1` ([`system_b`]);
-//! - (c) the 2D standard wet system (scenes/standard_wet_2d.toml, MODEL.md 1): 1200 disks, box
+//! - (c) the 2D standard wet system (scenes/standard_wet_2d.toml, docs/model.md 1): 1200 disks, box
 //!   400 x 9, `sigma_p = 0.06`, thin-thread bridges, particle restitution 0.9, wall restitution
 //!   1, `T_g / E_cb = 20` ([`system_c`]), shaken by [`shaken_standard`];
 //! - (c') the same system dry at the same absolute temperature ([`system_c_dry`]);

@@ -1149,7 +1149,7 @@ impl Scene {
         Ok(())
     }
 
-    /// The shear drive (MODEL.md 4.2): 3D, `x` and `y` periodic, floor and lid, `f_max >= 0`,
+    /// The shear drive (docs/model.md 4.2): 3D, `x` and `y` periodic, floor and lid, `f_max >= 0`,
     /// `0 < slab_width <= L_x`, none of the shaking keys.
     fn validate_shear(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let drive = &self.drive;
@@ -1157,7 +1157,7 @@ impl Scene {
             return Err(c.err(
                 "drive.kind",
                 "= \"shear\" needs dimension = 3: the force acts along y and varies along x \
-                 (Kolmogorov flow, MODEL.md 4.2); a 2D box (axes x, z) has no y axis"
+                 (Kolmogorov flow, docs/model.md 4.2); a 2D box (axes x, z) has no y axis"
                     .into(),
             ));
         }

@@ -51,7 +51,7 @@ pub struct EnergyLedger {
     /// (`table` solver, B.5.1); zero for the other solvers.
     pub added_by_wall_placement: f64,
     /// Work done on the particles by the drive: the shaken walls, or the shear field
-    /// (`sum m a_k dy` over every flight in slab `k`, MODEL.md 4.2).
+    /// (`sum m a_k dy` over every flight in slab `k`, docs/model.md 4.2).
     pub work_by_drive: f64,
 }
 

@@ -19,7 +19,7 @@ pub struct Frame {
     /// Whether each axis is periodic.
     pub periodic: Vec<bool>,
     /// Vertical displacement of the container (floor and lid) at `time`: `A sin(omega t)`
-    /// for a shaken scene (MODEL.md 4.1), 0 otherwise. The floor is at `z = wall_offset`, the lid
+    /// for a shaken scene (docs/model.md 4.1), 0 otherwise. The floor is at `z = wall_offset`, the lid
     /// at `z = H + wall_offset`.
     pub wall_offset: f64,
     /// Particle mass (the same for all).

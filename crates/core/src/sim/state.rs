@@ -58,7 +58,7 @@ impl EngineState {
     /// The start state of a continuation job: this final state of the neighbouring sweep point,
     /// whose scene was `prev`, carried into the next point's container. Positions along the
     /// vertical axis (the last) move into the container frame: the shaken floor and lid of
-    /// `prev` were displaced by `z_w(t) = A sin(omega t)` (MODEL.md 4.1, Eq. B.7) at the state's
+    /// `prev` were displaced by `z_w(t) = A sin(omega t)` (docs/model.md 4.1, Eq. B.7) at the state's
     /// time, and the next run starts at `t = 0` where its own walls are at `z_w = 0`; so every
     /// grain keeps its distance to floor and lid. Velocities (lab frame) and bridges are kept;
     /// time, event counts and the ledger start again from zero (the next job's ledger covers

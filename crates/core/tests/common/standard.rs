@@ -1,4 +1,4 @@
-//! The 2D standard wet system of MODEL.md 1, built in one place for every test (and the
+//! The 2D standard wet system of docs/model.md 1, built in one place for every test (and the
 //! `engines_like_scan` example) that runs it: N grains in `l_x d x 9 d` (N = 1200 in 400 x 9 is
 //! the standard), polydispersity 0.06, thin-thread bridges with the standard `s_crit = 0.0711`
 //! and `E_cb = 0.2844`, elastic walls, periodic along x, a sinusoidally shaken floor and lid at
@@ -16,10 +16,10 @@ use wetgran_core::scene::{EngineKind, RestitutionSpeed, Scene};
 pub const STANDARD_SEED: u64 = 1;
 /// The second seed of the seed-invariance checks.
 pub const OTHER_SEED: u64 = 2;
-/// `E_cb` of the standard system (MODEL.md 1), units of m g d.
+/// `E_cb` of the standard system (docs/model.md 1), units of m g d.
 pub const E_CB: f64 = 0.2844;
 
-/// The driving period `T = 2 pi v_w / (Gamma g)` with `v_w = sqrt(2 E* E_cb / m)` (MODEL.md
+/// The driving period `T = 2 pi v_w / (Gamma g)` with `v_w = sqrt(2 E* E_cb / m)` (docs/model.md
 /// 4.1; m = g = 1).
 pub fn driving_period(gamma: f64, e_star: f64) -> f64 {
     std::f64::consts::TAU * (2.0 * e_star * E_CB).sqrt() / gamma

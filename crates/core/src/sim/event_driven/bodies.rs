@@ -47,7 +47,7 @@ pub struct Bodies<const D: usize, const GRAV: bool, const SHEAR: bool> {
     pub gravity: f64,
     pub mass: f64,
     /// Work of the shear field on the flights already brought up to date
-    /// (`sum m a_k dy`, MODEL.md 4.2); 0 without shear.
+    /// (`sum m a_k dy`, docs/model.md 4.2); 0 without shear.
     pub field_work: f64,
 }
 

@@ -159,7 +159,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         // The initial state is in the bodies now: free it before the other arrays are built
         // (the peak memory of the build).
         drop(init);
-        // Times of the last collisions feed only the TC model (`tc > 0`, MODEL.md 2.1).
+        // Times of the last collisions feed only the TC model (`tc > 0`, docs/model.md 2.1).
         let tc_model = scene.engine.tc > 0.0;
         let bodies = Bodies {
             body,

@@ -14,7 +14,7 @@ pub enum EventKind {
     /// Contact of `i` with `partner` (hard-core collision, and bridge formation if wet). Valid
     /// only while the partner's velocity-change counter still reads `partner_count`.
     Collide { partner: u32, partner_count: u32 },
-    /// A bonded pair at `s = s_crit`: bounce off the well wall or rupture (MODEL.md 3.2);
+    /// A bonded pair at `s = s_crit`: bounce off the well wall or rupture (docs/model.md 3.2);
     /// validated like [`EventKind::Collide`].
     Well { partner: u32, partner_count: u32 },
     /// Crossing of a cell face along `axis`, upwards or downwards.

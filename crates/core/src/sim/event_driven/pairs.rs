@@ -1,5 +1,5 @@
 //! Event source of particle pairs: hard-core collisions and, with bridges (`WET`), the
-//! thin-thread bridges and their well events (MODEL.md 2.1, 3.2). [`PairSource`] owns each
+//! thin-thread bridges and their well events (docs/model.md 2.1, 3.2). [`PairSource`] owns each
 //! particle's earliest pair event and the bond lists.
 //!
 //! Prediction: all particles feel the same gravity, so the relative motion of two particles in
@@ -636,7 +636,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         }
     }
 
-    /// Bonded pair at `s = s_crit` at time `t`: bounce or rupture (MODEL.md 3.2).
+    /// Bonded pair at `s = s_crit` at time `t`: bounce or rupture (docs/model.md 3.2).
     pub fn well_edge<const G: bool, const S: bool>(
         &mut self,
         i: usize,

@@ -1,4 +1,4 @@
-//! The shear drive in the event-driven engine (MODEL.md 4.2): the slabs of constant body force
+//! The shear drive in the event-driven engine (docs/model.md 4.2): the slabs of constant body force
 //! along `y`, their faces, and the pair predictions of two particles that feel different forces.
 //!
 //! The force `F_max cos(2 pi x / L_x)` (Eq. 2.20) is made piecewise constant over `n` slabs of

@@ -1,4 +1,4 @@
-//! Event source of the shear drive (MODEL.md 4.2): the slabs of constant force along `x` and
+//! Event source of the shear drive (docs/model.md 4.2): the slabs of constant force along `x` and
 //! each particle's next slab-face crossing. Empty (no field, no per-particle state) unless the
 //! engine's `SHEAR` flag is set.
 //!

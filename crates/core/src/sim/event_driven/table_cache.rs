@@ -1,4 +1,4 @@
-//! A bounded cache of the `table` wall solver's tables ([`WallTable`], MODEL.md 6, B.4-B.5):
+//! A bounded cache of the `table` wall solver's tables ([`WallTable`], docs/model.md 6, B.4-B.5):
 //! one table per `(wall motion, table spec)`, built on first use, shared by every engine that
 //! asks for it, and evicted least recently used first once the cached tables exceed a size cap.
 //!

@@ -1,5 +1,5 @@
 //! Event source of the walls: static flat walls on every non-periodic axis and the shaken floor
-//! and lid (MODEL.md 4.1, 6) under one of three solvers, chosen once at scene start as a
+//! and lid (docs/model.md 4.1, 6) under one of three solvers, chosen once at scene start as a
 //! [`WallSolver`] that owns its state (the `table` solver's two tables and its one-particle
 //! memories). [`WallSource`] keeps each particle's next wall event.
 //!
@@ -263,7 +263,7 @@ impl WallSource {
         }
     }
 
-    /// Times until particle `i` meets the shaken lid and floor (MODEL.md 6), with the scene's
+    /// Times until particle `i` meets the shaken lid and floor (docs/model.md 6), with the scene's
     /// solver. The search looks two periods ahead; a particle that meets neither gets a
     /// re-check at the horizon (a wall event that finds no contact and only re-predicts). The
     /// lid is the floor problem mirrored: depth below the lid's mean position, velocity
@@ -379,7 +379,7 @@ impl WallSource {
     }
 
     /// Collision with the shaken floor or lid, `v' = v_w + e_w (v_w - v)` along the normal
-    /// (MODEL.md 4.1), with the collapse remedies applied to the speed relative to the wall. An
+    /// (docs/model.md 4.1), with the collapse remedies applied to the speed relative to the wall. An
     /// event that finds the particle away from the wall is a re-check and changes nothing.
     #[allow(clippy::too_many_arguments)]
     fn shaken_collision<const D: usize, const G: bool, const S: bool>(

@@ -6,7 +6,7 @@
 //! and velocity of the particles that some pair of the other domain reaches (a few dozen near
 //! the two cuts), published into a double buffer.
 //!
-//! Per domain and step (MODEL.md 2.2, Eq. 2.7 and 3.1; the same kernels as the serial step):
+//! Per domain and step (docs/model.md 2.2, Eq. 2.7 and 3.1; the same kernels as the serial step):
 //!
 //! 1. the pairs inside the domain, each once (Newton's third law, `pair_forces_serial`);
 //! 2. the **cross pairs** (one end in each domain), each computed by *both* domains, each
@@ -892,7 +892,7 @@ impl<const D: usize> Domain<D> {
     }
 }
 
-/// Forces of the cross pairs on this domain's particles (Eq. 2.7 and MODEL.md 3.1, the
+/// Forces of the cross pairs on this domain's particles (Eq. 2.7 and docs/model.md 3.1, the
 /// arithmetic of `pair_forces_serial` with the partner read from the halo `ghosts`: `2 D`
 /// values per ghost, position then velocity array value); updates the pairs' flags; returns
 /// the books (the caller keeps them in one domain only).

@@ -1,5 +1,5 @@
 //! Time-driven molecular dynamics of soft (Hertz) disks and spheres with the minimal capillary
-//! model (MODEL.md 2.2, 3.1): the second, independent engine, chosen by `engine.kind = "time"`.
+//! model (docs/model.md 2.2, 3.1): the second, independent engine, chosen by `engine.kind = "time"`.
 //!
 //! - `damping`: damping constants, given or derived from a restitution (`scene::damping`: the
 //!   scene's validation needs them to bound the time step);

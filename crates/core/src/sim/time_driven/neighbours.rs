@@ -12,7 +12,7 @@
 
 /// Entry flag: the pair overlapped at the last force evaluation.
 pub const CONTACT: u8 = 1;
-/// Entry flag: the pair holds a capillary bridge (MODEL.md 3.1).
+/// Entry flag: the pair holds a capillary bridge (docs/model.md 3.1).
 pub const BOND: u8 = 2;
 
 /// The exact displacement test of the list runs at least every this many steps (it bounds the

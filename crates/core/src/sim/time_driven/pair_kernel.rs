@@ -1,5 +1,5 @@
 //! The pair kernel of the time-driven engine: the force of one Verlet-list entry (damped Hertz
-//! contact, Eq. 2.7; the minimal capillary bridge, MODEL.md 3.1) and its bookkeeping, and the
+//! contact, Eq. 2.7; the minimal capillary bridge, docs/model.md 3.1) and its bookkeeping, and the
 //! two loops over the list that every execution strategy uses: [`pair_chunk`] (one chunk of
 //! entries, the parallel pair phase) and [`pair_forces_serial`] (the whole list on one thread,
 //! the serial path and the spatial domains). Both call [`pair_response`] per entry and sum the
@@ -38,7 +38,7 @@ pub(super) struct PairBooks {
     pub ruptures: u64,
 }
 
-/// Pair forces (Eq. 2.7 and MODEL.md 3.1) of the Verlet-list entries of one chunk: entry `m`
+/// Pair forces (Eq. 2.7 and docs/model.md 3.1) of the Verlet-list entries of one chunk: entry `m`
 /// is the pair `(row_of[m], partner[m])`; its force on the row's particle goes to
 /// `pf[m * D..(m + 1) * D]` (zeros when the pair does not interact), and its contact and bond
 /// flags are updated. A free function of slices so that the compiler keeps every array in a
@@ -110,7 +110,7 @@ pub(super) fn pair_chunk<const D: usize, const WET: bool>(
     b
 }
 
-/// The response of one pair within reach (Eq. 2.7 and MODEL.md 3.1): force magnitude along the
+/// The response of one pair within reach (Eq. 2.7 and docs/model.md 3.1): force magnitude along the
 /// line of centres, new contact and bond flags, and what the step books. Shared by every pair
 /// loop (the serial loop, the parallel chunks, the spatial domains' cross pairs), so that they
 /// take the same decisions with the same arithmetic; `vrel(k)` is `v_i - v_j` along axis `k`
@@ -208,7 +208,7 @@ pub(super) fn pair_response<const D: usize, const WET: bool>(
         }
         out.fmag = total;
         if WET && fl & BOND == 0 {
-            // MODEL.md 3.1: a bridge forms at contact; its energy F_B s starts at
+            // docs/model.md 3.1: a bridge forms at contact; its energy F_B s starts at
             // F_B (-overlap).
             out.flags |= BOND;
             out.formation = true;
@@ -225,7 +225,7 @@ pub(super) fn pair_response<const D: usize, const WET: bool>(
             out.rupture = true;
             out.ledger = pc.bridge_force * s;
         } else {
-            // MODEL.md 3.1: constant attraction F_B along the line of centres.
+            // docs/model.md 3.1: constant attraction F_B along the line of centres.
             out.fmag -= pc.bridge_force;
         }
     }
@@ -233,7 +233,7 @@ pub(super) fn pair_response<const D: usize, const WET: bool>(
 }
 
 /// The pair loop of the serial path ([`TimeEngine::forces_then_serial`]): forces (Eq. 2.7 and
-/// MODEL.md 3.1) over the Verlet list, each pair once (Newton's third law), added to `f` (the
+/// docs/model.md 3.1) over the Verlet list, each pair once (Newton's third law), added to `f` (the
 /// partner's share at once, the row's own sum at the end of its row); updates the contact and
 /// bond flags. The same arithmetic as [`pair_chunk`] and the gather of [`particle_chunk`]; the
 /// dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries as there.

@@ -1,4 +1,4 @@
-//! The continuous Kolmogorov shear force of the time-driven engine (MODEL.md 4.2, Eq. 2.20):
+//! The continuous Kolmogorov shear force of the time-driven engine (docs/model.md 4.2, Eq. 2.20):
 //! `F_s(x) = F_max cos(2 pi x / L_x)` along `y`, the same on every particle (equal masses).
 //! The event-driven engine uses the slab-constant version of the same field
 //! (`sim::event_driven::shear`); this one is what the slabs approximate.

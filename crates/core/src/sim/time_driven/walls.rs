@@ -1,4 +1,4 @@
-//! The Hertz walls of the time-driven engine (MODEL.md 4.1; Eq. 2.7 with `R_eff = R_i`): the
+//! The Hertz walls of the time-driven engine (docs/model.md 4.1; Eq. 2.7 with `R_eff = R_i`): the
 //! force of the lower and upper wall of one non-periodic axis on a run of particles, with the
 //! contact onsets, the damping's dissipation and the drive's work. One function shared by the
 //! serial and the parallel step (`engine.rs`).

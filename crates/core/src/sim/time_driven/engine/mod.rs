@@ -1,6 +1,6 @@
 //! The time-driven engine: soft disks (`D = 2`) and spheres (`D = 3`) with damped Hertz contacts
-//! (MODEL.md 2.2, Eq. 2.7), the minimal capillary model (MODEL.md 3.1), gravity, periodic lateral
-//! axes, static or sinusoidally shaken Hertz floor and lid (MODEL.md 4.1) and an optional body
+//! (docs/model.md 2.2, Eq. 2.7), the minimal capillary model (docs/model.md 3.1), gravity, periodic lateral
+//! axes, static or sinusoidally shaken Hertz floor and lid (docs/model.md 4.1) and an optional body
 //! force per particle ([`BodyForce`]).
 //!
 //! Effects are compile-time parameters, chosen once at scene start: `GRAV` (gravity), `WET`
@@ -23,7 +23,7 @@
 //!
 //! Energy bookkeeping ([`EnergyLedger`], same fields as the event engine):
 //! - `potential`: gravity `m g z`, Hertz elastic energy of pairs and walls (`(2/5) k sqrt(R_eff)
-//!   xi^(5/2)`), and the bridge energy `F_B s` of every bonded pair (MODEL.md 3.1: zero at
+//!   xi^(5/2)`), and the bridge energy `F_B s` of every bonded pair (docs/model.md 3.1: zero at
 //!   contact, `E_cb` at rupture);
 //! - `dissipated_restitution`: work of the damping part of Eq. 2.7, `sum F_damp xi_dot dt`;
 //! - `dissipated_ruptures`: the bridge energy `F_B s` removed at each rupture (about `E_cb`),
@@ -59,7 +59,7 @@ mod stepping;
 use stepping::{ChunkBooks, Then};
 
 /// A force per particle that depends on its position and the time (hook for driving by a body
-/// force, e.g. the shear force of MODEL.md 4.2). Its work is booked in `work_by_drive`.
+/// force, e.g. the shear force of docs/model.md 4.2). Its work is booked in `work_by_drive`.
 pub trait BodyForce<const D: usize>: Send + Sync {
     /// Whether the force exists (false compiles the call away).
     const ACTIVE: bool;
@@ -127,7 +127,7 @@ struct Params<const D: usize> {
     damping: f64,
     wall_damping: f64,
     s_crit: f64,
-    /// `F_B = E_cb / s_crit` (MODEL.md 3.1).
+    /// `F_B = E_cb / s_crit` (docs/model.md 3.1).
     bridge_force: f64,
     /// `(A, omega)` of the shaken floor and lid.
     drive: Option<(f64, f64)>,

@@ -666,7 +666,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
 /// The walls of every axis at time `t` (used on the non-periodic ones): Hertz with
 /// `R_eff = R_i`; the last axis's walls move with the drive, `z_w(t) = A sin(omega t)`
-/// (MODEL.md 4.1). `vs` turns the velocity array into velocities, `dt` weights the books.
+/// (docs/model.md 4.1). `vs` turns the velocity array into velocities, `dt` weights the books.
 fn wall_axes<const D: usize>(p: &Params<D>, t: f64, vs: f64, dt: f64) -> [WallAxis; D] {
     let (zw, vw) = match p.drive {
         Some((a, w)) => (a * (w * t).sin(), a * w * (w * t).cos()),
