@@ -14,7 +14,8 @@ mod common;
 use common::scene;
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::event_driven::Engine;
-use wetgran_core::sim::event_driven::queue::{CalendarQueue, EventQueue, HeapQueue, NaiveQueue};
+use wetgran_core::sim::event_driven::queue::{CalendarQueue, EventQueue};
+use wetgran_core::sim::event_driven::reference_queues::{HeapQueue, NaiveQueue};
 
 /// FNV-1a over 64-bit words.
 struct Digest(u64);

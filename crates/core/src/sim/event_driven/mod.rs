@@ -3,7 +3,8 @@
 //! One role per module (the structure is described in ARCHITECTURE.md, "Event engine"):
 //! - `engine`: the scheduler (clock, bodies, queue, books: pop, validate, dispatch);
 //! - `event`: the `Copy` event value and the sources' compact predictions;
-//! - `queue`: the `EventQueue` trait, the heap and the naive reference queue;
+//! - `queue`: the `EventQueue` trait and the calendar queue; `reference_queues` (tests only):
+//!   the heap and the naive reference queue;
 //! - `bodies`: delayed particle states and free flight;
 //! - `pairs`, `cell_source`, `walls`, `slabs`: the event sources;
 //! - `cells`: the neighbour grid; `shear`: the shear field and the sheared pair quartics;
@@ -18,6 +19,8 @@ pub mod event;
 pub mod ledger;
 pub mod pairs;
 pub mod queue;
+#[cfg(any(test, feature = "testing"))]
+pub mod reference_queues;
 pub mod shear;
 pub mod slabs;
 pub mod table_cache;
