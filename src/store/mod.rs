@@ -18,9 +18,10 @@
 //! every method blocks on it. Only the thread that owns the store talks to the database.
 //!
 //! Claims and crashes:
-//! - A claim is one `UPDATE ... WHERE id = (SELECT ... status = 'pending' LIMIT 1) AND status =
-//!   'pending' RETURNING` inside a `BEGIN IMMEDIATE` transaction: two runners cannot claim the
-//!   same job.
+//! - A claim reads the first row of its sweep's queue (`sweep_points.claim_rank`, kept by
+//!   triggers: migration `20261127000000_claim_queue.sql`) and sets that job running, inside
+//!   one `BEGIN IMMEDIATE` transaction: two runners cannot claim the same job. The queue is a
+//!   partial index ordered as the claim takes it, so a claim costs the same at any sweep size.
 //! - A runner owns its jobs under an owner name `host:pid:nonce` and refreshes their heartbeat
 //!   every [`HEARTBEAT_INTERVAL`].
 //! - A running job is orphaned when its heartbeat is older than [`STALE_AFTER`] (twelve missed
@@ -41,6 +42,8 @@
 mod cluster;
 pub mod hysteresis;
 mod queries;
+#[cfg(test)]
+mod query_plans;
 
 pub use cluster::{TaskRow, TaskState};
 
@@ -898,6 +901,7 @@ impl Store {
                 .bind(&job.id)
                 .bind(job.spec.canonical_json())
                 .bind(t)
+                .bind(&job.spec.start_from)
                 .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
@@ -1062,14 +1066,26 @@ impl Store {
     fn claim_in(&self, sweep_id: i64) -> Result<Option<Claim>, StoreError> {
         let t = now();
         let claimed = self.in_transaction(async |tx| {
-            let row: Option<(String, String)> = sqlx::query_as(queries::CLAIM_NEXT_JOB)
+            // Both statements run under the transaction's write lock: the row read first is
+            // still pending when it is claimed. The guard `status = 'pending'` in CLAIM_JOB
+            // holds anyway (a queue row with a rank is always a pending job's).
+            let next: Option<(String, i64, i64, String, String)> =
+                sqlx::query_as(queries::NEXT_CLAIMABLE_POINT)
+                    .bind(sweep_id)
+                    .fetch_optional(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+            let Some((job_id, point, replica, coords, sweep)) = next else {
+                return Ok(None);
+            };
+            let spec: Option<String> = sqlx::query_scalar(queries::CLAIM_JOB)
+                .bind(&job_id)
                 .bind(&self.owner)
                 .bind(t)
-                .bind(sweep_id)
                 .fetch_optional(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
-            let Some((job_id, spec)) = row else {
+            let Some(spec) = spec else {
                 return Ok(None);
             };
             let run_id: i64 = sqlx::query_scalar(queries::INSERT_RUN)
@@ -1079,13 +1095,6 @@ impl Store {
                 .fetch_one(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
-            let (point, replica, coords, sweep): (i64, i64, String, String) =
-                sqlx::query_as(queries::CLAIMED_POINT)
-                    .bind(sweep_id)
-                    .bind(&job_id)
-                    .fetch_one(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
             Ok::<_, StoreError>(Some((job_id, run_id, spec, point, replica, coords, sweep)))
         })?;
         let Some((job_id, run_id, spec, point, replica, coords, sweep)) = claimed else {
