@@ -39,6 +39,8 @@
 //! prepare each one against a freshly migrated database. A schema change is a new migration in
 //! `migrations/`.
 
+#[cfg(test)]
+mod claim_queue_tests;
 mod cluster;
 pub mod hysteresis;
 mod queries;
