@@ -52,7 +52,7 @@ pub use cluster::{TaskRow, TaskState};
 use crate::sweep::file::{Axis, SweepFile};
 use crate::sweep::job::JobResult;
 use crate::sweep::spec::{JobSpec, SweepJob};
-use sqlx::sqlite::{SqliteConnectOptions, SqlitePool, SqlitePoolOptions};
+use sqlx::sqlite::{SqliteConnectOptions, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
 use sqlx::{Row, SqliteConnection};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -243,6 +243,21 @@ pub const REFINED_FROM: i64 = crate::sweep::file::MAX_JOBS as i64;
 /// ([`JobSpec::identity`]). A database without it is re-keyed when opened.
 pub const JOB_ID_RULE: &str = "spec-without-classify";
 
+/// When a commit reaches the disk (docs/reliability.md, "Commits without a sync").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Durability {
+    /// Every commit syncs the write-ahead log to disk before it returns (SQLite
+    /// `synchronous = FULL`): a committed transaction survives a power loss.
+    Synced,
+    /// Commits append to the write-ahead log without a sync; the log is synced when SQLite
+    /// checkpoints it into the database (`synchronous = NORMAL` in WAL mode). A committed
+    /// transaction survives the death of the process (kill -9: its writes are in the operating
+    /// system's cache); a power loss or an operating-system crash may roll back the last
+    /// transactions, each whole, and never damages the file. For local runs (`sweep run`,
+    /// `sweep resume`), where every such transaction can be made again.
+    Fast,
+}
+
 /// An open wetgran database.
 #[derive(Debug)]
 pub struct Store {
@@ -404,21 +419,23 @@ fn inspect(path: &Path) -> Result<Existing, StoreError> {
 impl Store {
     /// Opens (creating if needed) the database at `path` and applies the migrations.
     pub fn open(path: &Path) -> Result<Store, StoreError> {
-        Self::open_impl(path, true)
+        Self::open_as(path, true, Durability::Synced)
     }
 
     /// Opens an existing database; a missing file is an error (nothing is created).
     pub fn open_existing(path: &Path) -> Result<Store, StoreError> {
-        Self::open_impl(path, false)
+        Self::open_as(path, false, Durability::Synced)
     }
 
-    fn open_impl(path: &Path, create: bool) -> Result<Store, StoreError> {
+    /// Opens the database at `path` (creating it if `create`, else a missing file is an error)
+    /// with commits as `durability` says.
+    pub fn open_as(path: &Path, create: bool, durability: Durability) -> Result<Store, StoreError> {
         // Two runners starting at once on a new file race to initialise it: the loser's
         // journal-mode switch or migration fails (its transaction rolls back) and it tries again,
         // then finding the file initialised.
         let mut attempt = 0;
         loop {
-            match Self::open_once(path, create) {
+            match Self::open_once(path, create, durability) {
                 Err(StoreError::Db { .. }) if attempt < 6 => {
                     attempt += 1;
                     std::thread::sleep(Duration::from_millis(50 * attempt));
@@ -428,7 +445,7 @@ impl Store {
         }
     }
 
-    fn open_once(path: &Path, create: bool) -> Result<Store, StoreError> {
+    fn open_once(path: &Path, create: bool, durability: Durability) -> Result<Store, StoreError> {
         let p = path.display().to_string();
         let existing = inspect(path)?;
         if matches!(existing, Existing::New) && !create {
@@ -450,7 +467,11 @@ impl Store {
             .filename(path)
             .create_if_missing(true)
             .busy_timeout(busy)
-            .foreign_keys(true);
+            .foreign_keys(true)
+            .synchronous(match durability {
+                Durability::Synced => SqliteSynchronous::Full,
+                Durability::Fast => SqliteSynchronous::Normal,
+            });
         let pool = rt
             .block_on(
                 SqlitePoolOptions::new()

@@ -75,6 +75,18 @@ enum Command {
         /// Folder for the databases (default: the system's temporary folder).
         #[arg(long)]
         dir: Option<PathBuf>,
+        /// Sync every commit to disk (SQLite `synchronous = FULL`) instead of committing as
+        /// `sweep run` does (`NORMAL`).
+        #[arg(long)]
+        synced: bool,
+        /// Which reports to time, comma-separated (`status`, `boundaries`, `plot`, `export`,
+        /// `reclassify`).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "status,boundaries,plot,export,reclassify"
+        )]
+        reports: Vec<String>,
     },
     /// Run the engines' hard cases at length with the invariant checks on, and print per case
     /// the events (or time steps), simulated time, largest overlap, energy-ledger error, NaN
@@ -104,10 +116,18 @@ fn main() -> ExitCode {
             workers,
             repeat,
             dir,
+            synced,
+            reports,
         }) => match wetgran_bench::orchestrator::run(
             &sizes,
             workers.max(1),
             repeat.max(1),
+            if synced {
+                wetgran::store::Durability::Synced
+            } else {
+                wetgran::store::Durability::Fast
+            },
+            &reports,
             dir.as_deref(),
         ) {
             Ok(text) => {

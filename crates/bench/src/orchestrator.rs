@@ -16,16 +16,19 @@
 //!   with the sweep would show in the last tenth);
 //! - the database size per result (file + WAL after the run, divided by N).
 //!
+//! The store commits as `sweep run` does (without a sync per commit, `Durability::Fast`), or
+//! with `--synced` as every other command does.
+//!
 //! Then the reports, each as the `wetgran` binary beside this one runs them on that database
 //! (process start included): `sweep status`, `boundaries`, `plot`, `export` (CSV to a file),
-//! `reclassify`, each the median of `--repeat` runs.
+//! `reclassify` (those named by `--reports`), each the median of `--repeat` runs.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use wetgran::run::{JobFn, RunOptions, run_sweeps_with};
-use wetgran::store::Store;
+use wetgran::store::{Durability, Store};
 use wetgran::sweep::{JobResult, SweepFile, run_job};
 
 /// The base scene of the benchmark sweep (the quickstart's).
@@ -122,7 +125,14 @@ pub struct Figures {
 }
 
 /// Runs the benchmark at one size in `dir`.
-pub fn measure(n: usize, workers: usize, repeat: usize, dir: &Path) -> Result<Figures, String> {
+pub fn measure(
+    n: usize,
+    workers: usize,
+    repeat: usize,
+    durability: Durability,
+    reports: &[String],
+    dir: &Path,
+) -> Result<Figures, String> {
     let (n_gamma, n_e) = grid(n);
     let jobs_n = n_gamma * n_e;
     std::fs::write(dir.join("shaken_wet_2d.toml"), BASE_SCENE).map_err(|e| e.to_string())?;
@@ -147,7 +157,7 @@ pub fn measure(n: usize, workers: usize, repeat: usize, dir: &Path) -> Result<Fi
     );
 
     let db = dir.join("bench.sqlite");
-    let store = Store::open(&db).map_err(|e| e.to_string())?;
+    let store = Store::open_as(&db, true, durability).map_err(|e| e.to_string())?;
     let t0 = Instant::now();
     let sweep = store
         .register_sweep(&file, &jobs)
@@ -232,14 +242,17 @@ pub fn measure(n: usize, workers: usize, repeat: usize, dir: &Path) -> Result<Fi
         ),
     ];
     let out = dir.join("stdout.txt");
-    let mut reports = Vec::new();
+    let mut timed = Vec::new();
     for (name, args) in &commands {
+        if !reports.iter().any(|r| name.contains(r.as_str())) {
+            continue;
+        }
         let mut times = Vec::new();
         for _ in 0..repeat {
             times.push(time_command(&bin, args, &out)?);
         }
         eprintln!("N = {jobs_n}: {name} {:.3} s", median(times.clone()));
-        reports.push((name.to_string(), median(times)));
+        timed.push((name.to_string(), median(times)));
     }
     Ok(Figures {
         jobs: jobs_n,
@@ -250,18 +263,22 @@ pub fn measure(n: usize, workers: usize, repeat: usize, dir: &Path) -> Result<Fi
         gap_first_ms: (median(first.clone()), quantile(first, 0.99)),
         gap_last_ms: (median(last.clone()), quantile(last, 0.99)),
         db_bytes_per_result: db_bytes as f64 / jobs_n as f64,
-        reports,
+        reports: timed,
     })
 }
 
 /// The table of figures.
-pub fn text(rows: &[Figures], workers: usize) -> String {
+pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String {
     use std::fmt::Write as _;
     let mut s = String::new();
     let _ = writeln!(
         s,
         "orchestrator: stand-in jobs of the real result shape, {workers} worker(s), file \
-         database"
+         database, commits {}",
+        match durability {
+            Durability::Synced => "synced (synchronous = FULL)",
+            Durability::Fast => "without a sync (synchronous = NORMAL, as `sweep run`)",
+        }
     );
     let _ = writeln!(
         s,
@@ -292,19 +309,13 @@ pub fn text(rows: &[Figures], workers: usize) -> String {
         );
     }
     let _ = writeln!(s, "reports (median seconds, `wetgran` process included):");
-    let _ = write!(s, "{:>8}", "jobs");
-    if let Some(r) = rows.first() {
-        for (name, _) in &r.reports {
-            let _ = write!(s, " {:>22}", name);
-        }
-    }
-    let _ = writeln!(s);
     for r in rows {
-        let _ = write!(s, "{:>8}", r.jobs);
-        for (_, t) in &r.reports {
-            let _ = write!(s, " {:>22.3}", t);
-        }
-        let _ = writeln!(s);
+        let parts: Vec<String> = r
+            .reports
+            .iter()
+            .map(|(name, t)| format!("{name} {t:.3}"))
+            .collect();
+        let _ = writeln!(s, "{:>8}  {}", r.jobs, parts.join(", "));
     }
     s
 }
@@ -315,6 +326,8 @@ pub fn run(
     sizes: &[usize],
     workers: usize,
     repeat: usize,
+    durability: Durability,
+    reports: &[String],
     dir: Option<&Path>,
 ) -> Result<String, String> {
     let mut rows = Vec::new();
@@ -324,9 +337,16 @@ pub fn run(
             None => tempfile::tempdir(),
         }
         .map_err(|e| format!("cannot make a temporary folder: {e}"))?;
-        rows.push(measure(n, workers, repeat, tmp.path())?);
+        rows.push(measure(
+            n,
+            workers,
+            repeat,
+            durability,
+            reports,
+            tmp.path(),
+        )?);
     }
-    Ok(text(&rows, workers))
+    Ok(text(&rows, workers, durability))
 }
 
 #[cfg(test)]
