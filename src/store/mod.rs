@@ -68,6 +68,8 @@ pub const BUSY_TIMEOUT: Duration = Duration::from_secs(30);
 pub const BUSY_TIMEOUT_VAR: &str = "WETGRAN_BUSY_TIMEOUT";
 /// How often a runner refreshes the heartbeat of its running jobs.
 pub const HEARTBEAT_INTERVAL: Duration = Duration::from_secs(5);
+/// The page cache of a store's connection, KiB.
+const CACHE_KIB: u32 = 64 * 1024;
 /// A running job whose heartbeat is older than this is re-queued.
 pub const STALE_AFTER: Duration = Duration::from_secs(60);
 
@@ -471,7 +473,11 @@ impl Store {
             .synchronous(match durability {
                 Durability::Synced => SqliteSynchronous::Full,
                 Durability::Fast => SqliteSynchronous::Normal,
-            });
+            })
+            // Page cache of the one connection, in KiB (negative: a size, not a page count):
+            // job ids are hashes, so every job, result and run row lands on a random page of
+            // its index; SQLite's default 2 MiB holds those pages of ~10^3 jobs, this of ~10^5.
+            .pragma("cache_size", format!("-{CACHE_KIB}"));
         let pool = rt
             .block_on(
                 SqlitePoolOptions::new()
