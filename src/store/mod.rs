@@ -384,7 +384,16 @@ enum Existing {
 
 fn inspect(path: &Path) -> Result<Existing, StoreError> {
     let p = path.display().to_string();
-    let bytes = match std::fs::read(path) {
+    // The 100-byte header only: a database of 10^5 results is gigabytes.
+    let header = || -> std::io::Result<Vec<u8>> {
+        use std::io::Read as _;
+        let mut bytes = Vec::with_capacity(100);
+        std::fs::File::open(path)?
+            .take(100)
+            .read_to_end(&mut bytes)?;
+        Ok(bytes)
+    };
+    let bytes = match header() {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Existing::New),
         Err(e) => {
