@@ -191,7 +191,7 @@ pub fn run_sweeps_with(
                 .spawn(move || {
                     let _tables = tables.enter();
                     let _cores = threads::enter(&cores, w);
-                    worker(w, rx, out, &*job)
+                    worker(w, rx, out, job)
                 })
                 .expect("spawn a worker thread"),
         );
@@ -328,12 +328,7 @@ fn continuation_start(
 }
 
 /// A worker: runs every claim it receives and reports back.
-fn worker(
-    w: usize,
-    jobs: mpsc::Receiver<Claim>,
-    out: mpsc::Sender<Msg>,
-    job: &(dyn Fn(&Claim, &mut dyn FnMut(f64)) -> Result<JobResult, JobError> + Send + Sync),
-) {
+fn worker(w: usize, jobs: mpsc::Receiver<Claim>, out: mpsc::Sender<Msg>, job: JobFn) {
     while let Ok(claim) = jobs.recv() {
         let t0 = Instant::now();
         let mut last = -1.0;
