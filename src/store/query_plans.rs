@@ -251,8 +251,8 @@ async fn trigger_statements(conn: &mut SqliteConnection) -> Vec<(String, String)
     out
 }
 
-#[test]
-fn no_query_or_trigger_scans_jobs_results_or_sweep_points() {
+/// Runs `body` on a fresh database made by [`populated`].
+fn on_populated(body: impl AsyncFnOnce(&mut SqliteConnection)) {
     let dir = tempfile::tempdir().unwrap();
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
@@ -260,6 +260,13 @@ fn no_query_or_trigger_scans_jobs_results_or_sweep_points() {
         .unwrap();
     rt.block_on(async {
         let mut conn = populated(dir.path()).await;
+        body(&mut conn).await;
+    });
+}
+
+#[test]
+fn no_query_or_trigger_scans_jobs_results_or_sweep_points() {
+    on_populated(async |conn| {
         let mut failures = Vec::new();
         let mut planned = 0;
         for (stem, text) in ALL {
@@ -275,19 +282,19 @@ fn no_query_or_trigger_scans_jobs_results_or_sweep_points() {
             if WHOLE_TABLE.iter().any(|(s, _)| s == stem) {
                 continue;
             }
-            let plan = plan_of(&mut conn, &statement).await;
+            let plan = plan_of(conn, &statement).await;
             planned += 1;
             for line in growing(&statement, &plan) {
                 failures.push(format!("{stem}.sql: {line}\n    plan: {plan:?}"));
             }
         }
-        let triggers = trigger_statements(&mut conn).await;
+        let triggers = trigger_statements(conn).await;
         assert!(
             triggers.len() >= 6,
             "the claim queue's triggers: {triggers:?}"
         );
         for (name, statement) in &triggers {
-            let plan = plan_of(&mut conn, statement).await;
+            let plan = plan_of(conn, statement).await;
             planned += 1;
             for line in growing(statement, &plan) {
                 failures.push(format!("trigger {name}: {line}\n    plan: {plan:?}"));
@@ -304,14 +311,8 @@ fn no_query_or_trigger_scans_jobs_results_or_sweep_points() {
 
 #[test]
 fn the_claim_walks_the_queue_index_without_sorting() {
-    let dir = tempfile::tempdir().unwrap();
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .unwrap();
-    rt.block_on(async {
-        let mut conn = populated(dir.path()).await;
-        let plan = plan_of(&mut conn, super::queries::NEXT_CLAIMABLE_POINT).await;
+    on_populated(async |conn| {
+        let plan = plan_of(conn, super::queries::NEXT_CLAIMABLE_POINT).await;
         let details: Vec<&str> = plan.iter().map(|l| l.detail.as_str()).collect();
         assert!(
             details
@@ -323,7 +324,7 @@ fn the_claim_walks_the_queue_index_without_sorting() {
             !details.iter().any(|l| l.contains("TEMP B-TREE")),
             "the claim sorts its candidates: {details:?}"
         );
-        let plan = plan_of(&mut conn, super::queries::CLAIM_JOB).await;
+        let plan = plan_of(conn, super::queries::CLAIM_JOB).await;
         assert!(
             plan.iter()
                 .any(|l| l.detail == "SEARCH jobs USING INDEX sqlite_autoindex_jobs_1 (id=?)"),
