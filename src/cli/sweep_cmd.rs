@@ -18,7 +18,7 @@ use crate::report::sweep_text::{
 };
 use crate::report::{export, plot_phase};
 use crate::run::{RunOptions, run_sweeps};
-use crate::store::{Store, StoreError, SweepRow};
+use crate::store::{Durability, Store, StoreError, SweepRow};
 use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
@@ -271,7 +271,9 @@ pub(super) fn sweep_run(
 ) -> Result<(), Failure> {
     // The file is checked in full before the database is touched.
     let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
-    let store = Store::open(db)?;
+    // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
+    // a sync"): everything it writes can be made again from the sweep file.
+    let store = Store::open_as(db, true, Durability::Fast)?;
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, replace)?;
     }
@@ -320,7 +322,7 @@ pub(super) fn sweep_resume(
     extend: Option<f64>,
     table_cache_mib: usize,
 ) -> Result<(), Failure> {
-    let store = Store::open_existing(db)?;
+    let store = Store::open_as(db, false, Durability::Fast)?;
     let sweeps = match name {
         Some(n) => vec![store.sweep(n)?],
         None => store.sweeps()?,

@@ -6,4 +6,4 @@ pub mod progress;
 pub mod relabel;
 pub mod runner;
 
-pub use runner::{RunOptions, RunSummary, run_sweeps};
+pub use runner::{JobFn, RunOptions, RunSummary, run_sweeps, run_sweeps_with};

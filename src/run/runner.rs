@@ -20,7 +20,7 @@
 use super::progress::Progress;
 use crate::store::{Claim, HEARTBEAT_INTERVAL, Store, StoreError, SweepRow};
 use crate::sweep::job::{JobError, JobResult, run_job, run_job_from};
-use std::sync::mpsc;
+use std::sync::{Arc, mpsc};
 use std::thread;
 use std::time::{Duration, Instant};
 use wetgran_core::sim::event_driven::table_cache::TableCache;
@@ -102,11 +102,36 @@ pub fn short(x: f64) -> String {
     }
 }
 
+/// What a worker calls to run one claimed job (its spec, and a continuation job's start state
+/// in `claim.start`), with a progress callback taking the fraction done.
+pub type JobFn =
+    Arc<dyn Fn(&Claim, &mut dyn FnMut(f64)) -> Result<JobResult, JobError> + Send + Sync>;
+
+/// The simulation of a claimed job: `sweep::run_job`, or `run_job_from` its start state.
+pub fn simulate(claim: &Claim, progress: &mut dyn FnMut(f64)) -> Result<JobResult, JobError> {
+    match claim.start.as_deref() {
+        Some(state) => run_job_from(&claim.spec, state, progress),
+        None => run_job(&claim.spec, progress),
+    }
+}
+
 /// Runs the pending jobs of the given sweeps until none is left.
 pub fn run_sweeps(
     store: &Store,
     sweeps: &[SweepRow],
     opts: &RunOptions,
+) -> Result<RunSummary, StoreError> {
+    run_sweeps_with(store, sweeps, opts, Arc::new(simulate))
+}
+
+/// [`run_sweeps`] with another job function in place of the simulation: the orchestrator
+/// benchmark (`wetgran-bench orchestrator`) times the claims, commits and heartbeats around a
+/// stand-in job that returns a result of the real shape at once.
+pub fn run_sweeps_with(
+    store: &Store,
+    sweeps: &[SweepRow],
+    opts: &RunOptions,
+    job: JobFn,
 ) -> Result<RunSummary, StoreError> {
     let start = Instant::now();
     let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
@@ -159,13 +184,14 @@ pub fn run_sweeps(
         let out = msg_tx.clone();
         let tables = tables.clone();
         let cores = cores.clone();
+        let job = job.clone();
         handles.push(
             thread::Builder::new()
                 .name(format!("wetgran-worker-{w}"))
                 .spawn(move || {
                     let _tables = tables.enter();
                     let _cores = threads::enter(&cores, w);
-                    worker(w, rx, out)
+                    worker(w, rx, out, job)
                 })
                 .expect("spawn a worker thread"),
         );
@@ -302,7 +328,7 @@ fn continuation_start(
 }
 
 /// A worker: runs every claim it receives and reports back.
-fn worker(w: usize, jobs: mpsc::Receiver<Claim>, out: mpsc::Sender<Msg>) {
+fn worker(w: usize, jobs: mpsc::Receiver<Claim>, out: mpsc::Sender<Msg>, job: JobFn) {
     while let Ok(claim) = jobs.recv() {
         let t0 = Instant::now();
         let mut last = -1.0;
@@ -313,10 +339,7 @@ fn worker(w: usize, jobs: mpsc::Receiver<Claim>, out: mpsc::Sender<Msg>) {
                 let _ = out.send(Msg::Progress(w, f));
             }
         };
-        let result = match claim.start.as_deref() {
-            Some(state) => run_job_from(&claim.spec, state, &mut report),
-            None => run_job(&claim.spec, &mut report),
-        };
+        let result = job(&claim, &mut report);
         let wall = t0.elapsed().as_secs_f64();
         if out
             .send(Msg::Finished(w, Box::new(claim), result, wall))

@@ -18,9 +18,10 @@
 //! every method blocks on it. Only the thread that owns the store talks to the database.
 //!
 //! Claims and crashes:
-//! - A claim is one `UPDATE ... WHERE id = (SELECT ... status = 'pending' LIMIT 1) AND status =
-//!   'pending' RETURNING` inside a `BEGIN IMMEDIATE` transaction: two runners cannot claim the
-//!   same job.
+//! - A claim reads the first row of its sweep's queue (`sweep_points.claim_rank`, kept by
+//!   triggers: migration `20261127000000_claim_queue.sql`) and sets that job running, inside
+//!   one `BEGIN IMMEDIATE` transaction: two runners cannot claim the same job. The queue is a
+//!   partial index ordered as the claim takes it, so a claim costs the same at any sweep size.
 //! - A runner owns its jobs under an owner name `host:pid:nonce` and refreshes their heartbeat
 //!   every [`HEARTBEAT_INTERVAL`].
 //! - A running job is orphaned when its heartbeat is older than [`STALE_AFTER`] (twelve missed
@@ -38,16 +39,20 @@
 //! prepare each one against a freshly migrated database. A schema change is a new migration in
 //! `migrations/`.
 
+#[cfg(test)]
+mod claim_queue_tests;
 mod cluster;
 pub mod hysteresis;
 mod queries;
+#[cfg(test)]
+mod query_plans;
 
 pub use cluster::{TaskRow, TaskState};
 
 use crate::sweep::file::{Axis, SweepFile};
 use crate::sweep::job::JobResult;
 use crate::sweep::spec::{JobSpec, SweepJob};
-use sqlx::sqlite::{SqliteConnectOptions, SqlitePool, SqlitePoolOptions};
+use sqlx::sqlite::{SqliteConnectOptions, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
 use sqlx::{Row, SqliteConnection};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -63,6 +68,8 @@ pub const BUSY_TIMEOUT: Duration = Duration::from_secs(30);
 pub const BUSY_TIMEOUT_VAR: &str = "WETGRAN_BUSY_TIMEOUT";
 /// How often a runner refreshes the heartbeat of its running jobs.
 pub const HEARTBEAT_INTERVAL: Duration = Duration::from_secs(5);
+/// The page cache of a store's connection, KiB.
+const CACHE_KIB: u32 = 64 * 1024;
 /// A running job whose heartbeat is older than this is re-queued.
 pub const STALE_AFTER: Duration = Duration::from_secs(60);
 
@@ -238,6 +245,21 @@ pub const REFINED_FROM: i64 = crate::sweep::file::MAX_JOBS as i64;
 /// ([`JobSpec::identity`]). A database without it is re-keyed when opened.
 pub const JOB_ID_RULE: &str = "spec-without-classify";
 
+/// When a commit reaches the disk (docs/reliability.md, "Commits without a sync").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Durability {
+    /// Every commit syncs the write-ahead log to disk before it returns (SQLite
+    /// `synchronous = FULL`): a committed transaction survives a power loss.
+    Synced,
+    /// Commits append to the write-ahead log without a sync; the log is synced when SQLite
+    /// checkpoints it into the database (`synchronous = NORMAL` in WAL mode). A committed
+    /// transaction survives the death of the process (kill -9: its writes are in the operating
+    /// system's cache); a power loss or an operating-system crash may roll back the last
+    /// transactions, each whole, and never damages the file. For local runs (`sweep run`,
+    /// `sweep resume`), where every such transaction can be made again.
+    Fast,
+}
+
 /// An open wetgran database.
 #[derive(Debug)]
 pub struct Store {
@@ -362,7 +384,16 @@ enum Existing {
 
 fn inspect(path: &Path) -> Result<Existing, StoreError> {
     let p = path.display().to_string();
-    let bytes = match std::fs::read(path) {
+    // The 100-byte header only: a database of 10^5 results is gigabytes.
+    let header = || -> std::io::Result<Vec<u8>> {
+        use std::io::Read as _;
+        let mut bytes = Vec::with_capacity(100);
+        std::fs::File::open(path)?
+            .take(100)
+            .read_to_end(&mut bytes)?;
+        Ok(bytes)
+    };
+    let bytes = match header() {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Existing::New),
         Err(e) => {
@@ -399,21 +430,23 @@ fn inspect(path: &Path) -> Result<Existing, StoreError> {
 impl Store {
     /// Opens (creating if needed) the database at `path` and applies the migrations.
     pub fn open(path: &Path) -> Result<Store, StoreError> {
-        Self::open_impl(path, true)
+        Self::open_as(path, true, Durability::Synced)
     }
 
     /// Opens an existing database; a missing file is an error (nothing is created).
     pub fn open_existing(path: &Path) -> Result<Store, StoreError> {
-        Self::open_impl(path, false)
+        Self::open_as(path, false, Durability::Synced)
     }
 
-    fn open_impl(path: &Path, create: bool) -> Result<Store, StoreError> {
+    /// Opens the database at `path` (creating it if `create`, else a missing file is an error)
+    /// with commits as `durability` says.
+    pub fn open_as(path: &Path, create: bool, durability: Durability) -> Result<Store, StoreError> {
         // Two runners starting at once on a new file race to initialise it: the loser's
         // journal-mode switch or migration fails (its transaction rolls back) and it tries again,
         // then finding the file initialised.
         let mut attempt = 0;
         loop {
-            match Self::open_once(path, create) {
+            match Self::open_once(path, create, durability) {
                 Err(StoreError::Db { .. }) if attempt < 6 => {
                     attempt += 1;
                     std::thread::sleep(Duration::from_millis(50 * attempt));
@@ -423,7 +456,7 @@ impl Store {
         }
     }
 
-    fn open_once(path: &Path, create: bool) -> Result<Store, StoreError> {
+    fn open_once(path: &Path, create: bool, durability: Durability) -> Result<Store, StoreError> {
         let p = path.display().to_string();
         let existing = inspect(path)?;
         if matches!(existing, Existing::New) && !create {
@@ -445,7 +478,15 @@ impl Store {
             .filename(path)
             .create_if_missing(true)
             .busy_timeout(busy)
-            .foreign_keys(true);
+            .foreign_keys(true)
+            .synchronous(match durability {
+                Durability::Synced => SqliteSynchronous::Full,
+                Durability::Fast => SqliteSynchronous::Normal,
+            })
+            // Page cache of the one connection, in KiB (negative: a size, not a page count):
+            // job ids are hashes, so every job, result and run row lands on a random page of
+            // its index; SQLite's default 2 MiB holds those pages of ~10^3 jobs, this of ~10^5.
+            .pragma("cache_size", format!("-{CACHE_KIB}"));
         let pool = rt
             .block_on(
                 SqlitePoolOptions::new()
@@ -898,6 +939,7 @@ impl Store {
                 .bind(&job.id)
                 .bind(job.spec.canonical_json())
                 .bind(t)
+                .bind(&job.spec.start_from)
                 .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
@@ -1062,14 +1104,26 @@ impl Store {
     fn claim_in(&self, sweep_id: i64) -> Result<Option<Claim>, StoreError> {
         let t = now();
         let claimed = self.in_transaction(async |tx| {
-            let row: Option<(String, String)> = sqlx::query_as(queries::CLAIM_NEXT_JOB)
+            // Both statements run under the transaction's write lock: the row read first is
+            // still pending when it is claimed. The guard `status = 'pending'` in CLAIM_JOB
+            // holds anyway (a queue row with a rank is always a pending job's).
+            let next: Option<(String, i64, i64, String, String)> =
+                sqlx::query_as(queries::NEXT_CLAIMABLE_POINT)
+                    .bind(sweep_id)
+                    .fetch_optional(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+            let Some((job_id, point, replica, coords, sweep)) = next else {
+                return Ok(None);
+            };
+            let spec: Option<String> = sqlx::query_scalar(queries::CLAIM_JOB)
+                .bind(&job_id)
                 .bind(&self.owner)
                 .bind(t)
-                .bind(sweep_id)
                 .fetch_optional(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
-            let Some((job_id, spec)) = row else {
+            let Some(spec) = spec else {
                 return Ok(None);
             };
             let run_id: i64 = sqlx::query_scalar(queries::INSERT_RUN)
@@ -1079,13 +1133,6 @@ impl Store {
                 .fetch_one(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
-            let (point, replica, coords, sweep): (i64, i64, String, String) =
-                sqlx::query_as(queries::CLAIMED_POINT)
-                    .bind(sweep_id)
-                    .bind(&job_id)
-                    .fetch_one(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
             Ok::<_, StoreError>(Some((job_id, run_id, spec, point, replica, coords, sweep)))
         })?;
         let Some((job_id, run_id, spec, point, replica, coords, sweep)) = claimed else {

@@ -18,7 +18,7 @@ macro_rules! queries {
         )*
         /// Every query: its file's stem and its text.
         #[cfg(test)]
-        const ALL: &[(&str, &str)] = &[$(($file, $name)),*];
+        pub(super) const ALL: &[(&str, &str)] = &[$(($file, $name)),*];
     };
 }
 
@@ -31,10 +31,8 @@ queries! {
     INTEGRITY_CHECK = "integrity_check";
     /// A job's checkpoint state (JSON).
     CHECKPOINT_STATE = "checkpoint_state";
-    /// Claims the next claimable pending job of a sweep (grid order); returns its id and spec.
-    CLAIM_NEXT_JOB = "claim_next_job";
-    /// The point, replica, coords and sweep name of a claimed job.
-    CLAIMED_POINT = "claimed_point";
+    /// Claims a pending job for a runner; returns its spec.
+    CLAIM_JOB = "claim_job";
     /// Copies a job row under its new id (re-keying).
     COPY_JOB_TO_NEW_ID = "copy_job_to_new_id";
     /// Every finished job's simulated time, wall seconds and convergence (`sweep estimate`).
@@ -98,6 +96,8 @@ queries! {
     MARK_RUNS_ORPHANED = "mark_runs_orphaned";
     /// Moves a result to the merged job, unless that job already has one (re-keying).
     MOVE_RESULT_IF_NONE = "move_result_if_none";
+    /// The next claimable row of a sweep's queue (chain heads first, then grid order).
+    NEXT_CLAIMABLE_POINT = "next_claimable_point";
     /// SQLite's quick integrity check of an existing wetgran database.
     QUICK_CHECK = "quick_check";
     /// Points the result of a job at its new id.

@@ -25,6 +25,7 @@ pub mod barrier;
 pub mod engines;
 pub mod memory;
 pub mod observer;
+pub mod orchestrator;
 pub mod shake;
 pub mod slab;
 pub mod stress;

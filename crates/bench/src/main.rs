@@ -56,6 +56,37 @@ struct Figures {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The sweep orchestrator alone: register and run sweeps of N stand-in jobs (results of
+    /// the real shape, returned at once) with the real runner and store on a file database, and
+    /// print claims per second, overhead per job, database size per result and the time of
+    /// `sweep status`, `boundaries`, `plot`, `export` and `reclassify` (docs/performance.md,
+    /// "Orchestrator"). Needs the `wetgran` binary beside this one.
+    Orchestrator {
+        /// Sweep sizes (jobs), comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "1000,10000")]
+        sizes: Vec<usize>,
+        /// Worker threads of the runner.
+        #[arg(long, default_value_t = 2)]
+        workers: usize,
+        /// Runs of each report command (the median is printed).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+        /// Folder for the databases (default: the system's temporary folder).
+        #[arg(long)]
+        dir: Option<PathBuf>,
+        /// Sync every commit to disk (SQLite `synchronous = FULL`) instead of committing as
+        /// `sweep run` does (`NORMAL`).
+        #[arg(long)]
+        synced: bool,
+        /// Which reports to time, comma-separated (`status`, `boundaries`, `plot`, `export`,
+        /// `reclassify`).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "status,boundaries,plot,export,reclassify"
+        )]
+        reports: Vec<String>,
+    },
     /// Run the engines' hard cases at length with the invariant checks on, and print per case
     /// the events (or time steps), simulated time, largest overlap, energy-ledger error, NaN
     /// count and wall time. Exit status 3 if any case broke an invariant.
@@ -79,6 +110,34 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Some(Command::Stress { case, events, json }) => stress(case.as_deref(), events, json),
+        Some(Command::Orchestrator {
+            sizes,
+            workers,
+            repeat,
+            dir,
+            synced,
+            reports,
+        }) => match wetgran_bench::orchestrator::run(
+            &sizes,
+            workers.max(1),
+            repeat.max(1),
+            if synced {
+                wetgran::store::Durability::Synced
+            } else {
+                wetgran::store::Durability::Fast
+            },
+            &reports,
+            dir.as_deref(),
+        ) {
+            Ok(text) => {
+                print!("{text}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
         None => figures(&cli.figures),
     }
 }

@@ -1,0 +1,370 @@
+//! `wetgran-bench orchestrator`: the sweep orchestrator alone (issue 35), on a file database.
+//!
+//! For each size N (default 10^3 and 10^4) the benchmark writes a sweep of N points in
+//! (Gamma, E*) over a tiny real scene (the quickstart's shaken wet 2D system with 20 grains and
+//! 2 periods), registers it in a fresh database (timed), and runs it with the real runner and
+//! store (`run::run_sweeps_with`: claims, run rows, heartbeats, commits of result and checkpoint)
+//! on `--workers` worker threads. The job each worker runs is a stand-in that returns at once a
+//! result of the real shape: the observables and final state of one real run of the first job
+//! (run once before, its time printed), with a phase label that depends on the point, so that
+//! the reports have boundaries to find. So the run's wall time is the orchestration alone:
+//!
+//! - claims per second = N / wall time of the run;
+//! - overhead per job = wall time / N (the one store thread does every claim and commit in turn;
+//!   the stand-in job costs nothing), and the median and 99th percentile of the time between one
+//!   job start and the next, in the first and in the last tenth of the sweep (a claim that grew
+//!   with the sweep would show in the last tenth);
+//! - the database size per result (file + WAL after the run, divided by N).
+//!
+//! The store commits as `sweep run` does (without a sync per commit, `Durability::Fast`), or
+//! with `--synced` as every other command does.
+//!
+//! Then the reports, each as the `wetgran` binary beside this one runs them on that database
+//! (process start included): `sweep status`, `boundaries`, `plot`, `export` (CSV to a file),
+//! `reclassify` (those named by `--reports`), each the median of `--repeat` runs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use wetgran::run::{JobFn, RunOptions, run_sweeps_with};
+use wetgran::store::{Durability, Store};
+use wetgran::sweep::{JobResult, SweepFile, run_job};
+
+/// The base scene of the benchmark sweep (the quickstart's).
+const BASE_SCENE: &str = include_str!("../../../scenes/shaken_wet_2d.toml");
+
+/// The benchmark sweep file over `n_gamma` x `n_e` points.
+fn sweep_text(n_gamma: usize, n_e: usize) -> String {
+    format!(
+        "[sweep]\nname = \"bench\"\nbase = \"shaken_wet_2d.toml\"\nreplicas = 1\nperiods = 2\n\
+         [scene]\nparticles.count = 20\nbox.size = [7.0, 9.0]\nengine.min_rebound_speed = 0.03\n\
+         [observe]\ntransient_periods = 1\nsamples_per_period = 20\n\
+         [[axis]]\nkey = \"gamma\"\nlog = {{ from = 0.5, to = 20.0, steps = {n_gamma} }}\n\
+         [[axis]]\nkey = \"e_star\"\nlog = {{ from = 0.3, to = 4.755, steps = {n_e} }}\n"
+    )
+}
+
+/// A grid of about `n` points: `(n_gamma, n_e)` with `n_gamma * n_e = n` where `n` allows.
+fn grid(n: usize) -> (usize, usize) {
+    let mut a = (n as f64).sqrt().floor() as usize;
+    while a > 1 && !n.is_multiple_of(a) {
+        a -= 1;
+    }
+    (a.max(1), n / a.max(1))
+}
+
+/// Median of a sample (0 for none).
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The `q` quantile of a sample (0 for none).
+fn quantile(mut v: Vec<f64>, q: f64) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+/// The `wetgran` binary beside this one.
+fn wetgran_binary() -> Result<PathBuf, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find this binary: {e}"))?;
+    let bin = exe.with_file_name("wetgran");
+    if bin.exists() {
+        Ok(bin)
+    } else {
+        Err(format!(
+            "{}: not found; build it first (`cargo build --release`)",
+            bin.display()
+        ))
+    }
+}
+
+/// Seconds one run of `wetgran ARGS` takes (standard output to `out`); an error if it fails.
+fn time_command(bin: &Path, args: &[&str], out: &Path) -> Result<f64, String> {
+    let file = std::fs::File::create(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let t0 = Instant::now();
+    let status = Command::new(bin)
+        .args(args)
+        .stdout(Stdio::from(file))
+        .stderr(Stdio::null())
+        .status()
+        .map_err(|e| format!("wetgran {}: {e}", args.join(" ")))?;
+    let t = t0.elapsed().as_secs_f64();
+    if !status.success() {
+        return Err(format!("wetgran {} failed ({status})", args.join(" ")));
+    }
+    Ok(t)
+}
+
+/// Bytes of a file, 0 if it is not there.
+fn size(p: &Path) -> u64 {
+    std::fs::metadata(p).map(|m| m.len()).unwrap_or(0)
+}
+
+/// The figures of one size.
+#[derive(Debug, Clone)]
+pub struct Figures {
+    pub jobs: usize,
+    pub register_s: f64,
+    pub run_s: f64,
+    pub claims_per_s: f64,
+    pub overhead_ms: f64,
+    /// Median and 99th percentile of the time between job starts (ms), first and last tenth.
+    pub gap_first_ms: (f64, f64),
+    pub gap_last_ms: (f64, f64),
+    pub db_bytes_per_result: f64,
+    /// `(command, median seconds)`.
+    pub reports: Vec<(String, f64)>,
+}
+
+/// Runs the benchmark at one size in `dir`.
+pub fn measure(
+    n: usize,
+    workers: usize,
+    repeat: usize,
+    durability: Durability,
+    reports: &[String],
+    dir: &Path,
+) -> Result<Figures, String> {
+    let (n_gamma, n_e) = grid(n);
+    let jobs_n = n_gamma * n_e;
+    std::fs::write(dir.join("shaken_wet_2d.toml"), BASE_SCENE).map_err(|e| e.to_string())?;
+    let sweep_path = dir.join("bench.toml");
+    std::fs::write(&sweep_path, sweep_text(n_gamma, n_e)).map_err(|e| e.to_string())?;
+    let file = SweepFile::load(&sweep_path).map_err(|e| e.to_string())?;
+    let jobs = file.expand().map_err(|e| e.to_string())?;
+
+    // One real run of the first job: the shape of every stand-in result.
+    let t0 = Instant::now();
+    let real = run_job(&jobs[0].spec, &mut |_| {}).map_err(|e| e.to_string())?;
+    let real_s = t0.elapsed().as_secs_f64();
+    let obs_bytes = real.observables.to_string().len();
+    let state_bytes = real
+        .checkpoint
+        .as_ref()
+        .map_or(0, |s| serde_json::to_string(s).map_or(0, |t| t.len()));
+    eprintln!(
+        "N = {jobs_n}: one real job {:.1} ms, observables {obs_bytes} B, final state \
+         {state_bytes} B",
+        real_s * 1e3
+    );
+
+    let db = dir.join("bench.sqlite");
+    let store = Store::open_as(&db, true, durability).map_err(|e| e.to_string())?;
+    let t0 = Instant::now();
+    let sweep = store
+        .register_sweep(&file, &jobs)
+        .map_err(|e| e.to_string())?;
+    let register_s = t0.elapsed().as_secs_f64();
+
+    let starts = Arc::new(Mutex::new(Vec::with_capacity(jobs_n)));
+    let job: JobFn = {
+        let starts = starts.clone();
+        Arc::new(move |claim, _progress| {
+            starts
+                .lock()
+                .expect("no panic holds it")
+                .push(Instant::now());
+            let gamma = claim.coords[0].as_f64().unwrap_or(1.0);
+            let e_star = claim.coords[1].as_f64().unwrap_or(1.0);
+            // A made-up map with two boundaries: solid at low Gamma, gas at high E* Gamma.
+            let phase = if gamma < 1.5 {
+                "s"
+            } else if gamma * e_star > 10.0 {
+                "g"
+            } else {
+                "f"
+            };
+            Ok(JobResult {
+                phase: Some(phase.to_string()),
+                decided_on: real.decided_on.clone(),
+                observables: real.observables.clone(),
+                simulated_time: real.simulated_time,
+                wall_seconds: 0.0,
+                events: real.events,
+                checkpoint: real.checkpoint.clone(),
+            })
+        })
+    };
+    let opts = RunOptions {
+        jobs: workers,
+        retry_failed: false,
+        show_progress: false,
+        table_cache_mib: 0,
+    };
+    let t0 = Instant::now();
+    let summary = run_sweeps_with(&store, std::slice::from_ref(&sweep), &opts, job)
+        .map_err(|e| e.to_string())?;
+    let run_s = t0.elapsed().as_secs_f64();
+    if summary.done as usize != jobs_n {
+        return Err(format!("{} of {jobs_n} jobs done", summary.done));
+    }
+    let db_bytes = size(&db) + size(&dir.join("bench.sqlite-wal"));
+    drop(store);
+
+    let starts = starts.lock().expect("no panic holds it").clone();
+    let gaps: Vec<f64> = starts
+        .windows(2)
+        .map(|w| (w[1] - w[0]).as_secs_f64() * 1e3)
+        .collect();
+    let tenth = (gaps.len() / 10).max(1).min(gaps.len());
+    let first = gaps[..tenth].to_vec();
+    let last = gaps[gaps.len() - tenth..].to_vec();
+
+    let bin = wetgran_binary()?;
+    let d = db.display().to_string();
+    let svg = dir.join("plot.svg").display().to_string();
+    let csv = dir.join("export.csv").display().to_string();
+    let commands: Vec<(&str, Vec<&str>)> = vec![
+        ("sweep status", vec!["sweep", "status", "--db", &d]),
+        (
+            "boundaries",
+            vec!["boundaries", "--db", &d, "--sweep", "bench"],
+        ),
+        (
+            "plot",
+            vec!["plot", "--db", &d, "--sweep", "bench", "-o", &svg],
+        ),
+        (
+            "export (CSV to a file)",
+            vec!["export", "--db", &d, "--sweep", "bench", "-o", &csv],
+        ),
+        (
+            "reclassify",
+            vec!["reclassify", "--db", &d, "--sweep", "bench"],
+        ),
+    ];
+    let out = dir.join("stdout.txt");
+    let mut timed = Vec::new();
+    for (name, args) in &commands {
+        if !reports.iter().any(|r| name.contains(r.as_str())) {
+            continue;
+        }
+        let mut times = Vec::new();
+        for _ in 0..repeat {
+            times.push(time_command(&bin, args, &out)?);
+        }
+        eprintln!("N = {jobs_n}: {name} {:.3} s", median(times.clone()));
+        timed.push((name.to_string(), median(times)));
+    }
+    Ok(Figures {
+        jobs: jobs_n,
+        register_s,
+        run_s,
+        claims_per_s: jobs_n as f64 / run_s,
+        overhead_ms: run_s / jobs_n as f64 * 1e3,
+        gap_first_ms: (median(first.clone()), quantile(first, 0.99)),
+        gap_last_ms: (median(last.clone()), quantile(last, 0.99)),
+        db_bytes_per_result: db_bytes as f64 / jobs_n as f64,
+        reports: timed,
+    })
+}
+
+/// The table of figures.
+pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "orchestrator: stand-in jobs of the real result shape, {workers} worker(s), file \
+         database, commits {}",
+        match durability {
+            Durability::Synced => "synced (synchronous = FULL)",
+            Durability::Fast => "without a sync (synchronous = NORMAL, as `sweep run`)",
+        }
+    );
+    let _ = writeln!(
+        s,
+        "{:>8} {:>10} {:>9} {:>10} {:>11} {:>17} {:>17} {:>11}",
+        "jobs",
+        "register s",
+        "run s",
+        "claims/s",
+        "ms per job",
+        "gap first med/p99",
+        "gap last med/p99",
+        "kB/result"
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{:>8} {:>10.2} {:>9.2} {:>10.0} {:>11.3} {:>8.3}/{:<8.3} {:>8.3}/{:<8.3} {:>11.1}",
+            r.jobs,
+            r.register_s,
+            r.run_s,
+            r.claims_per_s,
+            r.overhead_ms,
+            r.gap_first_ms.0,
+            r.gap_first_ms.1,
+            r.gap_last_ms.0,
+            r.gap_last_ms.1,
+            r.db_bytes_per_result / 1e3
+        );
+    }
+    let _ = writeln!(s, "reports (median seconds, `wetgran` process included):");
+    for r in rows {
+        let parts: Vec<String> = r
+            .reports
+            .iter()
+            .map(|(name, t)| format!("{name} {t:.3}"))
+            .collect();
+        let _ = writeln!(s, "{:>8}  {}", r.jobs, parts.join(", "));
+    }
+    s
+}
+
+/// Runs every size, each in a fresh folder under `dir` (default: the system's temporary folder),
+/// removed afterwards.
+pub fn run(
+    sizes: &[usize],
+    workers: usize,
+    repeat: usize,
+    durability: Durability,
+    reports: &[String],
+    dir: Option<&Path>,
+) -> Result<String, String> {
+    let mut rows = Vec::new();
+    for &n in sizes {
+        let tmp = match dir {
+            Some(d) => tempfile::tempdir_in(d),
+            None => tempfile::tempdir(),
+        }
+        .map_err(|e| format!("cannot make a temporary folder: {e}"))?;
+        rows.push(measure(
+            n,
+            workers,
+            repeat,
+            durability,
+            reports,
+            tmp.path(),
+        )?);
+    }
+    Ok(text(&rows, workers, durability))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grids_have_the_asked_size_where_it_factors() {
+        assert_eq!(grid(1000), (25, 40));
+        assert_eq!(grid(10_000), (100, 100));
+        assert_eq!(grid(100_000), (250, 400));
+        assert_eq!(grid(7), (1, 7));
+    }
+
+    #[test]
+    fn quantiles_of_a_sample() {
+        let v: Vec<f64> = (1..=101).map(f64::from).collect();
+        assert_eq!(median(v.clone()), 51.0);
+        assert_eq!(quantile(v, 0.99), 100.0);
+    }
+}
