@@ -1,8 +1,9 @@
 //! `wetgran-bench barrier`: what two threads that meet at a barrier twice per step can gain on
 //! this machine, whatever the engine.
 //!
-//! A time-driven step of the standard system takes about 9 us on one core (docs/performance.md,
-//! `bench tdmd`), and any split of a step over two threads needs them to meet at least twice
+//! A time-driven step of the standard system takes about 9 us on one core
+//! (docs/performance-history.md, "Fifth round: slab accumulators"), and any split of a step over
+//! two threads needs them to meet at least twice
 //! per step (after the forces, after the integration). This benchmark measures the ceiling
 //! that sets, with no engine in the way: each round, one thread does two units of a fixed
 //! integer work (a multiply-xorshift chain, no memory traffic) while two threads do one unit

@@ -67,7 +67,7 @@ pub enum StressCase {
     ShearDoubleRoots,
     /// The time-driven engine at the largest time step validation admits
     /// (`Scene::largest_time_step`: 3.36e-4 here at the default stiffness, with the bound on the
-    /// damping of its restitution; 3.94e-4 before that bound), on a small shaken
+    /// damping of its restitution; 3.94e-4 without that bound), on a small shaken
     /// wet 2D system (20 disks, Gamma = 5, E* = 10, started hot).
     TimeLargestDt,
     /// Self-check of the harness (run only when named): two disks planted overlapping by 0.1 d,

@@ -2,7 +2,7 @@
 //! slabs along `x` (the only lateral axis). In 3D they are, by default, square cells over the
 //! lateral plane `(x, y)` (`observe.bins_3d = "plane"`), so that a drop- or strip-shaped region
 //! is resolved in both lateral directions; `observe.bins_3d = "x_slabs"` keeps slabs along `x`
-//! that span the whole depth `L_y` (the layout before the plane bins, kept for comparison).
+//! that span the whole depth `L_y` (for comparison with results binned that way).
 //! Bins are numbered `ix + nx * iy`.
 
 use crate::sim::Frame;

@@ -25,13 +25,14 @@ pub fn linear_time_to_plane(x0: f64, v: f64, plane: f64, upward: bool) -> f64 {
 /// `hi = lo + w` (at most one of them is finite; `+inf` for `v = 0` or NaN), where a face
 /// marked `closed` (the outer face of an edge cell of a wall axis) counts as a plane at
 /// infinity. Computed without a branch on the sign of `v`, which is a coin toss for cell faces
-/// (docs/performance.md, "Fifth round"): the face is `lo + w * [v > 0]` (`lo + w` is how `hi`
-/// is formed, and `lo + 0.0` is `lo` for the `lo >= 0` of a cell corner), the time
+/// (docs/performance.md, "Ideas kept and rejected"): the face is `lo + w * [v > 0]` (`lo + w`
+/// is how `hi` is formed, and `lo + 0.0` is `lo` for the `lo >= 0` of a cell corner), the time
 /// `(plane - x0) / v` clamped at zero as there, and `+inf` added when the particle does not
 /// move along the axis or moves towards a closed face (`0 / 0` or `+-inf` before that; the
 /// added `0.0` otherwise can only turn a `-0.0` into `+0.0`, which no compare tells apart).
-/// Written as a product with an opaque 0 or 1: with a bit-mask choice of the two faces, or
-/// `f64::from(up)`, the compiler emitted a branch again.
+/// Written as a product with an opaque 0 or 1, because the compiler turns a bit-mask choice of
+/// the two faces, or `f64::from(up)`, into a branch (docs/performance.md, "Compiler-steering
+/// devices").
 #[inline(always)]
 pub fn linear_time_to_faces(
     x0: f64,

@@ -397,8 +397,8 @@ mod tests {
 
     #[test]
     fn tolerance_below_round_off_terminates() {
-        // Regression: with a gap tolerance below the round-off of the gap the step underflowed
-        // the clock's resolution and the loop never ended.
+        // A gap tolerance below the round-off of the gap must not make the step underflow the
+        // clock's resolution, which would keep the loop from ending.
         let w = WallMotion {
             amplitude: 0.3,
             omega: 2.0,

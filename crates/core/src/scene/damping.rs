@@ -75,8 +75,8 @@ pub fn calibration(scene: &Scene) -> Calibration {
 pub fn characteristic_temperature(scene: &Scene) -> f64 {
     let t0 = scene.initial_temperature();
     // A member of a continuation chain (`"continue"`) is calibrated as its point would be with a
-    // hot start, as the chain's first job usually is: the contact law must not change along the
-    // chain (before, the first job took `T_0` and the others the drive's scale).
+    // hot start, as the chain's first job usually is: the contact law must be the same for every
+    // job of the chain, so none of them may fall back to the drive's scale.
     if matches!(scene.initial.start, StartMode::Hot | StartMode::Continue) && t0 > 0.0 {
         return t0;
     }

@@ -278,8 +278,9 @@ impl ObserveSpec {
 mod tests {
     use super::*;
 
-    /// Regression: the sweep counted the periods of an undriven scene in `sqrt(d/g)` and the
-    /// observers in 1; with one definition (`Scene::driving_period`) both use the time unit.
+    /// The sweep and the observers count the periods of an undriven scene with one definition
+    /// (`Scene::driving_period`), in the scene's time unit; two definitions (`sqrt(d/g)` and 1)
+    /// would disagree.
     #[test]
     fn an_undriven_scene_counts_periods_in_its_time_unit() {
         let s = Scene::from_toml_str(

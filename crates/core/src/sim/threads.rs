@@ -23,8 +23,8 @@ use std::sync::{Arc, OnceLock};
 
 /// Cores a simulation process may use: `std::thread::available_parallelism` (1 if unknown),
 /// or the environment variable `WETGRAN_THREADS` when it is set to a positive number (e.g.
-/// `WETGRAN_THREADS=1`: every simulation on one thread, as before the engine was parallel; on
-/// a machine shared with other work).
+/// `WETGRAN_THREADS=1`: every simulation on one thread, e.g. on a machine shared with other
+/// work).
 pub fn available_cores() -> usize {
     std::env::var("WETGRAN_THREADS")
         .ok()

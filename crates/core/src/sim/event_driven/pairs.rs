@@ -12,7 +12,7 @@
 //! Scans without shear or minimum image gather the partners of the neighbour cells first and
 //! predict the contacts without branches (`scan_dry`, `dry_time`): whether a pair approaches
 //! and meets is a coin toss per partner, which a processor mispredicts (docs/performance.md,
-//! fourth round); the same operations as `predict_image`, so the same events.
+//! "Ideas kept and rejected"); the same operations as `predict_image`, so the same events.
 //!
 //! Safeguards (each tested in `crates/core/tests/engine_safeguards.rs`): an overlapping pair that approaches
 //! collides now, one that separates is left alone (B.5.6); a pair half a periodic box apart (four
@@ -168,8 +168,8 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         // collision may come through the other image; no later cell crossing brings them into a
         // newly adjacent slab again. So a pair beyond `FAR_IMAGE` of the box is also predicted
         // through its other image, and the earlier collision kept. With five cells or more,
-        // partners in adjacent cells are at most `0.4 L` apart and this never runs. (Found by
-        // the input fuzzer, crates/bench/tests/fuzz_inputs.rs; regression test in engine_safeguards.rs.)
+        // partners in adjacent cells are at most `0.4 L` apart and this never runs. (Tested in
+        // engine_safeguards.rs; the input fuzzer, crates/bench/tests/fuzz_inputs.rs, covers it.)
         // Without `WRAP` every periodic axis has five cells or more: never far.
         let far = |k: usize| bodies.periodic[k] && r[k].abs() >= FAR_IMAGE * bodies.size[k];
         if WRAP && (0..D).any(far) {
@@ -468,7 +468,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         } else if vv > 0.0 {
             // Larger root of |r + v dt| = sigma + s_crit. Right after a bounce off the well
             // wall the pair sits on the edge (c may be +round-off) and approaches: the root
-            // is then the next exit, not "none" (regression: bonds stretched past s_crit).
+            // is then the next exit, not "none" (else a bond could stretch past s_crit).
             let disc = (b * b - vv * c).max(0.0);
             Some(if b > 0.0 {
                 -c / (b + disc.sqrt())
@@ -482,8 +482,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     }
 
     /// The time of the contact of `i` (radius `ri`) with `j` (`+inf` if none, or if
-    /// `j == i`), and the `b`, `r^2`, `v^2`, `sigma` it used, for a pair under one force for all and without minimum image (`shift`: the
-    /// partner's image shift, if `SHIFT`), without branches: whether the pair approaches
+    /// `j == i`), and the `b`, `r^2`, `v^2`, `sigma` it used, for a pair under one force for
+    /// all and without minimum image (`shift`: the partner's image shift, if `SHIFT`), without
+    /// branches: whether the pair approaches
     /// (`b < 0`) and whether its paths meet (`disc > 0`) are coin tosses a processor
     /// mispredicts about every other partner, so every partner pays the whole arithmetic and
     /// the result is chosen. The same operations on the same operands as

@@ -32,8 +32,9 @@ pub trait EventQueue: Clone + std::fmt::Debug {
     fn memory(&self) -> Vec<(&'static str, usize)>;
 }
 
-/// Pops between two re-estimations of the bucket width, per particle (8 against 2: fewer
-/// instructions on all four reference systems, docs/performance.md "Third round").
+/// Pops between two re-estimations of the bucket width, per particle (8 executes fewer
+/// instructions than 2 on all four reference systems: docs/performance.md, "Ideas kept and
+/// rejected").
 const CALENDAR_RETUNE_PER_PARTICLE: u64 = 8;
 /// Keys sampled to estimate the width.
 const CALENDAR_SAMPLE: usize = 512;
@@ -60,8 +61,8 @@ const WIDTH_FACTOR: f64 = 2.0;
 /// to itself, so linking and unlinking write the neighbour's back link without testing for the
 /// end of the list (a coin toss at about one entry per list). The walk keeps its branches: a
 /// branch-free walk (two unconditional steps, the minimum chosen by bit masks) had fewer
-/// mispredicted branches in valgrind's model but took more CPU time (docs/performance.md,
-/// "Fifth round").
+/// mispredicted branches in valgrind's model but takes more CPU time (docs/performance.md,
+/// "Ideas kept and rejected").
 #[derive(Debug, Clone)]
 pub struct CalendarQueue {
     /// Keys of the particles `0..n`, then the sentinel's `+inf`.

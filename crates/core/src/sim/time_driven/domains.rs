@@ -1,4 +1,4 @@
-//! Spatial domain decomposition of the time-driven Gear step (issue 15 item 4): the box is cut
+//! Spatial domain decomposition of the time-driven Gear step (one job on two cores): the box is cut
 //! across its longest axis into [`DOMAINS`] slabs of equal particle counts, each slab's
 //! particles are copied into a [`Domain`] of their own (contiguous local arrays, sorted along
 //! the cut axis), and a team of threads (`team.rs`) runs whole steps on the domains with one
@@ -54,7 +54,7 @@ pub const DOMAINS: usize = 2;
 
 /// From this many particles on, every Gear step of a scene without a body force runs on the
 /// domains, on any number of threads (below, a step is too short for two threads to gain:
-/// docs/performance.md, "Sixth round").
+/// docs/performance-history.md, "Sixth round: spatial domains").
 pub const DOMAIN_MIN_PARTICLES: usize = 1024;
 
 /// What a domain step needs besides its own arrays (the same for every domain of a step).

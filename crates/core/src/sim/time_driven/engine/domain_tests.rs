@@ -265,7 +265,7 @@ fn spheres_on_domains_agree_with_the_serial_step() {
 
 /// The point of the domains: in the bench system (1200 disks, 400 x 9, cut across x)
 /// the threads exchange only a small halo per step. Prints the figures quoted in
-/// docs/performance.md ("Sixth round").
+/// docs/performance-history.md ("Sixth round: spatial domains").
 #[test]
 fn the_halo_is_a_small_part_of_the_bench_system() {
     let s = crate::scene::reference::dry_shaken_time_driven("gear5");

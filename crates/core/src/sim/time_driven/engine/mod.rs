@@ -86,9 +86,9 @@ pub const PARTICLE_CHUNK: usize = 128;
 
 /// Below this many particles (the default of [`TimeEngine::set_parallel_min_particles`]) the
 /// loops of a step run on the calling thread (same chunks, same numbers): a parallel loop costs
-/// a few microseconds of hand-over per step. Measured on a quiet 2-core machine (docs/performance.md,
-/// "Quiet-machine figures"): two threads made the N = 1200 bench 0.69x as fast, 4 800 disks
-/// about even, 19 200 at most 1.37x; 512 before that measurement.
+/// a few microseconds of hand-over per step. On a quiet 2-core machine two threads made the
+/// N = 1200 bench 0.69x as fast, 4 800 disks about even, 19 200 at most 1.37x
+/// (docs/performance-history.md, "Quiet-machine figures after the third round").
 pub const PARALLEL_MIN_PARTICLES: usize = 16_384;
 
 /// Which Gear steps run on the spatial domains (`domains.rs`).
