@@ -253,8 +253,12 @@ pub fn block_test(
 /// The stored verdict of a run with a `[convergence]` policy.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Convergence {
-    /// Every monitored quantity passed both tests in the final window.
+    /// The run's history was stationary at its last check (its trend state
+    /// `stationary`, `observe::trend`).
     pub converged: bool,
+    /// Why the run ended (`None` in results stored before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ending: Option<super::Ending>,
     /// The window the tests (and every stationary average of the result) cover.
     pub window_start: f64,
     pub window_end: f64,
@@ -267,15 +271,9 @@ pub struct Convergence {
     pub blocks: usize,
     pub sigmas: f64,
     pub rel_tolerance: f64,
-    /// The tests of the final window, one per monitored quantity.
+    /// The tests of the last check, one per monitored quantity, over the history from the
+    /// end of the transient (or the window's start, where earlier) to the end of the run.
     pub tests: Vec<BlockTest>,
-}
-
-impl Convergence {
-    /// Collects the tests of one window.
-    pub fn verdict(tests: &[BlockTest]) -> bool {
-        !tests.is_empty() && tests.iter().all(BlockTest::ok)
-    }
 }
 
 #[cfg(test)]

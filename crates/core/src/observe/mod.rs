@@ -14,6 +14,7 @@
 //! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D), only when asked for |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
 //! | [`stationarity`] | first versus second half of the window |
+//! | [`trend`](mod@trend) | the end of the transient and what the run did after it: stationary, heating, cooling, coarsening or undecided |
 //! | [`shear`](mod@shear) | shear drive: `E_par`, `E_perp`, their window means and extrema per cycle |
 //! | [`classify`](mod@classify) | the phase from the observables and the `[classify]` thresholds |
 //! | [`line`](mod@line) | the fluid-gas inflection point along a line of constant Gamma |
@@ -34,6 +35,7 @@ pub mod profiles;
 pub mod shear;
 pub mod stationarity;
 pub mod temperature;
+pub mod trend;
 
 pub use crate::scene::{ConvergenceSpec, ObserveSpec};
 pub use classify::{
@@ -225,6 +227,10 @@ pub struct Observables {
     /// statistics ([`convergence`](mod@convergence)); `None` for a fixed-length run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub convergence: Option<convergence::Convergence>,
+    /// What the monitored series did over the run ([`trend`](mod@trend)): every run stores one
+    /// state (`None` in results stored before it existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trend: Option<trend::Trend>,
 }
 
 impl Observables {
@@ -281,52 +287,73 @@ struct Monitored {
     values: [f64; 3],
 }
 
+/// Why a run with a `[convergence]` policy ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Ending {
+    /// Its history was stationary.
+    Stationary,
+    /// Its trend was the same at two checks in a row and cannot change its label (a heating
+    /// gas, a coarsening coexistence: [`trend::TrendState::keeps_label`]).
+    Trend,
+    /// The next window would have passed the cap.
+    Cap,
+}
+
 /// The observers, the window and the run-length policy, seen by the sampling loop.
 struct Watch<'a> {
     scene: &'a Scene,
     bins: LateralBins,
     set: ObserverSet,
-    eps: f64,
     monitored: Vec<Monitored>,
     /// The policy in absolute times (`None`: fixed length).
     schedule: Option<crate::scene::convergence::Schedule>,
+    /// The shortest transient the scene allows, in absolute time: the history the trend looks
+    /// at starts here.
+    t_floor: f64,
     checks: usize,
-    tests: Vec<convergence::BlockTest>,
-    converged: bool,
+    /// The trend at the latest check.
+    trend: Option<trend::Trend>,
+    ending: Option<Ending>,
     /// End of the whole run so far (for progress).
     progress_end: f64,
     progress: &'a mut dyn FnMut(f64),
 }
 
 impl Watch<'_> {
-    /// The tests of the current window `[t_start, t_end]`.
-    fn block_tests(&self, spec: &ConvergenceSpec) -> Vec<convergence::BlockTest> {
-        let names = ["temperature_reduced", "bridges_per_particle", "delta_n_cb"];
+    /// The trend of the run so far: the monitored history from `t_floor` on, the current
+    /// window starting at the observers' window start.
+    fn assess(&self) -> trend::Trend {
+        let spec = self.scene.convergence.clone().unwrap_or_default();
+        let names = [trend::TEMPERATURE, trend::BRIDGES, trend::DELTA_N_CB];
         let floors = [
             FLOOR_TEMPERATURE,
             FLOOR_BRIDGES_PER_PARTICLE,
             convergence::FLOOR_DELTA_N_CB,
         ];
         let quantities = if self.scene.is_wet() { 3 } else { 1 };
-        let t_start = self.set.window_start();
-        (0..quantities)
-            .map(|q| {
-                let x: Vec<f64> = self
-                    .monitored
-                    .iter()
-                    .filter(|m| m.time >= t_start - self.eps)
-                    .map(|m| m.values[q])
-                    .collect();
-                convergence::block_test(
-                    names[q],
-                    &x,
-                    spec.blocks,
-                    spec.sigmas,
-                    spec.rel_tolerance,
-                    floors[q],
-                )
+        let time: Vec<f64> = self.monitored.iter().map(|m| m.time).collect();
+        let series: Vec<Vec<f64>> = (0..quantities)
+            .map(|q| self.monitored.iter().map(|m| m.values[q]).collect())
+            .collect();
+        let monitored: Vec<trend::Monitored<'_>> = (0..quantities)
+            .map(|q| trend::Monitored {
+                name: names[q],
+                floor: floors[q],
+                values: &series[q],
             })
-            .collect()
+            .collect();
+        trend::assess(
+            &time,
+            &monitored,
+            self.t_floor,
+            self.set.window_start(),
+            trend::TrendTest {
+                blocks: spec.blocks,
+                sigmas: spec.sigmas,
+                rel_tolerance: spec.rel_tolerance,
+            },
+        )
     }
 }
 
@@ -348,16 +375,33 @@ impl crate::sim::Watcher for Watch<'_> {
         (self.progress)((frame.time / t0).clamp(0.0, 1.0));
     }
 
-    /// The run-length policy (`policy`): test the window; stop if it is stationary or the
-    /// next window would pass the cap, else start a new window here and run one more.
+    /// The run-length policy: assess the history ([`trend::assess`]); stop if it is
+    /// stationary, if the same trend that cannot change the window's label was found at this
+    /// check and the one before, or if the next window would pass the cap; else start a new
+    /// window here and run one more.
     fn extend(&mut self, t_end: f64) -> Option<f64> {
         let schedule = self.schedule?;
-        let spec = self.scene.convergence.as_ref()?;
         self.checks += 1;
-        self.tests = self.block_tests(spec);
-        self.converged = convergence::Convergence::verdict(&self.tests);
+        let now = self.assess();
+        let previous = self.trend.replace(now).map(|t| t.state);
+        let state = self.trend.as_ref().expect("just set").state;
         let next = t_end + schedule.window;
-        if self.converged || next > schedule.cap * (1.0 + 1e-12) {
+        self.ending = if state == trend::TrendState::Stationary {
+            Some(Ending::Stationary)
+        } else if previous == Some(state)
+            && matches!(
+                state,
+                trend::TrendState::Heating | trend::TrendState::Coarsening
+            )
+            && state.keeps_label(classify(&self.set.finish(self.scene), &self.scene.classify).phase)
+        {
+            Some(Ending::Trend)
+        } else if next > schedule.cap * (1.0 + 1e-12) {
+            Some(Ending::Cap)
+        } else {
+            None
+        };
+        if self.ending.is_some() {
             return None;
         }
         crate::test_pause::pause_at("window");
@@ -397,12 +441,12 @@ pub fn run_observed_from(
         scene,
         bins: spec.lateral_bins(scene),
         set,
-        eps: 1e-9 * duration.max(1.0),
         monitored: Vec::new(),
         schedule,
+        t_floor: t0 + spec.window_start(scene),
         checks: 0,
-        tests: Vec::new(),
-        converged: false,
+        trend: None,
+        ending: None,
         progress_end: duration,
         progress,
     };
@@ -431,13 +475,16 @@ pub fn run_observed_from(
         series.temperature_reduced = m.iter().map(|x| x.values[0]).collect();
         series.bridges_per_particle = m.iter().map(|x| x.values[1]).collect();
     }
+    // A fixed-length run is assessed once, at its end; a policy run keeps its last check's.
+    let trend = watch.trend.take().unwrap_or_else(|| watch.assess());
     observables.convergence = schedule.map(|s| {
         let c = scene
             .convergence
             .as_ref()
             .expect("a schedule comes from a policy");
         convergence::Convergence {
-            converged: watch.converged,
+            converged: trend.state == trend::TrendState::Stationary,
+            ending: watch.ending,
             window_start: observables.window_start,
             window_end: observables.window_end,
             checks: watch.checks,
@@ -446,9 +493,10 @@ pub fn run_observed_from(
             blocks: c.blocks,
             sigmas: c.sigmas,
             rel_tolerance: c.rel_tolerance,
-            tests: std::mem::take(&mut watch.tests),
+            tests: trend.tests.clone(),
         }
     });
+    observables.trend = Some(trend);
     let classification = classify(&observables, &scene.classify);
     (
         ObservedRun {
@@ -709,6 +757,7 @@ impl ObserverSet {
             series,
             shear: self.shear.as_ref().map(|o| o.finish(spec.time_series)),
             convergence: None,
+            trend: None,
         }
     }
 }

@@ -24,9 +24,15 @@ pub enum Bins3d {
 #[serde(deny_unknown_fields)]
 pub struct ObserveSpec {
     /// Length of the transient, in periods: the stationary window is
-    /// `[transient_periods * period, run.duration]`. Default 0 (the whole run).
+    /// `[max(transient_periods * period, transient_time), run.duration]`. Default 0 (the whole
+    /// run).
     #[serde(default)]
     pub transient_periods: f64,
+    /// Shortest transient in time units (default 0): a high-frequency period is short, and a hot
+    /// start cools on its own clock, not the drive's. With a `[convergence]` policy this is the
+    /// floor; the run's trend decides where its transient really ended (docs/observables.md).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub transient_time: f64,
     /// Width of the lateral bins of the profiles, in units of length (`d = 1`); rounded so that
     /// a whole number of bins tiles `L_x` (one bin if it exceeds `L_x`). Default 4 d.
     #[serde(default = "default_bin_width")]
@@ -85,10 +91,15 @@ pub struct ObserveSpec {
     pub bins_3d: Bins3d,
 }
 
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
 impl Default for ObserveSpec {
     fn default() -> Self {
         Self {
             transient_periods: 0.0,
+            transient_time: 0.0,
             bin_width: default_bin_width(),
             samples_per_period: default_samples_per_period(),
             location_changes: None,
@@ -151,9 +162,9 @@ impl ObserveSpec {
         scene.driving_period() / self.samples_per_period
     }
 
-    /// Start of the stationary window.
+    /// Start of the stationary window: `max(transient_periods T, transient_time)`.
     pub fn window_start(&self, scene: &Scene) -> f64 {
-        self.transient_periods * scene.driving_period()
+        (self.transient_periods * scene.driving_period()).max(self.transient_time)
     }
 
     /// Number of lateral bins along `x` and their width: `n = max(1, round(L_x / bin_width))`,
@@ -169,14 +180,31 @@ impl ObserveSpec {
         let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
         let finite_pos = |v: f64| v.is_finite() && v > 0.0;
         let period = scene.driving_period();
-        let duration = scene.run.duration;
+        // With a run-length policy the first window ends at its first check, not at
+        // `run.duration`.
+        let (duration, run_name) = scene
+            .convergence
+            .as_ref()
+            .map_or((scene.run.duration, "run.duration"), |c| {
+                (c.first_check(scene), "the [convergence] first check")
+            });
+        let tt = self.transient_time;
+        if !(tt.is_finite() && tt >= 0.0 && tt < duration) {
+            return Err(err(
+                "transient_time",
+                format!(
+                    "= {tt} is out of range: must be >= 0 and shorter than the first window, \
+                     i.e. < {run_name} = {duration}"
+                ),
+            ));
+        }
         let t = self.transient_periods;
         if !(t.is_finite() && t >= 0.0 && t * period < duration) {
             return Err(err(
                 "transient_periods",
                 format!(
                     "= {t} is out of range: must be >= 0 and shorter than the run, i.e. < \
-                     run.duration / period = {duration} / {period:.6} = {:.6} (one period is {})",
+                     {run_name} / period = {duration} / {period:.6} = {:.6} (one period is {})",
                     duration / period,
                     if scene.drive_motion().is_some() {
                         "the driving period 2 pi / omega"
