@@ -85,6 +85,7 @@ fn point(k: usize, scene: Scene, obs: Value) -> PointRow {
         events: Some(1),
         finished_at: Some(0.0),
         result_owner: None,
+        trend: None,
     }
 }
 

@@ -18,12 +18,15 @@
 //!    the plane's units: decades on a log axis) with the edge's interval in axis units, and a
 //!    confidence: the fraction of the votes at the two ends that agree with their end's
 //!    majority.
-//! 4. Trust: a point with a voting replica whose run did not converge (the run-length policy's
-//!    verdict, or the stationarity check of a result without one: `report::trust`) is kept on the
-//!    map, marked `converged = false` (hollow in `plot`, `?` in `boundaries`), but left out of
+//! 4. Trust: a point with a voting replica whose label may still change (a run neither
+//!    stationary nor on a trend that keeps its label: `observe::trend::trust`; for results stored
+//!    before trend states, the run-length policy's verdict or the stationarity check) is kept on
+//!    the map, marked `trusted = false` (hollow in `plot`, `?` in `boundaries`), but left out of
 //!    the triangulation, so no boundary rests on it, unless [`Extraction::include_unconverged`]
-//!    asks for it (`boundaries --include-unconverged`). Its unconverged neighbours are then
-//!    joined to the converged points around them.
+//!    asks for it (`boundaries --include-unconverged`). Its untrusted neighbours are then joined
+//!    to the trusted points around them. A heating gas and a coarsening coexistence are trusted
+//!    for their label (`~` in `boundaries`): more time only makes the gas hotter and the drops
+//!    bigger.
 //! 5. Physical units: for shaking sweeps every map and boundary point also carries the container
 //!    motion `(A, omega)` of docs/model.md 4.1, computed from its `(Gamma, E*)` and the scene's
 //!    `E_cb`, `m`, `g` (Scene::drive_motion).
@@ -41,9 +44,9 @@ pub struct Observation {
     pub coords: Vec<serde_json::Value>,
     pub replica: i64,
     pub phase: Option<String>,
-    /// Whether the run converged (`false`: unconverged or not stationary; `true` also where the
-    /// result carries no verdict).
-    pub converged: bool,
+    /// Whether the label may carry a boundary (`false`: not stationary and on no trend that
+    /// keeps the label; `true` also where the result carries no verdict).
+    pub trusted: bool,
     /// The job's scene (for physical units).
     pub scene: Scene,
 }
@@ -55,7 +58,7 @@ impl Observation {
             coords: row.coords.clone(),
             replica: row.replica,
             phase: row.phase.clone(),
-            converged: row.converged(),
+            trusted: row.trusted(),
             scene: row.spec.scene.clone(),
         }
     }
@@ -103,8 +106,8 @@ pub struct MapPoint {
     pub votes: Vec<Option<String>>,
     /// Whether the majority was a tie.
     pub tie: bool,
-    /// Whether every voting replica converged (module doc, 4).
-    pub converged: bool,
+    /// Whether every voting replica's label is trusted (module doc, 4).
+    pub trusted: bool,
     /// Container amplitude `A` and angular frequency `omega` (shaking sweeps).
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
@@ -371,7 +374,7 @@ impl Plane<'_> {
                 continue;
             };
             let job = votes[0];
-            let converged = votes.iter().all(|v| v.phase.is_none() || v.converged);
+            let trusted = votes.iter().all(|v| v.phase.is_none() || v.trusted);
             let (xv, yv) = (Self::value(job, self.x)?, Self::value(job, self.y)?);
             let (amplitude, omega) = self.motion(&job.scene, xv, yv);
             points.push(MapPoint {
@@ -381,7 +384,7 @@ impl Plane<'_> {
                 phase,
                 votes: phases,
                 tie,
-                converged,
+                trusted,
                 amplitude,
                 omega,
             });
@@ -399,7 +402,7 @@ impl Plane<'_> {
         how: Extraction,
     ) -> Result<Vec<(usize, usize)>, BoundaryError> {
         let carriers: Vec<usize> = (0..points.len())
-            .filter(|&i| how.include_unconverged || points[i].converged)
+            .filter(|&i| how.include_unconverged || points[i].trusted)
             .collect();
         let subset: Vec<MapPoint> = carriers.iter().map(|&i| points[i].clone()).collect();
         let edges = match (self.x, self.y) {
@@ -571,7 +574,7 @@ mod tests {
             coords: vec![serde_json::json!(2.0), serde_json::json!(e)],
             replica: r,
             phase: Some(p.to_string()),
-            converged: true,
+            trusted: true,
             scene: scene.clone(),
         };
         let jobs = vec![
@@ -612,11 +615,11 @@ mod tests {
             line: 0,
         }];
         // A line f (E* 1), g unconverged (E* 2), g (E* 4).
-        let obs = |e: f64, p: &str, converged: bool| Observation {
+        let obs = |e: f64, p: &str, trusted: bool| Observation {
             coords: vec![serde_json::json!(e)],
             replica: 0,
             phase: Some(p.to_string()),
-            converged,
+            trusted,
             scene: scene.clone(),
         };
         let jobs = vec![
@@ -629,7 +632,7 @@ mod tests {
         // The unconverged point stays on the map, marked ...
         assert_eq!(slice.points.len(), 3);
         assert_eq!(
-            slice.points.iter().map(|p| p.converged).collect::<Vec<_>>(),
+            slice.points.iter().map(|p| p.trusted).collect::<Vec<_>>(),
             [true, false, true]
         );
         // ... but the boundary is drawn between the converged neighbours, E* 1 and 4.

@@ -94,13 +94,20 @@ pub fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
 pub fn untrusted_points(
     points: &[crate::store::PointRow],
 ) -> std::collections::HashMap<String, char> {
-    points
-        .iter()
-        .filter_map(|p| {
-            let mark = crate::report::trust::trust_mark(p.observables.as_ref()?)?;
-            Some((serde_json::Value::from(p.coords.clone()).to_string(), mark))
-        })
-        .collect()
+    let mut marks = std::collections::HashMap::new();
+    for p in points {
+        let Some(mark) = crate::report::trust::mark(p.trust()) else {
+            continue;
+        };
+        // Among replicas, a label that may change outweighs one that is kept.
+        let e = marks
+            .entry(serde_json::Value::from(p.coords.clone()).to_string())
+            .or_insert(mark);
+        if mark == crate::report::trust::NOT_STATIONARY {
+            *e = mark;
+        }
+    }
+    marks
 }
 
 /// `boundaries` (table): per sweep and slice, the phase map as a grid and the boundary
@@ -152,11 +159,11 @@ pub fn boundaries_table(
                 let marks = untrusted.get(&s.name).unwrap_or(&none);
                 write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys, marks);
             }
-            let unconverged = slice.points.iter().filter(|p| !p.converged).count();
+            let unconverged = slice.points.iter().filter(|p| !p.trusted).count();
             if unconverged > 0 {
                 let _ = writeln!(
                     out,
-                    "  {unconverged} unconverged point(s): {}",
+                    "  {unconverged} point(s) not stationary whose label may change: {}",
                     if how.include_unconverged {
                         "used for the boundaries as asked (--include-unconverged)"
                     } else {
@@ -168,11 +175,11 @@ pub fn boundaries_table(
                 let carriers: Vec<&str> = slice
                     .points
                     .iter()
-                    .filter(|p| how.include_unconverged || p.converged)
+                    .filter(|p| how.include_unconverged || p.trusted)
                     .map(|p| p.phase.as_str())
                     .collect();
                 let why = if carriers.len() < 2 {
-                    "fewer than two converged points"
+                    "fewer than two trusted points"
                 } else if carriers.iter().all(|p| *p == carriers[0]) {
                     "every point that carries one has the same phase"
                 } else {
@@ -255,13 +262,22 @@ fn write_grid(
         } else {
             ""
         },
-        if slice.points.iter().any(|p| mark_of(p).is_some()) {
-            format!(
-                "; {} = not stationary",
-                crate::report::trust::NOT_STATIONARY
-            )
-        } else {
-            String::new()
+        {
+            let has = |m: char| slice.points.iter().any(|p| mark_of(p) == Some(m));
+            let mut legend = String::new();
+            if has(crate::report::trust::NOT_STATIONARY) {
+                legend += &format!(
+                    "; {} = not stationary, label may change",
+                    crate::report::trust::NOT_STATIONARY
+                );
+            }
+            if has(crate::report::trust::LABEL_KEPT) {
+                legend += &format!(
+                    "; {} = heating gas or coarsening coexistence, label kept",
+                    crate::report::trust::LABEL_KEPT
+                );
+            }
+            legend
         }
     );
     for &yv in ys.iter().rev() {

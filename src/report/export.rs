@@ -21,6 +21,13 @@ pub struct ExportRow {
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
     pub phase: Option<String>,
+    /// The run's stationarity verdict (`report::trust::stationary`).
+    pub stationary: Option<bool>,
+    /// The run's trend state (stationary, heating, cooling, coarsening, undecided; `None` for
+    /// results stored before trend states).
+    pub trend: Option<String>,
+    /// The trust mark: `?` label may change, `~` label kept by its trend, `None` stationary.
+    pub trust: Option<String>,
     pub decided_on: Option<serde_json::Value>,
     pub observables: serde_json::Value,
     pub simulated_time: Option<f64>,
@@ -50,6 +57,9 @@ pub fn rows(sweep: &SweepRow, points: &[PointRow]) -> Vec<ExportRow> {
                 amplitude: motion.map(|m| m.0),
                 omega: motion.map(|m| m.1),
                 phase: p.phase.clone(),
+                stationary: p.observables.as_ref().and_then(super::trust::stationary),
+                trend: p.trend.map(|t| t.name().to_string()),
+                trust: super::trust::mark(p.trust()).map(String::from),
                 decided_on: p.decided_on.clone(),
                 observables: p.observables.clone().unwrap_or(serde_json::Value::Null),
                 simulated_time: p.simulated_time,
@@ -200,6 +210,7 @@ pub fn to_csv(rows: &[ExportRow]) -> String {
             "omega",
             "phase",
             "stationary",
+            "trend",
             "trust",
             "simulated_time",
             "wall_seconds",
@@ -234,8 +245,9 @@ pub fn to_csv(rows: &[ExportRow]) -> String {
             opt(&r.amplitude),
             opt(&r.omega),
             opt(&r.phase),
-            opt(&super::trust::stationary(&r.observables)),
-            opt(&super::trust::trust_mark(&r.observables)),
+            opt(&r.stationary),
+            opt(&r.trend),
+            opt(&r.trust),
             opt(&r.simulated_time),
             opt(&r.wall_seconds),
             opt(&r.events),

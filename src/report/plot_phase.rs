@@ -339,7 +339,7 @@ where
         chart
             .draw_series(slice.points.iter().filter(|p| p.phase == phase).map(|p| {
                 // Unconverged points hollow: their label may still change.
-                let style = if p.converged {
+                let style = if p.trusted {
                     color.filled()
                 } else {
                     color.stroke_width(2)
@@ -350,7 +350,7 @@ where
             .label(phase)
             .legend(move |(px, py)| Circle::new((px + 9, py), 5, color.filled()));
     }
-    if slice.points.iter().any(|p| !p.converged) {
+    if slice.points.iter().any(|p| !p.trusted) {
         let grey = RGBColor(90, 90, 90);
         chart
             .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
@@ -470,7 +470,7 @@ mod tests {
             phase: "s".into(),
             votes: vec![Some("s".into())],
             tie: false,
-            converged: true,
+            trusted: true,
             amplitude: None,
             omega: None,
         };

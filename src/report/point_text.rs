@@ -33,6 +33,31 @@ pub fn decision_text(p: &PointRow) -> String {
     if let Some(phase) = &p.phase {
         let _ = writeln!(out, "phase       {phase}");
     }
+    if let Some(t) = p.trend {
+        let what = match crate::report::trust::mark(p.trust()) {
+            None => "",
+            Some(crate::report::trust::LABEL_KEPT) => {
+                " (not stationary, but the label is safe: a heating gas stays a gas, a coarsening \
+                 coexistence stays a coexistence; its numbers still drift)"
+            }
+            Some(_) => " (not stationary: the label may still change)",
+        };
+        let _ = writeln!(out, "trend       {t}{what}");
+        if let Some(ending) = p
+            .observables
+            .as_ref()
+            .and_then(|o| o.pointer("/convergence/ending"))
+            .and_then(|e| e.as_str())
+        {
+            let why = match ending {
+                "stationary" => "its history was stationary",
+                "trend" => "its trend was found twice in a row and cannot change its label",
+                "cap" => "it reached the cap of the run-length policy",
+                other => other,
+            };
+            let _ = writeln!(out, "ended       {why}");
+        }
+    }
     if let Some(o) = &p.observables {
         match crate::report::trust::stationary(o) {
             Some(true) => {

@@ -131,18 +131,37 @@ pub fn sweep_status_text(
         "  time   {} spent in finished jobs; {estimate}",
         duration_text(spent)
     );
-    let untrusted: Vec<String> = points
-        .iter()
-        .filter_map(|p| p.observables.as_ref())
-        .filter_map(|o| crate::report::trust::trust_mark(o).map(|m| m.to_string()))
-        .collect();
-    if !untrusted.is_empty() {
+    let mut trends = std::collections::BTreeMap::new();
+    for p in points.iter().filter(|p| p.status == "done") {
+        if let Some(t) = p.trend {
+            *trends.entry(t).or_insert(0usize) += 1;
+        }
+    }
+    if !trends.is_empty() {
+        let counts: Vec<String> = trends.iter().map(|(t, n)| format!("{n} {t}")).collect();
+        let _ = writeln!(out, "  trend  {}", counts.join(", "));
+    }
+    let marked = |m: char| {
+        points
+            .iter()
+            .filter(|p| p.status == "done")
+            .filter(|p| crate::report::trust::mark(p.trust()) == Some(m))
+            .count()
+    };
+    let (may_change, kept) = (
+        marked(crate::report::trust::NOT_STATIONARY),
+        marked(crate::report::trust::LABEL_KEPT),
+    );
+    if may_change + kept > 0 {
         let _ = writeln!(
             out,
-            "  trust  {} of {} result(s) not stationary ({} in `boundaries`; see `show JOB`)",
-            untrusted.len(),
+            "  trust  {} of {} result(s) not stationary: {may_change} whose label may change ({} \
+             in `boundaries`, left out of them), {kept} whose trend keeps the label ({}: a \
+             heating gas, a coarsening coexistence); see `show JOB`",
+            may_change + kept,
             c.done,
-            crate::report::trust::NOT_STATIONARY
+            crate::report::trust::NOT_STATIONARY,
+            crate::report::trust::LABEL_KEPT
         );
     }
     if !s.left_out.is_empty() {

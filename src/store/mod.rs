@@ -213,17 +213,28 @@ pub struct PointRow {
     pub finished_at: Option<f64>,
     /// The runner that committed the result.
     pub result_owner: Option<String>,
+    /// The result's trend state (`results.trend`; `None` without a result, or for a result
+    /// stored before trend states existed).
+    pub trend: Option<wetgran_core::observe::trend::TrendState>,
 }
 
 impl PointRow {
-    /// Whether the result may carry a phase boundary: `false` where its run did not converge
-    /// (`observe::converged_in_json`); `true` where it did and where the result carries no
-    /// verdict (or there is no result yet).
-    pub fn converged(&self) -> bool {
-        self.observables
+    /// How far the result's label can be trusted (`observe::trend::trust`): stationary (also
+    /// where the result carries no verdict, or there is no result yet), a trend that keeps the
+    /// label, or a label that may still change.
+    pub fn trust(&self) -> wetgran_core::observe::trend::Trust {
+        let converged = self
+            .observables
             .as_ref()
-            .and_then(wetgran_core::observe::converged_in_json)
-            != Some(false)
+            .and_then(wetgran_core::observe::converged_in_json);
+        let phase = self.phase.as_deref().and_then(|p| p.parse().ok());
+        wetgran_core::observe::trend::trust(self.trend, converged, phase)
+    }
+
+    /// Whether the result may carry a phase boundary: stationary, or a trend that cannot change
+    /// its label (a heating gas, a coarsening coexistence).
+    pub fn trusted(&self) -> bool {
+        self.trust().label_trusted()
     }
 }
 
@@ -1296,6 +1307,10 @@ impl Store {
                     events: r.get("events"),
                     finished_at: r.get("finished_at"),
                     result_owner: r.get("result_owner"),
+                    trend: r
+                        .get::<Option<String>, _>("trend")
+                        .as_deref()
+                        .and_then(wetgran_core::observe::trend::TrendState::parse),
                     job_id,
                 })
             })

@@ -92,6 +92,7 @@ fn synthetic(d: f64, t: f64, b: Bins, wet: bool) -> Observables {
         series: None,
         shear: None,
         convergence: None,
+        trend: None,
     }
 }
 

@@ -2,7 +2,7 @@
 -- ?1: sweep id
 SELECT p.point, p.replica, p.coords, p.job_id, j.status, j.spec, j.attempts,
     j.last_error, r.phase, r.decided_on, r.observables, r.simulated_time,
-    r.wall_seconds, r.events, r.finished_at, r.owner AS result_owner
+    r.wall_seconds, r.events, r.finished_at, r.owner AS result_owner, r.trend
 FROM sweep_points p
 JOIN jobs j ON j.id = p.job_id
 LEFT JOIN results r ON r.job_id = p.job_id

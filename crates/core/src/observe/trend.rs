@@ -95,6 +95,36 @@ impl fmt::Display for TrendState {
     }
 }
 
+/// How far a stored label can be trusted ([`trust`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Trust {
+    /// Stationary, or a result that carries no verdict at all.
+    Stationary,
+    /// Not stationary, but its trend cannot change its label ([`TrendState::keeps_label`]).
+    LabelKept,
+    /// Not stationary; more time may change the label.
+    MayChange,
+}
+
+impl Trust {
+    /// Whether the label may carry a phase boundary.
+    pub fn label_trusted(self) -> bool {
+        self != Trust::MayChange
+    }
+}
+
+/// The trust of a stored result from its trend state (`None`: stored before trend states), its
+/// convergence verdict (used only without a trend state) and its label.
+pub fn trust(trend: Option<TrendState>, converged: Option<bool>, phase: Option<Phase>) -> Trust {
+    match trend {
+        Some(TrendState::Stationary) => Trust::Stationary,
+        Some(t) if phase.is_some_and(|p| t.keeps_label(p)) => Trust::LabelKept,
+        Some(_) => Trust::MayChange,
+        None if converged == Some(false) => Trust::MayChange,
+        None => Trust::Stationary,
+    }
+}
+
 /// The trend of a run, stored with its result.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Trend {

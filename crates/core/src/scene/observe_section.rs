@@ -44,6 +44,14 @@ pub struct ObserveSpec {
     /// observers never samples).
     #[serde(default = "default_samples_per_period")]
     pub samples_per_period: f64,
+    /// Shortest interval between two observer samples, in time units (default 0: none). At
+    /// high frequency `period / samples_per_period` is far shorter than anything the observers
+    /// resolve (at omega = 850, 20 samples per period are 3.7e-4 time units apart), and a run
+    /// long in time would cost millions of samples. The interval is then the smallest whole
+    /// multiple of `period / samples_per_period` at least this long, so samples stay on the
+    /// drive's phase grid.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub min_sample_interval: f64,
     /// Count location changes (`f_lc`; Delaunay in 2D, neighbour shells in 3D). Left out, it
     /// is on only where the classifier reads `f_lc` (`classify.mobility =
     /// "location_changes"`): [`ObserveSpec::counts_location_changes`]. A scene read from text
@@ -102,6 +110,7 @@ impl Default for ObserveSpec {
             transient_time: 0.0,
             bin_width: default_bin_width(),
             samples_per_period: default_samples_per_period(),
+            min_sample_interval: 0.0,
             location_changes: None,
             diffusion: true,
             layers: default_layers(),
@@ -157,9 +166,15 @@ impl ObserveSpec {
             .unwrap_or(classify.mobility == Mobility::LocationChanges)
     }
 
-    /// Interval between two observer samples: `period / samples_per_period`.
+    /// Interval between two observer samples: `period / samples_per_period`, or the smallest
+    /// whole multiple of it that is at least `min_sample_interval`.
     pub fn sample_interval(&self, scene: &Scene) -> f64 {
-        scene.driving_period() / self.samples_per_period
+        let base = scene.driving_period() / self.samples_per_period;
+        if self.min_sample_interval > base {
+            base * (self.min_sample_interval / base * (1.0 - 1e-12)).ceil()
+        } else {
+            base
+        }
     }
 
     /// Start of the stationary window: `max(transient_periods T, transient_time)`.
@@ -228,6 +243,16 @@ impl ObserveSpec {
             return Err(err(
                 "samples_per_period",
                 format!("= {s} is out of range: must be > 0"),
+            ));
+        }
+        let m = self.min_sample_interval;
+        if !(m.is_finite() && m >= 0.0 && m < duration) {
+            return Err(err(
+                "min_sample_interval",
+                format!(
+                    "= {m} is out of range: must be >= 0 and shorter than the first window, \
+                     i.e. < {run_name} = {duration}"
+                ),
             ));
         }
         if self.layers == 0 {
