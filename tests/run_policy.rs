@@ -5,7 +5,8 @@
 #[path = "../crates/core/tests/common/mod.rs"]
 mod common;
 
-use wetgran_core::observe::{run_observed, run_observed_from};
+use wetgran_core::observe::trend::TrendState;
+use wetgran_core::observe::{Ending, run_observed, run_observed_from};
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::{EngineState, run_scene};
 
@@ -33,6 +34,9 @@ fn a_drifting_run_is_extended_on_one_trajectory_up_to_the_cap() {
     assert!(!c.converged, "{c:?}");
     assert!(!o.converged());
     assert_eq!(c.checks, 3, "{c:?}");
+    // Cooling can change a label: the run goes on to its cap and says why it stopped.
+    assert_eq!(c.ending, Some(Ending::Cap));
+    assert_eq!(o.trend.as_ref().unwrap().state, TrendState::Cooling);
     assert_eq!((c.first_check, c.cap), (8.0, 24.0));
     assert!((c.window_start - 16.0).abs() < 1e-9 && (c.window_end - 24.0).abs() < 1e-9);
     assert_eq!(
@@ -73,6 +77,10 @@ fn a_stationary_elastic_gas_converges_at_the_first_check() {
     let c = run.observables.convergence.as_ref().unwrap();
     assert!(c.converged, "{c:?}");
     assert_eq!(c.checks, 1);
+    assert_eq!(c.ending, Some(Ending::Stationary));
+    let trend = run.observables.trend.as_ref().unwrap();
+    assert_eq!(trend.state, TrendState::Stationary);
+    assert!(trend.relaxed);
     // min_time beats run.duration: the first check is at 4.
     assert!((run.report.simulated_time - 4.0).abs() < 1e-12);
     assert_eq!(c.tests.len(), 1, "dry: T_g only");
@@ -248,12 +256,25 @@ fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
         (2, 2),
         "cooling never settles"
     );
+    // The trend state is stored in its column and shown. The gas cools, and as it cools its
+    // grains cluster (Delta n_cb rises): cooling or coarsening, never stationary.
+    let trends: Vec<_> = before.iter().map(|p| p.trend).collect();
+    assert!(
+        trends
+            .iter()
+            .all(|t| matches!(t, Some(TrendState::Cooling | TrendState::Coarsening))),
+        "{trends:?}"
+    );
     let o = run(&["sweep", "status", "--db", db_s]);
     assert!(
         stdout(&o).contains("0 of 2 result(s) converged, 2 unconverged"),
         "{}",
         stdout(&o)
     );
+    assert!(stdout(&o).contains("  trend  "), "{}", stdout(&o));
+    let o = run(&["show", &before[0].job_id, "--db", db_s]);
+    let shown = format!("trend       {}", before[0].trend.unwrap());
+    assert!(stdout(&o).contains(&shown), "{}", stdout(&o));
     let states: Vec<EngineState> = before
         .iter()
         .map(|p| {

@@ -24,9 +24,9 @@
 //!    the map, marked `trusted = false` (hollow in `plot`, `?` in `boundaries`), but left out of
 //!    the triangulation, so no boundary rests on it, unless [`Extraction::include_unconverged`]
 //!    asks for it (`boundaries --include-unconverged`). Its untrusted neighbours are then joined
-//!    to the trusted points around them. A heating gas and a coarsening coexistence are trusted
-//!    for their label (`~` in `boundaries`): more time only makes the gas hotter and the drops
-//!    bigger.
+//!    to the trusted points around them. A heating gas, a cooling solid and a coarsening
+//!    coexistence are trusted for their label (`~` in `boundaries`): more time only makes the
+//!    gas hotter, the solid colder and the drops bigger.
 //! 5. Physical units: for shaking sweeps every map and boundary point also carries the container
 //!    motion `(A, omega)` of docs/model.md 4.1, computed from its `(Gamma, E*)` and the scene's
 //!    `E_cb`, `m`, `g` (Scene::drive_motion).

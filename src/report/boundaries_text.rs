@@ -273,7 +273,7 @@ fn write_grid(
             }
             if has(crate::report::trust::LABEL_KEPT) {
                 legend += &format!(
-                    "; {} = heating gas or coarsening coexistence, label kept",
+                    "; {} = heating gas, cooling solid or coarsening coexistence, label kept",
                     crate::report::trust::LABEL_KEPT
                 );
             }

@@ -37,8 +37,8 @@ pub fn decision_text(p: &PointRow) -> String {
         let what = match crate::report::trust::mark(p.trust()) {
             None => "",
             Some(crate::report::trust::LABEL_KEPT) => {
-                " (not stationary, but the label is safe: a heating gas stays a gas, a coarsening \
-                 coexistence stays a coexistence; its numbers still drift)"
+                " (not stationary, but the label is safe: a heating gas stays a gas, a cooling \
+                 solid a solid, a coarsening coexistence a coexistence; its numbers still drift)"
             }
             Some(_) => " (not stationary: the label may still change)",
         };

@@ -157,7 +157,7 @@ pub fn sweep_status_text(
             out,
             "  trust  {} of {} result(s) not stationary: {may_change} whose label may change ({} \
              in `boundaries`, left out of them), {kept} whose trend keeps the label ({}: a \
-             heating gas, a coarsening coexistence); see `show JOB`",
+             heating gas, a cooling solid, a coarsening coexistence); see `show JOB`",
             may_change + kept,
             c.done,
             crate::report::trust::NOT_STATIONARY,

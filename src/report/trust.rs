@@ -3,8 +3,8 @@
 //! from (docs/observables.md "Run to stationarity").
 //!
 //! A result with a trend state (`observe::trend`) is trusted when it is `stationary`; a heating
-//! gas and a coarsening coexistence are trusted *for their label* (more time cannot change it)
-//! and marked [`LABEL_KEPT`]; cooling and undecided results are marked [`NOT_STATIONARY`]. A
+//! gas, a cooling solid and a coarsening coexistence are trusted *for their label* (more time
+//! cannot change it) and marked [`LABEL_KEPT`]; cooling and undecided results are marked [`NOT_STATIONARY`]. A
 //! result stored before trend states existed falls back to its convergence verdict, or its
 //! first-half/second-half stationarity check.
 
@@ -15,7 +15,8 @@ use wetgran_core::observe::trend::{self, TrendState, Trust};
 pub const NOT_STATIONARY: char = '?';
 
 /// The mark of a result that is not stationary but whose trend cannot change its label (a
-/// heating gas, a coarsening coexistence): the label is safe, its numbers still drift.
+/// heating gas, a cooling solid, a coarsening coexistence): the label is safe, its numbers
+/// still drift.
 pub const LABEL_KEPT: char = '~';
 
 /// The stored trend state of a result (`observables.trend.state`), `None` for results stored
@@ -131,6 +132,8 @@ mod tests {
             trust_mark(&with("cooling"), Some("g")),
             Some(NOT_STATIONARY)
         );
+        // A cooling solid only gets colder.
+        assert_eq!(trust_mark(&with("cooling"), Some("s")), Some(LABEL_KEPT));
         assert_eq!(
             trust_mark(&with("undecided"), Some("s")),
             Some(NOT_STATIONARY)

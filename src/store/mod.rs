@@ -232,7 +232,7 @@ impl PointRow {
     }
 
     /// Whether the result may carry a phase boundary: stationary, or a trend that cannot change
-    /// its label (a heating gas, a coarsening coexistence).
+    /// its label (a heating gas, a cooling solid, a coarsening coexistence).
     pub fn trusted(&self) -> bool {
         self.trust().label_trusted()
     }

@@ -294,7 +294,7 @@ pub enum Ending {
     /// Its history was stationary.
     Stationary,
     /// Its trend was the same at two checks in a row and cannot change its label (a heating
-    /// gas, a coarsening coexistence: [`trend::TrendState::keeps_label`]).
+    /// gas, a cooling solid, a coarsening coexistence: [`trend::TrendState::keeps_label`]).
     Trend,
     /// The next window would have passed the cap.
     Cap,
@@ -389,10 +389,6 @@ impl crate::sim::Watcher for Watch<'_> {
         self.ending = if state == trend::TrendState::Stationary {
             Some(Ending::Stationary)
         } else if previous == Some(state)
-            && matches!(
-                state,
-                trend::TrendState::Heating | trend::TrendState::Coarsening
-            )
             && state.keeps_label(classify(&self.set.finish(self.scene), &self.scene.classify).phase)
         {
             Some(Ending::Trend)
