@@ -557,6 +557,17 @@ impl SweepFile {
                 toml::Value::Float(0.0),
             )
             .map_err(|m| SweepError::new(&file, None, "observe", m))?;
+            // The same for the keys in time units that are checked against the first window.
+            let mut deferred = Vec::new();
+            for key in ["transient_time", "min_sample_interval"] {
+                if let Some(v) = tree
+                    .get_mut("observe")
+                    .and_then(|o| o.as_table_mut())
+                    .and_then(|o| o.remove(key))
+                {
+                    deferred.push((key, v));
+                }
+            }
             for (axis, v) in self.axes.iter().zip(coords) {
                 let value = to_toml(v)
                     .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
@@ -626,6 +637,15 @@ impl SweepFile {
                 (None, None) => DEFAULT_TRANSIENT_FRACTION * scene.run.duration / period,
             };
             scene.observe.transient_periods = transient_periods;
+            for (key, v) in deferred {
+                let Some(x) = v.as_float().or(v.as_integer().map(|i| i as f64)) else {
+                    return Err(self.observe_err(key, format!("= {v} is not a number{where_}")));
+                };
+                match key {
+                    "transient_time" => scene.observe.transient_time = x,
+                    _ => scene.observe.min_sample_interval = x,
+                }
+            }
             if transient_periods * period >= scene.run.duration {
                 return Err(self.observe_err(
                     "transient_periods",
