@@ -496,6 +496,15 @@ where
                 .map_err(err)?;
         }
         let names: Vec<String> = (0..n).map(|k| branch_name(slices, k)).collect();
+        // The branches' short names for the text's order: `hot/cold`.
+        let short: Vec<String> = (0..n)
+            .map(|k| {
+                slices[k]
+                    .branch
+                    .clone()
+                    .unwrap_or_else(|| (k + 1).to_string())
+            })
+            .collect();
         let how = if n == 2 {
             format!("left {}, right {}", names[0], names[1])
         } else {
@@ -506,8 +515,8 @@ where
             .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
             .map_err(err)?
             .label(format!(
-                "split disc: bistable ({how}; label {})",
-                names.join("/")
+                "split disc: bistable ({how}; text: phases {})",
+                short.join("/")
             ))
             .legend(move |(px, py)| {
                 let centre = |v: Vec<(i32, i32)>| -> Vec<(i32, i32)> {
