@@ -725,4 +725,73 @@ mod tests {
         let svg = phase_svg(&map, &slice, None, Some(line), "t").unwrap();
         assert!(svg.contains("chain model, Eq. 7.9"));
     }
+
+    #[test]
+    fn branches_merge_by_position_and_only_disagreeing_points_are_bistable() {
+        use crate::boundary::MapPoint;
+        let point = |x: f64, phase: &str, converged: bool| MapPoint {
+            coords: vec![serde_json::json!(x)],
+            x,
+            y: 1.0,
+            phase: phase.into(),
+            votes: vec![Some(phase.into())],
+            tie: false,
+            converged,
+            amplitude: None,
+            omega: None,
+        };
+        let slice = |branch: &str, points: Vec<MapPoint>| Slice {
+            fixed: Vec::new(),
+            branch: Some(branch.into()),
+            points,
+            boundaries: Default::default(),
+        };
+        // Hot: f, g, g at x = 1, 2, 3; cold: f, f at x = 1, 2 (unconverged at 2), and x = 4.
+        let hot = slice(
+            "hot",
+            vec![
+                point(1.0, "f", true),
+                point(2.0, "g", true),
+                point(3.0, "g", true),
+            ],
+        );
+        let cold = slice(
+            "cold",
+            vec![
+                point(1.0, "f", true),
+                point(2.0, "f", false),
+                point(4.0, "s", true),
+            ],
+        );
+        let merged = merge_branches(&[&hot, &cold]);
+        let xs: Vec<f64> = merged.iter().map(|p| p.x).collect();
+        assert_eq!(xs, vec![1.0, 2.0, 3.0, 4.0]);
+        let bistable: Vec<bool> = merged.iter().map(DrawnPoint::bistable).collect();
+        // Only x = 2 disagrees; a point only one branch has is not bistable.
+        assert_eq!(bistable, vec![false, true, false, false]);
+        assert_eq!(merged[1].phases, vec![Some("g".into()), Some("f".into())]);
+        assert!(!merged[1].converged && merged[0].converged);
+        assert_eq!(merged[3].phase(), "s");
+        assert_eq!(branch_name(&[&hot, &cold], 1), "cold start");
+    }
+
+    #[test]
+    fn two_sectors_are_the_left_and_the_right_half() {
+        let left = sector(0, 2, 10);
+        let right = sector(1, 2, 10);
+        // Both start at the centre; the left one spans x <= 0, the right one x >= 0, each from
+        // the top (screen y = -10) to the bottom (y = 10) or back.
+        assert_eq!((left[0], right[0]), ((0, 0), (0, 0)));
+        assert!(left.iter().all(|&(x, _)| x <= 0));
+        assert!(right.iter().all(|&(x, _)| x >= 0));
+        assert!(left.contains(&(-10, 0)) && right.contains(&(10, 0)));
+        assert_eq!((left[1], *left.last().unwrap()), ((0, -10), (0, 10)));
+        // One branch: a whole disc, no centre vertex.
+        let whole = sector(0, 1, 10);
+        assert!(
+            whole
+                .iter()
+                .all(|&(x, y)| (x * x + y * y - 100).abs() <= 20)
+        );
+    }
 }
