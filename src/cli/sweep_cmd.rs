@@ -131,7 +131,8 @@ pub enum SweepCommand {
         /// cools and a bed settles, and the cost per period changes (0: time from the start).
         #[arg(long, default_value_t = DEFAULT_ESTIMATE_SETTLE)]
         settle: f64,
-        /// Number of jobs to sample.
+        /// Number of jobs to sample; a sweep with several start modes (`initial.start` axis)
+        /// shares them out among the modes, at least one each.
         #[arg(long, default_value_t = 6)]
         samples: usize,
         /// Cores the estimate is for (default: the available cores).
