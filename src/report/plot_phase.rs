@@ -258,11 +258,32 @@ pub fn branches_svg(
     let all = || slices.iter().flat_map(|s| s.points.iter());
     let x_range = range_of(all().map(|p| p.x), xa.log);
     let y_range = range_of(all().map(|p| p.y), ya.log);
-    // Headroom above the points for the legend (upper left).
+    // Headroom above the points for the legend (upper left): 0.3 of the points' span, more when
+    // the legend has more rows than that holds (about 15 px a row in a plot area of about
+    // 520 px), as a map of several branches has (bistable entry, one boundary entry each).
+    let merged = merge_branches(slices);
+    let mut phases: Vec<&str> = merged
+        .iter()
+        .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
+        .collect();
+    phases.sort();
+    phases.dedup();
+    let rows = phases.len()
+        + 3 // the landmark lines (at most)
+        + usize::from(chain_model.is_some())
+        + usize::from(merged.iter().any(|p| !p.converged))
+        + usize::from(merged.iter().any(DrawnPoint::bistable))
+        + 1 // uncertainty bars
+        + slices.len();
+    let above = ((rows * 15 + 30) as f64 / 520.0).clamp(0.23, 0.6);
+    let headroom = above / (1.0 - above);
     let y_range = if ya.log {
-        (y_range.0, y_range.1 * (y_range.1 / y_range.0).powf(0.3))
+        (
+            y_range.0,
+            y_range.1 * (y_range.1 / y_range.0).powf(headroom),
+        )
     } else {
-        (y_range.0, y_range.1 + 0.3 * (y_range.1 - y_range.0))
+        (y_range.0, y_range.1 + headroom * (y_range.1 - y_range.0))
     };
     let mut lines: Vec<Line> = Vec::new();
     if let (Some(l), true) = (landmarks, map.shaking) {
