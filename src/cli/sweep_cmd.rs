@@ -781,9 +781,9 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> Ex
                 sweep.name,
                 map.slices.len(),
                 if drawn.len() > 1 {
-                    "the branches of "
+                    "the branches of the first: "
                 } else {
-                    ""
+                    "the first: "
                 },
                 if others(slice).is_empty() {
                     fixed_text(&slice.fixed)
