@@ -75,11 +75,11 @@ fn each_branch_has_its_own_named_boundaries() {
 
     let table = ok_stdout(&["boundaries", "--db", db]);
     assert!(
-        table.contains("boundary f|g (3 point(s)), hot-start branch"),
+        table.contains("boundary f|g (3 point(s)), branch: hot start"),
         "{table}"
     );
     assert!(
-        table.contains("boundary f|g (3 point(s)), cold-start branch"),
+        table.contains("boundary f|g (3 point(s)), branch: cold start"),
         "{table}"
     );
 

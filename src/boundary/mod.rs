@@ -145,6 +145,15 @@ pub struct BoundaryPoint {
 /// The name of the start axis (`initial.start`), whose slices are the branches of a map.
 pub const START_AXIS: &str = "initial.start";
 
+/// A branch's name in words: `hot start`, `cold start`, `continuation` (another value: `X
+/// start`).
+pub fn branch_words(branch: &str) -> String {
+    match branch {
+        "continue" => "continuation".to_string(),
+        b => format!("{b} start"),
+    }
+}
+
 /// The map for one combination of the axes outside the plane.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Slice {

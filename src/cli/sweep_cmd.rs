@@ -476,7 +476,11 @@ pub(super) fn sweep_estimate(
     if !(settle.is_finite() && settle >= 0.0) {
         return Err(Failure::BadInput("--settle must be >= 0".to_string()));
     }
-    let (sweep, jobs) = load_sweep(file)?;
+    let (sweep, mut jobs) = load_sweep(file)?;
+    // One job per id, as the store registers them: a continuation chain's head is the hot job
+    // of its point when the sweep also has the hot start (same spec, same id).
+    let mut seen = std::collections::HashSet::new();
+    jobs.retain(|j| seen.insert(j.id.clone()));
     let mut stored = std::collections::HashMap::new();
     for path in dbs {
         stored.extend(Store::open_existing(path)?.finished_job_costs()?);

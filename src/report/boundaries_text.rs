@@ -131,7 +131,7 @@ pub fn boundaries_table(
             let branch = slice
                 .branch
                 .as_deref()
-                .map(|b| format!(", {b}-start branch"))
+                .map(|b| format!(", branch: {}", crate::boundary::branch_words(b)))
                 .unwrap_or_default();
             if !slice.fixed.is_empty() {
                 let _ = writeln!(out, "  slice {}{branch}", fixed_text(&slice.fixed));

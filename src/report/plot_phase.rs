@@ -221,12 +221,12 @@ pub fn merge_branches(slices: &[&Slice]) -> Vec<DrawnPoint> {
     out
 }
 
-/// The name of branch `k` in the legend: its start mode, or `branch k + 1`.
+/// The name of branch `k` in the legend: its start mode in words, or `branch k + 1`.
 fn branch_name(slices: &[&Slice], k: usize) -> String {
-    slices[k]
-        .branch
-        .as_ref()
-        .map_or_else(|| format!("branch {}", k + 1), |b| format!("{b} start"))
+    slices[k].branch.as_ref().map_or_else(
+        || format!("branch {}", k + 1),
+        |b| crate::boundary::branch_words(b),
+    )
 }
 
 /// Draws one slice of a phase map as SVG. `landmarks` adds the theory lines (shaking sweeps).

@@ -286,7 +286,11 @@ pub fn estimate_text(
             let parts: Vec<String> = split
                 .iter()
                 .map(|(mode, n, cpu)| {
-                    format!("{mode} start {n} job(s) {} of CPU", duration_text(*cpu))
+                    format!(
+                        "{} {n} job(s) {} of CPU",
+                        crate::boundary::branch_words(mode),
+                        duration_text(*cpu)
+                    )
                 })
                 .collect();
             let _ = writeln!(out, "    by start: {}", parts.join(", "));
