@@ -146,3 +146,53 @@ fn the_map_marks_bistable_points_with_both_labels_only_where_the_starts_disagree
     assert!(!svg.contains("\ng/f\n"), "{svg}");
     assert!(svg.contains("boundary points, cold start"), "{svg}");
 }
+
+#[test]
+fn a_continued_branch_is_named_as_such() {
+    // Hot start and continuation down in E* (the shipped elastic diagrams' axes): the continued
+    // branch stays a gas at E* = 1 where the hot start is a fluid.
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let file = write(
+        dir.path(),
+        "chain.toml",
+        "[sweep]\nname = \"chain\"\nbase = \"tiny.toml\"\nperiods = 6\n\
+         [sweep.continuation]\naxis = \"e_star\"\ndirection = \"descending\"\n\
+         [[axis]]\nkey = \"gamma\"\nvalues = [2.0, 3.0]\n\
+         [[axis]]\nkey = \"e_star\"\nvalues = [1.0, 2.0, 4.0]\n\
+         [[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"continue\"]\n",
+    );
+    let sweep = SweepFile::load(&file).unwrap();
+    let db = dir.path().join("chain.sqlite");
+    let store = Store::open(&db).unwrap();
+    let row = store
+        .register_sweep(&sweep, &sweep.expand().unwrap())
+        .unwrap();
+    let phase = |c: &[serde_json::Value], _: i64| {
+        let e = c[1].as_f64().unwrap();
+        let gas_from = if c[2] == "continue" { 0.5 } else { 1.5 };
+        Some(if e < gas_from { "f" } else { "g" }.to_string())
+    };
+    // 12 grid entries, the two chain heads (E* = 4) the hot jobs there: 10 jobs.
+    assert_eq!(finish_synthetic(&store, row.id, phase), 10);
+    let json: serde_json::Value = serde_json::from_str(&ok_stdout(&[
+        "boundaries",
+        "--db",
+        db.to_str().unwrap(),
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    let slices = json[0]["map"]["slices"].as_array().unwrap();
+    assert_eq!(slices[1]["branch"], "continue", "{json}");
+    // The continued branch is all gas: no boundary of its own.
+    assert!(slices[1]["boundaries"].as_object().unwrap().is_empty());
+    let svg = plot(dir.path(), &db);
+    assert!(
+        svg.contains(
+            "split disc: bistable (left hot start, right continuation; text: phases hot/continue)"
+        ),
+        "{svg}"
+    );
+    assert_eq!(svg.matches("\nf/g\n").count(), 2, "{svg}");
+}
