@@ -1,5 +1,6 @@
-//! Both starts of a diagram (issue 32, item 3): a sweep with an `initial.start = ["hot",
-//! "cold"]` axis, its results prepared through the store (synthetic phases, no simulation).
+//! Both starts of a diagram (issue 32, item 3): sweeps with an `initial.start` axis (`["hot",
+//! "cold"]`, `["hot", "continue"]`), their results prepared through the store (synthetic
+//! phases, no simulation).
 //! `boundaries` extracts and names each branch's boundaries separately (table, JSON, CSV), and
 //! `plot` draws the two branches as one map that marks the bistable points (split discs with
 //! both labels) only where the starts disagree.
