@@ -24,9 +24,9 @@
 //!    the triangulation, so no boundary rests on it, unless [`Extraction::include_unconverged`]
 //!    asks for it (`boundaries --include-unconverged`). Its unconverged neighbours are then
 //!    joined to the converged points around them.
-//! 5. Branches: a sweep with an `initial.start` axis (`["hot", "cold"]`: both branches of an
-//!    elastic diagram, docs/observables.md "Cold start and hysteresis") has one slice per start
-//!    mode, so each branch's boundaries are extracted from its own points alone; the slice and
+//! 5. Branches: a sweep with an `initial.start` axis (`["hot", "continue"]` in the shipped
+//!    elastic diagrams, or `["hot", "cold"]`: docs/observables.md "Cold start and hysteresis")
+//!    has one slice per start mode, so each branch's boundaries are extracted from its own points alone; the slice and
 //!    each of its boundary points name their branch (the start mode).
 //! 6. Physical units: for shaking sweeps every map and boundary point also carries the container
 //!    motion `(A, omega)` of docs/model.md 4.1, computed from its `(Gamma, E*)` and the scene's
