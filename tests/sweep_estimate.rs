@@ -126,3 +126,80 @@ fn bad_options_are_refused() {
         .unwrap();
     assert_ne!(o.status.code(), Some(0), "{}", text(&o));
 }
+
+#[test]
+fn every_start_mode_is_sampled_and_priced() {
+    // Two points x (hot, cold): one sample would once have been the middle job (a hot one);
+    // now each start mode gets one and the CPU time is split by start.
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let sweep = write(
+        dir.path(),
+        "both.toml",
+        "[sweep]\nname = \"both\"\nbase = \"tiny.toml\"\nperiods = 6\n\
+         [[axis]]\nkey = \"gamma\"\nvalues = [3.0]\n\
+         [[axis]]\nkey = \"e_star\"\nvalues = [0.3, 10.0]\n\
+         [[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"cold\"]\n",
+    );
+    let est = wetgran()
+        .args(["sweep", "estimate", sweep.to_str().unwrap()])
+        .args([
+            "--samples",
+            "1",
+            "--periods",
+            "1",
+            "--settle",
+            "0",
+            "--cores",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let out = text(&est);
+    assert!(est.status.success(), "{out}");
+    assert!(out.contains("4 job(s); sampling 2"), "{out}");
+    assert!(out.contains("initial.start = \"hot\""), "{out}");
+    assert!(out.contains("initial.start = \"cold\""), "{out}");
+    assert!(
+        out.contains("by start: hot start 2 job(s)") && out.contains("cold start 2 job(s)"),
+        "{out}"
+    );
+}
+
+#[test]
+fn a_chain_head_that_is_the_hot_job_counts_once() {
+    // Hot start and continuation down in E* over two points: the chain's head (E* = 10,
+    // "continue") runs hot, the same job as the hot one there: 3 jobs, as the store has them.
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let sweep = write(
+        dir.path(),
+        "chain.toml",
+        "[sweep]\nname = \"chain\"\nbase = \"tiny.toml\"\nperiods = 6\n\
+         [sweep.continuation]\naxis = \"e_star\"\ndirection = \"descending\"\n\
+         [[axis]]\nkey = \"gamma\"\nvalues = [3.0]\n\
+         [[axis]]\nkey = \"e_star\"\nvalues = [0.3, 10.0]\n\
+         [[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"continue\"]\n",
+    );
+    let est = wetgran()
+        .args(["sweep", "estimate", sweep.to_str().unwrap()])
+        .args([
+            "--samples",
+            "2",
+            "--periods",
+            "1",
+            "--settle",
+            "0",
+            "--cores",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let out = text(&est);
+    assert!(est.status.success(), "{out}");
+    assert!(out.contains("3 job(s); sampling 2"), "{out}");
+    assert!(
+        out.contains("by start: hot start 2 job(s)") && out.contains("continuation 1 job(s)"),
+        "{out}"
+    );
+}

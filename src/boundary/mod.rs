@@ -27,7 +27,12 @@
 //!    to the trusted points around them. A heating gas, a cooling solid and a coarsening
 //!    coexistence are trusted for their label (`~` in `boundaries`): more time only makes the
 //!    gas hotter, the solid colder and the drops bigger.
-//! 5. Physical units: for shaking sweeps every map and boundary point also carries the container
+//! 5. Branches: a sweep with an `initial.start` axis (`["hot", "continue"]` in the shipped
+//!    elastic diagrams, or `["hot", "cold"]`: docs/observables.md "Cold start and hysteresis")
+//!    has one slice per start mode, so each branch's boundaries are extracted from its own
+//!    points alone; the slice and each of its boundary points name their branch (the start
+//!    mode).
+//! 6. Physical units: for shaking sweeps every map and boundary point also carries the container
 //!    motion `(A, omega)` of docs/model.md 4.1, computed from its `(Gamma, E*)` and the scene's
 //!    `E_cb`, `m`, `g` (Scene::drive_motion).
 
@@ -135,6 +140,22 @@ pub struct BoundaryPoint {
     pub confidence: f64,
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
+    /// The branch it bounds: the start mode of its slice (`hot`, `cold`, `continue`) when the
+    /// sweep has an `initial.start` axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branch: Option<String>,
+}
+
+/// The name of the start axis (`initial.start`), whose slices are the branches of a map.
+pub const START_AXIS: &str = "initial.start";
+
+/// A branch's name in words: `hot start`, `cold start`, `continuation` (another value: `X
+/// start`).
+pub fn branch_words(branch: &str) -> String {
+    match branch {
+        "continue" => "continuation".to_string(),
+        b => format!("{b} start"),
+    }
 }
 
 /// The map for one combination of the axes outside the plane.
@@ -142,6 +163,9 @@ pub struct BoundaryPoint {
 pub struct Slice {
     /// `(label, value)` of every axis outside the plane.
     pub fixed: Vec<(String, serde_json::Value)>,
+    /// The start mode of its points when the sweep has an `initial.start` axis (module doc, 5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branch: Option<String>,
     pub points: Vec<MapPoint>,
     /// Boundary points grouped by phase pair.
     pub boundaries: BTreeMap<String, Vec<BoundaryPoint>>,
@@ -253,13 +277,24 @@ pub fn phase_map_with(
         y: &y,
         shaking,
     };
+    let start_axis = axes.iter().position(|a| a.key == START_AXIS);
     let mut slices = Vec::new();
     for group in group_by_slice(axes, jobs, &plane)? {
         let (points, scenes) = plane.map_points(&group.points)?;
         let edges = plane.carrier_edges(&points, how)?;
-        let boundaries = plane.boundaries(&points, &scenes, &edges);
+        // The branch: the start axis's value, the same for every job of the slice.
+        let branch = start_axis.and_then(|i| {
+            group.points.first()?.first()?.coords[i]
+                .as_str()
+                .map(String::from)
+        });
+        let mut boundaries = plane.boundaries(&points, &scenes, &edges);
+        for b in boundaries.values_mut().flatten() {
+            b.branch = branch.clone();
+        }
         slices.push(Slice {
             fixed: group.fixed,
+            branch,
             points,
             boundaries,
         });
@@ -458,6 +493,7 @@ impl Plane<'_> {
                     confidence: edge_confidence(a, b),
                     amplitude,
                     omega,
+                    branch: None,
                 });
         }
         for list in boundaries.values_mut() {

@@ -131,7 +131,8 @@ pub enum SweepCommand {
         /// cools and a bed settles, and the cost per period changes (0: time from the start).
         #[arg(long, default_value_t = DEFAULT_ESTIMATE_SETTLE)]
         settle: f64,
-        /// Number of jobs to sample.
+        /// Number of jobs to sample; a sweep with several start modes (`initial.start` axis)
+        /// shares them out among the modes, at least one each.
         #[arg(long, default_value_t = 6)]
         samples: usize,
         /// Cores the estimate is for (default: the available cores).
@@ -475,21 +476,19 @@ pub(super) fn sweep_estimate(
     if !(settle.is_finite() && settle >= 0.0) {
         return Err(Failure::BadInput("--settle must be >= 0".to_string()));
     }
-    let (sweep, jobs) = load_sweep(file)?;
+    let (sweep, mut jobs) = load_sweep(file)?;
+    // One job per id, as the store registers them: a continuation chain's head is the hot job
+    // of its point when the sweep also has the hot start (same spec, same id).
+    let mut seen = std::collections::HashSet::new();
+    jobs.retain(|j| seen.insert(j.id.clone()));
     let mut stored = std::collections::HashMap::new();
     for path in dbs {
         stored.extend(Store::open_existing(path)?.finished_job_costs()?);
     }
     let planned = planned_jobs(&sweep, &jobs, &stored);
-    let picks: Vec<usize> = if samples >= jobs.len() {
-        (0..jobs.len()).collect()
-    } else if samples == 1 {
-        vec![jobs.len() / 2]
-    } else {
-        (0..samples)
-            .map(|k| (k as f64 * (jobs.len() - 1) as f64 / (samples - 1) as f64).round() as usize)
-            .collect()
-    };
+    // Every start mode is sampled (a hot and a cold branch cost different rates).
+    let starts: Vec<String> = planned.iter().map(|j| j.start.clone()).collect();
+    let picks = crate::sweep::estimate::sample_picks(&starts, samples);
     print!(
         "{}",
         estimate_head_text(
@@ -542,6 +541,7 @@ pub(super) fn sweep_estimate(
                 rates.push(RateSample {
                     position: planned[k].position.clone(),
                     seconds_per_time: rate,
+                    start: planned[k].start.clone(),
                 });
                 print!(
                     "{}",
@@ -557,12 +557,22 @@ pub(super) fn sweep_estimate(
     }
     let policy = jobs.iter().any(|j| j.spec.scene.convergence.is_some());
     let mut lines = Vec::new();
+    let mut by_start = Vec::new();
     let mut add = |label: &str, length: RunLength| {
-        let whole = sweep_cost(
-            &planned,
-            &job_seconds(&planned, &rates, length, false),
-            cores,
-        );
+        let seconds = job_seconds(&planned, &rates, length, false);
+        // CPU time per start mode, in order of appearance.
+        let mut split: Vec<(String, usize, f64)> = Vec::new();
+        for (j, s) in planned.iter().zip(&seconds) {
+            match split.iter_mut().find(|(m, _, _)| *m == j.start) {
+                Some(e) => {
+                    e.1 += 1;
+                    e.2 += s;
+                }
+                None => split.push((j.start.clone(), 1, *s)),
+            }
+        }
+        by_start.push(split);
+        let whole = sweep_cost(&planned, &seconds, cores);
         let left = sweep_cost(
             &planned,
             &job_seconds(&planned, &rates, length, true),
@@ -595,6 +605,7 @@ pub(super) fn sweep_estimate(
             cores,
             measured.as_ref(),
             &lines,
+            &by_start,
             settle,
             periods
         )
@@ -652,6 +663,7 @@ fn planned_jobs(
                     simulated_time: c.simulated_time,
                     converged: c.converged,
                 }),
+                start: scene.initial.start.to_string(),
             }
         })
         .collect()
@@ -748,12 +760,40 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> Ex
                 sweep.name
             )));
         };
-        if map.slices.len() > 1 {
+        // The branches (slices differing only in `initial.start`) draw as one map: the slices
+        // whose other fixed coordinates are those of the first slice.
+        let start_label = sweep
+            .axes
+            .iter()
+            .find(|a| a.key == crate::boundary::START_AXIS)
+            .map(|a| a.label.clone());
+        let others = |sl: &crate::boundary::Slice| -> Vec<(String, serde_json::Value)> {
+            sl.fixed
+                .iter()
+                .filter(|(l, _)| Some(l) != start_label.as_ref())
+                .cloned()
+                .collect()
+        };
+        let drawn: Vec<&crate::boundary::Slice> = map
+            .slices
+            .iter()
+            .filter(|sl| others(sl) == others(slice))
+            .collect();
+        if drawn.len() < map.slices.len() {
             eprintln!(
-                "sweep {} has {} slices (axes beyond the plane); plotting the first: {}",
+                "sweep {} has {} slices (axes beyond the plane); plotting {}{}",
                 sweep.name,
                 map.slices.len(),
-                fixed_text(&slice.fixed)
+                if drawn.len() > 1 {
+                    "the branches of the first: "
+                } else {
+                    "the first: "
+                },
+                if others(slice).is_empty() {
+                    fixed_text(&slice.fixed)
+                } else {
+                    fixed_text(&others(slice))
+                }
             );
         }
         let title = format!("wetgran phase diagram: {}", sweep.name);
@@ -763,7 +803,7 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> Ex
                 .find(|p| p.coords == coords)
                 .map(|p| p.spec.scene.clone())
         });
-        let svg = plot_phase::phase_svg(&map, slice, landmarks, chain, &title)
+        let svg = plot_phase::branches_svg(&map, &drawn, landmarks, chain, &title)
             .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))?;
         std::fs::write(output, svg)
             .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;

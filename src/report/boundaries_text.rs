@@ -25,16 +25,18 @@ pub fn fixed_text(fixed: &[(String, serde_json::Value)]) -> String {
 /// `boundaries --format csv`: the points and the boundary points of each sweep's map.
 pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
     let mut out = String::from(
-        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence\n",
+        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence,branch\n",
     );
     for (s, m) in maps {
         let xl = m.x.as_ref().map(|a| a.key.clone()).unwrap_or_default();
         let yl = m.y.as_ref().map(|a| a.key.clone()).unwrap_or_default();
         for (k, slice) in m.slices.iter().enumerate() {
+            // The branch (start mode) of a sweep with an `initial.start` axis; empty otherwise.
+            let branch = slice.branch.as_deref().unwrap_or("");
             for p in &slice.points {
                 let _ = writeln!(
                     out,
-                    "{},{k},point,{},{xl},{},{yl},{},{},{},,,,,",
+                    "{},{k},point,{},{xl},{},{yl},{},{},{},,,,,,{branch}",
                     s.name,
                     p.phase,
                     p.x,
@@ -46,7 +48,7 @@ pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
             for b in slice.boundaries.values().flatten() {
                 let _ = writeln!(
                     out,
-                    "{},{k},boundary,{},{xl},{},{yl},{},{},{},{},{},{},{},{}",
+                    "{},{k},boundary,{},{xl},{},{yl},{},{},{},{},{},{},{},{},{branch}",
                     s.name,
                     b.pair,
                     b.x,
@@ -132,8 +134,14 @@ pub fn boundaries_table(
         };
         let ylabel = ya.as_ref().map(|a| a.label.as_str()).unwrap_or("");
         for slice in &m.slices {
+            // A start axis makes each slice one branch (hot, cold, continued start).
+            let branch = slice
+                .branch
+                .as_deref()
+                .map(|b| format!(", branch: {}", crate::boundary::branch_words(b)))
+                .unwrap_or_default();
             if !slice.fixed.is_empty() {
-                let _ = writeln!(out, "  slice {}", fixed_text(&slice.fixed));
+                let _ = writeln!(out, "  slice {}{branch}", fixed_text(&slice.fixed));
             }
             if slice.points.is_empty() {
                 let _ = writeln!(out, "  no classified point yet\n");
@@ -189,7 +197,7 @@ pub fn boundaries_table(
                 continue;
             }
             for (pair, list) in &slice.boundaries {
-                let _ = writeln!(out, "  boundary {pair} ({} point(s))", list.len());
+                let _ = writeln!(out, "  boundary {pair} ({} point(s)){branch}", list.len());
                 let _ = writeln!(
                     out,
                     "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",

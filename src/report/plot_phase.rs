@@ -11,6 +11,13 @@
 //! docs/model.md 8 (Eq. 7.9) is drawn: the solid is stable while `F_max L_x / (F_B d) <= 0.9229`, so
 //! the line `F_max = 0.9229 F_B d / L_x` (`F_B = E_cb / s_crit`) evaluated on each point's own
 //! scene (the other axis may change `L_x`, `E_cb`, `s_crit` or anything else).
+//!
+//! A sweep with an `initial.start` axis (the hot and the cold branch of an elastic diagram) is
+//! drawn as one map of its branches ([`branches_svg`]): a grid point where the branches agree is
+//! one dot; a bistable point (their phases differ) is a split disc, one sector per branch in its
+//! phase's colour (two branches: left half the first, right half the second), outlined in black
+//! and labelled with the phases in branch order (`g/f`). Each branch's boundary points keep
+//! their own marker, since the boundaries of the branches are extracted separately.
 
 use crate::boundary::{PhaseMap, PlaneAxis, Slice};
 use plotters::coord::Shift;
@@ -160,6 +167,68 @@ fn range_of(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     }
 }
 
+/// A grid position of the drawn map with the phase of each branch there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrawnPoint {
+    pub x: f64,
+    pub y: f64,
+    /// One entry per branch (slice), in branch order; `None` where that branch has no point.
+    pub phases: Vec<Option<String>>,
+    /// Whether every branch's label here is trusted (stationary, or kept by its trend).
+    pub trusted: bool,
+}
+
+impl DrawnPoint {
+    /// The branches with a point here disagree on the phase.
+    pub fn bistable(&self) -> bool {
+        let mut seen = self.phases.iter().flatten();
+        let first = seen.next();
+        seen.any(|p| Some(p) != first)
+    }
+
+    /// The phase of the first branch with a point here.
+    pub fn phase(&self) -> &str {
+        self.phases
+            .iter()
+            .flatten()
+            .next()
+            .map_or("", |p| p.as_str())
+    }
+}
+
+/// The points of the branches merged by position (first appearance order: the first branch's
+/// points, then positions only later branches have).
+pub fn merge_branches(slices: &[&Slice]) -> Vec<DrawnPoint> {
+    let mut out: Vec<DrawnPoint> = Vec::new();
+    for (b, slice) in slices.iter().enumerate() {
+        for p in &slice.points {
+            let k = match out.iter().position(|q| q.x == p.x && q.y == p.y) {
+                Some(k) => k,
+                None => {
+                    out.push(DrawnPoint {
+                        x: p.x,
+                        y: p.y,
+                        phases: vec![None; slices.len()],
+                        trusted: true,
+                    });
+                    out.len() - 1
+                }
+            };
+            out[k].phases[b] = Some(p.phase.clone());
+            out[k].trusted &= p.trusted;
+        }
+    }
+    out
+}
+
+/// The name of branch `k` in the legend: its start mode in words, or `branch k + 1`.
+fn branch_name(slices: &[&Slice], k: usize) -> String {
+    slices[k].branch.as_ref().map_or_else(
+        || format!("branch {}", k + 1),
+        |b| crate::boundary::branch_words(b),
+    )
+}
+
 /// Draws one slice of a phase map as SVG. `landmarks` adds the theory lines (shaking sweeps).
 pub fn phase_svg(
     map: &PhaseMap,
@@ -168,16 +237,53 @@ pub fn phase_svg(
     chain_model: Option<Vec<(f64, f64)>>,
     title: &str,
 ) -> Result<String, String> {
+    branches_svg(map, &[slice], landmarks, chain_model, title)
+}
+
+/// Draws the slices of a phase map that differ only in their start mode (the branches) as one
+/// SVG map: bistable points as split discs (module doc). One slice draws as [`phase_svg`].
+pub fn branches_svg(
+    map: &PhaseMap,
+    slices: &[&Slice],
+    landmarks: Option<Landmarks>,
+    chain_model: Option<Vec<(f64, f64)>>,
+    title: &str,
+) -> Result<String, String> {
     let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
         return Err("a phase diagram needs two numeric axes".to_string());
     };
-    let x_range = range_of(slice.points.iter().map(|p| p.x), xa.log);
-    let y_range = range_of(slice.points.iter().map(|p| p.y), ya.log);
-    // Headroom above the points for the legend (upper left).
+    if slices.is_empty() {
+        return Err("no slice to draw".to_string());
+    }
+    let all = || slices.iter().flat_map(|s| s.points.iter());
+    let x_range = range_of(all().map(|p| p.x), xa.log);
+    let y_range = range_of(all().map(|p| p.y), ya.log);
+    // Headroom above the points for the legend (upper left): 0.3 of the points' span, more when
+    // the legend has more rows than that holds (about 15 px a row in a plot area of about
+    // 520 px), as a map of several branches has (bistable entry, one boundary entry each).
+    let merged = merge_branches(slices);
+    let mut phases: Vec<&str> = merged
+        .iter()
+        .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
+        .collect();
+    phases.sort();
+    phases.dedup();
+    let rows = phases.len()
+        + 3 // the landmark lines (at most)
+        + usize::from(chain_model.is_some())
+        + usize::from(merged.iter().any(|p| !p.trusted))
+        + usize::from(merged.iter().any(DrawnPoint::bistable))
+        + 1 // uncertainty bars
+        + slices.len();
+    let above = ((rows * 15 + 30) as f64 / 520.0).clamp(0.23, 0.6);
+    let headroom = above / (1.0 - above);
     let y_range = if ya.log {
-        (y_range.0, y_range.1 * (y_range.1 / y_range.0).powf(0.3))
+        (
+            y_range.0,
+            y_range.1 * (y_range.1 / y_range.0).powf(headroom),
+        )
     } else {
-        (y_range.0, y_range.1 + 0.3 * (y_range.1 - y_range.0))
+        (y_range.0, y_range.1 + headroom * (y_range.1 - y_range.0))
     };
     let mut lines: Vec<Line> = Vec::new();
     if let (Some(l), true) = (landmarks, map.shaking) {
@@ -252,7 +358,7 @@ pub fn phase_svg(
                 &root,
                 x.log_scale(),
                 y.log_scale(),
-                slice,
+                slices,
                 &lines,
                 title,
                 &x_desc,
@@ -262,7 +368,7 @@ pub fn phase_svg(
                 &root,
                 x.log_scale(),
                 y,
-                slice,
+                slices,
                 &lines,
                 title,
                 &x_desc,
@@ -272,13 +378,13 @@ pub fn phase_svg(
                 &root,
                 x,
                 y.log_scale(),
-                slice,
+                slices,
                 &lines,
                 title,
                 &x_desc,
                 &y_desc,
             ),
-            (false, false) => draw(&root, x, y, slice, &lines, title, &x_desc, &y_desc),
+            (false, false) => draw(&root, x, y, slices, &lines, title, &x_desc, &y_desc),
         }?;
         root.present().map_err(|e| e.to_string())?;
     }
@@ -289,7 +395,7 @@ fn draw<XR, YR>(
     root: &DrawingArea<SVGBackend, Shift>,
     x: XR,
     y: YR,
-    slice: &Slice,
+    slices: &[&Slice],
     lines: &[Line],
     title: &str,
     x_desc: &str,
@@ -329,64 +435,172 @@ where
             }
         }
     }
+    let points = merge_branches(slices);
     // Smaller dots where refinement packed points densely.
-    let radius = if slice.points.len() > 100 { 3 } else { 6 };
-    let mut phases: Vec<&str> = slice.points.iter().map(|p| p.phase.as_str()).collect();
+    let radius = if points.len() > 100 { 3 } else { 6 };
+    let mut phases: Vec<&str> = points
+        .iter()
+        .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
+        .collect();
     phases.sort();
     phases.dedup();
     for phase in phases {
         let color = phase_color(phase);
         chart
-            .draw_series(slice.points.iter().filter(|p| p.phase == phase).map(|p| {
-                // Unconverged points hollow: their label may still change.
+            .draw_series(
+                points
+                    .iter()
+                    .filter(|p| !p.bistable() && p.phase() == phase)
+                    .map(|p| {
+                        // Untrusted points hollow: their label may still change.
+                        let style = if p.trusted {
+                            color.filled()
+                        } else {
+                            color.stroke_width(2)
+                        };
+                        Circle::new((p.x, p.y), radius, style)
+                    }),
+            )
+            .map_err(err)?
+            .label(phase)
+            .legend(move |(px, py)| Circle::new((px + 9, py), 5, color.filled()));
+    }
+    if points.iter().any(|p| !p.trusted) {
+        let grey = RGBColor(90, 90, 90);
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(err)?
+            .label("hollow: label may change")
+            .legend(move |(px, py)| Circle::new((px + 9, py), 5, grey.stroke_width(2)));
+    }
+    let bistable: Vec<&DrawnPoint> = points.iter().filter(|p| p.bistable()).collect();
+    if !bistable.is_empty() {
+        // One sector per branch in its phase's colour (white where that branch has no point),
+        // a black outline, and the phases in branch order beside it.
+        let r = radius + 2;
+        let n = slices.len();
+        for p in &bistable {
+            for (k, phase) in p.phases.iter().enumerate() {
+                let color = phase.as_deref().map_or(WHITE, phase_color);
+                let wedge = sector(k, n, r);
                 let style = if p.trusted {
                     color.filled()
                 } else {
                     color.stroke_width(2)
                 };
-                Circle::new((p.x, p.y), radius, style)
-            }))
-            .map_err(err)?
-            .label(phase)
-            .legend(move |(px, py)| Circle::new((px + 9, py), 5, color.filled()));
-    }
-    if slice.points.iter().any(|p| !p.trusted) {
-        let grey = RGBColor(90, 90, 90);
+                if p.trusted {
+                    chart
+                        .plotting_area()
+                        .draw(&(EmptyElement::at((p.x, p.y)) + Polygon::new(wedge, style)))
+                        .map_err(err)?;
+                } else {
+                    let mut closed = wedge;
+                    closed.push(closed[0]);
+                    chart
+                        .plotting_area()
+                        .draw(&(EmptyElement::at((p.x, p.y)) + PathElement::new(closed, style)))
+                        .map_err(err)?;
+                }
+            }
+            let text: Vec<&str> = p
+                .phases
+                .iter()
+                .map(|q| q.as_deref().unwrap_or("-"))
+                .collect();
+            chart
+                .plotting_area()
+                .draw(
+                    &(EmptyElement::at((p.x, p.y))
+                        + Circle::new((0, 0), r, BLACK.stroke_width(1))
+                        + Text::new(text.join("/"), (r + 2, -r - 10), ("sans-serif", 12))),
+                )
+                .map_err(err)?;
+        }
+        let names: Vec<String> = (0..n).map(|k| branch_name(slices, k)).collect();
+        // The branches' short names for the text's order: `hot/cold`.
+        let short: Vec<String> = (0..n)
+            .map(|k| {
+                slices[k]
+                    .branch
+                    .clone()
+                    .unwrap_or_else(|| (k + 1).to_string())
+            })
+            .collect();
+        let how = if n == 2 {
+            format!("left {}, right {}", names[0], names[1])
+        } else {
+            format!("anticlockwise from the top: {}", names.join(", "))
+        };
+        let greys = [RGBColor(60, 60, 60), RGBColor(190, 190, 190)];
         chart
             .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
             .map_err(err)?
-            .label("hollow: unconverged")
-            .legend(move |(px, py)| Circle::new((px + 9, py), 5, grey.stroke_width(2)));
+            .label(format!(
+                "split disc: bistable ({how}; text: phases {})",
+                short.join("/")
+            ))
+            .legend(move |(px, py)| {
+                let centre = |v: Vec<(i32, i32)>| -> Vec<(i32, i32)> {
+                    v.into_iter().map(|(a, b)| (a + px + 9, b + py)).collect()
+                };
+                EmptyElement::at((0, 0))
+                    + Polygon::new(centre(sector(0, n, 6)), greys[0].filled())
+                    + Polygon::new(centre(sector(1, n, 6)), greys[1].filled())
+            });
     }
-    let boundary: Vec<(f64, f64)> = slice
-        .boundaries
-        .values()
-        .flatten()
-        .map(|b| (b.x, b.y))
-        .collect();
     // Uncertainty of each boundary point: the straddling edge's extent along each axis.
-    let bars = slice.boundaries.values().flatten().flat_map(|b| {
-        [
-            vec![(b.x_range[0], b.y), (b.x_range[1], b.y)],
-            vec![(b.x, b.y_range[0]), (b.x, b.y_range[1])],
-        ]
-    });
-    if !boundary.is_empty() {
+    let bars: Vec<Vec<(f64, f64)>> = slices
+        .iter()
+        .flat_map(|s| s.boundaries.values().flatten())
+        .flat_map(|b| {
+            [
+                vec![(b.x_range[0], b.y), (b.x_range[1], b.y)],
+                vec![(b.x, b.y_range[0]), (b.x, b.y_range[1])],
+            ]
+        })
+        .collect();
+    if !bars.is_empty() {
         let grey = RGBColor(110, 110, 110);
         chart
-            .draw_series(bars.map(|bar| PathElement::new(bar, grey.stroke_width(1))))
+            .draw_series(
+                bars.into_iter()
+                    .map(|bar| PathElement::new(bar, grey.stroke_width(1))),
+            )
             .map_err(err)?
             .label("uncertainty (straddling edge)")
             .legend(move |(px, py)| PathElement::new(vec![(px, py), (px + 18, py)], grey));
+    }
+    // Each branch's boundary points with their own colour (the first black).
+    const BRANCH_COLOURS: [RGBColor; 3] = [
+        RGBColor(0, 0, 0),
+        RGBColor(170, 0, 170),
+        RGBColor(0, 110, 110),
+    ];
+    for (k, slice) in slices.iter().enumerate() {
+        let boundary: Vec<(f64, f64)> = slice
+            .boundaries
+            .values()
+            .flatten()
+            .map(|b| (b.x, b.y))
+            .collect();
+        if boundary.is_empty() {
+            continue;
+        }
+        let color = BRANCH_COLOURS[k % BRANCH_COLOURS.len()];
+        let label = if slices.len() > 1 {
+            format!("boundary points, {}", branch_name(slices, k))
+        } else {
+            "boundary points".to_string()
+        };
         chart
             .draw_series(
                 boundary
                     .iter()
-                    .map(|&(bx, by)| Cross::new((bx, by), 4, BLACK.stroke_width(2))),
+                    .map(|&(bx, by)| Cross::new((bx, by), 4, color.stroke_width(2))),
             )
             .map_err(err)?
-            .label("boundary points")
-            .legend(|(px, py)| Cross::new((px + 9, py), 4, BLACK.stroke_width(2)));
+            .label(label)
+            .legend(move |(px, py)| Cross::new((px + 9, py), 4, color.stroke_width(2)));
     }
     chart
         .configure_series_labels()
@@ -396,6 +610,25 @@ where
         .draw()
         .map_err(err)?;
     Ok(())
+}
+
+/// Sector `k` of `n` of a disc of radius `r` in pixel offsets from its centre: two sectors are
+/// the left and the right half; more start at the top and go anticlockwise.
+fn sector(k: usize, n: usize, r: i32) -> Vec<(i32, i32)> {
+    let n = n.max(1);
+    let step = std::f64::consts::TAU / n as f64;
+    let a0 = std::f64::consts::FRAC_PI_2 + k as f64 * step;
+    let mut v = if n > 1 { vec![(0, 0)] } else { Vec::new() };
+    let arc = 24 / n.min(24);
+    for i in 0..=arc {
+        let a = a0 + step * i as f64 / arc as f64;
+        // Screen y grows downwards.
+        v.push((
+            (r as f64 * a.cos()).round() as i32,
+            (-r as f64 * a.sin()).round() as i32,
+        ));
+    }
+    v
 }
 
 /// The plane axis labels, for callers that describe a plot.
@@ -482,6 +715,7 @@ mod tests {
         };
         let slice = Slice {
             fixed: Vec::new(),
+            branch: None,
             points: vec![
                 point(24.0, 0.1),
                 point(12.0, 0.1),
@@ -511,5 +745,74 @@ mod tests {
         // The plot draws it with its legend.
         let svg = phase_svg(&map, &slice, None, Some(line), "t").unwrap();
         assert!(svg.contains("chain model, Eq. 7.9"));
+    }
+
+    #[test]
+    fn branches_merge_by_position_and_only_disagreeing_points_are_bistable() {
+        use crate::boundary::MapPoint;
+        let point = |x: f64, phase: &str, trusted: bool| MapPoint {
+            coords: vec![serde_json::json!(x)],
+            x,
+            y: 1.0,
+            phase: phase.into(),
+            votes: vec![Some(phase.into())],
+            tie: false,
+            trusted,
+            amplitude: None,
+            omega: None,
+        };
+        let slice = |branch: &str, points: Vec<MapPoint>| Slice {
+            fixed: Vec::new(),
+            branch: Some(branch.into()),
+            points,
+            boundaries: Default::default(),
+        };
+        // Hot: f, g, g at x = 1, 2, 3; cold: f, f at x = 1, 2 (unconverged at 2), and x = 4.
+        let hot = slice(
+            "hot",
+            vec![
+                point(1.0, "f", true),
+                point(2.0, "g", true),
+                point(3.0, "g", true),
+            ],
+        );
+        let cold = slice(
+            "cold",
+            vec![
+                point(1.0, "f", true),
+                point(2.0, "f", false),
+                point(4.0, "s", true),
+            ],
+        );
+        let merged = merge_branches(&[&hot, &cold]);
+        let xs: Vec<f64> = merged.iter().map(|p| p.x).collect();
+        assert_eq!(xs, vec![1.0, 2.0, 3.0, 4.0]);
+        let bistable: Vec<bool> = merged.iter().map(DrawnPoint::bistable).collect();
+        // Only x = 2 disagrees; a point only one branch has is not bistable.
+        assert_eq!(bistable, vec![false, true, false, false]);
+        assert_eq!(merged[1].phases, vec![Some("g".into()), Some("f".into())]);
+        assert!(!merged[1].trusted && merged[0].trusted);
+        assert_eq!(merged[3].phase(), "s");
+        assert_eq!(branch_name(&[&hot, &cold], 1), "cold start");
+    }
+
+    #[test]
+    fn two_sectors_are_the_left_and_the_right_half() {
+        let left = sector(0, 2, 10);
+        let right = sector(1, 2, 10);
+        // Both start at the centre; the left one spans x <= 0, the right one x >= 0, each from
+        // the top (screen y = -10) to the bottom (y = 10) or back.
+        assert_eq!((left[0], right[0]), ((0, 0), (0, 0)));
+        assert!(left.iter().all(|&(x, _)| x <= 0));
+        assert!(right.iter().all(|&(x, _)| x >= 0));
+        assert!(left.contains(&(-10, 0)) && right.contains(&(10, 0)));
+        assert_eq!((left[1], *left.last().unwrap()), ((0, -10), (0, 10)));
+        // One branch: a whole disc, no centre vertex.
+        let whole = sector(0, 1, 10);
+        assert!(
+            whole
+                .iter()
+                .all(|&(x, y)| (x * x + y * y - 100).abs() <= 20)
+        );
     }
 }

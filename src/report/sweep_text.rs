@@ -266,6 +266,7 @@ pub fn estimate_text(
         crate::sweep::estimate::SweepCost,
         crate::sweep::estimate::SweepCost,
     )],
+    by_start: &[Vec<(String, usize, f64)>],
     settle: f64,
     periods: f64,
 ) -> String {
@@ -287,7 +288,7 @@ pub fn estimate_text(
         "estimate on {cores} worker(s), the runner's claim order (wall time of the whole sweep; \
          of what is left to run):"
     );
-    for (label, whole, left) in lines {
+    for (k, (label, whole, left)) in lines.iter().enumerate() {
         let _ = write!(
             out,
             "  {label}:\n    {} of CPU, {} wall (longest job {})",
@@ -299,6 +300,20 @@ pub fn estimate_text(
             let _ = write!(out, "; left: {} wall", duration_text(left.wall_seconds));
         }
         out.push('\n');
+        // A sweep of several starts (hot and cold branch): the CPU time of each.
+        if let Some(split) = by_start.get(k).filter(|s| s.len() > 1) {
+            let parts: Vec<String> = split
+                .iter()
+                .map(|(mode, n, cpu)| {
+                    format!(
+                        "{} {n} job(s) {} of CPU",
+                        crate::boundary::branch_words(mode),
+                        duration_text(*cpu)
+                    )
+                })
+                .collect();
+            let _ = writeln!(out, "    by start: {}", parts.join(", "));
+        }
     }
     let _ = writeln!(
         out,

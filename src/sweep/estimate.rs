@@ -9,6 +9,11 @@
 //! continuation job only once its predecessor has ended; a chain's next link before grid
 //! order, as `claim_next_job.sql`), so the tail of lone long jobs and the waits along chains
 //! are counted.
+//!
+//! A sweep that runs its points from more than one start (an `initial.start` axis: the hot and
+//! the cold branch of an elastic diagram) is sampled in every start mode ([`sample_picks`]), and
+//! an unmeasured job takes the nearest rate of its own start mode ([`nearest_rate`]): a bonded
+//! bed and a hot gas at the same grid point cost different event rates.
 
 /// One job as the estimate sees it.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,6 +29,8 @@ pub struct PlannedJob {
     pub predecessor: Option<usize>,
     /// Its stored result's cost, if the database has one.
     pub measured: Option<MeasuredCost>,
+    /// Its start mode (`initial.start`: hot, cold, continue).
+    pub start: String,
 }
 
 /// A finished job's measured cost.
@@ -42,6 +49,8 @@ pub struct RateSample {
     pub position: Vec<f64>,
     /// Wall seconds per simulated time unit.
     pub seconds_per_time: f64,
+    /// The start mode of the job it was measured on.
+    pub start: String,
 }
 
 /// The run length an unmeasured job is assumed to run.
@@ -112,8 +121,9 @@ pub fn measured_runs(jobs: &[PlannedJob]) -> Option<MeasuredRuns> {
 }
 
 /// The rate known nearest to `position` (Euclidean distance in the scaled grid; ties: the
-/// first sample). `None` without samples.
-pub fn nearest_rate(samples: &[RateSample], position: &[f64]) -> Option<f64> {
+/// first sample) among the samples of start mode `start`; from all samples when none has that
+/// start. `None` without samples.
+pub fn nearest_rate(samples: &[RateSample], position: &[f64], start: &str) -> Option<f64> {
     let dist = |s: &RateSample| -> f64 {
         s.position
             .iter()
@@ -121,14 +131,57 @@ pub fn nearest_rate(samples: &[RateSample], position: &[f64]) -> Option<f64> {
             .map(|(a, b)| (a - b) * (a - b))
             .sum()
     };
+    let same: Vec<&RateSample> = samples.iter().filter(|s| s.start == start).collect();
+    let pool: Vec<&RateSample> = if same.is_empty() {
+        samples.iter().collect()
+    } else {
+        same
+    };
     let mut best: Option<(f64, f64)> = None;
-    for s in samples {
+    for s in pool {
         let d = dist(s);
         if best.is_none_or(|(bd, _)| d < bd) {
             best = Some((d, s.seconds_per_time));
         }
     }
     best.map(|(_, r)| r)
+}
+
+/// Which jobs `sweep estimate` samples (indices into `starts`, the start mode of each job in
+/// grid order): `samples` spread evenly over the job list (one: the middle job). With more than
+/// one start mode the samples are shared out among the modes (the first modes in order of
+/// appearance get the remainder, every mode at least one), each mode's spread evenly over its
+/// own jobs, so each branch's rate is measured. Sorted, without repeats.
+pub fn sample_picks(starts: &[String], samples: usize) -> Vec<usize> {
+    let spread = |n: usize, k: usize| -> Vec<usize> {
+        if k >= n {
+            (0..n).collect()
+        } else if k == 1 {
+            vec![n / 2]
+        } else {
+            (0..k)
+                .map(|i| (i as f64 * (n - 1) as f64 / (k - 1) as f64).round() as usize)
+                .collect()
+        }
+    };
+    let mut modes: Vec<&str> = Vec::new();
+    for s in starts {
+        if !modes.contains(&s.as_str()) {
+            modes.push(s);
+        }
+    }
+    if modes.len() <= 1 || samples == 0 {
+        return spread(starts.len(), samples.min(starts.len()));
+    }
+    let mut picks = Vec::new();
+    for (m, mode) in modes.iter().enumerate() {
+        let own: Vec<usize> = (0..starts.len()).filter(|&k| starts[k] == *mode).collect();
+        let share = (samples / modes.len() + usize::from(m < samples % modes.len())).max(1);
+        picks.extend(spread(own.len(), share).into_iter().map(|i| own[i]));
+    }
+    picks.sort_unstable();
+    picks.dedup();
+    picks
 }
 
 /// Each job's wall seconds under `length`: a measured job costs what it cost; another one its
@@ -146,6 +199,7 @@ pub fn job_seconds(
         (m.simulated_time > 0.0).then(|| RateSample {
             position: j.position.clone(),
             seconds_per_time: m.wall_seconds / m.simulated_time,
+            start: j.start.clone(),
         })
     }));
     jobs.iter()
@@ -158,7 +212,7 @@ pub fn job_seconds(
                     RunLength::Extended(f) => (j.first_check * f).min(j.cap),
                     RunLength::Cap => j.cap,
                 };
-                nearest_rate(&rates, &j.position).unwrap_or(0.0) * run
+                nearest_rate(&rates, &j.position, &j.start).unwrap_or(0.0) * run
             }
         })
         .collect()
@@ -239,6 +293,7 @@ mod tests {
             cap,
             predecessor: None,
             measured: None,
+            start: "hot".into(),
         }
     }
 
@@ -283,10 +338,12 @@ mod tests {
             RateSample {
                 position: vec![0.0],
                 seconds_per_time: 1.0,
+                start: "hot".into(),
             },
             RateSample {
                 position: vec![1.0],
                 seconds_per_time: 3.0,
+                start: "hot".into(),
             },
         ];
         assert_eq!(
@@ -335,7 +392,53 @@ mod tests {
 
     #[test]
     fn no_samples_no_rate() {
-        assert_eq!(nearest_rate(&[], &[0.5]), None);
+        assert_eq!(nearest_rate(&[], &[0.5], "hot"), None);
         assert!(measured_runs(&[job(0.0, 1.0, 2.0)]).is_none());
+    }
+
+    #[test]
+    fn each_start_mode_is_sampled_and_lends_its_rate_to_its_own_jobs() {
+        // A (3 points) x (hot, cold) grid, the start axis fastest: hot, cold, hot, cold, ...
+        let starts: Vec<String> = (0..6)
+            .map(|k| if k % 2 == 0 { "hot" } else { "cold" }.to_string())
+            .collect();
+        // Two samples spread over the list would be jobs 0 and 5; shared out, one per mode: the
+        // middle hot job (2) and the middle cold job (3).
+        assert_eq!(sample_picks(&starts, 2), vec![2, 3]);
+        // Four: both ends of each mode.
+        assert_eq!(sample_picks(&starts, 4), vec![0, 1, 4, 5]);
+        // One sample still measures every mode.
+        assert_eq!(sample_picks(&starts, 1), vec![2, 3]);
+        // Three: the first mode takes the remainder.
+        assert_eq!(sample_picks(&starts, 3), vec![0, 3, 4]);
+        // More samples than jobs: every job once.
+        assert_eq!(sample_picks(&starts, 20), (0..6).collect::<Vec<_>>());
+        // One start mode: spread over the whole list, as before.
+        let hot = vec!["hot".to_string(); 5];
+        assert_eq!(sample_picks(&hot, 3), vec![0, 2, 4]);
+        assert_eq!(sample_picks(&hot, 1), vec![2]);
+        // A cold job takes the cold sample's rate even where a hot sample is nearer.
+        let samples = [
+            RateSample {
+                position: vec![0.0],
+                seconds_per_time: 1.0,
+                start: "hot".into(),
+            },
+            RateSample {
+                position: vec![1.0],
+                seconds_per_time: 5.0,
+                start: "cold".into(),
+            },
+        ];
+        assert_eq!(nearest_rate(&samples, &[0.1], "hot"), Some(1.0));
+        assert_eq!(nearest_rate(&samples, &[0.1], "cold"), Some(5.0));
+        // A mode with no sample falls back to the nearest of any mode.
+        assert_eq!(nearest_rate(&samples, &[0.1], "continue"), Some(1.0));
+        let mut jobs = vec![job(0.1, 10.0, 10.0), job(0.1, 10.0, 10.0)];
+        jobs[1].start = "cold".into();
+        assert_eq!(
+            job_seconds(&jobs, &samples, RunLength::FirstCheck, false),
+            vec![10.0, 50.0]
+        );
     }
 }
