@@ -52,6 +52,8 @@ pub struct Observation {
     /// Whether the label may carry a boundary (`false`: not stationary and on no trend that
     /// keeps the label; `true` also where the result carries no verdict).
     pub trusted: bool,
+    /// Not stationary, but on a trend that cannot change the label (`~`).
+    pub label_kept: bool,
     /// The job's scene (for physical units).
     pub scene: Scene,
 }
@@ -64,6 +66,7 @@ impl Observation {
             replica: row.replica,
             phase: row.phase.clone(),
             trusted: row.trusted(),
+            label_kept: row.trust() == wetgran_core::observe::trend::Trust::LabelKept,
             scene: row.spec.scene.clone(),
         }
     }
@@ -113,6 +116,8 @@ pub struct MapPoint {
     pub tie: bool,
     /// Whether every voting replica's label is trusted (module doc, 4).
     pub trusted: bool,
+    /// Whether a voting replica is not stationary but on a trend that keeps its label.
+    pub label_kept: bool,
     /// Container amplitude `A` and angular frequency `omega` (shaking sweeps).
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
@@ -410,6 +415,7 @@ impl Plane<'_> {
             };
             let job = votes[0];
             let trusted = votes.iter().all(|v| v.phase.is_none() || v.trusted);
+            let label_kept = votes.iter().any(|v| v.phase.is_some() && v.label_kept);
             let (xv, yv) = (Self::value(job, self.x)?, Self::value(job, self.y)?);
             let (amplitude, omega) = self.motion(&job.scene, xv, yv);
             points.push(MapPoint {
@@ -420,6 +426,7 @@ impl Plane<'_> {
                 votes: phases,
                 tie,
                 trusted,
+                label_kept,
                 amplitude,
                 omega,
             });
@@ -611,6 +618,7 @@ mod tests {
             replica: r,
             phase: Some(p.to_string()),
             trusted: true,
+            label_kept: false,
             scene: scene.clone(),
         };
         let jobs = vec![
@@ -656,6 +664,7 @@ mod tests {
             replica: 0,
             phase: Some(p.to_string()),
             trusted,
+            label_kept: false,
             scene: scene.clone(),
         };
         let jobs = vec![

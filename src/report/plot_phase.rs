@@ -176,6 +176,8 @@ pub struct DrawnPoint {
     pub phases: Vec<Option<String>>,
     /// Whether every branch's label here is trusted (stationary, or kept by its trend).
     pub trusted: bool,
+    /// Whether a branch's point here is not stationary but on a trend that keeps its label.
+    pub label_kept: bool,
 }
 
 impl DrawnPoint {
@@ -210,12 +212,14 @@ pub fn merge_branches(slices: &[&Slice]) -> Vec<DrawnPoint> {
                         y: p.y,
                         phases: vec![None; slices.len()],
                         trusted: true,
+                        label_kept: false,
                     });
                     out.len() - 1
                 }
             };
             out[k].phases[b] = Some(p.phase.clone());
             out[k].trusted &= p.trusted;
+            out[k].label_kept |= p.label_kept;
         }
     }
     out
@@ -272,6 +276,7 @@ pub fn branches_svg(
         + 3 // the landmark lines (at most)
         + usize::from(chain_model.is_some())
         + usize::from(merged.iter().any(|p| !p.trusted))
+        + usize::from(merged.iter().any(|p| p.trusted && p.label_kept))
         + usize::from(merged.iter().any(DrawnPoint::bistable))
         + 1 // uncertainty bars
         + slices.len();
@@ -472,6 +477,27 @@ where
             .map_err(err)?
             .label("hollow: label may change")
             .legend(move |(px, py)| Circle::new((px + 9, py), 5, grey.stroke_width(2)));
+    }
+    // Not stationary, label kept by the trend (a heating gas, a cooling solid, a coarsening
+    // coexistence): a white centre in the filled disc.
+    let kept: Vec<&DrawnPoint> = points
+        .iter()
+        .filter(|p| p.trusted && p.label_kept && !p.bistable())
+        .collect();
+    if !kept.is_empty() {
+        let centre = (radius / 2).max(1);
+        chart
+            .draw_series(
+                kept.iter()
+                    .map(|p| Circle::new((p.x, p.y), centre, WHITE.filled())),
+            )
+            .map_err(err)?
+            .label("white centre: drifting, label kept (~)")
+            .legend(move |(px, py)| {
+                EmptyElement::at((px + 9, py))
+                    + Circle::new((0, 0), 5, RGBColor(90, 90, 90).filled())
+                    + Circle::new((0, 0), 2, WHITE.filled())
+            });
     }
     let bistable: Vec<&DrawnPoint> = points.iter().filter(|p| p.bistable()).collect();
     if !bistable.is_empty() {
@@ -704,6 +730,7 @@ mod tests {
             votes: vec![Some("s".into())],
             tie: false,
             trusted: true,
+            label_kept: false,
             amplitude: None,
             omega: None,
         };
@@ -758,6 +785,7 @@ mod tests {
             votes: vec![Some(phase.into())],
             tie: false,
             trusted,
+            label_kept: false,
             amplitude: None,
             omega: None,
         };
