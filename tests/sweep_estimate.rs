@@ -203,3 +203,30 @@ fn a_chain_head_that_is_the_hot_job_counts_once() {
         "{out}"
     );
 }
+
+/// A transient and a sample spacing in time units longer than the timed stretch (the shipped
+/// 3D sweeps: 10 time units and 0.25 against one period of a fraction of a unit) are the job's,
+/// not the estimate's: every sampled job still yields a rate.
+#[test]
+fn a_transient_in_time_units_longer_than_the_timed_stretch_is_not_the_estimates() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let sweep = write(
+        dir.path(),
+        "line.toml",
+        &LINE.replace(
+            "[convergence]",
+            "[observe]\ntransient_time = 10.0\nmin_sample_interval = 1.0\n[convergence]\nmin_time = 20.0",
+        ),
+    );
+    let est = wetgran()
+        .args(["sweep", "estimate", sweep.to_str().unwrap()])
+        .args(["--samples", "2", "--periods", "1", "--settle", "0"])
+        .args(["--cores", "1"])
+        .output()
+        .unwrap();
+    let out = text(&est);
+    assert!(est.status.success(), "{out}");
+    assert!(!out.contains("failed"), "{out}");
+    assert!(out.contains("s per time unit"), "{out}");
+}

@@ -523,6 +523,10 @@ pub(super) fn sweep_estimate(
         spec.scene.convergence = None;
         spec.scene.run.duration = settle + periods * period;
         spec.scene.observe.transient_periods = 0.0;
+        spec.scene.observe.transient_time = 0.0;
+        // A timed stretch shorter than the job's sample spacing still gets a few samples.
+        let o = &mut spec.scene.observe;
+        o.min_sample_interval = o.min_sample_interval.min(0.25 * spec.scene.run.duration);
         // The clock starts at the first progress report past the settling time.
         let settled = settle / spec.scene.run.duration;
         let mut mark: Option<(std::time::Instant, f64)> = None;
