@@ -315,6 +315,47 @@ fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
         assert!(new.ledger.dissipated_restitution > old.ledger.dissipated_restitution);
     }
     assert_eq!(store.runs_per_job().unwrap().len(), 2);
+    drop(store);
+    // The cap in time units: the same jobs go on to at most 24 (undriven: one period is one
+    // time unit, so 24 periods would be the same cap; the flags exclude each other).
+    let o = run(&[
+        "sweep",
+        "resume",
+        "cool",
+        "--db",
+        db_s,
+        "--extend",
+        "24",
+        "--extend-time",
+        "24",
+    ]);
+    assert!(!o.status.success(), "both caps at once are refused");
+    let o = run(&[
+        "sweep",
+        "resume",
+        "cool",
+        "--db",
+        db_s,
+        "--extend-time",
+        "24",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let store = wetgran::store::Store::open_existing(&db).unwrap();
+    let times: Vec<f64> = store
+        .points(s.id)
+        .unwrap()
+        .iter()
+        .map(|q| q.simulated_time.unwrap())
+        .collect();
+    // A job the first extension left unconverged (the cooling gas stays so) went on past 16.
+    assert!(times.iter().all(|&t| t <= 24.0 + 1e-9), "{times:?}");
+    assert!(times.iter().any(|&t| t > 16.0 + 1e-9), "{times:?}");
+    let o = run(&["sweep", "resume", "cool", "--db", db_s, "--extend-time=-1"]);
+    assert!(
+        stderr(&o).contains("--extend-time = -1 is out of range"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// The cold start: a bonded bed at rest (bridges between the lattice's close pairs, T_g = 0)

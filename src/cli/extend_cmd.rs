@@ -1,23 +1,29 @@
-//! `sweep resume --extend MAX_PERIODS`: runs the unconverged finished jobs of sweeps further
+//! `sweep resume --extend MAX_PERIODS` (or `--extend-time MAX_TIME`): runs the unconverged finished jobs of sweeps further
 //! from their checkpoints (`sweep::job::extend_job`), on worker threads, and replaces each
 //! result (and checkpoint) as it finishes.
 
 use super::common::Failure;
 use crate::report::sweep_text::extended_text;
 use crate::store::{PointRow, Store, SweepRow};
+use crate::sweep::job::ExtendTo;
 use std::sync::Mutex;
 
-/// Extends every unconverged job of `sweeps` that has a checkpoint to at most `max_periods`
-/// periods of total run; prints a summary.
+/// Extends every unconverged job of `sweeps` that has a checkpoint to at most `cap` of total
+/// run; prints a summary.
 pub fn extend_unconverged(
     store: &Store,
     sweeps: &[SweepRow],
-    max_periods: f64,
+    cap: ExtendTo,
     workers: usize,
 ) -> Result<(), Failure> {
-    if !(max_periods.is_finite() && max_periods > 0.0) {
+    let v = cap.value();
+    if !(v.is_finite() && v > 0.0) {
+        let (flag, unit) = match cap {
+            ExtendTo::Periods(_) => ("--extend", "periods"),
+            ExtendTo::Time(_) => ("--extend-time", "time units"),
+        };
         return Err(Failure::BadInput(format!(
-            "--extend = {max_periods} is out of range: must be a finite number of periods > 0"
+            "{flag} = {v} is out of range: must be a finite number of {unit} > 0"
         )));
     }
     let mut todo: Vec<PointRow> = Vec::new();
@@ -59,7 +65,7 @@ pub fn extend_unconverged(
                             continue;
                         }
                     };
-                    match crate::sweep::job::extend_job(&p.spec, &state, max_periods, &mut |_| {}) {
+                    match crate::sweep::job::extend_job(&p.spec, &state, cap, &mut |_| {}) {
                         Ok(Some(r)) => {
                             let ok = r
                                 .observables
@@ -92,7 +98,7 @@ pub fn extend_unconverged(
             extended.into_inner().expect("count"),
             converged.into_inner().expect("count"),
             skipped.into_inner().expect("count"),
-            max_periods,
+            &cap.describe(),
             &failed
         )
     );

@@ -263,8 +263,13 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
             oversubscribe,
             retry_failed,
             extend,
+            extend_time,
             table_cache_mib,
         } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
+            use crate::sweep::job::ExtendTo;
+            let extend = extend
+                .map(ExtendTo::Periods)
+                .or(extend_time.map(ExtendTo::Time));
             sweep_cmd::sweep_resume(
                 name.as_deref(),
                 &db,

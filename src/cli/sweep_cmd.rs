@@ -90,8 +90,12 @@ pub enum SweepCommand {
         retry_failed: bool,
         /// Afterwards, run the unconverged finished jobs further from their checkpoints, up
         /// to this many driving periods of total run (docs/observables.md).
-        #[arg(long, value_name = "MAX_PERIODS")]
+        #[arg(long, value_name = "MAX_PERIODS", conflicts_with = "extend_time")]
         extend: Option<f64>,
+        /// The same with the total run in time units `sqrt(d/g)` (at high Gamma a period is
+        /// short, and the run policy counts in time).
+        #[arg(long, value_name = "MAX_TIME")]
+        extend_time: Option<f64>,
         /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
         /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
         /// caching.
@@ -320,7 +324,7 @@ pub(super) fn sweep_resume(
     db: &Path,
     jobs: usize,
     retry: bool,
-    extend: Option<f64>,
+    extend: Option<crate::sweep::job::ExtendTo>,
     table_cache_mib: usize,
 ) -> Result<(), Failure> {
     let store = Store::open_as(db, false, Durability::Fast)?;
@@ -336,10 +340,10 @@ pub(super) fn sweep_resume(
     }
     run_and_report(&store, &sweeps, jobs, retry, table_cache_mib)?;
     continue_refinement(&store, &sweeps, jobs, table_cache_mib)?;
-    let Some(max_periods) = extend else {
+    let Some(cap) = extend else {
         return fail_if_jobs_failed(&store, &sweeps);
     };
-    super::extend_cmd::extend_unconverged(&store, &sweeps, max_periods, jobs)?;
+    super::extend_cmd::extend_unconverged(&store, &sweeps, cap, jobs)?;
     // Extended results get the line rule's labels too, as after any run.
     for s in &sweeps {
         let relabelled =

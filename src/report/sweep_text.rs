@@ -337,15 +337,15 @@ pub fn extended_text(
     extended: usize,
     converged: usize,
     skipped: usize,
-    max_periods: f64,
+    cap: &str,
     failed: &[String],
 ) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
         "extended {extended} unconverged job(s) from their checkpoints, {converged} now \
-         converged; {skipped} left as they were (no checkpoint, or the cap of {max_periods} \
-         periods leaves no room); {} failed",
+         converged; {skipped} left as they were (no checkpoint, or the cap of {cap} leaves \
+         no room); {} failed",
         failed.len()
     );
     for f in failed {

@@ -92,20 +92,22 @@ fn guarded_run(
 pub fn extend_job(
     spec: &JobSpec,
     state: &wetgran_core::sim::EngineState,
-    max_periods: f64,
+    cap: ExtendTo,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Option<JobResult>, JobError> {
     let scene = &spec.scene;
     let period = scene.driving_period();
     let policy = scene.convergence.clone().unwrap_or_default();
     let window = policy.schedule(scene).window;
-    let room = max_periods * period - state.time;
+    let room = cap.time(period) - state.time;
     if room < window * (1.0 - 1e-9) {
         return Ok(None);
     }
     let mut ext = scene.clone();
     ext.run.duration = window;
+    // The run so far was the transient: the new window starts at the checkpoint.
     ext.observe.transient_periods = 0.0;
+    ext.observe.transient_time = 0.0;
     ext.convergence = Some(wetgran_core::observe::ConvergenceSpec {
         min_periods: 0.0,
         min_time: 0.0,
@@ -116,6 +118,40 @@ pub fn extend_job(
     });
     guarded_run(|| wetgran_core::observe::run_observed_from(&ext, Some(state), progress).0)
         .map(Some)
+}
+
+/// The total run length `sweep resume --extend` / `--extend-time` allows an unconverged job.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ExtendTo {
+    /// At most this many driving periods.
+    Periods(f64),
+    /// At most this many time units (the clock of the run policy at high frequency).
+    Time(f64),
+}
+
+impl ExtendTo {
+    /// The cap in time units for a job of driving period `period`.
+    pub fn time(self, period: f64) -> f64 {
+        match self {
+            ExtendTo::Periods(p) => p * period,
+            ExtendTo::Time(t) => t,
+        }
+    }
+
+    /// The cap in words (`800 periods`, `400 time units`).
+    pub fn describe(self) -> String {
+        match self {
+            ExtendTo::Periods(p) => format!("{p} periods"),
+            ExtendTo::Time(t) => format!("{t} time units"),
+        }
+    }
+
+    /// The cap's value, for range checks.
+    pub fn value(self) -> f64 {
+        match self {
+            ExtendTo::Periods(v) | ExtendTo::Time(v) => v,
+        }
+    }
 }
 
 /// The numerical guards: a broken engine invariant, or a stationary temperature that is not a
