@@ -5,7 +5,13 @@
 
 use std::collections::HashMap;
 use std::path::Path;
-use std::process::Command;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// How long wetgran waits for `scontrol show config`. A Slurm client whose controller does not
+/// answer retries for its `MessageTimeout` (10 s by default); the answer only sizes the arrays,
+/// and [`DEFAULT_ARRAY_LIMIT`] stands in without it.
+pub const SCONTROL_WAIT: Duration = Duration::from_secs(3);
 
 /// Tasks per array where neither `--array-limit` nor the cluster's `MaxArraySize` says
 /// otherwise (Slurm's own default `MaxArraySize` is 1001: task ids 0 .. 1000).
@@ -190,12 +196,54 @@ pub fn parse_squeue(stdout: &str, array_job: &str) -> HashMap<i64, String> {
     out
 }
 
-/// The cluster's `MaxArraySize`, where `scontrol` answers.
-pub fn max_array_size() -> Option<usize> {
-    let out = Command::new("scontrol")
-        .args(["show", "config"])
-        .output()
+/// Runs `cmd` and returns its output, or `None` where it cannot start or has not finished within
+/// `limit` (it is then killed). Its standard output and error are read on their own threads,
+/// so a long answer cannot block it on a full pipe.
+pub fn output_within(cmd: &mut Command, limit: Duration) -> Option<Output> {
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
         .ok()?;
+    let read = |pipe: Option<Box<dyn std::io::Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            if let Some(mut p) = pipe {
+                let _ = p.read_to_end(&mut buf);
+            }
+            buf
+        })
+    };
+    let out = read(child.stdout.take().map(|p| Box::new(p) as _));
+    let err = read(child.stderr.take().map(|p| Box::new(p) as _));
+    let start = Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if start.elapsed() < limit => {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            _ => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return None;
+            }
+        }
+    };
+    Some(Output {
+        status,
+        stdout: out.join().unwrap_or_default(),
+        stderr: err.join().unwrap_or_default(),
+    })
+}
+
+/// The cluster's `MaxArraySize`, where `scontrol` answers within [`SCONTROL_WAIT`].
+pub fn max_array_size() -> Option<usize> {
+    let out = output_within(
+        Command::new("scontrol").args(["show", "config"]),
+        SCONTROL_WAIT,
+    )?;
     out.status
         .success()
         .then(|| parse_max_array_size(&String::from_utf8_lossy(&out.stdout)))
@@ -401,5 +449,24 @@ mod tests {
         assert_eq!(q.len(), 2);
         assert_eq!(q[&0], "RUNNING");
         assert_eq!(q[&3], "PENDING");
+    }
+
+    #[test]
+    fn a_command_that_does_not_answer_in_time_is_killed() {
+        // `sleep 600` stands for a Slurm client waiting on a controller that is not up; the
+        // test finishing at all shows it was killed.
+        let mut sleep = Command::new("sleep");
+        sleep.arg("600");
+        assert!(output_within(&mut sleep, Duration::from_millis(200)).is_none());
+        let mut echo = Command::new("echo");
+        echo.arg("MaxArraySize           = 40001");
+        let out = output_within(&mut echo, Duration::from_secs(60)).expect("echo answers");
+        assert!(out.status.success());
+        assert_eq!(
+            parse_max_array_size(&String::from_utf8_lossy(&out.stdout)),
+            Some(40001)
+        );
+        // A command that cannot start gives no answer either.
+        assert!(output_within(&mut Command::new("/nonexistent/scontrol"), SCONTROL_WAIT).is_none());
     }
 }
