@@ -377,6 +377,40 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
         )),
         "{text}"
     );
+    assert!(!text.contains("no f_lc"), "{text}");
+    // Thresholds that decide mobility by f_lc, on results whose runs did not count location
+    // changes (the counter is off by default): the fallback to T_g is said, with the remedy.
+    let by_flc = write(
+        dir.path(),
+        "flc.toml",
+        "[classify]\nmobility = \"location_changes\"\n",
+    );
+    drop(store);
+    let flc_text = ok(&[
+        "reclassify",
+        "--sweep",
+        "cls",
+        "--classify",
+        by_flc.to_str().unwrap(),
+        "--db",
+        db_s,
+    ]);
+    assert!(
+        flc_text.contains("4 result(s) have no f_lc")
+            && flc_text.contains("location_changes = true"),
+        "{flc_text}"
+    );
+    // Back to the thresholds the rest of this test checks.
+    ok(&[
+        "reclassify",
+        "--sweep",
+        "cls",
+        "--classify",
+        everything_solid.to_str().unwrap(),
+        "--db",
+        db_s,
+    ]);
+    let store = Store::open_existing(&db).unwrap();
     // No mobile label survives a solid threshold of 1e12 E_cb.
     assert!(
         after

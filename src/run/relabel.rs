@@ -131,6 +131,10 @@ pub struct Relabelled {
     pub results: usize,
     /// Results whose stored observables this wetgran cannot read (left as they are).
     pub unreadable: usize,
+    /// Results whose thresholds decide mobility by `f_lc` but whose run did not count
+    /// location changes: the classifier fell back to `T_g` for them; they need a re-run with
+    /// `observe.location_changes = true` to be decided as asked.
+    pub missing_flc: usize,
     pub changes: BTreeMap<(String, String), usize>,
 }
 
@@ -148,6 +152,14 @@ impl Relabelled {
             text.push_str(&format!(
                 "; {} result(s) left as they were (observables not readable by this wetgran)",
                 self.unreadable
+            ));
+        }
+        if self.missing_flc > 0 {
+            text.push_str(&format!(
+                "; {} result(s) have no f_lc (the location-change counter was off when they \
+                 ran), so their mobility was decided by T_g, not by f_lc as asked: re-run them \
+                 with observe.location_changes = true",
+                self.missing_flc
             ));
         }
         text
@@ -194,6 +206,7 @@ pub fn relabel_stored(
     > = BTreeMap::new();
     let mut out = Relabelled::default();
     let mut unreadable = std::collections::HashSet::new();
+    let mut missing_flc = std::collections::HashSet::new();
     for s in sweeps {
         let points = store.points(s.id)?;
         for p in &points {
@@ -203,6 +216,15 @@ pub fn relabel_stored(
                 // Observables this wetgran cannot read (another version's layout) keep their
                 // label.
                 unreadable.insert(p.job_id.clone());
+            }
+            let th = thresholds.unwrap_or(&p.spec.scene.classify);
+            if th.mobility == wetgran_core::observe::Mobility::LocationChanges
+                && p.observables.as_ref().is_some_and(|o| {
+                    o.get("location_changes")
+                        .is_none_or(serde_json::Value::is_null)
+                })
+            {
+                missing_flc.insert(p.job_id.clone());
             }
         }
         let before: BTreeMap<&str, &PointRow> =
@@ -219,6 +241,7 @@ pub fn relabel_stored(
         }
     }
     out.unreadable = unreadable.len();
+    out.missing_flc = missing_flc.len();
     let mut updates = Vec::new();
     for (job_id, (old_phase, old_decided, phase, decided_on)) in labels {
         out.results += 1;
