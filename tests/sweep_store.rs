@@ -447,3 +447,27 @@ fn runners_opening_a_new_database_at_once_all_succeed() {
         }
     }
 }
+
+/// A `--db` in a folder that does not exist is named as such (exit 2, nothing created), not
+/// reported as a read-only folder.
+#[test]
+fn a_database_in_a_missing_folder_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = synthetic_sweep(dir.path(), "nofolder", 1);
+    let db = dir.path().join("no/such/folder/w.sqlite");
+    let o = run(&[
+        "sweep",
+        "run",
+        sweep.to_str().unwrap(),
+        "--db",
+        db.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("no/such/folder does not exist: create it"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!stderr(&o).contains("read-only"), "{}", stderr(&o));
+    assert!(!dir.path().join("no").exists());
+}

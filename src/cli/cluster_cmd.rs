@@ -71,6 +71,7 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
     if s.dry_run {
         return dry_run(db, &expanded, &target);
     }
+    super::common::folder_of_new_database(db)?;
     let store = Store::open(db)?;
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, s.replace)?;

@@ -264,3 +264,20 @@ pub(super) fn check_snapshot_names(paths: &[std::path::PathBuf]) -> Result<(), F
     }
     Ok(())
 }
+
+/// A database about to be created must have its folder: without this check SQLite's "unable to
+/// open database file" reads as a read-only folder.
+pub(super) fn folder_of_new_database(db: &Path) -> Result<(), Failure> {
+    if db.exists() {
+        return Ok(());
+    }
+    match db.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => Err(Failure::BadInput(format!(
+            "{}: the folder {} does not exist: create it (`mkdir -p {}`) or give another --db",
+            db.display(),
+            dir.display(),
+            dir.display()
+        ))),
+        _ => Ok(()),
+    }
+}

@@ -278,6 +278,7 @@ pub(super) fn sweep_run(
     let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
     // a sync"): everything it writes can be made again from the sweep file.
+    super::common::folder_of_new_database(db)?;
     let store = Store::open_as(db, true, Durability::Fast)?;
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, replace)?;
