@@ -277,14 +277,14 @@ pub struct Convergence {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
     use rand_xoshiro::Xoshiro256PlusPlus;
 
     /// `x_t = phi x_(t-1) + e_t`, `e_t` standard normal, started in the stationary law.
-    fn ar1(phi: f64, n: usize, seed: u64) -> Vec<f64> {
+    pub(crate) fn ar1(phi: f64, n: usize, seed: u64) -> Vec<f64> {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
         let mut e = || -> f64 { StandardNormal.sample(&mut rng) };
         let mut x = e() / (1.0 - phi * phi).sqrt();

@@ -332,28 +332,13 @@ pub const DELTA_N_CB: &str = "delta_n_cb";
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::SeedableRng;
-    use rand_distr::{Distribution, StandardNormal};
-    use rand_xoshiro::Xoshiro256PlusPlus;
+    use crate::observe::convergence::tests::ar1 as noise;
 
     const TEST: TrendTest = TrendTest {
         blocks: 4,
         sigmas: 3.0,
         rel_tolerance: 0.02,
     };
-
-    /// AR(1) noise of unit innovation and correlation `phi`, `n` samples.
-    fn noise(phi: f64, n: usize, seed: u64) -> Vec<f64> {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-        let mut e = || -> f64 { StandardNormal.sample(&mut rng) };
-        let mut x = e() / (1.0 - phi * phi).sqrt();
-        (0..n)
-            .map(|_| {
-                x = phi * x + e();
-                x
-            })
-            .collect()
-    }
 
     /// Assesses a temperature series `t(i)` and a contrast series `d(i)` sampled at unit
     /// spacing, with the window starting at `window_start`.

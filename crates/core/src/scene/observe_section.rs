@@ -203,16 +203,21 @@ impl ObserveSpec {
             .map_or((scene.run.duration, "run.duration"), |c| {
                 (c.first_check(scene), "the [convergence] first check")
             });
-        let tt = self.transient_time;
-        if !(tt.is_finite() && tt >= 0.0 && tt < duration) {
-            return Err(err(
-                "transient_time",
-                format!(
-                    "= {tt} is out of range: must be >= 0 and shorter than the first window, \
-                     i.e. < {run_name} = {duration}"
-                ),
-            ));
-        }
+        // A length in time units that must fit inside the first window.
+        let within_first_window = |key: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 && v < duration {
+                Ok(())
+            } else {
+                Err(err(
+                    key,
+                    format!(
+                        "= {v} is out of range: must be >= 0 and shorter than the first window, \
+                         i.e. < {run_name} = {duration}"
+                    ),
+                ))
+            }
+        };
+        within_first_window("transient_time", self.transient_time)?;
         let t = self.transient_periods;
         if !(t.is_finite() && t >= 0.0 && t * period < duration) {
             return Err(err(
@@ -245,16 +250,7 @@ impl ObserveSpec {
                 format!("= {s} is out of range: must be > 0"),
             ));
         }
-        let m = self.min_sample_interval;
-        if !(m.is_finite() && m >= 0.0 && m < duration) {
-            return Err(err(
-                "min_sample_interval",
-                format!(
-                    "= {m} is out of range: must be >= 0 and shorter than the first window, \
-                     i.e. < {run_name} = {duration}"
-                ),
-            ));
-        }
+        within_first_window("min_sample_interval", self.min_sample_interval)?;
         if self.layers == 0 {
             return Err(err(
                 "layers",
