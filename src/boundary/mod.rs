@@ -35,6 +35,7 @@ use crate::sweep::file::{Axis, AxisKind};
 use serde::Serialize;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use wetgran_core::scene::{DriveKind, Scene};
 
 /// One job's contribution to the map.
@@ -47,8 +48,9 @@ pub struct Observation {
     /// Whether the label may carry a boundary (`false`: not stationary and on no trend that
     /// keeps the label; `true` also where the result carries no verdict).
     pub trusted: bool,
-    /// The job's scene (for physical units).
-    pub scene: Scene,
+    /// The job's scene (for physical units); shared between the jobs of a sweep where their
+    /// scenes agree in what the map reads (`store::PointSummary`).
+    pub scene: Arc<Scene>,
 }
 
 impl Observation {
@@ -59,7 +61,19 @@ impl Observation {
             replica: row.replica,
             phase: row.phase.clone(),
             trusted: row.trusted(),
-            scene: row.spec.scene.clone(),
+            scene: Arc::new(row.spec.scene.clone()),
+        }
+    }
+
+    /// A report's summary of a stored job as one vote of the phase map (the same vote as
+    /// [`Observation::of_row`] of its full row).
+    pub fn of_summary(row: &crate::store::PointSummary) -> Observation {
+        Observation {
+            coords: row.coords.clone(),
+            replica: row.replica,
+            phase: row.phase.clone(),
+            trusted: row.trusted(),
+            scene: Arc::clone(&row.scene),
         }
     }
 }
@@ -388,7 +402,7 @@ impl Plane<'_> {
                 amplitude,
                 omega,
             });
-            scenes.push(&job.scene);
+            scenes.push(job.scene.as_ref());
         }
         Ok((points, scenes))
     }
@@ -575,7 +589,7 @@ mod tests {
             replica: r,
             phase: Some(p.to_string()),
             trusted: true,
-            scene: scene.clone(),
+            scene: Arc::new(scene.clone()),
         };
         let jobs = vec![
             obs(1.0, 0, "f"),
@@ -620,7 +634,7 @@ mod tests {
             replica: 0,
             phase: Some(p.to_string()),
             trusted,
-            scene: scene.clone(),
+            scene: Arc::new(scene.clone()),
         };
         let jobs = vec![
             obs(1.0, "f", true),

@@ -18,12 +18,13 @@ use crate::report::sweep_text::{
 };
 use crate::report::{export, plot_phase};
 use crate::run::{RunOptions, run_sweeps};
-use crate::store::{Durability, Store, StoreError, SweepRow};
+use crate::store::{Durability, PointSummary, Store, StoreError, SweepRow};
 use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use wetgran_core::scene::Scene;
 use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 
 /// Default database file, in the working directory.
@@ -415,7 +416,7 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
     let cores = available_cores();
     for s in &sweeps {
         let c = store.counts(s.id)?;
-        let points = store.points(s.id)?;
+        let points = store.point_summaries(s)?;
         let spent = store.time_spent(s.id)?;
         out.push_str(&sweep_status_text(s, &c, &points, spent, cores));
     }
@@ -668,10 +669,14 @@ pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
-/// The phase map of a sweep, from its stored results.
-fn sweep_map(store: &Store, sweep: &SweepRow, how: Extraction) -> Result<PhaseMap, Failure> {
-    let points = store.points(sweep.id)?;
-    let obs: Vec<Observation> = points.iter().map(Observation::of_row).collect();
+/// The phase map of a sweep from its stored results (`points`: its
+/// `Store::point_summaries`).
+fn sweep_map(
+    sweep: &SweepRow,
+    points: &[PointSummary],
+    how: Extraction,
+) -> Result<PhaseMap, Failure> {
+    let obs: Vec<Observation> = points.iter().map(Observation::of_summary).collect();
     phase_map_with(&sweep.axes, &obs, how)
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
 }
@@ -687,8 +692,11 @@ pub fn boundaries(
         let store = Store::open_existing(db)?;
         let sweeps = select(&store, name)?;
         let mut maps = Vec::new();
+        let mut points = Vec::new();
         for s in &sweeps {
-            maps.push((s, sweep_map(&store, s, how)?));
+            let p = store.point_summaries(s)?;
+            maps.push((s, sweep_map(s, &p, how)?));
+            points.push(p);
         }
         match format {
             BoundaryFormat::Json => {
@@ -702,12 +710,11 @@ pub fn boundaries(
             BoundaryFormat::Table => {
                 let mut notes = std::collections::HashMap::new();
                 let mut untrusted = std::collections::HashMap::new();
-                for s in &sweeps {
-                    let points = store.points(s.id)?;
-                    if let Some(n) = chain_model_note(&points) {
+                for (s, points) in sweeps.iter().zip(&points) {
+                    if let Some(n) = chain_model_note(points) {
                         notes.insert(s.name.clone(), n);
                     }
-                    untrusted.insert(s.name.clone(), untrusted_points(&points));
+                    untrusted.insert(s.name.clone(), untrusted_points(points));
                 }
                 print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
             }
@@ -737,11 +744,11 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> Ex
                 last
             }
         };
-        let map = sweep_map(&store, &sweep, how)?;
-        let points = store.points(sweep.id)?;
+        let points = store.point_summaries(&sweep)?;
+        let map = sweep_map(&sweep, &points, how)?;
         let landmarks = points
             .first()
-            .and_then(|p| plot_phase::Landmarks::of(&p.spec.scene));
+            .and_then(|p| plot_phase::Landmarks::of(&p.scene));
         let Some(slice) = map.slices.first() else {
             return Err(Failure::BadInput(format!(
                 "sweep {}: no classified point to plot yet",
@@ -757,11 +764,19 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> Ex
             );
         }
         let title = format!("wetgran phase diagram: {}", sweep.name);
+        // The scene of each grid point's first job, by its coordinates (what `find` over the
+        // points gave, without a search per point).
+        let mut scene_at: std::collections::HashMap<String, &Scene> =
+            std::collections::HashMap::new();
+        for p in &points {
+            scene_at
+                .entry(serde_json::Value::from(p.coords.clone()).to_string())
+                .or_insert(p.scene.as_ref());
+        }
         let chain = plot_phase::chain_model_line(&map, slice, |coords| {
-            points
-                .iter()
-                .find(|p| p.coords == coords)
-                .map(|p| p.spec.scene.clone())
+            scene_at
+                .get(&serde_json::Value::from(coords.to_vec()).to_string())
+                .map(|s| (*s).clone())
         });
         let svg = plot_phase::phase_svg(&map, slice, landmarks, chain, &title)
             .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))?;

@@ -46,8 +46,10 @@ pub mod hysteresis;
 mod queries;
 #[cfg(test)]
 mod query_plans;
+mod summary;
 
 pub use cluster::{TaskRow, TaskState};
+pub use summary::{PointSummary, axis_keeps_report_scene, unconverged_summaries};
 
 use crate::sweep::file::{Axis, SweepFile};
 use crate::sweep::job::JobResult;
@@ -790,6 +792,7 @@ impl Store {
             .bind(result.events as i64)
             .bind(owner)
             .bind(finished_at)
+            .bind(wetgran_core::observe::converged_in_json(&result.observables).map(i64::from))
             .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;

@@ -132,6 +132,8 @@ queries! {
     SET_WAL_MODE = "set_wal_mode";
     /// Every job of a sweep (grid order) with its result where there is one.
     SWEEP_POINTS = "sweep_points";
+    /// Every job of a sweep (grid order) with what the reports read: scalar columns only.
+    SWEEP_POINT_SUMMARIES = "sweep_point_summaries";
     /// The file text a sweep was last registered with.
     SWEEP_SOURCE = "sweep_source";
     /// The file text a sweep was last registered with, by name.
