@@ -1,6 +1,6 @@
 -- Every job of a sweep (grid order) with what the reports (`sweep status`, `boundaries`,
 -- `plot`) read of it: indexed scalar columns, no observables JSON, and of the spec only its
--- start mode (NULL: the default, hot) and, where ?2 asks for it, the whole spec (for sweeps
+-- start mode (NULL: the default, hot) and, where asked, the whole spec (for sweeps
 -- whose axes may change what the reports read of a scene: `Store::point_summaries`).
 -- ?1: sweep id, ?2: whether to return every job's spec (1) or none (0)
 SELECT p.point, p.replica, p.coords, p.job_id, j.status, j.attempts, j.last_error,
