@@ -22,6 +22,7 @@ use crate::store::{Durability, PointSummary, Store, StoreError, SweepRow};
 use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use wetgran_core::scene::Scene;
@@ -796,34 +797,94 @@ pub fn export(
     series: Option<&Path>,
 ) -> ExitCode {
     exit((|| {
+        if let (ExportFormat::Json, Some(_)) = (format, series) {
+            return Err(Failure::BadInput(
+                "--series goes with --format csv (the JSON export holds the series)".to_string(),
+            ));
+        }
         let store = Store::open_existing(db)?;
-        let mut rows = Vec::new();
-        for s in select(&store, name)? {
-            rows.extend(export::rows(&s, &store.points(s.id)?));
-        }
-        let text = match format {
-            ExportFormat::Csv => export::to_csv(&rows),
-            ExportFormat::Json => export::to_json(&rows),
+        let sweeps = select(&store, name)?;
+        let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
+        let cannot_write =
+            |what: &str, e: std::io::Error| Failure::Other(format!("{what}: cannot write: {e}"));
+        let out_name = output.map_or("standard output".to_string(), |p| p.display().to_string());
+        let mut out: Box<dyn std::io::Write> = match output {
+            Some(p) => Box::new(std::io::BufWriter::new(
+                std::fs::File::create(p).map_err(|e| cannot_write(&out_name, e))?,
+            )),
+            None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
         };
-        match output {
-            Some(p) => std::fs::write(p, text)
-                .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", p.display())))?,
-            None => print!("{text}"),
-        }
-        match (format, series) {
-            (ExportFormat::Csv, Some(p)) => std::fs::write(p, export::series_csv(&rows))
-                .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", p.display())))?,
-            (ExportFormat::Json, Some(_)) => {
-                return Err(Failure::BadInput(
-                    "--series goes with --format csv (the JSON export holds the series)"
-                        .to_string(),
-                ));
+        // Rows are written as they are read (report::export, "Streaming"): a CSV export reads
+        // them twice, the first time for its columns.
+        match format {
+            ExportFormat::Json => {
+                let mut json = export::JsonWriter::default();
+                store.scan_points(&ids, 1, |_, k, p| {
+                    if let Some(r) = export::ExportRow::of(&sweeps[k], &p) {
+                        json.row(&mut out, &r)
+                            .map_err(|e| cannot_write(&out_name, e))?;
+                    }
+                    Ok::<(), Failure>(())
+                })?;
+                json.finish(&mut out)
+                    .map_err(|e| cannot_write(&out_name, e))?;
             }
-            (ExportFormat::Csv, None) => eprintln!(
+            ExportFormat::Csv => {
+                let series_name = series.map(|p| p.display().to_string());
+                let mut series_out = match series {
+                    Some(p) => Some(std::io::BufWriter::new(
+                        std::fs::File::create(p)
+                            .map_err(|e| cannot_write(series_name.as_deref().unwrap_or(""), e))?,
+                    )),
+                    None => None,
+                };
+                let series_failed = |e| cannot_write(series_name.as_deref().unwrap_or_default(), e);
+                if let Some(w) = series_out.as_mut() {
+                    w.write_all(export::SERIES_HEADER.as_bytes())
+                        .map_err(series_failed)?;
+                }
+                let mut columns = export::CsvColumns::default();
+                let mut header_written = false;
+                store.scan_points(&ids, 2, |pass, k, p| {
+                    let Some(r) = export::ExportRow::of(&sweeps[k], &p) else {
+                        return Ok(());
+                    };
+                    if pass == 0 {
+                        columns.add(&r);
+                        return Ok(());
+                    }
+                    if !header_written {
+                        columns
+                            .write_header(&mut out)
+                            .map_err(|e| cannot_write(&out_name, e))?;
+                        header_written = true;
+                    }
+                    let (scalars, lines) = export::scalars_and_series(&r);
+                    columns
+                        .write_row(&mut out, &r, &scalars)
+                        .map_err(|e| cannot_write(&out_name, e))?;
+                    if let Some(w) = series_out.as_mut() {
+                        export::write_series(w, &r, &lines).map_err(series_failed)?;
+                    }
+                    Ok::<(), Failure>(())
+                })?;
+                if !header_written {
+                    // No finished job: the header alone.
+                    columns
+                        .write_header(&mut out)
+                        .map_err(|e| cannot_write(&out_name, e))?;
+                }
+                if let Some(w) = series_out.as_mut() {
+                    w.flush().map_err(series_failed)?;
+                }
+            }
+        }
+        out.flush().map_err(|e| cannot_write(&out_name, e))?;
+        if let (ExportFormat::Csv, None) = (format, series) {
+            eprintln!(
                 "export: scalar columns only; the series (time series, profiles) go to \
                  --series FILE or --format json"
-            ),
-            (ExportFormat::Json, None) => {}
+            );
         }
         Ok(())
     })())
