@@ -19,3 +19,12 @@ UPDATE results SET converged =
                 WHEN 'true' THEN 1 WHEN 'false' THEN 0 END
     END
 WHERE json_valid(observables);
+
+-- What the reports read of each result and each job, as covering indexes
+-- (store/sql/sweep_point_summaries.sql names them with INDEXED BY): reading `wall_seconds` or
+-- `trend` from the table row means walking the overflow pages of the observables stored before
+-- them (a 7 kB result spans two more pages, a 150 kB one about forty), and a job's start mode is
+-- inside its spec. The index rows hold the columns themselves.
+CREATE INDEX results_report ON results (job_id, phase, wall_seconds, trend, converged);
+CREATE INDEX jobs_report ON jobs (id, status, attempts, last_error,
+    json_extract(spec, '$.scene.initial.start'));
