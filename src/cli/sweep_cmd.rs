@@ -808,9 +808,17 @@ pub fn export(
         let cannot_write =
             |what: &str, e: std::io::Error| Failure::Other(format!("{what}: cannot write: {e}"));
         let out_name = output.map_or("standard output".to_string(), |p| p.display().to_string());
+        // A reader that closes the pipe (`export | head`) ends the export quietly, with the
+        // status a shell reports for SIGPIPE, as `main` does for a failed print.
+        let out_failed = |e: std::io::Error| {
+            if output.is_none() && e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(141);
+            }
+            cannot_write(&out_name, e)
+        };
         let mut out: Box<dyn std::io::Write> = match output {
             Some(p) => Box::new(std::io::BufWriter::new(
-                std::fs::File::create(p).map_err(|e| cannot_write(&out_name, e))?,
+                std::fs::File::create(p).map_err(out_failed)?,
             )),
             None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
         };
@@ -821,13 +829,11 @@ pub fn export(
                 let mut json = export::JsonWriter::default();
                 store.scan_points(&ids, 1, |_, k, p| {
                     if let Some(r) = export::ExportRow::of(&sweeps[k], &p) {
-                        json.row(&mut out, &r)
-                            .map_err(|e| cannot_write(&out_name, e))?;
+                        json.row(&mut out, &r).map_err(out_failed)?;
                     }
                     Ok::<(), Failure>(())
                 })?;
-                json.finish(&mut out)
-                    .map_err(|e| cannot_write(&out_name, e))?;
+                json.finish(&mut out).map_err(out_failed)?;
             }
             ExportFormat::Csv => {
                 let series_name = series.map(|p| p.display().to_string());
@@ -854,15 +860,13 @@ pub fn export(
                         return Ok(());
                     }
                     if !header_written {
-                        columns
-                            .write_header(&mut out)
-                            .map_err(|e| cannot_write(&out_name, e))?;
+                        columns.write_header(&mut out).map_err(out_failed)?;
                         header_written = true;
                     }
                     let (scalars, lines) = export::scalars_and_series(&r);
                     columns
                         .write_row(&mut out, &r, &scalars)
-                        .map_err(|e| cannot_write(&out_name, e))?;
+                        .map_err(out_failed)?;
                     if let Some(w) = series_out.as_mut() {
                         export::write_series(w, &r, &lines).map_err(series_failed)?;
                     }
@@ -870,16 +874,14 @@ pub fn export(
                 })?;
                 if !header_written {
                     // No finished job: the header alone.
-                    columns
-                        .write_header(&mut out)
-                        .map_err(|e| cannot_write(&out_name, e))?;
+                    columns.write_header(&mut out).map_err(out_failed)?;
                 }
                 if let Some(w) = series_out.as_mut() {
                     w.flush().map_err(series_failed)?;
                 }
             }
         }
-        out.flush().map_err(|e| cannot_write(&out_name, e))?;
+        out.flush().map_err(out_failed)?;
         if let (ExportFormat::Csv, None) = (format, series) {
             eprintln!(
                 "export: scalar columns only; the series (time series, profiles) go to \
