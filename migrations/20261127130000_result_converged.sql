@@ -24,7 +24,8 @@ WHERE json_valid(observables);
 -- (store/sql/sweep_point_summaries.sql names them with INDEXED BY): reading `wall_seconds` or
 -- `trend` from the table row means walking the overflow pages of the observables stored before
 -- them (a 7 kB result spans two more pages, a 150 kB one about forty), and a job's start mode is
--- inside its spec. The index rows hold the columns themselves.
+-- inside its spec. The index rows hold the columns themselves; `jobs_report` also serves the
+-- time spent per sweep (store/sql/time_spent.sql: the wall seconds of its finished jobs).
 CREATE INDEX results_report ON results (job_id, phase, wall_seconds, trend, converged);
-CREATE INDEX jobs_report ON jobs (id, status, attempts, last_error,
+CREATE INDEX jobs_report ON jobs (id, status, attempts, last_error, wall_seconds,
     json_extract(spec, '$.scene.initial.start'));

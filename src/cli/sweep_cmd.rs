@@ -416,8 +416,8 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
     }
     let cores = available_cores();
     for s in &sweeps {
-        let c = store.counts(s.id)?;
         let points = store.point_summaries(s)?;
+        let c = crate::store::StateCounts::of_summaries(&points);
         let spent = store.time_spent(s.id)?;
         out.push_str(&sweep_status_text(s, &c, &points, spent, cores));
     }

@@ -17,7 +17,7 @@
 //! the sweep's first job, parsed once; otherwise each carries its own job's scene, parsed from
 //! its spec as [`Store::points`] does (a slower read, the same output).
 
-use super::{PointRow, Store, StoreError, SweepRow, queries};
+use super::{PointRow, StateCounts, Store, StoreError, SweepRow, queries};
 use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 use std::sync::Arc;
@@ -81,6 +81,23 @@ impl PointSummary {
     /// Whether the result may carry a phase boundary ([`PointRow::trusted`]).
     pub fn trusted(&self) -> bool {
         self.trust().label_trusted()
+    }
+}
+
+impl StateCounts {
+    /// The jobs of a sweep by state, counted from its summaries: what [`Store::counts`] counts
+    /// (its statement groups the same rows by status), without reading every job row again.
+    pub fn of_summaries(points: &[PointSummary]) -> StateCounts {
+        let mut c = StateCounts::default();
+        for p in points {
+            match p.status.as_str() {
+                "pending" => c.pending += 1,
+                "running" => c.running += 1,
+                "done" => c.done += 1,
+                _ => c.failed += 1,
+            }
+        }
+        c
     }
 }
 
@@ -297,6 +314,7 @@ mod tests {
             assert_eq!(a.trust(), p.trust());
         }
         let c = store.counts(row.id).unwrap();
+        assert_eq!(StateCounts::of_summaries(&lean), c);
         let spent = store.time_spent(row.id).unwrap();
         let status = crate::report::sweep_text::sweep_status_text(row, &c, &lean, spent, 2);
         assert_eq!(
