@@ -416,4 +416,70 @@ mod tests {
         assert!(has("obs.f.ok", 0, "false"), "{series:?}");
         assert_eq!(series.len(), 8);
     }
+
+    /// A row with nested objects, arrays, an empty object and array, a string with a newline and
+    /// a quote, and a null.
+    fn sample_row(job: &str, extra: serde_json::Value) -> ExportRow {
+        ExportRow {
+            sweep: "s".into(),
+            point: 3,
+            replica: 1,
+            job_id: job.into(),
+            params: BTreeMap::from([("drive.gamma".to_string(), serde_json::json!(2.5))]),
+            amplitude: Some(0.25),
+            omega: None,
+            phase: Some("g".into()),
+            stationary: Some(false),
+            trend: Some("heating".into()),
+            trust: Some("~".into()),
+            decided_on: Some(serde_json::json!({"reason": "line one\nline \"two\"", "t": [1, 2]})),
+            observables: serde_json::json!({"a": {"b": 1.5, "e": {}, "f": []}, "n": null,
+                "s": [[0.5, 1.0], [2.0, 3.0]], "x": extra}),
+            simulated_time: Some(10.0),
+            wall_seconds: Some(0.5),
+            events: Some(7),
+            finished_at: Some(1.0),
+        }
+    }
+
+    #[test]
+    fn the_streamed_json_is_the_pretty_printed_array() {
+        let rows = [
+            sample_row("a", serde_json::json!(1)),
+            sample_row("b", serde_json::json!({"deep": [{"k": "v"}]})),
+        ];
+        for n in 0..=rows.len() {
+            let want = serde_json::to_string_pretty(&rows[..n]).unwrap() + "\n";
+            assert_eq!(to_json(&rows[..n]), want, "{n} row(s)");
+        }
+    }
+
+    #[test]
+    fn the_first_pass_finds_the_columns_that_flatten_writes() {
+        let rows = vec![
+            sample_row("a", serde_json::json!(1)),
+            sample_row("b", serde_json::json!({"only_here": true, "list": [1]})),
+        ];
+        let mut columns = CsvColumns::default();
+        let mut want = BTreeSet::new();
+        for r in &rows {
+            columns.add(r);
+            want.extend(scalars_and_series(r).0.into_keys());
+        }
+        assert_eq!(columns.extra, want);
+        assert!(
+            want.contains("obs.x.only_here") && want.contains("obs.x"),
+            "{want:?}"
+        );
+        // A column one row lacks is empty in that row.
+        let csv = to_csv(&rows);
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let k = header.iter().position(|h| *h == "obs.x.only_here").unwrap();
+        assert!(
+            !header.contains(&"obs.s"),
+            "the series stay out of the CSV: {header:?}"
+        );
+        assert_eq!(header.len(), 4 + 1 + FIXED_AFTER_PARAMS.len() + want.len());
+        assert!(k >= 4 + 1 + FIXED_AFTER_PARAMS.len());
+    }
 }

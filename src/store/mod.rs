@@ -1269,6 +1269,15 @@ impl Store {
         Ok(c)
     }
 
+    /// Runs one statement on the store's connection (tests that write rows as older versions
+    /// did).
+    #[cfg(test)]
+    pub(crate) fn execute_for_tests(&self, sql: &'static str) {
+        self.rt
+            .block_on(sqlx::query(sql).execute(&self.pool))
+            .unwrap();
+    }
+
     /// Every job of a sweep (grid order), with its result where there is one.
     pub fn points(&self, sweep_id: i64) -> Result<Vec<PointRow>, StoreError> {
         let rows = self
