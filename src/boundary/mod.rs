@@ -40,6 +40,7 @@ use crate::sweep::file::{Axis, AxisKind};
 use serde::Serialize;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use wetgran_core::scene::{DriveKind, Scene};
 
 /// One job's contribution to the map.
@@ -54,8 +55,9 @@ pub struct Observation {
     pub trusted: bool,
     /// Not stationary, but on a trend that cannot change the label (`~`).
     pub label_kept: bool,
-    /// The job's scene (for physical units).
-    pub scene: Scene,
+    /// The job's scene (for physical units); shared between the jobs of a sweep where their
+    /// scenes agree in what the map reads (`store::PointSummary`).
+    pub scene: Arc<Scene>,
 }
 
 impl Observation {
@@ -67,7 +69,20 @@ impl Observation {
             phase: row.phase.clone(),
             trusted: row.trusted(),
             label_kept: row.trust() == wetgran_core::observe::trend::Trust::LabelKept,
-            scene: row.spec.scene.clone(),
+            scene: Arc::new(row.spec.scene.clone()),
+        }
+    }
+
+    /// A report's summary of a stored job as one vote of the phase map (the same vote as
+    /// [`Observation::of_row`] of its full row).
+    pub fn of_summary(row: &crate::store::PointSummary) -> Observation {
+        Observation {
+            coords: row.coords.clone(),
+            replica: row.replica,
+            phase: row.phase.clone(),
+            trusted: row.trusted(),
+            label_kept: row.trust() == wetgran_core::observe::trend::Trust::LabelKept,
+            scene: Arc::clone(&row.scene),
         }
     }
 }
@@ -430,7 +445,7 @@ impl Plane<'_> {
                 amplitude,
                 omega,
             });
-            scenes.push(&job.scene);
+            scenes.push(job.scene.as_ref());
         }
         Ok((points, scenes))
     }
@@ -619,7 +634,7 @@ mod tests {
             phase: Some(p.to_string()),
             trusted: true,
             label_kept: false,
-            scene: scene.clone(),
+            scene: Arc::new(scene.clone()),
         };
         let jobs = vec![
             obs(1.0, 0, "f"),
@@ -665,7 +680,7 @@ mod tests {
             phase: Some(p.to_string()),
             trusted,
             label_kept: false,
-            scene: scene.clone(),
+            scene: Arc::new(scene.clone()),
         };
         let jobs = vec![
             obs(1.0, "f", true),

@@ -18,12 +18,14 @@ use crate::report::sweep_text::{
 };
 use crate::report::{export, plot_phase};
 use crate::run::{RunOptions, run_sweeps};
-use crate::store::{Durability, Store, StoreError, SweepRow};
+use crate::store::{Durability, PointSummary, Store, StoreError, SweepRow};
 use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use wetgran_core::scene::Scene;
 use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 
 /// Default database file, in the working directory.
@@ -420,8 +422,8 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
     }
     let cores = available_cores();
     for s in &sweeps {
-        let c = store.counts(s.id)?;
-        let points = store.points(s.id)?;
+        let points = store.point_summaries(s)?;
+        let c = crate::store::StateCounts::of_summaries(&points);
         let spent = store.time_spent(s.id)?;
         out.push_str(&sweep_status_text(s, &c, &points, spent, cores));
     }
@@ -689,10 +691,14 @@ pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
-/// The phase map of a sweep, from its stored results.
-fn sweep_map(store: &Store, sweep: &SweepRow, how: Extraction) -> Result<PhaseMap, Failure> {
-    let points = store.points(sweep.id)?;
-    let obs: Vec<Observation> = points.iter().map(Observation::of_row).collect();
+/// The phase map of a sweep from its stored results (`points`: its
+/// `Store::point_summaries`).
+fn sweep_map(
+    sweep: &SweepRow,
+    points: &[PointSummary],
+    how: Extraction,
+) -> Result<PhaseMap, Failure> {
+    let obs: Vec<Observation> = points.iter().map(Observation::of_summary).collect();
     phase_map_with(&sweep.axes, &obs, how)
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
 }
@@ -708,8 +714,11 @@ pub fn boundaries(
         let store = Store::open_existing(db)?;
         let sweeps = select(&store, name)?;
         let mut maps = Vec::new();
+        let mut points = Vec::new();
         for s in &sweeps {
-            maps.push((s, sweep_map(&store, s, how)?));
+            let p = store.point_summaries(s)?;
+            maps.push((s, sweep_map(s, &p, how)?));
+            points.push(p);
         }
         match format {
             BoundaryFormat::Json => {
@@ -723,12 +732,11 @@ pub fn boundaries(
             BoundaryFormat::Table => {
                 let mut notes = std::collections::HashMap::new();
                 let mut untrusted = std::collections::HashMap::new();
-                for s in &sweeps {
-                    let points = store.points(s.id)?;
-                    if let Some(n) = chain_model_note(&points) {
+                for (s, points) in sweeps.iter().zip(&points) {
+                    if let Some(n) = chain_model_note(points) {
                         notes.insert(s.name.clone(), n);
                     }
-                    untrusted.insert(s.name.clone(), untrusted_points(&points));
+                    untrusted.insert(s.name.clone(), untrusted_points(points));
                 }
                 print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
             }
@@ -758,11 +766,11 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> Ex
                 last
             }
         };
-        let map = sweep_map(&store, &sweep, how)?;
-        let points = store.points(sweep.id)?;
+        let points = store.point_summaries(&sweep)?;
+        let map = sweep_map(&sweep, &points, how)?;
         let landmarks = points
             .first()
-            .and_then(|p| plot_phase::Landmarks::of(&p.spec.scene));
+            .and_then(|p| plot_phase::Landmarks::of(&p.scene));
         let Some(slice) = map.slices.first() else {
             return Err(Failure::BadInput(format!(
                 "sweep {}: no classified point to plot yet",
@@ -806,11 +814,19 @@ pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> Ex
             );
         }
         let title = format!("wetgran phase diagram: {}", sweep.name);
+        // The scene of each grid point's first job, by its coordinates (what `find` over the
+        // points gave, without a search per point).
+        let mut scene_at: std::collections::HashMap<String, &Scene> =
+            std::collections::HashMap::new();
+        for p in &points {
+            scene_at
+                .entry(serde_json::Value::from(p.coords.clone()).to_string())
+                .or_insert(p.scene.as_ref());
+        }
         let chain = plot_phase::chain_model_line(&map, slice, |coords| {
-            points
-                .iter()
-                .find(|p| p.coords == coords)
-                .map(|p| p.spec.scene.clone())
+            scene_at
+                .get(&serde_json::Value::from(coords.to_vec()).to_string())
+                .map(|s| (*s).clone())
         });
         let svg = plot_phase::branches_svg(&map, &drawn, landmarks, chain, &title)
             .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))?;
@@ -830,34 +846,96 @@ pub fn export(
     series: Option<&Path>,
 ) -> ExitCode {
     exit((|| {
+        if let (ExportFormat::Json, Some(_)) = (format, series) {
+            return Err(Failure::BadInput(
+                "--series goes with --format csv (the JSON export holds the series)".to_string(),
+            ));
+        }
         let store = Store::open_existing(db)?;
-        let mut rows = Vec::new();
-        for s in select(&store, name)? {
-            rows.extend(export::rows(&s, &store.points(s.id)?));
-        }
-        let text = match format {
-            ExportFormat::Csv => export::to_csv(&rows),
-            ExportFormat::Json => export::to_json(&rows),
-        };
-        match output {
-            Some(p) => std::fs::write(p, text)
-                .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", p.display())))?,
-            None => print!("{text}"),
-        }
-        match (format, series) {
-            (ExportFormat::Csv, Some(p)) => std::fs::write(p, export::series_csv(&rows))
-                .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", p.display())))?,
-            (ExportFormat::Json, Some(_)) => {
-                return Err(Failure::BadInput(
-                    "--series goes with --format csv (the JSON export holds the series)"
-                        .to_string(),
-                ));
+        let sweeps = select(&store, name)?;
+        let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
+        let cannot_write =
+            |what: &str, e: std::io::Error| Failure::Other(format!("{what}: cannot write: {e}"));
+        let out_name = output.map_or("standard output".to_string(), |p| p.display().to_string());
+        // A reader that closes the pipe (`export | head`) ends the export quietly, with the
+        // status a shell reports for SIGPIPE, as `main` does for a failed print.
+        let out_failed = |e: std::io::Error| {
+            if output.is_none() && e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(141);
             }
-            (ExportFormat::Csv, None) => eprintln!(
+            cannot_write(&out_name, e)
+        };
+        let mut out: Box<dyn std::io::Write> = match output {
+            Some(p) => Box::new(std::io::BufWriter::new(
+                std::fs::File::create(p).map_err(out_failed)?,
+            )),
+            None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+        };
+        // Rows are written as they are read (report::export, "Streaming"): a CSV export reads
+        // them twice, the first time for its columns.
+        match format {
+            ExportFormat::Json => {
+                let mut json = export::JsonWriter::default();
+                store.scan_points(&ids, 1, |_, k, p| {
+                    if let Some(r) = export::ExportRow::of(&sweeps[k], &p) {
+                        json.row(&mut out, &r).map_err(out_failed)?;
+                    }
+                    Ok::<(), Failure>(())
+                })?;
+                json.finish(&mut out).map_err(out_failed)?;
+            }
+            ExportFormat::Csv => {
+                let series_name = series.map(|p| p.display().to_string());
+                let mut series_out = match series {
+                    Some(p) => Some(std::io::BufWriter::new(
+                        std::fs::File::create(p)
+                            .map_err(|e| cannot_write(series_name.as_deref().unwrap_or(""), e))?,
+                    )),
+                    None => None,
+                };
+                let series_failed = |e| cannot_write(series_name.as_deref().unwrap_or_default(), e);
+                if let Some(w) = series_out.as_mut() {
+                    w.write_all(export::SERIES_HEADER.as_bytes())
+                        .map_err(series_failed)?;
+                }
+                let mut columns = export::CsvColumns::default();
+                let mut header_written = false;
+                store.scan_points(&ids, 2, |pass, k, p| {
+                    let Some(r) = export::ExportRow::of(&sweeps[k], &p) else {
+                        return Ok(());
+                    };
+                    if pass == 0 {
+                        columns.add(&r);
+                        return Ok(());
+                    }
+                    if !header_written {
+                        columns.write_header(&mut out).map_err(out_failed)?;
+                        header_written = true;
+                    }
+                    let (scalars, lines) = export::scalars_and_series(&r);
+                    columns
+                        .write_row(&mut out, &r, &scalars)
+                        .map_err(out_failed)?;
+                    if let Some(w) = series_out.as_mut() {
+                        export::write_series(w, &r, &lines).map_err(series_failed)?;
+                    }
+                    Ok::<(), Failure>(())
+                })?;
+                if !header_written {
+                    // No finished job: the header alone.
+                    columns.write_header(&mut out).map_err(out_failed)?;
+                }
+                if let Some(w) = series_out.as_mut() {
+                    w.flush().map_err(series_failed)?;
+                }
+            }
+        }
+        out.flush().map_err(out_failed)?;
+        if let (ExportFormat::Csv, None) = (format, series) {
+            eprintln!(
                 "export: scalar columns only; the series (time series, profiles) go to \
                  --series FILE or --format json"
-            ),
-            (ExportFormat::Json, None) => {}
+            );
         }
         Ok(())
     })())

@@ -69,11 +69,11 @@ pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
 
 /// For shear sweeps of wet scenes: the chain model's critical force (docs/model.md 8, Eq. 7.9),
 /// `F_max = 0.9229 F_B d / L_x`, over the sweep's points (a range if the axes change it).
-pub fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
+pub fn chain_model_note(points: &[crate::store::PointSummary]) -> Option<String> {
     let values: Vec<f64> = points
         .iter()
-        .filter(|p| p.spec.scene.shear_slabs().is_some())
-        .filter_map(|p| plot_phase::chain_model_f_max(&p.spec.scene))
+        .filter(|p| p.scene.shear_slabs().is_some())
+        .filter_map(|p| plot_phase::chain_model_f_max(&p.scene))
         .collect();
     let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -94,7 +94,7 @@ pub fn chain_model_note(points: &[crate::store::PointRow]) -> Option<String> {
 /// The grid points (their coordinates as JSON text) with a replica whose result carries a trust
 /// mark (`report::trust`), with the mark.
 pub fn untrusted_points(
-    points: &[crate::store::PointRow],
+    points: &[crate::store::PointSummary],
 ) -> std::collections::HashMap<String, char> {
     let mut marks = std::collections::HashMap::new();
     for p in points {

@@ -14,6 +14,8 @@
 pub mod boundaries_text;
 pub mod cluster_text;
 pub mod export;
+#[cfg(test)]
+mod lean_reports_tests;
 pub mod plot_phase;
 pub mod point_text;
 pub mod profile_plot;

@@ -4,7 +4,7 @@
 //! rows and the figures measured.
 
 use crate::run::runner::{point_label, short};
-use crate::store::{LeftOut, PointRow, StateCounts, SweepRow};
+use crate::store::{LeftOut, PointSummary, StateCounts, SweepRow};
 use std::fmt::Write as _;
 
 /// A duration in seconds, minutes, hours or days, whichever reads best.
@@ -37,12 +37,13 @@ pub fn left_out_text(axes: &[crate::sweep::Axis], left_out: &[LeftOut]) -> Strin
     out
 }
 
-/// The `sweep status` lines of one sweep: `c` its job counts, `points` its stored points,
-/// `spent` the wall time of its finished jobs (s), `cores` those the time left is counted on.
+/// The `sweep status` lines of one sweep: `c` its job counts, `points` its stored points
+/// (`Store::point_summaries`), `spent` the wall time of its finished jobs (s), `cores` those the
+/// time left is counted on.
 pub fn sweep_status_text(
     s: &SweepRow,
     c: &StateCounts,
-    points: &[PointRow],
+    points: &[PointSummary],
     spent: f64,
     cores: usize,
 ) -> String {
@@ -70,7 +71,7 @@ pub fn sweep_status_text(
         c.pending,
         c.failed
     );
-    let (unconverged, checked) = crate::store::unconverged_count(points);
+    let (unconverged, checked) = crate::store::unconverged_summaries(points);
     if checked > 0 {
         let _ = writeln!(
             out,

@@ -46,8 +46,10 @@ pub mod hysteresis;
 mod queries;
 #[cfg(test)]
 mod query_plans;
+mod summary;
 
 pub use cluster::{TaskRow, TaskState};
+pub use summary::{PointSummary, axis_keeps_report_scene, unconverged_summaries};
 
 use crate::sweep::file::{Axis, SweepFile};
 use crate::sweep::job::JobResult;
@@ -70,6 +72,8 @@ pub const BUSY_TIMEOUT_VAR: &str = "WETGRAN_BUSY_TIMEOUT";
 pub const HEARTBEAT_INTERVAL: Duration = Duration::from_secs(5);
 /// The page cache of a store's connection, KiB.
 const CACHE_KIB: u32 = 64 * 1024;
+/// Rows per page of [`Store::scan_points`] (observables of up to ~150 kB each: ~10 MB a page).
+pub const POINTS_PAGE: i64 = 64;
 /// A running job whose heartbeat is older than this is re-queued.
 pub const STALE_AFTER: Duration = Duration::from_secs(60);
 
@@ -790,6 +794,7 @@ impl Store {
             .bind(result.events as i64)
             .bind(owner)
             .bind(finished_at)
+            .bind(wetgran_core::observe::converged_in_json(&result.observables).map(i64::from))
             .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
@@ -1264,6 +1269,15 @@ impl Store {
         Ok(c)
     }
 
+    /// Runs one statement on the store's connection (tests that write rows as older versions
+    /// did).
+    #[cfg(test)]
+    pub(crate) fn execute_for_tests(&self, sql: &'static str) {
+        self.rt
+            .block_on(sqlx::query(sql).execute(&self.pool))
+            .unwrap();
+    }
+
     /// Every job of a sweep (grid order), with its result where there is one.
     pub fn points(&self, sweep_id: i64) -> Result<Vec<PointRow>, StoreError> {
         let rows = self
@@ -1274,47 +1288,91 @@ impl Store {
                     .fetch_all(&self.pool),
             )
             .map_err(|e| self.db(e))?;
+        rows.iter().map(|r| self.point_row(r)).collect()
+    }
+
+    /// Every job of the given sweeps with its result, in sweep order and each sweep's grid
+    /// order, handed to `f` as `(pass, index of the sweep in sweep_ids, row)`, `passes` times
+    /// over (`export`: a first pass for the CSV columns, a second for the rows). The rows are
+    /// read [`POINTS_PAGE`] at a time (`sweep_points_page.sql`), so memory does not grow with
+    /// the sweeps; every pass reads inside one read transaction, so every pass sees the same
+    /// database even while a runner commits results.
+    pub fn scan_points<E: From<StoreError>>(
+        &self,
+        sweep_ids: &[i64],
+        passes: usize,
+        mut f: impl FnMut(usize, usize, PointRow) -> Result<(), E>,
+    ) -> Result<(), E> {
+        self.rt.block_on(async {
+            let mut tx = self.pool.begin().await.map_err(|e| self.db(e))?;
+            for pass in 0..passes {
+                for (k, &sweep_id) in sweep_ids.iter().enumerate() {
+                    let mut after = (-1i64, -1i64);
+                    loop {
+                        let rows = sqlx::query(queries::SWEEP_POINTS_PAGE)
+                            .bind(sweep_id)
+                            .bind(after.0)
+                            .bind(after.1)
+                            .bind(POINTS_PAGE)
+                            .fetch_all(&mut *tx)
+                            .await
+                            .map_err(|e| self.db(e))?;
+                        for r in &rows {
+                            let row = self.point_row(r)?;
+                            after = (row.point, row.replica);
+                            f(pass, k, row)?;
+                        }
+                        if rows.len() < POINTS_PAGE as usize {
+                            break;
+                        }
+                    }
+                }
+            }
+            // Read only: nothing to commit.
+            tx.rollback().await.map_err(|e| self.db(e))?;
+            Ok::<(), E>(())
+        })
+    }
+
+    /// A row of `sweep_points.sql` (or of a page of it) as a [`PointRow`].
+    fn point_row(&self, r: &sqlx::sqlite::SqliteRow) -> Result<PointRow, StoreError> {
         let path = self.path.display().to_string();
         let damaged = |what: &str, e: String| StoreError::Damaged {
             path: path.clone(),
             detail: format!("{what} is not readable: {e}"),
         };
-        rows.iter()
-            .map(|r| {
-                let job_id: String = r.get("job_id");
-                let json = |col: &str| -> Result<Option<serde_json::Value>, StoreError> {
-                    let s: Option<String> = r.get(col);
-                    s.map(|s| serde_json::from_str(&s))
-                        .transpose()
-                        .map_err(|e| damaged(&format!("{col} of job {job_id}"), e.to_string()))
-                };
-                let spec: String = r.get("spec");
-                Ok(PointRow {
-                    point: r.get("point"),
-                    replica: r.get("replica"),
-                    coords: serde_json::from_str(r.get::<&str, _>("coords"))
-                        .map_err(|e| damaged("coords", e.to_string()))?,
-                    status: r.get("status"),
-                    spec: JobSpec::from_json(&spec, &format!("job {job_id}"))
-                        .map_err(|e| damaged("a job spec", e))?,
-                    attempts: r.get("attempts"),
-                    last_error: r.get("last_error"),
-                    phase: r.get("phase"),
-                    decided_on: json("decided_on")?,
-                    observables: json("observables")?,
-                    simulated_time: r.get("simulated_time"),
-                    wall_seconds: r.get("wall_seconds"),
-                    events: r.get("events"),
-                    finished_at: r.get("finished_at"),
-                    result_owner: r.get("result_owner"),
-                    trend: r
-                        .get::<Option<String>, _>("trend")
-                        .as_deref()
-                        .and_then(wetgran_core::observe::trend::TrendState::parse),
-                    job_id,
-                })
-            })
-            .collect()
+        let job_id: String = r.get("job_id");
+        let json = |col: &str| -> Result<Option<serde_json::Value>, StoreError> {
+            let s: Option<String> = r.get(col);
+            s.map(|s| serde_json::from_str(&s))
+                .transpose()
+                .map_err(|e| damaged(&format!("{col} of job {job_id}"), e.to_string()))
+        };
+        let spec: String = r.get("spec");
+        Ok(PointRow {
+            point: r.get("point"),
+            replica: r.get("replica"),
+            coords: serde_json::from_str(r.get::<&str, _>("coords"))
+                .map_err(|e| damaged("coords", e.to_string()))?,
+            status: r.get("status"),
+            spec: JobSpec::from_json(&spec, &format!("job {job_id}"))
+                .map_err(|e| damaged("a job spec", e))?,
+            attempts: r.get("attempts"),
+            last_error: r.get("last_error"),
+            phase: r.get("phase"),
+            decided_on: json("decided_on")?,
+            observables: json("observables")?,
+            simulated_time: r.get("simulated_time"),
+            wall_seconds: r.get("wall_seconds"),
+            events: r.get("events"),
+            finished_at: r.get("finished_at"),
+            result_owner: r.get("result_owner"),
+            trend: r
+                .get::<Option<String>, _>("trend")
+                .as_deref()
+                .and_then(wetgran_core::observe::trend::TrendState::parse),
+            job_id,
+        })
     }
 
     /// Number of attempts recorded in the `runs` table per job (audit of "no job ran twice").

@@ -132,6 +132,10 @@ queries! {
     SET_WAL_MODE = "set_wal_mode";
     /// Every job of a sweep (grid order) with its result where there is one.
     SWEEP_POINTS = "sweep_points";
+    /// Every job of a sweep (grid order) with what the reports read: scalar columns only.
+    SWEEP_POINT_SUMMARIES = "sweep_point_summaries";
+    /// A page of a sweep's jobs with their results, after a given point and replica.
+    SWEEP_POINTS_PAGE = "sweep_points_page";
     /// The file text a sweep was last registered with.
     SWEEP_SOURCE = "sweep_source";
     /// The file text a sweep was last registered with, by name.

@@ -78,6 +78,9 @@ enum Command {
         /// `sweep run` does (`NORMAL`).
         #[arg(long)]
         synced: bool,
+        /// Keep each size's folder and database (its path is printed) instead of removing it.
+        #[arg(long)]
+        keep: bool,
         /// Which reports to time, comma-separated (`status`, `boundaries`, `plot`, `export`,
         /// `reclassify`).
         #[arg(
@@ -116,6 +119,7 @@ fn main() -> ExitCode {
             repeat,
             dir,
             synced,
+            keep,
             reports,
         }) => match wetgran_bench::orchestrator::run(
             &sizes,
@@ -128,6 +132,7 @@ fn main() -> ExitCode {
             },
             &reports,
             dir.as_deref(),
+            keep,
         ) {
             Ok(text) => {
                 print!("{text}");

@@ -321,7 +321,7 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
 }
 
 /// Runs every size, each in a fresh folder under `dir` (default: the system's temporary folder),
-/// removed afterwards.
+/// removed afterwards unless `keep` (then its path is printed, for profiling a report on it).
 pub fn run(
     sizes: &[usize],
     workers: usize,
@@ -329,6 +329,7 @@ pub fn run(
     durability: Durability,
     reports: &[String],
     dir: Option<&Path>,
+    keep: bool,
 ) -> Result<String, String> {
     let mut rows = Vec::new();
     for &n in sizes {
@@ -345,6 +346,9 @@ pub fn run(
             reports,
             tmp.path(),
         )?);
+        if keep {
+            eprintln!("N = {n}: database kept in {}", tmp.keep().display());
+        }
     }
     Ok(text(&rows, workers, durability))
 }

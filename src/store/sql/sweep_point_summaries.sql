@@ -1,0 +1,16 @@
+-- Every job of a sweep (grid order) with what the reports (`sweep status`, `boundaries`,
+-- `plot`) read of it: indexed scalar columns, no observables JSON, and of the spec only its
+-- start mode (NULL: the default, hot) and, where asked, the whole spec (for sweeps
+-- whose axes may change what the reports read of a scene: `Store::point_summaries`). The
+-- columns come from covering indexes (migration 20261127130000), not from the rows that hold
+-- the observables.
+-- ?1: sweep id, ?2: whether to return every job's spec (1) or none (0)
+SELECT p.point, p.replica, p.coords, p.job_id, j.status, j.attempts, j.last_error,
+    json_extract(j.spec, '$.scene.initial.start') AS start,
+    CASE WHEN ?2 THEN j.spec END AS spec,
+    r.phase, r.wall_seconds, r.trend, r.converged
+FROM sweep_points p
+JOIN jobs j INDEXED BY jobs_report ON j.id = p.job_id
+LEFT JOIN results r INDEXED BY results_report ON r.job_id = p.job_id
+WHERE p.sweep_id = ?1
+ORDER BY p.point, p.replica

@@ -1,0 +1,209 @@
+//! Lean rows for the reports (issue 35): what `sweep status`, `boundaries` and `plot` read of
+//! each job of a sweep, from indexed scalar columns (`results.phase`, `wall_seconds`, `trend`,
+//! `converged`) instead of the observables JSON (7 to 150 kB per result) and the spec JSON of
+//! every job that [`Store::points`] parses.
+//!
+//! The scene. The reports read of a job's scene only what sets its units and geometry: the
+//! container motion `(A, omega)` from `(Gamma, E*)` needs `E_cb`, `m`, `g`, `d` and whether
+//! the scene is wet (`boundary::drive_at`); `plot`'s landmarks and the chain model read the
+//! particles, box, dimension, capillary and gravity; `boundaries` reads the drive kind and slab
+//! width (`Scene::shear_slabs`); hysteresis reads the start mode. Every job of a sweep is an
+//! expansion of the same sweep file (re-registering a changed file drops every point, refined
+//! ones included: `delete_grid_points.sql`), so jobs differ only where the expansion sets
+//! something per point: the axis values, the seed of a replica, the run length in periods, and
+//! the start of a continuation chain's first job. The start mode is read per job from the spec
+//! in SQL (one `json_extract`). The rest is shared: where every axis key is one that changes
+//! none of the fields above ([`axis_keeps_report_scene`]), each summary carries the scene of
+//! the sweep's first job, parsed once; otherwise each carries its own job's scene, parsed from
+//! its spec as [`Store::points`] does (a slower read, the same output).
+
+use super::{PointRow, StateCounts, Store, StoreError, SweepRow, queries};
+use crate::sweep::spec::JobSpec;
+use sqlx::Row;
+use std::sync::Arc;
+use wetgran_core::observe::trend::{TrendState, Trust};
+use wetgran_core::scene::{Scene, StartMode};
+
+/// One job of a sweep as the reports see it (see the module doc).
+#[derive(Debug, Clone)]
+pub struct PointSummary {
+    pub point: i64,
+    pub replica: i64,
+    pub coords: Vec<serde_json::Value>,
+    pub job_id: String,
+    pub status: String,
+    pub attempts: i64,
+    pub last_error: Option<String>,
+    /// The start mode of its spec (`initial.start`).
+    pub start: StartMode,
+    pub phase: Option<String>,
+    /// Wall seconds of its result (`None` without a result).
+    pub wall_seconds: Option<f64>,
+    /// The result's trend state (`results.trend`).
+    pub trend: Option<TrendState>,
+    /// The result's convergence verdict (`results.converged`,
+    /// `observe::converged_in_json`); `None` without a result or without a verdict.
+    pub converged: Option<bool>,
+    /// A scene equal to the job's in every field the reports read (module doc); its axis
+    /// values, seed, run length and start mode may be another job's of the same sweep.
+    pub scene: Arc<Scene>,
+}
+
+impl PointSummary {
+    /// The summary of a full row (the same values, read from the row's JSON).
+    pub fn of_row(row: &PointRow) -> PointSummary {
+        PointSummary {
+            point: row.point,
+            replica: row.replica,
+            coords: row.coords.clone(),
+            job_id: row.job_id.clone(),
+            status: row.status.clone(),
+            attempts: row.attempts,
+            last_error: row.last_error.clone(),
+            start: row.spec.scene.initial.start,
+            phase: row.phase.clone(),
+            wall_seconds: row.wall_seconds,
+            trend: row.trend,
+            converged: row
+                .observables
+                .as_ref()
+                .and_then(wetgran_core::observe::converged_in_json),
+            scene: Arc::new(row.spec.scene.clone()),
+        }
+    }
+
+    /// How far the result's label can be trusted ([`PointRow::trust`], from the columns).
+    pub fn trust(&self) -> Trust {
+        let phase = self.phase.as_deref().and_then(|p| p.parse().ok());
+        wetgran_core::observe::trend::trust(self.trend, self.converged, phase)
+    }
+
+    /// Whether the result may carry a phase boundary ([`PointRow::trusted`]).
+    pub fn trusted(&self) -> bool {
+        self.trust().label_trusted()
+    }
+}
+
+impl StateCounts {
+    /// The jobs of a sweep by state, counted from its summaries: what [`Store::counts`] counts
+    /// (its statement groups the same rows by status), without reading every job row again.
+    pub fn of_summaries(points: &[PointSummary]) -> StateCounts {
+        let mut c = StateCounts::default();
+        for p in points {
+            match p.status.as_str() {
+                "pending" => c.pending += 1,
+                "running" => c.running += 1,
+                "done" => c.done += 1,
+                _ => c.failed += 1,
+            }
+        }
+        c
+    }
+}
+
+/// Results that did not converge and results with a verdict, `(unconverged, with a verdict)`
+/// ([`super::unconverged_count`] of the summaries).
+pub fn unconverged_summaries(points: &[PointSummary]) -> (u64, u64) {
+    points
+        .iter()
+        .filter_map(|p| p.converged)
+        .fold((0, 0), |(u, n), ok| (u + u64::from(!ok), n + 1))
+}
+
+/// Whether an axis with this (dotted scene) key leaves every scene field the reports read as
+/// the base sets it (module doc): the drive's strength (`Gamma`, `E*`, `F_max`, `A`, `omega`;
+/// the motion is recomputed from the coordinates), the seed, the start mode (read per job),
+/// the initial temperature, and the run, observer, classifier, convergence and engine
+/// settings.
+pub fn axis_keeps_report_scene(key: &str) -> bool {
+    const KEYS: [&str; 9] = [
+        "drive.gamma",
+        "drive.e_star",
+        "drive.f_max",
+        "drive.amplitude",
+        "drive.omega",
+        "initial.seed",
+        "initial.start",
+        "initial.temperature",
+        "initial.temperature_over_ecb",
+    ];
+    const SECTIONS: [&str; 5] = ["run.", "observe.", "classify.", "convergence.", "engine."];
+    KEYS.contains(&key) || SECTIONS.iter().any(|s| key.starts_with(s))
+}
+
+impl Store {
+    /// Every job of a sweep (grid order) as the reports see it (module doc): one row per job
+    /// from scalar columns, without the observables; the scene parsed once per sweep where its
+    /// axes allow, else once per job.
+    pub fn point_summaries(&self, sweep: &SweepRow) -> Result<Vec<PointSummary>, StoreError> {
+        let every_spec = !sweep.axes.iter().all(|a| axis_keeps_report_scene(&a.key));
+        let rows = self
+            .rt
+            .block_on(
+                sqlx::query(queries::SWEEP_POINT_SUMMARIES)
+                    .bind(sweep.id)
+                    .bind(every_spec)
+                    .fetch_all(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        let path = self.path.display().to_string();
+        let damaged = |what: &str, e: String| StoreError::Damaged {
+            path: path.clone(),
+            detail: format!("{what} is not readable: {e}"),
+        };
+        let shared = match rows.first() {
+            Some(r) if !every_spec => {
+                let job_id: String = r.get("job_id");
+                let spec = self.job_spec(&job_id)?.ok_or_else(|| {
+                    damaged(&format!("the spec of job {job_id}"), "missing".into())
+                })?;
+                Some(Arc::new(spec.scene))
+            }
+            _ => None,
+        };
+        rows.iter()
+            .map(|r| {
+                let job_id: String = r.get("job_id");
+                let scene = match &shared {
+                    Some(s) => Arc::clone(s),
+                    None => {
+                        let spec: String = r.get("spec");
+                        Arc::new(
+                            JobSpec::from_json(&spec, &format!("job {job_id}"))
+                                .map_err(|e| damaged("a job spec", e))?
+                                .scene,
+                        )
+                    }
+                };
+                let start = match r.get::<Option<String>, _>("start") {
+                    // Not written: the default (the spec leaves out a hot start).
+                    None => StartMode::default(),
+                    Some(s) => {
+                        serde_json::from_value(serde_json::Value::String(s)).map_err(|e| {
+                            damaged(&format!("the start of job {job_id}"), e.to_string())
+                        })?
+                    }
+                };
+                Ok(PointSummary {
+                    point: r.get("point"),
+                    replica: r.get("replica"),
+                    coords: serde_json::from_str(r.get::<&str, _>("coords"))
+                        .map_err(|e| damaged("coords", e.to_string()))?,
+                    status: r.get("status"),
+                    attempts: r.get("attempts"),
+                    last_error: r.get("last_error"),
+                    start,
+                    phase: r.get("phase"),
+                    wall_seconds: r.get("wall_seconds"),
+                    trend: r
+                        .get::<Option<String>, _>("trend")
+                        .as_deref()
+                        .and_then(TrendState::parse),
+                    converged: r.get::<Option<i64>, _>("converged").map(|c| c != 0),
+                    scene,
+                    job_id,
+                })
+            })
+            .collect()
+    }
+}
