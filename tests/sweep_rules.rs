@@ -349,15 +349,18 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
     )
     .unwrap();
     drop(store);
-    let text = ok(&[
-        "reclassify",
-        "--sweep",
-        "cls",
-        "--classify",
-        everything_solid.to_str().unwrap(),
-        "--db",
-        db_s,
-    ]);
+    let reclassify_with = |file: &std::path::Path| {
+        ok(&[
+            "reclassify",
+            "--sweep",
+            "cls",
+            "--classify",
+            file.to_str().unwrap(),
+            "--db",
+            db_s,
+        ])
+    };
+    let text = reclassify_with(&everything_solid);
     let store = Store::open_existing(&db).unwrap();
     assert_labels_follow(&store, "cls", &th_solid);
     let after: Vec<Option<String>> = store
@@ -386,30 +389,14 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
         "[classify]\nmobility = \"location_changes\"\n",
     );
     drop(store);
-    let flc_text = ok(&[
-        "reclassify",
-        "--sweep",
-        "cls",
-        "--classify",
-        by_flc.to_str().unwrap(),
-        "--db",
-        db_s,
-    ]);
+    let flc_text = reclassify_with(&by_flc);
     assert!(
         flc_text.contains("4 result(s) have no f_lc")
             && flc_text.contains("location_changes = true"),
         "{flc_text}"
     );
     // Back to the thresholds the rest of this test checks.
-    ok(&[
-        "reclassify",
-        "--sweep",
-        "cls",
-        "--classify",
-        everything_solid.to_str().unwrap(),
-        "--db",
-        db_s,
-    ]);
+    reclassify_with(&everything_solid);
     let store = Store::open_existing(&db).unwrap();
     // No mobile label survives a solid threshold of 1e12 E_cb.
     assert!(

@@ -63,26 +63,41 @@ pub struct Observation {
 impl Observation {
     /// A stored result as one vote of the phase map.
     pub fn of_row(row: &crate::store::PointRow) -> Observation {
-        Observation {
-            coords: row.coords.clone(),
-            replica: row.replica,
-            phase: row.phase.clone(),
-            trusted: row.trusted(),
-            label_kept: row.trust() == wetgran_core::observe::trend::Trust::LabelKept,
-            scene: Arc::new(row.spec.scene.clone()),
-        }
+        Self::vote(
+            &row.coords,
+            row.replica,
+            &row.phase,
+            row.trust(),
+            Arc::new(row.spec.scene.clone()),
+        )
     }
 
     /// A report's summary of a stored job as one vote of the phase map (the same vote as
     /// [`Observation::of_row`] of its full row).
     pub fn of_summary(row: &crate::store::PointSummary) -> Observation {
+        Self::vote(
+            &row.coords,
+            row.replica,
+            &row.phase,
+            row.trust(),
+            Arc::clone(&row.scene),
+        )
+    }
+
+    fn vote(
+        coords: &[serde_json::Value],
+        replica: i64,
+        phase: &Option<String>,
+        trust: wetgran_core::observe::trend::Trust,
+        scene: Arc<Scene>,
+    ) -> Observation {
         Observation {
-            coords: row.coords.clone(),
-            replica: row.replica,
-            phase: row.phase.clone(),
-            trusted: row.trusted(),
-            label_kept: row.trust() == wetgran_core::observe::trend::Trust::LabelKept,
-            scene: Arc::clone(&row.scene),
+            coords: coords.to_vec(),
+            replica,
+            phase: phase.clone(),
+            trusted: trust.label_trusted(),
+            label_kept: trust == wetgran_core::observe::trend::Trust::LabelKept,
+            scene,
         }
     }
 }
