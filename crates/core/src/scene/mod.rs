@@ -363,6 +363,8 @@ pub enum WallSolverKind {
 
 /// Default gap tolerance of the wall-root solver.
 pub const DEFAULT_ROOT_TOLERANCE: f64 = 1e-10;
+/// Steps per driving period of the `bracket` wall solver by default (`drive.t_min = T / 1000`).
+pub const BRACKET_STEPS_PER_PERIOD: f64 = 1000.0;
 
 /// Initial state: a regular lattice filled from the floor up, Gaussian velocities.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -686,6 +688,14 @@ impl Scene {
                 None
             },
         }
+    }
+
+    /// Step of the `bracket` wall solver at angular frequency `omega`: `drive.t_min`, by default
+    /// a thousandth of the driving period `T = 2 pi / omega` (docs/model.md 6).
+    pub fn bracket_step(&self, omega: f64) -> f64 {
+        self.drive
+            .t_min
+            .unwrap_or(2.0 * std::f64::consts::PI / omega / BRACKET_STEPS_PER_PERIOD)
     }
 
     /// The largest `engine.dt` the time-driven engine is allowed: the smallest of [`MAX_DT`], an

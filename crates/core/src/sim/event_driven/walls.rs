@@ -83,10 +83,7 @@ impl WallSolver {
             WallSolverKind::Bracket => WallSolver::Bracket {
                 motion,
                 tol,
-                t_min: scene
-                    .drive
-                    .t_min
-                    .unwrap_or(2.0 * std::f64::consts::PI / omega / 1000.0),
+                t_min: scene.bracket_step(omega),
             },
             WallSolverKind::Table if amplitude > 0.0 => {
                 let spec = scene.wall_table_spec(amplitude, omega);
