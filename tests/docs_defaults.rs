@@ -544,11 +544,11 @@ fn documents() -> Vec<PathBuf> {
 /// The value a documented default cell stands for, where it is one value.
 fn literal(cell: &str) -> Option<Value> {
     let c = cell.trim();
-    let c = c
+    let quoted = c
         .strip_prefix('`')
         .and_then(|s| s.strip_suffix('`'))
-        .filter(|s| !s.contains('`'))
-        .unwrap_or(c);
+        .filter(|s| !s.contains('`'));
+    let c = quoted.unwrap_or(c);
     if let Ok(v) = serde_json::from_str::<Value>(c) {
         return Some(v);
     }
@@ -558,7 +558,8 @@ fn literal(cell: &str) -> Option<Value> {
     let word = c.trim_matches('"');
     let is_word = !word.is_empty()
         && word.chars().all(|ch| ch.is_ascii_lowercase() || ch == '_' || ch.is_ascii_digit());
-    (is_word && word != "none" && word != "required").then(|| json!(word))
+    // Bare `none` and `required` are the words of the table's legend; `` `none` `` is a value.
+    (is_word && (quoted.is_some() || (word != "none" && word != "required"))).then(|| json!(word))
 }
 
 /// Numbers compare as `f64` (`1e-3` and `0.001`, `4` and `4.0` are one default).

@@ -1,7 +1,7 @@
 //! The documentation's cross-references resolve: every relative link and image of README.md,
 //! ARCHITECTURE.md and docs/*.md names a file of the repository, every `docs/NAME.md` a reader is
 //! sent to exists, and every section quoted after a document (`docs/model-choices.md, "Shear
-//! drive"`) is the start of one of that document's headings.
+//! drive"`) starts one of that document's headings or bold paragraph titles.
 
 use std::path::{Path, PathBuf};
 
@@ -123,11 +123,17 @@ fn every_mentioned_document_exists() {
     assert!(missing.is_empty(), "documents that do not exist:\n{}", missing.join("\n"));
 }
 
-/// Headings (`#` lines) of a Markdown file, without the hashes.
+/// Section titles of a Markdown file: headings (`#` lines, without the hashes) and the bold
+/// run-in titles that open a paragraph or a list item (`**Export streaming.** ...`).
 fn headings(text: &str) -> Vec<String> {
     text.lines()
-        .filter(|l| l.starts_with('#'))
-        .map(|l| l.trim_start_matches('#').trim().to_string())
+        .filter_map(|l| {
+            if l.starts_with('#') {
+                return Some(l.trim_start_matches('#').trim().to_string());
+            }
+            let bold = l.strip_prefix("- ").unwrap_or(l).strip_prefix("**")?;
+            bold.find("**").map(|end| bold[..end].to_string())
+        })
         .collect()
 }
 
@@ -190,6 +196,10 @@ fn the_scanners_find_what_they_should() {
     assert_eq!(
         mentioned_documents("(docs/model.md 4.1), docs/x.svg, crates/docs/y.md."),
         vec![(1, "docs/model.md".to_string())]
+    );
+    assert_eq!(
+        headings("# A b\n**Cold start** (x)\n- **Opt-in (issue 3).** y\nplain **not**\n"),
+        vec!["A b", "Cold start", "Opt-in (issue 3)."]
     );
     assert_eq!(
         section_citations("(docs/model-choices.md, \"Shear drive\"; docs/a.md \"B c\")"),
