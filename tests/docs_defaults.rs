@@ -60,7 +60,9 @@ fn minimal_text(skip: &str, extra: &str) -> String {
 /// The field list serde prints for an unknown key (`expected one of `a`, `b``).
 fn probe<T: serde::de::DeserializeOwned + std::fmt::Debug>(doc: &str) -> Option<Vec<String>> {
     let err = toml::from_str::<T>(doc).err()?.to_string();
-    let line = err.lines().find(|l| l.contains("unknown field `zz_probe`"))?;
+    let line = err
+        .lines()
+        .find(|l| l.contains("unknown field `zz_probe`"))?;
     let expected = line.split("expected").nth(1).unwrap_or("");
     Some(
         expected
@@ -120,7 +122,11 @@ fn scene_fill_in(key: &str, s: &Scene) -> Option<Value> {
         },
         "capillary.rupture_rule" => serde_json::to_value(s.rupture_rule()).ok()?,
         "drive.root_tolerance" => {
-            json!(s.drive.root_tolerance.unwrap_or(scene::DEFAULT_ROOT_TOLERANCE))
+            json!(
+                s.drive
+                    .root_tolerance
+                    .unwrap_or(scene::DEFAULT_ROOT_TOLERANCE)
+            )
         }
         "drive.table_cells" => json!([table.phase_cells, table.velocity_cells]),
         "drive.table_v_min" => json!(table.v_min),
@@ -206,10 +212,13 @@ fn sweep_keys() -> Vec<String> {
 fn sweep_defaults() -> BTreeMap<String, Code> {
     let name = "name = \"d\"";
     let sweep = parse_sweep(&sweep_text(name, "")).expect("the minimal sweep parses");
-    let cont = parse_sweep(&sweep_text(name, "[sweep.continuation]\naxis = \"gravity\"\n"))
-        .expect("a continuation parses")
-        .continuation
-        .expect("continuation");
+    let cont = parse_sweep(&sweep_text(
+        name,
+        "[sweep.continuation]\naxis = \"gravity\"\n",
+    ))
+    .expect("a continuation parses")
+    .continuation
+    .expect("continuation");
     let refine = parse_sweep(&sweep_text(name, "[refine]\nbudget = 4\n"))
         .expect("a refine table parses")
         .refine
@@ -242,7 +251,9 @@ fn sweep_defaults() -> BTreeMap<String, Code> {
     }
     // The scene keys a sweep sets otherwise than a scene file does.
     let sweep = parse_sweep(&sweep_text(&format!("{name}\nperiods = 8"), "")).expect("periods");
-    let job = &sweep.expand().expect("the minimal sweep expands")[0].spec.scene;
+    let job = &sweep.expand().expect("the minimal sweep expands")[0]
+        .spec
+        .scene;
     let job = serde_json::to_value(job).expect("a job's scene serializes");
     let plain = Scene::from_toml_str(&minimal_text("", ""), "minimal.toml").expect("valid");
     let plain = serde_json::to_value(plain).expect("a scene serializes");
@@ -264,9 +275,21 @@ type Check = fn() -> Result<(), String>;
 
 /// `(key, the default cell exactly as documented, the check of that rule against the code)`.
 const RULES: &[(&str, &str, Check)] = &[
-    ("box.boundary", "periodic laterally, `wall` vertically", boundary_rule),
-    ("contact.damping", "from `contact.restitution`", damping_rule),
-    ("contact.wall_damping", "from `contact.wall_restitution`", damping_rule),
+    (
+        "box.boundary",
+        "periodic laterally, `wall` vertically",
+        boundary_rule,
+    ),
+    (
+        "contact.damping",
+        "from `contact.restitution`",
+        damping_rule,
+    ),
+    (
+        "contact.wall_damping",
+        "from `contact.wall_restitution`",
+        damping_rule,
+    ),
     (
         "contact.restitution_temperature",
         "the initial temperature of a hot start (else the drive's scale, docs/model-choices.md)",
@@ -278,7 +301,11 @@ const RULES: &[(&str, &str, Check)] = &[
     ("drive.slab_width", "1 d", slab_width_rule),
     ("drive.t_min", "`T / 1000`", t_min_rule),
     ("initial.temperature", "one of the two", one_of_two_rule),
-    ("initial.temperature_over_ecb", "one of the two", one_of_two_rule),
+    (
+        "initial.temperature_over_ecb",
+        "one of the two",
+        one_of_two_rule,
+    ),
     (
         "engine.dt",
         "1e-4, or the largest allowed step where that is shorter",
@@ -290,12 +317,24 @@ const RULES: &[(&str, &str, Check)] = &[
         location_changes_rule,
     ),
     ("convergence.max_periods", "`4 t_1 / T`", max_periods_rule),
-    ("refine.max_replicas", "3 x `sweep.replicas`", max_replicas_rule),
+    (
+        "refine.max_replicas",
+        "3 x `sweep.replicas`",
+        max_replicas_rule,
+    ),
     ("axis.values", "one of the three", axis_rule),
     ("axis.linear", "one of the three", axis_rule),
     ("axis.log", "one of the three", axis_rule),
-    ("observe.transient_periods", "a quarter of the run", transient_rule),
-    ("run.sample_interval", "one observer sample", sample_interval_rule),
+    (
+        "observe.transient_periods",
+        "a quarter of the run",
+        transient_rule,
+    ),
+    (
+        "run.sample_interval",
+        "one observer sample",
+        sample_interval_rule,
+    ),
 ];
 
 fn ensure(ok: bool, what: String) -> Result<(), String> {
@@ -436,14 +475,23 @@ fn max_periods_rule() -> Result<(), String> {
 }
 
 fn max_replicas_rule() -> Result<(), String> {
-    let sweep = parse_sweep(&sweep_text("name = \"d\"\nreplicas = 2", "[refine]\nbudget = 4\n"))?;
+    let sweep = parse_sweep(&sweep_text(
+        "name = \"d\"\nreplicas = 2",
+        "[refine]\nbudget = 4\n",
+    ))?;
     let r = sweep.refine.ok_or("no refine")?;
-    ensure(r.max_replicas == 6, format!("max_replicas {}", r.max_replicas))
+    ensure(
+        r.max_replicas == 6,
+        format!("max_replicas {}", r.max_replicas),
+    )
 }
 
 fn axis_rule() -> Result<(), String> {
     let bare = sweep_text("name = \"d\"", "[[axis]]\nkey = \"initial.seed\"\n");
-    ensure(parse_sweep(&bare).is_err(), "an axis without values parses".into())
+    ensure(
+        parse_sweep(&bare).is_err(),
+        "an axis without values parses".into(),
+    )
 }
 
 fn transient_rule() -> Result<(), String> {
@@ -457,7 +505,10 @@ fn sample_interval_rule() -> Result<(), String> {
     let sweep = parse_sweep(&sweep_text("name = \"d\"\nperiods = 8", ""))?;
     let job = &sweep.expand().map_err(|e| e.to_string())?[0].spec.scene;
     let (dt, obs) = (job.run.sample_interval, job.observe.sample_interval(job));
-    ensure(dt == obs, format!("run.sample_interval {dt}, observer {obs}"))
+    ensure(
+        dt == obs,
+        format!("run.sample_interval {dt}, observer {obs}"),
+    )
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -557,7 +608,9 @@ fn literal(cell: &str) -> Option<Value> {
     }
     let word = c.trim_matches('"');
     let is_word = !word.is_empty()
-        && word.chars().all(|ch| ch.is_ascii_lowercase() || ch == '_' || ch.is_ascii_digit());
+        && word
+            .chars()
+            .all(|ch| ch.is_ascii_lowercase() || ch == '_' || ch.is_ascii_digit());
     // Bare `none` and `required` are the words of the table's legend; `` `none` `` is a value.
     (is_word && (quoted.is_some() || (word != "none" && word != "required"))).then(|| json!(word))
 }
@@ -586,7 +639,9 @@ fn disagreement(doc: &Documented, code: &Code) -> Option<String> {
             None => Err(format!("the code's default is {v}, documented as {cell:?}")),
         },
         (_, _, Some((_, text, _))) => Err(format!("write the rule as {text:?}, not {cell:?}")),
-        _ => Err(format!("the code's default is {code:?}, documented as {cell:?}")),
+        _ => Err(format!(
+            "the code's default is {code:?}, documented as {cell:?}"
+        )),
     };
     verdict
         .err()
@@ -632,7 +687,10 @@ fn missing_from(file: &str, docs: &[Documented], keys: &BTreeMap<String, Code>, 
 fn every_documented_default_is_the_codes() {
     let docs: Vec<Documented> = documents().iter().flat_map(|p| documented_in(p)).collect();
     let (scene, sweep) = (scene_defaults(), sweep_defaults());
-    assert!(scene.len() > 80 && sweep.len() > 15, "probing found too few keys");
+    assert!(
+        scene.len() > 80 && sweep.len() > 15,
+        "probing found too few keys"
+    );
     let problems = check_documents(&docs, &scene, &sweep);
     assert!(
         problems.is_empty(),

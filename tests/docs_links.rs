@@ -83,7 +83,11 @@ fn every_relative_link_resolves() {
         }
     }
     assert!(checked > 0, "no relative link found: the scan is broken");
-    assert!(broken.is_empty(), "links to missing files:\n{}", broken.join("\n"));
+    assert!(
+        broken.is_empty(),
+        "links to missing files:\n{}",
+        broken.join("\n")
+    );
 }
 
 /// Every `docs/NAME.md` (or `ARCHITECTURE.md`) a document mentions, with its line.
@@ -120,7 +124,11 @@ fn every_mentioned_document_exists() {
             }
         }
     }
-    assert!(missing.is_empty(), "documents that do not exist:\n{}", missing.join("\n"));
+    assert!(
+        missing.is_empty(),
+        "documents that do not exist:\n{}",
+        missing.join("\n")
+    );
 }
 
 /// Section titles of a Markdown file: headings (`#` lines, without the hashes) and the bold
@@ -175,7 +183,10 @@ fn every_cited_section_is_a_heading() {
                 continue; // a missing document is every_mentioned_document_exists's failure
             };
             checked += 1;
-            if !headings(&text).iter().any(|h| h.starts_with(section.as_str())) {
+            if !headings(&text)
+                .iter()
+                .any(|h| h.starts_with(section.as_str()))
+            {
                 wrong.push(format!("{}:{line}: {name}, \"{section}\"", doc.display()));
             }
         }
@@ -204,8 +215,52 @@ fn the_scanners_find_what_they_should() {
     assert_eq!(
         section_citations("(docs/model-choices.md, \"Shear drive\"; docs/a.md \"B c\")"),
         vec![
-            (1, "docs/model-choices.md".to_string(), "Shear drive".to_string()),
+            (
+                1,
+                "docs/model-choices.md".to_string(),
+                "Shear drive".to_string()
+            ),
             (1, "docs/a.md".to_string(), "B c".to_string())
         ]
+    );
+}
+
+/// The README's first code block holds the main job and the test command; `.ci/run` must run
+/// exactly that test command (and nothing else that starts with `cargo test`).
+#[test]
+fn the_readme_test_command_is_what_ci_runs() {
+    let readme = read(&root().join("README.md"));
+    let block: Vec<&str> = readme
+        .split("```")
+        .nth(1)
+        .expect("README.md opens with a code block")
+        .lines()
+        .skip(1)
+        .collect();
+    let command = |line: &str| line.split('#').next().unwrap_or("").trim().to_string();
+    let readme_test: Vec<String> = block
+        .iter()
+        .map(|l| command(l))
+        .filter(|c| c.starts_with("cargo test"))
+        .collect();
+    assert_eq!(
+        readme_test,
+        ["cargo test --release"],
+        "the README's test command"
+    );
+    assert!(
+        command(block[0]).starts_with("cargo run --release -- sweep run sweeps/quickstart.toml"),
+        "the README's first command is the main job: {}",
+        block[0]
+    );
+    let ci = read(&root().join(".ci/run"));
+    let ci_test: Vec<String> = ci
+        .lines()
+        .map(command)
+        .filter(|c| c.starts_with("cargo test"))
+        .collect();
+    assert_eq!(
+        ci_test, readme_test,
+        ".ci/run must run the README's test command"
     );
 }
