@@ -740,3 +740,29 @@ fn a_wrong_missing_or_extra_default_is_caught() {
     assert_eq!(check_documents(&bad, &scene, &sweep).len(), bad.len());
     assert!(scene.contains_key("observe.mobility_lag") && sweep.contains_key("refine.rounds"));
 }
+
+/// Every sweep file shown in README.md and docs/*.md (a ```toml block starting with `[sweep]`)
+/// parses and expands as if it were a file in `sweeps/`.
+#[test]
+fn every_sweep_example_in_the_docs_expands() {
+    let mut examples = 0;
+    for path in documents() {
+        let text = std::fs::read_to_string(&path).expect("readable");
+        for block in text.split("```toml\n").skip(1) {
+            let body = block.split("```").next().unwrap_or("");
+            if !body.starts_with("[sweep]") {
+                continue;
+            }
+            examples += 1;
+            let file = root().join("sweeps/example-from-the-docs.toml");
+            let jobs = SweepFile::parse(body, &file).and_then(|s| s.expand());
+            assert!(
+                jobs.as_ref().is_ok_and(|j| !j.is_empty()),
+                "{}: the example sweep does not expand: {:?}",
+                path.display(),
+                jobs.err()
+            );
+        }
+    }
+    assert!(examples >= 2, "only {examples} example sweeps found");
+}

@@ -264,3 +264,87 @@ fn the_readme_test_command_is_what_ci_runs() {
         ".ci/run must run the README's test command"
     );
 }
+
+/// Files under `dir` (recursively) whose name ends in one of `exts`, skipping `target`.
+fn files_under(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            if path
+                .file_name()
+                .is_some_and(|n| n != "target" && n != ".git")
+            {
+                files_under(&path, exts, out);
+            }
+        } else if path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| exts.contains(&e))
+        {
+            out.push(path);
+        }
+    }
+}
+
+/// Section numbers cited as `docs/model.md 4.1` (or `docs/model.md, section 7`), with the line.
+fn model_sections_cited(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        for (at, _) in line.match_indices("docs/model.md") {
+            let rest = line[at + "docs/model.md".len()..].trim_start_matches(',');
+            let rest = rest.trim_start();
+            let rest = rest.strip_prefix("section ").unwrap_or(rest);
+            let number: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_digit() || *c == '.')
+                .collect();
+            let number = number.trim_end_matches('.');
+            if !number.is_empty() {
+                out.push((n + 1, number.to_string()));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn every_cited_section_of_the_model_exists() {
+    let model = read(&root().join("docs/model.md"));
+    let sections: Vec<String> = headings(&model)
+        .iter()
+        .filter_map(|h| h.split_whitespace().next())
+        .map(|n| n.trim_end_matches('.').to_string())
+        .collect();
+    let mut files = vec![root().join("README.md"), root().join("ARCHITECTURE.md")];
+    for dir in [
+        "src", "crates", "tests", "docs", "sweeps", "scenes", "examples",
+    ] {
+        files_under(&root().join(dir), &["rs", "md", "toml"], &mut files);
+    }
+    let mut wrong = Vec::new();
+    let mut checked = 0;
+    for file in files {
+        for (line, number) in model_sections_cited(&read(&file)) {
+            checked += 1;
+            if !sections.contains(&number) {
+                wrong.push(format!("{}:{line}: docs/model.md {number}", file.display()));
+            }
+        }
+    }
+    assert!(
+        checked > 100,
+        "only {checked} citations of docs/model.md found: the scan is broken"
+    );
+    assert!(
+        wrong.is_empty(),
+        "citations of sections docs/model.md does not have:\n{}",
+        wrong.join("\n")
+    );
+    assert_eq!(
+        model_sections_cited("(docs/model.md 4.1), docs/model.md, section 7. docs/model.md Eq. 2"),
+        vec![(1, "4.1".to_string()), (1, "7".to_string())]
+    );
+}
