@@ -8,6 +8,7 @@ mod extend_cmd;
 pub mod point_cmd;
 mod reclassify_cmd;
 mod refine_cmd;
+mod report_cmd;
 mod simulate_cmd;
 pub mod sweep_cmd;
 
@@ -85,6 +86,9 @@ pub enum Command {
         /// Let unconverged points (drawn hollow) carry boundaries too.
         #[arg(long)]
         include_unconverged: bool,
+        /// Scale of the y axis (Gamma): `auto` is logarithmic where the sweep's axis is.
+        #[arg(long, value_enum, default_value = "auto")]
+        y_scale: report_cmd::Scale,
     },
     /// Show one stored sweep point: phase, the numbers it was decided on, pictures.
     ///
@@ -136,6 +140,22 @@ pub enum Command {
         #[arg(long, value_name = "FILE")]
         series: Option<PathBuf>,
     },
+    /// Plot the order parameters along each line of constant Gamma of a shaking sweep.
+    ///
+    /// T_g/E_cb, bridges per grain and Delta n_cb (Delta n_area for dry scenes) against E*, one
+    /// row of panels per Gamma: markers coloured by label, shaped by run state (trend), hollow
+    /// where the label may change, bars of one standard error, each branch's label changes
+    /// dashed. Prints the lines' label changes and T_g inflections (--json: as JSON). -o FILE
+    /// writes SVG (.svg) or CSV (.csv).
+    Lines(report_cmd::LinesArgs),
+    /// Write a sweep's report: a static HTML site (no script, works offline).
+    ///
+    /// index.html: the phase map with every point a link to its page, the table of points, the
+    /// boundaries, the order parameters along lines of constant Gamma, the sweep file and the
+    /// command lines that reproduce it; one page per grid position with each job's label, run
+    /// state and the numbers it was decided on, its snapshot (from the stored final state), its
+    /// lateral profiles and its line's curves.
+    Report(report_cmd::ReportArgs),
     /// Re-label stored results from their stored observables, without simulating.
     ///
     /// Calls the phase classifier on each result's observables with each job's own `[classify]`
@@ -199,12 +219,17 @@ pub fn main() -> ExitCode {
             sweep,
             output,
             include_unconverged,
+            y_scale,
         } => sweep_cmd::plot(
             &db,
             sweep.as_deref(),
             &output,
             Extraction {
                 include_unconverged,
+            },
+            crate::report::plot_phase::MapStyle {
+                x_log: None,
+                y_log: y_scale.log(),
             },
         ),
         Command::Export {
@@ -233,6 +258,8 @@ pub fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Lines(args) => report_cmd::lines(args),
+        Command::Report(args) => report_cmd::report(args),
         Command::Inflection { db, sweep } => point_cmd::inflection(&db, sweep.as_deref()),
         Command::Reclassify {
             sweep,

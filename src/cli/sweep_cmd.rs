@@ -9,7 +9,7 @@ use super::common::{
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{
-    boundaries_csv, boundaries_table, chain_model_note, fixed_text, untrusted_points,
+    boundaries_csv, boundaries_table, chain_model_note, untrusted_points,
 };
 use crate::report::cluster_text::slurm_status_text;
 use crate::report::sweep_text::{
@@ -25,7 +25,6 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use wetgran_core::scene::Scene;
 use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 
 /// Default database file, in the working directory.
@@ -693,7 +692,7 @@ pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
 
 /// The phase map of a sweep from its stored results (`points`: its
 /// `Store::point_summaries`).
-fn sweep_map(
+pub(super) fn sweep_map(
     sweep: &SweepRow,
     points: &[PointSummary],
     how: Extraction,
@@ -746,91 +745,18 @@ pub fn boundaries(
 }
 
 /// `wetgran plot`.
-pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> ExitCode {
+pub fn plot(
+    db: &Path,
+    name: Option<&str>,
+    output: &Path,
+    how: Extraction,
+    style: plot_phase::MapStyle,
+) -> ExitCode {
     exit((|| {
         let store = Store::open_existing(db)?;
-        let sweep = match name {
-            Some(n) => store.sweep(n)?,
-            None => {
-                let mut all = store.sweeps()?;
-                all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
-                let last = all.pop().ok_or_else(|| {
-                    Failure::BadInput(format!("{}: no sweep in this database", db.display()))
-                })?;
-                if !all.is_empty() {
-                    eprintln!(
-                        "plotting sweep {} (the latest; choose with --sweep)",
-                        last.name
-                    );
-                }
-                last
-            }
-        };
-        let points = store.point_summaries(&sweep)?;
-        let map = sweep_map(&sweep, &points, how)?;
-        let landmarks = points
-            .first()
-            .and_then(|p| plot_phase::Landmarks::of(&p.scene));
-        let Some(slice) = map.slices.first() else {
-            return Err(Failure::BadInput(format!(
-                "sweep {}: no classified point to plot yet",
-                sweep.name
-            )));
-        };
-        // The branches (slices differing only in `initial.start`) draw as one map: the slices
-        // whose other fixed coordinates are those of the first slice.
-        let start_label = sweep
-            .axes
-            .iter()
-            .find(|a| a.key == crate::boundary::START_AXIS)
-            .map(|a| a.label.clone());
-        let others = |sl: &crate::boundary::Slice| -> Vec<(String, serde_json::Value)> {
-            sl.fixed
-                .iter()
-                .filter(|(l, _)| Some(l) != start_label.as_ref())
-                .cloned()
-                .collect()
-        };
-        let drawn: Vec<&crate::boundary::Slice> = map
-            .slices
-            .iter()
-            .filter(|sl| others(sl) == others(slice))
-            .collect();
-        if drawn.len() < map.slices.len() {
-            eprintln!(
-                "sweep {} has {} slices (axes beyond the plane); plotting {}{}",
-                sweep.name,
-                map.slices.len(),
-                if drawn.len() > 1 {
-                    "the branches of the first: "
-                } else {
-                    "the first: "
-                },
-                if others(slice).is_empty() {
-                    fixed_text(&slice.fixed)
-                } else {
-                    fixed_text(&others(slice))
-                }
-            );
-        }
-        let title = format!("wetgran phase diagram: {}", sweep.name);
-        // The scene of each grid point's first job, by its coordinates (what `find` over the
-        // points gave, without a search per point).
-        let mut scene_at: std::collections::HashMap<String, &Scene> =
-            std::collections::HashMap::new();
-        for p in &points {
-            scene_at
-                .entry(serde_json::Value::from(p.coords.clone()).to_string())
-                .or_insert(p.scene.as_ref());
-        }
-        let chain = plot_phase::chain_model_line(&map, slice, |coords| {
-            scene_at
-                .get(&serde_json::Value::from(coords.to_vec()).to_string())
-                .map(|s| (*s).clone())
-        });
-        let svg = plot_phase::branches_svg(&map, &drawn, landmarks, chain, &title)
-            .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))?;
-        std::fs::write(output, svg)
+        let sweep = super::report_cmd::pick_sweep(&store, name)?;
+        let drawn = super::report_cmd::draw_map(&store, &sweep, how, style)?;
+        std::fs::write(output, drawn.svg)
             .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;
         eprintln!("wrote {}", output.display());
         Ok(())

@@ -14,12 +14,15 @@
 pub mod boundaries_text;
 pub mod cluster_text;
 pub mod export;
+pub mod lines;
+pub mod lines_plot;
 #[cfg(test)]
 mod lean_reports_tests;
 pub mod plot_phase;
 pub mod point_text;
 pub mod profile_plot;
 pub mod run_text;
+pub mod site;
 pub mod snapshot;
 mod svg;
 pub mod sweep_text;

@@ -163,7 +163,10 @@ fn range_of(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
         (10f64.powf(a - pad), 10f64.powf(b + pad))
     } else {
         let pad = ((hi - lo) * 0.06).max(if hi == 0.0 { 0.1 } else { hi.abs() * 0.05 });
-        (lo - pad, hi + pad)
+        // Non-negative values (Gamma, a force) keep the axis at or above zero, so that an
+        // overlay does not run into negative values no point can have.
+        let low = if lo >= 0.0 { (lo - pad).max(0.0) } else { lo - pad };
+        (low, hi + pad)
     }
 }
 
@@ -244,6 +247,30 @@ pub fn phase_svg(
     branches_svg(map, &[slice], landmarks, chain_model, title)
 }
 
+/// How a map is drawn: the scale of its axes where the caller chooses (`None`: the plane's, so
+/// `E*` log and `Gamma` linear on a shaking map).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MapStyle {
+    pub x_log: Option<bool>,
+    pub y_log: Option<bool>,
+}
+
+/// A drawn map: the SVG and, for every drawn grid position, its pixel position in the SVG (what
+/// an HTML image map links from).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrawnMap {
+    pub svg: String,
+    /// `(x, y, pixel x, pixel y)` of every merged grid position ([`merge_branches`] order).
+    pub points: Vec<(f64, f64, i32, i32)>,
+}
+
+/// The width of the map's SVG: the plot, then the legend to its right.
+pub const MAP_WIDTH: u32 = 1240;
+/// The height of the map's SVG.
+pub const MAP_HEIGHT: u32 = 640;
+/// The width kept right of the plot for the legend.
+const LEGEND_WIDTH: u32 = 330;
+
 /// Draws the slices of a phase map that differ only in their start mode (the branches) as one
 /// SVG map: bistable points as split discs (module doc). One slice draws as [`phase_svg`].
 pub fn branches_svg(
@@ -253,50 +280,56 @@ pub fn branches_svg(
     chain_model: Option<Vec<(f64, f64)>>,
     title: &str,
 ) -> Result<String, String> {
+    branches_map(
+        map,
+        slices,
+        landmarks,
+        chain_model,
+        title,
+        MapStyle::default(),
+    )
+    .map(|m| m.svg)
+}
+
+/// [`branches_svg`] with the axes' scales of `style`, and the pixel positions of the points.
+pub fn branches_map(
+    map: &PhaseMap,
+    slices: &[&Slice],
+    landmarks: Option<Landmarks>,
+    chain_model: Option<Vec<(f64, f64)>>,
+    title: &str,
+    style: MapStyle,
+) -> Result<DrawnMap, String> {
     let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
         return Err("a phase diagram needs two numeric axes".to_string());
     };
     if slices.is_empty() {
         return Err("no slice to draw".to_string());
     }
+    let x_log = style.x_log.unwrap_or(xa.log);
+    let y_log = style.y_log.unwrap_or(ya.log);
     let all = || slices.iter().flat_map(|s| s.points.iter());
-    let x_range = range_of(all().map(|p| p.x), xa.log);
-    let y_range = range_of(all().map(|p| p.y), ya.log);
-    // Headroom above the points for the legend (upper left): 0.3 of the points' span, more when
-    // the legend has more rows than that holds (about 15 px a row in a plot area of about
-    // 520 px), as a map of several branches has (bistable entry, one boundary entry each).
-    let merged = merge_branches(slices);
-    let mut phases: Vec<&str> = merged
-        .iter()
-        .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
-        .collect();
-    phases.sort();
-    phases.dedup();
-    let rows = phases.len()
-        + 3 // the landmark lines (at most)
-        + usize::from(chain_model.is_some())
-        + usize::from(merged.iter().any(|p| !p.trusted))
-        + usize::from(merged.iter().any(|p| p.trusted && p.label_kept))
-        + usize::from(merged.iter().any(DrawnPoint::bistable))
-        + 1 // uncertainty bars
-        + slices.len();
-    let above = ((rows * 15 + 30) as f64 / 520.0).clamp(0.23, 0.6);
-    let headroom = above / (1.0 - above);
-    let y_range = if ya.log {
-        (
-            y_range.0,
-            y_range.1 * (y_range.1 / y_range.0).powf(headroom),
-        )
-    } else {
-        (y_range.0, y_range.1 + headroom * (y_range.1 - y_range.0))
-    };
+    if x_log && !all().all(|p| p.x > 0.0) {
+        return Err(format!("{}: a log axis needs positive values", xa.label));
+    }
+    if y_log && !all().all(|p| p.y > 0.0) {
+        return Err(format!("{}: a log axis needs positive values", ya.label));
+    }
+    let x_range = range_of(all().map(|p| p.x), x_log);
+    let y_range = range_of(all().map(|p| p.y), y_log);
+    let x_grid: Vec<f64> = all().map(|p| p.x).collect();
+    let y_grid: Vec<f64> = all().map(|p| p.y).collect();
+    let ticks = (
+        super::svg::grid_ticks(&x_grid, x_range, x_log, 14),
+        super::svg::grid_ticks(&y_grid, y_range, y_log, 14),
+    );
     let mut lines: Vec<Line> = Vec::new();
     if let (Some(l), true) = (landmarks, map.shaking) {
         let n = 300;
         let xs: Vec<f64> = (0..=n)
             .map(|k| {
                 let t = k as f64 / n as f64;
-                if xa.log {
+                if x_log {
                     10f64.powf(x_range.0.log10() + t * (x_range.1.log10() - x_range.0.log10()))
                 } else {
                     x_range.0 + t * (x_range.1 - x_range.0)
@@ -343,31 +376,37 @@ pub fn branches_svg(
         ));
     }
     let mut svg = String::new();
+    let points;
     {
-        let root = SVGBackend::with_string(&mut svg, (900, 640)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (MAP_WIDTH, MAP_HEIGHT)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let x_desc = if xa.log {
+        let x_desc = if x_log {
             format!("{} (log scale)", xa.label)
         } else {
             xa.label.clone()
         };
-        let y_desc = if ya.log {
+        let y_desc = if y_log {
             format!("{} (log scale)", ya.label)
         } else {
             ya.label.clone()
         };
+        let text = Texts {
+            title,
+            x_desc: &x_desc,
+            y_desc: &y_desc,
+            note: no_boundary_note(slices),
+        };
         let x = x_range.0..x_range.1;
         let y = y_range.0..y_range.1;
-        match (xa.log, ya.log) {
+        points = match (x_log, y_log) {
             (true, true) => draw(
                 &root,
                 x.log_scale(),
                 y.log_scale(),
                 slices,
                 &lines,
-                title,
-                &x_desc,
-                &y_desc,
+                &text,
+                &ticks,
             ),
             (true, false) => draw(
                 &root,
@@ -375,9 +414,8 @@ pub fn branches_svg(
                 y,
                 slices,
                 &lines,
-                title,
-                &x_desc,
-                &y_desc,
+                &text,
+                &ticks,
             ),
             (false, true) => draw(
                 &root,
@@ -385,15 +423,63 @@ pub fn branches_svg(
                 y.log_scale(),
                 slices,
                 &lines,
-                title,
-                &x_desc,
-                &y_desc,
+                &text,
+                &ticks,
             ),
-            (false, false) => draw(&root, x, y, slices, &lines, title, &x_desc, &y_desc),
+            (false, false) => draw(
+                &root,
+                x,
+                y,
+                slices,
+                &lines,
+                &text,
+                &ticks,
+            ),
         }?;
         root.present().map_err(|e| e.to_string())?;
     }
-    Ok(svg)
+    Ok(DrawnMap { svg, points })
+}
+
+/// The texts of a map: title, axis names, and the note saying why no boundary is drawn.
+struct Texts<'a> {
+    title: &'a str,
+    x_desc: &'a str,
+    y_desc: &'a str,
+    note: Option<String>,
+}
+
+/// Why a map has no boundary point, in words (`None` when it has one).
+pub fn no_boundary_note(slices: &[&Slice]) -> Option<String> {
+    if slices.iter().any(|s| s.boundaries.values().any(|b| !b.is_empty())) {
+        return None;
+    }
+    let points: Vec<&crate::boundary::MapPoint> =
+        slices.iter().flat_map(|s| s.points.iter()).collect();
+    let trusted: Vec<&&crate::boundary::MapPoint> = points.iter().filter(|p| p.trusted).collect();
+    let mut phases: Vec<&str> = trusted.iter().map(|p| p.phase.as_str()).collect();
+    phases.sort();
+    phases.dedup();
+    let untrusted = points.len() - trusted.len();
+    Some(if trusted.is_empty() {
+        format!(
+            "No boundary: none of the {} points is converged (all hollow, their labels may \
+             still change); resume the sweep, or --include-unconverged",
+            points.len()
+        )
+    } else if phases.len() == 1 {
+        format!(
+            "No boundary: every converged point is {}{}",
+            phases[0],
+            if untrusted > 0 {
+                format!(" ({untrusted} unconverged point(s) left out)")
+            } else {
+                String::new()
+            }
+        )
+    } else {
+        "No boundary: too few converged points to join two phases by an edge".to_string()
+    })
 }
 
 fn draw<XR, YR>(
@@ -402,10 +488,9 @@ fn draw<XR, YR>(
     y: YR,
     slices: &[&Slice],
     lines: &[Line],
-    title: &str,
-    x_desc: &str,
-    y_desc: &str,
-) -> Result<(), String>
+    text: &Texts,
+    ticks: &(Vec<f64>, Vec<f64>),
+) -> Result<Vec<(f64, f64, i32, i32)>, String>
 where
     XR: AsRangedCoord<Value = f64>,
     YR: AsRangedCoord<Value = f64>,
@@ -414,19 +499,35 @@ where
 {
     let err = |e: DrawingAreaErrorKind<_>| e.to_string();
     let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 20))
+        .caption(text.title, ("sans-serif", 20))
         .margin(15)
+        .margin_right(15 + LEGEND_WIDTH)
         .x_label_area_size(45)
         .y_label_area_size(60)
         .build_cartesian_2d(x, y)
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc(x_desc)
-        .y_desc(y_desc)
+        .x_desc(text.x_desc)
+        .y_desc(text.y_desc)
+        .x_labels(0)
+        .y_labels(0)
         .light_line_style(WHITE)
         .draw()
         .map_err(err)?;
+    hand_ticks(root, chart.plotting_area(), &ticks.0, &ticks.1).map_err(err)?;
+    if let Some(note) = &text.note {
+        let (xr, yr) = chart.plotting_area().get_pixel_range();
+        let words = wrap(note, 60);
+        for (k, line) in words.iter().enumerate() {
+            root.draw(&Text::new(
+                line.clone(),
+                (xr.start + 12, yr.start + 10 + 18 * k as i32),
+                ("sans-serif", 15).into_font().color(&RGBColor(170, 0, 0)),
+            ))
+            .map_err(err)?;
+        }
+    }
     for (label, color, parts) in lines {
         let color = *color;
         for (k, part) in parts.iter().enumerate() {
@@ -628,14 +729,99 @@ where
             .label(label)
             .legend(move |(px, py)| Cross::new((px + 9, py), 4, color.stroke_width(2)));
     }
+    // The legend right of the plot, level with its top: it hides no point.
+    let (xr, _) = chart.plotting_area().get_pixel_range();
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(SeriesLabelPosition::Coordinate(
+            xr.end - xr.start + 12,
+            0,
+        ))
         .border_style(BLACK)
-        .background_style(WHITE.mix(0.85))
+        .background_style(WHITE)
         .draw()
         .map_err(err)?;
+    Ok(points
+        .iter()
+        .map(|p| {
+            let (px, py) = chart.backend_coord(&(p.x, p.y));
+            (p.x, p.y, px, py)
+        })
+        .collect())
+}
+
+/// Tick marks and labels at the given values of both axes of a chart (`plot`: its plotting
+/// area; `area`: the drawing area the chart was built on), in the chart's scale: the ticks a
+/// log axis of plotters would not draw at a sweep's grid values. Values outside the plot are
+/// skipped.
+pub(crate) fn hand_ticks<CT>(
+    area: &DrawingArea<SVGBackend, Shift>,
+    plot: &DrawingArea<SVGBackend, CT>,
+    xs: &[f64],
+    ys: &[f64],
+) -> Result<(), DrawingAreaErrorKind<std::io::Error>>
+where
+    CT: plotters::coord::CoordTranslate<From = (f64, f64)>,
+{
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let (xr, yr) = plot.get_pixel_range();
+    let base = area.get_base_pixel();
+    let font = TextStyle::from(("sans-serif", 12).into_font());
+    let below = font.pos(Pos::new(HPos::Center, VPos::Top));
+    let left = font.pos(Pos::new(HPos::Right, VPos::Center));
+    let (left_edge, bottom) = (xr.start - base.0, yr.end - base.1);
+    let y_any = ys.first().copied().unwrap_or(1.0);
+    let x_any = xs.first().copied().unwrap_or(1.0);
+    for &t in xs {
+        let px = plot.map_coordinate(&(t, y_any)).0;
+        if px < xr.start || px > xr.end {
+            continue;
+        }
+        let px = px - base.0;
+        area.draw(&PathElement::new(
+            vec![(px, bottom), (px, bottom + 5)],
+            BLACK.stroke_width(1),
+        ))?;
+        area.draw(&Text::new(
+            super::svg::label(t),
+            (px, bottom + 7),
+            below.clone(),
+        ))?;
+    }
+    for &t in ys {
+        let py = plot.map_coordinate(&(x_any, t)).1;
+        if py < yr.start || py > yr.end {
+            continue;
+        }
+        let py = py - base.1;
+        area.draw(&PathElement::new(
+            vec![(left_edge - 5, py), (left_edge, py)],
+            BLACK.stroke_width(1),
+        ))?;
+        area.draw(&Text::new(
+            super::svg::label(t),
+            (left_edge - 7, py),
+            left.clone(),
+        ))?;
+    }
     Ok(())
+}
+
+/// Splits a note into lines of at most about `width` characters, at spaces.
+fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut out: Vec<String> = vec![String::new()];
+    for word in text.split(' ') {
+        let last = out.last_mut().expect("non-empty");
+        if !last.is_empty() && last.len() + 1 + word.len() > width {
+            out.push(word.to_string());
+        } else {
+            if !last.is_empty() {
+                last.push(' ');
+            }
+            last.push_str(word);
+        }
+    }
+    out
 }
 
 /// Sector `k` of `n` of a disc of radius `r` in pixel offsets from its centre: two sectors are
