@@ -3,22 +3,22 @@
 //! site of a sweep, `report::site`).
 
 use super::common::{Failure, exit};
-use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
-use crate::report::lines_plot::lines_svg;
 use crate::boundary::Extraction;
 use crate::report::boundaries_text::fixed_text;
-use crate::report::plot_phase::{self, DrawnMap, MapStyle};
-use crate::store::{Store, SweepRow};
-use wetgran_core::scene::Scene;
-use clap::{Args, ValueEnum};
 use crate::report::boundaries_text::{boundaries_table, chain_model_note, untrusted_points};
+use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
+use crate::report::lines_plot::lines_svg;
+use crate::report::plot_phase::{self, DrawnMap, MapStyle};
 use crate::report::site::{JobPictures, SiteInput, site};
 use crate::report::{ColourBy, profiles_svg, snapshot_svg};
+use crate::store::{Store, SweepRow};
+use clap::{Args, ValueEnum};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use wetgran_core::observe::Observables;
-use wetgran_core::sim::Frame;
 use std::process::ExitCode;
+use wetgran_core::observe::Observables;
+use wetgran_core::scene::Scene;
+use wetgran_core::sim::Frame;
 
 /// The scale of a map's y axis (`Gamma` on a shaking map).
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -232,8 +232,7 @@ pub(super) fn draw_map(
     let title = format!("wetgran phase diagram: {}", sweep.name);
     // The scene of each grid point's first job, by its coordinates (what `find` over the
     // points gave, without a search per point).
-    let mut scene_at: std::collections::HashMap<String, &Scene> =
-        std::collections::HashMap::new();
+    let mut scene_at: std::collections::HashMap<String, &Scene> = std::collections::HashMap::new();
     for p in &points {
         scene_at
             .entry(serde_json::Value::from(p.coords.clone()).to_string())
@@ -297,7 +296,11 @@ pub(super) fn report(args: ReportArgs) -> ExitCode {
         let rows = store.points(sweep.id)?;
         let summaries = store.point_summaries(&sweep)?;
         let map = super::sweep_cmd::sweep_map(&sweep, &summaries, how)?;
-        let plane = map.x.as_ref().zip(map.y.as_ref()).map(|(x, y)| (x.index, y.index));
+        let plane = map
+            .x
+            .as_ref()
+            .zip(map.y.as_ref())
+            .map(|(x, y)| (x.index, y.index));
         let style = MapStyle {
             x_log: None,
             y_log: args.y_scale.log(),

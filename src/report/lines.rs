@@ -90,7 +90,11 @@ pub struct Lines {
 impl Lines {
     /// The name of the contrast: `Delta n_cb` or `Delta n_area`.
     pub fn contrast_name(&self) -> &'static str {
-        if self.wet { "Delta n_cb" } else { "Delta n_area" }
+        if self.wet {
+            "Delta n_cb"
+        } else {
+            "Delta n_area"
+        }
     }
 
     /// The lines at one Gamma (one per branch).
@@ -141,7 +145,10 @@ fn line_point(p: &PointRow, axes: [Option<usize>; 3]) -> Option<(Option<String>,
     let obs = p.observables.as_ref()?;
     let (gamma, e_star) = gamma_e_star(&p.spec.scene)?;
     let given = |k: Option<usize>| k.and_then(|k| p.coords.get(k)).and_then(|v| v.as_f64());
-    let (gamma, e_star) = (given(axes[1]).unwrap_or(gamma), given(axes[2]).unwrap_or(e_star));
+    let (gamma, e_star) = (
+        given(axes[1]).unwrap_or(gamma),
+        given(axes[2]).unwrap_or(e_star),
+    );
     let start_axis = axes[0];
     let wet = p.spec.scene.is_wet();
     let num = |ptr: &str| obs.pointer(ptr).and_then(|v| v.as_f64());
@@ -390,8 +397,7 @@ pub fn lines_table(lines: &Lines) -> String {
             l.gamma,
             l.branch.as_deref().unwrap_or("-"),
             l.points.len(),
-            l.inflection
-                .map_or("-".to_string(), |e| format!("{e:.4}")),
+            l.inflection.map_or("-".to_string(), |e| format!("{e:.4}")),
             if changes.is_empty() {
                 "none".to_string()
             } else {

@@ -78,7 +78,10 @@ fn column_range(lines: &Lines, q: Quantity, log_allowed: bool) -> ((f64, f64), b
     }
     let log = log_allowed && min_positive.is_finite() && hi / min_positive > 20.0;
     if log {
-        let (a, b) = ((min_positive.min(lo.max(min_positive / 10.0))).log10(), hi.log10());
+        let (a, b) = (
+            (min_positive.min(lo.max(min_positive / 10.0))).log10(),
+            hi.log10(),
+        );
         let pad = ((b - a) * 0.05).max(0.05);
         ((10f64.powf(a - pad), 10f64.powf(b + pad)), true)
     } else {
@@ -330,7 +333,9 @@ impl Panel<'_> {
             .configure_mesh()
             .x_desc("E*")
             .y_desc(self.y_name.as_str())
-            .x_labels(0)
+            .disable_x_mesh()
+            .x_label_formatter(&|_| String::new())
+            .set_tick_mark_size(LabelAreaPosition::Bottom, 0)
             .y_labels(6)
             .y_label_formatter(&|v| label(*v))
             .light_line_style(WHITE)
@@ -383,7 +388,10 @@ impl Panel<'_> {
                     ))
                     .map_err(err)?;
                 }
-                let colour = p.phase.as_deref().map_or(RGBColor(127, 127, 127), phase_color);
+                let colour = p
+                    .phase
+                    .as_deref()
+                    .map_or(RGBColor(127, 127, 127), phase_color);
                 let at = plot.map_coordinate(&(p.e_star, clip(v)));
                 let base = area.get_base_pixel();
                 marker(
@@ -415,7 +423,5 @@ fn means(line: &GammaLine, q: Quantity) -> Vec<(f64, f64)> {
             _ => out.push((p.e_star, v, 1)),
         }
     }
-    out.into_iter()
-        .map(|(e, s, n)| (e, s / n as f64))
-        .collect()
+    out.into_iter().map(|(e, s, n)| (e, s / n as f64)).collect()
 }

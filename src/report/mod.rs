@@ -14,10 +14,10 @@
 pub mod boundaries_text;
 pub mod cluster_text;
 pub mod export;
-pub mod lines;
-pub mod lines_plot;
 #[cfg(test)]
 mod lean_reports_tests;
+pub mod lines;
+pub mod lines_plot;
 pub mod plot_phase;
 pub mod point_text;
 pub mod profile_plot;

@@ -165,7 +165,11 @@ fn range_of(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
         let pad = ((hi - lo) * 0.06).max(if hi == 0.0 { 0.1 } else { hi.abs() * 0.05 });
         // Non-negative values (Gamma, a force) keep the axis at or above zero, so that an
         // overlay does not run into negative values no point can have.
-        let low = if lo >= 0.0 { (lo - pad).max(0.0) } else { lo - pad };
+        let low = if lo >= 0.0 {
+            (lo - pad).max(0.0)
+        } else {
+            lo - pad
+        };
         (low, hi + pad)
     }
 }
@@ -408,33 +412,9 @@ pub fn branches_map(
                 &text,
                 &ticks,
             ),
-            (true, false) => draw(
-                &root,
-                x.log_scale(),
-                y,
-                slices,
-                &lines,
-                &text,
-                &ticks,
-            ),
-            (false, true) => draw(
-                &root,
-                x,
-                y.log_scale(),
-                slices,
-                &lines,
-                &text,
-                &ticks,
-            ),
-            (false, false) => draw(
-                &root,
-                x,
-                y,
-                slices,
-                &lines,
-                &text,
-                &ticks,
-            ),
+            (true, false) => draw(&root, x.log_scale(), y, slices, &lines, &text, &ticks),
+            (false, true) => draw(&root, x, y.log_scale(), slices, &lines, &text, &ticks),
+            (false, false) => draw(&root, x, y, slices, &lines, &text, &ticks),
         }?;
         root.present().map_err(|e| e.to_string())?;
     }
@@ -451,7 +431,10 @@ struct Texts<'a> {
 
 /// Why a map has no boundary point, in words (`None` when it has one).
 pub fn no_boundary_note(slices: &[&Slice]) -> Option<String> {
-    if slices.iter().any(|s| s.boundaries.values().any(|b| !b.is_empty())) {
+    if slices
+        .iter()
+        .any(|s| s.boundaries.values().any(|b| !b.is_empty()))
+    {
         return None;
     }
     let points: Vec<&crate::boundary::MapPoint> =
@@ -510,9 +493,10 @@ where
         .configure_mesh()
         .x_desc(text.x_desc)
         .y_desc(text.y_desc)
-        .x_labels(0)
-        .y_labels(0)
-        .light_line_style(WHITE)
+        .disable_mesh()
+        .x_label_formatter(&|_| String::new())
+        .y_label_formatter(&|_| String::new())
+        .set_all_tick_mark_size(0)
         .draw()
         .map_err(err)?;
     hand_ticks(root, chart.plotting_area(), &ticks.0, &ticks.1).map_err(err)?;
@@ -528,16 +512,15 @@ where
             .map_err(err)?;
         }
     }
+    let mut legend: Vec<(String, Swatch)> = Vec::new();
     for (label, color, parts) in lines {
         let color = *color;
         for (k, part) in parts.iter().enumerate() {
-            let s = chart
+            chart
                 .draw_series(LineSeries::new(part.iter().copied(), color.stroke_width(2)))
                 .map_err(err)?;
             if k == 0 {
-                s.label(label.as_str()).legend(move |(px, py)| {
-                    PathElement::new(vec![(px, py), (px + 18, py)], color.stroke_width(2))
-                });
+                legend.push((label.clone(), Swatch::Line(color)));
             }
         }
     }
@@ -567,17 +550,12 @@ where
                         Circle::new((p.x, p.y), radius, style)
                     }),
             )
-            .map_err(err)?
-            .label(phase)
-            .legend(move |(px, py)| Circle::new((px + 9, py), 5, color.filled()));
+            .map_err(err)?;
+        legend.push((phase.to_string(), Swatch::Dot(color)));
     }
     if points.iter().any(|p| !p.trusted) {
         let grey = RGBColor(90, 90, 90);
-        chart
-            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-            .map_err(err)?
-            .label("hollow: label may change")
-            .legend(move |(px, py)| Circle::new((px + 9, py), 5, grey.stroke_width(2)));
+        legend.push(("hollow: label may change".to_string(), Swatch::Ring(grey)));
     }
     // Not stationary, label kept by the trend (a heating gas, a cooling solid, a coarsening
     // coexistence): a white centre in the filled disc.
@@ -592,13 +570,11 @@ where
                 kept.iter()
                     .map(|p| Circle::new((p.x, p.y), centre, WHITE.filled())),
             )
-            .map_err(err)?
-            .label("white centre: drifting, label kept (~)")
-            .legend(move |(px, py)| {
-                EmptyElement::at((px + 9, py))
-                    + Circle::new((0, 0), 5, RGBColor(90, 90, 90).filled())
-                    + Circle::new((0, 0), 2, WHITE.filled())
-            });
+            .map_err(err)?;
+        legend.push((
+            "white centre: drifting, label kept (~)".to_string(),
+            Swatch::Kept,
+        ));
     }
     let bistable: Vec<&DrawnPoint> = points.iter().filter(|p| p.bistable()).collect();
     if !bistable.is_empty() {
@@ -658,22 +634,11 @@ where
         } else {
             format!("anticlockwise from the top: {}", names.join(", "))
         };
-        let greys = [RGBColor(60, 60, 60), RGBColor(190, 190, 190)];
-        chart
-            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-            .map_err(err)?
-            .label(format!(
-                "split disc: bistable ({how}; text: phases {})",
-                short.join("/")
-            ))
-            .legend(move |(px, py)| {
-                let centre = |v: Vec<(i32, i32)>| -> Vec<(i32, i32)> {
-                    v.into_iter().map(|(a, b)| (a + px + 9, b + py)).collect()
-                };
-                EmptyElement::at((0, 0))
-                    + Polygon::new(centre(sector(0, n, 6)), greys[0].filled())
-                    + Polygon::new(centre(sector(1, n, 6)), greys[1].filled())
-            });
+        legend.push((format!("split disc: bistable ({how})"), Swatch::Split(n)));
+        legend.push((
+            format!("text by the disc: phases {}", short.join("/")),
+            Swatch::None,
+        ));
     }
     // Uncertainty of each boundary point: the straddling edge's extent along each axis.
     let bars: Vec<Vec<(f64, f64)>> = slices
@@ -693,9 +658,11 @@ where
                 bars.into_iter()
                     .map(|bar| PathElement::new(bar, grey.stroke_width(1))),
             )
-            .map_err(err)?
-            .label("uncertainty (straddling edge)")
-            .legend(move |(px, py)| PathElement::new(vec![(px, py), (px + 18, py)], grey));
+            .map_err(err)?;
+        legend.push((
+            "uncertainty (straddling edge)".to_string(),
+            Swatch::Line(grey),
+        ));
     }
     // Each branch's boundary points with their own colour (the first black).
     const BRANCH_COLOURS: [RGBColor; 3] = [
@@ -725,22 +692,12 @@ where
                     .iter()
                     .map(|&(bx, by)| Cross::new((bx, by), 4, color.stroke_width(2))),
             )
-            .map_err(err)?
-            .label(label)
-            .legend(move |(px, py)| Cross::new((px + 9, py), 4, color.stroke_width(2)));
+            .map_err(err)?;
+        legend.push((label, Swatch::Cross(color)));
     }
     // The legend right of the plot, level with its top: it hides no point.
-    let (xr, _) = chart.plotting_area().get_pixel_range();
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::Coordinate(
-            xr.end - xr.start + 12,
-            0,
-        ))
-        .border_style(BLACK)
-        .background_style(WHITE)
-        .draw()
-        .map_err(err)?;
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    draw_legend(root, (xr.end + 14, yr.start), &legend).map_err(err)?;
     Ok(points
         .iter()
         .map(|p| {
@@ -748,6 +705,76 @@ where
             (p.x, p.y, px, py)
         })
         .collect())
+}
+
+/// The mark of a legend entry.
+#[derive(Debug, Clone, Copy)]
+enum Swatch {
+    Line(RGBColor),
+    Dot(RGBColor),
+    Ring(RGBColor),
+    /// A grey disc with a white centre (label kept by its trend).
+    Kept,
+    /// A disc split into `n` grey sectors (bistable).
+    Split(usize),
+    Cross(RGBColor),
+    /// Text only (a continued line).
+    None,
+}
+
+/// Draws the legend entries from `at` (pixels) downwards, framed.
+fn draw_legend(
+    root: &DrawingArea<SVGBackend, Shift>,
+    at: (i32, i32),
+    entries: &[(String, Swatch)],
+) -> Result<(), DrawingAreaErrorKind<std::io::Error>> {
+    const ROW: i32 = 18;
+    let (x, y0) = at;
+    let width = entries
+        .iter()
+        .map(|(t, _)| 7 * t.len() as i32 + 34)
+        .max()
+        .unwrap_or(0);
+    root.draw(&Rectangle::new(
+        [(x, y0), (x + width, y0 + ROW * entries.len() as i32 + 8)],
+        BLACK.stroke_width(1),
+    ))?;
+    let font = TextStyle::from(("sans-serif", 13).into_font()).pos(
+        plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Left,
+            plotters::style::text_anchor::VPos::Center,
+        ),
+    );
+    for (k, (text, swatch)) in entries.iter().enumerate() {
+        let y = y0 + 13 + ROW * k as i32;
+        let c = (x + 14, y);
+        match *swatch {
+            Swatch::Line(col) => root.draw(&PathElement::new(
+                vec![(x + 5, y), (x + 23, y)],
+                col.stroke_width(2),
+            ))?,
+            Swatch::Dot(col) => root.draw(&Circle::new(c, 5, col.filled()))?,
+            Swatch::Ring(col) => root.draw(&Circle::new(c, 5, col.stroke_width(2)))?,
+            Swatch::Kept => {
+                root.draw(&Circle::new(c, 5, RGBColor(90, 90, 90).filled()))?;
+                root.draw(&Circle::new(c, 2, WHITE.filled()))?;
+            }
+            Swatch::Split(n) => {
+                let greys = [RGBColor(60, 60, 60), RGBColor(190, 190, 190)];
+                for k in 0..n.min(2) {
+                    let v: Vec<(i32, i32)> = sector(k, n, 6)
+                        .into_iter()
+                        .map(|(a, b)| (a + c.0, b + c.1))
+                        .collect();
+                    root.draw(&Polygon::new(v, greys[k].filled()))?;
+                }
+            }
+            Swatch::Cross(col) => root.draw(&Cross::new(c, 4, col.stroke_width(2)))?,
+            Swatch::None => {}
+        }
+        root.draw(&Text::new(text.clone(), (x + 28, y), font.clone()))?;
+    }
+    Ok(())
 }
 
 /// Tick marks and labels at the given values of both axes of a chart (`plot`: its plotting

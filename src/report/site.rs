@@ -81,13 +81,9 @@ fn positions<'a>(sweep: &SweepRow, rows: &'a [PointRow]) -> Vec<Position<'a>> {
             .filter(|(k, _)| Some(*k) != start)
             .map(|(_, (a, v))| (a.label.clone(), v.clone()))
             .collect();
-        let key = serde_json::Value::from(
-            coords
-                .iter()
-                .map(|(_, v)| v.clone())
-                .collect::<Vec<_>>(),
-        )
-        .to_string();
+        let key =
+            serde_json::Value::from(coords.iter().map(|(_, v)| v.clone()).collect::<Vec<_>>())
+                .to_string();
         match by_key.get(&key) {
             Some(&k) => out[k].jobs.push(r),
             None => {
@@ -204,7 +200,8 @@ fn page_at<'a>(
     positions.iter().find(|p| {
         p.jobs.first().is_some_and(|j| {
             let v = |k: usize| j.coords.get(k).and_then(|v| v.as_f64());
-            v(rows_plane.0).is_some_and(|a| near(a, x)) && v(rows_plane.1).is_some_and(|b| near(b, y))
+            v(rows_plane.0).is_some_and(|a| near(a, x))
+                && v(rows_plane.1).is_some_and(|b| near(b, y))
         })
     })
 }
@@ -257,7 +254,11 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
                     let what = format!(
                         "{}: {}",
                         coords_text(&p.coords),
-                        p.jobs.iter().map(|j| mark_label(j)).collect::<Vec<_>>().join("/")
+                        p.jobs
+                            .iter()
+                            .map(|j| mark_label(j))
+                            .collect::<Vec<_>>()
+                            .join("/")
                     );
                     let _ = writeln!(
                         h,
@@ -275,7 +276,10 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
             let _ = writeln!(h, "<p class=\"untrusted\">No map: {}</p>", esc(e));
         }
         (Ok(_), None) => {
-            let _ = writeln!(h, "<p>No map: the sweep has no plane of two numeric axes.</p>");
+            let _ = writeln!(
+                h,
+                "<p>No map: the sweep has no plane of two numeric axes.</p>"
+            );
         }
     }
     let _ = writeln!(
@@ -288,7 +292,10 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
             h,
             "<tr><td><a href=\"{}\">{}</a></td><td>{}</td><td>{}</td></tr>",
             p.page,
-            esc(p.page.trim_start_matches("points/").trim_end_matches(".html")),
+            esc(p
+                .page
+                .trim_start_matches("points/")
+                .trim_end_matches(".html")),
             esc(&coords_text(&p.coords)),
             esc(&p
                 .jobs
@@ -322,7 +329,11 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
         esc(&sweep.file),
         esc(input.source)
     );
-    let _ = writeln!(h, "<h2 id=\"reproduce\">Reproduce</h2>\n<pre>{}</pre>", esc(&commands(input)));
+    let _ = writeln!(
+        h,
+        "<h2 id=\"reproduce\">Reproduce</h2>\n<pre>{}</pre>",
+        esc(&commands(input))
+    );
     h.push_str("</body>\n</html>\n");
     h
 }
@@ -331,7 +342,9 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
 fn commands(input: &SiteInput) -> String {
     let (db, name) = (input.db, &input.sweep.name);
     let q = |s: &str| {
-        if s.chars().all(|c| c.is_ascii_alphanumeric() || "-_./".contains(c)) {
+        if s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_./".contains(c))
+        {
             s.to_string()
         } else {
             format!("'{}'", s.replace('\'', "'\\''"))

@@ -114,6 +114,9 @@ mod tests {
             vec![0.1, 1.0, 10.0, 100.0]
         );
         // Linear with too many values: evenly spaced.
-        assert_eq!(grid_ticks(&dense, (0.0, 1.0), false, 3), vec![0.0, 0.5, 1.0]);
+        assert_eq!(
+            grid_ticks(&dense, (0.0, 1.0), false, 3),
+            vec![0.0, 0.5, 1.0]
+        );
     }
 }
