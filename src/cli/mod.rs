@@ -4,6 +4,7 @@
 
 mod cluster_cmd;
 mod common;
+mod export_cmd;
 mod extend_cmd;
 pub mod point_cmd;
 mod reclassify_cmd;
@@ -119,11 +120,14 @@ pub enum Command {
         #[arg(long)]
         sweep: Option<String>,
     },
-    /// Export all finished jobs with their parameters, phase and observables.
+    /// Export all finished jobs in tidy form: one row per job, CSV or JSON with the same fields.
     ///
-    /// For pandas, Julia and friends: CSV with one row per job, its `stationary` verdict and
-    /// trust mark, and the scalar observables as dotted `obs.` columns (series to --series FILE
-    /// in long format), or JSON with everything nested.
+    /// For pandas, Julia and friends: the axis columns in the sweep's order, then
+    /// sweep,point,replica,job_id, the container motion, phase, stationary, trend, trust and the
+    /// run's cost, then the scalar observables (`obs.`) and decision inputs (`decided_on.`) that
+    /// carry information: a column empty or the same in every row is left out unless --all. The
+    /// series (time series, profiles) go to --series FILE in long format, numbers only; their
+    /// text entries to --text FILE. docs/reports.md reads the database directly from pandas.
     Export {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
@@ -135,10 +139,17 @@ pub enum Command {
         /// Write to this file instead of standard output.
         #[arg(short = 'o', long = "output")]
         output: Option<PathBuf>,
-        /// With --format csv: write the series (every array of the observables: time series,
-        /// profiles, MSD) to this file in long format, `job_id,series,index,value`.
+        /// Write the series (every array of the observables: time series, profiles, MSD) to
+        /// this file in long format, `job_id,series,index,value`, numbers only.
         #[arg(long, value_name = "FILE")]
         series: Option<PathBuf>,
+        /// With --series: write the text and true/false entries of the series (the names of the
+        /// monitored quantities, the checks' verdicts) to this file, same columns.
+        #[arg(long, value_name = "FILE")]
+        text: Option<PathBuf>,
+        /// Keep every scalar column, also those empty or the same in every row.
+        #[arg(long)]
+        all: bool,
     },
     /// Plot the order parameters along each line of constant Gamma of a shaking sweep.
     ///
@@ -238,12 +249,18 @@ pub fn main() -> ExitCode {
             format,
             output,
             series,
-        } => sweep_cmd::export(
+            text,
+            all,
+        } => export_cmd::export(
             &db,
             sweep.as_deref(),
-            format,
-            output.as_deref(),
-            series.as_deref(),
+            export_cmd::ExportTo {
+                format,
+                output: output.as_deref(),
+                series: series.as_deref(),
+                text: text.as_deref(),
+                all,
+            },
         ),
         Command::Show {
             db,
