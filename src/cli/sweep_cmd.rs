@@ -12,11 +12,11 @@ use crate::report::boundaries_text::{
     boundaries_csv, boundaries_table, chain_model_note, untrusted_points,
 };
 use crate::report::cluster_text::slurm_status_text;
+use crate::report::plot_phase;
 use crate::report::sweep_text::{
     coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
     estimate_stored_text, estimate_text, sweep_status_text,
 };
-use crate::report::plot_phase;
 use crate::run::{RunOptions, run_sweeps};
 use crate::store::{Durability, PointSummary, Store, StoreError, SweepRow};
 use crate::sweep::run_job;

@@ -99,7 +99,10 @@ impl ExportRow {
             ("amplitude", num(self.amplitude)),
             ("omega", num(self.omega)),
             ("phase", text(&self.phase)),
-            ("stationary", self.stationary.map_or(Value::Null, Value::from)),
+            (
+                "stationary",
+                self.stationary.map_or(Value::Null, Value::from),
+            ),
             ("trend", text(&self.trend)),
             ("trust", text(&self.trust)),
             ("simulated_time", num(self.simulated_time)),
@@ -328,9 +331,8 @@ impl Columns {
             .iter()
             .filter(|(_, c)| {
                 self.all
-                    || c.as_ref().is_some_and(|c| {
-                        self.rows < 2 || c.varies || c.filled < self.rows
-                    })
+                    || c.as_ref()
+                        .is_some_and(|c| self.rows < 2 || c.varies || c.filled < self.rows)
             })
             .map(|(k, _)| k.clone())
             .collect()
@@ -338,7 +340,11 @@ impl Columns {
 
     /// The scalar columns left out (empty or constant), for a note.
     pub fn left_out(&self) -> usize {
-        self.seen.len() - self.kept.as_ref().map_or_else(|| self.kept().len(), Vec::len)
+        self.seen.len()
+            - self
+                .kept
+                .as_ref()
+                .map_or_else(|| self.kept().len(), Vec::len)
     }
 
     /// Ends the first pass.
@@ -526,7 +532,11 @@ mod tests {
     #[test]
     fn empty_and_constant_columns_are_left_out_unless_all() {
         let rows = vec![
-            row("a", 0.5, json!({"t": 1.0, "unit": "E_cb", "gone": null, "some": 3})),
+            row(
+                "a",
+                0.5,
+                json!({"t": 1.0, "unit": "E_cb", "gone": null, "some": 3}),
+            ),
             row("b", 2.0, json!({"t": 2.5, "unit": "E_cb", "gone": null})),
         ];
         let (columns, csv, _) = export(&rows, false);
@@ -560,7 +570,13 @@ mod tests {
         let v: Vec<serde_json::Map<String, Value>> = serde_json::from_str(&json).unwrap();
         assert_eq!(v.len(), 2);
         let names = columns.names();
-        let header: Vec<String> = csv.lines().next().unwrap().split(',').map(String::from).collect();
+        let header: Vec<String> = csv
+            .lines()
+            .next()
+            .unwrap()
+            .split(',')
+            .map(String::from)
+            .collect();
         assert_eq!(header, names);
         let mut keys: Vec<&String> = v[0].keys().collect();
         let mut want: Vec<&String> = names.iter().collect();

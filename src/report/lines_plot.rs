@@ -344,7 +344,7 @@ impl Panel<'_> {
         let plot = chart.plotting_area();
         let (y0, y1) = self.y_range;
         // Ticks at the grid's E* values, drawn by hand (the log axis's own ticks skip most).
-        super::plot_phase::hand_ticks(area, plot, self.x_ticks, &[]).map_err(err)?;
+        super::chart::hand_ticks(area, plot, self.x_ticks, &[]).map_err(err)?;
         let clip = |v: f64| v.clamp(y0, y1);
         for (k, line) in self.lines.iter().enumerate() {
             let colour = BRANCH_COLOURS[k % BRANCH_COLOURS.len()];

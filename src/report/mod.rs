@@ -12,6 +12,7 @@
 //! so a stored sweep point can be drawn as well as a fresh run.
 
 pub mod boundaries_text;
+mod chart;
 pub mod cluster_text;
 pub mod export;
 #[cfg(test)]
