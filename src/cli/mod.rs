@@ -231,7 +231,7 @@ pub fn main() -> ExitCode {
             output,
             include_unconverged,
             y_scale,
-        } => sweep_cmd::plot(
+        } => report_cmd::plot(
             &db,
             sweep.as_deref(),
             &output,

@@ -1,4 +1,5 @@
-//! The commands that turn a sweep's database into pictures and pages: `wetgran lines` (the order
+//! The commands that turn a sweep's database into pictures and pages: `wetgran plot` (the phase
+//! map, `report::plot_phase`), `wetgran lines` (the order
 //! parameters along lines of constant Gamma, `report::lines`) and `wetgran report` (a static HTML
 //! site of a sweep, `report::site`).
 
@@ -118,6 +119,25 @@ pub(super) fn sweep_lines(store: &Store, sweep: &SweepRow) -> Result<Lines, Fail
         )));
     }
     Ok(lines)
+}
+
+/// `wetgran plot`.
+pub(super) fn plot(
+    db: &Path,
+    name: Option<&str>,
+    output: &Path,
+    how: Extraction,
+    style: MapStyle,
+) -> ExitCode {
+    exit((|| {
+        let store = Store::open_existing(db)?;
+        let sweep = pick_sweep(&store, name)?;
+        let drawn = draw_map(&store, &sweep, how, style)?;
+        std::fs::write(output, drawn.svg)
+            .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;
+        eprintln!("wrote {}", output.display());
+        Ok(())
+    })())
 }
 
 /// `wetgran lines`.

@@ -1,5 +1,5 @@
 //! The sweep commands: `sweep run|resume|status|expand|job|refine` (and `submit|collect`, in
-//! `cluster_cmd`), `boundaries`, `plot` (`export` is `export_cmd`).
+//! `cluster_cmd`), `boundaries` (`plot` is in `report_cmd`, `export` in `export_cmd`).
 //! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
 //! unknown sweep), 1 any other error.
 
@@ -12,7 +12,6 @@ use crate::report::boundaries_text::{
     boundaries_csv, boundaries_table, chain_model_note, untrusted_points,
 };
 use crate::report::cluster_text::slurm_status_text;
-use crate::report::plot_phase;
 use crate::report::sweep_text::{
     coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
     estimate_stored_text, estimate_text, sweep_status_text,
@@ -739,25 +738,6 @@ pub fn boundaries(
                 print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
             }
         }
-        Ok(())
-    })())
-}
-
-/// `wetgran plot`.
-pub fn plot(
-    db: &Path,
-    name: Option<&str>,
-    output: &Path,
-    how: Extraction,
-    style: plot_phase::MapStyle,
-) -> ExitCode {
-    exit((|| {
-        let store = Store::open_existing(db)?;
-        let sweep = super::report_cmd::pick_sweep(&store, name)?;
-        let drawn = super::report_cmd::draw_map(&store, &sweep, how, style)?;
-        std::fs::write(output, drawn.svg)
-            .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;
-        eprintln!("wrote {}", output.display());
         Ok(())
     })())
 }
