@@ -242,7 +242,7 @@ fn a_map_without_boundary_says_why_on_the_plot() {
 #[test]
 fn the_axes_have_a_tick_at_every_grid_value_and_gamma_can_be_logarithmic() {
     let (map, slice) = grid_map(true);
-    let tick = |svg: &str, v: &str| svg.contains(&format!(">{v}</text>"));
+    let tick = |svg: &str, v: &str| svg.contains(&format!(">\n{v}\n</text>"));
     let linear = phase_svg(&map, &slice, None, None, "t").unwrap();
     let log = branches_map(
         &map,
@@ -272,7 +272,11 @@ fn the_axes_have_a_tick_at_every_grid_value_and_gamma_can_be_logarithmic() {
     };
     assert!((2 * py(2.0) - py(0.5) - py(8.0)).abs() <= 1);
     // The legend is right of every point.
-    let legend_x = log.svg.find(">f</text>").map(|k| &log.svg[..k]).unwrap();
+    let legend_x = log
+        .svg
+        .find(">\nf\n</text>")
+        .map(|k| &log.svg[..k])
+        .unwrap();
     let x = legend_x[legend_x.rfind("x=\"").unwrap() + 3..]
         .split('"')
         .next()

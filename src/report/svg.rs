@@ -83,7 +83,11 @@ pub fn grid_ticks(values: &[f64], range: (f64, f64), log: bool, max: usize) -> V
     }
     if log && lo > 0.0 {
         let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
-        let steps: &[f64] = if b - a <= 2 { &[1.0, 2.0, 5.0] } else { &[1.0] };
+        let steps: &[f64] = if (hi / lo).log10() < 2.0 {
+            &[1.0, 2.0, 5.0]
+        } else {
+            &[1.0]
+        };
         return (a..=b)
             .flat_map(|k| steps.iter().map(move |s| s * 10f64.powi(k)))
             .filter(|v| *v >= lo && *v <= hi)
