@@ -328,6 +328,58 @@ pub fn branches_map(
         super::svg::grid_ticks(&x_grid, x_range, x_log, 14),
         super::svg::grid_ticks(&y_grid, y_range, y_log, 14),
     );
+    let lines = overlay_lines(map, landmarks, chain_model, (x_range, y_range), x_log);
+    let mut svg = String::new();
+    let points;
+    {
+        let root = SVGBackend::with_string(&mut svg, (MAP_WIDTH, MAP_HEIGHT)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let x_desc = if x_log {
+            format!("{} (log scale)", xa.label)
+        } else {
+            xa.label.clone()
+        };
+        let y_desc = if y_log {
+            format!("{} (log scale)", ya.label)
+        } else {
+            ya.label.clone()
+        };
+        let text = Texts {
+            title,
+            x_desc: &x_desc,
+            y_desc: &y_desc,
+            note: no_boundary_note(slices),
+        };
+        let x = x_range.0..x_range.1;
+        let y = y_range.0..y_range.1;
+        points = match (x_log, y_log) {
+            (true, true) => draw(
+                &root,
+                x.log_scale(),
+                y.log_scale(),
+                slices,
+                &lines,
+                &text,
+                &ticks,
+            ),
+            (true, false) => draw(&root, x.log_scale(), y, slices, &lines, &text, &ticks),
+            (false, true) => draw(&root, x, y.log_scale(), slices, &lines, &text, &ticks),
+            (false, false) => draw(&root, x, y, slices, &lines, &text, &ticks),
+        }?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(DrawnMap { svg, points })
+}
+
+/// The overlay lines of a map (the landmarks of a shaking map, the chain model), clipped to the
+/// plot's ranges `(x, y)`.
+fn overlay_lines(
+    map: &PhaseMap,
+    landmarks: Option<Landmarks>,
+    chain_model: Option<Vec<(f64, f64)>>,
+    (x_range, y_range): ((f64, f64), (f64, f64)),
+    x_log: bool,
+) -> Vec<Line> {
     let mut lines: Vec<Line> = Vec::new();
     if let (Some(l), true) = (landmarks, map.shaking) {
         let n = 300;
@@ -380,46 +432,7 @@ pub fn branches_map(
             vec![line],
         ));
     }
-    let mut svg = String::new();
-    let points;
-    {
-        let root = SVGBackend::with_string(&mut svg, (MAP_WIDTH, MAP_HEIGHT)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let x_desc = if x_log {
-            format!("{} (log scale)", xa.label)
-        } else {
-            xa.label.clone()
-        };
-        let y_desc = if y_log {
-            format!("{} (log scale)", ya.label)
-        } else {
-            ya.label.clone()
-        };
-        let text = Texts {
-            title,
-            x_desc: &x_desc,
-            y_desc: &y_desc,
-            note: no_boundary_note(slices),
-        };
-        let x = x_range.0..x_range.1;
-        let y = y_range.0..y_range.1;
-        points = match (x_log, y_log) {
-            (true, true) => draw(
-                &root,
-                x.log_scale(),
-                y.log_scale(),
-                slices,
-                &lines,
-                &text,
-                &ticks,
-            ),
-            (true, false) => draw(&root, x.log_scale(), y, slices, &lines, &text, &ticks),
-            (false, true) => draw(&root, x, y.log_scale(), slices, &lines, &text, &ticks),
-            (false, false) => draw(&root, x, y, slices, &lines, &text, &ticks),
-        }?;
-        root.present().map_err(|e| e.to_string())?;
-    }
-    Ok(DrawnMap { svg, points })
+    lines
 }
 
 /// The texts of a map: title, axis names, and the note saying why no boundary is drawn.

@@ -128,6 +128,7 @@ table { border-collapse: collapse; }\n\
 td, th { border: 1px solid #ccc; padding: 2px 8px; text-align: left; }\n\
 pre { background: #f6f6f6; padding: 0.6em; overflow-x: auto; }\n\
 img { max-width: 100%; }\n\
+img[usemap] { max-width: none; }\n\
 .untrusted { color: #a00; }\n";
 
 /// The label of a job with its trust mark (`g?`, `g~`).
@@ -206,38 +207,10 @@ fn page_at<'a>(
     })
 }
 
-fn index(input: &SiteInput, positions: &[Position]) -> String {
+/// The map section of the index: the map with an image map of links to the points' pages.
+fn map_section(input: &SiteInput, positions: &[Position]) -> String {
     let sweep = input.sweep;
-    let mut h = head(&format!("wetgran report: {}", sweep.name), "");
-    let _ = writeln!(h, "<h1>Sweep {}</h1>", esc(&sweep.name));
-    if let Some(d) = &sweep.description {
-        let _ = writeln!(h, "<p>{}</p>", esc(d));
-    }
-    let done = input.rows.iter().filter(|r| r.status == "done").count();
-    let mut labels: BTreeMap<String, usize> = BTreeMap::new();
-    for r in input.rows.iter().filter(|r| r.status == "done") {
-        *labels.entry(mark_label(r)).or_default() += 1;
-    }
-    let _ = writeln!(
-        h,
-        "<p>{} jobs, {done} finished; labels: {}. A mark after a label: <code>?</code> the \
-         run is not stationary and its label may still change, <code>~</code> not stationary \
-         but its trend keeps the label. Written by wetgran {}.</p>",
-        input.rows.len(),
-        labels
-            .iter()
-            .map(|(l, n)| format!("{} &times; {n}", esc(l)))
-            .collect::<Vec<_>>()
-            .join(", "),
-        env!("CARGO_PKG_VERSION")
-    );
-    let _ = writeln!(
-        h,
-        "<p>Contents: <a href=\"#map\">phase map</a> &middot; <a href=\"#points\">points</a> \
-         &middot; <a href=\"#boundaries\">boundaries</a> &middot; <a href=\"#lines\">lines of \
-         constant Gamma</a> &middot; <a href=\"#sweep\">sweep file</a> &middot; \
-         <a href=\"#reproduce\">reproduce</a></p>"
-    );
+    let mut h = String::new();
     let _ = writeln!(h, "<h2 id=\"map\">Phase map</h2>");
     match (&input.map, input.plane) {
         (Ok(map), Some(plane)) => {
@@ -282,6 +255,42 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
             );
         }
     }
+    h
+}
+
+fn index(input: &SiteInput, positions: &[Position]) -> String {
+    let sweep = input.sweep;
+    let mut h = head(&format!("wetgran report: {}", sweep.name), "");
+    let _ = writeln!(h, "<h1>Sweep {}</h1>", esc(&sweep.name));
+    if let Some(d) = &sweep.description {
+        let _ = writeln!(h, "<p>{}</p>", esc(d));
+    }
+    let done = input.rows.iter().filter(|r| r.status == "done").count();
+    let mut labels: BTreeMap<String, usize> = BTreeMap::new();
+    for r in input.rows.iter().filter(|r| r.status == "done") {
+        *labels.entry(mark_label(r)).or_default() += 1;
+    }
+    let _ = writeln!(
+        h,
+        "<p>{} jobs, {done} finished; labels: {}. A mark after a label: <code>?</code> the \
+         run is not stationary and its label may still change, <code>~</code> not stationary \
+         but its trend keeps the label. Written by wetgran {}.</p>",
+        input.rows.len(),
+        labels
+            .iter()
+            .map(|(l, n)| format!("{} &times; {n}", esc(l)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        env!("CARGO_PKG_VERSION")
+    );
+    let _ = writeln!(
+        h,
+        "<p>Contents: <a href=\"#map\">phase map</a> &middot; <a href=\"#points\">points</a> \
+         &middot; <a href=\"#boundaries\">boundaries</a> &middot; <a href=\"#lines\">lines of \
+         constant Gamma</a> &middot; <a href=\"#sweep\">sweep file</a> &middot; \
+         <a href=\"#reproduce\">reproduce</a></p>"
+    );
+    h.push_str(&map_section(input, positions));
     let _ = writeln!(
         h,
         "<h2 id=\"points\">Points</h2>\n<table>\n<tr><th>point</th><th>coordinates</th>\
