@@ -193,7 +193,7 @@ pub(super) fn draw_map(
     how: Extraction,
     style: MapStyle,
 ) -> Result<DrawnMap, Failure> {
-    let points = store.point_summaries(&sweep)?;
+    let points = store.point_summaries(sweep)?;
     let map = super::sweep_cmd::sweep_map(sweep, &points, how)?;
     let landmarks = points
         .first()
