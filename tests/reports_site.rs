@@ -306,9 +306,17 @@ fn the_report_gives_every_point_a_page_and_every_link_resolves() {
         sweep.display()
     )));
     assert!(index.contains("wetgran report --db"), "{index}");
-    // The map's Gamma axis is logarithmic, as the sweep's is.
+    // The map's Gamma axis is logarithmic, as the sweep's is; every link sits on its point's
+    // disc.
     let map = std::fs::read_to_string(root.join("map.svg")).unwrap();
     assert!(map.contains("Gamma (log scale)"), "{map}");
+    for coords in attrs(&index, "coords") {
+        let c: Vec<&str> = coords.split(',').collect();
+        assert!(
+            map.contains(&format!("<circle cx=\"{}\" cy=\"{}\"", c[0], c[1])),
+            "no point under the link at {coords}"
+        );
+    }
 }
 
 #[test]
