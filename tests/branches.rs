@@ -126,9 +126,8 @@ fn the_map_marks_bistable_points_with_both_labels_only_where_the_starts_disagree
     let db = prepared(dir.path(), true);
     let svg = plot(dir.path(), &db);
     assert!(
-        svg.contains(
-            "split disc: bistable (left hot start, right cold start; text: phases hot/cold)"
-        ),
+        svg.contains("split disc: bistable (left hot start, right cold start)")
+            && svg.contains("text by the disc: phases hot/cold"),
         "{svg}"
     );
     // The two bistable points (E* = 2): hot gas, cold fluid, two half discs each, and the
@@ -190,9 +189,8 @@ fn a_continued_branch_is_named_as_such() {
     assert!(slices[1]["boundaries"].as_object().unwrap().is_empty());
     let svg = plot(dir.path(), &db);
     assert!(
-        svg.contains(
-            "split disc: bistable (left hot start, right continuation; text: phases hot/continue)"
-        ),
+        svg.contains("split disc: bistable (left hot start, right continuation)")
+            && svg.contains("text by the disc: phases hot/continue"),
         "{svg}"
     );
     assert_eq!(svg.matches("\nf/g\n").count(), 2, "{svg}");

@@ -433,10 +433,11 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
     let series = std::fs::read_to_string(&series_path).unwrap();
     let mut lines = series.lines();
     assert_eq!(lines.next(), Some("job_id,series,index,value"));
+    let id_col = header.iter().position(|h| *h == "job_id").unwrap();
     let ids: Vec<String> = csv
         .lines()
         .skip(1)
-        .map(|l| l.split(',').nth(3).unwrap().to_string())
+        .map(|l| l.split(',').nth(id_col).unwrap().to_string())
         .collect();
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert!(rows.len() > 4 * 10, "{} series rows", rows.len());

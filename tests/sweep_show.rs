@@ -37,13 +37,19 @@ fn show_redraws_a_stored_point_and_inflection_reads_the_lines() {
     let export = wetgran().args(["export", "--db", db_s]).output().unwrap();
     let csv = String::from_utf8(export.stdout).unwrap();
     let row = csv.lines().nth(1).expect("a finished job");
-    let id = row.split(',').nth(3).unwrap().to_string();
-    let phase_col = csv
-        .lines()
-        .next()
-        .unwrap()
+    let column = |name: &str| {
+        csv.lines()
+            .next()
+            .unwrap()
+            .split(',')
+            .position(|c| c == name)
+    };
+    let id = row
         .split(',')
-        .position(|c| c == "phase");
+        .nth(column("job_id").unwrap())
+        .unwrap()
+        .to_string();
+    let phase_col = column("phase");
     let stored_phase = row.split(',').nth(phase_col.unwrap()).unwrap().to_string();
 
     let svg = dir.path().join("snap.svg");

@@ -4,10 +4,12 @@
 
 mod cluster_cmd;
 mod common;
+mod export_cmd;
 mod extend_cmd;
 pub mod point_cmd;
 mod reclassify_cmd;
 mod refine_cmd;
+mod report_cmd;
 mod simulate_cmd;
 pub mod sweep_cmd;
 
@@ -85,6 +87,9 @@ pub enum Command {
         /// Let unconverged points (drawn hollow) carry boundaries too.
         #[arg(long)]
         include_unconverged: bool,
+        /// Scale of the y axis (Gamma): `auto` is logarithmic where the sweep's axis is.
+        #[arg(long, value_enum, default_value = "auto")]
+        y_scale: report_cmd::Scale,
     },
     /// Show one stored sweep point: phase, the numbers it was decided on, pictures.
     ///
@@ -115,11 +120,14 @@ pub enum Command {
         #[arg(long)]
         sweep: Option<String>,
     },
-    /// Export all finished jobs with their parameters, phase and observables.
+    /// Export all finished jobs in tidy form: one row per job, CSV or JSON with the same fields.
     ///
-    /// For pandas, Julia and friends: CSV with one row per job, its `stationary` verdict and
-    /// trust mark, and the scalar observables as dotted `obs.` columns (series to --series FILE
-    /// in long format), or JSON with everything nested.
+    /// For pandas, Julia and friends: the axis columns in the sweep's order, then
+    /// sweep,point,replica,job_id, the container motion, phase, stationary, trend, trust and the
+    /// run's cost, then the scalar observables (`obs.`) and decision inputs (`decided_on.`) that
+    /// carry information: a column empty or the same in every row is left out unless --all. The
+    /// series (time series, profiles) go to --series FILE in long format, numbers only; their
+    /// text entries to --text FILE. docs/reports.md reads the database directly from pandas.
     Export {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
@@ -131,11 +139,34 @@ pub enum Command {
         /// Write to this file instead of standard output.
         #[arg(short = 'o', long = "output")]
         output: Option<PathBuf>,
-        /// With --format csv: write the series (every array of the observables: time series,
-        /// profiles, MSD) to this file in long format, `job_id,series,index,value`.
+        /// Write the series (every array of the observables: time series, profiles, MSD) to
+        /// this file in long format, `job_id,series,index,value`, numbers only.
         #[arg(long, value_name = "FILE")]
         series: Option<PathBuf>,
+        /// With --series: write the text and true/false entries of the series (the names of the
+        /// monitored quantities, the checks' verdicts) to this file, same columns.
+        #[arg(long, value_name = "FILE")]
+        text: Option<PathBuf>,
+        /// Keep every scalar column, also those empty or the same in every row.
+        #[arg(long)]
+        all: bool,
     },
+    /// Plot the order parameters along each line of constant Gamma of a shaking sweep.
+    ///
+    /// T_g/E_cb, bridges per grain and Delta n_cb (Delta n_area for dry scenes) against E*, one
+    /// row of panels per Gamma: markers coloured by label, shaped by run state (trend), hollow
+    /// where the label may change, bars of one standard error, each branch's label changes
+    /// dashed. Prints the lines' label changes and T_g inflections (--json: as JSON). -o FILE
+    /// writes SVG (.svg) or CSV (.csv).
+    Lines(report_cmd::LinesArgs),
+    /// Write a sweep's report: a static HTML site (no script, works offline).
+    ///
+    /// index.html: the phase map with every point a link to its page, the table of points, the
+    /// boundaries, the order parameters along lines of constant Gamma, the sweep file and the
+    /// command lines that reproduce it; one page per grid position with each job's label, run
+    /// state and the numbers it was decided on, its snapshot (from the stored final state), its
+    /// lateral profiles and its line's curves.
+    Report(report_cmd::ReportArgs),
     /// Re-label stored results from their stored observables, without simulating.
     ///
     /// Calls the phase classifier on each result's observables with each job's own `[classify]`
@@ -199,12 +230,17 @@ pub fn main() -> ExitCode {
             sweep,
             output,
             include_unconverged,
-        } => sweep_cmd::plot(
+            y_scale,
+        } => report_cmd::plot(
             &db,
             sweep.as_deref(),
             &output,
             Extraction {
                 include_unconverged,
+            },
+            crate::report::plot_phase::MapStyle {
+                x_log: None,
+                y_log: y_scale.log(),
             },
         ),
         Command::Export {
@@ -213,12 +249,18 @@ pub fn main() -> ExitCode {
             format,
             output,
             series,
-        } => sweep_cmd::export(
+            text,
+            all,
+        } => export_cmd::export(
             &db,
             sweep.as_deref(),
-            format,
-            output.as_deref(),
-            series.as_deref(),
+            export_cmd::ExportTo {
+                format,
+                output: output.as_deref(),
+                series: series.as_deref(),
+                text: text.as_deref(),
+                all,
+            },
         ),
         Command::Show {
             db,
@@ -233,6 +275,8 @@ pub fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Lines(args) => report_cmd::lines(args),
+        Command::Report(args) => report_cmd::report(args),
         Command::Inflection { db, sweep } => point_cmd::inflection(&db, sweep.as_deref()),
         Command::Reclassify {
             sweep,

@@ -1,5 +1,5 @@
 //! The sweep commands: `sweep run|resume|status|expand|job|refine` (and `submit|collect`, in
-//! `cluster_cmd`), `boundaries`, `plot`, `export`.
+//! `cluster_cmd`), `boundaries` (`plot` is in `report_cmd`, `export` in `export_cmd`).
 //! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
 //! unknown sweep), 1 any other error.
 
@@ -9,23 +9,20 @@ use super::common::{
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{
-    boundaries_csv, boundaries_table, chain_model_note, fixed_text, untrusted_points,
+    boundaries_csv, boundaries_table, chain_model_note, untrusted_points,
 };
 use crate::report::cluster_text::slurm_status_text;
 use crate::report::sweep_text::{
     coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
     estimate_stored_text, estimate_text, sweep_status_text,
 };
-use crate::report::{export, plot_phase};
 use crate::run::{RunOptions, run_sweeps};
 use crate::store::{Durability, PointSummary, Store, StoreError, SweepRow};
 use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use wetgran_core::scene::Scene;
 use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 
 /// Default database file, in the working directory.
@@ -693,7 +690,7 @@ pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
 
 /// The phase map of a sweep from its stored results (`points`: its
 /// `Store::point_summaries`).
-fn sweep_map(
+pub(super) fn sweep_map(
     sweep: &SweepRow,
     points: &[PointSummary],
     how: Extraction,
@@ -740,202 +737,6 @@ pub fn boundaries(
                 }
                 print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
             }
-        }
-        Ok(())
-    })())
-}
-
-/// `wetgran plot`.
-pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> ExitCode {
-    exit((|| {
-        let store = Store::open_existing(db)?;
-        let sweep = match name {
-            Some(n) => store.sweep(n)?,
-            None => {
-                let mut all = store.sweeps()?;
-                all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
-                let last = all.pop().ok_or_else(|| {
-                    Failure::BadInput(format!("{}: no sweep in this database", db.display()))
-                })?;
-                if !all.is_empty() {
-                    eprintln!(
-                        "plotting sweep {} (the latest; choose with --sweep)",
-                        last.name
-                    );
-                }
-                last
-            }
-        };
-        let points = store.point_summaries(&sweep)?;
-        let map = sweep_map(&sweep, &points, how)?;
-        let landmarks = points
-            .first()
-            .and_then(|p| plot_phase::Landmarks::of(&p.scene));
-        let Some(slice) = map.slices.first() else {
-            return Err(Failure::BadInput(format!(
-                "sweep {}: no classified point to plot yet",
-                sweep.name
-            )));
-        };
-        // The branches (slices differing only in `initial.start`) draw as one map: the slices
-        // whose other fixed coordinates are those of the first slice.
-        let start_label = sweep
-            .axes
-            .iter()
-            .find(|a| a.key == crate::boundary::START_AXIS)
-            .map(|a| a.label.clone());
-        let others = |sl: &crate::boundary::Slice| -> Vec<(String, serde_json::Value)> {
-            sl.fixed
-                .iter()
-                .filter(|(l, _)| Some(l) != start_label.as_ref())
-                .cloned()
-                .collect()
-        };
-        let drawn: Vec<&crate::boundary::Slice> = map
-            .slices
-            .iter()
-            .filter(|sl| others(sl) == others(slice))
-            .collect();
-        if drawn.len() < map.slices.len() {
-            eprintln!(
-                "sweep {} has {} slices (axes beyond the plane); plotting {}{}",
-                sweep.name,
-                map.slices.len(),
-                if drawn.len() > 1 {
-                    "the branches of the first: "
-                } else {
-                    "the first: "
-                },
-                if others(slice).is_empty() {
-                    fixed_text(&slice.fixed)
-                } else {
-                    fixed_text(&others(slice))
-                }
-            );
-        }
-        let title = format!("wetgran phase diagram: {}", sweep.name);
-        // The scene of each grid point's first job, by its coordinates (what `find` over the
-        // points gave, without a search per point).
-        let mut scene_at: std::collections::HashMap<String, &Scene> =
-            std::collections::HashMap::new();
-        for p in &points {
-            scene_at
-                .entry(serde_json::Value::from(p.coords.clone()).to_string())
-                .or_insert(p.scene.as_ref());
-        }
-        let chain = plot_phase::chain_model_line(&map, slice, |coords| {
-            scene_at
-                .get(&serde_json::Value::from(coords.to_vec()).to_string())
-                .map(|s| (*s).clone())
-        });
-        let svg = plot_phase::branches_svg(&map, &drawn, landmarks, chain, &title)
-            .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))?;
-        std::fs::write(output, svg)
-            .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;
-        eprintln!("wrote {}", output.display());
-        Ok(())
-    })())
-}
-
-/// `wetgran export`.
-pub fn export(
-    db: &Path,
-    name: Option<&str>,
-    format: ExportFormat,
-    output: Option<&Path>,
-    series: Option<&Path>,
-) -> ExitCode {
-    exit((|| {
-        if let (ExportFormat::Json, Some(_)) = (format, series) {
-            return Err(Failure::BadInput(
-                "--series goes with --format csv (the JSON export holds the series)".to_string(),
-            ));
-        }
-        let store = Store::open_existing(db)?;
-        let sweeps = select(&store, name)?;
-        let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
-        let cannot_write =
-            |what: &str, e: std::io::Error| Failure::Other(format!("{what}: cannot write: {e}"));
-        let out_name = output.map_or("standard output".to_string(), |p| p.display().to_string());
-        // A reader that closes the pipe (`export | head`) ends the export quietly, with the
-        // status a shell reports for SIGPIPE, as `main` does for a failed print.
-        let out_failed = |e: std::io::Error| {
-            if output.is_none() && e.kind() == std::io::ErrorKind::BrokenPipe {
-                std::process::exit(141);
-            }
-            cannot_write(&out_name, e)
-        };
-        let mut out: Box<dyn std::io::Write> = match output {
-            Some(p) => Box::new(std::io::BufWriter::new(
-                std::fs::File::create(p).map_err(out_failed)?,
-            )),
-            None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-        };
-        // Rows are written as they are read (report::export, "Streaming"): a CSV export reads
-        // them twice, the first time for its columns.
-        match format {
-            ExportFormat::Json => {
-                let mut json = export::JsonWriter::default();
-                store.scan_points(&ids, 1, |_, k, p| {
-                    if let Some(r) = export::ExportRow::of(&sweeps[k], &p) {
-                        json.row(&mut out, &r).map_err(out_failed)?;
-                    }
-                    Ok::<(), Failure>(())
-                })?;
-                json.finish(&mut out).map_err(out_failed)?;
-            }
-            ExportFormat::Csv => {
-                let series_name = series.map(|p| p.display().to_string());
-                let mut series_out = match series {
-                    Some(p) => Some(std::io::BufWriter::new(
-                        std::fs::File::create(p)
-                            .map_err(|e| cannot_write(series_name.as_deref().unwrap_or(""), e))?,
-                    )),
-                    None => None,
-                };
-                let series_failed = |e| cannot_write(series_name.as_deref().unwrap_or_default(), e);
-                if let Some(w) = series_out.as_mut() {
-                    w.write_all(export::SERIES_HEADER.as_bytes())
-                        .map_err(series_failed)?;
-                }
-                let mut columns = export::CsvColumns::default();
-                let mut header_written = false;
-                store.scan_points(&ids, 2, |pass, k, p| {
-                    let Some(r) = export::ExportRow::of(&sweeps[k], &p) else {
-                        return Ok(());
-                    };
-                    if pass == 0 {
-                        columns.add(&r);
-                        return Ok(());
-                    }
-                    if !header_written {
-                        columns.write_header(&mut out).map_err(out_failed)?;
-                        header_written = true;
-                    }
-                    let (scalars, lines) = export::scalars_and_series(&r);
-                    columns
-                        .write_row(&mut out, &r, &scalars)
-                        .map_err(out_failed)?;
-                    if let Some(w) = series_out.as_mut() {
-                        export::write_series(w, &r, &lines).map_err(series_failed)?;
-                    }
-                    Ok::<(), Failure>(())
-                })?;
-                if !header_written {
-                    // No finished job: the header alone.
-                    columns.write_header(&mut out).map_err(out_failed)?;
-                }
-                if let Some(w) = series_out.as_mut() {
-                    w.flush().map_err(series_failed)?;
-                }
-            }
-        }
-        out.flush().map_err(out_failed)?;
-        if let (ExportFormat::Csv, None) = (format, series) {
-            eprintln!(
-                "export: scalar columns only; the series (time series, profiles) go to \
-                 --series FILE or --format json"
-            );
         }
         Ok(())
     })())

@@ -1,33 +1,40 @@
-//! Export of a database's results, one row per finished job with its sweep, grid point, axis
-//! values, container motion, phase, trust verdict and observables: CSV for pandas and
-//! spreadsheets (the scalar observables as dotted columns; every array, a time series or a
-//! profile, goes to a separate long-format series CSV `job_id,series,index,value`), JSON
-//! (nested, series included) for anything else.
+//! Export of a database's results in tidy form, one row per finished job (`wetgran export`):
+//! CSV for pandas and spreadsheets, or JSON with the same fields (an array of flat objects,
+//! numbers as numbers).
+//!
+//! Columns, in order: the sweep's axes in the sweep's order (keyed by scene key,
+//! `drive.gamma`), then `sweep,point,replica,job_id`, the container motion
+//! (`amplitude,omega`), the verdict (`phase,stationary,trend,trust`) and the run's cost
+//! (`simulated_time,wall_seconds,events,finished_at`): these are always there. Then the scalar
+//! observables as dotted `obs.` columns and the scalar decision inputs as `decided_on.` columns,
+//! sorted by name, but only those that carry information: a column empty in every row, or (with
+//! two rows or more) holding the same value in every row, is left out unless `all` is asked for
+//! (`--all`). Every array (time series, profiles, the blocks of the convergence check) is a
+//! series and goes to the series file instead, `job_id,series,index,value`, numbers only (an
+//! empty value is a missing number); the text and true/false entries of those arrays (the names
+//! of the monitored quantities, the checks' verdicts) go to their own file of the same shape.
 //!
 //! Streaming (issue 35): the export is written row by row as the store reads it
 //! (`Store::scan_points`, a page of rows at a time), so its memory does not grow with the number
-//! of results. The CSV header is the union of the scalar columns of every row, which the first
-//! row cannot tell (results stored before a new observable existed lack its column), so a CSV
-//! export reads the rows twice inside one read transaction: a first pass collects the column
-//! names ([`CsvColumns::add`], the keys only), a second writes the rows. A declared schema would
-//! save the first pass but would have to follow every change of the observables; the names
-//! alone are small (a few hundred), whatever the number of rows. The JSON export and the series
-//! CSV need one pass each.
+//! of results. Which columns carry information is known only after every row, so the export
+//! reads the rows twice inside one read transaction: the first pass keeps, per column, its first
+//! value and whether another differs ([`Columns::add`]), the second writes the rows. The state
+//! is a few hundred columns whatever the number of rows.
 
 use crate::store::{PointRow, SweepRow};
-use serde::Serialize;
-use std::collections::{BTreeMap, BTreeSet};
+use serde_json::Value;
+use std::collections::BTreeMap;
 use std::io::Write;
 
 /// One finished job.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone)]
 pub struct ExportRow {
     pub sweep: String,
     pub point: i64,
     pub replica: i64,
     pub job_id: String,
-    /// Axis values by scene key (`drive.gamma`).
-    pub params: BTreeMap<String, serde_json::Value>,
+    /// Axis values by scene key, in the sweep's axis order.
+    pub params: Vec<(String, Value)>,
     /// Container amplitude and angular frequency of a shaken scene (docs/model.md 4.1).
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
@@ -39,20 +46,12 @@ pub struct ExportRow {
     pub trend: Option<String>,
     /// The trust mark: `?` label may change, `~` label kept by its trend, `None` stationary.
     pub trust: Option<String>,
-    pub decided_on: Option<serde_json::Value>,
-    pub observables: serde_json::Value,
+    pub decided_on: Option<Value>,
+    pub observables: Value,
     pub simulated_time: Option<f64>,
     pub wall_seconds: Option<f64>,
     pub events: Option<i64>,
     pub finished_at: Option<f64>,
-}
-
-/// The finished jobs of a sweep as export rows.
-pub fn rows(sweep: &SweepRow, points: &[PointRow]) -> Vec<ExportRow> {
-    points
-        .iter()
-        .filter_map(|p| ExportRow::of(sweep, p))
-        .collect()
 }
 
 impl ExportRow {
@@ -80,56 +79,60 @@ impl ExportRow {
             trend: p.trend.map(|t| t.name().to_string()),
             trust: super::trust::mark(p.trust()).map(String::from),
             decided_on: p.decided_on.clone(),
-            observables: p.observables.clone().unwrap_or(serde_json::Value::Null),
+            observables: p.observables.clone().unwrap_or(Value::Null),
             simulated_time: p.simulated_time,
             wall_seconds: p.wall_seconds,
             events: p.events,
             finished_at: p.finished_at,
         })
     }
-}
 
-/// JSON array of the rows.
-pub fn to_json(rows: &[ExportRow]) -> String {
-    let mut out = Vec::new();
-    let mut w = JsonWriter::default();
-    for r in rows {
-        w.row(&mut out, r).expect("writes to memory");
-    }
-    w.finish(&mut out).expect("writes to memory");
-    String::from_utf8(out).expect("JSON is UTF-8")
-}
-
-/// Writes a JSON array of rows one row at a time, as `serde_json::to_string_pretty` writes the
-/// whole array (two-space indent), then a newline.
-#[derive(Debug, Default)]
-pub struct JsonWriter {
-    rows: usize,
-}
-
-impl JsonWriter {
-    /// Writes one row: the array's opening bracket before the first, a comma before the others,
-    /// the row pretty-printed and indented one level (a JSON text has no raw newline inside a
-    /// string, so indenting every line indents exactly the structure).
-    pub fn row(&mut self, w: &mut impl Write, r: &ExportRow) -> std::io::Result<()> {
-        w.write_all(if self.rows == 0 { b"[\n" } else { b",\n" })?;
-        let text = serde_json::to_string_pretty(r).expect("a row serializes");
-        for (k, line) in text.split('\n').enumerate() {
-            if k > 0 {
-                w.write_all(b"\n")?;
-            }
-            w.write_all(b"  ")?;
-            w.write_all(line.as_bytes())?;
-        }
-        self.rows += 1;
-        Ok(())
-    }
-
-    /// Closes the array (`[]` for no row) and ends the line.
-    pub fn finish(self, w: &mut impl Write) -> std::io::Result<()> {
-        w.write_all(if self.rows == 0 { b"[]\n" } else { b"\n]\n" })
+    /// The columns every row has after the axes, with this row's values.
+    fn fixed(&self) -> [(&'static str, Value); FIXED.len()] {
+        let num = |v: Option<f64>| v.map_or(Value::Null, Value::from);
+        let text = |v: &Option<String>| v.clone().map_or(Value::Null, Value::from);
+        [
+            ("sweep", Value::from(self.sweep.clone())),
+            ("point", Value::from(self.point)),
+            ("replica", Value::from(self.replica)),
+            ("job_id", Value::from(self.job_id.clone())),
+            ("amplitude", num(self.amplitude)),
+            ("omega", num(self.omega)),
+            ("phase", text(&self.phase)),
+            (
+                "stationary",
+                self.stationary.map_or(Value::Null, Value::from),
+            ),
+            ("trend", text(&self.trend)),
+            ("trust", text(&self.trust)),
+            ("simulated_time", num(self.simulated_time)),
+            ("wall_seconds", num(self.wall_seconds)),
+            ("events", self.events.map_or(Value::Null, Value::from)),
+            ("finished_at", num(self.finished_at)),
+        ]
     }
 }
+
+/// The columns every row has, after the axis columns.
+pub const FIXED: [&str; 14] = [
+    "sweep",
+    "point",
+    "replica",
+    "job_id",
+    "amplitude",
+    "omega",
+    "phase",
+    "stationary",
+    "trend",
+    "trust",
+    "simulated_time",
+    "wall_seconds",
+    "events",
+    "finished_at",
+];
+
+/// One element of a series: `(name, index, value)`.
+pub type SeriesEntry = (String, usize, Value);
 
 /// Scalar leaves of a JSON value with dotted paths (`events.pair_collisions`) into `out`; every
 /// array is a series and goes to `series` instead: `(name, index, value)` per element leaf, the
@@ -137,17 +140,17 @@ impl JsonWriter {
 /// (`obs.stationarity.checks.relative_change`, `obs.location_changes.1`).
 fn flatten(
     prefix: &str,
-    v: &serde_json::Value,
-    out: &mut BTreeMap<String, String>,
-    series: &mut Vec<(String, usize, String)>,
+    v: &Value,
+    out: &mut BTreeMap<String, Value>,
+    series: &mut Vec<SeriesEntry>,
 ) {
     match v {
-        serde_json::Value::Object(m) => {
+        Value::Object(m) => {
             for (k, x) in m {
                 flatten(&join(prefix, k), x, out, series);
             }
         }
-        serde_json::Value::Array(a) => {
+        Value::Array(a) => {
             for (k, x) in a.iter().enumerate() {
                 let mut leaves = BTreeMap::new();
                 // Nested arrays inside an element stay in that element's series, flattened.
@@ -163,52 +166,35 @@ fn flatten(
             }
         }
         other => {
-            out.insert(prefix.to_string(), scalar_text(other));
+            out.insert(prefix.to_string(), other.clone());
         }
     }
 }
 
 /// Every scalar leaf of a JSON value with dotted paths, arrays indexed (`a.0`).
-fn flatten_all(prefix: &str, v: &serde_json::Value, out: &mut BTreeMap<String, String>) {
+fn flatten_all(prefix: &str, v: &Value, out: &mut BTreeMap<String, Value>) {
     match v {
-        serde_json::Value::Object(m) => {
+        Value::Object(m) => {
             for (k, x) in m {
                 flatten_all(&join(prefix, k), x, out);
             }
         }
-        serde_json::Value::Array(a) => {
+        Value::Array(a) => {
             for (k, x) in a.iter().enumerate() {
                 flatten_all(&join(prefix, &k.to_string()), x, out);
             }
         }
         other => {
-            out.insert(prefix.to_string(), scalar_text(other));
+            out.insert(prefix.to_string(), other.clone());
         }
     }
 }
 
-/// The names [`flatten`] gives the scalar leaves of `v` (its `out` keys), without their values
-/// and without the series: the first pass of a CSV export.
-fn scalar_names(prefix: &str, v: &serde_json::Value, out: &mut BTreeSet<String>) {
+/// The text of a scalar in a CSV cell: empty for null, strings unquoted.
+fn scalar_text(v: &Value) -> String {
     match v {
-        serde_json::Value::Object(m) => {
-            for (k, x) in m {
-                scalar_names(&join(prefix, k), x, out);
-            }
-        }
-        serde_json::Value::Array(_) => {}
-        _ => {
-            if !out.contains(prefix) {
-                out.insert(prefix.to_string());
-            }
-        }
-    }
-}
-
-fn scalar_text(v: &serde_json::Value) -> String {
-    match v {
-        serde_json::Value::Null => String::new(),
-        serde_json::Value::String(s) => s.clone(),
+        Value::Null => String::new(),
+        Value::String(s) => s.clone(),
         other => other.to_string(),
     }
 }
@@ -229,41 +215,11 @@ fn csv_field(s: &str) -> String {
     }
 }
 
-fn opt<T: ToString>(v: &Option<T>) -> String {
-    v.as_ref().map(ToString::to_string).unwrap_or_default()
-}
-
-/// The header of the series CSV.
+/// The header of the series files (numbers, and text).
 pub const SERIES_HEADER: &str = "job_id,series,index,value\n";
 
-/// The series of every row in long format: a header `job_id,series,index,value`, then one line
-/// per element of every array of the observables and decision inputs.
-pub fn series_csv(rows: &[ExportRow]) -> String {
-    let mut out = Vec::from(SERIES_HEADER);
-    for r in rows {
-        write_series(&mut out, r, &scalars_and_series(r).1).expect("writes to memory");
-    }
-    String::from_utf8(out).expect("CSV is UTF-8")
-}
-
-/// The series lines of one row (`series`: its [`scalars_and_series`]).
-pub fn write_series(
-    w: &mut impl Write,
-    r: &ExportRow,
-    series: &[(String, usize, String)],
-) -> std::io::Result<()> {
-    let job = csv_field(&r.job_id);
-    for (name, index, value) in series {
-        writeln!(w, "{job},{},{index},{}", csv_field(name), csv_field(value))?;
-    }
-    Ok(())
-}
-
 /// The scalar columns (`obs.`- and `decided_on.`-prefixed) and the series of a row.
-#[allow(clippy::type_complexity)]
-pub fn scalars_and_series(
-    r: &ExportRow,
-) -> (BTreeMap<String, String>, Vec<(String, usize, String)>) {
+pub fn scalars_and_series(r: &ExportRow) -> (BTreeMap<String, Value>, Vec<SeriesEntry>) {
     let mut m = BTreeMap::new();
     let mut series = Vec::new();
     flatten("obs", &r.observables, &mut m, &mut series);
@@ -273,118 +229,223 @@ pub fn scalars_and_series(
     (m, series)
 }
 
-/// CSV with a header row, one row per result, scalar columns only: fixed columns, then one
-/// column per axis key (union over sweeps), `stationary` and `trust` (the result's trust mark,
-/// `report::trust`), then the `obs.`-prefixed scalar observables and `decided_on.`-prefixed
-/// decision inputs. Arrays are left out: see [`series_csv`].
-pub fn to_csv(rows: &[ExportRow]) -> String {
-    let mut columns = CsvColumns::default();
-    for r in rows {
-        columns.add(r);
+/// Writes a row's series: numbers (and missing numbers, as an empty value) to `numbers`, text
+/// and true/false entries to `text` where given.
+pub fn write_series(
+    numbers: &mut impl Write,
+    text: Option<&mut dyn Write>,
+    r: &ExportRow,
+    series: &[SeriesEntry],
+) -> std::io::Result<()> {
+    let job = csv_field(&r.job_id);
+    for (name, index, value) in series {
+        if matches!(value, Value::Number(_) | Value::Null) {
+            writeln!(
+                numbers,
+                "{job},{},{index},{}",
+                csv_field(name),
+                scalar_text(value)
+            )?;
+        }
     }
-    let mut out = Vec::new();
-    columns.write_header(&mut out).expect("writes to memory");
-    for r in rows {
-        columns
-            .write_row(&mut out, r, &scalars_and_series(r).0)
-            .expect("writes to memory");
-    }
-    String::from_utf8(out).expect("CSV is UTF-8")
-}
-
-/// The columns of a CSV export: the axis keys and the scalar names over every row (the first
-/// pass of a streamed export; [`to_csv`]).
-#[derive(Debug, Default)]
-pub struct CsvColumns {
-    params: BTreeSet<String>,
-    extra: BTreeSet<String>,
-}
-
-/// The columns every row has, between the axis keys and the scalar observables.
-const FIXED_AFTER_PARAMS: [&str; 10] = [
-    "amplitude",
-    "omega",
-    "phase",
-    "stationary",
-    "trend",
-    "trust",
-    "simulated_time",
-    "wall_seconds",
-    "events",
-    "finished_at",
-];
-
-impl CsvColumns {
-    /// Adds a row's axis keys and scalar names.
-    pub fn add(&mut self, r: &ExportRow) {
-        for k in r.params.keys() {
-            if !self.params.contains(k) {
-                self.params.insert(k.clone());
+    if let Some(w) = text {
+        for (name, index, value) in series {
+            if matches!(value, Value::String(_) | Value::Bool(_)) {
+                writeln!(
+                    w,
+                    "{job},{},{index},{}",
+                    csv_field(name),
+                    csv_field(&scalar_text(value))
+                )?;
             }
         }
-        scalar_names("obs", &r.observables, &mut self.extra);
-        if let Some(d) = &r.decided_on {
-            scalar_names("decided_on", d, &mut self.extra);
+    }
+    Ok(())
+}
+
+/// What the first pass knows of a scalar column.
+#[derive(Debug, Clone)]
+struct ColumnSeen {
+    /// The first non-empty value.
+    first: Value,
+    /// Rows with a non-empty value.
+    filled: usize,
+    /// Whether a non-empty value differs from the first.
+    varies: bool,
+}
+
+/// The columns of an export (module doc): the first pass adds every row, the second writes.
+#[derive(Debug, Default)]
+pub struct Columns {
+    axes: Vec<String>,
+    seen: BTreeMap<String, Option<ColumnSeen>>,
+    rows: usize,
+    all: bool,
+    /// The scalar columns kept, fixed after the first pass.
+    kept: Option<Vec<String>>,
+}
+
+impl Columns {
+    /// Columns that keep every scalar (`all`) or only those that carry information.
+    pub fn new(all: bool) -> Columns {
+        Columns {
+            all,
+            ..Columns::default()
         }
     }
 
-    /// The header line.
-    pub fn write_header(&self, w: &mut impl Write) -> std::io::Result<()> {
-        let header: Vec<String> = ["sweep", "point", "replica", "job_id"]
+    /// Adds a row of the first pass (`scalars`: its [`scalars_and_series`] scalars).
+    pub fn add(&mut self, r: &ExportRow, scalars: &BTreeMap<String, Value>) {
+        for (k, _) in &r.params {
+            if !self.axes.contains(k) {
+                self.axes.push(k.clone());
+            }
+        }
+        self.rows += 1;
+        for (k, v) in scalars {
+            let entry = self.seen.entry(k.clone()).or_insert(None);
+            if v.is_null() {
+                continue;
+            }
+            match entry {
+                None => {
+                    *entry = Some(ColumnSeen {
+                        first: v.clone(),
+                        filled: 1,
+                        varies: false,
+                    })
+                }
+                Some(c) => {
+                    c.filled += 1;
+                    c.varies |= c.first != *v;
+                }
+            }
+        }
+    }
+
+    /// The scalar columns written: all, or those with a value somewhere that differs between
+    /// rows (a value in some rows only differs from the empty ones); with one row, every
+    /// column with a value.
+    fn kept(&self) -> Vec<String> {
+        self.seen
             .iter()
-            .map(|s| s.to_string())
-            .chain(self.params.iter().cloned())
-            .chain(FIXED_AFTER_PARAMS.iter().map(|s| s.to_string()))
-            .chain(self.extra.iter().cloned())
-            .map(|h| csv_field(&h))
+            .filter(|(_, c)| {
+                self.all
+                    || c.as_ref()
+                        .is_some_and(|c| self.rows < 2 || c.varies || c.filled < self.rows)
+            })
+            .map(|(k, _)| k.clone())
+            .collect()
+    }
+
+    /// The scalar columns left out (empty or constant), for a note.
+    pub fn left_out(&self) -> usize {
+        self.seen.len()
+            - self
+                .kept
+                .as_ref()
+                .map_or_else(|| self.kept().len(), Vec::len)
+    }
+
+    /// Ends the first pass.
+    pub fn finish_first_pass(&mut self) {
+        self.kept = Some(self.kept());
+    }
+
+    fn kept_names(&self) -> &[String] {
+        self.kept.as_deref().unwrap_or(&[])
+    }
+
+    /// Every column name, in order.
+    pub fn names(&self) -> Vec<String> {
+        self.axes
+            .iter()
+            .cloned()
+            .chain(FIXED.iter().map(|s| s.to_string()))
+            .chain(self.kept_names().iter().cloned())
+            .collect()
+    }
+
+    /// The values of a row in column order (null where the row lacks the column).
+    fn values(&self, r: &ExportRow, scalars: &BTreeMap<String, Value>) -> Vec<Value> {
+        let mut out: Vec<Value> = self
+            .axes
+            .iter()
+            .map(|a| {
+                r.params
+                    .iter()
+                    .find(|(k, _)| k == a)
+                    .map_or(Value::Null, |(_, v)| v.clone())
+            })
             .collect();
+        out.extend(r.fixed().into_iter().map(|(_, v)| v));
+        out.extend(
+            self.kept_names()
+                .iter()
+                .map(|k| scalars.get(k).cloned().unwrap_or(Value::Null)),
+        );
+        out
+    }
+
+    /// The CSV header line.
+    pub fn write_csv_header(&self, w: &mut impl Write) -> std::io::Result<()> {
+        let header: Vec<String> = self.names().iter().map(|h| csv_field(h)).collect();
         writeln!(w, "{}", header.join(","))
     }
 
-    /// The line of one row (`scalars`: its [`scalars_and_series`] scalars); a column the row
-    /// lacks is empty.
-    pub fn write_row(
+    /// The CSV line of one row; a column the row lacks is empty.
+    pub fn write_csv_row(
         &self,
         w: &mut impl Write,
         r: &ExportRow,
-        scalars: &BTreeMap<String, String>,
+        scalars: &BTreeMap<String, Value>,
     ) -> std::io::Result<()> {
-        let mut cells = vec![
-            r.sweep.clone(),
-            r.point.to_string(),
-            r.replica.to_string(),
-            r.job_id.clone(),
-        ];
-        for p in &self.params {
-            cells.push(match r.params.get(p) {
-                Some(serde_json::Value::String(s)) => s.clone(),
-                Some(v) => v.to_string(),
-                None => String::new(),
-            });
-        }
-        cells.extend([
-            opt(&r.amplitude),
-            opt(&r.omega),
-            opt(&r.phase),
-            opt(&r.stationary),
-            opt(&r.trend),
-            opt(&r.trust),
-            opt(&r.simulated_time),
-            opt(&r.wall_seconds),
-            opt(&r.events),
-            opt(&r.finished_at),
-        ]);
-        for k in &self.extra {
-            cells.push(scalars.get(k).cloned().unwrap_or_default());
-        }
-        let line: Vec<String> = cells.iter().map(|c| csv_field(c)).collect();
+        let line: Vec<String> = self
+            .values(r, scalars)
+            .iter()
+            .map(|v| csv_field(&scalar_text(v)))
+            .collect();
         writeln!(w, "{}", line.join(","))
+    }
+
+    /// One row as a JSON object on one line, with the CSV's columns in the CSV's order (a
+    /// column the row lacks is null).
+    pub fn json_row(&self, r: &ExportRow, scalars: &BTreeMap<String, Value>) -> String {
+        let cells: Vec<String> = self
+            .names()
+            .iter()
+            .zip(self.values(r, scalars))
+            .map(|(k, v)| format!("{}: {}", Value::from(k.as_str()), v))
+            .collect();
+        format!("{{{}}}", cells.join(", "))
+    }
+}
+
+/// Writes a JSON array one row at a time: `[`, one object per line, `]`.
+#[derive(Debug, Default)]
+pub struct JsonWriter {
+    rows: usize,
+}
+
+impl JsonWriter {
+    /// Writes one row (a [`Columns::json_row`]).
+    pub fn row(&mut self, w: &mut impl Write, object: &str) -> std::io::Result<()> {
+        w.write_all(if self.rows == 0 { b"[\n  " } else { b",\n  " })?;
+        w.write_all(object.as_bytes())?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Closes the array (`[]` for no row) and ends the line.
+    pub fn finish(self, w: &mut impl Write) -> std::io::Result<()> {
+        w.write_all(if self.rows == 0 { b"[]\n" } else { b"\n]\n" })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::json;
 
     #[test]
     fn csv_quotes_fields_with_separators() {
@@ -395,46 +456,48 @@ mod tests {
 
     #[test]
     fn flatten_keeps_scalars_and_sends_arrays_to_series() {
-        let v = serde_json::json!({"a": {"b": 1, "c": [2.5, null]}, "d": "x",
+        let v = json!({"a": {"b": 1, "c": [2.5, null]}, "d": "x",
             "e": [[0.5, 3.0], [1.0, 4.0]], "f": [{"q": "T", "ok": false}]});
         let mut m = BTreeMap::new();
         let mut series = Vec::new();
         flatten("obs", &v, &mut m, &mut series);
         assert_eq!(m.len(), 2, "{m:?}");
-        assert_eq!(m["obs.a.b"], "1");
-        assert_eq!(m["obs.d"], "x");
-        let has = |name: &str, k: usize, value: &str| {
+        assert_eq!(m["obs.a.b"], json!(1));
+        assert_eq!(m["obs.d"], json!("x"));
+        let has = |name: &str, k: usize, value: Value| {
             series
                 .iter()
-                .any(|(n, i, x)| n == name && *i == k && x == value)
+                .any(|(n, i, x)| n == name && *i == k && *x == value)
         };
-        assert!(has("obs.a.c", 0, "2.5"), "{series:?}");
-        assert!(has("obs.a.c", 1, ""), "{series:?}");
-        assert!(has("obs.e.0", 1, "1.0"), "{series:?}");
-        assert!(has("obs.e.1", 1, "4.0"), "{series:?}");
-        assert!(has("obs.f.q", 0, "T"), "{series:?}");
-        assert!(has("obs.f.ok", 0, "false"), "{series:?}");
+        assert!(has("obs.a.c", 0, json!(2.5)), "{series:?}");
+        assert!(has("obs.a.c", 1, Value::Null), "{series:?}");
+        assert!(has("obs.e.0", 1, json!(1.0)), "{series:?}");
+        assert!(has("obs.e.1", 1, json!(4.0)), "{series:?}");
+        assert!(has("obs.f.q", 0, json!("T")), "{series:?}");
+        assert!(has("obs.f.ok", 0, json!(false)), "{series:?}");
         assert_eq!(series.len(), 8);
     }
 
-    /// A row with nested objects, arrays, an empty object and array, a string with a newline and
-    /// a quote, and a null.
-    fn sample_row(job: &str, extra: serde_json::Value) -> ExportRow {
+    /// A row of sweep `s` with axes `gamma` then `e_star` (not alphabetical) and observables
+    /// `obs`.
+    fn row(job: &str, gamma: f64, obs: Value) -> ExportRow {
         ExportRow {
             sweep: "s".into(),
             point: 3,
             replica: 1,
             job_id: job.into(),
-            params: BTreeMap::from([("drive.gamma".to_string(), serde_json::json!(2.5))]),
+            params: vec![
+                ("drive.gamma".to_string(), json!(gamma)),
+                ("drive.e_star".to_string(), json!(2.0)),
+            ],
             amplitude: Some(0.25),
             omega: None,
             phase: Some("g".into()),
             stationary: Some(false),
             trend: Some("heating".into()),
             trust: Some("~".into()),
-            decided_on: Some(serde_json::json!({"reason": "line one\nline \"two\"", "t": [1, 2]})),
-            observables: serde_json::json!({"a": {"b": 1.5, "e": {}, "f": []}, "n": null,
-                "s": [[0.5, 1.0], [2.0, 3.0]], "x": extra}),
+            decided_on: Some(json!({"reason": "line one\nline \"two\"", "t": [1, 2]})),
+            observables: obs,
             simulated_time: Some(10.0),
             wall_seconds: Some(0.5),
             events: Some(7),
@@ -442,44 +505,120 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_streamed_json_is_the_pretty_printed_array() {
-        let rows = [
-            sample_row("a", serde_json::json!(1)),
-            sample_row("b", serde_json::json!({"deep": [{"k": "v"}]})),
-        ];
-        for n in 0..=rows.len() {
-            let want = serde_json::to_string_pretty(&rows[..n]).unwrap() + "\n";
-            assert_eq!(to_json(&rows[..n]), want, "{n} row(s)");
+    /// Both passes over `rows`: the columns, the CSV and the JSON.
+    fn export(rows: &[ExportRow], all: bool) -> (Columns, String, String) {
+        let mut columns = Columns::new(all);
+        for r in rows {
+            columns.add(r, &scalars_and_series(r).0);
         }
+        columns.finish_first_pass();
+        let mut csv = Vec::new();
+        let mut json = Vec::new();
+        let mut jw = JsonWriter::default();
+        columns.write_csv_header(&mut csv).unwrap();
+        for r in rows {
+            let s = scalars_and_series(r).0;
+            columns.write_csv_row(&mut csv, r, &s).unwrap();
+            jw.row(&mut json, &columns.json_row(r, &s)).unwrap();
+        }
+        jw.finish(&mut json).unwrap();
+        (
+            columns,
+            String::from_utf8(csv).unwrap(),
+            String::from_utf8(json).unwrap(),
+        )
     }
 
     #[test]
-    fn the_first_pass_finds_the_columns_that_flatten_writes() {
+    fn empty_and_constant_columns_are_left_out_unless_all() {
         let rows = vec![
-            sample_row("a", serde_json::json!(1)),
-            sample_row("b", serde_json::json!({"only_here": true, "list": [1]})),
+            row(
+                "a",
+                0.5,
+                json!({"t": 1.0, "unit": "E_cb", "gone": null, "some": 3}),
+            ),
+            row("b", 2.0, json!({"t": 2.5, "unit": "E_cb", "gone": null})),
         ];
-        let mut columns = CsvColumns::default();
-        let mut want = BTreeSet::new();
-        for r in &rows {
-            columns.add(r);
-            want.extend(scalars_and_series(r).0.into_keys());
-        }
-        assert_eq!(columns.extra, want);
-        assert!(
-            want.contains("obs.x.only_here") && want.contains("obs.x"),
-            "{want:?}"
-        );
-        // A column one row lacks is empty in that row.
-        let csv = to_csv(&rows);
+        let (columns, csv, _) = export(&rows, false);
         let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-        let k = header.iter().position(|h| *h == "obs.x.only_here").unwrap();
-        assert!(
-            !header.contains(&"obs.s"),
-            "the series stay out of the CSV: {header:?}"
+        // Axes first, in the sweep's order; then the fixed columns.
+        assert_eq!(header[..3], ["drive.gamma", "drive.e_star", "sweep"]);
+        assert_eq!(header[2..2 + FIXED.len()], FIXED);
+        // obs.t varies, obs.some is only in one row: kept. obs.unit is constant, obs.gone
+        // always empty, decided_on.reason constant: left out.
+        let extra: Vec<&str> = header[2 + FIXED.len()..].to_vec();
+        assert_eq!(extra, ["obs.some", "obs.t"], "{header:?}");
+        assert_eq!(columns.left_out(), 3);
+        let (_, all, _) = export(&rows, true);
+        let header: Vec<&str> = all.lines().next().unwrap().split(',').collect();
+        for c in ["obs.unit", "obs.gone", "decided_on.reason", "obs.t"] {
+            assert!(header.contains(&c), "{c}: {header:?}");
+        }
+        // One row: every column with a value stays (nothing to compare with).
+        let (_, one, _) = export(&rows[..1], false);
+        assert!(one.lines().next().unwrap().contains("obs.unit"), "{one}");
+    }
+
+    #[test]
+    fn the_json_has_the_csv_columns_in_order_with_typed_values() {
+        let rows = vec![
+            row("a", 0.5, json!({"t": 1.0, "s": [1, 2]})),
+            row("b", 2.0, json!({"t": 2.5})),
+        ];
+        let (columns, csv, json) = export(&rows, false);
+        assert!(json.starts_with("[\n"), "{json}");
+        let v: Vec<serde_json::Map<String, Value>> = serde_json::from_str(&json).unwrap();
+        assert_eq!(v.len(), 2);
+        let names = columns.names();
+        let header: Vec<String> = csv
+            .lines()
+            .next()
+            .unwrap()
+            .split(',')
+            .map(String::from)
+            .collect();
+        assert_eq!(header, names);
+        let mut keys: Vec<&String> = v[0].keys().collect();
+        let mut want: Vec<&String> = names.iter().collect();
+        keys.sort();
+        want.sort();
+        assert_eq!(keys, want);
+        // In the text, the keys come in column order.
+        let line = json.lines().nth(1).unwrap();
+        assert!(line.find("\"drive.gamma\"").unwrap() < line.find("\"drive.e_star\"").unwrap());
+        assert_eq!(v[1]["drive.gamma"], json!(2.0));
+        assert_eq!(v[1]["obs.t"], json!(2.5));
+        assert_eq!(v[0]["stationary"], json!(false));
+        assert_eq!(v[0]["trust"], json!("~"));
+        assert_eq!(v[0]["omega"], Value::Null);
+        // The series stay out of both.
+        assert!(!v[0].contains_key("obs.s"));
+        let mut empty = Vec::new();
+        JsonWriter::default().finish(&mut empty).unwrap();
+        assert_eq!(empty, b"[]\n");
+    }
+
+    #[test]
+    fn the_series_file_holds_numbers_and_the_text_file_the_rest() {
+        let r = row(
+            "a",
+            0.5,
+            json!({"s": [1.5, null], "checks": [{"quantity": "T_g", "ok": true, "x": 0.25}]}),
         );
-        assert_eq!(header.len(), 4 + 1 + FIXED_AFTER_PARAMS.len() + want.len());
-        assert!(k >= 4 + 1 + FIXED_AFTER_PARAMS.len());
+        let (_, series) = scalars_and_series(&r);
+        let (mut numbers, mut text) = (Vec::new(), Vec::new());
+        write_series(&mut numbers, Some(&mut text), &r, &series).unwrap();
+        let numbers = String::from_utf8(numbers).unwrap();
+        let text = String::from_utf8(text).unwrap();
+        for line in numbers.lines() {
+            let value = line.rsplit(',').next().unwrap();
+            assert!(value.is_empty() || value.parse::<f64>().is_ok(), "{line}");
+        }
+        assert!(numbers.contains("a,obs.s,0,1.5\na,obs.s,1,\n"), "{numbers}");
+        assert!(numbers.contains("a,obs.checks.x,0,0.25"), "{numbers}");
+        assert!(text.contains("a,obs.checks.quantity,0,T_g"), "{text}");
+        assert!(text.contains("a,obs.checks.ok,0,true"), "{text}");
+        // decided_on's array t = [1, 2] is numeric.
+        assert!(numbers.contains("a,decided_on.t,1,2"), "{numbers}");
     }
 }

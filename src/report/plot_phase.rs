@@ -19,6 +19,7 @@
 //! and labelled with the phases in branch order (`g/f`). Each branch's boundary points keep
 //! their own marker, since the boundaries of the branches are extracted separately.
 
+use super::chart::{Swatch, draw_legend, hand_ticks, sector, wrap};
 use crate::boundary::{PhaseMap, PlaneAxis, Slice};
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
@@ -163,7 +164,14 @@ fn range_of(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
         (10f64.powf(a - pad), 10f64.powf(b + pad))
     } else {
         let pad = ((hi - lo) * 0.06).max(if hi == 0.0 { 0.1 } else { hi.abs() * 0.05 });
-        (lo - pad, hi + pad)
+        // Non-negative values (Gamma, a force) keep the axis at or above zero, so that an
+        // overlay does not run into negative values no point can have.
+        let low = if lo >= 0.0 {
+            (lo - pad).max(0.0)
+        } else {
+            lo - pad
+        };
+        (low, hi + pad)
     }
 }
 
@@ -244,6 +252,30 @@ pub fn phase_svg(
     branches_svg(map, &[slice], landmarks, chain_model, title)
 }
 
+/// How a map is drawn: the scale of its axes where the caller chooses (`None`: the plane's, so
+/// `E*` log and `Gamma` linear on a shaking map).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MapStyle {
+    pub x_log: Option<bool>,
+    pub y_log: Option<bool>,
+}
+
+/// A drawn map: the SVG and, for every drawn grid position, its pixel position in the SVG (what
+/// an HTML image map links from).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrawnMap {
+    pub svg: String,
+    /// `(x, y, pixel x, pixel y)` of every merged grid position ([`merge_branches`] order).
+    pub points: Vec<(f64, f64, i32, i32)>,
+}
+
+/// The width of the map's SVG: the plot, then the legend to its right.
+pub const MAP_WIDTH: u32 = 1240;
+/// The height of the map's SVG.
+pub const MAP_HEIGHT: u32 = 640;
+/// The width kept right of the plot for the legend.
+const LEGEND_WIDTH: u32 = 330;
+
 /// Draws the slices of a phase map that differ only in their start mode (the branches) as one
 /// SVG map: bistable points as split discs (module doc). One slice draws as [`phase_svg`].
 pub fn branches_svg(
@@ -253,50 +285,108 @@ pub fn branches_svg(
     chain_model: Option<Vec<(f64, f64)>>,
     title: &str,
 ) -> Result<String, String> {
+    branches_map(
+        map,
+        slices,
+        landmarks,
+        chain_model,
+        title,
+        MapStyle::default(),
+    )
+    .map(|m| m.svg)
+}
+
+/// [`branches_svg`] with the axes' scales of `style`, and the pixel positions of the points.
+pub fn branches_map(
+    map: &PhaseMap,
+    slices: &[&Slice],
+    landmarks: Option<Landmarks>,
+    chain_model: Option<Vec<(f64, f64)>>,
+    title: &str,
+    style: MapStyle,
+) -> Result<DrawnMap, String> {
     let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
         return Err("a phase diagram needs two numeric axes".to_string());
     };
     if slices.is_empty() {
         return Err("no slice to draw".to_string());
     }
+    let x_log = style.x_log.unwrap_or(xa.log);
+    let y_log = style.y_log.unwrap_or(ya.log);
     let all = || slices.iter().flat_map(|s| s.points.iter());
-    let x_range = range_of(all().map(|p| p.x), xa.log);
-    let y_range = range_of(all().map(|p| p.y), ya.log);
-    // Headroom above the points for the legend (upper left): 0.3 of the points' span, more when
-    // the legend has more rows than that holds (about 15 px a row in a plot area of about
-    // 520 px), as a map of several branches has (bistable entry, one boundary entry each).
-    let merged = merge_branches(slices);
-    let mut phases: Vec<&str> = merged
-        .iter()
-        .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
-        .collect();
-    phases.sort();
-    phases.dedup();
-    let rows = phases.len()
-        + 3 // the landmark lines (at most)
-        + usize::from(chain_model.is_some())
-        + usize::from(merged.iter().any(|p| !p.trusted))
-        + usize::from(merged.iter().any(|p| p.trusted && p.label_kept))
-        + usize::from(merged.iter().any(DrawnPoint::bistable))
-        + 1 // uncertainty bars
-        + slices.len();
-    let above = ((rows * 15 + 30) as f64 / 520.0).clamp(0.23, 0.6);
-    let headroom = above / (1.0 - above);
-    let y_range = if ya.log {
-        (
-            y_range.0,
-            y_range.1 * (y_range.1 / y_range.0).powf(headroom),
-        )
-    } else {
-        (y_range.0, y_range.1 + headroom * (y_range.1 - y_range.0))
-    };
+    if x_log && !all().all(|p| p.x > 0.0) {
+        return Err(format!("{}: a log axis needs positive values", xa.label));
+    }
+    if y_log && !all().all(|p| p.y > 0.0) {
+        return Err(format!("{}: a log axis needs positive values", ya.label));
+    }
+    let x_range = range_of(all().map(|p| p.x), x_log);
+    let y_range = range_of(all().map(|p| p.y), y_log);
+    let x_grid: Vec<f64> = all().map(|p| p.x).collect();
+    let y_grid: Vec<f64> = all().map(|p| p.y).collect();
+    let ticks = (
+        super::svg::grid_ticks(&x_grid, x_range, x_log, 14),
+        super::svg::grid_ticks(&y_grid, y_range, y_log, 14),
+    );
+    let lines = overlay_lines(map, landmarks, chain_model, (x_range, y_range), x_log);
+    let mut svg = String::new();
+    let points;
+    {
+        let root = SVGBackend::with_string(&mut svg, (MAP_WIDTH, MAP_HEIGHT)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let x_desc = if x_log {
+            format!("{} (log scale)", xa.label)
+        } else {
+            xa.label.clone()
+        };
+        let y_desc = if y_log {
+            format!("{} (log scale)", ya.label)
+        } else {
+            ya.label.clone()
+        };
+        let text = Texts {
+            title,
+            x_desc: &x_desc,
+            y_desc: &y_desc,
+            note: no_boundary_note(slices),
+        };
+        let x = x_range.0..x_range.1;
+        let y = y_range.0..y_range.1;
+        points = match (x_log, y_log) {
+            (true, true) => draw(
+                &root,
+                x.log_scale(),
+                y.log_scale(),
+                slices,
+                &lines,
+                &text,
+                &ticks,
+            ),
+            (true, false) => draw(&root, x.log_scale(), y, slices, &lines, &text, &ticks),
+            (false, true) => draw(&root, x, y.log_scale(), slices, &lines, &text, &ticks),
+            (false, false) => draw(&root, x, y, slices, &lines, &text, &ticks),
+        }?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(DrawnMap { svg, points })
+}
+
+/// The overlay lines of a map (the landmarks of a shaking map, the chain model), clipped to the
+/// plot's ranges `(x, y)`.
+fn overlay_lines(
+    map: &PhaseMap,
+    landmarks: Option<Landmarks>,
+    chain_model: Option<Vec<(f64, f64)>>,
+    (x_range, y_range): ((f64, f64), (f64, f64)),
+    x_log: bool,
+) -> Vec<Line> {
     let mut lines: Vec<Line> = Vec::new();
     if let (Some(l), true) = (landmarks, map.shaking) {
         let n = 300;
         let xs: Vec<f64> = (0..=n)
             .map(|k| {
                 let t = k as f64 / n as f64;
-                if xa.log {
+                if x_log {
                     10f64.powf(x_range.0.log10() + t * (x_range.1.log10() - x_range.0.log10()))
                 } else {
                     x_range.0 + t * (x_range.1 - x_range.0)
@@ -342,58 +432,51 @@ pub fn branches_svg(
             vec![line],
         ));
     }
-    let mut svg = String::new();
+    lines
+}
+
+/// The texts of a map: title, axis names, and the note saying why no boundary is drawn.
+struct Texts<'a> {
+    title: &'a str,
+    x_desc: &'a str,
+    y_desc: &'a str,
+    note: Option<String>,
+}
+
+/// Why a map has no boundary point, in words (`None` when it has one).
+pub fn no_boundary_note(slices: &[&Slice]) -> Option<String> {
+    if slices
+        .iter()
+        .any(|s| s.boundaries.values().any(|b| !b.is_empty()))
     {
-        let root = SVGBackend::with_string(&mut svg, (900, 640)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let x_desc = if xa.log {
-            format!("{} (log scale)", xa.label)
-        } else {
-            xa.label.clone()
-        };
-        let y_desc = if ya.log {
-            format!("{} (log scale)", ya.label)
-        } else {
-            ya.label.clone()
-        };
-        let x = x_range.0..x_range.1;
-        let y = y_range.0..y_range.1;
-        match (xa.log, ya.log) {
-            (true, true) => draw(
-                &root,
-                x.log_scale(),
-                y.log_scale(),
-                slices,
-                &lines,
-                title,
-                &x_desc,
-                &y_desc,
-            ),
-            (true, false) => draw(
-                &root,
-                x.log_scale(),
-                y,
-                slices,
-                &lines,
-                title,
-                &x_desc,
-                &y_desc,
-            ),
-            (false, true) => draw(
-                &root,
-                x,
-                y.log_scale(),
-                slices,
-                &lines,
-                title,
-                &x_desc,
-                &y_desc,
-            ),
-            (false, false) => draw(&root, x, y, slices, &lines, title, &x_desc, &y_desc),
-        }?;
-        root.present().map_err(|e| e.to_string())?;
+        return None;
     }
-    Ok(svg)
+    let points: Vec<&crate::boundary::MapPoint> =
+        slices.iter().flat_map(|s| s.points.iter()).collect();
+    let trusted: Vec<&&crate::boundary::MapPoint> = points.iter().filter(|p| p.trusted).collect();
+    let mut phases: Vec<&str> = trusted.iter().map(|p| p.phase.as_str()).collect();
+    phases.sort();
+    phases.dedup();
+    let untrusted = points.len() - trusted.len();
+    Some(if trusted.is_empty() {
+        format!(
+            "No boundary: none of the {} points is converged (all hollow, their labels may \
+             still change); resume the sweep, or --include-unconverged",
+            points.len()
+        )
+    } else if phases.len() == 1 {
+        format!(
+            "No boundary: every converged point is {}{}",
+            phases[0],
+            if untrusted > 0 {
+                format!(" ({untrusted} unconverged point(s) left out)")
+            } else {
+                String::new()
+            }
+        )
+    } else {
+        "No boundary: too few converged points to join two phases by an edge".to_string()
+    })
 }
 
 fn draw<XR, YR>(
@@ -402,10 +485,9 @@ fn draw<XR, YR>(
     y: YR,
     slices: &[&Slice],
     lines: &[Line],
-    title: &str,
-    x_desc: &str,
-    y_desc: &str,
-) -> Result<(), String>
+    text: &Texts,
+    ticks: &(Vec<f64>, Vec<f64>),
+) -> Result<Vec<(f64, f64, i32, i32)>, String>
 where
     XR: AsRangedCoord<Value = f64>,
     YR: AsRangedCoord<Value = f64>,
@@ -414,29 +496,45 @@ where
 {
     let err = |e: DrawingAreaErrorKind<_>| e.to_string();
     let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 20))
+        .caption(text.title, ("sans-serif", 20))
         .margin(15)
+        .margin_right(15 + LEGEND_WIDTH)
         .x_label_area_size(45)
         .y_label_area_size(60)
         .build_cartesian_2d(x, y)
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc(x_desc)
-        .y_desc(y_desc)
-        .light_line_style(WHITE)
+        .x_desc(text.x_desc)
+        .y_desc(text.y_desc)
+        .disable_mesh()
+        .x_label_formatter(&|_| String::new())
+        .y_label_formatter(&|_| String::new())
+        .set_all_tick_mark_size(0)
         .draw()
         .map_err(err)?;
+    hand_ticks(root, chart.plotting_area(), &ticks.0, &ticks.1).map_err(err)?;
+    if let Some(note) = &text.note {
+        let (xr, yr) = chart.plotting_area().get_pixel_range();
+        let words = wrap(note, 60);
+        for (k, line) in words.iter().enumerate() {
+            root.draw(&Text::new(
+                line.clone(),
+                (xr.start + 12, yr.start + 10 + 18 * k as i32),
+                ("sans-serif", 15).into_font().color(&RGBColor(170, 0, 0)),
+            ))
+            .map_err(err)?;
+        }
+    }
+    let mut legend: Vec<(String, Swatch)> = Vec::new();
     for (label, color, parts) in lines {
         let color = *color;
         for (k, part) in parts.iter().enumerate() {
-            let s = chart
+            chart
                 .draw_series(LineSeries::new(part.iter().copied(), color.stroke_width(2)))
                 .map_err(err)?;
             if k == 0 {
-                s.label(label.as_str()).legend(move |(px, py)| {
-                    PathElement::new(vec![(px, py), (px + 18, py)], color.stroke_width(2))
-                });
+                legend.push((label.clone(), Swatch::Line(color)));
             }
         }
     }
@@ -466,17 +564,12 @@ where
                         Circle::new((p.x, p.y), radius, style)
                     }),
             )
-            .map_err(err)?
-            .label(phase)
-            .legend(move |(px, py)| Circle::new((px + 9, py), 5, color.filled()));
+            .map_err(err)?;
+        legend.push((phase.to_string(), Swatch::Dot(color)));
     }
     if points.iter().any(|p| !p.trusted) {
         let grey = RGBColor(90, 90, 90);
-        chart
-            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-            .map_err(err)?
-            .label("hollow: label may change")
-            .legend(move |(px, py)| Circle::new((px + 9, py), 5, grey.stroke_width(2)));
+        legend.push(("hollow: label may change".to_string(), Swatch::Ring(grey)));
     }
     // Not stationary, label kept by the trend (a heating gas, a cooling solid, a coarsening
     // coexistence): a white centre in the filled disc.
@@ -491,13 +584,11 @@ where
                 kept.iter()
                     .map(|p| Circle::new((p.x, p.y), centre, WHITE.filled())),
             )
-            .map_err(err)?
-            .label("white centre: drifting, label kept (~)")
-            .legend(move |(px, py)| {
-                EmptyElement::at((px + 9, py))
-                    + Circle::new((0, 0), 5, RGBColor(90, 90, 90).filled())
-                    + Circle::new((0, 0), 2, WHITE.filled())
-            });
+            .map_err(err)?;
+        legend.push((
+            "white centre: drifting, label kept (~)".to_string(),
+            Swatch::Kept,
+        ));
     }
     let bistable: Vec<&DrawnPoint> = points.iter().filter(|p| p.bistable()).collect();
     if !bistable.is_empty() {
@@ -557,22 +648,11 @@ where
         } else {
             format!("anticlockwise from the top: {}", names.join(", "))
         };
-        let greys = [RGBColor(60, 60, 60), RGBColor(190, 190, 190)];
-        chart
-            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-            .map_err(err)?
-            .label(format!(
-                "split disc: bistable ({how}; text: phases {})",
-                short.join("/")
-            ))
-            .legend(move |(px, py)| {
-                let centre = |v: Vec<(i32, i32)>| -> Vec<(i32, i32)> {
-                    v.into_iter().map(|(a, b)| (a + px + 9, b + py)).collect()
-                };
-                EmptyElement::at((0, 0))
-                    + Polygon::new(centre(sector(0, n, 6)), greys[0].filled())
-                    + Polygon::new(centre(sector(1, n, 6)), greys[1].filled())
-            });
+        legend.push((format!("split disc: bistable ({how})"), Swatch::Split(n)));
+        legend.push((
+            format!("text by the disc: phases {}", short.join("/")),
+            Swatch::None,
+        ));
     }
     // Uncertainty of each boundary point: the straddling edge's extent along each axis.
     let bars: Vec<Vec<(f64, f64)>> = slices
@@ -592,9 +672,11 @@ where
                 bars.into_iter()
                     .map(|bar| PathElement::new(bar, grey.stroke_width(1))),
             )
-            .map_err(err)?
-            .label("uncertainty (straddling edge)")
-            .legend(move |(px, py)| PathElement::new(vec![(px, py), (px + 18, py)], grey));
+            .map_err(err)?;
+        legend.push((
+            "uncertainty (straddling edge)".to_string(),
+            Swatch::Line(grey),
+        ));
     }
     // Each branch's boundary points with their own colour (the first black).
     const BRANCH_COLOURS: [RGBColor; 3] = [
@@ -624,37 +706,19 @@ where
                     .iter()
                     .map(|&(bx, by)| Cross::new((bx, by), 4, color.stroke_width(2))),
             )
-            .map_err(err)?
-            .label(label)
-            .legend(move |(px, py)| Cross::new((px + 9, py), 4, color.stroke_width(2)));
+            .map_err(err)?;
+        legend.push((label, Swatch::Cross(color)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.85))
-        .draw()
-        .map_err(err)?;
-    Ok(())
-}
-
-/// Sector `k` of `n` of a disc of radius `r` in pixel offsets from its centre: two sectors are
-/// the left and the right half; more start at the top and go anticlockwise.
-fn sector(k: usize, n: usize, r: i32) -> Vec<(i32, i32)> {
-    let n = n.max(1);
-    let step = std::f64::consts::TAU / n as f64;
-    let a0 = std::f64::consts::FRAC_PI_2 + k as f64 * step;
-    let mut v = if n > 1 { vec![(0, 0)] } else { Vec::new() };
-    let arc = 24 / n.min(24);
-    for i in 0..=arc {
-        let a = a0 + step * i as f64 / arc as f64;
-        // Screen y grows downwards.
-        v.push((
-            (r as f64 * a.cos()).round() as i32,
-            (-r as f64 * a.sin()).round() as i32,
-        ));
-    }
-    v
+    // The legend right of the plot, level with its top: it hides no point.
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    draw_legend(root, (xr.end + 14, yr.start), &legend).map_err(err)?;
+    Ok(points
+        .iter()
+        .map(|p| {
+            let (px, py) = chart.backend_coord(&(p.x, p.y));
+            (p.x, p.y, px, py)
+        })
+        .collect())
 }
 
 /// The plane axis labels, for callers that describe a plot.
@@ -663,184 +727,5 @@ pub fn axis_names(map: &PhaseMap) -> Option<(&PlaneAxis, &PlaneAxis)> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn landmark_lines_follow_model_4_1_and_eq_4_15() {
-        // Standard wet 2D system: E_cb = 0.2844, s_crit = 0.0711, F_B = 4, N = 1200, L_x = 400.
-        let l = Landmarks {
-            energy_unit: 0.2844,
-            mass: 1.0,
-            gravity: 1.0,
-            diameter: 1.0,
-            wet: Some((0.0711, 4.0)),
-            layers: 3.0,
-        };
-        // On A = s_crit the amplitude from (Gamma, E*) is s_crit: A = v_w^2 / (Gamma g).
-        let e = 2.5;
-        let g = l.gamma_at_amplitude(e, 0.0711);
-        let v_w2 = 2.0 * e * 0.2844;
-        assert!((v_w2 / g - 0.0711).abs() < 1e-12);
-        // Eq. 4.15 at E* = 0: 1 + F_B / (M m g); at large E* the floor 1 - 1/M.
-        assert!((l.gamma_c(0.0).unwrap() - (1.0 + 4.0 / 3.0)).abs() < 1e-12);
-        assert!((l.gamma_c(100.0).unwrap() - (1.0 - 1.0 / 3.0)).abs() < 1e-12);
-    }
-
-    #[test]
-    fn chain_model_matches_eq_7_9() {
-        // The shear set-up of docs/model.md 1: F_B = E_cb / s_crit = 6 m g, L_x = 60 d:
-        // F_max = 0.9229 * 6 / 60 = 0.09229 (the value quoted in sweeps/shear_3d.toml).
-        let text = include_str!("../../tests/scenes/good/shear_3d.toml")
-            .replace("size = [12.0, 12.0, 6.0]", "size = [60.0, 12.0, 6.0]");
-        let scene = Scene::from_toml_str(&text, "test").unwrap();
-        let f = chain_model_f_max(&scene).unwrap();
-        assert!((f - 0.09229).abs() < 1e-12, "{f}");
-        // Dry scenes have no bridge force and no chain model.
-        let dry = Scene::from_toml_str(
-            &text
-                .replace("model = \"thin_thread\"", "model = \"none\"")
-                .replace("s_crit = 0.0625\n", "")
-                .replace("e_cb = 0.375\n", "")
-                .replace("temperature_over_ecb = 40.0", "temperature = 10.0"),
-            "test",
-        )
-        .unwrap();
-        assert_eq!(chain_model_f_max(&dry), None);
-    }
-
-    #[test]
-    fn chain_model_line_follows_the_other_axis() {
-        use crate::boundary::MapPoint;
-        // Plane: x = L_x (box.size[0]), y = F_max; the line F_c(L_x) = 0.9229 * 6 / L_x.
-        let base = include_str!("../../tests/scenes/good/shear_3d.toml");
-        let scene_of = |c: &[serde_json::Value]| {
-            let l_x = c[0].as_f64()?;
-            let text = base.replace(
-                "size = [12.0, 12.0, 6.0]",
-                &format!("size = [{l_x:?}, 12.0, 6.0]"),
-            );
-            Scene::from_toml_str(&text, "test").ok()
-        };
-        let point = |l_x: f64, f: f64| MapPoint {
-            coords: vec![serde_json::json!(l_x), serde_json::json!(f)],
-            x: l_x,
-            y: f,
-            phase: "s".into(),
-            votes: vec![Some("s".into())],
-            tie: false,
-            trusted: true,
-            label_kept: false,
-            amplitude: None,
-            omega: None,
-        };
-        let axis = |index: usize, key: &str| PlaneAxis {
-            index,
-            key: key.into(),
-            label: key.into(),
-            log: false,
-        };
-        let slice = Slice {
-            fixed: Vec::new(),
-            branch: None,
-            points: vec![
-                point(24.0, 0.1),
-                point(12.0, 0.1),
-                point(12.0, 0.5),
-                point(24.0, 0.5),
-            ],
-            boundaries: Default::default(),
-        };
-        let map = PhaseMap {
-            x: Some(axis(0, "box.size[0]")),
-            y: Some(axis(1, "drive.f_max")),
-            shaking: false,
-            slices: vec![slice.clone()],
-        };
-        let line = chain_model_line(&map, &slice, scene_of).unwrap();
-        assert_eq!(line.len(), 2);
-        for (&(x, y), l_x) in line.iter().zip([12.0, 24.0]) {
-            assert_eq!(x, l_x);
-            assert!((y - 0.9229 * 6.0 / l_x).abs() < 1e-12, "{y}");
-        }
-        // Without the F_max axis in the plane: no line.
-        let other = PhaseMap {
-            y: Some(axis(1, "contact.restitution")),
-            ..map.clone()
-        };
-        assert!(chain_model_line(&other, &slice, scene_of).is_none());
-        // The plot draws it with its legend.
-        let svg = phase_svg(&map, &slice, None, Some(line), "t").unwrap();
-        assert!(svg.contains("chain model, Eq. 7.9"));
-    }
-
-    #[test]
-    fn branches_merge_by_position_and_only_disagreeing_points_are_bistable() {
-        use crate::boundary::MapPoint;
-        let point = |x: f64, phase: &str, trusted: bool| MapPoint {
-            coords: vec![serde_json::json!(x)],
-            x,
-            y: 1.0,
-            phase: phase.into(),
-            votes: vec![Some(phase.into())],
-            tie: false,
-            trusted,
-            label_kept: false,
-            amplitude: None,
-            omega: None,
-        };
-        let slice = |branch: &str, points: Vec<MapPoint>| Slice {
-            fixed: Vec::new(),
-            branch: Some(branch.into()),
-            points,
-            boundaries: Default::default(),
-        };
-        // Hot: f, g, g at x = 1, 2, 3; cold: f, f at x = 1, 2 (unconverged at 2), and x = 4.
-        let hot = slice(
-            "hot",
-            vec![
-                point(1.0, "f", true),
-                point(2.0, "g", true),
-                point(3.0, "g", true),
-            ],
-        );
-        let cold = slice(
-            "cold",
-            vec![
-                point(1.0, "f", true),
-                point(2.0, "f", false),
-                point(4.0, "s", true),
-            ],
-        );
-        let merged = merge_branches(&[&hot, &cold]);
-        let xs: Vec<f64> = merged.iter().map(|p| p.x).collect();
-        assert_eq!(xs, vec![1.0, 2.0, 3.0, 4.0]);
-        let bistable: Vec<bool> = merged.iter().map(DrawnPoint::bistable).collect();
-        // Only x = 2 disagrees; a point only one branch has is not bistable.
-        assert_eq!(bistable, vec![false, true, false, false]);
-        assert_eq!(merged[1].phases, vec![Some("g".into()), Some("f".into())]);
-        assert!(!merged[1].trusted && merged[0].trusted);
-        assert_eq!(merged[3].phase(), "s");
-        assert_eq!(branch_name(&[&hot, &cold], 1), "cold start");
-    }
-
-    #[test]
-    fn two_sectors_are_the_left_and_the_right_half() {
-        let left = sector(0, 2, 10);
-        let right = sector(1, 2, 10);
-        // Both start at the centre; the left one spans x <= 0, the right one x >= 0, each from
-        // the top (screen y = -10) to the bottom (y = 10) or back.
-        assert_eq!((left[0], right[0]), ((0, 0), (0, 0)));
-        assert!(left.iter().all(|&(x, _)| x <= 0));
-        assert!(right.iter().all(|&(x, _)| x >= 0));
-        assert!(left.contains(&(-10, 0)) && right.contains(&(10, 0)));
-        assert_eq!((left[1], *left.last().unwrap()), ((0, -10), (0, 10)));
-        // One branch: a whole disc, no centre vertex.
-        let whole = sector(0, 1, 10);
-        assert!(
-            whole
-                .iter()
-                .all(|&(x, y)| (x * x + y * y - 100).abs() <= 20)
-        );
-    }
-}
+#[path = "plot_phase_tests.rs"]
+mod tests;

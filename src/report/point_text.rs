@@ -2,6 +2,7 @@
 //! it was decided on) and `wetgran inflection` (the fluid-gas inflection of T_g/E_cb against E*
 //! along each line of constant Gamma, docs/model.md 7). Pure functions of the stored rows.
 
+use super::lines::gamma_e_star;
 use crate::store::PointRow;
 use std::fmt::Write as _;
 use wetgran_core::observe::fluid_gas_inflection;
@@ -86,19 +87,6 @@ pub fn decision_text(p: &PointRow) -> String {
         );
     }
     out
-}
-
-/// `(Gamma, E*)` of a shaken scene (docs/model.md 4.1), from the drive as the scene gives it.
-fn gamma_e_star(scene: &wetgran_core::scene::Scene) -> Option<(f64, f64)> {
-    let (a, omega) = scene.drive_motion()?;
-    let unit = if scene.is_wet() && scene.e_cb() > 0.0 {
-        scene.e_cb()
-    } else {
-        scene.particles.mass * scene.gravity * scene.particles.diameter
-    };
-    let gamma = a * omega * omega / scene.gravity;
-    let e_star = 0.5 * scene.particles.mass * (a * omega).powi(2) / unit;
-    Some((gamma, e_star))
 }
 
 /// The lines of constant Gamma of a sweep's stored points: `(Gamma, [(E*, T_g / E_cb)])` of

@@ -96,6 +96,20 @@ impl Frame {
         )
     }
 
+    /// The frame of a saved state (a stored checkpoint) of a run of `scene`: what a report draws
+    /// of a finished job without running it again.
+    pub fn of_saved_state(state: &super::EngineState, scene: &Scene) -> Frame {
+        Frame::of_state(
+            scene,
+            state.dimension,
+            state.time,
+            [state.positions.clone(), state.velocities.clone()],
+            state.radii.clone(),
+            state.bridges.clone(),
+            state.counts.clone(),
+        )
+    }
+
     /// A frame from an engine's state (`[positions, velocities]` flat, particle-major) and the
     /// scene's box, boundaries, container motion and mass.
     fn of_state(

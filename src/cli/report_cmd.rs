@@ -1,0 +1,393 @@
+//! The commands that turn a sweep's database into pictures and pages: `wetgran plot` (the phase
+//! map, `report::plot_phase`), `wetgran lines` (the order
+//! parameters along lines of constant Gamma, `report::lines`) and `wetgran report` (a static HTML
+//! site of a sweep, `report::site`).
+
+use super::common::{Failure, exit};
+use crate::boundary::Extraction;
+use crate::report::boundaries_text::fixed_text;
+use crate::report::boundaries_text::{boundaries_table, chain_model_note, untrusted_points};
+use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
+use crate::report::lines_plot::lines_svg;
+use crate::report::plot_phase::{self, DrawnMap, MapStyle};
+use crate::report::site::{JobPictures, SiteInput, site};
+use crate::report::{ColourBy, profiles_svg, snapshot_svg};
+use crate::store::{Store, SweepRow};
+use clap::{Args, ValueEnum};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use wetgran_core::observe::Observables;
+use wetgran_core::scene::Scene;
+use wetgran_core::sim::Frame;
+
+/// The scale of a map's y axis (`Gamma` on a shaking map).
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum Scale {
+    /// Logarithmic where the sweep's axis is (`log = {...}` in the sweep file).
+    Auto,
+    Linear,
+    Log,
+}
+
+impl Scale {
+    /// `None` for auto, else whether the axis is logarithmic.
+    pub fn log(self) -> Option<bool> {
+        match self {
+            Scale::Auto => None,
+            Scale::Linear => Some(false),
+            Scale::Log => Some(true),
+        }
+    }
+}
+
+/// `wetgran report`.
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    #[arg(long, default_value = super::sweep_cmd::DEFAULT_DB)]
+    db: PathBuf,
+    /// The sweep (default: the one registered or updated last).
+    #[arg(long)]
+    sweep: Option<String>,
+    /// The folder to write the report into (created if missing; its files are replaced).
+    #[arg(short = 'o', long = "output")]
+    output: PathBuf,
+    /// Leave out the snapshots of the final configurations (each drawn from the job's stored
+    /// final state).
+    #[arg(long)]
+    no_snapshots: bool,
+    /// Let unconverged points carry boundaries too (as `boundaries` and `plot`).
+    #[arg(long)]
+    include_unconverged: bool,
+    /// Scale of the map's y axis (Gamma).
+    #[arg(long, value_enum, default_value = "auto")]
+    y_scale: Scale,
+}
+
+/// `wetgran lines`.
+#[derive(Debug, Args)]
+pub struct LinesArgs {
+    #[arg(long, default_value = super::sweep_cmd::DEFAULT_DB)]
+    db: PathBuf,
+    /// The sweep (default: the one registered or updated last).
+    #[arg(long)]
+    sweep: Option<String>,
+    /// The file to write: `.svg` (the panels) or `.csv` (one row per job).
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// Also write the CSV (one row per job) to this file.
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Print the table of lines (label changes, inflection) as JSON, points included.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The sweep `name`, or the one registered or updated last (said on stderr when there are
+/// several).
+pub(super) fn pick_sweep(store: &Store, name: Option<&str>) -> Result<SweepRow, Failure> {
+    if let Some(n) = name {
+        return Ok(store.sweep(n)?);
+    }
+    let mut all = store.sweeps()?;
+    all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
+    let last = all.pop().ok_or_else(|| {
+        Failure::BadInput(format!(
+            "{}: no sweep in this database",
+            store.path().display()
+        ))
+    })?;
+    if !all.is_empty() {
+        eprintln!("sweep {} (the latest; choose with --sweep)", last.name);
+    }
+    Ok(last)
+}
+
+pub(super) fn write_file(path: &Path, text: &str) -> Result<(), Failure> {
+    std::fs::write(path, text)
+        .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))
+}
+
+/// The lines of a sweep from its store.
+pub(super) fn sweep_lines(store: &Store, sweep: &SweepRow) -> Result<Lines, Failure> {
+    let lines = lines_of(sweep, &store.points(sweep.id)?);
+    if lines.lines.is_empty() {
+        return Err(Failure::BadInput(format!(
+            "sweep {}: no finished job of a shaken scene: lines of constant Gamma need the \
+             drive's Gamma and E* (and at least one finished job)",
+            sweep.name
+        )));
+    }
+    Ok(lines)
+}
+
+/// `wetgran plot`.
+pub(super) fn plot(
+    db: &Path,
+    name: Option<&str>,
+    output: &Path,
+    how: Extraction,
+    style: MapStyle,
+) -> ExitCode {
+    exit((|| {
+        let store = Store::open_existing(db)?;
+        let sweep = pick_sweep(&store, name)?;
+        let drawn = draw_map(&store, &sweep, how, style)?;
+        std::fs::write(output, drawn.svg)
+            .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;
+        eprintln!("wrote {}", output.display());
+        Ok(())
+    })())
+}
+
+/// `wetgran lines`.
+pub(super) fn lines(args: LinesArgs) -> ExitCode {
+    exit((|| {
+        let ext = args
+            .output
+            .as_ref()
+            .map(|p| p.extension().and_then(|e| e.to_str()).unwrap_or(""));
+        if let Some(e) = ext
+            && e != "svg"
+            && e != "csv"
+        {
+            return Err(Failure::BadInput(format!(
+                "-o {}: the file name must end in .svg or .csv",
+                args.output.as_ref().expect("given").display()
+            )));
+        }
+        let store = Store::open_existing(&args.db)?;
+        let sweep = pick_sweep(&store, args.sweep.as_deref())?;
+        let lines = sweep_lines(&store, &sweep)?;
+        if args.json {
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&lines).expect("serializes")
+            );
+        } else {
+            print!("{}", lines_table(&lines));
+        }
+        if let Some(out) = &args.output {
+            let text = if ext == Some("csv") {
+                lines_csv(&lines)
+            } else {
+                lines_svg(&lines).map_err(Failure::BadInput)?
+            };
+            write_file(out, &text)?;
+            eprintln!("wrote {}", out.display());
+        }
+        if let Some(csv) = &args.csv {
+            write_file(csv, &lines_csv(&lines))?;
+            eprintln!("wrote {}", csv.display());
+        }
+        Ok(())
+    })())
+}
+
+/// The phase map of a sweep as `wetgran plot` draws it: the first slice of its map with its
+/// branches (slices that differ only in `initial.start`), the landmark lines of a shaking sweep
+/// and the chain model of a shear sweep.
+pub(super) fn draw_map(
+    store: &Store,
+    sweep: &SweepRow,
+    how: Extraction,
+    style: MapStyle,
+) -> Result<DrawnMap, Failure> {
+    let points = store.point_summaries(sweep)?;
+    let map = super::sweep_cmd::sweep_map(sweep, &points, how)?;
+    let landmarks = points
+        .first()
+        .and_then(|p| plot_phase::Landmarks::of(&p.scene));
+    let Some(slice) = map.slices.first() else {
+        return Err(Failure::BadInput(format!(
+            "sweep {}: no classified point to plot yet",
+            sweep.name
+        )));
+    };
+    // The branches (slices differing only in `initial.start`) draw as one map: the slices
+    // whose other fixed coordinates are those of the first slice.
+    let start_label = sweep
+        .axes
+        .iter()
+        .find(|a| a.key == crate::boundary::START_AXIS)
+        .map(|a| a.label.clone());
+    let others = |sl: &crate::boundary::Slice| -> Vec<(String, serde_json::Value)> {
+        sl.fixed
+            .iter()
+            .filter(|(l, _)| Some(l) != start_label.as_ref())
+            .cloned()
+            .collect()
+    };
+    let drawn: Vec<&crate::boundary::Slice> = map
+        .slices
+        .iter()
+        .filter(|sl| others(sl) == others(slice))
+        .collect();
+    if drawn.len() < map.slices.len() {
+        eprintln!(
+            "sweep {} has {} slices (axes beyond the plane); plotting {}{}",
+            sweep.name,
+            map.slices.len(),
+            if drawn.len() > 1 {
+                "the branches of the first: "
+            } else {
+                "the first: "
+            },
+            if others(slice).is_empty() {
+                fixed_text(&slice.fixed)
+            } else {
+                fixed_text(&others(slice))
+            }
+        );
+    }
+    // A log axis where the sweep's axis is logarithmic, unless the caller chose.
+    let log_kind = |a: &Option<crate::boundary::PlaneAxis>| {
+        a.as_ref()
+            .map(|a| a.log || sweep.axes[a.index].kind == crate::sweep::AxisKind::Log)
+    };
+    let style = MapStyle {
+        x_log: style.x_log.or(log_kind(&map.x)),
+        y_log: style.y_log.or(log_kind(&map.y)),
+    };
+    let title = format!("wetgran phase diagram: {}", sweep.name);
+    // The scene of each grid point's first job, by its coordinates (what `find` over the
+    // points gave, without a search per point).
+    let mut scene_at: std::collections::HashMap<String, &Scene> = std::collections::HashMap::new();
+    for p in &points {
+        scene_at
+            .entry(serde_json::Value::from(p.coords.clone()).to_string())
+            .or_insert(p.scene.as_ref());
+    }
+    let chain = plot_phase::chain_model_line(&map, slice, |coords| {
+        scene_at
+            .get(&serde_json::Value::from(coords.to_vec()).to_string())
+            .map(|s| (*s).clone())
+    });
+    plot_phase::branches_map(&map, &drawn, landmarks, chain, &title, style)
+        .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
+}
+
+/// The snapshot (from the stored final state) and profiles of each finished job.
+fn pictures(
+    store: &Store,
+    rows: &[crate::store::PointRow],
+    snapshots: bool,
+) -> Result<HashMap<String, JobPictures>, Failure> {
+    let mut out = HashMap::new();
+    for r in rows.iter().filter(|r| r.status == "done") {
+        let mut pics = JobPictures::default();
+        let observables: Option<Observables> = r
+            .observables
+            .as_ref()
+            .and_then(|o| serde_json::from_value(o.clone()).ok());
+        match &observables {
+            Some(o) => pics.profiles = Some(profiles_svg(o)),
+            None => pics
+                .notes
+                .push("No profiles: the stored observables are not readable.".to_string()),
+        }
+        if snapshots {
+            match store.checkpoint(&r.job_id)? {
+                Some(state) => {
+                    let frame = Frame::of_saved_state(&state, &r.spec.scene);
+                    let unit = observables.as_ref().map_or(1.0, |o| o.temperature_unit);
+                    pics.snapshot = Some(snapshot_svg(&frame, ColourBy::KineticEnergy, unit));
+                }
+                None => pics.notes.push(
+                    "No snapshot: the database holds no final state of this job (`wetgran \
+                     show --snapshot` runs it again)."
+                        .to_string(),
+                ),
+            }
+        }
+        out.insert(r.job_id.clone(), pics);
+    }
+    Ok(out)
+}
+
+/// `wetgran report`.
+pub(super) fn report(args: ReportArgs) -> ExitCode {
+    exit((|| {
+        let store = Store::open_existing(&args.db)?;
+        let sweep = pick_sweep(&store, args.sweep.as_deref())?;
+        let how = Extraction {
+            include_unconverged: args.include_unconverged,
+        };
+        let rows = store.points(sweep.id)?;
+        let summaries = store.point_summaries(&sweep)?;
+        let map = super::sweep_cmd::sweep_map(&sweep, &summaries, how)?;
+        let plane = map
+            .x
+            .as_ref()
+            .zip(map.y.as_ref())
+            .map(|(x, y)| (x.index, y.index));
+        let style = MapStyle {
+            x_log: None,
+            y_log: args.y_scale.log(),
+        };
+        // A sweep without a map (one numeric axis, nothing classified yet) still gets its
+        // report, with the reason in place of the map.
+        let drawn = match draw_map(&store, &sweep, how, style) {
+            Ok(d) => Ok(d),
+            Err(Failure::BadInput(m)) => Err(m),
+            Err(e) => return Err(e),
+        };
+        let mut notes = HashMap::new();
+        if let Some(n) = chain_model_note(&summaries) {
+            notes.insert(sweep.name.clone(), n);
+        }
+        let mut untrusted = HashMap::new();
+        untrusted.insert(sweep.name.clone(), untrusted_points(&summaries));
+        let boundaries = boundaries_table(&[(&sweep, map)], &notes, &untrusted, how);
+        let lines = lines_of(&sweep, &rows);
+        let line_pictures = if lines.lines.is_empty() {
+            None
+        } else {
+            let all = lines_svg(&lines).map_err(Failure::Other)?;
+            let per_gamma = lines
+                .gammas()
+                .into_iter()
+                .map(|g| {
+                    let one = Lines {
+                        lines: lines.at_gamma(g).into_iter().cloned().collect(),
+                        ..lines.clone()
+                    };
+                    lines_svg(&one).map_err(Failure::Other)
+                })
+                .collect::<Result<Vec<String>, Failure>>()?;
+            Some((all, per_gamma))
+        };
+        let pictures = pictures(&store, &rows, !args.no_snapshots)?;
+        let source = store.sweep_source(sweep.id)?;
+        let input = SiteInput {
+            sweep: &sweep,
+            source: &source,
+            db: &args.db.display().to_string(),
+            out: &args.output.display().to_string(),
+            rows: &rows,
+            map: drawn.as_ref().map_err(Clone::clone),
+            plane,
+            boundaries: &boundaries,
+            lines: line_pictures
+                .as_ref()
+                .map(|(all, per)| (&lines, all.as_str(), per.as_slice())),
+            pictures: &pictures,
+        };
+        let files = site(&input);
+        for (path, text) in &files {
+            let full = args.output.join(path);
+            if let Some(dir) = full.parent() {
+                std::fs::create_dir_all(dir).map_err(|e| {
+                    Failure::Other(format!("{}: cannot create: {e}", dir.display()))
+                })?;
+            }
+            write_file(&full, text)?;
+        }
+        eprintln!(
+            "wrote {} ({} files; open it in a browser)",
+            args.output.join("index.html").display(),
+            files.len()
+        );
+        Ok(())
+    })())
+}

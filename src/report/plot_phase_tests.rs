@@ -1,0 +1,315 @@
+//! Tests of the phase diagram plot (`plot_phase`): landmark lines, the chain model, branches
+//! and bistable points, the note of a map without boundary, ticks, log axes and the legend.
+
+use super::*;
+
+#[test]
+fn landmark_lines_follow_model_4_1_and_eq_4_15() {
+    // Standard wet 2D system: E_cb = 0.2844, s_crit = 0.0711, F_B = 4, N = 1200, L_x = 400.
+    let l = Landmarks {
+        energy_unit: 0.2844,
+        mass: 1.0,
+        gravity: 1.0,
+        diameter: 1.0,
+        wet: Some((0.0711, 4.0)),
+        layers: 3.0,
+    };
+    // On A = s_crit the amplitude from (Gamma, E*) is s_crit: A = v_w^2 / (Gamma g).
+    let e = 2.5;
+    let g = l.gamma_at_amplitude(e, 0.0711);
+    let v_w2 = 2.0 * e * 0.2844;
+    assert!((v_w2 / g - 0.0711).abs() < 1e-12);
+    // Eq. 4.15 at E* = 0: 1 + F_B / (M m g); at large E* the floor 1 - 1/M.
+    assert!((l.gamma_c(0.0).unwrap() - (1.0 + 4.0 / 3.0)).abs() < 1e-12);
+    assert!((l.gamma_c(100.0).unwrap() - (1.0 - 1.0 / 3.0)).abs() < 1e-12);
+}
+
+#[test]
+fn chain_model_matches_eq_7_9() {
+    // The shear set-up of docs/model.md 1: F_B = E_cb / s_crit = 6 m g, L_x = 60 d:
+    // F_max = 0.9229 * 6 / 60 = 0.09229 (the value quoted in sweeps/shear_3d.toml).
+    let text = include_str!("../../tests/scenes/good/shear_3d.toml")
+        .replace("size = [12.0, 12.0, 6.0]", "size = [60.0, 12.0, 6.0]");
+    let scene = Scene::from_toml_str(&text, "test").unwrap();
+    let f = chain_model_f_max(&scene).unwrap();
+    assert!((f - 0.09229).abs() < 1e-12, "{f}");
+    // Dry scenes have no bridge force and no chain model.
+    let dry = Scene::from_toml_str(
+        &text
+            .replace("model = \"thin_thread\"", "model = \"none\"")
+            .replace("s_crit = 0.0625\n", "")
+            .replace("e_cb = 0.375\n", "")
+            .replace("temperature_over_ecb = 40.0", "temperature = 10.0"),
+        "test",
+    )
+    .unwrap();
+    assert_eq!(chain_model_f_max(&dry), None);
+}
+
+#[test]
+fn chain_model_line_follows_the_other_axis() {
+    use crate::boundary::MapPoint;
+    // Plane: x = L_x (box.size[0]), y = F_max; the line F_c(L_x) = 0.9229 * 6 / L_x.
+    let base = include_str!("../../tests/scenes/good/shear_3d.toml");
+    let scene_of = |c: &[serde_json::Value]| {
+        let l_x = c[0].as_f64()?;
+        let text = base.replace(
+            "size = [12.0, 12.0, 6.0]",
+            &format!("size = [{l_x:?}, 12.0, 6.0]"),
+        );
+        Scene::from_toml_str(&text, "test").ok()
+    };
+    let point = |l_x: f64, f: f64| MapPoint {
+        coords: vec![serde_json::json!(l_x), serde_json::json!(f)],
+        x: l_x,
+        y: f,
+        phase: "s".into(),
+        votes: vec![Some("s".into())],
+        tie: false,
+        trusted: true,
+        label_kept: false,
+        amplitude: None,
+        omega: None,
+    };
+    let axis = |index: usize, key: &str| PlaneAxis {
+        index,
+        key: key.into(),
+        label: key.into(),
+        log: false,
+    };
+    let slice = Slice {
+        fixed: Vec::new(),
+        branch: None,
+        points: vec![
+            point(24.0, 0.1),
+            point(12.0, 0.1),
+            point(12.0, 0.5),
+            point(24.0, 0.5),
+        ],
+        boundaries: Default::default(),
+    };
+    let map = PhaseMap {
+        x: Some(axis(0, "box.size[0]")),
+        y: Some(axis(1, "drive.f_max")),
+        shaking: false,
+        slices: vec![slice.clone()],
+    };
+    let line = chain_model_line(&map, &slice, scene_of).unwrap();
+    assert_eq!(line.len(), 2);
+    for (&(x, y), l_x) in line.iter().zip([12.0, 24.0]) {
+        assert_eq!(x, l_x);
+        assert!((y - 0.9229 * 6.0 / l_x).abs() < 1e-12, "{y}");
+    }
+    // Without the F_max axis in the plane: no line.
+    let other = PhaseMap {
+        y: Some(axis(1, "contact.restitution")),
+        ..map.clone()
+    };
+    assert!(chain_model_line(&other, &slice, scene_of).is_none());
+    // The plot draws it with its legend.
+    let svg = phase_svg(&map, &slice, None, Some(line), "t").unwrap();
+    assert!(svg.contains("chain model, Eq. 7.9"));
+}
+
+#[test]
+fn branches_merge_by_position_and_only_disagreeing_points_are_bistable() {
+    use crate::boundary::MapPoint;
+    let point = |x: f64, phase: &str, trusted: bool| MapPoint {
+        coords: vec![serde_json::json!(x)],
+        x,
+        y: 1.0,
+        phase: phase.into(),
+        votes: vec![Some(phase.into())],
+        tie: false,
+        trusted,
+        label_kept: false,
+        amplitude: None,
+        omega: None,
+    };
+    let slice = |branch: &str, points: Vec<MapPoint>| Slice {
+        fixed: Vec::new(),
+        branch: Some(branch.into()),
+        points,
+        boundaries: Default::default(),
+    };
+    // Hot: f, g, g at x = 1, 2, 3; cold: f, f at x = 1, 2 (unconverged at 2), and x = 4.
+    let hot = slice(
+        "hot",
+        vec![
+            point(1.0, "f", true),
+            point(2.0, "g", true),
+            point(3.0, "g", true),
+        ],
+    );
+    let cold = slice(
+        "cold",
+        vec![
+            point(1.0, "f", true),
+            point(2.0, "f", false),
+            point(4.0, "s", true),
+        ],
+    );
+    let merged = merge_branches(&[&hot, &cold]);
+    let xs: Vec<f64> = merged.iter().map(|p| p.x).collect();
+    assert_eq!(xs, vec![1.0, 2.0, 3.0, 4.0]);
+    let bistable: Vec<bool> = merged.iter().map(DrawnPoint::bistable).collect();
+    // Only x = 2 disagrees; a point only one branch has is not bistable.
+    assert_eq!(bistable, vec![false, true, false, false]);
+    assert_eq!(merged[1].phases, vec![Some("g".into()), Some("f".into())]);
+    assert!(!merged[1].trusted && merged[0].trusted);
+    assert_eq!(merged[3].phase(), "s");
+    assert_eq!(branch_name(&[&hot, &cold], 1), "cold start");
+}
+
+/// A 3 x 3 (E*, Gamma) grid, Gamma 0.5, 2, 8: f below E* = 2, g from there; `trusted`
+/// marks every point.
+fn grid_map(trusted: bool) -> (PhaseMap, Slice) {
+    use crate::boundary::MapPoint;
+    let mut points = Vec::new();
+    for g in [0.5, 2.0, 8.0] {
+        for e in [0.3, 1.0, 4.0] {
+            points.push(MapPoint {
+                coords: vec![serde_json::json!(g), serde_json::json!(e)],
+                x: e,
+                y: g,
+                phase: if e < 2.0 { "f" } else { "g" }.into(),
+                votes: vec![None],
+                tie: false,
+                trusted,
+                label_kept: false,
+                amplitude: None,
+                omega: None,
+            });
+        }
+    }
+    let axis = |index: usize, key: &str, label: &str, log: bool| PlaneAxis {
+        index,
+        key: key.into(),
+        label: label.into(),
+        log,
+    };
+    let slice = Slice {
+        fixed: Vec::new(),
+        branch: None,
+        points,
+        boundaries: Default::default(),
+    };
+    let map = PhaseMap {
+        x: Some(axis(1, "drive.e_star", "E*", true)),
+        y: Some(axis(0, "drive.gamma", "Gamma", false)),
+        shaking: true,
+        slices: vec![slice.clone()],
+    };
+    (map, slice)
+}
+
+#[test]
+fn a_map_without_boundary_says_why_on_the_plot() {
+    let (map, slice) = grid_map(false);
+    let svg = phase_svg(&map, &slice, None, None, "t").unwrap();
+    assert!(
+        svg.contains("No boundary: none of the 9 points is converged"),
+        "{svg}"
+    );
+    let (map, slice) = grid_map(true);
+    let mut one_phase = slice.clone();
+    for p in &mut one_phase.points {
+        p.phase = "g".into();
+    }
+    let svg = phase_svg(&map, &one_phase, None, None, "t").unwrap();
+    assert!(svg.contains("No boundary: every converged point is g"));
+    // With a boundary point: no note.
+    let (_, mut with) = grid_map(true);
+    let b = crate::boundary::BoundaryPoint {
+        pair: "f|g".into(),
+        x: 2.0,
+        y: 2.0,
+        between: [0, 1],
+        x_half: 0.3,
+        y_half: 0.0,
+        x_range: [1.0, 4.0],
+        y_range: [2.0, 2.0],
+        confidence: 1.0,
+        amplitude: None,
+        omega: None,
+        branch: None,
+    };
+    with.boundaries.insert("f|g".into(), vec![b]);
+    let svg = phase_svg(&map, &with, None, None, "t").unwrap();
+    assert!(!svg.contains("No boundary"));
+}
+
+#[test]
+fn the_axes_have_a_tick_at_every_grid_value_and_gamma_can_be_logarithmic() {
+    let (map, slice) = grid_map(true);
+    let tick = |svg: &str, v: &str| svg.contains(&format!(">\n{v}\n</text>"));
+    let linear = phase_svg(&map, &slice, None, None, "t").unwrap();
+    let log = branches_map(
+        &map,
+        &[&slice],
+        None,
+        None,
+        "t",
+        MapStyle {
+            x_log: None,
+            y_log: Some(true),
+        },
+    )
+    .unwrap();
+    for v in ["0.3", "1", "4", "0.5", "2", "8"] {
+        assert!(tick(&linear, v), "linear map: no tick {v}");
+        assert!(tick(&log.svg, v), "log map: no tick {v}");
+    }
+    assert!(log.svg.contains("Gamma (log scale)"));
+    assert!(!linear.contains("Gamma (log scale)"));
+    // On the log axis Gamma = 2 lies halfway between 0.5 and 8 (in pixels).
+    let py = |g: f64| {
+        log.points
+            .iter()
+            .find(|p| p.1 == g && p.0 == 1.0)
+            .unwrap()
+            .3
+    };
+    assert!((2 * py(2.0) - py(0.5) - py(8.0)).abs() <= 1);
+    // The legend is right of every point.
+    let legend_x = log
+        .svg
+        .find(">\nf\n</text>")
+        .map(|k| &log.svg[..k])
+        .unwrap();
+    let x = legend_x[legend_x.rfind("x=\"").unwrap() + 3..]
+        .split('"')
+        .next()
+        .unwrap()
+        .parse::<i32>()
+        .unwrap();
+    assert!(log.points.iter().all(|p| p.2 + 10 < x), "legend at x = {x}");
+    // A log axis of non-positive values is refused.
+    let (map0, mut zero) = grid_map(true);
+    zero.points[0].y = 0.0;
+    let style = MapStyle {
+        x_log: None,
+        y_log: Some(true),
+    };
+    assert!(branches_map(&map0, &[&zero], None, None, "t", style).is_err());
+}
+
+#[test]
+fn two_sectors_are_the_left_and_the_right_half() {
+    let left = sector(0, 2, 10);
+    let right = sector(1, 2, 10);
+    // Both start at the centre; the left one spans x <= 0, the right one x >= 0, each from
+    // the top (screen y = -10) to the bottom (y = 10) or back.
+    assert_eq!((left[0], right[0]), ((0, 0), (0, 0)));
+    assert!(left.iter().all(|&(x, _)| x <= 0));
+    assert!(right.iter().all(|&(x, _)| x >= 0));
+    assert!(left.contains(&(-10, 0)) && right.contains(&(10, 0)));
+    assert_eq!((left[1], *left.last().unwrap()), ((0, -10), (0, 10)));
+    // One branch: a whole disc, no centre vertex.
+    let whole = sector(0, 1, 10);
+    assert!(
+        whole
+            .iter()
+            .all(|&(x, y)| (x * x + y * y - 100).abs() <= 20)
+    );
+}
