@@ -48,6 +48,9 @@ fn synthetic(d: f64, t: f64, b: Bins, wet: bool) -> Observables {
             lag: 10.0,
             diffusion: d,
             diffusion_clustered: None,
+            short_lag: None,
+            diffusion_short: None,
+            diffusion_clustered_short: None,
             lags: 30.0,
         }),
         profiles: Profiles {
@@ -75,6 +78,11 @@ fn synthetic(d: f64, t: f64, b: Bins, wet: bool) -> Observables {
             n_cb_standard_error: Some(SE),
             packing_standard_error: Some(SE),
             noise_blocks: 32,
+            diffusion_short: vec![],
+            diffusion_clustered_short: vec![],
+            n_cb_null: None,
+            packing_null: None,
+            clusters: None,
         },
         diffusion: None,
         counts: WindowCounts {

@@ -316,17 +316,33 @@ struct RegionObservables {
     temperature: f64,
 }
 
+/// A region whose mean-square displacement over the long lag stays below this (units `d^2`) and
+/// grows slower than `diffusive_exponent` is caged: its grains rattle without leaving their
+/// neighbours. A gas confined to a narrow pocket also saturates, but at the pocket's size.
+pub const CAGE_MSD: f64 = 1.0;
+
+/// The two mobility lags of a result.
+#[derive(Debug, Clone, Copy)]
+struct Lags {
+    /// The long lag, time units.
+    long: f64,
+    /// `tau_long / tau_short`.
+    ratio: f64,
+    /// Lateral dimensions (1 in 2D, 2 in 3D).
+    n_lat: f64,
+}
+
 /// `alpha` of `MSD ~ tau^alpha` from `D_lat` at the long and the short lag (`D = MSD / (2 n_lat
 /// tau)`): `alpha = 1 + ln(D_long / D_short) / ln(tau_long / tau_short)`.
 fn growth_exponent(long: f64, short: f64, lag_ratio: f64) -> Option<f64> {
     (long > 0.0 && short > 0.0 && lag_ratio > 1.0).then(|| 1.0 + (long / short).ln() / lag_ratio.ln())
 }
 
-/// Rule 1 for one region; `gas` decides fluid versus gas of a mobile region; `lag_ratio` is
-/// `tau_long / tau_short` (`None` without a short lag).
+/// Rule 1 for one region; `gas` decides fluid versus gas of a mobile region; `lags`: the two
+/// mobility lags (`None` without a short lag).
 fn region(
     obs: RegionObservables,
-    lag_ratio: Option<f64>,
+    lags: Option<Lags>,
     bins: usize,
     grains: &str,
     th: &Thresholds,
@@ -339,16 +355,21 @@ fn region(
         temperature,
     } = obs;
     let hot = temperature > th.gas_temperature;
-    let alpha = match (diffusion, diffusion_short, lag_ratio) {
-        (Some(l), Some(s), Some(r)) => growth_exponent(l, s, r),
+    let alpha = match (diffusion, diffusion_short, lags) {
+        (Some(l), Some(s), Some(g)) => growth_exponent(l, s, g.ratio),
         _ => None,
     };
     let (mobile, mobility_from) = match (th.mobility, diffusion, flc) {
-        // Mobile: displaced beyond the floor and still spreading at the long lag (not caged).
-        (Mobility::Displacement, Some(d), _) => (
-            d > th.solid_diffusion && alpha.is_none_or(|a| a >= th.diffusive_exponent),
-            Mobility::Displacement,
-        ),
+        // Mobile: displaced beyond the floor and not caged (saturating within a diameter).
+        (Mobility::Displacement, Some(d), _) => {
+            let caged = match (alpha, lags) {
+                (Some(a), Some(g)) => {
+                    a < th.diffusive_exponent && 2.0 * g.n_lat * g.long * d <= CAGE_MSD
+                }
+                _ => false,
+            };
+            (d > th.solid_diffusion && !caged, Mobility::Displacement)
+        }
         (Mobility::LocationChanges, _, Some(f)) => {
             (f > th.solid_flc || hot, Mobility::LocationChanges)
         }
@@ -530,10 +551,13 @@ fn classify_unsheared(
         .location_changes
         .as_ref()
         .map(|l| l.per_particle_per_period);
-    let lag_ratio = obs
-        .mobility
-        .as_ref()
-        .and_then(|m| m.short_lag.map(|s| m.lag / s));
+    let lag_ratio = obs.mobility.as_ref().and_then(|m| {
+        m.short_lag.map(|s| Lags {
+            long: m.lag,
+            ratio: m.lag / s,
+            n_lat: (obs.dimension.max(2) - 1) as f64,
+        })
+    });
     let whole = region(
         RegionObservables {
             flc: flc_whole,
@@ -701,9 +725,14 @@ fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
             );
             match r.growth_exponent {
                 Some(a) => format!(
-                    "{floor}, MSD growth exponent {a:.2} {} {}",
+                    "{floor}, MSD growth exponent {a:.2} {} {}{}",
                     if a >= th.diffusive_exponent { ">=" } else { "<" },
-                    th.diffusive_exponent
+                    th.diffusive_exponent,
+                    if a < th.diffusive_exponent && r.phase != Phase::S {
+                        " but spread beyond a cage"
+                    } else {
+                        ""
+                    }
                 ),
                 None => floor,
             }

@@ -4,13 +4,15 @@
 //!
 //! **Bonds.** In a wet scene a bond is a capillary bridge; in a dry scene a pair whose surfaces
 //! are closer than [`DRY_BOND_GAP`] `d`. Bridges form at every contact, so a gas grain that
-//! bounces off a drop holds one for the duration of the bounce. A bond therefore counts only once
-//! it has been seen at every sample for at least `bond_time` time units (`observe.bond_time`):
-//! its age is the time since the first sample of the current unbroken run of samples that saw
-//! it. With samples further apart than `bond_time`, a bond seen at two consecutive samples
-//! counts.
+//! bounces off a drop holds one for the duration of the bounce. A grain is *settled* once it has
+//! held a bond (any bond) at every sample for at least `bond_time` time units
+//! (`observe.bond_time`), and at two samples at least: with samples further apart than
+//! `bond_time`, a grain bonded at two consecutive samples is settled. The persistence is the
+//! grain's, not the bond's: in a strongly shaken liquid drop (Gamma = 30) single bridges break
+//! and re-form within a few hundredths of a time unit, but a grain of the drop is bonded to some
+//! neighbour almost all the time, where a vapour grain is bonded only while it bounces.
 //!
-//! **Members.** The lasting bonds make a graph over the grains; a grain is a *member* at a sample
+//! **Members.** The bonds between settled grains make a graph; a grain is a *member* at a sample
 //! when its connected component holds at least `min_size` grains (`observe.cluster_min_size`).
 //! Region observables of a coexistence's dense part use members only (`observe::lateral`).
 //!
@@ -22,21 +24,21 @@
 
 use crate::sim::Frame;
 use nalgebra::{Matrix3, Vector3};
-use std::collections::HashMap;
 
 /// Dry scenes: largest surface gap, in units of `d`, of a pair that counts as a bond.
 pub const DRY_BOND_GAP: f64 = 0.1;
 /// Component id of a grain that is not a member of any cluster.
 pub const NOT_MEMBER: u32 = u32::MAX;
 
-/// Tracks bond ages across samples and labels the members of large bonded clusters.
+/// Tracks how long each grain has been bonded and labels the members of large bonded clusters.
 #[derive(Debug, Clone)]
 pub struct BondedClusters {
     wet: bool,
     bond_time: f64,
     min_size: usize,
-    /// First time of the current unbroken run of samples that saw each bond `(i < j)`.
-    first_seen: HashMap<(u32, u32), f64>,
+    /// Per grain: the first time of the current unbroken run of samples at which it held a bond
+    /// (`None`: it held none at the last sample).
+    bonded_since: Vec<Option<f64>>,
 }
 
 /// The clusters of one sample.
@@ -56,43 +58,59 @@ impl Membership {
 }
 
 impl BondedClusters {
-    /// `bond_time`: the age a bond needs, time units; `min_size`: the smallest cluster whose
-    /// grains are members.
+    /// `bond_time`: how long a grain must have held a bond, time units; `min_size`: the smallest
+    /// cluster whose grains are members.
     pub fn new(wet: bool, bond_time: f64, min_size: usize) -> Self {
         Self {
             wet,
             bond_time,
             min_size: min_size.max(1),
-            first_seen: HashMap::new(),
+            bonded_since: Vec::new(),
         }
     }
 
     /// Books one sample and returns its membership. Samples must come in time order.
     pub fn observe(&mut self, frame: &Frame) -> Membership {
         let now = frame.time;
+        let n = frame.len();
         let pairs = if self.wet {
             frame.bridges.clone()
         } else {
             close_pairs(frame, DRY_BOND_GAP * mean_diameter(frame))
         };
-        let mut seen = HashMap::with_capacity(pairs.len());
-        let mut lasting = Vec::new();
-        for (i, j) in pairs {
-            let key = if i < j {
-                (i as u32, j as u32)
-            } else {
-                (j as u32, i as u32)
-            };
-            let t0 = self.first_seen.get(&key).copied().unwrap_or(now);
-            // A bond seen at the previous sample and now has lasted at least the interval
-            // between them; the tolerance keeps an exact `bond_time` apart from round-off.
-            if now - t0 >= self.bond_time * (1.0 - 1e-9) && self.first_seen.contains_key(&key) {
-                lasting.push(key);
-            }
-            seen.insert(key, t0);
+        let first = self.bonded_since.len() != n;
+        let mut bonded = vec![false; n];
+        for &(i, j) in &pairs {
+            bonded[i] = true;
+            bonded[j] = true;
         }
-        self.first_seen = seen;
-        components(frame.len(), &lasting, self.min_size)
+        let since: Vec<Option<f64>> = (0..n)
+            .map(|i| {
+                bonded[i].then(|| {
+                    if first {
+                        now
+                    } else {
+                        self.bonded_since[i].unwrap_or(now)
+                    }
+                })
+            })
+            .collect();
+        // Settled: bonded at every sample for at least `bond_time` and at two samples or more
+        // (the tolerance keeps an exact `bond_time` apart from round-off).
+        let settled: Vec<bool> = (0..n)
+            .map(|i| {
+                !first
+                    && self.bonded_since[i].is_some()
+                    && since[i].is_some_and(|t0| now - t0 >= self.bond_time * (1.0 - 1e-9))
+            })
+            .collect();
+        self.bonded_since = since;
+        let lasting: Vec<(u32, u32)> = pairs
+            .into_iter()
+            .filter(|&(i, j)| settled[i] && settled[j])
+            .map(|(i, j)| (i as u32, j as u32))
+            .collect();
+        components(n, &lasting, self.min_size)
     }
 }
 
@@ -361,8 +379,9 @@ mod tests {
 
     #[test]
     fn a_bounce_is_not_a_bond() {
-        // Safeguard: a bridge seen at one sample only (a grain bouncing off) never counts; one
-        // seen at samples 0.0 .. 1.0 counts from the sample at which it is one time unit old.
+        // Safeguard: a grain bonded at one sample only (bouncing off) never counts; grains
+        // bonded at every sample from 0.0 count from the sample at which they have been bonded
+        // for one time unit.
         let x = [(1.0, 1.0), (2.0, 1.0), (3.0, 1.0)];
         let mut c = BondedClusters::new(true, 1.0, 2);
         let m = c.observe(&frame(0.0, &x, vec![(0, 1), (1, 2)]));

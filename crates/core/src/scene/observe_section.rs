@@ -93,12 +93,13 @@ pub struct ObserveSpec {
     /// mean-square displacement over this lag gives `D_lat` (`observe::lateral`).
     #[serde(default = "default_mobility_lag")]
     pub mobility_lag: f64,
-    /// Age, in time units `sqrt(d/g)`, a bond (a capillary bridge; dry: a gap below 0.1 d)
-    /// needs before it binds a grain into a cluster (default 1): longer than a bounce, so a gas
-    /// grain that touches a drop and flies off is not counted with it (`observe::clusters`).
+    /// How long, in time units `sqrt(d/g)`, a grain must have held a bond (a capillary bridge;
+    /// dry: a gap below 0.1 d) at every sample before it counts as bound into a cluster
+    /// (default 0.2): longer than a bounce, so a gas grain that touches a drop and flies off is
+    /// not counted with it (`observe::clusters`).
     #[serde(default = "default_bond_time")]
     pub bond_time: f64,
-    /// Smallest bonded cluster, in grains, whose grains make up a dense region (default 10).
+    /// Smallest bonded cluster, in grains, whose grains make up a dense region (default 3).
     #[serde(default = "default_cluster_min_size")]
     pub cluster_min_size: usize,
     /// 3D: lateral bins as square cells over `(x, y)` (`"plane"`, default) or slabs along `x`
@@ -167,10 +168,10 @@ fn default_mobility_lag() -> f64 {
     10.0
 }
 fn default_bond_time() -> f64 {
-    1.0
+    0.2
 }
 fn default_cluster_min_size() -> usize {
-    10
+    3
 }
 
 impl ObserveSpec {

@@ -49,7 +49,7 @@ pub struct Thresholds {
     #[serde(default = "default_diffusive_exponent")]
     pub diffusive_exponent: f64,
     /// Smallest fraction of the dense bins' grains that are members of bonded clusters for a
-    /// coexistence (default 0.5): a density wave in a gas or fluid without a bonded cluster is
+    /// coexistence (default 0.2): a density wave in a gas or fluid without a bonded cluster is
     /// homogeneous (rule 2).
     #[serde(default = "default_cluster_fraction")]
     pub cluster_fraction: f64,
@@ -101,7 +101,7 @@ fn default_diffusive_exponent() -> f64 {
     0.5
 }
 fn default_cluster_fraction() -> f64 {
-    0.5
+    0.2
 }
 fn default_solid_flc() -> f64 {
     0.02
