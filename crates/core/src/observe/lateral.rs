@@ -266,7 +266,7 @@ impl LateralObserver {
         self.book_sample(frame, bk, &bin, &members);
         self.unwrap(frame);
         for which in [false, true] {
-            self.close_lags(frame, bk, which);
+            self.close_lags(frame, bk, which, &members);
             let track = if which { &mut self.short } else { &mut self.long };
             if self.samples.is_multiple_of(track.stride) {
                 track.origins.push_back(Origin {
@@ -362,8 +362,10 @@ impl LateralObserver {
 
     /// Closes the lags (long, or short with `short`) that end at this sample: each grain's
     /// lateral displacement, relative to its cluster's rigid motion (members) or to the mean of
-    /// the non-members that started in its bin (others), into block `bk`.
-    fn close_lags(&mut self, frame: &Frame, bk: usize, short: bool) {
+    /// the non-members that started in its bin (others), into block `bk`. The member sums take
+    /// the grains that are members at both ends of the lag: a grain that evaporated from a drop
+    /// during the lag moved as vapour, not as part of the drop.
+    fn close_lags(&mut self, frame: &Frame, bk: usize, short: bool, now_members: &Membership) {
         let dim = frame.dimension;
         let n_lat = dim - 1;
         let nb = self.bins.n;
@@ -375,13 +377,13 @@ impl LateralObserver {
                 break;
             }
             let o = track.origins.pop_front().expect("front exists");
-            let r2 = lag_displacements(&o, &self.unwrapped, frame, nb, n_lat);
+            let r2 = lag_displacements(&o, &self.unwrapped, frame, nb, n_lat, now_members);
             let block = &mut self.blocks[bk];
             for (i, d2) in r2.into_iter().enumerate() {
                 let s = &mut block.sums[o.bin[i] as usize * field::COUNT..];
                 s[first] += d2;
                 s[first + 1] += 1.0;
-                if o.cluster[i] != NOT_MEMBER {
+                if o.cluster[i] != NOT_MEMBER && now_members.is_member(i) {
                     s[first + 2] += d2;
                     s[first + 3] += 1.0;
                 }
@@ -401,14 +403,16 @@ impl LateralObserver {
     }
 }
 
-/// Squared lateral displacement of every grain since origin `o` (see [`LateralObserver`]'s
-/// module doc for the reference each is taken against).
+/// Squared lateral displacement of every grain since origin `o` (see the module doc for the
+/// reference each is taken against). A cluster's rigid motion is fitted to its grains that are
+/// still members (`now_members`); those that left it are measured against that motion too.
 fn lag_displacements(
     o: &Origin,
     now: &[f64],
     frame: &Frame,
     bins: usize,
     n_lat: usize,
+    now_members: &Membership,
 ) -> Vec<f64> {
     let dim = frame.dimension;
     let n = frame.len();
@@ -447,16 +451,29 @@ fn lag_displacements(
         }
     }
     for members in &grains {
-        let res = rigid_residuals(
-            members,
-            &o.positions,
-            now,
-            dim,
-            &frame.periodic,
-            &frame.box_size,
-        );
-        for (&i, d) in members.iter().zip(res) {
+        let (stayed, left): (Vec<usize>, Vec<usize>) =
+            members.iter().partition(|&&i| now_members.is_member(i));
+        let fit = if stayed.is_empty() { &left } else { &stayed };
+        let res = rigid_residuals(fit, &o.positions, now, dim, &frame.periodic, &frame.box_size);
+        for (&i, d) in fit.iter().zip(&res) {
             r2[i] = d[..n_lat].iter().map(|x| x * x).sum();
+        }
+        if !stayed.is_empty() {
+            // Grains that left: displacement less the cluster's mean translation.
+            let shift: Vec<f64> = (0..n_lat)
+                .map(|k| {
+                    stayed
+                        .iter()
+                        .map(|&i| now[i * dim + k] - o.positions[i * dim + k])
+                        .sum::<f64>()
+                        / stayed.len() as f64
+                })
+                .collect();
+            for &i in &left {
+                r2[i] = (0..n_lat)
+                    .map(|k| (now[i * dim + k] - o.positions[i * dim + k] - shift[k]).powi(2))
+                    .sum();
+            }
         }
     }
     r2
