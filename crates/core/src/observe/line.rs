@@ -57,13 +57,16 @@
 
 use super::Observables;
 use super::classify::{Classification, FluidGasFrom, Phase, Thresholds, classify, classify_with};
-use super::noise::normal_cdf;
+use super::noise::{erfc, normal_cdf};
 use serde::{Deserialize, Serialize};
 
 /// Family-wise level of the jump test (after the Bonferroni correction over positions).
 pub const JUMP_LEVEL: f64 = 0.01;
-/// One-sided level of the cubic term of the inflection test.
+/// Level at which the inflection test rejects a power law for the whole line.
 pub const INFLECTION_LEVEL: f64 = 0.01;
+/// Family-wise level (Bonferroni over the slopes) at which the steepest slope must be steeper
+/// than the flattest on each side.
+pub const SLOPE_LEVEL: f64 = 0.05;
 /// Floor on the relative error of a point's `T_g / E_cb` (a block error of zero would make any
 /// wiggle significant).
 pub const MIN_REL_ERROR: f64 = 1e-3;
@@ -267,6 +270,29 @@ fn wls(cols: &[Vec<f64>], y: &[f64], sigma: &[f64]) -> Option<(Vec<f64>, Vec<Vec
     Some((beta, cov, chi2))
 }
 
+/// `P(chi^2_nu > c)`, exact for integer `nu >= 1` (the regularised upper incomplete gamma
+/// function at half-integer order, by its finite series).
+pub fn chi2_sf(c: f64, nu: usize) -> f64 {
+    let h = 0.5 * c.max(0.0);
+    if nu % 2 == 0 {
+        let (mut term, mut sum) = (1.0, 1.0);
+        for k in 1..nu / 2 {
+            term *= h / k as f64;
+            sum += term;
+        }
+        (-h).exp() * sum
+    } else {
+        let mut sum = erfc(h.sqrt());
+        // h^(k + 1/2) / Gamma(k + 3/2), from k = 0: Gamma(3/2) = sqrt(pi) / 2.
+        let mut term = h.sqrt() / (0.5 * std::f64::consts::PI.sqrt());
+        for k in 0..(nu - 1) / 2 {
+            sum += (-h).exp() * term;
+            term *= h / (k as f64 + 1.5);
+        }
+        sum.min(1.0)
+    }
+}
+
 /// The fluid-gas jump of an elastic line ([`fluid_gas_jump`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Jump {
@@ -282,6 +308,8 @@ pub struct Jump {
     pub z: f64,
     /// Its p-value, Bonferroni-corrected for the positions tried.
     pub p_value: f64,
+    /// Where the errors came from ([`Curve::errors`]).
+    pub errors: String,
     /// The gas branch begins at `ln(T_g / E_cb) = level.0 + level.1 ln E*`: midway between the
     /// two fitted branches.
     pub level: (f64, f64),
@@ -334,6 +362,7 @@ pub fn fluid_gas_jump(points: &[LinePoint], min_ratio: f64) -> Result<Jump, Stri
         z,
         p_value,
         level,
+        errors: c.errors.clone(),
     })
 }
 
@@ -377,10 +406,13 @@ pub struct Inflection {
     pub bracket: (f64, f64),
     /// `T_g / E_cb` interpolated (log-log) at the inflection: the gas branch begins there.
     pub t_star: f64,
-    /// The cubic term `e` of the fit and its (widened) standard error.
-    pub cubic: (f64, f64),
-    /// One-sided p-value of `e < 0`.
+    /// p-value of the power law's chi-square.
+    pub p_line: f64,
+    /// p-value of the steepest slope against the flattest on its less steep side
+    /// (Bonferroni-corrected over the slopes).
     pub p_value: f64,
+    /// Where the errors came from ([`Curve::errors`]).
+    pub errors: String,
 }
 
 /// The inflection point of `T_g / E_cb` against `E*` along one line of constant Gamma (inelastic
@@ -390,53 +422,71 @@ pub fn fluid_gas_inflection(points: &[LinePoint]) -> Result<Inflection, String> 
     let c = curve(points)?;
     let n = c.x.len();
     let errors = &c.errors;
-    // The cubic, on centred and scaled x for conditioning.
-    let (x0, half) = (0.5 * (c.x[0] + c.x[n - 1]), 0.5 * (c.x[n - 1] - c.x[0]));
-    let u: Vec<f64> = c.x.iter().map(|x| (x - x0) / half).collect();
-    let cols: Vec<Vec<f64>> = (0..4)
-        .map(|p| u.iter().map(|v| v.powi(p)).collect())
-        .collect();
-    let (p_value, cubic) = if n > 4 {
-        let (beta, cov, chi) =
-            wls(&cols, &c.y, &c.sigma).ok_or("degenerate line (a cubic cannot be fitted)")?;
-        let s2 = (chi / (n - 4) as f64).max(1.0);
-        let se = (cov[3][3] * s2).sqrt();
-        let p = normal_cdf(beta[3] / se);
-        let turn = x0 - half * beta[2] / (3.0 * beta[3]);
-        if p >= INFLECTION_LEVEL {
-            return Err(format!(
-                "the curve does not turn from steepening to flattening beyond its scatter \
-                 (cubic term {:.3} +- {se:.3} in scaled ln E*, p = {p:.3} >= \
-                 {INFLECTION_LEVEL}); {errors}",
-                beta[3]
-            ));
-        }
-        if !(c.x[0] < turn && turn < c.x[n - 1]) {
-            return Err(format!(
-                "the fitted slope maximum (E* = {:.3}) lies outside the sampled range; {errors}",
-                turn.exp()
-            ));
-        }
-        (p, (beta[3], se))
-    } else {
+    let ones = vec![1.0; n];
+    let (_, _, chi) = wls(&[ones, c.x.clone()], &c.y, &c.sigma)
+        .ok_or("degenerate line (a power law cannot be fitted)")?;
+    let p_line = chi2_sf(chi, n - 2);
+    if p_line >= INFLECTION_LEVEL {
         return Err(format!(
-            "{n} points leave no degree of freedom to test a cubic; {errors}"
+            "a power law fits the line (chi^2 = {chi:.1} on {} degrees of freedom, p = \
+             {p_line:.3} >= {INFLECTION_LEVEL}); {errors}",
+            n - 2
         ));
-    };
-    let (e_star, max_slope, k) = steepest(&c.x, &c.y).ok_or_else(|| {
+    }
+    let (k, z_left, z_right) = slope_contrast(&c)
+        .ok_or_else(|| format!("the steepest sampled slope lies at an end of the line; {errors}"))?;
+    let m = (n - 1) as f64;
+    let p_value = (m * (1.0 - normal_cdf(z_left.min(z_right)))).min(1.0);
+    if p_value >= SLOPE_LEVEL {
+        return Err(format!(
+            "the steepest slope (between E* = {:.3} and {:.3}) is not significantly steeper than \
+             the flattest on both sides ({z_left:.2} and {z_right:.2} standard errors, p = \
+             {p_value:.3} >= {SLOPE_LEVEL}, Bonferroni over {m} slopes); {errors}",
+            c.x[k].exp(),
+            c.x[k + 1].exp()
+        ));
+    }
+    let (e_star, max_slope, kb) = steepest(&c.x, &c.y).ok_or_else(|| {
         format!("the steepest sampled slope lies at an end of the line; {errors}")
     })?;
     let xi = e_star.ln();
-    let w = ((xi - c.x[k]) / (c.x[k + 1] - c.x[k])).clamp(0.0, 1.0);
-    let t_star = (c.y[k] + w * (c.y[k + 1] - c.y[k])).exp();
+    let w = ((xi - c.x[kb]) / (c.x[kb + 1] - c.x[kb])).clamp(0.0, 1.0);
+    let t_star = (c.y[kb] + w * (c.y[kb + 1] - c.y[kb])).exp();
     Ok(Inflection {
         e_star,
         max_slope,
-        bracket: (c.x[k].exp(), c.x[k + 1].exp()),
+        bracket: (c.x[kb].exp(), c.x[kb + 1].exp()),
         t_star,
-        cubic,
+        p_line,
         p_value,
+        errors: c.errors.clone(),
     })
+}
+
+/// The slopes of consecutive points of the curve: the index `k` of the steepest (between points
+/// `k` and `k + 1`), and by how many standard errors it is steeper than the flattest slope on
+/// its left and on its right (neighbouring slopes share a point: their covariance counts).
+/// `None` when the steepest slope is at an end.
+fn slope_contrast(c: &Curve) -> Option<(usize, f64, f64)> {
+    let m = c.x.len() - 1;
+    let dx: Vec<f64> = (0..m).map(|j| c.x[j + 1] - c.x[j]).collect();
+    let s: Vec<f64> = (0..m).map(|j| (c.y[j + 1] - c.y[j]) / dx[j]).collect();
+    let var = |j: usize| (c.sigma[j].powi(2) + c.sigma[j + 1].powi(2)) / (dx[j] * dx[j]);
+    let cov = |i: usize, j: usize| {
+        let (a, b) = (i.min(j), i.max(j));
+        if b == a + 1 {
+            -c.sigma[b].powi(2) / (dx[a] * dx[b])
+        } else {
+            0.0
+        }
+    };
+    let k = (0..m).max_by(|&a, &b| s[a].total_cmp(&s[b]))?;
+    if k == 0 || k == m - 1 {
+        return None;
+    }
+    let flattest = |r: std::ops::Range<usize>| r.min_by(|&a, &b| s[a].total_cmp(&s[b]));
+    let z = |j: usize| (s[k] - s[j]) / (var(k) + var(j) - 2.0 * cov(k, j)).sqrt();
+    Some((k, z(flattest(0..k)?), z(flattest(k + 1..m)?)))
 }
 
 /// The steepest slope of the log-log points `(x, y)` (sorted, distinct x): `(E*, slope, k)` of
@@ -610,16 +660,17 @@ fn decide(
         Decision::Jump(j) => {
             let (gas, note) = branch(j.e_star, j.gas_temperature(e), "jump");
             let note = format!(
-                "{note}; the jump: ratio {:.2} between E* = {} and {}, p = {:.2e}",
-                j.ratio, j.bracket.0, j.bracket.1, j.p_value
+                "{note}; the jump: ratio {:.2} between E* = {} and {}, p = {:.2e}; {}",
+                j.ratio, j.bracket.0, j.bracket.1, j.p_value, j.errors
             );
             (gas, line("jump", j.e_star), note)
         }
         Decision::Inflection(i) => {
             let (gas, note) = branch(i.e_star, i.t_star, "inflection");
             let note = format!(
-                "{note}; the inflection: between E* = {} and {}, cubic term p = {:.2e}",
-                i.bracket.0, i.bracket.1, i.p_value
+                "{note}; the inflection: between E* = {} and {}, power law p = {:.2e}, slopes p = \
+                 {:.2e}; {}",
+                i.bracket.0, i.bracket.1, i.p_line, i.p_value, i.errors
             );
             (gas, line("inflection", i.e_star), note)
         }
