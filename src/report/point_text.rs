@@ -172,7 +172,13 @@ pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
                 i.bracket.1,
                 i.p_value
             ),
-            Err(why) => writeln!(out, "{:>10.4} {:>7} {:>12} ({why})", gamma, pts.len(), "none"),
+            Err(why) => writeln!(
+                out,
+                "{:>10.4} {:>7} {:>12} ({why})",
+                gamma,
+                pts.len(),
+                "none"
+            ),
         };
     }
     out

@@ -445,8 +445,7 @@ fn fluid_gas_along_a_line() {
         .iter()
         .map(|&(_, temp, d)| homogeneous(d, temp, 0.0))
         .collect();
-    let pts_old: Vec<(f64, &Observables)> =
-        curve.iter().zip(&old).map(|(c, o)| (c.0, o)).collect();
+    let pts_old: Vec<(f64, &Observables)> = curve.iter().zip(&old).map(|(c, o)| (c.0, o)).collect();
     for c in classify_line(30.0, &pts_old, &t, true) {
         assert!(
             matches!(&c.decided_on.fluid_gas,
@@ -508,7 +507,9 @@ fn fluid_gas_along_a_line() {
         assert_eq!(c.phase, want, "E* = {e}: {}", c.decided_on.reason);
         assert!(matches!(c.decided_on.fluid_gas, FluidGasFrom::Line { .. }));
         assert!(
-            c.decided_on.reason.contains("estimated from the line's scatter"),
+            c.decided_on
+                .reason
+                .contains("estimated from the line's scatter"),
             "{}",
             c.decided_on.reason
         );
@@ -588,7 +589,10 @@ fn above_the_boundary_but_off_the_gas_branch_stays_fluid() {
         "{}",
         cs[6].decided_on.reason
     );
-    assert!(matches!(cs[6].decided_on.fluid_gas, FluidGasFrom::Line { .. }));
+    assert!(matches!(
+        cs[6].decided_on.fluid_gas,
+        FluidGasFrom::Line { .. }
+    ));
 }
 
 /// The two Gamma = 30 lines of docs/validation.md (validated against the literature) through
@@ -650,8 +654,7 @@ fn the_validated_gamma_30_lines_keep_their_labels() {
                 }
             })
             .collect();
-        let pts: Vec<(f64, &Observables)> =
-            line.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
+        let pts: Vec<(f64, &Observables)> = line.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
         let cs = classify_line(30.0, &pts, &t, elastic);
         for (&(e, _, want), c) in line.iter().zip(&cs) {
             assert_eq!(c.phase, want, "E* = {e}: {}", c.decided_on.reason);

@@ -433,8 +433,9 @@ pub fn fluid_gas_inflection(points: &[LinePoint]) -> Result<Inflection, String> 
             n - 2
         ));
     }
-    let (k, z_left, z_right) = slope_contrast(&c)
-        .ok_or_else(|| format!("the steepest sampled slope lies at an end of the line; {errors}"))?;
+    let (k, z_left, z_right) = slope_contrast(&c).ok_or_else(|| {
+        format!("the steepest sampled slope lies at an end of the line; {errors}")
+    })?;
     let m = (n - 1) as f64;
     let p_value = (m * (1.0 - normal_cdf(z_left.min(z_right)))).min(1.0);
     if p_value >= SLOPE_LEVEL {
@@ -494,7 +495,12 @@ fn slope_contrast(c: &Curve) -> Option<(usize, f64, f64)> {
 /// `k + 1`) and its two neighbours. `None` when the largest slope is at an end.
 fn steepest(x: &[f64], y: &[f64]) -> Option<(f64, f64, usize)> {
     let mids: Vec<(f64, f64)> = (0..x.len() - 1)
-        .map(|i| (0.5 * (x[i] + x[i + 1]), (y[i + 1] - y[i]) / (x[i + 1] - x[i])))
+        .map(|i| {
+            (
+                0.5 * (x[i] + x[i + 1]),
+                (y[i + 1] - y[i]) / (x[i + 1] - x[i]),
+            )
+        })
         .collect();
     let k = (0..mids.len()).max_by(|&a, &b| mids[a].1.total_cmp(&mids[b].1))?;
     if k == 0 || k == mids.len() - 1 {
@@ -544,8 +550,7 @@ pub fn classify_line(
     elastic: bool,
 ) -> Vec<Classification> {
     let first: Vec<Classification> = points.iter().map(|(_, o)| classify(o, th)).collect();
-    let on_curve =
-        |c: &Classification| !c.decided_on.split && c.decided_on.whole.phase != Phase::S;
+    let on_curve = |c: &Classification| !c.decided_on.split && c.decided_on.whole.phase != Phase::S;
     let curve_points: Vec<LinePoint> = points
         .iter()
         .zip(&first)
@@ -579,7 +584,8 @@ pub fn classify_line(
             } else {
                 "solid: kept out of the line's curve".to_string()
             };
-            c.decided_on.reason = format!("{}; line at Gamma = {gamma}: {note}", c.decided_on.reason);
+            c.decided_on.reason =
+                format!("{}; line at Gamma = {gamma}: {note}", c.decided_on.reason);
             c
         })
         .collect()
@@ -602,22 +608,22 @@ fn by_coexistences(
     if fgc.is_empty() {
         return Decision::None(why);
     }
-    let e = fgc
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-            (a.0.min(p.0), a.1.max(p.0))
-        });
-    let t = fgc
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-            (a.0.min(p.1), a.1.max(p.1))
-        });
+    let e = fgc.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+        (a.0.min(p.0), a.1.max(p.0))
+    });
+    let t = fgc.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+        (a.0.min(p.1), a.1.max(p.1))
+    });
     let below = curve
         .iter()
         .map(|p| p.e_star)
         .filter(|&x| x < e.0)
         .fold(f64::NAN, f64::max);
-    let boundary = if below.is_nan() { e.0 } else { (below * e.0).sqrt() };
+    let boundary = if below.is_nan() {
+        e.0
+    } else {
+        (below * e.0).sqrt()
+    };
     Decision::Coexistence {
         e,
         t,
@@ -649,11 +655,24 @@ fn decide(
     );
     let branch = |b: f64, level: f64, what: &str| -> (bool, String) {
         if e <= b {
-            (false, format!("E* = {e} below the {what} boundary E* = {b:.4}: fluid side"))
+            (
+                false,
+                format!("E* = {e} below the {what} boundary E* = {b:.4}: fluid side"),
+            )
         } else if t >= level {
-            (true, format!("E* = {e} above the {what} boundary E* = {b:.4} and T_g/E_cb = {t:.4} on the gas branch (>= {level:.4})"))
+            (
+                true,
+                format!(
+                    "E* = {e} above the {what} boundary E* = {b:.4} and T_g/E_cb = {t:.4} on the gas branch (>= {level:.4})"
+                ),
+            )
         } else {
-            (false, format!("E* = {e} above the {what} boundary E* = {b:.4}, but T_g/E_cb = {t:.4} below the gas branch ({level:.4}): stays fluid"))
+            (
+                false,
+                format!(
+                    "E* = {e} above the {what} boundary E* = {b:.4}, but T_g/E_cb = {t:.4} below the gas branch ({level:.4}): stays fluid"
+                ),
+            )
         }
     };
     match d {
@@ -681,11 +700,26 @@ fn decide(
             why,
         } => {
             let (gas, note) = if e < *lo && t <= *tlo {
-                (false, format!("below the line's fluid-gas coexistences (E* >= {lo}) and colder than all of them (T_g/E_cb >= {tlo:.4}): fluid"))
+                (
+                    false,
+                    format!(
+                        "below the line's fluid-gas coexistences (E* >= {lo}) and colder than all of them (T_g/E_cb >= {tlo:.4}): fluid"
+                    ),
+                )
             } else if e > *hi && t >= *thi {
-                (true, format!("above the line's fluid-gas coexistences (E* <= {hi}) and hotter than all of them (T_g/E_cb <= {thi:.4}): gas"))
+                (
+                    true,
+                    format!(
+                        "above the line's fluid-gas coexistences (E* <= {hi}) and hotter than all of them (T_g/E_cb <= {thi:.4}): gas"
+                    ),
+                )
             } else {
-                (fallback, format!("not outside the line's fluid-gas coexistences in both E* and T_g: {per_point}"))
+                (
+                    fallback,
+                    format!(
+                        "not outside the line's fluid-gas coexistences in both E* and T_g: {per_point}"
+                    ),
+                )
             };
             let note = format!("no transition on the curve ({why}); {note}");
             (gas, line("coexistence", *boundary), note)
