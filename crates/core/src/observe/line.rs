@@ -21,26 +21,24 @@
 //! spoils two residuals, which the median ignores when the line has enough points. Every
 //! error has a floor of [`MIN_REL_ERROR`].
 //!
-//! **Jump (elastic).** A power law `y = a + b x` against a power law with a step,
-//! `y = a + b x + d [x > x_k]`, at each position `k` with at least two points on either side
-//! (a step with one point beyond it cannot be told from an outlier). The step at the position
-//! of largest chi-square gain `Delta chi^2_k` is significant when its p-value, `P(chi^2_1 >
-//! Delta chi^2_k / s_k^2)` times the number of positions tried (Bonferroni), is below
-//! [`JUMP_LEVEL`]; `s_k^2 = max(1, chi^2_k / (n - 3))` widens the errors where the step model
-//! itself does not fit (errors underestimated, or a gas that keeps heating). The raw ratio
-//! `T_{k+1} / T_k` must also reach `line_jump_ratio`. The boundary is the geometric mean of the
-//! two `E*` that bracket the step.
+//! **Jump (elastic).** At each gap between neighbours with at least two points on either side
+//! (one point beyond a step cannot be told from an outlier), a power law `y = a + b x` is
+//! fitted to each side and both are extended to the middle of the gap; the step between them
+//! there, in units of its standard error, is the test statistic (a bend without a
+//! discontinuity gives none). The errors are widened by `s^2 = max(1, chi^2 / (n - 4))` of the
+//! two fits, where the sides scatter more than the errors say (errors underestimated, or an
+//! elastic gas that keeps heating). The gap with the largest statistic is a jump when its
+//! one-sided p-value times the number of gaps tried (Bonferroni) is below [`JUMP_LEVEL`] and
+//! the raw ratio `T_{k+1} / T_k` reaches `line_jump_ratio`. The boundary is the geometric mean
+//! of the two `E*` that bracket it.
 //!
 //! **Inflection (inelastic).** The inflection is where the log-log slope `dy/dx` is largest
-//! (the second derivative changes sign there). Its existence is tested on the whole line: a
-//! cubic `y = a + b x + c x^2 + e x^3` has a slope maximum (an inflection where the curve turns
-//! from steepening to flattening) when `e < 0`; `e` must be negative by more than its standard
-//! error allows at level [`INFLECTION_LEVEL`] (one-sided, errors widened by
-//! `s^2 = max(1, chi^2 / (n - 4))`), and the cubic's inflection `-c / (3 e)` must lie inside
-//! the sampled range. It is then located locally: the slopes of consecutive points are taken
-//! at their midpoints, and the largest one and its two neighbours are fitted by a parabola
-//! whose vertex is the inflection point. A largest slope at either end of the line means the
-//! inflection lies outside the sampled range: no transition.
+//! (the second derivative changes sign there). It is reported when a power law for the whole
+//! line is rejected by its chi-square at [`INFLECTION_LEVEL`], the steepest slope between
+//! neighbours is interior, and it is steeper than the flattest slope on each side by more than
+//! their errors allow (one-sided, family-wise [`SLOPE_LEVEL`] with a Bonferroni correction over
+//! the slopes; neighbouring slopes share a point, and their covariance counts). It is located
+//! by the vertex of the parabola through the largest midpoint slope and its two neighbours.
 //!
 //! **Gas branch.** With a transition, a homogeneous point is gas when it lies above the
 //! boundary *and* its `T_g` is on the gas branch: for a jump, above the midpoint (in `y`)
@@ -156,9 +154,10 @@ pub fn curve(points: &[LinePoint]) -> Result<Curve, String> {
         .filter(|p| p.e_star > 0.0 && p.t > 0.0 && p.e_star.is_finite() && p.t.is_finite())
         .collect();
     p.sort_by(|a, b| a.e_star.total_cmp(&b.e_star));
-    // Per distinct E*: mean y, the block error of the mean (if every replica has one), the
+    // Per distinct E*: x, mean y, the block error of the mean (if every replica has one), the
     // replicas' spread error (if several), the number of replicas.
-    let mut groups: Vec<(f64, f64, Option<f64>, Option<f64>, usize)> = Vec::new();
+    type Group = (f64, f64, Option<f64>, Option<f64>, usize);
+    let mut groups: Vec<Group> = Vec::new();
     for g in p.chunk_by(|a, b| a.e_star == b.e_star) {
         let n = g.len() as f64;
         let ys: Vec<f64> = g.iter().map(|q| q.t.ln()).collect();
@@ -274,7 +273,7 @@ fn wls(cols: &[Vec<f64>], y: &[f64], sigma: &[f64]) -> Option<(Vec<f64>, Vec<Vec
 /// function at half-integer order, by its finite series).
 pub fn chi2_sf(c: f64, nu: usize) -> f64 {
     let h = 0.5 * c.max(0.0);
-    if nu % 2 == 0 {
+    if nu.is_multiple_of(2) {
         let (mut term, mut sum) = (1.0, 1.0);
         for k in 1..nu / 2 {
             term *= h / k as f64;
