@@ -8,7 +8,7 @@
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
-use wetgran_core::observe::line::{LinePoint, fluid_gas_inflection, fluid_gas_jump};
+use wetgran_core::observe::line::{LinePoint, curve, fluid_gas_inflection, fluid_gas_jump};
 
 /// `line_jump_ratio`'s default.
 const MIN_RATIO: f64 = 3.0;
@@ -94,21 +94,30 @@ fn a_real_jump_is_found() {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(32);
     let es = grid(0.5, 1.15, 12);
     let at = (es[5] * es[6]).sqrt();
-    let mut found = 0;
-    for _ in 0..DRAWS {
-        let pts = noisy(
-            &es,
-            |e| 1.5 * e * e * if e > at { 5.0 } else { 1.0 },
-            &mut rng,
-        );
-        if let Ok(j) = fluid_gas_jump(&pts, MIN_RATIO)
-            && (j.e_star / at).ln().abs() <= 1.15f64.ln() * 1.000_001
-        {
-            found += 1;
+    let mut rate = |jump: f64| {
+        let mut found = 0;
+        for _ in 0..DRAWS {
+            let pts = noisy(
+                &es,
+                |e| 1.5 * e * e * if e > at { jump } else { 1.0 },
+                &mut rng,
+            );
+            if let Ok(j) = fluid_gas_jump(&pts, MIN_RATIO)
+                && (j.e_star / at).ln().abs() <= 1.15f64.ln() * 1.000_001
+            {
+                found += 1;
+            }
         }
-    }
-    println!("jump of ratio 5, 12 points, 3 % noise: found within one spacing in {found}/{DRAWS}");
+        println!(
+            "jump of ratio {jump}, 12 points, 3 % noise: found within one spacing in \
+             {found}/{DRAWS}"
+        );
+        found
+    };
+    let found = rate(5.0);
     assert!(found >= DRAWS * 95 / 100, "found {found}");
+    // The sensitivity near the floor `line_jump_ratio` (reported, docs/validation.md).
+    rate(3.5);
 }
 
 /// A log-log sigmoid: `T_g / E_cb` rises from 2 to 10 over a factor 2 in `E*` (centred on
@@ -209,4 +218,44 @@ fn the_validated_eps_1_line_keeps_its_jump() {
             fluid_gas_inflection(&with(&eps096, err))
         );
     }
+}
+
+/// The errors of the curve: replicas of one `E*` are averaged in `ln T` and carry the larger of
+/// their combined block error and their spread; a line without stored errors gets its scatter
+/// from the line and says so; the floor holds where a block error is zero.
+#[test]
+fn the_curve_combines_replicas_and_says_where_its_errors_came_from() {
+    let p = |e: f64, t: f64, r: Option<f64>| LinePoint {
+        e_star: e,
+        t,
+        rel_error: r,
+    };
+    let c = curve(&[
+        p(1.0, 1.0, Some(0.02)),
+        p(2.0, 2.0, Some(0.02)),
+        p(2.0, 2.0, Some(0.02)),
+        p(3.0, 3.0, Some(0.02)),
+        p(3.0, 3.0 * 1.2f64.exp(), Some(0.02)),
+        p(4.0, 4.0, Some(0.0)),
+    ])
+    .unwrap();
+    assert_eq!(c.x.len(), 4);
+    // Agreeing replicas: the block errors combined, 0.02 / sqrt 2.
+    assert!((c.sigma[1] - 0.02 / 2f64.sqrt()).abs() < 1e-12);
+    // Disagreeing ones: their spread, sd / sqrt(n) = |d| / 2 for two.
+    assert!((c.y[2] - (3f64.ln() + 0.6)).abs() < 1e-12);
+    assert!((c.sigma[2] - 0.6).abs() < 1e-12);
+    assert_eq!(c.sigma[3], wetgran_core::observe::line::MIN_REL_ERROR);
+    assert!(c.errors.starts_with("errors from the runs' block errors"));
+    let bare: Vec<LinePoint> = (1..8).map(|k| p(k as f64, k as f64, None)).collect();
+    let c = curve(&bare).unwrap();
+    assert!(
+        c.errors.contains("estimated from the line's scatter"),
+        "{}",
+        c.errors
+    );
+    assert!(
+        curve(&bare[..4]).is_err(),
+        "two residuals cannot estimate a scatter"
+    );
 }
