@@ -41,8 +41,9 @@
 //! by the vertex of the parabola through the largest midpoint slope and its two neighbours.
 //!
 //! **Gas branch.** With a transition, a homogeneous point is gas when it lies above the
-//! boundary *and* its `T_g` is on the gas branch: for a jump, above the midpoint (in `y`)
-//! between the two fitted branches at its own `E*`; for an inflection, at or above the
+//! boundary *and* its `T_g` is on the gas branch: for a jump, at or above the midpoint (in `y`)
+//! between the two fitted branches at its own `E*`, or at least as hot as the point just above
+//! the jump (the branches, extended far, may cross); for an inflection, at or above the
 //! temperature interpolated at the inflection. A point above the boundary but below the gas
 //! branch stays fluid, and its `decided_on.reason` says so.
 //!
@@ -309,15 +310,20 @@ pub struct Jump {
     pub p_value: f64,
     /// Where the errors came from ([`Curve::errors`]).
     pub errors: String,
-    /// The gas branch begins at `ln(T_g / E_cb) = level.0 + level.1 ln E*`: midway between the
-    /// two fitted branches.
+    /// Midway between the two fitted branches: `ln(T_g / E_cb) = level.0 + level.1 ln E*`.
     pub level: (f64, f64),
+    /// `T_g / E_cb` of the point just above the jump.
+    pub upper_t: f64,
 }
 
 impl Jump {
-    /// `T_g / E_cb` at which a point at `e_star` is on the gas branch.
+    /// `T_g / E_cb` at which a point at `e_star` is on the gas branch: closer to the upper
+    /// branch than to the lower one, or at least as hot as the point just above the jump
+    /// (where the two fitted branches, extended far, would cross).
     pub fn gas_temperature(&self, e_star: f64) -> f64 {
-        (self.level.0 + self.level.1 * e_star.ln()).exp()
+        (self.level.0 + self.level.1 * e_star.ln())
+            .exp()
+            .min(self.upper_t)
     }
 }
 
@@ -361,6 +367,7 @@ pub fn fluid_gas_jump(points: &[LinePoint], min_ratio: f64) -> Result<Jump, Stri
         z,
         p_value,
         level,
+        upper_t: c.y[k + 1].exp(),
         errors: c.errors.clone(),
     })
 }
