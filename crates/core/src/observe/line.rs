@@ -669,14 +669,16 @@ fn decide(
             (
                 true,
                 format!(
-                    "E* = {e} above the {what} boundary E* = {b:.4} and T_g/E_cb = {t:.4} on the gas branch (>= {level:.4})"
+                    "E* = {e} above the {what} boundary E* = {b:.4} and T_g/E_cb = {t:.4} on \
+                     the gas branch (>= {level:.4})"
                 ),
             )
         } else {
             (
                 false,
                 format!(
-                    "E* = {e} above the {what} boundary E* = {b:.4}, but T_g/E_cb = {t:.4} below the gas branch ({level:.4}): stays fluid"
+                    "E* = {e} above the {what} boundary E* = {b:.4}, but T_g/E_cb = {t:.4} \
+                     below the gas branch ({level:.4}): stays fluid"
                 ),
             )
         }
@@ -709,21 +711,24 @@ fn decide(
                 (
                     false,
                     format!(
-                        "below the line's fluid-gas coexistences (E* >= {lo}) and colder than all of them (T_g/E_cb >= {tlo:.4}): fluid"
+                        "below the line's fluid-gas coexistences (E* >= {lo}) and colder than \
+                         all of them (T_g/E_cb >= {tlo:.4}): fluid"
                     ),
                 )
             } else if e > *hi && t >= *thi {
                 (
                     true,
                     format!(
-                        "above the line's fluid-gas coexistences (E* <= {hi}) and hotter than all of them (T_g/E_cb <= {thi:.4}): gas"
+                        "above the line's fluid-gas coexistences (E* <= {hi}) and hotter than \
+                         all of them (T_g/E_cb <= {thi:.4}): gas"
                     ),
                 )
             } else {
                 (
                     fallback,
                     format!(
-                        "not outside the line's fluid-gas coexistences in both E* and T_g: {per_point}"
+                        "not outside the line's fluid-gas coexistences in both E* and T_g: \
+                         {per_point}"
                     ),
                 )
             };
