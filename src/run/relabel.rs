@@ -3,7 +3,11 @@
 //! `observe::line`). Points of one line share everything but `E*` and the seed: the same
 //! Gamma, restitution, box, grains and run settings. A line needs at least
 //! [`MIN_LINE_POINTS`] distinct `E*`; points on shorter lines (or in sweeps without a Gamma
-//! axis) keep the per-point fallback, and say so in their `decided_on.fluid_gas`.
+//! axis) keep the per-point fallback, and say so in their `decided_on.fluid_gas`. On a line,
+//! `observe::line::classify_line` decides: its homogeneous mobile points (solids and
+//! coexistences kept out) make the curve, each with the block error of its temperature stored
+//! by the run, and a line whose curve shows no transition beyond that scatter keeps its
+//! per-point labels (`{"by": "line_without_transition"}`).
 
 use crate::store::{PointRow, Store, StoreError, SweepRow};
 use std::collections::BTreeMap;

@@ -120,9 +120,18 @@ pub enum FluidGasFrom {
     /// A line of constant Gamma: the fluid-gas boundary at `e_star_boundary`.
     Line {
         gamma: f64,
-        /// `"jump"` (elastic) or `"inflection"`.
+        /// `"jump"` (elastic), `"inflection"`, or `"coexistence"` (no transition on the curve,
+        /// the line's fluid-gas coexistences mark it: `observe::line`).
         method: String,
         e_star_boundary: f64,
+    },
+    /// A line of constant Gamma whose curve shows no fluid-gas transition that stands out of
+    /// its scatter: the per-point fallback decided, and `reason` says why the line did not.
+    LineWithoutTransition {
+        gamma: f64,
+        /// `"jump"` (elastic) or `"inflection"`: the test that found nothing.
+        method: String,
+        reason: String,
     },
 }
 
