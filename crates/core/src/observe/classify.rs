@@ -4,24 +4,27 @@
 //! (`wetgran reclassify`). docs/observables.md gives the reasoning and the evidence.
 //!
 //! The rule for one run (per point):
-//! 1. A region is *solid* when it is not mobile: its lateral mobility `D_lat` (mean-square
-//!    lateral displacement over a fixed lag in time, `observe::lateral`) is at most
-//!    `solid_diffusion`. (`mobility = "location_changes"`: `f_lc` per period against
-//!    `solid_flc`, a region hotter than `gas_temperature` counting as mobile; `mobility =
-//!    "temperature"`, or where neither was observed: `T_g / E_cb` against `solid_temperature`.)
-//!    A mobile region is *gas* when `T_g / E_cb > gas_temperature`, else *fluid*: this is the
-//!    per-point fallback of the fluid-gas decision, which a sweep replaces by the line rule
-//!    below wherever the point lies on a line of constant Gamma.
-//! 2. *Coexistence* needs a lateral profile that is significantly inhomogeneous: the profile
-//!    (`n_cb` for wet scenes, the packing fraction for dry ones, `coexistence_by`) has a spread
-//!    `Delta` (Eq. 3.3) above the `coexistence_level` quantile of the spread that a homogeneous
-//!    state with the same bins and window shows (`observe::noise`: the range of `B` normal
-//!    values with the bins' statistical error), above `coexistence_delta_n_cb`, and its dense
-//!    and dilute classes differ by at least the fraction `coexistence_contrast` of the dense
-//!    mean. Otherwise the system is homogeneous and rule 1 classifies it as a whole.
+//! 1. A region is *solid* when it is not mobile: its lateral mobility `D_lat` over the long lag
+//!    (`observe::lateral`) is at most `solid_diffusion`, or its mean-square displacement is
+//!    caged: it grows like `tau^alpha` with `alpha < diffusive_exponent` between the short and
+//!    the long lag while staying below [`CAGE_MSD`]. (`mobility = "location_changes"`: `f_lc`
+//!    per period against `solid_flc`, a region hotter than `gas_temperature` counting as
+//!    mobile; `mobility = "temperature"`, or where neither was observed: `T_g / E_cb` against
+//!    `solid_temperature`.) A mobile region is *gas* when `T_g / E_cb > gas_temperature`, else
+//!    *fluid*: this is the per-point fallback of the fluid-gas decision, which a sweep replaces
+//!    by the line rule wherever the point lies on a line of constant Gamma.
+//! 2. *Coexistence* needs a bonded dense part (at least `cluster_fraction` of the dense bins'
+//!    grains are members of bonded clusters, `observe::clusters`) and a lateral profile that is
+//!    significantly inhomogeneous: the profile (`n_cb` for wet scenes, the packing fraction for
+//!    dry ones, `coexistence_by`) has a spread `Delta` (Eq. 3.3) above the `coexistence_level`
+//!    quantile of the bootstrap null distribution stored with the result (`noise::NullRanges`;
+//!    older results: the range of `B` independent normals with the bins' statistical error),
+//!    above `coexistence_delta_n_cb`, and its dense and dilute classes differ by at least the
+//!    fraction `coexistence_contrast` of the dense mean. Otherwise the system is homogeneous
+//!    and rule 1 classifies it as a whole.
 //! 3. A coexistence splits the bins into a dense and a dilute class (Otsu's rule,
-//!    [`two_class_split`]). The dense region is described by its *clustered* grains (bonded,
-//!    or closely packed when dry: `observe::lateral`), the dilute region by all of its grains,
+//!    [`two_class_split`]). The dense region is described by its cluster members (bonded, or
+//!    closely packed when dry: `observe::clusters`), the dilute region by all of its grains,
 //!    each time-averaged over the samples; each is classified by rule 1, with the per-point
 //!    gas threshold, except that the dense region also counts as condensed (not gas) when the
 //!    dilute region is at least `line_jump_ratio` times hotter (a bonded drop in its vapour).
@@ -419,7 +422,7 @@ fn weighted(sel: &[usize], weight: &[f64], value: &[Option<f64>]) -> Option<f64>
 
 /// Classifies observables with the given thresholds (pure: the same inputs give the same
 /// answer). Fluid versus gas is decided per point (`gas_temperature`); a sweep replaces that by
-/// the line rule ([`super::line::apply_fluid_gas_line`]).
+/// the line rule ([`super::line::classify_line`]).
 pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
     let t_gas = th.gas_temperature;
     classify_with(obs, th, &|t| t > t_gas, FluidGasFrom::PointFallback)
