@@ -93,6 +93,10 @@ fn main() {
                         e_star_boundary,
                         ..
                     } => format!("{method} at E* = {e_star_boundary:.3}"),
+                    wetgran_core::observe::classify::FluidGasFrom::LineWithoutTransition {
+                        method,
+                        ..
+                    } => format!("point (line: no {method})"),
                 },
                 if d.borderline.is_empty() { "" } else { "yes" },
                 if obs.stationarity.stationary {

@@ -1,7 +1,8 @@
-//! Sweep-level classification (`run::relabel`): the points of a line of constant Gamma are
-//! labelled fluid or gas by the line's jump (elastic) or inflection (inelastic) of
-//! `T_g / E_cb(E*)`, every point of the line alike; points of lines too short keep the per-point
-//! fallback and say so; replicas (other seeds) belong to their point's line.
+//! Sweep-level classification (`run::relabel`): the homogeneous points of a line of constant
+//! Gamma are labelled fluid or gas by the line's jump (elastic) or inflection (inelastic) of
+//! `T_g / E_cb(E*)` where it stands out of the stored errors; a line without one keeps the
+//! per-point labels and says so; points of lines too short keep the per-point fallback and say
+//! so; replicas (other seeds) belong to their point's line.
 
 use serde_json::{Value, json};
 use wetgran::run::relabel::{MIN_LINE_POINTS, relabel};
@@ -9,6 +10,7 @@ use wetgran::store::PointRow;
 use wetgran::sweep::JobSpec;
 use wetgran::sweep::spec::SPEC_FORMAT;
 use wetgran_core::observe::classify::FluidGasFrom;
+use wetgran_core::observe::convergence::{BlockTest, Convergence};
 use wetgran_core::observe::{Phase, run_observed};
 use wetgran_core::scene::Scene;
 
@@ -63,6 +65,39 @@ fn observables(template: &Value, t: f64) -> Value {
     o
 }
 
+/// `o` with a stored block error of its temperature, `rel` of its value (as a run to
+/// stationarity stores it).
+fn with_error(mut o: Value, rel: f64) -> Value {
+    let t = o["granular_temperature_reduced"].as_f64().unwrap();
+    let c = Convergence {
+        converged: true,
+        ending: None,
+        window_start: 0.0,
+        window_end: 2.0,
+        checks: 1,
+        first_check: 2.0,
+        cap: 2.0,
+        blocks: 4,
+        sigmas: 3.0,
+        rel_tolerance: 0.02,
+        tests: vec![BlockTest {
+            quantity: wetgran_core::observe::trend::TEMPERATURE.into(),
+            mean: t,
+            standard_error: rel * t,
+            block_means: vec![t; 4],
+            block_errors: vec![2.0 * rel * t; 4],
+            max_pair_sigmas: 0.0,
+            drift: 0.0,
+            drift_error: 0.0,
+            tolerance: 0.02 * t,
+            agree: true,
+            no_trend: true,
+        }],
+    };
+    o["convergence"] = serde_json::to_value(c).unwrap();
+    o
+}
+
 fn point(k: usize, scene: Scene, obs: Value) -> PointRow {
     PointRow {
         point: k as i64,
@@ -95,8 +130,8 @@ fn lines_of_constant_gamma_decide_fluid_versus_gas() {
         serde_json::to_value(run_observed(&scene(30.0, 1.0, 1.0, 1), &mut |_| {}).observables)
             .unwrap();
     let mut rows = Vec::new();
-    // Elastic line at Gamma = 30: T jumps thirty-fold between E* = 1 and 1.5. The per-point
-    // fallback (gas above T = 2) would call E* = 1 (T = 2.5) a gas.
+    // Elastic line at Gamma = 30: T jumps thirty-fold between E* = 1 and 1.5 (errors of 1 %
+    // stored). The per-point fallback (gas above T = 2) would call E* = 1 (T = 2.5) a gas.
     let elastic = [
         (0.5, 0.6),
         (0.7, 1.2),
@@ -108,14 +143,14 @@ fn lines_of_constant_gamma_decide_fluid_versus_gas() {
         rows.push(point(
             rows.len(),
             scene(30.0, e, 1.0, 1),
-            observables(&template, t),
+            with_error(observables(&template, t), 0.01),
         ));
     }
     // A replica (seed 2) of E* = 1 on the same line.
     rows.push(point(
         rows.len(),
         scene(30.0, 1.0, 1.0, 2),
-        observables(&template, 2.4),
+        with_error(observables(&template, 2.4), 0.01),
     ));
     // Inelastic line at Gamma = 10: a sigmoid in log-log with its inflection at E* = 3.
     let e0: f64 = 3.0;
@@ -125,7 +160,7 @@ fn lines_of_constant_gamma_decide_fluid_versus_gas() {
         rows.push(point(
             rows.len(),
             scene(10.0, e, 0.9, 1),
-            observables(&template, t),
+            with_error(observables(&template, t), 0.01),
         ));
     }
     // A line too short (Gamma = 5, two points): per-point fallback.
@@ -133,6 +168,16 @@ fn lines_of_constant_gamma_decide_fluid_versus_gas() {
         rows.push(point(
             rows.len(),
             scene(5.0, e, 1.0, 1),
+            observables(&template, t),
+        ));
+    }
+    // The elastic line of Gamma = 30 again at Gamma = 20, without stored errors (results from
+    // before the run-length policy): five points cannot estimate their scatter past the jump,
+    // so the line has no transition and keeps its per-point labels.
+    for (e, t) in elastic {
+        rows.push(point(
+            rows.len(),
+            scene(20.0, e, 1.0, 1),
             observables(&template, t),
         ));
     }
@@ -176,6 +221,19 @@ fn lines_of_constant_gamma_decide_fluid_versus_gas() {
     // The short line: per point.
     assert_eq!(from(14), FluidGasFrom::PointFallback);
     assert_eq!((phase(14), phase(15)), (Phase::F, Phase::G));
+    // The line without errors: per-point labels (T above 2: g), and the line says why.
+    assert_eq!(
+        (16..21).map(phase).collect::<Vec<_>>(),
+        [Phase::F, Phase::F, Phase::G, Phase::G, Phase::G]
+    );
+    for k in 16..21 {
+        assert!(
+            matches!(&from(k), FluidGasFrom::LineWithoutTransition { gamma, method, reason }
+                if (gamma - 20.0).abs() < 1e-9 && method == "jump" && reason.contains("scatter")),
+            "{:?}",
+            from(k)
+        );
+    }
     // Old labels are reported for the caller to count changes.
     assert_eq!(labels[0].old.as_deref(), Some("g"));
 }

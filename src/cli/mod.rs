@@ -112,7 +112,8 @@ pub enum Command {
         profiles: Option<PathBuf>,
     },
     /// The fluid-gas boundary of inelastic systems: the inflection point of T_g/E_cb against
-    /// E* along each line of constant Gamma of a sweep (docs/model.md 7).
+    /// E* along each line of constant Gamma of a sweep (docs/model.md 7), where it stands out
+    /// of the line's scatter, else why there is none.
     Inflection {
         #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,

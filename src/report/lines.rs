@@ -261,8 +261,16 @@ pub fn lines_of(sweep: &SweepRow, points: &[PointRow]) -> Lines {
                 .then(a.replica.cmp(&b.replica))
         });
         l.boundaries = label_changes(&l.points);
-        let curve: Vec<(f64, f64)> = l.points.iter().map(|p| (p.e_star, p.temperature)).collect();
-        l.inflection = fluid_gas_inflection(&curve).map(|i| i.e_star);
+        let curve: Vec<wetgran_core::observe::line::LinePoint> = l
+            .points
+            .iter()
+            .map(|p| wetgran_core::observe::line::LinePoint {
+                e_star: p.e_star,
+                t: p.temperature,
+                rel_error: p.temperature_error.map(|e| e / p.temperature.abs()),
+            })
+            .collect();
+        l.inflection = fluid_gas_inflection(&curve).ok().map(|i| i.e_star);
     }
     Lines {
         sweep: sweep.name.clone(),

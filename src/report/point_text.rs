@@ -6,6 +6,7 @@ use super::lines::gamma_e_star;
 use crate::store::PointRow;
 use std::fmt::Write as _;
 use wetgran_core::observe::fluid_gas_inflection;
+use wetgran_core::observe::line::LinePoint;
 
 /// The first lines of `show`: the job, its sweep, coordinates and status.
 pub fn job_text(sweep: &str, p: &PointRow) -> String {
@@ -89,10 +90,22 @@ pub fn decision_text(p: &PointRow) -> String {
     out
 }
 
-/// The lines of constant Gamma of a sweep's stored points: `(Gamma, [(E*, T_g / E_cb)])` of
-/// every finished job of a shaken scene, by increasing Gamma.
-pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<(f64, f64)>)> {
-    let mut lines: Vec<(f64, Vec<(f64, f64)>)> = Vec::new();
+/// The relative error of a stored result's `T_g / E_cb`: its temperature block test
+/// (`convergence.tests`, `observe::line::temperature_rel_error`), `None` where none is stored.
+fn temperature_rel_error(obs: &serde_json::Value) -> Option<f64> {
+    let test = obs
+        .pointer("/convergence/tests")?
+        .as_array()?
+        .iter()
+        .find(|t| t["quantity"] == wetgran_core::observe::trend::TEMPERATURE)?;
+    let r = test["standard_error"].as_f64()? / test["mean"].as_f64()?.abs();
+    (r.is_finite() && r >= 0.0).then_some(r)
+}
+
+/// The lines of constant Gamma of a sweep's stored points: `(Gamma, [(E*, T_g / E_cb, relative
+/// error)])` of every finished job of a shaken scene, by increasing Gamma.
+pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<LinePoint>)> {
+    let mut lines: Vec<(f64, Vec<LinePoint>)> = Vec::new();
     for p in points {
         let (Some(obs), Some((gamma, e_star))) = (&p.observables, gamma_e_star(&p.spec.scene))
         else {
@@ -101,12 +114,17 @@ pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<(f64, f64)>)> {
         let Some(t) = obs["granular_temperature_reduced"].as_f64() else {
             continue;
         };
+        let point = LinePoint {
+            e_star,
+            t,
+            rel_error: temperature_rel_error(obs),
+        };
         match lines
             .iter_mut()
             .find(|(g, _)| (g - gamma).abs() <= 1e-9 * gamma.abs())
         {
-            Some((_, pts)) => pts.push((e_star, t)),
-            None => lines.push((gamma, vec![(e_star, t)])),
+            Some((_, pts)) => pts.push(point),
+            None => lines.push((gamma, vec![point])),
         }
     }
     lines.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -114,8 +132,10 @@ pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<(f64, f64)>)> {
 }
 
 /// `inflection` for one sweep: per line of constant Gamma, the inflection point of T_g/E_cb
-/// against E* and the bracket it lies in.
-pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<(f64, f64)>)]) -> String {
+/// against E* and the bracket it lies in, where it stands out of the line's scatter
+/// (`observe::line`), else why there is none. Every mobile point enters, coexistences included
+/// (`sweep reclassify` keeps them out of the curve that labels the points).
+pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -129,22 +149,23 @@ pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<(f64, f64)>)]) -> String 
     );
     for (gamma, pts) in lines {
         let _ = match fluid_gas_inflection(pts) {
-            Some(i) => writeln!(
+            Ok(i) => writeln!(
                 out,
-                "{:>10.4} {:>7} {:>12.4} {:>10.3} {:>10.4} .. {:<10.4}",
+                "{:>10.4} {:>7} {:>12.4} {:>10.3} {:>10.4} .. {:<10.4} p = {:.1e}",
                 gamma,
                 pts.len(),
                 i.e_star,
                 i.max_slope,
                 i.bracket.0,
-                i.bracket.1
+                i.bracket.1,
+                i.p_value
             ),
-            None => writeln!(
+            Err(why) => writeln!(
                 out,
-                "{:>10.4} {:>7} {:>12}",
+                "{:>10.4} {:>7} {:>12} ({why})",
                 gamma,
                 pts.len(),
-                "none (fewer than 4 points, or steepest at an end)"
+                "none"
             ),
         };
     }

@@ -3,7 +3,11 @@
 //! `observe::line`). Points of one line share everything but `E*` and the seed: the same
 //! Gamma, restitution, box, grains and run settings. A line needs at least
 //! [`MIN_LINE_POINTS`] distinct `E*`; points on shorter lines (or in sweeps without a Gamma
-//! axis) keep the per-point fallback, and say so in their `decided_on.fluid_gas`.
+//! axis) keep the per-point fallback, and say so in their `decided_on.fluid_gas`. On a line,
+//! `observe::line::classify_line` decides: its homogeneous mobile points (solids and
+//! coexistences kept out) make the curve, each with the block error of its temperature stored
+//! by the run, and a line whose curve shows no transition beyond that scatter keeps its
+//! per-point labels (`{"by": "line_without_transition"}`).
 
 use crate::store::{PointRow, Store, StoreError, SweepRow};
 use std::collections::BTreeMap;
@@ -135,6 +139,11 @@ pub struct Relabelled {
     /// location changes: the classifier fell back to `T_g` for them; they need a re-run with
     /// `observe.location_changes = true` to be decided as asked.
     pub missing_flc: usize,
+    /// Results measured before bonded-cluster regions, the short mobility lag and the
+    /// bootstrap null of the profile (issue 31): the classifier decided them by the rules their
+    /// observables allow (no cluster requirement, `D_lat` floor alone, the independent-bin
+    /// noise model); a re-run measures what the current rules read.
+    pub missing_regions: usize,
     pub changes: BTreeMap<(String, String), usize>,
 }
 
@@ -160,6 +169,16 @@ impl Relabelled {
                  ran), so their mobility was decided by T_g, not by f_lc as asked: re-run them \
                  with observe.location_changes = true",
                 self.missing_flc
+            ));
+        }
+        if self.missing_regions > 0 {
+            text.push_str(&format!(
+                "; {} result(s) were measured before bonded-cluster regions and the two-lag \
+                 mobility (docs/observables.md), so they were decided without the bonded-cluster \
+                 requirement, the caged-motion test and the bootstrap noise level: re-run them \
+                 (a new sweep database, or `sweep run` after deleting their results) to apply \
+                 the current rules",
+                self.missing_regions
             ));
         }
         text
@@ -207,6 +226,7 @@ pub fn relabel_stored(
     let mut out = Relabelled::default();
     let mut unreadable = std::collections::HashSet::new();
     let mut missing_flc = std::collections::HashSet::new();
+    let mut missing_regions = std::collections::HashSet::new();
     for s in sweeps {
         let points = store.points(s.id)?;
         for p in &points {
@@ -226,6 +246,13 @@ pub fn relabel_stored(
             {
                 missing_flc.insert(p.job_id.clone());
             }
+            if p
+                .observables
+                .as_ref()
+                .is_some_and(|o| o.pointer("/profiles/clusters").is_none())
+            {
+                missing_regions.insert(p.job_id.clone());
+            }
         }
         let before: BTreeMap<&str, &PointRow> =
             points.iter().map(|p| (p.job_id.as_str(), p)).collect();
@@ -242,6 +269,7 @@ pub fn relabel_stored(
     }
     out.unreadable = unreadable.len();
     out.missing_flc = missing_flc.len();
+    out.missing_regions = missing_regions.len();
     let mut updates = Vec::new();
     for (job_id, (old_phase, old_decided, phase, decided_on)) in labels {
         out.results += 1;

@@ -4,7 +4,8 @@
 //! and the fluid-gas inflection line analysis on curves with a known answer.
 
 use wetgran_core::observe::classify::{FluidGasFrom, LEGACY_DELTA_N_CB, two_class_split};
-use wetgran_core::observe::line::{classify_line, largest_jump};
+use wetgran_core::observe::convergence::{BlockTest, Convergence};
+use wetgran_core::observe::line::{LinePoint, classify_line, fluid_gas_jump};
 use wetgran_core::observe::noise::range_quantile;
 use wetgran_core::observe::{
     LateralMobility, Mobility, NcbNormalisation, Observables, Phase, Profiles, Stationarity,
@@ -48,6 +49,9 @@ fn synthetic(d: f64, t: f64, b: Bins, wet: bool) -> Observables {
             lag: 10.0,
             diffusion: d,
             diffusion_clustered: None,
+            short_lag: None,
+            diffusion_short: None,
+            diffusion_clustered_short: None,
             lags: 30.0,
         }),
         profiles: Profiles {
@@ -75,6 +79,11 @@ fn synthetic(d: f64, t: f64, b: Bins, wet: bool) -> Observables {
             n_cb_standard_error: Some(SE),
             packing_standard_error: Some(SE),
             noise_blocks: 32,
+            diffusion_short: vec![],
+            diffusion_clustered_short: vec![],
+            n_cb_null: None,
+            packing_null: None,
+            clusters: None,
         },
         diffusion: None,
         counts: WindowCounts {
@@ -131,6 +140,43 @@ fn two_regions(dense: (f64, f64), dilute: (f64, f64)) -> Observables {
 
 fn th() -> Thresholds {
     Thresholds::default()
+}
+
+/// `o` with a stored block error of its temperature, `rel` of its value (the `[convergence]`
+/// verdict's block test, where the line rule reads it).
+fn with_error(mut o: Observables, rel: f64) -> Observables {
+    let t = o.granular_temperature_reduced;
+    o.convergence = Some(Convergence {
+        converged: true,
+        ending: None,
+        window_start: 0.0,
+        window_end: 100.0,
+        checks: 1,
+        first_check: 100.0,
+        cap: 100.0,
+        blocks: 4,
+        sigmas: 3.0,
+        rel_tolerance: 0.02,
+        tests: vec![BlockTest {
+            quantity: wetgran_core::observe::trend::TEMPERATURE.into(),
+            mean: t,
+            standard_error: rel * t,
+            block_means: vec![t; 4],
+            block_errors: vec![2.0 * rel * t; 4],
+            max_pair_sigmas: 0.0,
+            drift: 0.0,
+            drift_error: 0.0,
+            tolerance: 0.02 * t,
+            agree: true,
+            no_trend: true,
+        }],
+    });
+    o
+}
+
+/// Points `(E*, T_g/E_cb)` without stored errors.
+fn bare(line: &[(f64, f64)]) -> Vec<LinePoint> {
+    line.iter().map(|&(e, t)| LinePoint::new(e, t)).collect()
 }
 
 #[test]
@@ -360,13 +406,14 @@ fn legacy_results_use_the_legacy_threshold() {
 }
 
 /// Along a line of constant Gamma, fluid versus gas follows the jump of `T_g/E_cb(E*)`
-/// (elastic) or its inflection (inelastic), for every point of the line, whatever the
-/// per-point threshold says; solid points do not make the jump.
+/// (elastic) or its inflection (inelastic), for every homogeneous point of the line, whatever
+/// the per-point threshold says; solid points do not make the jump.
 #[test]
 fn fluid_gas_along_a_line() {
     let t = th();
-    // Elastic: T jumps from 0.8 to 30 between E* = 1 and 1.5; a per-point threshold of 2
-    // would also put 1.5 (T = 1.5 in the curve below) on the fluid side.
+    // Elastic: T jumps from 0.8 to 30 between E* = 1 and 1.5 (errors of 1 % stored); a
+    // per-point threshold of 2 would also put 1.5 (T = 1.5 in the curve below) on the fluid
+    // side.
     let curve = [
         (0.3, 0.002, 0.0),
         (0.5, 0.3, 1.0),
@@ -377,7 +424,7 @@ fn fluid_gas_along_a_line() {
     ];
     let obs: Vec<Observables> = curve
         .iter()
-        .map(|&(_, temp, d)| homogeneous(d, temp, 0.0))
+        .map(|&(_, temp, d)| with_error(homogeneous(d, temp, 0.0), 0.01))
         .collect();
     let pts: Vec<(f64, &Observables)> = curve.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
     let labels: Vec<Phase> = classify_line(30.0, &pts, &t, true)
@@ -400,23 +447,47 @@ fn fluid_gas_along_a_line() {
         }
         other => panic!("{other:?}"),
     }
-    // The jump must be large: a smooth line has none, and keeps the per-point fallback.
+    // Without stored errors a line of five points cannot estimate its scatter (the jump
+    // spoils two of its three residuals): no transition, per-point labels, and it says why.
+    let old: Vec<Observables> = curve
+        .iter()
+        .map(|&(_, temp, d)| homogeneous(d, temp, 0.0))
+        .collect();
+    let pts_old: Vec<(f64, &Observables)> = curve.iter().zip(&old).map(|(c, o)| (c.0, o)).collect();
+    for c in classify_line(30.0, &pts_old, &t, true) {
+        assert!(
+            matches!(&c.decided_on.fluid_gas,
+                FluidGasFrom::LineWithoutTransition { method, reason, .. }
+                    if method == "jump" && reason.contains("scatter")),
+            "{:?}",
+            c.decided_on.fluid_gas
+        );
+    }
+    // The jump must be large: a smooth line has none, and keeps the per-point labels.
     let smooth: Vec<(f64, f64)> = (0..8)
         .map(|k| (0.5 + 0.25 * k as f64, 0.5 + 0.3 * k as f64))
         .collect();
-    assert!(largest_jump(&smooth, t.line_jump_ratio).is_none());
+    assert!(fluid_gas_jump(&bare(&smooth), t.line_jump_ratio).is_err());
     let obs: Vec<Observables> = smooth
         .iter()
-        .map(|&(_, temp)| homogeneous(1.0, temp, 0.0))
+        .map(|&(_, temp)| with_error(homogeneous(1.0, temp, 0.0), 0.01))
         .collect();
     let pts: Vec<(f64, &Observables)> = smooth.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
-    let cs = classify_line(30.0, &pts, &t, true);
-    assert!(
-        cs.iter()
-            .all(|c| c.decided_on.fluid_gas == FluidGasFrom::PointFallback)
-    );
+    for (c, (_, temp)) in classify_line(30.0, &pts, &t, true).iter().zip(&smooth) {
+        assert!(matches!(
+            c.decided_on.fluid_gas,
+            FluidGasFrom::LineWithoutTransition { .. }
+        ));
+        let want = if *temp > t.gas_temperature {
+            Phase::G
+        } else {
+            Phase::F
+        };
+        assert_eq!(c.phase, want, "{}", c.decided_on.reason);
+    }
     // Inelastic: the inflection of a sigmoid in log-log decides; the per-point threshold (2)
-    // would have put the boundary elsewhere (T = 2 lies at E* = 1.26 here).
+    // would have put the boundary elsewhere (T = 2 lies at E* = 1.26 here). No errors stored:
+    // the line's scatter stands in, and the reason says so.
     let e0: f64 = 3.0;
     let sig: Vec<(f64, f64)> = (0..12)
         .map(|k| {
@@ -443,24 +514,192 @@ fn fluid_gas_along_a_line() {
         };
         assert_eq!(c.phase, want, "E* = {e}: {}", c.decided_on.reason);
         assert!(matches!(c.decided_on.fluid_gas, FluidGasFrom::Line { .. }));
+        assert!(
+            c.decided_on
+                .reason
+                .contains("estimated from the line's scatter"),
+            "{}",
+            c.decided_on.reason
+        );
     }
 }
 
-/// Regression (the seeds study of docs/validation.md): the elastic jump was the largest ratio
-/// of neighbouring temperatures, which a wide step deep in the still-heating elastic gas beats;
-/// it is the steepest log-log step of at least `line_jump_ratio`.
+/// The issue's fluid-only line: `T_g / E_cb` rises eightfold between its first two points, but
+/// the line has no transition; every point keeps its per-point label (f) and says why.
 #[test]
-fn the_jump_of_a_heating_elastic_gas_is_its_steepest_step_not_its_widest() {
+fn a_fluid_only_line_has_no_boundary() {
     let t = th();
-    // The Gamma = 30 line of the seeds study (docs/validation.md): the widest step deep in the
-    // gas has the largest ratio (28 over 1.6 -> 2.6); the jump is the steepest step, 1.1 -> 1.6
-    // (ratio 17).
-    let seeds = [(0.7, 2.0), (1.1, 7.3), (1.6, 124.0), (2.6, 3500.0)];
-    let j = largest_jump(&seeds, t.line_jump_ratio).unwrap();
+    let line = [(0.3, 0.05), (0.5, 0.4), (0.7, 0.6), (1.0, 0.9)];
+    for rel in [None, Some(0.03)] {
+        let obs: Vec<Observables> = line
+            .iter()
+            .map(|&(_, temp)| {
+                let o = homogeneous(1.0, temp, 0.0);
+                rel.map_or(o.clone(), |r| with_error(o, r))
+            })
+            .collect();
+        let pts: Vec<(f64, &Observables)> = line.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
+        for elastic in [true, false] {
+            for c in classify_line(30.0, &pts, &t, elastic) {
+                assert_eq!(c.phase, Phase::F, "{}", c.decided_on.reason);
+                assert!(
+                    matches!(
+                        c.decided_on.fluid_gas,
+                        FluidGasFrom::LineWithoutTransition { .. }
+                    ),
+                    "{:?}",
+                    c.decided_on.fluid_gas
+                );
+                assert!(c.decided_on.reason.contains("no transition"));
+            }
+        }
+    }
+}
+
+/// A gas label needs `T_g` on the gas branch, not only `E*` above the boundary: a replica above
+/// the jump that stayed cold (T_g/E_cb = 3, hotter than the per-point threshold) stays fluid and
+/// says why; its hot twin is gas.
+#[test]
+fn above_the_boundary_but_off_the_gas_branch_stays_fluid() {
+    let t = th();
+    let curve = [
+        (0.5, 0.3),
+        (0.7, 0.5),
+        (1.0, 0.8),
+        (1.5, 30.0),
+        (2.0, 60.0),
+        (2.5, 100.0),
+        (2.5, 3.0),
+        (3.0, 150.0),
+    ];
+    let obs: Vec<Observables> = curve
+        .iter()
+        .map(|&(_, temp)| with_error(homogeneous(1.0, temp, 0.0), 0.02))
+        .collect();
+    let pts: Vec<(f64, &Observables)> = curve.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
+    let cs = classify_line(30.0, &pts, &t, true);
+    let phases: Vec<Phase> = cs.iter().map(|c| c.phase).collect();
+    assert_eq!(
+        phases,
+        [
+            Phase::F,
+            Phase::F,
+            Phase::F,
+            Phase::G,
+            Phase::G,
+            Phase::G,
+            Phase::F,
+            Phase::G
+        ]
+    );
+    assert!(
+        cs[6].decided_on.reason.contains("below the gas branch"),
+        "{}",
+        cs[6].decided_on.reason
+    );
+    assert!(matches!(
+        cs[6].decided_on.fluid_gas,
+        FluidGasFrom::Line { .. }
+    ));
+}
+
+/// The two Gamma = 30 lines of docs/validation.md (validated against the literature) through
+/// `classify_line`, their stored `T_g / E_cb` with errors of 3 %, the coexistences as two-region
+/// observables: the labels of the tables come back. eps = 1: the coexistences (0.9 to 1.3) are
+/// kept out of the curve, whose jump then lies between 0.7 and 1.6 (it holds the literature's
+/// 1.2). eps = 0.96: the homogeneous fluids (up to 1.6, `T_g / E_cb` up to 3.9, above the
+/// per-point threshold) show no inflection by themselves; the coexistences from 1.9 on mark the
+/// boundary (between 1.6 and 1.9, the literature's inflection at 1.82), and the fluids stay f.
+/// The same without stored errors.
+#[test]
+fn the_validated_gamma_30_lines_keep_their_labels() {
+    let t = th();
+    let fgc = |temp: f64, rel: Option<f64>| {
+        let mut o = two_regions((0.3, 1.5), (4.0, 30.0));
+        o.granular_temperature_reduced = temp;
+        rel.map_or(o.clone(), |r| with_error(o, r))
+    };
+    let eps1 = [
+        (0.5, 1.217, Phase::F),
+        (0.7, 1.888, Phase::F),
+        (0.9, 3.897, Phase::Fgc),
+        (1.1, 11.530, Phase::Fgc),
+        (1.3, 54.479, Phase::Fgc),
+        (1.6, 216.025, Phase::G),
+        (1.9, 458.565, Phase::G),
+        (2.2, 885.862, Phase::G),
+        (2.6, 3182.864, Phase::G),
+        (3.0, 3950.394, Phase::G),
+    ];
+    let eps096 = [
+        (0.5, 0.849, Phase::F),
+        (0.7, 1.211, Phase::F),
+        (0.9, 1.645, Phase::F),
+        (1.1, 2.156, Phase::F),
+        (1.3, 2.767, Phase::F),
+        (1.6, 3.943, Phase::F),
+        (1.9, 5.711, Phase::Fgc),
+        (2.2, 7.723, Phase::Fgc),
+        (2.6, 10.433, Phase::Fgc),
+        (3.0, 13.677, Phase::Fgc),
+    ];
+    // Stored without errors (as the tables' runs were), the eps = 1 curve's scatter estimate
+    // (0.30 in ln T) hides its jump, and its coexistences mark the boundary instead.
+    for (line, elastic, rel, method, bracket) in [
+        (&eps1, true, Some(0.03), "jump", (0.7, 1.6)),
+        (&eps096, false, Some(0.03), "coexistence", (1.6, 1.9)),
+        (&eps1, true, None, "coexistence", (0.7, 0.9)),
+        (&eps096, false, None, "coexistence", (1.6, 1.9)),
+    ] {
+        let obs: Vec<Observables> = line
+            .iter()
+            .map(|&(_, temp, p)| {
+                if p == Phase::Fgc {
+                    fgc(temp, rel)
+                } else {
+                    let o = homogeneous(1.0, temp, 0.0);
+                    rel.map_or(o.clone(), |r| with_error(o, r))
+                }
+            })
+            .collect();
+        let pts: Vec<(f64, &Observables)> = line.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
+        let cs = classify_line(30.0, &pts, &t, elastic);
+        for (&(e, _, want), c) in line.iter().zip(&cs) {
+            assert_eq!(c.phase, want, "E* = {e}: {}", c.decided_on.reason);
+            match &c.decided_on.fluid_gas {
+                FluidGasFrom::Line {
+                    method: m,
+                    e_star_boundary: b,
+                    ..
+                } => {
+                    assert_eq!(m, method);
+                    assert!(bracket.0 < *b && *b < bracket.1, "{b}");
+                }
+                other => panic!("E* = {e}: {other:?}"),
+            }
+        }
+        println!("errors {rel:?}, {method}: {}", cs[0].decided_on.reason);
+    }
+}
+
+/// The elastic jump is the step between the two fitted branches at the gap's middle, not the
+/// widest ratio: the seeds study's Gamma = 30 line (docs/validation.md) has its largest ratio
+/// deep in the heating gas (28 over 1.6 -> 2.6) and its jump at 1.1 -> 1.6 (ratio 17); the
+/// 10-point eps = 1 line keeps its boundary 1.1 -> 1.3, E* = 1.196, without stored errors.
+#[test]
+fn the_jump_of_a_heating_elastic_gas_is_its_step_not_its_widest_ratio() {
+    let t = th();
+    let seeds: Vec<LinePoint> = [(0.7, 2.0), (1.1, 7.3), (1.6, 124.0), (2.6, 3500.0)]
+        .iter()
+        .map(|&(e, temp)| LinePoint {
+            e_star: e,
+            t: temp,
+            rel_error: Some(0.05),
+        })
+        .collect();
+    let j = fluid_gas_jump(&seeds, t.line_jump_ratio).unwrap();
     assert_eq!(j.bracket, (1.1, 1.6));
     assert!((j.ratio - 124.0 / 7.3).abs() < 1e-9);
-    // The 10-point eps = 1 line of docs/validation.md (its stored T_g/E_cb) keeps its boundary
-    // under the steepest-step rule: 1.1 -> 1.3, E* = 1.196, as under the largest-ratio rule.
     let line = [
         (0.5, 1.217),
         (0.7, 1.888),
@@ -473,7 +712,7 @@ fn the_jump_of_a_heating_elastic_gas_is_its_steepest_step_not_its_widest() {
         (2.6, 3182.864),
         (3.0, 3950.394),
     ];
-    let j = largest_jump(&line, t.line_jump_ratio).unwrap();
+    let j = fluid_gas_jump(&bare(&line), t.line_jump_ratio).unwrap();
     assert_eq!(j.bracket, (1.1, 1.3));
     assert!((j.e_star - 1.196).abs() < 1e-3, "{}", j.e_star);
 }
@@ -499,7 +738,7 @@ fn inflection_of_a_known_sigmoid() {
                 (e, (-2.0 + 2.5 * ((e.ln() - e0.ln()) / w).tanh()).exp())
             })
             .collect();
-        let inf = fluid_gas_inflection(&pts).expect("inside the range");
+        let inf = fluid_gas_inflection(&bare(&pts)).expect("inside the range");
         // Located to a tenth of the point spacing in ln E* (ln 1.5 = 0.405).
         assert!(
             (inf.e_star / e0).ln().abs() < 0.1 * 1.5f64.ln(),
@@ -510,14 +749,14 @@ fn inflection_of_a_known_sigmoid() {
         // Order of the points does not matter.
         let mut rev = pts.clone();
         rev.reverse();
-        assert_eq!(fluid_gas_inflection(&rev), Some(inf));
+        assert_eq!(fluid_gas_inflection(&bare(&rev)), Ok(inf));
     }
     // A curve that only steepens (the inflection lies beyond the range) has none.
     let convex: Vec<(f64, f64)> = (1..10)
         .map(|k| (k as f64, (k as f64).powi(2).exp()))
         .collect();
-    assert_eq!(fluid_gas_inflection(&convex), None);
-    assert_eq!(fluid_gas_inflection(&convex[..3]), None);
+    assert!(fluid_gas_inflection(&bare(&convex)).is_err());
+    assert!(fluid_gas_inflection(&bare(&convex[..3])).is_err());
 }
 
 /// The dense/dilute split uses every bin, not only the two extremes: one outlier bin does not
@@ -616,4 +855,25 @@ fn a_hot_drop_in_a_much_hotter_vapour_is_a_fluid_gas_coexistence() {
         FluidGasFrom::PointFallback,
     );
     assert_eq!(c.phase, Phase::Fgc);
+}
+
+/// `decided_on.fluid_gas` as stored by earlier versions still reads, and the new "no
+/// transition" record round-trips under its tag.
+#[test]
+fn fluid_gas_records_old_and_new_deserialize() {
+    let old: FluidGasFrom = serde_json::from_str(r#"{"by": "point_fallback"}"#).unwrap();
+    assert_eq!(old, FluidGasFrom::PointFallback);
+    let line: FluidGasFrom = serde_json::from_str(
+        r#"{"by": "line", "gamma": 30.0, "method": "jump", "e_star_boundary": 1.196}"#,
+    )
+    .unwrap();
+    assert!(matches!(line, FluidGasFrom::Line { e_star_boundary, .. } if e_star_boundary == 1.196));
+    let none = FluidGasFrom::LineWithoutTransition {
+        gamma: 10.0,
+        method: "inflection".into(),
+        reason: "a power law fits the line".into(),
+    };
+    let v = serde_json::to_value(&none).unwrap();
+    assert_eq!(v["by"], "line_without_transition");
+    assert_eq!(serde_json::from_value::<FluidGasFrom>(v).unwrap(), none);
 }

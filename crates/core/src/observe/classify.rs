@@ -4,24 +4,27 @@
 //! (`wetgran reclassify`). docs/observables.md gives the reasoning and the evidence.
 //!
 //! The rule for one run (per point):
-//! 1. A region is *solid* when it is not mobile: its lateral mobility `D_lat` (mean-square
-//!    lateral displacement over a fixed lag in time, `observe::lateral`) is at most
-//!    `solid_diffusion`. (`mobility = "location_changes"`: `f_lc` per period against
-//!    `solid_flc`, a region hotter than `gas_temperature` counting as mobile; `mobility =
-//!    "temperature"`, or where neither was observed: `T_g / E_cb` against `solid_temperature`.)
-//!    A mobile region is *gas* when `T_g / E_cb > gas_temperature`, else *fluid*: this is the
-//!    per-point fallback of the fluid-gas decision, which a sweep replaces by the line rule
-//!    below wherever the point lies on a line of constant Gamma.
-//! 2. *Coexistence* needs a lateral profile that is significantly inhomogeneous: the profile
-//!    (`n_cb` for wet scenes, the packing fraction for dry ones, `coexistence_by`) has a spread
-//!    `Delta` (Eq. 3.3) above the `coexistence_level` quantile of the spread that a homogeneous
-//!    state with the same bins and window shows (`observe::noise`: the range of `B` normal
-//!    values with the bins' statistical error), above `coexistence_delta_n_cb`, and its dense
-//!    and dilute classes differ by at least the fraction `coexistence_contrast` of the dense
-//!    mean. Otherwise the system is homogeneous and rule 1 classifies it as a whole.
+//! 1. A region is *solid* when it is not mobile: its lateral mobility `D_lat` over the long lag
+//!    (`observe::lateral`) is at most `solid_diffusion`, or its mean-square displacement is
+//!    caged: it grows like `tau^alpha` with `alpha < diffusive_exponent` between the short and
+//!    the long lag while staying below [`CAGE_MSD`]. (`mobility = "location_changes"`: `f_lc`
+//!    per period against `solid_flc`, a region hotter than `gas_temperature` counting as
+//!    mobile; `mobility = "temperature"`, or where neither was observed: `T_g / E_cb` against
+//!    `solid_temperature`.) A mobile region is *gas* when `T_g / E_cb > gas_temperature`, else
+//!    *fluid*: this is the per-point fallback of the fluid-gas decision, which a sweep replaces
+//!    by the line rule wherever the point lies on a line of constant Gamma.
+//! 2. *Coexistence* needs a bonded dense part (at least `cluster_fraction` of the dense bins'
+//!    grains are members of bonded clusters, `observe::clusters`) and a lateral profile that is
+//!    significantly inhomogeneous: the profile (`n_cb` for wet scenes, the packing fraction for
+//!    dry ones, `coexistence_by`) has a spread `Delta` (Eq. 3.3) above the `coexistence_level`
+//!    quantile of the bootstrap null distribution stored with the result (`noise::NullRanges`;
+//!    older results: the range of `B` independent normals with the bins' statistical error),
+//!    above `coexistence_delta_n_cb`, and its dense and dilute classes differ by at least the
+//!    fraction `coexistence_contrast` of the dense mean. Otherwise the system is homogeneous
+//!    and rule 1 classifies it as a whole.
 //! 3. A coexistence splits the bins into a dense and a dilute class (Otsu's rule,
-//!    [`two_class_split`]). The dense region is described by its *clustered* grains (bonded,
-//!    or closely packed when dry: `observe::lateral`), the dilute region by all of its grains,
+//!    [`two_class_split`]). The dense region is described by its cluster members (bonded, or
+//!    closely packed when dry: `observe::clusters`), the dilute region by all of its grains,
 //!    each time-averaged over the samples; each is classified by rule 1, with the per-point
 //!    gas threshold, except that the dense region also counts as condensed (not gas) when the
 //!    dilute region is at least `line_jump_ratio` times hotter (a bonded drop in its vapour).
@@ -120,9 +123,18 @@ pub enum FluidGasFrom {
     /// A line of constant Gamma: the fluid-gas boundary at `e_star_boundary`.
     Line {
         gamma: f64,
-        /// `"jump"` (elastic) or `"inflection"`.
+        /// `"jump"` (elastic), `"inflection"`, or `"coexistence"` (no transition on the curve,
+        /// the line's fluid-gas coexistences mark it: `observe::line`).
         method: String,
         e_star_boundary: f64,
+    },
+    /// A line of constant Gamma whose curve shows no fluid-gas transition that stands out of
+    /// its scatter: the per-point fallback decided, and `reason` says why the line did not.
+    LineWithoutTransition {
+        gamma: f64,
+        /// `"jump"` (elastic) or `"inflection"`: the test that found nothing.
+        method: String,
+        reason: String,
     },
 }
 
@@ -131,9 +143,16 @@ pub enum FluidGasFrom {
 pub struct RegionInputs {
     /// Location changes per particle per period (`None` where not observed).
     pub flc: Option<f64>,
-    /// Lateral mobility `D_lat` (`None` where not observed).
+    /// Lateral mobility `D_lat` over the long lag (`None` where not observed).
     #[serde(default)]
     pub diffusion: Option<f64>,
+    /// `D_lat` over the short lag (`None` where not observed).
+    #[serde(default)]
+    pub diffusion_short: Option<f64>,
+    /// Growth exponent `alpha` of the mean-square displacement between the two lags
+    /// (`MSD ~ tau^alpha`; `None` without both).
+    #[serde(default)]
+    pub growth_exponent: Option<f64>,
     /// `T_g / E_cb` (`T_g / (m g d)` for dry scenes).
     pub temperature: f64,
     /// Which observable decided solid versus mobile.
@@ -158,8 +177,16 @@ pub struct CoexistenceTest {
     pub standard_error: Option<f64>,
     /// Expected spread of a homogeneous state, `E[range of B normals] * standard_error`.
     pub expected_noise: Option<f64>,
-    /// The `coexistence_level` quantile of that spread.
+    /// The `coexistence_level` quantile of that spread: from the bootstrap over the profile
+    /// where stored (`noise::NullRanges`), else from the independent-bin range model.
     pub noise_threshold: Option<f64>,
+    /// `"bootstrap"` or `"independent_bins"`: which null model gave `noise_threshold`.
+    #[serde(default)]
+    pub null_model: Option<String>,
+    /// Fraction of the dense bins' grains that are members of bonded clusters (`None` for
+    /// results stored before membership was measured).
+    #[serde(default)]
+    pub member_fraction: Option<f64>,
     /// `(dense - dilute) / dense` of the two classes' means.
     pub contrast: f64,
     pub significant: bool,
@@ -292,18 +319,69 @@ pub fn two_class_split(values: &[f64]) -> f64 {
     split
 }
 
-/// Rule 1 for one region; `gas` decides fluid versus gas of a mobile region.
+/// What rule 1 reads for one region.
+#[derive(Debug, Clone, Copy)]
+struct RegionObservables {
+    flc: Option<f64>,
+    diffusion: Option<f64>,
+    diffusion_short: Option<f64>,
+    temperature: f64,
+}
+
+/// A region whose mean-square displacement over the long lag stays below this (units `d^2`) and
+/// grows slower than `diffusive_exponent` is caged: its grains rattle without leaving their
+/// neighbours. A gas confined to a narrow pocket also saturates, but at the pocket's size.
+pub const CAGE_MSD: f64 = 1.0;
+
+/// The two mobility lags of a result.
+#[derive(Debug, Clone, Copy)]
+struct Lags {
+    /// The long lag, time units.
+    long: f64,
+    /// `tau_long / tau_short`.
+    ratio: f64,
+    /// Lateral dimensions (1 in 2D, 2 in 3D).
+    n_lat: f64,
+}
+
+/// `alpha` of `MSD ~ tau^alpha` from `D_lat` at the long and the short lag (`D = MSD / (2 n_lat
+/// tau)`): `alpha = 1 + ln(D_long / D_short) / ln(tau_long / tau_short)`.
+fn growth_exponent(long: f64, short: f64, lag_ratio: f64) -> Option<f64> {
+    (long > 0.0 && short > 0.0 && lag_ratio > 1.0).then(|| 1.0 + (long / short).ln() / lag_ratio.ln())
+}
+
+/// Rule 1 for one region; `gas` decides fluid versus gas of a mobile region; `lags`: the two
+/// mobility lags (`None` without a short lag).
 fn region(
-    inputs: (Option<f64>, Option<f64>, f64),
+    obs: RegionObservables,
+    lags: Option<Lags>,
     bins: usize,
     grains: &str,
     th: &Thresholds,
     gas: &dyn Fn(f64) -> bool,
 ) -> RegionInputs {
-    let (flc, diffusion, temperature) = inputs;
+    let RegionObservables {
+        flc,
+        diffusion,
+        diffusion_short,
+        temperature,
+    } = obs;
     let hot = temperature > th.gas_temperature;
+    let alpha = match (diffusion, diffusion_short, lags) {
+        (Some(l), Some(s), Some(g)) => growth_exponent(l, s, g.ratio),
+        _ => None,
+    };
     let (mobile, mobility_from) = match (th.mobility, diffusion, flc) {
-        (Mobility::Displacement, Some(d), _) => (d > th.solid_diffusion, Mobility::Displacement),
+        // Mobile: displaced beyond the floor and not caged (saturating within a diameter).
+        (Mobility::Displacement, Some(d), _) => {
+            let caged = match (alpha, lags) {
+                (Some(a), Some(g)) => {
+                    a < th.diffusive_exponent && 2.0 * g.n_lat * g.long * d <= CAGE_MSD
+                }
+                _ => false,
+            };
+            (d > th.solid_diffusion && !caged, Mobility::Displacement)
+        }
         (Mobility::LocationChanges, _, Some(f)) => {
             (f > th.solid_flc || hot, Mobility::LocationChanges)
         }
@@ -319,6 +397,8 @@ fn region(
     RegionInputs {
         flc,
         diffusion,
+        diffusion_short,
+        growth_exponent: alpha,
         temperature,
         mobility_from,
         bins,
@@ -342,7 +422,7 @@ fn weighted(sel: &[usize], weight: &[f64], value: &[Option<f64>]) -> Option<f64>
 
 /// Classifies observables with the given thresholds (pure: the same inputs give the same
 /// answer). Fluid versus gas is decided per point (`gas_temperature`); a sweep replaces that by
-/// the line rule ([`super::line::apply_fluid_gas_line`]).
+/// the line rule ([`super::line::classify_line`]).
 pub fn classify(obs: &Observables, th: &Thresholds) -> Classification {
     let t_gas = th.gas_temperature;
     classify_with(obs, th, &|t| t > t_gas, FluidGasFrom::PointFallback)
@@ -379,7 +459,8 @@ pub fn classify_with(
     c
 }
 
-/// Rule 2: whether the deciding profile is significantly inhomogeneous.
+/// Rule 2: whether the deciding profile is significantly inhomogeneous and its dense bins are
+/// made of bonded clusters.
 fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec<f64>) {
     let p = &obs.profiles;
     let wet = obs.temperature_unit_name == "E_cb";
@@ -388,23 +469,33 @@ fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec
         CoexistenceBy::Bridges => true,
         CoexistenceBy::Packing => false,
     };
-    let (name, values, delta, se) = if by_bridges {
-        ("n_cb", p.n_cb.clone(), p.delta_n_cb, p.n_cb_standard_error)
+    let (name, values, delta, se, null) = if by_bridges {
+        (
+            "n_cb",
+            p.n_cb.clone(),
+            p.delta_n_cb,
+            p.n_cb_standard_error,
+            p.n_cb_null.as_ref(),
+        )
     } else {
         (
             "packing",
             p.packing.clone(),
             p.delta_n_area,
             p.packing_standard_error,
+            p.packing_null.as_ref(),
         )
     };
     let bins = values.len();
     let split = two_class_split(&values);
     let (mut hi, mut nhi, mut lo, mut nlo) = (0.0, 0usize, 0.0, 0usize);
-    for &v in &values {
+    let (mut members, mut grains) = (0.0, 0.0);
+    for (b, &v) in values.iter().enumerate() {
         if v >= split {
             hi += v;
             nhi += 1;
+            members += p.clustered.get(b).copied().unwrap_or(0.0);
+            grains += p.particles.get(b).copied().unwrap_or(0.0);
         } else {
             lo += v;
             nlo += 1;
@@ -416,9 +507,19 @@ fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec
     } else {
         0.0
     };
+    // Membership is only known for results that measured bonded clusters.
+    let member_fraction = (p.clusters.is_some() && grains > 0.0).then(|| members / grains);
     let expected = se.map(|s| s * noise::range_mean(bins));
-    let threshold = se.map(|s| s * noise::range_quantile(bins, th.coexistence_level));
+    let (threshold, null_model) = match null {
+        Some(n) => (Some(n.quantile(th.coexistence_level)), Some("bootstrap")),
+        None => (
+            se.map(|s| s * noise::range_quantile(bins, th.coexistence_level)),
+            se.map(|_| "independent_bins"),
+        ),
+    };
+    let bonded = member_fraction.is_none_or(|f| f >= th.cluster_fraction);
     let significant = !delta.is_nan()
+        && bonded
         && match threshold {
             Some(q) => {
                 delta > q
@@ -442,6 +543,8 @@ fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec
             standard_error: se,
             expected_noise: expected,
             noise_threshold: threshold,
+            null_model: null_model.map(str::to_string),
+            member_fraction,
             contrast,
             significant,
         },
@@ -460,9 +563,21 @@ fn classify_unsheared(
         .location_changes
         .as_ref()
         .map(|l| l.per_particle_per_period);
-    let d_whole = obs.mobility.as_ref().map(|m| m.diffusion);
+    let lag_ratio = obs.mobility.as_ref().and_then(|m| {
+        m.short_lag.map(|s| Lags {
+            long: m.lag,
+            ratio: m.lag / s,
+            n_lat: (obs.dimension.max(2) - 1) as f64,
+        })
+    });
     let whole = region(
-        (flc_whole, d_whole, obs.granular_temperature_reduced),
+        RegionObservables {
+            flc: flc_whole,
+            diffusion: obs.mobility.as_ref().map(|m| m.diffusion),
+            diffusion_short: obs.mobility.as_ref().and_then(|m| m.diffusion_short),
+            temperature: obs.granular_temperature_reduced,
+        },
+        lag_ratio,
         p.n_cb.len(),
         "all",
         th,
@@ -502,44 +617,61 @@ fn classify_unsheared(
         .flc
         .as_ref()
         .map(|f| f.iter().map(|&x| Some(x * obs.period)).collect());
+    let flc_of = |sel: &[usize]| {
+        flc_bins
+            .as_ref()
+            .and_then(|fb| weighted(sel, &p.particles, fb))
+    };
     let has_clusters = !p.clustered.is_empty() && !p.temperature_clustered.is_empty();
-    let dense = {
+    let (dense_obs, grains) = {
         let sel = &dense_bins;
-        let (w, t_bins, d_bins, grains) = if has_clusters {
+        let (w, t_bins, d_bins, s_bins, grains) = if has_clusters {
             (
                 &p.clustered,
                 &p.temperature_clustered,
                 &p.diffusion_clustered,
+                &p.diffusion_clustered_short,
                 "clustered",
             )
         } else {
-            (&p.particles, &p.temperature_reduced, &p.diffusion, "all")
+            (
+                &p.particles,
+                &p.temperature_reduced,
+                &p.diffusion,
+                &p.diffusion_short,
+                "all",
+            )
         };
-        let t: f64 = weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced);
-        let d = weighted(sel, w, d_bins);
-        let f = flc_bins
-            .as_ref()
-            .and_then(|fb| weighted(sel, &p.particles, fb));
-        (f, d, t, grains)
+        let obs_dense = RegionObservables {
+            flc: flc_of(sel),
+            diffusion: weighted(sel, w, d_bins),
+            diffusion_short: weighted(sel, w, s_bins),
+            temperature: weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced),
+        };
+        (obs_dense, grains)
     };
     let dilute = {
         let sel = &dilute_bins;
-        let t = weighted(sel, &p.particles, &p.temperature_reduced)
-            .unwrap_or(obs.granular_temperature_reduced);
-        let d = weighted(sel, &p.particles, &p.diffusion);
-        let f = flc_bins
-            .as_ref()
-            .and_then(|fb| weighted(sel, &p.particles, fb));
-        region((f, d, t), sel.len(), "all", th, &|t| t > th.gas_temperature)
+        let o = RegionObservables {
+            flc: flc_of(sel),
+            diffusion: weighted(sel, &p.particles, &p.diffusion),
+            diffusion_short: weighted(sel, &p.particles, &p.diffusion_short),
+            temperature: weighted(sel, &p.particles, &p.temperature_reduced)
+                .unwrap_or(obs.granular_temperature_reduced),
+        };
+        region(o, lag_ratio, sel.len(), "all", th, &|t| {
+            t > th.gas_temperature
+        })
     };
     // The dense region is condensed (solid or fluid) when its clustered grains are no hotter
     // than the gas threshold, or when the dilute region is hotter by the fluid-gas jump
     // `line_jump_ratio` (a bonded drop in its vapour); else it is gas-like too.
     let t_dilute = dilute.temperature;
     let dense = region(
-        (dense.0, dense.1, dense.2),
+        dense_obs,
+        lag_ratio,
         dense_bins.len(),
-        dense.3,
+        grains,
         th,
         &|t| t > th.gas_temperature && t_dilute < th.line_jump_ratio * t,
     );
@@ -569,15 +701,23 @@ fn classify_unsheared(
 fn describe_test(t: &CoexistenceTest, th: &Thresholds) -> String {
     match t.noise_threshold {
         Some(q) => format!(
-            "Delta {} = {:.4} against noise {:.4} (level {} threshold {:.4}), contrast {:.2} \
-             (min {})",
+            "Delta {} = {:.4} against noise {:.4} (level {} threshold {:.4}, {}), contrast {:.2} \
+             (min {}){}",
             t.profile,
             t.delta,
             t.expected_noise.unwrap_or(f64::NAN),
             th.coexistence_level,
             q,
+            t.null_model.as_deref().unwrap_or("independent_bins"),
             t.contrast,
-            th.coexistence_contrast
+            th.coexistence_contrast,
+            match t.member_fraction {
+                Some(f) => format!(
+                    ", cluster members {:.2} of the dense bins' grains (min {})",
+                    f, th.cluster_fraction
+                ),
+                None => String::new(),
+            }
         ),
         None => format!(
             "Delta {} = {:.4}, no statistical error stored: legacy threshold",
@@ -589,11 +729,26 @@ fn describe_test(t: &CoexistenceTest, th: &Thresholds) -> String {
 /// One region's decision in words (`unit`: the temperature unit's name, `E_cb` or `m g d`).
 fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
     let mobility = match (r.mobility_from, r.diffusion, r.flc) {
-        (Mobility::Displacement, Some(d), _) => format!(
-            "D_lat = {d:.3e} {} {}",
-            if d > th.solid_diffusion { ">" } else { "<=" },
-            th.solid_diffusion
-        ),
+        (Mobility::Displacement, Some(d), _) => {
+            let floor = format!(
+                "D_lat = {d:.3e} {} {}",
+                if d > th.solid_diffusion { ">" } else { "<=" },
+                th.solid_diffusion
+            );
+            match r.growth_exponent {
+                Some(a) => format!(
+                    "{floor}, MSD growth exponent {a:.2} {} {}{}",
+                    if a >= th.diffusive_exponent { ">=" } else { "<" },
+                    th.diffusive_exponent,
+                    if a < th.diffusive_exponent && r.phase != Phase::S {
+                        " but spread beyond a cage"
+                    } else {
+                        ""
+                    }
+                ),
+                None => floor,
+            }
+        }
         (Mobility::LocationChanges, _, Some(f)) if f <= th.solid_flc && r.phase != Phase::S => {
             format!("f_lc = {f:.4} <= {} but too hot for bridges", th.solid_flc)
         }

@@ -1,44 +1,47 @@
 //! Per-bin observables over the stationary window, accumulated in time blocks: particle
-//! number, packing, bridge count, granular temperature of all grains and of the *clustered*
-//! grains, and the lateral mobility (mean-square displacement over a fixed lag in time).
+//! number, packing, bridge count, granular temperature of all grains and of the *members* of
+//! bonded clusters, and the lateral mobility (mean-square displacement over two lags in time).
 //!
 //! **Region membership.** A coexistence is classified from the grains that belong to each
-//! region at each sample, not from everything that crosses a bin (a gas grain flying through a
-//! bonded cluster would heat it). A grain is *clustered* at a sample when it is bound into a
-//! dense structure: in a wet scene it holds at least one capillary bridge; in a dry scene it has
-//! at least [`DRY_CLUSTER_NEIGHBOURS`] neighbours whose surfaces are closer than
-//! [`DRY_CLUSTER_GAP`] `d`. The dense region of a coexistence is described by its clustered
-//! grains, the dilute region by all of its grains (`observe::classify`).
+//! region at each sample, not from everything that crosses a bin (a gas grain that bounces off a
+//! drop would heat it). A grain is a *member* at a sample when it belongs to a large bonded
+//! cluster (`observe::clusters`: bonds that have lasted `observe.bond_time`, components of at
+//! least `observe.cluster_min_size` grains). The dense region of a coexistence is described by
+//! its members, the dilute region by all of its grains (`observe::classify`). The per-bin
+//! `field::CLUSTERED` counts members.
+//!
+//! **Temperature.** `T_b = m sum |v - <v>|^2 / (D (n - 1))` over the `n >= 2` grains of a group
+//! in a bin at a sample: the unbiased estimate, since the group's own mean velocity is
+//! subtracted (with `n` instead of `n - 1` a bin of three grains would read a third cold).
 //!
 //! **Mobility.** Lateral displacements are unwrapped sample by sample (nearest image) and
 //! compared over a lag of `k = max(1, round(lag / dt))` samples, `tau = k dt` close to
-//! `observe.mobility_lag` whatever the sampling interval `dt`; origins are taken every
-//! `max(1, k / 4)` samples. `D_lat = <|Delta r_lat|^2> / (2 n_lat tau)` (`n_lat` = 1 in 2D, 2 in
-//! 3D) per unit time: it does not depend on the sampling rate (positions at two times do not
-//! depend on how often one looked in between) nor on the driving period. Displacements are
-//! taken relative to the mean displacement of the grains that started in the same bin, so that
-//! a bed or cluster drifting or swaying as a whole (its grains keeping their neighbours) does
-//! not count as mobile: a resting bed at Gamma = 0.6 gave `D_lat` = 6e-3 without this, from a
-//! collective sway, and 1e-5 with it (docs/observables.md). A displacement is booked to the bin
-//! the grain was in at the lag's origin, and to the clustered accumulators when it was
-//! clustered there.
+//! `observe.mobility_lag` whatever the sampling interval `dt`, and over a short lag of a quarter
+//! of it; origins are taken every `max(1, k / 4)` samples of each lag. `D_lat = <|Delta
+//! r_lat|^2> / (2 n_lat tau)` (`n_lat` = 1 in 2D, 2 in 3D) per unit time. How `D_lat` changes
+//! between the two lags tells caged motion (the mean-square displacement saturates: `D_lat`
+//! falls like `1 / tau`) from diffusion (`D_lat` stays); `observe::classify` applies it. The
+//! displacement of a member is taken relative to its own cluster's rigid motion (translation and
+//! rotation, `clusters::rigid_residuals`) so that a drifting, turning solid drop is solid; that
+//! of any other grain relative to the mean displacement of the non-members that started in the
+//! same bin, so that a bed or gas layer swaying as a whole does not count as mobile. A
+//! displacement is booked to the bin the grain was in at the lag's origin, and to the member
+//! accumulators when it was a member there.
 //!
 //! **Blocks.** Sums are kept per block of `block_time` (initially one observation period);
 //! when more than [`MAX_BLOCKS`] exist, neighbours are merged and the block time doubles. The
 //! block means give the statistical error of every bin's time average (`noise`).
 
 use super::bins::LateralBins;
+use super::clusters::{BondedClusters, Membership, NOT_MEMBER, rigid_residuals};
 use super::profiles::particle_volume;
 use crate::sim::Frame;
 use std::collections::VecDeque;
 
-/// Dry scenes: largest surface gap, in units of `d`, of a neighbour that counts towards being
-/// clustered.
-pub const DRY_CLUSTER_GAP: f64 = 0.1;
-/// Dry scenes: neighbours within [`DRY_CLUSTER_GAP`] that make a grain clustered.
-pub const DRY_CLUSTER_NEIGHBOURS: usize = 2;
 /// Most blocks kept before neighbouring blocks are merged.
 pub const MAX_BLOCKS: usize = 256;
+/// The short mobility lag is the long one divided by this.
+pub const SHORT_LAG_DIVISOR: f64 = 4.0;
 
 /// Per-bin fields of a block (sums over the block's samples).
 pub mod field {
@@ -52,19 +55,25 @@ pub mod field {
     pub const T_ALL: usize = 3;
     /// `sum n_b` over those samples.
     pub const T_ALL_W: usize = 4;
-    /// The same for the clustered grains of the bin.
+    /// The same for the cluster members of the bin.
     pub const T_CL: usize = 5;
     pub const T_CL_W: usize = 6;
-    /// Clustered grains in the bin (summed over samples).
+    /// Cluster members in the bin (summed over samples).
     pub const CLUSTERED: usize = 7;
-    /// Summed `|Delta r_lat|^2` over the lag, all grains with origin in the bin, and their count.
+    /// Summed `|Delta r_lat|^2` over the long lag, all grains with origin in the bin, and their
+    /// count.
     pub const MSD_ALL: usize = 8;
     pub const MSD_ALL_N: usize = 9;
-    /// The same for grains clustered at the origin.
+    /// The same for grains that were members at the origin.
     pub const MSD_CL: usize = 10;
     pub const MSD_CL_N: usize = 11;
+    /// The four sums above over the short lag.
+    pub const MSD_SHORT_ALL: usize = 12;
+    pub const MSD_SHORT_ALL_N: usize = 13;
+    pub const MSD_SHORT_CL: usize = 14;
+    pub const MSD_SHORT_CL_N: usize = 15;
     /// Number of fields.
-    pub const COUNT: usize = 12;
+    pub const COUNT: usize = 16;
 }
 
 /// One block of samples.
@@ -101,184 +110,112 @@ impl Block {
     }
 }
 
-/// A lag origin: sample index, unwrapped lateral positions, bins and clustered flags.
+/// A lag origin: sample index, positions (lateral axes unwrapped), bins and cluster ids.
 #[derive(Debug, Clone)]
 struct Origin {
     index: u64,
-    lateral: Vec<f64>,
+    positions: Vec<f64>,
     bin: Vec<u32>,
-    clustered: Vec<bool>,
+    cluster: Vec<u32>,
 }
 
-/// Whether each grain of a frame is clustered (see the module doc).
-pub fn clustered(frame: &Frame, wet: bool) -> Vec<bool> {
-    let n = frame.len();
-    if wet {
-        let mut c = vec![false; n];
-        for &(i, j) in &frame.bridges {
-            c[i] = true;
-            c[j] = true;
-        }
-        return c;
-    }
-    close_neighbour_counts(frame, DRY_CLUSTER_GAP)
-        .into_iter()
-        .map(|k| k >= DRY_CLUSTER_NEIGHBOURS)
-        .collect()
+/// The origins of one lag and where its sums go.
+#[derive(Debug, Clone)]
+struct LagTrack {
+    samples: u64,
+    stride: u64,
+    origins: VecDeque<Origin>,
+    /// `field::MSD_ALL` or `field::MSD_SHORT_ALL`: the first of the lag's four fields.
+    first_field: usize,
 }
 
-/// For every grain, the number of others whose surface lies within `gap` (units of length) of
-/// its own: a cell list of cell size at least `2 r_max + gap`, periodic where the box is.
-pub fn close_neighbour_counts(frame: &Frame, gap: f64) -> Vec<usize> {
-    let n = frame.len();
-    let dim = frame.dimension;
-    let r_max = frame.radii.iter().copied().fold(0.0, f64::max);
-    let reach = 2.0 * r_max + gap;
-    let mut cells = [1usize; 3];
-    let mut size = [1.0f64; 3];
-    for k in 0..dim {
-        let l = frame.box_size[k];
-        cells[k] = ((l / reach).floor() as usize).max(1);
-        size[k] = l / cells[k] as f64;
-    }
-    let offset = frame.wall_offset;
-    let cell_of = |i: usize| -> [usize; 3] {
-        let x = frame.x(i);
-        let mut c = [0usize; 3];
-        for k in 0..dim {
-            let v = if k == dim - 1 { x[k] - offset } else { x[k] };
-            let w = if frame.periodic[k] {
-                v.rem_euclid(frame.box_size[k])
-            } else {
-                v
-            };
-            c[k] = ((w / size[k]).floor().max(0.0) as usize).min(cells[k] - 1);
-        }
-        c
-    };
-    let total = cells[0] * cells[1] * cells[2];
-    let mut heads: Vec<Vec<usize>> = vec![Vec::new(); total];
-    let index = |c: [usize; 3]| c[0] + cells[0] * (c[1] + cells[1] * c[2]);
-    let own: Vec<[usize; 3]> = (0..n).map(cell_of).collect();
-    for (i, c) in own.iter().enumerate() {
-        heads[index(*c)].push(i);
-    }
-    let mut count = vec![0usize; n];
-    for i in 0..n {
-        let c = own[i];
-        let mut seen: Vec<usize> = Vec::with_capacity(27);
-        let span = |k: usize| -> Vec<usize> {
-            if k >= dim {
-                return vec![0];
-            }
-            let m = cells[k] as i64;
-            let mut v = Vec::new();
-            for d in -1i64..=1 {
-                let x = c[k] as i64 + d;
-                let x = if frame.periodic[k] {
-                    x.rem_euclid(m)
-                } else if x < 0 || x >= m {
-                    continue;
-                } else {
-                    x
-                };
-                if !v.contains(&(x as usize)) {
-                    v.push(x as usize);
-                }
-            }
-            v
-        };
-        for &a in &span(0) {
-            for &b in &span(1) {
-                for &z in &span(2) {
-                    let cell = index([a, b, z]);
-                    if seen.contains(&cell) {
-                        continue;
-                    }
-                    seen.push(cell);
-                    for &j in &heads[cell] {
-                        if j == i {
-                            continue;
-                        }
-                        let (xi, xj) = (frame.x(i), frame.x(j));
-                        let mut r2 = 0.0;
-                        for k in 0..dim {
-                            let dx = frame.min_image(k, xj[k] - xi[k]);
-                            r2 += dx * dx;
-                        }
-                        let contact = frame.radii[i] + frame.radii[j] + gap;
-                        if r2 < contact * contact {
-                            count[i] += 1;
-                        }
-                    }
-                }
-            }
+impl LagTrack {
+    fn new(samples: u64, first_field: usize) -> Self {
+        Self {
+            samples,
+            stride: (samples / 4).max(1),
+            origins: VecDeque::new(),
+            first_field,
         }
     }
-    count
 }
 
-/// `T_g` (Eq. 3.2) from the sums `sum v` (per axis), `sum |v|^2` and the count of a group;
-/// `None` for fewer than two grains.
+/// `T_g` (Eq. 3.2) from the sums `sum v` (per axis), `sum |v|^2` and the count of a group,
+/// unbiased (`n - 1`, the group's mean velocity being subtracted); `None` for fewer than two
+/// grains.
 fn temperature_of(sum_v: &[f64], sum_sq: f64, n: usize, mass: f64) -> Option<f64> {
     if n < 2 {
         return None;
     }
     let nf = n as f64;
     let mean_sq: f64 = sum_v.iter().map(|s| (s / nf) * (s / nf)).sum();
-    Some(mass * (sum_sq / nf - mean_sq) / sum_v.len() as f64)
+    Some(mass * (sum_sq - nf * mean_sq) / ((nf - 1.0) * sum_v.len() as f64))
 }
 
 /// The per-bin block accumulator of the window (see the module doc).
 #[derive(Debug, Clone)]
 pub struct LateralObserver {
     bins: LateralBins,
-    wet: bool,
     /// Energy unit of the reduced temperatures.
     unit: f64,
     sample_interval: f64,
-    lag_samples: u64,
-    origin_stride: u64,
+    clusters: BondedClusters,
+    long: LagTrack,
+    short: LagTrack,
     pub block_time: f64,
     pub blocks: Vec<Block>,
     /// Window samples seen.
     samples: u64,
+    /// Positions with the periodic axes unwrapped, and the last sample's raw positions.
     unwrapped: Vec<f64>,
     previous: Vec<f64>,
-    origins: VecDeque<Origin>,
+}
+
+/// How a [`LateralObserver`] finds bonded clusters and measures mobility.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LateralSettings {
+    /// Capillary bridges are the bonds (else close pairs).
+    pub wet: bool,
+    /// Energy unit of the reduced temperatures.
+    pub unit: f64,
+    pub sample_interval: f64,
+    /// Initial block length (one observation period).
+    pub block_time: f64,
+    /// The long mobility lag, time units.
+    pub lag: f64,
+    /// Age a bond needs to count, time units.
+    pub bond_time: f64,
+    /// Smallest cluster whose grains are members.
+    pub cluster_min_size: usize,
 }
 
 impl LateralObserver {
-    /// `block_time`: initial block length (one observation period); `lag`: the mobility lag in
-    /// time units.
-    pub fn new(
-        bins: LateralBins,
-        wet: bool,
-        unit: f64,
-        sample_interval: f64,
-        block_time: f64,
-        lag: f64,
-    ) -> Self {
-        let lag_samples = ((lag / sample_interval).round() as u64).max(1);
+    pub fn new(bins: LateralBins, s: LateralSettings) -> Self {
+        let long = ((s.lag / s.sample_interval).round() as u64).max(1);
+        let short = ((s.lag / SHORT_LAG_DIVISOR / s.sample_interval).round() as u64).max(1);
         Self {
             bins,
-            wet,
-            unit,
-            sample_interval,
-            lag_samples,
-            origin_stride: (lag_samples / 4).max(1),
-            block_time,
+            unit: s.unit,
+            sample_interval: s.sample_interval,
+            clusters: BondedClusters::new(s.wet, s.bond_time, s.cluster_min_size),
+            long: LagTrack::new(long, field::MSD_ALL),
+            short: LagTrack::new(short, field::MSD_SHORT_ALL),
+            block_time: s.block_time,
             blocks: Vec::new(),
             samples: 0,
             unwrapped: Vec::new(),
             previous: Vec::new(),
-            origins: VecDeque::new(),
         }
     }
 
-    /// The lag actually used, `k dt`.
+    /// The long lag actually used, `k dt`.
     pub fn lag(&self) -> f64 {
-        self.lag_samples as f64 * self.sample_interval
+        self.long.samples as f64 * self.sample_interval
+    }
+
+    /// The short lag actually used.
+    pub fn short_lag(&self) -> f64 {
+        self.short.samples as f64 * self.sample_interval
     }
 
     pub fn bins(&self) -> &LateralBins {
@@ -321,16 +258,33 @@ impl LateralObserver {
 
     /// Books one window sample.
     pub fn observe(&mut self, frame: &Frame) {
-        let n = frame.len();
-        let dim = frame.dimension;
-        let n_lat = dim - 1;
         let bk = self.block_for(frame.time);
-        let nb = self.bins.n;
-        let bin: Vec<u32> = (0..n)
+        let bin: Vec<u32> = (0..frame.len())
             .map(|i| self.bins.of_particle(frame, i) as u32)
             .collect();
-        let cl = clustered(frame, self.wet);
-        // Per-bin velocity sums for all and clustered grains.
+        let members = self.clusters.observe(frame);
+        self.book_sample(frame, bk, &bin, &members);
+        self.unwrap(frame);
+        for which in [false, true] {
+            self.close_lags(frame, bk, which, &members);
+            let track = if which { &mut self.short } else { &mut self.long };
+            if self.samples.is_multiple_of(track.stride) {
+                track.origins.push_back(Origin {
+                    index: self.samples,
+                    positions: self.unwrapped.clone(),
+                    bin: bin.clone(),
+                    cluster: members.cluster.clone(),
+                });
+            }
+        }
+        self.samples += 1;
+    }
+
+    /// Counts, volumes, bridges and temperatures of one sample into block `bk`.
+    fn book_sample(&mut self, frame: &Frame, bk: usize, bin: &[u32], members: &Membership) {
+        let dim = frame.dimension;
+        let nb = self.bins.n;
+        // Per-bin velocity sums for all grains and for members.
         let mut sv_all = vec![0.0; nb * dim];
         let mut sq_all = vec![0.0; nb];
         let mut n_all = vec![0usize; nb];
@@ -340,7 +294,7 @@ impl LateralObserver {
         let block = &mut self.blocks[bk];
         block.samples += 1;
         block.t1 = frame.time;
-        for i in 0..n {
+        for i in 0..frame.len() {
             let b = bin[i] as usize;
             let v = frame.v(i);
             let s2: f64 = v.iter().map(|x| x * x).sum();
@@ -349,7 +303,8 @@ impl LateralObserver {
             for k in 0..dim {
                 sv_all[b * dim + k] += v[k];
             }
-            if cl[i] {
+            let member = members.is_member(i);
+            if member {
                 n_cl[b] += 1;
                 sq_cl[b] += s2;
                 for k in 0..dim {
@@ -359,7 +314,7 @@ impl LateralObserver {
             let s = &mut block.sums[b * field::COUNT..(b + 1) * field::COUNT];
             s[field::PARTICLES] += 1.0;
             s[field::VOLUME] += particle_volume(dim, frame.radii[i]);
-            if cl[i] {
+            if member {
                 s[field::CLUSTERED] += 1.0;
             }
         }
@@ -369,89 +324,71 @@ impl LateralObserver {
         }
         for b in 0..nb {
             let s = &mut block.sums[b * field::COUNT..(b + 1) * field::COUNT];
-            if let Some(t) = temperature_of(
-                &sv_all[b * dim..(b + 1) * dim],
-                sq_all[b],
-                n_all[b],
-                frame.mass,
-            ) {
-                s[field::T_ALL] += n_all[b] as f64 * t / self.unit;
-                s[field::T_ALL_W] += n_all[b] as f64;
-            }
-            if let Some(t) = temperature_of(
-                &sv_cl[b * dim..(b + 1) * dim],
-                sq_cl[b],
-                n_cl[b],
-                frame.mass,
-            ) {
-                s[field::T_CL] += n_cl[b] as f64 * t / self.unit;
-                s[field::T_CL_W] += n_cl[b] as f64;
-            }
-        }
-
-        // Mobility: unwrap, close lags that end now, open an origin when due.
-        if self.unwrapped.is_empty() {
-            self.unwrapped = (0..n).flat_map(|i| frame.x(i)[..n_lat].to_vec()).collect();
-            self.previous = self.unwrapped.clone();
-        } else {
-            for i in 0..n {
-                for k in 0..n_lat {
-                    let x = frame.x(i)[k];
-                    let p = &mut self.previous[i * n_lat + k];
-                    self.unwrapped[i * n_lat + k] += frame.min_image(k, x - *p);
-                    *p = x;
+            let groups = [
+                (&sv_all, &sq_all, &n_all, field::T_ALL),
+                (&sv_cl, &sq_cl, &n_cl, field::T_CL),
+            ];
+            for (sv, sq, n, f) in groups {
+                let sums = &sv[b * dim..(b + 1) * dim];
+                if let Some(t) = temperature_of(sums, sq[b], n[b], frame.mass) {
+                    s[f] += n[b] as f64 * t / self.unit;
+                    s[f + 1] += n[b] as f64;
                 }
             }
         }
+    }
+
+    /// Advances the unwrapped positions to `frame` (lateral axes by nearest image).
+    fn unwrap(&mut self, frame: &Frame) {
+        let dim = frame.dimension;
+        if self.unwrapped.is_empty() {
+            self.unwrapped = frame.positions.clone();
+            self.previous = frame.positions.clone();
+            return;
+        }
+        for i in 0..frame.len() {
+            for k in 0..dim {
+                let x = frame.x(i)[k];
+                let p = &mut self.previous[i * dim + k];
+                self.unwrapped[i * dim + k] += if frame.periodic[k] {
+                    frame.min_image(k, x - *p)
+                } else {
+                    x - *p
+                };
+                *p = x;
+            }
+        }
+    }
+
+    /// Closes the lags (long, or short with `short`) that end at this sample: each grain's
+    /// lateral displacement, relative to its cluster's rigid motion (members) or to the mean of
+    /// the non-members that started in its bin (others), into block `bk`. The member sums take
+    /// the grains that are members at both ends of the lag: a grain that evaporated from a drop
+    /// during the lag moved as vapour, not as part of the drop.
+    fn close_lags(&mut self, frame: &Frame, bk: usize, short: bool, now_members: &Membership) {
+        let dim = frame.dimension;
+        let n_lat = dim - 1;
+        let nb = self.bins.n;
         let now = self.samples;
-        while let Some(o) = self.origins.front() {
-            if now - o.index < self.lag_samples {
+        let track = if short { &mut self.short } else { &mut self.long };
+        let (lag, first) = (track.samples, track.first_field);
+        while let Some(o) = track.origins.front() {
+            if now - o.index < lag {
                 break;
             }
-            let o = self.origins.pop_front().expect("front exists");
-            // Mean displacement of the grains that started in each bin: a bed or cluster
-            // drifting or swaying as a whole is not mobile (its grains keep their neighbours).
-            let mut mean = vec![0.0; nb * n_lat];
-            let mut count = vec![0.0f64; nb];
-            for i in 0..n {
-                let b = o.bin[i] as usize;
-                count[b] += 1.0;
-                for k in 0..n_lat {
-                    mean[b * n_lat + k] += self.unwrapped[i * n_lat + k] - o.lateral[i * n_lat + k];
-                }
-            }
-            for b in 0..nb {
-                for k in 0..n_lat {
-                    mean[b * n_lat + k] /= count[b].max(1.0);
-                }
-            }
-            for i in 0..n {
-                let b = o.bin[i] as usize;
-                let mut r2 = 0.0;
-                for k in 0..n_lat {
-                    let d = self.unwrapped[i * n_lat + k]
-                        - o.lateral[i * n_lat + k]
-                        - mean[b * n_lat + k];
-                    r2 += d * d;
-                }
+            let o = track.origins.pop_front().expect("front exists");
+            let r2 = lag_displacements(&o, &self.unwrapped, frame, nb, n_lat, now_members);
+            let block = &mut self.blocks[bk];
+            for (i, d2) in r2.into_iter().enumerate() {
                 let s = &mut block.sums[o.bin[i] as usize * field::COUNT..];
-                s[field::MSD_ALL] += r2;
-                s[field::MSD_ALL_N] += 1.0;
-                if o.clustered[i] {
-                    s[field::MSD_CL] += r2;
-                    s[field::MSD_CL_N] += 1.0;
+                s[first] += d2;
+                s[first + 1] += 1.0;
+                if o.cluster[i] != NOT_MEMBER && now_members.is_member(i) {
+                    s[first + 2] += d2;
+                    s[first + 3] += 1.0;
                 }
             }
         }
-        if now.is_multiple_of(self.origin_stride) {
-            self.origins.push_back(Origin {
-                index: now,
-                lateral: self.unwrapped.clone(),
-                bin,
-                clustered: cl,
-            });
-        }
-        self.samples += 1;
     }
 
     /// Blocks whose start lies at or after `t` (all blocks for `t` at or before the first).
@@ -464,6 +401,82 @@ impl LateralObserver {
             .unwrap_or(self.blocks.len());
         &self.blocks[k..]
     }
+}
+
+/// Squared lateral displacement of every grain since origin `o` (see the module doc for the
+/// reference each is taken against). A cluster's rigid motion is fitted to its grains that are
+/// still members (`now_members`); those that left it are measured against that motion too.
+fn lag_displacements(
+    o: &Origin,
+    now: &[f64],
+    frame: &Frame,
+    bins: usize,
+    n_lat: usize,
+    now_members: &Membership,
+) -> Vec<f64> {
+    let dim = frame.dimension;
+    let n = frame.len();
+    let mut r2 = vec![0.0; n];
+    // Non-members: relative to the mean lateral displacement of the non-members of their bin.
+    let mut mean = vec![0.0; bins * n_lat];
+    let mut count = vec![0.0f64; bins];
+    for i in (0..n).filter(|&i| o.cluster[i] == NOT_MEMBER) {
+        let b = o.bin[i] as usize;
+        count[b] += 1.0;
+        for k in 0..n_lat {
+            mean[b * n_lat + k] += now[i * dim + k] - o.positions[i * dim + k];
+        }
+    }
+    for i in (0..n).filter(|&i| o.cluster[i] == NOT_MEMBER) {
+        let b = o.bin[i] as usize;
+        r2[i] = (0..n_lat)
+            .map(|k| {
+                let d = now[i * dim + k] - o.positions[i * dim + k];
+                (d - mean[b * n_lat + k] / count[b]).powi(2)
+            })
+            .sum();
+    }
+    // Members: relative to their own cluster's rigid motion.
+    let clusters = o
+        .cluster
+        .iter()
+        .filter(|&&c| c != NOT_MEMBER)
+        .map(|&c| c as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut grains: Vec<Vec<usize>> = vec![Vec::new(); clusters];
+    for i in 0..n {
+        if o.cluster[i] != NOT_MEMBER {
+            grains[o.cluster[i] as usize].push(i);
+        }
+    }
+    for members in &grains {
+        let (stayed, left): (Vec<usize>, Vec<usize>) =
+            members.iter().partition(|&&i| now_members.is_member(i));
+        let fit = if stayed.is_empty() { &left } else { &stayed };
+        let res = rigid_residuals(fit, &o.positions, now, dim, &frame.periodic, &frame.box_size);
+        for (&i, d) in fit.iter().zip(&res) {
+            r2[i] = d[..n_lat].iter().map(|x| x * x).sum();
+        }
+        if !stayed.is_empty() {
+            // Grains that left: displacement less the cluster's mean translation.
+            let shift: Vec<f64> = (0..n_lat)
+                .map(|k| {
+                    stayed
+                        .iter()
+                        .map(|&i| now[i * dim + k] - o.positions[i * dim + k])
+                        .sum::<f64>()
+                        / stayed.len() as f64
+                })
+                .collect();
+            for &i in &left {
+                r2[i] = (0..n_lat)
+                    .map(|k| (now[i * dim + k] - o.positions[i * dim + k] - shift[k]).powi(2))
+                    .sum();
+            }
+        }
+    }
+    r2
 }
 
 /// Sums of one field per bin over blocks.
@@ -491,18 +504,17 @@ mod tests {
         f
     }
 
-    #[test]
-    fn dry_clusters_need_two_close_neighbours() {
-        // A row of three touching grains and one lone grain; the ends of the row have one
-        // neighbour, the middle two.
-        let x = [(1.0, 1.0), (2.05, 1.0), (3.1, 1.0), (10.0, 5.0)];
-        let f = frame_2d(&x, &[(0.0, 0.0); 4], vec![], 0.0);
-        assert_eq!(close_neighbour_counts(&f, 0.1), vec![1, 2, 1, 0]);
-        assert_eq!(clustered(&f, false), vec![false, true, false, false]);
-        // Across the periodic edge.
-        let y = [(0.2, 1.0), (19.3, 1.0), (18.25, 1.0)];
-        let g = frame_2d(&y, &[(0.0, 0.0); 3], vec![], 0.0);
-        assert_eq!(close_neighbour_counts(&g, 0.1), vec![1, 2, 1]);
+    /// Settings with a bond age of `bond_time` and clusters of at least two grains.
+    fn settings(dt: f64, block: f64, lag: f64, bond_time: f64) -> LateralSettings {
+        LateralSettings {
+            wet: true,
+            unit: 1.0,
+            sample_interval: dt,
+            block_time: block,
+            lag,
+            bond_time,
+            cluster_min_size: 2,
+        }
     }
 
     #[test]
@@ -510,7 +522,7 @@ mod tests {
         // Two grains in one bin moving apart at unit speed each along x across the periodic
         // edge; dt = 0.5, lag 2: each moves 2 against their mean (0) per lag, whatever the
         // wraps.
-        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), true, 1.0, 0.5, 1.0, 2.0);
+        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), settings(0.5, 1.0, 2.0, 1.0));
         assert_eq!(o.lag(), 2.0);
         for k in 0..40 {
             let t = 0.5 * k as f64;
@@ -534,7 +546,7 @@ mod tests {
     fn a_block_moving_as_a_whole_is_not_mobile() {
         // Safeguard: three bonded grains in one bin translating together at unit speed have
         // zero displacement relative to their bin's mean (without the subtraction: 4 per lag).
-        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), true, 1.0, 0.5, 1.0, 2.0);
+        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), settings(0.5, 1.0, 2.0, 1.0));
         for k in 0..40 {
             let t = 0.5 * k as f64;
             let x = (5.0 + t).rem_euclid(20.0);
@@ -552,24 +564,65 @@ mod tests {
     }
 
     #[test]
-    fn clustered_temperature_ignores_passing_grains() {
+    fn member_temperature_ignores_passing_grains() {
         // Bin 0 holds a bonded, still pair and a fast unbonded grain: the bin's temperature
-        // of all grains is high, of the clustered ones zero.
+        // of all grains is high, of the members zero. The pair becomes a cluster once its
+        // bridge is one time unit old (the third sample).
         let x = [(1.0, 1.0), (2.0, 1.0), (3.0, 5.0)];
         let v = [(0.0, 0.0), (0.0, 0.0), (10.0, 0.0)];
-        let mut o = LateralObserver::new(LateralBins::new(4, 20.0), true, 1.0, 0.5, 1.0, 2.0);
-        o.observe(&frame_2d(&x, &v, vec![(0, 1)], 0.0));
+        let mut o = LateralObserver::new(LateralBins::new(4, 20.0), settings(0.5, 10.0, 2.0, 1.0));
+        for k in 0..3 {
+            o.observe(&frame_2d(&x, &v, vec![(0, 1)], 0.5 * k as f64));
+        }
         let b = &o.blocks[0];
         assert!(b.get(0, field::T_ALL) / b.get(0, field::T_ALL_W) > 5.0);
         assert_eq!(b.get(0, field::T_CL), 0.0);
         assert_eq!(b.get(0, field::T_CL_W), 2.0);
         assert_eq!(b.get(0, field::CLUSTERED), 2.0);
-        assert_eq!(b.get(0, field::BRIDGES), 1.0);
+        assert_eq!(b.get(0, field::BRIDGES), 3.0);
+    }
+
+    #[test]
+    fn bin_temperature_is_unbiased() {
+        // Two grains at velocities (1, 0) and (-1, 0), m = 1, 2D: about their mean (0) the
+        // unbiased estimate is sum |v - <v>|^2 / (D (n - 1)) = 2 / 2 = 1; the biased one (n)
+        // would give 1/2.
+        let x = [(1.0, 1.0), (2.0, 1.0)];
+        let v = [(1.0, 0.0), (-1.0, 0.0)];
+        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), settings(0.5, 10.0, 2.0, 1.0));
+        o.observe(&frame_2d(&x, &v, vec![], 0.0));
+        let b = &o.blocks[0];
+        let t = b.get(0, field::T_ALL) / b.get(0, field::T_ALL_W);
+        assert!((t - 1.0).abs() < 1e-12, "{t}");
+    }
+
+    #[test]
+    fn a_turning_drop_is_still_and_its_rattle_is_caged() {
+        // Safeguard for the rigid-motion reference: a drop of four bonded grains turning at
+        // 0.2 rad per time unit about its centre (radius ~1) has no displacement relative to
+        // itself; measured against the bin mean instead, its grains would move ~0.4 per lag.
+        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), settings(0.25, 10.0, 4.0, 0.5));
+        let bonds = vec![(0, 1), (1, 2), (2, 3), (3, 0)];
+        for k in 0..200 {
+            let t = 0.25 * k as f64;
+            let th = 0.2 * t;
+            let pts: Vec<(f64, f64)> = (0..4)
+                .map(|q| {
+                    let a = th + q as f64 * std::f64::consts::FRAC_PI_2;
+                    (10.0 + 0.3 * t + a.cos(), 5.0 + a.sin())
+                })
+                .collect();
+            o.observe(&frame_2d(&pts, &[(0.0, 0.0); 4], bonds.clone(), t));
+        }
+        let cl = field_sums(&o.blocks, 1, field::MSD_CL);
+        let n = field_sums(&o.blocks, 1, field::MSD_CL_N);
+        assert!(n[0] > 100.0, "{n:?}");
+        assert!(cl[0] / n[0] < 1e-20, "{}", cl[0] / n[0]);
     }
 
     #[test]
     fn blocks_merge_and_keep_every_sample() {
-        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), true, 1.0, 0.1, 0.1, 1.0);
+        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), settings(0.1, 0.1, 1.0, 1.0));
         for k in 0..(3 * MAX_BLOCKS) {
             o.observe(&frame_2d(
                 &[(1.0, 1.0)],

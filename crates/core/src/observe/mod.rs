@@ -9,7 +9,8 @@
 //! |---|---|
 //! | [`temperature`] | `T_g / E_cb`, global and per lateral bin (Eq. 3.2) |
 //! | [`profiles`] | lateral profiles of `n_cb` and of the packing fraction; `Delta n_cb` (Eq. 3.3), `Delta n_area` |
-//! | [`lateral`] | per-bin block sums: packing, bridges, `T_g` of all and of clustered grains, lateral mobility `D_lat` |
+//! | [`clusters`] | bonded clusters: bonds older than `bond_time`, components of at least `cluster_min_size` grains, a cluster's rigid motion |
+//! | [`lateral`] | per-bin block sums: packing, bridges, `T_g` of all grains and of cluster members, lateral mobility `D_lat` at two lags |
 //! | [`noise`] | statistical error of the profiles and the noise baseline of `Delta n` |
 //! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D), only when asked for |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
@@ -25,6 +26,7 @@
 
 pub mod bins;
 pub mod classify;
+pub mod clusters;
 pub mod convergence;
 pub mod diffusion;
 pub mod lateral;
@@ -133,9 +135,16 @@ pub struct Profiles {
     /// Lateral mobility `D_lat` per bin (grains booked to their bin at the lag's origin).
     #[serde(default)]
     pub diffusion: Vec<Option<f64>>,
-    /// `D_lat` per bin of the grains clustered at the lag's origin.
+    /// `D_lat` per bin of the grains that were cluster members at the lag's origin.
     #[serde(default)]
     pub diffusion_clustered: Vec<Option<f64>>,
+    /// `D_lat` per bin over the short lag (`LateralMobility::short_lag`; empty in results
+    /// stored before it was measured).
+    #[serde(default)]
+    pub diffusion_short: Vec<Option<f64>>,
+    /// The same for the cluster members.
+    #[serde(default)]
+    pub diffusion_clustered_short: Vec<Option<f64>>,
     /// `f_lc` per bin, per particle per time unit (`None` without the location-change
     /// observer). Results stored before per-time normalisation hold per-period values.
     pub flc: Option<Vec<f64>>,
@@ -153,6 +162,18 @@ pub struct Profiles {
     /// Blocks the standard errors were taken from.
     #[serde(default)]
     pub noise_blocks: usize,
+    /// Bootstrap null distribution of `Delta n_cb` (`noise::NullRanges`; `None` in results
+    /// stored before it, or with too few blocks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub n_cb_null: Option<noise::NullRanges>,
+    /// The same for the packing fraction.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub packing_null: Option<noise::NullRanges>,
+    /// The bonded-cluster definition `clustered` counts members of: `(bond_time,
+    /// cluster_min_size)` (`None` in results stored before it, where `clustered` counted grains
+    /// holding any bridge).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clusters: Option<(f64, usize)>,
 }
 
 /// The lateral mobility of the whole system over the window (`observe::lateral`).
@@ -162,8 +183,18 @@ pub struct LateralMobility {
     pub lag: f64,
     /// `D_lat = <|Delta r_lat|^2> / (2 n_lat tau)`, all grains.
     pub diffusion: f64,
-    /// The same over the grains clustered at the lag's origin (`None` without any).
+    /// The same over the grains that were cluster members at the lag's origin (`None` without
+    /// any).
     pub diffusion_clustered: Option<f64>,
+    /// The short lag, a quarter of `lag` (`None` in results stored before it was measured).
+    #[serde(default)]
+    pub short_lag: Option<f64>,
+    /// `D_lat` over the short lag, all grains.
+    #[serde(default)]
+    pub diffusion_short: Option<f64>,
+    /// `D_lat` over the short lag, cluster members.
+    #[serde(default)]
+    pub diffusion_clustered_short: Option<f64>,
     /// Lag windows that went into it (grain-lags / N).
     pub lags: f64,
 }
@@ -572,11 +603,15 @@ impl ObserverSet {
             profiles: ProfileObserver::default(),
             lateral: LateralObserver::new(
                 bins,
-                scene.is_wet(),
-                unit,
-                dt,
-                period,
-                spec.mobility_lag,
+                lateral::LateralSettings {
+                    wet: scene.is_wet(),
+                    unit,
+                    sample_interval: dt,
+                    block_time: period,
+                    lag: spec.mobility_lag,
+                    bond_time: spec.bond_time,
+                    cluster_min_size: spec.cluster_min_size,
+                },
             ),
             lc,
             diffusion: spec
@@ -821,8 +856,24 @@ fn lateral_profiles(
         }
         Some((sq / nb as f64).sqrt())
     };
+    // Block means (blocks x bins) for the bootstrap null distribution (observe::noise).
+    let block_means = |f: usize, scale: f64| -> Option<noise::NullRanges> {
+        let means: Vec<Vec<f64>> = blocks
+            .iter()
+            .map(|k| {
+                (0..nb)
+                    .map(|b| scale * k.get(b, f) / k.samples.max(1) as f64)
+                    .collect()
+            })
+            .collect();
+        let weights: Vec<f64> = blocks.iter().map(|k| k.samples as f64).collect();
+        let (means, weights) = noise::merge_to(means, weights, BOOTSTRAP_MAX_BLOCKS);
+        noise::null_ranges(means, weights)
+    };
     let lag = lateral.lag();
     let diff_scale = 1.0 / (2.0 * n_lat * lag);
+    let short_lag = lateral.short_lag();
+    let short_scale = 1.0 / (2.0 * n_lat * short_lag);
     let flc = lc.map(|o| o.per_bin(&particles));
     let sum = |f: usize| -> f64 { field_sums(blocks, nb, f).iter().sum() };
     let mobility = (sum(field::MSD_ALL_N) > 0.0).then(|| LateralMobility {
@@ -830,6 +881,11 @@ fn lateral_profiles(
         diffusion: diff_scale * sum(field::MSD_ALL) / sum(field::MSD_ALL_N),
         diffusion_clustered: (sum(field::MSD_CL_N) > 0.0)
             .then(|| diff_scale * sum(field::MSD_CL) / sum(field::MSD_CL_N)),
+        short_lag: Some(short_lag),
+        diffusion_short: (sum(field::MSD_SHORT_ALL_N) > 0.0)
+            .then(|| short_scale * sum(field::MSD_SHORT_ALL) / sum(field::MSD_SHORT_ALL_N)),
+        diffusion_clustered_short: (sum(field::MSD_SHORT_CL_N) > 0.0)
+            .then(|| short_scale * sum(field::MSD_SHORT_CL) / sum(field::MSD_SHORT_CL_N)),
         lags: sum(field::MSD_ALL_N) / scene.particles.count.max(1) as f64,
     });
     let profile = Profiles {
@@ -843,6 +899,9 @@ fn lateral_profiles(
         n_cb_standard_error: block_se(field::BRIDGES, ncb_scale),
         packing_standard_error: block_se(field::VOLUME, 1.0 / bin_volume),
         noise_blocks: blocks.len().min(NOISE_BLOCKS),
+        n_cb_null: block_means(field::BRIDGES, ncb_scale),
+        packing_null: block_means(field::VOLUME, 1.0 / bin_volume),
+        clusters: Some((scene.observe.bond_time, scene.observe.cluster_min_size)),
         particles,
         packing,
         n_cb,
@@ -852,10 +911,16 @@ fn lateral_profiles(
         clustered: per_sample(field::CLUSTERED),
         diffusion: ratio(field::MSD_ALL, field::MSD_ALL_N, diff_scale),
         diffusion_clustered: ratio(field::MSD_CL, field::MSD_CL_N, diff_scale),
+        diffusion_short: ratio(field::MSD_SHORT_ALL, field::MSD_SHORT_ALL_N, short_scale),
+        diffusion_clustered_short: ratio(field::MSD_SHORT_CL, field::MSD_SHORT_CL_N, short_scale),
         flc,
     };
     (profile, mobility)
 }
+
+/// At most this many blocks enter the bootstrap of the profile's spread (neighbours merged
+/// first; the bootstrap merges further while they are correlated).
+pub const BOOTSTRAP_MAX_BLOCKS: usize = 64;
 
 /// Blocks the standard error of a profile is taken from (`noise::block_standard_error`
 /// merges the window's blocks down to at most this many).

@@ -93,6 +93,15 @@ pub struct ObserveSpec {
     /// mean-square displacement over this lag gives `D_lat` (`observe::lateral`).
     #[serde(default = "default_mobility_lag")]
     pub mobility_lag: f64,
+    /// How long, in time units `sqrt(d/g)`, a grain must have held a bond (a capillary bridge;
+    /// dry: a gap below 0.1 d) at every sample before it counts as bound into a cluster
+    /// (default 0.2): longer than a bounce, so a gas grain that touches a drop and flies off is
+    /// not counted with it (`observe::clusters`).
+    #[serde(default = "default_bond_time")]
+    pub bond_time: f64,
+    /// Smallest bonded cluster, in grains, whose grains make up a dense region (default 3).
+    #[serde(default = "default_cluster_min_size")]
+    pub cluster_min_size: usize,
     /// 3D: lateral bins as square cells over `(x, y)` (`"plane"`, default) or slabs along `x`
     /// across the whole depth (`"x_slabs"`).
     #[serde(default)]
@@ -121,6 +130,8 @@ impl Default for ObserveSpec {
             lc_leave_factor: default_lc_leave_factor(),
             stationarity_tolerance: default_stationarity_tolerance(),
             mobility_lag: default_mobility_lag(),
+            bond_time: default_bond_time(),
+            cluster_min_size: default_cluster_min_size(),
             bins_3d: Bins3d::default(),
         }
     }
@@ -155,6 +166,12 @@ fn default_stationarity_tolerance() -> f64 {
 }
 fn default_mobility_lag() -> f64 {
     10.0
+}
+fn default_bond_time() -> f64 {
+    0.2
+}
+fn default_cluster_min_size() -> usize {
+    3
 }
 
 impl ObserveSpec {
@@ -299,6 +316,24 @@ impl ObserveSpec {
                 format!(
                     "= {} is out of range: must be finite and > 0 (time units)",
                     self.mobility_lag
+                ),
+            ));
+        }
+        if !(self.bond_time.is_finite() && self.bond_time >= 0.0) {
+            return Err(err(
+                "bond_time",
+                format!(
+                    "= {} is out of range: must be finite and >= 0 (time units)",
+                    self.bond_time
+                ),
+            ));
+        }
+        if self.cluster_min_size < 2 {
+            return Err(err(
+                "cluster_min_size",
+                format!(
+                    "= {} is out of range: must be >= 2 (grains)",
+                    self.cluster_min_size
                 ),
             ));
         }

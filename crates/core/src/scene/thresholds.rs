@@ -43,6 +43,16 @@ pub struct Thresholds {
     /// Largest lateral mobility `D_lat` (units `d^2 / sqrt(d/g)`) of a solid.
     #[serde(default = "default_solid_diffusion")]
     pub solid_diffusion: f64,
+    /// Smallest growth exponent `alpha` of the lateral mean-square displacement between the
+    /// short and the long mobility lag (`MSD ~ tau^alpha`) of a mobile region (default 0.5):
+    /// caged grains give `alpha` near 0, diffusing ones near 1 (`observe::classify`, rule 1).
+    #[serde(default = "default_diffusive_exponent")]
+    pub diffusive_exponent: f64,
+    /// Smallest fraction of the dense bins' grains that are members of bonded clusters for a
+    /// coexistence (default 0.2): a density wave in a gas or fluid without a bonded cluster is
+    /// homogeneous (rule 2).
+    #[serde(default = "default_cluster_fraction")]
+    pub cluster_fraction: f64,
     /// Largest `f_lc` (location changes per particle per period) of a solid
     /// (`mobility = "location_changes"`).
     #[serde(default = "default_solid_flc")]
@@ -87,6 +97,12 @@ fn default_solid_diffusion() -> f64 {
 }
 /// Default of `solid_diffusion` (docs/observables.md gives the calibration).
 pub const SOLID_DIFFUSION: f64 = 1e-3;
+fn default_diffusive_exponent() -> f64 {
+    0.5
+}
+fn default_cluster_fraction() -> f64 {
+    0.2
+}
 fn default_solid_flc() -> f64 {
     0.02
 }
@@ -114,6 +130,8 @@ impl Default for Thresholds {
         Self {
             mobility: Mobility::default(),
             solid_diffusion: default_solid_diffusion(),
+            diffusive_exponent: default_diffusive_exponent(),
+            cluster_fraction: default_cluster_fraction(),
             solid_flc: default_solid_flc(),
             solid_temperature: default_solid_temperature(),
             gas_temperature: default_gas_temperature(),
@@ -154,6 +172,20 @@ impl Thresholds {
             return Err(bad(
                 "coexistence_level",
                 format!("= {q} is out of range: must be in (0.5, 1) (a quantile, e.g. 0.999)"),
+            ));
+        }
+        let a = self.diffusive_exponent;
+        if !(a.is_finite() && a > 0.0 && a <= 1.0) {
+            return Err(bad(
+                "diffusive_exponent",
+                format!("= {a} is out of range: must be in (0, 1] (1: diffusion, 0: caged)"),
+            ));
+        }
+        let f = self.cluster_fraction;
+        if !(f.is_finite() && (0.0..=1.0).contains(&f)) {
+            return Err(bad(
+                "cluster_fraction",
+                format!("= {f} is out of range: must be in [0, 1]"),
             ));
         }
         let c = self.coexistence_contrast;
