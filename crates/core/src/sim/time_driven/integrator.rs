@@ -190,6 +190,40 @@ pub fn gear_correct_predict_axis(
     }
 }
 
+/// [`gear_correct_predict_axis`] on every axis of axis-major arrays of `m` particles per axis
+/// (`force_start[k]` and `period[k]` per axis); returns the largest move per axis.
+pub fn gear_correct_predict_axes<const D: usize>(
+    r: &mut [Vec<f64>; 6],
+    acc: &mut [f64],
+    force_start: [f64; D],
+    half_dt2: f64,
+    c: &[f64; 6],
+    period: [Option<f64>; D],
+    flush: bool,
+) -> [f64; D] {
+    let m = acc.len() / D;
+    let [r0, r1, r2, r3, r4, r5] = r;
+    std::array::from_fn(|k| {
+        let a = k * m..(k + 1) * m;
+        gear_correct_predict_axis(
+            [
+                &mut r0[a.clone()],
+                &mut r1[a.clone()],
+                &mut r2[a.clone()],
+                &mut r3[a.clone()],
+                &mut r4[a.clone()],
+                &mut r5[a.clone()],
+            ],
+            &mut acc[a],
+            force_start[k],
+            half_dt2,
+            c,
+            period[k],
+            flush,
+        )
+    })
+}
+
 /// The engine applies the subnormal flush of the Gear derivatives ([`GEAR_FLUSH`]) in every
 /// `GEAR_FLUSH_EVERY`-th step only, which takes four compare-and-mask operations per value out
 /// of the other steps. Safe: after a flush every derivative is 0 or at least `1e-200` in
