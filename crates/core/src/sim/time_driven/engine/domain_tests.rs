@@ -1,5 +1,6 @@
 //! The spatial domains (`domains.rs`) against the serial step and against themselves.
 use super::*;
+use crate::scene::Scene;
 
 /// A shaken wet bed of 360 disks in a 120 x 9 box (bridges form and rupture, across the
 /// cut too).
