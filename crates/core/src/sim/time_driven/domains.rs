@@ -457,11 +457,7 @@ impl<const D: usize> Decomposition<D> {
         dm.cross_flags.clear();
         dm.cross_flags
             .extend(cross.iter().map(|e| flags[e.2 as usize]));
-        for (li, &i) in dm.ids.iter().enumerate() {
-            for k in 0..D {
-                dm.built_at[k * m + li] = built_at[k * n + i as usize];
-            }
-        }
+        gather::<D, _>(&dm.ids, built_at, &mut dm.built_at, n);
         let len = 2 * D * dm.halo_out.len();
         for b in &self.halo[d] {
             let mut b = write(b);
@@ -476,27 +472,13 @@ impl<const D: usize> Decomposition<D> {
         let n = e.radius.len();
         for dm in &mut self.domains {
             let dm = get(dm);
-            let m = dm.ids.len();
-            for k in 0..D {
-                for (q, dst) in dm.r.iter_mut().enumerate() {
-                    let src = &e.r[q][k * n..(k + 1) * n];
-                    for (o, &i) in dst[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
-                        *o = src[i as usize];
-                    }
-                }
-                let src = &e.acc[k * n..(k + 1) * n];
-                for (o, &i) in dm.acc[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
-                    *o = src[i as usize];
-                }
-                let src = &e.wall_contact[k * n..(k + 1) * n];
-                for (o, &i) in dm.wall_contact[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
-                    *o = src[i as usize];
-                }
+            for (src, dst) in e.r.iter().zip(&mut dm.r) {
+                gather::<D, _>(&dm.ids, src, dst, n);
             }
-            for (li, &i) in dm.ids.iter().enumerate() {
-                dm.radius[li] = e.radius[i as usize];
-                dm.wall_kr[li] = e.wall_kr[i as usize];
-            }
+            gather::<D, _>(&dm.ids, e.acc, &mut dm.acc, n);
+            gather::<D, _>(&dm.ids, e.wall_contact, &mut dm.wall_contact, n);
+            gather::<1, _>(&dm.ids, e.radius, &mut dm.radius, n);
+            gather::<1, _>(&dm.ids, e.wall_kr, &mut dm.wall_kr, n);
             dm.acc_is_start = acc_is_start;
         }
         self.holds_step = Some(step);
@@ -712,6 +694,18 @@ impl<const D: usize> Decomposition<D> {
             let dm = lock(dm);
             dm.scatter(&dm.r[0], x, n);
             dm.scatter_flags(flags);
+        }
+    }
+}
+
+/// Reads the scene-order axis-major array `src` (`n` particles) into the local array `dst` of
+/// the particles `ids` (the inverse of [`Domain::scatter`]).
+fn gather<const D: usize, T: Copy>(ids: &[u32], src: &[T], dst: &mut [T], n: usize) {
+    let m = ids.len();
+    for k in 0..D {
+        let src = &src[k * n..(k + 1) * n];
+        for (o, &i) in dst[k * m..(k + 1) * m].iter_mut().zip(ids) {
+            *o = src[i as usize];
         }
     }
 }

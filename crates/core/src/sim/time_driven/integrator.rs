@@ -49,12 +49,14 @@ pub fn gear_predict(r: &mut [Vec<f64>; 6]) {
 /// [`gear_correct`]).
 pub const GEAR_FLUSH: f64 = 1e-200;
 
-/// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta`.
+/// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta` (the reference the fused loop is
+/// tested against).
 ///
 /// Safeguard: in free flight the higher derivatives left by a contact decay geometrically under
 /// predictor and corrector and would become subnormal numbers after some thousand steps, which
 /// makes every operation on them about a hundred times slower. Values below [`GEAR_FLUSH`]
 /// (far below any physical scale) are therefore set to zero.
+#[cfg(test)]
 pub fn gear_correct(r: &mut [Vec<f64>; 6], acc: &[f64], half_dt2: f64, c: &[f64; 6]) {
     let [r0, r1, r2, r3, r4, r5] = r;
     let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
@@ -107,7 +109,8 @@ const BLOCK: usize = 64;
 /// `n`) to predicted (step `n + 1`) in one pass, and the corrected position and scaled velocity
 /// of step `n` are written to `now`. The same arithmetic as [`gear_correct`] then
 /// [`gear_predict`], with half the passes over memory. All coordinates are treated alike (no
-/// wrap); the engine calls [`gear_correct_predict_axis`] per axis.
+/// wrap); the reference of [`gear_correct_predict_axis`], which the engine calls per axis.
+#[cfg(test)]
 pub fn gear_correct_predict(
     r: &mut [Vec<f64>; 6],
     now: &mut [Vec<f64>; 2],
@@ -202,18 +205,10 @@ pub fn gear_correct_predict_axes<const D: usize>(
     flush: bool,
 ) -> [f64; D] {
     let m = acc.len() / D;
-    let [r0, r1, r2, r3, r4, r5] = r;
     std::array::from_fn(|k| {
         let a = k * m..(k + 1) * m;
         gear_correct_predict_axis(
-            [
-                &mut r0[a.clone()],
-                &mut r1[a.clone()],
-                &mut r2[a.clone()],
-                &mut r3[a.clone()],
-                &mut r4[a.clone()],
-                &mut r5[a.clone()],
-            ],
+            r.each_mut().map(|r| &mut r[a.clone()]),
             &mut acc[a],
             force_start[k],
             half_dt2,

@@ -229,11 +229,6 @@ impl<const D: usize> NeighbourList<D> {
         self.skin
     }
 
-    /// Whether some particle moved more than `skin / 2` since the last build (`x` axis-major).
-    pub fn needs_rebuild(&self, x: &[f64]) -> bool {
-        self.max_displacement_sq(x) > 0.25 * self.skin * self.skin
-    }
-
     /// The largest squared displacement of a particle since the last build (`x` axis-major).
     /// The displacement is taken without the periodic image: a particle that crossed a periodic
     /// face counts as having moved by about `L` and triggers a (harmless, rare) rebuild; in

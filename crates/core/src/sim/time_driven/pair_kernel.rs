@@ -32,31 +32,6 @@ pub(super) struct PairConstants<const D: usize> {
     pub dt: f64,
 }
 
-impl<const D: usize> PairConstants<D> {
-    /// The constants of a box of `size` (periodic on the axes `periodic` says), the contact law
-    /// (`stiffness`, `damping`) and the bridge (`bridge_force`, `s_crit`); `vs` turns the
-    /// velocity array into velocities, `dt` weights the books.
-    pub fn new(
-        periodic: [bool; D],
-        size: [f64; D],
-        [stiffness, damping, bridge_force, s_crit]: [f64; 4],
-        vs: f64,
-        dt: f64,
-    ) -> Self {
-        Self {
-            periodic,
-            size,
-            half: std::array::from_fn(|k| 0.5 * size[k]),
-            stiffness,
-            damping,
-            bridge_force,
-            s_crit,
-            vs,
-            dt,
-        }
-    }
-}
-
 /// What one chunk of the pair loop books.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct PairBooks {
@@ -187,22 +162,23 @@ impl PairBooks {
     /// the serial loop books the sums per chunk of entries itself).
     #[inline(always)]
     pub(super) fn book(&mut self, pr: &PairResponse) {
-        if pr.onset {
-            self.onsets += 1;
-        }
-        if pr.overlap > 0.0 {
-            self.max_overlap = self.max_overlap.max(pr.overlap);
-        }
+        self.book_counts(pr);
         if pr.damped {
             self.dissipated += pr.dissipated;
         }
-        if pr.formation {
-            self.formations += 1;
+        if pr.formation || pr.rupture {
             self.bridge_ledger += pr.ledger;
         }
-        if pr.rupture {
-            self.ruptures += 1;
-            self.bridge_ledger += pr.ledger;
+    }
+
+    /// Books the onset, formation and rupture counts and the largest overlap of a response.
+    #[inline(always)]
+    pub(super) fn book_counts(&mut self, pr: &PairResponse) {
+        self.onsets += u64::from(pr.onset);
+        self.formations += u64::from(pr.formation);
+        self.ruptures += u64::from(pr.rupture);
+        if pr.overlap > 0.0 {
+            self.max_overlap = self.max_overlap.max(pr.overlap);
         }
     }
 }
@@ -321,14 +297,7 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
             else {
                 continue;
             };
-            if pr.onset {
-                b.onsets += 1;
-            }
-            if pr.overlap > 0.0 {
-                b.max_overlap = b.max_overlap.max(pr.overlap);
-            }
-            b.formations += u64::from(pr.formation);
-            b.ruptures += u64::from(pr.rupture);
+            b.book_counts(&pr);
             if pr.damped || pr.formation || pr.rupture {
                 // Close the partial sums of the earlier chunks (only where something is
                 // booked, off the common path; a chunk that booked nothing would add +0).

@@ -158,7 +158,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         s.moved_bound = 0.0;
         self.domains.forget();
         let t = self.time();
-        self.forces_then(t, self.velocity_scale(), 0.0, Then::Nothing);
+        self.forces_then(t, self.s.velocity_scale(), 0.0, Then::Nothing);
         if self.s.p.integrator == IntegratorKind::Gear5 {
             let s = &mut self.s;
             for e in 0..D * n {

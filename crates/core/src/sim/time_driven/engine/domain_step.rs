@@ -1,10 +1,6 @@
-//! The domain strategy: Gear steps on the spatial domains of `domains.rs`, run in regions of
-//! many steps by a team of threads (`team.rs`). A region is the list check of its first step,
-//! the decomposition (kept from the last region, or made from the positions of the current
-//! build), the state copied into the domains, the steps on a team of up to [`DOMAINS`] threads
-//! of the current pool (or on the calling thread alone; the team rebuilds the list itself
-//! where the check asks for it), and the state and the books copied back (the books step by
-//! step, domains in order, as one sum per step).
+//! The domain strategy: regions of Gear steps on the spatial domains of `domains.rs` (see
+//! there), each run by a team of up to [`DOMAINS`] threads of the current pool (`team.rs`; the
+//! calling thread alone on a pool of one), the books added back step by step, domains in order.
 
 use super::*;
 use crate::sim::time_driven::domains::{

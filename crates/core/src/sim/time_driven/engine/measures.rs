@@ -10,9 +10,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     pub fn energy(&self) -> EnergyLedger {
         let n = self.s.n;
         let p = &self.s.p;
-        let vs = self.velocity_scale();
-        let x = self.x_now();
-        let v = self.v_now();
+        let vs = self.s.velocity_scale();
+        let x = self.now(0);
+        let v = self.now(1);
         let mut kinetic = 0.0;
         for e in 0..D * n {
             let ve = v[e] * vs;
@@ -84,8 +84,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// Total momentum.
     pub fn momentum(&self) -> [f64; D] {
-        let vs = self.velocity_scale();
-        let v = self.v_now();
+        let vs = self.s.velocity_scale();
+        let v = self.now(1);
         std::array::from_fn(|k| {
             v[k * self.s.n..(k + 1) * self.s.n].iter().sum::<f64>() * vs * self.s.p.mass
         })
@@ -94,10 +94,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (Eq. 3.2, `f_d = D`).
     pub fn granular_temperature(&self) -> f64 {
         let n = self.s.n as f64;
-        let vs = self.velocity_scale();
+        let vs = self.s.velocity_scale();
         let mut mean_sq = 0.0;
         let mut mean2 = 0.0;
-        let v = self.v_now();
+        let v = self.now(1);
         for k in 0..D {
             let col = &v[k * self.s.n..(k + 1) * self.s.n];
             let m = col.iter().sum::<f64>() * vs / n;

@@ -13,20 +13,20 @@
 //! for the next step; the current (corrected) position and velocity are recovered on demand by
 //! inverting the predictor (round-off equal to the corrector's output), not stored each step.
 //! Forces come from the Verlet list of `neighbours.rs` with Newton's third law (each pair once),
-//! visiting only non-empty rows, every pair through the one kernel of `pair_kernel.rs`.
+//! visiting only non-empty rows, every pair through the one kernel of `pair_kernel.rs`. The
+//! list's displacement test runs only when a bound summed from the integrator loops' largest
+//! moves says it might fire (`State::update_list`); the builds happen at the same steps as with
+//! a test every step (up to the rebuilds a test every step triggers when a particle crosses a
+//! periodic face), and the trajectories are bit-identical (a build changes only which
+//! non-interacting pairs are listed). Nothing is allocated inside a step once the neighbour
+//! list has reached its working size.
 //!
-//! Layout: [`TimeEngine`] is the state every strategy steps ([`State`]: parameters, arrays,
-//! list, books) and the three execution strategies behind the [`Strategy`] trait
-//! (`stepping.rs`): [`Serial`] (`serial.rs`), [`RayonSplit`] (`rayon_split.rs`) and
-//! [`Domains`] (`domain_step.rs`, on the decomposition of `domains.rs`), chosen per step from
-//! the [`Execution`] given at construction. Construction and state I/O are in `build.rs`,
-//! what the engine reports in `measures.rs`. The list's displacement test runs only when a bound summed
-//! from the integrator loops' largest moves says it might fire ([`TimeEngine`]'s
-//! `update_list`); the builds happen at the same steps as with a test every step (up to the
-//! rebuilds a test every step triggers when a particle crosses a periodic face), and the
-//! trajectories are bit-identical (a build changes only which non-interacting pairs are
-//! listed). Nothing is allocated inside a step once the neighbour list has reached its working
-//! size.
+//! Layout: [`TimeEngine`] is the state every strategy steps (`State`: parameters, arrays,
+//! list, books) and the three execution strategies behind the `Strategy` trait
+//! (`stepping.rs`): `Serial` (`serial.rs`), `RayonSplit` (`rayon_split.rs`) and `Domains`
+//! (`domain_step.rs`, on the decomposition of `domains.rs`), chosen per step from the
+//! [`Execution`] given at construction. Construction and state I/O are in `build.rs`, what the
+//! engine reports in `measures.rs`.
 //!
 //! Energy bookkeeping ([`EnergyLedger`], same fields as the event engine):
 //! - `potential`: gravity `m g z`, Hertz elastic energy of pairs and walls (`(2/5) k sqrt(R_eff)
@@ -216,33 +216,21 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
         let a = gear_unpredict(std::array::from_fn(|k| s.r[k][e]));
         let k = e / s.n;
-        let mut x = a[0];
         if s.p.periodic[k] {
-            let l = s.p.size[k];
-            if x < 0.0 {
-                x += l;
-            } else if x >= l {
-                x -= l;
-            }
-        }
-        (x, a[1])
-    }
-
-    /// Positions of the current step, axis-major.
-    fn x_now(&self) -> Cow<'_, [f64]> {
-        if self.s.predicted {
-            Cow::Owned((0..D * self.s.n).map(|e| self.now_at(e).0).collect())
+            (stepping::wrap_into(a[0], s.p.size[k]), a[1])
         } else {
-            Cow::Borrowed(&self.s.r[0])
+            (a[0], a[1])
         }
     }
 
-    /// Velocities of the current step (times [`Self::velocity_scale`]), axis-major.
-    fn v_now(&self) -> Cow<'_, [f64]> {
+    /// Positions (`q = 0`) or velocities times [`State::velocity_scale`] (`q = 1`) of the
+    /// current step, axis-major.
+    fn now(&self, q: usize) -> Cow<'_, [f64]> {
         if self.s.predicted {
-            Cow::Owned((0..D * self.s.n).map(|e| self.now_at(e).1).collect())
+            let pick = |(x, v)| if q == 0 { x } else { v };
+            Cow::Owned((0..D * self.s.n).map(|e| pick(self.now_at(e))).collect())
         } else {
-            Cow::Borrowed(&self.s.r[1])
+            Cow::Borrowed(&self.s.r[q])
         }
     }
 
@@ -291,11 +279,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.s.max_overlap / self.s.p.diameter
     }
 
-    /// Factor turning `r[1]` into a velocity.
-    fn velocity_scale(&self) -> f64 {
-        self.s.velocity_scale()
-    }
-
     /// Position of particle `i` (scene order).
     pub fn position(&self, i: usize) -> [f64; D] {
         std::array::from_fn(|k| self.now_at(k * self.s.n + i).0)
@@ -303,8 +286,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// Velocity of particle `i`.
     pub fn velocity(&self, i: usize) -> [f64; D] {
-        let s = self.velocity_scale();
-        std::array::from_fn(|k| self.now_at(k * self.s.n + i).1 * s)
+        let vs = self.s.velocity_scale();
+        std::array::from_fn(|k| self.now_at(k * self.s.n + i).1 * vs)
     }
 
     /// Particle radii.
@@ -361,12 +344,16 @@ impl<const D: usize> Params<D> {
     /// The pair kernel's constants for a force evaluation (`vs` turns the velocity array into
     /// velocities, `dt` weights the books).
     fn pair_constants(&self, vs: f64, dt: f64) -> PairConstants<D> {
-        PairConstants::new(
-            self.periodic,
-            self.size,
-            [self.stiffness, self.damping, self.bridge_force, self.s_crit],
+        PairConstants {
+            periodic: self.periodic,
+            size: self.size,
+            half: std::array::from_fn(|k| 0.5 * self.size[k]),
+            stiffness: self.stiffness,
+            damping: self.damping,
+            bridge_force: self.bridge_force,
+            s_crit: self.s_crit,
             vs,
             dt,
-        )
+        }
     }
 }

@@ -257,13 +257,12 @@ fn particle_chunk<const D: usize>(
     cx: &ChunkContext<D>,
     e0: usize,
     acc: &mut [f64],
-    r: [&mut [f64]; 6],
+    mut r: [&mut [f64]; 6],
     touch: &mut [u8],
 ) -> ChunkBooks<D> {
     let mut walls = WallBooks::default();
     let mut moved = [0.0; D];
     let n = cx.n;
-    let [r0, r1, r2, r3, r4, r5] = r;
     for_each_axis_segment(n, e0, acc.len(), |k, o, m| {
         let i0 = (e0 + o) % n;
         let acc = &mut acc[o..o + m];
@@ -288,7 +287,7 @@ fn particle_chunk<const D: usize>(
         if !cx.periodic[k] {
             let radius = &cx.radius[i0..i0 + m];
             let wall_kr = &cx.wall_kr[i0..i0 + m];
-            let (x, v, touching) = (&r0[o..o + m], &r1[o..o + m], &mut touch[o..o + m]);
+            let (x, v, touching) = (&r[0][o..o + m], &r[1][o..o + m], &mut touch[o..o + m]);
             wall_forces(
                 &cx.walls[k],
                 x,
@@ -314,16 +313,8 @@ fn particle_chunk<const D: usize>(
         match cx.then {
             Then::Nothing => {}
             Then::Gear => {
-                let s = o..o + m;
                 let step_move = gear_correct_predict_axis(
-                    [
-                        &mut r0[s.clone()],
-                        &mut r1[s.clone()],
-                        &mut r2[s.clone()],
-                        &mut r3[s.clone()],
-                        &mut r4[s.clone()],
-                        &mut r5[s],
-                    ],
+                    r.each_mut().map(|r| &mut r[o..o + m]),
                     acc,
                     cx.init[k],
                     cx.half_dt2,
@@ -333,7 +324,7 @@ fn particle_chunk<const D: usize>(
                 );
                 moved[k] = max_ignoring_nan(moved[k], step_move);
             }
-            Then::VerletKick => verlet_kick(&mut r1[o..o + m], acc, cx.dt),
+            Then::VerletKick => verlet_kick(&mut r[1][o..o + m], acc, cx.dt),
         }
     });
     ChunkBooks { walls, moved }

@@ -79,19 +79,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// contact onsets and bridge events with weight `dt` (0: a re-evaluation that is not a
     /// step). Returns the largest move per axis of the Gear update (zeros otherwise).
     ///
-    /// Two parallel phases, each over fixed chunks whose results are combined in chunk order,
-    /// so the numbers do not depend on the number of threads:
-    ///
-    /// 1. the pair forces of every Verlet-list entry (each pair once), into a buffer, with the
-    ///    contact and bridge flags (`pair_chunk`, chunks of [`ENTRY_CHUNK`] entries);
-    /// 2. per chunk of [`PARTICLE_CHUNK`] coordinates: the weight, the pair forces gathered in
-    ///    the order the half list's rows visit them (the partners' rows, ascending, then the
-    ///    particle's own row), the walls, the body force, `1/m`, then `then`
-    ///    (`rayon_split.rs`).
-    ///
-    /// The accelerations are the same bits as a single loop that scatters each pair force to
-    /// both partners; the booked sums (dissipation, drive work, bridge energy) are summed per
-    /// chunk, so they differ from a single running sum by round-off.
+    /// On the serial or the rayon strategy, as [`Self::splits`] says (the same bits): the
+    /// initial forces and a re-evaluation after `set_state`.
     pub(super) fn forces_then(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
         if self.splits() {
             self.rayon.forces_then(&mut self.s, t, vs, dt, then)
@@ -107,16 +96,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
     fn wrap(&mut self) {
         let n = self.n;
         for k in 0..D {
-            if !self.p.periodic[k] {
-                continue;
-            }
-            let l = self.p.size[k];
-            for x in &mut self.r[0][k * n..(k + 1) * n] {
-                if *x < 0.0 {
-                    *x += l;
-                } else if *x >= l {
-                    *x -= l;
-                }
+            if self.p.periodic[k] {
+                wrap_slice(&mut self.r[0][k * n..(k + 1) * n], self.p.size[k]);
             }
         }
     }
@@ -283,13 +264,21 @@ pub(super) fn max_ignoring_nan(a: f64, b: f64) -> f64 {
     if b > a { b } else { a }
 }
 
-/// `x < 0: x + L; x >= L: x - L` on every element.
+/// [`wrap_into`] on every element.
 fn wrap_slice(xs: &mut [f64], l: f64) {
     for x in xs {
-        if *x < 0.0 {
-            *x += l;
-        } else if *x >= l {
-            *x -= l;
-        }
+        *x = wrap_into(*x, l);
+    }
+}
+
+/// `x` back into `[0, L)` after a move of less than `L`: `x < 0: x + L; x >= L: x - L`.
+#[inline(always)]
+pub(super) fn wrap_into(x: f64, l: f64) -> f64 {
+    if x < 0.0 {
+        x + l
+    } else if x >= l {
+        x - l
+    } else {
+        x
     }
 }
