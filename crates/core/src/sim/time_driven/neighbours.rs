@@ -16,7 +16,7 @@ pub const CONTACT: u8 = 1;
 pub const BOND: u8 = 2;
 
 /// The exact displacement test of the list runs at least every this many steps (it bounds the
-/// round-off accumulated in the engine's displacement bound, `TimeEngine::update_list`).
+/// round-off accumulated in the engine's displacement bound, `State::update_list`).
 pub const EXACT_CHECK_EVERY: u32 = 1024;
 
 /// Linked cells and the Verlet list.

@@ -308,11 +308,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     pub fn bridge_count(&self) -> usize {
         if WET { self.s.list.count(BOND) } else { 0 }
     }
-
-    /// The execution strategies in use ([`Self::with_execution`]).
-    pub fn execution(&self) -> Execution {
-        self.execution
-    }
 }
 
 impl<const D: usize, const GRAV: bool, const WET: bool, B> State<D, GRAV, WET, B> {
