@@ -122,15 +122,13 @@ impl<const D: usize> Domains<D> {
             {
                 return (d, checked);
             }
-            Some(mut old) => {
-                // The engine's arrays must hold the whole state before a new partition (the
-                // flags came back at the end of the last region; the list is new since).
-                if old.partial {
-                    let (mut arrays, _) = arrays(s);
-                    old.store(&mut arrays, None, true);
-                }
+            // The engine's arrays must hold the whole state before a new partition (the flags
+            // came back at the end of the last region; the list is new since).
+            Some(mut old) if old.partial => {
+                let (mut arrays, _) = arrays(s);
+                old.store(&mut arrays, None, true);
             }
-            None => {}
+            Some(_) | None => {}
         }
         self.partitions += 1;
         let mut d = Box::new(Decomposition::new(builds, s.p.size, s.list.built_at()));
