@@ -117,8 +117,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         (0..self.s.n).flat_map(|i| self.velocity(i)).collect()
     }
 
-    /// Test aid, `O(N^2)`: the first pair that overlaps (or is within `s_crit` of contact in a
-    /// wet scene) but is missing from the Verlet list, which would make its force vanish.
+    /// Test aid (the crate's `testing` feature), `O(N^2)`: the first pair that overlaps (or is
+    /// within `s_crit` of contact in a wet scene) but is missing from the Verlet list, which
+    /// would make its force vanish.
+    #[cfg(any(test, feature = "testing"))]
     pub fn pair_missing_from_list(&self) -> Option<(usize, usize)> {
         let reach = if WET { self.s.p.s_crit } else { 0.0 };
         for i in 0..self.s.n {
