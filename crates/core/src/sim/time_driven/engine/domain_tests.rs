@@ -78,6 +78,26 @@ fn pool(threads: usize) -> rayon::ThreadPool {
         .expect("a pool")
 }
 
+/// Asserts that `split` (on the domains) differs from `serial` (never on the domains) as a
+/// change of the summation order does: the same list builds, counts and bridges, positions
+/// within `1e-9`. Returns the largest position difference.
+fn agree_to_round_off<const D: usize>(
+    serial: &TimeEngine<D, true, true>,
+    split: &TimeEngine<D, true, true>,
+) -> f64 {
+    assert_eq!(serial.list_builds(), split.list_builds());
+    assert_eq!(serial.counts(), split.counts());
+    assert_eq!(serial.bridges(), split.bridges());
+    let (xs, xd) = (serial.positions_flat(), split.positions_flat());
+    let dx = xs
+        .iter()
+        .zip(&xd)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(dx < 1e-9, "positions differ by {dx}");
+    dx
+}
+
 /// The cross pairs bonded in domain 0's copy.
 fn cross_bonds(e: &Wet) -> usize {
     let dec = e.domains.decomposition.as_ref().expect("a decomposition");
@@ -242,27 +262,7 @@ fn spheres_on_domains_agree_with_the_serial_step() {
     );
     assert!(one.counts().bridge_formations > 0, "bridges form");
     assert!(bits(&one) == bits(&two), "one and two threads differ");
-    assert_eq!(serial.list_builds(), one.list_builds());
-    assert_eq!(
-        serial.counts().pair_collisions,
-        one.counts().pair_collisions
-    );
-    assert_eq!(
-        serial.counts().bridge_formations,
-        one.counts().bridge_formations
-    );
-    assert_eq!(
-        serial.counts().bridge_ruptures,
-        one.counts().bridge_ruptures
-    );
-    assert_eq!(serial.bridges(), one.bridges());
-    let dx = serial
-        .positions_flat()
-        .iter()
-        .zip(&one.positions_flat())
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    assert!(dx < 1e-9, "positions differ by {dx}");
+    agree_to_round_off(&serial, &one);
 }
 
 /// The point of the domains: in the bench system (1200 disks, 400 x 9, cut across x)
@@ -311,20 +311,7 @@ fn domains_change_the_serial_trajectory_by_round_off() {
         "{} partitions",
         split.domains.partitions
     );
-    assert_eq!(serial.list_builds(), split.list_builds());
-    let (cs, cd) = (serial.counts(), split.counts());
-    assert_eq!(cs.pair_collisions, cd.pair_collisions);
-    assert_eq!(cs.wall_collisions, cd.wall_collisions);
-    assert_eq!(cs.bridge_formations, cd.bridge_formations);
-    assert_eq!(cs.bridge_ruptures, cd.bridge_ruptures);
-    assert_eq!(serial.bridges(), split.bridges());
-    let (xs, xd) = (serial.positions_flat(), split.positions_flat());
-    let dx = xs
-        .iter()
-        .zip(&xd)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    assert!(dx < 1e-9, "positions differ by {dx}");
+    let dx = agree_to_round_off(&serial, &split);
     assert!(dx > 0.0, "the summation order differs, so some bit should");
     let (ls, ld) = (serial.energy(), split.energy());
     for (a, b, what) in [
