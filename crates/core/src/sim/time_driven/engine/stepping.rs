@@ -264,8 +264,8 @@ pub(super) fn max_ignoring_nan(a: f64, b: f64) -> f64 {
     if b > a { b } else { a }
 }
 
-/// [`wrap_into`] on every element, writing only the wrapped ones (a store per element made
-/// Verlet's drift pass about 7 % slower).
+/// [`wrap_into`] on every element, writing only the wrapped ones (few are: no store per
+/// element).
 fn wrap_slice(xs: &mut [f64], l: f64) {
     for x in xs {
         if *x < 0.0 {
