@@ -24,7 +24,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 use wetgran_core::scene::DEFAULT_STIFFNESS;
 use wetgran_core::scene::reference::dry_shaken_time_driven_widened;
-use wetgran_core::sim::time_driven::{DomainMode, TimeEngine};
+use wetgran_core::sim::time_driven::{DOMAIN_MIN_PARTICLES, Execution, TimeEngine};
 
 /// Wall seconds per simulated time unit of the C++ reference code (issue 6).
 pub const BASELINE_SECONDS_PER_TIME_UNIT: f64 = 0.38;
@@ -110,11 +110,21 @@ pub fn measure_threads(
     let mut rows = Vec::new();
     // `gear5` runs its default path (for N = 1200 the spatial domains, `domains.rs`),
     // `gear5-ser` the same integrator on the serial (with several threads: rayon-split) path.
-    for (integ, mode) in [
-        ("gear5", DomainMode::Auto),
-        ("gear5-ser", DomainMode::Never),
-        ("verlet", DomainMode::Auto),
+    for (integ, domains_from) in [
+        ("gear5", DOMAIN_MIN_PARTICLES),
+        ("gear5-ser", usize::MAX),
+        ("verlet", DOMAIN_MIN_PARTICLES),
     ] {
+        // The bench measures the parallel path itself: with several thread counts the step is
+        // split whatever the system size (below the default threshold it would run serially).
+        let execution = Execution {
+            domains_from,
+            split_from: if threads.iter().any(|&t| t > 1) {
+                0
+            } else {
+                Execution::default().split_from
+            },
+        };
         let s = dry_shaken_time_driven_widened(
             &integ[..integ.find('-').unwrap_or(integ.len())],
             n_factor.max(1),
@@ -137,13 +147,7 @@ pub fn measure_threads(
         for _ in 0..repeat.max(1) {
             for (pool, row) in pools.iter().zip(&mut rows[first..]) {
                 pool.install(|| {
-                    let mut e = TimeEngine::<2, true, false>::new(&s);
-                    e.set_domain_mode(mode);
-                    // The bench measures the parallel path itself: split the step whatever
-                    // the system size (below the default threshold it would run serially).
-                    if threads.iter().any(|&t| t > 1) {
-                        e.set_parallel_min_particles(0);
-                    }
+                    let mut e = TimeEngine::<2, true, false>::new(&s).with_execution(execution);
                     e.run_until(1.0);
                     let (b0, s0) = (e.list_builds(), e.steps());
                     let cpu0 = process_cpu_seconds();

@@ -22,7 +22,7 @@ mod common;
 use common::scene_with;
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::time_driven::shear::CosineShear;
-use wetgran_core::sim::time_driven::{BodyForce, TimeEngine};
+use wetgran_core::sim::time_driven::{BodyForce, Execution, TimeEngine};
 
 /// FNV-1a over 64-bit words.
 struct Digest(u64);
@@ -90,6 +90,12 @@ fn digest<const D: usize, const G: bool, const W: bool, B: BodyForce<D>>(
 /// default threshold), so that these sizes exercise the parallel path.
 const SPLIT_FROM: usize = 512;
 
+/// The default strategies, with the rayon split from [`SPLIT_FROM`] particles on.
+const SPLIT: Execution = Execution {
+    split_from: SPLIT_FROM,
+    domains_from: wetgran_core::sim::time_driven::DOMAIN_MIN_PARTICLES,
+};
+
 /// Runs `run` on a rayon pool of `threads` threads and returns its digests.
 fn on_threads(threads: usize, run: impl FnOnce() -> (u64, u64) + Send) -> (u64, u64) {
     rayon::ThreadPoolBuilder::new()
@@ -142,8 +148,7 @@ fn bench_scene_gear() {
         "bench gear5",
         (0x4cef_122d_97f7_9569, 0x7a37_ea3b_3ce6_04de),
         || {
-            let mut e = TimeEngine::<2, true, false>::new(&s);
-            e.set_parallel_min_particles(SPLIT_FROM);
+            let mut e = TimeEngine::<2, true, false>::new(&s).with_execution(SPLIT);
             e.run_until(0.3);
             digest(&e)
         },
@@ -157,8 +162,7 @@ fn bench_scene_verlet() {
         "bench verlet",
         (0xd19b_9c90_240d_9390, 0x056b_3114_7928_054a),
         || {
-            let mut e = TimeEngine::<2, true, false>::new(&s);
-            e.set_parallel_min_particles(SPLIT_FROM);
+            let mut e = TimeEngine::<2, true, false>::new(&s).with_execution(SPLIT);
             e.run_until(0.3);
             digest(&e)
         },
@@ -188,8 +192,7 @@ fn wet_2d_gear() {
         "wet 2D gear5",
         (0x5cf0_9ae3_7594_a66a, 0x7b4d_fcee_2b9e_47bc),
         || {
-            let mut e = TimeEngine::<2, true, true>::new(&s);
-            e.set_parallel_min_particles(SPLIT_FROM);
+            let mut e = TimeEngine::<2, true, true>::new(&s).with_execution(SPLIT);
             e.run_until(1.5);
             assert!(e.counts().bridge_ruptures > 0, "the run ruptures bridges");
             digest(&e)
@@ -204,8 +207,7 @@ fn wet_2d_verlet() {
         "wet 2D verlet",
         (0xdaec_5b1f_afe8_a063, 0xbf20_8030_40b7_bcd9),
         || {
-            let mut e = TimeEngine::<2, true, true>::new(&s);
-            e.set_parallel_min_particles(SPLIT_FROM);
+            let mut e = TimeEngine::<2, true, true>::new(&s).with_execution(SPLIT);
             e.run_until(1.5);
             digest(&e)
         },
@@ -229,8 +231,7 @@ fn wet_3d_gear() {
         "wet 3D gear5",
         (0x0d73_c090_5dd6_d1c1, 0xf150_4364_fc96_d60c),
         || {
-            let mut e = TimeEngine::<3, true, true>::new(&s);
-            e.set_parallel_min_particles(SPLIT_FROM);
+            let mut e = TimeEngine::<3, true, true>::new(&s).with_execution(SPLIT);
             e.run_until(0.5);
             digest(&e)
         },
@@ -254,8 +255,8 @@ fn sheared_3d_gear() {
         "sheared 3D gear5",
         (0xf930_23bd_a721_634c, 0xa188_7632_67d8_c325),
         || {
-            let mut e = TimeEngine::<3, false, false, CosineShear>::with_body_force(&s, field);
-            e.set_parallel_min_particles(SPLIT_FROM);
+            let mut e = TimeEngine::<3, false, false, CosineShear>::with_body_force(&s, field)
+                .with_execution(SPLIT);
             e.run_until(0.5);
             digest(&e)
         },
@@ -279,8 +280,8 @@ fn threads_do_not_change_a_wet_sheared_run() {
     assert!(s.particles.count >= SPLIT_FROM);
     let field = CosineShear::of_scene(&s).expect("a shear scene");
     let run = || {
-        let mut e = TimeEngine::<3, false, true, CosineShear>::with_body_force(&s, field);
-        e.set_parallel_min_particles(SPLIT_FROM);
+        let mut e = TimeEngine::<3, false, true, CosineShear>::with_body_force(&s, field)
+            .with_execution(SPLIT);
         e.run_until(0.2);
         assert!(e.counts().bridge_formations > 0, "bridges form");
         digest(&e)

@@ -40,10 +40,9 @@
 //! (engine test `domains_change_the_serial_trajectory_by_round_off`), which is why the engine
 //! chooses the path by the number of particles alone, never by the threads.
 
-use super::integrator::gear_correct_predict_axis;
-use super::neighbours::{BOND, CONTACT};
+use super::integrator::gear_correct_predict_axes;
 use super::neighbours::{EXACT_CHECK_EVERY, NeighbourList, RowScan, max_displacement_sq};
-use super::pair_kernel::{PairBooks, PairConstants, pair_forces_serial, pair_response};
+use super::pair_kernel::{PairBooks, PairConstants, cross_forces, pair_forces_serial};
 use super::walls::{WallAxis, WallBooks, wall_forces};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, RwLock};
@@ -60,12 +59,8 @@ pub const DOMAIN_MIN_PARTICLES: usize = 1024;
 /// What a domain step needs besides its own arrays (the same for every domain of a step).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct StepConstants<const D: usize> {
-    pub periodic: [bool; D],
-    pub size: [f64; D],
-    pub stiffness: f64,
-    pub damping: f64,
-    pub bridge_force: f64,
-    pub s_crit: f64,
+    /// The pair kernel's constants (velocity scale `1 / dt`, books weighted by `dt`).
+    pub pair: PairConstants<D>,
     pub dt: f64,
     pub inv_mass: Option<f64>,
     /// The force every coordinate starts from (the weight on the last axis).
@@ -462,11 +457,7 @@ impl<const D: usize> Decomposition<D> {
         dm.cross_flags.clear();
         dm.cross_flags
             .extend(cross.iter().map(|e| flags[e.2 as usize]));
-        for (li, &i) in dm.ids.iter().enumerate() {
-            for k in 0..D {
-                dm.built_at[k * m + li] = built_at[k * n + i as usize];
-            }
-        }
+        gather::<D, _>(&dm.ids, built_at, &mut dm.built_at, n);
         let len = 2 * D * dm.halo_out.len();
         for b in &self.halo[d] {
             let mut b = write(b);
@@ -481,27 +472,13 @@ impl<const D: usize> Decomposition<D> {
         let n = e.radius.len();
         for dm in &mut self.domains {
             let dm = get(dm);
-            let m = dm.ids.len();
-            for k in 0..D {
-                for (q, dst) in dm.r.iter_mut().enumerate() {
-                    let src = &e.r[q][k * n..(k + 1) * n];
-                    for (o, &i) in dst[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
-                        *o = src[i as usize];
-                    }
-                }
-                let src = &e.acc[k * n..(k + 1) * n];
-                for (o, &i) in dm.acc[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
-                    *o = src[i as usize];
-                }
-                let src = &e.wall_contact[k * n..(k + 1) * n];
-                for (o, &i) in dm.wall_contact[k * m..(k + 1) * m].iter_mut().zip(&dm.ids) {
-                    *o = src[i as usize];
-                }
+            for (src, dst) in e.r.iter().zip(&mut dm.r) {
+                gather::<D, _>(&dm.ids, src, dst, n);
             }
-            for (li, &i) in dm.ids.iter().enumerate() {
-                dm.radius[li] = e.radius[i as usize];
-                dm.wall_kr[li] = e.wall_kr[i as usize];
-            }
+            gather::<D, _>(&dm.ids, e.acc, &mut dm.acc, n);
+            gather::<D, _>(&dm.ids, e.wall_contact, &mut dm.wall_contact, n);
+            gather::<1, _>(&dm.ids, e.radius, &mut dm.radius, n);
+            gather::<1, _>(&dm.ids, e.wall_kr, &mut dm.wall_kr, n);
             dm.acc_is_start = acc_is_start;
         }
         self.holds_step = Some(step);
@@ -721,6 +698,18 @@ impl<const D: usize> Decomposition<D> {
     }
 }
 
+/// Reads the scene-order axis-major array `src` (`n` particles) into the local array `dst` of
+/// the particles `ids` (the inverse of [`Domain::scatter`]).
+fn gather<const D: usize, T: Copy>(ids: &[u32], src: &[T], dst: &mut [T], n: usize) {
+    let m = ids.len();
+    for k in 0..D {
+        let src = &src[k * n..(k + 1) * n];
+        for (o, &i) in dst[k * m..(k + 1) * m].iter_mut().zip(ids) {
+            *o = src[i as usize];
+        }
+    }
+}
+
 impl<const D: usize> Domain<D> {
     /// Writes the local axis-major array `src` into the scene-order array `dst` (`n`
     /// particles).
@@ -771,62 +760,16 @@ impl<const D: usize> Domain<D> {
         next: &mut [f64],
     ) -> bool {
         let m = self.ids.len();
-        let dt = c.dt;
         if !self.acc_is_start {
             for k in 0..D {
                 self.acc[k * m..(k + 1) * m].fill(c.init[k]);
             }
         }
         self.acc_is_start = true;
-        let pc = PairConstants {
-            periodic: c.periodic,
-            size: c.size,
-            stiffness: c.stiffness,
-            damping: c.damping,
-            bridge_force: c.bridge_force,
-            s_crit: c.s_crit,
-            vs: 1.0 / dt,
-            dt,
-        };
-        let pb = pair_forces_serial::<D, WET>(
-            &pc,
-            &self.r[0],
-            &self.r[1],
-            &mut self.acc,
-            &self.radius,
-            &self.start,
-            &self.rows,
-            &self.partner,
-            &mut self.flags,
-        );
+        let mut sums = self.pair_forces::<WET>(&c.pair, ghosts);
         let b = &mut self.books;
-        let mut sums = [pb.dissipated, pb.bridge_ledger, 0.0];
-        b.max_overlap = b.max_overlap.max(pb.max_overlap);
-        b.pair_onsets += pb.onsets;
-        b.formations += pb.formations;
-        b.ruptures += pb.ruptures;
-        let cb = cross_forces::<D, WET>(
-            &pc,
-            &self.r[0],
-            &self.r[1],
-            &mut self.acc,
-            &self.radius,
-            ghosts,
-            &self.ghost_radius,
-            &self.cross_own,
-            &self.cross_ghost,
-            &mut self.cross_flags,
-        );
-        if self.books_cross {
-            sums[0] += cb.dissipated;
-            sums[1] += cb.bridge_ledger;
-            b.max_overlap = b.max_overlap.max(cb.max_overlap);
-            b.pair_onsets += cb.onsets;
-            b.formations += cb.formations;
-            b.ruptures += cb.ruptures;
-        }
         for k in 0..D {
-            if c.periodic[k] {
+            if c.pair.periodic[k] {
                 continue;
             }
             let a = k * m..(k + 1) * m;
@@ -852,38 +795,73 @@ impl<const D: usize> Domain<D> {
                 *e *= inv_m;
             }
         }
+        let p = &c.pair;
+        let moved = gear_correct_predict_axes(
+            &mut self.r,
+            &mut self.acc,
+            c.init,
+            0.5 * c.dt * c.dt,
+            &c.gear,
+            std::array::from_fn(|k| p.periodic[k].then_some(p.size[k])),
+            flush,
+        );
         let mut moved2 = 0.0;
-        let [r0, r1, r2, r3, r4, r5] = &mut self.r;
-        for k in 0..D {
-            let a = k * m..(k + 1) * m;
-            let mk = gear_correct_predict_axis(
-                [
-                    &mut r0[a.clone()],
-                    &mut r1[a.clone()],
-                    &mut r2[a.clone()],
-                    &mut r3[a.clone()],
-                    &mut r4[a.clone()],
-                    &mut r5[a.clone()],
-                ],
-                &mut self.acc[a],
-                c.init[k],
-                0.5 * dt * dt,
-                &c.gear,
-                c.periodic[k].then_some(c.size[k]),
-                flush,
-            );
+        for mk in moved {
             moved2 += mk * mk;
         }
         self.publish(next);
-        // The list check of the next step (the engine's `update_list`, on this domain).
-        self.bound += moved2.sqrt();
+        self.check_list(moved2.sqrt(), c.half_skin)
+    }
+
+    /// The inner pairs and the cross pairs of this domain ([`pair_forces_serial`],
+    /// [`cross_forces`]): their forces added to `acc`, the counts and largest overlap booked
+    /// (the cross pairs' only where this domain books them); returns the step's sums
+    /// (dissipation, bridge ledger, drive work).
+    fn pair_forces<const WET: bool>(&mut self, pc: &PairConstants<D>, ghosts: &[f64]) -> [f64; 3] {
+        let pb = pair_forces_serial::<D, WET>(
+            pc,
+            &self.r[0],
+            &self.r[1],
+            &mut self.acc,
+            &self.radius,
+            &self.start,
+            &self.rows,
+            &self.partner,
+            &mut self.flags,
+        );
+        let mut sums = [pb.dissipated, pb.bridge_ledger, 0.0];
+        self.books.add_pairs(&pb);
+        let cb = cross_forces::<D, WET>(
+            pc,
+            &self.r[0],
+            &self.r[1],
+            &mut self.acc,
+            &self.radius,
+            ghosts,
+            &self.ghost_radius,
+            &self.cross_own,
+            &self.cross_ghost,
+            &mut self.cross_flags,
+        );
+        if self.books_cross {
+            sums[0] += cb.dissipated;
+            sums[1] += cb.bridge_ledger;
+            self.books.add_pairs(&cb);
+        }
+        sums
+    }
+
+    /// The list check of the next step (the engine's `update_list`, on this domain), after a
+    /// step whose moves have the norm `moved`: whether the list must be rebuilt.
+    fn check_list(&mut self, moved: f64, half_skin: f64) -> bool {
+        self.bound += moved;
         self.since_check += 1;
-        if self.bound < c.half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
+        if self.bound < half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
             return false;
         }
         self.since_check = 0;
         let worst = max_displacement_sq::<D>(&self.r[0], &self.built_at);
-        if worst > c.half_skin * c.half_skin {
+        if worst > half_skin * half_skin {
             true
         } else {
             self.bound = worst.sqrt();
@@ -892,65 +870,12 @@ impl<const D: usize> Domain<D> {
     }
 }
 
-/// Forces of the cross pairs on this domain's particles (Eq. 2.7 and docs/model.md 3.1, the
-/// arithmetic of `pair_forces_serial` with the partner read from the halo `ghosts`: `2 D`
-/// values per ghost, position then velocity array value); updates the pairs' flags; returns
-/// the books (the caller keeps them in one domain only).
-#[allow(clippy::too_many_arguments)]
-fn cross_forces<const D: usize, const WET: bool>(
-    pc: &PairConstants<D>,
-    x: &[f64],
-    v: &[f64],
-    f: &mut [f64],
-    radius: &[f64],
-    ghosts: &[f64],
-    ghost_radius: &[f64],
-    own: &[u32],
-    ghost: &[u32],
-    flags: &mut [u8],
-) -> PairBooks {
-    let m = radius.len();
-    let mut b = PairBooks::default();
-    let (own, ghost) = (&own[..flags.len()], &ghost[..flags.len()]);
-    for q in 0..flags.len() {
-        let i = own[q] as usize;
-        let g = &ghosts[ghost[q] as usize * 2 * D..(ghost[q] as usize + 1) * 2 * D];
-        let mut d = [0.0; D];
-        let mut r2 = 0.0;
-        for k in 0..D {
-            let mut dk = x[k * m + i] - g[k];
-            if pc.periodic[k] {
-                let half = 0.5 * pc.size[k];
-                if dk > half {
-                    dk -= pc.size[k];
-                } else if dk < -half {
-                    dk += pc.size[k];
-                }
-            }
-            d[k] = dk;
-            r2 += dk * dk;
-        }
-        let ri = radius[i];
-        let rj = ghost_radius[ghost[q] as usize];
-        let sig = ri + rj;
-        let fl = flags[q];
-        if r2 >= sig * sig && (!WET || fl & BOND == 0) {
-            if fl & CONTACT != 0 {
-                flags[q] = fl & !CONTACT;
-            }
-            continue;
-        }
-        let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| v[k * m + i] - g[D + k]);
-        b.book(&pr);
-        if pr.flags != fl {
-            flags[q] = pr.flags;
-        }
-        if pr.fmag != 0.0 {
-            let s = pr.fmag * pr.inv;
-            for k in 0..D {
-                f[k * m + i] += s * d[k];
-            }
-        }
+impl DomainBooks {
+    /// Adds the counts and the largest overlap of a pair loop.
+    fn add_pairs(&mut self, pb: &PairBooks) {
+        self.max_overlap = self.max_overlap.max(pb.max_overlap);
+        self.pair_onsets += pb.onsets;
+        self.formations += pb.formations;
+        self.ruptures += pb.ruptures;
     }
-    b
 }

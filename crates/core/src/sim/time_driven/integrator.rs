@@ -49,12 +49,14 @@ pub fn gear_predict(r: &mut [Vec<f64>; 6]) {
 /// [`gear_correct`]).
 pub const GEAR_FLUSH: f64 = 1e-200;
 
-/// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta`.
+/// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta` (the reference the fused loop is
+/// tested against).
 ///
 /// Safeguard: in free flight the higher derivatives left by a contact decay geometrically under
 /// predictor and corrector and would become subnormal numbers after some thousand steps, which
 /// makes every operation on them about a hundred times slower. Values below [`GEAR_FLUSH`]
 /// (far below any physical scale) are therefore set to zero.
+#[cfg(test)]
 pub fn gear_correct(r: &mut [Vec<f64>; 6], acc: &[f64], half_dt2: f64, c: &[f64; 6]) {
     let [r0, r1, r2, r3, r4, r5] = r;
     let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
@@ -107,7 +109,8 @@ const BLOCK: usize = 64;
 /// `n`) to predicted (step `n + 1`) in one pass, and the corrected position and scaled velocity
 /// of step `n` are written to `now`. The same arithmetic as [`gear_correct`] then
 /// [`gear_predict`], with half the passes over memory. All coordinates are treated alike (no
-/// wrap); the engine calls [`gear_correct_predict_axis`] per axis.
+/// wrap); the reference of [`gear_correct_predict_axis`], which the engine calls per axis.
+#[cfg(test)]
 pub fn gear_correct_predict(
     r: &mut [Vec<f64>; 6],
     now: &mut [Vec<f64>; 2],
@@ -188,6 +191,32 @@ pub fn gear_correct_predict_axis(
         (Some(l), false) => fused_axis::<true, false>(r, acc, h, c, l),
         (None, false) => fused_axis::<false, false>(r, acc, h, c, 0.0),
     }
+}
+
+/// [`gear_correct_predict_axis`] on every axis of axis-major arrays of `m` particles per axis
+/// (`force_start[k]` and `period[k]` per axis); returns the largest move per axis.
+pub fn gear_correct_predict_axes<const D: usize>(
+    r: &mut [Vec<f64>; 6],
+    acc: &mut [f64],
+    force_start: [f64; D],
+    half_dt2: f64,
+    c: &[f64; 6],
+    period: [Option<f64>; D],
+    flush: bool,
+) -> [f64; D] {
+    let m = acc.len() / D;
+    std::array::from_fn(|k| {
+        let a = k * m..(k + 1) * m;
+        gear_correct_predict_axis(
+            r.each_mut().map(|r| &mut r[a.clone()]),
+            &mut acc[a],
+            force_start[k],
+            half_dt2,
+            c,
+            period[k],
+            flush,
+        )
+    })
 }
 
 /// The engine applies the subnormal flush of the Gear derivatives ([`GEAR_FLUSH`]) in every

@@ -16,7 +16,7 @@ pub const CONTACT: u8 = 1;
 pub const BOND: u8 = 2;
 
 /// The exact displacement test of the list runs at least every this many steps (it bounds the
-/// round-off accumulated in the engine's displacement bound, `TimeEngine::update_list`).
+/// round-off accumulated in the engine's displacement bound, `State::update_list`).
 pub const EXACT_CHECK_EVERY: u32 = 1024;
 
 /// Linked cells and the Verlet list.
@@ -227,11 +227,6 @@ impl<const D: usize> NeighbourList<D> {
     /// The skin (the list holds pairs up to `skin` beyond their interaction range).
     pub fn skin(&self) -> f64 {
         self.skin
-    }
-
-    /// Whether some particle moved more than `skin / 2` since the last build (`x` axis-major).
-    pub fn needs_rebuild(&self, x: &[f64]) -> bool {
-        self.max_displacement_sq(x) > 0.25 * self.skin * self.skin
     }
 
     /// The largest squared displacement of a particle since the last build (`x` axis-major).

@@ -1,9 +1,11 @@
-//! The pair kernel of the time-driven engine: the force of one Verlet-list entry (damped Hertz
-//! contact, Eq. 2.7; the minimal capillary bridge, docs/model.md 3.1) and its bookkeeping, and the
-//! two loops over the list that every execution strategy uses: [`pair_chunk`] (one chunk of
-//! entries, the parallel pair phase) and [`pair_forces_serial`] (the whole list on one thread,
-//! the serial path and the spatial domains). Both call [`pair_response`] per entry and sum the
-//! books per [`ENTRY_CHUNK`] entries, so every strategy gives the same bits.
+//! The pair kernel of the time-driven engine: [`pair_kernel`] is the force of one Verlet-list
+//! entry (the minimum image, the reach test, the damped Hertz contact of Eq. 2.7 and the minimal
+//! capillary bridge of docs/model.md 3.1) with its new flags. The three loops over entries call
+//! it and differ only in where the force goes: [`pair_chunk`] (one chunk of entries into a
+//! buffer, the rayon strategy), [`pair_forces_serial`] (the whole half list, scattered to both
+//! partners: the serial strategy and a domain's inner pairs) and [`cross_forces`] (a domain's
+//! pairs with the other domain, the partner read from its halo). The books are summed per
+//! [`ENTRY_CHUNK`] entries, so every strategy gives the same bits.
 
 use super::neighbours::{BOND, CONTACT};
 use crate::physics::hertz;
@@ -13,10 +15,13 @@ use crate::physics::hertz;
 /// (fixed, so the numbers do not depend on the number of threads).
 pub const ENTRY_CHUNK: usize = 128;
 
-/// What the pair loop needs besides the arrays.
+/// What the pair kernel needs besides the particles' state.
+#[derive(Debug, Clone, Copy)]
 pub(super) struct PairConstants<const D: usize> {
     pub periodic: [bool; D],
     pub size: [f64; D],
+    /// Half the box size per axis (the minimum-image bound).
+    pub half: [f64; D],
     pub stiffness: f64,
     pub damping: f64,
     pub bridge_force: f64,
@@ -38,11 +43,61 @@ pub(super) struct PairBooks {
     pub ruptures: u64,
 }
 
-/// Pair forces (Eq. 2.7 and docs/model.md 3.1) of the Verlet-list entries of one chunk: entry `m`
-/// is the pair `(row_of[m], partner[m])`; its force on the row's particle goes to
-/// `pf[m * D..(m + 1) * D]` (zeros when the pair does not interact), and its contact and bond
-/// flags are updated. A free function of slices so that the compiler keeps every array in a
-/// register (no aliasing through `self`).
+/// One Verlet-list entry, the pair `(i, j)` at positions `xi`, `xj` with radii `ri`, `rj` and
+/// the flags `flag` of the last evaluation; `vrel(k)` is `v_i - v_j` along axis `k` (velocity
+/// array units). `None` when the pair is out of reach and not bonded (its contact flag is
+/// cleared); otherwise its response, with `flag` updated, and the force on `i` (`-` that on
+/// `j`; zeros when the response exerts none).
+#[inline(always)]
+pub(super) fn pair_kernel<const D: usize, const WET: bool>(
+    pc: &PairConstants<D>,
+    xi: &[f64; D],
+    xj: &[f64; D],
+    ri: f64,
+    rj: f64,
+    flag: &mut u8,
+    vrel: impl Fn(usize) -> f64,
+) -> Option<(PairResponse, [f64; D])> {
+    let mut d = [0.0; D];
+    let mut r2 = 0.0;
+    for k in 0..D {
+        let mut dk = xi[k] - xj[k];
+        if pc.periodic[k] {
+            if dk > pc.half[k] {
+                dk -= pc.size[k];
+            } else if dk < -pc.half[k] {
+                dk += pc.size[k];
+            }
+        }
+        d[k] = dk;
+        r2 += dk * dk;
+    }
+    let sig = ri + rj;
+    let fl = *flag;
+    if r2 >= sig * sig && (!WET || fl & BOND == 0) {
+        if fl & CONTACT != 0 {
+            *flag = fl & !CONTACT;
+        }
+        return None;
+    }
+    let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, vrel);
+    if pr.flags != fl {
+        *flag = pr.flags;
+    }
+    let mut force = [0.0; D];
+    if pr.fmag != 0.0 {
+        let s = pr.fmag * pr.inv;
+        for k in 0..D {
+            force[k] = s * d[k];
+        }
+    }
+    Some((pr, force))
+}
+
+/// Pair forces of the Verlet-list entries of one chunk ([`pair_kernel`]): entry `m` is the
+/// pair `(row_of[m], partner[m])`; its force on the row's particle goes to
+/// `pf[m * D..(m + 1) * D]` (zeros when the pair does not interact). A free function of slices
+/// so that the compiler keeps every array in a register (no aliasing through `self`).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn pair_chunk<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
@@ -57,54 +112,21 @@ pub(super) fn pair_chunk<const D: usize, const WET: bool>(
     let n = radius.len();
     let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
     let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
-    let mut half = [0.0; D];
-    for k in 0..D {
-        half[k] = 0.5 * pc.size[k];
-    }
     let mut b = PairBooks::default();
     let len = flags.len();
     let (row_of, partner, pf) = (&row_of[..len], &partner[..len], &mut pf[..len * D]);
     for m in 0..len {
-        let i = row_of[m] as usize;
-        let j = partner[m] as usize;
+        let (i, j) = (row_of[m] as usize, partner[m] as usize);
+        let xi: [f64; D] = std::array::from_fn(|k| xs[k][i]);
+        let xj: [f64; D] = std::array::from_fn(|k| xs[k][j]);
+        let vrel = |k: usize| vsl[k][i] - vsl[k][j];
         let out = &mut pf[m * D..(m + 1) * D];
-        let mut d = [0.0; D];
-        let mut r2 = 0.0;
-        for k in 0..D {
-            let mut dk = xs[k][i] - xs[k][j];
-            if pc.periodic[k] {
-                if dk > half[k] {
-                    dk -= pc.size[k];
-                } else if dk < -half[k] {
-                    dk += pc.size[k];
-                }
+        match pair_kernel::<D, WET>(pc, &xi, &xj, radius[i], radius[j], &mut flags[m], vrel) {
+            Some((pr, force)) => {
+                b.book(&pr);
+                out.copy_from_slice(&force);
             }
-            d[k] = dk;
-            r2 += dk * dk;
-        }
-        let ri = radius[i];
-        let rj = radius[j];
-        let sig = ri + rj;
-        let fl = flags[m];
-        if r2 >= sig * sig && (!WET || fl & BOND == 0) {
-            if fl & CONTACT != 0 {
-                flags[m] = fl & !CONTACT;
-            }
-            out.fill(0.0);
-            continue;
-        }
-        let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| vsl[k][i] - vsl[k][j]);
-        b.book(&pr);
-        if pr.flags != fl {
-            flags[m] = pr.flags;
-        }
-        if pr.fmag != 0.0 {
-            let s = pr.fmag * pr.inv;
-            for k in 0..D {
-                out[k] = s * d[k];
-            }
-        } else {
-            out.fill(0.0);
+            None => out.fill(0.0),
         }
     }
     b
@@ -140,22 +162,23 @@ impl PairBooks {
     /// the serial loop books the sums per chunk of entries itself).
     #[inline(always)]
     pub(super) fn book(&mut self, pr: &PairResponse) {
-        if pr.onset {
-            self.onsets += 1;
-        }
-        if pr.overlap > 0.0 {
-            self.max_overlap = self.max_overlap.max(pr.overlap);
-        }
+        self.book_counts(pr);
         if pr.damped {
             self.dissipated += pr.dissipated;
         }
-        if pr.formation {
-            self.formations += 1;
+        if pr.formation || pr.rupture {
             self.bridge_ledger += pr.ledger;
         }
-        if pr.rupture {
-            self.ruptures += 1;
-            self.bridge_ledger += pr.ledger;
+    }
+
+    /// Books the onset, formation and rupture counts and the largest overlap of a response.
+    #[inline(always)]
+    pub(super) fn book_counts(&mut self, pr: &PairResponse) {
+        self.onsets += u64::from(pr.onset);
+        self.formations += u64::from(pr.formation);
+        self.ruptures += u64::from(pr.rupture);
+        if pr.overlap > 0.0 {
+            self.max_overlap = self.max_overlap.max(pr.overlap);
         }
     }
 }
@@ -232,11 +255,12 @@ pub(super) fn pair_response<const D: usize, const WET: bool>(
     out
 }
 
-/// The pair loop of the serial path ([`TimeEngine::forces_then_serial`]): forces (Eq. 2.7 and
-/// docs/model.md 3.1) over the Verlet list, each pair once (Newton's third law), added to `f` (the
-/// partner's share at once, the row's own sum at the end of its row); updates the contact and
-/// bond flags. The same arithmetic as [`pair_chunk`] and the gather of [`particle_chunk`]; the
-/// dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries as there.
+/// The pair loop of the serial strategy and of a domain's inner pairs: [`pair_kernel`] over the
+/// half list (`rows` the non-empty rows, `start` their entries), each pair once (Newton's third
+/// law), added to `f` (the partner's share at once, the row's own sum at the end of its row:
+/// every particle receives its partners' forces in the order the rayon strategy's gather adds
+/// them). The dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries as in
+/// [`pair_chunk`].
 #[allow(clippy::too_many_arguments)]
 pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
@@ -252,15 +276,9 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     let n = radius.len();
     let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
     let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
-    let mut half = [0.0; D];
-    for k in 0..D {
-        half[k] = 0.5 * pc.size[k];
-    }
     let mut b = PairBooks::default();
     // Partial sums of the current chunk of entries.
     let (mut diss, mut ledger, mut boundary) = (0.0, 0.0, ENTRY_CHUNK);
-    let radius = &radius[..n];
-    let periodic = pc.periodic;
     for &i in rows {
         let i = i as usize;
         let (p0, p1) = (start[i] as usize, start[i + 1] as usize);
@@ -271,74 +289,36 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
         let mut row_force = false;
         let ri = radius[i];
         for q in p0..p1 {
-            // Before booking at entry `q`: close the partial sums of the earlier chunks (only
-            // where something is booked, off the common path; a chunk that booked nothing
-            // would add +0).
-            macro_rules! chunk_of_q {
-                () => {
-                    if q >= boundary {
-                        b.dissipated += diss;
-                        b.bridge_ledger += ledger;
-                        (diss, ledger) = (0.0, 0.0);
-                        boundary = (q / ENTRY_CHUNK + 1) * ENTRY_CHUNK;
-                    }
-                };
-            }
             let j = partner[q] as usize;
-            let mut d = [0.0; D];
-            let mut r2 = 0.0;
-            for k in 0..D {
-                let mut dk = xi[k] - xs[k][j];
-                if periodic[k] {
-                    if dk > half[k] {
-                        dk -= pc.size[k];
-                    } else if dk < -half[k] {
-                        dk += pc.size[k];
-                    }
-                }
-                d[k] = dk;
-                r2 += dk * dk;
-            }
-            let rj = radius[j];
-            let sig = ri + rj;
-            let fl = flags[q];
-            if r2 >= sig * sig && (!WET || fl & BOND == 0) {
-                if fl & CONTACT != 0 {
-                    flags[q] = fl & !CONTACT;
-                }
+            let xj: [f64; D] = std::array::from_fn(|k| xs[k][j]);
+            let vrel = |k: usize| vsl[k][i] - vsl[k][j];
+            let Some((pr, force)) =
+                pair_kernel::<D, WET>(pc, &xi, &xj, ri, radius[j], &mut flags[q], vrel)
+            else {
                 continue;
-            }
-            let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, |k| vsl[k][i] - vsl[k][j]);
-            if pr.onset {
-                b.onsets += 1;
-            }
-            if pr.overlap > 0.0 {
-                b.max_overlap = b.max_overlap.max(pr.overlap);
-            }
-            if pr.damped {
-                chunk_of_q!();
-                diss += pr.dissipated;
-            }
-            if pr.formation {
-                b.formations += 1;
-                chunk_of_q!();
-                ledger += pr.ledger;
-            }
-            if pr.rupture {
-                b.ruptures += 1;
-                chunk_of_q!();
-                ledger += pr.ledger;
-            }
-            if pr.flags != fl {
-                flags[q] = pr.flags;
+            };
+            b.book_counts(&pr);
+            if pr.damped || pr.formation || pr.rupture {
+                // Close the partial sums of the earlier chunks (only where something is
+                // booked, off the common path; a chunk that booked nothing would add +0).
+                if q >= boundary {
+                    b.dissipated += diss;
+                    b.bridge_ledger += ledger;
+                    (diss, ledger) = (0.0, 0.0);
+                    boundary = (q / ENTRY_CHUNK + 1) * ENTRY_CHUNK;
+                }
+                if pr.damped {
+                    diss += pr.dissipated;
+                }
+                if pr.formation || pr.rupture {
+                    ledger += pr.ledger;
+                }
             }
             if pr.fmag != 0.0 {
                 row_force = true;
-                let s = pr.fmag * pr.inv;
                 for k in 0..D {
-                    let fk = s * d[k];
-                    fi[k] += fk;
-                    f[k * n + j] -= fk;
+                    fi[k] += force[k];
+                    f[k * n + j] -= force[k];
                 }
             }
         }
@@ -350,5 +330,47 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     }
     b.dissipated += diss;
     b.bridge_ledger += ledger;
+    b
+}
+
+/// Forces of a domain's cross pairs on its own particles ([`pair_kernel`] with the partner read
+/// from the halo `ghosts`: `2 D` values per ghost, position then velocity array value); entry
+/// `q` is the pair of own particle `own[q]` and ghost `ghost[q]`. Returns the books (the caller
+/// keeps them in one domain only).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn cross_forces<const D: usize, const WET: bool>(
+    pc: &PairConstants<D>,
+    x: &[f64],
+    v: &[f64],
+    f: &mut [f64],
+    radius: &[f64],
+    ghosts: &[f64],
+    ghost_radius: &[f64],
+    own: &[u32],
+    ghost: &[u32],
+    flags: &mut [u8],
+) -> PairBooks {
+    let m = radius.len();
+    let mut b = PairBooks::default();
+    let (own, ghost) = (&own[..flags.len()], &ghost[..flags.len()]);
+    for q in 0..flags.len() {
+        let (i, g) = (own[q] as usize, ghost[q] as usize);
+        let gs = &ghosts[g * 2 * D..(g + 1) * 2 * D];
+        let xi: [f64; D] = std::array::from_fn(|k| x[k * m + i]);
+        let xj: [f64; D] = std::array::from_fn(|k| gs[k]);
+        let vrel = |k: usize| v[k * m + i] - gs[D + k];
+        let rj = ghost_radius[g];
+        let Some((pr, force)) =
+            pair_kernel::<D, WET>(pc, &xi, &xj, radius[i], rj, &mut flags[q], vrel)
+        else {
+            continue;
+        };
+        b.book(&pr);
+        if pr.fmag != 0.0 {
+            for k in 0..D {
+                f[k * m + i] += force[k];
+            }
+        }
+    }
     b
 }

@@ -1,7 +1,8 @@
 //! The Hertz walls of the time-driven engine (docs/model.md 4.1; Eq. 2.7 with `R_eff = R_i`): the
 //! force of the lower and upper wall of one non-periodic axis on a run of particles, with the
 //! contact onsets, the damping's dissipation and the drive's work. One function shared by the
-//! serial and the parallel step (`engine.rs`).
+//! three execution strategies of the engine (`engine/serial.rs`, `engine/rayon_split.rs`,
+//! `domains.rs`).
 //!
 //! Most particles touch no wall at a given step, so the pass first screens blocks of
 //! [`SCREEN_BLOCK`] particles with branch-free compares of the centres against a band from which

@@ -1,5 +1,6 @@
 //! The spatial domains (`domains.rs`) against the serial step and against themselves.
 use super::*;
+use crate::scene::Scene;
 
 /// A shaken wet bed of 360 disks in a 120 x 9 box (bridges form and rupture, across the
 /// cut too).
@@ -15,15 +16,27 @@ fn wet_bed() -> Scene {
 
 type Wet = TimeEngine<2, true, true>;
 
-fn engine(mode: DomainMode) -> Wet {
-    let mut e = Wet::new(&wet_bed());
-    e.set_domain_mode(mode);
-    e.team_door = std::time::Duration::from_secs(60);
+/// Gear steps on the domains whatever the size, or never.
+const ALWAYS: Execution = Execution {
+    domains_from: 0,
+    split_from: PARALLEL_MIN_PARTICLES,
+};
+const NEVER: Execution = Execution {
+    domains_from: usize::MAX,
+    split_from: PARALLEL_MIN_PARTICLES,
+};
+
+/// A door of a minute: every thread of the pool joins the team, even on a loaded machine.
+const LONG_DOOR: std::time::Duration = std::time::Duration::from_secs(60);
+
+fn engine(execution: Execution) -> Wet {
+    let mut e = Wet::new(&wet_bed()).with_execution(execution);
+    e.domains.door = LONG_DOOR;
     e
 }
 
 /// Every bit of the state and of the books.
-fn bits(e: &Wet) -> Vec<u64> {
+fn bits<const D: usize, const W: bool>(e: &TimeEngine<D, true, W>) -> Vec<u64> {
     let mut v: Vec<u64> = e.positions_flat().iter().map(|x| x.to_bits()).collect();
     v.extend(e.velocities_flat().iter().map(|x| x.to_bits()));
     let c = e.counts();
@@ -37,7 +50,7 @@ fn bits(e: &Wet) -> Vec<u64> {
     ]);
     v.extend(e.bridges().iter().flat_map(|&(i, j)| [i as u64, j as u64]));
     // The list checks' state: where the next exact displacement test falls.
-    if let Some(dec) = e.domains.0.as_ref() {
+    if let Some(dec) = e.domains.decomposition.as_ref() {
         for dm in &dec.domains {
             let dm = super::super::domains::lock(dm);
             v.extend([dm.bound.to_bits(), u64::from(dm.since_check)]);
@@ -65,9 +78,29 @@ fn pool(threads: usize) -> rayon::ThreadPool {
         .expect("a pool")
 }
 
+/// Asserts that `split` (on the domains) differs from `serial` (never on the domains) as a
+/// change of the summation order does: the same list builds, counts and bridges, positions
+/// within `1e-9`. Returns the largest position difference.
+fn agree_to_round_off<const D: usize>(
+    serial: &TimeEngine<D, true, true>,
+    split: &TimeEngine<D, true, true>,
+) -> f64 {
+    assert_eq!(serial.list_builds(), split.list_builds());
+    assert_eq!(serial.counts(), split.counts());
+    assert_eq!(serial.bridges(), split.bridges());
+    let (xs, xd) = (serial.positions_flat(), split.positions_flat());
+    let dx = xs
+        .iter()
+        .zip(&xd)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(dx < 1e-9, "positions differ by {dx}");
+    dx
+}
+
 /// The cross pairs bonded in domain 0's copy.
 fn cross_bonds(e: &Wet) -> usize {
-    let dec = e.domains.0.as_ref().expect("a decomposition");
+    let dec = e.domains.decomposition.as_ref().expect("a decomposition");
     let d0 = super::super::domains::lock(&dec.domains[0]);
     d0.cross_flags.iter().filter(|&&f| f & BOND != 0).count()
 }
@@ -76,10 +109,10 @@ fn cross_bonds(e: &Wet) -> usize {
 fn one_two_and_three_threads_give_the_same_bits() {
     let run = |threads: usize| {
         pool(threads).install(|| {
-            let mut e = engine(DomainMode::Always);
+            let mut e = engine(ALWAYS);
             e.run_until(1.0);
             assert!(e.counts().bridge_ruptures > 0, "bridges rupture");
-            (bits(&e), e.team_steps(), e.steps())
+            (bits(&e), e.domains.team_steps, e.steps())
         })
     };
     let (one, team1, _) = run(1);
@@ -99,7 +132,7 @@ fn one_two_and_three_threads_give_the_same_bits() {
 /// The bits after one `run_until(1.0)` of the bed on a pool of `threads`.
 fn bits_of_one_run(threads: usize) -> Vec<u64> {
     pool(threads).install(|| {
-        let mut e = engine(DomainMode::Always);
+        let mut e = engine(ALWAYS);
         e.run_until(1.0);
         bits(&e)
     })
@@ -122,10 +155,14 @@ fn run_in_pieces(e: &mut Wet, piece: f64) {
 fn a_team_of_changing_size_changes_no_number() {
     let one = bits_of_one_run(1);
     let varying = pool(2).install(|| {
-        let mut e = engine(DomainMode::Always);
-        e.team_door = std::time::Duration::from_micros(20);
+        let mut e = engine(ALWAYS);
+        e.domains.door = std::time::Duration::from_micros(20);
         run_in_pieces(&mut e, 0.01);
-        println!("{} of {} steps on a team of two", e.team_steps(), e.steps());
+        println!(
+            "{} of {} steps on a team of two",
+            e.domains.team_steps,
+            e.steps()
+        );
         bits(&e)
     });
     assert!(one == varying, "a team of changing size changes numbers");
@@ -137,9 +174,14 @@ fn a_team_of_changing_size_changes_no_number() {
 #[test]
 fn the_team_builds_the_list_without_leaving_its_region() {
     let (whole, regions, builds, partitions) = pool(2).install(|| {
-        let mut e = engine(DomainMode::Always);
+        let mut e = engine(ALWAYS);
         e.run_until(1.0);
-        (bits(&e), e.regions, e.list_builds(), e.partitions)
+        (
+            bits(&e),
+            e.domains.regions,
+            e.list_builds(),
+            e.domains.partitions,
+        )
     });
     assert!(builds > 20, "{builds} builds");
     assert!(
@@ -147,8 +189,8 @@ fn the_team_builds_the_list_without_leaving_its_region() {
         "{regions} regions for {builds} builds and {partitions} partitions"
     );
     let stepwise = pool(2).install(|| {
-        let mut e = engine(DomainMode::Always);
-        while e.time() < 1.0 - 0.5 * e.p.dt {
+        let mut e = engine(ALWAYS);
+        while e.time() < 1.0 - 0.5 * e.s.p.dt {
             e.step();
         }
         bits(&e)
@@ -160,7 +202,7 @@ fn the_team_builds_the_list_without_leaving_its_region() {
 fn where_regions_end_changes_no_number() {
     let whole = bits_of_one_run(2);
     let pieces = pool(2).install(|| {
-        let mut e = engine(DomainMode::Always);
+        let mut e = engine(ALWAYS);
         run_in_pieces(&mut e, 0.0173);
         bits(&e)
     });
@@ -176,11 +218,11 @@ fn where_regions_end_changes_no_number() {
 #[test]
 fn both_copies_of_a_cross_pair_take_the_same_decisions() {
     pool(1).install(|| {
-        let mut e = engine(DomainMode::Always);
+        let mut e = engine(ALWAYS);
         let mut bonded = 0;
         for k in 1..=20 {
             e.run_until(0.05 * k as f64);
-            let dec = e.domains.0.as_mut().expect("a decomposition");
+            let dec = e.domains.decomposition.as_mut().expect("a decomposition");
             assert!(
                 dec.cross_flags_agree(),
                 "cross flags differ at t = {}",
@@ -203,64 +245,24 @@ fn spheres_on_domains_agree_with_the_serial_step() {
         gamma = 5.0\ne_star = 10.0\n[initial]\ntemperature_over_ecb = 20.0\nseed = 5\n\
         [run]\nduration = 1.0\n[engine]\nkind = \"time\"\n";
     let scene = Scene::from_toml_str(text, "domain test 3D").expect("valid scene");
-    let run = |mode: DomainMode, threads: usize| {
+    let run = |execution: Execution, threads: usize| {
         pool(threads).install(|| {
-            let mut e = TimeEngine::<3, true, true>::new(&scene);
-            e.set_domain_mode(mode);
-            e.team_door = std::time::Duration::from_secs(60);
+            let mut e = TimeEngine::<3, true, true>::new(&scene).with_execution(execution);
+            e.domains.door = LONG_DOOR;
             e.run_until(0.4);
             e
         })
     };
-    let one = run(DomainMode::Always, 1);
-    let two = run(DomainMode::Always, 2);
-    let serial = run(DomainMode::Never, 1);
+    let one = run(ALWAYS, 1);
+    let two = run(ALWAYS, 2);
+    let serial = run(NEVER, 1);
     assert!(
-        two.team_steps() + 1 >= two.steps(),
+        two.domains.team_steps + 1 >= two.steps(),
         "two members ran the steps"
     );
     assert!(one.counts().bridge_formations > 0, "bridges form");
-    let bits = |e: &TimeEngine<3, true, true>| -> Vec<u64> {
-        let mut v: Vec<u64> = e.positions_flat().iter().map(|x| x.to_bits()).collect();
-        v.extend(e.velocities_flat().iter().map(|x| x.to_bits()));
-        let l = e.energy();
-        v.extend(
-            [
-                l.dissipated_restitution,
-                l.dissipated_ruptures,
-                l.work_by_drive,
-            ]
-            .map(f64::to_bits),
-        );
-        v.extend([
-            e.counts().pair_collisions,
-            e.counts().bridge_ruptures,
-            e.list_builds(),
-        ]);
-        v
-    };
     assert!(bits(&one) == bits(&two), "one and two threads differ");
-    assert_eq!(serial.list_builds(), one.list_builds());
-    assert_eq!(
-        serial.counts().pair_collisions,
-        one.counts().pair_collisions
-    );
-    assert_eq!(
-        serial.counts().bridge_formations,
-        one.counts().bridge_formations
-    );
-    assert_eq!(
-        serial.counts().bridge_ruptures,
-        one.counts().bridge_ruptures
-    );
-    assert_eq!(serial.bridges(), one.bridges());
-    let dx = serial
-        .positions_flat()
-        .iter()
-        .zip(&one.positions_flat())
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    assert!(dx < 1e-9, "positions differ by {dx}");
+    agree_to_round_off(&serial, &one);
 }
 
 /// The point of the domains: in the bench system (1200 disks, 400 x 9, cut across x)
@@ -272,7 +274,7 @@ fn the_halo_is_a_small_part_of_the_bench_system() {
     let mut e = TimeEngine::<2, true, false>::new(&s);
     assert!(e.uses_domains(), "N = 1200 runs on the domains by default");
     e.run_until(0.5);
-    let dec = e.domains.0.as_ref().expect("a decomposition");
+    let dec = e.domains.decomposition.as_ref().expect("a decomposition");
     for (d, dm) in dec.domains.iter().enumerate() {
         let dm = super::super::domains::lock(dm);
         let m = dm.ids.len();
@@ -288,7 +290,7 @@ fn the_halo_is_a_small_part_of_the_bench_system() {
     }
     println!(
         "{} partitions over {} list builds",
-        e.partitions,
+        e.domains.partitions,
         e.list_builds()
     );
 }
@@ -299,26 +301,17 @@ fn the_halo_is_a_small_part_of_the_bench_system() {
 /// them.
 #[test]
 fn domains_change_the_serial_trajectory_by_round_off() {
-    let mut serial = engine(DomainMode::Never);
-    let mut split = engine(DomainMode::Always);
+    let mut serial = engine(NEVER);
+    let mut split = engine(ALWAYS);
     let t = 1.2;
     serial.run_until(t);
     split.run_until(t);
-    assert!(split.partitions > 1, "{} partitions", split.partitions);
-    assert_eq!(serial.list_builds(), split.list_builds());
-    let (cs, cd) = (serial.counts(), split.counts());
-    assert_eq!(cs.pair_collisions, cd.pair_collisions);
-    assert_eq!(cs.wall_collisions, cd.wall_collisions);
-    assert_eq!(cs.bridge_formations, cd.bridge_formations);
-    assert_eq!(cs.bridge_ruptures, cd.bridge_ruptures);
-    assert_eq!(serial.bridges(), split.bridges());
-    let (xs, xd) = (serial.positions_flat(), split.positions_flat());
-    let dx = xs
-        .iter()
-        .zip(&xd)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    assert!(dx < 1e-9, "positions differ by {dx}");
+    assert!(
+        split.domains.partitions > 1,
+        "{} partitions",
+        split.domains.partitions
+    );
+    let dx = agree_to_round_off(&serial, &split);
     assert!(dx > 0.0, "the summation order differs, so some bit should");
     let (ls, ld) = (serial.energy(), split.energy());
     for (a, b, what) in [

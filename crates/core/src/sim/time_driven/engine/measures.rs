@@ -8,11 +8,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 {
     /// Energy bookkeeping at the current time (see the module doc for the fields).
     pub fn energy(&self) -> EnergyLedger {
-        let n = self.n;
-        let p = &self.p;
-        let vs = self.velocity_scale();
-        let x = self.x_now();
-        let v = self.v_now();
+        let n = self.s.n;
+        let p = &self.s.p;
+        let vs = self.s.velocity_scale();
+        let x = self.now(0);
+        let v = self.now(1);
         let mut kinetic = 0.0;
         for e in 0..D * n {
             let ve = v[e] * vs;
@@ -26,15 +26,15 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 .sum::<f64>();
         }
         for i in 0..n {
-            for q in self.list.start[i] as usize..self.list.start[i + 1] as usize {
-                let j = self.list.partner[q] as usize;
+            for q in self.s.list.start[i] as usize..self.s.list.start[i + 1] as usize {
+                let j = self.s.list.partner[q] as usize;
                 let r = self.distance(i, j);
-                let sig = self.radius[i] + self.radius[j];
+                let sig = self.s.radius[i] + self.s.radius[j];
                 if r < sig {
-                    let kr = p.stiffness * (self.radius[i] * self.radius[j] / sig).sqrt();
+                    let kr = p.stiffness * (self.s.radius[i] * self.s.radius[j] / sig).sqrt();
                     potential += hertz::elastic_energy(kr, sig - r);
                 }
-                if WET && self.list.flags[q] & BOND != 0 {
+                if WET && self.s.list.flags[q] & BOND != 0 {
                     potential += p.bridge_force * (r - sig);
                 }
             }
@@ -48,10 +48,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             let shift = if k == D - 1 { zw } else { 0.0 };
             for i in 0..n {
                 let xk = x[k * n + i];
-                let ri = self.radius[i];
+                let ri = self.s.radius[i];
                 for ov in [ri - (xk - shift), xk + ri - (p.size[k] + shift)] {
                     if ov > 0.0 {
-                        potential += hertz::elastic_energy(self.wall_kr[i], ov);
+                        potential += hertz::elastic_energy(self.s.wall_kr[i], ov);
                     }
                 }
             }
@@ -59,22 +59,22 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         EnergyLedger {
             kinetic,
             potential,
-            dissipated_restitution: self.dissipated_damping,
-            dissipated_ruptures: self.dissipated_bridges,
+            dissipated_restitution: self.s.dissipated_damping,
+            dissipated_ruptures: self.s.dissipated_bridges,
             added_by_collapse_remedies: 0.0,
             added_by_wall_placement: 0.0,
-            work_by_drive: self.work_by_drive,
+            work_by_drive: self.s.work_by_drive,
         }
     }
 
     /// Centre distance of `i` and `j` (nearest image).
     fn distance(&self, i: usize, j: usize) -> f64 {
-        let n = self.n;
+        let n = self.s.n;
         let mut r2 = 0.0;
         for k in 0..D {
             let mut d = self.now_at(k * n + i).0 - self.now_at(k * n + j).0;
-            if self.p.periodic[k] {
-                let l = self.p.size[k];
+            if self.s.p.periodic[k] {
+                let l = self.s.p.size[k];
                 d -= l * (d / l).round();
             }
             r2 += d * d;
@@ -84,49 +84,51 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 
     /// Total momentum.
     pub fn momentum(&self) -> [f64; D] {
-        let vs = self.velocity_scale();
-        let v = self.v_now();
+        let vs = self.s.velocity_scale();
+        let v = self.now(1);
         std::array::from_fn(|k| {
-            v[k * self.n..(k + 1) * self.n].iter().sum::<f64>() * vs * self.p.mass
+            v[k * self.s.n..(k + 1) * self.s.n].iter().sum::<f64>() * vs * self.s.p.mass
         })
     }
 
     /// Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (Eq. 3.2, `f_d = D`).
     pub fn granular_temperature(&self) -> f64 {
-        let n = self.n as f64;
-        let vs = self.velocity_scale();
+        let n = self.s.n as f64;
+        let vs = self.s.velocity_scale();
         let mut mean_sq = 0.0;
         let mut mean2 = 0.0;
-        let v = self.v_now();
+        let v = self.now(1);
         for k in 0..D {
-            let col = &v[k * self.n..(k + 1) * self.n];
+            let col = &v[k * self.s.n..(k + 1) * self.s.n];
             let m = col.iter().sum::<f64>() * vs / n;
             mean_sq += col.iter().map(|v| v * v).sum::<f64>() * vs * vs / n;
             mean2 += m * m;
         }
-        self.p.mass * (mean_sq - mean2) / D as f64
+        self.s.p.mass * (mean_sq - mean2) / D as f64
     }
 
     /// Positions flat with stride `D`, scene order.
     pub fn positions_flat(&self) -> Vec<f64> {
-        (0..self.n).flat_map(|i| self.position(i)).collect()
+        (0..self.s.n).flat_map(|i| self.position(i)).collect()
     }
 
     /// Velocities flat with stride `D`, scene order.
     pub fn velocities_flat(&self) -> Vec<f64> {
-        (0..self.n).flat_map(|i| self.velocity(i)).collect()
+        (0..self.s.n).flat_map(|i| self.velocity(i)).collect()
     }
 
-    /// Test aid, `O(N^2)`: the first pair that overlaps (or is within `s_crit` of contact in a
-    /// wet scene) but is missing from the Verlet list, which would make its force vanish.
+    /// Test aid (the crate's `testing` feature), `O(N^2)`: the first pair that overlaps (or is
+    /// within `s_crit` of contact in a wet scene) but is missing from the Verlet list, which
+    /// would make its force vanish.
+    #[cfg(any(test, feature = "testing"))]
     pub fn pair_missing_from_list(&self) -> Option<(usize, usize)> {
-        let reach = if WET { self.p.s_crit } else { 0.0 };
-        for i in 0..self.n {
-            let row =
-                &self.list.partner[self.list.start[i] as usize..self.list.start[i + 1] as usize];
-            for j in i + 1..self.n {
+        let reach = if WET { self.s.p.s_crit } else { 0.0 };
+        for i in 0..self.s.n {
+            let row = &self.s.list.partner
+                [self.s.list.start[i] as usize..self.s.list.start[i + 1] as usize];
+            for j in i + 1..self.s.n {
                 let r = self.distance(i, j);
-                if r < self.radius[i] + self.radius[j] + reach
+                if r < self.s.radius[i] + self.s.radius[j] + reach
                     && row.binary_search(&(j as u32)).is_err()
                 {
                     return Some((i, j));
@@ -141,11 +143,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// bridge stretched beyond `s_crit` by more than the same amount; no pair in contact or
     /// bonded lost from the neighbour list. Returns the first violation.
     pub fn sanity_check(&self) -> Result<(), String> {
-        let n = self.n;
+        let n = self.s.n;
         let t = self.time();
-        let tol = SANITY_OVERLAP * self.p.diameter;
-        let zw = self.p.drive.map_or(0.0, |(a, w)| a * (w * t).sin());
-        if let Some((i, j)) = self.list.lost_pair {
+        let tol = SANITY_OVERLAP * self.s.p.diameter;
+        let zw = self.s.p.drive.map_or(0.0, |(a, w)| a * (w * t).sin());
+        if let Some((i, j)) = self.s.list.lost_pair {
             return Err(format!(
                 "flagged pair {i}-{j} (in contact or bonded) left the neighbour list: it moved \
                  apart by more than the skin between two list builds, a blown-up run (engine.dt \
@@ -159,13 +161,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
                 return Err(format!("particle {i} has a non-finite state at t = {t}"));
             }
             for k in 0..D {
-                let (lo, hi) = if self.p.periodic[k] {
-                    (0.0, self.p.size[k])
+                let (lo, hi) = if self.s.p.periodic[k] {
+                    (0.0, self.s.p.size[k])
                 } else {
                     let s = if k == D - 1 { zw } else { 0.0 };
                     (
-                        s + self.radius[i] - tol,
-                        self.p.size[k] + s - self.radius[i] + tol,
+                        s + self.s.radius[i] - tol,
+                        self.s.p.size[k] + s - self.s.radius[i] + tol,
                     )
                 };
                 if x[k] < lo || x[k] > hi {
@@ -177,20 +179,20 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             }
         }
         for i in 0..n {
-            for q in self.list.start[i] as usize..self.list.start[i + 1] as usize {
-                let j = self.list.partner[q] as usize;
+            for q in self.s.list.start[i] as usize..self.s.list.start[i + 1] as usize {
+                let j = self.s.list.partner[q] as usize;
                 let r = self.distance(i, j);
-                let sig = self.radius[i] + self.radius[j];
+                let sig = self.s.radius[i] + self.s.radius[j];
                 if sig - r > tol {
                     return Err(format!(
                         "particles {i} and {j} overlap by {} at t = {t}",
                         sig - r
                     ));
                 }
-                if WET && self.list.flags[q] & BOND != 0 && r - sig > self.p.s_crit + tol {
+                if WET && self.s.list.flags[q] & BOND != 0 && r - sig > self.s.p.s_crit + tol {
                     return Err(format!(
                         "bonded pair {i}-{j} stretched beyond s_crit by {} at t = {t}",
-                        r - sig - self.p.s_crit
+                        r - sig - self.s.p.s_crit
                     ));
                 }
             }

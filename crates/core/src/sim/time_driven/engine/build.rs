@@ -1,0 +1,254 @@
+//! Construction and state I/O of the time-driven engine: the engine from a scene or from a
+//! saved state (`sim::state`), the execution strategies chosen at construction, and the
+//! overwriting of one particle's state. Nothing here steps.
+
+use super::stepping::Then;
+use super::*;
+use crate::scene::{Boundary, DEFAULT_SKIN, DEFAULT_STIFFNESS, Scene};
+use crate::sim::initial::{InitialState, initial_state};
+use crate::sim::time_driven::integrator::{GEAR5, GEAR5_C0_VELOCITY_DEPENDENT};
+
+impl<const D: usize, const GRAV: bool, const WET: bool> TimeEngine<D, GRAV, WET, NoBodyForce> {
+    /// Builds the engine for a validated scene with `engine.kind = "time"`.
+    pub fn new(scene: &Scene) -> Self {
+        Self::with_body_force(scene, NoBodyForce)
+    }
+
+    /// Rebuilds the engine from a saved state ([`Self::from_state_with_body_force`]).
+    pub fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
+        Self::from_state_with_body_force(scene, state, NoBodyForce)
+    }
+}
+
+impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
+    TimeEngine<D, GRAV, WET, B>
+{
+    /// Builds the engine with a body force.
+    pub fn with_body_force(scene: &Scene, body: B) -> Self {
+        Self::assemble(scene, initial_state(scene), None, body)
+    }
+
+    /// Rebuilds the engine from a saved state (`sim::state`): positions, velocities, radii and
+    /// the bridges (flagged bonded in the neighbour list) at the state's time, rounded to a
+    /// whole number of steps; event counts and energy ledger continued. The Gear derivatives
+    /// beyond the velocity are re-initialised as at a start (`r_2` from the forces, higher
+    /// ones zero), so the continuation is physically continuous (same positions, velocities,
+    /// bridges and energy) but not identical to an uninterrupted run; contacts overlapping at
+    /// the state count as new contact onsets.
+    pub fn from_state_with_body_force(
+        scene: &Scene,
+        state: &crate::sim::EngineState,
+        body: B,
+    ) -> Self {
+        let d = scene.dimension;
+        let init = InitialState {
+            radius: state.radii.clone(),
+            position: state.positions.chunks(d).map(<[f64]>::to_vec).collect(),
+            velocity: state.velocities.chunks(d).map(<[f64]>::to_vec).collect(),
+        };
+        Self::assemble(scene, init, Some(state), body)
+    }
+
+    /// The engine with the execution strategies of `execution` (instead of the default),
+    /// chosen as it is built: before its first step.
+    #[must_use]
+    pub fn with_execution(mut self, execution: Execution) -> Self {
+        self.execution = execution;
+        self
+    }
+
+    fn assemble(
+        scene: &Scene,
+        init: InitialState,
+        start: Option<&crate::sim::EngineState>,
+        body: B,
+    ) -> Self {
+        assert_eq!(scene.dimension, D, "scene dimension does not match");
+        assert_eq!(GRAV, scene.gravity > 0.0, "gravity flag does not match");
+        assert_eq!(WET, scene.is_wet(), "capillary flag does not match");
+        let n = init.radius.len();
+        let p = Params::of_scene(scene, &init.radius);
+        let list = neighbour_list(scene, &p, n);
+        let mut r: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; D * n]);
+        for i in 0..n {
+            for k in 0..D {
+                r[0][k * n + i] = init.position[i][k];
+                r[1][k * n + i] = init.velocity[i][k];
+            }
+        }
+        let wall_kr = init
+            .radius
+            .iter()
+            .map(|&ri| p.stiffness * ri.sqrt())
+            .collect();
+        let s = State {
+            p,
+            n,
+            steps: 0,
+            r,
+            predicted: false,
+            acc: vec![0.0; D * n],
+            acc_is_start: false,
+            radius: init.radius,
+            wall_kr,
+            wall_contact: vec![0; D * n],
+            list,
+            moved_bound: 0.0,
+            since_check: 0,
+            counts: EventCounts::default(),
+            dissipated_damping: 0.0,
+            dissipated_bridges: 0.0,
+            work_by_drive: 0.0,
+            max_overlap: 0.0,
+            body,
+        };
+        let mut engine = Self {
+            s,
+            execution: Execution::default(),
+            rayon: RayonSplit::default(),
+            domains: Domains::default(),
+        };
+        engine.s.list.build(&engine.s.r[0], &engine.s.radius);
+        if let Some(st) = start {
+            engine.s.continue_from(st);
+        }
+        // Initial accelerations; the bookkeeping of this evaluation is not a step (dt = 0).
+        let t0 = engine.time();
+        engine.forces_then(t0, 1.0, 0.0, Then::Nothing);
+        if engine.s.p.integrator == IntegratorKind::Gear5 {
+            let dt = engine.s.p.dt;
+            let s = &mut engine.s;
+            for e in 0..D * n {
+                s.r[1][e] *= dt;
+                s.r[2][e] = 0.5 * dt * dt * s.acc[e];
+            }
+        }
+        engine
+    }
+
+    /// Overwrites position and velocity of particle `i` (tests and set-ups); the higher Gear
+    /// derivatives are reset to zero and the neighbour list rebuilt.
+    pub fn set_state(&mut self, i: usize, x: [f64; D], v: [f64; D]) {
+        let n = self.s.n;
+        let dt = self.s.p.dt;
+        if self.s.predicted {
+            // Back to the corrected state of the current step: the inverse of the predictor.
+            for e in 0..D * n {
+                let (x, _) = self.now_at(e);
+                let a = gear_unpredict(std::array::from_fn(|k| self.s.r[k][e]));
+                for (k, ak) in a.into_iter().enumerate() {
+                    self.s.r[k][e] = ak;
+                }
+                self.s.r[0][e] = x;
+            }
+            self.s.predicted = false;
+        }
+        let s = &mut self.s;
+        for k in 0..D {
+            s.r[0][k * n + i] = x[k];
+            s.r[1][k * n + i] = match s.p.integrator {
+                IntegratorKind::Gear5 => v[k] * dt,
+                IntegratorKind::Verlet => v[k],
+            };
+            for r in &mut s.r[2..] {
+                r[k * n + i] = 0.0;
+            }
+        }
+        s.list.build(&s.r[0], &s.radius);
+        s.moved_bound = 0.0;
+        self.domains.forget();
+        let t = self.time();
+        self.forces_then(t, self.s.velocity_scale(), 0.0, Then::Nothing);
+        if self.s.p.integrator == IntegratorKind::Gear5 {
+            let s = &mut self.s;
+            for e in 0..D * n {
+                s.r[2][e] = 0.5 * dt * dt * s.acc[e];
+            }
+        }
+    }
+}
+
+impl<const D: usize, const GRAV: bool, const WET: bool, B> State<D, GRAV, WET, B> {
+    /// Continues the clock, the bridges and the books of a saved state.
+    fn continue_from(&mut self, st: &crate::sim::EngineState) {
+        self.steps = (st.time / self.p.dt).round() as u64;
+        if WET {
+            for &(i, j) in &st.bridges {
+                assert!(
+                    self.list.set_flag(i, j, BOND),
+                    "saved bridge {i}-{j} is beyond the interaction range"
+                );
+            }
+        }
+        self.counts = st.counts.clone();
+        self.dissipated_damping = st.ledger.dissipated_restitution;
+        self.dissipated_bridges = st.ledger.dissipated_ruptures;
+        self.work_by_drive = st.ledger.work_by_drive;
+    }
+}
+
+impl<const D: usize> Params<D> {
+    /// The parameters of a validated scene whose particles have radii `radius`.
+    fn of_scene(scene: &Scene, radius: &[f64]) -> Self {
+        let boundaries = scene.boundaries();
+        let mut size = [0.0; D];
+        let mut periodic = [false; D];
+        for k in 0..D {
+            size[k] = scene.container.size[k];
+            periodic[k] = boundaries[k] == Boundary::Periodic;
+        }
+        let (damping, wall_damping) = crate::sim::time_driven::damping::contact_damping(scene);
+        let mut gear = GEAR5;
+        if damping > 0.0 || wall_damping > 0.0 {
+            gear[0] = GEAR5_C0_VELOCITY_DEPENDENT;
+        }
+        let s_crit = scene.s_crit();
+        Self {
+            size,
+            periodic,
+            gravity: scene.gravity,
+            mass: scene.particles.mass,
+            dt: scene.time_step(),
+            integrator: scene.engine.integrator.unwrap_or_default(),
+            gear,
+            stiffness: scene.contact.stiffness.unwrap_or(DEFAULT_STIFFNESS),
+            damping,
+            wall_damping,
+            s_crit,
+            bridge_force: if scene.is_wet() {
+                hertz::bridge_force(scene.e_cb(), s_crit)
+            } else {
+                0.0
+            },
+            drive: scene.drive_motion(),
+            diameter: scene.particles.diameter,
+            max_radius: radius.iter().fold(0.0, |a: f64, &r| a.max(r)),
+        }
+    }
+}
+
+/// The empty Verlet list of the scene for `n` particles: reach `s_crit` plus the skin, cells
+/// spanning the box and, on the walled axes, the walls' travel and one diameter beyond.
+fn neighbour_list<const D: usize>(scene: &Scene, p: &Params<D>, n: usize) -> NeighbourList<D> {
+    let skin = scene.engine.skin.unwrap_or(DEFAULT_SKIN) * scene.particles.diameter;
+    let (_, d_max) = scene.diameter_range();
+    let amp = p.drive.map_or(0.0, |(a, _)| a.abs());
+    let mut lower = [0.0; D];
+    let mut upper = p.size;
+    for k in 0..D {
+        if !p.periodic[k] {
+            lower[k] = -amp - d_max;
+            upper[k] = p.size[k] + amp + d_max;
+        }
+    }
+    NeighbourList::new(
+        n,
+        p.size,
+        p.periodic,
+        lower,
+        upper,
+        p.s_crit + skin,
+        skin,
+        d_max + p.s_crit + skin,
+    )
+}
