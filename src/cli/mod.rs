@@ -5,6 +5,7 @@
 mod cluster_cmd;
 mod common;
 mod extend_cmd;
+mod interrupt;
 pub mod point_cmd;
 mod reclassify_cmd;
 mod refine_cmd;
@@ -17,7 +18,7 @@ use sweep_cmd::SweepCommand;
 use crate::boundary::Extraction;
 use crate::report::ColourBy;
 use clap::{Parser, Subcommand};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// Phase diagrams of wet granular matter.
@@ -55,7 +56,8 @@ pub enum Command {
     /// replicas at both ends agreeing with their point's majority). Unconverged points are marked
     /// `?` and carry no boundary unless asked (`--include-unconverged`).
     Boundaries {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// Only this sweep (default: all).
         #[arg(long)]
@@ -74,7 +76,8 @@ pub enum Command {
     /// span each boundary point's straddling edge; unconverged points are drawn hollow and carry
     /// no boundary unless asked.
     Plot {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// The sweep (default: the one registered or updated last).
         #[arg(long)]
@@ -92,7 +95,8 @@ pub enum Command {
     /// stored spec (same spec and seed, same numbers: the event count is compared with the
     /// stored run's) and draws its final configuration.
     Show {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// The job: at least 6 leading hex digits of its id (`wetgran export` lists ids).
         job: String,
@@ -109,7 +113,8 @@ pub enum Command {
     /// The fluid-gas boundary of inelastic systems: the inflection point of T_g/E_cb against
     /// E* along each line of constant Gamma of a sweep (docs/model.md 7).
     Inflection {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// Only this sweep (default: all).
         #[arg(long)]
@@ -121,7 +126,8 @@ pub enum Command {
     /// trust mark, and the scalar observables as dotted `obs.` columns (series to --series FILE
     /// in long format), or JSON with everything nested.
     Export {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// Only this sweep (default: all).
         #[arg(long)]
@@ -149,7 +155,8 @@ pub enum Command {
         /// Thresholds file (TOML).
         #[arg(long, value_name = "FILE")]
         classify: Option<PathBuf>,
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
     },
 }
@@ -172,9 +179,39 @@ pub enum JobCommand {
     },
 }
 
+impl Command {
+    /// The `--db` paths of the command, each with whether the command may create it.
+    fn databases(&self) -> Vec<(&Path, bool)> {
+        use SweepCommand as S;
+        match self {
+            Command::Boundaries { db, .. }
+            | Command::Plot { db, .. }
+            | Command::Show { db, .. }
+            | Command::Inflection { db, .. }
+            | Command::Export { db, .. }
+            | Command::Reclassify { db, .. } => vec![(db.as_path(), false)],
+            Command::Sweep { action } => match action {
+                S::Run { db, .. } | S::Submit { db, .. } => vec![(db.as_path(), true)],
+                S::Resume { db, .. }
+                | S::Status { db, .. }
+                | S::Refine { db, .. }
+                | S::Collect { db, .. } => vec![(db.as_path(), false)],
+                S::Estimate { db, .. } => db.iter().map(|d| (d.as_path(), false)).collect(),
+                S::Expand { .. } | S::Job { .. } => Vec::new(),
+            },
+            Command::Simulate(_) | Command::Job { .. } => Vec::new(),
+        }
+    }
+}
+
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    for (db, creates) in cli.command.databases() {
+        if let Err(f) = common::folder_of_database(db, creates) {
+            return exit(Err(f));
+        }
+    }
     match cli.command {
         Command::Simulate(args) => simulate_cmd::simulate(args),
         Command::Sweep { action } => sweep(action),

@@ -48,7 +48,7 @@ pub fn show(
 ) -> ExitCode {
     exit((|| {
         check_snapshot_names(snapshot)?;
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let (sweep, p) = find_job(&store, job)?;
         print!("{}", job_text(&sweep, &p));
         let observables: Option<Observables> = match &p.observables {
@@ -103,7 +103,7 @@ pub fn show(
 /// `wetgran inflection`.
 pub fn inflection(db: &Path, name: Option<&str>) -> ExitCode {
     exit((|| {
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         for s in select(&store, name)? {
             print!(
                 "{}",

@@ -47,8 +47,8 @@ pub enum SweepCommand {
     Run {
         /// The sweep file.
         file: PathBuf,
-        /// Database file (created if missing).
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
         #[arg(long)]
@@ -78,7 +78,8 @@ pub enum SweepCommand {
     Resume {
         /// The sweep to continue (default: all).
         name: Option<String>,
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// Worker threads (default: the available cores).
         #[arg(long)]
@@ -106,7 +107,8 @@ pub enum SweepCommand {
     },
     /// Per sweep: jobs by state, failures with their message, time spent and time left.
     Status {
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
     },
     /// Print the jobs a sweep file expands to, without running anything.
@@ -162,7 +164,8 @@ pub enum SweepCommand {
         /// The sweep (default: the only one in the database).
         #[arg(long)]
         sweep: Option<String>,
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// Jobs to add (default: what is left of the sweep file's `[refine]` budget).
         #[arg(long)]
@@ -220,8 +223,8 @@ pub enum SweepCommand {
         /// Print the array script(s) and submit nothing (nothing is written).
         #[arg(long)]
         dry_run: bool,
-        /// Database file (created if missing).
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// The sweep directory (default: `wetgran-slurm/<sweep name>` beside the database).
         #[arg(long)]
@@ -237,7 +240,8 @@ pub enum SweepCommand {
     /// killed at a limit, node failure); `sweep submit` submits those again. Exit status 4 when
     /// failed or lost jobs remain (tasks still queued are no failure).
     Collect {
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// Only this sweep (default: all).
         #[arg(long)]
@@ -280,8 +284,8 @@ pub(super) fn sweep_run(
     let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
     // a sync"): everything it writes can be made again from the sweep file.
-    super::common::folder_of_new_database(db)?;
     let store = Store::open_as(db, true, Durability::Fast)?;
+    super::interrupt::resume_hint_on_interrupt(Some(&sweep.name), db);
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, replace)?;
     }
@@ -331,6 +335,7 @@ pub(super) fn sweep_resume(
     table_cache_mib: usize,
 ) -> Result<(), Failure> {
     let store = Store::open_as(db, false, Durability::Fast)?;
+    super::interrupt::resume_hint_on_interrupt(name, db);
     let sweeps = match name {
         Some(n) => vec![store.sweep(n)?],
         None => store.sweeps()?,
@@ -431,7 +436,7 @@ pub fn status_text(store: &Store) -> Result<String, StoreError> {
 }
 
 pub(super) fn sweep_status(db: &Path) -> Result<(), Failure> {
-    let store = Store::open_existing(db)?;
+    let store = Store::open_read_only(db)?;
     print!("{}", status_text(&store)?);
     for s in store.sweeps()? {
         let tasks = store.tasks(s.id)?;
@@ -490,7 +495,7 @@ pub(super) fn sweep_estimate(
     jobs.retain(|j| seen.insert(j.id.clone()));
     let mut stored = std::collections::HashMap::new();
     for path in dbs {
-        stored.extend(Store::open_existing(path)?.finished_job_costs()?);
+        stored.extend(Store::open_read_only(path)?.finished_job_costs()?);
     }
     let planned = planned_jobs(&sweep, &jobs, &stored);
     // Every start mode is sampled (a hot and a cold branch cost different rates).
@@ -711,7 +716,7 @@ pub fn boundaries(
     how: Extraction,
 ) -> ExitCode {
     exit((|| {
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let sweeps = select(&store, name)?;
         let mut maps = Vec::new();
         let mut points = Vec::new();
@@ -748,7 +753,7 @@ pub fn boundaries(
 /// `wetgran plot`.
 pub fn plot(db: &Path, name: Option<&str>, output: &Path, how: Extraction) -> ExitCode {
     exit((|| {
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let sweep = match name {
             Some(n) => store.sweep(n)?,
             None => {
@@ -851,7 +856,7 @@ pub fn export(
                 "--series goes with --format csv (the JSON export holds the series)".to_string(),
             ));
         }
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let sweeps = select(&store, name)?;
         let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
         let cannot_write =

@@ -23,6 +23,8 @@ macro_rules! queries {
 }
 
 queries! {
+    /// The versions of the applied migrations (read-only opens).
+    APPLIED_MIGRATIONS = "applied_migrations";
     /// Every job's id and stored spec, oldest first (re-keying).
     ALL_JOB_SPECS = "all_job_specs";
     /// Opens a write transaction, taking the write lock at once.
