@@ -62,6 +62,10 @@ pub enum Command {
         /// Only this sweep (default: all).
         #[arg(long)]
         sweep: Option<String>,
+        /// Print JSON (every sweep's map: points, labels, boundaries) instead of the table.
+        #[arg(long, conflicts_with = "format")]
+        json: bool,
+        /// `table`, or `csv` (one row per boundary point); `json` is `--json`.
         #[arg(long, value_enum, default_value = "table")]
         format: sweep_cmd::BoundaryFormat,
         /// Let unconverged points (marked `?`) carry boundaries too; by default a boundary
@@ -109,6 +113,10 @@ pub enum Command {
         /// Write the lateral profiles (T_g, packing fraction, n_cb against x) as SVG.
         #[arg(long)]
         profiles: Option<PathBuf>,
+        /// Print JSON (one object: the job, its phase and what it was decided on, the files
+        /// written) instead of the text.
+        #[arg(long)]
+        json: bool,
     },
     /// The fluid-gas boundary of inelastic systems: the inflection point of T_g/E_cb against
     /// E* along each line of constant Gamma of a sweep (docs/model.md 7).
@@ -119,6 +127,9 @@ pub enum Command {
         /// Only this sweep (default: all).
         #[arg(long)]
         sweep: Option<String>,
+        /// Print JSON (an array, one object per sweep with its lines) instead of the table.
+        #[arg(long)]
+        json: bool,
     },
     /// Export all finished jobs with their parameters, phase and observables.
     ///
@@ -132,6 +143,10 @@ pub enum Command {
         /// Only this sweep (default: all).
         #[arg(long)]
         sweep: Option<String>,
+        /// Write JSON (everything nested, the series included) instead of CSV.
+        #[arg(long, conflicts_with = "format")]
+        json: bool,
+        /// `csv`; `json` is `--json`.
         #[arg(long, value_enum, default_value = "csv")]
         format: sweep_cmd::ExportFormat,
         /// Write to this file instead of standard output.
@@ -221,12 +236,17 @@ pub fn main() -> ExitCode {
         Command::Boundaries {
             db,
             sweep,
+            json,
             format,
             include_unconverged,
         } => sweep_cmd::boundaries(
             &db,
             sweep.as_deref(),
-            format,
+            if json {
+                sweep_cmd::BoundaryFormat::Json
+            } else {
+                format
+            },
             Extraction {
                 include_unconverged,
             },
@@ -247,13 +267,18 @@ pub fn main() -> ExitCode {
         Command::Export {
             db,
             sweep,
+            json,
             format,
             output,
             series,
         } => sweep_cmd::export(
             &db,
             sweep.as_deref(),
-            format,
+            if json {
+                sweep_cmd::ExportFormat::Json
+            } else {
+                format
+            },
             output.as_deref(),
             series.as_deref(),
         ),
@@ -263,14 +288,17 @@ pub fn main() -> ExitCode {
             snapshot,
             colour_by,
             profiles,
+            json,
         } => match colour_by.parse::<ColourBy>() {
-            Ok(c) => point_cmd::show(&db, &job, &snapshot, c, profiles.as_deref()),
+            Ok(c) => point_cmd::show(&db, &job, &snapshot, c, profiles.as_deref(), json),
             Err(e) => {
                 eprintln!("error: --colour-by: {e}");
                 ExitCode::from(2)
             }
         },
-        Command::Inflection { db, sweep } => point_cmd::inflection(&db, sweep.as_deref()),
+        Command::Inflection { db, sweep, json } => {
+            point_cmd::inflection(&db, sweep.as_deref(), json)
+        }
         Command::Reclassify {
             sweep,
             classify,
@@ -316,7 +344,7 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
                 table_cache_mib,
             )
         }),
-        SweepCommand::Status { db } => sweep_cmd::sweep_status(&db),
+        SweepCommand::Status { db, json } => sweep_cmd::sweep_status(&db, json),
         SweepCommand::Expand { file, specs } => sweep_cmd::sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_cmd::sweep_job(&spec),
         SweepCommand::Submit {

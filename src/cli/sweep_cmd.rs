@@ -13,15 +13,14 @@ use crate::report::boundaries_text::{
 };
 use crate::report::cluster_text::slurm_status_text;
 use crate::report::sweep_text::{
-    coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
-    estimate_stored_text, estimate_text, sweep_status_text,
+    StatusInput, coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
+    estimate_stored_text, estimate_text, sweep_status_json, sweep_status_text,
 };
 use crate::report::{export, plot_phase};
 use crate::run::{RunOptions, run_sweeps};
-use crate::store::{Durability, PointSummary, Store, StoreError, SweepRow};
+use crate::store::{Durability, PointSummary, Store, SweepRow};
 use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
-use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -106,7 +105,14 @@ pub enum SweepCommand {
         table_cache_mib: usize,
     },
     /// Per sweep: jobs by state, failures with their message, time spent and time left.
+    ///
+    /// A running job whose runner is gone (its process no longer exists on this host) or silent
+    /// (no heartbeat for 60 s) is shown as stale, with its heartbeat's age: `sweep resume`
+    /// runs it again.
     Status {
+        /// Print JSON (an array, one object per sweep) instead of the text.
+        #[arg(long)]
+        json: bool,
         /// Database file; also from WETGRAN_DB (the flag wins).
         #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
@@ -418,34 +424,54 @@ fn run_and_report(
     Ok(())
 }
 
-/// The text of `sweep status` (without the Slurm part).
-pub fn status_text(store: &Store) -> Result<String, StoreError> {
-    let mut out = String::new();
+/// `sweep status` of every sweep of the database: the text (without the Slurm part), or with
+/// `json` one JSON array of the sweeps (`sweep_status_json`, each with its Slurm tasks' text
+/// under `slurm`).
+pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
+    let store = Store::open_read_only(db)?;
     let sweeps = store.sweeps()?;
-    if sweeps.is_empty() {
-        let _ = writeln!(out, "{}: no sweeps yet", store.path().display());
+    if sweeps.is_empty() && !json {
+        println!("{}: no sweeps yet", store.path().display());
     }
     let cores = available_cores();
+    let now = crate::store::now();
+    let mut all = Vec::new();
     for s in &sweeps {
-        let points = store.point_summaries(s)?;
-        let c = crate::store::StateCounts::of_summaries(&points);
-        let spent = store.time_spent(s.id)?;
-        out.push_str(&sweep_status_text(s, &c, &points, spent, cores));
-    }
-    Ok(out)
-}
-
-pub(super) fn sweep_status(db: &Path) -> Result<(), Failure> {
-    let store = Store::open_read_only(db)?;
-    print!("{}", status_text(&store)?);
-    for s in store.sweeps()? {
+        let (points, spent) = store.status_summaries(s)?;
+        let running = store.running_jobs(s.id)?;
+        let input = StatusInput {
+            sweep: s,
+            counts: crate::store::StateCounts::of_summaries(&points),
+            points: &points,
+            spent,
+            cores,
+            running: &running,
+            now,
+        };
         let tasks = store.tasks(s.id)?;
-        let queue = crate::cluster::queue_states(&tasks, &mut crate::cluster::slurm::squeue);
-        let text = slurm_status_text(&tasks, &queue);
-        if !text.is_empty() {
-            println!("sweep {} on Slurm", s.name);
-            print!("{text}");
+        let slurm = if tasks.is_empty() {
+            String::new()
+        } else {
+            let queue = crate::cluster::queue_states(&tasks, &mut crate::cluster::slurm::squeue);
+            slurm_status_text(&tasks, &queue)
+        };
+        if json {
+            let mut v = sweep_status_json(&input);
+            v["slurm"] = (!slurm.is_empty()).then_some(slurm).into();
+            all.push(v);
+        } else {
+            print!("{}", sweep_status_text(&input));
+            if !slurm.is_empty() {
+                println!("sweep {} on Slurm", s.name);
+                print!("{slurm}");
+            }
         }
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&all).expect("serializes")
+        );
     }
     Ok(())
 }
@@ -853,7 +879,8 @@ pub fn export(
     exit((|| {
         if let (ExportFormat::Json, Some(_)) = (format, series) {
             return Err(Failure::BadInput(
-                "--series goes with --format csv (the JSON export holds the series)".to_string(),
+                "--series goes with the CSV export (with --json the JSON holds the series)"
+                    .to_string(),
             ));
         }
         let store = Store::open_read_only(db)?;
@@ -939,7 +966,7 @@ pub fn export(
         if let (ExportFormat::Csv, None) = (format, series) {
             eprintln!(
                 "export: scalar columns only; the series (time series, profiles) go to \
-                 --series FILE or --format json"
+                 --series FILE or --json"
             );
         }
         Ok(())

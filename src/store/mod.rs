@@ -47,10 +47,12 @@ mod queries;
 #[cfg(test)]
 mod query_plans;
 mod read_only;
+mod stale;
 mod summary;
 
 pub use cluster::{TaskRow, TaskState};
 pub use read_only::{ReadAccess, read_access};
+pub use stale::{RunningJob, Stale};
 pub use summary::{PointSummary, axis_keeps_report_scene, unconverged_summaries};
 
 use crate::sweep::file::{Axis, SweepFile};

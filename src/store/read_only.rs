@@ -28,10 +28,6 @@ use sqlx::sqlite::{SqliteConnectOptions, SqlitePoolOptions};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-/// Page cache of a read-only connection, KiB: the reports read each page once, so a large cache
-/// would only hold memory (the writers' is `CACHE_KIB`).
-const READ_CACHE_KIB: u32 = 8 * 1024;
-
 /// How a read-only open reaches the file (module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ReadAccess {
@@ -116,7 +112,7 @@ impl Store {
             .read_only(true)
             .immutable(access == ReadAccess::Immutable)
             .busy_timeout(busy)
-            .pragma("cache_size", format!("-{READ_CACHE_KIB}"));
+            .pragma("cache_size", format!("-{}", super::CACHE_KIB));
         let pool = rt
             .block_on(
                 SqlitePoolOptions::new()
