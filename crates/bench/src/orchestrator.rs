@@ -24,9 +24,11 @@
 //! `reclassify` (those named by `--reports`), each the median of `--repeat` runs.
 //!
 //! With `refine` among the reports: one refinement round, in this process, as
-//! `refine::driver::refine_sweep` makes it (the line rule's relabelling of every stored result,
-//! reading the rows, planning, adding the jobs, running them with the stand-in), each part
-//! timed; its budget is a tenth of the sweep. So that the map has boundaries to refine, the
+//! `refine::driver::refine_sweep` makes it (reading the rows, planning, adding the jobs, running
+//! them with the stand-in, and the relabelling of every stored result by the classifier and the
+//! line rule that starts each round), each part timed; its budget is a tenth of the sweep. The
+//! relabelling is timed last: it gives every stand-in result one label (their observables are
+//! one run's), which would leave no boundary to plan on. So that the map has boundaries to refine, the
 //! stand-in results are then marked stationary (`stationarity.stationary`,
 //! `convergence.converged`), which every report also sees.
 
@@ -157,9 +159,6 @@ fn refine_round(
     let e = |e: &dyn std::fmt::Display| e.to_string();
     let rows_of = std::slice::from_ref(row);
     let t0 = Instant::now();
-    wetgran::run::relabel::relabel_stored(store, rows_of, None).map_err(|x| e(&x))?;
-    let relabel_s = t0.elapsed().as_secs_f64();
-    let t0 = Instant::now();
     let rows = store.points(row.id).map_err(|x| e(&x))?;
     let settings = wetgran::refine::Settings {
         replicas: row.replicas,
@@ -183,6 +182,11 @@ fn refine_round(
             jobs.len()
         ));
     }
+    // Last: the classifier gives every stand-in result the same label (their observables are
+    // one run's), which would leave no boundary to plan on.
+    let t0 = Instant::now();
+    wetgran::run::relabel::relabel_stored(store, rows_of, None).map_err(|x| e(&x))?;
+    let relabel_s = t0.elapsed().as_secs_f64();
     Ok(RefineRound {
         relabel_s,
         plan_s,
