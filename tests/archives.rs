@@ -235,10 +235,11 @@ fn a_runner_killed_with_9_shows_as_stale_with_its_heartbeat_age() {
     let (mut child, _) = runner_midway(&sweep, &db, 1);
     // Until the next job is claimed.
     let t0 = std::time::Instant::now();
-    while !json_of(&expect(&["sweep", "status", "--db", d, "--json"], 0))[0]["jobs"]["running"]
-        .as_u64()
-        .is_some_and(|n| n == 1)
-    {
+    let running = || {
+        json_of(&expect(&["sweep", "status", "--db", d, "--json"], 0))[0]["jobs"]["running"]
+            .as_u64()
+    };
+    while running() != Some(1) {
         assert!(t0.elapsed().as_secs() < 30, "no job claimed");
         std::thread::sleep(std::time::Duration::from_millis(20));
     }

@@ -30,7 +30,7 @@
 //! relabelling is timed last: it gives every stand-in result one label (their observables are
 //! one run's), which would leave no boundary to plan on. So that the map has boundaries to refine, the
 //! stand-in results are then marked stationary (`stationarity.stationary`,
-//! `convergence.converged`), which every report also sees.
+//! `convergence.converged`, `trend.state`), which every report also sees.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
