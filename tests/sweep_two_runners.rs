@@ -13,11 +13,21 @@ use std::process::Stdio;
 use sweep_common::*;
 use wetgran::store::Store;
 
-/// Grid of the sweep: 12 x 20 = 240 jobs of 20 grains over 2 periods (~5-30 ms each).
-const N_GAMMA: usize = 12;
-const N_E: usize = 20;
+/// Grid of the sweep: 12 x 20 = 240 jobs of 20 grains over 2 periods (~5-30 ms each), or
+/// `N_GAMMA x N_E` from `WETGRAN_TWO_RUNNERS_GRID` (`100x100`: the figure of
+/// docs/reliability.md, "Two runners, one killed").
+fn grid() -> (usize, usize) {
+    std::env::var("WETGRAN_TWO_RUNNERS_GRID")
+        .ok()
+        .and_then(|g| {
+            let (a, b) = g.split_once('x')?;
+            Some((a.trim().parse().ok()?, b.trim().parse().ok()?))
+        })
+        .unwrap_or((12, 20))
+}
 
 fn quick_sweep(dir: &Path) -> std::path::PathBuf {
+    let (n_gamma, n_e) = grid();
     let scene = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/shaken_wet_2d.toml"),
     )
@@ -31,8 +41,8 @@ fn quick_sweep(dir: &Path) -> std::path::PathBuf {
              [scene]\nparticles.count = 20\nbox.size = [7.0, 9.0]\n\
              engine.min_rebound_speed = 0.03\n\
              [observe]\ntransient_periods = 1\nsamples_per_period = 20\n\
-             [[axis]]\nkey = \"gamma\"\nlog = {{ from = 0.5, to = 20.0, steps = {N_GAMMA} }}\n\
-             [[axis]]\nkey = \"e_star\"\nlog = {{ from = 0.3, to = 4.755, steps = {N_E} }}\n"
+             [[axis]]\nkey = \"gamma\"\nlog = {{ from = 0.5, to = 20.0, steps = {n_gamma} }}\n\
+             [[axis]]\nkey = \"e_star\"\nlog = {{ from = 0.3, to = 4.755, steps = {n_e} }}\n"
         ),
     )
 }
@@ -54,7 +64,9 @@ fn two_runners_one_killed_midway_every_job_done_once_none_lost() {
     let sweep = quick_sweep(dir.path());
     let db = dir.path().join("w.sqlite");
     let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
-    let total = N_GAMMA * N_E;
+    let total = grid().0 * grid().1;
+    // A is killed after a sixth of the sweep's jobs, at least its 40th.
+    let kill_after = (total / 6).max(40);
     let spawn = |args: &[&str]| {
         wetgran()
             .args(args)
@@ -77,11 +89,11 @@ fn two_runners_one_killed_midway_every_job_done_once_none_lost() {
     }
     let b = spawn(&run_args);
 
-    // Kill A with SIGKILL after its 40th committed job.
+    // Kill A with SIGKILL after its `kill_after`-th committed job.
     let mut lines = BufReader::new(a.stderr.take().unwrap()).lines();
     let mut a_text = String::new();
     let mut a_done = 0;
-    while a_done < 40 {
+    while a_done < kill_after {
         let line = lines
             .next()
             .unwrap_or_else(|| panic!("runner A stopped early:\n{a_text}"))

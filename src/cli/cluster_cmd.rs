@@ -71,7 +71,6 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
     if s.dry_run {
         return dry_run(db, &expanded, &target);
     }
-    super::common::folder_of_new_database(db)?;
     let store = Store::open(db)?;
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, s.replace)?;
@@ -169,7 +168,7 @@ fn dry_run(
         }
     }
     if db.exists() {
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let st = store.job_statuses(&ids)?;
         ids.retain(|id| st.get(id).map(String::as_str) != Some("done"));
     }

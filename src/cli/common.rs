@@ -26,6 +26,7 @@ impl From<StoreError> for Failure {
             | StoreError::NotWetgran { .. }
             | StoreError::Damaged { .. }
             | StoreError::Missing { .. }
+            | StoreError::Outdated { .. }
             | StoreError::NoSuchSweep { .. } => Failure::BadInput(e.to_string()),
             _ => Failure::Other(e.to_string()),
         }
@@ -265,18 +266,23 @@ pub(super) fn check_snapshot_names(paths: &[std::path::PathBuf]) -> Result<(), F
     Ok(())
 }
 
-/// A database about to be created must have its folder: without this check SQLite's "unable to
-/// open database file" reads as a read-only folder.
-pub(super) fn folder_of_new_database(db: &Path) -> Result<(), Failure> {
+/// The folder of a `--db` path must exist: without this check SQLite's "unable to open database
+/// file" reads as a read-only folder, and a reader's "no database here" hides the typo in the
+/// folder. Every command checks its `--db` before anything else (`Command::databases`).
+pub(super) fn folder_of_database(db: &Path, creates: bool) -> Result<(), Failure> {
     if db.exists() {
         return Ok(());
     }
     match db.parent().filter(|d| !d.as_os_str().is_empty()) {
         Some(dir) if !dir.is_dir() => Err(Failure::BadInput(format!(
-            "{}: the folder {} does not exist: create it (`mkdir -p {}`) or give another --db",
+            "{}: the folder {} does not exist: {}give another --db (or WETGRAN_DB)",
             db.display(),
             dir.display(),
-            dir.display()
+            if creates {
+                format!("create it (`mkdir -p {}`) or ", dir.display())
+            } else {
+                String::new()
+            }
         ))),
         _ => Ok(()),
     }

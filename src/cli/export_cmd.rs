@@ -34,7 +34,7 @@ pub(super) fn export(db: &Path, name: Option<&str>, to: ExportTo) -> ExitCode {
                 "--text goes with --series (it holds the text entries of the series)".to_string(),
             ));
         }
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let sweeps = select(&store, name)?;
         let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
         let out_name = to

@@ -6,6 +6,7 @@ mod cluster_cmd;
 mod common;
 mod export_cmd;
 mod extend_cmd;
+mod interrupt;
 pub mod point_cmd;
 mod reclassify_cmd;
 mod refine_cmd;
@@ -19,7 +20,7 @@ use sweep_cmd::SweepCommand;
 use crate::boundary::Extraction;
 use crate::report::ColourBy;
 use clap::{Parser, Subcommand};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// Phase diagrams of wet granular matter.
@@ -57,11 +58,16 @@ pub enum Command {
     /// replicas at both ends agreeing with their point's majority). Unconverged points are marked
     /// `?` and carry no boundary unless asked (`--include-unconverged`).
     Boundaries {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// Only this sweep (default: all).
         #[arg(long)]
         sweep: Option<String>,
+        /// Print JSON (every sweep's map: points, labels, boundaries) instead of the table.
+        #[arg(long, conflicts_with = "format")]
+        json: bool,
+        /// `table`, or `csv` (one row per boundary point); `json` is `--json`.
         #[arg(long, value_enum, default_value = "table")]
         format: sweep_cmd::BoundaryFormat,
         /// Let unconverged points (marked `?`) carry boundaries too; by default a boundary
@@ -76,7 +82,8 @@ pub enum Command {
     /// span each boundary point's straddling edge; unconverged points are drawn hollow and carry
     /// no boundary unless asked.
     Plot {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// The sweep (default: the one registered or updated last).
         #[arg(long)]
@@ -97,7 +104,8 @@ pub enum Command {
     /// stored spec (same spec and seed, same numbers: the event count is compared with the
     /// stored run's) and draws its final configuration.
     Show {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// The job: at least 6 leading hex digits of its id (`wetgran export` lists ids).
         job: String,
@@ -110,16 +118,24 @@ pub enum Command {
         /// Write the lateral profiles (T_g, packing fraction, n_cb against x) as SVG.
         #[arg(long)]
         profiles: Option<PathBuf>,
+        /// Print JSON (one object: the job, its phase and what it was decided on, the files
+        /// written) instead of the text.
+        #[arg(long)]
+        json: bool,
     },
     /// The fluid-gas boundary of inelastic systems: the inflection point of T_g/E_cb against
     /// E* along each line of constant Gamma of a sweep (docs/model.md 7), where it stands out
     /// of the line's scatter, else why there is none.
     Inflection {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// Only this sweep (default: all).
         #[arg(long)]
         sweep: Option<String>,
+        /// Print JSON (an array, one object per sweep with its lines) instead of the table.
+        #[arg(long)]
+        json: bool,
     },
     /// Export all finished jobs in tidy form: one row per job, CSV or JSON with the same fields.
     ///
@@ -130,11 +146,16 @@ pub enum Command {
     /// series (time series, profiles) go to --series FILE in long format, numbers only; their
     /// text entries to --text FILE. docs/reports.md reads the database directly from pandas.
     Export {
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
         /// Only this sweep (default: all).
         #[arg(long)]
         sweep: Option<String>,
+        /// Write JSON (everything nested, the series included) instead of CSV.
+        #[arg(long, conflicts_with = "format")]
+        json: bool,
+        /// `csv`; `json` is `--json`.
         #[arg(long, value_enum, default_value = "csv")]
         format: sweep_cmd::ExportFormat,
         /// Write to this file instead of standard output.
@@ -181,7 +202,8 @@ pub enum Command {
         /// Thresholds file (TOML).
         #[arg(long, value_name = "FILE")]
         classify: Option<PathBuf>,
-        #[arg(long, default_value = sweep_cmd::DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
         db: PathBuf,
     },
 }
@@ -204,9 +226,41 @@ pub enum JobCommand {
     },
 }
 
+impl Command {
+    /// The `--db` paths of the command, each with whether the command may create it.
+    fn databases(&self) -> Vec<(&Path, bool)> {
+        use SweepCommand as S;
+        match self {
+            Command::Boundaries { db, .. }
+            | Command::Plot { db, .. }
+            | Command::Show { db, .. }
+            | Command::Inflection { db, .. }
+            | Command::Export { db, .. }
+            | Command::Reclassify { db, .. } => vec![(db.as_path(), false)],
+            Command::Lines(args) => vec![(args.db(), false)],
+            Command::Report(args) => vec![(args.db(), false)],
+            Command::Sweep { action } => match action {
+                S::Run { db, .. } | S::Submit { db, .. } => vec![(db.as_path(), true)],
+                S::Resume { db, .. }
+                | S::Status { db, .. }
+                | S::Refine { db, .. }
+                | S::Collect { db, .. } => vec![(db.as_path(), false)],
+                S::Estimate { db, .. } => db.iter().map(|d| (d.as_path(), false)).collect(),
+                S::Expand { .. } | S::Job { .. } => Vec::new(),
+            },
+            Command::Simulate(_) | Command::Job { .. } => Vec::new(),
+        }
+    }
+}
+
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    for (db, creates) in cli.command.databases() {
+        if let Err(f) = common::folder_of_database(db, creates) {
+            return exit(Err(f));
+        }
+    }
     match cli.command {
         Command::Simulate(args) => simulate_cmd::simulate(args),
         Command::Sweep { action } => sweep(action),
@@ -216,12 +270,17 @@ pub fn main() -> ExitCode {
         Command::Boundaries {
             db,
             sweep,
+            json,
             format,
             include_unconverged,
         } => sweep_cmd::boundaries(
             &db,
             sweep.as_deref(),
-            format,
+            if json {
+                sweep_cmd::BoundaryFormat::Json
+            } else {
+                format
+            },
             Extraction {
                 include_unconverged,
             },
@@ -247,6 +306,7 @@ pub fn main() -> ExitCode {
         Command::Export {
             db,
             sweep,
+            json,
             format,
             output,
             series,
@@ -256,7 +316,11 @@ pub fn main() -> ExitCode {
             &db,
             sweep.as_deref(),
             export_cmd::ExportTo {
-                format,
+                format: if json {
+                    sweep_cmd::ExportFormat::Json
+                } else {
+                    format
+                },
                 output: output.as_deref(),
                 series: series.as_deref(),
                 text: text.as_deref(),
@@ -269,8 +333,9 @@ pub fn main() -> ExitCode {
             snapshot,
             colour_by,
             profiles,
+            json,
         } => match colour_by.parse::<ColourBy>() {
-            Ok(c) => point_cmd::show(&db, &job, &snapshot, c, profiles.as_deref()),
+            Ok(c) => point_cmd::show(&db, &job, &snapshot, c, profiles.as_deref(), json),
             Err(e) => {
                 eprintln!("error: --colour-by: {e}");
                 ExitCode::from(2)
@@ -278,7 +343,9 @@ pub fn main() -> ExitCode {
         },
         Command::Lines(args) => report_cmd::lines(args),
         Command::Report(args) => report_cmd::report(args),
-        Command::Inflection { db, sweep } => point_cmd::inflection(&db, sweep.as_deref()),
+        Command::Inflection { db, sweep, json } => {
+            point_cmd::inflection(&db, sweep.as_deref(), json)
+        }
         Command::Reclassify {
             sweep,
             classify,
@@ -324,7 +391,7 @@ fn sweep(cmd: SweepCommand) -> ExitCode {
                 table_cache_mib,
             )
         }),
-        SweepCommand::Status { db } => sweep_cmd::sweep_status(&db),
+        SweepCommand::Status { db, json } => sweep_cmd::sweep_status(&db, json),
         SweepCommand::Expand { file, specs } => sweep_cmd::sweep_expand(&file, specs),
         SweepCommand::Job { spec } => sweep_cmd::sweep_job(&spec),
         SweepCommand::Submit {

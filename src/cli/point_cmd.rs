@@ -4,7 +4,9 @@
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
 use super::common::{Failure, check_snapshot_names, exit, select};
-use crate::report::point_text::{decision_text, gamma_lines, inflection_text, job_text};
+use crate::report::point_text::{
+    decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
+};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use crate::store::{PointRow, Store};
 use std::path::{Path, PathBuf};
@@ -45,12 +47,24 @@ pub fn show(
     snapshot: &[PathBuf],
     colour_by: ColourBy,
     profiles: Option<&Path>,
+    json: bool,
 ) -> ExitCode {
     exit((|| {
         check_snapshot_names(snapshot)?;
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let (sweep, p) = find_job(&store, job)?;
-        print!("{}", job_text(&sweep, &p));
+        // With --json the lines below go to the object, printed at the end.
+        let mut doc = json.then(|| job_json(&sweep, &p));
+        let mut say = |key: &str, value: serde_json::Value, line: String| match doc.as_mut() {
+            Some(d) => match (&mut d[key], value) {
+                (serde_json::Value::Array(a), serde_json::Value::Array(b)) => a.extend(b),
+                (slot, v) => *slot = v,
+            },
+            None => println!("{line}"),
+        };
+        if !json {
+            print!("{}", job_text(&sweep, &p));
+        }
         let observables: Option<Observables> = match &p.observables {
             Some(v) => Some(serde_json::from_value(v.clone()).map_err(|e| {
                 Failure::BadInput(format!(
@@ -60,7 +74,9 @@ pub fn show(
             })?),
             None => None,
         };
-        print!("{}", decision_text(&p));
+        if !json {
+            print!("{}", decision_text(&p));
+        }
         if let Some(path) = profiles {
             let Some(o) = &observables else {
                 return Err(Failure::BadInput(format!(
@@ -70,44 +86,65 @@ pub fn show(
             };
             std::fs::write(path, profiles_svg(o))
                 .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))?;
-            println!(
-                "profiles    {} (from the stored observables)",
-                path.display()
+            say(
+                "profiles",
+                path.display().to_string().into(),
+                format!(
+                    "profiles    {} (from the stored observables)",
+                    path.display()
+                ),
             );
         }
         if !snapshot.is_empty() {
             // The stored spec runs the job again; same spec and seed, same numbers, so the
             // re-run is the stored run, which the event count confirms.
             let (run, frame) = run_observed_with_frame(&p.spec.scene, &mut |_| {});
-            match p.events {
-                Some(stored) if stored as u64 == run.report.events_total => {
-                    println!("re-run      reproduces the stored run ({stored} events)")
+            let events = run.report.events_total;
+            let line = match p.events {
+                Some(stored) if stored as u64 == events => {
+                    format!("re-run      reproduces the stored run ({stored} events)")
                 }
-                Some(stored) => println!(
-                    "re-run      WARNING: {} events, the stored run had {stored} (another \
-                     build or platform?)",
-                    run.report.events_total
+                Some(stored) => format!(
+                    "re-run      WARNING: {events} events, the stored run had {stored} (another \
+                     build or platform?)"
                 ),
-                None => println!("re-run      {} events", run.report.events_total),
-            }
+                None => format!("re-run      {events} events"),
+            };
+            say("rerun_events", events.into(), line);
             for path in snapshot {
                 write_snapshot(path, &frame, colour_by, run.observables.temperature_unit)
                     .map_err(Failure::Other)?;
-                println!("snapshot    {} (final configuration)", path.display());
+                say(
+                    "snapshots",
+                    serde_json::json!([path.display().to_string()]),
+                    format!("snapshot    {} (final configuration)", path.display()),
+                );
             }
+        }
+        if let Some(d) = doc {
+            println!("{}", serde_json::to_string_pretty(&d).expect("serializes"));
         }
         Ok(())
     })())
 }
 
 /// `wetgran inflection`.
-pub fn inflection(db: &Path, name: Option<&str>) -> ExitCode {
+pub fn inflection(db: &Path, name: Option<&str>, json: bool) -> ExitCode {
     exit((|| {
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
+        let mut all = Vec::new();
         for s in select(&store, name)? {
-            print!(
+            let lines = gamma_lines(&store.points(s.id)?);
+            if json {
+                all.push(inflection_json(&s.name, &lines));
+            } else {
+                print!("{}", inflection_text(&s.name, &lines));
+            }
+        }
+        if json {
+            println!(
                 "{}",
-                inflection_text(&s.name, &gamma_lines(&store.points(s.id)?))
+                serde_json::to_string_pretty(&all).expect("serializes")
             );
         }
         Ok(())

@@ -41,6 +41,7 @@ pub fn refine(
             all.remove(0)
         }
     };
+    super::interrupt::resume_hint_on_interrupt(Some(&row.name), db);
     let file = registered_file(&store, &row)?;
     let section = file.refine;
     let bad = |flag: &str, msg: String| Failure::BadInput(format!("{flag}: {msg}"));

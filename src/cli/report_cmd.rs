@@ -44,7 +44,8 @@ impl Scale {
 /// `wetgran report`.
 #[derive(Debug, Args)]
 pub struct ReportArgs {
-    #[arg(long, default_value = super::sweep_cmd::DEFAULT_DB)]
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
     db: PathBuf,
     /// The sweep (default: the one registered or updated last).
     #[arg(long)]
@@ -67,7 +68,8 @@ pub struct ReportArgs {
 /// `wetgran lines`.
 #[derive(Debug, Args)]
 pub struct LinesArgs {
-    #[arg(long, default_value = super::sweep_cmd::DEFAULT_DB)]
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
     db: PathBuf,
     /// The sweep (default: the one registered or updated last).
     #[arg(long)]
@@ -130,7 +132,7 @@ pub(super) fn plot(
     style: MapStyle,
 ) -> ExitCode {
     exit((|| {
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let sweep = pick_sweep(&store, name)?;
         let drawn = draw_map(&store, &sweep, how, style)?;
         std::fs::write(output, drawn.svg)
@@ -156,7 +158,7 @@ pub(super) fn lines(args: LinesArgs) -> ExitCode {
                 args.output.as_ref().expect("given").display()
             )));
         }
-        let store = Store::open_existing(&args.db)?;
+        let store = Store::open_read_only(&args.db)?;
         let sweep = pick_sweep(&store, args.sweep.as_deref())?;
         let lines = sweep_lines(&store, &sweep)?;
         if args.json {
@@ -308,7 +310,7 @@ fn pictures(
 /// `wetgran report`.
 pub(super) fn report(args: ReportArgs) -> ExitCode {
     exit((|| {
-        let store = Store::open_existing(&args.db)?;
+        let store = Store::open_read_only(&args.db)?;
         let sweep = pick_sweep(&store, args.sweep.as_deref())?;
         let how = Extraction {
             include_unconverged: args.include_unconverged,
@@ -390,4 +392,18 @@ pub(super) fn report(args: ReportArgs) -> ExitCode {
         );
         Ok(())
     })())
+}
+
+impl ReportArgs {
+    /// The `--db` path.
+    pub(crate) fn db(&self) -> &std::path::Path {
+        &self.db
+    }
+}
+
+impl LinesArgs {
+    /// The `--db` path.
+    pub(crate) fn db(&self) -> &std::path::Path {
+        &self.db
+    }
 }

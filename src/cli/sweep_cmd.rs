@@ -13,14 +13,13 @@ use crate::report::boundaries_text::{
 };
 use crate::report::cluster_text::slurm_status_text;
 use crate::report::sweep_text::{
-    coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
-    estimate_stored_text, estimate_text, sweep_status_text,
+    StatusInput, coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
+    estimate_stored_text, estimate_text, sweep_status_json, sweep_status_text,
 };
 use crate::run::{RunOptions, run_sweeps};
-use crate::store::{Durability, PointSummary, Store, StoreError, SweepRow};
+use crate::store::{Durability, PointSummary, Store, SweepRow};
 use crate::sweep::run_job;
 use clap::{Subcommand, ValueEnum};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
@@ -44,8 +43,8 @@ pub enum SweepCommand {
     Run {
         /// The sweep file.
         file: PathBuf,
-        /// Database file (created if missing).
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
         #[arg(long)]
@@ -75,7 +74,8 @@ pub enum SweepCommand {
     Resume {
         /// The sweep to continue (default: all).
         name: Option<String>,
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// Worker threads (default: the available cores).
         #[arg(long)]
@@ -102,8 +102,16 @@ pub enum SweepCommand {
         table_cache_mib: usize,
     },
     /// Per sweep: jobs by state, failures with their message, time spent and time left.
+    ///
+    /// A running job whose runner is gone (its process no longer exists on this host) or silent
+    /// (no heartbeat for 60 s) is shown as stale, with its heartbeat's age: `sweep resume`
+    /// runs it again.
     Status {
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Print JSON (an array, one object per sweep) instead of the text.
+        #[arg(long)]
+        json: bool,
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
     },
     /// Print the jobs a sweep file expands to, without running anything.
@@ -159,7 +167,8 @@ pub enum SweepCommand {
         /// The sweep (default: the only one in the database).
         #[arg(long)]
         sweep: Option<String>,
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// Jobs to add (default: what is left of the sweep file's `[refine]` budget).
         #[arg(long)]
@@ -217,8 +226,8 @@ pub enum SweepCommand {
         /// Print the array script(s) and submit nothing (nothing is written).
         #[arg(long)]
         dry_run: bool,
-        /// Database file (created if missing).
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// The sweep directory (default: `wetgran-slurm/<sweep name>` beside the database).
         #[arg(long)]
@@ -234,7 +243,8 @@ pub enum SweepCommand {
     /// killed at a limit, node failure); `sweep submit` submits those again. Exit status 4 when
     /// failed or lost jobs remain (tasks still queued are no failure).
     Collect {
-        #[arg(long, default_value = DEFAULT_DB)]
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
         db: PathBuf,
         /// Only this sweep (default: all).
         #[arg(long)]
@@ -277,8 +287,8 @@ pub(super) fn sweep_run(
     let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
     // a sync"): everything it writes can be made again from the sweep file.
-    super::common::folder_of_new_database(db)?;
     let store = Store::open_as(db, true, Durability::Fast)?;
+    super::interrupt::resume_hint_on_interrupt(Some(&sweep.name), db);
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, replace)?;
     }
@@ -328,6 +338,7 @@ pub(super) fn sweep_resume(
     table_cache_mib: usize,
 ) -> Result<(), Failure> {
     let store = Store::open_as(db, false, Durability::Fast)?;
+    super::interrupt::resume_hint_on_interrupt(name, db);
     let sweeps = match name {
         Some(n) => vec![store.sweep(n)?],
         None => store.sweeps()?,
@@ -410,34 +421,54 @@ fn run_and_report(
     Ok(())
 }
 
-/// The text of `sweep status` (without the Slurm part).
-pub fn status_text(store: &Store) -> Result<String, StoreError> {
-    let mut out = String::new();
+/// `sweep status` of every sweep of the database: the text (without the Slurm part), or with
+/// `json` one JSON array of the sweeps (`sweep_status_json`, each with its Slurm tasks' text
+/// under `slurm`).
+pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
+    let store = Store::open_read_only(db)?;
     let sweeps = store.sweeps()?;
-    if sweeps.is_empty() {
-        let _ = writeln!(out, "{}: no sweeps yet", store.path().display());
+    if sweeps.is_empty() && !json {
+        println!("{}: no sweeps yet", store.path().display());
     }
     let cores = available_cores();
+    let now = crate::store::now();
+    let mut all = Vec::new();
     for s in &sweeps {
-        let points = store.point_summaries(s)?;
-        let c = crate::store::StateCounts::of_summaries(&points);
-        let spent = store.time_spent(s.id)?;
-        out.push_str(&sweep_status_text(s, &c, &points, spent, cores));
-    }
-    Ok(out)
-}
-
-pub(super) fn sweep_status(db: &Path) -> Result<(), Failure> {
-    let store = Store::open_existing(db)?;
-    print!("{}", status_text(&store)?);
-    for s in store.sweeps()? {
+        let (points, spent) = store.status_summaries(s)?;
+        let running = store.running_jobs(s.id)?;
+        let input = StatusInput {
+            sweep: s,
+            counts: crate::store::StateCounts::of_summaries(&points),
+            points: &points,
+            spent,
+            cores,
+            running: &running,
+            now,
+        };
         let tasks = store.tasks(s.id)?;
-        let queue = crate::cluster::queue_states(&tasks, &mut crate::cluster::slurm::squeue);
-        let text = slurm_status_text(&tasks, &queue);
-        if !text.is_empty() {
-            println!("sweep {} on Slurm", s.name);
-            print!("{text}");
+        let slurm = if tasks.is_empty() {
+            String::new()
+        } else {
+            let queue = crate::cluster::queue_states(&tasks, &mut crate::cluster::slurm::squeue);
+            slurm_status_text(&tasks, &queue)
+        };
+        if json {
+            let mut v = sweep_status_json(&input);
+            v["slurm"] = (!slurm.is_empty()).then_some(slurm).into();
+            all.push(v);
+        } else {
+            print!("{}", sweep_status_text(&input));
+            if !slurm.is_empty() {
+                println!("sweep {} on Slurm", s.name);
+                print!("{slurm}");
+            }
         }
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&all).expect("serializes")
+        );
     }
     Ok(())
 }
@@ -487,7 +518,7 @@ pub(super) fn sweep_estimate(
     jobs.retain(|j| seen.insert(j.id.clone()));
     let mut stored = std::collections::HashMap::new();
     for path in dbs {
-        stored.extend(Store::open_existing(path)?.finished_job_costs()?);
+        stored.extend(Store::open_read_only(path)?.finished_job_costs()?);
     }
     let planned = planned_jobs(&sweep, &jobs, &stored);
     // Every start mode is sampled (a hot and a cold branch cost different rates).
@@ -708,7 +739,7 @@ pub fn boundaries(
     how: Extraction,
 ) -> ExitCode {
     exit((|| {
-        let store = Store::open_existing(db)?;
+        let store = Store::open_read_only(db)?;
         let sweeps = select(&store, name)?;
         let mut maps = Vec::new();
         let mut points = Vec::new();

@@ -112,10 +112,25 @@ fn assert_same_reports(store: &Store, row: &SweepRow) {
     let c = store.counts(row.id).unwrap();
     assert_eq!(StateCounts::of_summaries(&lean), c);
     let spent = store.time_spent(row.id).unwrap();
-    let status = crate::report::sweep_text::sweep_status_text(row, &c, &lean, spent, 2);
+    let (again, spent_of_rows) = store.status_summaries(row).unwrap();
+    assert_eq!(again.len(), lean.len());
+    assert!(
+        (spent - spent_of_rows).abs() < 1e-9,
+        "{spent} {spent_of_rows}"
+    );
+    let input = |points| crate::report::sweep_text::StatusInput {
+        sweep: row,
+        counts: c,
+        points,
+        spent,
+        cores: 2,
+        running: &[],
+        now: 0.0,
+    };
+    let status = crate::report::sweep_text::sweep_status_text(&input(&lean));
     assert_eq!(
         status,
-        crate::report::sweep_text::sweep_status_text(row, &c, &of_full, spent, 2)
+        crate::report::sweep_text::sweep_status_text(&input(&of_full))
     );
     assert_eq!(
         unconverged_summaries(&lean),

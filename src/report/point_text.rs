@@ -171,3 +171,73 @@ pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
     }
     out
 }
+
+/// `show --json`: the job of [`job_text`] and the decision of [`decision_text`] as one object
+/// (the observables themselves are left out: `export --json` has them).
+pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
+    let trust = match crate::report::trust::mark(p.trust()) {
+        None => "stationary",
+        Some(crate::report::trust::LABEL_KEPT) => "label kept (not stationary)",
+        Some(_) => "label may change (not stationary)",
+    };
+    let ending = p
+        .observables
+        .as_ref()
+        .and_then(|o| o.pointer("/convergence/ending"))
+        .cloned();
+    serde_json::json!({
+        "job_id": p.job_id,
+        "sweep": sweep,
+        "point": p.point,
+        "replica": p.replica,
+        "coords": p.coords,
+        "status": p.status,
+        "attempts": p.attempts,
+        "last_error": p.last_error,
+        "phase": p.phase,
+        "trend": p.trend.map(|t| t.to_string()),
+        "trust": if p.phase.is_some() { Some(trust) } else { None },
+        "ended": ending,
+        "stationary": p.observables.as_ref().and_then(crate::report::trust::stationary),
+        "failed_checks": p
+            .observables
+            .as_ref()
+            .map(crate::report::trust::failed_checks)
+            .unwrap_or_default(),
+        "decided_on": p.decided_on,
+        "simulated_time": p.simulated_time,
+        "wall_seconds": p.wall_seconds,
+        "events": p.events,
+        "finished_at": p.finished_at,
+    })
+}
+
+/// `inflection --json` for one sweep: per line of constant Gamma, its points and the inflection
+/// point (`null` where [`inflection_text`] says none).
+pub fn inflection_json(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> serde_json::Value {
+    let lines: Vec<serde_json::Value> = lines
+        .iter()
+        .map(|(gamma, pts)| {
+            let (inflection, none) = match fluid_gas_inflection(pts) {
+                Ok(i) => (
+                    serde_json::json!({
+                        "e_star": i.e_star, "max_slope": i.max_slope,
+                        "between_e_star": [i.bracket.0, i.bracket.1],
+                        "p_value": i.p_value,
+                    }),
+                    None,
+                ),
+                Err(why) => (serde_json::Value::Null, Some(why)),
+            };
+            serde_json::json!({
+                "gamma": gamma,
+                "points": pts.iter().map(|p| serde_json::json!({
+                    "e_star": p.e_star, "tg_over_ecb": p.t, "relative_error": p.rel_error,
+                })).collect::<Vec<_>>(),
+                "inflection": inflection,
+                "no_inflection_because": none,
+            })
+        })
+        .collect();
+    serde_json::json!({ "sweep": sweep, "lines": lines })
+}

@@ -4,7 +4,7 @@
 //! rows and the figures measured.
 
 use crate::run::runner::{point_label, short};
-use crate::store::{LeftOut, PointSummary, StateCounts, SweepRow};
+use crate::store::{LeftOut, PointSummary, RunningJob, Stale, StateCounts, SweepRow};
 use std::fmt::Write as _;
 
 /// A duration in seconds, minutes, hours or days, whichever reads best.
@@ -37,16 +37,87 @@ pub fn left_out_text(axes: &[crate::sweep::Axis], left_out: &[LeftOut]) -> Strin
     out
 }
 
-/// The `sweep status` lines of one sweep: `c` its job counts, `points` its stored points
+/// What `sweep status` reads of one sweep: `counts` its job counts, `points` its stored points
 /// (`Store::point_summaries`), `spent` the wall time of its finished jobs (s), `cores` those the
-/// time left is counted on.
-pub fn sweep_status_text(
-    s: &SweepRow,
-    c: &StateCounts,
-    points: &[PointSummary],
-    spent: f64,
-    cores: usize,
-) -> String {
+/// time left is counted on, `running` its running jobs with their runners
+/// (`Store::running_jobs`) and `now` the time they are judged at (stale or live).
+#[derive(Debug)]
+pub struct StatusInput<'a> {
+    pub sweep: &'a SweepRow,
+    pub counts: StateCounts,
+    pub points: &'a [PointSummary],
+    pub spent: f64,
+    pub cores: usize,
+    pub running: &'a [RunningJob],
+    pub now: f64,
+}
+
+impl StatusInput<'_> {
+    /// The running jobs whose runner is gone or silent, with why.
+    pub fn stale(&self) -> Vec<(&RunningJob, Stale)> {
+        self.running
+            .iter()
+            .filter_map(|j| j.stale(self.now).map(|s| (j, s)))
+            .collect()
+    }
+
+    /// The mean wall seconds of the finished jobs (`None` before the first).
+    fn mean_wall(&self) -> Option<f64> {
+        let walls: Vec<f64> = self
+            .points
+            .iter()
+            .filter(|p| p.status == "done")
+            .filter_map(|p| p.wall_seconds)
+            .collect();
+        (!walls.is_empty()).then(|| walls.iter().sum::<f64>() / walls.len() as f64)
+    }
+
+    /// Seconds left on `cores` (`None`: unknown until a job finishes, or nothing left).
+    pub fn time_left(&self) -> Option<f64> {
+        let left = self.counts.pending + self.counts.running;
+        (left > 0)
+            .then(|| self.mean_wall())
+            .flatten()
+            .map(|m| m * left as f64 / self.cores as f64)
+    }
+}
+
+/// The stale jobs of a sweep by runner: `(owner, jobs, why)` in order of first appearance.
+fn stale_by_owner<'a>(stale: &[(&'a RunningJob, Stale)]) -> Vec<(&'a str, usize, Stale)> {
+    let mut out: Vec<(&str, usize, Stale)> = Vec::new();
+    for (j, why) in stale {
+        let owner = j.owner.as_deref().unwrap_or("unknown runner");
+        match out.iter_mut().find(|(o, _, _)| *o == owner) {
+            Some(e) => e.1 += 1,
+            None => out.push((owner, 1, *why)),
+        }
+    }
+    out
+}
+
+/// The heartbeat age of a stale job in words.
+fn heartbeat_text(why: &Stale) -> String {
+    let age = match why.heartbeat_age {
+        Some(a) => format!("last heartbeat {} ago", duration_text(a)),
+        None => "no heartbeat".to_string(),
+    };
+    if why.process_gone {
+        format!("its process is gone, {age}")
+    } else {
+        format!("silent, {age}")
+    }
+}
+
+/// The `sweep status` lines of one sweep (see [`StatusInput`]).
+pub fn sweep_status_text(input: &StatusInput) -> String {
+    let (s, c, points, spent, cores) = (
+        input.sweep,
+        &input.counts,
+        input.points,
+        input.spent,
+        input.cores,
+    );
+    let stale = input.stale();
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -62,15 +133,28 @@ pub fn sweep_status_text(
     if let Some(cost) = &s.cost {
         let _ = writeln!(out, "  cost: {cost}");
     }
+    let live = (c.running as usize).saturating_sub(stale.len());
+    let running = if stale.is_empty() {
+        format!("{} running", c.running)
+    } else {
+        format!("{live} running, {} stale", stale.len())
+    };
     let _ = writeln!(
         out,
-        "  jobs   {} total: {} done, {} running, {} pending, {} failed",
+        "  jobs   {} total: {} done, {running}, {} pending, {} failed",
         c.total(),
         c.done,
-        c.running,
         c.pending,
         c.failed
     );
+    for (owner, n, why) in stale_by_owner(&stale) {
+        let _ = writeln!(
+            out,
+            "  stale  {n} job(s) of runner {owner} ({}): not running; `sweep resume` runs them \
+             again",
+            heartbeat_text(&why)
+        );
+    }
     let (unconverged, checked) = crate::store::unconverged_summaries(points);
     if checked > 0 {
         let _ = writeln!(
@@ -109,23 +193,21 @@ pub fn sweep_status_text(
             let _ = writeln!(out, "    {at}: {}", labels.join(", "));
         }
     }
-    let done_walls: Vec<f64> = points
-        .iter()
-        .filter(|p| p.status == "done")
-        .filter_map(|p| p.wall_seconds)
-        .collect();
     let left = c.pending + c.running;
-    let estimate = if left == 0 {
-        "nothing left".to_string()
-    } else if done_walls.is_empty() {
-        "time left unknown until a job finishes".to_string()
-    } else {
-        let mean = done_walls.iter().sum::<f64>() / done_walls.len() as f64;
-        format!(
-            "about {} left on {cores} core(s) ({left} job(s) x {} mean)",
-            duration_text(mean * left as f64 / cores as f64),
+    let estimate = match (left, input.mean_wall(), input.time_left()) {
+        (0, _, _) => "nothing left".to_string(),
+        (_, None, _) | (_, _, None) => "time left unknown until a job finishes".to_string(),
+        (_, Some(mean), Some(t)) if live == 0 && !stale.is_empty() => format!(
+            "no runner is working on it: {left} job(s) left, about {} on {cores} core(s) once \
+             resumed ({} mean)",
+            duration_text(t),
             duration_text(mean)
-        )
+        ),
+        (_, Some(mean), Some(t)) => format!(
+            "about {} left on {cores} core(s) ({left} job(s) x {} mean)",
+            duration_text(t),
+            duration_text(mean)
+        ),
     };
     let _ = writeln!(
         out,
@@ -353,4 +435,62 @@ pub fn extended_text(
         let _ = writeln!(out, "  {f}");
     }
     out
+}
+
+/// `sweep status --json` of one sweep: the figures of [`sweep_status_text`] as one object.
+pub fn sweep_status_json(input: &StatusInput) -> serde_json::Value {
+    use serde_json::json;
+    let (s, c, points) = (input.sweep, &input.counts, input.points);
+    let stale = input.stale();
+    let live = (c.running as usize).saturating_sub(stale.len());
+    let (unconverged, checked) = crate::store::unconverged_summaries(points);
+    let starts = crate::store::hysteresis::by_start(&s.axes, points);
+    let mut trends = std::collections::BTreeMap::new();
+    for p in points.iter().filter(|p| p.status == "done") {
+        if let Some(t) = p.trend {
+            *trends.entry(t.to_string()).or_insert(0usize) += 1;
+        }
+    }
+    let stale_runners: Vec<_> = stale_by_owner(&stale)
+        .into_iter()
+        .map(|(owner, n, why)| {
+            json!({
+                "owner": owner, "jobs": n, "process_gone": why.process_gone,
+                "heartbeat_age_s": why.heartbeat_age,
+            })
+        })
+        .collect();
+    let failed: Vec<_> = points
+        .iter()
+        .filter(|p| p.status == "failed")
+        .map(|p| {
+            json!({
+                "point": p.point, "replica": p.replica, "coords": p.coords,
+                "job_id": p.job_id, "attempts": p.attempts, "error": p.last_error,
+            })
+        })
+        .collect();
+    json!({
+        "sweep": s.name,
+        "file": s.file,
+        "description": s.description,
+        "points": points.len() as u64 / s.replicas.max(1) as u64,
+        "replicas": s.replicas,
+        "jobs": {
+            "total": c.total(), "done": c.done, "running": live, "stale": stale.len(),
+            "pending": c.pending, "failed": c.failed,
+        },
+        "stale_runners": stale_runners,
+        "results_with_verdict": checked,
+        "unconverged": unconverged,
+        "hysteretic_points": starts.iter().filter(|g| g.hysteretic).count(),
+        "compared_points": starts.iter().filter(|g| g.compared()).count(),
+        "trends": trends,
+        "time_spent_s": input.spent,
+        "time_left_s": input.time_left(),
+        "cores": input.cores,
+        "runner_working": live > 0,
+        "left_out": s.left_out,
+        "failed": failed,
+    })
 }

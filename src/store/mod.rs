@@ -46,9 +46,13 @@ pub mod hysteresis;
 mod queries;
 #[cfg(test)]
 mod query_plans;
+mod read_only;
+mod stale;
 mod summary;
 
 pub use cluster::{TaskRow, TaskState};
+pub use read_only::{ReadAccess, read_access};
+pub use stale::{RunningJob, Stale};
 pub use summary::{PointSummary, axis_keeps_report_scene, unconverged_summaries};
 
 use crate::sweep::file::{Axis, SweepFile};
@@ -92,6 +96,8 @@ pub enum StoreError {
     Missing { path: String },
     /// A name that is not in the database.
     NoSuchSweep { path: String, name: String },
+    /// Written by an older wetgran and not writable here, so it cannot be upgraded.
+    Outdated { path: String, detail: String },
     /// Any other database error.
     Db { path: String, detail: String },
 }
@@ -122,6 +128,12 @@ impl fmt::Display for StoreError {
             StoreError::NoSuchSweep { path, name } => {
                 write!(f, "{path}: no sweep named `{name}` in this database")
             }
+            StoreError::Outdated { path, detail } => write!(
+                f,
+                "{path}: written by an older wetgran ({detail}) and read-only here, so it cannot \
+                 be upgraded: run any wetgran command on it once where it can be written, or \
+                 work on a writable copy"
+            ),
             StoreError::Db { path, detail } => write!(f, "{path}: database error: {detail}"),
         }
     }
@@ -746,6 +758,14 @@ impl Store {
     }
 
     fn db(&self, e: sqlx::Error) -> StoreError {
+        // A malformed page or header met while reading (read-only opens run no integrity
+        // check: docs/reliability.md, "Reading an archive").
+        if matches!(sqlite_code(&e), Some(11 | 26)) {
+            return StoreError::Damaged {
+                path: self.path.display().to_string(),
+                detail: e.to_string(),
+            };
+        }
         StoreError::Db {
             path: self.path.display().to_string(),
             detail: explain(&e),

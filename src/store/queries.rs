@@ -23,6 +23,14 @@ macro_rules! queries {
 }
 
 queries! {
+    /// The versions of the applied migrations (read-only opens).
+    APPLIED_MIGRATIONS = "applied_migrations";
+    /// A sweep's report rows packed into one JSON array (no specs).
+    SWEEP_POINT_SUMMARIES_PACKED = "sweep_point_summaries_packed";
+    /// The spec of a sweep's first job in grid order.
+    SWEEP_FIRST_SPEC = "sweep_first_spec";
+    /// The running jobs of a sweep with their runner and heartbeat (`sweep status`).
+    SWEEP_RUNNING_JOBS = "sweep_running_jobs";
     /// Every job's id and stored spec, oldest first (re-keying).
     ALL_JOB_SPECS = "all_job_specs";
     /// Opens a write transaction, taking the write lock at once.

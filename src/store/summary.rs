@@ -11,8 +11,8 @@
 //! expansion of the same sweep file (re-registering a changed file drops every point, refined
 //! ones included: `delete_grid_points.sql`), so jobs differ only where the expansion sets
 //! something per point: the axis values, the seed of a replica, the run length in periods, and
-//! the start of a continuation chain's first job. The start mode is read per job from the spec
-//! in SQL (one `json_extract`). The rest is shared: where every axis key is one that changes
+//! the start of a continuation chain's first job. The start mode is read per job from its column
+//! `jobs.start_mode`. The rest is shared: where every axis key is one that changes
 //! none of the fields above ([`axis_keeps_report_scene`]), each summary carries the scene of
 //! the sweep's first job, parsed once; otherwise each carries its own job's scene, parsed from
 //! its spec as [`Store::points`] does (a slower read, the same output).
@@ -23,6 +23,26 @@ use sqlx::Row;
 use std::sync::Arc;
 use wetgran_core::observe::trend::{TrendState, Trust};
 use wetgran_core::scene::{Scene, StartMode};
+
+/// A row of the summary statements, as read (`sweep_point_summaries.sql`, or one element of
+/// `sweep_point_summaries_packed.sql`: the same columns in the same order).
+#[derive(Debug, serde::Deserialize)]
+struct SummaryRow {
+    point: i64,
+    replica: i64,
+    coords: Vec<serde_json::Value>,
+    job_id: String,
+    status: String,
+    attempts: i64,
+    last_error: Option<String>,
+    job_wall_seconds: Option<f64>,
+    start: Option<String>,
+    spec: Option<String>,
+    phase: Option<String>,
+    wall_seconds: Option<f64>,
+    trend: Option<String>,
+    converged: Option<i64>,
+}
 
 /// One job of a sweep as the reports see it (see the module doc).
 #[derive(Debug, Clone)]
@@ -136,74 +156,161 @@ impl Store {
     /// from scalar columns, without the observables; the scene parsed once per sweep where its
     /// axes allow, else once per job.
     pub fn point_summaries(&self, sweep: &SweepRow) -> Result<Vec<PointSummary>, StoreError> {
+        Ok(self.status_summaries(sweep)?.0)
+    }
+
+    /// [`Store::point_summaries`], and the wall time of the sweep's finished and failed jobs
+    /// ([`Store::time_spent`], each job once) from the same rows.
+    pub fn status_summaries(
+        &self,
+        sweep: &SweepRow,
+    ) -> Result<(Vec<PointSummary>, f64), StoreError> {
         let every_spec = !sweep.axes.iter().all(|a| axis_keeps_report_scene(&a.key));
-        let rows = self
+        let shared = if every_spec {
+            None
+        } else {
+            self.first_scene(sweep.id)?
+        };
+        let rows = if every_spec {
+            self.summary_rows_streamed(sweep.id)?
+        } else {
+            self.summary_rows_packed(sweep.id)?
+        };
+        let mut spent = 0.0;
+        let mut counted: std::collections::HashSet<&str> = std::collections::HashSet::new();
+        for r in &rows {
+            if matches!(r.status.as_str(), "done" | "failed") && counted.insert(&r.job_id) {
+                spent += r.job_wall_seconds.unwrap_or(0.0);
+            }
+        }
+        let out = rows
+            .into_iter()
+            .map(|r| self.summary_of(r, shared.as_ref()))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((out, spent))
+    }
+
+    /// The rows of `sweep_point_summaries.sql` with every spec, mapped as they arrive (a
+    /// `fetch_all` would hold every row's SQLite values at once: ~1.3 kB a job).
+    fn summary_rows_streamed(&self, sweep_id: i64) -> Result<Vec<SummaryRow>, StoreError> {
+        let path = self.path.display().to_string();
+        self.rt.block_on(async {
+            let mut out = Vec::new();
+            let mut rows = sqlx::query(queries::SWEEP_POINT_SUMMARIES)
+                .bind(sweep_id)
+                .bind(true)
+                .fetch(&self.pool);
+            while let Some(r) = std::future::poll_fn(|cx| rows.as_mut().poll_next(cx)).await {
+                let r = r.map_err(|e| self.db(e))?;
+                out.push(SummaryRow {
+                    point: r.get("point"),
+                    replica: r.get("replica"),
+                    coords: serde_json::from_str(r.get::<&str, _>("coords")).map_err(|e| {
+                        StoreError::Damaged {
+                            path: path.clone(),
+                            detail: format!("coords are not readable: {e}"),
+                        }
+                    })?,
+                    job_id: r.get("job_id"),
+                    status: r.get("status"),
+                    attempts: r.get("attempts"),
+                    last_error: r.get("last_error"),
+                    job_wall_seconds: r.get("job_wall_seconds"),
+                    start: r.get("start"),
+                    spec: r.get("spec"),
+                    phase: r.get("phase"),
+                    wall_seconds: r.get("wall_seconds"),
+                    trend: r.get("trend"),
+                    converged: r.get("converged"),
+                });
+            }
+            Ok(out)
+        })
+    }
+
+    /// The rows of `sweep_point_summaries_packed.sql` (no specs), in grid order.
+    fn summary_rows_packed(&self, sweep_id: i64) -> Result<Vec<SummaryRow>, StoreError> {
+        let text: Option<String> = self
             .rt
             .block_on(
-                sqlx::query(queries::SWEEP_POINT_SUMMARIES)
-                    .bind(sweep.id)
-                    .bind(every_spec)
-                    .fetch_all(&self.pool),
+                sqlx::query_scalar(queries::SWEEP_POINT_SUMMARIES_PACKED)
+                    .bind(sweep_id)
+                    .fetch_one(&self.pool),
             )
             .map_err(|e| self.db(e))?;
+        let mut rows: Vec<SummaryRow> = match text {
+            None => Vec::new(),
+            Some(t) => serde_json::from_str(&t).map_err(|e| StoreError::Damaged {
+                path: self.path.display().to_string(),
+                detail: format!("the report rows are not readable: {e}"),
+            })?,
+        };
+        rows.sort_by_key(|r| (r.point, r.replica));
+        Ok(rows)
+    }
+
+    /// One row of the summary statements as a summary; `shared` the sweep's scene where every
+    /// job shares it (else the row's spec is parsed).
+    fn summary_of(
+        &self,
+        r: SummaryRow,
+        shared: Option<&Arc<Scene>>,
+    ) -> Result<PointSummary, StoreError> {
         let path = self.path.display().to_string();
         let damaged = |what: &str, e: String| StoreError::Damaged {
             path: path.clone(),
             detail: format!("{what} is not readable: {e}"),
         };
-        let shared = match rows.first() {
-            Some(r) if !every_spec => {
-                let job_id: String = r.get("job_id");
-                let spec = self.job_spec(&job_id)?.ok_or_else(|| {
-                    damaged(&format!("the spec of job {job_id}"), "missing".into())
-                })?;
-                Some(Arc::new(spec.scene))
-            }
-            _ => None,
+        let job_id = r.job_id;
+        let scene = match (shared, &r.spec) {
+            (Some(s), _) => Arc::clone(s),
+            (None, spec) => Arc::new(
+                JobSpec::from_json(spec.as_deref().unwrap_or(""), &format!("job {job_id}"))
+                    .map_err(|e| damaged("a job spec", e))?
+                    .scene,
+            ),
         };
-        rows.iter()
-            .map(|r| {
-                let job_id: String = r.get("job_id");
-                let scene = match &shared {
-                    Some(s) => Arc::clone(s),
-                    None => {
-                        let spec: String = r.get("spec");
-                        Arc::new(
-                            JobSpec::from_json(&spec, &format!("job {job_id}"))
-                                .map_err(|e| damaged("a job spec", e))?
-                                .scene,
-                        )
-                    }
-                };
-                let start = match r.get::<Option<String>, _>("start") {
-                    // Not written: the default (the spec leaves out a hot start).
-                    None => StartMode::default(),
-                    Some(s) => {
-                        serde_json::from_value(serde_json::Value::String(s)).map_err(|e| {
-                            damaged(&format!("the start of job {job_id}"), e.to_string())
-                        })?
-                    }
-                };
-                Ok(PointSummary {
-                    point: r.get("point"),
-                    replica: r.get("replica"),
-                    coords: serde_json::from_str(r.get::<&str, _>("coords"))
-                        .map_err(|e| damaged("coords", e.to_string()))?,
-                    status: r.get("status"),
-                    attempts: r.get("attempts"),
-                    last_error: r.get("last_error"),
-                    start,
-                    phase: r.get("phase"),
-                    wall_seconds: r.get("wall_seconds"),
-                    trend: r
-                        .get::<Option<String>, _>("trend")
-                        .as_deref()
-                        .and_then(TrendState::parse),
-                    converged: r.get::<Option<i64>, _>("converged").map(|c| c != 0),
-                    scene,
-                    job_id,
+        let start = match r.start {
+            // Not written: the default (the spec leaves out a hot start).
+            None => StartMode::default(),
+            Some(s) => serde_json::from_value(serde_json::Value::String(s))
+                .map_err(|e| damaged(&format!("the start of job {job_id}"), e.to_string()))?,
+        };
+        Ok(PointSummary {
+            point: r.point,
+            replica: r.replica,
+            coords: r.coords,
+            status: r.status,
+            attempts: r.attempts,
+            last_error: r.last_error,
+            start,
+            phase: r.phase,
+            wall_seconds: r.wall_seconds,
+            trend: r.trend.as_deref().and_then(TrendState::parse),
+            converged: r.converged.map(|c| c != 0),
+            scene,
+            job_id,
+        })
+    }
+
+    /// The scene of a sweep's first job in grid order (`None`: the sweep has no job).
+    fn first_scene(&self, sweep_id: i64) -> Result<Option<Arc<Scene>>, StoreError> {
+        let row: Option<(String, String)> = self
+            .rt
+            .block_on(
+                sqlx::query_as(queries::SWEEP_FIRST_SPEC)
+                    .bind(sweep_id)
+                    .fetch_optional(&self.pool),
+            )
+            .map_err(|e| self.db(e))?;
+        row.map(|(id, text)| {
+            JobSpec::from_json(&text, &format!("job {id}"))
+                .map(|spec| Arc::new(spec.scene))
+                .map_err(|e| StoreError::Damaged {
+                    path: self.path.display().to_string(),
+                    detail: format!("a job spec is not readable: {e}"),
                 })
-            })
-            .collect()
+        })
+        .transpose()
     }
 }

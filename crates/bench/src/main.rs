@@ -82,7 +82,7 @@ enum Command {
         #[arg(long)]
         keep: bool,
         /// Which reports to time, comma-separated (`status`, `boundaries`, `plot`, `export`,
-        /// `reclassify`).
+        /// `reclassify`; `refine`: one refinement round, with stationary stand-in results).
         #[arg(
             long,
             value_delimiter = ',',

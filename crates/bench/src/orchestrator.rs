@@ -22,6 +22,15 @@
 //! Then the reports, each as the `wetgran` binary beside this one runs them on that database
 //! (process start included): `sweep status`, `boundaries`, `plot`, `export` (CSV to a file),
 //! `reclassify` (those named by `--reports`), each the median of `--repeat` runs.
+//!
+//! With `refine` among the reports: one refinement round, in this process, as
+//! `refine::driver::refine_sweep` makes it (reading the rows, planning, adding the jobs, running
+//! them with the stand-in, and the relabelling of every stored result by the classifier and the
+//! line rule that starts each round), each part timed; its budget is a tenth of the sweep. The
+//! relabelling is timed last: it gives every stand-in result one label (their observables are
+//! one run's), which would leave no boundary to plan on. So that the map has boundaries to refine, the
+//! stand-in results are then marked stationary (`stationarity.stationary`,
+//! `convergence.converged`, `trend.state`), which every report also sees.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -122,6 +131,69 @@ pub struct Figures {
     pub db_bytes_per_result: f64,
     /// `(command, median seconds)`.
     pub reports: Vec<(String, f64)>,
+    /// One refinement round (`refine` among the reports).
+    pub refine: Option<RefineRound>,
+}
+
+/// The parts of one refinement round, seconds.
+#[derive(Debug, Clone)]
+pub struct RefineRound {
+    pub relabel_s: f64,
+    /// Reading every row (`Store::points`) and planning the round.
+    pub plan_s: f64,
+    pub add_s: f64,
+    pub run_s: f64,
+    pub added: usize,
+}
+
+/// Times one refinement round of the sweep `row` of `store` (module doc), with `job` as its
+/// jobs.
+fn refine_round(
+    store: &Store,
+    file: &SweepFile,
+    row: &wetgran::store::SweepRow,
+    job: JobFn,
+    opts: &RunOptions,
+) -> Result<RefineRound, String> {
+    use wetgran::refine::driver::plan_jobs;
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    let rows_of = std::slice::from_ref(row);
+    let t0 = Instant::now();
+    let rows = store.points(row.id).map_err(|x| e(&x))?;
+    let settings = wetgran::refine::Settings {
+        replicas: row.replicas,
+        max_replicas: 3 * row.replicas,
+        resolution: 0.0,
+    };
+    let jobs =
+        plan_jobs(file, row, &rows, (rows.len() / 10).max(1), &settings).map_err(|x| e(&x))?;
+    drop(rows);
+    let plan_s = t0.elapsed().as_secs_f64();
+    let t0 = Instant::now();
+    store.add_jobs(row.id, &jobs).map_err(|x| e(&x))?;
+    let add_s = t0.elapsed().as_secs_f64();
+    let t0 = Instant::now();
+    let summary = run_sweeps_with(store, rows_of, opts, job).map_err(|x| e(&x))?;
+    let run_s = t0.elapsed().as_secs_f64();
+    if summary.done as usize != jobs.len() {
+        return Err(format!(
+            "refinement: {} of {} jobs done",
+            summary.done,
+            jobs.len()
+        ));
+    }
+    // Last: the classifier gives every stand-in result the same label (their observables are
+    // one run's), which would leave no boundary to plan on.
+    let t0 = Instant::now();
+    wetgran::run::relabel::relabel_stored(store, rows_of, None).map_err(|x| e(&x))?;
+    let relabel_s = t0.elapsed().as_secs_f64();
+    Ok(RefineRound {
+        relabel_s,
+        plan_s,
+        add_s,
+        run_s,
+        added: jobs.len(),
+    })
 }
 
 /// Runs the benchmark at one size in `dir`.
@@ -164,6 +236,17 @@ pub fn measure(
         .map_err(|e| e.to_string())?;
     let register_s = t0.elapsed().as_secs_f64();
 
+    let refine = reports.iter().any(|r| r == "refine");
+    let mut observables = real.observables.clone();
+    if refine {
+        observables["stationarity"]["stationary"] = true.into();
+        if observables
+            .get("convergence")
+            .is_some_and(|c| c.is_object())
+        {
+            observables["convergence"]["converged"] = true.into();
+        }
+    }
     let starts = Arc::new(Mutex::new(Vec::with_capacity(jobs_n)));
     let job: JobFn = {
         let starts = starts.clone();
@@ -185,7 +268,7 @@ pub fn measure(
             Ok(JobResult {
                 phase: Some(phase.to_string()),
                 decided_on: real.decided_on.clone(),
-                observables: real.observables.clone(),
+                observables: observables.clone(),
                 simulated_time: real.simulated_time,
                 wall_seconds: 0.0,
                 events: real.events,
@@ -200,7 +283,7 @@ pub fn measure(
         table_cache_mib: 0,
     };
     let t0 = Instant::now();
-    let summary = run_sweeps_with(&store, std::slice::from_ref(&sweep), &opts, job)
+    let summary = run_sweeps_with(&store, std::slice::from_ref(&sweep), &opts, job.clone())
         .map_err(|e| e.to_string())?;
     let run_s = t0.elapsed().as_secs_f64();
     if summary.done as usize != jobs_n {
@@ -254,6 +337,14 @@ pub fn measure(
         eprintln!("N = {jobs_n}: {name} {:.3} s", median(times.clone()));
         timed.push((name.to_string(), median(times)));
     }
+    let refine = if refine {
+        let store = Store::open_as(&db, false, durability).map_err(|e| e.to_string())?;
+        let r = refine_round(&store, &file, &sweep, job, &opts)?;
+        eprintln!("N = {jobs_n}: refinement round {r:?}");
+        Some(r)
+    } else {
+        None
+    };
     Ok(Figures {
         jobs: jobs_n,
         register_s,
@@ -264,6 +355,7 @@ pub fn measure(
         gap_last_ms: (median(last.clone()), quantile(last, 0.99)),
         db_bytes_per_result: db_bytes as f64 / jobs_n as f64,
         reports: timed,
+        refine,
     })
 }
 
@@ -316,6 +408,22 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
             .map(|(name, t)| format!("{name} {t:.3}"))
             .collect();
         let _ = writeln!(s, "{:>8}  {}", r.jobs, parts.join(", "));
+    }
+    for r in rows {
+        if let Some(f) = &r.refine {
+            let _ = writeln!(
+                s,
+                "{:>8}  refinement round: {} job(s) added; relabel {:.3} s, read rows and plan \
+                 {:.3} s, add jobs {:.3} s, run them {:.3} s; {:.3} s in all",
+                r.jobs,
+                f.added,
+                f.relabel_s,
+                f.plan_s,
+                f.add_s,
+                f.run_s,
+                f.relabel_s + f.plan_s + f.add_s + f.run_s
+            );
+        }
     }
     s
 }

@@ -4,9 +4,11 @@
 -- whose axes may change what the reports read of a scene: `Store::point_summaries`). The
 -- columns come from covering indexes (migration 20261127130000), not from the rows that hold
 -- the observables.
+-- `job_wall_seconds` is the job's last ended attempt (`time_spent.sql` sums it).
 -- ?1: sweep id, ?2: whether to return every job's spec (1) or none (0)
 SELECT p.point, p.replica, p.coords, p.job_id, j.status, j.attempts, j.last_error,
-    json_extract(j.spec, '$.scene.initial.start') AS start,
+    j.wall_seconds AS job_wall_seconds,
+    j.start_mode AS start,
     CASE WHEN ?2 THEN j.spec END AS spec,
     r.phase, r.wall_seconds, r.trend, r.converged
 FROM sweep_points p

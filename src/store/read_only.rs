@@ -1,0 +1,224 @@
+//! Read-only opens, for the commands that only read (`sweep status`, `show`, `boundaries`,
+//! `plot`, `export`, `inflection`, `sweep estimate --db`, `sweep submit --dry-run`): the
+//! database is opened with `SQLITE_OPEN_READONLY`, nothing is created, initialised, migrated or
+//! re-keyed, and no integrity check runs (docs/reliability.md, "Reading an archive").
+//!
+//! How the file is reached ([`ReadAccess`]):
+//! - **shared** (`mode=ro`): SQLite's locks and the write-ahead log as any reader; another
+//!   process may run `sweep run` on the database meanwhile. SQLite then needs the `-wal` and
+//!   `-shm` files beside the database, and creates them (empty) where they are missing and the
+//!   folder can be written.
+//! - **immutable** (`immutable=1`): no locks and no `-wal`/`-shm`, for a database that cannot
+//!   change while it is read: its file or its folder is marked read-only (no write permission
+//!   bit for anyone), and the log beside it holds no commits (is missing or empty). A writer in
+//!   WAL mode must write the database or create the `-wal` file in that folder before it
+//!   changes anything, so no writer can exist during the read (root aside, who ignores the
+//!   bits), and the main file holds every committed transaction. Also where a shared open fails
+//!   because SQLite cannot create the `-wal`/`-shm` files (a folder this user cannot write, with
+//!   write bits for another): no writer of this user can exist either.
+//!
+//! A database written by an older wetgran (migrations or the job-id rule not applied) is
+//! upgraded by a read-write open where it can be written, as any command did before; where it
+//! cannot, it is refused with [`StoreError::Outdated`].
+
+use super::{
+    Existing, MIGRATOR, Store, StoreError, explain, inspect, new_owner, queries, sqlite_code,
+};
+use sqlx::sqlite::{SqliteConnectOptions, SqlitePoolOptions};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// How a read-only open reaches the file (module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReadAccess {
+    Shared,
+    Immutable,
+}
+
+/// The write-ahead log beside a database.
+fn wal_of(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push("-wal");
+    PathBuf::from(name)
+}
+
+/// Whether no write permission bit is set on `path` (an archive marked read-only, also for
+/// root).
+fn marked_read_only(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly())
+}
+
+/// How the database at `path` is read (module doc).
+pub fn read_access(path: &Path) -> ReadAccess {
+    let log_has_commits = std::fs::metadata(wal_of(path)).is_ok_and(|m| m.len() > 0);
+    if log_has_commits {
+        return ReadAccess::Shared;
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if marked_read_only(path) || marked_read_only(&dir) {
+        ReadAccess::Immutable
+    } else {
+        ReadAccess::Shared
+    }
+}
+
+impl Store {
+    /// Opens an existing database for reading only (module doc); a database from an older
+    /// wetgran is upgraded first where it can be written.
+    pub fn open_read_only(path: &Path) -> Result<Store, StoreError> {
+        let mut access = read_access(path);
+        let store = match Self::open_reader(path, access) {
+            Err(StoreError::Db { .. })
+                if access == ReadAccess::Shared && cannot_create_beside(path) =>
+            {
+                access = ReadAccess::Immutable;
+                Self::open_reader(path, access)?
+            }
+            other => other?,
+        };
+        match store.outdated()? {
+            None => Ok(store),
+            Some(_) if access == ReadAccess::Shared => {
+                drop(store);
+                Self::open_existing(path)
+            }
+            Some(detail) => Err(StoreError::Outdated {
+                path: path.display().to_string(),
+                detail,
+            }),
+        }
+    }
+
+    /// The read-only connection itself; checks what the file holds (header, tables) first.
+    fn open_reader(path: &Path, access: ReadAccess) -> Result<Store, StoreError> {
+        let p = path.display().to_string();
+        let existing = inspect(path)?;
+        if matches!(existing, Existing::New) {
+            return Err(StoreError::Missing { path: p });
+        }
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .map_err(|e| StoreError::Db {
+                path: p.clone(),
+                detail: format!("cannot start the async runtime: {e}"),
+            })?;
+        let busy = super::busy_timeout();
+        let opts = SqliteConnectOptions::new()
+            .filename(path)
+            .read_only(true)
+            .immutable(access == ReadAccess::Immutable)
+            .busy_timeout(busy)
+            .pragma("cache_size", format!("-{}", super::CACHE_KIB));
+        let pool = rt
+            .block_on(
+                SqlitePoolOptions::new()
+                    .max_connections(1)
+                    .min_connections(0)
+                    .acquire_timeout(busy * 2 + Duration::from_secs(1))
+                    .connect_with(opts),
+            )
+            .map_err(|e| StoreError::Db {
+                path: p.clone(),
+                detail: read_open_error(path, &e),
+            })?;
+        let store = Store {
+            rt,
+            pool,
+            path: path.to_path_buf(),
+            owner: new_owner(),
+        };
+        // The first read: SQLite opens the log here, so a log it cannot open fails here.
+        let tables: Vec<String> = store
+            .rt
+            .block_on(sqlx::query_scalar(queries::LIST_TABLES).fetch_all(&store.pool))
+            .map_err(|e| match sqlite_code(&e) {
+                Some(11 | 26) => store.db(e),
+                _ => StoreError::Db {
+                    path: p.clone(),
+                    detail: read_open_error(path, &e),
+                },
+            })?;
+        if matches!(existing, Existing::OtherSqlite) {
+            return Err(if tables.is_empty() {
+                StoreError::Missing { path: p }
+            } else {
+                StoreError::NotWetgran {
+                    path: p,
+                    detail: format!("tables {}", tables.join(", ")),
+                }
+            });
+        }
+        Ok(store)
+    }
+
+    /// What an older wetgran left undone (migrations, the job-id rule), in words; `None` when
+    /// the database is as this wetgran writes it. Migrations of a newer wetgran are an error.
+    fn outdated(&self) -> Result<Option<String>, StoreError> {
+        let applied: Vec<i64> = match self
+            .rt
+            .block_on(sqlx::query_scalar(queries::APPLIED_MIGRATIONS).fetch_all(&self.pool))
+        {
+            Ok(v) => v,
+            // No migration table: initialised, never migrated.
+            Err(e) if e.to_string().contains("no such table") => Vec::new(),
+            Err(e) => return Err(self.db(e)),
+        };
+        let known: Vec<i64> = MIGRATOR.iter().map(|m| m.version).collect();
+        if let Some(v) = applied.iter().find(|v| !known.contains(v)) {
+            return Err(StoreError::Db {
+                path: self.path.display().to_string(),
+                detail: format!(
+                    "written by a newer wetgran (migration {v} is unknown to this one): use \
+                     that version"
+                ),
+            });
+        }
+        let missing: Vec<String> = known
+            .iter()
+            .filter(|v| !applied.contains(v))
+            .map(|v| v.to_string())
+            .collect();
+        if !missing.is_empty() {
+            return Ok(Some(format!(
+                "migrations {} not applied",
+                missing.join(", ")
+            )));
+        }
+        let rule: Option<String> = self
+            .rt
+            .block_on(sqlx::query_scalar(queries::JOB_ID_RULE).fetch_optional(&self.pool))
+            .map_err(|e| self.db(e))?;
+        Ok((rule.as_deref() != Some(super::JOB_ID_RULE))
+            .then(|| "its job ids follow an older rule".to_string()))
+    }
+}
+
+/// Whether a shared open may have failed for want of the `-wal`/`-shm` files: neither is
+/// there (SQLite would have created them where it could).
+fn cannot_create_beside(path: &Path) -> bool {
+    let mut shm = path.as_os_str().to_owned();
+    shm.push("-shm");
+    !wal_of(path).exists() && !PathBuf::from(shm).exists()
+}
+
+/// The text of a failed read-only open: a log with commits that SQLite cannot read without
+/// the `-shm` file it cannot create is named as such.
+fn read_open_error(path: &Path, e: &sqlx::Error) -> String {
+    if sqlite_code(e) == Some(14) && wal_of(path).exists() {
+        let mut shm = path.as_os_str().to_owned();
+        shm.push("-shm");
+        return format!(
+            "cannot read the database: its write-ahead log {} holds commits that SQLite reads \
+             with the index file {}, which is missing and cannot be created here (a read-only \
+             folder): open it once where the folder can be written, or copy the three files \
+             ({e})",
+            wal_of(path).display(),
+            PathBuf::from(shm).display()
+        );
+    }
+    explain(e)
+}
