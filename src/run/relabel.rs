@@ -246,8 +246,7 @@ pub fn relabel_stored(
             {
                 missing_flc.insert(p.job_id.clone());
             }
-            if p
-                .observables
+            if p.observables
                 .as_ref()
                 .is_some_and(|o| o.pointer("/profiles/clusters").is_none())
             {

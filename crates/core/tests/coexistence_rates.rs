@@ -88,13 +88,10 @@ fn run(p: &Point, seed: u64) -> Vec<Outcome> {
             let obs = set.finish(&sc);
             let pr = &obs.profiles;
             let delta = pr.delta_n_cb;
-            let boot = pr
-                .n_cb_null
-                .as_ref()
-                .map_or(f64::NAN, |n| n.quantile(0.95));
-            let indep = pr
-                .n_cb_standard_error
-                .map_or(f64::NAN, |se| se * noise::range_quantile(pr.n_cb.len(), 0.95));
+            let boot = pr.n_cb_null.as_ref().map_or(f64::NAN, |n| n.quantile(0.95));
+            let indep = pr.n_cb_standard_error.map_or(f64::NAN, |se| {
+                se * noise::range_quantile(pr.n_cb.len(), 0.95)
+            });
             let c = classify(&obs, &shipped);
             let c0 = classify(&obs, &no_floor);
             Outcome {
@@ -102,7 +99,10 @@ fn run(p: &Point, seed: u64) -> Vec<Outcome> {
                 above_independent_95: delta > indep,
                 split_as_shipped: c.decided_on.split,
                 split_without_contrast: c0.decided_on.split,
-                lag1: pr.n_cb_null.as_ref().map_or(f64::NAN, |n| n.lag1_correlation),
+                lag1: pr
+                    .n_cb_null
+                    .as_ref()
+                    .map_or(f64::NAN, |n| n.lag1_correlation),
                 phase: c.phase,
             }
         })
@@ -127,17 +127,71 @@ fn rate(k: usize, n: usize) -> String {
 #[ignore = "long: the coexistence test's level and power on N = 1200, ~10 min on 2 cores"]
 fn coexistence_test_level_and_power() {
     let points = [
-        Point { name: "f: Gamma 30, E* 0.7, eps 0.96", gamma: 30.0, e_star: 0.7, eps: 0.96, windows: 16, length: 25.0, coexistence: false },
-        Point { name: "f: Gamma 30, E* 1.3, eps 0.96", gamma: 30.0, e_star: 1.3, eps: 0.96, windows: 16, length: 25.0, coexistence: false },
-        Point { name: "f: Gamma 20, E* 0.3, eps 1", gamma: 20.0, e_star: 0.3, eps: 1.0, windows: 8, length: 50.0, coexistence: false },
-        Point { name: "f: Gamma 2, E* 0.5, eps 1", gamma: 2.0, e_star: 0.5, eps: 1.0, windows: 8, length: 50.0, coexistence: false },
-        Point { name: "g: Gamma 1.6, E* 1, eps 0.96", gamma: 1.6, e_star: 1.0, eps: 0.96, windows: 8, length: 50.0, coexistence: false },
-        Point { name: "fgc: Gamma 30, E* 1.1, eps 1", gamma: 30.0, e_star: 1.1, eps: 1.0, windows: 16, length: 25.0, coexistence: true },
-        Point { name: "fgc: Gamma 30, E* 2.2, eps 0.96", gamma: 30.0, e_star: 2.2, eps: 0.96, windows: 16, length: 25.0, coexistence: true },
+        Point {
+            name: "f: Gamma 30, E* 0.7, eps 0.96",
+            gamma: 30.0,
+            e_star: 0.7,
+            eps: 0.96,
+            windows: 16,
+            length: 25.0,
+            coexistence: false,
+        },
+        Point {
+            name: "f: Gamma 30, E* 1.3, eps 0.96",
+            gamma: 30.0,
+            e_star: 1.3,
+            eps: 0.96,
+            windows: 16,
+            length: 25.0,
+            coexistence: false,
+        },
+        Point {
+            name: "f: Gamma 20, E* 0.3, eps 1",
+            gamma: 20.0,
+            e_star: 0.3,
+            eps: 1.0,
+            windows: 8,
+            length: 50.0,
+            coexistence: false,
+        },
+        Point {
+            name: "f: Gamma 2, E* 0.5, eps 1",
+            gamma: 2.0,
+            e_star: 0.5,
+            eps: 1.0,
+            windows: 8,
+            length: 50.0,
+            coexistence: false,
+        },
+        Point {
+            name: "g: Gamma 1.6, E* 1, eps 0.96",
+            gamma: 1.6,
+            e_star: 1.0,
+            eps: 0.96,
+            windows: 8,
+            length: 50.0,
+            coexistence: false,
+        },
+        Point {
+            name: "fgc: Gamma 30, E* 1.1, eps 1",
+            gamma: 30.0,
+            e_star: 1.1,
+            eps: 1.0,
+            windows: 16,
+            length: 25.0,
+            coexistence: true,
+        },
+        Point {
+            name: "fgc: Gamma 30, E* 2.2, eps 0.96",
+            gamma: 30.0,
+            e_star: 2.2,
+            eps: 0.96,
+            windows: 16,
+            length: 25.0,
+            coexistence: true,
+        },
     ];
-    let jobs: Vec<(usize, u64)> = (0..points.len())
-        .flat_map(|i| [(i, 1), (i, 2)])
-        .collect();
+    let jobs: Vec<(usize, u64)> = (0..points.len()).flat_map(|i| [(i, 1), (i, 2)]).collect();
     let results: Vec<(usize, Vec<Outcome>)> = jobs
         .par_iter()
         .map(|&(i, seed)| (i, run(&points[i], seed)))
@@ -181,7 +235,9 @@ fn coexistence_test_level_and_power() {
             labels.join(", ")
         );
         if p.coexistence {
-            found += count(&|o| o.split_as_shipped && matches!(o.phase, Phase::Fgc | Phase::Sgc | Phase::Sfc));
+            found += count(&|o| {
+                o.split_as_shipped && matches!(o.phase, Phase::Fgc | Phase::Sgc | Phase::Sfc)
+            });
             coex += n;
         } else {
             fp_boot += boot;
@@ -201,6 +257,9 @@ fn coexistence_test_level_and_power() {
     // Rule 2 as shipped splits a homogeneous state in at most 5 % of windows (upper end of the
     // 95 % interval) and finds at least 90 % of the coexistences' windows.
     let (_, hi) = wilson(fp_split, homog);
-    assert!(hi <= 0.05, "rule 2 splits homogeneous states: {fp_split}/{homog}");
+    assert!(
+        hi <= 0.05,
+        "rule 2 splits homogeneous states: {fp_split}/{homog}"
+    );
     assert!(found * 10 >= coex * 9, "coexistences found {found}/{coex}");
 }

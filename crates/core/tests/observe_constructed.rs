@@ -235,7 +235,11 @@ fn frame(k: usize, groups: &mut [Group], bounces: usize, rng: &mut Xoshiro256Plu
                             }
                             if inside(p.0, a, b) {
                                 let into = (p.0 - a).rem_euclid(L);
-                                p.0 = if into < 0.5 * (b - a).rem_euclid(L) { a } else { b };
+                                p.0 = if into < 0.5 * (b - a).rem_euclid(L) {
+                                    a
+                                } else {
+                                    b
+                                };
                             }
                         }
                         let y = p.1 + gauss(rng, step);
@@ -405,4 +409,3 @@ fn a_gas_with_a_density_wave_and_no_bonded_cluster_is_homogeneous() {
         assert_eq!(c.phase, Phase::G, "{}", c.decided_on.reason);
     }
 }
-

@@ -13,8 +13,8 @@ use rand_distr::StandardNormal;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use wetgran_core::observe::{Phase, run_observed_from};
 use wetgran_core::scene::Scene;
-use wetgran_core::sim::{EngineState, EventCounts};
 use wetgran_core::sim::books::EnergyLedger;
+use wetgran_core::sim::{EngineState, EventCounts};
 
 const L: f64 = 100.0;
 const H: f64 = 9.0;
@@ -109,4 +109,3 @@ fn the_hot_dilute_gas_alone_is_a_homogeneous_gas() {
     assert!(!c.decided_on.split, "{}", c.decided_on.reason);
     assert_eq!(c.phase, Phase::G, "{}", c.decided_on.reason);
 }
-

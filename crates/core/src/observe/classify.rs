@@ -347,7 +347,8 @@ struct Lags {
 /// `alpha` of `MSD ~ tau^alpha` from `D_lat` at the long and the short lag (`D = MSD / (2 n_lat
 /// tau)`): `alpha = 1 + ln(D_long / D_short) / ln(tau_long / tau_short)`.
 fn growth_exponent(long: f64, short: f64, lag_ratio: f64) -> Option<f64> {
-    (long > 0.0 && short > 0.0 && lag_ratio > 1.0).then(|| 1.0 + (long / short).ln() / lag_ratio.ln())
+    (long > 0.0 && short > 0.0 && lag_ratio > 1.0)
+        .then(|| 1.0 + (long / short).ln() / lag_ratio.ln())
 }
 
 /// Rule 1 for one region; `gas` decides fluid versus gas of a mobile region; `lags`: the two
@@ -667,14 +668,9 @@ fn classify_unsheared(
     // than the gas threshold, or when the dilute region is hotter by the fluid-gas jump
     // `line_jump_ratio` (a bonded drop in its vapour); else it is gas-like too.
     let t_dilute = dilute.temperature;
-    let dense = region(
-        dense_obs,
-        lag_ratio,
-        dense_bins.len(),
-        grains,
-        th,
-        &|t| t > th.gas_temperature && t_dilute < th.line_jump_ratio * t,
-    );
+    let dense = region(dense_obs, lag_ratio, dense_bins.len(), grains, th, &|t| {
+        t > th.gas_temperature && t_dilute < th.line_jump_ratio * t
+    });
     let phase = Phase::coexistence(dense.phase, dilute.phase).unwrap_or(dense.phase);
     decided.reason = format!(
         "coexistence test passed ({}): split at {} = {mid:.4}; dense part ({} bins, {} grains): \
@@ -738,7 +734,11 @@ fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
             match r.growth_exponent {
                 Some(a) => format!(
                     "{floor}, MSD growth exponent {a:.2} {} {}{}",
-                    if a >= th.diffusive_exponent { ">=" } else { "<" },
+                    if a >= th.diffusive_exponent {
+                        ">="
+                    } else {
+                        "<"
+                    },
                     th.diffusive_exponent,
                     if a < th.diffusive_exponent && r.phase != Phase::S {
                         " but spread beyond a cage"

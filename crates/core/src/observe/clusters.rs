@@ -302,7 +302,9 @@ pub fn rigid_residuals(
         .map(|p| {
             (0..dim)
                 .map(|k| {
-                    let turned: f64 = (0..dim).map(|l| rotation[k * dim + l] * a[p * dim + l]).sum();
+                    let turned: f64 = (0..dim)
+                        .map(|l| rotation[k * dim + l] * a[p * dim + l])
+                        .sum();
                     b[p * dim + k] - turned
                 })
                 .collect()
@@ -400,7 +402,13 @@ mod tests {
 
     #[test]
     fn dry_bonds_are_close_pairs() {
-        let x = [(1.0, 1.0), (2.05, 1.0), (3.1, 1.0), (10.0, 5.0), (39.6, 5.0)];
+        let x = [
+            (1.0, 1.0),
+            (2.05, 1.0),
+            (3.1, 1.0),
+            (10.0, 5.0),
+            (39.6, 5.0),
+        ];
         let f = frame(0.0, &x, vec![]);
         let mut p = close_pairs(&f, 0.1);
         p.sort_unstable();
@@ -414,7 +422,13 @@ mod tests {
     fn a_rigid_turn_and_drift_leave_no_residual() {
         // A 2D cluster of five grains straddling the periodic edge, turned by 0.3 rad about its
         // centroid and moved by (7, 0.5).
-        let pts = [(39.0, 2.0), (0.2, 2.5), (39.5, 3.4), (1.0, 3.0), (38.8, 4.0)];
+        let pts = [
+            (39.0, 2.0),
+            (0.2, 2.5),
+            (39.5, 3.4),
+            (1.0, 3.0),
+            (38.8, 4.0),
+        ];
         let (l, th) = (40.0f64, 0.3f64);
         let start: Vec<f64> = pts.iter().flat_map(|p| [p.0, p.1]).collect();
         // Unwrapped positions about the centroid.
@@ -438,14 +452,28 @@ mod tests {
                 [p.0 + (nx - u.0), ny]
             })
             .collect();
-        let r = rigid_residuals(&[0, 1, 2, 3, 4], &start, &end, 2, &[true, false], &[l, 10.0]);
+        let r = rigid_residuals(
+            &[0, 1, 2, 3, 4],
+            &start,
+            &end,
+            2,
+            &[true, false],
+            &[l, 10.0],
+        );
         for v in &r {
             assert!(v.iter().all(|x| x.abs() < 1e-12), "{v:?}");
         }
         // Each grain moving on its own keeps its motion relative to the others.
         let mut moved = end.clone();
         moved[0] += 0.4;
-        let r = rigid_residuals(&[0, 1, 2, 3, 4], &start, &moved, 2, &[true, false], &[l, 10.0]);
+        let r = rigid_residuals(
+            &[0, 1, 2, 3, 4],
+            &start,
+            &moved,
+            2,
+            &[true, false],
+            &[l, 10.0],
+        );
         assert!(r[0][0].abs() > 0.2, "{:?}", r[0]);
     }
 

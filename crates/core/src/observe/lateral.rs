@@ -267,7 +267,11 @@ impl LateralObserver {
         self.unwrap(frame);
         for which in [false, true] {
             self.close_lags(frame, bk, which, &members);
-            let track = if which { &mut self.short } else { &mut self.long };
+            let track = if which {
+                &mut self.short
+            } else {
+                &mut self.long
+            };
             if self.samples.is_multiple_of(track.stride) {
                 track.origins.push_back(Origin {
                     index: self.samples,
@@ -370,7 +374,11 @@ impl LateralObserver {
         let n_lat = dim - 1;
         let nb = self.bins.n;
         let now = self.samples;
-        let track = if short { &mut self.short } else { &mut self.long };
+        let track = if short {
+            &mut self.short
+        } else {
+            &mut self.long
+        };
         let (lag, first) = (track.samples, track.first_field);
         while let Some(o) = track.origins.front() {
             if now - o.index < lag {
@@ -454,7 +462,14 @@ fn lag_displacements(
         let (stayed, left): (Vec<usize>, Vec<usize>) =
             members.iter().partition(|&&i| now_members.is_member(i));
         let fit = if stayed.is_empty() { &left } else { &stayed };
-        let res = rigid_residuals(fit, &o.positions, now, dim, &frame.periodic, &frame.box_size);
+        let res = rigid_residuals(
+            fit,
+            &o.positions,
+            now,
+            dim,
+            &frame.periodic,
+            &frame.box_size,
+        );
         for (&i, d) in fit.iter().zip(&res) {
             r2[i] = d[..n_lat].iter().map(|x| x * x).sum();
         }

@@ -485,12 +485,18 @@ mod tests {
         let (k, bins, sd) = (32, 100, 1.0);
         let step = 6.0 * sd / (k as f64).sqrt();
         for _ in 0..50 {
-            let m = blocks(&mut rng, k, bins, sd, 1, &|b| if b < 50 { step } else { 0.0 });
+            let m = blocks(&mut rng, k, bins, sd, 1, &|b| {
+                if b < 50 { step } else { 0.0 }
+            });
             let mu = column_means(&m, &vec![1.0; k]);
             let delta = mu.iter().copied().fold(f64::MIN, f64::max)
                 - mu.iter().copied().fold(f64::MAX, f64::min);
             let null = null_ranges(m, vec![1.0; k]).unwrap();
-            assert!(delta > null.quantile(0.99), "{delta} vs {:?}", null.quantiles);
+            assert!(
+                delta > null.quantile(0.99),
+                "{delta} vs {:?}",
+                null.quantiles
+            );
         }
     }
 
@@ -512,7 +518,11 @@ mod tests {
             })
             .collect();
         let (merged, _, r) = decorrelated_blocks(m, vec![1.0; 64]);
-        assert!(merged.len() < 64 && merged.len() >= MIN_BOOTSTRAP_BLOCKS, "{}", merged.len());
+        assert!(
+            merged.len() < 64 && merged.len() >= MIN_BOOTSTRAP_BLOCKS,
+            "{}",
+            merged.len()
+        );
         assert!(r < 0.8, "{r}");
     }
 
