@@ -72,8 +72,11 @@ struct Group {
     lattice_bonds: Vec<(usize, usize)>,
 }
 
+/// Sites of a lattice and its neighbour pairs.
+type Lattice = (Vec<(f64, f64)>, Vec<(usize, usize)>);
+
 /// A triangular lattice of spacing 1 filling `x0 .. x0 + width`, heights `0.5 ..= top`.
-fn lattice(x0: f64, width: f64, top: f64) -> (Vec<(f64, f64)>, Vec<(usize, usize)>) {
+fn lattice(x0: f64, width: f64, top: f64) -> Lattice {
     let dy = 3f64.sqrt() / 2.0;
     let mut sites = Vec::new();
     let mut row = 0;

@@ -289,7 +289,7 @@ pub fn null_ranges(means: Vec<Vec<f64>>, weights: Vec<f64>) -> Option<NullRanges
     }
     let bins = means[0].len();
     let mu = column_means(&means, &weights);
-    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(0x5eed_0f_b007);
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(0x005e_ed0f_b007);
     // sqrt(K / (K - 1)): the bootstrap of a mean from K draws underestimates its variance.
     let inflate = (k as f64 / (k - 1) as f64).sqrt();
     let mut ranges = Vec::with_capacity(BOOTSTRAP_RESAMPLES);
