@@ -252,6 +252,31 @@ pub fn close_pairs(frame: &Frame, gap: f64) -> Vec<(usize, usize)> {
 /// the order of `members`. The translation is the mean displacement; the rotation is fitted
 /// about the centroid when the cluster spans less than half the box along every periodic axis
 /// (a cluster that wraps around the box cannot turn).
+/// Whether the grains `members` (positions `start`, `dim` per grain) spread over half the box or
+/// more along a periodic axis, measured from the first member by nearest image: a cluster that
+/// wraps around the box (a bed, a percolating network) and cannot turn as a whole.
+pub fn spans_box(
+    members: &[usize],
+    start: &[f64],
+    dim: usize,
+    periodic: &[bool],
+    box_size: &[f64],
+) -> bool {
+    let Some(&reference) = members.first() else {
+        return false;
+    };
+    (0..dim).filter(|&k| periodic[k]).any(|k| {
+        let (mut lo, mut hi) = (0.0f64, 0.0f64);
+        for &i in members {
+            let mut d = start[i * dim + k] - start[reference * dim + k];
+            d -= box_size[k] * (d / box_size[k]).round();
+            lo = lo.min(d);
+            hi = hi.max(d);
+        }
+        hi - lo >= 0.5 * box_size[k]
+    })
+}
+
 pub fn rigid_residuals(
     members: &[usize],
     start: &[f64],
@@ -268,9 +293,8 @@ pub fn rigid_residuals(
     // Positions at the start relative to the first member (nearest image), and displacements.
     let mut rel = vec![0.0; m * dim];
     let mut disp = vec![0.0; m * dim];
-    let mut extent_ok = true;
+    let extent_ok = !spans_box(members, start, dim, periodic, box_size);
     for k in 0..dim {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for (a, &i) in members.iter().enumerate() {
             let mut d = start[i * dim + k] - start[reference * dim + k];
             if periodic[k] {
@@ -278,11 +302,6 @@ pub fn rigid_residuals(
             }
             rel[a * dim + k] = d;
             disp[a * dim + k] = end[i * dim + k] - start[i * dim + k];
-            lo = lo.min(d);
-            hi = hi.max(d);
-        }
-        if periodic[k] && hi - lo >= 0.5 * box_size[k] {
-            extent_ok = false;
         }
     }
     let mean = |v: &[f64], k: usize| (0..m).map(|a| v[a * dim + k]).sum::<f64>() / m as f64;
