@@ -97,10 +97,19 @@ pub struct ObserveSpec {
     /// dry: a gap below 0.1 d) at every sample before it counts as bound into a cluster
     /// (default 0.2): longer than a bounce, so a gas grain that touches a drop and flies off is
     /// not counted with it (`observe::clusters`).
-    #[serde(default = "default_bond_time")]
+    /// Left out of the serialized spec at its default, so that job ids (hashes of the spec) of
+    /// sweeps that do not set it are those they had before it existed.
+    #[serde(
+        default = "default_bond_time",
+        skip_serializing_if = "is_default_bond_time"
+    )]
     pub bond_time: f64,
     /// Smallest bonded cluster, in grains, whose grains make up a dense region (default 3).
-    #[serde(default = "default_cluster_min_size")]
+    /// Left out of the serialized spec at its default (job ids as before it existed).
+    #[serde(
+        default = "default_cluster_min_size",
+        skip_serializing_if = "is_default_cluster_min_size"
+    )]
     pub cluster_min_size: usize,
     /// 3D: lateral bins as square cells over `(x, y)` (`"plane"`, default) or slabs along `x`
     /// across the whole depth (`"x_slabs"`).
@@ -172,6 +181,12 @@ fn default_bond_time() -> f64 {
 }
 fn default_cluster_min_size() -> usize {
     3
+}
+fn is_default_bond_time(v: &f64) -> bool {
+    *v == default_bond_time()
+}
+fn is_default_cluster_min_size(v: &usize) -> bool {
+    *v == default_cluster_min_size()
 }
 
 impl ObserveSpec {
