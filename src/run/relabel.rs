@@ -207,7 +207,15 @@ impl Relabelled {
 #[derive(Default)]
 struct Tally {
     /// `job -> (old phase, old decided_on, new phase, new decided_on)`.
-    labels: BTreeMap<String, (Option<String>, Option<serde_json::Value>, String, serde_json::Value)>,
+    labels: BTreeMap<
+        String,
+        (
+            Option<String>,
+            Option<serde_json::Value>,
+            String,
+            serde_json::Value,
+        ),
+    >,
     unreadable: HashSet<String>,
     missing_flc: HashSet<String>,
     missing_regions: HashSet<String>,
@@ -328,10 +336,7 @@ pub fn relabel_changed(store: &Store, sweep: &SweepRow) -> Result<Relabelled, St
     }
     let specs = store.point_specs(sweep.id)?;
     let pending_set: HashSet<&str> = pending.iter().map(String::as_str).collect();
-    let keys: Vec<Option<String>> = specs
-        .iter()
-        .map(|p| spec_line_key(&p.spec.scene))
-        .collect();
+    let keys: Vec<Option<String>> = specs.iter().map(|p| spec_line_key(&p.spec.scene)).collect();
     let touched: HashSet<&str> = specs
         .iter()
         .zip(&keys)

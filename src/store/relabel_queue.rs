@@ -12,7 +12,10 @@ use sqlx::Row;
 
 /// The key prefix of a sweep's marks and the end of its range (`:` raised to `;`).
 fn range(sweep_id: i64) -> (String, String) {
-    (format!("relabel:{sweep_id}:"), format!("relabel:{sweep_id};"))
+    (
+        format!("relabel:{sweep_id}:"),
+        format!("relabel:{sweep_id};"),
+    )
 }
 
 /// One row of a sweep with its job's spec (no result columns).
@@ -69,7 +72,10 @@ impl Store {
                     .fetch_all(&self.pool),
             )
             .map_err(|e| self.db(e))?;
-        Ok(keys.into_iter().map(|k| k[lo.len()..].to_string()).collect())
+        Ok(keys
+            .into_iter()
+            .map(|k| k[lo.len()..].to_string())
+            .collect())
     }
 
     /// Every row of a sweep with its spec, in no particular order.
