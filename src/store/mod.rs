@@ -699,6 +699,8 @@ impl Store {
                         .await
                         .map_err(|e| self.db(e))?;
                 }
+                // A merged job may have taken another's result: its lines are relabelled.
+                self.mark_relabel_job(tx, &new).await?;
                 sqlx::query(queries::DELETE_JOB)
                     .bind(&old)
                     .execute(&mut **tx)
