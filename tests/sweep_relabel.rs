@@ -357,7 +357,7 @@ fn relabelling_only_the_changed_lines_equals_relabelling_everything() {
     let want = stored_labels(&a, &row_a);
     // A full relabelling finds nothing to change.
     assert_eq!(
-        relabel_stored(&a, &[row_a.clone()], None)
+        relabel_stored(&a, std::slice::from_ref(&row_a), None)
             .unwrap()
             .changed(),
         0

@@ -228,7 +228,13 @@ fn end_of_run_relabel(
         .points(row.id)
         .map_err(|e| e.to_string())?
         .into_iter()
-        .map(|p| (p.job_id, stand_in_phase(&p.coords).to_string(), decided_on.clone()))
+        .map(|p| {
+            (
+                p.job_id,
+                stand_in_phase(&p.coords).to_string(),
+                decided_on.clone(),
+            )
+        })
         .collect();
     store.relabel(&labels).map_err(|e| e.to_string())?;
     Ok(t)
