@@ -324,7 +324,7 @@ fn killed_at_each_kind_of_instant_the_sweep_resumes_to_the_uninterrupted_numbers
 /// labels of refined points, and the plan of the next round, depended on whether a resume had
 /// relabelled them; extended results kept their per-point labels until some later resume
 /// relabelled them. Now every run, refinement round and extension ends with the relabelling
-/// (`run::relabel::relabel_stored`).
+/// of the lines holding its new results (`run::relabel::relabel_changed`).
 #[test]
 fn regression_a_kill_in_the_grid_leaves_the_labels_of_the_uninterrupted_run() {
     let dir = tempfile::tempdir().unwrap();

@@ -16,8 +16,16 @@ use wetgran_core::scene::Scene;
 
 fn scene(gamma: f64, e_star: f64, restitution: f64, seed: u64) -> Scene {
     Scene::from_toml_str(
-        &format!(
-            r#"
+        &scene_toml(gamma, e_star, restitution, seed),
+        "relabel test",
+    )
+    .expect("valid scene")
+}
+
+/// The scene file of [`scene`].
+fn scene_toml(gamma: f64, e_star: f64, restitution: f64, seed: u64) -> String {
+    format!(
+        r#"
 dimension = 2
 gravity = 1.0
 [box]
@@ -45,10 +53,7 @@ duration = 2.0
 [observe]
 mobility_lag = 0.5
 "#
-        ),
-        "relabel test",
     )
-    .expect("valid scene")
 }
 
 /// Observables of a homogeneous mobile state at `T_g / E_cb = t`: a real short run's record
@@ -236,4 +241,175 @@ fn lines_of_constant_gamma_decide_fluid_versus_gas() {
     }
     // Old labels are reported for the caller to count changes.
     assert_eq!(labels[0].old.as_deref(), Some("g"));
+}
+
+/// The temperatures of the two elastic lines of the stored sweep below (errors of 1 %): by the
+/// line rule `f f f g g`; the per-point fallback calls `E* = 1` (T = 2.5) a gas, as it does on
+/// a line too short to decide.
+const LINE: [(f64, f64); 5] = [
+    (0.5, 0.6),
+    (0.7, 1.2),
+    (1.0, 2.5),
+    (1.5, 80.0),
+    (2.0, 120.0),
+];
+
+/// A sweep over two lines of constant Gamma (30 and 20) of [`LINE`]'s `E*`, in a new database.
+fn stored_sweep(path: &std::path::Path) -> (wetgran::store::Store, wetgran::store::SweepRow) {
+    let toml = scene_toml(30.0, 1.0, 1.0, 1);
+    let scene_part: String = toml
+        .lines()
+        .map(|l| match l.strip_prefix('[') {
+            Some(rest) if !rest.starts_with('[') => format!("[scene.{rest}"),
+            _ => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let e: Vec<String> = LINE.iter().map(|(e, _)| e.to_string()).collect();
+    let text = format!(
+        "[sweep]\nname = \"inc\"\nperiods = 10\n[scene]\n{scene_part}\n[[axis]]\nkey = \"gamma\"\n\
+         values = [30.0, 20.0]\n[[axis]]\nkey = \"e_star\"\nvalues = [{}]\n",
+        e.join(", ")
+    );
+    let file = wetgran::sweep::SweepFile::parse(&text, std::path::Path::new("inc.toml")).unwrap();
+    let store = wetgran::store::Store::open(path).unwrap();
+    let row = store
+        .register_sweep(&file, &file.expand().unwrap())
+        .unwrap();
+    (store, row)
+}
+
+/// `(Gamma, index in LINE)` of a claimed job.
+fn where_on_line(claim: &wetgran::store::Claim) -> (f64, usize) {
+    let (g, e) = wetgran::run::relabel::gamma_e_star(&claim.spec.scene).unwrap();
+    let k = LINE
+        .iter()
+        .position(|(x, _)| (x - e).abs() < 1e-9 * x)
+        .unwrap();
+    (g, k)
+}
+
+/// Claims every job of the sweep, then stores the results of those `pick` selects, in the
+/// order given, each labelled per point as the runner labels it.
+fn finish_some(
+    store: &wetgran::store::Store,
+    claims: &[wetgran::store::Claim],
+    template: &Value,
+    pick: impl Fn(f64, usize) -> bool,
+) {
+    for c in claims {
+        let (g, k) = where_on_line(c);
+        if !pick(g, k) {
+            continue;
+        }
+        let obs = with_error(observables(template, LINE[k].1), 0.01);
+        let parsed: wetgran_core::observe::Observables =
+            serde_json::from_value(obs.clone()).unwrap();
+        let c1 = wetgran_core::observe::classify(&parsed, &c.spec.scene.classify);
+        let result = wetgran::sweep::job::JobResult {
+            phase: Some(c1.phase.to_string()),
+            decided_on: Some(serde_json::to_value(&c1.decided_on).unwrap()),
+            observables: obs,
+            simulated_time: 2.0,
+            wall_seconds: 0.1,
+            events: 1,
+            checkpoint: None,
+        };
+        assert!(store.finish(c, &result).unwrap());
+    }
+}
+
+fn claim_all(
+    store: &wetgran::store::Store,
+    row: &wetgran::store::SweepRow,
+) -> Vec<wetgran::store::Claim> {
+    std::iter::from_fn(|| store.claim(&[row.id]).unwrap()).collect()
+}
+
+type Labels = std::collections::BTreeMap<String, (Option<String>, Option<Value>)>;
+
+fn stored_labels(store: &wetgran::store::Store, row: &wetgran::store::SweepRow) -> Labels {
+    store
+        .points(row.id)
+        .unwrap()
+        .into_iter()
+        .map(|p| (p.job_id, (p.phase, p.decided_on)))
+        .collect()
+}
+
+/// The relabelling after a run (`relabel_changed`) reads only the lines holding results stored
+/// since the last one, and whatever order the results came in, with a crash between storing
+/// and relabelling or not, the stored labels end equal to a relabelling of every result.
+#[test]
+fn relabelling_only_the_changed_lines_equals_relabelling_everything() {
+    use wetgran::run::relabel::{relabel_changed, relabel_stored};
+    let template =
+        serde_json::to_value(run_observed(&scene(30.0, 1.0, 1.0, 1), &mut |_| {}).observables)
+            .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+
+    // All results at once, then one relabelling of what changed.
+    let (a, row_a) = stored_sweep(&dir.path().join("a.sqlite"));
+    let claims = claim_all(&a, &row_a);
+    assert_eq!(claims.len(), 2 * LINE.len());
+    finish_some(&a, &claims, &template, |_, _| true);
+    assert_eq!(relabel_changed(&a, &row_a).unwrap().results, 2 * LINE.len());
+    let want = stored_labels(&a, &row_a);
+    // A full relabelling finds nothing to change.
+    assert_eq!(
+        relabel_stored(&a, std::slice::from_ref(&row_a), None)
+            .unwrap()
+            .changed(),
+        0
+    );
+    assert_eq!(stored_labels(&a, &row_a), want);
+    let e1 = |claims: &[wetgran::store::Claim], g: f64| {
+        claims
+            .iter()
+            .find(|c| where_on_line(c) == (g, 2))
+            .unwrap()
+            .job_id
+            .clone()
+    };
+    assert_eq!(want[&e1(&claims, 30.0)].0.as_deref(), Some("f"));
+
+    // The other order: the low E* of both lines first (lines too short: per point), then the
+    // rest of Gamma = 30, then the rest of Gamma = 20, relabelling after each batch.
+    let (b, row_b) = stored_sweep(&dir.path().join("b.sqlite"));
+    let mut claims = claim_all(&b, &row_b);
+    claims.reverse();
+    finish_some(&b, &claims, &template, |_, k| k < 3);
+    assert_eq!(relabel_changed(&b, &row_b).unwrap().results, 6);
+    assert_eq!(
+        stored_labels(&b, &row_b)[&e1(&claims, 30.0)].0.as_deref(),
+        Some("g"),
+        "on a line too short E* = 1 is labelled per point"
+    );
+    finish_some(&b, &claims, &template, |g, k| g > 25.0 && k >= 3);
+    // The two new results and the three earlier ones of their line; Gamma = 20 untouched.
+    let r = relabel_changed(&b, &row_b).unwrap();
+    assert_eq!(r.results, LINE.len());
+    assert_eq!(r.changes.get(&("g".into(), "f".into())), Some(&1));
+    assert_eq!(
+        stored_labels(&b, &row_b)[&e1(&claims, 20.0)].0.as_deref(),
+        Some("g")
+    );
+    finish_some(&b, &claims, &template, |g, k| g < 25.0 && k >= 3);
+    assert_eq!(relabel_changed(&b, &row_b).unwrap().results, LINE.len());
+    assert_eq!(stored_labels(&b, &row_b), want);
+    // Nothing stored since: nothing read.
+    assert_eq!(relabel_changed(&b, &row_b).unwrap().results, 0);
+
+    // A crash between storing the second batch and relabelling it: the next relabelling (here
+    // in a new process's store) still sees those results.
+    let path_c = dir.path().join("c.sqlite");
+    let (c, row_c) = stored_sweep(&path_c);
+    let claims = claim_all(&c, &row_c);
+    finish_some(&c, &claims, &template, |_, k| k < 3);
+    relabel_changed(&c, &row_c).unwrap();
+    finish_some(&c, &claims, &template, |_, k| k >= 3);
+    drop(c);
+    let c = wetgran::store::Store::open(&path_c).unwrap();
+    assert_eq!(relabel_changed(&c, &row_c).unwrap().results, 2 * LINE.len());
+    assert_eq!(stored_labels(&c, &row_c), want);
 }

@@ -357,8 +357,7 @@ pub(super) fn sweep_resume(
     super::extend_cmd::extend_unconverged(&store, &sweeps, cap, jobs)?;
     // Extended results get the line rule's labels too, as after any run.
     for s in &sweeps {
-        let relabelled =
-            crate::run::relabel::relabel_stored(&store, std::slice::from_ref(s), None)?;
+        let relabelled = crate::run::relabel::relabel_changed(&store, s)?;
         if relabelled.changed() > 0 {
             eprintln!(
                 "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
@@ -399,7 +398,7 @@ fn run_and_report(
         summary.wall_seconds
     );
     for s in sweeps {
-        let relabelled = crate::run::relabel::relabel_stored(store, std::slice::from_ref(s), None)?;
+        let relabelled = crate::run::relabel::relabel_changed(store, s)?;
         if relabelled.changed() > 0 {
             eprintln!(
                 "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",

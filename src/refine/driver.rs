@@ -6,14 +6,14 @@
 //! so that an interrupted refinement continues with rounds of the same size); a round's budget is shared
 //! by the slices in order. Refinement stops when the budget is spent or a round plans nothing
 //! (every boundary edge resolved). Everything is decided from the stored results (relabelled by
-//! the line rule after each round's run, `run::relabel::relabel_stored`), so a run
+//! the line rule after each round's run, `run::relabel::relabel_changed`), so a run
 //! interrupted at any point continues with the same plan: `sweep resume` (or `sweep refine`
 //! again) runs the pending jobs of the interrupted round first, and two refinements from the
 //! same results add the same points.
 
 use super::{Sample, Settings, Step, plan_round};
 use crate::boundary::{Observation, PlaneAxis, phase_map};
-use crate::run::relabel::relabel_stored;
+use crate::run::relabel::relabel_changed;
 use crate::run::{RunOptions, run_sweeps};
 use crate::store::{PointRow, REFINED_FROM, Store, StoreError, SweepRow};
 use crate::sweep::{SweepFile, SweepJob};
@@ -81,7 +81,7 @@ pub fn refine_sweep(
         run_sweeps(store, std::slice::from_ref(row), opts)?;
         // The plan reads the labels: the line rule's, from every stored result, as after any
         // run, so that a refinement interrupted anywhere plans the same round again.
-        let relabelled = relabel_stored(store, std::slice::from_ref(row), None)?;
+        let relabelled = relabel_changed(store, row)?;
         if opts.show_progress && relabelled.changed() > 0 {
             eprintln!(
                 "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",

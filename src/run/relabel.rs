@@ -10,7 +10,7 @@
 //! per-point labels (`{"by": "line_without_transition"}`).
 
 use crate::store::{PointRow, Store, StoreError, SweepRow};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashSet};
 use wetgran_core::observe::line::classify_line;
 use wetgran_core::observe::{Classification, Observables, Thresholds, classify};
 use wetgran_core::scene::{DriveKind, Scene};
@@ -202,19 +202,12 @@ impl Relabelled {
     }
 }
 
-/// Re-labels every stored result of `sweeps` from its stored observables with `thresholds`, or
-/// with the job's own `[classify]` thresholds when `None`, the fluid-gas line rule included
-/// (`run::relabel`, docs/model.md 7); writes only labels that changed or whose decision numbers
-/// changed. A job shared by several of the given sweeps is counted once (the last sweep's
-/// lines decide its label). The runner's callers relabel after every change of the stored
-/// results (a run, a refinement round, an extension), so that every stored label is the same
-/// function of the stored observables whatever order (or crash) the results came in.
-pub fn relabel_stored(
-    store: &Store,
-    sweeps: &[SweepRow],
-    thresholds: Option<&Thresholds>,
-) -> Result<Relabelled, StoreError> {
-    let mut labels: BTreeMap<
+/// The labels a relabelling computed, keyed by job, and what it noticed about the results it
+/// read.
+#[derive(Default)]
+struct Tally {
+    /// `job -> (old phase, old decided_on, new phase, new decided_on)`.
+    labels: BTreeMap<
         String,
         (
             Option<String>,
@@ -222,20 +215,22 @@ pub fn relabel_stored(
             String,
             serde_json::Value,
         ),
-    > = BTreeMap::new();
-    let mut out = Relabelled::default();
-    let mut unreadable = std::collections::HashSet::new();
-    let mut missing_flc = std::collections::HashSet::new();
-    let mut missing_regions = std::collections::HashSet::new();
-    for s in sweeps {
-        let points = store.points(s.id)?;
-        for p in &points {
+    >,
+    unreadable: HashSet<String>,
+    missing_flc: HashSet<String>,
+    missing_regions: HashSet<String>,
+}
+
+impl Tally {
+    /// Relabels `points` (whole lines of one sweep) and records the outcome.
+    fn add(&mut self, points: &[PointRow], thresholds: Option<&Thresholds>) {
+        for p in points {
             if let Some(o) = &p.observables
                 && serde_json::from_value::<Observables>(o.clone()).is_err()
             {
                 // Observables this wetgran cannot read (another version's layout) keep their
                 // label.
-                unreadable.insert(p.job_id.clone());
+                self.unreadable.insert(p.job_id.clone());
             }
             let th = thresholds.unwrap_or(&p.spec.scene.classify);
             if th.mobility == wetgran_core::observe::Mobility::LocationChanges
@@ -244,44 +239,125 @@ pub fn relabel_stored(
                         .is_none_or(serde_json::Value::is_null)
                 })
             {
-                missing_flc.insert(p.job_id.clone());
+                self.missing_flc.insert(p.job_id.clone());
             }
             if p.observables
                 .as_ref()
                 .is_some_and(|o| o.pointer("/profiles/clusters").is_none())
             {
-                missing_regions.insert(p.job_id.clone());
+                self.missing_regions.insert(p.job_id.clone());
             }
         }
         let before: BTreeMap<&str, &PointRow> =
             points.iter().map(|p| (p.job_id.as_str(), p)).collect();
-        for l in relabel(&points, thresholds) {
+        for l in relabel(points, thresholds) {
             let p = before[l.job_id.as_str()];
             let phase = l.classification.phase.to_string();
             let decided_on =
                 serde_json::to_value(&l.classification.decided_on).expect("decision serializes");
-            labels.insert(
+            self.labels.insert(
                 l.job_id.clone(),
                 (p.phase.clone(), p.decided_on.clone(), phase, decided_on),
             );
         }
     }
-    out.unreadable = unreadable.len();
-    out.missing_flc = missing_flc.len();
-    out.missing_regions = missing_regions.len();
-    let mut updates = Vec::new();
-    for (job_id, (old_phase, old_decided, phase, decided_on)) in labels {
-        out.results += 1;
-        let old = old_phase.clone().unwrap_or_else(|| "-".to_string());
-        if old != phase {
-            *out.changes.entry((old, phase.clone())).or_insert(0) += 1;
+
+    /// The summary, and the labels to write: those that changed or whose decision numbers did.
+    fn finish(self) -> (Relabelled, Vec<(String, String, serde_json::Value)>) {
+        let mut out = Relabelled {
+            unreadable: self.unreadable.len(),
+            missing_flc: self.missing_flc.len(),
+            missing_regions: self.missing_regions.len(),
+            ..Relabelled::default()
+        };
+        let mut updates = Vec::new();
+        for (job_id, (old_phase, old_decided, phase, decided_on)) in self.labels {
+            out.results += 1;
+            let old = old_phase.clone().unwrap_or_else(|| "-".to_string());
+            if old != phase {
+                *out.changes.entry((old, phase.clone())).or_insert(0) += 1;
+            }
+            if old_phase.as_deref() != Some(phase.as_str())
+                || old_decided.as_ref() != Some(&decided_on)
+            {
+                updates.push((job_id, phase, decided_on));
+            }
         }
-        if old_phase.as_deref() != Some(phase.as_str()) || old_decided.as_ref() != Some(&decided_on)
-        {
-            updates.push((job_id, phase, decided_on));
-        }
+        (out, updates)
     }
-    store.relabel(&updates)?;
+}
+
+/// Re-labels every stored result of `sweeps` from its stored observables with `thresholds`, or
+/// with the job's own `[classify]` thresholds when `None`, the fluid-gas line rule included
+/// (`run::relabel`, docs/model.md 7); writes only labels that changed or whose decision numbers
+/// changed, and clears the sweeps' marks of results not yet relabelled
+/// (`store::relabel_queue`). A job shared by several of the given sweeps is counted once (the
+/// last sweep's lines decide its label). `wetgran reclassify` and the registration of a sweep
+/// file (whose `[classify]` may be new) relabel this way; after a run, a refinement round or an
+/// extension the callers use [`relabel_changed`].
+pub fn relabel_stored(
+    store: &Store,
+    sweeps: &[SweepRow],
+    thresholds: Option<&Thresholds>,
+) -> Result<Relabelled, StoreError> {
+    let mut tally = Tally::default();
+    for s in sweeps {
+        tally.add(&store.points(s.id)?, thresholds);
+    }
+    let (out, updates) = tally.finish();
+    let clear: Vec<(i64, Option<Vec<String>>)> = sweeps.iter().map(|s| (s.id, None)).collect();
+    store.relabel_and_clear(&updates, &clear)?;
+    Ok(out)
+}
+
+/// The line key of a job's point, from its spec alone: `None` for a point that is on no line
+/// (not sinusoidally shaken). A point whose observables say it was sheared is kept off its line
+/// by [`relabel`]; the key here only has to put every member of a line under one key.
+fn spec_line_key(scene: &Scene) -> Option<String> {
+    (scene.drive.kind == DriveKind::Sine)
+        .then(|| gamma_e_star(scene))
+        .flatten()
+        .map(|(g, _)| line_key(scene, g))
+}
+
+/// Re-labels, with each job's own thresholds, only the results of `sweep` stored, replaced or
+/// added to it since its last relabelling (the marks of `store::relabel_queue`) and every
+/// result on the lines of constant Gamma that hold them; every other stored label is a
+/// function of stored observables that did not change, and of lines that did not change, so it
+/// is left as it is. The runner's callers relabel this way after every change of the stored
+/// results (a run, a refinement round, an extension), and the marks are written with the
+/// results and cleared with the labels, so that every stored label is the same function of
+/// the stored observables whatever order (or crash) the results came in: the labels equal
+/// those of [`relabel_stored`] with `None` thresholds.
+pub fn relabel_changed(store: &Store, sweep: &SweepRow) -> Result<Relabelled, StoreError> {
+    let pending = store.relabel_pending(sweep.id)?;
+    if pending.is_empty() {
+        return Ok(Relabelled::default());
+    }
+    let specs = store.point_specs(sweep.id)?;
+    let pending_set: HashSet<&str> = pending.iter().map(String::as_str).collect();
+    let keys: Vec<Option<String>> = specs.iter().map(|p| spec_line_key(&p.spec.scene)).collect();
+    let touched: HashSet<&str> = specs
+        .iter()
+        .zip(&keys)
+        .filter(|(p, _)| pending_set.contains(p.job_id.as_str()))
+        .filter_map(|(_, k)| k.as_deref())
+        .collect();
+    let mut members: Vec<String> = specs
+        .iter()
+        .zip(&keys)
+        .filter(|(p, k)| {
+            pending_set.contains(p.job_id.as_str())
+                || k.as_deref().is_some_and(|k| touched.contains(k))
+        })
+        .map(|(p, _)| p.job_id.clone())
+        .collect();
+    members.sort();
+    members.dedup();
+    let mut tally = Tally::default();
+    tally.add(&store.points_of_jobs(sweep.id, &members)?, None);
+    let (out, updates) = tally.finish();
+    store.relabel_and_clear(&updates, &[(sweep.id, Some(pending))])?;
     Ok(out)
 }
 

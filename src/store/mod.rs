@@ -47,11 +47,13 @@ mod queries;
 #[cfg(test)]
 mod query_plans;
 mod read_only;
+mod relabel_queue;
 mod stale;
 mod summary;
 
 pub use cluster::{TaskRow, TaskState};
 pub use read_only::{ReadAccess, read_access};
+pub use relabel_queue::PointSpec;
 pub use stale::{RunningJob, Stale};
 pub use summary::{PointSummary, axis_keeps_report_scene, unconverged_summaries};
 
@@ -697,6 +699,8 @@ impl Store {
                         .await
                         .map_err(|e| self.db(e))?;
                 }
+                // A merged job may have taken another's result: its lines are relabelled.
+                self.mark_relabel_job(tx, &new).await?;
                 sqlx::query(queries::DELETE_JOB)
                     .bind(&old)
                     .execute(&mut **tx)
@@ -718,18 +722,25 @@ impl Store {
         &self,
         labels: &[(String, String, serde_json::Value)],
     ) -> Result<(), StoreError> {
-        self.in_transaction(async |tx| {
-            for (job, phase, decided_on) in labels {
-                sqlx::query(queries::SET_RESULT_LABEL)
-                    .bind(job)
-                    .bind(phase)
-                    .bind(decided_on.to_string())
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
-            }
-            Ok(())
-        })
+        self.in_transaction(async |tx| self.write_labels(tx, labels).await)
+    }
+
+    /// Sets the phase label and decision numbers of stored results inside an open transaction.
+    async fn write_labels(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        labels: &[(String, String, serde_json::Value)],
+    ) -> Result<(), StoreError> {
+        for (job, phase, decided_on) in labels {
+            sqlx::query(queries::SET_RESULT_LABEL)
+                .bind(job)
+                .bind(phase)
+                .bind(decided_on.to_string())
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+        }
+        Ok(())
     }
 
     /// SQLite's full integrity check (`PRAGMA integrity_check`): `["ok"]` for a sound file, else
@@ -818,6 +829,8 @@ impl Store {
             .execute(&mut **tx)
             .await
             .map_err(|e| self.db(e))?;
+        // The sweeps holding the job relabel its lines after the run (`run::relabel`).
+        self.mark_relabel_job(tx, job_id).await?;
         if let Some(state) = &result.checkpoint {
             sqlx::query(queries::UPSERT_CHECKPOINT)
                 .bind(job_id)
@@ -988,6 +1001,7 @@ impl Store {
                 .execute(&mut **tx)
                 .await
                 .map_err(|e| self.db(e))?;
+            self.mark_relabel_point(tx, sweep_id, &job.id).await?;
         }
         Ok(())
     }

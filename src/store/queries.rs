@@ -52,6 +52,18 @@ queries! {
     /// Deletes a sweep's grid points before re-registering it (refined ones too if its file
     /// changed).
     DELETE_GRID_POINTS = "delete_grid_points";
+    /// Marks a job's result as not yet relabelled in every sweep that holds it.
+    MARK_RELABEL_JOB = "mark_relabel_job";
+    /// Marks a job added to a sweep with a result already stored as not yet relabelled there.
+    MARK_RELABEL_POINT = "mark_relabel_point";
+    /// The marks of a sweep's results not yet relabelled.
+    RELABEL_PENDING = "relabel_pending";
+    /// Forgets marks of results not yet relabelled in a key range.
+    CLEAR_RELABEL_PENDING = "clear_relabel_pending";
+    /// A sweep's rows with their specs, no results (line keys).
+    SWEEP_POINT_SPECS = "sweep_point_specs";
+    /// One job's rows in a sweep with its result.
+    SWEEP_POINTS_OF_JOB = "sweep_points_of_job";
     /// Deletes a job row.
     DELETE_JOB = "delete_job";
     /// Deletes a job's result.

@@ -23,14 +23,17 @@
 //! (process start included): `sweep status`, `boundaries`, `plot`, `export` (CSV to a file),
 //! `reclassify` (those named by `--reports`), each the median of `--repeat` runs.
 //!
-//! With `refine` among the reports: one refinement round, in this process, as
+//! With `refine` among the reports: first the relabelling that ends `sweep run`
+//! (`run::relabel::relabel_changed` on the sweep's results, every one of them new), timed; the
+//! stand-in labels are then written back (`Store::relabel`, untimed): the classifier gives
+//! every stand-in result one label (their observables are one run's), which would leave no
+//! boundary to plan on. Then one refinement round, in this process, as
 //! `refine::driver::refine_sweep` makes it (reading the rows, planning, adding the jobs, running
-//! them with the stand-in, and the relabelling of every stored result by the classifier and the
-//! line rule that starts each round), each part timed; its budget is a tenth of the sweep. The
-//! relabelling is timed last: it gives every stand-in result one label (their observables are
-//! one run's), which would leave no boundary to plan on. So that the map has boundaries to refine, the
-//! stand-in results are then marked stationary (`stationarity.stationary`,
-//! `convergence.converged`, `trend.state`), which every report also sees.
+//! them with the stand-in, and the relabelling of the lines of constant Gamma holding the new
+//! results that follows each round's run), each part timed; its budget is a tenth of the sweep.
+//! So that the map has boundaries to refine, the stand-in results are marked stationary
+//! (`stationarity.stationary`, `convergence.converged`, `trend.state`), which every report also
+//! sees.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -133,6 +136,8 @@ pub struct Figures {
     pub reports: Vec<(String, f64)>,
     /// One refinement round (`refine` among the reports).
     pub refine: Option<RefineRound>,
+    /// Seconds of the relabelling that ends `sweep run` (`refine` among the reports).
+    pub end_of_run_relabel_s: Option<f64>,
 }
 
 /// The parts of one refinement round, seconds.
@@ -182,10 +187,8 @@ fn refine_round(
             jobs.len()
         ));
     }
-    // Last: the classifier gives every stand-in result the same label (their observables are
-    // one run's), which would leave no boundary to plan on.
     let t0 = Instant::now();
-    wetgran::run::relabel::relabel_stored(store, rows_of, None).map_err(|x| e(&x))?;
+    wetgran::run::relabel::relabel_changed(store, row).map_err(|x| e(&x))?;
     let relabel_s = t0.elapsed().as_secs_f64();
     Ok(RefineRound {
         relabel_s,
@@ -194,6 +197,47 @@ fn refine_round(
         run_s,
         added: jobs.len(),
     })
+}
+
+/// The stand-in label of a point: a made-up map with two boundaries, solid at low Gamma, gas at
+/// high E* Gamma.
+fn stand_in_phase(coords: &[serde_json::Value]) -> &'static str {
+    let gamma = coords.first().and_then(|v| v.as_f64()).unwrap_or(1.0);
+    let e_star = coords.get(1).and_then(|v| v.as_f64()).unwrap_or(1.0);
+    if gamma < 1.5 {
+        "s"
+    } else if gamma * e_star > 10.0 {
+        "g"
+    } else {
+        "f"
+    }
+}
+
+/// Times the relabelling that ends `sweep run` on the sweep `row`, then writes the stand-in
+/// labels back (module doc).
+fn end_of_run_relabel(
+    store: &Store,
+    row: &wetgran::store::SweepRow,
+    decided_on: &Option<serde_json::Value>,
+) -> Result<f64, String> {
+    let t0 = Instant::now();
+    wetgran::run::relabel::relabel_changed(store, row).map_err(|e| e.to_string())?;
+    let t = t0.elapsed().as_secs_f64();
+    let decided_on = decided_on.clone().unwrap_or(serde_json::Value::Null);
+    let labels: Vec<(String, String, serde_json::Value)> = store
+        .points(row.id)
+        .map_err(|e| e.to_string())?
+        .into_iter()
+        .map(|p| {
+            (
+                p.job_id,
+                stand_in_phase(&p.coords).to_string(),
+                decided_on.clone(),
+            )
+        })
+        .collect();
+    store.relabel(&labels).map_err(|e| e.to_string())?;
+    Ok(t)
 }
 
 /// Runs the benchmark at one size in `dir`.
@@ -217,6 +261,7 @@ pub fn measure(
     let t0 = Instant::now();
     let real = run_job(&jobs[0].spec, &mut |_| {}).map_err(|e| e.to_string())?;
     let real_s = t0.elapsed().as_secs_f64();
+    let real_decided_on = real.decided_on.clone();
     let obs_bytes = real.observables.to_string().len();
     let state_bytes = real
         .checkpoint
@@ -255,18 +300,8 @@ pub fn measure(
                 .lock()
                 .expect("no panic holds it")
                 .push(Instant::now());
-            let gamma = claim.coords[0].as_f64().unwrap_or(1.0);
-            let e_star = claim.coords[1].as_f64().unwrap_or(1.0);
-            // A made-up map with two boundaries: solid at low Gamma, gas at high E* Gamma.
-            let phase = if gamma < 1.5 {
-                "s"
-            } else if gamma * e_star > 10.0 {
-                "g"
-            } else {
-                "f"
-            };
             Ok(JobResult {
-                phase: Some(phase.to_string()),
+                phase: Some(stand_in_phase(&claim.coords).to_string()),
                 decided_on: real.decided_on.clone(),
                 observables: observables.clone(),
                 simulated_time: real.simulated_time,
@@ -290,6 +325,13 @@ pub fn measure(
         return Err(format!("{} of {jobs_n} jobs done", summary.done));
     }
     let db_bytes = size(&db) + size(&dir.join("bench.sqlite-wal"));
+    let end_of_run_relabel_s = if refine {
+        let t = end_of_run_relabel(&store, &sweep, &real_decided_on)?;
+        eprintln!("N = {jobs_n}: relabelling at the end of the run {t:.3} s");
+        Some(t)
+    } else {
+        None
+    };
     drop(store);
 
     let starts = starts.lock().expect("no panic holds it").clone();
@@ -356,6 +398,7 @@ pub fn measure(
         db_bytes_per_result: db_bytes as f64 / jobs_n as f64,
         reports: timed,
         refine,
+        end_of_run_relabel_s,
     })
 }
 
@@ -410,10 +453,17 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
         let _ = writeln!(s, "{:>8}  {}", r.jobs, parts.join(", "));
     }
     for r in rows {
+        if let Some(t) = r.end_of_run_relabel_s {
+            let _ = writeln!(
+                s,
+                "{:>8}  relabelling at the end of `sweep run` (every result new): {t:.3} s",
+                r.jobs
+            );
+        }
         if let Some(f) = &r.refine {
             let _ = writeln!(
                 s,
-                "{:>8}  refinement round: {} job(s) added; relabel {:.3} s, read rows and plan \
+                "{:>8}  refinement round: {} job(s) added; relabel the lines of the new results {:.3} s, read rows and plan \
                  {:.3} s, add jobs {:.3} s, run them {:.3} s; {:.3} s in all",
                 r.jobs,
                 f.added,
