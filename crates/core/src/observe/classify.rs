@@ -175,7 +175,8 @@ pub struct CoexistenceTest {
     pub delta: f64,
     /// RMS statistical error of the bins' time averages (`None`: not measured).
     pub standard_error: Option<f64>,
-    /// Expected spread of a homogeneous state, `E[range of B normals] * standard_error`.
+    /// Expected spread of a homogeneous state: the bootstrap's median where stored, else
+    /// `E[range of B normals] * standard_error`.
     pub expected_noise: Option<f64>,
     /// The `coexistence_level` quantile of that spread: from the bootstrap over the profile
     /// where stored (`noise::NullRanges`), else from the independent-bin range model.
@@ -510,10 +511,17 @@ fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec
     };
     // Membership is only known for results that measured bonded clusters.
     let member_fraction = (p.clusters.is_some() && grains > 0.0).then(|| members / grains);
-    let expected = se.map(|s| s * noise::range_mean(bins));
-    let (threshold, null_model) = match null {
-        Some(n) => (Some(n.quantile(th.coexistence_level)), Some("bootstrap")),
+    // The expected spread of a homogeneous profile and the level's quantile: from the stored
+    // bootstrap (its median and quantile, cheap), else from the independent-bin range model
+    // (two numerical integrals per call).
+    let (expected, threshold, null_model) = match null {
+        Some(n) => (
+            Some(n.quantile(0.5)),
+            Some(n.quantile(th.coexistence_level)),
+            Some("bootstrap"),
+        ),
         None => (
+            se.map(|s| s * noise::range_mean(bins)),
             se.map(|s| s * noise::range_quantile(bins, th.coexistence_level)),
             se.map(|_| "independent_bins"),
         ),
