@@ -346,10 +346,10 @@ fn grid_position(point: usize, lens: &[usize]) -> Vec<f64> {
 /// chain's first job.
 pub fn sample_spec(sweep: &SweepFile, job: &SweepJob, settle: f64, periods: f64) -> JobSpec {
     let mut spec = job.spec.clone();
-    if spec.start_from.take().is_some() {
-        if let Some(c) = &sweep.continuation {
-            spec.scene.initial.start = c.first;
-        }
+    if spec.start_from.take().is_some()
+        && let Some(c) = &sweep.continuation
+    {
+        spec.scene.initial.start = c.first;
     }
     let period = spec.period();
     spec.scene.convergence = None;
