@@ -196,6 +196,88 @@ fn refine_round(
     })
 }
 
+/// The stand-in job: records its start time in `starts` and returns `real` at once, with
+/// `observables` and a phase from a made-up map of its grid point.
+fn stand_in_job(
+    real: JobResult,
+    observables: serde_json::Value,
+    starts: Arc<Mutex<Vec<Instant>>>,
+) -> JobFn {
+    Arc::new(move |claim, _progress| {
+        starts
+            .lock()
+            .expect("no panic holds it")
+            .push(Instant::now());
+        let gamma = claim.coords[0].as_f64().unwrap_or(1.0);
+        let e_star = claim.coords[1].as_f64().unwrap_or(1.0);
+        // A made-up map with two boundaries: solid at low Gamma, gas at high E* Gamma.
+        let phase = if gamma < 1.5 {
+            "s"
+        } else if gamma * e_star > 10.0 {
+            "g"
+        } else {
+            "f"
+        };
+        Ok(JobResult {
+            phase: Some(phase.to_string()),
+            decided_on: real.decided_on.clone(),
+            observables: observables.clone(),
+            simulated_time: real.simulated_time,
+            wall_seconds: 0.0,
+            events: real.events,
+            checkpoint: real.checkpoint.clone(),
+        })
+    })
+}
+
+/// Times each report command named in `reports` on the database `db`, `repeat` times each:
+/// (name, median seconds).
+fn time_reports(
+    db: &Path,
+    dir: &Path,
+    reports: &[String],
+    repeat: usize,
+    jobs_n: usize,
+) -> Result<Vec<(String, f64)>, String> {
+    let bin = wetgran_binary()?;
+    let d = db.display().to_string();
+    let svg = dir.join("plot.svg").display().to_string();
+    let csv = dir.join("export.csv").display().to_string();
+    let commands: Vec<(&str, Vec<&str>)> = vec![
+        ("sweep status", vec!["sweep", "status", "--db", &d]),
+        (
+            "boundaries",
+            vec!["boundaries", "--db", &d, "--sweep", "bench"],
+        ),
+        (
+            "plot",
+            vec!["plot", "--db", &d, "--sweep", "bench", "-o", &svg],
+        ),
+        (
+            "export (CSV to a file)",
+            vec!["export", "--db", &d, "--sweep", "bench", "-o", &csv],
+        ),
+        (
+            "reclassify",
+            vec!["reclassify", "--db", &d, "--sweep", "bench"],
+        ),
+    ];
+    let out = dir.join("stdout.txt");
+    let mut timed = Vec::new();
+    for (name, args) in &commands {
+        if !reports.iter().any(|r| name.contains(r.as_str())) {
+            continue;
+        }
+        let mut times = Vec::new();
+        for _ in 0..repeat {
+            times.push(time_command(&bin, args, &out)?);
+        }
+        eprintln!("N = {jobs_n}: {name} {:.3} s", median(times.clone()));
+        timed.push((name.to_string(), median(times)));
+    }
+    Ok(timed)
+}
+
 /// Runs the benchmark at one size in `dir`.
 pub fn measure(
     n: usize,
@@ -248,34 +330,7 @@ pub fn measure(
         }
     }
     let starts = Arc::new(Mutex::new(Vec::with_capacity(jobs_n)));
-    let job: JobFn = {
-        let starts = starts.clone();
-        Arc::new(move |claim, _progress| {
-            starts
-                .lock()
-                .expect("no panic holds it")
-                .push(Instant::now());
-            let gamma = claim.coords[0].as_f64().unwrap_or(1.0);
-            let e_star = claim.coords[1].as_f64().unwrap_or(1.0);
-            // A made-up map with two boundaries: solid at low Gamma, gas at high E* Gamma.
-            let phase = if gamma < 1.5 {
-                "s"
-            } else if gamma * e_star > 10.0 {
-                "g"
-            } else {
-                "f"
-            };
-            Ok(JobResult {
-                phase: Some(phase.to_string()),
-                decided_on: real.decided_on.clone(),
-                observables: observables.clone(),
-                simulated_time: real.simulated_time,
-                wall_seconds: 0.0,
-                events: real.events,
-                checkpoint: real.checkpoint.clone(),
-            })
-        })
-    };
+    let job = stand_in_job(real, observables, starts.clone());
     let opts = RunOptions {
         jobs: workers,
         retry_failed: false,
@@ -301,42 +356,7 @@ pub fn measure(
     let first = gaps[..tenth].to_vec();
     let last = gaps[gaps.len() - tenth..].to_vec();
 
-    let bin = wetgran_binary()?;
-    let d = db.display().to_string();
-    let svg = dir.join("plot.svg").display().to_string();
-    let csv = dir.join("export.csv").display().to_string();
-    let commands: Vec<(&str, Vec<&str>)> = vec![
-        ("sweep status", vec!["sweep", "status", "--db", &d]),
-        (
-            "boundaries",
-            vec!["boundaries", "--db", &d, "--sweep", "bench"],
-        ),
-        (
-            "plot",
-            vec!["plot", "--db", &d, "--sweep", "bench", "-o", &svg],
-        ),
-        (
-            "export (CSV to a file)",
-            vec!["export", "--db", &d, "--sweep", "bench", "-o", &csv],
-        ),
-        (
-            "reclassify",
-            vec!["reclassify", "--db", &d, "--sweep", "bench"],
-        ),
-    ];
-    let out = dir.join("stdout.txt");
-    let mut timed = Vec::new();
-    for (name, args) in &commands {
-        if !reports.iter().any(|r| name.contains(r.as_str())) {
-            continue;
-        }
-        let mut times = Vec::new();
-        for _ in 0..repeat {
-            times.push(time_command(&bin, args, &out)?);
-        }
-        eprintln!("N = {jobs_n}: {name} {:.3} s", median(times.clone()));
-        timed.push((name.to_string(), median(times)));
-    }
+    let timed = time_reports(&db, dir, reports, repeat, jobs_n)?;
     let refine = if refine {
         let store = Store::open_as(&db, false, durability).map_err(|e| e.to_string())?;
         let r = refine_round(&store, &file, &sweep, job, &opts)?;
