@@ -129,6 +129,31 @@ fn numbers(
     )
 }
 
+/// `sweep status` shows the Slurm queue of the sweep `cl` (4 tasks in 2 arrays), each task in
+/// a state Slurm or the collector names.
+fn check_status_shows_queue(db_s: &str) {
+    let status = stdout(&run(&["sweep", "status", "--db", db_s]));
+    assert!(status.contains("sweep cl on Slurm"), "{status}");
+    assert!(status.contains("4 task(s) in 2 array(s)"), "{status}");
+    let queued = status
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("not collected yet: "))
+        .unwrap_or_else(|| panic!("{status}"));
+    for part in queued.split(", ") {
+        let state = part.split_once(' ').unwrap().1;
+        assert!(
+            [
+                "PENDING",
+                "RUNNING",
+                "COMPLETING",
+                "finished, not collected"
+            ]
+            .contains(&state),
+            "{status}"
+        );
+    }
+}
+
 #[test]
 fn a_sweep_submitted_to_slurm_equals_a_local_run() {
     let _slurm = match slurm() {
@@ -182,27 +207,7 @@ fn a_sweep_submitted_to_slurm_equals_a_local_run() {
     assert!(tasks.iter().all(|t| Path::new(&t.dir) == sd));
     // Nothing is in the database's job rows before collection.
     assert_eq!(store.counts(id).unwrap().pending, 4);
-    // `sweep status` shows the queue.
-    let status = stdout(&run(&["sweep", "status", "--db", db_s]));
-    assert!(status.contains("sweep cl on Slurm"), "{status}");
-    assert!(status.contains("4 task(s) in 2 array(s)"), "{status}");
-    let queued = status
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("not collected yet: "))
-        .unwrap_or_else(|| panic!("{status}"));
-    for part in queued.split(", ") {
-        let state = part.split_once(' ').unwrap().1;
-        assert!(
-            [
-                "PENDING",
-                "RUNNING",
-                "COMPLETING",
-                "finished, not collected"
-            ]
-            .contains(&state),
-            "{status}"
-        );
-    }
+    check_status_shows_queue(db_s);
 
     wait_for(&store, id);
     let first_round = t0.elapsed().as_secs_f64();

@@ -285,6 +285,59 @@ fn assert_labels_follow(store: &Store, sweep: &str, th: &Thresholds) -> usize {
     n
 }
 
+/// `export` of the four results of the sweep in `db_s`: one row per result, scalar columns
+/// only, the series in their own file indexed per job. Returns the job ids of the rows.
+fn check_export(dir: &std::path::Path, db_s: &str) -> Vec<String> {
+    // Export: one row per result, scalar columns only; the series go to their own file.
+    let csv_path = dir.join("r.csv");
+    let series_path = dir.join("series.csv");
+    ok(&[
+        "export",
+        "--db",
+        db_s,
+        "-o",
+        csv_path.to_str().unwrap(),
+        "--series",
+        series_path.to_str().unwrap(),
+    ]);
+    let csv = std::fs::read_to_string(&csv_path).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert!(header.len() < 100, "{} columns: {header:?}", header.len());
+    assert!(header.contains(&"stationary") && header.contains(&"trust"));
+    assert!(
+        !header
+            .iter()
+            .any(|h| h.rsplit('.').next().unwrap().parse::<usize>().is_ok()),
+        "an array element became a column: {header:?}"
+    );
+    assert_eq!(csv.lines().count(), 5);
+    let series = std::fs::read_to_string(&series_path).unwrap();
+    let mut lines = series.lines();
+    assert_eq!(lines.next(), Some("job_id,series,index,value"));
+    let id_col = header.iter().position(|h| *h == "job_id").unwrap();
+    let ids: Vec<String> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(id_col).unwrap().to_string())
+        .collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert!(rows.len() > 4 * 10, "{} series rows", rows.len());
+    for r in &rows {
+        assert_eq!(r.len(), 4, "{r:?}");
+        assert!(ids.iter().any(|i| i == r[0]), "{r:?}");
+        assert!(r[2].parse::<usize>().is_ok(), "{r:?}");
+    }
+    // A series' indices count 0, 1, 2, ... per job.
+    let first = &rows[0];
+    let idx: Vec<usize> = rows
+        .iter()
+        .filter(|r| r[0] == first[0] && r[1] == first[1])
+        .map(|r| r[2].parse().unwrap())
+        .collect();
+    assert_eq!(idx, (0..idx.len()).collect::<Vec<_>>());
+    ids
+}
+
 #[test]
 fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
     let dir = tempfile::tempdir().unwrap();
@@ -407,53 +460,7 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
     );
     assert_eq!(store.runs_started().unwrap(), 4);
 
-    // Export: one row per result, scalar columns only; the series go to their own file.
-    let csv_path = dir.path().join("r.csv");
-    let series_path = dir.path().join("series.csv");
-    ok(&[
-        "export",
-        "--db",
-        db_s,
-        "-o",
-        csv_path.to_str().unwrap(),
-        "--series",
-        series_path.to_str().unwrap(),
-    ]);
-    let csv = std::fs::read_to_string(&csv_path).unwrap();
-    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    assert!(header.len() < 100, "{} columns: {header:?}", header.len());
-    assert!(header.contains(&"stationary") && header.contains(&"trust"));
-    assert!(
-        !header
-            .iter()
-            .any(|h| h.rsplit('.').next().unwrap().parse::<usize>().is_ok()),
-        "an array element became a column: {header:?}"
-    );
-    assert_eq!(csv.lines().count(), 5);
-    let series = std::fs::read_to_string(&series_path).unwrap();
-    let mut lines = series.lines();
-    assert_eq!(lines.next(), Some("job_id,series,index,value"));
-    let id_col = header.iter().position(|h| *h == "job_id").unwrap();
-    let ids: Vec<String> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(id_col).unwrap().to_string())
-        .collect();
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert!(rows.len() > 4 * 10, "{} series rows", rows.len());
-    for r in &rows {
-        assert_eq!(r.len(), 4, "{r:?}");
-        assert!(ids.iter().any(|i| i == r[0]), "{r:?}");
-        assert!(r[2].parse::<usize>().is_ok(), "{r:?}");
-    }
-    // A series' indices count 0, 1, 2, ... per job.
-    let first = &rows[0];
-    let idx: Vec<usize> = rows
-        .iter()
-        .filter(|r| r[0] == first[0] && r[1] == first[1])
-        .map(|r| r[2].parse().unwrap())
-        .collect();
-    assert_eq!(idx, (0..idx.len()).collect::<Vec<_>>());
+    let ids = check_export(dir.path(), db_s);
 
     // `show` states the stationarity verdict.
     let job = &ids[0];

@@ -501,7 +501,10 @@ pub(super) fn sweep_estimate(
     cores: usize,
     dbs: &[PathBuf],
 ) -> Result<(), Failure> {
-    use crate::sweep::estimate::{RateSample, RunLength, job_seconds, measured_runs, sweep_cost};
+    use crate::sweep::estimate::{
+        MeasuredCost, RateSample, cost_lines, measured_runs, planned_jobs, sample_picks,
+        sample_spec, time_sample,
+    };
     if !(periods.is_finite() && periods > 0.0) || samples == 0 {
         return Err(Failure::BadInput(
             "--periods must be > 0 and --samples >= 1".to_string(),
@@ -517,12 +520,19 @@ pub(super) fn sweep_estimate(
     jobs.retain(|j| seen.insert(j.id.clone()));
     let mut stored = std::collections::HashMap::new();
     for path in dbs {
-        stored.extend(Store::open_read_only(path)?.finished_job_costs()?);
+        for (id, c) in Store::open_read_only(path)?.finished_job_costs()? {
+            let cost = MeasuredCost {
+                wall_seconds: c.wall_seconds,
+                simulated_time: c.simulated_time,
+                converged: c.converged,
+            };
+            stored.insert(id, cost);
+        }
     }
     let planned = planned_jobs(&sweep, &jobs, &stored);
     // Every start mode is sampled (a hot and a cold branch cost different rates).
     let starts: Vec<String> = planned.iter().map(|j| j.start.clone()).collect();
-    let picks = crate::sweep::estimate::sample_picks(&starts, samples);
+    let picks = sample_picks(&starts, samples);
     print!(
         "{}",
         estimate_head_text(
@@ -536,8 +546,7 @@ pub(super) fn sweep_estimate(
     let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
     let mut rates = Vec::new();
     for &k in &picks {
-        let job = &jobs[k];
-        let coords = coords_text(&labels, &job.coords);
+        let coords = coords_text(&labels, &jobs[k].coords);
         if let Some(m) = planned[k].measured {
             // The database has its run: its rate is known, nothing to sample.
             print!(
@@ -546,36 +555,10 @@ pub(super) fn sweep_estimate(
             );
             continue;
         }
-        let mut spec = job.spec.clone();
-        if spec.start_from.take().is_some() {
-            // A continuation job is sampled from the start of its chain's first job.
-            if let Some(c) = &sweep.continuation {
-                spec.scene.initial.start = c.first;
-            }
-        }
-        let period = spec.period();
-        spec.scene.convergence = None;
-        spec.scene.run.duration = settle + periods * period;
-        spec.scene.observe.transient_periods = 0.0;
-        spec.scene.observe.transient_time = 0.0;
-        // A timed stretch shorter than the job's sample spacing still gets a few samples.
-        let o = &mut spec.scene.observe;
-        o.min_sample_interval = o.min_sample_interval.min(0.25 * spec.scene.run.duration);
-        // The clock starts at the first progress report past the settling time.
-        let settled = settle / spec.scene.run.duration;
-        let mut mark: Option<(std::time::Instant, f64)> = None;
-        let t0 = std::time::Instant::now();
-        let outcome = run_job(&spec, &mut |f| {
-            if mark.is_none() && f >= settled {
-                mark = Some((std::time::Instant::now(), f));
-            }
-        });
-        let (start, from) = mark.unwrap_or((t0, 0.0));
-        let wall = start.elapsed().as_secs_f64();
-        match outcome {
+        let spec = sample_spec(&sweep, &jobs[k], settle, periods);
+        match time_sample(&spec, settle) {
             Ok(r) => {
-                let timed = (1.0 - from) * r.simulated_time;
-                let rate = wall / timed;
+                let rate = r.seconds_per_time;
                 rates.push(RateSample {
                     position: planned[k].position.clone(),
                     seconds_per_time: rate,
@@ -583,7 +566,7 @@ pub(super) fn sweep_estimate(
                 });
                 print!(
                     "{}",
-                    estimate_sample_text(&coords, rate * period, rate, r.events)
+                    estimate_sample_text(&coords, rate * spec.period(), rate, r.events)
                 );
             }
             Err(e) => print!("{}", estimate_failed_text(&coords, &e.to_string())),
@@ -594,48 +577,7 @@ pub(super) fn sweep_estimate(
         return Err(Failure::Other("every sampled job failed".to_string()));
     }
     let policy = jobs.iter().any(|j| j.spec.scene.convergence.is_some());
-    let mut lines = Vec::new();
-    let mut by_start = Vec::new();
-    let mut add = |label: &str, length: RunLength| {
-        let seconds = job_seconds(&planned, &rates, length, false);
-        // CPU time per start mode, in order of appearance.
-        let mut split: Vec<(String, usize, f64)> = Vec::new();
-        for (j, s) in planned.iter().zip(&seconds) {
-            match split.iter_mut().find(|(m, _, _)| *m == j.start) {
-                Some(e) => {
-                    e.1 += 1;
-                    e.2 += s;
-                }
-                None => split.push((j.start.clone(), 1, *s)),
-            }
-        }
-        by_start.push(split);
-        let whole = sweep_cost(&planned, &seconds, cores);
-        let left = sweep_cost(
-            &planned,
-            &job_seconds(&planned, &rates, length, true),
-            cores,
-        );
-        lines.push((label.to_string(), whole, left));
-    };
-    if policy {
-        add(
-            "minimum (every job stationary at its first check)",
-            RunLength::FirstCheck,
-        );
-        if let Some(m) = measured {
-            add(
-                &format!(
-                    "likely (the stored runs' {:.2} x their first check)",
-                    m.mean_length_factor
-                ),
-                RunLength::Extended(m.mean_length_factor),
-            );
-        }
-        add("cap (every job run to its cap)", RunLength::Cap);
-    } else {
-        add("the sweep's run length", RunLength::FirstCheck);
-    }
+    let (lines, by_start) = cost_lines(&planned, &rates, measured.as_ref(), policy, cores);
     print!(
         "{}",
         estimate_text(
@@ -649,62 +591,6 @@ pub(super) fn sweep_estimate(
         )
     );
     Ok(())
-}
-
-/// The jobs as `sweep estimate` sees them: grid position, run lengths, predecessor, and the
-/// stored cost of those the database has finished.
-fn planned_jobs(
-    sweep: &crate::sweep::SweepFile,
-    jobs: &[crate::sweep::SweepJob],
-    stored: &std::collections::HashMap<String, crate::store::FinishedCost>,
-) -> Vec<crate::sweep::estimate::PlannedJob> {
-    use crate::sweep::estimate::{MeasuredCost, PlannedJob};
-    let lens: Vec<usize> = sweep.axes.iter().map(|a| a.values.len().max(1)).collect();
-    let index: std::collections::HashMap<&str, usize> = jobs
-        .iter()
-        .enumerate()
-        .map(|(k, j)| (j.id.as_str(), k))
-        .collect();
-    jobs.iter()
-        .map(|j| {
-            // Row-major grid index, the last axis fastest.
-            let mut rest = j.point;
-            let mut position = vec![0.0; lens.len()];
-            for (a, &len) in lens.iter().enumerate().rev() {
-                let i = rest % len;
-                rest /= len;
-                position[a] = if len > 1 {
-                    i as f64 / (len - 1) as f64
-                } else {
-                    0.0
-                };
-            }
-            let scene = &j.spec.scene;
-            let (first_check, cap) = match &scene.convergence {
-                Some(c) => {
-                    let s = c.schedule(scene);
-                    (s.first_check, s.cap)
-                }
-                None => (scene.run.duration, scene.run.duration),
-            };
-            PlannedJob {
-                position,
-                first_check,
-                cap,
-                predecessor: j
-                    .spec
-                    .start_from
-                    .as_deref()
-                    .and_then(|p| index.get(p).copied()),
-                measured: stored.get(&j.id).map(|c| MeasuredCost {
-                    wall_seconds: c.wall_seconds,
-                    simulated_time: c.simulated_time,
-                    converged: c.converged,
-                }),
-                start: scene.initial.start.to_string(),
-            }
-        })
-        .collect()
 }
 
 pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {

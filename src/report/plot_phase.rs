@@ -602,70 +602,114 @@ where
             Swatch::Kept,
         ));
     }
+    draw_bistable(&mut chart, slices, &points, radius, &mut legend)?;
+    draw_boundary_points(&mut chart, slices, &mut legend)?;
+    // The legend right of the plot, level with its top: it hides no point.
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    draw_legend(root, (xr.end + 14, yr.start), &legend).map_err(err)?;
+    Ok(points
+        .iter()
+        .map(|p| {
+            let (px, py) = chart.backend_coord(&(p.x, p.y));
+            (p.x, p.y, px, py)
+        })
+        .collect())
+}
+
+/// The bistable points (those whose branches disagree): a disc split into one sector per
+/// branch, the phases in branch order beside it, and their legend entries.
+fn draw_bistable<X, Y>(
+    chart: &mut ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
+    slices: &[&Slice],
+    points: &[DrawnPoint],
+    radius: i32,
+    legend: &mut Vec<(String, Swatch)>,
+) -> Result<(), String>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let err = |e: DrawingAreaErrorKind<_>| e.to_string();
     let bistable: Vec<&DrawnPoint> = points.iter().filter(|p| p.bistable()).collect();
-    if !bistable.is_empty() {
-        // One sector per branch in its phase's colour (white where that branch has no point),
-        // a black outline, and the phases in branch order beside it.
-        let r = radius + 2;
-        let n = slices.len();
-        for p in &bistable {
-            for (k, phase) in p.phases.iter().enumerate() {
-                let color = phase.as_deref().map_or(WHITE, phase_color);
-                let wedge = sector(k, n, r);
-                let style = if p.trusted {
-                    color.filled()
-                } else {
-                    color.stroke_width(2)
-                };
-                if p.trusted {
-                    chart
-                        .plotting_area()
-                        .draw(&(EmptyElement::at((p.x, p.y)) + Polygon::new(wedge, style)))
-                        .map_err(err)?;
-                } else {
-                    let mut closed = wedge;
-                    closed.push(closed[0]);
-                    chart
-                        .plotting_area()
-                        .draw(&(EmptyElement::at((p.x, p.y)) + PathElement::new(closed, style)))
-                        .map_err(err)?;
-                }
-            }
-            let text: Vec<&str> = p
-                .phases
-                .iter()
-                .map(|q| q.as_deref().unwrap_or("-"))
-                .collect();
-            chart
-                .plotting_area()
-                .draw(
-                    &(EmptyElement::at((p.x, p.y))
-                        + Circle::new((0, 0), r, BLACK.stroke_width(1))
-                        + Text::new(text.join("/"), (r + 2, -r - 10), ("sans-serif", 12))),
-                )
-                .map_err(err)?;
-        }
-        let names: Vec<String> = (0..n).map(|k| branch_name(slices, k)).collect();
-        // The branches' short names for the text's order: `hot/cold`.
-        let short: Vec<String> = (0..n)
-            .map(|k| {
-                slices[k]
-                    .branch
-                    .clone()
-                    .unwrap_or_else(|| (k + 1).to_string())
-            })
-            .collect();
-        let how = if n == 2 {
-            format!("left {}, right {}", names[0], names[1])
-        } else {
-            format!("anticlockwise from the top: {}", names.join(", "))
-        };
-        legend.push((format!("split disc: bistable ({how})"), Swatch::Split(n)));
-        legend.push((
-            format!("text by the disc: phases {}", short.join("/")),
-            Swatch::None,
-        ));
+    if bistable.is_empty() {
+        return Ok(());
     }
+    // One sector per branch in its phase's colour (white where that branch has no point),
+    // a black outline, and the phases in branch order beside it.
+    let r = radius + 2;
+    let n = slices.len();
+    for p in &bistable {
+        for (k, phase) in p.phases.iter().enumerate() {
+            let color = phase.as_deref().map_or(WHITE, phase_color);
+            let wedge = sector(k, n, r);
+            let style = if p.trusted {
+                color.filled()
+            } else {
+                color.stroke_width(2)
+            };
+            if p.trusted {
+                chart
+                    .plotting_area()
+                    .draw(&(EmptyElement::at((p.x, p.y)) + Polygon::new(wedge, style)))
+                    .map_err(err)?;
+            } else {
+                let mut closed = wedge;
+                closed.push(closed[0]);
+                chart
+                    .plotting_area()
+                    .draw(&(EmptyElement::at((p.x, p.y)) + PathElement::new(closed, style)))
+                    .map_err(err)?;
+            }
+        }
+        let text: Vec<&str> = p
+            .phases
+            .iter()
+            .map(|q| q.as_deref().unwrap_or("-"))
+            .collect();
+        chart
+            .plotting_area()
+            .draw(
+                &(EmptyElement::at((p.x, p.y))
+                    + Circle::new((0, 0), r, BLACK.stroke_width(1))
+                    + Text::new(text.join("/"), (r + 2, -r - 10), ("sans-serif", 12))),
+            )
+            .map_err(err)?;
+    }
+    let names: Vec<String> = (0..n).map(|k| branch_name(slices, k)).collect();
+    // The branches' short names for the text's order: `hot/cold`.
+    let short: Vec<String> = (0..n)
+        .map(|k| {
+            slices[k]
+                .branch
+                .clone()
+                .unwrap_or_else(|| (k + 1).to_string())
+        })
+        .collect();
+    let how = if n == 2 {
+        format!("left {}, right {}", names[0], names[1])
+    } else {
+        format!("anticlockwise from the top: {}", names.join(", "))
+    };
+    legend.push((format!("split disc: bistable ({how})"), Swatch::Split(n)));
+    legend.push((
+        format!("text by the disc: phases {}", short.join("/")),
+        Swatch::None,
+    ));
+    Ok(())
+}
+
+/// The boundary points of each branch, with the uncertainty bars of their straddling edges,
+/// and their legend entries.
+fn draw_boundary_points<X, Y>(
+    chart: &mut ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
+    slices: &[&Slice],
+    legend: &mut Vec<(String, Swatch)>,
+) -> Result<(), String>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let err = |e: DrawingAreaErrorKind<_>| e.to_string();
     // Uncertainty of each boundary point: the straddling edge's extent along each axis.
     let bars: Vec<Vec<(f64, f64)>> = slices
         .iter()
@@ -721,16 +765,7 @@ where
             .map_err(err)?;
         legend.push((label, Swatch::Cross(color)));
     }
-    // The legend right of the plot, level with its top: it hides no point.
-    let (xr, yr) = chart.plotting_area().get_pixel_range();
-    draw_legend(root, (xr.end + 14, yr.start), &legend).map_err(err)?;
-    Ok(points
-        .iter()
-        .map(|p| {
-            let (px, py) = chart.backend_coord(&(p.x, p.y));
-            (p.x, p.y, px, py)
-        })
-        .collect())
+    Ok(())
 }
 
 /// The plane axis labels, for callers that describe a plot.

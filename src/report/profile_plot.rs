@@ -7,8 +7,8 @@ use super::svg::{esc, label, n};
 use std::fmt::Write;
 use wetgran_core::observe::Observables;
 
-/// SVG of the lateral profiles of one result.
-pub fn profiles_svg(obs: &Observables) -> String {
+/// The profiles plotted, one panel each: its title and its value per bin (`None`: no value).
+fn profile_panels(obs: &Observables) -> Vec<(String, Vec<Option<f64>>)> {
     let p = &obs.profiles;
     let unit = &obs.temperature_unit_name;
     let mut panels: Vec<(String, Vec<Option<f64>>)> = vec![
@@ -42,6 +42,13 @@ pub fn profiles_svg(obs: &Observables) -> String {
             f.iter().map(|&x| Some(x)).collect(),
         ));
     }
+    panels
+}
+
+/// SVG of the lateral profiles of one result.
+pub fn profiles_svg(obs: &Observables) -> String {
+    let p = &obs.profiles;
+    let panels = profile_panels(obs);
     if let Some((nx, ny)) = p.grid {
         return maps_svg(obs, &panels, nx, ny);
     }

@@ -113,6 +113,65 @@ pub fn snapshot_xyz(frame: &Frame, energy_unit: f64) -> String {
     s
 }
 
+/// The bridges as one SVG path, each a line between its grains' centres (a bridge across the
+/// periodic `x` boundary drawn at both ends); `px`, `pz` map box coordinates to pixels.
+fn bridge_lines(s: &mut String, frame: &Frame, px: &dyn Fn(f64) -> f64, pz: &dyn Fn(f64) -> f64) {
+    let _ = write!(
+        s,
+        "<path stroke=\"#d62728\" stroke-width=\"0.7\" stroke-opacity=\"0.8\" fill=\"none\" d=\""
+    );
+    for &(i, j) in &frame.bridges {
+        let (xi, zi) = (frame.wrap(0, frame.x(i)[0]), frame.height(i));
+        let (xj, zj) = (frame.wrap(0, frame.x(j)[0]), frame.height(j));
+        let dx = frame.min_image(0, xj - xi);
+        let _ = write!(
+            s,
+            "M{} {}L{} {}",
+            n(px(xi)),
+            n(pz(zi)),
+            n(px(xi + dx)),
+            n(pz(zj))
+        );
+        if (xi + dx - xj).abs() > 1e-9 {
+            let _ = write!(
+                s,
+                "M{} {}L{} {}",
+                n(px(xj)),
+                n(pz(zj)),
+                n(px(xj - dx)),
+                n(pz(zi))
+            );
+        }
+    }
+    let _ = writeln!(s, "\"/>");
+}
+
+/// The colour legend: one swatch per step of the colour scale, baseline at `ly`.
+fn colour_legend(s: &mut String, colour_by: ColourBy, ml: f64, ly: f64) {
+    for k in 0..=8 {
+        let (fill, text) = match colour_by {
+            ColourBy::KineticEnergy => (
+                colour(k as f64 / 8.0),
+                format!("{:.1}", -2.0 + 0.5 * k as f64),
+            ),
+            ColourBy::Bridges if k < 8 => (
+                category(k).to_string(),
+                if k == 7 { "7+".into() } else { k.to_string() },
+            ),
+            ColourBy::Bridges => continue,
+        };
+        let x = ml + 42.0 * k as f64;
+        let _ = writeln!(
+            s,
+            "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"10\" fill=\"{fill}\"/><text x=\"{}\" y=\"{}\">{text}</text>",
+            n(x),
+            n(ly - 9.0),
+            n(x + 15.0),
+            n(ly)
+        );
+    }
+}
+
 /// SVG picture of a frame (see the module header); `energy_unit` is `E_cb`.
 pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> String {
     let d = frame.dimension;
@@ -203,59 +262,9 @@ pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> Str
             );
         }
     }
-    let _ = write!(
-        s,
-        "<path stroke=\"#d62728\" stroke-width=\"0.7\" stroke-opacity=\"0.8\" fill=\"none\" d=\""
-    );
-    for &(i, j) in &frame.bridges {
-        let (xi, zi) = (frame.wrap(0, frame.x(i)[0]), frame.height(i));
-        let (xj, zj) = (frame.wrap(0, frame.x(j)[0]), frame.height(j));
-        let dx = frame.min_image(0, xj - xi);
-        let _ = write!(
-            s,
-            "M{} {}L{} {}",
-            n(px(xi)),
-            n(pz(zi)),
-            n(px(xi + dx)),
-            n(pz(zj))
-        );
-        if (xi + dx - xj).abs() > 1e-9 {
-            let _ = write!(
-                s,
-                "M{} {}L{} {}",
-                n(px(xj)),
-                n(pz(zj)),
-                n(px(xj - dx)),
-                n(pz(zi))
-            );
-        }
-    }
-    let _ = writeln!(s, "\"/>");
+    bridge_lines(&mut s, frame, &px, &pz);
     let _ = writeln!(s, "</g>");
-    // Colour legend.
-    let ly = ht - 14.0;
-    for k in 0..=8 {
-        let (fill, text) = match colour_by {
-            ColourBy::KineticEnergy => (
-                colour(k as f64 / 8.0),
-                format!("{:.1}", -2.0 + 0.5 * k as f64),
-            ),
-            ColourBy::Bridges if k < 8 => (
-                category(k).to_string(),
-                if k == 7 { "7+".into() } else { k.to_string() },
-            ),
-            ColourBy::Bridges => continue,
-        };
-        let x = ml + 42.0 * k as f64;
-        let _ = writeln!(
-            s,
-            "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"10\" fill=\"{fill}\"/><text x=\"{}\" y=\"{}\">{text}</text>",
-            n(x),
-            n(ly - 9.0),
-            n(x + 15.0),
-            n(ly)
-        );
-    }
+    colour_legend(&mut s, colour_by, ml, ht - 14.0);
     s.push_str("</svg>\n");
     s
 }

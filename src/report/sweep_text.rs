@@ -108,6 +108,78 @@ fn heartbeat_text(why: &Stale) -> String {
     }
 }
 
+/// The `hysteresis` lines of `sweep status`: how many points' start modes disagree, and each
+/// such point with the labels of its start modes.
+fn hysteresis_text(out: &mut String, s: &SweepRow, points: &[PointSummary]) {
+    let starts = crate::store::hysteresis::by_start(&s.axes, points);
+    let compared = starts.iter().filter(|g| g.compared()).count();
+    if compared > 0 {
+        let _ = writeln!(
+            out,
+            "  hysteresis  {} of {compared} point(s) hysteretic (their start modes disagree)",
+            starts.iter().filter(|g| g.hysteretic).count()
+        );
+        for g in starts.iter().filter(|g| g.hysteretic) {
+            let labels: Vec<String> = g
+                .by_start
+                .iter()
+                .map(|(mode, l)| format!("{mode} {}", l.join("/")))
+                .collect();
+            let at: Vec<String> = s
+                .axes
+                .iter()
+                .filter(|a| a.key != "initial.start")
+                .zip(&g.coords)
+                .map(|(a, v)| format!("{} = {v}", a.label))
+                .collect();
+            let at = if at.is_empty() {
+                "the base scene".to_string()
+            } else {
+                at.join(", ")
+            };
+            let _ = writeln!(out, "    {at}: {}", labels.join(", "));
+        }
+    }
+}
+
+/// The `trend` and `trust` lines of `sweep status`: the trends of the finished results, and how
+/// many of the `done` results are not stationary.
+fn trust_text(out: &mut String, points: &[PointSummary], done: u64) {
+    let mut trends = std::collections::BTreeMap::new();
+    for p in points.iter().filter(|p| p.status == "done") {
+        if let Some(t) = p.trend {
+            *trends.entry(t).or_insert(0usize) += 1;
+        }
+    }
+    if !trends.is_empty() {
+        let counts: Vec<String> = trends.iter().map(|(t, n)| format!("{n} {t}")).collect();
+        let _ = writeln!(out, "  trend  {}", counts.join(", "));
+    }
+    let marked = |m: char| {
+        points
+            .iter()
+            .filter(|p| p.status == "done")
+            .filter(|p| crate::report::trust::mark(p.trust()) == Some(m))
+            .count()
+    };
+    let (may_change, kept) = (
+        marked(crate::report::trust::NOT_STATIONARY),
+        marked(crate::report::trust::LABEL_KEPT),
+    );
+    if may_change + kept > 0 {
+        let _ = writeln!(
+            out,
+            "  trust  {} of {} result(s) not stationary: {may_change} whose label may change ({} \
+             in `boundaries`, left out of them), {kept} whose trend keeps the label ({}: a \
+             heating gas, a cooling solid, a coarsening coexistence); see `show JOB`",
+            may_change + kept,
+            done,
+            crate::report::trust::NOT_STATIONARY,
+            crate::report::trust::LABEL_KEPT
+        );
+    }
+}
+
 /// The `sweep status` lines of one sweep (see [`StatusInput`]).
 pub fn sweep_status_text(input: &StatusInput) -> String {
     let (s, c, points, spent, cores) = (
@@ -164,35 +236,7 @@ pub fn sweep_status_text(input: &StatusInput) -> String {
             checked - unconverged
         );
     }
-    let starts = crate::store::hysteresis::by_start(&s.axes, points);
-    let compared = starts.iter().filter(|g| g.compared()).count();
-    if compared > 0 {
-        let _ = writeln!(
-            out,
-            "  hysteresis  {} of {compared} point(s) hysteretic (their start modes disagree)",
-            starts.iter().filter(|g| g.hysteretic).count()
-        );
-        for g in starts.iter().filter(|g| g.hysteretic) {
-            let labels: Vec<String> = g
-                .by_start
-                .iter()
-                .map(|(mode, l)| format!("{mode} {}", l.join("/")))
-                .collect();
-            let at: Vec<String> = s
-                .axes
-                .iter()
-                .filter(|a| a.key != "initial.start")
-                .zip(&g.coords)
-                .map(|(a, v)| format!("{} = {v}", a.label))
-                .collect();
-            let at = if at.is_empty() {
-                "the base scene".to_string()
-            } else {
-                at.join(", ")
-            };
-            let _ = writeln!(out, "    {at}: {}", labels.join(", "));
-        }
-    }
+    hysteresis_text(&mut out, s, points);
     let left = c.pending + c.running;
     let estimate = match (left, input.mean_wall(), input.time_left()) {
         (0, _, _) => "nothing left".to_string(),
@@ -214,39 +258,7 @@ pub fn sweep_status_text(input: &StatusInput) -> String {
         "  time   {} spent in finished jobs; {estimate}",
         duration_text(spent)
     );
-    let mut trends = std::collections::BTreeMap::new();
-    for p in points.iter().filter(|p| p.status == "done") {
-        if let Some(t) = p.trend {
-            *trends.entry(t).or_insert(0usize) += 1;
-        }
-    }
-    if !trends.is_empty() {
-        let counts: Vec<String> = trends.iter().map(|(t, n)| format!("{n} {t}")).collect();
-        let _ = writeln!(out, "  trend  {}", counts.join(", "));
-    }
-    let marked = |m: char| {
-        points
-            .iter()
-            .filter(|p| p.status == "done")
-            .filter(|p| crate::report::trust::mark(p.trust()) == Some(m))
-            .count()
-    };
-    let (may_change, kept) = (
-        marked(crate::report::trust::NOT_STATIONARY),
-        marked(crate::report::trust::LABEL_KEPT),
-    );
-    if may_change + kept > 0 {
-        let _ = writeln!(
-            out,
-            "  trust  {} of {} result(s) not stationary: {may_change} whose label may change ({} \
-             in `boundaries`, left out of them), {kept} whose trend keeps the label ({}: a \
-             heating gas, a cooling solid, a coarsening coexistence); see `show JOB`",
-            may_change + kept,
-            c.done,
-            crate::report::trust::NOT_STATIONARY,
-            crate::report::trust::LABEL_KEPT
-        );
-    }
+    trust_text(&mut out, points, c.done);
     if !s.left_out.is_empty() {
         let _ = writeln!(
             out,

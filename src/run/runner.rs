@@ -174,28 +174,9 @@ pub fn run_sweeps_with(
     }
 
     let (msg_tx, msg_rx) = mpsc::channel::<Msg>();
-    let mut job_tx = Vec::new();
-    let mut handles = Vec::new();
     let tables = TableCache::with_cap_mib(opts.table_cache_mib);
     let cores = CoreShare::new(threads::available_cores(), n_workers);
-    for w in 0..n_workers {
-        let (tx, rx) = mpsc::channel::<Claim>();
-        job_tx.push(tx);
-        let out = msg_tx.clone();
-        let tables = tables.clone();
-        let cores = cores.clone();
-        let job = job.clone();
-        handles.push(
-            thread::Builder::new()
-                .name(format!("wetgran-worker-{w}"))
-                .spawn(move || {
-                    let _tables = tables.enter();
-                    let _cores = threads::enter(&cores, w);
-                    worker(w, rx, out, job)
-                })
-                .expect("spawn a worker thread"),
-        );
-    }
+    let (job_tx, handles) = spawn_workers(n_workers, &msg_tx, &tables, &cores, &job);
     drop(msg_tx);
 
     let mut idle: Vec<usize> = (0..n_workers).rev().collect();
@@ -244,35 +225,7 @@ pub fn run_sweeps_with(
             match msg_rx.recv_timeout(wait.max(Duration::from_millis(10))) {
                 Ok(Msg::Progress(w, f)) => progress.update(w, f),
                 Ok(Msg::Finished(w, claim, result, wall)) => {
-                    let sweep = sweeps
-                        .iter()
-                        .find(|s| s.name == claim.sweep)
-                        .expect("claimed from one of these sweeps");
-                    let label = point_label(sweep, &claim.coords, claim.replica);
-                    let short_id = &claim.job_id[..12];
-                    let line = match &result {
-                        Ok(r) => {
-                            if store.finish(&claim, r)? {
-                                summary.done += 1;
-                                format!(
-                                    "done    {label}: phase {}, {:.1} s (job {short_id})",
-                                    r.phase.as_deref().unwrap_or("-"),
-                                    r.wall_seconds
-                                )
-                            } else {
-                                summary.discarded += 1;
-                                format!(
-                                    "dropped {label}: another runner finished it first (job \
-                                     {short_id})"
-                                )
-                            }
-                        }
-                        Err(e) => {
-                            store.fail(&claim, &e.to_string(), wall)?;
-                            summary.failed += 1;
-                            format!("FAILED  {label}: {e} (job {short_id})")
-                        }
-                    };
+                    let line = record_finished(store, sweeps, &claim, &result, wall, &mut summary)?;
                     progress.finish(w, &line);
                     idle.push(w);
                     busy -= 1;
@@ -325,6 +278,80 @@ fn continuation_start(
         )));
     };
     Ok(Ok(state.continued(&spec.scene)))
+}
+
+/// Stores a finished job's result (or its failure), counts it in `summary`, and returns the
+/// line the progress display prints for it.
+fn record_finished(
+    store: &Store,
+    sweeps: &[SweepRow],
+    claim: &Claim,
+    result: &Result<JobResult, JobError>,
+    wall: f64,
+    summary: &mut RunSummary,
+) -> Result<String, StoreError> {
+    let sweep = sweeps
+        .iter()
+        .find(|s| s.name == claim.sweep)
+        .expect("claimed from one of these sweeps");
+    let label = point_label(sweep, &claim.coords, claim.replica);
+    let short_id = &claim.job_id[..12];
+    let line = match result {
+        Ok(r) => {
+            if store.finish(claim, r)? {
+                summary.done += 1;
+                format!(
+                    "done    {label}: phase {}, {:.1} s (job {short_id})",
+                    r.phase.as_deref().unwrap_or("-"),
+                    r.wall_seconds
+                )
+            } else {
+                summary.discarded += 1;
+                format!(
+                    "dropped {label}: another runner finished it first (job \
+                     {short_id})"
+                )
+            }
+        }
+        Err(e) => {
+            store.fail(claim, &e.to_string(), wall)?;
+            summary.failed += 1;
+            format!("FAILED  {label}: {e} (job {short_id})")
+        }
+    };
+    Ok(line)
+}
+
+/// Starts `n_workers` worker threads, each in the wall-table cache `tables` and its share of
+/// `cores`; returns the channel that hands each its claims and their handles.
+fn spawn_workers(
+    n_workers: usize,
+    msg_tx: &mpsc::Sender<Msg>,
+    tables: &TableCache,
+    cores: &Arc<CoreShare>,
+    job: &JobFn,
+) -> (Vec<mpsc::Sender<Claim>>, Vec<thread::JoinHandle<()>>) {
+    let mut job_tx = Vec::new();
+    let mut handles = Vec::new();
+    for w in 0..n_workers {
+        let (tx, rx) = mpsc::channel::<Claim>();
+        job_tx.push(tx);
+        let out = msg_tx.clone();
+        let tables = tables.clone();
+        let cores = cores.clone();
+        let job = job.clone();
+        handles.push(
+            thread::Builder::new()
+                .name(format!("wetgran-worker-{w}"))
+                .spawn(move || {
+                    let _tables = tables.enter();
+                    let _cores = threads::enter(&cores, w);
+                    worker(w, rx, out, job)
+                })
+                .expect("spawn a worker thread"),
+        );
+    }
+    (job_tx, handles)
 }
 
 /// A worker: runs every claim it receives and reports back.

@@ -15,6 +15,10 @@
 //! an unmeasured job takes the nearest rate of its own start mode ([`nearest_rate`]): a bonded
 //! bed and a hot gas at the same grid point cost different event rates.
 
+use super::{JobError, JobSpec, SweepFile, SweepJob, run_job};
+use std::collections::HashMap;
+use std::time::Instant;
+
 /// One job as the estimate sees it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlannedJob {
@@ -280,6 +284,176 @@ pub fn makespan(seconds: &[f64], predecessor: &[Option<usize>], workers: usize) 
         }
     }
     ends.iter().flatten().copied().fold(0.0, f64::max)
+}
+
+/// The jobs of a sweep as the estimate sees them: grid position, run lengths, predecessor, and
+/// the cost of those in `stored` (finished runs, by job id). `jobs` holds one job per id.
+pub fn planned_jobs(
+    sweep: &SweepFile,
+    jobs: &[SweepJob],
+    stored: &HashMap<String, MeasuredCost>,
+) -> Vec<PlannedJob> {
+    let lens: Vec<usize> = sweep.axes.iter().map(|a| a.values.len().max(1)).collect();
+    let index: HashMap<&str, usize> = jobs
+        .iter()
+        .enumerate()
+        .map(|(k, j)| (j.id.as_str(), k))
+        .collect();
+    jobs.iter()
+        .map(|j| {
+            let scene = &j.spec.scene;
+            let (first_check, cap) = match &scene.convergence {
+                Some(c) => {
+                    let s = c.schedule(scene);
+                    (s.first_check, s.cap)
+                }
+                None => (scene.run.duration, scene.run.duration),
+            };
+            PlannedJob {
+                position: grid_position(j.point, &lens),
+                first_check,
+                cap,
+                predecessor: j
+                    .spec
+                    .start_from
+                    .as_deref()
+                    .and_then(|p| index.get(p).copied()),
+                measured: stored.get(&j.id).copied(),
+                start: scene.initial.start.to_string(),
+            }
+        })
+        .collect()
+}
+
+/// A grid point's index along each axis (row-major, the last axis fastest), scaled to `[0, 1]`.
+fn grid_position(point: usize, lens: &[usize]) -> Vec<f64> {
+    let mut rest = point;
+    let mut position = vec![0.0; lens.len()];
+    for (a, &len) in lens.iter().enumerate().rev() {
+        let i = rest % len;
+        rest /= len;
+        position[a] = if len > 1 {
+            i as f64 / (len - 1) as f64
+        } else {
+            0.0
+        };
+    }
+    position
+}
+
+/// The spec a sampled job runs: `settle` time units, then `periods` driving periods, with no
+/// convergence policy and no transient. A continuation job is sampled from the start of its
+/// chain's first job.
+pub fn sample_spec(sweep: &SweepFile, job: &SweepJob, settle: f64, periods: f64) -> JobSpec {
+    let mut spec = job.spec.clone();
+    if spec.start_from.take().is_some()
+        && let Some(c) = &sweep.continuation
+    {
+        spec.scene.initial.start = c.first;
+    }
+    let period = spec.period();
+    spec.scene.convergence = None;
+    spec.scene.run.duration = settle + periods * period;
+    spec.scene.observe.transient_periods = 0.0;
+    spec.scene.observe.transient_time = 0.0;
+    // A timed stretch shorter than the job's sample spacing still gets a few samples.
+    let o = &mut spec.scene.observe;
+    o.min_sample_interval = o.min_sample_interval.min(0.25 * spec.scene.run.duration);
+    spec
+}
+
+/// One sampled job's measured rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampledRate {
+    /// Wall seconds per simulated time unit past the settling time.
+    pub seconds_per_time: f64,
+    /// Events the whole sampled run processed.
+    pub events: u64,
+}
+
+/// Runs a sample spec (from [`sample_spec`]) and times it from the first progress report past
+/// `settle` time units to its end.
+pub fn time_sample(spec: &JobSpec, settle: f64) -> Result<SampledRate, JobError> {
+    let settled = settle / spec.scene.run.duration;
+    let mut mark: Option<(Instant, f64)> = None;
+    let t0 = Instant::now();
+    let outcome = run_job(spec, &mut |f| {
+        if mark.is_none() && f >= settled {
+            mark = Some((Instant::now(), f));
+        }
+    });
+    let (start, from) = mark.unwrap_or((t0, 0.0));
+    let wall = start.elapsed().as_secs_f64();
+    let r = outcome?;
+    let timed = (1.0 - from) * r.simulated_time;
+    Ok(SampledRate {
+        seconds_per_time: wall / timed,
+        events: r.events,
+    })
+}
+
+/// One assumption on the run lengths: its label, the whole sweep's cost, the cost of what is
+/// left to run.
+pub type CostLine = (String, SweepCost, SweepCost);
+
+/// CPU seconds per start mode, in order of appearance: (start mode, jobs, CPU seconds).
+pub type StartSplit = Vec<(String, usize, f64)>;
+
+/// The cost of the sweep under each assumption on the run lengths that applies: with a
+/// convergence policy (`policy`) the minimum, the stored runs' mean extension (when `measured`
+/// has one) and the cap; without one, the sweep's run length. Each line comes with its CPU
+/// time per start mode.
+pub fn cost_lines(
+    planned: &[PlannedJob],
+    rates: &[RateSample],
+    measured: Option<&MeasuredRuns>,
+    policy: bool,
+    cores: usize,
+) -> (Vec<CostLine>, Vec<StartSplit>) {
+    let mut lengths: Vec<(String, RunLength)> = Vec::new();
+    if policy {
+        lengths.push((
+            "minimum (every job stationary at its first check)".to_string(),
+            RunLength::FirstCheck,
+        ));
+        if let Some(m) = measured {
+            lengths.push((
+                format!(
+                    "likely (the stored runs' {:.2} x their first check)",
+                    m.mean_length_factor
+                ),
+                RunLength::Extended(m.mean_length_factor),
+            ));
+        }
+        lengths.push(("cap (every job run to its cap)".to_string(), RunLength::Cap));
+    } else {
+        lengths.push(("the sweep's run length".to_string(), RunLength::FirstCheck));
+    }
+    let mut lines = Vec::new();
+    let mut by_start = Vec::new();
+    for (label, length) in lengths {
+        let seconds = job_seconds(planned, rates, length, false);
+        by_start.push(start_split(planned, &seconds));
+        let whole = sweep_cost(planned, &seconds, cores);
+        let left = sweep_cost(planned, &job_seconds(planned, rates, length, true), cores);
+        lines.push((label, whole, left));
+    }
+    (lines, by_start)
+}
+
+/// Jobs and CPU seconds per start mode, in order of appearance.
+fn start_split(planned: &[PlannedJob], seconds: &[f64]) -> StartSplit {
+    let mut split: StartSplit = Vec::new();
+    for (j, s) in planned.iter().zip(seconds) {
+        match split.iter_mut().find(|(m, _, _)| *m == j.start) {
+            Some(e) => {
+                e.1 += 1;
+                e.2 += s;
+            }
+            None => split.push((j.start.clone(), 1, *s)),
+        }
+    }
+    split
 }
 
 #[cfg(test)]

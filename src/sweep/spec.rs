@@ -270,6 +270,10 @@ fn number(t: &toml::Table, key: &str, file: &SweepFile) -> Result<Option<f64>, S
     }
 }
 
+/// A job's scene tree, its base `observe.transient_periods`, and the `[observe]` keys in time
+/// units held back until the run length is known (see `SweepFile::point_tree`).
+type PointTree = (toml::Table, Option<f64>, Vec<(&'static str, toml::Value)>);
+
 impl SweepFile {
     /// Whether the scene tree (base scene plus the sweep's `[scene]` table) sets a dotted key.
     fn base_sets(&self, dotted: &str) -> bool {
@@ -512,6 +516,81 @@ impl SweepFile {
         Ok(Ok(out))
     }
 
+    /// The scene tree of one job before its conversion from periods: the base scene with the
+    /// sweep's `[observe]`, `[classify]`, `[convergence]` tables, the point's axis values and the
+    /// replica's seed. Returns it with the base scene's `observe.transient_periods` (replaced by
+    /// a placeholder) and the `[observe]` keys in time units taken out of it, which are checked
+    /// once the run length is known.
+    fn point_tree(
+        &self,
+        coords: &[serde_json::Value],
+        replica: u32,
+        base_seed: u64,
+    ) -> Result<PointTree, SweepError> {
+        let file = self.path.display().to_string();
+        let mut tree = self.scene_tree.clone();
+        // The sweep's `[observe]`, `[classify]` and `[convergence]` tables go into the
+        // scene's sections
+        // of those names (over what the base scene sets), validated with the scene.
+        for (section, table) in [
+            ("observe", &self.observe),
+            ("classify", &self.classify),
+            ("convergence", &self.convergence),
+        ] {
+            for (key, value) in table {
+                set_key(&mut tree, &format!("{section}.{key}"), value.clone())
+                    .map_err(|m| SweepError::new(&file, None, section, m))?;
+            }
+        }
+        // The transient is checked against the run length once that is converted from
+        // periods (below); until then it is a placeholder.
+        let base_transient = tree
+            .get("observe")
+            .and_then(|o| o.get("transient_periods"))
+            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)));
+        set_key(
+            &mut tree,
+            "observe.transient_periods",
+            toml::Value::Float(0.0),
+        )
+        .map_err(|m| SweepError::new(&file, None, "observe", m))?;
+        // The same for the keys in time units that are checked against the first window.
+        let mut deferred = Vec::new();
+        for key in ["transient_time", "min_sample_interval"] {
+            if let Some(v) = tree
+                .get_mut("observe")
+                .and_then(|o| o.as_table_mut())
+                .and_then(|o| o.remove(key))
+            {
+                deferred.push((key, v));
+            }
+        }
+        for (axis, v) in self.axes.iter().zip(coords) {
+            let value =
+                to_toml(v).map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
+            set_key(&mut tree, &axis.key, value)
+                .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
+        }
+        if self.replicas > 1 || replica > 0 {
+            let seed = base_seed.checked_add(replica as u64).ok_or_else(|| {
+                SweepError::new(&file, None, "initial.seed", "overflows with the replicas")
+            })?;
+            set_key(&mut tree, "initial.seed", toml::Value::Integer(seed as i64))
+                .map_err(|m| SweepError::new(&file, None, "initial.seed", m))?;
+        }
+        if self.periods.is_some() {
+            // The run length comes from `sweep.periods`; a placeholder lets a base scene
+            // without `run.duration` parse (it is replaced below).
+            let run = tree
+                .entry("run")
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            if let toml::Value::Table(run) = run {
+                run.entry("duration").or_insert(toml::Value::Float(1.0));
+            }
+        }
+        Ok((tree, base_transient, deferred))
+    }
+
     /// One job; `Ok(Err(_))`: its scene fails a constraint between keys
     /// ([`wetgran_core::scene::Constraint`], skippable), `Err(_)`: the sweep is invalid (a key outside
     /// its own range included).
@@ -530,67 +609,9 @@ impl SweepFile {
             base_seed,
         } = *prep;
         {
-            let mut tree = self.scene_tree.clone();
             let where_ = describe_point(self, coords, replica);
-            // The sweep's `[observe]`, `[classify]` and `[convergence]` tables go into the
-            // scene's sections
-            // of those names (over what the base scene sets), validated with the scene.
-            for (section, table) in [
-                ("observe", &self.observe),
-                ("classify", &self.classify),
-                ("convergence", &self.convergence),
-            ] {
-                for (key, value) in table {
-                    set_key(&mut tree, &format!("{section}.{key}"), value.clone())
-                        .map_err(|m| SweepError::new(&file, None, section, m))?;
-                }
-            }
-            // The transient is checked against the run length once that is converted from
-            // periods (below); until then it is a placeholder.
-            let base_transient = tree
-                .get("observe")
-                .and_then(|o| o.get("transient_periods"))
-                .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)));
-            set_key(
-                &mut tree,
-                "observe.transient_periods",
-                toml::Value::Float(0.0),
-            )
-            .map_err(|m| SweepError::new(&file, None, "observe", m))?;
-            // The same for the keys in time units that are checked against the first window.
-            let mut deferred = Vec::new();
-            for key in ["transient_time", "min_sample_interval"] {
-                if let Some(v) = tree
-                    .get_mut("observe")
-                    .and_then(|o| o.as_table_mut())
-                    .and_then(|o| o.remove(key))
-                {
-                    deferred.push((key, v));
-                }
-            }
-            for (axis, v) in self.axes.iter().zip(coords) {
-                let value = to_toml(v)
-                    .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
-                set_key(&mut tree, &axis.key, value)
-                    .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
-            }
-            if self.replicas > 1 || replica > 0 {
-                let seed = base_seed.checked_add(replica as u64).ok_or_else(|| {
-                    SweepError::new(&file, None, "initial.seed", "overflows with the replicas")
-                })?;
-                set_key(&mut tree, "initial.seed", toml::Value::Integer(seed as i64))
-                    .map_err(|m| SweepError::new(&file, None, "initial.seed", m))?;
-            }
-            if self.periods.is_some() {
-                // The run length comes from `sweep.periods`; a placeholder lets a base scene
-                // without `run.duration` parse (it is replaced below).
-                let run = tree
-                    .entry("run")
-                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-                if let toml::Value::Table(run) = run {
-                    run.entry("duration").or_insert(toml::Value::Float(1.0));
-                }
-            }
+            let (mut tree, base_transient, deferred) =
+                self.point_tree(coords, replica, base_seed)?;
             // `[convergence]` is checked against the run length, which `sweep.periods` sets
             // below: it joins the scene after that conversion (a base scene's own run length
             // would otherwise decide whether its cap is long enough).

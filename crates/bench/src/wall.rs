@@ -94,6 +94,34 @@ fn shots(n: usize) -> (WallMotion, Vec<Shot>) {
     (floor, shots)
 }
 
+/// Compares roots with the reference ones: (summed error, largest error, wrong roots, roots
+/// compared). A root off by more than `WRONG_ROOT_FRACTION_OF_PERIOD` of the period, or a hit
+/// where the reference has none (or the reverse), is wrong.
+fn root_errors(
+    reference: &[WallRoot],
+    roots: &[WallRoot],
+    period: f64,
+) -> (f64, f64, usize, usize) {
+    let (mut sum, mut max, mut wrong, mut hits) = (0.0, 0.0f64, 0usize, 0usize);
+    for (r, o) in reference.iter().zip(roots) {
+        match (r, o) {
+            (WallRoot::Hit(a), WallRoot::Hit(b)) => {
+                let err = (a - b).abs();
+                if err > WRONG_ROOT_FRACTION_OF_PERIOD * period {
+                    wrong += 1;
+                } else {
+                    sum += err;
+                    max = max.max(err);
+                    hits += 1;
+                }
+            }
+            (WallRoot::None, WallRoot::None) => {}
+            _ => wrong += 1,
+        }
+    }
+    (sum, max, wrong, hits)
+}
+
 /// Runs every solver setting on `4000 * scale` trajectories, `repeat` timing repetitions.
 pub fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
     let n = ((4000.0 * scale) as usize).max(200);
@@ -181,23 +209,7 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
         .zip(costs)
         .map(|((solver, knob, f), table)| {
             let roots: Vec<WallRoot> = shots.iter().map(&f).collect();
-            let (mut sum, mut max, mut wrong, mut hits) = (0.0, 0.0f64, 0usize, 0usize);
-            for (r, o) in reference.iter().zip(&roots) {
-                match (r, o) {
-                    (WallRoot::Hit(a), WallRoot::Hit(b)) => {
-                        let err = (a - b).abs();
-                        if err > WRONG_ROOT_FRACTION_OF_PERIOD * floor.period() {
-                            wrong += 1;
-                        } else {
-                            sum += err;
-                            max = max.max(err);
-                            hits += 1;
-                        }
-                    }
-                    (WallRoot::None, WallRoot::None) => {}
-                    _ => wrong += 1,
-                }
-            }
+            let (sum, max, wrong, hits) = root_errors(&reference, &roots, floor.period());
             let mut times: Vec<f64> = (0..repeat.max(1))
                 .map(|_| {
                     let start = Instant::now();

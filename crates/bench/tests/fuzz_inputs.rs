@@ -338,6 +338,37 @@ fn given_invalid_base(expect: Expect) -> Expect {
     }
 }
 
+/// A value of another type than `v` (`kind` picks which).
+fn wrong_type(kind: u8, v: &Value) -> Value {
+    match (kind, v) {
+        (0, Value::String(_)) => Value::Integer(7),
+        (0, _) => Value::String("seven".into()),
+        (1, Value::Boolean(_)) => Value::Float(0.5),
+        (1, _) => Value::Boolean(true),
+        (2, _) => Value::Table(table(vec![("a", Value::Integer(1))])),
+        (3, Value::Array(_)) => Value::String("[]".into()),
+        (3, _) => Value::Array(vec![Value::Integer(1), Value::String("x".into())]),
+        (4, _) => Value::Datetime("1979-05-27T07:32:00Z".parse().unwrap()),
+        (_, Value::Float(_)) | (_, Value::Integer(_)) => Value::String("1.0".into()),
+        _ => Value::Float(1.5),
+    }
+}
+
+/// An extreme number (`kind` picks which): negative, huge, tiny, zero, minus zero.
+fn extreme(kind: u8) -> Value {
+    match kind {
+        0 => Value::Integer(-1),
+        1 => Value::Float(-1e9),
+        2 => Value::Float(1e300),
+        3 => Value::Integer(i64::MAX),
+        4 => Value::Integer(i64::MIN),
+        5 => Value::Float(-0.0),
+        6 => Value::Integer(0),
+        7 => Value::Float(1e-300),
+        _ => Value::Integer(1 << 40),
+    }
+}
+
 /// Applies `m` to the tree and writes it as TOML text; also says what a rejection must name
 /// (paths as in the tree; `strip` is removed from their front, e.g. `scene.` in a sweep file).
 fn mutate_toml(tree: toml::Table, m: &Mutation, strip: &str) -> (String, Expect) {
@@ -390,18 +421,7 @@ fn mutate_toml(tree: toml::Table, m: &Mutation, strip: &str) -> (String, Expect)
         Mutation::WrongType(i, kind) => {
             let p = i.get(&leaves).clone();
             let v = get_mut(&mut root, &p);
-            let new = match (kind, &*v) {
-                (0, Value::String(_)) => Value::Integer(7),
-                (0, _) => Value::String("seven".into()),
-                (1, Value::Boolean(_)) => Value::Float(0.5),
-                (1, _) => Value::Boolean(true),
-                (2, _) => Value::Table(table(vec![("a", Value::Integer(1))])),
-                (3, Value::Array(_)) => Value::String("[]".into()),
-                (3, _) => Value::Array(vec![Value::Integer(1), Value::String("x".into())]),
-                (4, _) => Value::Datetime("1979-05-27T07:32:00Z".parse().unwrap()),
-                (_, Value::Float(_)) | (_, Value::Integer(_)) => Value::String("1.0".into()),
-                _ => Value::Float(1.5),
-            };
+            let new = wrong_type(*kind, v);
             // A string may stand where a string is expected, a number where a number is:
             // some of these replacements are legal (`restitution_speed = 7`, an axis value).
             *v = new;
@@ -421,17 +441,7 @@ fn mutate_toml(tree: toml::Table, m: &Mutation, strip: &str) -> (String, Expect)
         }
         Mutation::Extreme(i, kind) if !numeric.is_empty() => {
             let p = i.get(&numeric).clone();
-            *get_mut(&mut root, &p) = match kind {
-                0 => Value::Integer(-1),
-                1 => Value::Float(-1e9),
-                2 => Value::Float(1e300),
-                3 => Value::Integer(i64::MAX),
-                4 => Value::Integer(i64::MIN),
-                5 => Value::Float(-0.0),
-                6 => Value::Integer(0),
-                7 => Value::Float(1e-300),
-                _ => Value::Integer(1 << 40),
-            };
+            *get_mut(&mut root, &p) = extreme(*kind);
             Expect::AnyKey
         }
         Mutation::Remove(i) => {

@@ -123,10 +123,9 @@ fn rate(k: usize, n: usize) -> String {
     format!("{k}/{n} ({:.0}-{:.0} %)", 100.0 * lo, 100.0 * hi)
 }
 
-#[test]
-#[ignore = "long: the coexistence test's level and power on N = 1200, ~10 min on 2 cores"]
-fn coexistence_test_level_and_power() {
-    let points = [
+/// The states measured: five homogeneous ones and two coexistences.
+fn measured_points() -> [Point; 7] {
+    [
         Point {
             name: "f: Gamma 30, E* 0.7, eps 0.96",
             gamma: 30.0,
@@ -190,7 +189,13 @@ fn coexistence_test_level_and_power() {
             length: 25.0,
             coexistence: true,
         },
-    ];
+    ]
+}
+
+#[test]
+#[ignore = "long: the coexistence test's level and power on N = 1200, ~10 min on 2 cores"]
+fn coexistence_test_level_and_power() {
+    let points = measured_points();
     let jobs: Vec<(usize, u64)> = (0..points.len()).flat_map(|i| [(i, 1), (i, 2)]).collect();
     let results: Vec<(usize, Vec<Outcome>)> = jobs
         .par_iter()

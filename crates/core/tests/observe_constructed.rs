@@ -158,6 +158,47 @@ fn gas(
     }
 }
 
+/// One step of a gas grain: a drift in the standing wave of amplitude `u` and wavelength
+/// `wave` plus diffusion (`step` per axis), kept out of the drop's span `drop_span` and
+/// reflected at the floor and the lid.
+fn gas_step(
+    p: &mut (f64, f64),
+    u: f64,
+    wave: f64,
+    step: f64,
+    drop_span: Option<(f64, f64)>,
+    rng: &mut Xoshiro256PlusPlus,
+) {
+    let gauss = |rng: &mut Xoshiro256PlusPlus, s: f64| s * rng.sample::<f64, _>(StandardNormal);
+    let force = -(std::f64::consts::TAU * u / wave) * (std::f64::consts::TAU * p.0 / wave).sin();
+    let before = p.0;
+    p.0 += force * DT + gauss(rng, step);
+    if let Some((a, b)) = drop_span {
+        // A step into the drop is not taken; a grain the drop has moved
+        // onto is pushed out at the nearer edge.
+        if inside(p.0, a, b) {
+            p.0 = before;
+        }
+        if inside(p.0, a, b) {
+            let into = (p.0 - a).rem_euclid(L);
+            p.0 = if into < 0.5 * (b - a).rem_euclid(L) {
+                a
+            } else {
+                b
+            };
+        }
+    }
+    let y = p.1 + gauss(rng, step);
+    // Reflect at the floor and the lid.
+    p.1 = if y < 0.5 {
+        1.0 - y
+    } else if y > H - 0.5 {
+        2.0 * (H - 0.5) - y
+    } else {
+        y
+    };
+}
+
 /// Advances every group to sample `k` and returns the frame: positions, velocities, bridges
 /// (plus `bounces` single-sample bridges between random gas grains and random grains of the
 /// first group, the drop they touch).
@@ -226,34 +267,7 @@ fn frame(k: usize, groups: &mut [Group], bounces: usize, rng: &mut Xoshiro256Plu
                 let sd = (temperature * E_CB).sqrt();
                 for p in g.pos.iter_mut() {
                     if k > 0 {
-                        let force = -(std::f64::consts::TAU * u / wave)
-                            * (std::f64::consts::TAU * p.0 / wave).sin();
-                        let before = p.0;
-                        p.0 += force * DT + gauss(rng, step);
-                        if let Some((a, b)) = drop_span {
-                            // A step into the drop is not taken; a grain the drop has moved
-                            // onto is pushed out at the nearer edge.
-                            if inside(p.0, a, b) {
-                                p.0 = before;
-                            }
-                            if inside(p.0, a, b) {
-                                let into = (p.0 - a).rem_euclid(L);
-                                p.0 = if into < 0.5 * (b - a).rem_euclid(L) {
-                                    a
-                                } else {
-                                    b
-                                };
-                            }
-                        }
-                        let y = p.1 + gauss(rng, step);
-                        // Reflect at the floor and the lid.
-                        p.1 = if y < 0.5 {
-                            1.0 - y
-                        } else if y > H - 0.5 {
-                            2.0 * (H - 0.5) - y
-                        } else {
-                            y
-                        };
+                        gas_step(p, u, wave, step, drop_span, rng);
                     }
                     x.extend([p.0.rem_euclid(L), p.1]);
                     v.extend([gauss(rng, sd), gauss(rng, sd)]);

@@ -561,6 +561,41 @@ fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec
     )
 }
 
+/// The dense region's observables over its bins `sel`: over its clustered grains when the
+/// profiles have them, else over all grains; with the name of the grains it counted.
+fn dense_observables(
+    obs: &Observables,
+    sel: &[usize],
+    flc: Option<f64>,
+) -> (RegionObservables, &'static str) {
+    let p = &obs.profiles;
+    let has_clusters = !p.clustered.is_empty() && !p.temperature_clustered.is_empty();
+    let (w, t_bins, d_bins, s_bins, grains) = if has_clusters {
+        (
+            &p.clustered,
+            &p.temperature_clustered,
+            &p.diffusion_clustered,
+            &p.diffusion_clustered_short,
+            "clustered",
+        )
+    } else {
+        (
+            &p.particles,
+            &p.temperature_reduced,
+            &p.diffusion,
+            &p.diffusion_short,
+            "all",
+        )
+    };
+    let obs_dense = RegionObservables {
+        flc,
+        diffusion: weighted(sel, w, d_bins),
+        diffusion_short: weighted(sel, w, s_bins),
+        temperature: weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced),
+    };
+    (obs_dense, grains)
+}
+
 /// Rules 1-3.
 fn classify_unsheared(
     obs: &Observables,
@@ -631,34 +666,7 @@ fn classify_unsheared(
             .as_ref()
             .and_then(|fb| weighted(sel, &p.particles, fb))
     };
-    let has_clusters = !p.clustered.is_empty() && !p.temperature_clustered.is_empty();
-    let (dense_obs, grains) = {
-        let sel = &dense_bins;
-        let (w, t_bins, d_bins, s_bins, grains) = if has_clusters {
-            (
-                &p.clustered,
-                &p.temperature_clustered,
-                &p.diffusion_clustered,
-                &p.diffusion_clustered_short,
-                "clustered",
-            )
-        } else {
-            (
-                &p.particles,
-                &p.temperature_reduced,
-                &p.diffusion,
-                &p.diffusion_short,
-                "all",
-            )
-        };
-        let obs_dense = RegionObservables {
-            flc: flc_of(sel),
-            diffusion: weighted(sel, w, d_bins),
-            diffusion_short: weighted(sel, w, s_bins),
-            temperature: weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced),
-        };
-        (obs_dense, grains)
-    };
+    let (dense_obs, grains) = dense_observables(obs, &dense_bins, flc_of(&dense_bins));
     let dilute = {
         let sel = &dilute_bins;
         let o = RegionObservables {

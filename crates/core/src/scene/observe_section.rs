@@ -224,6 +224,12 @@ impl ObserveSpec {
 
     /// Checks every key of `[observe]` against the rest of the scene.
     pub fn validate(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
+        self.validate_sampling(scene, origin)?;
+        self.validate_observers(scene, origin)
+    }
+
+    /// The transient, the lateral bins and the sample spacing, against the run's first window.
+    fn validate_sampling(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
         let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
         let finite_pos = |v: f64| v.is_finite() && v > 0.0;
         let period = scene.driving_period();
@@ -283,6 +289,14 @@ impl ObserveSpec {
             ));
         }
         within_first_window("min_sample_interval", self.min_sample_interval)?;
+        Ok(())
+    }
+
+    /// The observers' own settings: layers, the line rule, mobility, bonds, clusters,
+    /// stationarity.
+    fn validate_observers(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
+        let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
+        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
         if self.layers == 0 {
             return Err(err(
                 "layers",

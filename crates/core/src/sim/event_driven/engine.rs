@@ -98,12 +98,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         Self::assemble(scene, init, Some(state))
     }
 
-    fn assemble(
-        scene: &Scene,
-        init: FlatInitialState,
-        start: Option<&crate::sim::EngineState>,
-    ) -> Self {
-        let t0 = start.map_or(0.0, |s| s.time);
+    /// Panics unless the scene matches the engine's const parameters (dimension, gravity,
+    /// capillary, shear).
+    fn check_flags(scene: &Scene) {
         assert_eq!(
             scene.dimension, D,
             "scene dimension does not match the engine"
@@ -124,6 +121,39 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             "shear flag does not match the scene"
         );
         assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
+    }
+
+    /// Takes the bridges, event counts and energy books of a saved state (resumed at `t0`).
+    fn restore(&mut self, st: &crate::sim::EngineState, t0: f64) {
+        if WET {
+            for &(i, j) in &st.bridges {
+                let (id_i, id_j) = (self.bodies.id[i], self.bodies.id[j]);
+                self.pairs.add_bond_half(i, j, id_i, t0);
+                self.pairs.add_bond_half(j, i, id_j, t0);
+            }
+        }
+        self.counts = st.counts.clone();
+        let l = &st.ledger;
+        self.ledger.dissipated_restitution = l.dissipated_restitution;
+        self.ledger.dissipated_ruptures = l.dissipated_ruptures;
+        self.ledger.added = l.added_by_collapse_remedies;
+        self.ledger.placement = l.added_by_wall_placement;
+        if SHEAR {
+            // The shear field's work is summed where the flights are done.
+            self.bodies.field_work = l.work_by_drive;
+        } else {
+            self.ledger.work_by_drive = l.work_by_drive;
+        }
+        self.next_reorder = self.counts.total().saturating_add(self.reorder_every);
+    }
+
+    fn assemble(
+        scene: &Scene,
+        init: FlatInitialState,
+        start: Option<&crate::sim::EngineState>,
+    ) -> Self {
+        let t0 = start.map_or(0.0, |s| s.time);
+        Self::check_flags(scene);
         let n = init.radius.len();
         // Pair events pack the partner's index into 31 bits (`event::PairEvent`).
         assert!(
@@ -214,26 +244,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             reorder_every: reorder_interval(n),
         };
         if let Some(st) = start {
-            if WET {
-                for &(i, j) in &st.bridges {
-                    let (id_i, id_j) = (engine.bodies.id[i], engine.bodies.id[j]);
-                    engine.pairs.add_bond_half(i, j, id_i, t0);
-                    engine.pairs.add_bond_half(j, i, id_j, t0);
-                }
-            }
-            engine.counts = st.counts.clone();
-            let l = &st.ledger;
-            engine.ledger.dissipated_restitution = l.dissipated_restitution;
-            engine.ledger.dissipated_ruptures = l.dissipated_ruptures;
-            engine.ledger.added = l.added_by_collapse_remedies;
-            engine.ledger.placement = l.added_by_wall_placement;
-            if SHEAR {
-                // The shear field's work is summed where the flights are done.
-                engine.bodies.field_work = l.work_by_drive;
-            } else {
-                engine.ledger.work_by_drive = l.work_by_drive;
-            }
-            engine.next_reorder = engine.counts.total().saturating_add(engine.reorder_every);
+            engine.restore(st, t0);
         }
         for i in 0..n {
             engine.predict_all(i);
