@@ -427,7 +427,11 @@ fn hot_and_cold_starts_that_disagree_are_hysteretic() {
     let g = &groups[0];
     use wetgran_core::scene::StartMode;
     assert_eq!(g.by_start[&StartMode::Cold], vec!["s".to_string()], "{g:?}");
-    assert_eq!(g.by_start[&StartMode::Hot], vec!["fgc".to_string()], "{g:?}");
+    assert_eq!(
+        g.by_start[&StartMode::Hot],
+        vec!["fgc".to_string()],
+        "{g:?}"
+    );
     assert!(g.hysteretic);
     let o = run(&["sweep", "status", "--db", db_s]);
     assert!(

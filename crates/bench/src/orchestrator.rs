@@ -240,6 +240,54 @@ fn end_of_run_relabel(
     Ok(t)
 }
 
+/// Times each report command named in `reports` on the database `db`, `repeat` times each:
+/// (name, median seconds).
+fn time_reports(
+    db: &Path,
+    dir: &Path,
+    reports: &[String],
+    repeat: usize,
+    jobs_n: usize,
+) -> Result<Vec<(String, f64)>, String> {
+    let bin = wetgran_binary()?;
+    let d = db.display().to_string();
+    let svg = dir.join("plot.svg").display().to_string();
+    let csv = dir.join("export.csv").display().to_string();
+    let commands: Vec<(&str, Vec<&str>)> = vec![
+        ("sweep status", vec!["sweep", "status", "--db", &d]),
+        (
+            "boundaries",
+            vec!["boundaries", "--db", &d, "--sweep", "bench"],
+        ),
+        (
+            "plot",
+            vec!["plot", "--db", &d, "--sweep", "bench", "-o", &svg],
+        ),
+        (
+            "export (CSV to a file)",
+            vec!["export", "--db", &d, "--sweep", "bench", "-o", &csv],
+        ),
+        (
+            "reclassify",
+            vec!["reclassify", "--db", &d, "--sweep", "bench"],
+        ),
+    ];
+    let out = dir.join("stdout.txt");
+    let mut timed = Vec::new();
+    for (name, args) in &commands {
+        if !reports.iter().any(|r| name.contains(r.as_str())) {
+            continue;
+        }
+        let mut times = Vec::new();
+        for _ in 0..repeat {
+            times.push(time_command(&bin, args, &out)?);
+        }
+        eprintln!("N = {jobs_n}: {name} {:.3} s", median(times.clone()));
+        timed.push((name.to_string(), median(times)));
+    }
+    Ok(timed)
+}
+
 /// Runs the benchmark at one size in `dir`.
 pub fn measure(
     n: usize,
@@ -343,42 +391,7 @@ pub fn measure(
     let first = gaps[..tenth].to_vec();
     let last = gaps[gaps.len() - tenth..].to_vec();
 
-    let bin = wetgran_binary()?;
-    let d = db.display().to_string();
-    let svg = dir.join("plot.svg").display().to_string();
-    let csv = dir.join("export.csv").display().to_string();
-    let commands: Vec<(&str, Vec<&str>)> = vec![
-        ("sweep status", vec!["sweep", "status", "--db", &d]),
-        (
-            "boundaries",
-            vec!["boundaries", "--db", &d, "--sweep", "bench"],
-        ),
-        (
-            "plot",
-            vec!["plot", "--db", &d, "--sweep", "bench", "-o", &svg],
-        ),
-        (
-            "export (CSV to a file)",
-            vec!["export", "--db", &d, "--sweep", "bench", "-o", &csv],
-        ),
-        (
-            "reclassify",
-            vec!["reclassify", "--db", &d, "--sweep", "bench"],
-        ),
-    ];
-    let out = dir.join("stdout.txt");
-    let mut timed = Vec::new();
-    for (name, args) in &commands {
-        if !reports.iter().any(|r| name.contains(r.as_str())) {
-            continue;
-        }
-        let mut times = Vec::new();
-        for _ in 0..repeat {
-            times.push(time_command(&bin, args, &out)?);
-        }
-        eprintln!("N = {jobs_n}: {name} {:.3} s", median(times.clone()));
-        timed.push((name.to_string(), median(times)));
-    }
+    let timed = time_reports(&db, dir, reports, repeat, jobs_n)?;
     let refine = if refine {
         let store = Store::open_as(&db, false, durability).map_err(|e| e.to_string())?;
         let r = refine_round(&store, &file, &sweep, job, &opts)?;
