@@ -141,6 +141,8 @@ fn scene_fill_in(key: &str, s: &Scene) -> Option<Value> {
         "engine.skin" => json!(s.engine.skin.unwrap_or(scene::DEFAULT_SKIN)),
         "observe.transient_time" => json!(s.observe.transient_time),
         "observe.min_sample_interval" => json!(s.observe.min_sample_interval),
+        "observe.bond_time" => json!(s.observe.bond_time),
+        "observe.cluster_min_size" => json!(s.observe.cluster_min_size),
         _ => return None,
     })
 }

@@ -5,7 +5,7 @@
 //!
 //! - homogeneous, stationary states (fluids, an inelastic gas): how often the profile's spread
 //!   exceeds the bootstrap's 0.95 quantile (5 % if the time-averaged profile were flat up to
-//!   noise) and the independent-bin model's, and how often rule 2 as shipped (level 0.999,
+//!   noise) and the independent-bin model's, and how often rule 2 as shipped (level 0.99,
 //!   bonded dense bins, contrast floor) and without the contrast floor splits the system;
 //! - coexistences: how often rule 2 finds them.
 //!

@@ -98,10 +98,18 @@ fn check(label: &str, c: &Comparison) {
         "{label}: only {} dilute bins",
         c.rows.len()
     );
-    assert_eq!(
-        c.event.classification.phase, c.time.classification.phase,
-        "{label}"
-    );
+    // The two engines have different capillary models (thin thread against minimal): their
+    // labels must agree wherever neither decision lies at a threshold; at one (a contrast at
+    // the coexistence floor, say) the label is uncertain by construction and only printed.
+    let (ev, td) = (&c.event.classification, &c.time.classification);
+    if ev.decided_on.borderline.is_empty() && td.decided_on.borderline.is_empty() {
+        assert_eq!(ev.phase, td.phase, "{label}");
+    } else {
+        println!(
+            "  ({label}: phases {} / {} at a borderline decision: {:?} / {:?}, not asserted)",
+            ev.phase, td.phase, ev.decided_on.borderline, td.decided_on.borderline
+        );
+    }
     assert!((t - 1.0).abs() < 0.2, "{label}: T_g ratio {t}");
     assert!((p - 1.0).abs() < 0.05, "{label}: packing ratio {p}");
     println!("  ({label}: largest single-bin deviation {worst:.3}, not asserted)");

@@ -68,7 +68,7 @@ pub struct Thresholds {
     /// Which profile decides coexistence.
     #[serde(default)]
     pub coexistence_by: CoexistenceBy,
-    /// Quantile of the homogeneous-state spread a coexistence must exceed (default 0.999).
+    /// Quantile of the homogeneous-state spread a coexistence must exceed (default 0.99).
     #[serde(default = "default_coexistence_level")]
     pub coexistence_level: f64,
     /// Smallest relative difference `(dense - dilute) / dense` of the two classes' mean
@@ -113,7 +113,7 @@ fn default_gas_temperature() -> f64 {
     2.0
 }
 fn default_coexistence_level() -> f64 {
-    0.999
+    0.99
 }
 fn default_coexistence_contrast() -> f64 {
     0.5
@@ -171,7 +171,7 @@ impl Thresholds {
         if !(q.is_finite() && q > 0.5 && q < 1.0) {
             return Err(bad(
                 "coexistence_level",
-                format!("= {q} is out of range: must be in (0.5, 1) (a quantile, e.g. 0.999)"),
+                format!("= {q} is out of range: must be in (0.5, 1) (a quantile, e.g. 0.99)"),
             ));
         }
         let a = self.diffusive_exponent;
