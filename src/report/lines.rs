@@ -114,18 +114,7 @@ fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
 }
 
-/// `(Gamma, E*)` of a shaken scene (docs/model.md 4.1), from the drive as the scene gives it.
-pub fn gamma_e_star(scene: &wetgran_core::scene::Scene) -> Option<(f64, f64)> {
-    let (a, omega) = scene.drive_motion()?;
-    let unit = if scene.is_wet() && scene.e_cb() > 0.0 {
-        scene.e_cb()
-    } else {
-        scene.particles.mass * scene.gravity * scene.particles.diameter
-    };
-    let gamma = a * omega * omega / scene.gravity;
-    let e_star = 0.5 * scene.particles.mass * (a * omega).powi(2) / unit;
-    Some((gamma, e_star))
-}
+pub use crate::run::relabel::gamma_e_star;
 
 /// The block standard error of monitored quantity `name` (module doc).
 fn block_error(obs: &serde_json::Value, name: &str) -> Option<f64> {
