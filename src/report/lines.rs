@@ -15,7 +15,9 @@
 //! branch) whose majority labels over trusted replicas differ, at their geometric mean; a grid
 //! point without a trusted majority (or with a tie) is stepped over, so a boundary always rests on
 //! two trusted labels. The fluid-gas inflection of `T_g` (`observe::fluid_gas_inflection`,
-//! docs/model.md 7) is given beside it.
+//! docs/model.md 7) is given beside it, over the homogeneous mobile points only, as the line
+//! rule takes it: a solid is off the fluid-gas curve, and the whole-system temperature of a
+//! coexistence mixes its dense and dilute parts.
 
 use crate::boundary::{START_AXIS, majority};
 use crate::store::{PointRow, SweepRow};
@@ -68,8 +70,8 @@ pub struct GammaLine {
     /// By increasing `E*`, replicas in order.
     pub points: Vec<LinePoint>,
     pub boundaries: Vec<LineBoundary>,
-    /// `E*` of the fluid-gas inflection of `T_g` (`None`: fewer than four points, or steepest
-    /// at an end).
+    /// `E*` of the fluid-gas inflection of `T_g` over the line's homogeneous mobile points
+    /// (`None`: fewer than four such points, or no slope that stands out of the scatter).
     pub inflection: Option<f64>,
 }
 
@@ -186,6 +188,27 @@ fn line_point(p: &PointRow, axes: [Option<usize>; 3]) -> Option<(Option<String>,
     Some((branch, gamma, point))
 }
 
+/// Whether a point of this label lies on the fluid-gas curve of `T_g`: homogeneous and
+/// mobile (f or g), as in the line rule (`observe::line::classify_line`).
+fn on_fluid_gas_curve(phase: Option<&str>) -> bool {
+    matches!(phase, Some("f" | "g"))
+}
+
+/// The fluid-gas inflection of `T_g` over a line's points (sorted by `E*`) that lie on the
+/// fluid-gas curve.
+fn line_inflection(points: &[LinePoint]) -> Option<f64> {
+    let curve: Vec<wetgran_core::observe::line::LinePoint> = points
+        .iter()
+        .filter(|p| on_fluid_gas_curve(p.phase.as_deref()))
+        .map(|p| wetgran_core::observe::line::LinePoint {
+            e_star: p.e_star,
+            t: p.temperature,
+            rel_error: p.temperature_error.map(|e| e / p.temperature.abs()),
+        })
+        .collect();
+    fluid_gas_inflection(&curve).ok().map(|i| i.e_star)
+}
+
 /// The lines of constant Gamma of a sweep's finished jobs (`points`: its `Store::points`).
 pub fn lines_of(sweep: &SweepRow, points: &[PointRow]) -> Lines {
     let start_axis = sweep.axes.iter().position(|a| a.key == START_AXIS);
@@ -250,16 +273,7 @@ pub fn lines_of(sweep: &SweepRow, points: &[PointRow]) -> Lines {
                 .then(a.replica.cmp(&b.replica))
         });
         l.boundaries = label_changes(&l.points);
-        let curve: Vec<wetgran_core::observe::line::LinePoint> = l
-            .points
-            .iter()
-            .map(|p| wetgran_core::observe::line::LinePoint {
-                e_star: p.e_star,
-                t: p.temperature,
-                rel_error: p.temperature_error.map(|e| e / p.temperature.abs()),
-            })
-            .collect();
-        l.inflection = fluid_gas_inflection(&curve).ok().map(|i| i.e_star);
+        l.inflection = line_inflection(&l.points);
     }
     Lines {
         sweep: sweep.name.clone(),
@@ -459,6 +473,31 @@ mod tests {
         assert!((b[1].e_star - 8.0).abs() < 1e-12);
         // One label all along: no boundary.
         assert!(label_changes(&points[2..5]).is_empty());
+    }
+
+    /// A coexistence's whole-system temperature is off the fluid-gas curve: a hot one in the
+    /// middle of a smooth line makes a steep rise only when it is counted.
+    #[test]
+    fn the_inflection_leaves_coexistences_out() {
+        let line = |middle: &str| {
+            let mut points: Vec<LinePoint> = [1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0]
+                .iter()
+                .map(|&e| {
+                    let mut p = lp(e, if e < 10.0 { "f" } else { "g" }, true, 0);
+                    p.temperature = 0.1 * e;
+                    p.temperature_error = Some(0.001 * e);
+                    p
+                })
+                .collect();
+            let mut hot = lp(5.0, middle, true, 0);
+            hot.temperature = 50.0;
+            hot.temperature_error = Some(0.05);
+            points.insert(3, hot);
+            points
+        };
+        assert!(line_inflection(&line("f")).is_some());
+        assert_eq!(line_inflection(&line("fgc")), None);
+        assert_eq!(line_inflection(&line("sgc")), None);
     }
 
     #[test]

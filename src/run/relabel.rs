@@ -44,11 +44,14 @@ pub fn gamma_e_star(scene: &Scene) -> Option<(f64, f64)> {
 /// and sampling taken out, and Gamma to 9 significant digits. A sweep's `periods` and
 /// `samples_per_period` set `run.duration` and `run.sample_interval` in driving periods, which
 /// differ with `E*` along a line of constant Gamma; they say how long and how often a point was
-/// looked at, not where it is.
+/// looked at, not where it is. So does the transient: a sweep whose run length is in time
+/// units gets a transient of a fixed fraction of it, a different number of periods per point.
 fn line_key(scene: &Scene, gamma: f64) -> String {
     let mut s = scene.clone();
     s.run.duration = 0.0;
     s.run.sample_interval = 0.0;
+    s.observe.transient_periods = 0.0;
+    s.observe.transient_time = 0.0;
     s.drive.amplitude = None;
     s.drive.omega = None;
     s.drive.gamma = None;
@@ -388,5 +391,28 @@ mod tests {
         assert_eq!(line_key(a, ga), line_key(b, gb));
         // Another Gamma is another line.
         assert_ne!(line_key(a, ga), line_key(a, 2.0 * ga));
+    }
+
+    /// Regression: with the run length in time units (no `sweep.periods`), the default
+    /// transient is a fixed fraction of the run, so a different number of periods at every
+    /// `E*`, and no point of such a sweep found a line.
+    #[test]
+    fn a_line_spans_points_whose_run_length_is_set_in_time() {
+        let file = crate::sweep::SweepFile::parse(
+            "[sweep]\nname = \"l\"\n[scene]\ndimension = 2\n[scene.box]\n\
+             size = [20.0, 9.0]\n[scene.particles]\ncount = 10\n[scene.capillary]\n\
+             model = \"thin_thread\"\n[scene.drive]\nkind = \"sine\"\n[scene.initial]\n\
+             temperature = 1.0\n[scene.run]\nduration = 40.0\n[[axis]]\nkey = \"gamma\"\n\
+             values = [30.0]\n[[axis]]\nkey = \"e_star\"\nvalues = [0.5, 2.0]\n",
+            std::path::Path::new("l.toml"),
+        )
+        .unwrap();
+        let jobs = file.expand().unwrap();
+        let (a, b) = (&jobs[0].spec.scene, &jobs[1].spec.scene);
+        assert_eq!(a.run.duration, b.run.duration);
+        assert_ne!(a.observe.transient_periods, b.observe.transient_periods);
+        let (ga, _) = gamma_e_star(a).unwrap();
+        let (gb, _) = gamma_e_star(b).unwrap();
+        assert_eq!(line_key(a, ga), line_key(b, gb));
     }
 }
