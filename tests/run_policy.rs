@@ -267,7 +267,9 @@ fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
     );
     let o = run(&["sweep", "status", "--db", db_s]);
     assert!(
-        stdout(&o).contains("0 of 2 result(s) converged, 2 unconverged"),
+        stdout(&o).contains(
+            "0 of 2 result(s) passed the run policy's convergence test, 2 stopped at its cap"
+        ),
         "{}",
         stdout(&o)
     );

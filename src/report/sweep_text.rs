@@ -231,8 +231,9 @@ pub fn sweep_status_text(input: &StatusInput) -> String {
     if checked > 0 {
         let _ = writeln!(
             out,
-            "  stationary  {} of {checked} result(s) converged, {unconverged} unconverged \
-             (`sweep resume --extend` runs those further)",
+            "  run end  {} of {checked} result(s) passed the run policy's convergence test, \
+             {unconverged} stopped at its cap (`sweep resume --extend` runs those further; the \
+             trend and trust lines say whether a label may still change)",
             checked - unconverged
         );
     }
