@@ -190,7 +190,7 @@ fn line_point(p: &PointRow, axes: [Option<usize>; 3]) -> Option<(Option<String>,
 
 /// Whether a point of this label lies on the fluid-gas curve of `T_g`: homogeneous and
 /// mobile (f or g), as in the line rule (`observe::line::classify_line`).
-fn on_fluid_gas_curve(phase: Option<&str>) -> bool {
+pub(crate) fn on_fluid_gas_curve(phase: Option<&str>) -> bool {
     matches!(phase, Some("f" | "g"))
 }
 

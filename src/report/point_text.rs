@@ -103,7 +103,8 @@ fn temperature_rel_error(obs: &serde_json::Value) -> Option<f64> {
 }
 
 /// The lines of constant Gamma of a sweep's stored points: `(Gamma, [(E*, T_g / E_cb, relative
-/// error)])` of every finished job of a shaken scene, by increasing Gamma.
+/// error)])` of every finished job of a shaken scene labelled f or g, by increasing Gamma. Solids
+/// and coexistences are off the fluid-gas curve, as in the line rule that labels the points.
 pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<LinePoint>)> {
     let mut lines: Vec<(f64, Vec<LinePoint>)> = Vec::new();
     for p in points {
@@ -111,6 +112,9 @@ pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<LinePoint>)> {
         else {
             continue;
         };
+        if !crate::report::lines::on_fluid_gas_curve(p.phase.as_deref()) {
+            continue;
+        }
         let Some(t) = obs["granular_temperature_reduced"].as_f64() else {
             continue;
         };
@@ -133,8 +137,8 @@ pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<LinePoint>)> {
 
 /// `inflection` for one sweep: per line of constant Gamma, the inflection point of T_g/E_cb
 /// against E* and the bracket it lies in, where it stands out of the line's scatter
-/// (`observe::line`), else why there is none. Every mobile point enters, coexistences included
-/// (`sweep reclassify` keeps them out of the curve that labels the points).
+/// (`observe::line`), else why there is none. The homogeneous mobile points enter (see
+/// [`gamma_lines`]).
 pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
     let mut out = String::new();
     let _ = writeln!(
