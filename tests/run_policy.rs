@@ -229,6 +229,25 @@ impl wetgran_core::sim::Watcher for NoWatch {
 #[path = "sweep_common/mod.rs"]
 mod sweep_common;
 
+/// The sweep `cool` of two cooling gases that never settle, capped at 8 periods, written to
+/// `dir` and run with one worker; returns its database.
+fn cool_sweep_run(dir: &std::path::Path) -> std::path::PathBuf {
+    use sweep_common::*;
+    write(dir, "cool.toml", &cooling(4.0, ""));
+    let sweep = write(
+        dir,
+        "cool_sweep.toml",
+        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\n\
+         [convergence]\nmax_periods = 8.0\n\
+         [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 0.9]\n",
+    );
+    let db = dir.join("w.sqlite");
+    let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
+    let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    db
+}
+
 /// A sweep with a policy stores the verdict and a checkpoint with every result; `sweep status`
 /// counts the unconverged; `sweep resume --extend` continues them from their checkpoints (time
 /// goes on, bridges carried over) and replaces their results.
@@ -236,18 +255,8 @@ mod sweep_common;
 fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
     use sweep_common::*;
     let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "cool.toml", &cooling(4.0, ""));
-    let sweep = write(
-        dir.path(),
-        "cool_sweep.toml",
-        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\n\
-         [convergence]\nmax_periods = 8.0\n\
-         [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 0.9]\n",
-    );
-    let db = dir.path().join("w.sqlite");
-    let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
-    let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let db = cool_sweep_run(dir.path());
+    let db_s = db.to_str().unwrap();
     let store = wetgran::store::Store::open_existing(&db).unwrap();
     let s = store.sweep("cool").unwrap();
     let before = store.points(s.id).unwrap();
@@ -453,18 +462,8 @@ fn ctrl_c_during_an_extension_keeps_every_result_and_the_next_extend_finishes() 
     use sweep_common::*;
     use wetgran_core::test_pause::{MARKER, PAUSE_AT_VAR, PAUSE_SECS_VAR};
     let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "cool.toml", &cooling(4.0, ""));
-    let sweep = write(
-        dir.path(),
-        "cool_sweep.toml",
-        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\n\
-         [convergence]\nmax_periods = 8.0\n\
-         [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 0.9]\n",
-    );
-    let db = dir.path().join("w.sqlite");
-    let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
-    let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let db = cool_sweep_run(dir.path());
+    let db_s = db.to_str().unwrap();
     let points = |db: &std::path::Path| {
         let store = wetgran::store::Store::open_existing(db).unwrap();
         let s = store.sweep("cool").unwrap();

@@ -4,13 +4,13 @@
 
 use super::common::Failure;
 use crate::report::sweep_text::extended_text;
-use crate::run::extend::extend_unconverged as extend;
+use crate::run::extend::extend_unconverged;
 use crate::store::{Store, SweepRow};
 use crate::sweep::job::ExtendTo;
 
 /// Extends every unconverged job of `sweeps` that has a checkpoint to at most `cap` of total
 /// run; prints a summary.
-pub fn extend_unconverged(
+pub(super) fn extend_and_report(
     store: &Store,
     sweeps: &[SweepRow],
     cap: ExtendTo,
@@ -27,7 +27,7 @@ pub fn extend_unconverged(
             "{flag} = {v} is out of range: must be a finite number of {unit} > 0"
         )));
     }
-    let s = extend(store, sweeps, cap, workers, table_cache_mib, true)?;
+    let s = extend_unconverged(store, sweeps, cap, workers, table_cache_mib, true)?;
     eprint!(
         "{}",
         extended_text(
