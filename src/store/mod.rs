@@ -38,6 +38,13 @@
 //! compile time (no `DATABASE_URL` or offline data in the build); the tests of `queries.rs`
 //! prepare each one against a freshly migrated database. A schema change is a new migration in
 //! `migrations/`.
+//!
+//! Files by concern: `open` (what a file is, the connection, initialisation, migrations, the
+//! re-keying of jobs) and `read_only` (read-only opens, on the same connection code);
+//! `register` (sweeps, their jobs, labels of stored results); `claims` (owners, claims, run
+//! rows, heartbeats, commits of finished, failed and extended jobs); `reads` (counts, a sweep's
+//! jobs with their results, checkpoints, costs); `summary`, `hysteresis`, `stale`,
+//! `relabel_queue` and `cluster` for the reports, relabelling and Slurm.
 
 #[cfg(test)]
 mod claim_queue_tests;
