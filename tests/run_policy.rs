@@ -229,6 +229,25 @@ impl wetgran_core::sim::Watcher for NoWatch {
 #[path = "sweep_common/mod.rs"]
 mod sweep_common;
 
+/// The sweep `cool` of two cooling gases that never settle, capped at 8 periods, written to
+/// `dir` and run with one worker; returns its database.
+fn cool_sweep_run(dir: &std::path::Path) -> std::path::PathBuf {
+    use sweep_common::*;
+    write(dir, "cool.toml", &cooling(4.0, ""));
+    let sweep = write(
+        dir,
+        "cool_sweep.toml",
+        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\n\
+         [convergence]\nmax_periods = 8.0\n\
+         [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 0.9]\n",
+    );
+    let db = dir.join("w.sqlite");
+    let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
+    let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    db
+}
+
 /// A sweep with a policy stores the verdict and a checkpoint with every result; `sweep status`
 /// counts the unconverged; `sweep resume --extend` continues them from their checkpoints (time
 /// goes on, bridges carried over) and replaces their results.
@@ -236,18 +255,8 @@ mod sweep_common;
 fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
     use sweep_common::*;
     let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "cool.toml", &cooling(4.0, ""));
-    let sweep = write(
-        dir.path(),
-        "cool_sweep.toml",
-        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\n\
-         [convergence]\nmax_periods = 8.0\n\
-         [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 0.9]\n",
-    );
-    let db = dir.path().join("w.sqlite");
-    let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
-    let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let db = cool_sweep_run(dir.path());
+    let db_s = db.to_str().unwrap();
     let store = wetgran::store::Store::open_existing(&db).unwrap();
     let s = store.sweep("cool").unwrap();
     let before = store.points(s.id).unwrap();
@@ -443,4 +452,82 @@ fn hot_and_cold_starts_that_disagree_are_hysteretic() {
     );
     // The point is listed with the labels of each start.
     assert!(stdout(&o).contains("hot fgc, cold s"), "{}", stdout(&o));
+}
+
+/// Ctrl-C while `sweep resume --extend` replaces a result (the `extend` pause point: the old
+/// result deleted, the new one not written): the process says how to resume and exits with
+/// 130, the extension committed before stays, the interrupted job keeps its old result, and the
+/// next `--extend` extends it.
+#[test]
+fn ctrl_c_during_an_extension_keeps_every_result_and_the_next_extend_finishes() {
+    use std::io::{BufRead, BufReader};
+    use sweep_common::*;
+    use wetgran_core::test_pause::{MARKER, PAUSE_AT_VAR, PAUSE_SECS_VAR};
+    let dir = tempfile::tempdir().unwrap();
+    let db = cool_sweep_run(dir.path());
+    let db_s = db.to_str().unwrap();
+    let points = |db: &std::path::Path| {
+        let store = wetgran::store::Store::open_existing(db).unwrap();
+        let s = store.sweep("cool").unwrap();
+        assert_eq!(store.integrity_check().unwrap(), ["ok"]);
+        store.points(s.id).unwrap()
+    };
+    let before = points(&db);
+    assert!(before.iter().all(|p| p.simulated_time == Some(8.0)));
+
+    // One worker takes the jobs in grid order: the second replacement pauses.
+    let mut child = wetgran()
+        .args(["sweep", "resume", "cool", "--db", db_s, "--extend", "16"])
+        .args(["--jobs", "1"])
+        .env(PAUSE_AT_VAR, "extend:2")
+        .env(PAUSE_SECS_VAR, "60")
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut seen = String::new();
+    while !seen.contains(MARKER) {
+        let line = lines
+            .next()
+            .unwrap_or_else(|| panic!("the extension ended before its pause:\n{seen}"))
+            .unwrap();
+        seen += &line;
+        seen.push('\n');
+    }
+    let pid = child.id().to_string();
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let status = child.wait().unwrap();
+    let err = rest.join("\n");
+    assert_eq!(status.code(), Some(130), "{seen}{err}");
+    let hint = format!("wetgran sweep resume cool --db {db_s}");
+    assert!(err.contains(&hint), "no `{hint}` in:\n{seen}{err}");
+
+    let mid = points(&db);
+    let t: Vec<f64> = mid.iter().map(|p| p.simulated_time.unwrap()).collect();
+    assert!(
+        t[0] > 8.0 && t[0] <= 16.0 + 1e-9,
+        "the first extension is stored: {t:?}"
+    );
+    assert_eq!(
+        mid[1].simulated_time,
+        Some(8.0),
+        "the second job keeps its old result"
+    );
+    assert_eq!(mid[1].observables, before[1].observables);
+
+    let o = run(&["sweep", "resume", "cool", "--db", db_s, "--extend", "16"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let after = points(&db);
+    assert_eq!(after[0].observables, mid[0].observables, "{}", stderr(&o));
+    let t = after[1].simulated_time.unwrap();
+    assert!(
+        t > 8.0 && t <= 16.0 + 1e-9,
+        "the second job is extended now: {t}"
+    );
 }

@@ -354,7 +354,7 @@ pub(super) fn sweep_resume(
     let Some(cap) = extend else {
         return fail_if_jobs_failed(&store, &sweeps);
     };
-    super::extend_cmd::extend_unconverged(&store, &sweeps, cap, jobs)?;
+    super::extend_cmd::extend_and_report(&store, &sweeps, cap, jobs, table_cache_mib)?;
     // Extended results get the line rule's labels too, as after any run.
     for s in &sweeps {
         let relabelled = crate::run::relabel::relabel_changed(&store, s)?;

@@ -1,30 +1,13 @@
-//! The scheduler: claims pending jobs from the store, runs them on worker threads (one
-//! simulation per thread, synchronous), and commits each finished job on its own.
-//!
-//! Only the calling thread talks to the store; workers receive claimed specs over a channel and
-//! send back progress and outcomes. Between messages the calling thread refreshes the heartbeat
-//! of the running jobs every `store::HEARTBEAT_INTERVAL`.
-//!
-//! The runner owns the wall-table cache of its jobs (`table` wall solver): one bounded
-//! [`TableCache`] per run, capped by [`RunOptions::table_cache_mib`], installed on every worker
-//! thread and dropped with the run, so a sweep over many drives keeps at most the cap in
-//! cached tables (plus the two tables each running job holds).
-//!
-//! The runner also shares the machine's cores among its jobs ([`CoreShare`], `sim::threads`):
-//! each worker enters the run's share, and the runner tells it how many workers are busy and
-//! whether the queue is empty. While jobs wait, each job gets `cores / workers` threads; once
-//! the queue is empty, the jobs still running get the idle workers' cores (the time-driven
-//! engine's steps are parallel, with the same numbers on any number of threads), so the tail
-//! of a sweep does not leave cores idle.
+//! The scheduler of sweep runs: claims pending jobs from the store ([`SweepQueue`]), runs
+//! them on the worker pool (`pool`: worker threads, heartbeats, the wall-table cache and the
+//! core share), and commits each finished job on its own.
 
+use super::pool::{Queue, run_queue};
 use super::progress::Progress;
-use crate::store::{Claim, HEARTBEAT_INTERVAL, Store, StoreError, SweepRow};
+use crate::store::{Claim, Store, StoreError, SweepRow};
 use crate::sweep::job::{JobError, JobResult, run_job, run_job_from};
-use std::sync::{Arc, mpsc};
-use std::thread;
-use std::time::{Duration, Instant};
-use wetgran_core::sim::event_driven::table_cache::TableCache;
-use wetgran_core::sim::threads::{self, CoreShare};
+use std::sync::Arc;
+use std::time::Instant;
 
 /// How to run.
 #[derive(Debug, Clone)]
@@ -55,11 +38,6 @@ pub struct RunSummary {
     /// Wall tables built by the run's cache, and the most bytes it held at once.
     pub tables_built: u64,
     pub table_cache_peak_bytes: usize,
-}
-
-enum Msg {
-    Progress(usize, f64),
-    Finished(usize, Box<Claim>, Result<JobResult, JobError>, f64),
 }
 
 /// `Gamma = 2, E* = 3 (replica 1)`.
@@ -173,89 +151,113 @@ pub fn run_sweeps_with(
         progress.note(&format!("re-queued {} failed job(s)", summary.retried));
     }
 
-    let (msg_tx, msg_rx) = mpsc::channel::<Msg>();
-    let tables = TableCache::with_cap_mib(opts.table_cache_mib);
-    let cores = CoreShare::new(threads::available_cores(), n_workers);
-    let (job_tx, handles) = spawn_workers(n_workers, &msg_tx, &tables, &cores, &job);
-    drop(msg_tx);
-
-    let mut idle: Vec<usize> = (0..n_workers).rev().collect();
-    let mut busy = 0usize;
-    // Whether the last claim found the queue empty (a continuation job may become claimable
-    // later, when its predecessor ends).
-    let mut drained = false;
-    let mut last_beat = Instant::now();
-    let outcome = (|| -> Result<(), StoreError> {
-        loop {
-            while let Some(&w) = idle.last() {
-                let Some(mut claim) = store.claim(&ids)? else {
-                    drained = true;
-                    break;
-                };
-                drained = false;
-                let sweep = sweeps
-                    .iter()
-                    .find(|s| s.name == claim.sweep)
-                    .expect("claimed from one of these sweeps");
-                if let Some(prev) = claim.spec.start_from.clone() {
-                    match continuation_start(store, &prev)? {
-                        Ok(state) => claim.start = Some(Box::new(state)),
-                        Err(why) => {
-                            store.fail(&claim, &why, 0.0)?;
-                            summary.failed += 1;
-                            let label = point_label(sweep, &claim.coords, claim.replica);
-                            progress.note(&format!(
-                                "FAILED  {label}: {why} (job {})",
-                                &claim.job_id[..12]
-                            ));
-                            continue;
-                        }
-                    }
-                }
-                idle.pop();
-                progress.start(w, &point_label(sweep, &claim.coords, claim.replica));
-                job_tx[w].send(claim).expect("worker alive");
-                busy += 1;
-            }
-            if busy == 0 {
-                return Ok(());
-            }
-            cores.set(busy, drained);
-            let wait = HEARTBEAT_INTERVAL.saturating_sub(last_beat.elapsed());
-            match msg_rx.recv_timeout(wait.max(Duration::from_millis(10))) {
-                Ok(Msg::Progress(w, f)) => progress.update(w, f),
-                Ok(Msg::Finished(w, claim, result, wall)) => {
-                    let line = record_finished(store, sweeps, &claim, &result, wall, &mut summary)?;
-                    progress.finish(w, &line);
-                    idle.push(w);
-                    busy -= 1;
-                }
-                Err(mpsc::RecvTimeoutError::Timeout) => {}
-                Err(mpsc::RecvTimeoutError::Disconnected) => {
-                    return Err(StoreError::Db {
-                        path: store.path().display().to_string(),
-                        detail: "all worker threads stopped".to_string(),
-                    });
-                }
-            }
-            if last_beat.elapsed() >= HEARTBEAT_INTERVAL {
-                store.heartbeat()?;
-                last_beat = Instant::now();
-            }
-        }
-    })();
-    drop(job_tx);
-    if outcome.is_ok() {
-        for h in handles {
-            let _ = h.join();
-        }
-    }
-    progress.close();
-    outcome?;
+    let mut queue = SweepQueue {
+        sweeps,
+        ids,
+        summary,
+    };
+    let tables = run_queue(
+        store,
+        &mut queue,
+        n_workers,
+        opts.table_cache_mib,
+        &mut progress,
+        job,
+    )?;
+    let mut summary = queue.summary;
     summary.wall_seconds = start.elapsed().as_secs_f64();
-    summary.tables_built = tables.builds();
-    summary.table_cache_peak_bytes = tables.peak_bytes();
+    summary.tables_built = tables.built;
+    summary.table_cache_peak_bytes = tables.peak_bytes;
     Ok(summary)
+}
+
+/// The pending jobs of some sweeps, claimed from the store's queue, and what became of them.
+struct SweepQueue<'a> {
+    sweeps: &'a [SweepRow],
+    ids: Vec<i64>,
+    summary: RunSummary,
+}
+
+impl SweepQueue<'_> {
+    /// The sweep a job was claimed from.
+    fn sweep_of(&self, claim: &Claim) -> &SweepRow {
+        self.sweeps
+            .iter()
+            .find(|s| s.name == claim.sweep)
+            .expect("claimed from one of these sweeps")
+    }
+}
+
+impl Queue for SweepQueue<'_> {
+    type Job = Claim;
+    type Outcome = Result<JobResult, JobError>;
+
+    /// The next pending job whose run can start: a continuation job gets its predecessor's
+    /// final state, or fails at once with the reason when there is none.
+    fn claim(
+        &mut self,
+        store: &Store,
+        progress: &mut Progress,
+    ) -> Result<Option<(Claim, String)>, StoreError> {
+        while let Some(mut claim) = store.claim(&self.ids)? {
+            let label = point_label(self.sweep_of(&claim), &claim.coords, claim.replica);
+            let Some(prev) = claim.spec.start_from.clone() else {
+                return Ok(Some((claim, label)));
+            };
+            match continuation_start(store, &prev)? {
+                Ok(state) => {
+                    claim.start = Some(Box::new(state));
+                    return Ok(Some((claim, label)));
+                }
+                Err(why) => {
+                    store.fail(&claim, &why, 0.0)?;
+                    self.summary.failed += 1;
+                    progress.note(&format!(
+                        "FAILED  {label}: {why} (job {})",
+                        &claim.job_id[..12]
+                    ));
+                }
+            }
+        }
+        Ok(None)
+    }
+
+    /// Stores a finished job's result (or its failure) and counts it.
+    fn commit(
+        &mut self,
+        store: &Store,
+        claim: Claim,
+        result: Result<JobResult, JobError>,
+        wall: f64,
+    ) -> Result<String, StoreError> {
+        let label = point_label(self.sweep_of(&claim), &claim.coords, claim.replica);
+        let short_id = &claim.job_id[..12];
+        let summary = &mut self.summary;
+        let line = match result {
+            Ok(r) => {
+                if store.finish(&claim, &r)? {
+                    summary.done += 1;
+                    format!(
+                        "done    {label}: phase {}, {:.1} s (job {short_id})",
+                        r.phase.as_deref().unwrap_or("-"),
+                        r.wall_seconds
+                    )
+                } else {
+                    summary.discarded += 1;
+                    format!(
+                        "dropped {label}: another runner finished it first (job \
+                         {short_id})"
+                    )
+                }
+            }
+            Err(e) => {
+                store.fail(&claim, &e.to_string(), wall)?;
+                summary.failed += 1;
+                format!("FAILED  {label}: {e} (job {short_id})")
+            }
+        };
+        Ok(line)
+    }
 }
 
 /// The start state of a continuation job whose predecessor is job `prev`: its checkpoint
@@ -278,101 +280,4 @@ fn continuation_start(
         )));
     };
     Ok(Ok(state.continued(&spec.scene)))
-}
-
-/// Stores a finished job's result (or its failure), counts it in `summary`, and returns the
-/// line the progress display prints for it.
-fn record_finished(
-    store: &Store,
-    sweeps: &[SweepRow],
-    claim: &Claim,
-    result: &Result<JobResult, JobError>,
-    wall: f64,
-    summary: &mut RunSummary,
-) -> Result<String, StoreError> {
-    let sweep = sweeps
-        .iter()
-        .find(|s| s.name == claim.sweep)
-        .expect("claimed from one of these sweeps");
-    let label = point_label(sweep, &claim.coords, claim.replica);
-    let short_id = &claim.job_id[..12];
-    let line = match result {
-        Ok(r) => {
-            if store.finish(claim, r)? {
-                summary.done += 1;
-                format!(
-                    "done    {label}: phase {}, {:.1} s (job {short_id})",
-                    r.phase.as_deref().unwrap_or("-"),
-                    r.wall_seconds
-                )
-            } else {
-                summary.discarded += 1;
-                format!(
-                    "dropped {label}: another runner finished it first (job \
-                     {short_id})"
-                )
-            }
-        }
-        Err(e) => {
-            store.fail(claim, &e.to_string(), wall)?;
-            summary.failed += 1;
-            format!("FAILED  {label}: {e} (job {short_id})")
-        }
-    };
-    Ok(line)
-}
-
-/// Starts `n_workers` worker threads, each in the wall-table cache `tables` and its share of
-/// `cores`; returns the channel that hands each its claims and their handles.
-fn spawn_workers(
-    n_workers: usize,
-    msg_tx: &mpsc::Sender<Msg>,
-    tables: &TableCache,
-    cores: &Arc<CoreShare>,
-    job: &JobFn,
-) -> (Vec<mpsc::Sender<Claim>>, Vec<thread::JoinHandle<()>>) {
-    let mut job_tx = Vec::new();
-    let mut handles = Vec::new();
-    for w in 0..n_workers {
-        let (tx, rx) = mpsc::channel::<Claim>();
-        job_tx.push(tx);
-        let out = msg_tx.clone();
-        let tables = tables.clone();
-        let cores = cores.clone();
-        let job = job.clone();
-        handles.push(
-            thread::Builder::new()
-                .name(format!("wetgran-worker-{w}"))
-                .spawn(move || {
-                    let _tables = tables.enter();
-                    let _cores = threads::enter(&cores, w);
-                    worker(w, rx, out, job)
-                })
-                .expect("spawn a worker thread"),
-        );
-    }
-    (job_tx, handles)
-}
-
-/// A worker: runs every claim it receives and reports back.
-fn worker(w: usize, jobs: mpsc::Receiver<Claim>, out: mpsc::Sender<Msg>, job: JobFn) {
-    while let Ok(claim) = jobs.recv() {
-        let t0 = Instant::now();
-        let mut last = -1.0;
-        let mut report = |f: f64| {
-            // At most one message per percent.
-            if f - last >= 0.01 || f >= 1.0 {
-                last = f;
-                let _ = out.send(Msg::Progress(w, f));
-            }
-        };
-        let result = job(&claim, &mut report);
-        let wall = t0.elapsed().as_secs_f64();
-        if out
-            .send(Msg::Finished(w, Box::new(claim), result, wall))
-            .is_err()
-        {
-            return;
-        }
-    }
 }

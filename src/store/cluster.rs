@@ -114,39 +114,32 @@ impl Store {
 
     /// Adds the Slurm job id sbatch answered to a recorded submission.
     pub fn set_slurm_job(&self, submission_id: i64, slurm_job: &str) -> Result<(), StoreError> {
-        self.rt
-            .block_on(
-                sqlx::query(queries::SET_SLURM_JOB)
-                    .bind(submission_id)
-                    .bind(slurm_job)
-                    .execute(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        self.run(
+            sqlx::query(queries::SET_SLURM_JOB)
+                .bind(submission_id)
+                .bind(slurm_job)
+                .execute(&self.pool),
+        )?;
         Ok(())
     }
 
     /// Forgets a submission that sbatch refused (its tasks never existed).
     pub fn drop_submission(&self, submission_id: i64) -> Result<(), StoreError> {
-        self.rt
-            .block_on(
-                sqlx::query(queries::DELETE_SUBMISSION)
-                    .bind(submission_id)
-                    .execute(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        self.run(
+            sqlx::query(queries::DELETE_SUBMISSION)
+                .bind(submission_id)
+                .execute(&self.pool),
+        )?;
         Ok(())
     }
 
     /// Every recorded task of a sweep, oldest submission first.
     pub fn tasks(&self, sweep_id: i64) -> Result<Vec<TaskRow>, StoreError> {
-        let rows: Vec<TaskTuple> = self
-            .rt
-            .block_on(
-                sqlx::query_as(queries::LIST_TASKS)
-                    .bind(sweep_id)
-                    .fetch_all(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        let rows: Vec<TaskTuple> = self.run(
+            sqlx::query_as(queries::LIST_TASKS)
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+        )?;
         Ok(rows
             .into_iter()
             .map(
@@ -175,16 +168,14 @@ impl Store {
         state: TaskState,
         message: Option<&str>,
     ) -> Result<(), StoreError> {
-        self.rt
-            .block_on(
-                sqlx::query(queries::SET_TASK_STATE)
-                    .bind(submission_id)
-                    .bind(task)
-                    .bind(state.as_str())
-                    .bind(message)
-                    .execute(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        self.run(
+            sqlx::query(queries::SET_TASK_STATE)
+                .bind(submission_id)
+                .bind(task)
+                .bind(state.as_str())
+                .bind(message)
+                .execute(&self.pool),
+        )?;
         Ok(())
     }
 
@@ -196,14 +187,11 @@ impl Store {
     ) -> Result<std::collections::HashMap<String, String>, StoreError> {
         let mut out = std::collections::HashMap::new();
         for id in ids {
-            let s: Option<String> = self
-                .rt
-                .block_on(
-                    sqlx::query_scalar(queries::JOB_STATUS)
-                        .bind(id)
-                        .fetch_optional(&self.pool),
-                )
-                .map_err(|e| self.db(e))?;
+            let s: Option<String> = self.run(
+                sqlx::query_scalar(queries::JOB_STATUS)
+                    .bind(id)
+                    .fetch_optional(&self.pool),
+            )?;
             if let Some(s) = s {
                 out.insert(id.clone(), s);
             }

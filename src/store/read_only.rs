@@ -21,12 +21,10 @@
 //! upgraded by a read-write open where it can be written, as any command did before; where it
 //! cannot, it is refused with [`StoreError::Outdated`].
 
-use super::{
-    Existing, MIGRATOR, Store, StoreError, explain, inspect, new_owner, queries, sqlite_code,
-};
-use sqlx::sqlite::{SqliteConnectOptions, SqlitePoolOptions};
+use super::open::{Existing, inspect};
+use super::{MIGRATOR, Store, StoreError, explain, queries, sqlite_code};
+use sqlx::sqlite::SqliteConnectOptions;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 /// How a read-only open reaches the file (module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,10 +33,11 @@ pub enum ReadAccess {
     Immutable,
 }
 
-/// The write-ahead log beside a database.
-fn wal_of(path: &Path) -> PathBuf {
+/// The file beside a database named with `suffix` (`-wal`: its write-ahead log, `-shm`: the
+/// log's index).
+fn beside(path: &Path, suffix: &str) -> PathBuf {
     let mut name = path.as_os_str().to_owned();
-    name.push("-wal");
+    name.push(suffix);
     PathBuf::from(name)
 }
 
@@ -50,7 +49,7 @@ fn marked_read_only(path: &Path) -> bool {
 
 /// How the database at `path` is read (module doc).
 pub fn read_access(path: &Path) -> ReadAccess {
-    let log_has_commits = std::fs::metadata(wal_of(path)).is_ok_and(|m| m.len() > 0);
+    let log_has_commits = std::fs::metadata(beside(path, "-wal")).is_ok_and(|m| m.len() > 0);
     if log_has_commits {
         return ReadAccess::Shared;
     }
@@ -94,43 +93,11 @@ impl Store {
 
     /// The read-only connection itself; checks what the file holds (header, tables) first.
     fn open_reader(path: &Path, access: ReadAccess) -> Result<Store, StoreError> {
-        let p = path.display().to_string();
-        let existing = inspect(path)?;
-        if matches!(existing, Existing::New) {
-            return Err(StoreError::Missing { path: p });
-        }
-        let rt = tokio::runtime::Builder::new_current_thread()
-            .enable_all()
-            .build()
-            .map_err(|e| StoreError::Db {
-                path: p.clone(),
-                detail: format!("cannot start the async runtime: {e}"),
-            })?;
-        let busy = super::busy_timeout();
+        let existing = inspect(path, false)?;
         let opts = SqliteConnectOptions::new()
-            .filename(path)
             .read_only(true)
-            .immutable(access == ReadAccess::Immutable)
-            .busy_timeout(busy)
-            .pragma("cache_size", format!("-{}", super::CACHE_KIB));
-        let pool = rt
-            .block_on(
-                SqlitePoolOptions::new()
-                    .max_connections(1)
-                    .min_connections(0)
-                    .acquire_timeout(busy * 2 + Duration::from_secs(1))
-                    .connect_with(opts),
-            )
-            .map_err(|e| StoreError::Db {
-                path: p.clone(),
-                detail: read_open_error(path, &e),
-            })?;
-        let store = Store {
-            rt,
-            pool,
-            path: path.to_path_buf(),
-            owner: new_owner(),
-        };
+            .immutable(access == ReadAccess::Immutable);
+        let store = Self::connect(path, opts, |e| read_open_error(path, e))?;
         // The first read: SQLite opens the log here, so a log it cannot open fails here.
         let tables: Vec<String> = store
             .rt
@@ -138,30 +105,24 @@ impl Store {
             .map_err(|e| match sqlite_code(&e) {
                 Some(11 | 26) => store.db(e),
                 _ => StoreError::Db {
-                    path: p.clone(),
+                    path: path.display().to_string(),
                     detail: read_open_error(path, &e),
                 },
             })?;
-        if matches!(existing, Existing::OtherSqlite) {
-            return Err(if tables.is_empty() {
-                StoreError::Missing { path: p }
-            } else {
-                StoreError::NotWetgran {
-                    path: p,
-                    detail: format!("tables {}", tables.join(", ")),
-                }
-            });
+        match existing {
+            Existing::OtherSqlite if tables.is_empty() => Err(StoreError::Missing {
+                path: path.display().to_string(),
+            }),
+            Existing::OtherSqlite => Err(store.not_wetgran(&tables)),
+            _ => Ok(store),
         }
-        Ok(store)
     }
 
     /// What an older wetgran left undone (migrations, the job-id rule), in words; `None` when
     /// the database is as this wetgran writes it. Migrations of a newer wetgran are an error.
     fn outdated(&self) -> Result<Option<String>, StoreError> {
-        let applied: Vec<i64> = match self
-            .rt
-            .block_on(sqlx::query_scalar(queries::APPLIED_MIGRATIONS).fetch_all(&self.pool))
-        {
+        let applied = sqlx::query_scalar::<_, i64>(queries::APPLIED_MIGRATIONS);
+        let applied: Vec<i64> = match self.rt.block_on(applied.fetch_all(&self.pool)) {
             Ok(v) => v,
             // No migration table: initialised, never migrated.
             Err(e) if e.to_string().contains("no such table") => Vec::new(),
@@ -188,36 +149,27 @@ impl Store {
                 missing.join(", ")
             )));
         }
-        let rule: Option<String> = self
-            .rt
-            .block_on(sqlx::query_scalar(queries::JOB_ID_RULE).fetch_optional(&self.pool))
-            .map_err(|e| self.db(e))?;
-        Ok((rule.as_deref() != Some(super::JOB_ID_RULE))
-            .then(|| "its job ids follow an older rule".to_string()))
+        Ok((!self.job_ids_current()?).then(|| "its job ids follow an older rule".to_string()))
     }
 }
 
 /// Whether a shared open may have failed for want of the `-wal`/`-shm` files: neither is
 /// there (SQLite would have created them where it could).
 fn cannot_create_beside(path: &Path) -> bool {
-    let mut shm = path.as_os_str().to_owned();
-    shm.push("-shm");
-    !wal_of(path).exists() && !PathBuf::from(shm).exists()
+    !beside(path, "-wal").exists() && !beside(path, "-shm").exists()
 }
 
 /// The text of a failed read-only open: a log with commits that SQLite cannot read without
 /// the `-shm` file it cannot create is named as such.
 fn read_open_error(path: &Path, e: &sqlx::Error) -> String {
-    if sqlite_code(e) == Some(14) && wal_of(path).exists() {
-        let mut shm = path.as_os_str().to_owned();
-        shm.push("-shm");
+    if sqlite_code(e) == Some(14) && beside(path, "-wal").exists() {
         return format!(
             "cannot read the database: its write-ahead log {} holds commits that SQLite reads \
              with the index file {}, which is missing and cannot be created here (a read-only \
              folder): open it once where the folder can be written, or copy the three files \
              ({e})",
-            wal_of(path).display(),
-            PathBuf::from(shm).display()
+            beside(path, "-wal").display(),
+            beside(path, "-shm").display()
         );
     }
     explain(e)

@@ -63,15 +63,12 @@ impl Store {
     /// The jobs of sweep `sweep_id` whose result (or its removal) no relabelling has seen.
     pub fn relabel_pending(&self, sweep_id: i64) -> Result<Vec<String>, StoreError> {
         let (lo, hi) = range(sweep_id);
-        let keys: Vec<String> = self
-            .rt
-            .block_on(
-                sqlx::query_scalar(queries::RELABEL_PENDING)
-                    .bind(&lo)
-                    .bind(&hi)
-                    .fetch_all(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        let keys: Vec<String> = self.run(
+            sqlx::query_scalar(queries::RELABEL_PENDING)
+                .bind(&lo)
+                .bind(&hi)
+                .fetch_all(&self.pool),
+        )?;
         Ok(keys
             .into_iter()
             .map(|k| k[lo.len()..].to_string())
@@ -80,21 +77,17 @@ impl Store {
 
     /// Every row of a sweep with its spec, in no particular order.
     pub fn point_specs(&self, sweep_id: i64) -> Result<Vec<PointSpec>, StoreError> {
-        let rows = self
-            .rt
-            .block_on(
-                sqlx::query(queries::SWEEP_POINT_SPECS)
-                    .bind(sweep_id)
-                    .fetch_all(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        let rows = self.run(
+            sqlx::query(queries::SWEEP_POINT_SPECS)
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+        )?;
         rows.iter()
             .map(|r| {
                 let spec: String = r.get("spec");
                 let job_id: String = r.get("job_id");
-                let spec = serde_json::from_str(&spec).map_err(|e| StoreError::Damaged {
-                    path: self.path.display().to_string(),
-                    detail: format!("job {job_id}: stored spec unreadable: {e}"),
+                let spec = serde_json::from_str(&spec).map_err(|e| {
+                    self.damaged(format!("job {job_id}: stored spec unreadable: {e}"))
                 })?;
                 Ok(PointSpec {
                     point: r.get("point"),
@@ -115,15 +108,12 @@ impl Store {
     ) -> Result<Vec<PointRow>, StoreError> {
         let mut out = Vec::new();
         for job in job_ids {
-            let rows = self
-                .rt
-                .block_on(
-                    sqlx::query(queries::SWEEP_POINTS_OF_JOB)
-                        .bind(sweep_id)
-                        .bind(job)
-                        .fetch_all(&self.pool),
-                )
-                .map_err(|e| self.db(e))?;
+            let rows = self.run(
+                sqlx::query(queries::SWEEP_POINTS_OF_JOB)
+                    .bind(sweep_id)
+                    .bind(job)
+                    .fetch_all(&self.pool),
+            )?;
             for r in &rows {
                 out.push(self.point_row(r)?);
             }

@@ -43,14 +43,11 @@ impl RunningJob {
 impl Store {
     /// The running jobs of a sweep, in grid order, with their runner and heartbeat.
     pub fn running_jobs(&self, sweep_id: i64) -> Result<Vec<RunningJob>, StoreError> {
-        let rows = self
-            .rt
-            .block_on(
-                sqlx::query(queries::SWEEP_RUNNING_JOBS)
-                    .bind(sweep_id)
-                    .fetch_all(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        let rows = self.run(
+            sqlx::query(queries::SWEEP_RUNNING_JOBS)
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+        )?;
         let mut jobs: Vec<RunningJob> = rows
             .iter()
             .map(|r| RunningJob {

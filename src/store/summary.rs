@@ -193,7 +193,6 @@ impl Store {
     /// The rows of `sweep_point_summaries.sql` with every spec, mapped as they arrive (a
     /// `fetch_all` would hold every row's SQLite values at once: ~1.3 kB a job).
     fn summary_rows_streamed(&self, sweep_id: i64) -> Result<Vec<SummaryRow>, StoreError> {
-        let path = self.path.display().to_string();
         self.rt.block_on(async {
             let mut out = Vec::new();
             let mut rows = sqlx::query(queries::SWEEP_POINT_SUMMARIES)
@@ -205,12 +204,8 @@ impl Store {
                 out.push(SummaryRow {
                     point: r.get("point"),
                     replica: r.get("replica"),
-                    coords: serde_json::from_str(r.get::<&str, _>("coords")).map_err(|e| {
-                        StoreError::Damaged {
-                            path: path.clone(),
-                            detail: format!("coords are not readable: {e}"),
-                        }
-                    })?,
+                    coords: serde_json::from_str(r.get::<&str, _>("coords"))
+                        .map_err(|e| self.damaged(format!("coords are not readable: {e}")))?,
                     job_id: r.get("job_id"),
                     status: r.get("status"),
                     attempts: r.get("attempts"),
@@ -230,20 +225,15 @@ impl Store {
 
     /// The rows of `sweep_point_summaries_packed.sql` (no specs), in grid order.
     fn summary_rows_packed(&self, sweep_id: i64) -> Result<Vec<SummaryRow>, StoreError> {
-        let text: Option<String> = self
-            .rt
-            .block_on(
-                sqlx::query_scalar(queries::SWEEP_POINT_SUMMARIES_PACKED)
-                    .bind(sweep_id)
-                    .fetch_one(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        let text: Option<String> = self.run(
+            sqlx::query_scalar(queries::SWEEP_POINT_SUMMARIES_PACKED)
+                .bind(sweep_id)
+                .fetch_one(&self.pool),
+        )?;
         let mut rows: Vec<SummaryRow> = match text {
             None => Vec::new(),
-            Some(t) => serde_json::from_str(&t).map_err(|e| StoreError::Damaged {
-                path: self.path.display().to_string(),
-                detail: format!("the report rows are not readable: {e}"),
-            })?,
+            Some(t) => serde_json::from_str(&t)
+                .map_err(|e| self.damaged(format!("the report rows are not readable: {e}")))?,
         };
         rows.sort_by_key(|r| (r.point, r.replica));
         Ok(rows)
@@ -256,11 +246,7 @@ impl Store {
         r: SummaryRow,
         shared: Option<&Arc<Scene>>,
     ) -> Result<PointSummary, StoreError> {
-        let path = self.path.display().to_string();
-        let damaged = |what: &str, e: String| StoreError::Damaged {
-            path: path.clone(),
-            detail: format!("{what} is not readable: {e}"),
-        };
+        let damaged = |what: &str, e: String| self.damaged(format!("{what} is not readable: {e}"));
         let job_id = r.job_id;
         let scene = match (shared, &r.spec) {
             (Some(s), _) => Arc::clone(s),
@@ -295,21 +281,15 @@ impl Store {
 
     /// The scene of a sweep's first job in grid order (`None`: the sweep has no job).
     fn first_scene(&self, sweep_id: i64) -> Result<Option<Arc<Scene>>, StoreError> {
-        let row: Option<(String, String)> = self
-            .rt
-            .block_on(
-                sqlx::query_as(queries::SWEEP_FIRST_SPEC)
-                    .bind(sweep_id)
-                    .fetch_optional(&self.pool),
-            )
-            .map_err(|e| self.db(e))?;
+        let row: Option<(String, String)> = self.run(
+            sqlx::query_as(queries::SWEEP_FIRST_SPEC)
+                .bind(sweep_id)
+                .fetch_optional(&self.pool),
+        )?;
         row.map(|(id, text)| {
             JobSpec::from_json(&text, &format!("job {id}"))
                 .map(|spec| Arc::new(spec.scene))
-                .map_err(|e| StoreError::Damaged {
-                    path: self.path.display().to_string(),
-                    detail: format!("a job spec is not readable: {e}"),
-                })
+                .map_err(|e| self.damaged(format!("a job spec is not readable: {e}")))
         })
         .transpose()
     }

@@ -1,0 +1,433 @@
+//! Opening a read-write store: what the file is ([`inspect`], refused before anything is
+//! written), the connection shared with read-only opens ([`Store::connect`]), initialisation
+//! (application id, WAL mode, migrations) and the one-time re-keying of jobs to
+//! [`JOB_ID_RULE`].
+
+use super::{
+    APPLICATION_ID, CACHE_KIB, Durability, JOB_ID_RULE, MIGRATOR, Store, StoreError, busy_timeout,
+    db_error, explain, is_storage_fault, new_owner, queries,
+};
+use crate::sweep::spec::JobSpec;
+use sqlx::SqliteConnection;
+use sqlx::sqlite::{SqliteConnectOptions, SqlitePoolOptions, SqliteSynchronous};
+use std::path::Path;
+use std::time::Duration;
+
+/// What is at a path before it is opened.
+pub(super) enum Existing {
+    New,
+    Ours,
+    OtherSqlite,
+}
+
+/// What is at `path`, from its header; nothing there (a missing or empty file) is
+/// [`StoreError::Missing`] unless `create`.
+pub(super) fn inspect(path: &Path, create: bool) -> Result<Existing, StoreError> {
+    let p = path.display().to_string();
+    let new = || match create {
+        true => Ok(Existing::New),
+        false => Err(StoreError::Missing { path: p.clone() }),
+    };
+    // The 100-byte header only: a database of 10^5 results is gigabytes.
+    let header = || -> std::io::Result<Vec<u8>> {
+        use std::io::Read as _;
+        let mut bytes = Vec::with_capacity(100);
+        std::fs::File::open(path)?
+            .take(100)
+            .read_to_end(&mut bytes)?;
+        Ok(bytes)
+    };
+    let bytes = match header() {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return new(),
+        Err(e) => {
+            return Err(StoreError::Db {
+                path: p,
+                detail: format!("cannot read the file: {e}"),
+            });
+        }
+    };
+    if bytes.is_empty() {
+        return new();
+    }
+    if bytes.len() < 100 || &bytes[..16] != b"SQLite format 3\0" {
+        let detail = if bytes.len() < 100 {
+            format!("{} bytes, shorter than an SQLite header", bytes.len())
+        } else {
+            "no SQLite header".to_string()
+        };
+        return Err(StoreError::NotSqlite { path: p, detail });
+    }
+    let app_id = i32::from_be_bytes([bytes[68], bytes[69], bytes[70], bytes[71]]);
+    if app_id == APPLICATION_ID {
+        Ok(Existing::Ours)
+    } else if app_id != 0 {
+        Err(StoreError::NotWetgran {
+            path: p,
+            detail: format!("application id {app_id:#x}"),
+        })
+    } else {
+        Ok(Existing::OtherSqlite)
+    }
+}
+
+impl Store {
+    /// Opens (creating if needed) the database at `path` and applies the migrations.
+    pub fn open(path: &Path) -> Result<Store, StoreError> {
+        Self::open_as(path, true, Durability::Synced)
+    }
+
+    /// Opens an existing database; a missing file is an error (nothing is created).
+    pub fn open_existing(path: &Path) -> Result<Store, StoreError> {
+        Self::open_as(path, false, Durability::Synced)
+    }
+
+    /// Opens the database at `path` (creating it if `create`, else a missing file is an error)
+    /// with commits as `durability` says.
+    pub fn open_as(path: &Path, create: bool, durability: Durability) -> Result<Store, StoreError> {
+        // Two runners starting at once on a new file race to initialise it: the loser's
+        // journal-mode switch or migration fails (its transaction rolls back) and it tries again,
+        // then finding the file initialised.
+        let mut attempt = 0;
+        loop {
+            match Self::open_once(path, create, durability) {
+                Err(StoreError::Db { .. }) if attempt < 6 => {
+                    attempt += 1;
+                    std::thread::sleep(Duration::from_millis(50 * attempt));
+                }
+                other => return other,
+            }
+        }
+    }
+
+    fn open_once(path: &Path, create: bool, durability: Durability) -> Result<Store, StoreError> {
+        let existing = inspect(path, create)?;
+        let opts = SqliteConnectOptions::new()
+            .create_if_missing(true)
+            .foreign_keys(true)
+            .synchronous(match durability {
+                Durability::Synced => SqliteSynchronous::Full,
+                Durability::Fast => SqliteSynchronous::Normal,
+            });
+        let store = Self::connect(path, opts, explain)?;
+        store.prepare(existing)?;
+        store.rekey_jobs()?;
+        Ok(store)
+    }
+
+    /// The store's runtime and its one connection to `path` with `opts` (read-write or
+    /// read-only), waiting [`busy_timeout`] for locks; `open_error` words a failed connect.
+    pub(super) fn connect(
+        path: &Path,
+        opts: SqliteConnectOptions,
+        open_error: impl Fn(&sqlx::Error) -> String,
+    ) -> Result<Store, StoreError> {
+        let failed = |detail: String| StoreError::Db {
+            path: path.display().to_string(),
+            detail,
+        };
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .map_err(|e| failed(format!("cannot start the async runtime: {e}")))?;
+        let busy = busy_timeout();
+        let opts = opts
+            .filename(path)
+            .busy_timeout(busy)
+            // Page cache of the one connection, in KiB (negative: a size, not a page count):
+            // job ids are hashes, so every job, result and run row lands on a random page of
+            // its index; SQLite's default 2 MiB holds those pages of ~10^3 jobs, this of ~10^5.
+            .pragma("cache_size", format!("-{CACHE_KIB}"));
+        let pool = rt
+            .block_on(
+                SqlitePoolOptions::new()
+                    .max_connections(1)
+                    .min_connections(0)
+                    .acquire_timeout(busy * 2 + Duration::from_secs(1))
+                    .connect_with(opts),
+            )
+            .map_err(|e| failed(open_error(&e)))?;
+        Ok(Store {
+            rt,
+            pool,
+            path: path.to_path_buf(),
+            owner: new_owner(),
+        })
+    }
+
+    /// Checks (read-only) what is in the file, then initialises and migrates it.
+    fn prepare(&self, existing: Existing) -> Result<(), StoreError> {
+        let db = |e: sqlx::Error| db_error(&self.path, &e);
+        // A file that cannot be read or written is not a damaged one.
+        let damaged = |e: sqlx::Error| match is_storage_fault(&e) {
+            true => db(e),
+            false => self.damaged(e.to_string()),
+        };
+        self.rt.block_on(async {
+            let mut conn = self.pool.acquire().await.map_err(db)?;
+            let conn: &mut SqliteConnection = &mut conn;
+            match existing {
+                Existing::OtherSqlite => {
+                    let tables: Vec<String> = sqlx::query_scalar(queries::LIST_TABLES)
+                        .fetch_all(&mut *conn)
+                        .await
+                        .map_err(damaged)?;
+                    if !tables.is_empty() {
+                        return Err(self.not_wetgran(&tables));
+                    }
+                }
+                Existing::Ours => {
+                    let check: Vec<String> = sqlx::query_scalar(queries::QUICK_CHECK)
+                        .fetch_all(&mut *conn)
+                        .await
+                        .map_err(damaged)?;
+                    if check.first().map(String::as_str) != Some("ok") {
+                        return Err(self.damaged(format!("integrity check: {}", check.join("; "))));
+                    }
+                }
+                Existing::New => {}
+            }
+            if !matches!(existing, Existing::Ours) {
+                // Before WAL mode, so that the id is written to the main file at once.
+                sqlx::query(queries::SET_APPLICATION_ID)
+                    .execute(&mut *conn)
+                    .await
+                    .map_err(db)?;
+            }
+            let mode: String = sqlx::query_scalar(queries::SET_WAL_MODE)
+                .fetch_one(&mut *conn)
+                .await
+                .map_err(db)?;
+            let failed = |detail: String| StoreError::Db {
+                path: self.path.display().to_string(),
+                detail,
+            };
+            if !mode.eq_ignore_ascii_case("wal") {
+                return Err(failed(format!(
+                    "cannot switch to WAL mode (journal mode is {mode})"
+                )));
+            }
+            MIGRATOR.run(&mut *conn).await.map_err(|e| {
+                failed(match e {
+                    sqlx::migrate::MigrateError::Execute(e)
+                    | sqlx::migrate::MigrateError::ExecuteMigration(e, _) => {
+                        format!("applying the migrations: {}", explain(&e))
+                    }
+                    e => format!("applying the migrations: {e}"),
+                })
+            })?;
+            Ok(())
+        })
+    }
+
+    /// The refusal of an SQLite database of another program, by the tables it holds.
+    pub(super) fn not_wetgran(&self, tables: &[String]) -> StoreError {
+        StoreError::NotWetgran {
+            path: self.path.display().to_string(),
+            detail: format!("tables {}", tables.join(", ")),
+        }
+    }
+
+    /// Whether the job ids follow [`JOB_ID_RULE`] (meta key `job_ids`).
+    pub(super) fn job_ids_current(&self) -> Result<bool, StoreError> {
+        let rule: Option<String> =
+            self.run(sqlx::query_scalar(queries::JOB_ID_RULE).fetch_optional(&self.pool))?;
+        Ok(rule.as_deref() == Some(JOB_ID_RULE))
+    }
+
+    /// Compatibility rule for databases written before job ids left out the `[classify]`
+    /// thresholds (docs/model-choices.md, "Job identity"): once per database (meta key
+    /// `job_ids` = [`JOB_ID_RULE`]), every job is re-keyed to the id its stored spec has now,
+    /// in one transaction. Jobs that differed only in their thresholds become one: its point
+    /// rows, runs and cluster tasks follow it; a result is kept (the first one found where the
+    /// merged job has none, dropped otherwise: the trajectory is the same).
+    fn rekey_jobs(&self) -> Result<(), StoreError> {
+        if self.job_ids_current()? {
+            return Ok(());
+        }
+        self.in_transaction(async |tx| {
+            let jobs: Vec<(String, String)> = sqlx::query_as(queries::ALL_JOB_SPECS)
+                .fetch_all(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            for (old, text) in jobs {
+                let spec = JobSpec::from_json(&text, &format!("job {old}"))
+                    .map_err(|e| self.damaged(format!("a job spec is not readable: {e}")))?;
+                let new = spec.id();
+                if new == old {
+                    continue;
+                }
+                let exists: Option<String> = sqlx::query_scalar(queries::JOB_EXISTS)
+                    .bind(&new)
+                    .fetch_optional(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+                if exists.is_none() {
+                    sqlx::query(queries::COPY_JOB_TO_NEW_ID)
+                        .bind(&old)
+                        .bind(&new)
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                } else {
+                    // Merging: the merged job takes this one's result if it has none.
+                    let moved = sqlx::query(queries::MOVE_RESULT_IF_NONE)
+                        .bind(&old)
+                        .bind(&new)
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                    if moved.rows_affected() > 0 {
+                        sqlx::query(queries::MARK_MERGED_JOB_DONE)
+                            .bind(&old)
+                            .bind(&new)
+                            .execute(&mut **tx)
+                            .await
+                            .map_err(|e| self.db(e))?;
+                    }
+                    sqlx::query(queries::DELETE_RESULT)
+                        .bind(&old)
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                }
+                for sql in [
+                    queries::REKEY_SWEEP_POINTS,
+                    queries::REKEY_RUNS,
+                    queries::REKEY_SUBMISSION_TASKS,
+                    queries::REKEY_RESULTS,
+                ] {
+                    sqlx::query(sql)
+                        .bind(&old)
+                        .bind(&new)
+                        .execute(&mut **tx)
+                        .await
+                        .map_err(|e| self.db(e))?;
+                }
+                // A merged job may have taken another's result: its lines are relabelled.
+                self.mark_relabel_job(tx, &new).await?;
+                sqlx::query(queries::DELETE_JOB)
+                    .bind(&old)
+                    .execute(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+            }
+            sqlx::query(queries::SET_JOB_ID_RULE)
+                .bind(JOB_ID_RULE)
+                .execute(&mut **tx)
+                .await
+                .map_err(|e| self.db(e))?;
+            Ok(())
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::store::store_with_jobs;
+    use crate::sweep::job::JobResult;
+
+    #[test]
+    fn application_id_pragma_matches_the_constant() {
+        // The PRAGMA text cannot take a bound parameter; keep it in step with the constant.
+        assert_eq!(APPLICATION_ID, 1464291918);
+        let statement = queries::SET_APPLICATION_ID
+            .lines()
+            .find(|l| !l.starts_with("--"))
+            .unwrap();
+        assert_eq!(
+            statement,
+            format!("PRAGMA application_id = {APPLICATION_ID}")
+        );
+    }
+
+    /// Runs raw SQL on the store's single connection.
+    fn exec(store: &Store, sql: &'static str, binds: &[&str]) {
+        let mut q = sqlx::query(sql);
+        for b in binds {
+            q = q.bind(*b);
+        }
+        store.rt.block_on(q.execute(&store.pool)).unwrap();
+    }
+
+    #[test]
+    fn a_database_with_old_job_ids_is_rekeyed_once_and_keeps_its_results() {
+        let dir = tempfile::tempdir().unwrap();
+        let (db, sweep_id) = store_with_jobs(dir.path());
+        let store = Store::open(&db).unwrap();
+        let claim = store.claim(&[sweep_id]).unwrap().unwrap();
+        let result = JobResult {
+            phase: Some("g".into()),
+            decided_on: None,
+            observables: serde_json::json!({"k": 1}),
+            simulated_time: 1.0,
+            wall_seconds: 0.5,
+            events: 3,
+            checkpoint: None,
+        };
+        assert!(store.finish(&claim, &result).unwrap());
+        let done_id = claim.job_id.clone();
+        // Write the database as the old rule did: ids hashed with the `[classify]` thresholds,
+        // plus a second job that differed from the finished one only in its thresholds.
+        exec(&store, "PRAGMA foreign_keys = OFF", &[]);
+        for p in store.points(sweep_id).unwrap() {
+            let old = crate::sweep::spec::id_of_canonical(&p.spec.canonical_json());
+            assert_ne!(old, p.job_id);
+            for sql in [
+                "UPDATE jobs SET id = ?2 WHERE id = ?1",
+                "UPDATE sweep_points SET job_id = ?2 WHERE job_id = ?1",
+                "UPDATE results SET job_id = ?2 WHERE job_id = ?1",
+                "UPDATE runs SET job_id = ?2 WHERE job_id = ?1",
+            ] {
+                exec(&store, sql, &[&p.job_id, &old]);
+            }
+        }
+        let mut twin = claim.spec.clone();
+        twin.scene.classify.gas_temperature *= 2.0;
+        let twin_old = crate::sweep::spec::id_of_canonical(&twin.canonical_json());
+        exec(
+            &store,
+            "INSERT INTO jobs (id, spec, created_at) VALUES (?1, ?2, 0)",
+            &[&twin_old, &twin.canonical_json()],
+        );
+        exec(
+            &store,
+            "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
+             VALUES (1, 99, 0, '[9]', ?1)",
+            &[&twin_old],
+        );
+        exec(&store, "DELETE FROM meta WHERE key = 'job_ids'", &[]);
+        drop(store);
+
+        let store = Store::open_existing(&db).unwrap();
+        let points = store.points(sweep_id).unwrap();
+        assert_eq!(points.len(), 4);
+        for p in &points {
+            assert_eq!(
+                p.job_id,
+                p.spec.id(),
+                "every job carries its id under the new rule"
+            );
+        }
+        // The twin merged into the finished job and shares its result.
+        let twin_row = points.iter().find(|p| p.point == 99).unwrap();
+        assert_eq!(twin_row.job_id, done_id);
+        for p in points.iter().filter(|p| p.job_id == done_id) {
+            assert_eq!(p.status, "done");
+            assert_eq!(p.observables, Some(serde_json::json!({"k": 1})));
+        }
+        let jobs: i64 = store
+            .rt
+            .block_on(sqlx::query_scalar("SELECT count(*) FROM jobs").fetch_one(&store.pool))
+            .unwrap();
+        assert_eq!(jobs, 3);
+        assert_eq!(store.runs_per_job().unwrap(), vec![(done_id.clone(), 1)]);
+        // Marked once: opening again changes nothing.
+        let rule: String = store
+            .rt
+            .block_on(sqlx::query_scalar(queries::JOB_ID_RULE).fetch_one(&store.pool))
+            .unwrap();
+        assert_eq!(rule, JOB_ID_RULE);
+    }
+}

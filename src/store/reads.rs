@@ -1,0 +1,207 @@
+//! The report reads: integrity, counts by state, a sweep's jobs with their results (whole or
+//! page by page), job specs and checkpoints, and what finished jobs cost.
+
+use super::{FinishedCost, POINTS_PAGE, PointRow, StateCounts, Store, StoreError, queries};
+use crate::sweep::spec::JobSpec;
+use sqlx::Row;
+
+impl Store {
+    /// SQLite's full integrity check (`PRAGMA integrity_check`): `["ok"]` for a sound file, else
+    /// the problems it found.
+    pub fn integrity_check(&self) -> Result<Vec<String>, StoreError> {
+        self.run(sqlx::query_scalar(queries::INTEGRITY_CHECK).fetch_all(&self.pool))
+    }
+
+    /// Number of rows in the `runs` table: simulations started, ever, in this database.
+    pub fn runs_started(&self) -> Result<i64, StoreError> {
+        self.run(sqlx::query_scalar(queries::COUNT_RUNS).fetch_one(&self.pool))
+    }
+
+    /// The spec of a job, if the database has it.
+    pub fn job_spec(&self, job_id: &str) -> Result<Option<JobSpec>, StoreError> {
+        let row: Option<(String,)> = self.run(
+            sqlx::query_as(queries::JOB_SPEC)
+                .bind(job_id)
+                .fetch_optional(&self.pool),
+        )?;
+        row.map(|(s,)| {
+            JobSpec::from_json(&s, &format!("job {job_id}"))
+                .map_err(|e| self.damaged(format!("the spec of job {job_id} is not readable: {e}")))
+        })
+        .transpose()
+    }
+
+    /// The checkpoint (final state) of a finished job, if one was stored.
+    pub fn checkpoint(
+        &self,
+        job_id: &str,
+    ) -> Result<Option<wetgran_core::sim::EngineState>, StoreError> {
+        let row: Option<(String,)> = self.run(
+            sqlx::query_as(queries::CHECKPOINT_STATE)
+                .bind(job_id)
+                .fetch_optional(&self.pool),
+        )?;
+        row.map(|(s,)| {
+            serde_json::from_str(&s).map_err(|e| {
+                self.damaged(format!(
+                    "the checkpoint of job {job_id} is not readable: {e}"
+                ))
+            })
+        })
+        .transpose()
+    }
+
+    /// Jobs of a sweep by state.
+    pub fn counts(&self, sweep_id: i64) -> Result<StateCounts, StoreError> {
+        let rows: Vec<(String, i64)> = self.run(
+            sqlx::query_as(queries::COUNT_BY_STATUS)
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+        )?;
+        let mut c = StateCounts::default();
+        for (status, n) in rows {
+            let n = n as u64;
+            match status.as_str() {
+                "pending" => c.pending = n,
+                "running" => c.running = n,
+                "done" => c.done = n,
+                _ => c.failed = n,
+            }
+        }
+        Ok(c)
+    }
+
+    /// Runs one statement on the store's connection (tests that write rows as older versions
+    /// did).
+    #[cfg(test)]
+    pub(crate) fn execute_for_tests(&self, sql: &'static str) {
+        self.rt
+            .block_on(sqlx::query(sql).execute(&self.pool))
+            .unwrap();
+    }
+
+    /// Every job of a sweep (grid order), with its result where there is one.
+    pub fn points(&self, sweep_id: i64) -> Result<Vec<PointRow>, StoreError> {
+        let rows = self.run(
+            sqlx::query(queries::SWEEP_POINTS)
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+        )?;
+        rows.iter().map(|r| self.point_row(r)).collect()
+    }
+
+    /// Every job of the given sweeps with its result, in sweep order and each sweep's grid
+    /// order, handed to `f` as `(pass, index of the sweep in sweep_ids, row)`, `passes` times
+    /// over (`export`: a first pass for the CSV columns, a second for the rows). The rows are
+    /// read [`POINTS_PAGE`] at a time (`sweep_points_page.sql`), so memory does not grow with
+    /// the sweeps; every pass reads inside one read transaction, so every pass sees the same
+    /// database even while a runner commits results.
+    pub fn scan_points<E: From<StoreError>>(
+        &self,
+        sweep_ids: &[i64],
+        passes: usize,
+        mut f: impl FnMut(usize, usize, PointRow) -> Result<(), E>,
+    ) -> Result<(), E> {
+        self.rt.block_on(async {
+            let mut tx = self.pool.begin().await.map_err(|e| self.db(e))?;
+            for pass in 0..passes {
+                for (k, &sweep_id) in sweep_ids.iter().enumerate() {
+                    let mut after = (-1i64, -1i64);
+                    loop {
+                        let rows = sqlx::query(queries::SWEEP_POINTS_PAGE)
+                            .bind(sweep_id)
+                            .bind(after.0)
+                            .bind(after.1)
+                            .bind(POINTS_PAGE)
+                            .fetch_all(&mut *tx)
+                            .await
+                            .map_err(|e| self.db(e))?;
+                        for r in &rows {
+                            let row = self.point_row(r)?;
+                            after = (row.point, row.replica);
+                            f(pass, k, row)?;
+                        }
+                        if rows.len() < POINTS_PAGE as usize {
+                            break;
+                        }
+                    }
+                }
+            }
+            // Read only: nothing to commit.
+            tx.rollback().await.map_err(|e| self.db(e))?;
+            Ok::<(), E>(())
+        })
+    }
+
+    /// A row of `sweep_points.sql` (or of a page of it) as a [`PointRow`].
+    pub(super) fn point_row(&self, r: &sqlx::sqlite::SqliteRow) -> Result<PointRow, StoreError> {
+        let damaged = |what: &str, e: String| self.damaged(format!("{what} is not readable: {e}"));
+        let job_id: String = r.get("job_id");
+        let json = |col: &str| -> Result<Option<serde_json::Value>, StoreError> {
+            let s: Option<String> = r.get(col);
+            s.map(|s| serde_json::from_str(&s))
+                .transpose()
+                .map_err(|e| damaged(&format!("{col} of job {job_id}"), e.to_string()))
+        };
+        let spec: String = r.get("spec");
+        Ok(PointRow {
+            point: r.get("point"),
+            replica: r.get("replica"),
+            coords: serde_json::from_str(r.get::<&str, _>("coords"))
+                .map_err(|e| damaged("coords", e.to_string()))?,
+            status: r.get("status"),
+            spec: JobSpec::from_json(&spec, &format!("job {job_id}"))
+                .map_err(|e| damaged("a job spec", e))?,
+            attempts: r.get("attempts"),
+            last_error: r.get("last_error"),
+            phase: r.get("phase"),
+            decided_on: json("decided_on")?,
+            observables: json("observables")?,
+            simulated_time: r.get("simulated_time"),
+            wall_seconds: r.get("wall_seconds"),
+            events: r.get("events"),
+            finished_at: r.get("finished_at"),
+            result_owner: r.get("result_owner"),
+            trend: r
+                .get::<Option<String>, _>("trend")
+                .as_deref()
+                .and_then(wetgran_core::observe::trend::TrendState::parse),
+            job_id,
+        })
+    }
+
+    /// Number of attempts recorded in the `runs` table per job (audit of "no job ran twice").
+    pub fn runs_per_job(&self) -> Result<Vec<(String, i64)>, StoreError> {
+        self.run(sqlx::query_as(queries::RUNS_PER_JOB).fetch_all(&self.pool))
+    }
+
+    /// What every finished job in the database cost, by job id (any sweep): the simulated time
+    /// its run ended at, its wall seconds (with extensions) and its convergence verdict.
+    pub fn finished_job_costs(
+        &self,
+    ) -> Result<std::collections::HashMap<String, FinishedCost>, StoreError> {
+        let rows: Vec<(String, f64, f64, Option<i64>)> =
+            self.run(sqlx::query_as(queries::FINISHED_JOB_COSTS).fetch_all(&self.pool))?;
+        Ok(rows
+            .into_iter()
+            .map(|(id, simulated_time, wall_seconds, converged)| {
+                let cost = FinishedCost {
+                    simulated_time,
+                    wall_seconds,
+                    converged: converged.map(|c| c != 0),
+                };
+                (id, cost)
+            })
+            .collect())
+    }
+
+    /// Total wall time of the finished and failed attempts of a sweep's jobs, in seconds.
+    pub fn time_spent(&self, sweep_id: i64) -> Result<f64, StoreError> {
+        let t: Option<f64> = self.run(
+            sqlx::query_scalar(queries::TIME_SPENT)
+                .bind(sweep_id)
+                .fetch_one(&self.pool),
+        )?;
+        Ok(t.unwrap_or(0.0))
+    }
+}
