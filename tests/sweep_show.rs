@@ -108,6 +108,29 @@ fn show_redraws_a_stored_point_and_inflection_reads_the_lines() {
         assert!(!text(&out).contains("panicked"), "{}", text(&out));
     }
 
+    // The job is found by its prefix in any case; a prefix no job has is a usage error.
+    let upper = wetgran()
+        .args(["show", "--db", db_s, &id[..8].to_ascii_uppercase()])
+        .output()
+        .unwrap();
+    assert!(upper.status.success(), "{}", text(&upper));
+    assert!(text(&upper).contains(&id), "{}", text(&upper));
+    let absent = if id.starts_with('0') {
+        "ffffff"
+    } else {
+        "000000"
+    };
+    let none = wetgran()
+        .args(["show", "--db", db_s, absent])
+        .output()
+        .unwrap();
+    assert_eq!(none.status.code(), Some(2), "{}", text(&none));
+    assert!(
+        text(&none).contains("no job id starts with"),
+        "{}",
+        text(&none)
+    );
+
     // One line of constant Gamma with five E*: the analysis reports it.
     let inf = wetgran()
         .args(["inflection", "--db", db_s])

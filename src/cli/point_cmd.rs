@@ -20,12 +20,17 @@ fn find_job(store: &Store, prefix: &str) -> Result<(String, PointRow), Failure> 
             "job `{prefix}`: give at least 6 hex digits of a job id (`wetgran export` lists them)"
         )));
     }
+    let names: std::collections::HashMap<i64, String> = store
+        .sweeps()?
+        .into_iter()
+        .map(|s| (s.id, s.name))
+        .collect();
     let mut found: Vec<(String, PointRow)> = Vec::new();
-    for s in store.sweeps()? {
-        for p in store.points(s.id)? {
-            if p.job_id.starts_with(prefix) && !found.iter().any(|(_, q)| q.job_id == p.job_id) {
-                found.push((s.name.clone(), p));
-            }
+    for (sweep_id, p) in store.points_with_job_prefix(prefix)? {
+        // A job shared by several sweeps is shown once, under the first.
+        if !found.iter().any(|(_, q)| q.job_id == p.job_id) {
+            let name = names.get(&sweep_id).cloned().unwrap_or_default();
+            found.push((name, p));
         }
     }
     match found.len() {

@@ -64,6 +64,8 @@ queries! {
     SWEEP_POINT_SPECS = "sweep_point_specs";
     /// One job's rows in a sweep with its result.
     SWEEP_POINTS_OF_JOB = "sweep_points_of_job";
+    /// The rows of every sweep whose job id starts with a prefix, with their results (`show`).
+    SWEEP_POINTS_WITH_JOB_PREFIX = "sweep_points_with_job_prefix";
     /// Deletes a job row.
     DELETE_JOB = "delete_job";
     /// Deletes a job's result.

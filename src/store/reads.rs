@@ -133,6 +133,27 @@ impl Store {
         })
     }
 
+    /// The rows, in every sweep, of the jobs whose id starts with `prefix` (hex digits, any
+    /// case), with their results: `(sweep id, row)` by sweep and grid order. An index range, so
+    /// finding one job does not read the others' observables.
+    pub fn points_with_job_prefix(&self, prefix: &str) -> Result<Vec<(i64, PointRow)>, StoreError> {
+        let low = prefix.to_ascii_lowercase();
+        // Job ids are lowercase hex: every id that starts with `low` sorts below `low` + "g".
+        let high = format!("{low}g");
+        let rows = self.run(
+            sqlx::query(queries::SWEEP_POINTS_WITH_JOB_PREFIX)
+                .bind(&low)
+                .bind(&high)
+                .fetch_all(&self.pool),
+        )?;
+        let mut out = rows
+            .iter()
+            .map(|r| Ok((r.get("sweep_id"), self.point_row(r)?)))
+            .collect::<Result<Vec<(i64, PointRow)>, StoreError>>()?;
+        out.sort_by_key(|(sweep, p)| (*sweep, p.point, p.replica));
+        Ok(out)
+    }
+
     /// A row of `sweep_points.sql` (or of a page of it) as a [`PointRow`].
     pub(super) fn point_row(&self, r: &sqlx::sqlite::SqliteRow) -> Result<PointRow, StoreError> {
         let damaged = |what: &str, e: String| self.damaged(format!("{what} is not readable: {e}"));
