@@ -12,9 +12,7 @@
 //! Scans without shear or minimum image gather the partners of the neighbour cells first and
 //! predict the contacts without branches (`scan_dry`, `dry_time`): whether a pair approaches
 //! and meets is a coin toss per partner, which a processor mispredicts (docs/performance.md,
-//! "Ideas kept and rejected"); the same operations as `predict_image`, so the same events. When
-//! the particle records outgrow the core's caches (`TOUCH_FROM_BYTES`), such a scan first reads
-//! every gathered partner's record once, so that their cache misses overlap; no number changes.
+//! "Ideas kept and rejected"); the same operations as `predict_image`, so the same events.
 //!
 //! Safeguards (each tested in `crates/core/tests/engine_safeguards.rs`): an overlapping pair that approaches
 //! collides now, one that separates is left alone (B.5.6); a pair half a periodic box apart (four
@@ -22,7 +20,7 @@
 //! rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
 //! leaves it at least at the rebound floor.
 
-use super::bodies::{Bodies, Body, Vector, permute_in_place, vec_bytes};
+use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cell_source::{CellSource, Neighbourhood};
 use super::cells::{BATCH, CellGrid};
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
@@ -38,14 +36,6 @@ use crate::sim::books::EventCounts;
 /// image (see `PairSource::predict_pair_from`): above the `0.4 L` that partners in adjacent
 /// cells reach with five cells, below the `0.5 L` tie of four.
 const FAR_IMAGE: f64 = 0.45;
-/// Size of the particle records (`Bodies::body`) from which a scan reads its partners' records
-/// once before predicting (`PairSource::scan_dry`). Below it the records stay in the core's
-/// caches and the extra loads only cost time (the 2D standard systems, N = 1200, 77 kB: 3-6 %
-/// slower); above it the overlapped misses win. Measured on two cache sizes (docs/performance.md,
-/// "Compiler-steering devices"): system (a) (N = 32 000 in 3D, 2 MB of records) 1.16x with
-/// 2 MiB of L2 per core, 1.15x with 1 MiB; (b) 1.10x with 1 MiB. Only the time depends on it,
-/// never a number (`crates/core/tests/engine_pins.rs`).
-const TOUCH_FROM_BYTES: usize = 512 * 1024;
 /// Most bridges one particle may hold (a guard: more means the packing is unphysical).
 pub const MAX_BONDS: usize = 16;
 
@@ -68,9 +58,6 @@ pub struct PairSource<const D: usize, const WET: bool> {
     /// Bond partners of particle `i` in `bonds[i * MAX_BONDS..][..bond_len[i]]`.
     pub bonds: Vec<u32>,
     pub bond_len: Vec<u8>,
-    /// Size of the particle records from which a scan reads its partners' records once before
-    /// predicting ([`TOUCH_FROM_BYTES`] unless a test moves it).
-    pub(crate) touch_from_bytes: usize,
 }
 
 impl<const D: usize, const WET: bool> PairSource<D, WET> {
@@ -84,7 +71,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 Vec::new()
             },
             bond_len: if WET { vec![0; n] } else { Vec::new() },
-            touch_from_bytes: TOUCH_FROM_BYTES,
         }
     }
 
@@ -302,25 +288,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         slabs: &SlabSource,
         t: f64,
     ) {
-        if self.touches(bodies) {
-            self.scan_with::<G, S, true>(i, hood, bodies, cells, slabs, t);
-        } else {
-            self.scan_with::<G, S, false>(i, hood, bodies, cells, slabs, t);
-        }
-    }
-
-    /// [`Self::scan`], the gathered scans reading their partners' records once first if
-    /// `TOUCH` (decided once per scan, so that the scans of small systems stay as they were).
-    #[inline(never)]
-    fn scan_with<const G: bool, const S: bool, const TOUCH: bool>(
-        &mut self,
-        i: usize,
-        hood: &Neighbourhood<D>,
-        bodies: &Bodies<D, G, S>,
-        cells: &CellSource<D>,
-        slabs: &SlabSource,
-        t: f64,
-    ) {
         let grid = &cells.grid;
         let c = cells.cell[i];
         let no_shift = [0.0; D];
@@ -331,7 +298,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             if !S && grid.interior_needs_no_image {
                 let zero = [[0.0; D]; 27];
                 let around = around.map(|(cell, _)| (cell, 0));
-                self.scan_dry::<G, S, false, TOUCH>(i, around, bodies, grid, &zero, t);
+                self.scan_dry::<G, S, false>(i, around, bodies, grid, &zero, t);
             } else if grid.interior_needs_no_image {
                 self.scan_cells::<G, S, false, false>(i, around, bodies, grid, slabs, t);
             } else {
@@ -350,7 +317,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 .iter()
                 .map(|&d| ((base + d) as usize, 0));
             let zero = [[0.0; D]; 27];
-            self.scan_dry::<G, S, false, TOUCH>(i, around, bodies, grid, &zero, t);
+            self.scan_dry::<G, S, false>(i, around, bodies, grid, &zero, t);
         } else if grid.interior_needs_no_image {
             // Boundary cell, every periodic axis of five cells or more: a partner in a cell
             // reached across a periodic face is exactly one box edge away along that axis, the
@@ -367,7 +334,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 let around = hood.offsets.iter().enumerate().filter_map(|(m, o)| {
                     CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, m as u8))
                 });
-                self.scan_dry::<G, S, true, TOUCH>(i, around, bodies, grid, &table, t);
+                self.scan_dry::<G, S, true>(i, around, bodies, grid, &table, t);
                 return;
             }
             let around = hood.offsets.iter().filter_map(|o| {
@@ -383,13 +350,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 .filter_map(|o| CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, no_shift)));
             self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
         }
-    }
-
-    /// Whether a scan reads its partners' records once before predicting: when the particle
-    /// records are at least `touch_from_bytes` ([`TOUCH_FROM_BYTES`]).
-    #[inline(always)]
-    fn touches<const G: bool, const S: bool>(&self, bodies: &Bodies<D, G, S>) -> bool {
-        bodies.len() * std::mem::size_of::<Body<D>>() >= self.touch_from_bytes
     }
 
     /// The pair predictions of `i` with every particle of the cells `around`, in order. Each
@@ -440,7 +400,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// follows ([`Self::well_time`]). Among equal times the first in the cells' order wins,
     /// as in [`Self::scan_cells`]: the same events, bit for bit.
     #[inline(always)]
-    fn scan_dry<const G: bool, const S: bool, const SHIFT: bool, const TOUCH: bool>(
+    fn scan_dry<const G: bool, const S: bool, const SHIFT: bool>(
         &mut self,
         i: usize,
         mut around: impl Iterator<Item = (usize, u8)>,
@@ -460,17 +420,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let mut tags = [0u8; BATCH];
         loop {
             let (len, more) = grid.gather::<SHIFT>(&mut around, &mut gather, &mut buf, &mut tags);
-            if TOUCH {
-                // Every partner's record read once first: independent loads, so that their
-                // cache misses overlap instead of each waiting, partner after partner, behind
-                // the predictions' square roots and divisions (see `TOUCH_FROM_BYTES`). The
-                // value read only feeds `black_box`: nothing computed below depends on it.
-                let mut touched = 0u64;
-                for &j in &buf[..len.min(BATCH)] {
-                    touched ^= bodies.body[j as usize].t.to_bits();
-                }
-                std::hint::black_box(touched);
-            }
             for m in 0..len.min(BATCH) {
                 let j = buf[m];
                 let shift = &table[if SHIFT { tags[m] as usize } else { 0 }];
