@@ -632,15 +632,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             }
             let j = pe.partner() as usize;
             let (xi, vi) = self.bodies.state_at(i, t);
-            let now = self.pairs.predict_pair_from::<_, _, true>(
-                &self.bodies,
-                &self.slabs,
-                &xi,
-                &vi,
-                i,
-                j,
-                t,
-            );
+            let now =
+                self.pairs
+                    .predict_pair_from(&self.bodies, &self.slabs, &xi, &vi, i, j, t, true);
             match now {
                 Some((tn, kind))
                     if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3)
