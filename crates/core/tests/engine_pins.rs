@@ -206,30 +206,6 @@ fn dry_gas_3d_trajectory_is_pinned() {
     check("dry gas 3d", d, PIN_DRY_GAS);
 }
 
-/// Reading each partner's record once before the predictions (a cache measure, on by default
-/// only for records of 512 KiB and more, so none of the pinned systems takes it) leaves every
-/// pinned trajectory as it is: forced on, the digests are the pins.
-#[test]
-fn touching_the_partners_first_changes_no_trajectory() {
-    fn touched<const D: usize, const G: bool, const W: bool, const S: bool>(
-        s: &Scene,
-        events: u64,
-    ) -> u64 {
-        let mut e = Engine::<D, G, W, S>::new(s);
-        e.set_reorder_interval(20_000);
-        e.set_partner_touch_from(0);
-        e.run_until(f64::INFINITY, Some(events));
-        e.sanity_check().unwrap();
-        digest(&e)
-    }
-    let shaken = touched::<2, true, true, false>(&shaken_wet_2d("exact"), 120_000);
-    check("shaken wet 2d, exact, touched", shaken, PIN_SHAKEN_EXACT);
-    let settling = touched::<3, true, true, false>(&settling_3d(), 120_000);
-    check("settling wet 3d, touched", settling, PIN_SETTLING);
-    let dry = touched::<3, false, false, false>(&dry_gas_3d(), 120_000);
-    check("dry gas 3d, touched", dry, PIN_DRY_GAS);
-}
-
 const PIN_SHAKEN_EXACT: u64 = 0x40eb9e7ead6df1bf;
 const PIN_SHAKEN_BRACKET: u64 = 0x8aed632edb2f61cd;
 const PIN_SHAKEN_TABLE: u64 = 0x9572bfc634d94b08;

@@ -182,7 +182,6 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
     /// Times until particle `i` (at the current time) reaches the plane `hi` moving up and the
     /// plane `lo` moving down along axis `k` (`+inf` for a plane at infinity or never reached):
     /// parabolas on the vertical axis under gravity, straight lines otherwise.
-    #[inline(always)]
     pub fn times_to_planes(&self, i: usize, k: usize, lo: f64, hi: f64) -> (f64, f64) {
         let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
         let never = f64::INFINITY;

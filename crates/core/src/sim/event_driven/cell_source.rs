@@ -102,7 +102,6 @@ impl<const D: usize> CellSource<D> {
     }
 
     /// Predicts the next crossing of a face of `i`'s cell (particle at time `now`).
-    #[inline(always)]
     pub fn predict<const G: bool, const S: bool>(
         &mut self,
         i: usize,

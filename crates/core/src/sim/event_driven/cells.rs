@@ -299,18 +299,18 @@ impl<const D: usize> CellGrid<D> {
 
     /// Gathers into `buf` the particles of the cells `cells` yields, in the order
     /// [`Self::for_each_in`] visits them cell after cell, each with the tag that came with its
-    /// cell in `tags` (`TAGGED`; else the tags are not stored): the first [`GATHER_STEPS`]
+    /// cell in `tags` (`tagged`; else the tags are not stored): the first [`GATHER_STEPS`]
     /// steps of each list walk store the index and count it only if it is not the sentinel
     /// (no branch on the cell's occupancy); longer lists continue in a loop. Returns how many
     /// it gathered and whether to call again (the buffer was full; `state` remembers where
     /// it stopped).
-    #[inline(always)]
-    pub fn gather<const TAGGED: bool>(
+    pub fn gather(
         &self,
         cells: &mut impl Iterator<Item = (usize, u8)>,
         state: &mut Gather,
         buf: &mut [u32; BATCH],
         tags: &mut [u8; BATCH],
+        tagged: bool,
     ) -> (usize, bool) {
         let end = self.end;
         let mut len = 0usize;
@@ -335,7 +335,7 @@ impl<const D: usize> CellGrid<D> {
             for _ in 0..GATHER_STEPS {
                 // `len <= BATCH - GATHER_STEPS` here; the mask only spares the bounds test.
                 buf[len % BATCH] = j;
-                if TAGGED {
+                if tagged {
                     tags[len % BATCH] = tag;
                 }
                 len += usize::from(j != end);
@@ -360,19 +360,19 @@ impl<const D: usize> CellGrid<D> {
 
     /// Calls `f` with the particles of the cells `cells`, in the order [`Self::for_each_in`]
     /// visits them cell after cell, handed on in batches of at most [`BATCH`], each particle
-    /// with the tag that came with its cell (`TAGGED`; else the tags are not stored): the
+    /// with the tag that came with its cell (`tagged`; else the tags are not stored): the
     /// batches of [`Self::gather`].
-    #[inline(always)]
-    pub fn for_each_batch<const TAGGED: bool>(
+    pub fn for_each_batch(
         &self,
         mut cells: impl Iterator<Item = (usize, u8)>,
+        tagged: bool,
         mut f: impl FnMut(&[u32], &[u8]),
     ) {
         let mut state = self.gather_start();
         let mut buf = [0u32; BATCH];
         let mut tags = [0u8; BATCH];
         loop {
-            let (len, more) = self.gather::<TAGGED>(&mut cells, &mut state, &mut buf, &mut tags);
+            let (len, more) = self.gather(&mut cells, &mut state, &mut buf, &mut tags, tagged);
             f(&buf[..len], &tags[..len]);
             if !more {
                 return;
@@ -446,7 +446,7 @@ mod tests {
         let mut state = g.gather_start();
         let (mut buf, mut tags) = ([0u32; BATCH], [0u8; BATCH]);
         loop {
-            let (len, more) = g.gather::<true>(&mut cells, &mut state, &mut buf, &mut tags);
+            let (len, more) = g.gather(&mut cells, &mut state, &mut buf, &mut tags, true);
             assert!(len <= BATCH);
             got.extend(buf[..len].iter().copied().zip(tags[..len].iter().copied()));
             if !more {
@@ -456,7 +456,7 @@ mod tests {
         assert_eq!(got, want);
         let mut batched = vec![];
         let cells = order.iter().map(|&c| (c, c as u8));
-        g.for_each_batch::<true>(cells, |b, t| {
+        g.for_each_batch(cells, true, |b, t| {
             batched.extend(b.iter().copied().zip(t.iter().copied()))
         });
         assert_eq!(batched, want);

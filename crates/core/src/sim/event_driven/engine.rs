@@ -477,15 +477,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.next_reorder = self.counts.total().saturating_add(events);
     }
 
-    /// Sets the size of the particle records from which pair scans read their partners'
-    /// records once before predicting (a cache measure that changes no number; the default
-    /// touches from 512 KiB). Tests use this to prove both paths give the same trajectory
-    /// (compiled for tests only: the feature `testing`).
-    #[cfg(any(test, feature = "testing"))]
-    pub fn set_partner_touch_from(&mut self, bytes: usize) {
-        self.pairs.touch_from_bytes = bytes;
-    }
-
     /// Renumbers the particles in cell order so that neighbours sit close together in memory
     /// (a pair scan then mostly hits cache lines already loaded). A pure relabelling: no state,
     /// prediction or event time changes; the public API keeps speaking in scene order. Each
@@ -641,15 +632,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             }
             let j = pe.partner() as usize;
             let (xi, vi) = self.bodies.state_at(i, t);
-            let now = self.pairs.predict_pair_from::<_, _, true>(
-                &self.bodies,
-                &self.slabs,
-                &xi,
-                &vi,
-                i,
-                j,
-                t,
-            );
+            let now =
+                self.pairs
+                    .predict_pair_from(&self.bodies, &self.slabs, &xi, &vi, i, j, t, true);
             match now {
                 Some((tn, kind))
                     if (tn - pe.time).abs() <= 1e-6 * (tn - t).abs().max(1e-3)

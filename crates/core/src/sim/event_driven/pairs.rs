@@ -10,11 +10,10 @@
 //! time, and the scheduler drops it (and re-predicts) if the count moved on (lazy invalidation).
 //!
 //! Scans without shear or minimum image gather the partners of the neighbour cells first and
-//! predict the contacts without branches (`scan_dry`, `dry_time`): whether a pair approaches
-//! and meets is a coin toss per partner, which a processor mispredicts (docs/performance.md,
-//! "Ideas kept and rejected"); the same operations as `predict_image`, so the same events. When
-//! the particle records outgrow the core's caches (`TOUCH_FROM_BYTES`), such a scan first reads
-//! every gathered partner's record once, so that their cache misses overlap; no number changes.
+//! predict every partner's contact by the whole arithmetic, choosing the result at the end
+//! (`scan_dry`, `dry_time`): whether a pair approaches and meets is a coin toss per partner,
+//! which a processor mispredicts (docs/performance.md, "Ideas kept and rejected"); the same
+//! operations as `predict_image`, so the same events.
 //!
 //! Safeguards (each tested in `crates/core/tests/engine_safeguards.rs`): an overlapping pair that approaches
 //! collides now, one that separates is left alone (B.5.6); a pair half a periodic box apart (four
@@ -22,7 +21,7 @@
 //! rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
 //! leaves it at least at the rebound floor.
 
-use super::bodies::{Bodies, Body, Vector, permute_in_place, vec_bytes};
+use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cell_source::{CellSource, Neighbourhood};
 use super::cells::{BATCH, CellGrid};
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
@@ -38,14 +37,6 @@ use crate::sim::books::EventCounts;
 /// image (see `PairSource::predict_pair_from`): above the `0.4 L` that partners in adjacent
 /// cells reach with five cells, below the `0.5 L` tie of four.
 const FAR_IMAGE: f64 = 0.45;
-/// Size of the particle records (`Bodies::body`) from which a scan reads its partners' records
-/// once before predicting (`PairSource::scan_dry`). Below it the records stay in the core's
-/// caches and the extra loads only cost time (the 2D standard systems, N = 1200, 77 kB: 3-6 %
-/// slower); above it the overlapped misses win. Measured on two cache sizes (docs/performance.md,
-/// "Compiler-steering devices"): system (a) (N = 32 000 in 3D, 2 MB of records) 1.16x with
-/// 2 MiB of L2 per core, 1.15x with 1 MiB; (b) 1.10x with 1 MiB. Only the time depends on it,
-/// never a number (`crates/core/tests/engine_pins.rs`).
-const TOUCH_FROM_BYTES: usize = 512 * 1024;
 /// Most bridges one particle may hold (a guard: more means the packing is unphysical).
 pub const MAX_BONDS: usize = 16;
 
@@ -68,9 +59,6 @@ pub struct PairSource<const D: usize, const WET: bool> {
     /// Bond partners of particle `i` in `bonds[i * MAX_BONDS..][..bond_len[i]]`.
     pub bonds: Vec<u32>,
     pub bond_len: Vec<u8>,
-    /// Size of the particle records from which a scan reads its partners' records once before
-    /// predicting ([`TOUCH_FROM_BYTES`] unless a test moves it).
-    pub(crate) touch_from_bytes: usize,
 }
 
 impl<const D: usize, const WET: bool> PairSource<D, WET> {
@@ -84,7 +72,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 Vec::new()
             },
             bond_len: if WET { vec![0; n] } else { Vec::new() },
-            touch_from_bytes: TOUCH_FROM_BYTES,
         }
     }
 
@@ -154,12 +141,12 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     // ----- prediction --------------------------------------------------------------------
 
-    /// Earliest pair event of `i`, with state `(xi, vi)` at time `t`, with `j`. `WRAP`: take
+    /// Earliest pair event of `i`, with state `(xi, vi)` at time `t`, with `j`. `wrap`: take
     /// the minimum image of the separation (`false` only where it cannot change it, see
     /// [`CellGrid::interior_needs_no_image`]).
     #[inline]
     #[allow(clippy::too_many_arguments)]
-    pub fn predict_pair_from<const G: bool, const S: bool, const WRAP: bool>(
+    pub fn predict_pair_from<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
         slabs: &SlabSource,
@@ -168,9 +155,10 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         i: usize,
         j: usize,
         t: f64,
+        wrap: bool,
     ) -> Option<(f64, PairKind)> {
         let (xj, vj) = bodies.state_at(j, t);
-        let r = if WRAP {
+        let r = if wrap {
             bodies.min_image(xi - xj)
         } else {
             xi - xj
@@ -184,9 +172,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         // through its other image, and the earlier collision kept. With five cells or more,
         // partners in adjacent cells are at most `0.4 L` apart and this never runs. (Tested in
         // engine_safeguards.rs; the input fuzzer, crates/bench/tests/fuzz_inputs.rs, covers it.)
-        // Without `WRAP` every periodic axis has five cells or more: never far.
+        // Without `wrap` every periodic axis has five cells or more: never far.
         let far = |k: usize| bodies.periodic[k] && r[k].abs() >= FAR_IMAGE * bodies.size[k];
-        if WRAP && (0..D).any(far) {
+        if wrap && (0..D).any(far) {
             // Every other image across the far axes (both at a tie on two axes in 3D).
             for mask in 1..1usize << D {
                 if (0..D).any(|k| mask >> k & 1 == 1 && !far(k)) {
@@ -259,7 +247,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// Pair events of `i` and `j` in slabs of different force (shear drive): the quartics of
     /// [`super::shear::pair_times`], solved up to the first slab exit of either particle.
-    #[cold]
     #[allow(clippy::too_many_arguments)]
     fn predict_sheared_pair<const G: bool, const S: bool>(
         &self,
@@ -302,25 +289,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         slabs: &SlabSource,
         t: f64,
     ) {
-        if self.touches(bodies) {
-            self.scan_with::<G, S, true>(i, hood, bodies, cells, slabs, t);
-        } else {
-            self.scan_with::<G, S, false>(i, hood, bodies, cells, slabs, t);
-        }
-    }
-
-    /// [`Self::scan`], the gathered scans reading their partners' records once first if
-    /// `TOUCH` (decided once per scan, so that the scans of small systems stay as they were).
-    #[inline(never)]
-    fn scan_with<const G: bool, const S: bool, const TOUCH: bool>(
-        &mut self,
-        i: usize,
-        hood: &Neighbourhood<D>,
-        bodies: &Bodies<D, G, S>,
-        cells: &CellSource<D>,
-        slabs: &SlabSource,
-        t: f64,
-    ) {
         let grid = &cells.grid;
         let c = cells.cell[i];
         let no_shift = [0.0; D];
@@ -331,11 +299,11 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             if !S && grid.interior_needs_no_image {
                 let zero = [[0.0; D]; 27];
                 let around = around.map(|(cell, _)| (cell, 0));
-                self.scan_dry::<G, S, false, TOUCH>(i, around, bodies, grid, &zero, t);
+                self.scan_dry(i, around, bodies, grid, &zero, t, false);
             } else if grid.interior_needs_no_image {
-                self.scan_cells::<G, S, false, false>(i, around, bodies, grid, slabs, t);
+                self.scan_cells(i, around, bodies, grid, slabs, t, false, false);
             } else {
-                self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
+                self.scan_cells(i, around, bodies, grid, slabs, t, true, false);
             }
         } else if !S
             && grid.interior_needs_no_image
@@ -350,7 +318,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 .iter()
                 .map(|&d| ((base + d) as usize, 0));
             let zero = [[0.0; D]; 27];
-            self.scan_dry::<G, S, false, TOUCH>(i, around, bodies, grid, &zero, t);
+            self.scan_dry(i, around, bodies, grid, &zero, t, false);
         } else if grid.interior_needs_no_image {
             // Boundary cell, every periodic axis of five cells or more: a partner in a cell
             // reached across a periodic face is exactly one box edge away along that axis, the
@@ -367,36 +335,29 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 let around = hood.offsets.iter().enumerate().filter_map(|(m, o)| {
                     CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, m as u8))
                 });
-                self.scan_dry::<G, S, true, TOUCH>(i, around, bodies, grid, &table, t);
+                self.scan_dry(i, around, bodies, grid, &table, t, true);
                 return;
             }
             let around = hood.offsets.iter().filter_map(|o| {
                 CellGrid::<D>::from_parts(&parts, o)
                     .map(|cell| (cell, CellGrid::<D>::shift_of(&shifts, o)))
             });
-            self.scan_cells::<G, S, false, true>(i, around, bodies, grid, slabs, t);
+            self.scan_cells(i, around, bodies, grid, slabs, t, false, true);
         } else {
             let parts = grid.axis_parts(&c);
             let around = hood
                 .offsets
                 .iter()
                 .filter_map(|o| CellGrid::<D>::from_parts(&parts, o).map(|cell| (cell, no_shift)));
-            self.scan_cells::<G, S, true, false>(i, around, bodies, grid, slabs, t);
+            self.scan_cells(i, around, bodies, grid, slabs, t, true, false);
         }
     }
 
-    /// Whether a scan reads its partners' records once before predicting: when the particle
-    /// records are at least `touch_from_bytes` ([`TOUCH_FROM_BYTES`]).
-    #[inline(always)]
-    fn touches<const G: bool, const S: bool>(&self, bodies: &Bodies<D, G, S>) -> bool {
-        bodies.len() * std::mem::size_of::<Body<D>>() >= self.touch_from_bytes
-    }
-
     /// The pair predictions of `i` with every particle of the cells `around`, in order. Each
-    /// cell comes with the image shift of its partners (`SHIFT`: added to the separation on
-    /// the axes where it is not zero; the minimum image then needs no `WRAP`).
-    #[inline(always)]
-    fn scan_cells<const G: bool, const S: bool, const WRAP: bool, const SHIFT: bool>(
+    /// cell comes with the image shift of its partners (`shifted`: added to the separation on
+    /// the axes where it is not zero; the minimum image then needs no `wrap`).
+    #[allow(clippy::too_many_arguments)]
+    fn scan_cells<const G: bool, const S: bool>(
         &mut self,
         i: usize,
         around: impl Iterator<Item = (usize, [f64; D])>,
@@ -404,16 +365,18 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         grid: &CellGrid<D>,
         slabs: &SlabSource,
         t: f64,
+        wrap: bool,
+        shifted: bool,
     ) {
         let this = &*self;
         let mut best = this.ev[i];
         // Copies, so that the loop keeps them in registers.
         let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
-        if SHIFT {
+        if shifted {
             for (cell, shift) in around {
                 grid.for_each_in(cell, |j| {
-                    this.consider::<G, S, WRAP, SHIFT>(
-                        bodies, slabs, &xi, &vi, i, j, t, &shift, &mut best,
+                    this.consider(
+                        bodies, slabs, &xi, &vi, i, j, t, &shift, &mut best, wrap, shifted,
                     );
                 });
             }
@@ -421,10 +384,11 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // No shifts: the partners of all cells gathered in batches first, so that the
             // cells' occupancies cost no mispredicted branches (`CellGrid::for_each_batch`).
             let no_shift = [0.0; D];
-            grid.for_each_batch::<false>(around.map(|(cell, _)| (cell, 0)), |batch, _| {
+            grid.for_each_batch(around.map(|(cell, _)| (cell, 0)), false, |batch, _| {
                 for &j in batch {
-                    this.consider::<G, S, WRAP, SHIFT>(
-                        bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best,
+                    this.consider(
+                        bodies, slabs, &xi, &vi, i, j as usize, t, &no_shift, &mut best, wrap,
+                        shifted,
                     );
                 }
             });
@@ -434,13 +398,13 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// The scan under one force for all and without minimum image (see [`Self::scan`]):
     /// `around` gives each neighbour cell with the index of its partners' image shift in
-    /// `table` (used if `SHIFT`). The partners are gathered first ([`CellGrid::gather`]: the
-    /// cells' occupancies cost no mispredicted branches), then predicted in one loop whose
-    /// contacts have no branches ([`Self::dry_time`]); wet, a bonded partner's well event
-    /// follows ([`Self::well_time`]). Among equal times the first in the cells' order wins,
-    /// as in [`Self::scan_cells`]: the same events, bit for bit.
-    #[inline(always)]
-    fn scan_dry<const G: bool, const S: bool, const SHIFT: bool, const TOUCH: bool>(
+    /// `table` (used if `shifted`). The partners are gathered first ([`CellGrid::gather`]: the
+    /// cells' occupancies cost no mispredicted branches), then predicted in one loop that
+    /// chooses each contact time after the whole arithmetic ([`Self::dry_time`]); wet, a
+    /// bonded partner's well event follows ([`Self::well_time`]). Among equal times the first
+    /// in the cells' order wins, as in [`Self::scan_cells`]: the same events, bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    fn scan_dry<const G: bool, const S: bool>(
         &mut self,
         i: usize,
         mut around: impl Iterator<Item = (usize, u8)>,
@@ -448,6 +412,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         grid: &CellGrid<D>,
         table: &[[f64; D]; 27],
         t: f64,
+        shifted: bool,
     ) {
         let (xi, vi, ri) = (bodies.body[i].x, bodies.body[i].v, bodies.body[i].r);
         let (mut best_t, mut best_j, mut best_well) = (self.ev[i].time, NONE, false);
@@ -459,23 +424,12 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let mut buf = [0u32; BATCH];
         let mut tags = [0u8; BATCH];
         loop {
-            let (len, more) = grid.gather::<SHIFT>(&mut around, &mut gather, &mut buf, &mut tags);
-            if TOUCH {
-                // Every partner's record read once first: independent loads, so that their
-                // cache misses overlap instead of each waiting, partner after partner, behind
-                // the predictions' square roots and divisions (see `TOUCH_FROM_BYTES`). The
-                // value read only feeds `black_box`: nothing computed below depends on it.
-                let mut touched = 0u64;
-                for &j in &buf[..len.min(BATCH)] {
-                    touched ^= bodies.body[j as usize].t.to_bits();
-                }
-                std::hint::black_box(touched);
-            }
+            let (len, more) = grid.gather(&mut around, &mut gather, &mut buf, &mut tags, shifted);
             for m in 0..len.min(BATCH) {
                 let j = buf[m];
-                let shift = &table[if SHIFT { tags[m] as usize } else { 0 }];
+                let shift = &table[if shifted { tags[m] as usize } else { 0 }];
                 let (mut tj, b, rr, vv, sigma) =
-                    Self::dry_time::<G, S, SHIFT>(bodies, &xi, &vi, ri, i, j, t, shift);
+                    Self::dry_time(bodies, &xi, &vi, ri, i, j, t, shift, shifted);
                 let mut well = false;
                 if WET && bonds.iter().fold(false, |a, &k| a | (k == j)) {
                     // The well event of `predict_image`, the same operations: it wins only
@@ -510,7 +464,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// Time of the well event of a bonded pair (`lambda = sigma + s_crit`) from `b`, `r^2`,
     /// `v^2` at `t` (both scans: [`Self::predict_image`] and [`Self::scan_dry`]).
-    #[inline(always)]
     fn well_time(b: f64, rr: f64, vv: f64, lambda: f64, t: f64) -> Option<f64> {
         let c = rr - lambda * lambda;
         let dt = if b > 0.0 && c >= 0.0 {
@@ -534,15 +487,13 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// The time of the contact of `i` (radius `ri`) with `j` (`+inf` if none, or if
     /// `j == i`), and the `b`, `r^2`, `v^2`, `sigma` it used, for a pair under one force for
-    /// all and without minimum image (`shift`: the partner's image shift, if `SHIFT`), without
-    /// branches: whether the pair approaches
-    /// (`b < 0`) and whether its paths meet (`disc > 0`) are coin tosses a processor
-    /// mispredicts about every other partner, so every partner pays the whole arithmetic and
-    /// the result is chosen. The same operations on the same operands as
+    /// all and without minimum image (`shift`: the partner's image shift, if `shifted`). Whether
+    /// the pair approaches (`b < 0`) and whether its paths meet (`disc > 0`) are coin tosses a
+    /// processor mispredicts about every other partner, so every partner pays the whole
+    /// arithmetic and the result is chosen. The same operations on the same operands as
     /// [`Self::predict_image`] (Eq. B.3, the overlap safeguard: `t` itself), so the same bits.
-    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn dry_time<const G: bool, const S: bool, const SHIFT: bool>(
+    fn dry_time<const G: bool, const S: bool>(
         bodies: &Bodies<D, G, S>,
         xi: &Vector<D>,
         vi: &Vector<D>,
@@ -551,10 +502,11 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         j: u32,
         t: f64,
         shift: &[f64; D],
+        shifted: bool,
     ) -> (f64, f64, f64, f64, f64) {
         let (xj, vj) = bodies.state_at(j as usize, t);
         let mut r = xi - xj;
-        if SHIFT {
+        if shifted {
             // Adding a zero shift changes no bit that matters: at most `-0.0` becomes `+0.0`,
             // which no product, sum or test below tells apart.
             for k in 0..D {
@@ -569,22 +521,20 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let c = rr - sigma * sigma;
         let disc = b * b - vv * c;
         // The smaller root, cancellation-free; overlapping and approaching (`c <= 0`, the
-        // quotient `<= 0`): now. A pair that does not meet gets `+inf` added (an integer mask,
-        // so that the compiler has no condition to branch on).
+        // quotient `<= 0`): now. A pair that does not meet gets `+inf` added.
         let dt = (c / (-b + disc.max(0.0).sqrt())).max(0.0);
         // Negated tests, as in `predict_image` (`b >= 0` there): whatever is not approaching
         // or not meeting is a miss.
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
         let miss = !(b < 0.0) | ((c > 0.0) & !(disc > 0.0)) | (j as usize == i);
-        let never = f64::from_bits(f64::INFINITY.to_bits() & 0u64.wrapping_sub(u64::from(miss)));
+        let never = if miss { f64::INFINITY } else { 0.0 };
         (t + dt + never, b, rr, vv, sigma)
     }
 
     /// Lowers `best` (the pair event of `i`, state `(xi, vi)` at `t`) if partner `j` gives an
     /// earlier one (`j == i` is skipped). `shift`: see [`Self::scan_cells`].
-    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn consider<const G: bool, const S: bool, const WRAP: bool, const SHIFT: bool>(
+    fn consider<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
         slabs: &SlabSource,
@@ -595,14 +545,16 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         t: f64,
         shift: &[f64; D],
         best: &mut PairEvent,
+        wrap: bool,
+        shifted: bool,
     ) {
         if j == i {
             return;
         }
-        let predicted = if SHIFT {
+        let predicted = if shifted {
             self.predict_pair_shifted(bodies, slabs, xi, vi, i, j, t, shift)
         } else {
-            self.predict_pair_from::<G, S, WRAP>(bodies, slabs, xi, vi, i, j, t)
+            self.predict_pair_from(bodies, slabs, xi, vi, i, j, t, wrap)
         };
         if let Some((tj, kind)) = predicted
             && tj < best.time

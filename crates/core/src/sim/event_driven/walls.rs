@@ -194,7 +194,6 @@ impl WallSource {
     }
 
     /// Time of the next wall event of `i` (`+inf` without walls).
-    #[inline(always)]
     pub fn time(&self, i: usize) -> f64 {
         self.ev.get(i).map_or(f64::INFINITY, |e| e.time)
     }
@@ -211,7 +210,6 @@ impl WallSource {
     /// the tabulated approach speed of a shaken-wall hit. Ends the `table` solver's memories of
     /// `i` (edge table after a launch, exact solver after a table error): they serve one
     /// prediction.
-    #[inline(always)]
     pub fn predict<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,

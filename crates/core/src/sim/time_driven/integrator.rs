@@ -230,7 +230,6 @@ pub fn gear_correct_predict_axes<const D: usize>(
 /// velocity by nothing (they are below one ulp of either).
 pub const GEAR_FLUSH_EVERY: u64 = 4;
 
-#[inline(always)]
 fn fused_axis<const WRAP: bool, const FLUSH: bool>(
     r: [&mut [f64]; 6],
     acc: &mut [f64],

@@ -48,7 +48,6 @@ pub(super) struct PairBooks {
 /// array units). `None` when the pair is out of reach and not bonded (its contact flag is
 /// cleared); otherwise its response, with `flag` updated, and the force on `i` (`-` that on
 /// `j`; zeros when the response exerts none).
-#[inline(always)]
 pub(super) fn pair_kernel<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
     xi: &[f64; D],
@@ -160,7 +159,6 @@ pub(super) struct PairResponse {
 impl PairBooks {
     /// Books one pair's response in full (the parallel chunks and the domains' cross pairs;
     /// the serial loop books the sums per chunk of entries itself).
-    #[inline(always)]
     pub(super) fn book(&mut self, pr: &PairResponse) {
         self.book_counts(pr);
         if pr.damped {
@@ -172,7 +170,6 @@ impl PairBooks {
     }
 
     /// Books the onset, formation and rupture counts and the largest overlap of a response.
-    #[inline(always)]
     pub(super) fn book_counts(&mut self, pr: &PairResponse) {
         self.onsets += u64::from(pr.onset);
         self.formations += u64::from(pr.formation);
@@ -184,7 +181,6 @@ impl PairBooks {
 }
 
 /// See [`PairResponse`]; `fl` the pair's flags at the last evaluation.
-#[inline(always)]
 pub(super) fn pair_response<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
     d: &[f64; D],

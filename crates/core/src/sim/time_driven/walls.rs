@@ -152,7 +152,6 @@ pub fn wall_forces(
 /// (false for a NaN) and no particle of it has a contact bit set: then the block adds no force,
 /// books nothing and changes no bit. Branch-free over a fixed-size block, so it compiles to
 /// packed compares.
-#[inline(always)]
 fn block_is_quiet(w: &WallAxis, x: &[f64], touching: &[u8]) -> bool {
     let x: &[f64; SCREEN_BLOCK] = x.try_into().expect("a full block");
     let touching: &[u8; SCREEN_BLOCK] = touching.try_into().expect("a full block");

@@ -241,7 +241,6 @@ pub(super) enum Then {
 
 /// Splits the flat coordinates `e0..e0 + len` (axis-major, `n` per axis) at the axis
 /// boundaries and calls `f(k, offset, m)` for each piece: axis `k`, offset in the chunk, length.
-#[inline(always)]
 pub(super) fn for_each_axis_segment(
     n: usize,
     e0: usize,
@@ -259,7 +258,6 @@ pub(super) fn for_each_axis_segment(
 
 /// `b` if it is larger, else `a` (a NaN `b` is ignored): the running maximum of the integrator
 /// loops (`integrator::lane_max`), exact and so independent of the order of the chunks.
-#[inline(always)]
 pub(super) fn max_ignoring_nan(a: f64, b: f64) -> f64 {
     if b > a { b } else { a }
 }
