@@ -157,6 +157,11 @@ pub struct RegionInputs {
     pub temperature: f64,
     /// Which observable decided solid versus mobile.
     pub mobility_from: Mobility,
+    /// Dense region: the fraction of its members' displacements over the long lag that stay
+    /// within `solid_diffusion` of their cage, the grains they were bonded to (`None` for other
+    /// regions and results stored before it was measured).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub members_still: Option<f64>,
     /// Lateral bins in the region (all bins for the whole system).
     pub bins: usize,
     /// `"all"` grains of the region's bins, or only the `"clustered"` ones.
@@ -327,7 +332,14 @@ struct RegionObservables {
     diffusion: Option<f64>,
     diffusion_short: Option<f64>,
     temperature: f64,
+    /// Dense region: [`RegionInputs::members_still`].
+    members_still: Option<f64>,
 }
+
+/// A dense region is solid when at least this fraction of its members' displacements stay
+/// within `solid_diffusion` of their cage: the median member is still, whatever a mobile surface
+/// layer or an eroding edge adds to the mean.
+pub const STILL_MEMBERS: f64 = 0.5;
 
 /// A region whose mean-square displacement over the long lag stays below this (units `d^2`) and
 /// grows slower than `diffusive_exponent` is caged: its grains rattle without leaving their
@@ -367,6 +379,7 @@ fn region(
         diffusion,
         diffusion_short,
         temperature,
+        members_still,
     } = obs;
     let hot = temperature > th.gas_temperature;
     let alpha = match (diffusion, diffusion_short, lags) {
@@ -382,7 +395,11 @@ fn region(
                 }
                 _ => false,
             };
-            (d > th.solid_diffusion && !caged, Mobility::Displacement)
+            let still = members_still.is_some_and(|f| f >= STILL_MEMBERS);
+            (
+                d > th.solid_diffusion && !caged && !still,
+                Mobility::Displacement,
+            )
         }
         (Mobility::LocationChanges, _, Some(f)) => {
             (f > th.solid_flc || hot, Mobility::LocationChanges)
@@ -403,6 +420,7 @@ fn region(
         growth_exponent: alpha,
         temperature,
         mobility_from,
+        members_still,
         bins,
         grains: grains.to_string(),
         phase,
@@ -567,6 +585,7 @@ fn dense_observables(
     obs: &Observables,
     sel: &[usize],
     flc: Option<f64>,
+    th: &Thresholds,
 ) -> (RegionObservables, &'static str) {
     let p = &obs.profiles;
     let has_clusters = !p.clustered.is_empty() && !p.temperature_clustered.is_empty();
@@ -592,6 +611,11 @@ fn dense_observables(
         diffusion: weighted(sel, w, d_bins),
         diffusion_short: weighted(sel, w, s_bins),
         temperature: weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced),
+        members_still: p
+            .member_cages
+            .as_ref()
+            .filter(|_| has_clusters)
+            .and_then(|c| c.fraction_within(sel, th.solid_diffusion)),
     };
     (obs_dense, grains)
 }
@@ -620,6 +644,7 @@ fn classify_unsheared(
             diffusion: obs.mobility.as_ref().map(|m| m.diffusion),
             diffusion_short: obs.mobility.as_ref().and_then(|m| m.diffusion_short),
             temperature: obs.granular_temperature_reduced,
+            members_still: None,
         },
         lag_ratio,
         p.n_cb.len(),
@@ -666,7 +691,7 @@ fn classify_unsheared(
             .as_ref()
             .and_then(|fb| weighted(sel, &p.particles, fb))
     };
-    let (dense_obs, grains) = dense_observables(obs, &dense_bins, flc_of(&dense_bins));
+    let (dense_obs, grains) = dense_observables(obs, &dense_bins, flc_of(&dense_bins), th);
     let dilute = {
         let sel = &dilute_bins;
         let o = RegionObservables {
@@ -675,6 +700,7 @@ fn classify_unsheared(
             diffusion_short: weighted(sel, &p.particles, &p.diffusion_short),
             temperature: weighted(sel, &p.particles, &p.temperature_reduced)
                 .unwrap_or(obs.granular_temperature_reduced),
+            members_still: None,
         };
         region(o, lag_ratio, sel.len(), "all", th, &|t| {
             t > th.gas_temperature
@@ -783,6 +809,13 @@ fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
             },
             th.solid_temperature
         ),
+    };
+    let mobility = match (r.mobility_from, r.members_still) {
+        (Mobility::Displacement, Some(f)) => format!(
+            "{mobility}, members still in their cage {f:.2} {} {STILL_MEMBERS}",
+            if f >= STILL_MEMBERS { ">=" } else { "<" }
+        ),
+        _ => mobility,
     };
     if r.phase == Phase::S {
         return format!("{mobility} -> s");
