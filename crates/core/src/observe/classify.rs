@@ -232,7 +232,8 @@ pub struct DecisionInputs {
 /// A decision is borderline when its input lies within this factor of its threshold (either
 /// side): `D_lat` against `solid_diffusion`, `Delta` against the noise threshold.
 pub const BORDERLINE_FACTOR: f64 = 2.0;
-/// The contrast of a coexistence is borderline within this distance of its threshold.
+/// The contrast of a coexistence, and the fraction of a dense region's members still in their
+/// cage, are borderline within this distance of their thresholds.
 pub const BORDERLINE_CONTRAST: f64 = 0.1;
 
 /// Whether `x` lies within [`BORDERLINE_FACTOR`] of a positive threshold `t`.
@@ -260,6 +261,13 @@ fn borderline(d: &DecisionInputs) -> Vec<String> {
             out.push(format!(
                 "{name}: D_lat = {x:.3e} near solid_diffusion = {}",
                 th.solid_diffusion
+            ));
+        }
+        if let (Mobility::Displacement, Some(f)) = (r.mobility_from, r.members_still)
+            && (f - STILL_MEMBERS).abs() < BORDERLINE_CONTRAST
+        {
+            out.push(format!(
+                "{name}: members still in their cage {f:.2} near {STILL_MEMBERS}"
             ));
         }
     }

@@ -406,6 +406,8 @@ mod tests {
         assert_eq!(m.clusters, 1);
         assert_eq!(m.cluster[..3], [0, 0, 0]);
         assert!(m.cluster[3..].iter().all(|&c| c == NOT_MEMBER));
+        // Only bonds between members are kept: each member's cage.
+        assert_eq!(m.bonds, vec![(0, 1), (2, 1)]);
         let all = components(6, &[(0, 1), (2, 1), (3, 4)], 1);
         assert_eq!(all.clusters, 3);
     }

@@ -746,6 +746,49 @@ mod tests {
         assert!(cl / n < 0.02, "{}", cl / n);
     }
 
+    /// Of the member displacements measured against their cage, the fraction within each
+    /// edge, after 200 samples of `pts(t)` (bonds `bonds`, one bin).
+    fn cage_fractions(pts: &dyn Fn(f64) -> Vec<(f64, f64)>, bonds: &[(usize, usize)]) -> Vec<f64> {
+        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), settings(0.25, 10.0, 4.0, 0.5));
+        for k in 0..200 {
+            let t = 0.25 * k as f64;
+            let p = pts(t);
+            o.observe(&frame_2d(&p, &vec![(0.0, 0.0); p.len()], bonds.to_vec(), t));
+        }
+        let n = field_sums(&o.blocks, 1, field::CAGE_N)[0];
+        assert!(n > 100.0, "{n}");
+        (0..CAGE_EDGES.len())
+            .map(|k| field_sums(&o.blocks, 1, field::CAGE_WITHIN + k)[0] / n)
+            .collect()
+    }
+
+    #[test]
+    fn grains_that_keep_their_neighbours_stay_in_their_cage() {
+        // Two rows of three bonded grains sliding apart at 0.1 per time unit each, held in one
+        // cluster by the bond 2-3: against the cluster's rigid motion every grain moves 0.4 per
+        // lag of 4, against its bonded neighbours only the two grains of the link bond do.
+        let bonds = [(0, 1), (1, 2), (2, 3), (3, 4), (4, 5)];
+        let slide = |t: f64| -> Vec<(f64, f64)> {
+            (0..6)
+                .map(|i| {
+                    let v = if i < 3 { -0.1 } else { 0.1 };
+                    ((8.0 + i as f64 + v * t).rem_euclid(20.0), 1.0)
+                })
+                .collect()
+        };
+        let f = cage_fractions(&slide, &bonds);
+        assert!(f.iter().all(|&x| (x - 4.0 / 6.0).abs() < 1e-12), "{f:?}");
+        // Grains that wander about by 0.5 independently of their bonded neighbours leave
+        // their cage: a liquid's grains.
+        let wander = |t: f64| -> Vec<(f64, f64)> {
+            (0..6)
+                .map(|i| (8.0 + i as f64 + 0.5 * (0.3 * t + 1.7 * i as f64).sin(), 1.0))
+                .collect()
+        };
+        let f = cage_fractions(&wander, &bonds);
+        assert!(f[2] < 0.2, "{f:?}");
+    }
+
     #[test]
     fn blocks_merge_and_keep_every_sample() {
         let mut o = LateralObserver::new(LateralBins::new(1, 20.0), settings(0.1, 0.1, 1.0, 1.0));

@@ -53,6 +53,7 @@ use bins::LateralBins;
 use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
 use profiles::ProfileObserver;
+pub use profiles::CageCounts;
 use serde::{Deserialize, Serialize};
 use temperature::TemperatureObserver;
 
@@ -180,44 +181,6 @@ pub struct Profiles {
     pub member_cages: Option<CageCounts>,
 }
 
-/// How far cluster members move relative to their own cage (the grains they were bonded to at
-/// the lag's origin) over the long lag: per bin, how many member displacements were measured
-/// and how many stayed within each edge (`observe::lateral`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CageCounts {
-    /// Mobilities `d^2 / (2 n_lat tau)`, `d^2` per time unit, ascending.
-    pub edges: Vec<f64>,
-    /// Per bin: member displacements measured (members at both ends holding a lasting bond
-    /// at the origin).
-    pub measured: Vec<f64>,
-    /// Per bin, per edge: of those, how many had a cage-relative mobility at most the edge.
-    pub within: Vec<Vec<f64>>,
-}
-
-impl CageCounts {
-    /// The fraction of the member displacements of the bins `sel` whose cage-relative mobility
-    /// is at most `threshold`, interpolated linearly in `ln` between the edges around it;
-    /// `None` without any displacement or with `threshold` outside the edges.
-    pub fn fraction_within(&self, sel: &[usize], threshold: f64) -> Option<f64> {
-        let total: f64 = sel.iter().filter_map(|&b| self.measured.get(b)).sum();
-        let at = |k: usize| -> f64 {
-            sel.iter()
-                .filter_map(|&b| self.within.get(b).and_then(|w| w.get(k)))
-                .sum::<f64>()
-                / total
-        };
-        if total <= 0.0 || !(threshold > 0.0) {
-            return None;
-        }
-        let k = self.edges.iter().position(|&e| e >= threshold)?;
-        if k == 0 {
-            return (threshold == self.edges[0]).then(|| at(0));
-        }
-        let (lo, hi) = (self.edges[k - 1], self.edges[k]);
-        let w = (threshold / lo).ln() / (hi / lo).ln();
-        Some(at(k - 1) + w * (at(k) - at(k - 1)))
-    }
-}
 
 /// The lateral mobility of the whole system over the window (`observe::lateral`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
