@@ -345,9 +345,11 @@ struct RegionObservables {
 }
 
 /// A dense region is solid when at least this fraction of its members' displacements stay
-/// within `solid_diffusion` of their cage: the median member is still, whatever a mobile surface
-/// layer or an eroding edge adds to the mean.
-pub const STILL_MEMBERS: f64 = 0.5;
+/// within `solid_diffusion` of their cage: nearly all its grains keep their neighbours, whatever
+/// a mobile surface layer or an eroding edge (a few grains that move far) adds to the mean. Not
+/// the median (0.5): the liquid drop of the fluid-gas coexistence at Gamma = 30 has 0.57 over a
+/// 300-unit run and up to more than half in 25-unit windows (docs/validation.md).
+pub const STILL_MEMBERS: f64 = 0.8;
 
 /// A region whose mean-square displacement over the long lag stays below this (units `d^2`) and
 /// grows slower than `diffusive_exponent` is caged: its grains rattle without leaving their
