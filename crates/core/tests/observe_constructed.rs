@@ -374,7 +374,9 @@ fn a_drifting_turning_crystal_drop_in_a_hot_gas_is_sgc() {
         let c = label(groups, 10, seed);
         eprintln!("seed {seed}: {}", c.decided_on.reason);
         let dense = c.decided_on.dense.as_ref().expect("a coexistence");
-        let still = dense.members_still.expect("cage-relative displacements measured");
+        let still = dense
+            .members_still
+            .expect("cage-relative displacements measured");
         assert!(still > 0.8, "{}", c.decided_on.reason);
         assert_eq!(c.phase, Phase::Sgc, "{}", c.decided_on.reason);
     }
@@ -390,7 +392,9 @@ fn a_liquid_drop_in_a_hot_gas_is_fgc() {
         eprintln!("seed {seed}: {}", c.decided_on.reason);
         // Its grains leave their neighbours: most members are not in their cage.
         let dense = c.decided_on.dense.as_ref().expect("a coexistence");
-        let still = dense.members_still.expect("cage-relative displacements measured");
+        let still = dense
+            .members_still
+            .expect("cage-relative displacements measured");
         assert!(still < 0.35, "{}", c.decided_on.reason);
         assert_eq!(c.phase, Phase::Fgc, "{}", c.decided_on.reason);
     }

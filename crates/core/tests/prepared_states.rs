@@ -101,7 +101,9 @@ fn a_bonded_crystal_strip_in_a_hot_dilute_gas_is_sgc() {
         eprintln!("seed {seed}: {}", c.decided_on.reason);
         let dense = c.decided_on.dense.as_ref().expect("a coexistence");
         // The strip's members stay in their cages: measured, not assumed.
-        let still = dense.members_still.expect("cage-relative displacements measured");
+        let still = dense
+            .members_still
+            .expect("cage-relative displacements measured");
         assert!(still >= 0.8, "seed {seed}: {}", c.decided_on.reason);
         assert_eq!(c.phase, Phase::Sgc, "seed {seed}: {}", c.decided_on.reason);
     }

@@ -52,8 +52,8 @@ use crate::sim::{Frame, RunReport};
 use bins::LateralBins;
 use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
-use profiles::ProfileObserver;
 pub use profiles::CageCounts;
+use profiles::ProfileObserver;
 use serde::{Deserialize, Serialize};
 use temperature::TemperatureObserver;
 
@@ -180,7 +180,6 @@ pub struct Profiles {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub member_cages: Option<CageCounts>,
 }
-
 
 /// The lateral mobility of the whole system over the window (`observe::lateral`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

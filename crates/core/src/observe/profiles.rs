@@ -111,7 +111,7 @@ impl CageCounts {
                 .sum::<f64>()
                 / total
         };
-        if total <= 0.0 || !(threshold > 0.0) {
+        if total <= 0.0 || threshold.is_nan() || threshold <= 0.0 {
             return None;
         }
         let k = self.edges.iter().position(|&e| e >= threshold)?;
