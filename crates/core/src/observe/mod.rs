@@ -907,18 +907,7 @@ fn lateral_profiles(
         n_cb_null: block_means(field::BRIDGES, ncb_scale),
         packing_null: block_means(field::VOLUME, 1.0 / bin_volume),
         clusters: Some((scene.observe.bond_time, scene.observe.cluster_min_size)),
-        member_cages: Some(CageCounts {
-            edges: lateral::CAGE_EDGES.to_vec(),
-            measured: field_sums(blocks, nb, field::CAGE_N),
-            within: {
-                let per_edge: Vec<Vec<f64>> = (0..lateral::CAGE_EDGES.len())
-                    .map(|k| field_sums(blocks, nb, field::CAGE_WITHIN + k))
-                    .collect();
-                (0..nb)
-                    .map(|b| per_edge.iter().map(|e| e[b]).collect())
-                    .collect()
-            },
-        }),
+        member_cages: Some(member_cages(blocks, nb)),
         particles,
         packing,
         n_cb,
@@ -933,6 +922,20 @@ fn lateral_profiles(
         flc,
     };
     (profile, mobility)
+}
+
+/// The members' cage-relative displacement counts of the blocks `blocks`, per bin.
+fn member_cages(blocks: &[lateral::Block], nb: usize) -> CageCounts {
+    let per_edge: Vec<Vec<f64>> = (0..lateral::CAGE_EDGES.len())
+        .map(|k| field_sums(blocks, nb, field::CAGE_WITHIN + k))
+        .collect();
+    CageCounts {
+        edges: lateral::CAGE_EDGES.to_vec(),
+        measured: field_sums(blocks, nb, field::CAGE_N),
+        within: (0..nb)
+            .map(|b| per_edge.iter().map(|e| e[b]).collect())
+            .collect(),
+    }
 }
 
 /// At most this many blocks enter the bootstrap of the profile's spread (neighbours merged
