@@ -84,6 +84,7 @@ fn synthetic(d: f64, t: f64, b: Bins, wet: bool) -> Observables {
             n_cb_null: None,
             packing_null: None,
             clusters: None,
+            member_cages: None,
         },
         diffusion: None,
         counts: WindowCounts {

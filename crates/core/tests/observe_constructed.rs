@@ -372,6 +372,12 @@ fn a_drifting_turning_crystal_drop_in_a_hot_gas_is_sgc() {
         );
         let groups = vec![drop, hot_gas(&mut rng, 250, (55.0, 90.0))];
         let c = label(groups, 10, seed);
+        eprintln!("seed {seed}: {}", c.decided_on.reason);
+        let dense = c.decided_on.dense.as_ref().expect("a coexistence");
+        let still = dense
+            .members_still
+            .expect("cage-relative displacements measured");
+        assert!(still > 0.8, "{}", c.decided_on.reason);
         assert_eq!(c.phase, Phase::Sgc, "{}", c.decided_on.reason);
     }
 }
@@ -383,6 +389,13 @@ fn a_liquid_drop_in_a_hot_gas_is_fgc() {
         let drop = liquid(60.0, 24.0, 8.5, 0.02, 1.0);
         let groups = vec![drop, hot_gas(&mut rng, 250, (55.0, 90.0))];
         let c = label(groups, 10, seed);
+        eprintln!("seed {seed}: {}", c.decided_on.reason);
+        // Its grains leave their neighbours: most members are not in their cage.
+        let dense = c.decided_on.dense.as_ref().expect("a coexistence");
+        let still = dense
+            .members_still
+            .expect("cage-relative displacements measured");
+        assert!(still < 0.35, "{}", c.decided_on.reason);
         assert_eq!(c.phase, Phase::Fgc, "{}", c.decided_on.reason);
     }
 }
@@ -403,6 +416,7 @@ fn a_crystal_slab_next_to_a_bonded_liquid_is_sfc() {
         );
         let layer = liquid(100.0, 100.0, 4.0, 0.02, 1.0);
         let c = label(vec![slab, layer], 0, seed);
+        eprintln!("seed {seed}: {}", c.decided_on.reason);
         assert_eq!(c.phase, Phase::Sfc, "{}", c.decided_on.reason);
     }
 }

@@ -157,6 +157,11 @@ pub struct RegionInputs {
     pub temperature: f64,
     /// Which observable decided solid versus mobile.
     pub mobility_from: Mobility,
+    /// Dense region: the fraction of its members' displacements over the long lag that stay
+    /// within `solid_diffusion` of their cage, the grains they were bonded to (`None` for other
+    /// regions and results stored before it was measured).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub members_still: Option<f64>,
     /// Lateral bins in the region (all bins for the whole system).
     pub bins: usize,
     /// `"all"` grains of the region's bins, or only the `"clustered"` ones.
@@ -227,7 +232,8 @@ pub struct DecisionInputs {
 /// A decision is borderline when its input lies within this factor of its threshold (either
 /// side): `D_lat` against `solid_diffusion`, `Delta` against the noise threshold.
 pub const BORDERLINE_FACTOR: f64 = 2.0;
-/// The contrast of a coexistence is borderline within this distance of its threshold.
+/// The contrast of a coexistence, and the fraction of a dense region's members still in their
+/// cage, are borderline within this distance of their thresholds.
 pub const BORDERLINE_CONTRAST: f64 = 0.1;
 
 /// Whether `x` lies within [`BORDERLINE_FACTOR`] of a positive threshold `t`.
@@ -255,6 +261,13 @@ fn borderline(d: &DecisionInputs) -> Vec<String> {
             out.push(format!(
                 "{name}: D_lat = {x:.3e} near solid_diffusion = {}",
                 th.solid_diffusion
+            ));
+        }
+        if let (Mobility::Displacement, Some(f)) = (r.mobility_from, r.members_still)
+            && (f - STILL_MEMBERS).abs() < BORDERLINE_CONTRAST
+        {
+            out.push(format!(
+                "{name}: members still in their cage {f:.2} near {STILL_MEMBERS}"
             ));
         }
     }
@@ -327,7 +340,16 @@ struct RegionObservables {
     diffusion: Option<f64>,
     diffusion_short: Option<f64>,
     temperature: f64,
+    /// Dense region: [`RegionInputs::members_still`].
+    members_still: Option<f64>,
 }
+
+/// A dense region is solid when at least this fraction of its members' displacements stay
+/// within `solid_diffusion` of their cage: nearly all its grains keep their neighbours, whatever
+/// a mobile surface layer or an eroding edge (a few grains that move far) adds to the mean. Not
+/// the median (0.5): the liquid drop of the fluid-gas coexistence at Gamma = 30 has 0.57 over a
+/// 300-unit run and up to more than half in 25-unit windows (docs/validation.md).
+pub const STILL_MEMBERS: f64 = 0.8;
 
 /// A region whose mean-square displacement over the long lag stays below this (units `d^2`) and
 /// grows slower than `diffusive_exponent` is caged: its grains rattle without leaving their
@@ -367,6 +389,7 @@ fn region(
         diffusion,
         diffusion_short,
         temperature,
+        members_still,
     } = obs;
     let hot = temperature > th.gas_temperature;
     let alpha = match (diffusion, diffusion_short, lags) {
@@ -382,7 +405,11 @@ fn region(
                 }
                 _ => false,
             };
-            (d > th.solid_diffusion && !caged, Mobility::Displacement)
+            let still = members_still.is_some_and(|f| f >= STILL_MEMBERS);
+            (
+                d > th.solid_diffusion && !caged && !still,
+                Mobility::Displacement,
+            )
         }
         (Mobility::LocationChanges, _, Some(f)) => {
             (f > th.solid_flc || hot, Mobility::LocationChanges)
@@ -403,6 +430,7 @@ fn region(
         growth_exponent: alpha,
         temperature,
         mobility_from,
+        members_still,
         bins,
         grains: grains.to_string(),
         phase,
@@ -567,6 +595,7 @@ fn dense_observables(
     obs: &Observables,
     sel: &[usize],
     flc: Option<f64>,
+    th: &Thresholds,
 ) -> (RegionObservables, &'static str) {
     let p = &obs.profiles;
     let has_clusters = !p.clustered.is_empty() && !p.temperature_clustered.is_empty();
@@ -592,6 +621,11 @@ fn dense_observables(
         diffusion: weighted(sel, w, d_bins),
         diffusion_short: weighted(sel, w, s_bins),
         temperature: weighted(sel, w, t_bins).unwrap_or(obs.granular_temperature_reduced),
+        members_still: p
+            .member_cages
+            .as_ref()
+            .filter(|_| has_clusters)
+            .and_then(|c| c.fraction_within(sel, th.solid_diffusion)),
     };
     (obs_dense, grains)
 }
@@ -620,6 +654,7 @@ fn classify_unsheared(
             diffusion: obs.mobility.as_ref().map(|m| m.diffusion),
             diffusion_short: obs.mobility.as_ref().and_then(|m| m.diffusion_short),
             temperature: obs.granular_temperature_reduced,
+            members_still: None,
         },
         lag_ratio,
         p.n_cb.len(),
@@ -666,7 +701,7 @@ fn classify_unsheared(
             .as_ref()
             .and_then(|fb| weighted(sel, &p.particles, fb))
     };
-    let (dense_obs, grains) = dense_observables(obs, &dense_bins, flc_of(&dense_bins));
+    let (dense_obs, grains) = dense_observables(obs, &dense_bins, flc_of(&dense_bins), th);
     let dilute = {
         let sel = &dilute_bins;
         let o = RegionObservables {
@@ -675,6 +710,7 @@ fn classify_unsheared(
             diffusion_short: weighted(sel, &p.particles, &p.diffusion_short),
             temperature: weighted(sel, &p.particles, &p.temperature_reduced)
                 .unwrap_or(obs.granular_temperature_reduced),
+            members_still: None,
         };
         region(o, lag_ratio, sel.len(), "all", th, &|t| {
             t > th.gas_temperature
@@ -783,6 +819,13 @@ fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
             },
             th.solid_temperature
         ),
+    };
+    let mobility = match (r.mobility_from, r.members_still) {
+        (Mobility::Displacement, Some(f)) => format!(
+            "{mobility}, members still in their cage {f:.2} {} {STILL_MEMBERS}",
+            if f >= STILL_MEMBERS { ">=" } else { "<" }
+        ),
+        _ => mobility,
     };
     if r.phase == Phase::S {
         return format!("{mobility} -> s");

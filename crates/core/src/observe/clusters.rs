@@ -48,6 +48,9 @@ pub struct Membership {
     pub cluster: Vec<u32>,
     /// Number of clusters of at least the minimum size.
     pub clusters: usize,
+    /// The lasting bonds between members (both grains members of the same cluster): each
+    /// member's bonded neighbours, its cage (`observe::lateral`).
+    pub bonds: Vec<(u32, u32)>,
 }
 
 impl Membership {
@@ -144,7 +147,7 @@ pub fn components(n: usize, bonds: &[(u32, u32)], min_size: usize) -> Membership
     }
     let mut id = vec![NOT_MEMBER; n];
     let mut clusters = 0usize;
-    let cluster = roots
+    let cluster: Vec<u32> = roots
         .iter()
         .map(|&r| {
             if size[r as usize] < min_size {
@@ -157,7 +160,16 @@ pub fn components(n: usize, bonds: &[(u32, u32)], min_size: usize) -> Membership
             id[r as usize]
         })
         .collect();
-    Membership { cluster, clusters }
+    let bonds = bonds
+        .iter()
+        .copied()
+        .filter(|&(i, _)| cluster[i as usize] != NOT_MEMBER)
+        .collect();
+    Membership {
+        cluster,
+        clusters,
+        bonds,
+    }
 }
 
 /// Pairs `(i, j)`, `i < j`, whose surfaces lie within `gap` (units of length): a cell list of
@@ -394,6 +406,8 @@ mod tests {
         assert_eq!(m.clusters, 1);
         assert_eq!(m.cluster[..3], [0, 0, 0]);
         assert!(m.cluster[3..].iter().all(|&c| c == NOT_MEMBER));
+        // Only bonds between members are kept: each member's cage.
+        assert_eq!(m.bonds, vec![(0, 1), (2, 1)]);
         let all = components(6, &[(0, 1), (2, 1), (3, 4)], 1);
         assert_eq!(all.clusters, 3);
     }

@@ -74,9 +74,20 @@ pub mod field {
     pub const MSD_SHORT_ALL_N: usize = 13;
     pub const MSD_SHORT_CL: usize = 14;
     pub const MSD_SHORT_CL_N: usize = 15;
+    /// Long-lag displacements of members (at both ends) that held a lasting bond at the origin:
+    /// the grains whose cage-relative displacement is measured.
+    pub const CAGE_N: usize = 16;
+    /// Of those, the number whose cage-relative mobility is at most `CAGE_EDGES[k]`, at
+    /// `CAGE_WITHIN + k`.
+    pub const CAGE_WITHIN: usize = 17;
     /// Number of fields.
-    pub const COUNT: usize = 16;
+    pub const COUNT: usize = CAGE_WITHIN + super::CAGE_EDGES.len();
 }
+
+/// Mobilities `d^2 / (2 n_lat tau)` (`d^2` per time unit) at which the cage-relative
+/// displacements of the members are counted: the fraction of members that stay within a
+/// threshold between two edges is interpolated in `ln D` (`observe::classify`).
+pub const CAGE_EDGES: [f64; 5] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2];
 
 /// One block of samples.
 #[derive(Debug, Clone)]
@@ -119,6 +130,8 @@ struct Origin {
     positions: Vec<f64>,
     bin: Vec<u32>,
     cluster: Vec<u32>,
+    /// The members' lasting bonds (long lag only; empty for the short one).
+    bonds: Vec<(u32, u32)>,
 }
 
 /// The origins of one lag and where its sums go.
@@ -280,6 +293,11 @@ impl LateralObserver {
                     positions: self.unwrapped.clone(),
                     bin: bin.clone(),
                     cluster: members.cluster.clone(),
+                    bonds: if which {
+                        Vec::new()
+                    } else {
+                        members.bonds.clone()
+                    },
                 });
             }
         }
@@ -376,6 +394,11 @@ impl LateralObserver {
         let n_lat = dim - 1;
         let nb = self.bins.n;
         let now = self.samples;
+        // Cage-relative displacement within `CAGE_EDGES[k]`: `d^2 <= 2 n_lat tau CAGE_EDGES[k]`.
+        let within: Vec<f64> = CAGE_EDGES
+            .iter()
+            .map(|e| 2.0 * n_lat as f64 * self.lag() * e)
+            .collect();
         let track = if short {
             &mut self.short
         } else {
@@ -388,6 +411,7 @@ impl LateralObserver {
             }
             let o = track.origins.pop_front().expect("front exists");
             let r2 = lag_displacements(&o, &self.unwrapped, frame, nb, n_lat, now_members);
+            let cage = (!short).then(|| cage_relative(&o, &self.unwrapped, dim, n_lat));
             let block = &mut self.blocks[bk];
             for (i, d2) in r2.into_iter().enumerate() {
                 let s = &mut block.sums[o.bin[i] as usize * field::COUNT..];
@@ -396,6 +420,14 @@ impl LateralObserver {
                 if o.cluster[i] != NOT_MEMBER && now_members.is_member(i) {
                     s[first + 2] += d2;
                     s[first + 3] += 1.0;
+                    if let Some(c2) = cage.as_ref().and_then(|c| c[i]) {
+                        s[field::CAGE_N] += 1.0;
+                        for (k, &w) in within.iter().enumerate() {
+                            if c2 <= w {
+                                s[field::CAGE_WITHIN + k] += 1.0;
+                            }
+                        }
+                    }
                 }
             }
         }
@@ -484,6 +516,36 @@ fn lag_displacements(
         }
     }
     r2
+}
+
+/// Per grain, the squared lateral displacement since origin `o` relative to the mean
+/// displacement of the grains it was bonded to at the origin (its cage; `None` for a grain
+/// without a lasting bond there). Against its own neighbours a grain of a solid piece rattles in
+/// place however the piece drifts, turns or bends, and a grain that left its neighbours (a
+/// liquid's, or a solid's mobile surface grain) shows it.
+fn cage_relative(o: &Origin, now: &[f64], dim: usize, n_lat: usize) -> Vec<Option<f64>> {
+    let n = o.cluster.len();
+    let mut sum = vec![0.0; n * n_lat];
+    let mut count = vec![0usize; n];
+    let disp = |i: usize, k: usize| now[i * dim + k] - o.positions[i * dim + k];
+    for &(i, j) in &o.bonds {
+        let (i, j) = (i as usize, j as usize);
+        for k in 0..n_lat {
+            sum[i * n_lat + k] += disp(j, k);
+            sum[j * n_lat + k] += disp(i, k);
+        }
+        count[i] += 1;
+        count[j] += 1;
+    }
+    (0..n)
+        .map(|i| {
+            (count[i] > 0).then(|| {
+                (0..n_lat)
+                    .map(|k| (disp(i, k) - sum[i * n_lat + k] / count[i] as f64).powi(2))
+                    .sum()
+            })
+        })
+        .collect()
 }
 
 /// For the grains `group`, the squared lateral displacement since origin `o` relative to the mean
@@ -682,6 +744,49 @@ mod tests {
         let n: f64 = field_sums(&o.blocks, 10, field::MSD_CL_N).iter().sum();
         assert!(n > 100.0, "{n}");
         assert!(cl / n < 0.02, "{}", cl / n);
+    }
+
+    /// Of the member displacements measured against their cage, the fraction within each
+    /// edge, after 200 samples of `pts(t)` (bonds `bonds`, one bin).
+    fn cage_fractions(pts: &dyn Fn(f64) -> Vec<(f64, f64)>, bonds: &[(usize, usize)]) -> Vec<f64> {
+        let mut o = LateralObserver::new(LateralBins::new(1, 20.0), settings(0.25, 10.0, 4.0, 0.5));
+        for k in 0..200 {
+            let t = 0.25 * k as f64;
+            let p = pts(t);
+            o.observe(&frame_2d(&p, &vec![(0.0, 0.0); p.len()], bonds.to_vec(), t));
+        }
+        let n = field_sums(&o.blocks, 1, field::CAGE_N)[0];
+        assert!(n > 100.0, "{n}");
+        (0..CAGE_EDGES.len())
+            .map(|k| field_sums(&o.blocks, 1, field::CAGE_WITHIN + k)[0] / n)
+            .collect()
+    }
+
+    #[test]
+    fn grains_that_keep_their_neighbours_stay_in_their_cage() {
+        // Two rows of three bonded grains sliding apart at 0.1 per time unit each, held in one
+        // cluster by the bond 2-3: against the cluster's rigid motion every grain moves 0.4 per
+        // lag of 4, against its bonded neighbours only the two grains of the link bond do.
+        let bonds = [(0, 1), (1, 2), (2, 3), (3, 4), (4, 5)];
+        let slide = |t: f64| -> Vec<(f64, f64)> {
+            (0..6)
+                .map(|i| {
+                    let v = if i < 3 { -0.1 } else { 0.1 };
+                    ((8.0 + i as f64 + v * t).rem_euclid(20.0), 1.0)
+                })
+                .collect()
+        };
+        let f = cage_fractions(&slide, &bonds);
+        assert!(f.iter().all(|&x| (x - 4.0 / 6.0).abs() < 1e-12), "{f:?}");
+        // Grains that wander about by 0.5 independently of their bonded neighbours leave
+        // their cage: a liquid's grains.
+        let wander = |t: f64| -> Vec<(f64, f64)> {
+            (0..6)
+                .map(|i| (8.0 + i as f64 + 0.5 * (0.3 * t + 1.7 * i as f64).sin(), 1.0))
+                .collect()
+        };
+        let f = cage_fractions(&wander, &bonds);
+        assert!(f[2] < 0.2, "{f:?}");
     }
 
     #[test]

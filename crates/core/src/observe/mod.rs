@@ -52,6 +52,7 @@ use crate::sim::{Frame, RunReport};
 use bins::LateralBins;
 use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
+pub use profiles::CageCounts;
 use profiles::ProfileObserver;
 use serde::{Deserialize, Serialize};
 use temperature::TemperatureObserver;
@@ -174,6 +175,10 @@ pub struct Profiles {
     /// holding any bridge).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub clusters: Option<(f64, usize)>,
+    /// The members' cage-relative displacements over the long lag, counted per bin (`None` in
+    /// results stored before they were measured).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub member_cages: Option<CageCounts>,
 }
 
 /// The lateral mobility of the whole system over the window (`observe::lateral`).
@@ -902,6 +907,7 @@ fn lateral_profiles(
         n_cb_null: block_means(field::BRIDGES, ncb_scale),
         packing_null: block_means(field::VOLUME, 1.0 / bin_volume),
         clusters: Some((scene.observe.bond_time, scene.observe.cluster_min_size)),
+        member_cages: Some(member_cages(blocks, nb)),
         particles,
         packing,
         n_cb,
@@ -916,6 +922,20 @@ fn lateral_profiles(
         flc,
     };
     (profile, mobility)
+}
+
+/// The members' cage-relative displacement counts of the blocks `blocks`, per bin.
+fn member_cages(blocks: &[lateral::Block], nb: usize) -> CageCounts {
+    let per_edge: Vec<Vec<f64>> = (0..lateral::CAGE_EDGES.len())
+        .map(|k| field_sums(blocks, nb, field::CAGE_WITHIN + k))
+        .collect();
+    CageCounts {
+        edges: lateral::CAGE_EDGES.to_vec(),
+        measured: field_sums(blocks, nb, field::CAGE_N),
+        within: (0..nb)
+            .map(|b| per_edge.iter().map(|e| e[b]).collect())
+            .collect(),
+    }
 }
 
 /// At most this many blocks enter the bootstrap of the profile's spread (neighbours merged
