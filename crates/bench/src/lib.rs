@@ -21,17 +21,17 @@
 //! `wetgran-bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
 //! particle, with the breakdown by array.
 
-pub mod barrier;
-pub mod engines;
-pub mod memory;
-pub mod observer;
+pub(crate) mod barrier;
+pub(crate) mod engines;
+pub(crate) mod memory;
+pub(crate) mod observer;
 pub mod orchestrator;
-pub mod shake;
-pub mod slab;
+pub(crate) mod shake;
+pub(crate) mod slab;
 pub mod stress;
 pub mod stress_text;
-pub mod tdmd;
-pub mod wall;
+pub(crate) mod tdmd;
+pub(crate) mod wall;
 
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -175,10 +175,10 @@ pub struct Repetition {
 }
 
 impl Repetition {
-    pub fn events_per_second(&self) -> f64 {
+    pub(crate) fn events_per_second(&self) -> f64 {
         self.events as f64 / self.wall_seconds.max(1e-12)
     }
-    pub fn collisions_per_second(&self) -> f64 {
+    pub(crate) fn collisions_per_second(&self) -> f64 {
         self.collisions as f64 / self.wall_seconds.max(1e-12)
     }
 }
@@ -223,10 +223,10 @@ impl Spread {
 }
 
 impl Row {
-    pub fn events_per_second(&self) -> Spread {
+    pub(crate) fn events_per_second(&self) -> Spread {
         Spread::of(self.reps.iter().map(Repetition::events_per_second))
     }
-    pub fn collisions_per_second(&self) -> Spread {
+    pub(crate) fn collisions_per_second(&self) -> Spread {
         Spread::of(self.reps.iter().map(Repetition::collisions_per_second))
     }
     /// Simulated time of the timed part (identical across repetitions; the median is taken).
@@ -344,19 +344,14 @@ fn measure(scene: &Scene, warmup: u64, events: u64) -> Result<Repetition, String
 }
 
 /// Events timed per repetition and warm-up events for a base count and a scale.
-pub fn event_budget(base_events: u64, scale: f64) -> (u64, u64) {
+pub(crate) fn event_budget(base_events: u64, scale: f64) -> (u64, u64) {
     let events = ((base_events as f64 * scale).round() as u64).max(MIN_EVENTS);
     let warmup = (events / 10).max(MIN_WARMUP);
     (events, warmup)
 }
 
-/// Runs every reference system `repeat` times.
-pub fn engine_bench(repeat: usize, scale: f64) -> Result<Vec<Row>, String> {
-    engine_bench_only(repeat, scale, None)
-}
-
 /// Runs the reference systems whose labels are in `only` (all if `None`) `repeat` times.
-pub fn engine_bench_only(
+pub(crate) fn engine_bench_only(
     repeat: usize,
     scale: f64,
     only: Option<&[&str]>,
@@ -404,7 +399,7 @@ fn mega(x: f64) -> String {
 }
 
 /// The printed table.
-pub fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
+pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -476,7 +471,7 @@ mod tests {
 
     #[test]
     fn tiny_engine_bench_runs_every_system() {
-        let rows = engine_bench(1, 0.001).expect("bench runs");
+        let rows = engine_bench_only(1, 0.001, None).expect("bench runs");
         assert_eq!(rows.len(), 4);
         for r in &rows {
             assert_eq!(r.reps.len(), 1);
@@ -496,7 +491,7 @@ mod tests {
         assert!(run("nonsense", 1, 1.0).is_err());
         assert!(run("engine:x", 1, 1.0).is_err());
         assert_eq!(engine_bench_only(1, 0.001, Some(&["c'"])).unwrap().len(), 1);
-        assert!(engine_bench(1, 0.0).is_err());
+        assert!(engine_bench_only(1, 0.0, None).is_err());
     }
 
     #[test]

@@ -289,7 +289,7 @@ fn time_reports(
 }
 
 /// Runs the benchmark at one size in `dir`.
-pub fn measure(
+pub(crate) fn measure(
     n: usize,
     workers: usize,
     repeat: usize,

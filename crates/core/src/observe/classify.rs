@@ -226,9 +226,9 @@ pub struct DecisionInputs {
 
 /// A decision is borderline when its input lies within this factor of its threshold (either
 /// side): `D_lat` against `solid_diffusion`, `Delta` against the noise threshold.
-pub const BORDERLINE_FACTOR: f64 = 2.0;
+pub(crate) const BORDERLINE_FACTOR: f64 = 2.0;
 /// The contrast of a coexistence is borderline within this distance of its threshold.
-pub const BORDERLINE_CONTRAST: f64 = 0.1;
+pub(crate) const BORDERLINE_CONTRAST: f64 = 0.1;
 
 /// Whether `x` lies within [`BORDERLINE_FACTOR`] of a positive threshold `t`.
 fn near(x: f64, t: f64) -> bool {
@@ -332,7 +332,7 @@ struct RegionObservables {
 /// A region whose mean-square displacement over the long lag stays below this (units `d^2`) and
 /// grows slower than `diffusive_exponent` is caged: its grains rattle without leaving their
 /// neighbours. A gas confined to a narrow pocket also saturates, but at the pocket's size.
-pub const CAGE_MSD: f64 = 1.0;
+pub(crate) const CAGE_MSD: f64 = 1.0;
 
 /// The two mobility lags of a result.
 #[derive(Debug, Clone, Copy)]

@@ -26,9 +26,9 @@ use crate::sim::Frame;
 use nalgebra::{Matrix3, Vector3};
 
 /// Dry scenes: largest surface gap, in units of `d`, of a pair that counts as a bond.
-pub const DRY_BOND_GAP: f64 = 0.1;
+pub(crate) const DRY_BOND_GAP: f64 = 0.1;
 /// Component id of a grain that is not a member of any cluster.
-pub const NOT_MEMBER: u32 = u32::MAX;
+pub(crate) const NOT_MEMBER: u32 = u32::MAX;
 
 /// Tracks how long each grain has been bonded and labels the members of large bonded clusters.
 #[derive(Debug, Clone)]
@@ -52,7 +52,7 @@ pub struct Membership {
 
 impl Membership {
     /// Whether grain `i` is a member of a large bonded cluster.
-    pub fn is_member(&self, i: usize) -> bool {
+    pub(crate) fn is_member(&self, i: usize) -> bool {
         self.cluster[i] != NOT_MEMBER
     }
 }
@@ -255,7 +255,7 @@ pub fn close_pairs(frame: &Frame, gap: f64) -> Vec<(usize, usize)> {
 /// Whether the grains `members` (positions `start`, `dim` per grain) spread over half the box or
 /// more along a periodic axis, measured from the first member by nearest image: a cluster that
 /// wraps around the box (a bed, a percolating network) and cannot turn as a whole.
-pub fn spans_box(
+pub(crate) fn spans_box(
     members: &[usize],
     start: &[f64],
     dim: usize,
@@ -277,7 +277,7 @@ pub fn spans_box(
     })
 }
 
-pub fn rigid_residuals(
+pub(crate) fn rigid_residuals(
     members: &[usize],
     start: &[f64],
     end: &[f64],

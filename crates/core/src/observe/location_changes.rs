@@ -446,7 +446,7 @@ impl LocationChangeCounter {
 
     /// `f_lc` per bin per unit time, given the mean particle number of every bin (`0` for
     /// empty bins).
-    pub fn per_bin(&self, particles: &[f64]) -> Vec<f64> {
+    pub(crate) fn per_bin(&self, particles: &[f64]) -> Vec<f64> {
         let periods = self.window_time;
         self.bin_count
             .iter()

@@ -37,7 +37,7 @@ pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
 }
 
 /// Volume (area in 2D) of a particle of radius `r`.
-pub fn particle_volume(dimension: usize, r: f64) -> f64 {
+pub(crate) fn particle_volume(dimension: usize, r: f64) -> f64 {
     if dimension == 2 {
         PI * r * r
     } else {

@@ -74,7 +74,7 @@ impl ShearObserver {
     }
 
     /// `(t, E_par / unit)` at every sample (for the stationarity check).
-    pub fn e_par_series(&self) -> Vec<(f64, f64)> {
+    pub(crate) fn e_par_series(&self) -> Vec<(f64, f64)> {
         self.samples.iter().map(|s| (s.0, s.1)).collect()
     }
 

@@ -63,7 +63,7 @@ impl TemperatureObserver {
     }
 
     /// Window mean of `T_g / unit` (NaN without samples).
-    pub fn mean_reduced(&self) -> f64 {
+    pub(crate) fn mean_reduced(&self) -> f64 {
         self.window_sum / self.window_samples as f64
     }
 }

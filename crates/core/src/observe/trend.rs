@@ -34,7 +34,7 @@ use std::fmt;
 
 /// Batch means the MSER search works on (at most): long series are averaged into this many
 /// batches first, which keeps the search linear and smooths sample-to-sample noise.
-pub const MSER_BATCHES: usize = 200;
+pub(crate) const MSER_BATCHES: usize = 200;
 
 /// What the monitored series did over the run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -80,7 +80,7 @@ impl TrendState {
 
     /// Whether a run in this state with label `phase` keeps that label however long it runs:
     /// stationary runs, heating gases, cooling solids and coarsening coexistences.
-    pub fn keeps_label(self, phase: Phase) -> bool {
+    pub(crate) fn keeps_label(self, phase: Phase) -> bool {
         match self {
             TrendState::Stationary => true,
             TrendState::Heating => phase == Phase::G,
@@ -166,7 +166,7 @@ pub struct Monitored<'a> {
 /// the series has not relaxed. (Right at mid-run the statistic of a steady rise is flat to within
 /// its noise, so the minimum wanders a few batches below the end of the range.)
 /// Series too short to batch give `(0, false)`.
-pub fn mser_truncation(x: &[f64]) -> (usize, bool) {
+pub(crate) fn mser_truncation(x: &[f64]) -> (usize, bool) {
     let n = x.len();
     if n < 8 {
         return (0, false);
@@ -202,7 +202,7 @@ pub fn mser_truncation(x: &[f64]) -> (usize, bool) {
 /// Assesses a run's history: `time` the sample times, `quantities` the monitored series on
 /// those times, `window_start` the start of the reported window (the tests cover it whole). Samples before `t_floor` (the shortest transient the
 /// scene allows) are not looked at.
-pub fn assess(
+pub(crate) fn assess(
     time: &[f64],
     quantities: &[Monitored<'_>],
     t_floor: f64,

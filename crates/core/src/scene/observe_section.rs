@@ -193,7 +193,7 @@ impl ObserveSpec {
     /// Whether the location-change counter runs: as set, else only where `classify` decides
     /// mobility by `f_lc`. The counter triangulates every sample (2D) and can cost as much as
     /// the engine, so nothing pays for it unless asked (docs/observables.md).
-    pub fn counts_location_changes(&self, classify: &Thresholds) -> bool {
+    pub(crate) fn counts_location_changes(&self, classify: &Thresholds) -> bool {
         self.location_changes
             .unwrap_or(classify.mobility == Mobility::LocationChanges)
     }

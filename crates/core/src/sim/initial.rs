@@ -29,7 +29,7 @@ pub struct FlatInitialState {
 }
 
 /// Builds the initial state of a validated scene, flattened.
-pub fn initial_state_flat(scene: &Scene) -> FlatInitialState {
+pub(crate) fn initial_state_flat(scene: &Scene) -> FlatInitialState {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.initial.seed);
     let p = &scene.particles;
     let dim = scene.dimension;
@@ -86,7 +86,7 @@ pub fn initial_state_flat(scene: &Scene) -> FlatInitialState {
 
 /// Builds the initial state of a validated scene (the numbers of [`initial_state_flat`], one
 /// vector per particle).
-pub fn initial_state(scene: &Scene) -> InitialState {
+pub(crate) fn initial_state(scene: &Scene) -> InitialState {
     let dim = scene.dimension;
     let flat = initial_state_flat(scene);
     InitialState {

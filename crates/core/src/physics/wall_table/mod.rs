@@ -47,7 +47,7 @@ use std::time::Instant;
 
 /// Most roots of the gap in one period: `s''` changes sign at most twice per period, so `s` has
 /// at most four zeros there.
-pub const MAX_ROOTS: usize = 4;
+pub(crate) const MAX_ROOTS: usize = 4;
 
 /// Resolution and velocity map of a table.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -277,7 +277,7 @@ impl WallTable {
 
     /// Next hit of a flight that has just left the wall at `t0` with speed `v_rel > 0` relative
     /// to it, placed exactly on the wall (B.5.1-B.5.2).
-    pub fn next_hit_after_wall(&self, v_rel: f64, t0: f64, horizon: f64) -> TableHit {
+    pub(crate) fn next_hit_after_wall(&self, v_rel: f64, t0: f64, horizon: f64) -> TableHit {
         let w = &self.motion;
         let phi = phase_of(w, t0);
         let v_abs = w.velocity(t0) + v_rel;
@@ -466,9 +466,9 @@ fn time_to_reach(z: f64, v: f64, g: f64, plane: f64, up: bool) -> Option<f64> {
 }
 
 /// Default phase (or height) cells of a table.
-pub const DEFAULT_PHASE_CELLS: usize = 128;
+pub(crate) const DEFAULT_PHASE_CELLS: usize = 128;
 /// Default velocity cells of a table.
-pub const DEFAULT_VELOCITY_CELLS: usize = 128;
+pub(crate) const DEFAULT_VELOCITY_CELLS: usize = 128;
 /// Default `v_min` in units of the wall's peak speed `A omega`.
 pub const DEFAULT_V_MIN_OVER_WALL_SPEED: f64 = 0.05;
 /// Default `v_max` in units of the wall's peak speed `A omega`.

@@ -15,33 +15,33 @@ use std::fmt;
 const MAX_CELLS: usize = 1 << 28;
 
 /// Fewest neighbour cells a periodic axis may have (see the check in `validate`).
-pub const MIN_PERIODIC_CELLS: i32 = 4;
+pub(crate) const MIN_PERIODIC_CELLS: i32 = 4;
 
 /// Largest amplitude `A` of the shaken container, units of `d`: positions are computed next to
 /// a floor displaced by up to `A`, so their round-off (`~ A 1e-16`) stays far below the overlap
 /// tolerance. (Found by the input fuzzer: `e_star = 1e300` put the floor at 1e298.)
-pub const MAX_AMPLITUDE: f64 = 1e4;
+pub(super) const MAX_AMPLITUDE: f64 = 1e4;
 /// Largest peak wall speed `A omega`, units of `sqrt(g d)` (20 times the hardest case of
 /// `wetgran-bench stress`, 50).
-pub const MAX_WALL_SPEED: f64 = 1e3;
+pub(super) const MAX_WALL_SPEED: f64 = 1e3;
 /// Largest peak acceleration `Gamma = A omega^2 / g` (100 times `wetgran-bench stress`'s 1000).
-pub const MAX_GAMMA: f64 = 1e5;
+pub(super) const MAX_GAMMA: f64 = 1e5;
 /// Largest peak shear force `F_max`, units of `m g` (found by the input fuzzer: at `1e300` the
 /// sheared pair quartics lose every digit and pairs pass through each other).
-pub const MAX_SHEAR_FORCE: f64 = 1e3;
+pub(super) const MAX_SHEAR_FORCE: f64 = 1e3;
 /// Narrowest shear slab, in units of `d` (`drive.slab_width`).
 const MIN_SLAB_WIDTH: f64 = 1e-3;
 /// Most shear slabs along `L_x` (`drive.slab_width`).
 const MAX_SHEAR_SLABS: f64 = 1e6;
 /// Largest gravity, in the scene's units.
-pub const MAX_GRAVITY: f64 = 1e6;
+pub(super) const MAX_GRAVITY: f64 = 1e6;
 /// Range of `particles.diameter` and `particles.mass`, in the scene's units.
-pub const MIN_UNIT_SCALE: f64 = 1e-6;
-pub const MAX_UNIT_SCALE: f64 = 1e6;
+pub(super) const MIN_UNIT_SCALE: f64 = 1e-6;
+pub(super) const MAX_UNIT_SCALE: f64 = 1e6;
 /// Smallest `engine.overlap_tolerance`, in units of the diameter.
-pub const MIN_OVERLAP_TOLERANCE: f64 = 1e-12;
+pub(super) const MIN_OVERLAP_TOLERANCE: f64 = 1e-12;
 /// Smallest non-zero gravity: below it the time unit sqrt(d/g) leaves event times no digits.
-pub const MIN_GRAVITY: f64 = 1e-6;
+pub(super) const MIN_GRAVITY: f64 = 1e-6;
 
 /// Why a scene was rejected.
 #[derive(Debug, Clone, PartialEq)]

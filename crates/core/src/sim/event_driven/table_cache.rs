@@ -100,7 +100,7 @@ impl TableCache {
 
     /// The cache of engines built on threads without an installed cache, capped at
     /// [`DEFAULT_TABLE_CACHE_MIB`].
-    pub fn process_default() -> &'static TableCache {
+    pub(crate) fn process_default() -> &'static TableCache {
         static DEFAULT: OnceLock<TableCache> = OnceLock::new();
         DEFAULT.get_or_init(|| TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB))
     }

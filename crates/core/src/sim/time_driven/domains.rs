@@ -49,7 +49,7 @@ use std::sync::{Mutex, RwLock};
 
 /// Domains the box is cut into (fixed, so the numbers do not depend on the thread count; a
 /// team has at most this many members).
-pub const DOMAINS: usize = 2;
+pub(crate) const DOMAINS: usize = 2;
 
 /// From this many particles on, every Gear step of a scene without a body force runs on the
 /// domains, on any number of threads (below, a step is too short for two threads to gain:
@@ -116,7 +116,7 @@ pub(super) struct TeamBuild<'a, const D: usize> {
 impl<'a, const D: usize> TeamBuild<'a, D> {
     /// The engine's list, its positions `x` (axis-major, written back before a build) and
     /// the radii.
-    pub fn new(list: &'a mut NeighbourList<D>, x: &'a mut [f64], radius: &'a [f64]) -> Self {
+    pub(super) fn new(list: &'a mut NeighbourList<D>, x: &'a mut [f64], radius: &'a [f64]) -> Self {
         Self {
             list: RwLock::new(list),
             x: Mutex::new(x),
@@ -214,10 +214,10 @@ pub(super) struct Decomposition<const D: usize> {
 }
 
 /// A partition is remade when the cross entries exceed twice those at the partition plus this.
-pub const REPARTITION_SLACK: usize = 16;
+pub(super) const REPARTITION_SLACK: usize = 16;
 
 /// A partition is remade at the latest this many list builds after it was made.
-pub const REPARTITION_EVERY: u64 = 64;
+pub(super) const REPARTITION_EVERY: u64 = 64;
 
 impl<const D: usize> Clone for Decomposition<D> {
     fn clone(&self) -> Self {
@@ -293,7 +293,7 @@ impl<const D: usize> Decomposition<D> {
     /// by the index), [`DOMAINS`] = 2 domains of `n / 2` and `n - n / 2` particles, each in
     /// ascending scene order. The lists are split by [`Self::split_lists`], the state loaded
     /// by [`Self::load`].
-    pub fn new(build: u64, size: [f64; D], x: &[f64]) -> Self {
+    pub(super) fn new(build: u64, size: [f64; D], x: &[f64]) -> Self {
         let n = x.len() / D;
         let mut axis = 0;
         for k in 1..D {
@@ -352,7 +352,7 @@ impl<const D: usize> Decomposition<D> {
     }
 
     /// Whether the partition is to be remade at list build `build` (see the type's doc).
-    pub fn wants_new_partition(&self, build: u64) -> bool {
+    pub(super) fn wants_new_partition(&self, build: u64) -> bool {
         let cross: usize = self.domains.iter().map(|d| lock(d).cross_own.len()).sum();
         build >= self.partitioned_at + REPARTITION_EVERY
             || cross > 2 * self.cross_at_partition + REPARTITION_SLACK
@@ -361,7 +361,7 @@ impl<const D: usize> Decomposition<D> {
     /// Splits the half list of `list` (scene indices) into each domain's inner list and
     /// cross list, numbers the ghosts, and takes the positions of the build and the radii
     /// ([`Self::split_domain`] for every domain).
-    pub fn split_lists(&mut self, list: &NeighbourList<D>, radius: &[f64]) {
+    pub(super) fn split_lists(&mut self, list: &NeighbourList<D>, radius: &[f64]) {
         for d in 0..DOMAINS {
             self.split_domain(d, list, radius);
         }
@@ -376,7 +376,7 @@ impl<const D: usize> Decomposition<D> {
     }
 
     /// The list build whose entries the domains' lists hold (`NeighbourList::builds`; 0: none).
-    pub fn built_for(&self) -> u64 {
+    pub(super) fn built_for(&self) -> u64 {
         self.built_for.load(Ordering::Relaxed)
     }
 
@@ -387,7 +387,7 @@ impl<const D: usize> Decomposition<D> {
     /// ascending: the other domain's ghosts, in the other domain's ghost order), and the halo
     /// buffers of both parities sized for them. Reads only the list and what the partition
     /// fixed, writes only domain `d`, so the domains can be split at once by different threads.
-    pub fn split_domain(&self, d: usize, list: &NeighbourList<D>, radius: &[f64]) {
+    pub(super) fn split_domain(&self, d: usize, list: &NeighbourList<D>, radius: &[f64]) {
         let (start, partner, flags) = (&list.start, &list.partner, &list.flags);
         let built_at = list.built_at();
         let n = start.len() - 1;
@@ -468,7 +468,7 @@ impl<const D: usize> Decomposition<D> {
 
     /// Copies the engine's state into the domains (Gear derivatives, forces, wall contacts,
     /// radii) and marks them as holding step `step`.
-    pub fn load(&mut self, e: &EngineArrays<'_>, acc_is_start: bool, step: u64) {
+    pub(super) fn load(&mut self, e: &EngineArrays<'_>, acc_is_start: bool, step: u64) {
         let n = e.radius.len();
         for dm in &mut self.domains {
             let dm = get(dm);
@@ -487,7 +487,7 @@ impl<const D: usize> Decomposition<D> {
     /// Prepares a region starting at step `step`: the list check's bound and count (the
     /// engine's, unless `own_checks`: then each domain keeps its own, see
     /// [`Self::checked_for`]), empty books, and the halo of the step's parity.
-    pub fn begin(&mut self, bound: f64, since_check: u32, step: u64, own_checks: bool) {
+    pub(super) fn begin(&mut self, bound: f64, since_check: u32, step: u64, own_checks: bool) {
         let parity = (step % 2) as usize;
         for (d, dm) in self.domains.iter_mut().enumerate() {
             let dm = get(dm);
@@ -507,7 +507,7 @@ impl<const D: usize> Decomposition<D> {
     /// Copies the domains' state back into the engine's arrays: all of it (`full`), or only
     /// the positions (`r[0]`, what a list build reads); and the list flags where `flags` is
     /// given (the list of the domains' build; cross pairs from the booking domain).
-    pub fn store(&mut self, e: &mut EngineArrays<'_>, flags: Option<&mut [u8]>, full: bool) {
+    pub(super) fn store(&mut self, e: &mut EngineArrays<'_>, flags: Option<&mut [u8]>, full: bool) {
         let mut flags = flags;
         let n = e.radius.len();
         for dm in &mut self.domains {
@@ -528,7 +528,7 @@ impl<const D: usize> Decomposition<D> {
 
     /// The books of every domain in order (counts and largest overlap; per-step sums), and
     /// the largest displacement bound and step count since the exact test.
-    pub fn books(&mut self) -> (RegionBooks, f64, u32) {
+    pub(super) fn books(&mut self) -> (RegionBooks, f64, u32) {
         let (mut bound, mut since) = (0.0f64, 0u32);
         let mut books = Vec::with_capacity(DOMAINS);
         for dm in &mut self.domains {
@@ -543,7 +543,7 @@ impl<const D: usize> Decomposition<D> {
     #[cfg(test)]
     /// Test aid: whether both copies of every cross pair hold the same flags (they must: the
     /// two domains take the same decisions on exactly antisymmetric numbers).
-    pub fn cross_flags_agree(&mut self) -> bool {
+    pub(super) fn cross_flags_agree(&mut self) -> bool {
         let mut by_entry: Vec<(u32, u8)> = Vec::new();
         let mut other: Vec<(u32, u8)> = Vec::new();
         for (d, dm) in self.domains.iter_mut().enumerate() {
@@ -570,7 +570,7 @@ impl<const D: usize> Decomposition<D> {
     /// `wait` is the team's barrier. Returns the steps taken and how the region ended. Every
     /// member returns the same.
     #[allow(clippy::too_many_arguments)]
-    pub fn run_member<const WET: bool>(
+    pub(super) fn run_member<const WET: bool>(
         &self,
         c: &StepConstants<D>,
         walls_at: &(dyn Fn(u64) -> [WallAxis; D] + Sync),

@@ -13,7 +13,7 @@ use crate::physics::hertz;
 /// Verlet-list entries per chunk of the pair phase of a step: the unit of work of a thread, and
 /// the unit over which the booked sums are taken before they are added up in chunk order
 /// (fixed, so the numbers do not depend on the number of threads).
-pub const ENTRY_CHUNK: usize = 128;
+pub(super) const ENTRY_CHUNK: usize = 128;
 
 /// What the pair kernel needs besides the particles' state.
 #[derive(Debug, Clone, Copy)]
