@@ -89,10 +89,10 @@ impl SpinBarrier {
 pub(crate) struct Row {
     pub unit: u64,
     /// KiB each thread publishes per round for the other to read (0: none).
-    pub exchange_kib: usize,
+    pub(crate) exchange_kib: usize,
     pub rounds: u64,
-    pub serial_us: Spread,
-    pub parallel_us: Spread,
+    pub(crate) serial_us: Spread,
+    pub(crate) parallel_us: Spread,
 }
 
 /// Rounds per repetition for a unit size: about 0.15 s of serial work at `scale` 1.

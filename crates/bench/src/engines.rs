@@ -32,8 +32,8 @@ pub(crate) struct EngineRow {
     pub gamma: f64,
     pub e_star: f64,
     pub engine: &'static str,
-    pub wall_per_time: Vec<f64>,
-    pub cpu_per_time: Vec<f64>,
+    pub(crate) wall_per_time: Vec<f64>,
+    pub(crate) cpu_per_time: Vec<f64>,
 }
 
 /// The scene of one point, run by `kind`, `duration` time units.

@@ -159,7 +159,7 @@ pub struct System {
     pub description: String,
     pub scene: Scene,
     /// Events timed per repetition at `scale = 1`.
-    pub base_events: u64,
+    pub(crate) base_events: u64,
 }
 
 /// What one repetition measured.
@@ -189,10 +189,8 @@ pub struct Row {
     pub label: &'static str,
     pub description: String,
     pub particles: usize,
-    /// Events requested per repetition (after scaling).
-    pub target_events: u64,
-    pub warmup_events: u64,
-    pub reps: Vec<Repetition>,
+    pub(crate) warmup_events: u64,
+    pub(crate) reps: Vec<Repetition>,
 }
 
 /// Median, minimum and maximum.
@@ -386,7 +384,6 @@ pub(crate) fn engine_bench_only(
             label: sys.label,
             description: format!("{}; {}", sys.description, lattice_fill(&sys.scene)),
             particles: sys.scene.particles.count,
-            target_events: events,
             warmup_events: warmup,
             reps,
         });

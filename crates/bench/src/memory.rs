@@ -38,15 +38,15 @@ pub(crate) fn bulk_scene(n: usize) -> Scene {
 pub(crate) struct MemoryRow {
     pub particles: usize,
     /// Resident set size at the start of the child, before the engine (KiB).
-    pub rss_start_kib: u64,
+    pub(crate) rss_start_kib: u64,
     /// Resident set size right after the engine was built (KiB).
-    pub rss_built_kib: u64,
+    pub(crate) rss_built_kib: u64,
     /// Peak resident set size of the child over the build and the run (KiB).
-    pub peak_kib: u64,
+    pub(crate) peak_kib: u64,
     /// Events run after the build.
     pub events: u64,
     /// Heap bytes of each engine array.
-    pub structures: Vec<(String, usize)>,
+    pub(crate) structures: Vec<(String, usize)>,
 }
 
 impl MemoryRow {

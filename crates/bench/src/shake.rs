@@ -20,7 +20,7 @@ pub(crate) struct ShakeRow {
     pub solver: &'static str,
     pub periods: usize,
     pub seconds_per_period: f64,
-    pub events_per_period: f64,
+    pub(crate) events_per_period: f64,
     pub tg_over_ecb: f64,
     pub bridges: f64,
 }

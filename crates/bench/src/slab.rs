@@ -26,10 +26,10 @@ pub(crate) struct SlabRow {
     pub slabs: usize,
     /// Mean over seeds of the second-half mean of `E_par / E_cb`, and its standard error.
     pub e_par: f64,
-    pub e_par_error: f64,
-    pub events_per_particle_time: f64,
-    pub slab_crossings_per_particle_time: f64,
-    pub median_seconds: f64,
+    pub(crate) e_par_error: f64,
+    pub(crate) events_per_particle_time: f64,
+    pub(crate) slab_crossings_per_particle_time: f64,
+    pub(crate) median_seconds: f64,
 }
 
 /// The scene of the benchmark at slab width `w`, seed `seed`, run length `duration`.

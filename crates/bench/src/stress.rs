@@ -322,7 +322,7 @@ pub struct Measured {
     pub checks: u64,
     pub violation: Option<String>,
     /// The engine ran out of events before the work asked (nothing moves).
-    pub exhausted: bool,
+    pub(crate) exhausted: bool,
 }
 
 /// Runs one case for `events` events (or time steps), checking after each of [`CHECKS`] chunks.

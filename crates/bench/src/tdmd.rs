@@ -61,13 +61,13 @@ pub(crate) struct TdmdRow {
     /// Wall seconds per simulated time unit, one per repetition.
     pub seconds_per_time: Vec<f64>,
     /// CPU seconds per simulated time unit, one per repetition (empty without `/proc`).
-    pub cpu_per_time: Vec<f64>,
+    pub(crate) cpu_per_time: Vec<f64>,
     /// Verlet-list entries per particle at the end of the last repetition.
-    pub pairs_per_particle: f64,
+    pub(crate) pairs_per_particle: f64,
     pub particles: usize,
     pub dt: f64,
     pub max_overlap: f64,
-    pub builds_per_step: f64,
+    pub(crate) builds_per_step: f64,
     pub damping: f64,
 }
 

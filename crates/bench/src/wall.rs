@@ -22,11 +22,11 @@ use wetgran_core::physics::wall_table::{self, TableHit, TableSpec, WallTable};
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct WallRow {
     pub solver: &'static str,
-    pub knob: String,
-    pub mean_error: f64,
-    pub max_error: f64,
-    pub wrong_fraction: f64,
-    pub ns_per_prediction: f64,
+    pub(crate) knob: String,
+    pub(crate) mean_error: f64,
+    pub(crate) max_error: f64,
+    pub(crate) wrong_fraction: f64,
+    pub(crate) ns_per_prediction: f64,
     /// `table` only: seconds to fill the floor and lid tables, their memory in bytes, and the
     /// fraction of queries answered by the exact solver (outside the table or failed cells).
     pub table: Option<TableCost>,
@@ -35,12 +35,12 @@ pub(crate) struct WallRow {
 /// What a table costs besides its lookups.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct TableCost {
-    pub build_seconds: f64,
+    pub(crate) build_seconds: f64,
     /// CPU seconds of the whole process (every thread) during the builds; NaN without `/proc`.
     /// The cells are filled on the pool `sim::threads` chooses (`WETGRAN_THREADS` caps it).
-    pub build_cpu_seconds: f64,
+    pub(crate) build_cpu_seconds: f64,
     pub bytes: usize,
-    pub fallback_fraction: f64,
+    pub(crate) fallback_fraction: f64,
 }
 
 /// A collision time more than this fraction of a period off is a wrong root (another root, or

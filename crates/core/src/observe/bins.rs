@@ -37,9 +37,9 @@ pub struct LateralBins {
     pub ny: usize,
     /// Width along `x` (kept as `width` for the 2D callers).
     pub width: f64,
-    pub width_y: f64,
+    pub(crate) width_y: f64,
     pub length: f64,
-    pub length_y: f64,
+    pub(crate) length_y: f64,
 }
 
 impl LateralBins {

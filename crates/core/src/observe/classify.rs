@@ -152,7 +152,7 @@ pub struct RegionInputs {
     /// Growth exponent `alpha` of the mean-square displacement between the two lags
     /// (`MSD ~ tau^alpha`; `None` without both).
     #[serde(default)]
-    pub growth_exponent: Option<f64>,
+    pub(crate) growth_exponent: Option<f64>,
     /// `T_g / E_cb` (`T_g / (m g d)` for dry scenes).
     pub temperature: f64,
     /// Which observable decided solid versus mobile.
@@ -183,11 +183,11 @@ pub struct CoexistenceTest {
     pub noise_threshold: Option<f64>,
     /// `"bootstrap"` or `"independent_bins"`: which null model gave `noise_threshold`.
     #[serde(default)]
-    pub null_model: Option<String>,
+    pub(crate) null_model: Option<String>,
     /// Fraction of the dense bins' grains that are members of bonded clusters (`None` for
     /// results stored before membership was measured).
     #[serde(default)]
-    pub member_fraction: Option<f64>,
+    pub(crate) member_fraction: Option<f64>,
     /// `(dense - dilute) / dense` of the two classes' means.
     pub contrast: f64,
     pub significant: bool,

@@ -45,7 +45,7 @@ pub struct BlockingError {
     pub level: usize,
     /// Whether the estimate reached a plateau; if not, it is the last usable level's value
     /// (a lower bound: the series is short compared with its correlation time).
-    pub plateau: bool,
+    pub(crate) plateau: bool,
     /// The largest `SE_l` from `level` on: the conservative choice where the series is only a
     /// few tens of correlation times long and the plateau is still creeping up.
     pub upper: f64,

@@ -33,7 +33,7 @@ pub struct Diffusion {
     /// Times since the window start at which the MSD was sampled.
     pub times: Vec<f64>,
     /// `msd[l][k]`: MSD of layer `l` at `times[k]`.
-    pub msd: Vec<Vec<f64>>,
+    pub(crate) msd: Vec<Vec<f64>>,
 }
 
 /// Layer of every particle: ranks by height, `layers` groups of equal size.

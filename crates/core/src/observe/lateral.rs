@@ -164,7 +164,7 @@ pub(crate) struct LateralObserver {
     clusters: BondedClusters,
     long: LagTrack,
     short: LagTrack,
-    pub block_time: f64,
+    pub(crate) block_time: f64,
     pub blocks: Vec<Block>,
     /// Window samples seen.
     samples: u64,
@@ -182,7 +182,7 @@ pub(crate) struct LateralSettings {
     pub unit: f64,
     pub sample_interval: f64,
     /// Initial block length (one observation period).
-    pub block_time: f64,
+    pub(crate) block_time: f64,
     /// The long mobility lag, time units.
     pub lag: f64,
     /// Age a bond needs to count, time units.

@@ -313,7 +313,7 @@ pub struct Jump {
     /// Midway between the two fitted branches: `ln(T_g / E_cb) = level.0 + level.1 ln E*`.
     pub level: (f64, f64),
     /// `T_g / E_cb` of the point just above the jump.
-    pub upper_t: f64,
+    pub(crate) upper_t: f64,
 }
 
 impl Jump {
@@ -413,7 +413,7 @@ pub struct Inflection {
     /// `T_g / E_cb` interpolated (log-log) at the inflection: the gas branch begins there.
     pub t_star: f64,
     /// p-value of the power law's chi-square.
-    pub p_line: f64,
+    pub(crate) p_line: f64,
     /// p-value of the steepest slope against the flattest on its less steep side
     /// (Bonferroni-corrected over the slopes).
     pub p_value: f64,

@@ -167,7 +167,7 @@ pub struct NullRanges {
     /// Lag-one autocorrelation of the block means' deviations, pooled over bins, of those blocks.
     pub lag1_correlation: f64,
     /// `(q, range)`: the `q` quantile of the bootstrap ranges, for every `q` of [`NULL_LEVELS`].
-    pub quantiles: Vec<(f64, f64)>,
+    pub(crate) quantiles: Vec<(f64, f64)>,
 }
 
 impl NullRanges {

@@ -25,10 +25,10 @@ use serde::{Deserialize, Serialize};
 pub struct Cycle {
     pub start: f64,
     pub end: f64,
-    pub e_par_min: f64,
-    pub e_par_max: f64,
-    pub e_perp_min: f64,
-    pub e_perp_max: f64,
+    pub(crate) e_par_min: f64,
+    pub(crate) e_par_max: f64,
+    pub(crate) e_perp_min: f64,
+    pub(crate) e_perp_max: f64,
 }
 
 /// The shear observables of one run.

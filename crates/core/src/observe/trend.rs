@@ -132,7 +132,7 @@ pub fn trust(trend: Option<TrendState>, converged: Option<bool>, phase: Option<P
 pub struct Trend {
     pub state: TrendState,
     /// The end of the transient found by MSER (the latest over the quantities).
-    pub relaxed_at: f64,
+    pub(crate) relaxed_at: f64,
     /// Whether the history had relaxed (every quantity's truncation in the first half).
     pub relaxed: bool,
     /// The history the tests cover, `[from, to]`.

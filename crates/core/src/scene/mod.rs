@@ -493,10 +493,10 @@ pub struct EngineSpec {
     pub min_rebound_speed: f64,
     /// Largest overlap (in units of `d`) that the sanity check tolerates.
     #[serde(default = "default_overlap_tolerance")]
-    pub overlap_tolerance: f64,
+    pub(crate) overlap_tolerance: f64,
     /// Cell edge of the neighbour grid; 0 chooses the smallest legal one automatically.
     #[serde(default)]
-    pub cell_size: f64,
+    pub(crate) cell_size: f64,
 }
 
 impl Default for EngineSpec {

@@ -35,20 +35,20 @@ pub struct Bodies<const D: usize, const GRAV: bool, const SHEAR: bool> {
     /// Velocity changes of each particle (lazy invalidation of pair events).
     pub count: Vec<u32>,
     /// Time of each particle's last collision (TC model; empty when `tc = 0`).
-    pub last_collision: Vec<f64>,
+    pub(crate) last_collision: Vec<f64>,
     /// Shear drive: acceleration along `y` in the particle's slab (empty otherwise).
-    pub accel: Vec<f64>,
+    pub(crate) accel: Vec<f64>,
     /// Original index (scene order) of the particle stored at each internal index.
     pub id: Vec<u32>,
     /// Internal index of each original particle.
-    pub slot_of: Vec<u32>,
+    pub(crate) slot_of: Vec<u32>,
     pub size: [f64; D],
     pub periodic: [bool; D],
     pub gravity: f64,
     pub mass: f64,
     /// Work of the shear field on the flights already brought up to date
     /// (`sum m a_k dy`, docs/model.md 4.2); 0 without shear.
-    pub field_work: f64,
+    pub(crate) field_work: f64,
 }
 
 /// Bytes a vector holds on the heap (its capacity, not its length).

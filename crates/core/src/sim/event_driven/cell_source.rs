@@ -17,11 +17,11 @@ use crate::physics::flight::linear_time_to_faces;
 #[derive(Debug, Clone)]
 pub struct Neighbourhood<const D: usize> {
     pub offsets: Vec<[i32; D]>,
-    pub deltas: Vec<isize>,
+    pub(crate) deltas: Vec<isize>,
     /// For a cell next to walls but inside along every periodic axis, indexed by its
     /// [`CellGrid::wall_class`]: the index changes of the offsets that stay inside the walls,
     /// in the order of `offsets`.
-    pub deltas_by_wall_class: Vec<Vec<isize>>,
+    pub(crate) deltas_by_wall_class: Vec<Vec<isize>>,
 }
 
 impl<const D: usize> Neighbourhood<D> {

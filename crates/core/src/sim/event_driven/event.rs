@@ -73,7 +73,7 @@ pub struct PairEvent {
     pub time: f64,
     /// Partner index, `WELL_BIT` set for a well event; `NONE` for no partner.
     partner_kind: u32,
-    pub partner_count: u32,
+    pub(crate) partner_count: u32,
 }
 
 impl PairEvent {

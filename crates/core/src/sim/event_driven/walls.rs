@@ -42,10 +42,10 @@ pub(crate) struct TableState {
     pub tables: [Arc<WallTable>; 2],
     /// The particle that has just left the floor (`false`) or lid (`true`); its next wall
     /// prediction uses the wall-edge table (B.5.2).
-    pub launched: Option<(usize, bool)>,
+    pub(crate) launched: Option<(usize, bool)>,
     /// The particle whose tabulated hit found it away from the wall; its next wall prediction
     /// comes from the exact solver.
-    pub distrusted: Option<usize>,
+    pub(crate) distrusted: Option<usize>,
 }
 
 /// How wall collision times are found: static walls, or the shaken floor and lid with one of
@@ -153,7 +153,7 @@ impl WallSolver {
 pub(crate) struct WallSource {
     pub solver: WallSolver,
     /// Wall restitution and the collapse remedies.
-    pub e_wall: f64,
+    pub(crate) e_wall: f64,
     pub tc: f64,
     pub min_rebound: f64,
     /// Next wall event of each particle (empty when no axis has walls: every candidate is then
@@ -161,7 +161,7 @@ pub(crate) struct WallSource {
     pub ev: Vec<PlaneEvent>,
     /// `table` solver: tabulated approach speed of each particle's predicted wall hit (NaN when
     /// the hit was not tabulated; empty, i.e. NaN throughout, under the other solvers).
-    pub vrel: Vec<f64>,
+    pub(crate) vrel: Vec<f64>,
 }
 
 impl WallSource {

@@ -62,12 +62,12 @@ pub(super) struct StepConstants<const D: usize> {
     /// The pair kernel's constants (velocity scale `1 / dt`, books weighted by `dt`).
     pub pair: PairConstants<D>,
     pub dt: f64,
-    pub inv_mass: Option<f64>,
+    pub(crate) inv_mass: Option<f64>,
     /// The force every coordinate starts from (the weight on the last axis).
-    pub init: [f64; D],
-    pub gear: [f64; 6],
+    pub(crate) init: [f64; D],
+    pub(crate) gear: [f64; 6],
     /// Half the neighbour list's skin: the largest displacement the list tolerates.
-    pub half_skin: f64,
+    pub(crate) half_skin: f64,
 }
 
 /// The counts and the largest overlap a domain booked in a region (the sums are kept per step,
@@ -75,8 +75,8 @@ pub(super) struct StepConstants<const D: usize> {
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct DomainBooks {
     pub max_overlap: f64,
-    pub pair_onsets: u64,
-    pub wall_onsets: u64,
+    pub(crate) pair_onsets: u64,
+    pub(crate) wall_onsets: u64,
     pub formations: u64,
     pub ruptures: u64,
 }
@@ -135,42 +135,42 @@ pub(super) struct Domain<const D: usize> {
     /// Gear's scaled derivatives, local, axis-major (`r[q][k * m + i]`).
     pub r: [Vec<f64>; 6],
     /// Forces (start values between steps).
-    pub acc: Vec<f64>,
-    pub acc_is_start: bool,
+    pub(crate) acc: Vec<f64>,
+    pub(crate) acc_is_start: bool,
     pub radius: Vec<f64>,
-    pub wall_kr: Vec<f64>,
-    pub wall_contact: Vec<u8>,
+    pub(crate) wall_kr: Vec<f64>,
+    pub(crate) wall_contact: Vec<u8>,
     /// Positions at the last list build (local, axis-major).
-    pub built_at: Vec<f64>,
+    pub(crate) built_at: Vec<f64>,
     /// The half list of the pairs inside the domain (compressed rows, local indices).
     pub start: Vec<u32>,
     pub rows: Vec<u32>,
     pub partner: Vec<u32>,
     pub flags: Vec<u8>,
     /// The engine's list entry of each inner entry.
-    pub inner_src: Vec<u32>,
+    pub(crate) inner_src: Vec<u32>,
     /// Cross pairs: own local index (ascending), ghost number, flags, the engine's entry.
-    pub cross_own: Vec<u32>,
-    pub cross_ghost: Vec<u32>,
-    pub cross_flags: Vec<u8>,
-    pub cross_src: Vec<u32>,
+    pub(crate) cross_own: Vec<u32>,
+    pub(crate) cross_ghost: Vec<u32>,
+    pub(crate) cross_flags: Vec<u8>,
+    pub(crate) cross_src: Vec<u32>,
     /// Ghosts (the other domain's particles the cross pairs reach), read from its halo.
-    pub ghosts: usize,
+    pub(crate) ghosts: usize,
     /// Radius of each ghost.
-    pub ghost_radius: Vec<f64>,
+    pub(crate) ghost_radius: Vec<f64>,
     /// Own particles (local, ascending) that are ghosts of the other domain, in its ghost
     /// order: published into the halo after each step.
-    pub halo_out: Vec<u32>,
+    pub(crate) halo_out: Vec<u32>,
     /// Whether this domain books the cross pairs (domain 0).
-    pub books_cross: bool,
+    pub(crate) books_cross: bool,
     /// Displacement bound and steps since the exact test (the engine's `update_list`).
     pub bound: f64,
-    pub since_check: u32,
+    pub(crate) since_check: u32,
     /// Counts and largest overlap booked in the region.
     pub books: DomainBooks,
     /// Per step of the region: dissipation, bridge ledger, drive work (the engine adds them
     /// step by step, domains in order, so where regions end changes no sum).
-    pub step_books: Vec<[f64; 3]>,
+    pub(crate) step_books: Vec<[f64; 3]>,
 }
 
 /// Which particle is in which domain, the domains, and the shared halo buffers.
@@ -187,21 +187,21 @@ pub(super) struct Decomposition<const D: usize> {
     /// The list build whose entries the domains' lists hold (`NeighbourList::builds`).
     built_for: AtomicU64,
     /// The list build at which the partition was made.
-    pub partitioned_at: u64,
+    pub(crate) partitioned_at: u64,
     /// Cross entries (per domain, summed) right after the partition.
-    pub cross_at_partition: usize,
+    pub(crate) cross_at_partition: usize,
     /// Domain and local index of each particle (scene order).
-    pub dom: Vec<u8>,
+    pub(crate) dom: Vec<u8>,
     pub local: Vec<u32>,
     pub domains: Vec<Mutex<Domain<D>>>,
     /// Per domain, the halo of the two step parities: `2 D` values per halo particle
     /// (position, then the velocity array's value).
-    pub halo: Vec<[RwLock<Vec<f64>>; 2]>,
+    pub(crate) halo: Vec<[RwLock<Vec<f64>>; 2]>,
     /// Per domain and step parity: the list must be rebuilt before the next step.
     pub stop: Vec<[AtomicBool; 2]>,
     /// The step whose state the domains hold (`None`: not loaded yet, or the engine's state
     /// was changed outside the domains).
-    pub holds_step: Option<u64>,
+    pub(crate) holds_step: Option<u64>,
     /// Whether the engine's arrays hold only the positions of that step (the rest is in the
     /// domains): between the regions of one run.
     pub partial: bool,
@@ -210,7 +210,7 @@ pub(super) struct Decomposition<const D: usize> {
     /// without the engine's `update_list` and keeps the domains' own bounds, so where regions
     /// end does not move the exact displacement tests (which decide the rebuilds caused by a
     /// periodic wrap).
-    pub checked_for: Option<u64>,
+    pub(crate) checked_for: Option<u64>,
 }
 
 /// A partition is remade when the cross entries exceed twice those at the partition plus this.
@@ -281,10 +281,10 @@ fn get<T>(m: &mut Mutex<T>) -> &mut T {
 /// The engine's arrays a decomposition reads and writes (scene order, axis-major).
 pub(super) struct EngineArrays<'a> {
     pub r: &'a mut [Vec<f64>; 6],
-    pub acc: &'a mut [f64],
-    pub wall_contact: &'a mut [u8],
+    pub(crate) acc: &'a mut [f64],
+    pub(crate) wall_contact: &'a mut [u8],
     pub radius: &'a [f64],
-    pub wall_kr: &'a [f64],
+    pub(crate) wall_kr: &'a [f64],
 }
 
 impl<const D: usize> Decomposition<D> {

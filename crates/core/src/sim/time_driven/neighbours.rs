@@ -35,13 +35,13 @@ pub(crate) struct NeighbourList<const D: usize> {
     /// The row (first particle) of each entry: the pair loop runs over entries in parallel
     /// chunks. Made, with the transposed list, by [`Self::ensure_transposed`] (only the
     /// rayon-split step reads them).
-    pub row_of: Vec<u32>,
+    pub(crate) row_of: Vec<u32>,
     /// The transposed list: the entries whose partner is `j` are
     /// `in_entry[in_start[j]..in_start[j + 1]]`, ascending (so by ascending row). The engine
     /// gathers each particle's pair forces through it in the order the rows visit them.
-    pub in_start: Vec<u32>,
+    pub(crate) in_start: Vec<u32>,
     /// Entry indices of the transposed list.
-    pub in_entry: Vec<u32>,
+    pub(crate) in_entry: Vec<u32>,
     old_start: Vec<u32>,
     old_partner: Vec<u32>,
     old_flags: Vec<u8>,
@@ -86,7 +86,7 @@ pub(crate) struct NeighbourList<const D: usize> {
     /// it moved apart by more than the skin within one list's life, which only a blown-up run
     /// does (a time step too large for the speeds reached). The engine's `sanity_check`
     /// reports it; the list itself goes on.
-    pub lost_pair: Option<(usize, usize)>,
+    pub(crate) lost_pair: Option<(usize, usize)>,
 }
 
 const NONE: u32 = u32::MAX;
