@@ -152,7 +152,7 @@ pub fn run_with_svg(
 
 /// One reference system of the engine benchmark.
 #[derive(Debug, Clone)]
-pub struct System {
+pub(crate) struct System {
     /// Short label used in the table: `a`, `b`, `c`, `c'`.
     pub label: &'static str,
     /// One line saying what the system is.
@@ -164,7 +164,7 @@ pub struct System {
 
 /// What one repetition measured.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Repetition {
+pub(crate) struct Repetition {
     pub wall_seconds: f64,
     /// Events processed in the timed part (`EventCounts::total`).
     pub events: u64,
@@ -195,14 +195,14 @@ pub struct Row {
 
 /// Median, minimum and maximum.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Spread {
+pub(crate) struct Spread {
     pub median: f64,
     pub min: f64,
     pub max: f64,
 }
 
 impl Spread {
-    pub fn of(values: impl IntoIterator<Item = f64>) -> Spread {
+    pub(crate) fn of(values: impl IntoIterator<Item = f64>) -> Spread {
         let mut v: Vec<f64> = values.into_iter().collect();
         assert!(!v.is_empty(), "spread of no values");
         v.sort_by(f64::total_cmp);
@@ -256,7 +256,7 @@ fn lattice_fill(scene: &Scene) -> String {
 }
 
 /// The four reference systems, validated.
-pub fn systems() -> Result<Vec<System>, String> {
+pub(crate) fn systems() -> Result<Vec<System>, String> {
     let list = vec![
         System {
             label: "a",
