@@ -32,7 +32,7 @@ pub(crate) const NOT_MEMBER: u32 = u32::MAX;
 
 /// Tracks how long each grain has been bonded and labels the members of large bonded clusters.
 #[derive(Debug, Clone)]
-pub struct BondedClusters {
+pub(crate) struct BondedClusters {
     wet: bool,
     bond_time: f64,
     min_size: usize,
@@ -60,7 +60,7 @@ impl Membership {
 impl BondedClusters {
     /// `bond_time`: how long a grain must have held a bond, time units; `min_size`: the smallest
     /// cluster whose grains are members.
-    pub fn new(wet: bool, bond_time: f64, min_size: usize) -> Self {
+    pub(crate) fn new(wet: bool, bond_time: f64, min_size: usize) -> Self {
         Self {
             wet,
             bond_time,
@@ -70,7 +70,7 @@ impl BondedClusters {
     }
 
     /// Books one sample and returns its membership. Samples must come in time order.
-    pub fn observe(&mut self, frame: &Frame) -> Membership {
+    pub(crate) fn observe(&mut self, frame: &Frame) -> Membership {
         let now = frame.time;
         let n = frame.len();
         let pairs = if self.wet {

@@ -38,7 +38,7 @@ pub(crate) const FLOOR_DELTA_N_CB: f64 = 0.05;
 
 /// Flyvbjerg-Petersen estimate of the standard error of the mean of a correlated series.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct BlockingError {
+pub(crate) struct BlockingError {
     /// The standard error of the mean.
     pub standard_error: f64,
     /// Blocking level the estimate was taken at (block length `2^level` samples).

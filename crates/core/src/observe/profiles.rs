@@ -69,7 +69,7 @@ pub fn spread(profile: &[f64]) -> f64 {
 /// The number of bridges per particle at every sample (the profiles themselves are
 /// accumulated by [`super::lateral::LateralObserver`]).
 #[derive(Debug, Clone, Default)]
-pub struct ProfileObserver {
+pub(crate) struct ProfileObserver {
     /// `(t, bridges per particle)` at every sample.
     pub series: Vec<(f64, f64)>,
 }

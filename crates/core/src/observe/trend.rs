@@ -145,7 +145,7 @@ pub struct Trend {
 
 /// The parameters of the tests (the scene's `[convergence]` section, or its defaults).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrendTest {
+pub(crate) struct TrendTest {
     pub blocks: usize,
     pub sigmas: f64,
     pub rel_tolerance: f64,
@@ -153,7 +153,7 @@ pub struct TrendTest {
 
 /// One monitored quantity's history: its name, its floor for the tolerance, its values.
 #[derive(Debug, Clone, Copy)]
-pub struct Monitored<'a> {
+pub(crate) struct Monitored<'a> {
     pub name: &'a str,
     pub floor: f64,
     pub values: &'a [f64],

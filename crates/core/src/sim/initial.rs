@@ -12,7 +12,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 /// Particle radii, positions and velocities, flattened per particle (`dim` numbers each).
 #[derive(Debug, Clone, PartialEq)]
-pub struct InitialState {
+pub(crate) struct InitialState {
     pub radius: Vec<f64>,
     pub position: Vec<Vec<f64>>,
     pub velocity: Vec<Vec<f64>>,
@@ -22,7 +22,7 @@ pub struct InitialState {
 /// particle in `position` and `velocity`): what the event engine builds from, without a heap
 /// allocation per particle (`wetgran-bench memory`).
 #[derive(Debug, Clone, PartialEq)]
-pub struct FlatInitialState {
+pub(crate) struct FlatInitialState {
     pub radius: Vec<f64>,
     pub position: Vec<f64>,
     pub velocity: Vec<f64>,

@@ -69,7 +69,7 @@ pub struct TableSpec {
 
 /// Where a flight enters the wall's reach (see the module header).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Edge {
+pub(crate) enum Edge {
     /// Edge I: `z = +A`, moving down.
     Top = 0,
     /// Edge II: `z = -A`, moving up.
