@@ -3,7 +3,7 @@
 //! A scene names the dimension, the box and its boundaries, the particles, the contact and
 //! capillary laws, gravity, the drive, the initial state, the run length and the engine's accuracy
 //! knobs. [`Scene::from_toml_str`] parses and validates; every rejected value produces a
-//! [`SceneError`] that names the file, the key and the allowed range (see `validate.rs`).
+//! [`SceneError`] that names the file, the key and the allowed range (see `validate/`).
 //!
 //! Conventions (docs/model.md section 1): units of mean diameter `d`, particle mass `m`, gravity `g`.
 //! The last axis is vertical (`z`; in 2D the axes are `x, z`); gravity points along `-z`.
