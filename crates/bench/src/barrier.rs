@@ -23,16 +23,16 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 /// Units of work per thread per round (iterations of the chain), from about 0.4 us to 15 us.
-pub const UNITS: [u64; 6] = [250, 500, 1000, 2000, 4000, 8000];
+pub(crate) const UNITS: [u64; 6] = [250, 500, 1000, 2000, 4000, 8000];
 
 /// The unit of the exchange rows: about 4 us per thread, so that a round of one thread (two
 /// units) is about as long as a Gear step of the standard N = 1200 system on one core.
-pub const EXCHANGE_UNIT: u64 = 1000;
+pub(crate) const EXCHANGE_UNIT: u64 = 1000;
 
 /// Data each thread publishes per round in the exchange rows, in KiB, read by the other after
 /// the first barrier. A split Gear step of the 2D N = 1200 system publishes positions and
 /// velocities of its half: 600 x 2 x 2 x 8 B = 19 KiB per thread; N = 4800: 75 KiB.
-pub const EXCHANGE_KIB: [usize; 5] = [0, 4, 19, 38, 75];
+pub(crate) const EXCHANGE_KIB: [usize; 5] = [0, 4, 19, 38, 75];
 
 /// One unit of work: `n` dependent multiply-add-xorshift steps.
 fn work(n: u64, seed: u64) -> u64 {
@@ -47,14 +47,14 @@ fn work(n: u64, seed: u64) -> u64 {
 /// A reusable spin barrier for a fixed number of threads: an arrival count and a generation
 /// number; the last to arrive resets the count and opens the next generation.
 #[derive(Debug)]
-pub struct SpinBarrier {
+pub(crate) struct SpinBarrier {
     parties: u64,
     arrived: AtomicU64,
     generation: AtomicU64,
 }
 
 impl SpinBarrier {
-    pub fn new(parties: u64) -> SpinBarrier {
+    pub(crate) fn new(parties: u64) -> SpinBarrier {
         SpinBarrier {
             parties,
             arrived: AtomicU64::new(0),
@@ -63,7 +63,7 @@ impl SpinBarrier {
     }
 
     /// Returns once all `parties` threads have called it for this generation.
-    pub fn wait(&self) {
+    pub(crate) fn wait(&self) {
         let g = self.generation.load(Ordering::Acquire);
         if self.arrived.fetch_add(1, Ordering::AcqRel) + 1 == self.parties {
             self.arrived.store(0, Ordering::Relaxed);
@@ -86,13 +86,13 @@ impl SpinBarrier {
 /// One unit size: time per round on one thread (two units) and on two (one unit each, two
 /// barriers), in microseconds.
 #[derive(Debug, Clone)]
-pub struct Row {
+pub(crate) struct Row {
     pub unit: u64,
     /// KiB each thread publishes per round for the other to read (0: none).
-    pub exchange_kib: usize,
+    pub(crate) exchange_kib: usize,
     pub rounds: u64,
-    pub serial_us: Spread,
-    pub parallel_us: Spread,
+    pub(crate) serial_us: Spread,
+    pub(crate) parallel_us: Spread,
 }
 
 /// Rounds per repetition for a unit size: about 0.15 s of serial work at `scale` 1.
@@ -177,7 +177,7 @@ fn measure_one(unit: u64, exchange_kib: usize, repeat: usize, scale: f64) -> Row
 
 /// Measures every unit size of [`UNITS`] without data exchange, then [`EXCHANGE_UNIT`] with
 /// every size of [`EXCHANGE_KIB`]; `repeat` times each (serial and two-thread runs alternate).
-pub fn measure(repeat: usize, scale: f64) -> Vec<Row> {
+pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<Row> {
     let plain = UNITS.iter().map(|&u| measure_one(u, 0, repeat, scale));
     let exchange = EXCHANGE_KIB
         .iter()
@@ -186,7 +186,7 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<Row> {
     plain.chain(exchange).collect()
 }
 
-pub fn report(rows: &[Row], repeat: usize) -> String {
+pub(crate) fn report(rows: &[Row], repeat: usize) -> String {
     let mut out = format!(
         "two threads meeting at a spin barrier twice per round ({} cores available), \
          medians of {} repetitions\n",

@@ -19,25 +19,25 @@ use wetgran_core::scene::{EngineKind, Scene};
 use wetgran_core::sim::{Frame, run_scene_observed};
 
 /// Untimed time units before the timed part.
-pub const WARM_UP: f64 = 10.0;
+pub(crate) const WARM_UP: f64 = 10.0;
 /// Timed time units at `scale = 1`.
-pub const MEASURED: f64 = 5.0;
+pub(crate) const MEASURED: f64 = 5.0;
 /// Restitution of crates/core/tests/engines_like.rs (`sweeps/shaken_2d_eps096.toml`).
-pub const EPS: f64 = 0.96;
+pub(crate) const EPS: f64 = 0.96;
 
 /// One point and engine: seconds per simulated time unit, one value per repetition.
 #[derive(Debug, Clone, PartialEq)]
-pub struct EngineRow {
+pub(crate) struct EngineRow {
     pub label: &'static str,
     pub gamma: f64,
     pub e_star: f64,
     pub engine: &'static str,
-    pub wall_per_time: Vec<f64>,
-    pub cpu_per_time: Vec<f64>,
+    pub(crate) wall_per_time: Vec<f64>,
+    pub(crate) cpu_per_time: Vec<f64>,
 }
 
 /// The scene of one point, run by `kind`, `duration` time units.
-pub fn scene(gamma: f64, e_star: f64, kind: EngineKind, duration: f64) -> Scene {
+pub(crate) fn scene(gamma: f64, e_star: f64, kind: EngineKind, duration: f64) -> Scene {
     let mut s = standard_shaken(gamma, e_star, EPS, None, duration);
     s.engine.kind = kind;
     s.validate("bench engines").expect("bench scene is valid");
@@ -77,7 +77,7 @@ fn time_one_here(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
 }
 
 /// Measures every point with both engines, interleaved.
-pub fn measure(repeat: usize, scale: f64) -> Vec<EngineRow> {
+pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<EngineRow> {
     let measured = (MEASURED * scale).max(0.5);
     // The warm-up must end on a sample time: samples every `measured` time units.
     let warm = (WARM_UP / measured).ceil() * measured;
@@ -125,7 +125,7 @@ fn median(v: &[f64]) -> f64 {
 }
 
 /// The table: one line per point and engine, the ratio on the time engine's line.
-pub fn report(rows: &[EngineRow], repeat: usize, scale: f64) -> String {
+pub(crate) fn report(rows: &[EngineRow], repeat: usize, scale: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,

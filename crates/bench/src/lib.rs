@@ -21,17 +21,17 @@
 //! `wetgran-bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
 //! particle, with the breakdown by array.
 
-pub mod barrier;
-pub mod engines;
-pub mod memory;
-pub mod observer;
+pub(crate) mod barrier;
+pub(crate) mod engines;
+pub(crate) mod memory;
+pub(crate) mod observer;
 pub mod orchestrator;
-pub mod shake;
-pub mod slab;
+pub(crate) mod shake;
+pub(crate) mod slab;
 pub mod stress;
 pub mod stress_text;
-pub mod tdmd;
-pub mod wall;
+pub(crate) mod tdmd;
+pub(crate) mod wall;
 
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -152,19 +152,19 @@ pub fn run_with_svg(
 
 /// One reference system of the engine benchmark.
 #[derive(Debug, Clone)]
-pub struct System {
+pub(crate) struct System {
     /// Short label used in the table: `a`, `b`, `c`, `c'`.
     pub label: &'static str,
     /// One line saying what the system is.
     pub description: String,
     pub scene: Scene,
     /// Events timed per repetition at `scale = 1`.
-    pub base_events: u64,
+    pub(crate) base_events: u64,
 }
 
 /// What one repetition measured.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Repetition {
+pub(crate) struct Repetition {
     pub wall_seconds: f64,
     /// Events processed in the timed part (`EventCounts::total`).
     pub events: u64,
@@ -175,10 +175,10 @@ pub struct Repetition {
 }
 
 impl Repetition {
-    pub fn events_per_second(&self) -> f64 {
+    pub(crate) fn events_per_second(&self) -> f64 {
         self.events as f64 / self.wall_seconds.max(1e-12)
     }
-    pub fn collisions_per_second(&self) -> f64 {
+    pub(crate) fn collisions_per_second(&self) -> f64 {
         self.collisions as f64 / self.wall_seconds.max(1e-12)
     }
 }
@@ -189,22 +189,20 @@ pub struct Row {
     pub label: &'static str,
     pub description: String,
     pub particles: usize,
-    /// Events requested per repetition (after scaling).
-    pub target_events: u64,
-    pub warmup_events: u64,
-    pub reps: Vec<Repetition>,
+    pub(crate) warmup_events: u64,
+    pub(crate) reps: Vec<Repetition>,
 }
 
 /// Median, minimum and maximum.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Spread {
+pub(crate) struct Spread {
     pub median: f64,
     pub min: f64,
     pub max: f64,
 }
 
 impl Spread {
-    pub fn of(values: impl IntoIterator<Item = f64>) -> Spread {
+    pub(crate) fn of(values: impl IntoIterator<Item = f64>) -> Spread {
         let mut v: Vec<f64> = values.into_iter().collect();
         assert!(!v.is_empty(), "spread of no values");
         v.sort_by(f64::total_cmp);
@@ -223,10 +221,10 @@ impl Spread {
 }
 
 impl Row {
-    pub fn events_per_second(&self) -> Spread {
+    pub(crate) fn events_per_second(&self) -> Spread {
         Spread::of(self.reps.iter().map(Repetition::events_per_second))
     }
-    pub fn collisions_per_second(&self) -> Spread {
+    pub(crate) fn collisions_per_second(&self) -> Spread {
         Spread::of(self.reps.iter().map(Repetition::collisions_per_second))
     }
     /// Simulated time of the timed part (identical across repetitions; the median is taken).
@@ -258,7 +256,7 @@ fn lattice_fill(scene: &Scene) -> String {
 }
 
 /// The four reference systems, validated.
-pub fn systems() -> Result<Vec<System>, String> {
+pub(crate) fn systems() -> Result<Vec<System>, String> {
     let list = vec![
         System {
             label: "a",
@@ -344,19 +342,14 @@ fn measure(scene: &Scene, warmup: u64, events: u64) -> Result<Repetition, String
 }
 
 /// Events timed per repetition and warm-up events for a base count and a scale.
-pub fn event_budget(base_events: u64, scale: f64) -> (u64, u64) {
+pub(crate) fn event_budget(base_events: u64, scale: f64) -> (u64, u64) {
     let events = ((base_events as f64 * scale).round() as u64).max(MIN_EVENTS);
     let warmup = (events / 10).max(MIN_WARMUP);
     (events, warmup)
 }
 
-/// Runs every reference system `repeat` times.
-pub fn engine_bench(repeat: usize, scale: f64) -> Result<Vec<Row>, String> {
-    engine_bench_only(repeat, scale, None)
-}
-
 /// Runs the reference systems whose labels are in `only` (all if `None`) `repeat` times.
-pub fn engine_bench_only(
+pub(crate) fn engine_bench_only(
     repeat: usize,
     scale: f64,
     only: Option<&[&str]>,
@@ -391,7 +384,6 @@ pub fn engine_bench_only(
             label: sys.label,
             description: format!("{}; {}", sys.description, lattice_fill(&sys.scene)),
             particles: sys.scene.particles.count,
-            target_events: events,
             warmup_events: warmup,
             reps,
         });
@@ -404,7 +396,7 @@ fn mega(x: f64) -> String {
 }
 
 /// The printed table.
-pub fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
+pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -476,7 +468,7 @@ mod tests {
 
     #[test]
     fn tiny_engine_bench_runs_every_system() {
-        let rows = engine_bench(1, 0.001).expect("bench runs");
+        let rows = engine_bench_only(1, 0.001, None).expect("bench runs");
         assert_eq!(rows.len(), 4);
         for r in &rows {
             assert_eq!(r.reps.len(), 1);
@@ -496,7 +488,7 @@ mod tests {
         assert!(run("nonsense", 1, 1.0).is_err());
         assert!(run("engine:x", 1, 1.0).is_err());
         assert_eq!(engine_bench_only(1, 0.001, Some(&["c'"])).unwrap().len(), 1);
-        assert!(engine_bench(1, 0.0).is_err());
+        assert!(engine_bench_only(1, 0.0, None).is_err());
     }
 
     #[test]

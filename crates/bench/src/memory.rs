@@ -21,12 +21,12 @@ use wetgran_core::scene::{Boundary, Scene};
 use wetgran_core::sim::event_driven::Engine;
 
 /// Sizes measured at `scale = 1`.
-pub const SIZES: [usize; 2] = [125_000, 1_000_000];
+pub(crate) const SIZES: [usize; 2] = [125_000, 1_000_000];
 /// Fewest particles of a scaled size.
 const MIN_PARTICLES: usize = 2_000;
 
 /// The bulk gas of `n` spheres: system (a) of `bench engine` at `n` particles.
-pub fn bulk_scene(n: usize) -> Scene {
+pub(crate) fn bulk_scene(n: usize) -> Scene {
     let side = (n as f64 / 0.5).cbrt();
     let mut s = base_scene(3, 0.0, vec![side; 3], vec![Boundary::Periodic; 3]);
     s.particles.count = n;
@@ -35,28 +35,28 @@ pub fn bulk_scene(n: usize) -> Scene {
 
 /// What one child process measured.
 #[derive(Debug, Clone, PartialEq)]
-pub struct MemoryRow {
+pub(crate) struct MemoryRow {
     pub particles: usize,
     /// Resident set size at the start of the child, before the engine (KiB).
-    pub rss_start_kib: u64,
+    pub(crate) rss_start_kib: u64,
     /// Resident set size right after the engine was built (KiB).
-    pub rss_built_kib: u64,
+    pub(crate) rss_built_kib: u64,
     /// Peak resident set size of the child over the build and the run (KiB).
-    pub peak_kib: u64,
+    pub(crate) peak_kib: u64,
     /// Events run after the build.
     pub events: u64,
     /// Heap bytes of each engine array.
-    pub structures: Vec<(String, usize)>,
+    pub(crate) structures: Vec<(String, usize)>,
 }
 
 impl MemoryRow {
-    pub fn peak_per_particle(&self) -> f64 {
+    pub(crate) fn peak_per_particle(&self) -> f64 {
         self.peak_kib as f64 * 1024.0 / self.particles as f64
     }
-    pub fn peak_above_start_per_particle(&self) -> f64 {
+    pub(crate) fn peak_above_start_per_particle(&self) -> f64 {
         (self.peak_kib.saturating_sub(self.rss_start_kib)) as f64 * 1024.0 / self.particles as f64
     }
-    pub fn engine_bytes(&self) -> usize {
+    pub(crate) fn engine_bytes(&self) -> usize {
         self.structures.iter().map(|(_, b)| b).sum()
     }
 }
@@ -76,7 +76,7 @@ fn rss_and_peak_kib() -> Result<(u64, u64), String> {
 }
 
 /// The child's measurement, in this process: build, run `2 n` events, read the peak.
-pub fn measure_here(n: usize) -> Result<MemoryRow, String> {
+pub(crate) fn measure_here(n: usize) -> Result<MemoryRow, String> {
     let scene = bulk_scene(n);
     scene
         .validate("bench memory system")
@@ -102,7 +102,7 @@ pub fn measure_here(n: usize) -> Result<MemoryRow, String> {
 }
 
 /// The child's output: one `key value` line per figure, `struct BYTES NAME` per array.
-pub fn child_text(row: &MemoryRow) -> String {
+pub(crate) fn child_text(row: &MemoryRow) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "particles {}", row.particles);
     let _ = writeln!(s, "rss_start_kib {}", row.rss_start_kib);
@@ -116,7 +116,7 @@ pub fn child_text(row: &MemoryRow) -> String {
 }
 
 /// Parses [`child_text`].
-pub fn parse_child(text: &str) -> Result<MemoryRow, String> {
+pub(crate) fn parse_child(text: &str) -> Result<MemoryRow, String> {
     let mut row = MemoryRow {
         particles: 0,
         rss_start_kib: 0,
@@ -149,7 +149,7 @@ pub fn parse_child(text: &str) -> Result<MemoryRow, String> {
 }
 
 /// Runs one child process per size (`SIZES` times `scale`).
-pub fn measure(scale: f64) -> Result<Vec<MemoryRow>, String> {
+pub(crate) fn measure(scale: f64) -> Result<Vec<MemoryRow>, String> {
     if !(scale.is_finite() && scale > 0.0) {
         return Err(format!("--scale = {scale} must be a finite number > 0"));
     }
@@ -173,7 +173,7 @@ pub fn measure(scale: f64) -> Result<Vec<MemoryRow>, String> {
 }
 
 /// The printed table and the breakdown of the largest size.
-pub fn report(rows: &[MemoryRow]) -> String {
+pub(crate) fn report(rows: &[MemoryRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,

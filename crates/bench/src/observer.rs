@@ -21,14 +21,14 @@ use wetgran_core::scene::Scene;
 use wetgran_core::sim::{Frame, run_scene_observed};
 
 /// Samples per driving period (the default of `[observe]`).
-pub const SAMPLES_PER_PERIOD: f64 = 20.0;
+pub(crate) const SAMPLES_PER_PERIOD: f64 = 20.0;
 /// Time units run before the measured samples.
-pub const WARM_UP: f64 = 20.0;
+pub(crate) const WARM_UP: f64 = 20.0;
 
 /// The 2D standard wet system shaken at `(gamma, e_star)` with particle restitution `eps`
 /// (`min_rebound`: `engine.min_rebound_speed`), running `duration` time units, hot start
 /// `T_g / E_cb = 20`, seed 1.
-pub fn standard_shaken(
+pub(crate) fn standard_shaken(
     gamma: f64,
     e_star: f64,
     eps: f64,
@@ -65,7 +65,7 @@ duration = {duration:?}
 }
 
 /// The three points: label, Gamma, E*.
-pub const POINTS: [(&str, f64, f64); 3] = [
+pub(crate) const POINTS: [(&str, f64, f64); 3] = [
     ("gas", 2.0, 3.0),
     ("fluid", 30.0, 0.7),
     ("coexistence", 30.0, 2.6),
@@ -73,7 +73,7 @@ pub const POINTS: [(&str, f64, f64); 3] = [
 
 /// One point's figures (seconds summed over the measured samples).
 #[derive(Debug, Clone, PartialEq)]
-pub struct ObserverRow {
+pub(crate) struct ObserverRow {
     pub label: &'static str,
     pub gamma: f64,
     pub e_star: f64,
@@ -88,7 +88,7 @@ pub struct ObserverRow {
 }
 
 /// Measures the points labelled in `only` (every point when empty).
-pub fn measure(samples: usize, scale: f64, only: &[&str]) -> Vec<ObserverRow> {
+pub(crate) fn measure(samples: usize, scale: f64, only: &[&str]) -> Vec<ObserverRow> {
     let samples = ((samples as f64 * scale).round() as usize).max(10);
     POINTS
         .iter()
@@ -191,7 +191,7 @@ fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -
 }
 
 /// The table.
-pub fn report(rows: &[ObserverRow]) -> String {
+pub(crate) fn report(rows: &[ObserverRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,

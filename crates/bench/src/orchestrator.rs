@@ -124,30 +124,30 @@ fn size(p: &Path) -> u64 {
 #[derive(Debug, Clone)]
 pub struct Figures {
     pub jobs: usize,
-    pub register_s: f64,
-    pub run_s: f64,
-    pub claims_per_s: f64,
-    pub overhead_ms: f64,
+    pub(crate) register_s: f64,
+    pub(crate) run_s: f64,
+    pub(crate) claims_per_s: f64,
+    pub(crate) overhead_ms: f64,
     /// Median and 99th percentile of the time between job starts (ms), first and last tenth.
-    pub gap_first_ms: (f64, f64),
-    pub gap_last_ms: (f64, f64),
-    pub db_bytes_per_result: f64,
+    pub(crate) gap_first_ms: (f64, f64),
+    pub(crate) gap_last_ms: (f64, f64),
+    pub(crate) db_bytes_per_result: f64,
     /// `(command, median seconds)`.
     pub reports: Vec<(String, f64)>,
     /// One refinement round (`refine` among the reports).
     pub refine: Option<RefineRound>,
     /// Seconds of the relabelling that ends `sweep run` (`refine` among the reports).
-    pub end_of_run_relabel_s: Option<f64>,
+    pub(crate) end_of_run_relabel_s: Option<f64>,
 }
 
 /// The parts of one refinement round, seconds.
 #[derive(Debug, Clone)]
 pub struct RefineRound {
-    pub relabel_s: f64,
+    pub(crate) relabel_s: f64,
     /// Reading every row (`Store::points`) and planning the round.
-    pub plan_s: f64,
-    pub add_s: f64,
-    pub run_s: f64,
+    pub(crate) plan_s: f64,
+    pub(crate) add_s: f64,
+    pub(crate) run_s: f64,
     pub added: usize,
 }
 
@@ -289,7 +289,7 @@ fn time_reports(
 }
 
 /// Runs the benchmark at one size in `dir`.
-pub fn measure(
+pub(crate) fn measure(
     n: usize,
     workers: usize,
     repeat: usize,

@@ -14,19 +14,19 @@ use wetgran_core::sim::event_driven::Engine;
 
 /// One (point, solver) run.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ShakeRow {
+pub(crate) struct ShakeRow {
     pub gamma: f64,
     pub e_star: f64,
     pub solver: &'static str,
     pub periods: usize,
     pub seconds_per_period: f64,
-    pub events_per_period: f64,
+    pub(crate) events_per_period: f64,
     pub tg_over_ecb: f64,
     pub bridges: f64,
 }
 
 /// Runs both points with every solver for `periods * scale` driving periods (at least 4).
-pub fn measure(periods: usize, scale: f64) -> Vec<ShakeRow> {
+pub(crate) fn measure(periods: usize, scale: f64) -> Vec<ShakeRow> {
     let periods = ((periods as f64 * scale).round() as usize).max(4);
     let e_cb = 0.2844;
     let mut rows = Vec::new();
@@ -73,7 +73,7 @@ pub fn measure(periods: usize, scale: f64) -> Vec<ShakeRow> {
 }
 
 /// The table `wetgran-bench shake` prints.
-pub fn report(rows: &[ShakeRow]) -> String {
+pub(crate) fn report(rows: &[ShakeRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,

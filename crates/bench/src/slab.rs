@@ -17,23 +17,23 @@ use wetgran_core::sim::Frame;
 use wetgran_core::sim::event_driven::Engine;
 
 /// Slab widths measured (units of `d`); 12 / w slabs tile `L_x = 12`.
-pub const WIDTHS: [f64; 5] = [3.0, 2.0, 1.0, 0.5, 0.25];
+pub(crate) const WIDTHS: [f64; 5] = [3.0, 2.0, 1.0, 0.5, 0.25];
 
 /// One slab width.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SlabRow {
+pub(crate) struct SlabRow {
     pub width: f64,
     pub slabs: usize,
     /// Mean over seeds of the second-half mean of `E_par / E_cb`, and its standard error.
     pub e_par: f64,
-    pub e_par_error: f64,
-    pub events_per_particle_time: f64,
-    pub slab_crossings_per_particle_time: f64,
-    pub median_seconds: f64,
+    pub(crate) e_par_error: f64,
+    pub(crate) events_per_particle_time: f64,
+    pub(crate) slab_crossings_per_particle_time: f64,
+    pub(crate) median_seconds: f64,
 }
 
 /// The scene of the benchmark at slab width `w`, seed `seed`, run length `duration`.
-pub fn scene(w: f64, seed: u64, duration: f64) -> Scene {
+pub(crate) fn scene(w: f64, seed: u64, duration: f64) -> Scene {
     let mut s = Scene::from_toml_str(
         include_str!("../../../scenes/shear_small_3d.toml"),
         "scenes/shear_small_3d.toml",
@@ -47,7 +47,7 @@ pub fn scene(w: f64, seed: u64, duration: f64) -> Scene {
 }
 
 /// Runs every width with `repeat` seeds for `10 * scale` time units (at least 2).
-pub fn measure(repeat: usize, scale: f64) -> Vec<SlabRow> {
+pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<SlabRow> {
     let duration = (10.0 * scale).max(2.0);
     let repeat = repeat.max(1);
     let mut rows = Vec::new();
@@ -99,7 +99,7 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<SlabRow> {
 }
 
 /// The table.
-pub fn report(rows: &[SlabRow], repeat: usize, scale: f64) -> String {
+pub(crate) fn report(rows: &[SlabRow], repeat: usize, scale: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,

@@ -37,7 +37,7 @@ use wetgran_core::sim::{EngineVisitor, Frame, Simulation, with_engine};
 /// Events (or time steps) per case by default.
 pub const DEFAULT_EVENTS: u64 = 10_000_000;
 /// Invariant checks per case: one after each of this many equal chunks of the run.
-pub const CHECKS: u64 = 100;
+pub(crate) const CHECKS: u64 = 100;
 
 /// One hard case.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -113,7 +113,7 @@ impl StressCase {
     }
 
     /// Whether the case runs the time-driven engine (its work is counted in time steps).
-    pub fn is_time_driven(self) -> bool {
+    pub(crate) fn is_time_driven(self) -> bool {
         self == StressCase::TimeLargestDt
     }
 
@@ -322,7 +322,7 @@ pub struct Measured {
     pub checks: u64,
     pub violation: Option<String>,
     /// The engine ran out of events before the work asked (nothing moves).
-    pub exhausted: bool,
+    pub(crate) exhausted: bool,
 }
 
 /// Runs one case for `events` events (or time steps), checking after each of [`CHECKS`] chunks.
@@ -534,7 +534,7 @@ fn non_finite(frame: &Frame, ledger: &EnergyLedger) -> u64 {
 
 /// Largest `r_i + r_j - |x_i - x_j|` over all pairs (minimum image along periodic axes), 0 if
 /// no pair overlaps. All pairs: the cases are small enough.
-pub fn largest_pair_overlap(f: &Frame) -> f64 {
+pub(crate) fn largest_pair_overlap(f: &Frame) -> f64 {
     let d = f.dimension;
     let n = f.radii.len();
     let mut worst = 0.0f64;

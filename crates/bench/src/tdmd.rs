@@ -27,12 +27,12 @@ use wetgran_core::scene::reference::dry_shaken_time_driven_widened;
 use wetgran_core::sim::time_driven::{DOMAIN_MIN_PARTICLES, Execution, TimeEngine};
 
 /// Wall seconds per simulated time unit of the C++ reference code (issue 6).
-pub const BASELINE_SECONDS_PER_TIME_UNIT: f64 = 0.38;
+pub(crate) const BASELINE_SECONDS_PER_TIME_UNIT: f64 = 0.38;
 
 /// CPU time of the calling thread in seconds (Linux `/proc/thread-self/schedstat`, first field:
 /// nanoseconds on a CPU), `None` elsewhere. On a loaded machine it separates the engine's cost
 /// from the time spent waiting for a core.
-pub fn thread_cpu_seconds() -> Option<f64> {
+pub(crate) fn thread_cpu_seconds() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
     let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
     Some(ns * 1e-9)
@@ -40,7 +40,7 @@ pub fn thread_cpu_seconds() -> Option<f64> {
 
 /// CPU time of the whole process (every thread) in seconds, from `/proc/self/task/*/schedstat`
 /// (threads that ended are not counted); `None` without `/proc`.
-pub fn process_cpu_seconds() -> Option<f64> {
+pub(crate) fn process_cpu_seconds() -> Option<f64> {
     let mut ns = 0.0;
     for task in std::fs::read_dir("/proc/self/task").ok()? {
         let path = task.ok()?.path().join("schedstat");
@@ -54,20 +54,20 @@ pub fn process_cpu_seconds() -> Option<f64> {
 
 /// One integrator's figures.
 #[derive(Debug, Clone, PartialEq)]
-pub struct TdmdRow {
+pub(crate) struct TdmdRow {
     pub integrator: &'static str,
     /// Threads of the pool the runs were made on.
     pub threads: usize,
     /// Wall seconds per simulated time unit, one per repetition.
     pub seconds_per_time: Vec<f64>,
     /// CPU seconds per simulated time unit, one per repetition (empty without `/proc`).
-    pub cpu_per_time: Vec<f64>,
+    pub(crate) cpu_per_time: Vec<f64>,
     /// Verlet-list entries per particle at the end of the last repetition.
-    pub pairs_per_particle: f64,
+    pub(crate) pairs_per_particle: f64,
     pub particles: usize,
     pub dt: f64,
     pub max_overlap: f64,
-    pub builds_per_step: f64,
+    pub(crate) builds_per_step: f64,
     pub damping: f64,
 }
 
@@ -82,16 +82,11 @@ fn median(v: &[f64]) -> f64 {
     }
 }
 
-/// Runs the benchmark for both integrators on one thread.
-pub fn measure(repeat: usize, scale: f64) -> Vec<TdmdRow> {
-    measure_threads(repeat, scale, &[1], 1)
-}
-
 /// Runs the benchmark for both integrators and each thread count of `threads` (alternating
 /// within each repetition); rows in the order integrator, then thread count. `n_factor`: the
 /// system widened ([`dry_shaken_time_driven_widened`]); the timed span is divided by it (at least 0.02 time
 /// units), so that a repetition costs about the same.
-pub fn measure_threads(
+pub(crate) fn measure_threads(
     repeat: usize,
     scale: f64,
     threads: &[usize],
@@ -173,12 +168,12 @@ pub fn measure_threads(
 /// The timed part of a repetition, a function of its own so that a profiler can select it
 /// (`valgrind --tool=callgrind --toggle-collect='*tdmd*timed_run*'`).
 #[inline(never)]
-pub fn timed_run(e: &mut TimeEngine<2, true, false>, t_end: f64) {
+pub(crate) fn timed_run(e: &mut TimeEngine<2, true, false>, t_end: f64) {
     e.run_until(t_end);
 }
 
 /// The table.
-pub fn report(rows: &[TdmdRow]) -> String {
+pub(crate) fn report(rows: &[TdmdRow]) -> String {
     let mut s = String::new();
     let n = rows.first().map_or(1200, |r| r.particles);
     let _ = writeln!(

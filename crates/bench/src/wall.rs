@@ -20,13 +20,13 @@ use wetgran_core::physics::wall_table::{self, TableHit, TableSpec, WallTable};
 
 /// One solver setting and what it measured.
 #[derive(Debug, Clone, PartialEq)]
-pub struct WallRow {
+pub(crate) struct WallRow {
     pub solver: &'static str,
-    pub knob: String,
-    pub mean_error: f64,
-    pub max_error: f64,
-    pub wrong_fraction: f64,
-    pub ns_per_prediction: f64,
+    pub(crate) knob: String,
+    pub(crate) mean_error: f64,
+    pub(crate) max_error: f64,
+    pub(crate) wrong_fraction: f64,
+    pub(crate) ns_per_prediction: f64,
     /// `table` only: seconds to fill the floor and lid tables, their memory in bytes, and the
     /// fraction of queries answered by the exact solver (outside the table or failed cells).
     pub table: Option<TableCost>,
@@ -34,22 +34,28 @@ pub struct WallRow {
 
 /// What a table costs besides its lookups.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TableCost {
-    pub build_seconds: f64,
+pub(crate) struct TableCost {
+    pub(crate) build_seconds: f64,
     /// CPU seconds of the whole process (every thread) during the builds; NaN without `/proc`.
     /// The cells are filled on the pool `sim::threads` chooses (`WETGRAN_THREADS` caps it).
-    pub build_cpu_seconds: f64,
+    pub(crate) build_cpu_seconds: f64,
     pub bytes: usize,
-    pub fallback_fraction: f64,
+    pub(crate) fallback_fraction: f64,
 }
 
 /// A collision time more than this fraction of a period off is a wrong root (another root, or
 /// a missed one); the errors of the others are the mean and maximum reported.
-pub const WRONG_ROOT_FRACTION_OF_PERIOD: f64 = 1e-2;
+pub(crate) const WRONG_ROOT_FRACTION_OF_PERIOD: f64 = 1e-2;
 
 /// The `table` solver as the engine uses it: the tabulated answer, or the exact solver (gap
 /// tolerance 1e-10) where the table does not answer. Returns the root and whether it fell back.
-pub fn table_root(table: &WallTable, h: f64, v: f64, t0: f64, horizon: f64) -> (WallRoot, bool) {
+pub(crate) fn table_root(
+    table: &WallTable,
+    h: f64,
+    v: f64,
+    t0: f64,
+    horizon: f64,
+) -> (WallRoot, bool) {
     match table.next_hit(h, v, t0, horizon) {
         TableHit::Hit { dt, .. } => (WallRoot::Hit(dt), false),
         TableHit::Now if h - table.motion().position(t0) <= 1e-7 => (WallRoot::Hit(0.0), false),
@@ -123,7 +129,7 @@ fn root_errors(
 }
 
 /// Runs every solver setting on `4000 * scale` trajectories, `repeat` timing repetitions.
-pub fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
+pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
     let n = ((4000.0 * scale) as usize).max(200);
     let (floor, shots) = shots(n);
     let horizon = 2.0 * floor.period();
@@ -234,7 +240,7 @@ pub fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
 }
 
 /// The table `wetgran-bench wall` prints.
-pub fn report(rows: &[WallRow]) -> String {
+pub(crate) fn report(rows: &[WallRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -288,7 +294,7 @@ pub fn report(rows: &[WallRow]) -> String {
 /// A log-log SVG of the largest time error against the cost per prediction, one marker per
 /// solver setting (exact: circles, bracket: squares, table: diamonds), labelled with the knob; settings with
 /// wrong roots are drawn in red. Hand-written SVG: no plotting dependency.
-pub fn svg(rows: &[WallRow]) -> String {
+pub(crate) fn svg(rows: &[WallRow]) -> String {
     let (w, h, margin, right) = (820.0, 440.0, 70.0, 230.0);
     let xs: Vec<f64> = rows
         .iter()

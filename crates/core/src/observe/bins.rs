@@ -37,9 +37,9 @@ pub struct LateralBins {
     pub ny: usize,
     /// Width along `x` (kept as `width` for the 2D callers).
     pub width: f64,
-    pub width_y: f64,
+    pub(crate) width_y: f64,
     pub length: f64,
-    pub length_y: f64,
+    pub(crate) length_y: f64,
 }
 
 impl LateralBins {
@@ -66,7 +66,7 @@ impl LateralBins {
     }
 
     /// Whether the bins cut the `y` axis too (3D plane bins).
-    pub fn is_plane(&self) -> bool {
+    pub(crate) fn is_plane(&self) -> bool {
         self.ny > 1
     }
 
@@ -82,7 +82,7 @@ impl LateralBins {
     }
 
     /// The bin of the lateral point `(x, y)` (`y` ignored for slabs).
-    pub fn of_xy(&self, x: f64, y: f64) -> usize {
+    pub(crate) fn of_xy(&self, x: f64, y: f64) -> usize {
         let ix = self.of(x);
         if self.ny == 1 {
             return ix;
@@ -91,7 +91,7 @@ impl LateralBins {
     }
 
     /// The bin of particle `i` of a frame.
-    pub fn of_particle(&self, frame: &Frame, i: usize) -> usize {
+    pub(crate) fn of_particle(&self, frame: &Frame, i: usize) -> usize {
         let x = frame.x(i);
         if frame.dimension == 3 {
             self.of_xy(x[0], x[1])
@@ -118,7 +118,7 @@ impl LateralBins {
 
     /// Lateral measure of one bin: its width in 2D; width times `L_y` for 3D slabs; the cell's
     /// area for 3D plane bins.
-    pub fn lateral_measure(&self, frame: &Frame) -> f64 {
+    pub(crate) fn lateral_measure(&self, frame: &Frame) -> f64 {
         if frame.dimension == 2 {
             return self.width;
         }
@@ -130,7 +130,7 @@ impl LateralBins {
     }
 
     /// Bin of the midpoint of the pair `(i, j)` (nearest periodic image of `j` seen from `i`).
-    pub fn of_pair(&self, frame: &Frame, i: usize, j: usize) -> usize {
+    pub(crate) fn of_pair(&self, frame: &Frame, i: usize, j: usize) -> usize {
         let (xi, xj) = (frame.x(i), frame.x(j));
         let mx = xi[0] + 0.5 * frame.min_image(0, xj[0] - xi[0]);
         if frame.dimension == 3 && self.is_plane() {

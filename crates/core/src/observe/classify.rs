@@ -152,7 +152,7 @@ pub struct RegionInputs {
     /// Growth exponent `alpha` of the mean-square displacement between the two lags
     /// (`MSD ~ tau^alpha`; `None` without both).
     #[serde(default)]
-    pub growth_exponent: Option<f64>,
+    pub(crate) growth_exponent: Option<f64>,
     /// `T_g / E_cb` (`T_g / (m g d)` for dry scenes).
     pub temperature: f64,
     /// Which observable decided solid versus mobile.
@@ -188,11 +188,11 @@ pub struct CoexistenceTest {
     pub noise_threshold: Option<f64>,
     /// `"bootstrap"` or `"independent_bins"`: which null model gave `noise_threshold`.
     #[serde(default)]
-    pub null_model: Option<String>,
+    pub(crate) null_model: Option<String>,
     /// Fraction of the dense bins' grains that are members of bonded clusters (`None` for
     /// results stored before membership was measured).
     #[serde(default)]
-    pub member_fraction: Option<f64>,
+    pub(crate) member_fraction: Option<f64>,
     /// `(dense - dilute) / dense` of the two classes' means.
     pub contrast: f64,
     pub significant: bool,
@@ -231,10 +231,10 @@ pub struct DecisionInputs {
 
 /// A decision is borderline when its input lies within this factor of its threshold (either
 /// side): `D_lat` against `solid_diffusion`, `Delta` against the noise threshold.
-pub const BORDERLINE_FACTOR: f64 = 2.0;
+pub(crate) const BORDERLINE_FACTOR: f64 = 2.0;
 /// The contrast of a coexistence, and the fraction of a dense region's members still in their
 /// cage, are borderline within this distance of their thresholds.
-pub const BORDERLINE_CONTRAST: f64 = 0.1;
+pub(crate) const BORDERLINE_CONTRAST: f64 = 0.1;
 
 /// Whether `x` lies within [`BORDERLINE_FACTOR`] of a positive threshold `t`.
 fn near(x: f64, t: f64) -> bool {
@@ -354,7 +354,7 @@ pub const STILL_MEMBERS: f64 = 0.8;
 /// A region whose mean-square displacement over the long lag stays below this (units `d^2`) and
 /// grows slower than `diffusive_exponent` is caged: its grains rattle without leaving their
 /// neighbours. A gas confined to a narrow pocket also saturates, but at the pocket's size.
-pub const CAGE_MSD: f64 = 1.0;
+pub(crate) const CAGE_MSD: f64 = 1.0;
 
 /// The two mobility lags of a result.
 #[derive(Debug, Clone, Copy)]

@@ -26,13 +26,13 @@ use crate::sim::Frame;
 use nalgebra::{Matrix3, Vector3};
 
 /// Dry scenes: largest surface gap, in units of `d`, of a pair that counts as a bond.
-pub const DRY_BOND_GAP: f64 = 0.1;
+pub(crate) const DRY_BOND_GAP: f64 = 0.1;
 /// Component id of a grain that is not a member of any cluster.
-pub const NOT_MEMBER: u32 = u32::MAX;
+pub(crate) const NOT_MEMBER: u32 = u32::MAX;
 
 /// Tracks how long each grain has been bonded and labels the members of large bonded clusters.
 #[derive(Debug, Clone)]
-pub struct BondedClusters {
+pub(crate) struct BondedClusters {
     wet: bool,
     bond_time: f64,
     min_size: usize,
@@ -55,7 +55,7 @@ pub struct Membership {
 
 impl Membership {
     /// Whether grain `i` is a member of a large bonded cluster.
-    pub fn is_member(&self, i: usize) -> bool {
+    pub(crate) fn is_member(&self, i: usize) -> bool {
         self.cluster[i] != NOT_MEMBER
     }
 }
@@ -63,7 +63,7 @@ impl Membership {
 impl BondedClusters {
     /// `bond_time`: how long a grain must have held a bond, time units; `min_size`: the smallest
     /// cluster whose grains are members.
-    pub fn new(wet: bool, bond_time: f64, min_size: usize) -> Self {
+    pub(crate) fn new(wet: bool, bond_time: f64, min_size: usize) -> Self {
         Self {
             wet,
             bond_time,
@@ -73,7 +73,7 @@ impl BondedClusters {
     }
 
     /// Books one sample and returns its membership. Samples must come in time order.
-    pub fn observe(&mut self, frame: &Frame) -> Membership {
+    pub(crate) fn observe(&mut self, frame: &Frame) -> Membership {
         let now = frame.time;
         let n = frame.len();
         let pairs = if self.wet {
@@ -267,7 +267,7 @@ pub fn close_pairs(frame: &Frame, gap: f64) -> Vec<(usize, usize)> {
 /// Whether the grains `members` (positions `start`, `dim` per grain) spread over half the box or
 /// more along a periodic axis, measured from the first member by nearest image: a cluster that
 /// wraps around the box (a bed, a percolating network) and cannot turn as a whole.
-pub fn spans_box(
+pub(crate) fn spans_box(
     members: &[usize],
     start: &[f64],
     dim: usize,
@@ -289,7 +289,7 @@ pub fn spans_box(
     })
 }
 
-pub fn rigid_residuals(
+pub(crate) fn rigid_residuals(
     members: &[usize],
     start: &[f64],
     end: &[f64],

@@ -31,21 +31,21 @@
 use serde::{Deserialize, Serialize};
 
 /// Fewest values at a blocking level for its standard error to be used.
-pub const MIN_BLOCKS: usize = 16;
+pub(crate) const MIN_BLOCKS: usize = 16;
 
 /// Floor of `Delta n_cb` (units `d^-(D-1)`) for the tolerance of the test.
-pub const FLOOR_DELTA_N_CB: f64 = 0.05;
+pub(crate) const FLOOR_DELTA_N_CB: f64 = 0.05;
 
 /// Flyvbjerg-Petersen estimate of the standard error of the mean of a correlated series.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct BlockingError {
+pub(crate) struct BlockingError {
     /// The standard error of the mean.
     pub standard_error: f64,
     /// Blocking level the estimate was taken at (block length `2^level` samples).
     pub level: usize,
     /// Whether the estimate reached a plateau; if not, it is the last usable level's value
     /// (a lower bound: the series is short compared with its correlation time).
-    pub plateau: bool,
+    pub(crate) plateau: bool,
     /// The largest `SE_l` from `level` on: the conservative choice where the series is only a
     /// few tens of correlation times long and the plateau is still creeping up.
     pub upper: f64,
@@ -53,7 +53,7 @@ pub struct BlockingError {
 
 /// The standard error of the mean of `x` by blocking (see the module doc). Series shorter than
 /// [`MIN_BLOCKS`] fall back to the uncorrelated estimate `sqrt(c0 / (n - 1))` (no plateau).
-pub fn blocking_error(x: &[f64]) -> BlockingError {
+pub(crate) fn blocking_error(x: &[f64]) -> BlockingError {
     let se_of = |v: &[f64]| -> f64 {
         let n = v.len();
         if n < 2 {
@@ -104,7 +104,7 @@ pub fn blocking_error(x: &[f64]) -> BlockingError {
 /// residuals `x - m_b` about the block means, with lags taken inside blocks only (a step or a
 /// drift between blocks does not inflate it) and Sokal's window: the smallest `M >= 5 tau(M)`,
 /// at most half a block.
-pub fn integrated_time(x: &[f64], block_means: &[f64], per: usize) -> f64 {
+pub(crate) fn integrated_time(x: &[f64], block_means: &[f64], per: usize) -> f64 {
     let r: Vec<f64> = x
         .iter()
         .enumerate()
@@ -171,7 +171,7 @@ impl BlockTest {
 /// Runs the agreement and trend tests on `x` (one window, equally spaced samples) cut into
 /// `blocks` blocks of equal sample count (the remainder, fewer than `blocks` samples, is dropped
 /// from the start). `sigmas` is `k`. Fewer than two samples per block fails both tests.
-pub fn block_test(
+pub(crate) fn block_test(
     quantity: &str,
     x: &[f64],
     blocks: usize,

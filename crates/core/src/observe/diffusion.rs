@@ -33,11 +33,11 @@ pub struct Diffusion {
     /// Times since the window start at which the MSD was sampled.
     pub times: Vec<f64>,
     /// `msd[l][k]`: MSD of layer `l` at `times[k]`.
-    pub msd: Vec<Vec<f64>>,
+    pub(crate) msd: Vec<Vec<f64>>,
 }
 
 /// Layer of every particle: ranks by height, `layers` groups of equal size.
-pub fn assign_layers(frame: &Frame, layers: usize) -> Vec<usize> {
+pub(crate) fn assign_layers(frame: &Frame, layers: usize) -> Vec<usize> {
     let n = frame.len();
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| frame.height(a).total_cmp(&frame.height(b)).then(a.cmp(&b)));
@@ -55,7 +55,7 @@ pub fn assign_layers(frame: &Frame, layers: usize) -> Vec<usize> {
 }
 
 /// Least-squares slope of `y` against `x` (0 for fewer than two points).
-pub fn slope(x: &[f64], y: &[f64]) -> f64 {
+pub(crate) fn slope(x: &[f64], y: &[f64]) -> f64 {
     let n = x.len() as f64;
     if x.len() < 2 {
         return 0.0;
@@ -69,7 +69,7 @@ pub fn slope(x: &[f64], y: &[f64]) -> f64 {
 
 /// Tracks unwrapped lateral displacements per layer over the window.
 #[derive(Debug, Clone)]
-pub struct DiffusionObserver {
+pub(crate) struct DiffusionObserver {
     layers: usize,
     layer_of: Vec<usize>,
     layer_size: Vec<usize>,
@@ -82,7 +82,7 @@ pub struct DiffusionObserver {
 }
 
 impl DiffusionObserver {
-    pub fn new(layers: usize) -> Self {
+    pub(crate) fn new(layers: usize) -> Self {
         Self {
             layers,
             layer_of: Vec::new(),
@@ -97,7 +97,7 @@ impl DiffusionObserver {
     }
 
     /// The per-layer results (`None` before the window's first sample).
-    pub fn finish(&self, dimension: usize) -> Option<Diffusion> {
+    pub(crate) fn finish(&self, dimension: usize) -> Option<Diffusion> {
         if self.layer_of.is_empty() {
             return None;
         }

@@ -41,57 +41,57 @@ use crate::sim::Frame;
 use std::collections::VecDeque;
 
 /// Most blocks kept before neighbouring blocks are merged.
-pub const MAX_BLOCKS: usize = 256;
+pub(crate) const MAX_BLOCKS: usize = 256;
 /// The short mobility lag is the long one divided by this.
-pub const SHORT_LAG_DIVISOR: f64 = 4.0;
+pub(crate) const SHORT_LAG_DIVISOR: f64 = 4.0;
 
 /// Per-bin fields of a block (sums over the block's samples).
-pub mod field {
+pub(crate) mod field {
     /// Particles in the bin (summed over samples).
-    pub const PARTICLES: usize = 0;
+    pub(crate) const PARTICLES: usize = 0;
     /// Summed particle volume (area in 2D).
-    pub const VOLUME: usize = 1;
+    pub(crate) const VOLUME: usize = 1;
     /// Bridges whose midpoint lies in the bin.
-    pub const BRIDGES: usize = 2;
+    pub(crate) const BRIDGES: usize = 2;
     /// `sum n_b T_b` over samples with at least two grains, all grains.
-    pub const T_ALL: usize = 3;
+    pub(crate) const T_ALL: usize = 3;
     /// `sum n_b` over those samples.
-    pub const T_ALL_W: usize = 4;
+    pub(crate) const T_ALL_W: usize = 4;
     /// The same for the cluster members of the bin.
-    pub const T_CL: usize = 5;
-    pub const T_CL_W: usize = 6;
+    pub(crate) const T_CL: usize = 5;
+    pub(crate) const T_CL_W: usize = 6;
     /// Cluster members in the bin (summed over samples).
-    pub const CLUSTERED: usize = 7;
+    pub(crate) const CLUSTERED: usize = 7;
     /// Summed `|Delta r_lat|^2` over the long lag, all grains with origin in the bin, and their
     /// count.
-    pub const MSD_ALL: usize = 8;
-    pub const MSD_ALL_N: usize = 9;
+    pub(crate) const MSD_ALL: usize = 8;
+    pub(crate) const MSD_ALL_N: usize = 9;
     /// The same for grains that were members at the origin.
-    pub const MSD_CL: usize = 10;
-    pub const MSD_CL_N: usize = 11;
+    pub(crate) const MSD_CL: usize = 10;
+    pub(crate) const MSD_CL_N: usize = 11;
     /// The four sums above over the short lag.
-    pub const MSD_SHORT_ALL: usize = 12;
-    pub const MSD_SHORT_ALL_N: usize = 13;
-    pub const MSD_SHORT_CL: usize = 14;
-    pub const MSD_SHORT_CL_N: usize = 15;
+    pub(crate) const MSD_SHORT_ALL: usize = 12;
+    pub(crate) const MSD_SHORT_ALL_N: usize = 13;
+    pub(crate) const MSD_SHORT_CL: usize = 14;
+    pub(crate) const MSD_SHORT_CL_N: usize = 15;
     /// Long-lag displacements of members (at both ends) that held a lasting bond at the origin:
     /// the grains whose cage-relative displacement is measured.
-    pub const CAGE_N: usize = 16;
+    pub(crate) const CAGE_N: usize = 16;
     /// Of those, the number whose cage-relative mobility is at most `CAGE_EDGES[k]`, at
     /// `CAGE_WITHIN + k`.
-    pub const CAGE_WITHIN: usize = 17;
+    pub(crate) const CAGE_WITHIN: usize = 17;
     /// Number of fields.
-    pub const COUNT: usize = CAGE_WITHIN + super::CAGE_EDGES.len();
+    pub(crate) const COUNT: usize = CAGE_WITHIN + super::CAGE_EDGES.len();
 }
 
 /// Mobilities `d^2 / (2 n_lat tau)` (`d^2` per time unit) at which the cage-relative
 /// displacements of the members are counted: the fraction of members that stay within a
 /// threshold between two edges is interpolated in `ln D` (`observe::classify`).
-pub const CAGE_EDGES: [f64; 5] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2];
+pub(crate) const CAGE_EDGES: [f64; 5] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2];
 
 /// One block of samples.
 #[derive(Debug, Clone)]
-pub struct Block {
+pub(crate) struct Block {
     pub t0: f64,
     pub t1: f64,
     pub samples: u64,
@@ -110,7 +110,7 @@ impl Block {
     }
 
     /// Field `f` of bin `b`.
-    pub fn get(&self, b: usize, f: usize) -> f64 {
+    pub(crate) fn get(&self, b: usize, f: usize) -> f64 {
         self.sums[b * field::COUNT + f]
     }
 
@@ -169,7 +169,7 @@ fn temperature_of(sum_v: &[f64], sum_sq: f64, n: usize, mass: f64) -> Option<f64
 
 /// The per-bin block accumulator of the window (see the module doc).
 #[derive(Debug, Clone)]
-pub struct LateralObserver {
+pub(crate) struct LateralObserver {
     bins: LateralBins,
     /// Energy unit of the reduced temperatures.
     unit: f64,
@@ -177,7 +177,7 @@ pub struct LateralObserver {
     clusters: BondedClusters,
     long: LagTrack,
     short: LagTrack,
-    pub block_time: f64,
+    pub(crate) block_time: f64,
     pub blocks: Vec<Block>,
     /// Window samples seen.
     samples: u64,
@@ -188,14 +188,14 @@ pub struct LateralObserver {
 
 /// How a [`LateralObserver`] finds bonded clusters and measures mobility.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LateralSettings {
+pub(crate) struct LateralSettings {
     /// Capillary bridges are the bonds (else close pairs).
     pub wet: bool,
     /// Energy unit of the reduced temperatures.
     pub unit: f64,
     pub sample_interval: f64,
     /// Initial block length (one observation period).
-    pub block_time: f64,
+    pub(crate) block_time: f64,
     /// The long mobility lag, time units.
     pub lag: f64,
     /// Age a bond needs to count, time units.
@@ -205,7 +205,7 @@ pub struct LateralSettings {
 }
 
 impl LateralObserver {
-    pub fn new(bins: LateralBins, s: LateralSettings) -> Self {
+    pub(crate) fn new(bins: LateralBins, s: LateralSettings) -> Self {
         let long = ((s.lag / s.sample_interval).round() as u64).max(1);
         let short = ((s.lag / SHORT_LAG_DIVISOR / s.sample_interval).round() as u64).max(1);
         Self {
@@ -224,16 +224,16 @@ impl LateralObserver {
     }
 
     /// The long lag actually used, `k dt`.
-    pub fn lag(&self) -> f64 {
+    pub(crate) fn lag(&self) -> f64 {
         self.long.samples as f64 * self.sample_interval
     }
 
     /// The short lag actually used.
-    pub fn short_lag(&self) -> f64 {
+    pub(crate) fn short_lag(&self) -> f64 {
         self.short.samples as f64 * self.sample_interval
     }
 
-    pub fn bins(&self) -> &LateralBins {
+    pub(crate) fn bins(&self) -> &LateralBins {
         &self.bins
     }
 
@@ -272,7 +272,7 @@ impl LateralObserver {
     }
 
     /// Books one window sample.
-    pub fn observe(&mut self, frame: &Frame) {
+    pub(crate) fn observe(&mut self, frame: &Frame) {
         let bk = self.block_for(frame.time);
         let bin: Vec<u32> = (0..frame.len())
             .map(|i| self.bins.of_particle(frame, i) as u32)
@@ -434,7 +434,7 @@ impl LateralObserver {
     }
 
     /// Blocks whose start lies at or after `t` (all blocks for `t` at or before the first).
-    pub fn blocks_from(&self, t: f64) -> &[Block] {
+    pub(crate) fn blocks_from(&self, t: f64) -> &[Block] {
         let eps = 1e-9 * t.abs().max(1.0);
         let k = self
             .blocks
@@ -580,7 +580,7 @@ fn bin_relative(
 }
 
 /// Sums of one field per bin over blocks.
-pub fn field_sums(blocks: &[Block], bins: usize, f: usize) -> Vec<f64> {
+pub(crate) fn field_sums(blocks: &[Block], bins: usize, f: usize) -> Vec<f64> {
     (0..bins)
         .map(|b| blocks.iter().map(|k| k.get(b, f)).sum())
         .collect()

@@ -60,19 +60,19 @@ use super::noise::{erfc, normal_cdf};
 use serde::{Deserialize, Serialize};
 
 /// Family-wise level of the jump test (after the Bonferroni correction over positions).
-pub const JUMP_LEVEL: f64 = 0.01;
+pub(crate) const JUMP_LEVEL: f64 = 0.01;
 /// Level at which the inflection test rejects a power law for the whole line.
-pub const INFLECTION_LEVEL: f64 = 0.01;
+pub(crate) const INFLECTION_LEVEL: f64 = 0.01;
 /// Family-wise level (Bonferroni over the slopes) at which the steepest slope must be steeper
 /// than the flattest on each side.
-pub const SLOPE_LEVEL: f64 = 0.05;
+pub(crate) const SLOPE_LEVEL: f64 = 0.05;
 /// Floor on the relative error of a point's `T_g / E_cb` (a block error of zero would make any
 /// wiggle significant).
 pub const MIN_REL_ERROR: f64 = 1e-3;
 /// Fewest points of a curve for either test.
-pub const MIN_CURVE_POINTS: usize = 4;
+pub(crate) const MIN_CURVE_POINTS: usize = 4;
 /// Fewest interior residuals for the scatter estimate where no errors are stored.
-pub const MIN_SCATTER_RESIDUALS: usize = 3;
+pub(crate) const MIN_SCATTER_RESIDUALS: usize = 3;
 
 /// One point of a line: `E*`, `T_g / E_cb` and the relative standard error of `T_g / E_cb`
 /// (`None` where the run stored none).
@@ -125,7 +125,7 @@ pub fn temperature_rel_error(obs: &Observables) -> Option<f64> {
 /// standard deviation in units of the points' (`sqrt(1 + w^2 + (1 - w)^2)`, `w` the
 /// interpolation weight), then `1.4826` times the median absolute value. `None` with fewer than
 /// [`MIN_SCATTER_RESIDUALS`] residuals.
-pub fn scatter_estimate(x: &[f64], y: &[f64]) -> Option<f64> {
+pub(crate) fn scatter_estimate(x: &[f64], y: &[f64]) -> Option<f64> {
     let mut r: Vec<f64> = (1..x.len().saturating_sub(1))
         .map(|i| {
             let w = (x[i] - x[i - 1]) / (x[i + 1] - x[i - 1]);
@@ -272,7 +272,7 @@ fn wls(cols: &[Vec<f64>], y: &[f64], sigma: &[f64]) -> Option<(Vec<f64>, Vec<Vec
 
 /// `P(chi^2_nu > c)`, exact for integer `nu >= 1` (the regularised upper incomplete gamma
 /// function at half-integer order, by its finite series).
-pub fn chi2_sf(c: f64, nu: usize) -> f64 {
+pub(crate) fn chi2_sf(c: f64, nu: usize) -> f64 {
     let h = 0.5 * c.max(0.0);
     if nu.is_multiple_of(2) {
         let (mut term, mut sum) = (1.0, 1.0);
@@ -313,7 +313,7 @@ pub struct Jump {
     /// Midway between the two fitted branches: `ln(T_g / E_cb) = level.0 + level.1 ln E*`.
     pub level: (f64, f64),
     /// `T_g / E_cb` of the point just above the jump.
-    pub upper_t: f64,
+    pub(crate) upper_t: f64,
 }
 
 impl Jump {
@@ -413,7 +413,7 @@ pub struct Inflection {
     /// `T_g / E_cb` interpolated (log-log) at the inflection: the gas branch begins there.
     pub t_star: f64,
     /// p-value of the power law's chi-square.
-    pub p_line: f64,
+    pub(crate) p_line: f64,
     /// p-value of the steepest slope against the flattest on its less steep side
     /// (Bonferroni-corrected over the slopes).
     pub p_value: f64,

@@ -49,13 +49,13 @@ pub struct Edge {
     pub i: u32,
     pub j: u32,
     pub length: f64,
-    pub mid_x: f64,
+    pub(crate) mid_x: f64,
     /// Midpoint `y` (3D; 0 in 2D).
-    pub mid_y: f64,
+    pub(crate) mid_y: f64,
     /// 2D: the vertices `c < d` opposite the edge in its two triangles and the sum of the angles
     /// at `c` and `d`; `None` on the hull (and always for neighbour shells). The edge is Delaunay
     /// while the sum is at most `pi`; `pi - sum` is by how much.
-    pub opposite: Option<(u32, u32, f64)>,
+    pub(crate) opposite: Option<(u32, u32, f64)>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -405,9 +405,9 @@ pub struct LocationChangeCounter {
     /// Changes counted in intervals inside the window.
     pub window_count: u64,
     /// Summed length of those intervals.
-    pub window_time: f64,
+    pub(crate) window_time: f64,
     /// Changes per bin inside the window.
-    pub bin_count: Vec<u64>,
+    pub(crate) bin_count: Vec<u64>,
     particles: usize,
 }
 
@@ -446,7 +446,7 @@ impl LocationChangeCounter {
 
     /// `f_lc` per bin per unit time, given the mean particle number of every bin (`0` for
     /// empty bins).
-    pub fn per_bin(&self, particles: &[f64]) -> Vec<f64> {
+    pub(crate) fn per_bin(&self, particles: &[f64]) -> Vec<f64> {
         let periods = self.window_time;
         self.bin_count
             .iter()

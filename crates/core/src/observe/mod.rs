@@ -28,14 +28,14 @@ pub mod bins;
 pub mod classify;
 pub mod clusters;
 pub mod convergence;
-pub mod diffusion;
-pub mod lateral;
+pub(crate) mod diffusion;
+pub(crate) mod lateral;
 pub mod line;
 pub mod location_changes;
 pub mod noise;
 pub mod profiles;
 pub mod shear;
-pub mod stationarity;
+pub(crate) mod stationarity;
 pub mod temperature;
 pub mod trend;
 
@@ -65,13 +65,13 @@ pub trait Observer {
 
 /// Stationarity floors (see [`stationarity`]): below these magnitudes a change is judged
 /// against the floor instead of the value itself.
-pub const FLOOR_TEMPERATURE: f64 = 0.05;
+pub(crate) const FLOOR_TEMPERATURE: f64 = 0.05;
 /// Floor for bridges per particle.
-pub const FLOOR_BRIDGES_PER_PARTICLE: f64 = 0.1;
+pub(crate) const FLOOR_BRIDGES_PER_PARTICLE: f64 = 0.1;
 /// Floor for `f_lc` (location changes per particle per period).
-pub const FLOOR_FLC: f64 = 0.05;
+pub(crate) const FLOOR_FLC: f64 = 0.05;
 /// Floor for `E_par` in units of `E_cb` (`m g d` dry): the default solid threshold.
-pub const FLOOR_E_PAR: f64 = 0.1;
+pub(crate) const FLOOR_E_PAR: f64 = 0.1;
 
 /// `f_lc` over the window.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -940,8 +940,8 @@ fn member_cages(blocks: &[lateral::Block], nb: usize) -> CageCounts {
 
 /// At most this many blocks enter the bootstrap of the profile's spread (neighbours merged
 /// first; the bootstrap merges further while they are correlated).
-pub const BOOTSTRAP_MAX_BLOCKS: usize = 64;
+pub(crate) const BOOTSTRAP_MAX_BLOCKS: usize = 64;
 
 /// Blocks the standard error of a profile is taken from (`noise::block_standard_error`
 /// merges the window's blocks down to at most this many).
-pub const NOISE_BLOCKS: usize = 32;
+pub(crate) const NOISE_BLOCKS: usize = 32;

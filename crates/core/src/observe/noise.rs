@@ -30,7 +30,7 @@ use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
 /// `erfc(x)`, relative error below `1.2e-7` everywhere (the Chebyshev-fitted exponential of
 /// Press et al., Numerical Recipes, Sec. 6.2, written out here).
-pub fn erfc(x: f64) -> f64 {
+pub(crate) fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
     let poly = -z * z - 1.265_512_23
@@ -46,12 +46,12 @@ pub fn erfc(x: f64) -> f64 {
 }
 
 /// Standard normal distribution function `Phi(x)`.
-pub fn normal_cdf(x: f64) -> f64 {
+pub(crate) fn normal_cdf(x: f64) -> f64 {
     0.5 * erfc(-x * FRAC_1_SQRT_2)
 }
 
 /// Standard normal density `phi(x)`.
-pub fn normal_pdf(x: f64) -> f64 {
+pub(crate) fn normal_pdf(x: f64) -> f64 {
     (-0.5 * x * x).exp() / (2.0 * PI).sqrt()
 }
 
@@ -69,7 +69,7 @@ fn integrate(f: impl Fn(f64) -> f64) -> f64 {
 }
 
 /// `P(R <= r)` for the range `R` of `b` independent standard normal values.
-pub fn range_cdf(b: usize, r: f64) -> f64 {
+pub(crate) fn range_cdf(b: usize, r: f64) -> f64 {
     if b < 2 {
         return 1.0;
     }
@@ -102,7 +102,7 @@ pub fn range_quantile(b: usize, q: f64) -> f64 {
 
 /// Mean of the range of `b` independent standard normal values,
 /// `E[R] = integral (1 - Phi^b - (1 - Phi)^b) dx`.
-pub fn range_mean(b: usize) -> f64 {
+pub(crate) fn range_mean(b: usize) -> f64 {
     if b < 2 {
         return 0.0;
     }
@@ -116,7 +116,11 @@ pub fn range_mean(b: usize) -> f64 {
 /// sqrt(blocks)`, the blocks being consecutive groups of the given means merged until at most
 /// `max_blocks` remain (so each is long against the correlation time). `None` with fewer than
 /// two blocks.
-pub fn block_standard_error(means: &[f64], weights: &[f64], max_blocks: usize) -> Option<f64> {
+pub(crate) fn block_standard_error(
+    means: &[f64],
+    weights: &[f64],
+    max_blocks: usize,
+) -> Option<f64> {
     let (mut m, mut w): (Vec<f64>, Vec<f64>) = (means.to_vec(), weights.to_vec());
     while m.len() > max_blocks.max(2) {
         let mut mm = Vec::with_capacity(m.len() / 2 + 1);
@@ -148,12 +152,12 @@ pub fn block_standard_error(means: &[f64], weights: &[f64], max_blocks: usize) -
 }
 
 /// Resamples drawn by [`null_ranges`].
-pub const BOOTSTRAP_RESAMPLES: usize = 4000;
+pub(crate) const BOOTSTRAP_RESAMPLES: usize = 4000;
 /// The quantile levels stored in [`NullRanges`]: a classifier level between two of them is read
 /// by interpolation in `ln(1 - q)`.
-pub const NULL_LEVELS: [f64; 8] = [0.5, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995, 0.999];
+pub(crate) const NULL_LEVELS: [f64; 8] = [0.5, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995, 0.999];
 /// Fewest blocks the bootstrap keeps when it merges correlated blocks.
-pub const MIN_BOOTSTRAP_BLOCKS: usize = 8;
+pub(crate) const MIN_BOOTSTRAP_BLOCKS: usize = 8;
 
 /// The null distribution of a profile's spread `Delta` (see the module doc).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -163,7 +167,7 @@ pub struct NullRanges {
     /// Lag-one autocorrelation of the block means' deviations, pooled over bins, of those blocks.
     pub lag1_correlation: f64,
     /// `(q, range)`: the `q` quantile of the bootstrap ranges, for every `q` of [`NULL_LEVELS`].
-    pub quantiles: Vec<(f64, f64)>,
+    pub(crate) quantiles: Vec<(f64, f64)>,
 }
 
 impl NullRanges {
@@ -189,7 +193,7 @@ impl NullRanges {
 }
 
 /// Block means and weights merged pairwise (weighted) until at most `max_blocks` remain.
-pub fn merge_to(
+pub(crate) fn merge_to(
     mut means: Vec<Vec<f64>>,
     mut weights: Vec<f64>,
     max_blocks: usize,
@@ -225,7 +229,7 @@ fn merge_pairs(means: &[Vec<f64>], weights: &[f64]) -> (Vec<Vec<f64>>, Vec<f64>)
 /// lag-one autocorrelation of the deviations from the weighted mean, pooled over bins, exceeds
 /// `max(0.1, 2 / sqrt(K))` and more than [`MIN_BOOTSTRAP_BLOCKS`] remain; returns the blocks and
 /// the final correlation.
-pub fn decorrelated_blocks(
+pub(crate) fn decorrelated_blocks(
     mut means: Vec<Vec<f64>>,
     mut weights: Vec<f64>,
 ) -> (Vec<Vec<f64>>, Vec<f64>, f64) {
@@ -280,7 +284,7 @@ fn lag1_correlation(means: &[Vec<f64>], weights: &[f64]) -> f64 {
 /// The bootstrap null distribution of the profile's range (module doc) from block means
 /// `means[k][b]` with weights (samples per block); `None` with fewer than
 /// [`MIN_BOOTSTRAP_BLOCKS`] blocks. Deterministic: the generator is seeded by a constant.
-pub fn null_ranges(means: Vec<Vec<f64>>, weights: Vec<f64>) -> Option<NullRanges> {
+pub(crate) fn null_ranges(means: Vec<Vec<f64>>, weights: Vec<f64>) -> Option<NullRanges> {
     use rand::{Rng, SeedableRng};
     let (means, weights, r1) = decorrelated_blocks(means, weights);
     let k = means.len();

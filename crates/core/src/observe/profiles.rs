@@ -40,7 +40,7 @@ pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
 }
 
 /// Volume (area in 2D) of a particle of radius `r`.
-pub fn particle_volume(dimension: usize, r: f64) -> f64 {
+pub(crate) fn particle_volume(dimension: usize, r: f64) -> f64 {
     if dimension == 2 {
         PI * r * r
     } else {
@@ -72,7 +72,7 @@ pub fn spread(profile: &[f64]) -> f64 {
 /// The number of bridges per particle at every sample (the profiles themselves are
 /// accumulated by [`super::lateral::LateralObserver`]).
 #[derive(Debug, Clone, Default)]
-pub struct ProfileObserver {
+pub(crate) struct ProfileObserver {
     /// `(t, bridges per particle)` at every sample.
     pub series: Vec<(f64, f64)>,
 }

@@ -25,10 +25,10 @@ use serde::{Deserialize, Serialize};
 pub struct Cycle {
     pub start: f64,
     pub end: f64,
-    pub e_par_min: f64,
-    pub e_par_max: f64,
-    pub e_perp_min: f64,
-    pub e_perp_max: f64,
+    pub(crate) e_par_min: f64,
+    pub(crate) e_par_max: f64,
+    pub(crate) e_perp_min: f64,
+    pub(crate) e_perp_max: f64,
 }
 
 /// The shear observables of one run.
@@ -58,7 +58,7 @@ pub fn shear_energies(frame: &Frame) -> (f64, f64) {
 
 /// Collects `E_par` and `E_perp` at every sample.
 #[derive(Debug, Clone)]
-pub struct ShearObserver {
+pub(crate) struct ShearObserver {
     unit: f64,
     /// `(t, E_par / unit, E_perp / unit, in_window)`.
     samples: Vec<(f64, f64, f64, bool)>,
@@ -66,7 +66,7 @@ pub struct ShearObserver {
 
 impl ShearObserver {
     /// Observer reporting energies in units of `unit`.
-    pub fn new(unit: f64) -> Self {
+    pub(crate) fn new(unit: f64) -> Self {
         Self {
             unit,
             samples: Vec::new(),
@@ -74,12 +74,12 @@ impl ShearObserver {
     }
 
     /// `(t, E_par / unit)` at every sample (for the stationarity check).
-    pub fn e_par_series(&self) -> Vec<(f64, f64)> {
+    pub(crate) fn e_par_series(&self) -> Vec<(f64, f64)> {
         self.samples.iter().map(|s| (s.0, s.1)).collect()
     }
 
     /// Window means, cycles and (if `keep_series`) the series.
-    pub fn finish(&self, keep_series: bool) -> ShearObservables {
+    pub(crate) fn finish(&self, keep_series: bool) -> ShearObservables {
         let window: Vec<&(f64, f64, f64, bool)> = self.samples.iter().filter(|s| s.3).collect();
         let n = window.len().max(1) as f64;
         let e_par = window.iter().map(|s| s.1).sum::<f64>() / n;

@@ -27,7 +27,7 @@ pub struct Stationarity {
 
 /// Compares the means of `(t, value)` samples with `t0 <= t < mid` and `mid <= t <= t1`,
 /// `mid = (t0 + t1) / 2`. A half without samples gives NaN and a failed check.
-pub fn check(
+pub(crate) fn check(
     quantity: &str,
     series: &[(f64, f64)],
     window: (f64, f64),
@@ -62,7 +62,7 @@ pub fn check(
 }
 
 /// Collects checks into a verdict.
-pub fn verdict(tolerance: f64, checks: Vec<StationarityCheck>) -> Stationarity {
+pub(crate) fn verdict(tolerance: f64, checks: Vec<StationarityCheck>) -> Stationarity {
     let stationary = !checks.is_empty() && checks.iter().all(|c| c.ok);
     Stationarity {
         tolerance,

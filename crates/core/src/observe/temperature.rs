@@ -43,7 +43,7 @@ pub fn temperature_profile(frame: &Frame, bins: &LateralBins) -> (Vec<Option<f64
 /// Time series and window mean of the global temperature (the per-bin temperatures are
 /// accumulated by [`super::lateral::LateralObserver`]).
 #[derive(Debug, Clone)]
-pub struct TemperatureObserver {
+pub(crate) struct TemperatureObserver {
     /// `E_cb`, or `m g d` for dry scenes.
     unit: f64,
     /// `(t, T_g / unit)` at every sample.
@@ -53,7 +53,7 @@ pub struct TemperatureObserver {
 }
 
 impl TemperatureObserver {
-    pub fn new(unit: f64) -> Self {
+    pub(crate) fn new(unit: f64) -> Self {
         Self {
             unit,
             series: Vec::new(),
@@ -63,7 +63,7 @@ impl TemperatureObserver {
     }
 
     /// Window mean of `T_g / unit` (NaN without samples).
-    pub fn mean_reduced(&self) -> f64 {
+    pub(crate) fn mean_reduced(&self) -> f64 {
         self.window_sum / self.window_samples as f64
     }
 }

@@ -34,7 +34,7 @@ use std::fmt;
 
 /// Batch means the MSER search works on (at most): long series are averaged into this many
 /// batches first, which keeps the search linear and smooths sample-to-sample noise.
-pub const MSER_BATCHES: usize = 200;
+pub(crate) const MSER_BATCHES: usize = 200;
 
 /// What the monitored series did over the run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -80,7 +80,7 @@ impl TrendState {
 
     /// Whether a run in this state with label `phase` keeps that label however long it runs:
     /// stationary runs, heating gases, cooling solids and coarsening coexistences.
-    pub fn keeps_label(self, phase: Phase) -> bool {
+    pub(crate) fn keeps_label(self, phase: Phase) -> bool {
         match self {
             TrendState::Stationary => true,
             TrendState::Heating => phase == Phase::G,
@@ -132,7 +132,7 @@ pub fn trust(trend: Option<TrendState>, converged: Option<bool>, phase: Option<P
 pub struct Trend {
     pub state: TrendState,
     /// The end of the transient found by MSER (the latest over the quantities).
-    pub relaxed_at: f64,
+    pub(crate) relaxed_at: f64,
     /// Whether the history had relaxed (every quantity's truncation in the first half).
     pub relaxed: bool,
     /// The history the tests cover, `[from, to]`.
@@ -145,7 +145,7 @@ pub struct Trend {
 
 /// The parameters of the tests (the scene's `[convergence]` section, or its defaults).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrendTest {
+pub(crate) struct TrendTest {
     pub blocks: usize,
     pub sigmas: f64,
     pub rel_tolerance: f64,
@@ -153,7 +153,7 @@ pub struct TrendTest {
 
 /// One monitored quantity's history: its name, its floor for the tolerance, its values.
 #[derive(Debug, Clone, Copy)]
-pub struct Monitored<'a> {
+pub(crate) struct Monitored<'a> {
     pub name: &'a str,
     pub floor: f64,
     pub values: &'a [f64],
@@ -166,7 +166,7 @@ pub struct Monitored<'a> {
 /// the series has not relaxed. (Right at mid-run the statistic of a steady rise is flat to within
 /// its noise, so the minimum wanders a few batches below the end of the range.)
 /// Series too short to batch give `(0, false)`.
-pub fn mser_truncation(x: &[f64]) -> (usize, bool) {
+pub(crate) fn mser_truncation(x: &[f64]) -> (usize, bool) {
     let n = x.len();
     if n < 8 {
         return (0, false);
@@ -202,7 +202,7 @@ pub fn mser_truncation(x: &[f64]) -> (usize, bool) {
 /// Assesses a run's history: `time` the sample times, `quantities` the monitored series on
 /// those times, `window_start` the start of the reported window (the tests cover it whole). Samples before `t_floor` (the shortest transient the
 /// scene allows) are not looked at.
-pub fn assess(
+pub(crate) fn assess(
     time: &[f64],
     quantities: &[Monitored<'_>],
     t_floor: f64,

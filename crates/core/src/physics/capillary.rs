@@ -16,7 +16,7 @@ pub enum RuptureRule {
 
 /// What happens when a bonded pair separates to `s = s_crit`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum WellOutcome {
+pub(crate) enum WellOutcome {
     /// The bridge holds: the normal relative velocity is reversed (elastic reflection off the
     /// well wall). Carries the new normal relative speed (`-u`).
     Bounce(f64),
@@ -32,7 +32,7 @@ pub enum WellOutcome {
 /// Thesis-appendix rule: the criterion is `m u^2 / 2 > E_cb` and `u' = sqrt(u^2 - 2 E_cb / m)`,
 /// which removes `E_cb / 2` of the system's energy.
 #[inline]
-pub fn well_outcome(mass: f64, u: f64, e_cb: f64, rule: RuptureRule) -> WellOutcome {
+pub(crate) fn well_outcome(mass: f64, u: f64, e_cb: f64, rule: RuptureRule) -> WellOutcome {
     let (inertia, removed_fraction) = match rule {
         RuptureRule::ReducedMass => (0.5 * mass, 1.0),
         RuptureRule::ThesisAppendix => (mass, 0.5),

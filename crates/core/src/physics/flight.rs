@@ -5,7 +5,7 @@
 /// towards it (`+inf` otherwise). Never negative: a particle slightly past the plane (round-off)
 /// reaches it "now".
 #[inline]
-pub fn linear_time_to_plane(x0: f64, v: f64, plane: f64, upward: bool) -> f64 {
+pub(crate) fn linear_time_to_plane(x0: f64, v: f64, plane: f64, upward: bool) -> f64 {
     if upward {
         if v > 0.0 {
             ((plane - x0) / v).max(0.0)
@@ -34,7 +34,7 @@ pub fn linear_time_to_plane(x0: f64, v: f64, plane: f64, upward: bool) -> f64 {
 /// choice (hiding the flags from it gained under 2 % here: docs/performance.md,
 /// "Compiler-steering devices").
 #[inline(always)]
-pub fn linear_time_to_faces(
+pub(crate) fn linear_time_to_faces(
     x0: f64,
     v: f64,
     lo: f64,
@@ -57,7 +57,7 @@ pub fn linear_time_to_faces(
 /// while rising (the first root), `+inf` if it turns before. Cancellation-free form
 /// `t = 2 dz / (v + sqrt(v^2 - 2 g dz))`, `dz = plane - z0`.
 #[inline]
-pub fn parabola_time_up(z0: f64, v: f64, g: f64, plane: f64) -> f64 {
+pub(crate) fn parabola_time_up(z0: f64, v: f64, g: f64, plane: f64) -> f64 {
     if v <= 0.0 {
         return f64::INFINITY;
     }
@@ -77,7 +77,7 @@ pub fn parabola_time_up(z0: f64, v: f64, g: f64, plane: f64) -> f64 {
 /// If round-off put the particle slightly below the plane, the discriminant is clamped at zero,
 /// and a particle already below it and falling reaches it "now".
 #[inline]
-pub fn parabola_time_down(z0: f64, v: f64, g: f64, plane: f64) -> f64 {
+pub(crate) fn parabola_time_down(z0: f64, v: f64, g: f64, plane: f64) -> f64 {
     let dz = z0 - plane;
     if dz <= 0.0 && v <= 0.0 {
         return 0.0;
@@ -98,7 +98,7 @@ pub fn parabola_time_down(z0: f64, v: f64, g: f64, plane: f64) -> f64 {
 /// `g = a`, where reaching a plane upwards is falling onto its mirror. `a = 0` is the straight
 /// line. Never negative.
 #[inline]
-pub fn accelerated_time_to_plane(x0: f64, v: f64, a: f64, plane: f64, upward: bool) -> f64 {
+pub(crate) fn accelerated_time_to_plane(x0: f64, v: f64, a: f64, plane: f64, upward: bool) -> f64 {
     if a < 0.0 {
         if upward {
             parabola_time_up(x0, v, -a, plane)

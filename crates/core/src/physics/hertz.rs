@@ -17,7 +17,7 @@
 /// Effective radius of two spheres (corrected form of the text's Eq. 2.7):
 /// `R_eff = R_i R_j / (R_i + R_j)`.
 #[inline]
-pub fn effective_radius(r_i: f64, r_j: f64) -> f64 {
+pub(crate) fn effective_radius(r_i: f64, r_j: f64) -> f64 {
     r_i * r_j / (r_i + r_j)
 }
 
@@ -32,7 +32,7 @@ pub fn force(kr: f64, xi: f64, xi_dot: f64, a_d: f64) -> f64 {
 /// Elastic energy stored in a Hertz contact, `(2/5) k sqrt(R_eff) xi^(5/2)`
 /// (the integral of the elastic part of Eq. 2.7).
 #[inline]
-pub fn elastic_energy(kr: f64, xi: f64) -> f64 {
+pub(crate) fn elastic_energy(kr: f64, xi: f64) -> f64 {
     0.4 * kr * xi * xi * xi.sqrt()
 }
 
@@ -182,7 +182,7 @@ fn bisect_damping(too_small: impl Fn(f64) -> bool, halvings: usize) -> f64 {
 
 /// Restitution of a head-on collision at approach speed `v`, integrated by [`direct_collision`]
 /// with `steps` RK4 steps per elastic contact time (1000 resolve it to about 1e-6).
-pub fn restitution_at(kr: f64, a_d: f64, mu: f64, v: f64, steps: f64) -> f64 {
+pub(crate) fn restitution_at(kr: f64, a_d: f64, mu: f64, v: f64, steps: f64) -> f64 {
     direct_collision(kr, a_d, mu, v, contact_time(kr, mu, v) / steps).restitution
 }
 
@@ -213,7 +213,7 @@ const LOSS_STEPS: f64 = 1000.0;
 /// constant restitution `eps`. Evaluated with Simpson's rule in `u = sqrt(x)` (weight
 /// `2 u^3 exp(-u^2)`, smooth where `1 - e^2 ~ v^(1/5)` is not), `e(v)` by [`restitution_at`].
 /// The particle-wall version is the same with `mu = m` (an infinitely heavy wall).
-pub fn maxwellian_loss(kr: f64, a_d: f64, mu: f64, t: f64) -> f64 {
+pub(crate) fn maxwellian_loss(kr: f64, a_d: f64, mu: f64, t: f64) -> f64 {
     let h = LOSS_U_MAX / LOSS_INTERVALS as f64;
     let mut sum = 0.0;
     // u = 0 has zero weight.
@@ -241,7 +241,7 @@ pub fn maxwellian_loss(kr: f64, a_d: f64, mu: f64, t: f64) -> f64 {
 /// `beta(x) = B x^(1/10)`, `B = A_d (kr / mu)^(2/5) (2 t / mu)^(1/10)`, so the loss is a function
 /// of `B` alone: `A_d = B_eps (mu / kr)^(2/5) (mu / (2 t))^(1/10)`, `B_eps` by bisection at
 /// `kr = mu = 1`, `t = 1/2` (the loss grows monotonically with `A_d`), remembered per `eps`.
-pub fn damping_for_maxwellian_restitution(kr: f64, mu: f64, t: f64, eps: f64) -> f64 {
+pub(crate) fn damping_for_maxwellian_restitution(kr: f64, mu: f64, t: f64, eps: f64) -> f64 {
     unit_damping(UnitCalibration::Maxwellian, eps)
         * (mu / kr).powf(0.4)
         * (mu / (2.0 * t)).powf(0.1)
@@ -250,7 +250,7 @@ pub fn damping_for_maxwellian_restitution(kr: f64, mu: f64, t: f64, eps: f64) ->
 /// Minimal capillary model (docs/model.md 3.1): the constant attraction `F_B = E_cb / s_crit` that
 /// acts along the line of centres while a bridge exists (`s <= s_crit`, also during overlap).
 #[inline]
-pub fn bridge_force(e_cb: f64, s_crit: f64) -> f64 {
+pub(crate) fn bridge_force(e_cb: f64, s_crit: f64) -> f64 {
     e_cb / s_crit
 }
 

@@ -95,11 +95,6 @@ impl Poly {
         Poly { c, n }
     }
 
-    /// Degree (0 for a constant).
-    pub fn degree(&self) -> usize {
-        self.n
-    }
-
     /// Coefficients, lowest order first.
     pub fn coefficients(&self) -> [f64; 5] {
         self.c
@@ -107,7 +102,7 @@ impl Poly {
 
     /// `p(t)` by Horner's rule.
     #[inline]
-    pub fn eval(&self, t: f64) -> f64 {
+    pub(crate) fn eval(&self, t: f64) -> f64 {
         let mut s = self.c[self.n];
         for k in (0..self.n).rev() {
             s = s * t + self.c[k];
@@ -153,7 +148,7 @@ impl Poly {
 
     /// Cauchy's bound: every real root has `|t| <= 1 + max_k |c_k / c_n|` (infinite for a
     /// constant).
-    pub fn root_bound(&self) -> f64 {
+    pub(crate) fn root_bound(&self) -> f64 {
         if self.n == 0 {
             return f64::INFINITY;
         }
@@ -167,7 +162,7 @@ impl Poly {
     /// Sorted real roots in `[a, b]` where the sign changes (simple and odd-order roots), found
     /// by isolation through the derivative's roots. Even-order roots (no sign change) are not
     /// listed; [`earliest_entry`] handles them at the critical points.
-    pub fn sign_changes_in(&self, a: f64, b: f64) -> Points {
+    pub(crate) fn sign_changes_in(&self, a: f64, b: f64) -> Points {
         let mut out = Points::new();
         if a.partial_cmp(&b)
             .is_none_or(|o| o == std::cmp::Ordering::Greater)

@@ -43,7 +43,7 @@ impl WallMotion {
 
     /// Bound on the second derivative of the gap: `|g| + A omega^2`.
     #[inline]
-    pub fn curvature_bound(&self) -> f64 {
+    pub(crate) fn curvature_bound(&self) -> f64 {
         self.g.abs() + self.amplitude * self.omega * self.omega
     }
 

@@ -3,17 +3,17 @@
 use rand::Rng;
 
 /// Largest polydispersity a uniform distribution of positive diameters allows, `1/sqrt(3)`.
-pub const MAX_POLYDISPERSITY: f64 = 0.577_350_269_189_625_8;
+pub(crate) const MAX_POLYDISPERSITY: f64 = 0.577_350_269_189_625_8;
 
 /// Smallest and largest diameter for mean `d` and polydispersity `sigma_p`:
 /// `d_min/max = d (1 -+ sqrt(3) sigma_p)` (Eq. 2.22).
-pub fn diameter_range(d_mean: f64, sigma_p: f64) -> (f64, f64) {
+pub(crate) fn diameter_range(d_mean: f64, sigma_p: f64) -> (f64, f64) {
     let half_width = 3f64.sqrt() * sigma_p;
     (d_mean * (1.0 - half_width), d_mean * (1.0 + half_width))
 }
 
 /// Draws `n` diameters uniform on `[d_min, d_max]` (Eq. 2.21).
-pub fn draw_diameters<R: Rng>(rng: &mut R, n: usize, d_mean: f64, sigma_p: f64) -> Vec<f64> {
+pub(crate) fn draw_diameters<R: Rng>(rng: &mut R, n: usize, d_mean: f64, sigma_p: f64) -> Vec<f64> {
     let (lo, hi) = diameter_range(d_mean, sigma_p);
     (0..n)
         .map(|_| {

@@ -19,7 +19,7 @@ use super::{Scene, SceneError};
 use serde::{Deserialize, Serialize};
 
 /// Default cap, in units of the first check time.
-pub const DEFAULT_CAP_FACTOR: f64 = 4.0;
+pub(crate) const DEFAULT_CAP_FACTOR: f64 = 4.0;
 
 /// Scene section `[convergence]` (every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

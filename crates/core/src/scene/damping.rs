@@ -72,7 +72,7 @@ pub fn calibration(scene: &Scene) -> Calibration {
 /// A scene without a hot-start temperature (cold start, or none given) takes the scale of its
 /// drive: `m (A omega)^2` for shaking (docs/model.md 4.1), `F_max d` for shear (docs/model.md 4.2), else
 /// `m g d` (`g = 1` without gravity). These fallbacks are not measured.
-pub fn characteristic_temperature(scene: &Scene) -> f64 {
+pub(crate) fn characteristic_temperature(scene: &Scene) -> f64 {
     let t0 = scene.initial_temperature();
     // A member of a continuation chain (`"continue"`) is calibrated as its point would be with a
     // hot start, as the chain's first job usually is: the contact law must be the same for every

@@ -26,7 +26,7 @@ pub fn capacity(size: &[f64], spacing: f64) -> usize {
 }
 
 /// The largest spacing `>= min_spacing` whose lattice still holds `count` sites (bisection).
-pub fn uniform_spacing(size: &[f64], min_spacing: f64, count: usize) -> f64 {
+pub(crate) fn uniform_spacing(size: &[f64], min_spacing: f64, count: usize) -> f64 {
     let (mut lo, mut hi) = (
         min_spacing,
         size.iter().cloned().fold(min_spacing, f64::max),
@@ -47,7 +47,12 @@ pub fn uniform_spacing(size: &[f64], min_spacing: f64, count: usize) -> f64 {
 
 /// Coordinates of the first `count` sites, filled lateral axes first, then layer by layer
 /// upwards from the floor (`from_floor`), or spread evenly along every axis.
-pub fn site_positions(size: &[f64], spacing: f64, count: usize, from_floor: bool) -> Vec<Vec<f64>> {
+pub(crate) fn site_positions(
+    size: &[f64],
+    spacing: f64,
+    count: usize,
+    from_floor: bool,
+) -> Vec<Vec<f64>> {
     let n = sites_per_axis(size, spacing);
     let dim = size.len();
     let mut out = Vec::with_capacity(count);

@@ -3,17 +3,17 @@
 //! A scene names the dimension, the box and its boundaries, the particles, the contact and
 //! capillary laws, gravity, the drive, the initial state, the run length and the engine's accuracy
 //! knobs. [`Scene::from_toml_str`] parses and validates; every rejected value produces a
-//! [`SceneError`] that names the file, the key and the allowed range (see `validate.rs`).
+//! [`SceneError`] that names the file, the key and the allowed range (see `validate/`).
 //!
 //! Conventions (docs/model.md section 1): units of mean diameter `d`, particle mass `m`, gravity `g`.
 //! The last axis is vertical (`z`; in 2D the axes are `x, z`); gravity points along `-z`.
 
-pub mod convergence;
+pub(crate) mod convergence;
 pub mod damping;
 pub mod lattice;
-pub mod observe_section;
+pub(crate) mod observe_section;
 pub mod reference;
-pub mod thresholds;
+pub(crate) mod thresholds;
 mod validate;
 
 pub use validate::parse_error_key;
@@ -24,7 +24,8 @@ use std::path::Path;
 pub use convergence::ConvergenceSpec;
 pub use observe_section::ObserveSpec;
 pub use thresholds::Thresholds;
-pub use validate::{Constraint, MIN_PERIODIC_CELLS, SceneError};
+pub(crate) use validate::MIN_PERIODIC_CELLS;
+pub use validate::{Constraint, SceneError};
 
 /// One simulation, as read from a scene file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -196,21 +197,21 @@ pub const DEFAULT_DT: f64 = 1e-4;
 /// Default Verlet-list skin of the time-driven engine, in units of `d`.
 pub const DEFAULT_SKIN: f64 = 0.1;
 /// Largest time step of the time-driven engine, whatever the stiffness.
-pub const MAX_DT: f64 = 1e-2;
+pub(crate) const MAX_DT: f64 = 1e-2;
 /// Impact speed, in units of `sqrt(g d)` (absolute without gravity), whose Hertz contact the
 /// time step must resolve ([`Scene::largest_time_step`]).
-pub const DT_REFERENCE_SPEED: f64 = 10.0;
+pub(crate) const DT_REFERENCE_SPEED: f64 = 10.0;
 /// Time steps per Hertz contact at [`DT_REFERENCE_SPEED`] at the least
 /// ([`Scene::largest_time_step`]).
-pub const STEPS_PER_CONTACT: f64 = 8.0;
+pub(crate) const STEPS_PER_CONTACT: f64 = 8.0;
 /// Weight of the damping rate against the contact frequency in the time-step bound of the Gear
 /// integrator ([`Scene::largest_time_step`]); its velocity-dependent force makes the predictor-
 /// corrector far less stable under damping than Verlet (docs/reliability.md, "Time step and
 /// damping").
-pub const GEAR_DAMPING_WEIGHT: f64 = 2.0;
+pub(crate) const GEAR_DAMPING_WEIGHT: f64 = 2.0;
 /// Weight of the damping rate in the time-step bound of velocity Verlet
 /// ([`Scene::largest_time_step`]).
-pub const VERLET_DAMPING_WEIGHT: f64 = 0.5;
+pub(crate) const VERLET_DAMPING_WEIGHT: f64 = 0.5;
 
 /// Capillary bridges (docs/model.md 3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -364,7 +365,7 @@ pub enum WallSolverKind {
 /// Default gap tolerance of the wall-root solver.
 pub const DEFAULT_ROOT_TOLERANCE: f64 = 1e-10;
 /// Steps per driving period of the `bracket` wall solver by default (`drive.t_min = T / 1000`).
-pub const BRACKET_STEPS_PER_PERIOD: f64 = 1000.0;
+pub(crate) const BRACKET_STEPS_PER_PERIOD: f64 = 1000.0;
 
 /// Initial state: a regular lattice filled from the floor up, Gaussian velocities.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -416,7 +417,7 @@ impl std::fmt::Display for StartMode {
 }
 
 impl StartMode {
-    pub fn is_hot(&self) -> bool {
+    pub(crate) fn is_hot(&self) -> bool {
         *self == StartMode::Hot
     }
 }
@@ -492,10 +493,10 @@ pub struct EngineSpec {
     pub min_rebound_speed: f64,
     /// Largest overlap (in units of `d`) that the sanity check tolerates.
     #[serde(default = "default_overlap_tolerance")]
-    pub overlap_tolerance: f64,
+    pub(crate) overlap_tolerance: f64,
     /// Cell edge of the neighbour grid; 0 chooses the smallest legal one automatically.
     #[serde(default)]
-    pub cell_size: f64,
+    pub(crate) cell_size: f64,
 }
 
 impl Default for EngineSpec {
@@ -533,9 +534,9 @@ fn default_overlap_tolerance() -> f64 {
 }
 
 /// Thin-thread default rupture separation (docs/model.md 1).
-pub const DEFAULT_S_CRIT: f64 = 0.0711;
+pub(crate) const DEFAULT_S_CRIT: f64 = 0.0711;
 /// Default bridge force in units of `m g` (docs/model.md 1): `E_cb = F_B s_crit`.
-pub const DEFAULT_BRIDGE_FORCE_OVER_MG: f64 = 4.0;
+pub(crate) const DEFAULT_BRIDGE_FORCE_OVER_MG: f64 = 4.0;
 
 impl Scene {
     /// Parses and validates a scene; `origin` names the file in error messages.

@@ -81,14 +81,14 @@ pub struct ObserveSpec {
     /// 3D: two grains become neighbours when their centres come closer than this multiple of
     /// `r_i + r_j` (default 1.2), and stop being neighbours beyond `lc_leave_factor` times it.
     #[serde(default = "default_lc_enter_factor")]
-    pub lc_enter_factor: f64,
+    pub(crate) lc_enter_factor: f64,
     /// 3D: leaving factor of the neighbour shell (default 1.5; > `lc_enter_factor`).
     #[serde(default = "default_lc_leave_factor")]
-    pub lc_leave_factor: f64,
+    pub(crate) lc_leave_factor: f64,
     /// Largest relative change between the first and second half of the window that still
     /// counts as stationary (default 0.2).
     #[serde(default = "default_stationarity_tolerance")]
-    pub stationarity_tolerance: f64,
+    pub(crate) stationarity_tolerance: f64,
     /// Lag of the mobility measure, in time units `sqrt(d/g)` (default 10): the lateral
     /// mean-square displacement over this lag gives `D_lat` (`observe::lateral`).
     #[serde(default = "default_mobility_lag")]
@@ -193,7 +193,7 @@ impl ObserveSpec {
     /// Whether the location-change counter runs: as set, else only where `classify` decides
     /// mobility by `f_lc`. The counter triangulates every sample (2D) and can cost as much as
     /// the engine, so nothing pays for it unless asked (docs/observables.md).
-    pub fn counts_location_changes(&self, classify: &Thresholds) -> bool {
+    pub(crate) fn counts_location_changes(&self, classify: &Thresholds) -> bool {
         self.location_changes
             .unwrap_or(classify.mobility == Mobility::LocationChanges)
     }

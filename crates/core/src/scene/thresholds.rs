@@ -96,7 +96,7 @@ fn default_solid_diffusion() -> f64 {
     SOLID_DIFFUSION
 }
 /// Default of `solid_diffusion` (docs/observables.md gives the calibration).
-pub const SOLID_DIFFUSION: f64 = 1e-3;
+pub(crate) const SOLID_DIFFUSION: f64 = 1e-3;
 fn default_diffusive_exponent() -> f64 {
     0.5
 }

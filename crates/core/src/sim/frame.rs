@@ -78,7 +78,7 @@ impl Frame {
 
     /// Copies the current state of a time-driven engine (its event counts are contact onsets,
     /// bridge formations and ruptures; see `time_driven::engine`).
-    pub fn of_time_engine<const D: usize, const G: bool, const W: bool, B>(
+    pub(crate) fn of_time_engine<const D: usize, const G: bool, const W: bool, B>(
         engine: &TimeEngine<D, G, W, B>,
         scene: &Scene,
     ) -> Frame

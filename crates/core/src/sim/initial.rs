@@ -12,7 +12,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 /// Particle radii, positions and velocities, flattened per particle (`dim` numbers each).
 #[derive(Debug, Clone, PartialEq)]
-pub struct InitialState {
+pub(crate) struct InitialState {
     pub radius: Vec<f64>,
     pub position: Vec<Vec<f64>>,
     pub velocity: Vec<Vec<f64>>,
@@ -22,14 +22,14 @@ pub struct InitialState {
 /// particle in `position` and `velocity`): what the event engine builds from, without a heap
 /// allocation per particle (`wetgran-bench memory`).
 #[derive(Debug, Clone, PartialEq)]
-pub struct FlatInitialState {
+pub(crate) struct FlatInitialState {
     pub radius: Vec<f64>,
     pub position: Vec<f64>,
     pub velocity: Vec<f64>,
 }
 
 /// Builds the initial state of a validated scene, flattened.
-pub fn initial_state_flat(scene: &Scene) -> FlatInitialState {
+pub(crate) fn initial_state_flat(scene: &Scene) -> FlatInitialState {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.initial.seed);
     let p = &scene.particles;
     let dim = scene.dimension;
@@ -86,7 +86,7 @@ pub fn initial_state_flat(scene: &Scene) -> FlatInitialState {
 
 /// Builds the initial state of a validated scene (the numbers of [`initial_state_flat`], one
 /// vector per particle).
-pub fn initial_state(scene: &Scene) -> InitialState {
+pub(crate) fn initial_state(scene: &Scene) -> InitialState {
     let dim = scene.dimension;
     let flat = initial_state_flat(scene);
     InitialState {

@@ -14,9 +14,9 @@
 
 pub mod books;
 pub mod event_driven;
-pub mod frame;
+pub(crate) mod frame;
 pub mod initial;
-pub mod state;
+pub(crate) mod state;
 pub mod threads;
 pub mod time_driven;
 
@@ -84,7 +84,10 @@ pub fn run_scene(scene: &Scene) -> RunReport {
 }
 
 /// Runs a validated scene, calling `progress` after every sample (for progress displays).
-pub fn run_scene_with_progress(scene: &Scene, progress: &mut dyn FnMut(&Sample)) -> RunReport {
+pub(crate) fn run_scene_with_progress(
+    scene: &Scene,
+    progress: &mut dyn FnMut(&Sample),
+) -> RunReport {
     run_dispatch(scene, None, progress, None)
 }
 

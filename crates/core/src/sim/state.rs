@@ -33,7 +33,7 @@ pub struct EngineState {
 
 impl EngineState {
     /// The state of a frame plus the engine's ledger at the frame's time.
-    pub fn of_frame(engine: &str, frame: Frame, ledger: EnergyLedger) -> EngineState {
+    pub(crate) fn of_frame(engine: &str, frame: Frame, ledger: EnergyLedger) -> EngineState {
         EngineState {
             engine: engine.to_string(),
             dimension: frame.dimension,
@@ -88,7 +88,7 @@ impl EngineState {
     }
 
     /// Whether the snapshot fits a scene: dimension and particle count.
-    pub fn check_fits(&self, scene: &crate::scene::Scene) -> Result<(), String> {
+    pub(crate) fn check_fits(&self, scene: &crate::scene::Scene) -> Result<(), String> {
         if self.dimension != scene.dimension || self.len() != scene.particles.count {
             return Err(format!(
                 "the saved state ({}D, {} particles) does not fit the scene ({}D, {} particles)",

@@ -64,7 +64,7 @@ impl CoreShare {
     /// Threads for one running job: `cores / workers` while jobs wait in the queue, else
     /// `cores / busy` (rounded down, so the running jobs never hold more than the cores); at
     /// least 1.
-    pub fn threads_per_job(&self) -> usize {
+    pub(crate) fn threads_per_job(&self) -> usize {
         let sharers = if self.drained.load(Ordering::Relaxed) {
             self.busy.load(Ordering::Relaxed).clamp(1, self.workers)
         } else {

@@ -2,18 +2,18 @@
 //! engine's invariants (`sanity_check`) as it goes.
 #![allow(dead_code)]
 
-pub mod standard;
+pub(crate) mod standard;
 
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::event_driven::Engine;
 
 /// Parses and validates a scene written inline in a test.
-pub fn scene(text: &str) -> Scene {
+pub(crate) fn scene(text: &str) -> Scene {
     Scene::from_toml_str(text, "<test scene>").unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// A scene with the given header lines; `[run]` and `[initial]` are added if missing.
-pub fn scene_with(
+pub(crate) fn scene_with(
     dimension: usize,
     gravity: f64,
     size: &[f64],
@@ -45,7 +45,7 @@ pub fn scene_with(
 }
 
 /// Runs the engine in `chunks` steps up to `t_end`, checking invariants after each chunk.
-pub fn run_checked<const D: usize, const G: bool, const W: bool, const S: bool>(
+pub(crate) fn run_checked<const D: usize, const G: bool, const W: bool, const S: bool>(
     e: &mut Engine<D, G, W, S>,
     t_end: f64,
     chunks: usize,
@@ -65,7 +65,7 @@ pub fn run_checked<const D: usize, const G: bool, const W: bool, const S: bool>(
 
 /// Runs until at least `events` more events have been processed, checking invariants every
 /// `every` events.
-pub fn run_events<const D: usize, const G: bool, const W: bool, const S: bool>(
+pub(crate) fn run_events<const D: usize, const G: bool, const W: bool, const S: bool>(
     e: &mut Engine<D, G, W, S>,
     events: u64,
     every: u64,

@@ -35,31 +35,31 @@ pub struct Bodies<const D: usize, const GRAV: bool, const SHEAR: bool> {
     /// Velocity changes of each particle (lazy invalidation of pair events).
     pub count: Vec<u32>,
     /// Time of each particle's last collision (TC model; empty when `tc = 0`).
-    pub last_collision: Vec<f64>,
+    pub(crate) last_collision: Vec<f64>,
     /// Shear drive: acceleration along `y` in the particle's slab (empty otherwise).
-    pub accel: Vec<f64>,
+    pub(crate) accel: Vec<f64>,
     /// Original index (scene order) of the particle stored at each internal index.
     pub id: Vec<u32>,
     /// Internal index of each original particle.
-    pub slot_of: Vec<u32>,
+    pub(crate) slot_of: Vec<u32>,
     pub size: [f64; D],
     pub periodic: [bool; D],
     pub gravity: f64,
     pub mass: f64,
     /// Work of the shear field on the flights already brought up to date
     /// (`sum m a_k dy`, docs/model.md 4.2); 0 without shear.
-    pub field_work: f64,
+    pub(crate) field_work: f64,
 }
 
 /// Bytes a vector holds on the heap (its capacity, not its length).
-pub fn vec_bytes<T>(v: &Vec<T>) -> usize {
+pub(crate) fn vec_bytes<T>(v: &Vec<T>) -> usize {
     v.capacity() * std::mem::size_of::<T>()
 }
 
 /// Reorders `v` in place so that entry `k` becomes the old `v[order[k]]`, cycle by cycle of the
 /// permutation (one byte of marks per entry instead of a second copy of `v`: the renumbering
 /// adds no array of the engine's size to its peak memory). An empty `v` stays empty.
-pub fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
+pub(crate) fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
     if v.is_empty() {
         return;
     }
@@ -100,7 +100,7 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
     /// `j = i` for one particle); `+inf` when the engine keeps no collision times (`tc = 0`, where
     /// `rebound_speed` never looks at it: `since < 0` cannot hold).
     #[inline]
-    pub fn since_last_collision(&self, i: usize, j: usize, t: f64) -> f64 {
+    pub(crate) fn since_last_collision(&self, i: usize, j: usize, t: f64) -> f64 {
         if self.last_collision.is_empty() {
             f64::INFINITY
         } else {
@@ -110,7 +110,7 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
 
     /// Records a collision of `i` at time `t` (TC model; nothing without it).
     #[inline]
-    pub fn record_collision(&mut self, i: usize, t: f64) {
+    pub(crate) fn record_collision(&mut self, i: usize, t: f64) {
         if let Some(last) = self.last_collision.get_mut(i) {
             *last = t;
         }
@@ -124,7 +124,7 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
 
     /// Position and velocity of particle `i` at time `t` (without storing them).
     #[inline]
-    pub fn state_at(&self, i: usize, t: f64) -> (Vector<D>, Vector<D>) {
+    pub(crate) fn state_at(&self, i: usize, t: f64) -> (Vector<D>, Vector<D>) {
         let dt = t - self.body[i].t;
         let mut x = self.body[i].x + self.body[i].v * dt;
         let mut v = self.body[i].v;
@@ -143,7 +143,7 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
     /// Work of the shear field on particle `i` from its own time to `t` at state `x`:
     /// `m a (y(t) - y(t_i))` (constant force over the flight).
     #[inline]
-    pub fn field_work(&self, i: usize, x: &Vector<D>) -> f64 {
+    pub(crate) fn field_work(&self, i: usize, x: &Vector<D>) -> f64 {
         self.mass * self.accel[i] * (x[FORCE_AXIS] - self.body[i].x[FORCE_AXIS])
     }
 
@@ -182,7 +182,7 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
     /// Times until particle `i` (at the current time) reaches the plane `hi` moving up and the
     /// plane `lo` moving down along axis `k` (`+inf` for a plane at infinity or never reached):
     /// parabolas on the vertical axis under gravity, straight lines otherwise.
-    pub fn times_to_planes(&self, i: usize, k: usize, lo: f64, hi: f64) -> (f64, f64) {
+    pub(crate) fn times_to_planes(&self, i: usize, k: usize, lo: f64, hi: f64) -> (f64, f64) {
         let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
         let never = f64::INFINITY;
         if SHEAR && k == FORCE_AXIS {
@@ -243,7 +243,7 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
     }
 
     /// Renumbers the particles: new index `k` holds old particle `order[k]`.
-    pub fn permute(&mut self, order: &[u32]) {
+    pub(crate) fn permute(&mut self, order: &[u32]) {
         permute_in_place(&mut self.body, order);
         permute_in_place(&mut self.count, order);
         permute_in_place(&mut self.last_collision, order);

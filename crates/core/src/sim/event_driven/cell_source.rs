@@ -17,11 +17,11 @@ use crate::physics::flight::linear_time_to_faces;
 #[derive(Debug, Clone)]
 pub struct Neighbourhood<const D: usize> {
     pub offsets: Vec<[i32; D]>,
-    pub deltas: Vec<isize>,
+    pub(crate) deltas: Vec<isize>,
     /// For a cell next to walls but inside along every periodic axis, indexed by its
     /// [`CellGrid::wall_class`]: the index changes of the offsets that stay inside the walls,
     /// in the order of `offsets`.
-    pub deltas_by_wall_class: Vec<Vec<isize>>,
+    pub(crate) deltas_by_wall_class: Vec<Vec<isize>>,
 }
 
 impl<const D: usize> Neighbourhood<D> {
@@ -148,7 +148,7 @@ impl<const D: usize> CellSource<D> {
     /// wrapping its position across a periodic face. The newly adjacent cells are then
     /// [`Self::far_slab`]`(axis, up)`.
     #[inline]
-    pub fn fire<const G: bool, const S: bool>(
+    pub(crate) fn fire<const G: bool, const S: bool>(
         &mut self,
         i: usize,
         axis: usize,
@@ -179,7 +179,7 @@ impl<const D: usize> CellSource<D> {
     /// Offsets of the far slab of the neighbourhood after a crossing along `axis` (`up`:
     /// towards larger coordinates): `+-1` along `axis`, anything across.
     #[inline]
-    pub fn far_slab(&self, axis: usize, up: bool) -> &Neighbourhood<D> {
+    pub(crate) fn far_slab(&self, axis: usize, up: bool) -> &Neighbourhood<D> {
         &self.far[2 * axis + usize::from(up)]
     }
 
@@ -187,7 +187,7 @@ impl<const D: usize> CellSource<D> {
     /// itself included; cells beyond a closed face skipped). The plain, branchy
     /// walk for the rare callers (placements, invariant checks); the event scans use
     /// [`CellGrid::gather`].
-    pub fn for_each_near(&self, i: usize, mut f: impl FnMut(usize)) {
+    pub(crate) fn for_each_near(&self, i: usize, mut f: impl FnMut(usize)) {
         for o in &self.all.offsets {
             if let Some(cell) = self.grid.shifted(&self.cell[i], o) {
                 self.grid.for_each_in(cell, &mut f);
@@ -197,7 +197,7 @@ impl<const D: usize> CellSource<D> {
 
     /// Moves `i` to the cell of position `x` (a placement or a set-up): out of its list and
     /// into the new one.
-    pub fn relocate(&mut self, i: usize, x: &Vector<D>) {
+    pub(crate) fn relocate(&mut self, i: usize, x: &Vector<D>) {
         let old = self.grid.linear(&self.cell[i]);
         self.grid.remove(i, old);
         let arr: [f64; D] = (*x).into();
@@ -207,7 +207,7 @@ impl<const D: usize> CellSource<D> {
     }
 
     /// Like [`Self::relocate`], but leaves the lists alone when the cell does not change.
-    pub fn relocate_if_moved(&mut self, i: usize, x: &Vector<D>) {
+    pub(crate) fn relocate_if_moved(&mut self, i: usize, x: &Vector<D>) {
         let arr: [f64; D] = (*x).into();
         let c = self.grid.locate(&arr);
         if c != self.cell[i] {
@@ -221,7 +221,7 @@ impl<const D: usize> CellSource<D> {
 
     /// The order that sorts the particles by cell (ties by index): the renumbering that puts
     /// neighbours close together in memory.
-    pub fn cell_order(&self) -> Vec<u32> {
+    pub(crate) fn cell_order(&self) -> Vec<u32> {
         let mut order: Vec<u32> = (0..self.cell.len() as u32).collect();
         // Keys are distinct (the index breaks ties), so the unstable sort (no buffer) gives the
         // stable order.

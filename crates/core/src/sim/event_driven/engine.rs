@@ -32,7 +32,6 @@ use super::cell_source::CellSource;
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, NONE};
 use super::ledger::Ledger;
-pub use super::pairs::MAX_BONDS;
 use super::pairs::{PairParams, PairSource};
 use super::queue::{CalendarQueue, EventQueue};
 use super::shear::{FORCE_AXIS, ShearField};
@@ -89,7 +88,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     /// continued from a state follows the uninterrupted run to round-off: predictions are
     /// recomputed from positions advanced to the common time, which rounds differently
     /// (`crates/core/tests/observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
-    pub fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
+    pub(crate) fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
         let init = FlatInitialState {
             radius: state.radii.clone(),
             position: state.positions.clone(),
@@ -591,11 +590,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             .iter()
             .map(|&k| self.bodies.body[k as usize].r)
             .collect()
-    }
-
-    /// Number of events processed out of time order beyond round-off (must be 0).
-    pub fn time_reversals(&self) -> u64 {
-        self.time_reversals
     }
 
     /// Overwrites the velocity of particle `i` at the current time (tests and set-ups) and

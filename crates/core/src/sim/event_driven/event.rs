@@ -4,7 +4,7 @@
 //! scheduler.
 
 /// Sentinel partner index: no partner.
-pub const NONE: u32 = u32::MAX;
+pub(crate) const NONE: u32 = u32::MAX;
 
 /// What happens at an event, with what the source needs to carry it out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -33,11 +33,6 @@ pub struct Event {
 }
 
 impl Event {
-    pub const NEVER: Event = Event {
-        time: f64::INFINITY,
-        kind: EventKind::Never,
-    };
-
     /// `other` if it is strictly earlier than `self`, else `self`: among equal times the
     /// candidate offered first wins, which fixes the precedence of the sources.
     #[inline]
@@ -51,7 +46,7 @@ impl Event {
 /// the engine (a pair scan reads the cells and the slabs, a wall hit may move a particle to
 /// another cell); the scheduler calls them on the concrete source types, so everything is
 /// monomorphised.
-pub trait EventSource {
+pub(crate) trait EventSource {
     /// The source's stored prediction for particle `i`, as an event (`Event::NEVER`-timed if
     /// none).
     fn candidate(&self, i: usize) -> Event;
@@ -78,11 +73,11 @@ pub struct PairEvent {
     pub time: f64,
     /// Partner index, `WELL_BIT` set for a well event; `NONE` for no partner.
     partner_kind: u32,
-    pub partner_count: u32,
+    pub(crate) partner_count: u32,
 }
 
 impl PairEvent {
-    pub const NEVER: PairEvent = PairEvent {
+    pub(crate) const NEVER: PairEvent = PairEvent {
         time: f64::INFINITY,
         partner_kind: NONE,
         partner_count: 0,
@@ -121,7 +116,7 @@ impl PairEvent {
 
     /// Renames the partner (renumbering: `new_of_old[old] = new`).
     #[inline]
-    pub fn rename_partner(&mut self, new_of_old: &[u32]) {
+    pub(crate) fn rename_partner(&mut self, new_of_old: &[u32]) {
         if self.partner_kind != NONE {
             let well = self.partner_kind & WELL_BIT;
             self.partner_kind = new_of_old[self.partner() as usize] | well;
@@ -157,7 +152,7 @@ pub struct PlaneEvent {
 }
 
 impl PlaneEvent {
-    pub const NEVER: PlaneEvent = PlaneEvent {
+    pub(crate) const NEVER: PlaneEvent = PlaneEvent {
         time: f64::INFINITY,
         axis: 0,
         up: false,
@@ -165,7 +160,7 @@ impl PlaneEvent {
 
     /// Replaces this event by `(time, axis, up)` if that is earlier.
     #[inline]
-    pub fn keep_earlier(&mut self, time: f64, axis: usize, up: bool) {
+    pub(crate) fn keep_earlier(&mut self, time: f64, axis: usize, up: bool) {
         if time < self.time {
             *self = PlaneEvent {
                 time,
@@ -221,6 +216,10 @@ mod tests {
         assert_eq!(b.earlier(a), b);
         let c = Event { time: 0.5, ..b };
         assert_eq!(a.earlier(c), c);
-        assert_eq!(Event::NEVER.earlier(a), a);
+        let never = Event {
+            time: f64::INFINITY,
+            kind: EventKind::Never,
+        };
+        assert_eq!(never.earlier(a), a);
     }
 }

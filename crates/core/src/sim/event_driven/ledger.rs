@@ -23,7 +23,7 @@ impl Ledger {
     /// `inertia/2 (u_out^2 - e^2 u_in^2) >= 0`, is booked apart (`inertia` = `m/2` for pairs,
     /// `m` for walls).
     #[inline]
-    pub fn book_restitution(&mut self, inertia: f64, u_in: f64, e: f64, u_out: f64) {
+    pub(crate) fn book_restitution(&mut self, inertia: f64, u_in: f64, e: f64, u_out: f64) {
         let plain = e * u_in;
         self.dissipated_restitution += 0.5 * inertia * (u_in * u_in - plain * plain);
         self.added += 0.5 * inertia * (u_out * u_out - plain * plain);

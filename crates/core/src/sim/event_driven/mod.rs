@@ -11,19 +11,19 @@
 //! - `table_cache`: the bounded cache of the `table` wall solver's tables;
 //! - `ledger`: the running sums of the energy exchanged at events.
 
-pub mod bodies;
-pub mod cell_source;
+pub(crate) mod bodies;
+pub(crate) mod cell_source;
 pub mod cells;
-pub mod engine;
-pub mod event;
-pub mod ledger;
+pub(crate) mod engine;
+pub(crate) mod event;
+pub(crate) mod ledger;
 pub mod pairs;
 pub mod queue;
 #[cfg(any(test, feature = "testing"))]
 pub mod reference_queues;
-pub mod shear;
-pub mod slabs;
+pub(crate) mod shear;
+pub(crate) mod slabs;
 pub mod table_cache;
-pub mod walls;
+pub(crate) mod walls;
 
 pub use engine::{Engine, Vector};

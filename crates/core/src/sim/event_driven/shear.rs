@@ -14,7 +14,7 @@ use crate::physics::quartic::{Poly, contact_quartic, earliest_entry};
 use crate::scene::ShearSlabs;
 
 /// Axis of the body force (`y`).
-pub const FORCE_AXIS: usize = 1;
+pub(crate) const FORCE_AXIS: usize = 1;
 
 /// The slabs of one scene: width, count and the acceleration in each.
 #[derive(Debug, Clone)]
@@ -41,12 +41,12 @@ impl ShearField {
 
     /// Acceleration along `y` in slab `k`.
     #[inline]
-    pub fn accel(&self, k: usize) -> f64 {
+    pub(crate) fn accel(&self, k: usize) -> f64 {
         self.accel[k]
     }
 
     /// The slab holding `x` (positions on `[0, L_x)`; round-off outside is clamped).
-    pub fn slab_of(&self, x: f64) -> usize {
+    pub(crate) fn slab_of(&self, x: f64) -> usize {
         let k = (x / self.width).floor();
         (k.max(0.0) as usize).min(self.count() - 1)
     }
@@ -80,7 +80,7 @@ impl ShearField {
 /// acceleration `da` along `y` (all `i` minus `j`), within `horizon`: the contact at distance
 /// `sigma` (approaching), and, for a bonded pair, the well edge at `lambda = sigma + s_crit`
 /// (separating). Times are relative to now.
-pub fn pair_times<const D: usize>(
+pub(crate) fn pair_times<const D: usize>(
     r: &[f64; D],
     v: &[f64; D],
     da: f64,

@@ -45,7 +45,7 @@ impl SlabSource {
     }
 
     /// The acceleration of every particle in its slab (empty without shear).
-    pub fn accelerations(&self) -> Vec<f64> {
+    pub(crate) fn accelerations(&self) -> Vec<f64> {
         match &self.field {
             Some(f) => self.slab.iter().map(|&k| f.accel(k as usize)).collect(),
             None => Vec::new(),
@@ -75,7 +75,7 @@ impl SlabSource {
 
     /// Moves `i` (at the current time) into the neighbouring slab and sets its new
     /// acceleration; the caller counts the course change and re-predicts.
-    pub fn fire<const D: usize, const G: bool, const S: bool>(
+    pub(crate) fn fire<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
         up: bool,
@@ -88,7 +88,7 @@ impl SlabSource {
     }
 
     /// Puts `i` in the slab of position `x` (set-ups and tests).
-    pub fn relocate<const D: usize, const G: bool, const S: bool>(
+    pub(crate) fn relocate<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
         x: f64,

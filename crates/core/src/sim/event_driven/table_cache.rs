@@ -100,7 +100,7 @@ impl TableCache {
 
     /// The cache of engines built on threads without an installed cache, capped at
     /// [`DEFAULT_TABLE_CACHE_MIB`].
-    pub fn process_default() -> &'static TableCache {
+    pub(crate) fn process_default() -> &'static TableCache {
         static DEFAULT: OnceLock<TableCache> = OnceLock::new();
         DEFAULT.get_or_init(|| TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB))
     }
@@ -203,26 +203,7 @@ impl TableCache {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn motion(gamma: f64, e_star: f64) -> WallMotion {
-        let v_w = (2.0f64 * e_star * 0.2844).sqrt();
-        WallMotion {
-            amplitude: v_w * v_w / gamma,
-            omega: gamma / v_w,
-            g: 1.0,
-        }
-    }
-
-    fn spec(w: &WallMotion, cells: usize) -> TableSpec {
-        let vw = w.amplitude * w.omega;
-        TableSpec {
-            phase_cells: cells,
-            velocity_cells: cells,
-            v_min: 0.05 * vw,
-            v_max: 50.0 * vw,
-            corner_tolerance: Some(1e-3),
-        }
-    }
+    use crate::physics::wall_table::tests::{spec_for as spec, standard_motion as motion};
 
     #[test]
     fn one_table_per_drive_is_shared_across_threads() {

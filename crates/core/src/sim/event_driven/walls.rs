@@ -29,11 +29,11 @@ use std::sync::Arc;
 /// Largest gap (in units of `d`) at which a tabulated wall hit is accepted and the particle
 /// placed on the wall (B.5.1); a larger gap makes the event a re-check. Bounds the
 /// displacement a table error can cause.
-pub const TABLE_PLACEMENT_TOLERANCE: f64 = 1e-2;
+pub(crate) const TABLE_PLACEMENT_TOLERANCE: f64 = 1e-2;
 
 /// State of the `table` solver (B.4-B.5).
 #[derive(Debug, Clone)]
-pub struct TableState {
+pub(crate) struct TableState {
     pub motion: WallMotion,
     /// Gap tolerance of the exact solver it falls back on.
     pub tol: f64,
@@ -42,16 +42,16 @@ pub struct TableState {
     pub tables: [Arc<WallTable>; 2],
     /// The particle that has just left the floor (`false`) or lid (`true`); its next wall
     /// prediction uses the wall-edge table (B.5.2).
-    pub launched: Option<(usize, bool)>,
+    pub(crate) launched: Option<(usize, bool)>,
     /// The particle whose tabulated hit found it away from the wall; its next wall prediction
     /// comes from the exact solver.
-    pub distrusted: Option<usize>,
+    pub(crate) distrusted: Option<usize>,
 }
 
 /// How wall collision times are found: static walls, or the shaken floor and lid with one of
 /// the solvers of `physics::shaken_wall` / `physics::wall_table`.
 #[derive(Debug, Clone)]
-pub enum WallSolver {
+pub(crate) enum WallSolver {
     /// Static flat walls: straight or parabolic flights to the planes.
     Static,
     /// Conservative advancement with the curvature bound `g + A omega^2` (cannot skip a root).
@@ -69,7 +69,7 @@ pub enum WallSolver {
 
 impl WallSolver {
     /// The solver the scene asks for (its table from the thread's [`TableCache`]).
-    pub fn from_scene(scene: &Scene) -> Self {
+    pub(crate) fn from_scene(scene: &Scene) -> Self {
         let Some((amplitude, omega)) = scene.drive_motion() else {
             return WallSolver::Static;
         };
@@ -105,7 +105,7 @@ impl WallSolver {
     }
 
     /// The floor's motion, `None` for static walls.
-    pub fn motion(&self) -> Option<WallMotion> {
+    pub(crate) fn motion(&self) -> Option<WallMotion> {
         match self {
             WallSolver::Static => None,
             WallSolver::Exact { motion, .. } | WallSolver::Bracket { motion, .. } => Some(*motion),
@@ -150,10 +150,10 @@ impl WallSolver {
 
 /// Each particle's next wall event and the solver.
 #[derive(Debug, Clone)]
-pub struct WallSource {
+pub(crate) struct WallSource {
     pub solver: WallSolver,
     /// Wall restitution and the collapse remedies.
-    pub e_wall: f64,
+    pub(crate) e_wall: f64,
     pub tc: f64,
     pub min_rebound: f64,
     /// Next wall event of each particle (empty when no axis has walls: every candidate is then
@@ -161,12 +161,12 @@ pub struct WallSource {
     pub ev: Vec<PlaneEvent>,
     /// `table` solver: tabulated approach speed of each particle's predicted wall hit (NaN when
     /// the hit was not tabulated; empty, i.e. NaN throughout, under the other solvers).
-    pub vrel: Vec<f64>,
+    pub(crate) vrel: Vec<f64>,
 }
 
 impl WallSource {
     /// The source for `n` particles; `walls`: whether any axis has walls.
-    pub fn new(
+    pub(crate) fn new(
         solver: WallSolver,
         e_wall: f64,
         tc: f64,
@@ -194,12 +194,12 @@ impl WallSource {
     }
 
     /// Time of the next wall event of `i` (`+inf` without walls).
-    pub fn time(&self, i: usize) -> f64 {
+    pub(crate) fn time(&self, i: usize) -> f64 {
         self.ev.get(i).map_or(f64::INFINITY, |e| e.time)
     }
 
     /// Heap bytes of the per-particle arrays (`wetgran-bench memory`; shared tables excluded).
-    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+    pub(crate) fn memory(&self) -> Vec<(&'static str, usize)> {
         vec![
             ("walls.ev", vec_bytes(&self.ev)),
             ("walls.vrel", vec_bytes(&self.vrel)),
@@ -210,7 +210,7 @@ impl WallSource {
     /// the tabulated approach speed of a shaken-wall hit. Ends the `table` solver's memories of
     /// `i` (edge table after a launch, exact solver after a table error): they serve one
     /// prediction.
-    pub fn predict<const D: usize, const G: bool, const S: bool>(
+    pub(crate) fn predict<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
         bodies: &Bodies<D, G, S>,
@@ -327,7 +327,7 @@ impl WallSource {
     /// Carries out the wall event of `i` at time `t` along `axis` (`lid`: the upper wall); the
     /// caller re-predicts every event of `i` afterwards.
     #[allow(clippy::too_many_arguments)]
-    pub fn fire<const D: usize, const G: bool, const S: bool>(
+    pub(crate) fn fire<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
         axis: usize,

@@ -49,7 +49,7 @@ use std::sync::{Mutex, RwLock};
 
 /// Domains the box is cut into (fixed, so the numbers do not depend on the thread count; a
 /// team has at most this many members).
-pub const DOMAINS: usize = 2;
+pub(crate) const DOMAINS: usize = 2;
 
 /// From this many particles on, every Gear step of a scene without a body force runs on the
 /// domains, on any number of threads (below, a step is too short for two threads to gain:
@@ -62,12 +62,12 @@ pub(super) struct StepConstants<const D: usize> {
     /// The pair kernel's constants (velocity scale `1 / dt`, books weighted by `dt`).
     pub pair: PairConstants<D>,
     pub dt: f64,
-    pub inv_mass: Option<f64>,
+    pub(crate) inv_mass: Option<f64>,
     /// The force every coordinate starts from (the weight on the last axis).
-    pub init: [f64; D],
-    pub gear: [f64; 6],
+    pub(crate) init: [f64; D],
+    pub(crate) gear: [f64; 6],
     /// Half the neighbour list's skin: the largest displacement the list tolerates.
-    pub half_skin: f64,
+    pub(crate) half_skin: f64,
 }
 
 /// The counts and the largest overlap a domain booked in a region (the sums are kept per step,
@@ -75,8 +75,8 @@ pub(super) struct StepConstants<const D: usize> {
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct DomainBooks {
     pub max_overlap: f64,
-    pub pair_onsets: u64,
-    pub wall_onsets: u64,
+    pub(crate) pair_onsets: u64,
+    pub(crate) wall_onsets: u64,
     pub formations: u64,
     pub ruptures: u64,
 }
@@ -116,7 +116,7 @@ pub(super) struct TeamBuild<'a, const D: usize> {
 impl<'a, const D: usize> TeamBuild<'a, D> {
     /// The engine's list, its positions `x` (axis-major, written back before a build) and
     /// the radii.
-    pub fn new(list: &'a mut NeighbourList<D>, x: &'a mut [f64], radius: &'a [f64]) -> Self {
+    pub(super) fn new(list: &'a mut NeighbourList<D>, x: &'a mut [f64], radius: &'a [f64]) -> Self {
         Self {
             list: RwLock::new(list),
             x: Mutex::new(x),
@@ -135,42 +135,42 @@ pub(super) struct Domain<const D: usize> {
     /// Gear's scaled derivatives, local, axis-major (`r[q][k * m + i]`).
     pub r: [Vec<f64>; 6],
     /// Forces (start values between steps).
-    pub acc: Vec<f64>,
-    pub acc_is_start: bool,
+    pub(crate) acc: Vec<f64>,
+    pub(crate) acc_is_start: bool,
     pub radius: Vec<f64>,
-    pub wall_kr: Vec<f64>,
-    pub wall_contact: Vec<u8>,
+    pub(crate) wall_kr: Vec<f64>,
+    pub(crate) wall_contact: Vec<u8>,
     /// Positions at the last list build (local, axis-major).
-    pub built_at: Vec<f64>,
+    pub(crate) built_at: Vec<f64>,
     /// The half list of the pairs inside the domain (compressed rows, local indices).
     pub start: Vec<u32>,
     pub rows: Vec<u32>,
     pub partner: Vec<u32>,
     pub flags: Vec<u8>,
     /// The engine's list entry of each inner entry.
-    pub inner_src: Vec<u32>,
+    pub(crate) inner_src: Vec<u32>,
     /// Cross pairs: own local index (ascending), ghost number, flags, the engine's entry.
-    pub cross_own: Vec<u32>,
-    pub cross_ghost: Vec<u32>,
-    pub cross_flags: Vec<u8>,
-    pub cross_src: Vec<u32>,
+    pub(crate) cross_own: Vec<u32>,
+    pub(crate) cross_ghost: Vec<u32>,
+    pub(crate) cross_flags: Vec<u8>,
+    pub(crate) cross_src: Vec<u32>,
     /// Ghosts (the other domain's particles the cross pairs reach), read from its halo.
-    pub ghosts: usize,
+    pub(crate) ghosts: usize,
     /// Radius of each ghost.
-    pub ghost_radius: Vec<f64>,
+    pub(crate) ghost_radius: Vec<f64>,
     /// Own particles (local, ascending) that are ghosts of the other domain, in its ghost
     /// order: published into the halo after each step.
-    pub halo_out: Vec<u32>,
+    pub(crate) halo_out: Vec<u32>,
     /// Whether this domain books the cross pairs (domain 0).
-    pub books_cross: bool,
+    pub(crate) books_cross: bool,
     /// Displacement bound and steps since the exact test (the engine's `update_list`).
     pub bound: f64,
-    pub since_check: u32,
+    pub(crate) since_check: u32,
     /// Counts and largest overlap booked in the region.
     pub books: DomainBooks,
     /// Per step of the region: dissipation, bridge ledger, drive work (the engine adds them
     /// step by step, domains in order, so where regions end changes no sum).
-    pub step_books: Vec<[f64; 3]>,
+    pub(crate) step_books: Vec<[f64; 3]>,
 }
 
 /// Which particle is in which domain, the domains, and the shared halo buffers.
@@ -187,21 +187,21 @@ pub(super) struct Decomposition<const D: usize> {
     /// The list build whose entries the domains' lists hold (`NeighbourList::builds`).
     built_for: AtomicU64,
     /// The list build at which the partition was made.
-    pub partitioned_at: u64,
+    pub(crate) partitioned_at: u64,
     /// Cross entries (per domain, summed) right after the partition.
-    pub cross_at_partition: usize,
+    pub(crate) cross_at_partition: usize,
     /// Domain and local index of each particle (scene order).
-    pub dom: Vec<u8>,
+    pub(crate) dom: Vec<u8>,
     pub local: Vec<u32>,
     pub domains: Vec<Mutex<Domain<D>>>,
     /// Per domain, the halo of the two step parities: `2 D` values per halo particle
     /// (position, then the velocity array's value).
-    pub halo: Vec<[RwLock<Vec<f64>>; 2]>,
+    pub(crate) halo: Vec<[RwLock<Vec<f64>>; 2]>,
     /// Per domain and step parity: the list must be rebuilt before the next step.
     pub stop: Vec<[AtomicBool; 2]>,
     /// The step whose state the domains hold (`None`: not loaded yet, or the engine's state
     /// was changed outside the domains).
-    pub holds_step: Option<u64>,
+    pub(crate) holds_step: Option<u64>,
     /// Whether the engine's arrays hold only the positions of that step (the rest is in the
     /// domains): between the regions of one run.
     pub partial: bool,
@@ -210,14 +210,14 @@ pub(super) struct Decomposition<const D: usize> {
     /// without the engine's `update_list` and keeps the domains' own bounds, so where regions
     /// end does not move the exact displacement tests (which decide the rebuilds caused by a
     /// periodic wrap).
-    pub checked_for: Option<u64>,
+    pub(crate) checked_for: Option<u64>,
 }
 
 /// A partition is remade when the cross entries exceed twice those at the partition plus this.
-pub const REPARTITION_SLACK: usize = 16;
+pub(super) const REPARTITION_SLACK: usize = 16;
 
 /// A partition is remade at the latest this many list builds after it was made.
-pub const REPARTITION_EVERY: u64 = 64;
+pub(super) const REPARTITION_EVERY: u64 = 64;
 
 impl<const D: usize> Clone for Decomposition<D> {
     fn clone(&self) -> Self {
@@ -281,10 +281,10 @@ fn get<T>(m: &mut Mutex<T>) -> &mut T {
 /// The engine's arrays a decomposition reads and writes (scene order, axis-major).
 pub(super) struct EngineArrays<'a> {
     pub r: &'a mut [Vec<f64>; 6],
-    pub acc: &'a mut [f64],
-    pub wall_contact: &'a mut [u8],
+    pub(crate) acc: &'a mut [f64],
+    pub(crate) wall_contact: &'a mut [u8],
     pub radius: &'a [f64],
-    pub wall_kr: &'a [f64],
+    pub(crate) wall_kr: &'a [f64],
 }
 
 impl<const D: usize> Decomposition<D> {
@@ -293,7 +293,7 @@ impl<const D: usize> Decomposition<D> {
     /// by the index), [`DOMAINS`] = 2 domains of `n / 2` and `n - n / 2` particles, each in
     /// ascending scene order. The lists are split by [`Self::split_lists`], the state loaded
     /// by [`Self::load`].
-    pub fn new(build: u64, size: [f64; D], x: &[f64]) -> Self {
+    pub(super) fn new(build: u64, size: [f64; D], x: &[f64]) -> Self {
         let n = x.len() / D;
         let mut axis = 0;
         for k in 1..D {
@@ -352,7 +352,7 @@ impl<const D: usize> Decomposition<D> {
     }
 
     /// Whether the partition is to be remade at list build `build` (see the type's doc).
-    pub fn wants_new_partition(&self, build: u64) -> bool {
+    pub(super) fn wants_new_partition(&self, build: u64) -> bool {
         let cross: usize = self.domains.iter().map(|d| lock(d).cross_own.len()).sum();
         build >= self.partitioned_at + REPARTITION_EVERY
             || cross > 2 * self.cross_at_partition + REPARTITION_SLACK
@@ -361,7 +361,7 @@ impl<const D: usize> Decomposition<D> {
     /// Splits the half list of `list` (scene indices) into each domain's inner list and
     /// cross list, numbers the ghosts, and takes the positions of the build and the radii
     /// ([`Self::split_domain`] for every domain).
-    pub fn split_lists(&mut self, list: &NeighbourList<D>, radius: &[f64]) {
+    pub(super) fn split_lists(&mut self, list: &NeighbourList<D>, radius: &[f64]) {
         for d in 0..DOMAINS {
             self.split_domain(d, list, radius);
         }
@@ -376,7 +376,7 @@ impl<const D: usize> Decomposition<D> {
     }
 
     /// The list build whose entries the domains' lists hold (`NeighbourList::builds`; 0: none).
-    pub fn built_for(&self) -> u64 {
+    pub(super) fn built_for(&self) -> u64 {
         self.built_for.load(Ordering::Relaxed)
     }
 
@@ -387,7 +387,7 @@ impl<const D: usize> Decomposition<D> {
     /// ascending: the other domain's ghosts, in the other domain's ghost order), and the halo
     /// buffers of both parities sized for them. Reads only the list and what the partition
     /// fixed, writes only domain `d`, so the domains can be split at once by different threads.
-    pub fn split_domain(&self, d: usize, list: &NeighbourList<D>, radius: &[f64]) {
+    pub(super) fn split_domain(&self, d: usize, list: &NeighbourList<D>, radius: &[f64]) {
         let (start, partner, flags) = (&list.start, &list.partner, &list.flags);
         let built_at = list.built_at();
         let n = start.len() - 1;
@@ -468,7 +468,7 @@ impl<const D: usize> Decomposition<D> {
 
     /// Copies the engine's state into the domains (Gear derivatives, forces, wall contacts,
     /// radii) and marks them as holding step `step`.
-    pub fn load(&mut self, e: &EngineArrays<'_>, acc_is_start: bool, step: u64) {
+    pub(super) fn load(&mut self, e: &EngineArrays<'_>, acc_is_start: bool, step: u64) {
         let n = e.radius.len();
         for dm in &mut self.domains {
             let dm = get(dm);
@@ -487,7 +487,7 @@ impl<const D: usize> Decomposition<D> {
     /// Prepares a region starting at step `step`: the list check's bound and count (the
     /// engine's, unless `own_checks`: then each domain keeps its own, see
     /// [`Self::checked_for`]), empty books, and the halo of the step's parity.
-    pub fn begin(&mut self, bound: f64, since_check: u32, step: u64, own_checks: bool) {
+    pub(super) fn begin(&mut self, bound: f64, since_check: u32, step: u64, own_checks: bool) {
         let parity = (step % 2) as usize;
         for (d, dm) in self.domains.iter_mut().enumerate() {
             let dm = get(dm);
@@ -507,7 +507,7 @@ impl<const D: usize> Decomposition<D> {
     /// Copies the domains' state back into the engine's arrays: all of it (`full`), or only
     /// the positions (`r[0]`, what a list build reads); and the list flags where `flags` is
     /// given (the list of the domains' build; cross pairs from the booking domain).
-    pub fn store(&mut self, e: &mut EngineArrays<'_>, flags: Option<&mut [u8]>, full: bool) {
+    pub(super) fn store(&mut self, e: &mut EngineArrays<'_>, flags: Option<&mut [u8]>, full: bool) {
         let mut flags = flags;
         let n = e.radius.len();
         for dm in &mut self.domains {
@@ -528,7 +528,7 @@ impl<const D: usize> Decomposition<D> {
 
     /// The books of every domain in order (counts and largest overlap; per-step sums), and
     /// the largest displacement bound and step count since the exact test.
-    pub fn books(&mut self) -> (RegionBooks, f64, u32) {
+    pub(super) fn books(&mut self) -> (RegionBooks, f64, u32) {
         let (mut bound, mut since) = (0.0f64, 0u32);
         let mut books = Vec::with_capacity(DOMAINS);
         for dm in &mut self.domains {
@@ -543,7 +543,7 @@ impl<const D: usize> Decomposition<D> {
     #[cfg(test)]
     /// Test aid: whether both copies of every cross pair hold the same flags (they must: the
     /// two domains take the same decisions on exactly antisymmetric numbers).
-    pub fn cross_flags_agree(&mut self) -> bool {
+    pub(super) fn cross_flags_agree(&mut self) -> bool {
         let mut by_entry: Vec<(u32, u8)> = Vec::new();
         let mut other: Vec<(u32, u8)> = Vec::new();
         for (d, dm) in self.domains.iter_mut().enumerate() {
@@ -570,7 +570,7 @@ impl<const D: usize> Decomposition<D> {
     /// `wait` is the team's barrier. Returns the steps taken and how the region ended. Every
     /// member returns the same.
     #[allow(clippy::too_many_arguments)]
-    pub fn run_member<const WET: bool>(
+    pub(super) fn run_member<const WET: bool>(
         &self,
         c: &StepConstants<D>,
         walls_at: &(dyn Fn(u64) -> [WallAxis; D] + Sync),

@@ -20,7 +20,7 @@
 
 /// Gear corrector coefficients for second-order equations, six values, velocity-independent
 /// forces (Allen & Tildesley Table E.1).
-pub const GEAR5: [f64; 6] = [
+pub(crate) const GEAR5: [f64; 6] = [
     3.0 / 16.0,
     251.0 / 360.0,
     1.0,
@@ -30,10 +30,10 @@ pub const GEAR5: [f64; 6] = [
 ];
 
 /// `c_0` of Gear's 5th-order corrector when the force depends on the velocity.
-pub const GEAR5_C0_VELOCITY_DEPENDENT: f64 = 3.0 / 20.0;
+pub(crate) const GEAR5_C0_VELOCITY_DEPENDENT: f64 = 3.0 / 20.0;
 
 /// Predictor: Taylor step of the scaled derivatives `r[0..6]`, element-wise.
-pub fn gear_predict(r: &mut [Vec<f64>; 6]) {
+pub(crate) fn gear_predict(r: &mut [Vec<f64>; 6]) {
     let [r0, r1, r2, r3, r4, r5] = r;
     for e in 0..r0.len() {
         let (a1, a2, a3, a4, a5) = (r1[e], r2[e], r3[e], r4[e], r5[e]);
@@ -47,7 +47,7 @@ pub fn gear_predict(r: &mut [Vec<f64>; 6]) {
 
 /// Below this magnitude the scaled derivatives `r_2 .. r_5` are set to zero (see
 /// [`gear_correct`]).
-pub const GEAR_FLUSH: f64 = 1e-200;
+pub(crate) const GEAR_FLUSH: f64 = 1e-200;
 
 /// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta` (the reference the fused loop is
 /// tested against).
@@ -57,7 +57,7 @@ pub const GEAR_FLUSH: f64 = 1e-200;
 /// makes every operation on them about a hundred times slower. Values below [`GEAR_FLUSH`]
 /// (far below any physical scale) are therefore set to zero.
 #[cfg(test)]
-pub fn gear_correct(r: &mut [Vec<f64>; 6], acc: &[f64], half_dt2: f64, c: &[f64; 6]) {
+pub(crate) fn gear_correct(r: &mut [Vec<f64>; 6], acc: &[f64], half_dt2: f64, c: &[f64; 6]) {
     let [r0, r1, r2, r3, r4, r5] = r;
     let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
     for e in 0..r0.len() {
@@ -111,7 +111,7 @@ const BLOCK: usize = 64;
 /// [`gear_predict`], with half the passes over memory. All coordinates are treated alike (no
 /// wrap); the reference of [`gear_correct_predict_axis`], which the engine calls per axis.
 #[cfg(test)]
-pub fn gear_correct_predict(
+pub(crate) fn gear_correct_predict(
     r: &mut [Vec<f64>; 6],
     now: &mut [Vec<f64>; 2],
     acc: &[f64],
@@ -144,7 +144,7 @@ pub fn gear_correct_predict(
 /// step `n` from the prediction `p` for step `n + 1`. Exact up to round-off (the position to
 /// about one ulp of `|x|`); the engine uses it to read the current state instead of storing it
 /// every step.
-pub fn gear_unpredict(p: [f64; 6]) -> [f64; 6] {
+pub(crate) fn gear_unpredict(p: [f64; 6]) -> [f64; 6] {
     let a5 = p[5];
     let a4 = p[4] - 5.0 * a5;
     let a3 = p[3] - 4.0 * a4 - 10.0 * a5;
@@ -175,7 +175,7 @@ pub fn gear_unpredict(p: [f64; 6]) -> [f64; 6] {
 ///
 /// Each `acc[e]` is set to `force_start` once read: the engine's next force evaluation starts
 /// from it (the weight, or 0) without a pass of its own over the array.
-pub fn gear_correct_predict_axis(
+pub(crate) fn gear_correct_predict_axis(
     r: [&mut [f64]; 6],
     acc: &mut [f64],
     force_start: f64,
@@ -195,7 +195,7 @@ pub fn gear_correct_predict_axis(
 
 /// [`gear_correct_predict_axis`] on every axis of axis-major arrays of `m` particles per axis
 /// (`force_start[k]` and `period[k]` per axis); returns the largest move per axis.
-pub fn gear_correct_predict_axes<const D: usize>(
+pub(crate) fn gear_correct_predict_axes<const D: usize>(
     r: &mut [Vec<f64>; 6],
     acc: &mut [f64],
     force_start: [f64; D],
@@ -228,7 +228,7 @@ pub fn gear_correct_predict_axes<const D: usize>(
 /// `1e-200 * (3.7e-18)^4`, about `2e-271`, far above the subnormal range (`< 2.2e-308`; 6 steps
 /// would still be safe). Values between `1e-271` and `1e-200` change the position and the
 /// velocity by nothing (they are below one ulp of either).
-pub const GEAR_FLUSH_EVERY: u64 = 4;
+pub(crate) const GEAR_FLUSH_EVERY: u64 = 4;
 
 fn fused_axis<const WRAP: bool, const FLUSH: bool>(
     r: [&mut [f64]; 6],
@@ -297,7 +297,7 @@ fn fused_axis<const WRAP: bool, const FLUSH: bool>(
 /// Velocity Verlet, first half: `v += a dt/2; x += v dt`. Returns `max_e |v dt|`, the largest
 /// move of this step (see [`gear_correct_predict_axis`]; the engine calls this per axis). Each
 /// `acc[e]` is set to `force_start` once read (as in [`gear_correct_predict_axis`]).
-pub fn verlet_drift(
+pub(crate) fn verlet_drift(
     x: &mut [f64],
     v: &mut [f64],
     acc: &mut [f64],
@@ -320,7 +320,7 @@ pub fn verlet_drift(
 }
 
 /// Velocity Verlet, second half: `v += a dt/2` with the new acceleration.
-pub fn verlet_kick(v: &mut [f64], acc: &[f64], dt: f64) {
+pub(crate) fn verlet_kick(v: &mut [f64], acc: &[f64], dt: f64) {
     for e in 0..v.len() {
         v[e] += 0.5 * dt * acc[e];
     }

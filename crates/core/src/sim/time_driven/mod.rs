@@ -17,13 +17,13 @@
 
 pub use crate::scene::damping;
 mod domains;
-pub mod engine;
-pub mod integrator;
-pub mod neighbours;
+pub(crate) mod engine;
+pub(crate) mod integrator;
+pub(crate) mod neighbours;
 mod pair_kernel;
 pub mod shear;
 mod team;
 mod walls;
 
-pub use domains::{DOMAIN_MIN_PARTICLES, DOMAINS};
-pub use engine::{BodyForce, Execution, NoBodyForce, SANITY_OVERLAP, TimeEngine};
+pub use domains::DOMAIN_MIN_PARTICLES;
+pub use engine::{BodyForce, Execution, NoBodyForce, TimeEngine};

@@ -11,17 +11,17 @@
 //! allocates only while the list grows beyond its largest size so far.
 
 /// Entry flag: the pair overlapped at the last force evaluation.
-pub const CONTACT: u8 = 1;
+pub(crate) const CONTACT: u8 = 1;
 /// Entry flag: the pair holds a capillary bridge (docs/model.md 3.1).
-pub const BOND: u8 = 2;
+pub(crate) const BOND: u8 = 2;
 
 /// The exact displacement test of the list runs at least every this many steps (it bounds the
 /// round-off accumulated in the engine's displacement bound, `State::update_list`).
-pub const EXACT_CHECK_EVERY: u32 = 1024;
+pub(crate) const EXACT_CHECK_EVERY: u32 = 1024;
 
 /// Linked cells and the Verlet list.
 #[derive(Debug, Clone)]
-pub struct NeighbourList<const D: usize> {
+pub(crate) struct NeighbourList<const D: usize> {
     /// Row starts, `n + 1` entries.
     pub start: Vec<u32>,
     /// Partner of each entry.
@@ -35,13 +35,13 @@ pub struct NeighbourList<const D: usize> {
     /// The row (first particle) of each entry: the pair loop runs over entries in parallel
     /// chunks. Made, with the transposed list, by [`Self::ensure_transposed`] (only the
     /// rayon-split step reads them).
-    pub row_of: Vec<u32>,
+    pub(crate) row_of: Vec<u32>,
     /// The transposed list: the entries whose partner is `j` are
     /// `in_entry[in_start[j]..in_start[j + 1]]`, ascending (so by ascending row). The engine
     /// gathers each particle's pair forces through it in the order the rows visit them.
-    pub in_start: Vec<u32>,
+    pub(crate) in_start: Vec<u32>,
     /// Entry indices of the transposed list.
-    pub in_entry: Vec<u32>,
+    pub(crate) in_entry: Vec<u32>,
     old_start: Vec<u32>,
     old_partner: Vec<u32>,
     old_flags: Vec<u8>,
@@ -86,7 +86,7 @@ pub struct NeighbourList<const D: usize> {
     /// it moved apart by more than the skin within one list's life, which only a blown-up run
     /// does (a time step too large for the speeds reached). The engine's `sanity_check`
     /// reports it; the list itself goes on.
-    pub lost_pair: Option<(usize, usize)>,
+    pub(crate) lost_pair: Option<(usize, usize)>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -94,12 +94,12 @@ const NONE: u32 = u32::MAX;
 /// From this many particles on, a build on a pool of several threads scans the rows in two
 /// halves at once (`rayon::join`; about 1000 instructions per particle, so a hand-over of a few
 /// microseconds is paid back from about a thousand particles on).
-pub const PARALLEL_BUILD_MIN: usize = 1024;
+pub(crate) const PARALLEL_BUILD_MIN: usize = 1024;
 
 /// The largest squared displacement between positions `x` and `built_at` (axis-major, the
 /// same length), without the periodic image; in blocks of 64 particles, so that the loop
 /// vectorises.
-pub fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
+pub(crate) fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
     let n = x.len() / D;
     let mut worst = 0.0f64;
     let mut acc = [0.0f64; 64];
@@ -125,7 +125,7 @@ pub fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
 
 /// The rows of part of a build: partners, flags, row lengths, the first lost flagged pair.
 #[derive(Debug, Clone, Default)]
-pub struct RowScan {
+pub(crate) struct RowScan {
     partner: Vec<u32>,
     flags: Vec<u8>,
     len: Vec<u32>,
@@ -144,7 +144,7 @@ impl RowScan {
 impl<const D: usize> NeighbourList<D> {
     /// A list for `n` particles in a box of edges `size`; `lower`/`upper` bound the wall axes
     /// (the shaken floor and lid move), `range` is the largest `d_max + s_crit + skin`.
-    pub fn new(
+    pub(crate) fn new(
         n: usize,
         size: [f64; D],
         periodic: [bool; D],
@@ -220,12 +220,12 @@ impl<const D: usize> NeighbourList<D> {
     }
 
     /// Positions (axis-major) at the last build.
-    pub fn built_at(&self) -> &[f64] {
+    pub(crate) fn built_at(&self) -> &[f64] {
         &self.built_at
     }
 
     /// The skin (the list holds pairs up to `skin` beyond their interaction range).
-    pub fn skin(&self) -> f64 {
+    pub(crate) fn skin(&self) -> f64 {
         self.skin
     }
 
@@ -233,7 +233,7 @@ impl<const D: usize> NeighbourList<D> {
     /// The displacement is taken without the periodic image: a particle that crossed a periodic
     /// face counts as having moved by about `L` and triggers a (harmless, rare) rebuild; in
     /// exchange the loop vectorises.
-    pub fn max_displacement_sq(&self, x: &[f64]) -> f64 {
+    pub(crate) fn max_displacement_sq(&self, x: &[f64]) -> f64 {
         max_displacement_sq::<D>(x, &self.built_at)
     }
 
@@ -251,7 +251,7 @@ impl<const D: usize> NeighbourList<D> {
     /// The three phases ([`Self::begin_build`], [`Self::scan_part`] for both parts,
     /// [`Self::finish_build`]) can also be run by a team of threads (the spatial domains build
     /// the list inside their team, `domains.rs`); the list is the same either way.
-    pub fn build(&mut self, x: &[f64], radius: &[f64]) {
+    pub(crate) fn build(&mut self, x: &[f64], radius: &[f64]) {
         self.begin_build(x, radius);
         let [mut lo, mut hi] = self.take_scans();
         if radius.len() >= PARALLEL_BUILD_MIN && rayon::current_num_threads() > 1 {
@@ -270,7 +270,7 @@ impl<const D: usize> NeighbourList<D> {
     /// First phase of a build: the old rows kept for the flags, the positions of the build
     /// (`x`, axis-major) and the particles binned into the cells (a counting sort by cell,
     /// ascending index within a cell), with their positions and radii in that order.
-    pub fn begin_build(&mut self, x: &[f64], radius: &[f64]) {
+    pub(crate) fn begin_build(&mut self, x: &[f64], radius: &[f64]) {
         let n = self.scratch.len();
         self.builds += 1;
         std::mem::swap(&mut self.start, &mut self.old_start);
@@ -322,13 +322,13 @@ impl<const D: usize> NeighbourList<D> {
 
     /// The reused buffers of the two parts of the row scan (give them back through
     /// [`Self::finish_build`]).
-    pub fn take_scans(&mut self) -> [RowScan; 2] {
+    pub(crate) fn take_scans(&mut self) -> [RowScan; 2] {
         std::mem::take(&mut self.scan)
     }
 
     /// Second phase of a build: the rows of part `part` (0: the first `n / 2` particles, 1:
     /// the rest) into `out`. The parts are independent: two threads may scan them at once.
-    pub fn scan_part(&self, radius: &[f64], part: usize, out: &mut RowScan) {
+    pub(crate) fn scan_part(&self, radius: &[f64], part: usize, out: &mut RowScan) {
         let n = radius.len();
         let h = n / 2;
         let range = if part == 0 { 0..h } else { h..n };
@@ -336,7 +336,7 @@ impl<const D: usize> NeighbourList<D> {
     }
 
     /// Last phase of a build: the parts' rows joined into the list, and the transposed list.
-    pub fn finish_build(&mut self, parts: [RowScan; 2]) {
+    pub(crate) fn finish_build(&mut self, parts: [RowScan; 2]) {
         let n = self.scratch.len();
         let mut i = 0;
         for part in &parts {
@@ -363,7 +363,7 @@ impl<const D: usize> NeighbourList<D> {
     /// Makes `row_of` and the transposed list (`in_start`, `in_entry`) of the current build,
     /// unless they are made already: the rayon-split step needs them, the serial step and the
     /// domains do not, so a build does not pay for them.
-    pub fn ensure_transposed(&mut self) {
+    pub(crate) fn ensure_transposed(&mut self) {
         if self.transposed_at == self.builds {
             return;
         }
@@ -494,7 +494,7 @@ impl<const D: usize> NeighbourList<D> {
 
     /// Sets `flag` on the entry of the pair `(i, j)`, `i < j`; false if the pair is not in the
     /// list (restoring saved bridges, `TimeEngine::from_state`).
-    pub fn set_flag(&mut self, i: usize, j: usize, flag: u8) -> bool {
+    pub(crate) fn set_flag(&mut self, i: usize, j: usize, flag: u8) -> bool {
         let row = self.start[i] as usize..self.start[i + 1] as usize;
         match self.partner[row.clone()].binary_search(&(j as u32)) {
             Ok(k) => {
@@ -506,7 +506,7 @@ impl<const D: usize> NeighbourList<D> {
     }
 
     /// Pairs with `flag` set, as `(i, j)` with `i < j`, sorted.
-    pub fn flagged(&self, flag: u8) -> Vec<(usize, usize)> {
+    pub(crate) fn flagged(&self, flag: u8) -> Vec<(usize, usize)> {
         let n = self.start.len() - 1;
         let mut out = Vec::new();
         for i in 0..n {
@@ -520,7 +520,7 @@ impl<const D: usize> NeighbourList<D> {
     }
 
     /// Number of entries with `flag` set.
-    pub fn count(&self, flag: u8) -> usize {
+    pub(crate) fn count(&self, flag: u8) -> usize {
         self.flags.iter().filter(|&&f| f & flag != 0).count()
     }
 }

@@ -13,7 +13,7 @@ use crate::physics::hertz;
 /// Verlet-list entries per chunk of the pair phase of a step: the unit of work of a thread, and
 /// the unit over which the booked sums are taken before they are added up in chunk order
 /// (fixed, so the numbers do not depend on the number of threads).
-pub const ENTRY_CHUNK: usize = 128;
+pub(super) const ENTRY_CHUNK: usize = 128;
 
 /// What the pair kernel needs besides the particles' state.
 #[derive(Debug, Clone, Copy)]
@@ -24,7 +24,7 @@ pub(super) struct PairConstants<const D: usize> {
     pub half: [f64; D],
     pub stiffness: f64,
     pub damping: f64,
-    pub bridge_force: f64,
+    pub(crate) bridge_force: f64,
     pub s_crit: f64,
     /// Factor turning the velocity array into velocities.
     pub vs: f64,
@@ -37,7 +37,7 @@ pub(super) struct PairConstants<const D: usize> {
 pub(super) struct PairBooks {
     pub dissipated: f64,
     pub max_overlap: f64,
-    pub bridge_ledger: f64,
+    pub(crate) bridge_ledger: f64,
     pub onsets: u64,
     pub formations: u64,
     pub ruptures: u64,
@@ -139,15 +139,15 @@ pub(super) fn pair_chunk<const D: usize, const WET: bool>(
 #[derive(Debug, Clone, Copy)]
 pub(super) struct PairResponse {
     /// Force magnitude on `i` along `d / r` (0: no force).
-    pub fmag: f64,
+    pub(crate) fmag: f64,
     /// `1 / r`.
-    pub inv: f64,
+    pub(crate) inv: f64,
     /// The pair's new flags.
     pub flags: u8,
     /// `R_i + R_j - r` (booked as the largest overlap when positive).
     pub overlap: f64,
     pub onset: bool,
-    pub formation: bool,
+    pub(crate) formation: bool,
     pub rupture: bool,
     /// Whether the damping did work, and that work `(F - F_elastic) xi_dot dt`.
     pub damped: bool,

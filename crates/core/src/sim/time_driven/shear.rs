@@ -12,7 +12,7 @@ pub struct CosineShear {
     /// Peak force `F_max`.
     pub f_max: f64,
     /// Wave number `2 pi / L_x`.
-    pub wave_number: f64,
+    pub(crate) wave_number: f64,
 }
 
 impl CosineShear {

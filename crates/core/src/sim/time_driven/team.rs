@@ -29,17 +29,17 @@ use std::time::{Duration, Instant};
 /// How long a waiting member spins before it starts yielding its core (on a quiet machine a
 /// barrier of the time-driven step takes well under a microsecond; longer means a member is
 /// not running).
-pub const SPIN_TIME: Duration = Duration::from_micros(50);
+pub(super) const SPIN_TIME: Duration = Duration::from_micros(50);
 
 /// How long the first members wait at the door for the other threads of the pool to start.
-pub const DOOR_WAIT: Duration = Duration::from_millis(2);
+pub(super) const DOOR_WAIT: Duration = Duration::from_millis(2);
 
 /// The door's "closed" bit in [`Team::joined`].
 const CLOSED: usize = 1 << (usize::BITS - 1);
 
 /// The shared state of one region.
 #[derive(Debug)]
-pub struct Team {
+pub(super) struct Team {
     /// Members joined so far (low bits) and [`CLOSED`].
     joined: AtomicUsize,
     /// Threads of the pool (the most members a team can have).
@@ -56,7 +56,7 @@ pub struct Team {
 
 /// One member's view of the team.
 #[derive(Debug, Clone, Copy)]
-pub struct Member<'t> {
+pub(super) struct Member<'t> {
     team: &'t Team,
     /// This member's number, `0..members`.
     pub slot: usize,
@@ -116,7 +116,7 @@ impl Pause {
 impl Member<'_> {
     /// Waits until every member has called `wait` as often as this one. Memory written by any
     /// member before its call is visible to every member after it.
-    pub fn wait(&self) {
+    pub(super) fn wait(&self) {
         let team = self.team;
         let generation = team.generation.load(Ordering::Acquire);
         if team.arrived.fetch_add(1, Ordering::AcqRel) + 1 == self.members {
@@ -186,7 +186,7 @@ impl Team {
 
 /// Runs `work` as the only member of a team on the calling thread (no pool thread, no door;
 /// its barriers return at once): the same code as [`run`] on one thread.
-pub fn solo<R>(work: impl FnOnce(Member<'_>) -> R) -> R {
+pub(super) fn solo<R>(work: impl FnOnce(Member<'_>) -> R) -> R {
     let team = Team::new(1, Duration::ZERO);
     work(Member {
         team: &team,

@@ -16,16 +16,16 @@ use crate::physics::hertz;
 
 /// Bits of the per-coordinate wall-contact byte: touching the lower, the upper wall of the
 /// coordinate's axis.
-pub const WALL_LO: u8 = 1;
+pub(super) const WALL_LO: u8 = 1;
 /// See [`WALL_LO`].
-pub const WALL_HI: u8 = 2;
+pub(super) const WALL_HI: u8 = 2;
 
 /// Particles per block of the screening pass.
-pub const SCREEN_BLOCK: usize = 8;
+pub(super) const SCREEN_BLOCK: usize = 8;
 
 /// One axis's pair of walls at the time of a force evaluation.
 #[derive(Debug, Clone, Copy)]
-pub struct WallAxis {
+pub(super) struct WallAxis {
     /// Position of the lower wall (its drive displacement on the driven axis, else 0).
     pub lo: f64,
     /// Position of the upper wall (the box size plus the same displacement).
@@ -51,7 +51,7 @@ impl WallAxis {
     /// a centre `x` inside it has `x - lo > R_i` and `x + R_i < hi` exactly, so the rounded
     /// overlaps `R_i - (x - lo)` and `x + R_i - hi` of the per-particle test are `<= 0`
     /// (rounding is monotone and `R_i`, `hi` are floating-point numbers).
-    pub fn new(
+    pub(super) fn new(
         lo: f64,
         hi: f64,
         velocity: f64,
@@ -77,7 +77,7 @@ impl WallAxis {
 /// What the walls book; the sums run on in the order of the particles (the engine keeps one
 /// per chunk of coordinates).
 #[derive(Debug, Clone, Copy, Default)]
-pub struct WallBooks {
+pub(super) struct WallBooks {
     /// Work of the damping part of Eq. 2.7, `sum F_damp xi_dot dt`.
     pub dissipated: f64,
     /// Work of the moving walls, `sum F_wall v_wall dt`.
@@ -92,7 +92,7 @@ pub struct WallBooks {
 /// `radius` and wall prefactors `wall_kr` (`k sqrt(R_i)`) to `f`, updates their contact bits
 /// `touching` and books into `b`. All slices have the length of `x`.
 #[allow(clippy::too_many_arguments)]
-pub fn wall_forces(
+pub(super) fn wall_forces(
     w: &WallAxis,
     x: &[f64],
     v: &[f64],

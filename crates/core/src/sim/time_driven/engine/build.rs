@@ -15,7 +15,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool> TimeEngine<D, GRAV, WET,
     }
 
     /// Rebuilds the engine from a saved state ([`Self::from_state_with_body_force`]).
-    pub fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
+    pub(crate) fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
         Self::from_state_with_body_force(scene, state, NoBodyForce)
     }
 }
@@ -35,7 +35,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// ones zero), so the continuation is physically continuous (same positions, velocities,
     /// bridges and energy) but not identical to an uninterrupted run; contacts overlapping at
     /// the state count as new contact onsets.
-    pub fn from_state_with_body_force(
+    pub(crate) fn from_state_with_body_force(
         scene: &Scene,
         state: &crate::sim::EngineState,
         body: B,

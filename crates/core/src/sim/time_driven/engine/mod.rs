@@ -88,14 +88,14 @@ impl<const D: usize> BodyForce<D> for NoBodyForce {
 /// Coordinates per chunk of the per-particle phase of a step (and of Verlet's drift): the
 /// unit of work of a thread, and the unit over which the booked sums are taken before they are
 /// added up in chunk order (fixed, so the numbers do not depend on the number of threads).
-pub const PARTICLE_CHUNK: usize = 128;
+pub(crate) const PARTICLE_CHUNK: usize = 128;
 
 /// Below this many particles (the default [`Execution::split_from`]) the
 /// loops of a step run on the calling thread (same chunks, same numbers): a parallel loop costs
 /// a few microseconds of hand-over per step. On a quiet 2-core machine two threads made the
 /// N = 1200 bench 0.69x as fast, 4 800 disks about even, 19 200 at most 1.37x
 /// (docs/performance-history.md, "Quiet-machine figures after the third round").
-pub const PARALLEL_MIN_PARTICLES: usize = 16_384;
+pub(crate) const PARALLEL_MIN_PARTICLES: usize = 16_384;
 
 /// Which execution strategy runs which step, fixed at construction
 /// ([`TimeEngine::with_execution`]). The numbers never depend on the thread count; the
@@ -124,7 +124,7 @@ impl Default for Execution {
 
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
-pub const SANITY_OVERLAP: f64 = 0.05;
+pub(crate) const SANITY_OVERLAP: f64 = 0.05;
 
 /// Runtime parameters derived once from the scene.
 #[derive(Debug, Clone)]
