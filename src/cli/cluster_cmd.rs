@@ -16,11 +16,11 @@ use std::process::ExitCode;
 
 /// Folder of the sweep directories where `--dir` is not given: beside the database (which a
 /// cluster user keeps on the shared filesystem), `<db folder>/wetgran-slurm/<sweep name>`.
-pub const DEFAULT_DIR: &str = "wetgran-slurm";
+pub(super) const DEFAULT_DIR: &str = "wetgran-slurm";
 
 /// `sweep submit` settings.
 #[derive(Debug, Clone)]
-pub struct Submit {
+pub(super) struct Submit {
     pub options: SbatchOptions,
     pub array_limit: Option<usize>,
     pub dry_run: bool,
@@ -35,7 +35,7 @@ fn absolute(p: &Path) -> Result<PathBuf, Failure> {
 }
 
 /// The sweep directory of `sweep` for the database `db`.
-pub fn sweep_dir(db: &Path, sweep: &str, dir: Option<&Path>) -> Result<PathBuf, Failure> {
+pub(super) fn sweep_dir(db: &Path, sweep: &str, dir: Option<&Path>) -> Result<PathBuf, Failure> {
     match dir {
         Some(d) => absolute(d),
         None => {
@@ -384,7 +384,7 @@ fn unfinished_for_good(
 /// standard output without `--out`). A failed job, or a spec that cannot be read, still writes
 /// a record (outcome `failed`), so that `sweep collect` can tell a failure from a task that
 /// never ran; the job id of an unreadable spec is its file name without `.json`.
-pub fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
+pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
     let t0 = std::time::Instant::now();
     let (record, code) = match read_spec(spec_path) {
         Err(Failure::BadInput(m) | Failure::JobsFailed(m) | Failure::Other(m)) => {

@@ -35,7 +35,7 @@ impl From<StoreError> for Failure {
 
 /// Exit status of `sweep run` / `sweep resume` when the sweep ran to its end but some jobs
 /// failed (3 is taken by a broken engine invariant in `simulate` and by `stress`).
-pub const JOBS_FAILED_EXIT: u8 = 4;
+pub(super) const JOBS_FAILED_EXIT: u8 = 4;
 
 pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
     match r {
@@ -56,7 +56,7 @@ pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
 }
 
 /// The cores this process may use (`std::thread::available_parallelism`, 1 if unknown).
-pub fn available_cores() -> usize {
+pub(super) fn available_cores() -> usize {
     std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1)
@@ -64,7 +64,7 @@ pub fn available_cores() -> usize {
 
 /// Worker threads for `--jobs N`: the available cores by default; `N` must be in
 /// `[1, available cores]` unless `oversubscribe` (`--oversubscribe`) allows more.
-pub fn workers(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, String> {
+pub(super) fn workers(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, String> {
     let cores = available_cores();
     match jobs {
         None => Ok(cores),

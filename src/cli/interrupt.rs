@@ -11,7 +11,7 @@ use std::path::Path;
 use std::sync::Once;
 
 /// Exit status after Ctrl-C.
-pub const INTERRUPTED_EXIT: i32 = 130;
+pub(super) const INTERRUPTED_EXIT: i32 = 130;
 
 /// A path as a shell word: quoted where it holds anything but letters, digits and `_-./+,:=@`.
 pub(super) fn shell_word(s: &str) -> String {

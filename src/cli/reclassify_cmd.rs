@@ -15,7 +15,7 @@ use wetgran_core::observe::Thresholds;
 
 /// Reads classifier thresholds from a TOML file: a `[classify]` table, or the keys at the top
 /// level; missing keys take their defaults (docs/observables.md). Errors name the file.
-pub fn thresholds_file(path: &Path) -> Result<Thresholds, String> {
+pub(super) fn thresholds_file(path: &Path) -> Result<Thresholds, String> {
     let origin = path.display().to_string();
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("{origin}: cannot read the thresholds file: {e}"))?;
@@ -38,7 +38,7 @@ pub fn thresholds_file(path: &Path) -> Result<Thresholds, String> {
 }
 
 /// `wetgran reclassify [--sweep NAME] [--classify FILE] [--db PATH]`.
-pub fn reclassify(db: &Path, sweep: Option<&str>, classify_file: Option<&Path>) -> ExitCode {
+pub(super) fn reclassify(db: &Path, sweep: Option<&str>, classify_file: Option<&Path>) -> ExitCode {
     exit((|| {
         let thresholds = classify_file
             .map(thresholds_file)

@@ -10,7 +10,7 @@ use std::path::Path;
 
 /// Command-line overrides of the `[refine]` table.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Overrides {
+pub(super) struct Overrides {
     pub budget: Option<usize>,
     pub rounds: Option<usize>,
     pub resolution: Option<f64>,
@@ -19,7 +19,7 @@ pub struct Overrides {
 
 /// `wetgran sweep refine`: `budget` more jobs (default: what is left of the file's `[refine]`
 /// budget).
-pub fn refine(
+pub(super) fn refine(
     db: &Path,
     name: Option<&str>,
     over: Overrides,

@@ -1,14 +1,14 @@
 //! Small SVG helpers shared by the pictures: escaping, number formatting, a colour map.
 
 /// Escapes text for SVG.
-pub fn esc(s: &str) -> String {
+pub(super) fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
 }
 
 /// A number with few digits for coordinates (keeps files small).
-pub fn n(v: f64) -> String {
+pub(super) fn n(v: f64) -> String {
     let r = (v * 100.0).round() / 100.0;
     if r == r.trunc() {
         format!("{}", r as i64)
@@ -18,7 +18,7 @@ pub fn n(v: f64) -> String {
 }
 
 /// A tick label: plain for ordinary magnitudes, scientific for very small or large ones.
-pub fn label(v: f64) -> String {
+pub(super) fn label(v: f64) -> String {
     if v == 0.0 {
         "0".into()
     } else if v.abs() >= 1e4 || v.abs() < 1e-2 {
@@ -32,7 +32,7 @@ pub fn label(v: f64) -> String {
 }
 
 /// A perceptually ordered colour map (dark blue - teal - yellow) for `u` in `[0, 1]`.
-pub fn colour(u: f64) -> String {
+pub(super) fn colour(u: f64) -> String {
     const STOPS: [(f64, [f64; 3]); 5] = [
         (0.0, [68.0, 1.0, 84.0]),
         (0.25, [59.0, 82.0, 139.0]),
@@ -59,7 +59,7 @@ pub fn colour(u: f64) -> String {
 }
 
 /// Eight distinct colours for small integers (bridge counts 0..=7+).
-pub fn category(k: usize) -> &'static str {
+pub(super) fn category(k: usize) -> &'static str {
     const C: [&str; 8] = [
         "#bdbdbd", "#4575b4", "#74add1", "#abd9e9", "#fee090", "#fdae61", "#f46d43", "#d73027",
     ];
@@ -69,7 +69,7 @@ pub fn category(k: usize) -> &'static str {
 /// The ticks of an axis over `range`: every grid value when there are at most `max` distinct
 /// ones inside it (a sweep's axis values), else every decade on a log axis (1, 2, 5 times each
 /// decade when the range spans less than two), else `max` evenly spaced values.
-pub fn grid_ticks(values: &[f64], range: (f64, f64), log: bool, max: usize) -> Vec<f64> {
+pub(super) fn grid_ticks(values: &[f64], range: (f64, f64), log: bool, max: usize) -> Vec<f64> {
     let (lo, hi) = (range.0.min(range.1), range.0.max(range.1));
     let mut grid: Vec<f64> = values
         .iter()

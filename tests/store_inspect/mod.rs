@@ -10,7 +10,7 @@ use std::path::Path;
 /// One job as stored: its status and, when it has them, its result and checkpoint rows
 /// (numbers as bits, JSON as the stored text, so that equality is exact).
 #[derive(Debug, Clone, PartialEq)]
-pub struct StoredJob {
+pub(crate) struct StoredJob {
     pub status: String,
     pub result: Option<StoredResult>,
     /// (checkpoint time bits, state JSON).
@@ -19,7 +19,7 @@ pub struct StoredJob {
 
 /// A result row without its wall time, owner and finish time (which differ between runs).
 #[derive(Debug, Clone, PartialEq)]
-pub struct StoredResult {
+pub(crate) struct StoredResult {
     pub phase: Option<String>,
     pub decided_on: Option<String>,
     pub observables: String,
@@ -29,14 +29,14 @@ pub struct StoredResult {
 
 /// Every job of the database by id, and the sweep points `(sweep, point, replica, job id)`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Snapshot {
+pub(crate) struct Snapshot {
     pub jobs: BTreeMap<String, StoredJob>,
     pub points: Vec<(String, i64, i64, String)>,
 }
 
 impl Snapshot {
     /// The jobs that have a result.
-    pub fn done(&self) -> BTreeMap<&String, &StoredJob> {
+    pub(crate) fn done(&self) -> BTreeMap<&String, &StoredJob> {
         self.jobs
             .iter()
             .filter(|(_, j)| j.result.is_some())
@@ -46,7 +46,7 @@ impl Snapshot {
 
 /// What differs between two stored jobs, field by field (empty when they are equal); long
 /// texts are cut.
-pub fn differences(a: &StoredJob, b: &StoredJob) -> String {
+pub(crate) fn differences(a: &StoredJob, b: &StoredJob) -> String {
     let cut = |s: &str| s.chars().take(160).collect::<String>();
     let mut out = Vec::new();
     if a.status != b.status {
@@ -97,7 +97,7 @@ fn runtime() -> tokio::runtime::Runtime {
 /// Reads the database read-only and checks every row for consistency: a job is `done` exactly
 /// when it has one result row; every result's JSON parses; every checkpoint parses as an engine
 /// state whose time is the row's and the result's simulated time. Panics with what is wrong.
-pub fn snapshot(db: &Path) -> Snapshot {
+pub(crate) fn snapshot(db: &Path) -> Snapshot {
     use sqlx::Row;
     use sqlx::sqlite::SqliteConnectOptions;
     runtime().block_on(async {
@@ -195,7 +195,7 @@ pub fn snapshot(db: &Path) -> Snapshot {
 }
 
 /// SQLite's full `PRAGMA integrity_check` through the store (`["ok"]` for a sound file).
-pub fn integrity(db: &Path) -> Vec<String> {
+pub(crate) fn integrity(db: &Path) -> Vec<String> {
     wetgran::store::Store::open_existing(db)
         .unwrap()
         .integrity_check()

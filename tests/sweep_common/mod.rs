@@ -9,7 +9,7 @@ use wetgran::sweep::JobResult;
 
 /// A small 2D wet shaken scene: 40 disks in a 20 d x 9 d box. One driving period at
 /// (Gamma, E*) = (3, 2) is T = 2 pi v_w / Gamma with v_w = sqrt(2 E* E_cb).
-pub const TINY_SCENE: &str = r#"
+pub(crate) const TINY_SCENE: &str = r#"
 dimension = 2
 [box]
 size = [20.0, 9.0]
@@ -32,33 +32,33 @@ duration = 10.0
 "#;
 
 /// Writes `text` to `dir/name` and returns the path.
-pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+pub(crate) fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).expect("write a test file");
     p
 }
 
 /// The wetgran binary built for these tests.
-pub fn wetgran() -> Command {
+pub(crate) fn wetgran() -> Command {
     Command::new(env!("CARGO_BIN_EXE_wetgran"))
 }
 
 /// Runs wetgran with `args` and returns its output.
-pub fn run(args: &[&str]) -> Output {
+pub(crate) fn run(args: &[&str]) -> Output {
     wetgran().args(args).output().expect("start wetgran")
 }
 
-pub fn stderr(o: &Output) -> String {
+pub(crate) fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).to_string()
 }
 
-pub fn stdout(o: &Output) -> String {
+pub(crate) fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).to_string()
 }
 
 /// Claims every pending job of the sweep and finishes it with the phase `phase(coords,
 /// replica)`, as a runner would (no simulation).
-pub fn finish_synthetic(
+pub(crate) fn finish_synthetic(
     store: &Store,
     sweep_id: i64,
     phase: impl Fn(&[serde_json::Value], i64) -> Option<String>,
