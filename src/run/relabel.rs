@@ -10,6 +10,7 @@
 //! per-point labels (`{"by": "line_without_transition"}`).
 
 use crate::store::{PointRow, Store, StoreError, SweepRow};
+use serde::Deserialize;
 use std::collections::{BTreeMap, HashSet};
 use wetgran_core::observe::line::classify_line;
 use wetgran_core::observe::{Classification, Observables, Thresholds, classify};
@@ -62,41 +63,57 @@ fn line_key(scene: &Scene, gamma: f64) -> String {
 /// Re-classifies every finished point of a sweep from its stored observables, with
 /// `thresholds` (or each point's own `[classify]`) and the line rule where a line exists.
 pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Relabel> {
+    relabel_parsed(points, &parse_observables(points), thresholds)
+}
+
+/// Each point's stored observables as this wetgran reads them (`None`: no result, or a layout
+/// it cannot read), parsed once per relabelling.
+fn parse_observables(points: &[PointRow]) -> Vec<Option<Observables>> {
+    points
+        .iter()
+        .map(|row| {
+            row.observables
+                .as_ref()
+                .and_then(|o| Observables::deserialize(o).ok())
+        })
+        .collect()
+}
+
+/// [`relabel`] with the observables already parsed (`parsed[k]` those of `points[k]`). The
+/// points are grouped by line in one pass (a map from line key to members), so the work is
+/// one line key and one classification per point whatever the number of lines.
+fn relabel_parsed(
+    points: &[PointRow],
+    parsed: &[Option<Observables>],
+    thresholds: Option<&Thresholds>,
+) -> Vec<Relabel> {
     struct P<'a> {
         row: &'a PointRow,
-        obs: Observables,
+        obs: &'a Observables,
         th: Thresholds,
-        line: Option<(String, f64, f64)>,
+        line: Option<(f64, f64)>,
     }
-    let mut ps: Vec<P> = points
-        .iter()
-        .filter_map(|row| {
-            let obs: Observables = serde_json::from_value(row.observables.clone()?).ok()?;
-            let scene = &row.spec.scene;
-            let th = thresholds
-                .cloned()
-                .unwrap_or_else(|| scene.classify.clone());
-            let line = (scene.drive.kind == DriveKind::Sine && obs.shear.is_none())
-                .then(|| gamma_e_star(scene))
-                .flatten()
-                .map(|(g, e)| (line_key(scene, g), g, e));
-            Some(P { row, obs, th, line })
-        })
-        .collect();
+    let mut lines: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    let mut ps: Vec<P> = Vec::with_capacity(points.len());
+    for (row, obs) in points.iter().zip(parsed) {
+        let Some(obs) = obs else { continue };
+        let scene = &row.spec.scene;
+        let th = thresholds
+            .cloned()
+            .unwrap_or_else(|| scene.classify.clone());
+        let line = (scene.drive.kind == DriveKind::Sine && obs.shear.is_none())
+            .then(|| gamma_e_star(scene))
+            .flatten();
+        if let Some((g, _)) = line {
+            lines.entry(line_key(scene, g)).or_default().push(ps.len());
+        }
+        ps.push(P { row, obs, th, line });
+    }
     let mut out: Vec<Option<Classification>> = vec![None; ps.len()];
-    let mut keys: Vec<String> = ps
-        .iter()
-        .filter_map(|p| p.line.as_ref().map(|l| l.0.clone()))
-        .collect();
-    keys.sort();
-    keys.dedup();
-    for key in keys {
-        let members: Vec<usize> = (0..ps.len())
-            .filter(|&k| ps[k].line.as_ref().is_some_and(|l| l.0 == key))
-            .collect();
+    for members in lines.values() {
         let mut distinct: Vec<f64> = members
             .iter()
-            .map(|&k| ps[k].line.as_ref().expect("member").2)
+            .map(|&k| ps[k].line.expect("member").1)
             .collect();
         distinct.sort_by(f64::total_cmp);
         distinct.dedup();
@@ -104,12 +121,12 @@ pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Rela
             continue;
         }
         let first = &ps[members[0]];
-        let gamma = first.line.as_ref().expect("member").1;
+        let gamma = first.line.expect("member").0;
         let elastic = first.row.spec.scene.contact.restitution >= 1.0;
         let th = first.th.clone();
         let line: Vec<(f64, &Observables)> = members
             .iter()
-            .map(|&k| (ps[k].line.as_ref().expect("member").2, &ps[k].obs))
+            .map(|&k| (ps[k].line.expect("member").1, ps[k].obs))
             .collect();
         for (k, c) in members
             .iter()
@@ -118,12 +135,12 @@ pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Rela
             out[*k] = Some(c);
         }
     }
-    ps.iter_mut()
+    ps.iter()
         .zip(out)
         .map(|(p, c)| Relabel {
             job_id: p.row.job_id.clone(),
             old: p.row.phase.clone(),
-            classification: c.unwrap_or_else(|| classify(&p.obs, &p.th)),
+            classification: c.unwrap_or_else(|| classify(p.obs, &p.th)),
         })
         .collect()
 }
@@ -224,10 +241,9 @@ struct Tally {
 impl Tally {
     /// Relabels `points` (whole lines of one sweep) and records the outcome.
     fn add(&mut self, points: &[PointRow], thresholds: Option<&Thresholds>) {
-        for p in points {
-            if let Some(o) = &p.observables
-                && serde_json::from_value::<Observables>(o.clone()).is_err()
-            {
+        let parsed = parse_observables(points);
+        for (p, obs) in points.iter().zip(&parsed) {
+            if p.observables.is_some() && obs.is_none() {
                 // Observables this wetgran cannot read (another version's layout) keep their
                 // label.
                 self.unreadable.insert(p.job_id.clone());
@@ -250,7 +266,7 @@ impl Tally {
         }
         let before: BTreeMap<&str, &PointRow> =
             points.iter().map(|p| (p.job_id.as_str(), p)).collect();
-        for l in relabel(points, thresholds) {
+        for l in relabel_parsed(points, &parsed, thresholds) {
             let p = before[l.job_id.as_str()];
             let phase = l.classification.phase.to_string();
             let decided_on =

@@ -26,6 +26,7 @@ pub mod engines;
 pub mod memory;
 pub mod observer;
 pub mod orchestrator;
+pub mod orchestrator_scale;
 pub mod shake;
 pub mod slab;
 pub mod stress;
