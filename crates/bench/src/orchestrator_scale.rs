@@ -318,7 +318,8 @@ pub fn run(
                 "{tasks:>8} tasks: `sweep collect` {t:.2} s ({:.3} ms per task)",
                 t / tasks as f64 * 1e3
             );
-            eprint!("{s}");
+            eprint!("{}", s.lines().last().unwrap_or_default());
+            eprintln!();
         }
         if two {
             let r = two_runners(n, tmp.path())?;
@@ -337,7 +338,8 @@ pub fn run(
                 r.resume_s,
                 r.relabel_s
             );
-            eprint!("{s}");
+            eprint!("{}", s.lines().last().unwrap_or_default());
+            eprintln!();
         }
     }
     Ok(s)
