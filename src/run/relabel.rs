@@ -223,16 +223,9 @@ impl Relabelled {
 /// read.
 #[derive(Default)]
 struct Tally {
-    /// `job -> (old phase, old decided_on, new phase, new decided_on)`.
-    labels: BTreeMap<
-        String,
-        (
-            Option<String>,
-            Option<serde_json::Value>,
-            String,
-            serde_json::Value,
-        ),
-    >,
+    /// `job -> (old phase, new phase, new decided_on)`, the decision only where the label or
+    /// its decision numbers changed (what is written).
+    labels: BTreeMap<String, (Option<String>, String, Option<serde_json::Value>)>,
     unreadable: HashSet<String>,
     missing_flc: HashSet<String>,
     missing_regions: HashSet<String>,
@@ -271,9 +264,11 @@ impl Tally {
             let phase = l.classification.phase.to_string();
             let decided_on =
                 serde_json::to_value(&l.classification.decided_on).expect("decision serializes");
+            let write = p.phase.as_deref() != Some(phase.as_str())
+                || p.decided_on.as_ref() != Some(&decided_on);
             self.labels.insert(
                 l.job_id.clone(),
-                (p.phase.clone(), p.decided_on.clone(), phase, decided_on),
+                (p.phase.clone(), phase, write.then_some(decided_on)),
             );
         }
     }
@@ -287,15 +282,13 @@ impl Tally {
             ..Relabelled::default()
         };
         let mut updates = Vec::new();
-        for (job_id, (old_phase, old_decided, phase, decided_on)) in self.labels {
+        for (job_id, (old_phase, phase, decided_on)) in self.labels {
             out.results += 1;
-            let old = old_phase.clone().unwrap_or_else(|| "-".to_string());
+            let old = old_phase.unwrap_or_else(|| "-".to_string());
             if old != phase {
                 *out.changes.entry((old, phase.clone())).or_insert(0) += 1;
             }
-            if old_phase.as_deref() != Some(phase.as_str())
-                || old_decided.as_ref() != Some(&decided_on)
-            {
+            if let Some(decided_on) = decided_on {
                 updates.push((job_id, phase, decided_on));
             }
         }
@@ -318,12 +311,58 @@ pub fn relabel_stored(
 ) -> Result<Relabelled, StoreError> {
     let mut tally = Tally::default();
     for s in sweeps {
-        tally.add(&store.points(s.id)?, thresholds);
+        let specs = store.point_specs(s.id)?;
+        let keys: Vec<Option<String>> =
+            specs.iter().map(|p| spec_line_key(&p.spec.scene)).collect();
+        let every: Vec<(&str, Option<&str>)> = specs
+            .iter()
+            .zip(&keys)
+            .map(|(p, k)| (p.job_id.as_str(), k.as_deref()))
+            .collect();
+        for group in line_groups(&every) {
+            tally.add(&store.points_of_jobs(s.id, &group)?, thresholds);
+        }
     }
     let (out, updates) = tally.finish();
     let clear: Vec<(i64, Option<Vec<String>>)> = sweeps.iter().map(|s| (s.id, None)).collect();
     store.relabel_and_clear(&updates, &clear)?;
     Ok(out)
+}
+
+/// Jobs read and re-classified at once by a relabelling: whole lines of constant Gamma are
+/// gathered until a group holds at least this many jobs. The rows of a group are held with
+/// their observables parsed (tens of kB a result), so a sweep is relabelled in memory that
+/// does not grow with it (10^5 results read at once held 6.8 GB).
+const GROUP_JOBS: usize = 2_000;
+
+/// `(job id, line key)` pairs cut into groups of whole lines (every job of a line in one
+/// group; jobs on no line in groups of their own), each group at most [`GROUP_JOBS`] jobs
+/// unless one line is longer; each job once, lines in key order.
+fn line_groups(jobs: &[(&str, Option<&str>)]) -> Vec<Vec<String>> {
+    let mut lines: BTreeMap<Option<&str>, Vec<&str>> = BTreeMap::new();
+    for &(job, key) in jobs {
+        lines.entry(key).or_default().push(job);
+    }
+    let mut groups: Vec<Vec<String>> = Vec::new();
+    let mut current: Vec<String> = Vec::new();
+    for (key, mut members) in lines {
+        members.sort_unstable();
+        members.dedup();
+        let chunks: Vec<&[&str]> = match key {
+            Some(_) => vec![&members[..]],
+            None => members.chunks(GROUP_JOBS).collect(),
+        };
+        for chunk in chunks {
+            if !current.is_empty() && current.len() + chunk.len() > GROUP_JOBS {
+                groups.push(std::mem::take(&mut current));
+            }
+            current.extend(chunk.iter().map(|j| j.to_string()));
+        }
+    }
+    if !current.is_empty() {
+        groups.push(current);
+    }
+    groups
 }
 
 /// The line key of a job's point, from its spec alone: `None` for a point that is on no line
@@ -359,19 +398,19 @@ pub fn relabel_changed(store: &Store, sweep: &SweepRow) -> Result<Relabelled, St
         .filter(|(p, _)| pending_set.contains(p.job_id.as_str()))
         .filter_map(|(_, k)| k.as_deref())
         .collect();
-    let mut members: Vec<String> = specs
+    let members: Vec<(&str, Option<&str>)> = specs
         .iter()
         .zip(&keys)
         .filter(|(p, k)| {
             pending_set.contains(p.job_id.as_str())
                 || k.as_deref().is_some_and(|k| touched.contains(k))
         })
-        .map(|(p, _)| p.job_id.clone())
+        .map(|(p, k)| (p.job_id.as_str(), k.as_deref()))
         .collect();
-    members.sort();
-    members.dedup();
     let mut tally = Tally::default();
-    tally.add(&store.points_of_jobs(sweep.id, &members)?, None);
+    for group in line_groups(&members) {
+        tally.add(&store.points_of_jobs(sweep.id, &group)?, None);
+    }
     let (out, updates) = tally.finish();
     store.relabel_and_clear(&updates, &[(sweep.id, Some(pending))])?;
     Ok(out)
@@ -404,5 +443,47 @@ mod tests {
         assert_eq!(line_key(a, ga), line_key(b, gb));
         // Another Gamma is another line.
         assert_ne!(line_key(a, ga), line_key(a, 2.0 * ga));
+    }
+
+    #[test]
+    fn groups_hold_whole_lines_each_job_once() {
+        let ids: Vec<String> = (0..3 * GROUP_JOBS).map(|k| format!("j{k:06}")).collect();
+        // Two long lines, many short ones, and jobs on no line; a job listed twice.
+        let mut jobs: Vec<(&str, Option<&str>)> = Vec::new();
+        let keys: Vec<String> = (0..600).map(|k| format!("line{k:03}")).collect();
+        for (k, id) in ids.iter().enumerate() {
+            let key = match k {
+                _ if k < GROUP_JOBS + 10 => Some("long"),
+                _ if k < GROUP_JOBS + 1_210 => Some(keys[k % 600].as_str()),
+                _ => None,
+            };
+            jobs.push((id, key));
+        }
+        jobs.push((&ids[0], Some("long")));
+        let groups = line_groups(&jobs);
+        let mut seen: Vec<&String> = groups.iter().flatten().collect();
+        assert_eq!(seen.len(), ids.len());
+        seen.sort();
+        seen.dedup();
+        assert_eq!(seen.len(), ids.len());
+        for (id, key) in &jobs {
+            let Some(key) = key else { continue };
+            let home = groups
+                .iter()
+                .position(|g| g.iter().any(|j| j == id))
+                .unwrap();
+            for (other, k) in &jobs {
+                if k.as_ref() == Some(key) {
+                    assert!(groups[home].iter().any(|j| j == other), "{key} split");
+                }
+            }
+        }
+        // Only the line longer than a group makes a group over the size.
+        let over: Vec<usize> = groups
+            .iter()
+            .map(Vec::len)
+            .filter(|&n| n > GROUP_JOBS)
+            .collect();
+        assert_eq!(over, vec![GROUP_JOBS + 10]);
     }
 }
