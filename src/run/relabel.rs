@@ -10,6 +10,7 @@
 //! per-point labels (`{"by": "line_without_transition"}`).
 
 use crate::store::{PointRow, Store, StoreError, SweepRow};
+use serde::Deserialize;
 use std::collections::{BTreeMap, HashSet};
 use wetgran_core::observe::line::classify_line;
 use wetgran_core::observe::{Classification, Observables, Thresholds, classify};
@@ -65,41 +66,57 @@ fn line_key(scene: &Scene, gamma: f64) -> String {
 /// Re-classifies every finished point of a sweep from its stored observables, with
 /// `thresholds` (or each point's own `[classify]`) and the line rule where a line exists.
 pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Relabel> {
+    relabel_parsed(points, &parse_observables(points), thresholds)
+}
+
+/// Each point's stored observables as this wetgran reads them (`None`: no result, or a layout
+/// it cannot read), parsed once per relabelling.
+fn parse_observables(points: &[PointRow]) -> Vec<Option<Observables>> {
+    points
+        .iter()
+        .map(|row| {
+            row.observables
+                .as_ref()
+                .and_then(|o| Observables::deserialize(o).ok())
+        })
+        .collect()
+}
+
+/// [`relabel`] with the observables already parsed (`parsed[k]` those of `points[k]`). The
+/// points are grouped by line in one pass (a map from line key to members), so the work is
+/// one line key and one classification per point whatever the number of lines.
+fn relabel_parsed(
+    points: &[PointRow],
+    parsed: &[Option<Observables>],
+    thresholds: Option<&Thresholds>,
+) -> Vec<Relabel> {
     struct P<'a> {
         row: &'a PointRow,
-        obs: Observables,
+        obs: &'a Observables,
         th: Thresholds,
-        line: Option<(String, f64, f64)>,
+        line: Option<(f64, f64)>,
     }
-    let mut ps: Vec<P> = points
-        .iter()
-        .filter_map(|row| {
-            let obs: Observables = serde_json::from_value(row.observables.clone()?).ok()?;
-            let scene = &row.spec.scene;
-            let th = thresholds
-                .cloned()
-                .unwrap_or_else(|| scene.classify.clone());
-            let line = (scene.drive.kind == DriveKind::Sine && obs.shear.is_none())
-                .then(|| gamma_e_star(scene))
-                .flatten()
-                .map(|(g, e)| (line_key(scene, g), g, e));
-            Some(P { row, obs, th, line })
-        })
-        .collect();
+    let mut lines: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    let mut ps: Vec<P> = Vec::with_capacity(points.len());
+    for (row, obs) in points.iter().zip(parsed) {
+        let Some(obs) = obs else { continue };
+        let scene = &row.spec.scene;
+        let th = thresholds
+            .cloned()
+            .unwrap_or_else(|| scene.classify.clone());
+        let line = (scene.drive.kind == DriveKind::Sine && obs.shear.is_none())
+            .then(|| gamma_e_star(scene))
+            .flatten();
+        if let Some((g, _)) = line {
+            lines.entry(line_key(scene, g)).or_default().push(ps.len());
+        }
+        ps.push(P { row, obs, th, line });
+    }
     let mut out: Vec<Option<Classification>> = vec![None; ps.len()];
-    let mut keys: Vec<String> = ps
-        .iter()
-        .filter_map(|p| p.line.as_ref().map(|l| l.0.clone()))
-        .collect();
-    keys.sort();
-    keys.dedup();
-    for key in keys {
-        let members: Vec<usize> = (0..ps.len())
-            .filter(|&k| ps[k].line.as_ref().is_some_and(|l| l.0 == key))
-            .collect();
+    for members in lines.values() {
         let mut distinct: Vec<f64> = members
             .iter()
-            .map(|&k| ps[k].line.as_ref().expect("member").2)
+            .map(|&k| ps[k].line.expect("member").1)
             .collect();
         distinct.sort_by(f64::total_cmp);
         distinct.dedup();
@@ -107,12 +124,12 @@ pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Rela
             continue;
         }
         let first = &ps[members[0]];
-        let gamma = first.line.as_ref().expect("member").1;
+        let gamma = first.line.expect("member").0;
         let elastic = first.row.spec.scene.contact.restitution >= 1.0;
         let th = first.th.clone();
         let line: Vec<(f64, &Observables)> = members
             .iter()
-            .map(|&k| (ps[k].line.as_ref().expect("member").2, &ps[k].obs))
+            .map(|&k| (ps[k].line.expect("member").1, ps[k].obs))
             .collect();
         for (k, c) in members
             .iter()
@@ -121,12 +138,12 @@ pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Rela
             out[*k] = Some(c);
         }
     }
-    ps.iter_mut()
+    ps.iter()
         .zip(out)
         .map(|(p, c)| Relabel {
             job_id: p.row.job_id.clone(),
             old: p.row.phase.clone(),
-            classification: c.unwrap_or_else(|| classify(&p.obs, &p.th)),
+            classification: c.unwrap_or_else(|| classify(p.obs, &p.th)),
         })
         .collect()
 }
@@ -209,16 +226,9 @@ impl Relabelled {
 /// read.
 #[derive(Default)]
 struct Tally {
-    /// `job -> (old phase, old decided_on, new phase, new decided_on)`.
-    labels: BTreeMap<
-        String,
-        (
-            Option<String>,
-            Option<serde_json::Value>,
-            String,
-            serde_json::Value,
-        ),
-    >,
+    /// `job -> (old phase, new phase, new decided_on)`, the decision only where the label or
+    /// its decision numbers changed (what is written).
+    labels: BTreeMap<String, (Option<String>, String, Option<serde_json::Value>)>,
     unreadable: HashSet<String>,
     missing_flc: HashSet<String>,
     missing_regions: HashSet<String>,
@@ -227,10 +237,9 @@ struct Tally {
 impl Tally {
     /// Relabels `points` (whole lines of one sweep) and records the outcome.
     fn add(&mut self, points: &[PointRow], thresholds: Option<&Thresholds>) {
-        for p in points {
-            if let Some(o) = &p.observables
-                && serde_json::from_value::<Observables>(o.clone()).is_err()
-            {
+        let parsed = parse_observables(points);
+        for (p, obs) in points.iter().zip(&parsed) {
+            if p.observables.is_some() && obs.is_none() {
                 // Observables this wetgran cannot read (another version's layout) keep their
                 // label.
                 self.unreadable.insert(p.job_id.clone());
@@ -253,14 +262,16 @@ impl Tally {
         }
         let before: BTreeMap<&str, &PointRow> =
             points.iter().map(|p| (p.job_id.as_str(), p)).collect();
-        for l in relabel(points, thresholds) {
+        for l in relabel_parsed(points, &parsed, thresholds) {
             let p = before[l.job_id.as_str()];
             let phase = l.classification.phase.to_string();
             let decided_on =
                 serde_json::to_value(&l.classification.decided_on).expect("decision serializes");
+            let write = p.phase.as_deref() != Some(phase.as_str())
+                || p.decided_on.as_ref() != Some(&decided_on);
             self.labels.insert(
                 l.job_id.clone(),
-                (p.phase.clone(), p.decided_on.clone(), phase, decided_on),
+                (p.phase.clone(), phase, write.then_some(decided_on)),
             );
         }
     }
@@ -274,15 +285,13 @@ impl Tally {
             ..Relabelled::default()
         };
         let mut updates = Vec::new();
-        for (job_id, (old_phase, old_decided, phase, decided_on)) in self.labels {
+        for (job_id, (old_phase, phase, decided_on)) in self.labels {
             out.results += 1;
-            let old = old_phase.clone().unwrap_or_else(|| "-".to_string());
+            let old = old_phase.unwrap_or_else(|| "-".to_string());
             if old != phase {
                 *out.changes.entry((old, phase.clone())).or_insert(0) += 1;
             }
-            if old_phase.as_deref() != Some(phase.as_str())
-                || old_decided.as_ref() != Some(&decided_on)
-            {
+            if let Some(decided_on) = decided_on {
                 updates.push((job_id, phase, decided_on));
             }
         }
@@ -305,12 +314,58 @@ pub fn relabel_stored(
 ) -> Result<Relabelled, StoreError> {
     let mut tally = Tally::default();
     for s in sweeps {
-        tally.add(&store.points(s.id)?, thresholds);
+        let specs = store.point_specs(s.id)?;
+        let keys: Vec<Option<String>> =
+            specs.iter().map(|p| spec_line_key(&p.spec.scene)).collect();
+        let every: Vec<(&str, Option<&str>)> = specs
+            .iter()
+            .zip(&keys)
+            .map(|(p, k)| (p.job_id.as_str(), k.as_deref()))
+            .collect();
+        for group in line_groups(&every) {
+            tally.add(&store.points_of_jobs(s.id, &group)?, thresholds);
+        }
     }
     let (out, updates) = tally.finish();
     let clear: Vec<(i64, Option<Vec<String>>)> = sweeps.iter().map(|s| (s.id, None)).collect();
     store.relabel_and_clear(&updates, &clear)?;
     Ok(out)
+}
+
+/// Jobs read and re-classified at once by a relabelling: whole lines of constant Gamma are
+/// gathered until a group holds at least this many jobs. The rows of a group are held with
+/// their observables parsed (tens of kB a result), so a sweep is relabelled in memory that
+/// does not grow with it (10^5 results read at once held 6.8 GB).
+const GROUP_JOBS: usize = 2_000;
+
+/// `(job id, line key)` pairs cut into groups of whole lines (every job of a line in one
+/// group; jobs on no line in groups of their own), each group at most [`GROUP_JOBS`] jobs
+/// unless one line is longer; each job once, lines in key order.
+fn line_groups(jobs: &[(&str, Option<&str>)]) -> Vec<Vec<String>> {
+    let mut lines: BTreeMap<Option<&str>, Vec<&str>> = BTreeMap::new();
+    for &(job, key) in jobs {
+        lines.entry(key).or_default().push(job);
+    }
+    let mut groups: Vec<Vec<String>> = Vec::new();
+    let mut current: Vec<String> = Vec::new();
+    for (key, mut members) in lines {
+        members.sort_unstable();
+        members.dedup();
+        let chunks: Vec<&[&str]> = match key {
+            Some(_) => vec![&members[..]],
+            None => members.chunks(GROUP_JOBS).collect(),
+        };
+        for chunk in chunks {
+            if !current.is_empty() && current.len() + chunk.len() > GROUP_JOBS {
+                groups.push(std::mem::take(&mut current));
+            }
+            current.extend(chunk.iter().map(|j| j.to_string()));
+        }
+    }
+    if !current.is_empty() {
+        groups.push(current);
+    }
+    groups
 }
 
 /// The line key of a job's point, from its spec alone: `None` for a point that is on no line
@@ -346,19 +401,19 @@ pub fn relabel_changed(store: &Store, sweep: &SweepRow) -> Result<Relabelled, St
         .filter(|(p, _)| pending_set.contains(p.job_id.as_str()))
         .filter_map(|(_, k)| k.as_deref())
         .collect();
-    let mut members: Vec<String> = specs
+    let members: Vec<(&str, Option<&str>)> = specs
         .iter()
         .zip(&keys)
         .filter(|(p, k)| {
             pending_set.contains(p.job_id.as_str())
                 || k.as_deref().is_some_and(|k| touched.contains(k))
         })
-        .map(|(p, _)| p.job_id.clone())
+        .map(|(p, k)| (p.job_id.as_str(), k.as_deref()))
         .collect();
-    members.sort();
-    members.dedup();
     let mut tally = Tally::default();
-    tally.add(&store.points_of_jobs(sweep.id, &members)?, None);
+    for group in line_groups(&members) {
+        tally.add(&store.points_of_jobs(sweep.id, &group)?, None);
+    }
     let (out, updates) = tally.finish();
     store.relabel_and_clear(&updates, &[(sweep.id, Some(pending))])?;
     Ok(out)
@@ -414,5 +469,47 @@ mod tests {
         let (ga, _) = gamma_e_star(a).unwrap();
         let (gb, _) = gamma_e_star(b).unwrap();
         assert_eq!(line_key(a, ga), line_key(b, gb));
+    }
+
+    #[test]
+    fn groups_hold_whole_lines_each_job_once() {
+        let ids: Vec<String> = (0..3 * GROUP_JOBS).map(|k| format!("j{k:06}")).collect();
+        // Two long lines, many short ones, and jobs on no line; a job listed twice.
+        let mut jobs: Vec<(&str, Option<&str>)> = Vec::new();
+        let keys: Vec<String> = (0..600).map(|k| format!("line{k:03}")).collect();
+        for (k, id) in ids.iter().enumerate() {
+            let key = match k {
+                _ if k < GROUP_JOBS + 10 => Some("long"),
+                _ if k < GROUP_JOBS + 1_210 => Some(keys[k % 600].as_str()),
+                _ => None,
+            };
+            jobs.push((id, key));
+        }
+        jobs.push((&ids[0], Some("long")));
+        let groups = line_groups(&jobs);
+        let mut seen: Vec<&String> = groups.iter().flatten().collect();
+        assert_eq!(seen.len(), ids.len());
+        seen.sort();
+        seen.dedup();
+        assert_eq!(seen.len(), ids.len());
+        for (id, key) in &jobs {
+            let Some(key) = key else { continue };
+            let home = groups
+                .iter()
+                .position(|g| g.iter().any(|j| j == id))
+                .unwrap();
+            for (other, k) in &jobs {
+                if k.as_ref() == Some(key) {
+                    assert!(groups[home].iter().any(|j| j == other), "{key} split");
+                }
+            }
+        }
+        // Only the line longer than a group makes a group over the size.
+        let over: Vec<usize> = groups
+            .iter()
+            .map(Vec::len)
+            .filter(|&n| n > GROUP_JOBS)
+            .collect();
+        assert_eq!(over, vec![GROUP_JOBS + 10]);
     }
 }

@@ -209,23 +209,70 @@ impl Store {
         owner: &str,
         finished_at: f64,
     ) -> Result<bool, StoreError> {
+        self.in_transaction(async |tx| self.ingest_in(tx, job_id, result, owner, finished_at).await)
+    }
+
+    /// [`Store::ingest_result`] inside an open transaction.
+    async fn ingest_in(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        job_id: &str,
+        result: &JobResult,
+        owner: &str,
+        finished_at: f64,
+    ) -> Result<bool, StoreError> {
+        let n = sqlx::query(queries::INGEST_DONE_JOB)
+            .bind(job_id)
+            .bind(owner)
+            .bind(finished_at)
+            .bind(result.wall_seconds)
+            .execute(&mut **tx)
+            .await
+            .map_err(|e| self.db(e))?
+            .rows_affected();
+        if n == 1 {
+            self.insert_result(tx, job_id, result, owner, finished_at)
+                .await?;
+            self.insert_remote_run(tx, job_id, owner, result.wall_seconds, finished_at, "done")
+                .await?;
+        }
+        Ok(n == 1)
+    }
+
+    /// Stores results computed elsewhere and the state of the task that brought each
+    /// (`collected`, or `duplicate` where the job already had a result), all in one
+    /// transaction (one sync for the lot, where one per result and one per task state made
+    /// `sweep collect` cost two synced commits a task). Returns, per item, whether its result
+    /// was stored. Each item is what [`Store::ingest_result`] followed by
+    /// [`Store::set_task_state`] would do; a crash before the commit stores none of them and
+    /// leaves their tasks `submitted`, so the next collection reads their files again. An
+    /// item is `(job id, result, owner, finished at, submission id, task)`.
+    pub fn ingest_results(
+        &self,
+        items: &[(&str, &JobResult, &str, f64, i64, i64)],
+    ) -> Result<Vec<bool>, StoreError> {
         self.in_transaction(async |tx| {
-            let n = sqlx::query(queries::INGEST_DONE_JOB)
-                .bind(job_id)
-                .bind(owner)
-                .bind(finished_at)
-                .bind(result.wall_seconds)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?
-                .rows_affected();
-            if n == 1 {
-                self.insert_result(tx, job_id, result, owner, finished_at)
+            let mut kept = Vec::with_capacity(items.len());
+            for &(job_id, result, owner, finished_at, submission_id, task) in items {
+                let k = self
+                    .ingest_in(tx, job_id, result, owner, finished_at)
                     .await?;
-                self.insert_remote_run(tx, job_id, owner, result.wall_seconds, finished_at, "done")
-                    .await?;
+                let state = if k {
+                    TaskState::Collected
+                } else {
+                    TaskState::Duplicate
+                };
+                sqlx::query(queries::SET_TASK_STATE)
+                    .bind(submission_id)
+                    .bind(task)
+                    .bind(state.as_str())
+                    .bind(None::<&str>)
+                    .execute(&mut **tx)
+                    .await
+                    .map_err(|e| self.db(e))?;
+                kept.push(k);
             }
-            Ok(n == 1)
+            Ok(kept)
         })
     }
 

@@ -26,6 +26,7 @@ pub(crate) mod engines;
 pub(crate) mod memory;
 pub(crate) mod observer;
 pub mod orchestrator;
+pub mod orchestrator_scale;
 pub(crate) mod shake;
 pub(crate) mod slab;
 pub mod stress;

@@ -89,6 +89,25 @@ enum Command {
             default_value = "status,boundaries,plot,export,reclassify"
         )]
         reports: Vec<String>,
+        /// Instead of the run and the reports: time `sweep collect` of N task result records
+        /// (a submission recorded without Slurm, the records written beforehand).
+        #[arg(long)]
+        collect: bool,
+        /// Instead of the run and the reports: two runner processes on one database, the first
+        /// killed with SIGKILL after a sixth of the jobs, the rest resumed; checks that every
+        /// job is done once and none lost (docs/reliability.md, "Two runners, one killed").
+        #[arg(long)]
+        two_runners: bool,
+    },
+    /// One runner of `orchestrator --two-runners` (internal).
+    #[command(hide = true)]
+    OrchestratorRunner {
+        #[arg(long)]
+        db: PathBuf,
+        #[arg(long)]
+        dir: PathBuf,
+        #[arg(long)]
+        log: PathBuf,
     },
     /// Run the engines' hard cases at length with the invariant checks on, and print per case
     /// the events (or time steps), simulated time, largest overlap, energy-ledger error, NaN
@@ -115,13 +134,35 @@ fn main() -> ExitCode {
         Some(Command::Stress { case, events, json }) => stress(case.as_deref(), events, json),
         Some(Command::Orchestrator {
             sizes,
+            dir,
+            collect,
+            two_runners,
+            ..
+        }) if collect || two_runners => report(wetgran_bench::orchestrator_scale::run(
+            &sizes,
+            collect,
+            two_runners,
+            dir.as_deref(),
+        )),
+        Some(Command::OrchestratorRunner { db, dir, log }) => {
+            match wetgran_bench::orchestrator_scale::runner(&db, &dir, &log) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
+        Some(Command::Orchestrator {
+            sizes,
             workers,
             repeat,
             dir,
             synced,
             keep,
             reports,
-        }) => match wetgran_bench::orchestrator::run(
+            ..
+        }) => report(wetgran_bench::orchestrator::run(
             &sizes,
             workers.max(1),
             repeat.max(1),
@@ -133,17 +174,22 @@ fn main() -> ExitCode {
             &reports,
             dir.as_deref(),
             keep,
-        ) {
-            Ok(text) => {
-                print!("{text}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
+        )),
         None => figures(&cli.figures),
+    }
+}
+
+/// Prints a benchmark's table, or its error (exit status 2).
+fn report(r: Result<String, String>) -> ExitCode {
+    match r {
+        Ok(text) => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
     }
 }
 

@@ -44,10 +44,10 @@ use wetgran::store::{Durability, Store};
 use wetgran::sweep::{JobResult, SweepFile, run_job};
 
 /// The base scene of the benchmark sweep (the quickstart's).
-const BASE_SCENE: &str = include_str!("../../../scenes/shaken_wet_2d.toml");
+pub(crate) const BASE_SCENE: &str = include_str!("../../../scenes/shaken_wet_2d.toml");
 
 /// The benchmark sweep file over `n_gamma` x `n_e` points.
-fn sweep_text(n_gamma: usize, n_e: usize) -> String {
+pub(crate) fn sweep_text(n_gamma: usize, n_e: usize) -> String {
     format!(
         "[sweep]\nname = \"bench\"\nbase = \"shaken_wet_2d.toml\"\nreplicas = 1\nperiods = 2\n\
          [scene]\nparticles.count = 20\nbox.size = [7.0, 9.0]\nengine.min_rebound_speed = 0.03\n\
@@ -58,7 +58,7 @@ fn sweep_text(n_gamma: usize, n_e: usize) -> String {
 }
 
 /// A grid of about `n` points: `(n_gamma, n_e)` with `n_gamma * n_e = n` where `n` allows.
-fn grid(n: usize) -> (usize, usize) {
+pub(crate) fn grid(n: usize) -> (usize, usize) {
     let mut a = (n as f64).sqrt().floor() as usize;
     while a > 1 && !n.is_multiple_of(a) {
         a -= 1;
@@ -85,7 +85,7 @@ fn quantile(mut v: Vec<f64>, q: f64) -> f64 {
 }
 
 /// The `wetgran` binary beside this one.
-fn wetgran_binary() -> Result<PathBuf, String> {
+pub(crate) fn wetgran_binary() -> Result<PathBuf, String> {
     let exe = std::env::current_exe().map_err(|e| format!("cannot find this binary: {e}"))?;
     let bin = exe.with_file_name("wetgran");
     if bin.exists() {
@@ -201,7 +201,7 @@ fn refine_round(
 
 /// The stand-in label of a point: a made-up map with two boundaries, solid at low Gamma, gas at
 /// high E* Gamma.
-fn stand_in_phase(coords: &[serde_json::Value]) -> &'static str {
+pub(crate) fn stand_in_phase(coords: &[serde_json::Value]) -> &'static str {
     let gamma = coords.first().and_then(|v| v.as_f64()).unwrap_or(1.0);
     let e_star = coords.get(1).and_then(|v| v.as_f64()).unwrap_or(1.0);
     if gamma < 1.5 {

@@ -83,11 +83,39 @@ pub(crate) fn range_cdf(b: usize, r: f64) -> f64 {
     (b as f64 * s).clamp(0.0, 1.0)
 }
 
+/// Values of [`range_quantile`] (`q` as its bits) and [`range_mean`] (`q = None`) computed in
+/// this process, by number of bins. Each is a pure function of its arguments that costs 60 or
+/// one numerical integrals of 3 600 steps, and a sweep's results share a handful of `(b, q)`:
+/// relabelling 10^4 results without a stored bootstrap null asked for the same few values
+/// 10^4 times.
+type RangeCache = std::sync::Mutex<std::collections::HashMap<(usize, Option<u64>), f64>>;
+
+fn range_cache() -> &'static RangeCache {
+    static CACHE: std::sync::OnceLock<RangeCache> = std::sync::OnceLock::new();
+    CACHE.get_or_init(Default::default)
+}
+
+/// `f()`, computed once per process for `key` (a poisoned lock only costs the cache).
+fn cached(key: (usize, Option<u64>), f: impl FnOnce() -> f64) -> f64 {
+    if let Some(v) = range_cache().lock().ok().and_then(|c| c.get(&key).copied()) {
+        return v;
+    }
+    let v = f();
+    if let Ok(mut c) = range_cache().lock() {
+        c.insert(key, v);
+    }
+    v
+}
+
 /// The `q` quantile of the range of `b` independent standard normal values (0 for `b < 2`).
 pub fn range_quantile(b: usize, q: f64) -> f64 {
     if b < 2 {
         return 0.0;
     }
+    cached((b, Some(q.to_bits())), || range_quantile_uncached(b, q))
+}
+
+fn range_quantile_uncached(b: usize, q: f64) -> f64 {
     let (mut lo, mut hi) = (0.0, 20.0);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
@@ -106,6 +134,10 @@ pub(crate) fn range_mean(b: usize) -> f64 {
     if b < 2 {
         return 0.0;
     }
+    cached((b, None), || range_mean_uncached(b))
+}
+
+fn range_mean_uncached(b: usize) -> f64 {
     integrate(|x| {
         let p = normal_cdf(x);
         1.0 - p.powi(b as i32) - (1.0 - p).powi(b as i32)
@@ -353,6 +385,21 @@ mod tests {
             let exact = 2.0 * normal_cdf(r / 2f64.sqrt()) - 1.0;
             assert!((range_cdf(2, r) - exact).abs() < 1e-6, "r = {r}");
         }
+    }
+
+    #[test]
+    fn cached_range_values_equal_the_computed_ones() {
+        for b in [3, 7, 16] {
+            for q in [0.95, 0.99] {
+                let first = range_quantile(b, q);
+                assert_eq!(first.to_bits(), range_quantile_uncached(b, q).to_bits());
+                assert_eq!(first.to_bits(), range_quantile(b, q).to_bits());
+            }
+            assert_eq!(range_mean(b).to_bits(), range_mean_uncached(b).to_bits());
+            assert_eq!(range_mean(b).to_bits(), range_mean(b).to_bits());
+        }
+        // Another level is another entry.
+        assert!(range_quantile(7, 0.99) > range_quantile(7, 0.95));
     }
 
     #[test]

@@ -1,0 +1,346 @@
+//! `wetgran-bench orchestrator --collect` and `--two-runners`: the orchestrator at cluster scale
+//! (issue 35, items 3 and 4), with the stand-in jobs of [`crate::orchestrator`].
+//!
+//! - **collect**: registers the benchmark sweep of N points in a fresh database, records one
+//!   submission of N tasks (as `sweep submit --slurm` does after `sbatch`, without a Slurm job
+//!   id, so no queue is asked), writes each task's result record (`results/<job id>.json`, the
+//!   stand-in result of the real shape) into the sweep directory (untimed), and times
+//!   `wetgran sweep collect --db DB` (the process, start included).
+//! - **two runners**: registers the sweep, starts two runner processes (this binary's hidden
+//!   `orchestrator-runner`, one worker each: the real runner and store, `sweep run`'s
+//!   commits) on the one database, kills the first with SIGKILL once it has started a sixth of
+//!   the jobs, lets the second run to the end, then resumes in this process (the orphaned job
+//!   re-queued, as `sweep resume` does) and relabels the results (`relabel_changed`, as the end
+//!   of `sweep run`). Every stand-in job appends its job id to its process's log file before it
+//!   returns, so the bookkeeping is exact: every job done, with one result; run rows and
+//!   attempts 1 per job, 2 for a job the killed runner held; every job started once in all
+//!   three logs, except that a job the killed runner held may show once more (a start logged
+//!   before the kill). Any other outcome is an error.
+
+use crate::orchestrator::{BASE_SCENE, grid, stand_in_phase, sweep_text, wetgran_binary};
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::io::Write as _;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use wetgran::cluster::{Outcome, ResultRecord, SweepDir};
+use wetgran::run::{JobFn, RunOptions, run_sweeps_with};
+use wetgran::store::{Durability, Store, SweepRow};
+use wetgran::sweep::{JobResult, JobSpec, SweepFile, run_job};
+
+fn e(x: impl std::fmt::Display) -> String {
+    x.to_string()
+}
+
+/// The benchmark sweep of about `n` points written into `dir`, its jobs, and the spec of its
+/// first job written to `first_job.json` (the runner processes run it for their stand-in).
+fn prepare(n: usize, dir: &Path) -> Result<(SweepFile, Vec<wetgran::sweep::SweepJob>), String> {
+    let (n_gamma, n_e) = grid(n);
+    std::fs::write(dir.join("shaken_wet_2d.toml"), BASE_SCENE).map_err(e)?;
+    let path = dir.join("bench.toml");
+    std::fs::write(&path, sweep_text(n_gamma, n_e)).map_err(e)?;
+    let file = SweepFile::load(&path).map_err(e)?;
+    let jobs = file.expand().map_err(e)?;
+    let spec = serde_json::to_string(&jobs[0].spec).map_err(e)?;
+    std::fs::write(dir.join("first_job.json"), spec).map_err(e)?;
+    Ok((file, jobs))
+}
+
+/// One real run of `spec`: the shape of every stand-in result.
+fn real_result(spec: &JobSpec) -> Result<JobResult, String> {
+    run_job(spec, &mut |_| {}).map_err(e)
+}
+
+/// A stand-in job returning `real` with the point's made-up label; with `log`, it appends the
+/// job id (one line, one `write`) to that file first.
+fn stand_in(real: JobResult, log: Option<std::fs::File>) -> JobFn {
+    let log = log.map(Mutex::new);
+    Arc::new(move |claim, _progress| {
+        if let Some(f) = &log {
+            let mut f = f.lock().expect("no panic holds it");
+            // One write per line: a kill leaves whole lines.
+            f.write_all(format!("{}\n", claim.job_id).as_bytes())
+                .map_err(|x| wetgran::sweep::JobError::Panic(format!("start log: {x}")))?;
+        }
+        let mut r = real.clone();
+        r.phase = Some(stand_in_phase(&claim.coords).to_string());
+        Ok(r)
+    })
+}
+
+/// `wetgran sweep collect` of N tasks (module doc): `(seconds, tasks)`.
+pub fn time_collect(n: usize, dir: &Path) -> Result<(f64, usize), String> {
+    let (file, jobs) = prepare(n, dir)?;
+    let real = real_result(&jobs[0].spec)?;
+    let db = dir.join("collect.sqlite");
+    let store = Store::open_as(&db, true, Durability::Synced).map_err(e)?;
+    let sweep = store.register_sweep(&file, &jobs).map_err(e)?;
+    let sd = SweepDir::new(&dir.join("slurm"));
+    sd.create().map_err(e)?;
+    let mut ids: Vec<String> = jobs.iter().map(|j| j.spec.id()).collect();
+    ids.sort();
+    ids.dedup();
+    let root = sd.root.display().to_string();
+    store
+        .record_submission(sweep.id, &root, "#!/bin/sh\n# bench\n", &ids)
+        .map_err(e)?;
+    drop(store);
+    let coords: HashMap<String, &[serde_json::Value]> = jobs
+        .iter()
+        .map(|j| (j.spec.id(), j.coords.as_slice()))
+        .collect();
+    for (k, id) in ids.iter().enumerate() {
+        let mut r = real.clone();
+        r.phase = Some(stand_in_phase(coords[id]).to_string());
+        let mut rec = ResultRecord::new(id, Outcome::Done(r), 0.01);
+        rec.slurm_task = Some(format!("1000_{k}"));
+        let text = serde_json::to_string_pretty(&rec).map_err(e)?;
+        std::fs::write(sd.result(id), text + "\n").map_err(e)?;
+    }
+    let bin = wetgran_binary()?;
+    let t0 = Instant::now();
+    let out = Command::new(&bin)
+        .args(["sweep", "collect", "--db"])
+        .arg(&db)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .output()
+        .map_err(e)?;
+    let t = t0.elapsed().as_secs_f64();
+    if !out.status.success() {
+        return Err(format!(
+            "sweep collect failed ({}): {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    let store = Store::open_existing(&db).map_err(e)?;
+    let c = store.counts(sweep.id).map_err(e)?;
+    if c.done as usize != ids.len() {
+        return Err(format!("collect: {} of {} jobs done", c.done, ids.len()));
+    }
+    Ok((t, ids.len()))
+}
+
+/// What the two-runner run measured.
+#[derive(Debug)]
+pub struct TwoRunners {
+    pub jobs: usize,
+    /// Seconds from the start of the first runner to the end of the second.
+    pub runners_s: f64,
+    /// Starts logged by the killed runner, the survivor and the resume.
+    pub started: [usize; 3],
+    /// Jobs the killed runner held (re-queued by the resume).
+    pub held: usize,
+    pub resume_s: f64,
+    pub relabel_s: f64,
+}
+
+/// The job ids of a start log, one per line (a line cut by the kill is dropped: it has no
+/// newline).
+fn read_log(path: &Path) -> Result<Vec<String>, String> {
+    let text = std::fs::read_to_string(path).map_err(|x| format!("{}: {x}", path.display()))?;
+    let whole = text.rfind('\n').map_or("", |at| &text[..at]);
+    Ok(whole.lines().map(str::to_string).collect())
+}
+
+fn lines_in(path: &Path) -> usize {
+    std::fs::read(path).map_or(0, |b| b.iter().filter(|&&c| c == b'\n').count())
+}
+
+/// Two runners on one database of N jobs, the first killed with SIGKILL mid-way (module doc).
+pub fn two_runners(n: usize, dir: &Path) -> Result<TwoRunners, String> {
+    let (file, jobs) = prepare(n, dir)?;
+    let db = dir.join("two.sqlite");
+    let store = Store::open_as(&db, true, Durability::Fast).map_err(e)?;
+    let sweep = store.register_sweep(&file, &jobs).map_err(e)?;
+    drop(store);
+    let total = jobs.len();
+    let kill_after = (total / 6).max(1);
+    let exe = std::env::current_exe().map_err(e)?;
+    let logs = [dir.join("a.log"), dir.join("b.log"), dir.join("r.log")];
+    let spawn = |log: &Path| {
+        Command::new(&exe)
+            .args(["orchestrator-runner", "--db"])
+            .arg(&db)
+            .arg("--dir")
+            .arg(dir)
+            .arg("--log")
+            .arg(log)
+            .stdout(Stdio::null())
+            .spawn()
+            .map_err(e)
+    };
+    let t0 = Instant::now();
+    let mut a = spawn(&logs[0])?;
+    let b = spawn(&logs[1])?;
+    while lines_in(&logs[0]) < kill_after {
+        if let Some(status) = a.try_wait().map_err(e)? {
+            return Err(format!("runner A ended ({status}) before the kill"));
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    a.kill().map_err(e)?;
+    a.wait().map_err(e)?;
+    let b = b.wait_with_output().map_err(e)?;
+    if !b.status.success() {
+        return Err(format!("runner B failed ({})", b.status));
+    }
+    let runners_s = t0.elapsed().as_secs_f64();
+
+    let store = Store::open_as(&db, false, Durability::Fast).map_err(e)?;
+    let held: HashSet<String> = store
+        .point_summaries(&sweep)
+        .map_err(e)?
+        .into_iter()
+        .filter(|p| p.status == "running")
+        .map(|p| p.job_id)
+        .collect();
+    let spec: JobSpec =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("first_job.json")).map_err(e)?)
+            .map_err(e)?;
+    let log = std::fs::File::create(&logs[2]).map_err(e)?;
+    let t1 = Instant::now();
+    let opts = RunOptions {
+        jobs: 1,
+        retry_failed: false,
+        show_progress: false,
+        table_cache_mib: 0,
+    };
+    let job = stand_in(real_result(&spec)?, Some(log));
+    run_sweeps_with(&store, std::slice::from_ref(&sweep), &opts, job).map_err(e)?;
+    let resume_s = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    wetgran::run::relabel::relabel_changed(&store, &sweep).map_err(e)?;
+    let relabel_s = t2.elapsed().as_secs_f64();
+    let started = [
+        read_log(&logs[0])?,
+        read_log(&logs[1])?,
+        read_log(&logs[2])?,
+    ];
+    check_books(&store, &sweep, total, &held, &started)?;
+    Ok(TwoRunners {
+        jobs: total,
+        runners_s,
+        started: [started[0].len(), started[1].len(), started[2].len()],
+        held: held.len(),
+        resume_s,
+        relabel_s,
+    })
+}
+
+/// The exact bookkeeping of [`two_runners`] (module doc); an error names what is off.
+fn check_books(
+    store: &Store,
+    sweep: &SweepRow,
+    total: usize,
+    held: &HashSet<String>,
+    started: &[Vec<String>; 3],
+) -> Result<(), String> {
+    let c = store.counts(sweep.id).map_err(e)?;
+    if c.done as usize != total || c.total() as usize != total {
+        return Err(format!("not every job done: {c:?} of {total}"));
+    }
+    let summaries = store.point_summaries(sweep).map_err(e)?;
+    let runs: BTreeMap<String, i64> = store.runs_per_job().map_err(e)?.into_iter().collect();
+    if summaries.len() != total || runs.len() != total {
+        return Err(format!(
+            "{} rows, {} jobs with run rows, of {total}",
+            summaries.len(),
+            runs.len()
+        ));
+    }
+    let mut starts: HashMap<&str, usize> = HashMap::new();
+    for id in started.iter().flatten() {
+        *starts.entry(id.as_str()).or_default() += 1;
+    }
+    for p in &summaries {
+        if p.status != "done" || p.wall_seconds.is_none() {
+            return Err(format!("job {}: {} without a result", p.job_id, p.status));
+        }
+        let want: i64 = if held.contains(&p.job_id) { 2 } else { 1 };
+        let s = starts.get(p.job_id.as_str()).copied().unwrap_or(0) as i64;
+        let starts_ok = s == want || (want == 2 && s == 1);
+        if runs[&p.job_id] != want || p.attempts != want || !starts_ok {
+            return Err(format!(
+                "job {}: {} run row(s), {} attempt(s), {s} start(s); want {want}",
+                p.job_id, runs[&p.job_id], p.attempts
+            ));
+        }
+    }
+    if starts.len() != total {
+        return Err(format!("{} distinct jobs started of {total}", starts.len()));
+    }
+    Ok(())
+}
+
+/// The hidden `orchestrator-runner`: runs the benchmark sweep of `db` to the end with one
+/// worker and the stand-in job (the spec `dir/first_job.json` run once for its shape), each
+/// start appended to `log`.
+pub fn runner(db: &Path, dir: &Path, log: &Path) -> Result<(), String> {
+    let spec: JobSpec =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("first_job.json")).map_err(e)?)
+            .map_err(e)?;
+    let real = real_result(&spec)?;
+    let log = std::fs::File::create(log).map_err(e)?;
+    let store = Store::open_as(db, false, Durability::Fast).map_err(e)?;
+    let sweep = store.sweep("bench").map_err(e)?;
+    let opts = RunOptions {
+        jobs: 1,
+        retry_failed: false,
+        show_progress: false,
+        table_cache_mib: 0,
+    };
+    run_sweeps_with(&store, &[sweep], &opts, stand_in(real, Some(log))).map_err(e)?;
+    Ok(())
+}
+
+/// Runs the asked scale figures at every size, each in a fresh folder under `dir`.
+pub fn run(
+    sizes: &[usize],
+    collect: bool,
+    two: bool,
+    dir: Option<&Path>,
+) -> Result<String, String> {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    for &n in sizes {
+        let tmp = match dir {
+            Some(d) => tempfile::tempdir_in(d),
+            None => tempfile::tempdir(),
+        }
+        .map_err(|x| format!("cannot make a temporary folder: {x}"))?;
+        if collect {
+            let (t, tasks) = time_collect(n, tmp.path())?;
+            let _ = writeln!(
+                s,
+                "{tasks:>8} tasks: `sweep collect` {t:.2} s ({:.3} ms per task)",
+                t / tasks as f64 * 1e3
+            );
+            eprint!("{}", s.lines().last().unwrap_or_default());
+            eprintln!();
+        }
+        if two {
+            let r = two_runners(n, tmp.path())?;
+            let _ = writeln!(
+                s,
+                "{:>8} jobs, two runners, the first killed after {} starts: both {:.1} s; \
+                 starts A {} / B {} / resume {}, {} job(s) held at the kill; resume {:.2} s, \
+                 relabel {:.2} s; books exact (every job done once, none lost)",
+                r.jobs,
+                r.started[0],
+                r.runners_s,
+                r.started[0],
+                r.started[1],
+                r.started[2],
+                r.held,
+                r.resume_s,
+                r.relabel_s
+            );
+            eprint!("{}", s.lines().last().unwrap_or_default());
+            eprintln!();
+        }
+    }
+    Ok(s)
+}
