@@ -837,6 +837,29 @@ fn borderline_decisions_are_flagged() {
             .borderline
             .is_empty()
     );
+    // A bonded dense part just above or below `cluster_fraction` (members 2.5 and 1.5 of the
+    // 10 grains of each dense bin): the split hangs on it, flagged either way; 8 of 10: clear.
+    let members = |m: f64| {
+        let mut o = two_regions((0.0, 0.01), (1.0, 10.0));
+        o.profiles.clusters = Some((0.2, 3));
+        for (c, n) in o.profiles.clustered.iter_mut().zip(&o.profiles.n_cb) {
+            *c = if *n > 1.0 { m } else { 0.0 };
+        }
+        classify(&o, &t)
+    };
+    for (m, split) in [(2.5, true), (1.5, false)] {
+        let c = members(m);
+        assert_eq!(c.decided_on.split, split, "{}", c.decided_on.reason);
+        assert!(
+            c.decided_on
+                .borderline
+                .iter()
+                .any(|b| b.contains("cluster_fraction")),
+            "{m}: {:?}",
+            c.decided_on.borderline
+        );
+    }
+    assert!(members(8.0).decided_on.borderline.is_empty());
 }
 
 /// A bonded drop in its vapour: the drop's clustered grains are a little hotter than the gas

@@ -232,8 +232,9 @@ pub struct DecisionInputs {
 /// A decision is borderline when its input lies within this factor of its threshold (either
 /// side): `D_lat` against `solid_diffusion`, `Delta` against the noise threshold.
 pub(crate) const BORDERLINE_FACTOR: f64 = 2.0;
-/// The contrast of a coexistence, and the fraction of a dense region's members still in their
-/// cage, are borderline within this distance of their thresholds.
+/// The contrast of a coexistence, the fraction of its dense bins' grains that are cluster
+/// members, and the fraction of a dense region's members still in their cage, are borderline
+/// within this distance of their thresholds.
 pub(crate) const BORDERLINE_CONTRAST: f64 = 0.1;
 
 /// Whether `x` lies within [`BORDERLINE_FACTOR`] of a positive threshold `t`.
@@ -287,6 +288,18 @@ fn borderline(d: &DecisionInputs) -> Vec<String> {
             out.push(format!(
                 "contrast {:.2} near coexistence_contrast = {}",
                 t.contrast, th.coexistence_contrast
+            ));
+        }
+        // The bonded part decides between a coexistence and a modulated homogeneous state
+        // only where the profile's spread and contrast pass.
+        if let Some(f) = t.member_fraction
+            && t.noise_threshold.is_some_and(|q| t.delta > q)
+            && t.contrast >= th.coexistence_contrast
+            && (f - th.cluster_fraction).abs() < BORDERLINE_CONTRAST
+        {
+            out.push(format!(
+                "cluster members {f:.2} of the dense bins near cluster_fraction = {}",
+                th.cluster_fraction
             ));
         }
     }
