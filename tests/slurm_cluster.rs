@@ -9,8 +9,8 @@
 mod slurm_common;
 mod sweep_common;
 
-use std::collections::HashMap;
 use slurm_common::{slurm, wait_for};
+use std::collections::HashMap;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use sweep_common::*;
