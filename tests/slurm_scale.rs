@@ -91,6 +91,42 @@ fn check_done_once(store: &Store, sweep: i64) {
     assert_eq!(owners.len(), N_GAMMA * N_E);
 }
 
+/// Runs the sweep locally (2 workers) into a second database and checks that every job's
+/// stored numbers equal the collected ones; returns the local run's seconds.
+fn check_equals_local(dir: &std::path::Path, sweep_s: &str, store: &Store, id: i64) -> f64 {
+    // The same sweep run locally: the same numbers for every job.
+    let local = dir.join("local.sqlite");
+    let t2 = Instant::now();
+    ok(&run(&[
+        "sweep",
+        "run",
+        sweep_s,
+        "--db",
+        local.to_str().unwrap(),
+        "--jobs",
+        "2",
+    ]));
+    let local_s = t2.elapsed().as_secs_f64();
+    let local = Store::open_existing(&local).unwrap();
+    let lid = local.sweep("scale").unwrap().id;
+    let here: HashMap<String, PointRow> = local
+        .points(lid)
+        .unwrap()
+        .into_iter()
+        .map(|p| (p.job_id.clone(), p))
+        .collect();
+    assert_eq!(here.len(), N_GAMMA * N_E);
+    for p in store.points(id).unwrap() {
+        assert_eq!(
+            numbers(&p),
+            numbers(&here[&p.job_id]),
+            "job {} differs",
+            p.job_id
+        );
+    }
+    local_s
+}
+
 #[test]
 fn two_hundred_tasks_on_slurm_are_each_done_once_and_equal_a_local_run() {
     let _slurm = match slurm() {
@@ -187,36 +223,7 @@ fn two_hundred_tasks_on_slurm_are_each_done_once_and_equal_a_local_run() {
     check_done_once(&store, id);
     let cluster_s = t0.elapsed().as_secs_f64();
 
-    // The same sweep run locally: the same numbers for every job.
-    let local = dir.path().join("local.sqlite");
-    let t2 = Instant::now();
-    ok(&run(&[
-        "sweep",
-        "run",
-        sweep_s,
-        "--db",
-        local.to_str().unwrap(),
-        "--jobs",
-        "2",
-    ]));
-    let local_s = t2.elapsed().as_secs_f64();
-    let local = Store::open_existing(&local).unwrap();
-    let lid = local.sweep("scale").unwrap().id;
-    let here: HashMap<String, PointRow> = local
-        .points(lid)
-        .unwrap()
-        .into_iter()
-        .map(|p| (p.job_id.clone(), p))
-        .collect();
-    assert_eq!(here.len(), N_GAMMA * N_E);
-    for p in store.points(id).unwrap() {
-        assert_eq!(
-            numbers(&p),
-            numbers(&here[&p.job_id]),
-            "job {} differs",
-            p.job_id
-        );
-    }
+    let local_s = check_equals_local(dir.path(), sweep_s, &store, id);
     println!(
         "slurm scale: {} tasks; submit {submit_s:.1} s, submit to queue empty {queue_s:.1} s, \
          collect {collect_s:.2} s, whole cluster part {cluster_s:.1} s; local run (2 workers) \
