@@ -6,96 +6,15 @@
 //! Skips, with a message saying why, only where the machine cannot run a cluster: no Slurm
 //! controller answers and either this is not root or the packages cannot be installed.
 
+mod slurm_common;
 mod sweep_common;
 
+use slurm_common::{slurm, wait_for};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 use std::time::{Duration, Instant};
 use sweep_common::*;
 use wetgran::store::{PointRow, Store, TaskState};
-
-/// Stops the daemons at the end if this test started them.
-struct Started(Option<PathBuf>);
-
-impl Drop for Started {
-    fn drop(&mut self) {
-        if let Some(script) = &self.0 {
-            let _ = Command::new("bash").arg(script).arg("stop").status();
-        }
-    }
-}
-
-fn controller_answers() -> bool {
-    Command::new("scontrol")
-        .arg("ping")
-        .output()
-        .is_ok_and(|o| o.status.success() && String::from_utf8_lossy(&o.stdout).contains("UP"))
-}
-
-/// A running Slurm, or why there cannot be one here.
-fn slurm() -> Result<Started, String> {
-    if controller_answers() {
-        return Ok(Started(None));
-    }
-    let root = Command::new("id")
-        .arg("-u")
-        .output()
-        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
-    if !root {
-        return Err(
-            "no Slurm controller answers and this is not root (scripts/slurm-local.sh \
-                    start needs root)"
-                .to_string(),
-        );
-    }
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/slurm-local.sh");
-    let out = Command::new("bash")
-        .arg(&script)
-        .arg("start")
-        .output()
-        .expect("run scripts/slurm-local.sh");
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    match out.status.code() {
-        Some(0) => Ok(Started(Some(script))),
-        Some(4) => Err(format!("slurm-wlm and munge cannot be installed:\n{text}")),
-        _ => panic!("scripts/slurm-local.sh start failed on a root machine:\n{text}"),
-    }
-}
-
-/// Waits until no task of the sweep's arrays is queued (at most two minutes).
-fn wait_for(store: &Store, sweep: i64) {
-    let jobs: Vec<String> = {
-        let mut j: Vec<String> = store
-            .tasks(sweep)
-            .unwrap()
-            .into_iter()
-            .filter_map(|t| t.slurm_job)
-            .collect();
-        j.dedup();
-        j
-    };
-    let t0 = Instant::now();
-    loop {
-        let out = Command::new("squeue")
-            .args(["-h", "-r", "-o", "%i %T", "-j", &jobs.join(",")])
-            .output()
-            .expect("squeue");
-        let text = String::from_utf8_lossy(&out.stdout).to_string();
-        if text.trim().is_empty() {
-            return;
-        }
-        assert!(
-            t0.elapsed() < Duration::from_secs(120),
-            "tasks still queued after two minutes:\n{text}"
-        );
-        std::thread::sleep(Duration::from_millis(250));
-    }
-}
 
 fn ok(o: &std::process::Output) -> String {
     assert!(o.status.success(), "{}\n{}", stdout(o), stderr(o));
@@ -209,7 +128,7 @@ fn a_sweep_submitted_to_slurm_equals_a_local_run() {
     assert_eq!(store.counts(id).unwrap().pending, 4);
     check_status_shows_queue(db_s);
 
-    wait_for(&store, id);
+    wait_for(&store, id, Duration::from_secs(120));
     let first_round = t0.elapsed().as_secs_f64();
     // One task's result is lost (as if it was killed before writing it).
     let lost = tasks
@@ -240,7 +159,7 @@ fn a_sweep_submitted_to_slurm_equals_a_local_run() {
     // Submitting again submits the failed and the missing jobs only.
     let out = ok(&run(&["sweep", "submit", sweep_s, "--slurm", "--db", db_s]));
     assert!(out.contains("3 job(s) submitted as 1 array(s)"), "{out}");
-    wait_for(&store, id);
+    wait_for(&store, id, Duration::from_secs(120));
     let out = partial(&run(&["sweep", "collect", "--db", db_s]));
     assert!(out.contains("1 result(s) stored"), "{out}");
     assert!(out.contains("2 failed"), "{out}");

@@ -215,6 +215,7 @@ fn jobs_left(
         .create()
         .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", target.dir.display())))?;
     let c = collect(store, row, &mut slurm::squeue)?;
+    relabel_collected(store, row)?;
     if c.stored.len() + c.failed.len() + c.missing.len() + c.corrupt.len() > 0 {
         eprint!("{}", collected_text(row, &store.points(row.id)?, &c));
     }
@@ -232,6 +233,21 @@ fn jobs_left(
         return Ok(None);
     }
     Ok(Some(ids))
+}
+
+/// The line rule's labels (docs/model.md 7) over the lines of constant Gamma that got collected
+/// results, as after a local `sweep run`: without it a collected result kept its point's own
+/// label, where the same job run locally got its line's.
+fn relabel_collected(store: &Store, row: &SweepRow) -> Result<(), Failure> {
+    let relabelled = crate::run::relabel::relabel_changed(store, row)?;
+    if relabelled.changed() > 0 {
+        eprintln!(
+            "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
+            row.name,
+            relabelled.text()
+        );
+    }
+    Ok(())
 }
 
 fn io_failure(p: &Path, e: std::io::Error) -> Failure {
@@ -325,6 +341,7 @@ pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> 
         }
         any = true;
         let c = collect(&store, s, &mut slurm::squeue)?;
+        relabel_collected(&store, s)?;
         let points = store.points(s.id)?;
         print!("{}", collected_text(s, &points, &c));
         let (failed, lost) = unfinished_for_good(&points, &store.tasks(s.id)?);

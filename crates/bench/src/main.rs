@@ -93,6 +93,11 @@ enum Command {
         /// (a submission recorded without Slurm, the records written beforehand).
         #[arg(long)]
         collect: bool,
+        /// Instead of the run and the reports: time `sweep submit --slurm --dry-run` of the
+        /// N-job sweep (process start, expansion, split into arrays, scripts printed), without
+        /// a database and with the sweep registered in one.
+        #[arg(long)]
+        submit_dry_run: bool,
         /// Instead of the run and the reports: two runner processes on one database, the first
         /// killed with SIGKILL after a sixth of the jobs, the rest resumed; checks that every
         /// job is done once and none lost (docs/reliability.md, "Two runners, one killed").
@@ -136,14 +141,18 @@ fn main() -> ExitCode {
             sizes,
             dir,
             collect,
+            submit_dry_run,
             two_runners,
             ..
-        }) if collect || two_runners => report(wetgran_bench::orchestrator_scale::run(
-            &sizes,
-            collect,
-            two_runners,
-            dir.as_deref(),
-        )),
+        }) if collect || submit_dry_run || two_runners => {
+            report(wetgran_bench::orchestrator_scale::run(
+                &sizes,
+                collect,
+                submit_dry_run,
+                two_runners,
+                dir.as_deref(),
+            ))
+        }
         Some(Command::OrchestratorRunner { db, dir, log }) => {
             match wetgran_bench::orchestrator_scale::runner(&db, &dir, &log) {
                 Ok(()) => ExitCode::SUCCESS,

@@ -6,6 +6,13 @@
 //!   id, so no queue is asked), writes each task's result record (`results/<job id>.json`, the
 //!   stand-in result of the real shape) into the sweep directory (untimed), and times
 //!   `wetgran sweep collect --db DB` (the process, start included).
+//! - **submit dry run**: writes the benchmark sweep of N points and times
+//!   `wetgran sweep submit FILE --slurm --dry-run --db DB` (the process, start included: the
+//!   sweep file read and expanded, the job ids, the split into arrays at the default
+//!   `--array-limit` or the cluster's `MaxArraySize` where `scontrol` answers, every array
+//!   script printed to a file), twice: with no database (a new study) and with the sweep
+//!   registered in DB (every job's status looked up). The printed header is checked: N jobs in
+//!   `ceil(N / limit)` arrays.
 //! - **two runners**: registers the sweep, starts two runner processes (this binary's hidden
 //!   `orchestrator-runner`, one worker each: the real runner and store, `sweep run`'s
 //!   commits) on the one database, kills the first with SIGKILL once it has started a sixth of
@@ -121,6 +128,114 @@ pub fn time_collect(n: usize, dir: &Path) -> Result<(f64, usize), String> {
         return Err(format!("collect: {} of {} jobs done", c.done, ids.len()));
     }
     Ok((t, ids.len()))
+}
+
+/// What `sweep submit --slurm --dry-run` of N jobs took (module doc).
+#[derive(Debug)]
+pub struct DryRun {
+    pub jobs: usize,
+    pub arrays: usize,
+    pub limit: usize,
+    /// Where the limit came from (`cluster MaxArraySize M` or `scontrol not available`).
+    pub source: String,
+    /// Seconds without a database and with the sweep registered in one.
+    pub fresh_s: f64,
+    pub registered_s: f64,
+}
+
+/// `(jobs, arrays, limit, source)` of the dry run's header line
+/// `# dry run: N job(s) to submit as K array(s) of at most L task(s) (SOURCE); ...`.
+fn parse_dry_header(text: &str) -> Option<(usize, usize, usize, String)> {
+    let line = text.lines().next()?.strip_prefix("# dry run: ")?;
+    let (jobs, rest) = line.split_once(" job(s) to submit as ")?;
+    let (arrays, rest) = rest.split_once(" array(s) of at most ")?;
+    let (limit, rest) = rest.split_once(" task(s) (")?;
+    let source = rest.split_once(')')?.0.to_string();
+    Some((
+        jobs.parse().ok()?,
+        arrays.parse().ok()?,
+        limit.parse().ok()?,
+        source,
+    ))
+}
+
+/// One timed `sweep submit --slurm --dry-run` of the benchmark sweep; checks its header.
+fn dry_run_once(
+    bin: &Path,
+    dir: &Path,
+    db: &Path,
+    jobs: usize,
+) -> Result<(f64, usize, usize, String), String> {
+    let sweep = dir.join("bench.toml");
+    let out_path = dir.join("dry-run.txt");
+    let out = std::fs::File::create(&out_path).map_err(e)?;
+    let t0 = Instant::now();
+    let status = Command::new(bin)
+        .args(["sweep", "submit"])
+        .arg(&sweep)
+        .args(["--slurm", "--dry-run", "--db"])
+        .arg(db)
+        .stdout(Stdio::from(out))
+        .stderr(Stdio::null())
+        .status()
+        .map_err(e)?;
+    let t = t0.elapsed().as_secs_f64();
+    if !status.success() {
+        return Err(format!("sweep submit --dry-run failed ({status})"));
+    }
+    let text = std::fs::read_to_string(&out_path).map_err(e)?;
+    let (n, arrays, limit, source) = parse_dry_header(&text)
+        .ok_or_else(|| format!("dry run: unexpected header {:?}", text.lines().next()))?;
+    // Tasks of the printed array scripts (`#SBATCH --array=0-K`: K + 1 tasks each).
+    let sizes: Vec<usize> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("#SBATCH --array=0-"))
+        .filter_map(|k| k.trim().parse::<usize>().ok())
+        .map(|k| k + 1)
+        .collect();
+    let in_scripts: usize = sizes.iter().sum();
+    if n != jobs
+        || limit == 0
+        || arrays != jobs.div_ceil(limit)
+        || sizes.len() != arrays
+        || in_scripts != jobs
+        || sizes.iter().any(|&k| k > limit)
+    {
+        return Err(format!(
+            "dry run of {jobs} jobs printed {n} jobs in {arrays} arrays of at most {limit} \
+             (scripts of {sizes:?} tasks)"
+        ));
+    }
+    Ok((t, arrays, limit, source))
+}
+
+/// `sweep submit --slurm --dry-run` of N jobs, without and with a database (module doc).
+pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<DryRun, String> {
+    let (file, jobs) = prepare(n, dir)?;
+    let mut ids: Vec<String> = jobs.iter().map(|j| j.spec.id()).collect();
+    ids.sort();
+    ids.dedup();
+    let bin = wetgran_binary()?;
+    let db = dir.join("dry.sqlite");
+    let (fresh_s, arrays, limit, source) = dry_run_once(&bin, dir, &db, ids.len())?;
+    if db.exists() {
+        return Err("the dry run created the database".to_string());
+    }
+    let store = Store::open_as(&db, true, Durability::Synced).map_err(e)?;
+    store.register_sweep(&file, &jobs).map_err(e)?;
+    drop(store);
+    let (registered_s, ..) = dry_run_once(&bin, dir, &db, ids.len())?;
+    if dir.join("wetgran-slurm").exists() {
+        return Err("the dry run wrote a sweep directory".to_string());
+    }
+    Ok(DryRun {
+        jobs: ids.len(),
+        arrays,
+        limit,
+        source,
+        fresh_s,
+        registered_s,
+    })
 }
 
 /// What the two-runner run measured.
@@ -300,6 +415,7 @@ pub fn runner(db: &Path, dir: &Path, log: &Path) -> Result<(), String> {
 pub fn run(
     sizes: &[usize],
     collect: bool,
+    dry_run: bool,
     two: bool,
     dir: Option<&Path>,
 ) -> Result<String, String> {
@@ -317,6 +433,17 @@ pub fn run(
                 s,
                 "{tasks:>8} tasks: `sweep collect` {t:.2} s ({:.3} ms per task)",
                 t / tasks as f64 * 1e3
+            );
+            eprint!("{}", s.lines().last().unwrap_or_default());
+            eprintln!();
+        }
+        if dry_run {
+            let r = time_submit_dry_run(n, tmp.path())?;
+            let _ = writeln!(
+                s,
+                "{:>8} jobs: `sweep submit --slurm --dry-run` {:.2} s without a database, \
+                 {:.2} s with the sweep registered ({} array(s) of at most {}, {})",
+                r.jobs, r.fresh_s, r.registered_s, r.arrays, r.limit, r.source
             );
             eprint!("{}", s.lines().last().unwrap_or_default());
             eprintln!();
@@ -343,4 +470,20 @@ pub fn run(
         }
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_dry_header;
+
+    #[test]
+    fn the_dry_run_header_parses() {
+        let text = "# dry run: 10000 job(s) to submit as 10 array(s) of at most 1000 task(s) \
+                    (cluster MaxArraySize 1001); sweep directory /x/wetgran-slurm/bench\n# ----";
+        assert_eq!(
+            parse_dry_header(text),
+            Some((10000, 10, 1000, "cluster MaxArraySize 1001".to_string()))
+        );
+        assert_eq!(parse_dry_header("sweep bench: nothing"), None);
+    }
 }
