@@ -11,6 +11,7 @@
 //! wall and CPU seconds per simulated time unit, and the ratio time / event (CPU where known).
 //! The engines run in one process, one after the other, so both see the same machine load.
 
+use super::median;
 use super::observer::{POINTS, standard_shaken};
 use super::tdmd::thread_cpu_seconds;
 use std::fmt::Write as _;
@@ -108,20 +109,6 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<EngineRow> {
         rows.extend(pair);
     }
     rows
-}
-
-fn median(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
 }
 
 /// The table: one line per point and engine, the ratio on the time engine's line.

@@ -144,15 +144,16 @@ fn main() -> ExitCode {
             submit_dry_run,
             two_runners,
             ..
-        }) if collect || submit_dry_run || two_runners => {
-            report(wetgran_bench::orchestrator_scale::run(
+        }) if collect || submit_dry_run || two_runners => report(
+            wetgran_bench::orchestrator_scale::run(
                 &sizes,
                 collect,
                 submit_dry_run,
                 two_runners,
                 dir.as_deref(),
-            ))
-        }
+            )
+            .map(|()| String::new()),
+        ),
         Some(Command::OrchestratorRunner { db, dir, log }) => {
             match wetgran_bench::orchestrator_scale::runner(&db, &dir, &log) {
                 Ok(()) => ExitCode::SUCCESS,
@@ -184,7 +185,17 @@ fn main() -> ExitCode {
             dir.as_deref(),
             keep,
         )),
-        None => figures(&cli.figures),
+        None => {
+            let f = &cli.figures;
+            report(wetgran_bench::run(
+                &f.which,
+                f.repeat.max(1),
+                f.scale,
+                f.svg.as_deref(),
+                &f.threads,
+                f.n_factor.max(1),
+            ))
+        }
     }
 }
 
@@ -195,24 +206,6 @@ fn report(r: Result<String, String>) -> ExitCode {
             print!("{text}");
             ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(2)
-        }
-    }
-}
-
-/// `wetgran-bench [WHICH] [--repeat R] [--scale S] ...`.
-fn figures(f: &Figures) -> ExitCode {
-    match wetgran_bench::run_with_svg(
-        &f.which,
-        f.repeat.max(1),
-        f.scale,
-        f.svg.as_deref(),
-        &f.threads,
-        f.n_factor.max(1),
-    ) {
-        Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(2)

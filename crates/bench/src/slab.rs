@@ -84,7 +84,6 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<SlabRow> {
         } else {
             0.0
         };
-        secs.sort_by(f64::total_cmp);
         rows.push(SlabRow {
             width: w,
             slabs,
@@ -92,7 +91,7 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<SlabRow> {
             e_par_error: (var / r).sqrt(),
             events_per_particle_time: events / r,
             slab_crossings_per_particle_time: slabs_crossed / r,
-            median_seconds: secs[secs.len() / 2],
+            median_seconds: crate::quantile(&secs, 0.5),
         });
     }
     rows

@@ -20,6 +20,7 @@
 //! process (every thread, from `/proc/self/task/*/schedstat`), so it includes the time the
 //! pool's threads spend waiting for work.
 
+use crate::{Spread, median};
 use std::fmt::Write as _;
 use std::time::Instant;
 use wetgran_core::scene::DEFAULT_STIFFNESS;
@@ -69,17 +70,6 @@ pub(crate) struct TdmdRow {
     pub max_overlap: f64,
     pub(crate) builds_per_step: f64,
     pub damping: f64,
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let m = s.len() / 2;
-    if s.len() % 2 == 1 {
-        s[m]
-    } else {
-        0.5 * (s[m - 1] + s[m])
-    }
 }
 
 /// Runs the benchmark for both integrators and each thread count of `threads` (alternating
@@ -198,13 +188,11 @@ pub(crate) fn report(rows: &[TdmdRow]) -> String {
         "pairs/p"
     );
     for r in rows {
-        let med = median(&r.seconds_per_time);
-        let min = r
-            .seconds_per_time
-            .iter()
-            .cloned()
-            .fold(f64::INFINITY, f64::min);
-        let max = r.seconds_per_time.iter().cloned().fold(0.0, f64::max);
+        let Spread {
+            median: med,
+            min,
+            max,
+        } = Spread::of(r.seconds_per_time.iter().copied());
         let psteps = r.particles as f64 / r.dt / med;
         let (cpu, cpu_ratio) = if r.cpu_per_time.is_empty() {
             ("n/a".to_string(), "n/a".to_string())
