@@ -120,10 +120,8 @@ pub(crate) fn report(rows: &[EngineRow], repeat: usize, scale: f64) -> String {
          {WARM_UP} time units warm-up, {} timed, median of {repeat}, engines alternating",
         (MEASURED * scale).max(0.5)
     );
-    let _ = writeln!(
-        s,
-        "{:<12} {:>5} {:>5} {:>6} {:>12} {:>12} {:>12} {:>12}",
-        "point", "Gamma", "E*", "engine", "wall s/t", "cpu s/t", "wall ratio", "cpu ratio"
+    s.push_str(
+        "point        Gamma    E* engine     wall s/t      cpu s/t   wall ratio    cpu ratio\n",
     );
     for pair in rows.chunks(2) {
         let (e, t) = (&pair[0], &pair[1]);

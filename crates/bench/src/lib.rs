@@ -397,19 +397,7 @@ pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
         "rates in millions per wall-clock second: median [min, max] over {repeat} repetition(s)"
     );
     let _ = writeln!(s);
-    let _ = writeln!(
-        s,
-        "{:<4} {:>6} {:>9} {:>8} {:>26} {:>26} {:>10} {:>11} {:>7}",
-        "sys",
-        "N",
-        "events",
-        "warm-up",
-        "events/s [M]",
-        "collisions/s [M]",
-        "sim. time",
-        "events/t",
-        "coll.%"
-    );
+    s.push_str("sys       N    events  warm-up               events/s [M]           collisions/s [M]  sim. time    events/t  coll.%\n");
     for r in rows {
         let ev = r.events_per_second();
         let co = r.collisions_per_second();

@@ -49,6 +49,15 @@ pub(crate) fn e(x: impl std::fmt::Display) -> String {
     x.to_string()
 }
 
+/// What `f` returned and the wall seconds it took; its error as text.
+pub(crate) fn timed<T, E: std::fmt::Display>(
+    f: impl FnOnce() -> Result<T, E>,
+) -> Result<(T, f64), String> {
+    let t0 = Instant::now();
+    let out = f().map_err(e)?;
+    Ok((out, t0.elapsed().as_secs_f64()))
+}
+
 /// The base scene of the benchmark sweep (the quickstart's).
 pub(crate) const BASE_SCENE: &str = include_str!("../../../scenes/shaken_wet_2d.toml");
 
@@ -205,22 +214,17 @@ fn refine_round(
 ) -> Result<RefineRound, String> {
     use wetgran::refine::driver::plan_jobs;
     let rows_of = std::slice::from_ref(row);
-    let t0 = Instant::now();
-    let rows = store.points(row.id).map_err(e)?;
-    let settings = wetgran::refine::Settings {
-        replicas: row.replicas,
-        max_replicas: 3 * row.replicas,
-        resolution: 0.0,
-    };
-    let jobs = plan_jobs(file, row, &rows, (rows.len() / 10).max(1), &settings).map_err(e)?;
-    drop(rows);
-    let plan_s = t0.elapsed().as_secs_f64();
-    let t0 = Instant::now();
-    store.add_jobs(row.id, &jobs).map_err(e)?;
-    let add_s = t0.elapsed().as_secs_f64();
-    let t0 = Instant::now();
-    let summary = run_sweeps_with(store, rows_of, opts, job).map_err(e)?;
-    let run_s = t0.elapsed().as_secs_f64();
+    let (jobs, plan_s) = timed(|| {
+        let rows = store.points(row.id).map_err(e)?;
+        let settings = wetgran::refine::Settings {
+            replicas: row.replicas,
+            max_replicas: 3 * row.replicas,
+            resolution: 0.0,
+        };
+        plan_jobs(file, row, &rows, (rows.len() / 10).max(1), &settings).map_err(e)
+    })?;
+    let ((), add_s) = timed(|| store.add_jobs(row.id, &jobs))?;
+    let (summary, run_s) = timed(|| run_sweeps_with(store, rows_of, opts, job))?;
     if summary.done as usize != jobs.len() {
         return Err(format!(
             "refinement: {} of {} jobs done",
@@ -228,9 +232,7 @@ fn refine_round(
             jobs.len()
         ));
     }
-    let t0 = Instant::now();
-    wetgran::run::relabel::relabel_changed(store, row).map_err(e)?;
-    let relabel_s = t0.elapsed().as_secs_f64();
+    let (_, relabel_s) = timed(|| wetgran::run::relabel::relabel_changed(store, row))?;
     Ok(RefineRound {
         relabel_s,
         plan_s,
@@ -261,9 +263,7 @@ fn end_of_run_relabel(
     row: &wetgran::store::SweepRow,
     decided_on: &Option<serde_json::Value>,
 ) -> Result<f64, String> {
-    let t0 = Instant::now();
-    wetgran::run::relabel::relabel_changed(store, row).map_err(e)?;
-    let t = t0.elapsed().as_secs_f64();
+    let (_, t) = timed(|| wetgran::run::relabel::relabel_changed(store, row))?;
     let decided_on = decided_on.clone().unwrap_or(serde_json::Value::Null);
     let labels: Vec<(String, String, serde_json::Value)> = store
         .points(row.id)
@@ -341,9 +341,7 @@ pub(crate) fn measure(
 ) -> Result<Figures, String> {
     let (file, jobs) = prepare(n, dir)?;
     let jobs_n = jobs.len();
-    let t0 = Instant::now();
-    let real = real_result(&jobs[0].spec)?;
-    let real_s = t0.elapsed().as_secs_f64();
+    let (real, real_s) = timed(|| real_result(&jobs[0].spec))?;
     let real_decided_on = real.decided_on.clone();
     let obs_bytes = real.observables.to_string().len();
     let state_bytes = real
@@ -358,9 +356,7 @@ pub(crate) fn measure(
 
     let db = dir.join("bench.sqlite");
     let store = Store::open_as(&db, true, durability).map_err(e)?;
-    let t0 = Instant::now();
-    let sweep = store.register_sweep(&file, &jobs).map_err(e)?;
-    let register_s = t0.elapsed().as_secs_f64();
+    let (sweep, register_s) = timed(|| store.register_sweep(&file, &jobs))?;
 
     let refine = reports.iter().any(|r| r == "refine");
     let mut observables = real.observables.clone();
@@ -390,10 +386,8 @@ pub(crate) fn measure(
         })
     };
     let opts = run_options(workers);
-    let t0 = Instant::now();
-    let summary =
-        run_sweeps_with(&store, std::slice::from_ref(&sweep), &opts, job.clone()).map_err(e)?;
-    let run_s = t0.elapsed().as_secs_f64();
+    let sweeps = std::slice::from_ref(&sweep);
+    let (summary, run_s) = timed(|| run_sweeps_with(&store, sweeps, &opts, job.clone()))?;
     if summary.done as usize != jobs_n {
         return Err(format!("{} of {jobs_n} jobs done", summary.done));
     }
@@ -452,18 +446,7 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
             Durability::Fast => "without a sync (synchronous = NORMAL, as `sweep run`)",
         }
     );
-    let _ = writeln!(
-        s,
-        "{:>8} {:>10} {:>9} {:>10} {:>11} {:>17} {:>17} {:>11}",
-        "jobs",
-        "register s",
-        "run s",
-        "claims/s",
-        "ms per job",
-        "gap first med/p99",
-        "gap last med/p99",
-        "kB/result"
-    );
+    s.push_str("    jobs register s     run s   claims/s  ms per job gap first med/p99  gap last med/p99   kB/result\n");
     for r in rows {
         let _ = writeln!(
             s,

@@ -25,7 +25,7 @@
 //!   before the kill). Any other outcome is an error.
 
 use crate::orchestrator::{
-    e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir, time_command,
+    e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir, time_command, timed,
     wetgran_binary,
 };
 use std::collections::{BTreeMap, HashMap, HashSet};
@@ -274,13 +274,11 @@ pub fn two_runners(n: usize, dir: &Path) -> Result<TwoRunners, String> {
         .filter(|p| p.status == "running")
         .map(|p| p.job_id)
         .collect();
-    let t1 = Instant::now();
-    let job = logged_stand_in(dir, &logs[2])?;
-    run_sweeps_with(&store, std::slice::from_ref(&sweep), &run_options(1), job).map_err(e)?;
-    let resume_s = t1.elapsed().as_secs_f64();
-    let t2 = Instant::now();
-    wetgran::run::relabel::relabel_changed(&store, &sweep).map_err(e)?;
-    let relabel_s = t2.elapsed().as_secs_f64();
+    let (_, resume_s) = timed(|| {
+        let job = logged_stand_in(dir, &logs[2])?;
+        run_sweeps_with(&store, std::slice::from_ref(&sweep), &run_options(1), job).map_err(e)
+    })?;
+    let (_, relabel_s) = timed(|| wetgran::run::relabel::relabel_changed(&store, &sweep))?;
     let started = [
         read_log(&logs[0])?,
         read_log(&logs[1])?,

@@ -106,10 +106,8 @@ pub(crate) fn report(rows: &[SlabRow], repeat: usize, scale: f64) -> String {
         (10.0 * scale).max(2.0),
         repeat.max(1)
     );
-    let _ = writeln!(
-        s,
-        "{:>7} {:>6} {:>12} {:>9} {:>14} {:>14} {:>10} {:>8}",
-        "width", "slabs", "E_par/E_cb", "+-", "events/(N t)", "slab x/(N t)", "wall s", "vs w=1"
+    s.push_str(
+        "  width  slabs   E_par/E_cb        +-   events/(N t)   slab x/(N t)     wall s   vs w=1\n",
     );
     let base = rows
         .iter()

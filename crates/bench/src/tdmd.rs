@@ -171,22 +171,7 @@ pub(crate) fn report(rows: &[TdmdRow]) -> String {
         "time-driven engine, dry shaken 2D: N = {n}, sigma_p 0.06, box {} x 9, A = 0.05, Gamma = 15, dt = 1e-4",
         n / 3
     );
-    let _ = writeln!(
-        s,
-        "{:<9} {:>3} {:>12} {:>11} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}",
-        "integr.",
-        "thr",
-        "p-steps/s",
-        "s/time med",
-        "min",
-        "max",
-        "vs 0.38 s",
-        "cpu s/time",
-        "cpu vs .38",
-        "max ovl/d",
-        "builds/st",
-        "pairs/p"
-    );
+    s.push_str("integr.   thr    p-steps/s  s/time med       min       max  vs 0.38 s  cpu s/time cpu vs .38  max ovl/d  builds/st   pairs/p\n");
     for r in rows {
         let Spread {
             median: med,

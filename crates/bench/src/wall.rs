@@ -250,20 +250,7 @@ pub(crate) fn report(rows: &[WallRow]) -> String {
          the tables are built on {} thread(s) (WETGRAN_THREADS caps them)\n",
         wetgran_core::sim::threads::available_cores()
     );
-    let _ = writeln!(
-        s,
-        "{:<8} {:<16} {:>12} {:>12} {:>9} {:>12} {:>9} {:>9} {:>9} {:>8}",
-        "solver",
-        "knob",
-        "mean |dt|",
-        "max |dt|",
-        "wrong %",
-        "ns/predict",
-        "build s",
-        "cpu s",
-        "MiB",
-        "exact %"
-    );
+    s.push_str("solver   knob                mean |dt|     max |dt|   wrong %   ns/predict   build s     cpu s       MiB  exact %\n");
     for r in rows {
         let _ = write!(
             s,
