@@ -54,27 +54,24 @@ fn time_one(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
         .num_threads(1)
         .build()
         .expect("one-thread pool");
-    pool.install(|| time_one_here(scene, measured))
-}
-
-/// [`time_one`] on the calling thread.
-fn time_one_here(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
-    let mut start: Option<(Instant, Option<f64>)> = None;
-    let mut end = None;
-    run_scene_observed(
-        scene,
-        measured,
-        &mut |f: &Frame| {
-            if start.is_none() && f.time >= WARM_UP - 1e-9 {
-                start = Some((Instant::now(), thread_cpu_seconds()));
-            } else if start.is_some() {
-                end = Some((Instant::now(), thread_cpu_seconds()));
-            }
-        },
-        &mut |_| {},
-    );
-    let ((w0, c0), (w1, c1)) = (start.expect("warm-up ends"), end.expect("timed part ends"));
-    ((w1 - w0).as_secs_f64(), c0.zip(c1).map(|(a, b)| b - a))
+    pool.install(|| {
+        let mut start: Option<(Instant, Option<f64>)> = None;
+        let mut end = None;
+        run_scene_observed(
+            scene,
+            measured,
+            &mut |f: &Frame| {
+                if start.is_none() && f.time >= WARM_UP - 1e-9 {
+                    start = Some((Instant::now(), thread_cpu_seconds()));
+                } else if start.is_some() {
+                    end = Some((Instant::now(), thread_cpu_seconds()));
+                }
+            },
+            &mut |_| {},
+        );
+        let ((w0, c0), (w1, c1)) = (start.expect("warm-up ends"), end.expect("timed part ends"));
+        ((w1 - w0).as_secs_f64(), c0.zip(c1).map(|(a, b)| b - a))
+    })
 }
 
 /// Measures every point with both engines, interleaved.

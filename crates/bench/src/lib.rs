@@ -8,15 +8,8 @@
 //! as median, minimum and maximum over the repetitions, the simulated time one repetition covers
 //! and the events per unit of simulated time.
 //!
-//! The reference systems:
-//! - (a) 3D bulk: 32000 elastic monodisperse spheres, number density 0.5 (periodic cube of side
-//!   40), no gravity, `T = 1`;
-//! - (b) 3D gravity: 32000 elastic spheres, `g = 1`, box 80 x 80 x 40 periodic laterally with
-//!   floor and lid, `T = 1`;
-//! - (c) the 2D standard wet system (scenes/standard_wet_2d.toml): 1200 disks, box 400 x 9,
-//!   `sigma_p = 0.06`, thin-thread bridges, particle restitution 0.9, wall restitution 1,
-//!   `T_g / E_cb = 20`;
-//! - (c') the same system dry (no bridges) at the same absolute temperature.
+//! The reference systems (a) 3D bulk, (b) 3D gravity, (c) 2D standard wet and (c') the same
+//! dry are those of [`wetgran_core::scene::reference`].
 //!
 //! `wetgran-bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
 //! particle, with the breakdown by array.
@@ -356,10 +349,9 @@ pub(crate) fn engine_bench_only(
             continue;
         }
         let (events, warmup) = event_budget(sys.base_events, scale);
-        let mut reps = Vec::with_capacity(repeat);
-        for _ in 0..repeat {
-            reps.push(measure(&sys.scene, warmup, events)?);
-        }
+        let reps = (0..repeat)
+            .map(|_| measure(&sys.scene, warmup, events))
+            .collect::<Result<_, _>>()?;
         rows.push(Row {
             label: sys.label,
             description: format!("{}; {}", sys.description, lattice_fill(&sys.scene)),
@@ -369,10 +361,6 @@ pub(crate) fn engine_bench_only(
         });
     }
     Ok(rows)
-}
-
-fn mega(x: f64) -> String {
-    format!("{:.3}", x / 1e6)
 }
 
 /// The printed table.
@@ -399,9 +387,15 @@ pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
     let _ = writeln!(s);
     s.push_str("sys       N    events  warm-up               events/s [M]           collisions/s [M]  sim. time    events/t  coll.%\n");
     for r in rows {
-        let ev = r.events_per_second();
-        let co = r.collisions_per_second();
         let t = r.simulated_time();
+        let mega = |x: Spread| {
+            format!(
+                "{:.3} [{:.3}, {:.3}]",
+                x.median / 1e6,
+                x.min / 1e6,
+                x.max / 1e6
+            )
+        };
         let _ = writeln!(
             s,
             "{:<4} {:>6} {:>9} {:>8} {:>26} {:>26} {:>10.4} {:>11.4e} {:>7.1}",
@@ -409,8 +403,8 @@ pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
             r.particles,
             r.events(),
             r.warmup_events,
-            format!("{} [{}, {}]", mega(ev.median), mega(ev.min), mega(ev.max)),
-            format!("{} [{}, {}]", mega(co.median), mega(co.min), mega(co.max)),
+            mega(r.events_per_second()),
+            mega(r.collisions_per_second()),
             t,
             r.events() as f64 / t,
             100.0 * r.collisions() as f64 / r.events().max(1) as f64,

@@ -91,17 +91,8 @@ fn observe_counter(counter: &mut LocationChangeCounter, frame: &Frame) {
     counter.observe(frame, std::hint::black_box(true));
 }
 
-/// The scene of a bench point, run long enough for the warm-up and `samples` samples, with
-/// the sampling interval, the index of the first timed sample and the observer's settings.
-struct BenchPoint {
-    scene: Scene,
-    interval: f64,
-    first: f64,
-    method: Method,
-    bins: wetgran_core::observe::bins::LateralBins,
-}
-
-fn bench_point(gamma: f64, e_star: f64, samples: usize) -> BenchPoint {
+fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -> ObserverRow {
+    // The scene runs the warm-up and then `samples` samples, the first timed one at `first`.
     let probe = standard_shaken(gamma, e_star, 1.0, Some(0.03), 1.0);
     let interval = probe.driving_period() / SAMPLES_PER_PERIOD;
     let first = (WARM_UP / interval).ceil();
@@ -115,23 +106,6 @@ fn bench_point(gamma: f64, e_star: f64, samples: usize) -> BenchPoint {
         max_edge: scene.observe.lc_max_edge * scene.particles.diameter,
         margin: scene.observe.lc_flip_margin,
     };
-    BenchPoint {
-        scene,
-        interval,
-        first,
-        method,
-        bins,
-    }
-}
-
-fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -> ObserverRow {
-    let BenchPoint {
-        scene,
-        interval,
-        first,
-        method,
-        bins,
-    } = bench_point(gamma, e_star, samples);
     let period = scene.driving_period();
     let mut others = ObserverSet::new(&scene);
     let mut counter = LocationChangeCounter::new(method, bins, period);

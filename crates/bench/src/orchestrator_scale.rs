@@ -28,7 +28,7 @@ use crate::orchestrator::{
     e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir, time_command, timed,
     wetgran_binary,
 };
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::io::Write as _;
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -63,9 +63,8 @@ pub fn time_collect(n: usize, dir: &Path) -> Result<(f64, usize), String> {
     let sweep = store.register_sweep(&file, &jobs).map_err(e)?;
     let sd = SweepDir::new(&dir.join("slurm"));
     sd.create().map_err(e)?;
-    let mut ids: Vec<String> = jobs.iter().map(|j| j.spec.id()).collect();
-    ids.sort();
-    ids.dedup();
+    let ids: BTreeSet<String> = jobs.iter().map(|j| j.spec.id()).collect();
+    let ids: Vec<String> = ids.into_iter().collect();
     let root = sd.root.display().to_string();
     store
         .record_submission(sweep.id, &root, "#!/bin/sh\n# bench\n", &ids)
@@ -172,24 +171,26 @@ fn dry_run_once(
 /// `sweep submit --slurm --dry-run` of N jobs, without and with a database (module doc).
 pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<DryRun, String> {
     let (file, jobs) = prepare(n, dir)?;
-    let mut ids: Vec<String> = jobs.iter().map(|j| j.spec.id()).collect();
-    ids.sort();
-    ids.dedup();
+    let n_ids = jobs
+        .iter()
+        .map(|j| j.spec.id())
+        .collect::<HashSet<_>>()
+        .len();
     let bin = wetgran_binary()?;
     let db = dir.join("dry.sqlite");
-    let (fresh_s, arrays, limit, source) = dry_run_once(&bin, dir, &db, ids.len())?;
+    let (fresh_s, arrays, limit, source) = dry_run_once(&bin, dir, &db, n_ids)?;
     if db.exists() {
         return Err("the dry run created the database".to_string());
     }
     let store = Store::open_as(&db, true, Durability::Synced).map_err(e)?;
     store.register_sweep(&file, &jobs).map_err(e)?;
     drop(store);
-    let (registered_s, ..) = dry_run_once(&bin, dir, &db, ids.len())?;
+    let (registered_s, ..) = dry_run_once(&bin, dir, &db, n_ids)?;
     if dir.join("wetgran-slurm").exists() {
         return Err("the dry run wrote a sweep directory".to_string());
     }
     Ok(DryRun {
-        jobs: ids.len(),
+        jobs: n_ids,
         arrays,
         limit,
         source,

@@ -5,9 +5,8 @@
 //! on the shaken plate below Gamma = 1, inelastic collapse in a dense bonded cluster, grazing
 //! wall hits, Gamma = 1000 with a tiny amplitude, a wall speed of 50 `sqrt(g d)`, a packing near
 //! jamming, the shear drive's quartic pair predictions near double roots, and the time-driven
-//! engine at the largest time step validation admits. [`run_case`] builds the case's scene (the
-//! library's builders where one exists: `bench::shake::shaken_standard` for the standard wet system), runs it
-//! in [`CHECKS`] chunks and after every chunk
+//! engine at the largest time step validation admits. [`run_case`] builds the case's scene (on
+//! `wetgran_core::scene::reference`), runs it in [`CHECKS`] chunks and after every chunk
 //!
 //! - runs the engine's own `sanity_check` (finite states, inside the box, no overlap beyond the
 //!   tolerance, no over-stretched bond, no event in the past, ...): the first violation stops
@@ -279,7 +278,10 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
         ledger_error: f64::NAN,
         nan_count: 0,
         checks: 0,
-        violation: Some(format!("panicked: {}", panic_text(payload.as_ref()))),
+        violation: Some(format!(
+            "panicked: {}",
+            wetgran::sweep::job::panic_message(payload.as_ref())
+        )),
         exhausted: false,
     });
     // A hard case that runs out of events tests nothing: a failure.
@@ -302,17 +304,6 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
         checks: m.checks,
         wall_seconds: start.elapsed().as_secs_f64(),
         violation,
-    }
-}
-
-/// The text of a panic payload.
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    if let Some(s) = payload.downcast_ref::<&str>() {
-        s.to_string()
-    } else if let Some(s) = payload.downcast_ref::<String>() {
-        s.clone()
-    } else {
-        "unknown panic payload".to_string()
     }
 }
 

@@ -1,9 +1,7 @@
 //! `wetgran-bench tdmd`: speed of the time-driven engine on the dry shaken 2D system of issue 6.
 //!
-//! The system: N = 1200 disks, `sigma_p = 0.06`, box 400 x 9 periodic in x, Hertz floor and lid
-//! shaken with `A = 0.05` at `Gamma = 15` (`omega = sqrt(Gamma g / A)`), `dt = 1e-4`, default
-//! stiffness, and the particle damping `A_d` that gives restitution 0.9 at impact speed 1
-//! (`physics::hertz::damping_for_restitution`); elastic walls; initial `T = 1 m g d`.
+//! The system is [`dry_shaken_time_driven_widened`] (N = 1200 disks in 400 x 9, shaken at
+//! `A = 0.05`, `Gamma = 15`, `dt = 1e-4`, damping for restitution 0.9 at impact speed 1).
 //!
 //! Each repetition builds a fresh engine (same seed), runs one time unit untimed (the bed leaves
 //! the lattice), then times `scale` simulated time units (at least 0.1). Reported per integrator:
