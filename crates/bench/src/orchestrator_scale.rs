@@ -1,5 +1,5 @@
-//! `wetgran-bench orchestrator --collect` and `--two-runners`: the orchestrator at cluster scale
-//! (issue 35, items 3 and 4), with the stand-in jobs of [`crate::orchestrator`].
+//! `wetgran-bench orchestrator --collect`, `--submit-dry-run` and `--two-runners`: the orchestrator at
+//! cluster scale (issue 35, items 3 and 4), with the stand-in jobs of [`crate::orchestrator`].
 //!
 //! - **collect**: registers the benchmark sweep of N points in a fresh database, records one
 //!   submission of N tasks (as `sweep submit --slurm` does after `sbatch`, without a Slurm job
