@@ -11,6 +11,7 @@
 //! wall and CPU seconds per simulated time unit, and the ratio time / event (CPU where known).
 //! The engines run in one process, one after the other, so both see the same machine load.
 
+use super::median;
 use super::observer::{POINTS, standard_shaken};
 use super::tdmd::thread_cpu_seconds;
 use std::fmt::Write as _;
@@ -53,27 +54,24 @@ fn time_one(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
         .num_threads(1)
         .build()
         .expect("one-thread pool");
-    pool.install(|| time_one_here(scene, measured))
-}
-
-/// [`time_one`] on the calling thread.
-fn time_one_here(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
-    let mut start: Option<(Instant, Option<f64>)> = None;
-    let mut end = None;
-    run_scene_observed(
-        scene,
-        measured,
-        &mut |f: &Frame| {
-            if start.is_none() && f.time >= WARM_UP - 1e-9 {
-                start = Some((Instant::now(), thread_cpu_seconds()));
-            } else if start.is_some() {
-                end = Some((Instant::now(), thread_cpu_seconds()));
-            }
-        },
-        &mut |_| {},
-    );
-    let ((w0, c0), (w1, c1)) = (start.expect("warm-up ends"), end.expect("timed part ends"));
-    ((w1 - w0).as_secs_f64(), c0.zip(c1).map(|(a, b)| b - a))
+    pool.install(|| {
+        let mut start: Option<(Instant, Option<f64>)> = None;
+        let mut end = None;
+        run_scene_observed(
+            scene,
+            measured,
+            &mut |f: &Frame| {
+                if start.is_none() && f.time >= WARM_UP - 1e-9 {
+                    start = Some((Instant::now(), thread_cpu_seconds()));
+                } else if start.is_some() {
+                    end = Some((Instant::now(), thread_cpu_seconds()));
+                }
+            },
+            &mut |_| {},
+        );
+        let ((w0, c0), (w1, c1)) = (start.expect("warm-up ends"), end.expect("timed part ends"));
+        ((w1 - w0).as_secs_f64(), c0.zip(c1).map(|(a, b)| b - a))
+    })
 }
 
 /// Measures every point with both engines, interleaved.
@@ -110,20 +108,6 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<EngineRow> {
     rows
 }
 
-fn median(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
-}
-
 /// The table: one line per point and engine, the ratio on the time engine's line.
 pub(crate) fn report(rows: &[EngineRow], repeat: usize, scale: f64) -> String {
     let mut s = String::new();
@@ -133,10 +117,8 @@ pub(crate) fn report(rows: &[EngineRow], repeat: usize, scale: f64) -> String {
          {WARM_UP} time units warm-up, {} timed, median of {repeat}, engines alternating",
         (MEASURED * scale).max(0.5)
     );
-    let _ = writeln!(
-        s,
-        "{:<12} {:>5} {:>5} {:>6} {:>12} {:>12} {:>12} {:>12}",
-        "point", "Gamma", "E*", "engine", "wall s/t", "cpu s/t", "wall ratio", "cpu ratio"
+    s.push_str(
+        "point        Gamma    E* engine     wall s/t      cpu s/t   wall ratio    cpu ratio\n",
     );
     for pair in rows.chunks(2) {
         let (e, t) = (&pair[0], &pair[1]);

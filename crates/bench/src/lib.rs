@@ -8,15 +8,8 @@
 //! as median, minimum and maximum over the repetitions, the simulated time one repetition covers
 //! and the events per unit of simulated time.
 //!
-//! The reference systems:
-//! - (a) 3D bulk: 32000 elastic monodisperse spheres, number density 0.5 (periodic cube of side
-//!   40), no gravity, `T = 1`;
-//! - (b) 3D gravity: 32000 elastic spheres, `g = 1`, box 80 x 80 x 40 periodic laterally with
-//!   floor and lid, `T = 1`;
-//! - (c) the 2D standard wet system (scenes/standard_wet_2d.toml): 1200 disks, box 400 x 9,
-//!   `sigma_p = 0.06`, thin-thread bridges, particle restitution 0.9, wall restitution 1,
-//!   `T_g / E_cb = 20`;
-//! - (c') the same system dry (no bridges) at the same absolute temperature.
+//! The reference systems (a) 3D bulk, (b) 3D gravity, (c) 2D standard wet and (c') the same
+//! dry are those of [`wetgran_core::scene::reference`].
 //!
 //! `wetgran-bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
 //! particle, with the breakdown by array.
@@ -46,109 +39,72 @@ const MIN_EVENTS: u64 = 5_000;
 /// Fewest warm-up events.
 const MIN_WARMUP: u64 = 500;
 
-/// Runs the benchmark `which` and prints its table to stdout: `engine` (all reference systems)
-/// or `engine:LABELS` with a comma-separated subset of `a,b,c,c'` (e.g. `engine:a` to profile
-/// one system).
-pub fn run(which: &str, repeat: usize, scale: f64) -> Result<(), String> {
-    run_with_svg(which, repeat, scale, None, &[1], 1)
-}
-
-/// Like [`run`]; `wall` also writes its error-against-cost plot to `svg` if given; `tdmd` runs
-/// once per thread count of `threads` (the other benchmarks are single-threaded), on its
-/// system widened `n_factor` times.
-pub fn run_with_svg(
+/// The table of the benchmark `which`: `engine` (all reference systems) or `engine:LABELS` with
+/// a comma-separated subset of `a,b,c,c'` (e.g. `engine:a` to profile one system), `wall`
+/// (its error-against-cost plot also written to `svg` if given), `tdmd` (once per thread count
+/// of `threads`, on its system widened `n_factor` times; the others are single-threaded), ...
+pub fn run(
     which: &str,
     repeat: usize,
     scale: f64,
     svg: Option<&std::path::Path>,
     threads: &[usize],
     n_factor: usize,
-) -> Result<(), String> {
-    if which == "wall" {
-        let rows = wall::measure(repeat, scale);
-        print!("{}", wall::report(&rows));
-        if let Some(path) = svg {
-            std::fs::write(path, wall::svg(&rows))
-                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-            println!("plot written to {}", path.display());
+) -> Result<String, String> {
+    let (name, arg) = match which.split_once(':') {
+        Some((name, arg)) => (name, Some(arg)),
+        None => (which, None),
+    };
+    Ok(match (name, arg) {
+        ("wall", None) => {
+            let rows = wall::measure(repeat, scale);
+            let mut text = wall::report(&rows);
+            if let Some(path) = svg {
+                std::fs::write(path, wall::svg(&rows))
+                    .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+                let _ = writeln!(text, "plot written to {}", path.display());
+            }
+            text
         }
-        return Ok(());
-    }
-    if which == "tdmd" {
-        print!(
-            "{}",
-            tdmd::report(&tdmd::measure_threads(repeat, scale, threads, n_factor))
-        );
-        return Ok(());
-    }
-    if which == "slab" {
-        print!(
-            "{}",
-            slab::report(&slab::measure(repeat, scale), repeat, scale)
-        );
-        return Ok(());
-    }
-    if which == "memory" {
-        print!("{}", memory::report(&memory::measure(scale)?));
-        return Ok(());
-    }
-    if let Some(n) = which.strip_prefix("memory:") {
-        // The child process of `memory` (one size).
-        let n: usize = n
-            .parse()
-            .map_err(|_| format!("`{which}`: expected memory:N with a particle count N"))?;
-        print!("{}", memory::child_text(&memory::measure_here(n)?));
-        return Ok(());
-    }
-    if which == "observer" || which.starts_with("observer:") {
-        let only: Vec<&str> = which
-            .strip_prefix("observer:")
-            .map(|l| l.split(',').map(str::trim).collect())
-            .unwrap_or_default();
-        if let Some(bad) = only
-            .iter()
-            .find(|l| !observer::POINTS.iter().any(|p| p.0 == **l))
-        {
-            return Err(format!(
-                "unknown observer point `{bad}`: use gas, fluid, coexistence"
-            ));
+        ("tdmd", None) => tdmd::report(&tdmd::measure_threads(repeat, scale, threads, n_factor)),
+        ("slab", None) => slab::report(&slab::measure(repeat, scale), repeat, scale),
+        ("memory", None) => memory::report(&memory::measure(scale)?),
+        ("memory", Some(n)) => {
+            // The child process of `memory` (one size).
+            let n: usize = n
+                .parse()
+                .map_err(|_| format!("`{which}`: expected memory:N with a particle count N"))?;
+            memory::child_text(&memory::measure_here(n)?)
         }
-        print!(
-            "{}",
+        ("observer", points) => {
+            let only: Vec<&str> = points.map_or(vec![], |p| p.split(',').map(str::trim).collect());
+            if let Some(bad) = only
+                .iter()
+                .find(|l| !observer::POINTS.iter().any(|p| p.0 == **l))
+            {
+                return Err(format!(
+                    "unknown observer point `{bad}`: use gas, fluid, coexistence"
+                ));
+            }
             observer::report(&observer::measure(400, scale, &only))
-        );
-        return Ok(());
-    }
-    if which == "engines" {
-        print!(
-            "{}",
-            engines::report(&engines::measure(repeat, scale), repeat, scale)
-        );
-        return Ok(());
-    }
-    if which == "barrier" {
-        print!(
-            "{}",
-            barrier::report(&barrier::measure(repeat, scale), repeat)
-        );
-        return Ok(());
-    }
-    if which == "shake" {
-        print!("{}", shake::report(&shake::measure(40, scale)));
-        return Ok(());
-    }
-    let only: Option<Vec<&str>> = match which.split_once(':') {
-        None if which == "engine" => None,
-        Some(("engine", labels)) => Some(labels.split(',').map(str::trim).collect()),
+        }
+        ("engines", None) => engines::report(&engines::measure(repeat, scale), repeat, scale),
+        ("barrier", None) => barrier::report(&barrier::measure(repeat, scale), repeat),
+        ("shake", None) => shake::report(&shake::measure(40, scale)),
+        ("engine", labels) => {
+            let only: Option<Vec<&str>> = labels.map(|l| l.split(',').map(str::trim).collect());
+            engine_report(
+                &engine_bench_only(repeat, scale, only.as_deref())?,
+                repeat,
+                scale,
+            )
+        }
         _ => {
             return Err(format!(
                 "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
             ));
         }
-    };
-    let rows = engine_bench_only(repeat, scale, only.as_deref())?;
-    print!("{}", engine_report(&rows, repeat, scale));
-    Ok(())
+    })
 }
 
 /// One reference system of the engine benchmark.
@@ -207,18 +163,34 @@ impl Spread {
         let mut v: Vec<f64> = values.into_iter().collect();
         assert!(!v.is_empty(), "spread of no values");
         v.sort_by(f64::total_cmp);
-        let n = v.len();
-        let median = if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        };
         Spread {
-            median,
+            median: median(&v),
             min: v[0],
-            max: v[n - 1],
+            max: v[v.len() - 1],
         }
     }
+}
+
+/// The median (the mean of the middle two for an even count); NaN for no values.
+pub(crate) fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// The `q` quantile of a sample, the nearest rank (`q = 0.5`: the upper of the middle two for
+/// an even count); 0 for no values.
+pub(crate) fn quantile(v: &[f64], q: f64) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        return 0.0;
+    }
+    v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
 impl Row {
@@ -377,10 +349,9 @@ pub(crate) fn engine_bench_only(
             continue;
         }
         let (events, warmup) = event_budget(sys.base_events, scale);
-        let mut reps = Vec::with_capacity(repeat);
-        for _ in 0..repeat {
-            reps.push(measure(&sys.scene, warmup, events)?);
-        }
+        let reps = (0..repeat)
+            .map(|_| measure(&sys.scene, warmup, events))
+            .collect::<Result<_, _>>()?;
         rows.push(Row {
             label: sys.label,
             description: format!("{}; {}", sys.description, lattice_fill(&sys.scene)),
@@ -390,10 +361,6 @@ pub(crate) fn engine_bench_only(
         });
     }
     Ok(rows)
-}
-
-fn mega(x: f64) -> String {
-    format!("{:.3}", x / 1e6)
 }
 
 /// The printed table.
@@ -418,23 +385,17 @@ pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
         "rates in millions per wall-clock second: median [min, max] over {repeat} repetition(s)"
     );
     let _ = writeln!(s);
-    let _ = writeln!(
-        s,
-        "{:<4} {:>6} {:>9} {:>8} {:>26} {:>26} {:>10} {:>11} {:>7}",
-        "sys",
-        "N",
-        "events",
-        "warm-up",
-        "events/s [M]",
-        "collisions/s [M]",
-        "sim. time",
-        "events/t",
-        "coll.%"
-    );
+    s.push_str("sys       N    events  warm-up               events/s [M]           collisions/s [M]  sim. time    events/t  coll.%\n");
     for r in rows {
-        let ev = r.events_per_second();
-        let co = r.collisions_per_second();
         let t = r.simulated_time();
+        let mega = |x: Spread| {
+            format!(
+                "{:.3} [{:.3}, {:.3}]",
+                x.median / 1e6,
+                x.min / 1e6,
+                x.max / 1e6
+            )
+        };
         let _ = writeln!(
             s,
             "{:<4} {:>6} {:>9} {:>8} {:>26} {:>26} {:>10.4} {:>11.4e} {:>7.1}",
@@ -442,8 +403,8 @@ pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
             r.particles,
             r.events(),
             r.warmup_events,
-            format!("{} [{}, {}]", mega(ev.median), mega(ev.min), mega(ev.max)),
-            format!("{} [{}, {}]", mega(co.median), mega(co.min), mega(co.max)),
+            mega(r.events_per_second()),
+            mega(r.collisions_per_second()),
             t,
             r.events() as f64 / t,
             100.0 * r.collisions() as f64 / r.events().max(1) as f64,
@@ -485,18 +446,23 @@ mod tests {
         }
         let text = engine_report(&rows, 1, 0.001);
         assert!(text.contains("dry/wet events-per-second ratio"));
-        assert!(run("engine:c'", 1, 0.001).is_ok());
-        assert!(run("nonsense", 1, 1.0).is_err());
-        assert!(run("engine:x", 1, 1.0).is_err());
+        let run = |which| run(which, 1, 0.001, None, &[1], 1);
+        assert!(run("engine:c'").is_ok());
+        assert!(run("nonsense").is_err() && run("engine:x").is_err() && run("wall:").is_err());
         assert_eq!(engine_bench_only(1, 0.001, Some(&["c'"])).unwrap().len(), 1);
         assert!(engine_bench_only(1, 0.0, None).is_err());
     }
 
     #[test]
-    fn spread_and_budget() {
+    fn spread_quantiles_and_budget() {
         let s = Spread::of([3.0, 1.0, 2.0]);
         assert_eq!((s.median, s.min, s.max), (2.0, 1.0, 3.0));
         assert_eq!(Spread::of([1.0, 4.0]).median, 2.5);
+        assert!(median(&[]).is_nan());
+        let v: Vec<f64> = (1..=101).map(f64::from).collect();
+        assert_eq!((quantile(&v, 0.5), quantile(&v, 0.99)), (51.0, 100.0));
+        assert_eq!(quantile(&[1.0, 4.0], 0.5), 4.0);
+        assert_eq!(quantile(&[], 0.5), 0.0);
         assert_eq!(event_budget(2_000_000, 1.0), (2_000_000, 200_000));
         assert_eq!(event_budget(2_000_000, 0.001), (MIN_EVENTS, MIN_WARMUP));
     }

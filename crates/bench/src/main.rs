@@ -4,7 +4,9 @@
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use wetgran::store::Durability;
 use wetgran_bench::stress::{DEFAULT_EVENTS, StressCase, run_case};
+use wetgran_bench::{orchestrator, orchestrator_scale};
 
 /// Benchmarks and stress cases of wetgran's engines.
 #[derive(Debug, Parser)]
@@ -139,22 +141,37 @@ fn main() -> ExitCode {
         Some(Command::Stress { case, events, json }) => stress(case.as_deref(), events, json),
         Some(Command::Orchestrator {
             sizes,
+            workers,
+            repeat,
             dir,
+            synced,
+            keep,
+            reports,
             collect,
             submit_dry_run,
             two_runners,
-            ..
-        }) if collect || submit_dry_run || two_runners => {
-            report(wetgran_bench::orchestrator_scale::run(
+        }) => report(if collect || submit_dry_run || two_runners {
+            let dir = dir.as_deref();
+            orchestrator_scale::run(&sizes, collect, submit_dry_run, two_runners, dir)
+                .map(|()| String::new())
+        } else {
+            let durability = match synced {
+                true => Durability::Synced,
+                false => Durability::Fast,
+            };
+            let (workers, repeat) = (workers.max(1), repeat.max(1));
+            orchestrator::run(
                 &sizes,
-                collect,
-                submit_dry_run,
-                two_runners,
+                workers,
+                repeat,
+                durability,
+                &reports,
                 dir.as_deref(),
-            ))
-        }
+                keep,
+            )
+        }),
         Some(Command::OrchestratorRunner { db, dir, log }) => {
-            match wetgran_bench::orchestrator_scale::runner(&db, &dir, &log) {
+            match orchestrator_scale::runner(&db, &dir, &log) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");
@@ -162,29 +179,17 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Some(Command::Orchestrator {
-            sizes,
-            workers,
-            repeat,
-            dir,
-            synced,
-            keep,
-            reports,
-            ..
-        }) => report(wetgran_bench::orchestrator::run(
-            &sizes,
-            workers.max(1),
-            repeat.max(1),
-            if synced {
-                wetgran::store::Durability::Synced
-            } else {
-                wetgran::store::Durability::Fast
-            },
-            &reports,
-            dir.as_deref(),
-            keep,
-        )),
-        None => figures(&cli.figures),
+        None => {
+            let f = &cli.figures;
+            report(wetgran_bench::run(
+                &f.which,
+                f.repeat.max(1),
+                f.scale,
+                f.svg.as_deref(),
+                &f.threads,
+                f.n_factor.max(1),
+            ))
+        }
     }
 }
 
@@ -195,24 +200,6 @@ fn report(r: Result<String, String>) -> ExitCode {
             print!("{text}");
             ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(2)
-        }
-    }
-}
-
-/// `wetgran-bench [WHICH] [--repeat R] [--scale S] ...`.
-fn figures(f: &Figures) -> ExitCode {
-    match wetgran_bench::run_with_svg(
-        &f.which,
-        f.repeat.max(1),
-        f.scale,
-        f.svg.as_deref(),
-        &f.threads,
-        f.n_factor.max(1),
-    ) {
-        Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(2)

@@ -34,7 +34,7 @@ pub(crate) fn bulk_scene(n: usize) -> Scene {
 }
 
 /// What one child process measured.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct MemoryRow {
     pub particles: usize,
     /// Resident set size at the start of the child, before the engine (KiB).
@@ -101,47 +101,15 @@ pub(crate) fn measure_here(n: usize) -> Result<MemoryRow, String> {
     })
 }
 
-/// The child's output: one `key value` line per figure, `struct BYTES NAME` per array.
+/// The child's output: the row as JSON.
 pub(crate) fn child_text(row: &MemoryRow) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "particles {}", row.particles);
-    let _ = writeln!(s, "rss_start_kib {}", row.rss_start_kib);
-    let _ = writeln!(s, "rss_built_kib {}", row.rss_built_kib);
-    let _ = writeln!(s, "peak_kib {}", row.peak_kib);
-    let _ = writeln!(s, "events {}", row.events);
-    for (name, b) in &row.structures {
-        let _ = writeln!(s, "struct {b} {name}");
-    }
-    s
+    serde_json::to_string_pretty(row).expect("a memory row serializes") + "\n"
 }
 
 /// Parses [`child_text`].
 pub(crate) fn parse_child(text: &str) -> Result<MemoryRow, String> {
-    let mut row = MemoryRow {
-        particles: 0,
-        rss_start_kib: 0,
-        rss_built_kib: 0,
-        peak_kib: 0,
-        events: 0,
-        structures: Vec::new(),
-    };
-    for line in text.lines() {
-        let bad = || format!("bench memory: cannot read the child's line `{line}`");
-        let (key, rest) = line.split_once(' ').ok_or_else(bad)?;
-        let num = |s: &str| s.trim().parse::<u64>().map_err(|_| bad());
-        match key {
-            "particles" => row.particles = num(rest)? as usize,
-            "rss_start_kib" => row.rss_start_kib = num(rest)?,
-            "rss_built_kib" => row.rss_built_kib = num(rest)?,
-            "peak_kib" => row.peak_kib = num(rest)?,
-            "events" => row.events = num(rest)?,
-            "struct" => {
-                let (b, name) = rest.split_once(' ').ok_or_else(bad)?;
-                row.structures.push((name.to_string(), num(b)? as usize));
-            }
-            _ => return Err(bad()),
-        }
-    }
+    let row: MemoryRow = serde_json::from_str(text)
+        .map_err(|x| format!("bench memory: cannot read the child's output ({x}): {text}"))?;
     if row.particles == 0 {
         return Err("bench memory: the child reported no particles".into());
     }
@@ -158,7 +126,7 @@ pub(crate) fn measure(scale: f64) -> Result<Vec<MemoryRow>, String> {
     for n in SIZES {
         let n = ((n as f64 * scale).round() as usize).max(MIN_PARTICLES);
         let out = std::process::Command::new(&exe)
-            .args(["bench", &format!("memory:{n}")])
+            .arg(format!("memory:{n}"))
             .output()
             .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
         if !out.status.success() {
@@ -187,10 +155,8 @@ pub(crate) fn report(rows: &[MemoryRow]) -> String {
          bytes of the engine's arrays (capacity x element size)"
     );
     let _ = writeln!(s);
-    let _ = writeln!(
-        s,
-        "{:>9} {:>9} {:>10} {:>10} {:>10} {:>9} {:>12} {:>10}",
-        "N", "events", "start MiB", "built MiB", "peak MiB", "peak B/N", "peak-start", "engine B/N"
+    s.push_str(
+        "        N    events  start MiB  built MiB   peak MiB  peak B/N   peak-start engine B/N\n",
     );
     let mib = |k: u64| k as f64 / 1024.0;
     for r in rows {

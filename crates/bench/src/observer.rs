@@ -17,7 +17,8 @@ use std::fmt::Write as _;
 use std::time::Instant;
 use wetgran_core::observe::location_changes::{LocationChangeCounter, Method};
 use wetgran_core::observe::{Observer, ObserverSet};
-use wetgran_core::scene::Scene;
+use wetgran_core::scene::reference::shaken_standard;
+use wetgran_core::scene::{CapillaryModel, CapillarySpec, Scene, WallSolverKind};
 use wetgran_core::sim::{Frame, run_scene_observed};
 
 /// Samples per driving period (the default of `[observe]`).
@@ -27,7 +28,8 @@ pub(crate) const WARM_UP: f64 = 20.0;
 
 /// The 2D standard wet system shaken at `(gamma, e_star)` with particle restitution `eps`
 /// (`min_rebound`: `engine.min_rebound_speed`), running `duration` time units, hot start
-/// `T_g / E_cb = 20`, seed 1.
+/// `T_g / E_cb = 20`, seed 1, the box's boundaries and the bridges' `s_crit` and `E_cb` left to
+/// their defaults.
 pub(crate) fn standard_shaken(
     gamma: f64,
     e_star: f64,
@@ -35,33 +37,19 @@ pub(crate) fn standard_shaken(
     min_rebound: Option<f64>,
     duration: f64,
 ) -> Scene {
-    let engine = min_rebound
-        .map(|v| format!("[engine]\nmin_rebound_speed = {v:?}\n"))
-        .unwrap_or_default();
-    let text = format!(
-        r#"
-dimension = 2
-[box]
-size = [400.0, 9.0]
-[particles]
-count = 1200
-polydispersity = 0.06
-[contact]
-restitution = {eps:?}
-[capillary]
-model = "thin_thread"
-[drive]
-kind = "sine"
-gamma = {gamma:?}
-e_star = {e_star:?}
-[initial]
-temperature_over_ecb = 20.0
-seed = 1
-[run]
-duration = {duration:?}
-{engine}"#
-    );
-    Scene::from_toml_str(&text, "bench standard shaken").expect("bench scene is valid")
+    let mut s = shaken_standard(gamma, e_star, WallSolverKind::Exact);
+    s.container.boundary = None;
+    s.contact.restitution = eps;
+    s.capillary = CapillarySpec {
+        model: CapillaryModel::ThinThread,
+        ..CapillarySpec::default()
+    };
+    if let Some(v) = min_rebound {
+        s.engine.min_rebound_speed = v;
+    }
+    s.run.duration = duration;
+    s.resolve_observers();
+    s
 }
 
 /// The three points: label, Gamma, E*.
@@ -103,17 +91,8 @@ fn observe_counter(counter: &mut LocationChangeCounter, frame: &Frame) {
     counter.observe(frame, std::hint::black_box(true));
 }
 
-/// The scene of a bench point, run long enough for the warm-up and `samples` samples, with
-/// the sampling interval, the index of the first timed sample and the observer's settings.
-struct BenchPoint {
-    scene: Scene,
-    interval: f64,
-    first: f64,
-    method: Method,
-    bins: wetgran_core::observe::bins::LateralBins,
-}
-
-fn bench_point(gamma: f64, e_star: f64, samples: usize) -> BenchPoint {
+fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -> ObserverRow {
+    // The scene runs the warm-up and then `samples` samples, the first timed one at `first`.
     let probe = standard_shaken(gamma, e_star, 1.0, Some(0.03), 1.0);
     let interval = probe.driving_period() / SAMPLES_PER_PERIOD;
     let first = (WARM_UP / interval).ceil();
@@ -127,23 +106,6 @@ fn bench_point(gamma: f64, e_star: f64, samples: usize) -> BenchPoint {
         max_edge: scene.observe.lc_max_edge * scene.particles.diameter,
         margin: scene.observe.lc_flip_margin,
     };
-    BenchPoint {
-        scene,
-        interval,
-        first,
-        method,
-        bins,
-    }
-}
-
-fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -> ObserverRow {
-    let BenchPoint {
-        scene,
-        interval,
-        first,
-        method,
-        bins,
-    } = bench_point(gamma, e_star, samples);
     let period = scene.driving_period();
     let mut others = ObserverSet::new(&scene);
     let mut counter = LocationChangeCounter::new(method, bins, period);
@@ -197,11 +159,7 @@ pub(crate) fn report(rows: &[ObserverRow]) -> String {
         s,
         "location-change observer, 2D standard wet system (N 1200, 400x9, eps 1), {SAMPLES_PER_PERIOD} samples/period after {WARM_UP} time units"
     );
-    let _ = writeln!(
-        s,
-        "{:<12} {:>5} {:>5} {:>7} {:>9} {:>9} {:>9} {:>8} {:>8}  thread CPU / wall",
-        "point", "Gamma", "E*", "samples", "engine ms", "others ms", "lc ms", "lc share", "changes",
-    );
+    s.push_str("point        Gamma    E* samples engine ms others ms     lc ms lc share  changes  thread CPU / wall\n");
     for r in rows {
         let n = r.samples.max(1) as f64;
         let wall = r.engine + r.others + r.counter;

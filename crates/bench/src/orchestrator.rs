@@ -35,13 +35,28 @@
 //! (`stationarity.stationary`, `convergence.converged`, `trend.state`), which every report also
 //! sees.
 
+use crate::quantile;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use wetgran::run::{JobFn, RunOptions, run_sweeps_with};
 use wetgran::store::{Durability, Store};
-use wetgran::sweep::{JobResult, SweepFile, run_job};
+use wetgran::sweep::{JobError, JobResult, JobSpec, SweepFile, SweepJob, run_job};
+
+/// An error as its text.
+pub(crate) fn e(x: impl std::fmt::Display) -> String {
+    x.to_string()
+}
+
+/// What `f` returned and the wall seconds it took; its error as text.
+pub(crate) fn timed<T, E: std::fmt::Display>(
+    f: impl FnOnce() -> Result<T, E>,
+) -> Result<(T, f64), String> {
+    let t0 = Instant::now();
+    let out = f().map_err(e)?;
+    Ok((out, t0.elapsed().as_secs_f64()))
+}
 
 /// The base scene of the benchmark sweep (the quickstart's).
 pub(crate) const BASE_SCENE: &str = include_str!("../../../scenes/shaken_wet_2d.toml");
@@ -66,22 +81,53 @@ pub(crate) fn grid(n: usize) -> (usize, usize) {
     (a.max(1), n / a.max(1))
 }
 
-/// Median of a sample (0 for none).
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+/// The benchmark sweep of about `n` points written into `dir` (its base scene beside it), and
+/// its jobs.
+pub(crate) fn prepare(n: usize, dir: &Path) -> Result<(SweepFile, Vec<SweepJob>), String> {
+    let (n_gamma, n_e) = grid(n);
+    std::fs::write(dir.join("shaken_wet_2d.toml"), BASE_SCENE).map_err(e)?;
+    let path = dir.join("bench.toml");
+    std::fs::write(&path, sweep_text(n_gamma, n_e)).map_err(e)?;
+    let file = SweepFile::load(&path).map_err(e)?;
+    let jobs = file.expand().map_err(e)?;
+    Ok((file, jobs))
 }
 
-/// The `q` quantile of a sample (0 for none).
-fn quantile(mut v: Vec<f64>, q: f64) -> f64 {
-    if v.is_empty() {
-        return 0.0;
+/// One real run of `spec`: the shape of every stand-in result.
+pub(crate) fn real_result(spec: &JobSpec) -> Result<JobResult, String> {
+    run_job(spec, &mut |_| {}).map_err(e)
+}
+
+/// A stand-in job: `on_start(job id)`, then `result` with the point's made-up label.
+pub(crate) fn stand_in(
+    result: JobResult,
+    on_start: impl Fn(&str) -> Result<(), JobError> + Send + Sync + 'static,
+) -> JobFn {
+    Arc::new(move |claim, _progress| {
+        on_start(&claim.job_id)?;
+        let mut r = result.clone();
+        r.phase = Some(stand_in_phase(&claim.coords).to_string());
+        Ok(r)
+    })
+}
+
+/// How the benchmark runs a sweep: `workers` threads, silent, no wall-table cache.
+pub(crate) fn run_options(workers: usize) -> RunOptions {
+    RunOptions {
+        jobs: workers,
+        retry_failed: false,
+        show_progress: false,
+        table_cache_mib: 0,
     }
-    v.sort_by(f64::total_cmp);
-    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+/// A fresh folder under `dir` (default: the system's temporary folder).
+pub(crate) fn temp_dir(dir: Option<&Path>) -> Result<tempfile::TempDir, String> {
+    match dir {
+        Some(d) => tempfile::tempdir_in(d),
+        None => tempfile::tempdir(),
+    }
+    .map_err(|x| format!("cannot make a temporary folder: {x}"))
 }
 
 /// The `wetgran` binary beside this one.
@@ -98,19 +144,25 @@ pub(crate) fn wetgran_binary() -> Result<PathBuf, String> {
     }
 }
 
-/// Seconds one run of `wetgran ARGS` takes (standard output to `out`); an error if it fails.
-fn time_command(bin: &Path, args: &[&str], out: &Path) -> Result<f64, String> {
-    let file = std::fs::File::create(out).map_err(|e| format!("{}: {e}", out.display()))?;
+/// Seconds one run of `wetgran ARGS` takes (standard output to `out`); an error with its
+/// standard error if it fails.
+pub(crate) fn time_command(bin: &Path, args: &[&str], out: &Path) -> Result<f64, String> {
+    let file = std::fs::File::create(out).map_err(|x| format!("{}: {x}", out.display()))?;
     let t0 = Instant::now();
-    let status = Command::new(bin)
+    let run = Command::new(bin)
         .args(args)
         .stdout(Stdio::from(file))
-        .stderr(Stdio::null())
-        .status()
-        .map_err(|e| format!("wetgran {}: {e}", args.join(" ")))?;
+        .stderr(Stdio::piped())
+        .output()
+        .map_err(|x| format!("wetgran {}: {x}", args.join(" ")))?;
     let t = t0.elapsed().as_secs_f64();
-    if !status.success() {
-        return Err(format!("wetgran {} failed ({status})", args.join(" ")));
+    if !run.status.success() {
+        return Err(format!(
+            "wetgran {} failed ({}): {}",
+            args.join(" "),
+            run.status,
+            String::from_utf8_lossy(&run.stderr)
+        ));
     }
     Ok(t)
 }
@@ -161,25 +213,18 @@ fn refine_round(
     opts: &RunOptions,
 ) -> Result<RefineRound, String> {
     use wetgran::refine::driver::plan_jobs;
-    let e = |e: &dyn std::fmt::Display| e.to_string();
     let rows_of = std::slice::from_ref(row);
-    let t0 = Instant::now();
-    let rows = store.points(row.id).map_err(|x| e(&x))?;
-    let settings = wetgran::refine::Settings {
-        replicas: row.replicas,
-        max_replicas: 3 * row.replicas,
-        resolution: 0.0,
-    };
-    let jobs =
-        plan_jobs(file, row, &rows, (rows.len() / 10).max(1), &settings).map_err(|x| e(&x))?;
-    drop(rows);
-    let plan_s = t0.elapsed().as_secs_f64();
-    let t0 = Instant::now();
-    store.add_jobs(row.id, &jobs).map_err(|x| e(&x))?;
-    let add_s = t0.elapsed().as_secs_f64();
-    let t0 = Instant::now();
-    let summary = run_sweeps_with(store, rows_of, opts, job).map_err(|x| e(&x))?;
-    let run_s = t0.elapsed().as_secs_f64();
+    let (jobs, plan_s) = timed(|| {
+        let rows = store.points(row.id).map_err(e)?;
+        let settings = wetgran::refine::Settings {
+            replicas: row.replicas,
+            max_replicas: 3 * row.replicas,
+            resolution: 0.0,
+        };
+        plan_jobs(file, row, &rows, (rows.len() / 10).max(1), &settings).map_err(e)
+    })?;
+    let ((), add_s) = timed(|| store.add_jobs(row.id, &jobs))?;
+    let (summary, run_s) = timed(|| run_sweeps_with(store, rows_of, opts, job))?;
     if summary.done as usize != jobs.len() {
         return Err(format!(
             "refinement: {} of {} jobs done",
@@ -187,9 +232,7 @@ fn refine_round(
             jobs.len()
         ));
     }
-    let t0 = Instant::now();
-    wetgran::run::relabel::relabel_changed(store, row).map_err(|x| e(&x))?;
-    let relabel_s = t0.elapsed().as_secs_f64();
+    let (_, relabel_s) = timed(|| wetgran::run::relabel::relabel_changed(store, row))?;
     Ok(RefineRound {
         relabel_s,
         plan_s,
@@ -220,13 +263,11 @@ fn end_of_run_relabel(
     row: &wetgran::store::SweepRow,
     decided_on: &Option<serde_json::Value>,
 ) -> Result<f64, String> {
-    let t0 = Instant::now();
-    wetgran::run::relabel::relabel_changed(store, row).map_err(|e| e.to_string())?;
-    let t = t0.elapsed().as_secs_f64();
+    let (_, t) = timed(|| wetgran::run::relabel::relabel_changed(store, row))?;
     let decided_on = decided_on.clone().unwrap_or(serde_json::Value::Null);
     let labels: Vec<(String, String, serde_json::Value)> = store
         .points(row.id)
-        .map_err(|e| e.to_string())?
+        .map_err(e)?
         .into_iter()
         .map(|p| {
             (
@@ -236,7 +277,7 @@ fn end_of_run_relabel(
             )
         })
         .collect();
-    store.relabel(&labels).map_err(|e| e.to_string())?;
+    store.relabel(&labels).map_err(e)?;
     Ok(t)
 }
 
@@ -282,8 +323,9 @@ fn time_reports(
         for _ in 0..repeat {
             times.push(time_command(&bin, args, &out)?);
         }
-        eprintln!("N = {jobs_n}: {name} {:.3} s", median(times.clone()));
-        timed.push((name.to_string(), median(times)));
+        let t = quantile(&times, 0.5);
+        eprintln!("N = {jobs_n}: {name} {t:.3} s");
+        timed.push((name.to_string(), t));
     }
     Ok(timed)
 }
@@ -297,18 +339,9 @@ pub(crate) fn measure(
     reports: &[String],
     dir: &Path,
 ) -> Result<Figures, String> {
-    let (n_gamma, n_e) = grid(n);
-    let jobs_n = n_gamma * n_e;
-    std::fs::write(dir.join("shaken_wet_2d.toml"), BASE_SCENE).map_err(|e| e.to_string())?;
-    let sweep_path = dir.join("bench.toml");
-    std::fs::write(&sweep_path, sweep_text(n_gamma, n_e)).map_err(|e| e.to_string())?;
-    let file = SweepFile::load(&sweep_path).map_err(|e| e.to_string())?;
-    let jobs = file.expand().map_err(|e| e.to_string())?;
-
-    // One real run of the first job: the shape of every stand-in result.
-    let t0 = Instant::now();
-    let real = run_job(&jobs[0].spec, &mut |_| {}).map_err(|e| e.to_string())?;
-    let real_s = t0.elapsed().as_secs_f64();
+    let (file, jobs) = prepare(n, dir)?;
+    let jobs_n = jobs.len();
+    let (real, real_s) = timed(|| real_result(&jobs[0].spec))?;
     let real_decided_on = real.decided_on.clone();
     let obs_bytes = real.observables.to_string().len();
     let state_bytes = real
@@ -322,12 +355,8 @@ pub(crate) fn measure(
     );
 
     let db = dir.join("bench.sqlite");
-    let store = Store::open_as(&db, true, durability).map_err(|e| e.to_string())?;
-    let t0 = Instant::now();
-    let sweep = store
-        .register_sweep(&file, &jobs)
-        .map_err(|e| e.to_string())?;
-    let register_s = t0.elapsed().as_secs_f64();
+    let store = Store::open_as(&db, true, durability).map_err(e)?;
+    let (sweep, register_s) = timed(|| store.register_sweep(&file, &jobs))?;
 
     let refine = reports.iter().any(|r| r == "refine");
     let mut observables = real.observables.clone();
@@ -341,34 +370,24 @@ pub(crate) fn measure(
         }
     }
     let starts = Arc::new(Mutex::new(Vec::with_capacity(jobs_n)));
-    let job: JobFn = {
+    let job = {
         let starts = starts.clone();
-        Arc::new(move |claim, _progress| {
+        let result = JobResult {
+            observables,
+            wall_seconds: 0.0,
+            ..real
+        };
+        stand_in(result, move |_| {
             starts
                 .lock()
                 .expect("no panic holds it")
                 .push(Instant::now());
-            Ok(JobResult {
-                phase: Some(stand_in_phase(&claim.coords).to_string()),
-                decided_on: real.decided_on.clone(),
-                observables: observables.clone(),
-                simulated_time: real.simulated_time,
-                wall_seconds: 0.0,
-                events: real.events,
-                checkpoint: real.checkpoint.clone(),
-            })
+            Ok(())
         })
     };
-    let opts = RunOptions {
-        jobs: workers,
-        retry_failed: false,
-        show_progress: false,
-        table_cache_mib: 0,
-    };
-    let t0 = Instant::now();
-    let summary = run_sweeps_with(&store, std::slice::from_ref(&sweep), &opts, job.clone())
-        .map_err(|e| e.to_string())?;
-    let run_s = t0.elapsed().as_secs_f64();
+    let opts = run_options(workers);
+    let sweeps = std::slice::from_ref(&sweep);
+    let (summary, run_s) = timed(|| run_sweeps_with(&store, sweeps, &opts, job.clone()))?;
     if summary.done as usize != jobs_n {
         return Err(format!("{} of {jobs_n} jobs done", summary.done));
     }
@@ -388,12 +407,11 @@ pub(crate) fn measure(
         .map(|w| (w[1] - w[0]).as_secs_f64() * 1e3)
         .collect();
     let tenth = (gaps.len() / 10).max(1).min(gaps.len());
-    let first = gaps[..tenth].to_vec();
-    let last = gaps[gaps.len() - tenth..].to_vec();
+    let (first, last) = (&gaps[..tenth], &gaps[gaps.len() - tenth..]);
 
     let timed = time_reports(&db, dir, reports, repeat, jobs_n)?;
     let refine = if refine {
-        let store = Store::open_as(&db, false, durability).map_err(|e| e.to_string())?;
+        let store = Store::open_as(&db, false, durability).map_err(e)?;
         let r = refine_round(&store, &file, &sweep, job, &opts)?;
         eprintln!("N = {jobs_n}: refinement round {r:?}");
         Some(r)
@@ -406,8 +424,8 @@ pub(crate) fn measure(
         run_s,
         claims_per_s: jobs_n as f64 / run_s,
         overhead_ms: run_s / jobs_n as f64 * 1e3,
-        gap_first_ms: (median(first.clone()), quantile(first, 0.99)),
-        gap_last_ms: (median(last.clone()), quantile(last, 0.99)),
+        gap_first_ms: (quantile(first, 0.5), quantile(first, 0.99)),
+        gap_last_ms: (quantile(last, 0.5), quantile(last, 0.99)),
         db_bytes_per_result: db_bytes as f64 / jobs_n as f64,
         reports: timed,
         refine,
@@ -428,18 +446,7 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
             Durability::Fast => "without a sync (synchronous = NORMAL, as `sweep run`)",
         }
     );
-    let _ = writeln!(
-        s,
-        "{:>8} {:>10} {:>9} {:>10} {:>11} {:>17} {:>17} {:>11}",
-        "jobs",
-        "register s",
-        "run s",
-        "claims/s",
-        "ms per job",
-        "gap first med/p99",
-        "gap last med/p99",
-        "kB/result"
-    );
+    s.push_str("    jobs register s     run s   claims/s  ms per job gap first med/p99  gap last med/p99   kB/result\n");
     for r in rows {
         let _ = writeln!(
             s,
@@ -504,11 +511,7 @@ pub fn run(
 ) -> Result<String, String> {
     let mut rows = Vec::new();
     for &n in sizes {
-        let tmp = match dir {
-            Some(d) => tempfile::tempdir_in(d),
-            None => tempfile::tempdir(),
-        }
-        .map_err(|e| format!("cannot make a temporary folder: {e}"))?;
+        let tmp = temp_dir(dir)?;
         rows.push(measure(
             n,
             workers,
@@ -534,12 +537,5 @@ mod tests {
         assert_eq!(grid(10_000), (100, 100));
         assert_eq!(grid(100_000), (250, 400));
         assert_eq!(grid(7), (1, 7));
-    }
-
-    #[test]
-    fn quantiles_of_a_sample() {
-        let v: Vec<f64> = (1..=101).map(f64::from).collect();
-        assert_eq!(median(v.clone()), 51.0);
-        assert_eq!(quantile(v, 0.99), 100.0);
     }
 }

@@ -1,5 +1,5 @@
-//! `wetgran-bench orchestrator --collect` and `--two-runners`: the orchestrator at cluster scale
-//! (issue 35, items 3 and 4), with the stand-in jobs of [`crate::orchestrator`].
+//! `wetgran-bench orchestrator --collect`, `--submit-dry-run` and `--two-runners`: the orchestrator at
+//! cluster scale (issue 35, items 3 and 4), with the stand-in jobs of [`crate::orchestrator`].
 //!
 //! - **collect**: registers the benchmark sweep of N points in a fresh database, records one
 //!   submission of N tasks (as `sweep submit --slurm` does after `sbatch`, without a Slurm job
@@ -24,56 +24,34 @@
 //!   three logs, except that a job the killed runner held may show once more (a start logged
 //!   before the kill). Any other outcome is an error.
 
-use crate::orchestrator::{BASE_SCENE, grid, stand_in_phase, sweep_text, wetgran_binary};
-use std::collections::{BTreeMap, HashMap, HashSet};
+use crate::orchestrator::{
+    e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir, time_command, timed,
+    wetgran_binary,
+};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::io::Write as _;
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 use wetgran::cluster::{Outcome, ResultRecord, SweepDir};
-use wetgran::run::{JobFn, RunOptions, run_sweeps_with};
+use wetgran::run::{JobFn, run_sweeps_with};
 use wetgran::store::{Durability, Store, SweepRow};
-use wetgran::sweep::{JobResult, JobSpec, SweepFile, run_job};
+use wetgran::sweep::{JobError, JobSpec};
 
-fn e(x: impl std::fmt::Display) -> String {
-    x.to_string()
-}
-
-/// The benchmark sweep of about `n` points written into `dir`, its jobs, and the spec of its
-/// first job written to `first_job.json` (the runner processes run it for their stand-in).
-fn prepare(n: usize, dir: &Path) -> Result<(SweepFile, Vec<wetgran::sweep::SweepJob>), String> {
-    let (n_gamma, n_e) = grid(n);
-    std::fs::write(dir.join("shaken_wet_2d.toml"), BASE_SCENE).map_err(e)?;
-    let path = dir.join("bench.toml");
-    std::fs::write(&path, sweep_text(n_gamma, n_e)).map_err(e)?;
-    let file = SweepFile::load(&path).map_err(e)?;
-    let jobs = file.expand().map_err(e)?;
-    let spec = serde_json::to_string(&jobs[0].spec).map_err(e)?;
-    std::fs::write(dir.join("first_job.json"), spec).map_err(e)?;
-    Ok((file, jobs))
-}
-
-/// One real run of `spec`: the shape of every stand-in result.
-fn real_result(spec: &JobSpec) -> Result<JobResult, String> {
-    run_job(spec, &mut |_| {}).map_err(e)
-}
-
-/// A stand-in job returning `real` with the point's made-up label; with `log`, it appends the
-/// job id (one line, one `write`) to that file first.
-fn stand_in(real: JobResult, log: Option<std::fs::File>) -> JobFn {
-    let log = log.map(Mutex::new);
-    Arc::new(move |claim, _progress| {
-        if let Some(f) = &log {
-            let mut f = f.lock().expect("no panic holds it");
-            // One write per line: a kill leaves whole lines.
-            f.write_all(format!("{}\n", claim.job_id).as_bytes())
-                .map_err(|x| wetgran::sweep::JobError::Panic(format!("start log: {x}")))?;
-        }
-        let mut r = real.clone();
-        r.phase = Some(stand_in_phase(&claim.coords).to_string());
-        Ok(r)
-    })
+/// The stand-in job of a runner process: the first job of the sweep (`dir/first_job.json`) run
+/// once for its shape, each start appended to `log` (one line, one `write`: a kill leaves whole
+/// lines).
+fn logged_stand_in(dir: &Path, log: &Path) -> Result<JobFn, String> {
+    let spec: JobSpec =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("first_job.json")).map_err(e)?)
+            .map_err(e)?;
+    let log = Mutex::new(std::fs::File::create(log).map_err(e)?);
+    Ok(stand_in(real_result(&spec)?, move |id| {
+        let mut f = log.lock().expect("no panic holds it");
+        f.write_all(format!("{id}\n").as_bytes())
+            .map_err(|x| JobError::Panic(format!("start log: {x}")))
+    }))
 }
 
 /// `wetgran sweep collect` of N tasks (module doc): `(seconds, tasks)`.
@@ -85,9 +63,8 @@ pub fn time_collect(n: usize, dir: &Path) -> Result<(f64, usize), String> {
     let sweep = store.register_sweep(&file, &jobs).map_err(e)?;
     let sd = SweepDir::new(&dir.join("slurm"));
     sd.create().map_err(e)?;
-    let mut ids: Vec<String> = jobs.iter().map(|j| j.spec.id()).collect();
-    ids.sort();
-    ids.dedup();
+    let ids: BTreeSet<String> = jobs.iter().map(|j| j.spec.id()).collect();
+    let ids: Vec<String> = ids.into_iter().collect();
     let root = sd.root.display().to_string();
     store
         .record_submission(sweep.id, &root, "#!/bin/sh\n# bench\n", &ids)
@@ -105,23 +82,12 @@ pub fn time_collect(n: usize, dir: &Path) -> Result<(f64, usize), String> {
         let text = serde_json::to_string_pretty(&rec).map_err(e)?;
         std::fs::write(sd.result(id), text + "\n").map_err(e)?;
     }
-    let bin = wetgran_binary()?;
-    let t0 = Instant::now();
-    let out = Command::new(&bin)
-        .args(["sweep", "collect", "--db"])
-        .arg(&db)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .output()
-        .map_err(e)?;
-    let t = t0.elapsed().as_secs_f64();
-    if !out.status.success() {
-        return Err(format!(
-            "sweep collect failed ({}): {}",
-            out.status,
-            String::from_utf8_lossy(&out.stderr)
-        ));
-    }
+    let d = db.display().to_string();
+    let t = time_command(
+        &wetgran_binary()?,
+        &["sweep", "collect", "--db", &d],
+        &dir.join("collect.txt"),
+    )?;
     let store = Store::open_existing(&db).map_err(e)?;
     let c = store.counts(sweep.id).map_err(e)?;
     if c.done as usize != ids.len() {
@@ -166,23 +132,16 @@ fn dry_run_once(
     db: &Path,
     jobs: usize,
 ) -> Result<(f64, usize, usize, String), String> {
-    let sweep = dir.join("bench.toml");
+    let (sweep, db) = (dir.join("bench.toml"), db.display().to_string());
+    let args = [
+        "sweep",
+        "submit",
+        &sweep.display().to_string(),
+        "--slurm",
+        "--dry-run",
+    ];
     let out_path = dir.join("dry-run.txt");
-    let out = std::fs::File::create(&out_path).map_err(e)?;
-    let t0 = Instant::now();
-    let status = Command::new(bin)
-        .args(["sweep", "submit"])
-        .arg(&sweep)
-        .args(["--slurm", "--dry-run", "--db"])
-        .arg(db)
-        .stdout(Stdio::from(out))
-        .stderr(Stdio::null())
-        .status()
-        .map_err(e)?;
-    let t = t0.elapsed().as_secs_f64();
-    if !status.success() {
-        return Err(format!("sweep submit --dry-run failed ({status})"));
-    }
+    let t = time_command(bin, &[&args[..], &["--db", &db]].concat(), &out_path)?;
     let text = std::fs::read_to_string(&out_path).map_err(e)?;
     let (n, arrays, limit, source) = parse_dry_header(&text)
         .ok_or_else(|| format!("dry run: unexpected header {:?}", text.lines().next()))?;
@@ -212,24 +171,26 @@ fn dry_run_once(
 /// `sweep submit --slurm --dry-run` of N jobs, without and with a database (module doc).
 pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<DryRun, String> {
     let (file, jobs) = prepare(n, dir)?;
-    let mut ids: Vec<String> = jobs.iter().map(|j| j.spec.id()).collect();
-    ids.sort();
-    ids.dedup();
+    let n_ids = jobs
+        .iter()
+        .map(|j| j.spec.id())
+        .collect::<HashSet<_>>()
+        .len();
     let bin = wetgran_binary()?;
     let db = dir.join("dry.sqlite");
-    let (fresh_s, arrays, limit, source) = dry_run_once(&bin, dir, &db, ids.len())?;
+    let (fresh_s, arrays, limit, source) = dry_run_once(&bin, dir, &db, n_ids)?;
     if db.exists() {
         return Err("the dry run created the database".to_string());
     }
     let store = Store::open_as(&db, true, Durability::Synced).map_err(e)?;
     store.register_sweep(&file, &jobs).map_err(e)?;
     drop(store);
-    let (registered_s, ..) = dry_run_once(&bin, dir, &db, ids.len())?;
+    let (registered_s, ..) = dry_run_once(&bin, dir, &db, n_ids)?;
     if dir.join("wetgran-slurm").exists() {
         return Err("the dry run wrote a sweep directory".to_string());
     }
     Ok(DryRun {
-        jobs: ids.len(),
+        jobs: n_ids,
         arrays,
         limit,
         source,
@@ -267,6 +228,8 @@ fn lines_in(path: &Path) -> usize {
 /// Two runners on one database of N jobs, the first killed with SIGKILL mid-way (module doc).
 pub fn two_runners(n: usize, dir: &Path) -> Result<TwoRunners, String> {
     let (file, jobs) = prepare(n, dir)?;
+    let spec = serde_json::to_string(&jobs[0].spec).map_err(e)?;
+    std::fs::write(dir.join("first_job.json"), spec).map_err(e)?;
     let db = dir.join("two.sqlite");
     let store = Store::open_as(&db, true, Durability::Fast).map_err(e)?;
     let sweep = store.register_sweep(&file, &jobs).map_err(e)?;
@@ -312,23 +275,11 @@ pub fn two_runners(n: usize, dir: &Path) -> Result<TwoRunners, String> {
         .filter(|p| p.status == "running")
         .map(|p| p.job_id)
         .collect();
-    let spec: JobSpec =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("first_job.json")).map_err(e)?)
-            .map_err(e)?;
-    let log = std::fs::File::create(&logs[2]).map_err(e)?;
-    let t1 = Instant::now();
-    let opts = RunOptions {
-        jobs: 1,
-        retry_failed: false,
-        show_progress: false,
-        table_cache_mib: 0,
-    };
-    let job = stand_in(real_result(&spec)?, Some(log));
-    run_sweeps_with(&store, std::slice::from_ref(&sweep), &opts, job).map_err(e)?;
-    let resume_s = t1.elapsed().as_secs_f64();
-    let t2 = Instant::now();
-    wetgran::run::relabel::relabel_changed(&store, &sweep).map_err(e)?;
-    let relabel_s = t2.elapsed().as_secs_f64();
+    let (_, resume_s) = timed(|| {
+        let job = logged_stand_in(dir, &logs[2])?;
+        run_sweeps_with(&store, std::slice::from_ref(&sweep), &run_options(1), job).map_err(e)
+    })?;
+    let (_, relabel_s) = timed(|| wetgran::run::relabel::relabel_changed(&store, &sweep))?;
     let started = [
         read_log(&logs[0])?,
         read_log(&logs[1])?,
@@ -394,64 +345,42 @@ fn check_books(
 /// worker and the stand-in job (the spec `dir/first_job.json` run once for its shape), each
 /// start appended to `log`.
 pub fn runner(db: &Path, dir: &Path, log: &Path) -> Result<(), String> {
-    let spec: JobSpec =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("first_job.json")).map_err(e)?)
-            .map_err(e)?;
-    let real = real_result(&spec)?;
-    let log = std::fs::File::create(log).map_err(e)?;
+    let job = logged_stand_in(dir, log)?;
     let store = Store::open_as(db, false, Durability::Fast).map_err(e)?;
     let sweep = store.sweep("bench").map_err(e)?;
-    let opts = RunOptions {
-        jobs: 1,
-        retry_failed: false,
-        show_progress: false,
-        table_cache_mib: 0,
-    };
-    run_sweeps_with(&store, &[sweep], &opts, stand_in(real, Some(log))).map_err(e)?;
+    run_sweeps_with(&store, &[sweep], &run_options(1), job).map_err(e)?;
     Ok(())
 }
 
-/// Runs the asked scale figures at every size, each in a fresh folder under `dir`.
+/// Runs the asked scale figures at every size, each in a fresh folder under `dir`, and prints
+/// each figure's line to standard output as soon as it is measured.
 pub fn run(
     sizes: &[usize],
     collect: bool,
     dry_run: bool,
     two: bool,
     dir: Option<&Path>,
-) -> Result<String, String> {
-    use std::fmt::Write as _;
-    let mut s = String::new();
+) -> Result<(), String> {
     for &n in sizes {
-        let tmp = match dir {
-            Some(d) => tempfile::tempdir_in(d),
-            None => tempfile::tempdir(),
-        }
-        .map_err(|x| format!("cannot make a temporary folder: {x}"))?;
+        let tmp = temp_dir(dir)?;
         if collect {
             let (t, tasks) = time_collect(n, tmp.path())?;
-            let _ = writeln!(
-                s,
+            println!(
                 "{tasks:>8} tasks: `sweep collect` {t:.2} s ({:.3} ms per task)",
                 t / tasks as f64 * 1e3
             );
-            eprint!("{}", s.lines().last().unwrap_or_default());
-            eprintln!();
         }
         if dry_run {
             let r = time_submit_dry_run(n, tmp.path())?;
-            let _ = writeln!(
-                s,
+            println!(
                 "{:>8} jobs: `sweep submit --slurm --dry-run` {:.2} s without a database, \
                  {:.2} s with the sweep registered ({} array(s) of at most {}, {})",
                 r.jobs, r.fresh_s, r.registered_s, r.arrays, r.limit, r.source
             );
-            eprint!("{}", s.lines().last().unwrap_or_default());
-            eprintln!();
         }
         if two {
             let r = two_runners(n, tmp.path())?;
-            let _ = writeln!(
-                s,
+            println!(
                 "{:>8} jobs, two runners, the first killed after {} starts: both {:.1} s; \
                  starts A {} / B {} / resume {}, {} job(s) held at the kill; resume {:.2} s, \
                  relabel {:.2} s; books exact (every job done once, none lost)",
@@ -465,11 +394,9 @@ pub fn run(
                 r.resume_s,
                 r.relabel_s
             );
-            eprint!("{}", s.lines().last().unwrap_or_default());
-            eprintln!();
         }
     }
-    Ok(s)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -80,10 +80,8 @@ pub(crate) fn report(rows: &[ShakeRow]) -> String {
         "wetgran-bench shake: 2D standard wet system (N = 1200, 400 x 9, eps 0.9) shaken;\n\
          averages over the second half of the run, sampled once per driving period\n"
     );
-    let _ = writeln!(
-        s,
-        "{:>6} {:>6} {:<9} {:>8} {:>12} {:>14} {:>10} {:>9}",
-        "Gamma", "E*", "solver", "periods", "s/period", "events/period", "T_g/E_cb", "bridges"
+    s.push_str(
+        " Gamma     E* solver     periods     s/period  events/period   T_g/E_cb   bridges\n",
     );
     for r in rows {
         let _ = writeln!(

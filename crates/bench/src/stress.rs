@@ -5,9 +5,8 @@
 //! on the shaken plate below Gamma = 1, inelastic collapse in a dense bonded cluster, grazing
 //! wall hits, Gamma = 1000 with a tiny amplitude, a wall speed of 50 `sqrt(g d)`, a packing near
 //! jamming, the shear drive's quartic pair predictions near double roots, and the time-driven
-//! engine at the largest time step validation admits. [`run_case`] builds the case's scene (the
-//! library's builders where one exists: `bench::shake::shaken_standard` for the standard wet system), runs it
-//! in [`CHECKS`] chunks and after every chunk
+//! engine at the largest time step validation admits. [`run_case`] builds the case's scene (on
+//! `wetgran_core::scene::reference`), runs it in [`CHECKS`] chunks and after every chunk
 //!
 //! - runs the engine's own `sanity_check` (finite states, inside the box, no overlap beyond the
 //!   tolerance, no over-stretched bond, no event in the past, ...): the first violation stops
@@ -28,8 +27,11 @@
 
 use serde::Serialize;
 use std::time::Instant;
-use wetgran_core::scene::reference::shaken_standard;
-use wetgran_core::scene::{Scene, WallSolverKind};
+use wetgran_core::scene::Boundary::{self, Periodic, Wall};
+use wetgran_core::scene::reference::{base_scene, shaken_standard};
+use wetgran_core::scene::{
+    CapillaryModel, CapillarySpec, DriveKind, EngineKind, Scene, WallSolverKind,
+};
 use wetgran_core::sim::EnergyLedger;
 use wetgran_core::sim::event_driven::{Engine, Vector};
 use wetgran_core::sim::{EngineVisitor, Frame, Simulation, with_engine};
@@ -121,18 +123,55 @@ impl StressCase {
     pub fn scene(self) -> Scene {
         let s = match self {
             StressCase::RestingBed => shaken_standard(0.5, 0.1, WallSolverKind::Exact),
-            StressCase::BondedCollapse => parse(BONDED_COLLAPSE),
-            StressCase::GrazingWalls => parse(GRAZING_WALLS),
-            StressCase::StrongShaking => shaken_motion(1e-4, (1000.0f64 / 1e-4).sqrt()),
-            StressCase::FastWall => shaken_motion(2.0, 25.0),
-            StressCase::Jammed => parse(JAMMED),
-            StressCase::ShearDoubleRoots => parse(SHEAR_DOUBLE_ROOTS),
-            StressCase::TimeLargestDt => {
-                let mut s = parse(TIME_LARGEST_DT);
-                s.engine.dt = Some(s.largest_time_step());
+            StressCase::BondedCollapse => {
+                let mut s = small_scene(0.0, vec![14.0, 30.0], vec![Periodic; 2], 130, 7);
+                s.particles.polydispersity = 0.06;
+                s.contact.restitution = 0.3;
+                s.capillary = thin_thread(0.0711, 100.0);
+                s.initial.temperature = Some(0.5);
                 s
             }
-            StressCase::PlantedOverlap => parse(PLANTED_OVERLAP),
+            StressCase::GrazingWalls => {
+                let mut s = small_scene(1.0, vec![60.0, 6.0], vec![Periodic, Wall], 30, 1);
+                s.initial.temperature = Some(0.0);
+                s
+            }
+            StressCase::StrongShaking => shaken_motion(1e-4, (1000.0f64 / 1e-4).sqrt()),
+            StressCase::FastWall => shaken_motion(2.0, 25.0),
+            StressCase::Jammed => {
+                let mut s = small_scene(0.0, vec![29.02; 2], vec![Periodic; 2], 841, 3);
+                s.initial.lattice_spacing = 1.0005;
+                s
+            }
+            StressCase::ShearDoubleRoots => {
+                let (size, walls) = (vec![10.0, 10.0, 6.0], vec![Periodic, Periodic, Wall]);
+                let mut s = small_scene(1.0, size, walls, 380, 4);
+                s.contact.restitution = 0.9;
+                s.capillary = thin_thread(0.0625, 0.375);
+                s.engine.min_rebound_speed = 0.03;
+                s.drive.kind = DriveKind::Shear;
+                s.drive.f_max = Some(1.5);
+                s.drive.slab_width = Some(0.25);
+                s.initial.temperature = None;
+                s.initial.temperature_over_ecb = Some(5.0);
+                s
+            }
+            StressCase::TimeLargestDt => {
+                let mut s = shaken_standard(5.0, 10.0, WallSolverKind::Exact);
+                s.container.size = vec![10.0, 9.0];
+                s.particles.count = 20;
+                s.engine.kind = EngineKind::Time;
+                s.capillary.rupture_rule = None;
+                s.engine.dt = Some(s.largest_time_step());
+                s.initial.seed = 5;
+                s.run.duration = 1.0;
+                s
+            }
+            StressCase::PlantedOverlap => {
+                let mut s = small_scene(0.0, vec![20.0; 2], vec![Periodic; 2], 2, 0);
+                s.initial.temperature = Some(0.0);
+                s
+            }
         };
         s.validate(self.name())
             .unwrap_or_else(|e| panic!("stress case scene: {e}"));
@@ -140,9 +179,30 @@ impl StressCase {
     }
 }
 
-/// Parses one of the case scenes below.
-fn parse(text: &str) -> Scene {
-    Scene::from_toml_str(text, "stress case").unwrap_or_else(|e| panic!("{e}"))
+/// `count` equal elastic particles at `T = 1` ([`base_scene`]) in the given box, seed `seed`,
+/// run length 1.
+fn small_scene(
+    gravity: f64,
+    size: Vec<f64>,
+    boundary: Vec<Boundary>,
+    count: usize,
+    seed: u64,
+) -> Scene {
+    let mut s = base_scene(size.len(), gravity, size, boundary);
+    s.particles.count = count;
+    s.initial.seed = seed;
+    s.run.duration = 1.0;
+    s
+}
+
+/// Thin-thread bridges of rupture distance `s_crit` and rupture energy `e_cb`.
+fn thin_thread(s_crit: f64, e_cb: f64) -> CapillarySpec {
+    CapillarySpec {
+        model: CapillaryModel::ThinThread,
+        s_crit: Some(s_crit),
+        e_cb: Some(e_cb),
+        rupture_rule: None,
+    }
 }
 
 /// The standard wet system's material in a 30 x 9 box, 100 disks, shaken at `(A, omega)`
@@ -158,128 +218,6 @@ fn shaken_motion(amplitude: f64, omega: f64) -> Scene {
     s.initial.seed = 3;
     s
 }
-
-const BONDED_COLLAPSE: &str = r#"
-dimension = 2
-gravity = 0.0
-[box]
-size = [14.0, 30.0]
-boundary = ["periodic", "periodic"]
-[particles]
-count = 130
-polydispersity = 0.06
-[contact]
-restitution = 0.3
-[capillary]
-model = "thin_thread"
-s_crit = 0.0711
-e_cb = 100.0
-[initial]
-temperature = 0.5
-seed = 7
-[run]
-duration = 1.0
-"#;
-
-const GRAZING_WALLS: &str = r#"
-dimension = 2
-gravity = 1.0
-[box]
-size = [60.0, 6.0]
-boundary = ["periodic", "wall"]
-[particles]
-count = 30
-[initial]
-temperature = 0.0
-seed = 1
-[run]
-duration = 1.0
-"#;
-
-const JAMMED: &str = r#"
-dimension = 2
-gravity = 0.0
-[box]
-size = [29.02, 29.02]
-boundary = ["periodic", "periodic"]
-[particles]
-count = 841
-[initial]
-temperature = 1.0
-lattice_spacing = 1.0005
-seed = 3
-[run]
-duration = 1.0
-"#;
-
-const SHEAR_DOUBLE_ROOTS: &str = r#"
-dimension = 3
-gravity = 1.0
-[box]
-size = [10.0, 10.0, 6.0]
-boundary = ["periodic", "periodic", "wall"]
-[particles]
-count = 380
-[contact]
-restitution = 0.9
-[capillary]
-model = "thin_thread"
-s_crit = 0.0625
-e_cb = 0.375
-[engine]
-min_rebound_speed = 0.03
-[drive]
-kind = "shear"
-f_max = 1.5
-slab_width = 0.25
-[initial]
-temperature_over_ecb = 5.0
-seed = 4
-[run]
-duration = 1.0
-"#;
-
-const TIME_LARGEST_DT: &str = r#"
-dimension = 2
-gravity = 1.0
-[box]
-size = [10.0, 9.0]
-boundary = ["periodic", "wall"]
-[particles]
-count = 20
-polydispersity = 0.06
-[contact]
-restitution = 0.9
-[capillary]
-model = "thin_thread"
-s_crit = 0.0711
-e_cb = 0.2844
-[drive]
-kind = "sine"
-gamma = 5.0
-e_star = 10.0
-[engine]
-kind = "time"
-[initial]
-temperature_over_ecb = 20.0
-seed = 5
-[run]
-duration = 1.0
-"#;
-
-const PLANTED_OVERLAP: &str = r#"
-dimension = 2
-gravity = 0.0
-[box]
-size = [20.0, 20.0]
-boundary = ["periodic", "periodic"]
-[particles]
-count = 2
-[initial]
-temperature = 0.0
-[run]
-duration = 1.0
-"#;
 
 /// What one case measured.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -340,7 +278,10 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
         ledger_error: f64::NAN,
         nan_count: 0,
         checks: 0,
-        violation: Some(format!("panicked: {}", panic_text(payload.as_ref()))),
+        violation: Some(format!(
+            "panicked: {}",
+            wetgran::sweep::job::panic_message(payload.as_ref())
+        )),
         exhausted: false,
     });
     // A hard case that runs out of events tests nothing: a failure.
@@ -363,17 +304,6 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
         checks: m.checks,
         wall_seconds: start.elapsed().as_secs_f64(),
         violation,
-    }
-}
-
-/// The text of a panic payload.
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    if let Some(s) = payload.downcast_ref::<&str>() {
-        s.to_string()
-    } else if let Some(s) = payload.downcast_ref::<String>() {
-        s.clone()
-    } else {
-        "unknown panic payload".to_string()
     }
 }
 

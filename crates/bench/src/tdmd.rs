@@ -1,9 +1,7 @@
 //! `wetgran-bench tdmd`: speed of the time-driven engine on the dry shaken 2D system of issue 6.
 //!
-//! The system: N = 1200 disks, `sigma_p = 0.06`, box 400 x 9 periodic in x, Hertz floor and lid
-//! shaken with `A = 0.05` at `Gamma = 15` (`omega = sqrt(Gamma g / A)`), `dt = 1e-4`, default
-//! stiffness, and the particle damping `A_d` that gives restitution 0.9 at impact speed 1
-//! (`physics::hertz::damping_for_restitution`); elastic walls; initial `T = 1 m g d`.
+//! The system is [`dry_shaken_time_driven_widened`] (N = 1200 disks in 400 x 9, shaken at
+//! `A = 0.05`, `Gamma = 15`, `dt = 1e-4`, damping for restitution 0.9 at impact speed 1).
 //!
 //! Each repetition builds a fresh engine (same seed), runs one time unit untimed (the bed leaves
 //! the lattice), then times `scale` simulated time units (at least 0.1). Reported per integrator:
@@ -20,6 +18,7 @@
 //! process (every thread, from `/proc/self/task/*/schedstat`), so it includes the time the
 //! pool's threads spend waiting for work.
 
+use crate::{Spread, median};
 use std::fmt::Write as _;
 use std::time::Instant;
 use wetgran_core::scene::DEFAULT_STIFFNESS;
@@ -69,17 +68,6 @@ pub(crate) struct TdmdRow {
     pub max_overlap: f64,
     pub(crate) builds_per_step: f64,
     pub damping: f64,
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let m = s.len() / 2;
-    if s.len() % 2 == 1 {
-        s[m]
-    } else {
-        0.5 * (s[m - 1] + s[m])
-    }
 }
 
 /// Runs the benchmark for both integrators and each thread count of `threads` (alternating
@@ -181,30 +169,13 @@ pub(crate) fn report(rows: &[TdmdRow]) -> String {
         "time-driven engine, dry shaken 2D: N = {n}, sigma_p 0.06, box {} x 9, A = 0.05, Gamma = 15, dt = 1e-4",
         n / 3
     );
-    let _ = writeln!(
-        s,
-        "{:<9} {:>3} {:>12} {:>11} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10} {:>10} {:>9}",
-        "integr.",
-        "thr",
-        "p-steps/s",
-        "s/time med",
-        "min",
-        "max",
-        "vs 0.38 s",
-        "cpu s/time",
-        "cpu vs .38",
-        "max ovl/d",
-        "builds/st",
-        "pairs/p"
-    );
+    s.push_str("integr.   thr    p-steps/s  s/time med       min       max  vs 0.38 s  cpu s/time cpu vs .38  max ovl/d  builds/st   pairs/p\n");
     for r in rows {
-        let med = median(&r.seconds_per_time);
-        let min = r
-            .seconds_per_time
-            .iter()
-            .cloned()
-            .fold(f64::INFINITY, f64::min);
-        let max = r.seconds_per_time.iter().cloned().fold(0.0, f64::max);
+        let Spread {
+            median: med,
+            min,
+            max,
+        } = Spread::of(r.seconds_per_time.iter().copied());
         let psteps = r.particles as f64 / r.dt / med;
         let (cpu, cpu_ratio) = if r.cpu_per_time.is_empty() {
             ("n/a".to_string(), "n/a".to_string())

@@ -216,7 +216,7 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
         .map(|((solver, knob, f), table)| {
             let roots: Vec<WallRoot> = shots.iter().map(&f).collect();
             let (sum, max, wrong, hits) = root_errors(&reference, &roots, floor.period());
-            let mut times: Vec<f64> = (0..repeat.max(1))
+            let times: Vec<f64> = (0..repeat.max(1))
                 .map(|_| {
                     let start = Instant::now();
                     for s in &shots {
@@ -225,14 +225,13 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<WallRow> {
                     start.elapsed().as_secs_f64() * 1e9 / shots.len() as f64
                 })
                 .collect();
-            times.sort_by(f64::total_cmp);
             WallRow {
                 solver,
                 knob,
                 mean_error: if hits > 0 { sum / hits as f64 } else { 0.0 },
                 max_error: max,
                 wrong_fraction: wrong as f64 / shots.len() as f64,
-                ns_per_prediction: times[times.len() / 2],
+                ns_per_prediction: crate::quantile(&times, 0.5),
                 table,
             }
         })
@@ -251,20 +250,7 @@ pub(crate) fn report(rows: &[WallRow]) -> String {
          the tables are built on {} thread(s) (WETGRAN_THREADS caps them)\n",
         wetgran_core::sim::threads::available_cores()
     );
-    let _ = writeln!(
-        s,
-        "{:<8} {:<16} {:>12} {:>12} {:>9} {:>12} {:>9} {:>9} {:>9} {:>8}",
-        "solver",
-        "knob",
-        "mean |dt|",
-        "max |dt|",
-        "wrong %",
-        "ns/predict",
-        "build s",
-        "cpu s",
-        "MiB",
-        "exact %"
-    );
+    s.push_str("solver   knob                mean |dt|     max |dt|   wrong %   ns/predict   build s     cpu s       MiB  exact %\n");
     for r in rows {
         let _ = write!(
             s,
