@@ -100,12 +100,7 @@ pub fn run_scene_observed(
     observer: &mut dyn FnMut(&Frame),
     progress: &mut dyn FnMut(&Sample),
 ) -> RunReport {
-    assert!(
-        interval > 0.0 && interval.is_finite(),
-        "observer interval must be > 0"
-    );
-    let mut w = FnWatcher(observer);
-    run_dispatch(scene, None, progress, Some((interval, &mut w)))
+    run_scene_watched(scene, None, interval, &mut FnWatcher(observer), progress)
 }
 
 /// What the sampling loop hands frames to, and asks whether to go on at the end of the run.

@@ -8,12 +8,10 @@
 //! occupancy of a cell (0, 1 or 2 particles, at random) is then no branch for the processor to
 //! mispredict.
 
-/// List steps [`CellGrid::gather`] takes per cell without a branch: at the densities
-/// of the reference systems (0.5 particles per cell in 3D) more than two particles in a cell
-/// are rare (1.4 % of the cells), and those fall back to the loop.
+/// List steps [`CellGrid::gather`] takes per cell without a branch: at the reference densities
+/// (0.5 particles per cell in 3D) only 1.4 % of the cells hold more, and fall back to the loop.
 const GATHER_STEPS: usize = 2;
-/// Particle indices [`CellGrid::gather`] gathers before it hands them on (a power of
-/// two).
+/// Particle indices [`CellGrid::gather`] gathers before it hands them on (a power of two).
 pub const BATCH: usize = 64;
 
 /// Where [`CellGrid::gather`] stopped: the rest of a list (`j`, the sentinel if none) and
@@ -34,9 +32,8 @@ pub struct CellGrid<const D: usize> {
     /// Whether each axis wraps around.
     pub periodic: [bool; D],
     /// Whether every periodic axis has at least five cells: then two particles in the
-    /// neighbourhood of an interior cell (one found without wrapping) are less than `2.5` cells
-    /// apart along a periodic axis of at least 5 cells, i.e. less than half the box, so their
-    /// separation needs no minimum image (it would change nothing).
+    /// neighbourhood of an interior cell are less than half the box apart, so their separation
+    /// needs no minimum image.
     pub interior_needs_no_image: bool,
     /// The list sentinel: the particle count (`next[end] == end`).
     end: u32,
@@ -79,11 +76,7 @@ impl<const D: usize> CellGrid<D> {
 
     /// The cell containing coordinate `x` (clamped into the grid).
     pub fn locate(&self, x: &[f64; D]) -> [i32; D] {
-        let mut c = [0i32; D];
-        for k in 0..D {
-            c[k] = ((x[k] / self.width[k]).floor() as i32).clamp(0, self.n[k] - 1);
-        }
-        c
+        std::array::from_fn(|k| ((x[k] / self.width[k]).floor() as i32).clamp(0, self.n[k] - 1))
     }
 
     /// Linear index of a cell.
@@ -114,16 +107,10 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Whether every neighbour of cell `c` lies inside the grid without wrapping, so that
-    /// [`Self::interior_neighbour`] may be used (the fast path of neighbour scans).
+    /// [`Self::interior_delta`] finds it (the fast path of neighbour scans).
     #[inline]
     pub fn is_interior(&self, c: &[i32; D]) -> bool {
         (0..D).all(|k| c[k] >= 1 && c[k] <= self.n[k] - 2)
-    }
-
-    /// Linear index of the cell at `offset` from the interior cell with linear index `base`.
-    #[inline]
-    pub fn interior_neighbour(&self, base: usize, offset: &[i32; D]) -> usize {
-        (base as isize + self.interior_delta(offset)) as usize
     }
 
     /// Number of wall classes ([`Self::wall_class`]): two bits per axis.
@@ -227,11 +214,7 @@ impl<const D: usize> CellGrid<D> {
     /// The image shift of the cell at `offset` from [`Self::axis_parts_and_shifts`].
     #[inline]
     pub fn shift_of(shifts: &[[f64; 3]; D], offset: &[i32; D]) -> [f64; D] {
-        let mut s = [0.0; D];
-        for k in 0..D {
-            s[k] = shifts[k][(offset[k] + 1) as usize];
-        }
-        s
+        std::array::from_fn(|k| shifts[k][(offset[k] + 1) as usize])
     }
 
     /// Linear index of `c + offset` from [`Self::axis_parts`] of `c`; `None` past a wall.
@@ -315,19 +298,9 @@ impl<const D: usize> CellGrid<D> {
         let end = self.end;
         let mut len = 0usize;
         // The rest of a list cut short by a full buffer.
-        let (mut j, tag) = (state.j, state.tag);
-        while j != end {
-            if len == BATCH {
-                *state = Gather { j, tag };
-                return (len, true);
-            }
-            buf[len] = j;
-            tags[len] = tag;
-            len += 1;
-            j = self.next[j as usize];
-        }
+        let (j, tag) = (state.j, state.tag);
         state.j = end;
-        if len > BATCH - GATHER_STEPS {
+        if self.walk(j, tag, state, buf, tags, &mut len) || len > BATCH - GATHER_STEPS {
             return (len, true);
         }
         for (cell, tag) in cells.by_ref() {
@@ -341,21 +314,36 @@ impl<const D: usize> CellGrid<D> {
                 len += usize::from(j != end);
                 j = self.next[j as usize];
             }
-            while j != end {
-                if len == BATCH {
-                    *state = Gather { j, tag };
-                    return (len, true);
-                }
-                buf[len] = j;
-                tags[len] = tag;
-                len += 1;
-                j = self.next[j as usize];
-            }
-            if len > BATCH - GATHER_STEPS {
+            if self.walk(j, tag, state, buf, tags, &mut len) || len > BATCH - GATHER_STEPS {
                 return (len, true);
             }
         }
         (len, false)
+    }
+
+    /// Appends the list from `j` on (its cell's tag `tag`) to `buf[..len]`; `true` if the
+    /// buffer filled first (`state` then says where to go on).
+    #[inline(always)]
+    fn walk(
+        &self,
+        mut j: u32,
+        tag: u8,
+        state: &mut Gather,
+        buf: &mut [u32; BATCH],
+        tags: &mut [u8; BATCH],
+        len: &mut usize,
+    ) -> bool {
+        while j != self.end {
+            if *len == BATCH {
+                *state = Gather { j, tag };
+                return true;
+            }
+            buf[*len] = j;
+            tags[*len] = tag;
+            *len += 1;
+            j = self.next[j as usize];
+        }
+        false
     }
 
     /// Calls `f` with the particles of the cells `cells`, in the order [`Self::for_each_in`]
@@ -382,18 +370,9 @@ impl<const D: usize> CellGrid<D> {
 
     /// All `3^D` neighbour offsets (including the cell itself).
     pub fn neighbour_offsets() -> Vec<[i32; D]> {
-        let mut out = Vec::new();
-        let total = 3usize.pow(D as u32);
-        for m in 0..total {
-            let mut o = [0i32; D];
-            let mut r = m;
-            for k in 0..D {
-                o[k] = (r % 3) as i32 - 1;
-                r /= 3;
-            }
-            out.push(o);
-        }
-        out
+        (0..3usize.pow(D as u32))
+            .map(|m| std::array::from_fn(|k| (m / 3usize.pow(k as u32) % 3) as i32 - 1))
+            .collect()
     }
 
     /// Whether every periodic axis has at least four cells: then the `3^D` neighbourhood holds no
@@ -489,7 +468,7 @@ mod tests {
         assert!(g3.is_interior(&c) && !g3.is_interior(&[0, 1, 8]) && !g3.is_interior(&[4, 1, 9]));
         for o in CellGrid::<3>::neighbour_offsets() {
             assert_eq!(
-                Some(g3.interior_neighbour(g3.linear(&c), &o)),
+                Some((g3.linear(&c) as isize + g3.interior_delta(&o)) as usize),
                 g3.shifted(&c, &o)
             );
         }

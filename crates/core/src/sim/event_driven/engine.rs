@@ -82,12 +82,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         Self::assemble(scene, initial_state_flat(scene), None)
     }
 
-    /// Rebuilds the engine from a saved state (`sim::state`): every particle at the state's
-    /// time, the bridges bonded, the event counts and the energy ledger continued, cells and
-    /// predictions derived afresh. The TC remedy's last-collision times start unset. A run
-    /// continued from a state follows the uninterrupted run to round-off: predictions are
-    /// recomputed from positions advanced to the common time, which rounds differently
-    /// (`crates/core/tests/observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
+    /// Rebuilds the engine from a saved state (`sim::state`): particles at the state's time,
+    /// bridges, event counts and energy ledger continued, cells and predictions derived afresh,
+    /// the TC remedy's last-collision times unset. It follows the uninterrupted run to
+    /// round-off (`observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
     pub(crate) fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
         let init = FlatInitialState {
             radius: state.radii.clone(),
@@ -185,9 +183,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                 r: init.radius[i],
             })
             .collect();
-        // The initial state is in the bodies now: free it before the other arrays are built
-        // (the peak memory of the build).
-        drop(init);
+        drop(init); // before the other arrays are built (peak memory)
         // Times of the last collisions feed only the TC model (`tc > 0`, docs/model.md 2.1).
         let tc_model = scene.engine.tc > 0.0;
         let bodies = Bodies {
@@ -298,8 +294,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         out
     }
 
-    // ----- scheduling --------------------------------------------------------------------
-
     /// The earliest candidate event of `i` over the sources (pair, slab, wall, cell; ties go to
     /// the earlier-named source).
     #[inline]
@@ -399,29 +393,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                 self.counts.invalidated += 1;
                 self.predict_all(i);
             }
-            EventKind::Collide { partner, .. } => {
+            kind @ (EventKind::Collide { partner, .. } | EventKind::Well { partner, .. }) => {
                 let j = partner as usize;
-                self.pairs.collide(
-                    i,
-                    j,
-                    now,
-                    &mut self.bodies,
-                    &mut self.ledger,
-                    &mut self.counts,
-                );
-                self.predict_all(i);
-                self.predict_all(j);
-            }
-            EventKind::Well { partner, .. } => {
-                let j = partner as usize;
-                self.pairs.well_edge(
-                    i,
-                    j,
-                    now,
-                    &mut self.bodies,
-                    &mut self.ledger,
-                    &mut self.counts,
-                );
+                let (b, l, c) = (&mut self.bodies, &mut self.ledger, &mut self.counts);
+                if matches!(kind, EventKind::Collide { .. }) {
+                    self.pairs.collide(i, j, now, b, l, c);
+                } else {
+                    self.pairs.well_edge(i, j, now, b, l, c);
+                }
                 self.predict_all(i);
                 self.predict_all(j);
             }
@@ -501,8 +480,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         }
     }
 
-    // ----- observables -------------------------------------------------------------------
-
     /// Position and velocity of every particle at the current time, in internal order. The
     /// stored delayed states are left as they are: observing never changes the round-off of a
     /// trajectory, so the sampling interval cannot change the physics.
@@ -563,33 +540,24 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.bodies.mass * (mean_sq - mean.norm_squared()) / D as f64
     }
 
+    /// `f` of each particle's internal index, in scene order.
+    fn in_scene_order<T>(&self, f: impl Fn(usize) -> T) -> Vec<T> {
+        self.bodies.slot_of.iter().map(|&k| f(k as usize)).collect()
+    }
+
     /// Positions at the current time, in scene order.
     pub fn positions(&self) -> Vec<Vector<D>> {
-        let states = self.current_states();
-        self.bodies
-            .slot_of
-            .iter()
-            .map(|&k| states[k as usize].0)
-            .collect()
+        self.in_scene_order(|k| self.bodies.state_at(k, self.time).0)
     }
 
     /// Velocities at the current time, in scene order.
     pub fn velocities(&self) -> Vec<Vector<D>> {
-        let states = self.current_states();
-        self.bodies
-            .slot_of
-            .iter()
-            .map(|&k| states[k as usize].1)
-            .collect()
+        self.in_scene_order(|k| self.bodies.state_at(k, self.time).1)
     }
 
     /// Particle radii, in scene order.
     pub fn radii(&self) -> Vec<f64> {
-        self.bodies
-            .slot_of
-            .iter()
-            .map(|&k| self.bodies.body[k as usize].r)
-            .collect()
+        self.in_scene_order(|k| self.bodies.body[k].r)
     }
 
     /// Overwrites the velocity of particle `i` at the current time (tests and set-ups) and
@@ -658,8 +626,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         out
     }
 
-    // ----- invariants --------------------------------------------------------------------
-
     /// Checks the invariants: finite numbers, every particle inside the box, no pair overlap
     /// and no bonded pair beyond `s_crit` by more than the tolerance, every particle in the
     /// cell (and slab) its position says, no event scheduled in the past, no time reversal.
@@ -698,22 +664,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                     (r + shift, b.size[k] - r + shift)
                 };
                 // The `table` solver places a particle on the shaken wall only as far as its
-                // neighbours leave room (`walls::placement_room`): what is left of the table's
-                // gap, at most its placement tolerance, may stay behind the wall until the
-                // particle leaves it (its next wall event is at once if it approaches).
-                let behind = if x[k] < lo - tol {
-                    Some(lo - x[k])
-                } else if x[k] > hi + tol {
-                    Some(x[k] - hi)
-                } else {
-                    None
-                };
-                let table_residual = |depth: f64| {
-                    k == D - 1
-                        && depth <= super::walls::TABLE_PLACEMENT_TOLERANCE
-                        && matches!(self.walls.solver, super::walls::WallSolver::Table(_))
-                };
-                if behind.is_some_and(|b| !table_residual(b)) {
+                // neighbours leave room (`walls::placement_room`): the rest, at most its
+                // placement tolerance, may stay behind the wall until the particle leaves it.
+                let behind = (lo - x[k]).max(x[k] - hi);
+                let table_residual = k == D - 1
+                    && behind <= super::walls::TABLE_PLACEMENT_TOLERANCE
+                    && matches!(self.walls.solver, WallSolver::Table(_));
+                if behind > tol && !table_residual {
                     return Err(format!(
                         "particle {si} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
                         x[k]

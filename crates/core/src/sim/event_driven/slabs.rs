@@ -120,11 +120,7 @@ impl EventSource for SlabSource {
     /// The stored crossing of `i` as an event.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
-        let e = self.ev[i];
-        Event {
-            time: e.time,
-            kind: EventKind::Slab { up: e.up },
-        }
+        self.ev[i].event(|_, up| EventKind::Slab { up })
     }
 
     /// Renumbers the particles (see [`Bodies::permute`]).
