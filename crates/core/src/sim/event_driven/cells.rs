@@ -2,11 +2,9 @@
 //! (largest diameter plus `s_crit`), with doubly linked per-cell particle lists so that a
 //! particle changes cell in `O(1)` without allocation.
 //!
-//! The lists end in a sentinel index one past the last particle, whose own link points back at
-//! itself, so that a neighbour scan may take the first steps of a list walk without asking
-//! whether the list has ended ([`CellGrid::gather`], [`CellGrid::for_each_batch`]): the
-//! occupancy of a cell (0, 1 or 2 particles, at random) is then no branch for the processor to
-//! mispredict.
+//! The lists end in a sentinel index one past the last particle, linked to itself, so that a
+//! neighbour scan may take the first steps of a list walk without asking whether the list has
+//! ended ([`CellGrid::gather`]): a cell's occupancy is then no branch to mispredict.
 
 /// List steps [`CellGrid::gather`] takes per cell without a branch: at the reference densities
 /// (0.5 particles per cell in 3D) only 1.4 % of the cells hold more, and fall back to the loop.
@@ -45,12 +43,8 @@ pub struct CellGrid<const D: usize> {
 impl<const D: usize> CellGrid<D> {
     /// A grid over a box of edges `size` with cells no smaller than `min_edge`.
     pub fn new(size: [f64; D], periodic: [bool; D], min_edge: f64, particles: usize) -> Self {
-        let mut n = [1i32; D];
-        let mut width = [0.0; D];
-        for k in 0..D {
-            n[k] = ((size[k] / min_edge).floor() as i32).max(1);
-            width[k] = size[k] / n[k] as f64;
-        }
+        let n: [i32; D] = std::array::from_fn(|k| ((size[k] / min_edge).floor() as i32).max(1));
+        let width: [f64; D] = std::array::from_fn(|k| size[k] / n[k] as f64);
         let total: usize = n.iter().map(|&x| x as usize).product();
         Self {
             n,
@@ -116,12 +110,10 @@ impl<const D: usize> CellGrid<D> {
     /// Number of wall classes ([`Self::wall_class`]): two bits per axis.
     pub const WALL_CLASSES: usize = 1 << (2 * D);
 
-    /// The wall class of cell `c`, if it is inside along every periodic axis (no neighbour
-    /// found by wrapping): per axis, bit `2k` set at the low face of a wall axis (`c_k = 0`),
-    /// bit `2k + 1` at its high face (`c_k = n_k - 1`; both for a single layer of cells).
-    /// `None` on the edge of a periodic axis. With the class, the neighbours of `c` are found
-    /// by the interior index changes of the offsets that stay inside the walls
-    /// ([`Self::inside_walls`]): the fast path of scans next to a wall.
+    /// The wall class of cell `c` (`None` on the edge of a periodic axis): per wall axis, bit
+    /// `2k` set at its low face (`c_k = 0`), bit `2k + 1` at its high face (both for a single
+    /// layer). With the class, the neighbours of `c` are the interior index changes of the
+    /// offsets that stay inside the walls ([`Self::inside_walls`]).
     #[inline]
     pub fn wall_class(&self, c: &[i32; D]) -> Option<usize> {
         let mut class = 0usize;
@@ -160,9 +152,8 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Per axis `k` and step `s` in `-1, 0, 1`: the part `stride_k * wrap(c_k + s)` of the linear
-    /// index of a neighbour of cell `c`, or `usize::MAX` past a wall. The linear index of
-    /// `c + o` is the sum of the parts `o_k` picks ([`Self::shifted`] without its per-offset
-    /// division; the boundary cells' neighbour scans use it).
+    /// index of a neighbour of cell `c`, or `usize::MAX` past a wall; the linear index of `c + o`
+    /// is the sum of the parts `o_k` picks ([`Self::shifted`] without its per-offset division).
     #[inline]
     pub fn axis_parts(&self, c: &[i32; D]) -> [[usize; 3]; D] {
         let mut parts = [[usize::MAX; 3]; D];
@@ -186,10 +177,8 @@ impl<const D: usize> CellGrid<D> {
     /// [`Self::axis_parts`], and per axis `k` and step `s` the image shift of the partners in
     /// that slab of cells: `-size[k]` where `c_k + s` wraps past the upper face of a periodic
     /// axis, `+size[k]` past the lower face, `0` otherwise. With five cells or more on every
-    /// periodic axis (`interior_needs_no_image`) this is the minimum image of every pair in
-    /// neighbouring cells: two particles `n_k - 1 >= 4` cells apart along `k` are more than
-    /// `0.6 L` apart, so `Bodies::min_image` shifts them by exactly `size[k]`; two particles in
-    /// cells at most one apart are less than `2 / 5 L` apart, and it leaves them alone.
+    /// periodic axis this is the minimum image of every pair in neighbouring cells (those
+    /// `n_k - 1` cells apart are more than `0.6 L` apart, the others less than `0.4 L`).
     #[inline]
     pub fn axis_parts_and_shifts(
         &self,
@@ -281,12 +270,10 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Gathers into `buf` the particles of the cells `cells` yields, in the order
-    /// [`Self::for_each_in`] visits them cell after cell, each with the tag that came with its
-    /// cell in `tags` (`tagged`; else the tags are not stored): the first [`GATHER_STEPS`]
-    /// steps of each list walk store the index and count it only if it is not the sentinel
-    /// (no branch on the cell's occupancy); longer lists continue in a loop. Returns how many
-    /// it gathered and whether to call again (the buffer was full; `state` remembers where
-    /// it stopped).
+    /// [`Self::for_each_in`] visits them, each with its cell's tag in `tags` (if `tagged`): the
+    /// first [`GATHER_STEPS`] steps of each list store the index and count it only if it is not
+    /// the sentinel (no branch on the occupancy). Returns how many it gathered and whether to
+    /// call again (the buffer was full; `state` remembers where it stopped).
     pub fn gather(
         &self,
         cells: &mut impl Iterator<Item = (usize, u8)>,
@@ -346,10 +333,8 @@ impl<const D: usize> CellGrid<D> {
         false
     }
 
-    /// Calls `f` with the particles of the cells `cells`, in the order [`Self::for_each_in`]
-    /// visits them cell after cell, handed on in batches of at most [`BATCH`], each particle
-    /// with the tag that came with its cell (`tagged`; else the tags are not stored): the
-    /// batches of [`Self::gather`].
+    /// Calls `f` with the batches of [`Self::gather`] (particles and tags) until all the cells
+    /// `cells` yields are done.
     pub fn for_each_batch(
         &self,
         mut cells: impl Iterator<Item = (usize, u8)>,

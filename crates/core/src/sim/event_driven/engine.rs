@@ -157,13 +157,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             n < (1 << 31) - 1,
             "too many particles for the event engine: {n}"
         );
-        let mut size = [0.0; D];
-        let mut periodic = [false; D];
+        let size: [f64; D] = std::array::from_fn(|k| scene.container.size[k]);
         let boundaries = scene.boundaries();
-        for k in 0..D {
-            size[k] = scene.container.size[k];
-            periodic[k] = boundaries[k] == Boundary::Periodic;
-        }
+        let periodic: [bool; D] = std::array::from_fn(|k| boundaries[k] == Boundary::Periodic);
         let (_, d_max) = scene.diameter_range();
         let range = (d_max + scene.s_crit()).max(scene.engine.cell_size);
         let grid = CellGrid::new(size, periodic, range, n);
@@ -189,11 +185,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         let bodies = Bodies {
             body,
             count: vec![0; n],
-            last_collision: if tc_model {
-                vec![f64::NEG_INFINITY; n]
-            } else {
-                Vec::new()
-            },
+            last_collision: vec![f64::NEG_INFINITY; if tc_model { n } else { 0 }],
             accel: slabs.accelerations(),
             id: (0..n as u32).collect(),
             slot_of: (0..n as u32).collect(),
@@ -430,8 +422,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                 self.counts.cell_crossings += 1;
                 let axis = axis as usize;
                 self.cells.fire(i, axis, up, &mut self.bodies);
-                // Only the newly adjacent cells can hold an earlier partner; the pair event is
-                // kept.
+                // Only the newly adjacent cells can hold an earlier partner.
                 self.pairs.scan(
                     i,
                     self.cells.far_slab(axis, up),
@@ -448,17 +439,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     }
 
     /// Sets how many events pass between two renumberings in cell order (`u64::MAX`: never).
-    /// The default grows with the particle count; tests use this to prove the renumbering is a
-    /// pure relabelling.
     pub fn set_reorder_interval(&mut self, events: u64) {
         self.reorder_every = events;
         self.next_reorder = self.counts.total().saturating_add(events);
     }
 
-    /// Renumbers the particles in cell order so that neighbours sit close together in memory
-    /// (a pair scan then mostly hits cache lines already loaded). A pure relabelling: no state,
-    /// prediction or event time changes; the public API keeps speaking in scene order. Each
-    /// source permutes its own per-particle state.
+    /// Renumbers the particles in cell order so that neighbours sit close together in memory.
+    /// A pure relabelling (no state, prediction or event time changes; the public API keeps
+    /// speaking in scene order): each source permutes its own per-particle state.
     fn reorder_by_cell(&mut self) {
         let n = self.len();
         self.next_reorder = self.counts.total().saturating_add(self.reorder_every);
@@ -480,9 +468,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         }
     }
 
-    /// Position and velocity of every particle at the current time, in internal order. The
-    /// stored delayed states are left as they are: observing never changes the round-off of a
-    /// trajectory, so the sampling interval cannot change the physics.
+    /// Position and velocity of every particle at the current time, in internal order, leaving
+    /// the delayed states alone: observing never changes the round-off of a trajectory.
     fn current_states(&self) -> Vec<(Vector<D>, Vector<D>)> {
         (0..self.len())
             .map(|i| self.bodies.state_at(i, self.time))
@@ -626,12 +613,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         out
     }
 
-    /// Checks the invariants: finite numbers, every particle inside the box, no pair overlap
-    /// and no bonded pair beyond `s_crit` by more than the tolerance, every particle in the
-    /// cell (and slab) its position says, no event scheduled in the past, no time reversal.
-    /// With the `table` solver a particle may lie behind a shaken wall by up to its placement
-    /// tolerance (`walls::TABLE_PLACEMENT_TOLERANCE`, the error that solver admits by design).
-    /// Returns a description of the first violation.
+    /// Checks the invariants: finite numbers, every particle inside the box (with the `table`
+    /// solver up to `walls::TABLE_PLACEMENT_TOLERANCE` behind a shaken wall, by design), no pair
+    /// overlap and no bonded pair beyond `s_crit` by more than the tolerance, every particle in
+    /// its cell (and slab), no event in the past, no time reversal. Returns the first violation.
     pub fn sanity_check(&self) -> Result<(), String> {
         let states = self.current_states();
         let tol = self.overlap_tolerance;

@@ -65,12 +65,8 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         Self {
             p,
             ev: vec![PairEvent::NEVER; n],
-            bonds: if WET {
-                vec![NONE; n * MAX_BONDS]
-            } else {
-                Vec::new()
-            },
-            bond_len: if WET { vec![0; n] } else { Vec::new() },
+            bonds: vec![NONE; if WET { n * MAX_BONDS } else { 0 }],
+            bond_len: vec![0; if WET { n } else { 0 }],
         }
     }
 
@@ -289,10 +285,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 let zero = [[0.0; D]; 27];
                 let around = around.map(|(cell, _)| (cell, 0));
                 self.scan_dry(i, around, bodies, grid, &zero, t, false);
-            } else if grid.interior_needs_no_image {
-                self.scan_cells(i, around, bodies, grid, slabs, t, false, false);
             } else {
-                self.scan_cells(i, around, bodies, grid, slabs, t, true, false);
+                let wrap = !grid.interior_needs_no_image;
+                self.scan_cells(i, around, bodies, grid, slabs, t, wrap, false);
             }
         } else if !S
             && grid.interior_needs_no_image

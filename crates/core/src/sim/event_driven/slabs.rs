@@ -28,11 +28,7 @@ impl SlabSource {
             Some(f) => positions_x.map(|x| f.slab_of(x) as u32).collect(),
             None => Vec::new(),
         };
-        let ev = if field.is_some() {
-            vec![PlaneEvent::NEVER; slab.len()]
-        } else {
-            Vec::new()
-        };
+        let ev = vec![PlaneEvent::NEVER; slab.len()];
         Self { field, slab, ev }
     }
 

@@ -178,16 +178,8 @@ impl WallSource {
             e_wall,
             tc,
             min_rebound,
-            ev: if walls {
-                vec![PlaneEvent::NEVER; n]
-            } else {
-                Vec::new()
-            },
-            vrel: if tabulated {
-                vec![f64::NAN; n]
-            } else {
-                Vec::new()
-            },
+            ev: vec![PlaneEvent::NEVER; if walls { n } else { 0 }],
+            vrel: vec![f64::NAN; if tabulated { n } else { 0 }],
         }
     }
 
