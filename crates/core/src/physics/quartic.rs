@@ -123,7 +123,6 @@ impl Poly {
         16.0 * f64::EPSILON * s
     }
 
-    /// The derivative.
     pub fn derivative(&self) -> Poly {
         let mut c = [0.0; 5];
         for k in 1..=self.n {
@@ -132,7 +131,6 @@ impl Poly {
         Poly::new(c)
     }
 
-    /// The negated polynomial.
     pub fn negated(&self) -> Poly {
         Poly::new(self.c.map(|x| -x))
     }

@@ -80,15 +80,7 @@ pub struct RunReport {
 
 /// Runs a validated scene to the end and reports.
 pub fn run_scene(scene: &Scene) -> RunReport {
-    run_scene_with_progress(scene, &mut |_| {})
-}
-
-/// Runs a validated scene, calling `progress` after every sample (for progress displays).
-pub(crate) fn run_scene_with_progress(
-    scene: &Scene,
-    progress: &mut dyn FnMut(&Sample),
-) -> RunReport {
-    run_dispatch(scene, None, progress, None)
+    run_dispatch(scene, None, &mut |_| {}, None)
 }
 
 /// Runs a validated scene and hands a [`Frame`] to `observer` at every time `k * interval`

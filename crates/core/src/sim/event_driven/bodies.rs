@@ -85,13 +85,11 @@ pub(crate) fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
 }
 
 impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR> {
-    /// Number of particles.
     #[inline]
     pub fn len(&self) -> usize {
         self.body.len()
     }
 
-    /// Whether there is no particle.
     pub fn is_empty(&self) -> bool {
         self.body.is_empty()
     }

@@ -236,7 +236,6 @@ impl<const D: usize> CellSource<D> {
 }
 
 impl<const D: usize> EventSource for CellSource<D> {
-    /// The stored crossing of `i` as an event.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
         self.ev[i].event(|axis, up| EventKind::Cell { axis, up })

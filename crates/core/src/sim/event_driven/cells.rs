@@ -73,7 +73,6 @@ impl<const D: usize> CellGrid<D> {
         std::array::from_fn(|k| ((x[k] / self.width[k]).floor() as i32).clamp(0, self.n[k] - 1))
     }
 
-    /// Linear index of a cell.
     #[inline]
     pub fn linear(&self, c: &[i32; D]) -> usize {
         let mut idx = 0usize;

@@ -239,17 +239,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         engine
     }
 
-    /// Number of particles.
     pub fn len(&self) -> usize {
         self.bodies.len()
     }
 
-    /// Whether the system holds no particle.
     pub fn is_empty(&self) -> bool {
         self.bodies.is_empty()
     }
 
-    /// Current simulation time.
     pub fn time(&self) -> f64 {
         self.time
     }
@@ -259,7 +256,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         &self.counts
     }
 
-    /// Number of capillary bridges.
     pub fn bridge_count(&self) -> usize {
         self.pairs.bridge_count()
     }
@@ -267,9 +263,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     /// The capillary bridges as pairs of scene indices `(i, j)`, `i < j`, sorted (empty for dry
     /// scenes). Read-only view for the observers.
     pub fn bridges(&self) -> Vec<(usize, usize)> {
-        if !WET {
-            return Vec::new();
-        }
         let mut out = Vec::with_capacity(self.bridge_count());
         for k in 0..self.len() {
             for &b in self.pairs.bonds_of(k) {

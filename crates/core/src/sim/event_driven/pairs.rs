@@ -81,13 +81,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     #[inline]
     pub fn bonded(&self, i: usize, j: usize) -> bool {
-        if !WET {
-            return false;
-        }
-        let base = i * MAX_BONDS;
-        self.bonds[base..base + self.bond_len[i] as usize]
-            .iter()
-            .any(|&b| b as usize == j)
+        self.bonds_of(i).iter().any(|&b| b as usize == j)
     }
 
     /// Adds `j` to `i`'s bonds (`who` and `time` name the particle in the guard's message).
@@ -103,19 +97,15 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     }
 
     pub fn remove_bond_half(&mut self, i: usize, j: usize) {
-        let base = i * MAX_BONDS;
-        let len = self.bond_len[i] as usize;
-        if let Some(k) = self.bonds[base..base + len]
-            .iter()
-            .position(|&b| b as usize == j)
-        {
-            self.bonds[base + k] = self.bonds[base + len - 1];
-            self.bonds[base + len - 1] = NONE;
+        if let Some(k) = self.bonds_of(i).iter().position(|&b| b as usize == j) {
+            let (base, last) = (i * MAX_BONDS, self.bond_len[i] as usize - 1);
+            self.bonds[base + k] = self.bonds[base + last];
+            self.bonds[base + last] = NONE;
             self.bond_len[i] -= 1;
         }
     }
 
-    /// Bond partners of `i`.
+    #[inline]
     pub fn bonds_of(&self, i: usize) -> &[u32] {
         if !WET {
             return &[];
@@ -124,11 +114,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         &self.bonds[base..base + self.bond_len[i] as usize]
     }
 
-    /// Number of bridges.
     pub fn bridge_count(&self) -> usize {
-        if !WET {
-            return 0;
-        }
         self.bond_len.iter().map(|&l| l as usize).sum::<usize>() / 2
     }
 
@@ -136,7 +122,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// the minimum image of the separation (`false` only where it cannot change it, see
     /// [`CellGrid::interior_needs_no_image`]).
     #[inline]
-    #[allow(clippy::too_many_arguments)]
     pub fn predict_pair_from<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
@@ -185,7 +170,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// Earliest pair event of `i` and `j` at time `t` with separation `r` (one periodic image)
     /// and relative velocity `v`.
     #[inline]
-    #[allow(clippy::too_many_arguments)]
     fn predict_image<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
@@ -233,7 +217,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// Pair events of `i` and `j` in slabs of different force (shear drive): the quartics of
     /// [`super::shear::pair_times`], solved up to the first slab exit of either particle.
-    #[allow(clippy::too_many_arguments)]
     fn predict_sheared_pair<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
@@ -336,7 +319,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// The pair predictions of `i` with every particle of the cells `around`, in order. Each
     /// cell comes with the image shift of its partners (`shifted`: added to the separation on
     /// the axes where it is not zero; the minimum image then needs no `wrap`).
-    #[allow(clippy::too_many_arguments)]
     fn scan_cells<const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -381,7 +363,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// chooses each contact time after the whole arithmetic ([`Self::dry_time`]); wet, a
     /// bonded partner's well event follows ([`Self::well_time`]). Among equal times the first
     /// in the cells' order wins, as in [`Self::scan_cells`]: the same events, bit for bit.
-    #[allow(clippy::too_many_arguments)]
     fn scan_dry<const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -466,7 +447,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// all and without minimum image (`shift`: the partner's image shift, if `shifted`). Every
     /// partner pays the whole arithmetic and the result is chosen (see the module header); the
     /// same operations as [`Self::predict_image`] (Eq. B.3, overlap: `t` itself), so the same bits.
-    #[allow(clippy::too_many_arguments)]
     fn dry_time<const G: bool, const S: bool>(
         bodies: &Bodies<D, G, S>,
         xi: &Vector<D>,
@@ -504,7 +484,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// Lowers `best` (the pair event of `i`, state `(xi, vi)` at `t`) if partner `j` gives an
     /// earlier one (`j == i` is skipped). `shift`: see [`Self::scan_cells`].
-    #[allow(clippy::too_many_arguments)]
     fn consider<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
@@ -636,7 +615,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 }
 
 impl<const D: usize, const WET: bool> EventSource for PairSource<D, WET> {
-    /// The stored pair event of `i`.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
         self.ev[i].event()

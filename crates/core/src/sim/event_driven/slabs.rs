@@ -113,13 +113,11 @@ impl SlabSource {
 }
 
 impl EventSource for SlabSource {
-    /// The stored crossing of `i` as an event.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
         self.ev[i].event(|_, up| EventKind::Slab { up })
     }
 
-    /// Renumbers the particles (see [`Bodies::permute`]).
     fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
         if self.field.is_some() {
             permute_in_place(&mut self.slab, order);

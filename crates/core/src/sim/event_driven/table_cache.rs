@@ -125,7 +125,6 @@ impl TableCache {
         CacheScope { previous }
     }
 
-    /// The cap in bytes.
     pub fn cap(&self) -> usize {
         self.cap
     }
@@ -140,12 +139,10 @@ impl TableCache {
         self.lock().peak
     }
 
-    /// Number of tables held now.
     pub fn len(&self) -> usize {
         self.lock().map.len()
     }
 
-    /// Whether the cache holds no table.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

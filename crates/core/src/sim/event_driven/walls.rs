@@ -315,7 +315,6 @@ impl WallSource {
 
     /// Carries out the wall event of `i` at time `t` along `axis` (`lid`: the upper wall); the
     /// caller re-predicts every event of `i` afterwards.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn fire<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -356,7 +355,6 @@ impl WallSource {
     /// and returns the outgoing speed. Rest on a floor is the one state an event-driven engine
     /// cannot represent (zero-time bounces): no grain leaves a `floor` slower than the rebound
     /// floor.
-    #[allow(clippy::too_many_arguments)]
     fn rebound<const D: usize, const G: bool, const S: bool>(
         &self,
         i: usize,
@@ -382,7 +380,6 @@ impl WallSource {
     /// Collision with the shaken floor or lid, `v' = v_w + e_w (v_w - v)` along the normal
     /// (docs/model.md 4.1), with the collapse remedies applied to the speed relative to the wall. An
     /// event that finds the particle away from the wall is a re-check and changes nothing.
-    #[allow(clippy::too_many_arguments)]
     fn shaken_collision<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -496,7 +493,6 @@ fn placement_room<const D: usize, const G: bool, const S: bool>(
 }
 
 impl EventSource for WallSource {
-    /// The stored wall event of `i`.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
         let e = self.ev.get(i).copied().unwrap_or(PlaneEvent::NEVER);
