@@ -53,24 +53,25 @@ pub(crate) fn well_outcome(mass: f64, u: f64, e_cb: f64, rule: RuptureRule) -> W
 mod tests {
     use super::*;
 
-    fn system_energy_change(m: f64, u: f64, u2: f64) -> f64 {
-        // Equal masses, only the normal relative motion changes: dE = mu/2 (u2^2 - u^2).
-        0.25 * m * (u2 * u2 - u * u)
-    }
-
     #[test]
-    fn reduced_mass_rule_removes_exactly_ecb() {
+    fn each_rule_removes_its_share_of_ecb_and_bounces_below_its_threshold() {
         let (m, e_cb) = (1.0, 0.2844);
-        let u = 2.0; // mu u^2/2 = 1 > E_cb
-        match well_outcome(m, u, e_cb, RuptureRule::ReducedMass) {
-            WellOutcome::Rupture {
-                new_normal_speed,
-                energy,
-            } => {
-                assert_eq!(energy, e_cb);
-                assert!((system_energy_change(m, u, new_normal_speed) + e_cb).abs() < 1e-14);
+        // Above each rule's threshold (reduced mass: mu u^2/2 = 1; thesis: m u^2/2 = 0.5).
+        for (rule, u, removed) in [
+            (RuptureRule::ReducedMass, 2.0, e_cb),
+            (RuptureRule::ThesisAppendix, 1.0, 0.5 * e_cb),
+        ] {
+            match well_outcome(m, u, e_cb, rule) {
+                WellOutcome::Rupture {
+                    new_normal_speed: u2,
+                    energy,
+                } => {
+                    assert_eq!(energy, removed);
+                    // Equal masses, only the normal relative motion changes: dE = mu/2 (u2^2 - u^2).
+                    assert!((0.25 * m * (u2 * u2 - u * u) + removed).abs() < 1e-14);
+                }
+                o => panic!("{rule:?}: expected rupture, got {o:?}"),
             }
-            o => panic!("expected rupture, got {o:?}"),
         }
         // Just below threshold: mu u^2 / 2 = 0.9 E_cb -> bounce.
         let u = (0.9 * e_cb * 4.0 / m).sqrt();
@@ -78,22 +79,6 @@ mod tests {
             well_outcome(m, u, e_cb, RuptureRule::ReducedMass),
             WellOutcome::Bounce(-u)
         );
-    }
-
-    #[test]
-    fn thesis_rule_removes_half_ecb() {
-        let (m, e_cb) = (1.0, 0.2844);
-        let u = 1.0; // m u^2 / 2 = 0.5 > E_cb
-        match well_outcome(m, u, e_cb, RuptureRule::ThesisAppendix) {
-            WellOutcome::Rupture {
-                new_normal_speed,
-                energy,
-            } => {
-                assert_eq!(energy, 0.5 * e_cb);
-                assert!((system_energy_change(m, u, new_normal_speed) + 0.5 * e_cb).abs() < 1e-14);
-            }
-            o => panic!("expected rupture, got {o:?}"),
-        }
         // Between the two thresholds the rules disagree: reduced mass bounces.
         let u = (3.0 * e_cb / m).sqrt(); // m u^2/2 = 1.5 E_cb, mu u^2/2 = 0.75 E_cb
         assert!(matches!(

@@ -20,19 +20,13 @@ pub(crate) fn linear_time_to_plane(x0: f64, v: f64, plane: f64, upward: bool) ->
 }
 
 /// The earlier of the two straight-flight times to the faces of a cell `[lo, lo + w]` and
-/// whether it is the upper face: for a finite (or NaN) `v`, the same number as the smaller of
-/// `linear_time_to_plane(x0, v, hi, true)` and `linear_time_to_plane(x0, v, lo, false)` with
-/// `hi = lo + w` (at most one of them is finite; `+inf` for `v = 0` or NaN), where a face
-/// marked `closed` (the outer face of an edge cell of a wall axis) counts as a plane at
-/// infinity. Computed without a branch on the sign of `v`, which is a coin toss for cell faces
-/// (docs/performance.md, "Ideas kept and rejected"): the face is `lo + w * [v > 0]` (`lo + w`
-/// is how `hi` is formed, and `lo + 0.0` is `lo` for the `lo >= 0` of a cell corner), the time
-/// `(plane - x0) / v` clamped at zero as there, and `+inf` added when the particle does not
-/// move along the axis or moves towards a closed face (`0 / 0` or `+-inf` before that; the
-/// added `0.0` otherwise can only turn a `-0.0` into `+0.0`, which no compare tells apart).
-/// Written as arithmetic on the flags; whether the compiler keeps it free of branches is its
-/// choice (hiding the flags from it gained under 2 % here: docs/performance.md,
-/// "Compiler-steering devices").
+/// whether it is the upper face: the same number as the smaller of the two
+/// [`linear_time_to_plane`] calls (`+inf` for `v = 0` or NaN), a face marked `closed` (the
+/// outer face of an edge cell of a wall axis) counting as a plane at infinity. Written without
+/// a branch on the sign of `v`, a coin toss for cell faces (docs/performance.md, "Ideas kept
+/// and rejected"): the face is `lo + w * [v > 0]` (`lo + 0.0` is `lo` for `lo >= 0`), and
+/// `+inf` is added when the face is never reached (else `0.0`, which at most turns `-0.0` into
+/// `+0.0`).
 #[inline(always)]
 pub(crate) fn linear_time_to_faces(
     x0: f64,
@@ -44,8 +38,6 @@ pub(crate) fn linear_time_to_faces(
 ) -> (f64, bool) {
     let up = v > 0.0;
     let down = v < 0.0;
-    // The face and the `+inf` of a face never reached are chosen by arithmetic on the flags
-    // (a 0 or 1 factor, a bit mask), not by `if`: which face a particle heads for is a coin toss.
     let plane = lo + w * f64::from(i32::from(up));
     let never_reached = !(up | down) | (up & hi_closed) | (down & lo_closed);
     let mask = 0u64.wrapping_sub(u64::from(never_reached));

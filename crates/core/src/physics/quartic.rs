@@ -24,27 +24,18 @@
 //! `16 eps sum |c_k| t^k` of zero are treated as contacts, so a grazing contact is never lost to
 //! round-off either.
 //!
-//! [`earliest_entry`] returns the first time at which `p` is `<= 0` *and* not increasing: the
-//! moment a pair comes into contact while approaching (or, for the negated well polynomial, the
-//! moment a bonded pair reaches the well edge while separating). Pieces on which `p` increases
-//! are skipped: a pair that touches now and separates has no event there.
+//! [`earliest_entry`] returns the first time at which `p` is `<= 0` *and* not increasing: a
+//! contact while approaching (or, negated, a bonded pair reaching the well edge while separating).
 
 /// At most 6 sorted points (ends plus up to 4 critical points), on the stack: the solver runs
 /// in the engine's hot path and allocates nothing.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct Points {
     x: [f64; 6],
     len: usize,
 }
 
 impl Points {
-    fn new() -> Self {
-        Points {
-            x: [0.0; 6],
-            len: 0,
-        }
-    }
-
     fn push(&mut self, v: f64) {
         if self.len < self.x.len() {
             self.x[self.len] = v;
@@ -132,7 +123,6 @@ impl Poly {
         16.0 * f64::EPSILON * s
     }
 
-    /// The derivative.
     pub fn derivative(&self) -> Poly {
         let mut c = [0.0; 5];
         for k in 1..=self.n {
@@ -141,7 +131,6 @@ impl Poly {
         Poly::new(c)
     }
 
-    /// The negated polynomial.
     pub fn negated(&self) -> Poly {
         Poly::new(self.c.map(|x| -x))
     }
@@ -163,7 +152,7 @@ impl Poly {
     /// by isolation through the derivative's roots. Even-order roots (no sign change) are not
     /// listed; [`earliest_entry`] handles them at the critical points.
     pub(crate) fn sign_changes_in(&self, a: f64, b: f64) -> Points {
-        let mut out = Points::new();
+        let mut out = Points::default();
         if a.partial_cmp(&b)
             .is_none_or(|o| o == std::cmp::Ordering::Greater)
         {
@@ -186,7 +175,7 @@ impl Poly {
     /// `[a, c_1, ..., c_k, b]`: the ends and the critical points (roots of `p'`) between them;
     /// `p` is monotone between consecutive entries.
     fn monotone_pieces(&self, a: f64, b: f64) -> Points {
-        let mut pts = Points::new();
+        let mut pts = Points::default();
         pts.push(a);
         if self.n >= 2 {
             for &c in self.derivative().sign_changes_in(a, b).as_slice() {

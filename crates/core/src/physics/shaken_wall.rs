@@ -80,16 +80,12 @@ pub enum WallRoot {
 pub fn exact_root(w: &WallMotion, h: f64, v: f64, t0: f64, tol: f64, horizon: f64) -> WallRoot {
     let k = w.curvature_bound();
     let (mut s, mut ds) = w.gap(h, v, t0, 0.0);
-    if s <= tol {
-        // On or behind the wall: hit now if approaching; if separating, the gap is opening and
-        // the next root comes after it has opened (advance past the separation first).
-        if ds < 0.0 {
-            return WallRoot::Hit(0.0);
-        }
+    // On or behind the wall: hit now if approaching; if separating, first march until the gap
+    // has opened (bound-based steps need s > 0).
+    if s <= tol && ds < 0.0 {
+        return WallRoot::Hit(0.0);
     }
     let mut tau = 0.0;
-    // While separating from an overlap, march by the time the gap needs to be at least
-    // positive: bound-based steps need s > 0.
     let mut guard = 0u32;
     while s <= tol {
         // s' >= 0 here; the gap keeps opening for at least ds / k.
@@ -250,19 +246,7 @@ pub fn reference_root(
         let b = a + step;
         let (sb, _) = w.gap(h, v, t0, b);
         if sa > 0.0 && sb <= 0.0 {
-            let (mut lo, mut hi) = (a, b);
-            for _ in 0..200 {
-                let mid = 0.5 * (lo + hi);
-                if mid <= lo || mid >= hi {
-                    break;
-                }
-                if w.gap(h, v, t0, mid).0 > 0.0 {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            return WallRoot::Hit(hi);
+            return WallRoot::Hit(bisect(a, b, |t| w.gap(h, v, t0, t).0 > 0.0));
         }
         a = b;
         sa = sb;
@@ -270,19 +254,40 @@ pub fn reference_root(
     WallRoot::None
 }
 
+/// Bisects `[lo, hi]` (`positive(lo)`, not `positive(hi)`) to round-off and returns the end
+/// where `positive` is false.
+pub(crate) fn bisect(mut lo: f64, mut hi: f64, positive: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if positive(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
+    fn motion(amplitude: f64, omega: f64, g: f64) -> WallMotion {
+        WallMotion {
+            amplitude,
+            omega,
+            g,
+        }
+    }
+
     #[test]
     fn static_wall_matches_the_parabola() {
         // A = 0: the root is the falling root of h + v t - g t^2 / 2 = 0.
-        let w = WallMotion {
-            amplitude: 0.0,
-            omega: 1.0,
-            g: 1.0,
-        };
+        let w = motion(0.0, 1.0, 1.0);
         let (h, v) = (2.0f64, 0.5f64);
         let exact = (v + (v * v + 2.0 * h).sqrt()) / 1.0;
         match exact_root(&w, h, v, 0.3, 1e-12, 100.0) {
@@ -295,11 +300,7 @@ mod tests {
     fn random_motion(rng: &mut impl Rng) -> WallMotion {
         let gamma: f64 = rng.gen_range(0.3..20.0);
         let omega: f64 = rng.gen_range(0.5..10.0);
-        WallMotion {
-            amplitude: gamma / (omega * omega),
-            omega,
-            g: 1.0,
-        }
+        motion(gamma / (omega * omega), omega, 1.0)
     }
 
     #[test]
@@ -371,11 +372,7 @@ mod tests {
     fn lid_problem_with_gravity_pointing_away() {
         // g < 0: the particle accelerates away from the (mirrored) lid; thrown towards it fast
         // enough it hits, otherwise never.
-        let w = WallMotion {
-            amplitude: 0.05,
-            omega: 4.0,
-            g: -1.0,
-        };
+        let w = motion(0.05, 4.0, -1.0);
         for (h, v, hits) in [(1.0, -3.0, true), (1.0, -0.5, false), (1.0, 1.0, false)] {
             let e = exact_root(&w, h, v, 0.0, 1e-12, 10.0);
             let b = bracket_root(&w, h, v, 0.0, 1e-4, 1e-12, 10.0);
@@ -399,11 +396,7 @@ mod tests {
     fn tolerance_below_round_off_terminates() {
         // A gap tolerance below the round-off of the gap must not make the step underflow the
         // clock's resolution, which would keep the loop from ending.
-        let w = WallMotion {
-            amplitude: 0.3,
-            omega: 2.0,
-            g: 1.0,
-        };
+        let w = motion(0.3, 2.0, 1.0);
         for &(h, v, t0) in &[(3.0, -1.0, 1234.5), (0.5, 0.3, 0.7), (2.0, 2.0, 1e6)] {
             assert!(matches!(
                 exact_root(&w, h, v, t0, 0.0, 50.0),
@@ -415,12 +408,10 @@ mod tests {
     #[test]
     fn bracket_root_ends_on_the_particle_side_for_any_tolerance_and_clock() {
         // Fuzz of the thesis's solver at the edges of its inputs: gap tolerances at and below
-        // the gap's round-off (0, 1e-300), clocks far from the origin (t0 up to 1e7, where an
-        // ulp of t is 2e-9), coarse and fine marching steps. Every search must end, and a hit
-        // must never put the particle inside the wall: `refine` returns the bracket's particle
-        // side when the tolerance cannot be met, so the gap there, evaluated by the same
-        // function, is >= 0 exactly (returning the wall side `b` instead fails here). A hit is also never earlier than the earliest root found by
-        // conservative advancement with a tolerance the clock can resolve.
+        // the gap's round-off (0, 1e-300), clocks far from the origin (t0 up to 1e7), coarse
+        // and fine marching steps. Every search must end, and a hit must never put the particle
+        // inside the wall (`refine` returns the bracket's particle side when the tolerance
+        // cannot be met; returning `b` fails here), nor come before the earliest root.
         let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(41);
         let mut hits = 0;
         for i in 0..3000 {
@@ -460,13 +451,8 @@ mod tests {
 
     #[test]
     fn grazing_shot_is_caught() {
-        // Particle at rest relative to a wall at its lowest point... choose a trajectory that
-        // touches the wall's crest: h(t) = A + small, apex at the crest time.
-        let w = WallMotion {
-            amplitude: 0.1,
-            omega: 2.0,
-            g: 1.0,
-        };
+        // A trajectory whose apex touches the wall's crest: h(t) = A + small at the crest time.
+        let w = motion(0.1, 2.0, 1.0);
         let t_crest = PI / 2.0 / w.omega;
         // Apex exactly at the crest height: h + v t - t^2/2 reaches A at t = v with zero slope.
         let v = 0.5;

@@ -142,12 +142,10 @@ impl Frame {
         }
     }
 
-    /// Number of particles.
     pub fn len(&self) -> usize {
         self.radii.len()
     }
 
-    /// Whether the frame holds no particle.
     pub fn is_empty(&self) -> bool {
         self.radii.is_empty()
     }

@@ -33,9 +33,10 @@ pub(crate) fn initial_state_flat(scene: &Scene) -> FlatInitialState {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.initial.seed);
     let p = &scene.particles;
     let dim = scene.dimension;
-    let diameters = draw_diameters(&mut rng, p.count, p.diameter, p.polydispersity);
-    let radius: Vec<f64> = diameters.iter().map(|d| 0.5 * d).collect();
-    drop(diameters);
+    let radius: Vec<f64> = draw_diameters(&mut rng, p.count, p.diameter, p.polydispersity)
+        .iter()
+        .map(|d| 0.5 * d)
+        .collect();
     let (_, d_max) = scene.diameter_range();
     let min_spacing = scene.initial.lattice_spacing * d_max;
     let size = &scene.container.size;
@@ -49,10 +50,9 @@ pub(crate) fn initial_state_flat(scene: &Scene) -> FlatInitialState {
 
     let temperature = scene.initial_temperature();
     // Drawn particle by particle, axis by axis.
-    let mut velocity: Vec<f64> = Vec::with_capacity(p.count * dim);
-    for _ in 0..p.count * dim {
-        velocity.push(StandardNormal.sample(&mut rng));
-    }
+    let mut velocity: Vec<f64> = (0..p.count * dim)
+        .map(|_| StandardNormal.sample(&mut rng))
+        .collect();
     // Zero total momentum, then rescale to T_g = m (<v^2> - <v>^2) / f_d exactly (Eq. 3.2).
     let n = p.count as f64;
     let mut mean = vec![0.0; dim];
@@ -74,9 +74,7 @@ pub(crate) fn initial_state_flat(scene: &Scene) -> FlatInitialState {
     } else {
         0.0
     };
-    for x in velocity.iter_mut() {
-        *x *= scale;
-    }
+    velocity.iter_mut().for_each(|x| *x *= scale);
     FlatInitialState {
         radius,
         position,
@@ -99,10 +97,7 @@ pub(crate) fn initial_state(scene: &Scene) -> InitialState {
 /// The cold start (`initial.start = "cold"`): the hot start's lattice and radii, every velocity
 /// zero, and a capillary bridge between every pair whose surface separation
 /// `|x_i - x_j| - r_i - r_j` (nearest image on periodic axes) is below `s_crit`: a bonded bed at
-/// rest that settles under gravity, forming more bridges as grains touch. With the default
-/// lattice spacing (1.01 `d_max`) and `sigma_p = 0.06`, the pairs of similar small grains start
-/// bonded (gaps `1.01 d_max - d_i/2 - d_j/2` range from 0.01 to 0.22). Time 0, counts and
-/// ledger zero.
+/// rest that settles under gravity. Time 0, counts and ledger zero.
 pub fn cold_state(scene: &Scene) -> super::EngineState {
     let init = initial_state(scene);
     let dim = scene.dimension;

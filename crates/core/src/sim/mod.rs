@@ -80,15 +80,7 @@ pub struct RunReport {
 
 /// Runs a validated scene to the end and reports.
 pub fn run_scene(scene: &Scene) -> RunReport {
-    run_scene_with_progress(scene, &mut |_| {})
-}
-
-/// Runs a validated scene, calling `progress` after every sample (for progress displays).
-pub(crate) fn run_scene_with_progress(
-    scene: &Scene,
-    progress: &mut dyn FnMut(&Sample),
-) -> RunReport {
-    run_dispatch(scene, None, progress, None)
+    run_dispatch(scene, None, &mut |_| {}, None)
 }
 
 /// Runs a validated scene and hands a [`Frame`] to `observer` at every time `k * interval`
@@ -100,12 +92,7 @@ pub fn run_scene_observed(
     observer: &mut dyn FnMut(&Frame),
     progress: &mut dyn FnMut(&Sample),
 ) -> RunReport {
-    assert!(
-        interval > 0.0 && interval.is_finite(),
-        "observer interval must be > 0"
-    );
-    let mut w = FnWatcher(observer);
-    run_dispatch(scene, None, progress, Some((interval, &mut w)))
+    run_scene_watched(scene, None, interval, &mut FnWatcher(observer), progress)
 }
 
 /// What the sampling loop hands frames to, and asks whether to go on at the end of the run.

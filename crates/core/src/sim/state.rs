@@ -2,12 +2,10 @@
 //! run can be continued on the same trajectory later: checkpoints of finished jobs
 //! (`sweep resume --extend`), continuation along a sweep axis, and the cold start.
 //!
-//! What it holds is what the physics needs: time, positions, velocities, radii, the capillary
-//! bridges (bonded pairs) and the accumulated event counts and energy ledger (so counts and
-//! the energy bookkeeping continue). What it does not hold is derived again on restore: cells,
-//! neighbour lists and event predictions; the event engine's per-particle time of the last
-//! collision (the TC collapse remedy) is reset, and the time engine's higher Gear derivatives
-//! are re-initialised from the forces (`sim::time_driven::engine`).
+//! It holds what the physics needs (time, positions, velocities, radii, bridges) and the
+//! accumulated event counts and energy ledger. Cells, neighbour lists and predictions are
+//! derived again on restore; the TC remedy's last-collision times are reset, and the time
+//! engine's higher Gear derivatives re-initialised from the forces.
 
 use super::Frame;
 use super::books::{EnergyLedger, EventCounts};
@@ -56,13 +54,10 @@ impl EngineState {
     }
 
     /// The start state of a continuation job: this final state of the neighbouring sweep point,
-    /// whose scene was `prev`, carried into the next point's container. Positions along the
-    /// vertical axis (the last) move into the container frame: the shaken floor and lid of
-    /// `prev` were displaced by `z_w(t) = A sin(omega t)` (docs/model.md 4.1, Eq. B.7) at the state's
-    /// time, and the next run starts at `t = 0` where its own walls are at `z_w = 0`; so every
-    /// grain keeps its distance to floor and lid. Velocities (lab frame) and bridges are kept;
-    /// time, event counts and the ledger start again from zero (the next job's ledger covers
-    /// its own run).
+    /// whose scene was `prev`, carried into the next point's container. Heights move into the
+    /// container frame (`prev`'s walls were displaced by `z_w(t) = A sin(omega t)`, docs/model.md
+    /// 4.1, the next run's are at `z_w(0) = 0`), so every grain keeps its distance to floor and
+    /// lid. Velocities and bridges are kept; time, counts and ledger start from zero.
     pub fn continued(&self, prev: &crate::scene::Scene) -> EngineState {
         let d = self.dimension;
         let shift = prev

@@ -6,11 +6,9 @@
 //!
 //! - inside a rayon pool (a benchmark or test that installed one), the engine uses that pool;
 //! - on a thread where a [`CoreShare`] is entered (the sweep runner's workers), the job runs on
-//!   a pool of its share of the cores: while jobs are waiting in the queue every job gets
-//!   `cores / workers` threads (at least 1), and once the queue is empty the cores of the
-//!   workers that went idle are handed to the jobs still running (`cores / running`, rounded
-//!   down), so the last job of a sweep uses the whole machine. With at most as many workers as
-//!   cores the running jobs never hold more threads than there are cores;
+//!   a pool of its share of the cores (`CoreShare::threads_per_job`): once the queue is empty
+//!   the idle workers' cores go to the jobs still running, so the last job of a sweep uses the
+//!   whole machine;
 //! - elsewhere (`wetgran simulate`, `job run`, tests), the process pool of all available cores.
 //!
 //! [`install`] is called once per `run_until` of the engine (once per sample or observer frame,
@@ -22,9 +20,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
 
 /// Cores a simulation process may use: `std::thread::available_parallelism` (1 if unknown),
-/// or the environment variable `WETGRAN_THREADS` when it is set to a positive number (e.g.
-/// `WETGRAN_THREADS=1`: every simulation on one thread, e.g. on a machine shared with other
-/// work).
+/// or the environment variable `WETGRAN_THREADS` when it is set to a positive number.
 pub fn available_cores() -> usize {
     std::env::var("WETGRAN_THREADS")
         .ok()

@@ -161,14 +161,12 @@ pub(super) fn tabulate(
 ) -> Cell {
     let base = base_point(w, edge, p[0], p[1], spec.v_min);
     let (starts_inside, taus) = all_roots(w, base, period, edge == Edge::Wall);
-    // For the wall edge the flight leaves the wall at tau = 0: the stored roots start with that
-    // leaving root, so that odd indices mean "entering" as for a flight that starts behind the
-    // wall.
+    // The flight from the wall edge continues one that was behind the wall and leaves it at
+    // tau = 0: its stored roots start with that leaving root, so that odd indices mean
+    // "entering" as for a flight that starts behind the wall.
     let mut cell = Cell {
         reference: p,
         exact_only: false,
-        // The flight from the wall edge is the continuation of one that was behind the wall and
-        // leaves it at tau = 0.
         starts_inside: starts_inside || edge == Edge::Wall,
         count: 0,
         roots: [Root::default(); MAX_ROOTS],

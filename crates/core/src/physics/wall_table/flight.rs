@@ -3,7 +3,7 @@
 //! the parameters, and every zero of the gap in a window, found by conservative advancement.
 
 use super::{Edge, MAX_ROOTS};
-use crate::physics::shaken_wall::WallMotion;
+use crate::physics::shaken_wall::{WallMotion, bisect};
 
 /// Inverse of [`map_velocity`] and `dv/du`, with the sign each edge's flights have.
 fn unmap_velocity(edge: Edge, u: f64, v_min: f64) -> (f64, f64) {
@@ -131,18 +131,7 @@ pub(super) fn all_roots(
             continue;
         }
         // Bisect [a, b] to round-off: sigma(a) >= -tol... sigma(b) < 0.
-        let (mut lo, mut hi) = (a, b);
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            if side * gap3(w, base, mid).0 > 0.0 {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
+        let hi = bisect(a, b, |t| side * gap3(w, base, t).0 > 0.0);
         if hi <= window && roots.len() < MAX_ROOTS {
             roots.push(hi);
         }

@@ -162,11 +162,9 @@ pub struct WallTable {
 }
 
 impl WallTable {
-    /// Fills the four edge tables for `motion` (a pure function of its inputs). The cells are
-    /// filled in parallel on the rayon pool the caller runs this in (the engine's table cache
-    /// installs the pool `sim::threads` chooses: a sweep job's share of the cores, else all of
-    /// them); each cell is a function of its indices alone and the counters are integer sums,
-    /// so the table is the same bits on any number of threads.
+    /// Fills the four edge tables for `motion`, in parallel on the caller's rayon pool (the
+    /// table cache installs the one `sim::threads` chooses); each cell is a function of its
+    /// indices alone, so the table is the same bits on any number of threads.
     pub fn build(motion: WallMotion, spec: TableSpec) -> WallTable {
         let start = Instant::now();
         let built: Vec<(EdgeTable, BuildStats)> = EDGES
@@ -212,8 +210,7 @@ impl WallTable {
         let reach = w.amplitude;
         let period = w.period();
         let (mut t, mut z, mut vz) = (t0, h, v);
-        // After a period without a hit the next base point is the start of the next period
-        // (edge III), taken as given rather than recomputed from a rounded clock.
+        // After a period without a hit the base point is the next period's start (edge III).
         let mut period_start = false;
         // Each pass covers at least one period from its base point.
         for _ in 0..(horizon / period) as usize + 3 {
@@ -254,8 +251,7 @@ impl WallTable {
                         TableHit::None
                     };
                 }
-                // Behind the wall at a later period's start: only round-off or table error puts
-                // a flight there; the exact solver decides.
+                // Behind the wall at a later period's start (round-off or table error): exact.
                 Some(TableHit::Now) if t > t0 => return TableHit::OutOfRange,
                 Some(answer) => return answer,
                 None => {}
@@ -398,8 +394,7 @@ impl WallTable {
 fn answer_from_cell(cell: &Cell, delta: [f64; 2], now: f64, approach: f64) -> Option<TableHit> {
     let count = cell.count as usize;
     let tau = |k: usize| extrapolate(cell.roots[k].tau, cell.roots[k].dtau, delta);
-    // Roots alternate between entering and leaving the wall: the side at `now` is the start
-    // side toggled once per root before `now`.
+    // Roots alternate between entering and leaving: toggle the start side per root before now.
     let mut inside = cell.starts_inside;
     let mut k = 0;
     while k < count && tau(k) <= now {
@@ -407,9 +402,7 @@ fn answer_from_cell(cell: &Cell, delta: [f64; 2], now: f64, approach: f64) -> Op
         k += 1;
     }
     if inside {
-        // The latest root before now entered the wall: the flight is behind it. Collide now if
-        // approaching (B.5.6); a separating flight is left to leave, and hits at the next
-        // entering root.
+        // Behind the wall: collide now if approaching (B.5.6), else hit at the next entering root.
         if approach > 0.0 {
             return Some(TableHit::Now);
         }

@@ -56,9 +56,9 @@ pub(crate) fn vec_bytes<T>(v: &Vec<T>) -> usize {
     v.capacity() * std::mem::size_of::<T>()
 }
 
-/// Reorders `v` in place so that entry `k` becomes the old `v[order[k]]`, cycle by cycle of the
-/// permutation (one byte of marks per entry instead of a second copy of `v`: the renumbering
-/// adds no array of the engine's size to its peak memory). An empty `v` stays empty.
+/// Reorders `v` in place so that entry `k` becomes the old `v[order[k]]`, cycle by cycle (one
+/// byte of marks per entry instead of a second copy of `v`: no peak memory). An empty `v` stays
+/// empty.
 pub(crate) fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
     if v.is_empty() {
         return;
@@ -85,13 +85,11 @@ pub(crate) fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
 }
 
 impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR> {
-    /// Number of particles.
     #[inline]
     pub fn len(&self) -> usize {
         self.body.len()
     }
 
-    /// Whether there is no particle.
     pub fn is_empty(&self) -> bool {
         self.body.is_empty()
     }
@@ -184,50 +182,20 @@ impl<const D: usize, const GRAV: bool, const SHEAR: bool> Bodies<D, GRAV, SHEAR>
     /// parabolas on the vertical axis under gravity, straight lines otherwise.
     pub(crate) fn times_to_planes(&self, i: usize, k: usize, lo: f64, hi: f64) -> (f64, f64) {
         let (x, v) = (self.body[i].x[k], self.body[i].v[k]);
-        let never = f64::INFINITY;
-        if SHEAR && k == FORCE_AXIS {
-            let a = self.accel[i];
-            return (
-                if hi.is_finite() {
-                    accelerated_time_to_plane(x, v, a, hi, true)
-                } else {
-                    never
-                },
-                if lo.is_finite() {
-                    accelerated_time_to_plane(x, v, a, lo, false)
-                } else {
-                    never
-                },
-            );
-        }
-        if GRAV && k == D - 1 {
-            let g = self.gravity;
-            (
-                if hi.is_finite() {
-                    parabola_time_up(x, v, g, hi)
-                } else {
-                    never
-                },
-                if lo.is_finite() {
-                    parabola_time_down(x, v, g, lo)
-                } else {
-                    never
-                },
-            )
-        } else {
-            (
-                if hi.is_finite() {
-                    linear_time_to_plane(x, v, hi, true)
-                } else {
-                    never
-                },
-                if lo.is_finite() {
-                    linear_time_to_plane(x, v, lo, false)
-                } else {
-                    never
-                },
-            )
-        }
+        let time = |plane: f64, up: bool| {
+            if !plane.is_finite() {
+                f64::INFINITY
+            } else if SHEAR && k == FORCE_AXIS {
+                accelerated_time_to_plane(x, v, self.accel[i], plane, up)
+            } else if GRAV && k == D - 1 && up {
+                parabola_time_up(x, v, self.gravity, plane)
+            } else if GRAV && k == D - 1 {
+                parabola_time_down(x, v, self.gravity, plane)
+            } else {
+                linear_time_to_plane(x, v, plane, up)
+            }
+        };
+        (time(hi, true), time(lo, false))
     }
 
     /// Heap bytes of each per-particle array (`wetgran-bench memory`).

@@ -1,11 +1,9 @@
 //! Event source of the neighbour cells: which cell each particle is in, and its next crossing
 //! of a cell face ([`CellSource`], over the grid of [`super::cells`]).
 //!
-//! Round-off at cell faces: crossing times are clamped at zero by the flight functions and a
-//! particle's cell is tracked by index, never recomputed from its position; crossing a face of
-//! a periodic axis wraps the position. Firing a crossing moves the particle into the
-//! neighbouring cell and returns the offsets of the newly adjacent slab of cells, the only cells
-//! whose partners the pair source must scan (the pair event is kept).
+//! Round-off at cell faces: crossing times are clamped at zero and a particle's cell is tracked
+//! by index, never recomputed from its position; crossing a periodic face wraps the position.
+//! After a crossing only the newly adjacent slab of cells needs a pair scan.
 
 use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cells::CellGrid;
@@ -83,8 +81,7 @@ impl<const D: usize> CellSource<D> {
             ev: Vec::new(),
         };
         for (i, x) in positions.enumerate() {
-            let arr: [f64; D] = x.into();
-            let c = s.grid.locate(&arr);
+            let c = s.grid.locate(&x.into());
             s.cell.push(c);
             let lin = s.grid.linear(&c);
             s.grid.insert(i, lin);
@@ -130,9 +127,8 @@ impl<const D: usize> CellSource<D> {
                 best.keep_earlier(t_up, k, true);
                 best.keep_earlier(t_down, k, false);
             } else {
-                // Straight flight: at most one of the two faces is ahead, chosen by the sign
-                // of `v` without a branch; the same time and the same winner among equal
-                // times as the two calls above (an infinite time never replaces `best`).
+                // Straight flight: the face ahead chosen without a branch; the same time and
+                // winner as the two calls above.
                 let (x, v) = (bodies.body[i].x[k], bodies.body[i].v[k]);
                 let lo_closed = !periodic & (c[k] == 0);
                 let hi_closed = !periodic & (c[k] == self.grid.n[k] - 1);
@@ -155,24 +151,30 @@ impl<const D: usize> CellSource<D> {
         up: bool,
         bodies: &mut Bodies<D, G, S>,
     ) {
-        let old = self.grid.linear(&self.cell[i]);
-        self.grid.remove(i, old);
         let n = self.grid.n[axis];
-        let c = &mut self.cell[i][axis];
+        let mut c = self.cell[i];
         if up {
-            *c += 1;
-            if *c == n {
-                *c = 0;
+            c[axis] += 1;
+            if c[axis] == n {
+                c[axis] = 0;
                 bodies.body[i].x[axis] -= bodies.size[axis];
             }
         } else {
-            *c -= 1;
-            if *c < 0 {
-                *c = n - 1;
+            c[axis] -= 1;
+            if c[axis] < 0 {
+                c[axis] = n - 1;
                 bodies.body[i].x[axis] += bodies.size[axis];
             }
         }
-        let new = self.grid.linear(&self.cell[i]);
+        self.move_to(i, c);
+    }
+
+    /// Moves `i` out of its cell's list into that of cell `c`.
+    fn move_to(&mut self, i: usize, c: [i32; D]) {
+        let old = self.grid.linear(&self.cell[i]);
+        self.grid.remove(i, old);
+        self.cell[i] = c;
+        let new = self.grid.linear(&c);
         self.grid.insert(i, new);
     }
 
@@ -184,9 +186,7 @@ impl<const D: usize> CellSource<D> {
     }
 
     /// Calls `f(j)` for every particle `j` in the `3^D` cells around the cell of `i` (`i`
-    /// itself included; cells beyond a closed face skipped). The plain, branchy
-    /// walk for the rare callers (placements, invariant checks); the event scans use
-    /// [`CellGrid::gather`].
+    /// included): the plain walk for the rare callers (placements, invariant checks).
     pub(crate) fn for_each_near(&self, i: usize, mut f: impl FnMut(usize)) {
         for o in &self.all.offsets {
             if let Some(cell) = self.grid.shifted(&self.cell[i], o) {
@@ -198,24 +198,14 @@ impl<const D: usize> CellSource<D> {
     /// Moves `i` to the cell of position `x` (a placement or a set-up): out of its list and
     /// into the new one.
     pub(crate) fn relocate(&mut self, i: usize, x: &Vector<D>) {
-        let old = self.grid.linear(&self.cell[i]);
-        self.grid.remove(i, old);
-        let arr: [f64; D] = (*x).into();
-        self.cell[i] = self.grid.locate(&arr);
-        let new = self.grid.linear(&self.cell[i]);
-        self.grid.insert(i, new);
+        self.move_to(i, self.grid.locate(&(*x).into()));
     }
 
     /// Like [`Self::relocate`], but leaves the lists alone when the cell does not change.
     pub(crate) fn relocate_if_moved(&mut self, i: usize, x: &Vector<D>) {
-        let arr: [f64; D] = (*x).into();
-        let c = self.grid.locate(&arr);
+        let c = self.grid.locate(&(*x).into());
         if c != self.cell[i] {
-            let old = self.grid.linear(&self.cell[i]);
-            self.grid.remove(i, old);
-            self.cell[i] = c;
-            let new = self.grid.linear(&c);
-            self.grid.insert(i, new);
+            self.move_to(i, c);
         }
     }
 
@@ -223,8 +213,7 @@ impl<const D: usize> CellSource<D> {
     /// neighbours close together in memory.
     pub(crate) fn cell_order(&self) -> Vec<u32> {
         let mut order: Vec<u32> = (0..self.cell.len() as u32).collect();
-        // Keys are distinct (the index breaks ties), so the unstable sort (no buffer) gives the
-        // stable order.
+        // Keys are distinct, so the unstable sort (no buffer) gives the stable order.
         order.sort_unstable_by_key(|&k| (self.grid.linear(&self.cell[k as usize]), k));
         order
     }
@@ -247,17 +236,9 @@ impl<const D: usize> CellSource<D> {
 }
 
 impl<const D: usize> EventSource for CellSource<D> {
-    /// The stored crossing of `i` as an event.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
-        let e = self.ev[i];
-        Event {
-            time: e.time,
-            kind: EventKind::Cell {
-                axis: e.axis,
-                up: e.up,
-            },
-        }
+        self.ev[i].event(|axis, up| EventKind::Cell { axis, up })
     }
 
     /// Renumbers the particles (see [`Bodies::permute`]) and rebuilds the cell lists.
@@ -276,23 +257,10 @@ impl<const D: usize> EventSource for CellSource<D> {
 mod tests {
     use super::*;
 
-    /// The neighbours of a cell `c` as the general path finds them: every offset of `hood`
-    /// through [`CellGrid::shifted`] (wrapping on periodic axes, `None` past a wall), in order.
-    fn shifted_neighbours<const D: usize>(
-        grid: &CellGrid<D>,
-        hood: &Neighbourhood<D>,
-        c: &[i32; D],
-    ) -> Vec<usize> {
-        hood.offsets
-            .iter()
-            .filter_map(|o| grid.shifted(c, o))
-            .collect()
-    }
-
     /// Every cell with a wall class (inside along the periodic axes, anywhere along the wall
     /// axes, including single layers) finds by its class's index changes exactly the
-    /// neighbours, in the same order, that the general path finds: for the whole neighbourhood
-    /// and for each far slab of a crossing.
+    /// neighbours, in the same order, that the general path ([`CellGrid::shifted`]) finds: for
+    /// the whole neighbourhood and for each far slab of a crossing.
     fn wall_classes_find_the_neighbours_of<const D: usize>(n: [usize; D], periodic: [bool; D]) {
         let size = n.map(|k| k as f64);
         let grid = CellGrid::<D>::new(size, periodic, 1.0, 1);
@@ -301,12 +269,8 @@ mod tests {
         let total: usize = n.iter().product();
         let mut classed = 0;
         for linear in 0..total {
-            let mut c = [0i32; D];
-            let mut r = linear;
-            for k in 0..D {
-                c[k] = (r % n[k]) as i32;
-                r /= n[k];
-            }
+            let c: [i32; D] =
+                std::array::from_fn(|k| (linear / n[..k].iter().product::<usize>() % n[k]) as i32);
             let Some(class) = grid.wall_class(&c) else {
                 assert!((0..D).any(|k| periodic[k] && (c[k] == 0 || c[k] == n[k] as i32 - 1)));
                 continue;
@@ -318,7 +282,12 @@ mod tests {
                     .iter()
                     .map(|&d| (base + d) as usize)
                     .collect();
-                assert_eq!(fast, shifted_neighbours(grid, hood, &c), "cell {c:?}");
+                let general: Vec<usize> = hood
+                    .offsets
+                    .iter()
+                    .filter_map(|o| grid.shifted(&c, o))
+                    .collect();
+                assert_eq!(fast, general, "cell {c:?}");
             }
         }
         assert!(classed > 0);

@@ -2,18 +2,14 @@
 //! (largest diameter plus `s_crit`), with doubly linked per-cell particle lists so that a
 //! particle changes cell in `O(1)` without allocation.
 //!
-//! The lists end in a sentinel index one past the last particle, whose own link points back at
-//! itself, so that a neighbour scan may take the first steps of a list walk without asking
-//! whether the list has ended ([`CellGrid::gather`], [`CellGrid::for_each_batch`]): the
-//! occupancy of a cell (0, 1 or 2 particles, at random) is then no branch for the processor to
-//! mispredict.
+//! The lists end in a sentinel index one past the last particle, linked to itself, so that a
+//! neighbour scan may take the first steps of a list walk without asking whether the list has
+//! ended ([`CellGrid::gather`]): a cell's occupancy is then no branch to mispredict.
 
-/// List steps [`CellGrid::gather`] takes per cell without a branch: at the densities
-/// of the reference systems (0.5 particles per cell in 3D) more than two particles in a cell
-/// are rare (1.4 % of the cells), and those fall back to the loop.
+/// List steps [`CellGrid::gather`] takes per cell without a branch: at the reference densities
+/// (0.5 particles per cell in 3D) only 1.4 % of the cells hold more, and fall back to the loop.
 const GATHER_STEPS: usize = 2;
-/// Particle indices [`CellGrid::gather`] gathers before it hands them on (a power of
-/// two).
+/// Particle indices [`CellGrid::gather`] gathers before it hands them on (a power of two).
 pub const BATCH: usize = 64;
 
 /// Where [`CellGrid::gather`] stopped: the rest of a list (`j`, the sentinel if none) and
@@ -34,9 +30,8 @@ pub struct CellGrid<const D: usize> {
     /// Whether each axis wraps around.
     pub periodic: [bool; D],
     /// Whether every periodic axis has at least five cells: then two particles in the
-    /// neighbourhood of an interior cell (one found without wrapping) are less than `2.5` cells
-    /// apart along a periodic axis of at least 5 cells, i.e. less than half the box, so their
-    /// separation needs no minimum image (it would change nothing).
+    /// neighbourhood of an interior cell are less than half the box apart, so their separation
+    /// needs no minimum image.
     pub interior_needs_no_image: bool,
     /// The list sentinel: the particle count (`next[end] == end`).
     end: u32,
@@ -48,12 +43,8 @@ pub struct CellGrid<const D: usize> {
 impl<const D: usize> CellGrid<D> {
     /// A grid over a box of edges `size` with cells no smaller than `min_edge`.
     pub fn new(size: [f64; D], periodic: [bool; D], min_edge: f64, particles: usize) -> Self {
-        let mut n = [1i32; D];
-        let mut width = [0.0; D];
-        for k in 0..D {
-            n[k] = ((size[k] / min_edge).floor() as i32).max(1);
-            width[k] = size[k] / n[k] as f64;
-        }
+        let n: [i32; D] = std::array::from_fn(|k| ((size[k] / min_edge).floor() as i32).max(1));
+        let width: [f64; D] = std::array::from_fn(|k| size[k] / n[k] as f64);
         let total: usize = n.iter().map(|&x| x as usize).product();
         Self {
             n,
@@ -79,14 +70,9 @@ impl<const D: usize> CellGrid<D> {
 
     /// The cell containing coordinate `x` (clamped into the grid).
     pub fn locate(&self, x: &[f64; D]) -> [i32; D] {
-        let mut c = [0i32; D];
-        for k in 0..D {
-            c[k] = ((x[k] / self.width[k]).floor() as i32).clamp(0, self.n[k] - 1);
-        }
-        c
+        std::array::from_fn(|k| ((x[k] / self.width[k]).floor() as i32).clamp(0, self.n[k] - 1))
     }
 
-    /// Linear index of a cell.
     #[inline]
     pub fn linear(&self, c: &[i32; D]) -> usize {
         let mut idx = 0usize;
@@ -114,27 +100,19 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Whether every neighbour of cell `c` lies inside the grid without wrapping, so that
-    /// [`Self::interior_neighbour`] may be used (the fast path of neighbour scans).
+    /// [`Self::interior_delta`] finds it (the fast path of neighbour scans).
     #[inline]
     pub fn is_interior(&self, c: &[i32; D]) -> bool {
         (0..D).all(|k| c[k] >= 1 && c[k] <= self.n[k] - 2)
     }
 
-    /// Linear index of the cell at `offset` from the interior cell with linear index `base`.
-    #[inline]
-    pub fn interior_neighbour(&self, base: usize, offset: &[i32; D]) -> usize {
-        (base as isize + self.interior_delta(offset)) as usize
-    }
-
     /// Number of wall classes ([`Self::wall_class`]): two bits per axis.
     pub const WALL_CLASSES: usize = 1 << (2 * D);
 
-    /// The wall class of cell `c`, if it is inside along every periodic axis (no neighbour
-    /// found by wrapping): per axis, bit `2k` set at the low face of a wall axis (`c_k = 0`),
-    /// bit `2k + 1` at its high face (`c_k = n_k - 1`; both for a single layer of cells).
-    /// `None` on the edge of a periodic axis. With the class, the neighbours of `c` are found
-    /// by the interior index changes of the offsets that stay inside the walls
-    /// ([`Self::inside_walls`]): the fast path of scans next to a wall.
+    /// The wall class of cell `c` (`None` on the edge of a periodic axis): per wall axis, bit
+    /// `2k` set at its low face (`c_k = 0`), bit `2k + 1` at its high face (both for a single
+    /// layer). With the class, the neighbours of `c` are the interior index changes of the
+    /// offsets that stay inside the walls ([`Self::inside_walls`]).
     #[inline]
     pub fn wall_class(&self, c: &[i32; D]) -> Option<usize> {
         let mut class = 0usize;
@@ -173,9 +151,8 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Per axis `k` and step `s` in `-1, 0, 1`: the part `stride_k * wrap(c_k + s)` of the linear
-    /// index of a neighbour of cell `c`, or `usize::MAX` past a wall. The linear index of
-    /// `c + o` is the sum of the parts `o_k` picks ([`Self::shifted`] without its per-offset
-    /// division; the boundary cells' neighbour scans use it).
+    /// index of a neighbour of cell `c`, or `usize::MAX` past a wall; the linear index of `c + o`
+    /// is the sum of the parts `o_k` picks ([`Self::shifted`] without its per-offset division).
     #[inline]
     pub fn axis_parts(&self, c: &[i32; D]) -> [[usize; 3]; D] {
         let mut parts = [[usize::MAX; 3]; D];
@@ -199,10 +176,8 @@ impl<const D: usize> CellGrid<D> {
     /// [`Self::axis_parts`], and per axis `k` and step `s` the image shift of the partners in
     /// that slab of cells: `-size[k]` where `c_k + s` wraps past the upper face of a periodic
     /// axis, `+size[k]` past the lower face, `0` otherwise. With five cells or more on every
-    /// periodic axis (`interior_needs_no_image`) this is the minimum image of every pair in
-    /// neighbouring cells: two particles `n_k - 1 >= 4` cells apart along `k` are more than
-    /// `0.6 L` apart, so `Bodies::min_image` shifts them by exactly `size[k]`; two particles in
-    /// cells at most one apart are less than `2 / 5 L` apart, and it leaves them alone.
+    /// periodic axis this is the minimum image of every pair in neighbouring cells (those
+    /// `n_k - 1` cells apart are more than `0.6 L` apart, the others less than `0.4 L`).
     #[inline]
     pub fn axis_parts_and_shifts(
         &self,
@@ -227,11 +202,7 @@ impl<const D: usize> CellGrid<D> {
     /// The image shift of the cell at `offset` from [`Self::axis_parts_and_shifts`].
     #[inline]
     pub fn shift_of(shifts: &[[f64; 3]; D], offset: &[i32; D]) -> [f64; D] {
-        let mut s = [0.0; D];
-        for k in 0..D {
-            s[k] = shifts[k][(offset[k] + 1) as usize];
-        }
-        s
+        std::array::from_fn(|k| shifts[k][(offset[k] + 1) as usize])
     }
 
     /// Linear index of `c + offset` from [`Self::axis_parts`] of `c`; `None` past a wall.
@@ -298,12 +269,10 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Gathers into `buf` the particles of the cells `cells` yields, in the order
-    /// [`Self::for_each_in`] visits them cell after cell, each with the tag that came with its
-    /// cell in `tags` (`tagged`; else the tags are not stored): the first [`GATHER_STEPS`]
-    /// steps of each list walk store the index and count it only if it is not the sentinel
-    /// (no branch on the cell's occupancy); longer lists continue in a loop. Returns how many
-    /// it gathered and whether to call again (the buffer was full; `state` remembers where
-    /// it stopped).
+    /// [`Self::for_each_in`] visits them, each with its cell's tag in `tags` (if `tagged`): the
+    /// first [`GATHER_STEPS`] steps of each list store the index and count it only if it is not
+    /// the sentinel (no branch on the occupancy). Returns how many it gathered and whether to
+    /// call again (the buffer was full; `state` remembers where it stopped).
     pub fn gather(
         &self,
         cells: &mut impl Iterator<Item = (usize, u8)>,
@@ -315,19 +284,9 @@ impl<const D: usize> CellGrid<D> {
         let end = self.end;
         let mut len = 0usize;
         // The rest of a list cut short by a full buffer.
-        let (mut j, tag) = (state.j, state.tag);
-        while j != end {
-            if len == BATCH {
-                *state = Gather { j, tag };
-                return (len, true);
-            }
-            buf[len] = j;
-            tags[len] = tag;
-            len += 1;
-            j = self.next[j as usize];
-        }
+        let (j, tag) = (state.j, state.tag);
         state.j = end;
-        if len > BATCH - GATHER_STEPS {
+        if self.walk(j, tag, state, buf, tags, &mut len) || len > BATCH - GATHER_STEPS {
             return (len, true);
         }
         for (cell, tag) in cells.by_ref() {
@@ -341,27 +300,40 @@ impl<const D: usize> CellGrid<D> {
                 len += usize::from(j != end);
                 j = self.next[j as usize];
             }
-            while j != end {
-                if len == BATCH {
-                    *state = Gather { j, tag };
-                    return (len, true);
-                }
-                buf[len] = j;
-                tags[len] = tag;
-                len += 1;
-                j = self.next[j as usize];
-            }
-            if len > BATCH - GATHER_STEPS {
+            if self.walk(j, tag, state, buf, tags, &mut len) || len > BATCH - GATHER_STEPS {
                 return (len, true);
             }
         }
         (len, false)
     }
 
-    /// Calls `f` with the particles of the cells `cells`, in the order [`Self::for_each_in`]
-    /// visits them cell after cell, handed on in batches of at most [`BATCH`], each particle
-    /// with the tag that came with its cell (`tagged`; else the tags are not stored): the
-    /// batches of [`Self::gather`].
+    /// Appends the list from `j` on (its cell's tag `tag`) to `buf[..len]`; `true` if the
+    /// buffer filled first (`state` then says where to go on).
+    #[inline(always)]
+    fn walk(
+        &self,
+        mut j: u32,
+        tag: u8,
+        state: &mut Gather,
+        buf: &mut [u32; BATCH],
+        tags: &mut [u8; BATCH],
+        len: &mut usize,
+    ) -> bool {
+        while j != self.end {
+            if *len == BATCH {
+                *state = Gather { j, tag };
+                return true;
+            }
+            buf[*len] = j;
+            tags[*len] = tag;
+            *len += 1;
+            j = self.next[j as usize];
+        }
+        false
+    }
+
+    /// Calls `f` with the batches of [`Self::gather`] (particles and tags) until all the cells
+    /// `cells` yields are done.
     pub fn for_each_batch(
         &self,
         mut cells: impl Iterator<Item = (usize, u8)>,
@@ -382,18 +354,9 @@ impl<const D: usize> CellGrid<D> {
 
     /// All `3^D` neighbour offsets (including the cell itself).
     pub fn neighbour_offsets() -> Vec<[i32; D]> {
-        let mut out = Vec::new();
-        let total = 3usize.pow(D as u32);
-        for m in 0..total {
-            let mut o = [0i32; D];
-            let mut r = m;
-            for k in 0..D {
-                o[k] = (r % 3) as i32 - 1;
-                r /= 3;
-            }
-            out.push(o);
-        }
-        out
+        (0..3usize.pow(D as u32))
+            .map(|m| std::array::from_fn(|k| (m / 3usize.pow(k as u32) % 3) as i32 - 1))
+            .collect()
     }
 
     /// Whether every periodic axis has at least four cells: then the `3^D` neighbourhood holds no
@@ -489,7 +452,7 @@ mod tests {
         assert!(g3.is_interior(&c) && !g3.is_interior(&[0, 1, 8]) && !g3.is_interior(&[4, 1, 9]));
         for o in CellGrid::<3>::neighbour_offsets() {
             assert_eq!(
-                Some(g3.interior_neighbour(g3.linear(&c), &o)),
+                Some((g3.linear(&c) as isize + g3.interior_delta(&o)) as usize),
                 g3.shifted(&c, &o)
             );
         }

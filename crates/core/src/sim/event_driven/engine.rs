@@ -82,12 +82,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         Self::assemble(scene, initial_state_flat(scene), None)
     }
 
-    /// Rebuilds the engine from a saved state (`sim::state`): every particle at the state's
-    /// time, the bridges bonded, the event counts and the energy ledger continued, cells and
-    /// predictions derived afresh. The TC remedy's last-collision times start unset. A run
-    /// continued from a state follows the uninterrupted run to round-off: predictions are
-    /// recomputed from positions advanced to the common time, which rounds differently
-    /// (`crates/core/tests/observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
+    /// Rebuilds the engine from a saved state (`sim::state`): particles at the state's time,
+    /// bridges, event counts and energy ledger continued, cells and predictions derived afresh,
+    /// the TC remedy's last-collision times unset. It follows the uninterrupted run to
+    /// round-off (`observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
     pub(crate) fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
         let init = FlatInitialState {
             radius: state.radii.clone(),
@@ -159,13 +157,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             n < (1 << 31) - 1,
             "too many particles for the event engine: {n}"
         );
-        let mut size = [0.0; D];
-        let mut periodic = [false; D];
+        let size: [f64; D] = std::array::from_fn(|k| scene.container.size[k]);
         let boundaries = scene.boundaries();
-        for k in 0..D {
-            size[k] = scene.container.size[k];
-            periodic[k] = boundaries[k] == Boundary::Periodic;
-        }
+        let periodic: [bool; D] = std::array::from_fn(|k| boundaries[k] == Boundary::Periodic);
         let (_, d_max) = scene.diameter_range();
         let range = (d_max + scene.s_crit()).max(scene.engine.cell_size);
         let grid = CellGrid::new(size, periodic, range, n);
@@ -185,19 +179,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                 r: init.radius[i],
             })
             .collect();
-        // The initial state is in the bodies now: free it before the other arrays are built
-        // (the peak memory of the build).
-        drop(init);
+        drop(init); // before the other arrays are built (peak memory)
         // Times of the last collisions feed only the TC model (`tc > 0`, docs/model.md 2.1).
         let tc_model = scene.engine.tc > 0.0;
         let bodies = Bodies {
             body,
             count: vec![0; n],
-            last_collision: if tc_model {
-                vec![f64::NEG_INFINITY; n]
-            } else {
-                Vec::new()
-            },
+            last_collision: vec![f64::NEG_INFINITY; if tc_model { n } else { 0 }],
             accel: slabs.accelerations(),
             id: (0..n as u32).collect(),
             slot_of: (0..n as u32).collect(),
@@ -251,17 +239,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         engine
     }
 
-    /// Number of particles.
     pub fn len(&self) -> usize {
         self.bodies.len()
     }
 
-    /// Whether the system holds no particle.
     pub fn is_empty(&self) -> bool {
         self.bodies.is_empty()
     }
 
-    /// Current simulation time.
     pub fn time(&self) -> f64 {
         self.time
     }
@@ -271,7 +256,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         &self.counts
     }
 
-    /// Number of capillary bridges.
     pub fn bridge_count(&self) -> usize {
         self.pairs.bridge_count()
     }
@@ -279,9 +263,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     /// The capillary bridges as pairs of scene indices `(i, j)`, `i < j`, sorted (empty for dry
     /// scenes). Read-only view for the observers.
     pub fn bridges(&self) -> Vec<(usize, usize)> {
-        if !WET {
-            return Vec::new();
-        }
         let mut out = Vec::with_capacity(self.bridge_count());
         for k in 0..self.len() {
             for &b in self.pairs.bonds_of(k) {
@@ -297,8 +278,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         out.sort_unstable();
         out
     }
-
-    // ----- scheduling --------------------------------------------------------------------
 
     /// The earliest candidate event of `i` over the sources (pair, slab, wall, cell; ties go to
     /// the earlier-named source).
@@ -399,29 +378,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                 self.counts.invalidated += 1;
                 self.predict_all(i);
             }
-            EventKind::Collide { partner, .. } => {
+            kind @ (EventKind::Collide { partner, .. } | EventKind::Well { partner, .. }) => {
                 let j = partner as usize;
-                self.pairs.collide(
-                    i,
-                    j,
-                    now,
-                    &mut self.bodies,
-                    &mut self.ledger,
-                    &mut self.counts,
-                );
-                self.predict_all(i);
-                self.predict_all(j);
-            }
-            EventKind::Well { partner, .. } => {
-                let j = partner as usize;
-                self.pairs.well_edge(
-                    i,
-                    j,
-                    now,
-                    &mut self.bodies,
-                    &mut self.ledger,
-                    &mut self.counts,
-                );
+                let (b, l, c) = (&mut self.bodies, &mut self.ledger, &mut self.counts);
+                if matches!(kind, EventKind::Collide { .. }) {
+                    self.pairs.collide(i, j, now, b, l, c);
+                } else {
+                    self.pairs.well_edge(i, j, now, b, l, c);
+                }
                 self.predict_all(i);
                 self.predict_all(j);
             }
@@ -451,8 +415,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                 self.counts.cell_crossings += 1;
                 let axis = axis as usize;
                 self.cells.fire(i, axis, up, &mut self.bodies);
-                // Only the newly adjacent cells can hold an earlier partner; the pair event is
-                // kept.
+                // Only the newly adjacent cells can hold an earlier partner.
                 self.pairs.scan(
                     i,
                     self.cells.far_slab(axis, up),
@@ -469,17 +432,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     }
 
     /// Sets how many events pass between two renumberings in cell order (`u64::MAX`: never).
-    /// The default grows with the particle count; tests use this to prove the renumbering is a
-    /// pure relabelling.
     pub fn set_reorder_interval(&mut self, events: u64) {
         self.reorder_every = events;
         self.next_reorder = self.counts.total().saturating_add(events);
     }
 
-    /// Renumbers the particles in cell order so that neighbours sit close together in memory
-    /// (a pair scan then mostly hits cache lines already loaded). A pure relabelling: no state,
-    /// prediction or event time changes; the public API keeps speaking in scene order. Each
-    /// source permutes its own per-particle state.
+    /// Renumbers the particles in cell order so that neighbours sit close together in memory.
+    /// A pure relabelling (no state, prediction or event time changes; the public API keeps
+    /// speaking in scene order): each source permutes its own per-particle state.
     fn reorder_by_cell(&mut self) {
         let n = self.len();
         self.next_reorder = self.counts.total().saturating_add(self.reorder_every);
@@ -501,11 +461,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         }
     }
 
-    // ----- observables -------------------------------------------------------------------
-
-    /// Position and velocity of every particle at the current time, in internal order. The
-    /// stored delayed states are left as they are: observing never changes the round-off of a
-    /// trajectory, so the sampling interval cannot change the physics.
+    /// Position and velocity of every particle at the current time, in internal order, leaving
+    /// the delayed states alone: observing never changes the round-off of a trajectory.
     fn current_states(&self) -> Vec<(Vector<D>, Vector<D>)> {
         (0..self.len())
             .map(|i| self.bodies.state_at(i, self.time))
@@ -563,33 +520,24 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.bodies.mass * (mean_sq - mean.norm_squared()) / D as f64
     }
 
+    /// `f` of each particle's internal index, in scene order.
+    fn in_scene_order<T>(&self, f: impl Fn(usize) -> T) -> Vec<T> {
+        self.bodies.slot_of.iter().map(|&k| f(k as usize)).collect()
+    }
+
     /// Positions at the current time, in scene order.
     pub fn positions(&self) -> Vec<Vector<D>> {
-        let states = self.current_states();
-        self.bodies
-            .slot_of
-            .iter()
-            .map(|&k| states[k as usize].0)
-            .collect()
+        self.in_scene_order(|k| self.bodies.state_at(k, self.time).0)
     }
 
     /// Velocities at the current time, in scene order.
     pub fn velocities(&self) -> Vec<Vector<D>> {
-        let states = self.current_states();
-        self.bodies
-            .slot_of
-            .iter()
-            .map(|&k| states[k as usize].1)
-            .collect()
+        self.in_scene_order(|k| self.bodies.state_at(k, self.time).1)
     }
 
     /// Particle radii, in scene order.
     pub fn radii(&self) -> Vec<f64> {
-        self.bodies
-            .slot_of
-            .iter()
-            .map(|&k| self.bodies.body[k as usize].r)
-            .collect()
+        self.in_scene_order(|k| self.bodies.body[k].r)
     }
 
     /// Overwrites the velocity of particle `i` at the current time (tests and set-ups) and
@@ -658,14 +606,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         out
     }
 
-    // ----- invariants --------------------------------------------------------------------
-
-    /// Checks the invariants: finite numbers, every particle inside the box, no pair overlap
-    /// and no bonded pair beyond `s_crit` by more than the tolerance, every particle in the
-    /// cell (and slab) its position says, no event scheduled in the past, no time reversal.
-    /// With the `table` solver a particle may lie behind a shaken wall by up to its placement
-    /// tolerance (`walls::TABLE_PLACEMENT_TOLERANCE`, the error that solver admits by design).
-    /// Returns a description of the first violation.
+    /// Checks the invariants: finite numbers, every particle inside the box (with the `table`
+    /// solver up to `walls::TABLE_PLACEMENT_TOLERANCE` behind a shaken wall, by design), no pair
+    /// overlap and no bonded pair beyond `s_crit` by more than the tolerance, every particle in
+    /// its cell (and slab), no event in the past, no time reversal. Returns the first violation.
     pub fn sanity_check(&self) -> Result<(), String> {
         let states = self.current_states();
         let tol = self.overlap_tolerance;
@@ -698,22 +642,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                     (r + shift, b.size[k] - r + shift)
                 };
                 // The `table` solver places a particle on the shaken wall only as far as its
-                // neighbours leave room (`walls::placement_room`): what is left of the table's
-                // gap, at most its placement tolerance, may stay behind the wall until the
-                // particle leaves it (its next wall event is at once if it approaches).
-                let behind = if x[k] < lo - tol {
-                    Some(lo - x[k])
-                } else if x[k] > hi + tol {
-                    Some(x[k] - hi)
-                } else {
-                    None
-                };
-                let table_residual = |depth: f64| {
-                    k == D - 1
-                        && depth <= super::walls::TABLE_PLACEMENT_TOLERANCE
-                        && matches!(self.walls.solver, super::walls::WallSolver::Table(_))
-                };
-                if behind.is_some_and(|b| !table_residual(b)) {
+                // neighbours leave room (`walls::placement_room`): the rest, at most its
+                // placement tolerance, may stay behind the wall until the particle leaves it.
+                let behind = (lo - x[k]).max(x[k] - hi);
+                let table_residual = k == D - 1
+                    && behind <= super::walls::TABLE_PLACEMENT_TOLERANCE
+                    && matches!(self.walls.solver, WallSolver::Table(_));
+                if behind > tol && !table_residual {
                     return Err(format!(
                         "particle {si} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
                         x[k]

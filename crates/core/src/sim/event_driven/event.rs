@@ -42,10 +42,8 @@ impl Event {
 }
 
 /// What every event source offers the scheduler. Prediction and firing are the sources' own
-/// methods (`predict`, `fire`, `scan`, `collide`, ...), because each needs different parts of
-/// the engine (a pair scan reads the cells and the slabs, a wall hit may move a particle to
-/// another cell); the scheduler calls them on the concrete source types, so everything is
-/// monomorphised.
+/// methods, because each needs different parts of the engine; the scheduler calls them on the
+/// concrete source types, so everything is monomorphised.
 pub(crate) trait EventSource {
     /// The source's stored prediction for particle `i`, as an event (`Event::NEVER`-timed if
     /// none).
@@ -157,6 +155,15 @@ impl PlaneEvent {
         axis: 0,
         up: false,
     };
+
+    /// The stored event as the scheduler's, of the kind `kind(axis, up)`.
+    #[inline]
+    pub(crate) fn event(self, kind: impl Fn(u8, bool) -> EventKind) -> Event {
+        Event {
+            time: self.time,
+            kind: kind(self.axis, self.up),
+        }
+    }
 
     /// Replaces this event by `(time, axis, up)` if that is earlier.
     #[inline]

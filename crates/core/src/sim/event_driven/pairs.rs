@@ -9,16 +9,15 @@
 //! its neighbourhood of cells; it remembers the partner's velocity-change count at prediction
 //! time, and the scheduler drops it (and re-predicts) if the count moved on (lazy invalidation).
 //!
-//! Scans without shear or minimum image gather the partners of the neighbour cells first and
-//! predict every partner's contact by the whole arithmetic, choosing the result at the end
-//! (`scan_dry`, `dry_time`): whether a pair approaches and meets is a coin toss per partner,
-//! which a processor mispredicts (docs/performance.md, "Ideas kept and rejected"); the same
-//! operations as `predict_image`, so the same events.
+//! Scans without shear or minimum image predict every partner by the whole arithmetic and
+//! choose at the end (`scan_dry`, `dry_time`): whether a pair meets is a coin toss a processor
+//! mispredicts (docs/performance.md, "Ideas kept and rejected"); the same operations as
+//! `predict_image`, so the same events.
 //!
-//! Safeguards (each tested in `crates/core/tests/engine_safeguards.rs`): an overlapping pair that approaches
-//! collides now, one that separates is left alone (B.5.6); a pair half a periodic box apart (four
-//! cells) is predicted through both images; collapse: the TC model and the
-//! rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
+//! Safeguards (each tested in `crates/core/tests/engine_safeguards.rs`): an overlapping pair
+//! that approaches collides now, one that separates is left alone (B.5.6); a pair half a
+//! periodic box apart (four cells) is predicted through both images; collapse: the TC model and
+//! the rebound floor of `physics::contact::rebound_speed`; a pair grazing the concave well wall
 //! leaves it at least at the rebound floor.
 
 use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
@@ -66,12 +65,8 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         Self {
             p,
             ev: vec![PairEvent::NEVER; n],
-            bonds: if WET {
-                vec![NONE; n * MAX_BONDS]
-            } else {
-                Vec::new()
-            },
-            bond_len: if WET { vec![0; n] } else { Vec::new() },
+            bonds: vec![NONE; if WET { n * MAX_BONDS } else { 0 }],
+            bond_len: vec![0; if WET { n } else { 0 }],
         }
     }
 
@@ -84,17 +79,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         ]
     }
 
-    // ----- bonds -------------------------------------------------------------------------
-
     #[inline]
     pub fn bonded(&self, i: usize, j: usize) -> bool {
-        if !WET {
-            return false;
-        }
-        let base = i * MAX_BONDS;
-        self.bonds[base..base + self.bond_len[i] as usize]
-            .iter()
-            .any(|&b| b as usize == j)
+        self.bonds_of(i).iter().any(|&b| b as usize == j)
     }
 
     /// Adds `j` to `i`'s bonds (`who` and `time` name the particle in the guard's message).
@@ -110,19 +97,15 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     }
 
     pub fn remove_bond_half(&mut self, i: usize, j: usize) {
-        let base = i * MAX_BONDS;
-        let len = self.bond_len[i] as usize;
-        if let Some(k) = self.bonds[base..base + len]
-            .iter()
-            .position(|&b| b as usize == j)
-        {
-            self.bonds[base + k] = self.bonds[base + len - 1];
-            self.bonds[base + len - 1] = NONE;
+        if let Some(k) = self.bonds_of(i).iter().position(|&b| b as usize == j) {
+            let (base, last) = (i * MAX_BONDS, self.bond_len[i] as usize - 1);
+            self.bonds[base + k] = self.bonds[base + last];
+            self.bonds[base + last] = NONE;
             self.bond_len[i] -= 1;
         }
     }
 
-    /// Bond partners of `i`.
+    #[inline]
     pub fn bonds_of(&self, i: usize) -> &[u32] {
         if !WET {
             return &[];
@@ -131,21 +114,14 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         &self.bonds[base..base + self.bond_len[i] as usize]
     }
 
-    /// Number of bridges.
     pub fn bridge_count(&self) -> usize {
-        if !WET {
-            return 0;
-        }
         self.bond_len.iter().map(|&l| l as usize).sum::<usize>() / 2
     }
-
-    // ----- prediction --------------------------------------------------------------------
 
     /// Earliest pair event of `i`, with state `(xi, vi)` at time `t`, with `j`. `wrap`: take
     /// the minimum image of the separation (`false` only where it cannot change it, see
     /// [`CellGrid::interior_needs_no_image`]).
     #[inline]
-    #[allow(clippy::too_many_arguments)]
     pub fn predict_pair_from<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
@@ -165,17 +141,13 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         };
         let v = vi - vj;
         let mut best = self.predict_image(bodies, slabs, &r, &v, i, j, t);
-        // Safeguard: with four cells on a periodic axis two partners may sit half a box apart
-        // (the initial lattice puts them there), where the minimum image is a tie and the
-        // collision may come through the other image; no later cell crossing brings them into a
-        // newly adjacent slab again. So a pair beyond `FAR_IMAGE` of the box is also predicted
-        // through its other image, and the earlier collision kept. With five cells or more,
-        // partners in adjacent cells are at most `0.4 L` apart and this never runs. (Tested in
-        // engine_safeguards.rs; the input fuzzer, crates/bench/tests/fuzz_inputs.rs, covers it.)
-        // Without `wrap` every periodic axis has five cells or more: never far.
+        // Safeguard: with four cells on a periodic axis two partners may sit half a box apart,
+        // where the minimum image is a tie and the collision may come through the other image
+        // (no later cell crossing re-predicts them). So a pair beyond `FAR_IMAGE` of the box is
+        // also predicted through its other image(s). With five cells or more (always without
+        // `wrap`) partners are at most `0.4 L` apart and this never runs.
         let far = |k: usize| bodies.periodic[k] && r[k].abs() >= FAR_IMAGE * bodies.size[k];
         if wrap && (0..D).any(far) {
-            // Every other image across the far axes (both at a tie on two axes in 3D).
             for mask in 1..1usize << D {
                 if (0..D).any(|k| mask >> k & 1 == 1 && !far(k)) {
                     continue;
@@ -198,7 +170,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// Earliest pair event of `i` and `j` at time `t` with separation `r` (one periodic image)
     /// and relative velocity `v`.
     #[inline]
-    #[allow(clippy::too_many_arguments)]
     fn predict_image<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
@@ -210,13 +181,12 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         t: f64,
     ) -> Option<(f64, PairKind)> {
         let (r, v) = (*r, *v);
-        // All particles feel the same gravity, so relative motion is a straight line (Eq. B.3).
+        // Same force on both: relative motion is a straight line (Eq. B.3).
         if S && bodies.accel[i] != bodies.accel[j] {
             return self.predict_sheared_pair(bodies, slabs, &r, &v, i, j, t);
         }
         let b = r.dot(&v);
         if !WET && b >= 0.0 {
-            // Dry and separating (or sliding): no contact ahead.
             return None;
         }
         let rr = r.norm_squared();
@@ -247,7 +217,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// Pair events of `i` and `j` in slabs of different force (shear drive): the quartics of
     /// [`super::shear::pair_times`], solved up to the first slab exit of either particle.
-    #[allow(clippy::too_many_arguments)]
     fn predict_sheared_pair<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
@@ -293,26 +262,22 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let c = cells.cell[i];
         let no_shift = [0.0; D];
         if grid.is_interior(&c) {
-            // Interior: neighbours by a fixed index change, no wrapping.
             let base = grid.linear(&c) as isize;
             let around = hood.deltas.iter().map(|&d| ((base + d) as usize, no_shift));
             if !S && grid.interior_needs_no_image {
                 let zero = [[0.0; D]; 27];
                 let around = around.map(|(cell, _)| (cell, 0));
                 self.scan_dry(i, around, bodies, grid, &zero, t, false);
-            } else if grid.interior_needs_no_image {
-                self.scan_cells(i, around, bodies, grid, slabs, t, false, false);
             } else {
-                self.scan_cells(i, around, bodies, grid, slabs, t, true, false);
+                let wrap = !grid.interior_needs_no_image;
+                self.scan_cells(i, around, bodies, grid, slabs, t, wrap, false);
             }
         } else if !S
             && grid.interior_needs_no_image
             && let Some(class) = grid.wall_class(&c)
         {
-            // Next to a wall, inside along every periodic axis: the neighbours that exist are
-            // the interior ones that stay inside the walls, found by the same index changes,
-            // in the order of `hood`; no wrap and no image shift (the general boundary path
-            // below would give each of them the shift 0).
+            // Next to a wall, inside along every periodic axis: the interior index changes that
+            // stay inside the walls, in the order of `hood`, all with image shift 0.
             let base = grid.linear(&c) as isize;
             let around = hood.deltas_by_wall_class[class]
                 .iter()
@@ -320,14 +285,12 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             let zero = [[0.0; D]; 27];
             self.scan_dry(i, around, bodies, grid, &zero, t, false);
         } else if grid.interior_needs_no_image {
-            // Boundary cell, every periodic axis of five cells or more: a partner in a cell
-            // reached across a periodic face is exactly one box edge away along that axis, the
-            // others less than `0.4 L` (see `CellGrid::axis_parts_and_shifts`), so the known
-            // shift gives the minimum image (no test per partner) and no pair is far.
+            // Boundary cell, every periodic axis of five cells or more: a partner across a
+            // periodic face is exactly one box edge away (`CellGrid::axis_parts_and_shifts`),
+            // so the known shift gives the minimum image and no pair is far.
             let (parts, shifts) = grid.axis_parts_and_shifts(&c, &bodies.size);
             if !S {
-                // One force for all: gathered with each cell's offset as tag (at most
-                // 27), the shifts looked up per partner, and no branches (see `scan_cells`).
+                // One force for all: each cell's offset is its partners' tag into the shifts.
                 let mut table = [[0.0; D]; 27];
                 for (m, o) in hood.offsets.iter().enumerate() {
                     table[m] = CellGrid::<D>::shift_of(&shifts, o);
@@ -356,7 +319,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// The pair predictions of `i` with every particle of the cells `around`, in order. Each
     /// cell comes with the image shift of its partners (`shifted`: added to the separation on
     /// the axes where it is not zero; the minimum image then needs no `wrap`).
-    #[allow(clippy::too_many_arguments)]
     fn scan_cells<const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -370,7 +332,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     ) {
         let this = &*self;
         let mut best = this.ev[i];
-        // Copies, so that the loop keeps them in registers.
         let (xi, vi) = (bodies.body[i].x, bodies.body[i].v);
         if shifted {
             for (cell, shift) in around {
@@ -381,8 +342,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 });
             }
         } else {
-            // No shifts: the partners of all cells gathered in batches first, so that the
-            // cells' occupancies cost no mispredicted branches (`CellGrid::for_each_batch`).
+            // Batched, so that the cells' occupancies cost no mispredicted branches.
             let no_shift = [0.0; D];
             grid.for_each_batch(around.map(|(cell, _)| (cell, 0)), false, |batch, _| {
                 for &j in batch {
@@ -403,7 +363,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// chooses each contact time after the whole arithmetic ([`Self::dry_time`]); wet, a
     /// bonded partner's well event follows ([`Self::well_time`]). Among equal times the first
     /// in the cells' order wins, as in [`Self::scan_cells`]: the same events, bit for bit.
-    #[allow(clippy::too_many_arguments)]
     fn scan_dry<const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -416,8 +375,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     ) {
         let (xi, vi, ri) = (bodies.body[i].x, bodies.body[i].v, bodies.body[i].r);
         let (mut best_t, mut best_j, mut best_well) = (self.ev[i].time, NONE, false);
-        // Wet: the bonds of `i`, searched whole for each partner (the same number of steps
-        // for every partner of the scan).
+        // Wet: the bonds of `i`, searched whole for each partner (no early exit to mispredict).
         let bonds = self.bonds_of(i);
         let s_crit = self.p.s_crit;
         let mut gather = grid.gather_start();
@@ -432,9 +390,8 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                     Self::dry_time(bodies, &xi, &vi, ri, i, j, t, shift, shifted);
                 let mut well = false;
                 if WET && bonds.iter().fold(false, |a, &k| a | (k == j)) {
-                    // The well event of `predict_image`, the same operations: it wins only
-                    // if strictly earlier than the contact (an overlapping pair's contact at
-                    // `t` wins, as the early return there).
+                    // As in `predict_image`: the well wins only if strictly earlier (an
+                    // overlapping pair's contact at `t` wins, as the early return there).
                     if let Some(tw) = Self::well_time(b, rr, vv, sigma + s_crit, t)
                         && tw < tj
                     {
@@ -470,9 +427,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             // At or beyond the well edge (round-off) and separating: the event is now.
             Some(0.0)
         } else if vv > 0.0 {
-            // Larger root of |r + v dt| = sigma + s_crit. Right after a bounce off the well
-            // wall the pair sits on the edge (c may be +round-off) and approaches: the root
-            // is then the next exit, not "none" (else a bond could stretch past s_crit).
+            // Larger root of |r + v dt| = lambda. Right after a bounce off the well wall the
+            // pair sits on the edge (c may be +round-off): the root is then the next exit, not
+            // "none" (else a bond could stretch past s_crit).
             let disc = (b * b - vv * c).max(0.0);
             Some(if b > 0.0 {
                 -c / (b + disc.sqrt())
@@ -487,12 +444,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// The time of the contact of `i` (radius `ri`) with `j` (`+inf` if none, or if
     /// `j == i`), and the `b`, `r^2`, `v^2`, `sigma` it used, for a pair under one force for
-    /// all and without minimum image (`shift`: the partner's image shift, if `shifted`). Whether
-    /// the pair approaches (`b < 0`) and whether its paths meet (`disc > 0`) are coin tosses a
-    /// processor mispredicts about every other partner, so every partner pays the whole
-    /// arithmetic and the result is chosen. The same operations on the same operands as
-    /// [`Self::predict_image`] (Eq. B.3, the overlap safeguard: `t` itself), so the same bits.
-    #[allow(clippy::too_many_arguments)]
+    /// all and without minimum image (`shift`: the partner's image shift, if `shifted`). Every
+    /// partner pays the whole arithmetic and the result is chosen (see the module header); the
+    /// same operations as [`Self::predict_image`] (Eq. B.3, overlap: `t` itself), so the same bits.
     fn dry_time<const G: bool, const S: bool>(
         bodies: &Bodies<D, G, S>,
         xi: &Vector<D>,
@@ -507,8 +461,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let (xj, vj) = bodies.state_at(j as usize, t);
         let mut r = xi - xj;
         if shifted {
-            // Adding a zero shift changes no bit that matters: at most `-0.0` becomes `+0.0`,
-            // which no product, sum or test below tells apart.
+            // A zero shift can only turn `-0.0` into `+0.0`, which nothing below tells apart.
             for k in 0..D {
                 r[k] += shift[k];
             }
@@ -520,11 +473,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         let vv = v.norm_squared();
         let c = rr - sigma * sigma;
         let disc = b * b - vv * c;
-        // The smaller root, cancellation-free; overlapping and approaching (`c <= 0`, the
-        // quotient `<= 0`): now. A pair that does not meet gets `+inf` added.
+        // The smaller root, cancellation-free; overlapping and approaching (`c <= 0`): now.
         let dt = (c / (-b + disc.max(0.0).sqrt())).max(0.0);
-        // Negated tests, as in `predict_image` (`b >= 0` there): whatever is not approaching
-        // or not meeting is a miss.
+        // Negated tests, as in `predict_image`: not approaching or not meeting is a miss.
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
         let miss = !(b < 0.0) | ((c > 0.0) & !(disc > 0.0)) | (j as usize == i);
         let never = if miss { f64::INFINITY } else { 0.0 };
@@ -533,7 +484,6 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
 
     /// Lowers `best` (the pair event of `i`, state `(xi, vi)` at `t`) if partner `j` gives an
     /// earlier one (`j == i` is skipped). `shift`: see [`Self::scan_cells`].
-    #[allow(clippy::too_many_arguments)]
     fn consider<const G: bool, const S: bool>(
         &self,
         bodies: &Bodies<D, G, S>,
@@ -552,7 +502,15 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
             return;
         }
         let predicted = if shifted {
-            self.predict_pair_shifted(bodies, slabs, xi, vi, i, j, t, shift)
+            // Bit for bit the minimum image where that shifts by exactly `shift`
+            // (`Bodies::min_image` adds or subtracts the box edge, the same operation), and
+            // such a pair is never far.
+            let (xj, vj) = bodies.state_at(j, t);
+            let mut r = xi - xj;
+            for k in (0..D).filter(|&k| shift[k] != 0.0) {
+                r[k] += shift[k];
+            }
+            self.predict_image(bodies, slabs, &r, &(vi - vj), i, j, t)
         } else {
             self.predict_pair_from(bodies, slabs, xi, vi, i, j, t, wrap)
         };
@@ -563,37 +521,8 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         }
     }
 
-    /// [`Self::predict_pair_from`] for a partner `j` whose minimum image is `shift` away: the
-    /// separation `xi - xj`, plus `shift[k]` on each axis where it is not zero. Bit for bit the
-    /// minimum image where that shifts by exactly `shift` (`Bodies::min_image` subtracts or
-    /// adds the box edge, the same operation), and where the pair is never far.
-    #[inline]
-    #[allow(clippy::too_many_arguments)]
-    fn predict_pair_shifted<const G: bool, const S: bool>(
-        &self,
-        bodies: &Bodies<D, G, S>,
-        slabs: &SlabSource,
-        xi: &Vector<D>,
-        vi: &Vector<D>,
-        i: usize,
-        j: usize,
-        t: f64,
-        shift: &[f64; D],
-    ) -> Option<(f64, PairKind)> {
-        let (xj, vj) = bodies.state_at(j, t);
-        let mut r = xi - xj;
-        for k in 0..D {
-            if shift[k] != 0.0 {
-                r[k] += shift[k];
-            }
-        }
-        let v = vi - vj;
-        self.predict_image(bodies, slabs, &r, &v, i, j, t)
-    }
-
-    // ----- firing ------------------------------------------------------------------------
-
-    /// Unit normal from `j` to `i` and the normal relative velocity, both brought to `t`.
+    /// Unit normal from `j` to `i` and the normal relative velocity, both brought to `t`; both
+    /// particles change course.
     fn normal<const G: bool, const S: bool>(
         bodies: &mut Bodies<D, G, S>,
         i: usize,
@@ -604,8 +533,9 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         bodies.advance(j, t);
         let r = bodies.min_image(bodies.body[i].x - bodies.body[j].x);
         let n = r / r.norm();
-        let u = (bodies.body[i].v - bodies.body[j].v).dot(&n);
-        (n, u)
+        bodies.bump(i);
+        bodies.bump(j);
+        (n, (bodies.body[i].v - bodies.body[j].v).dot(&n))
     }
 
     /// Pair collision at `t` with restitution (Eqs. 2.3-2.4) and, if wet, bridge formation.
@@ -619,15 +549,10 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         counts: &mut EventCounts,
     ) {
         let (n, u) = Self::normal(bodies, i, j, t);
-        bodies.bump(i);
-        bodies.bump(j);
         if u < 0.0 {
             let since = bodies.since_last_collision(i, j, t);
             let u_out = rebound_speed(-u, self.p.eps, since, self.p.tc, self.p.min_rebound);
-            // Change of the normal relative velocity, shared equally (equal masses).
-            let du = u_out - u;
-            bodies.body[i].v += n * (0.5 * du);
-            bodies.body[j].v -= n * (0.5 * du);
+            Self::kick(bodies, i, j, &n, u_out - u);
             ledger.book_restitution(0.5 * bodies.mass, -u, self.p.eps, u_out);
             bodies.record_collision(i, t);
             bodies.record_collision(j, t);
@@ -651,17 +576,13 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         counts: &mut EventCounts,
     ) {
         let (n, u) = Self::normal(bodies, i, j, t);
-        bodies.bump(i);
-        bodies.bump(j);
-        // A pair on the edge moving tangentially (u <= 0 by round-off) is treated as touching the
-        // wall with zero normal speed.
+        // Moving tangentially on the edge (u <= 0 by round-off): zero normal speed.
         let u_in = u.max(0.0);
         let u_out = match well_outcome(bodies.mass, u_in, self.p.e_cb, self.p.rule) {
             WellOutcome::Bounce(reflected) => {
                 counts.well_bounces += 1;
-                // A pair grazing the concave well wall would bounce ever more often (about
-                // pi / angle bounces to slide round): it leaves the wall inwards at least at the
-                // rebound floor, and the energy that adds is booked with the collapse remedies.
+                // A pair grazing the concave well wall would bounce ever more often: it leaves
+                // at least at the rebound floor, the energy added booked with the remedies.
                 let u_out = reflected.min(-self.p.min_rebound);
                 ledger.added += 0.25 * bodies.mass * (u_out * u_out - u * u);
                 u_out
@@ -677,16 +598,23 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 new_normal_speed
             }
         };
-        let du = u_out - u;
+        Self::kick(bodies, i, j, &n, u_out - u);
+    }
+
+    /// Changes the normal relative velocity by `du`, shared equally (equal masses).
+    fn kick<const G: bool, const S: bool>(
+        bodies: &mut Bodies<D, G, S>,
+        i: usize,
+        j: usize,
+        n: &Vector<D>,
+        du: f64,
+    ) {
         bodies.body[i].v += n * (0.5 * du);
         bodies.body[j].v -= n * (0.5 * du);
     }
-
-    // ----- renumbering -------------------------------------------------------------------
 }
 
 impl<const D: usize, const WET: bool> EventSource for PairSource<D, WET> {
-    /// The stored pair event of `i`.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
         self.ev[i].event()

@@ -2,20 +2,11 @@
 //! predicted event, behind the [`EventQueue`] trait so that an engine runs on any
 //! implementation (`Engine<.., Q: EventQueue>`, monomorphised: no dynamic dispatch in the loop).
 //!
-//! Re-predicting a particle changes its key in place, so a queue never holds stale copies;
-//! events that became invalid through a partner's collision are detected lazily with
-//! per-particle event counters (see `engine.rs`). Implementations:
-//! - [`CalendarQueue`], the default: a calendar queue (buckets of equal width in time, a year
-//!   of `2^k >= N` doubly linked buckets), `O(1)` per update and, with its width
-//!   re-estimated from the keys every `8 N` pops, about one bucket visited per pop;
-//! - `HeapQueue` (an indexed 4-ary min-heap, `O(log N)` per update) and `NaiveQueue` (a
-//!   linear scan, slow and obviously correct), the references the tests run whole engines on
-//!   to compare their trajectories with the calendar queue's bit for bit
-//!   (`crates/core/tests/engine_pins.rs`); they are in `reference_queues.rs`, compiled only for
-//!   tests (the feature `testing` of this crate, which its tests enable).
-//!
-//! All break ties of equal keys by the smaller particle index, so the event order, and hence
-//! the trajectory, does not depend on the queue.
+//! Re-predicting a particle changes its key in place, so a queue never holds stale copies
+//! (invalid events are detected lazily, see `engine.rs`). [`CalendarQueue`] is the default;
+//! `reference_queues.rs` (tests only) holds a heap and a linear scan that the tests run whole
+//! engines on (`crates/core/tests/engine_pins.rs`). All break ties of equal keys by the
+//! smaller particle index, so the trajectory does not depend on the queue.
 
 /// A priority queue over particles `0..n` with one key (event time) each.
 pub trait EventQueue: Clone + std::fmt::Debug {
@@ -42,37 +33,26 @@ const CALENDAR_SAMPLE: usize = 512;
 /// `WIDTH_FACTOR ln 2 ~ 1.4` keys per bucket near the front for exponentially spread keys.
 const WIDTH_FACTOR: f64 = 2.0;
 
-/// Calendar queue (R. Brown, Commun. ACM 31, 1220 (1988)) over particle indices. Time is cut
-/// into buckets of width `w`; the key `t` lies in the virtual bucket `floor(t / w)`, stored in
-/// list `floor(t / w) mod 2^k` (a "year" of `2^k >= N` lists, doubly linked, on
-/// average at most one entry each). Infinite keys are in no list.
+/// Calendar queue (R. Brown, Commun. ACM 31, 1220 (1988)) over particle indices. The key `t`
+/// lies in the virtual bucket `floor(t / w)`, stored in list `floor(t / w) mod 2^k` (a "year"
+/// of `2^k >= N` doubly linked lists). Infinite keys are in no list.
 ///
-/// Order: `floor(t / w)` is monotone in `t` (a correctly rounded product and a truncation are
-/// both monotone), so the earliest key lies in the earliest non-empty virtual bucket; `min`
-/// walks the virtual buckets from the cursor `cur` (no finite key lies in a bucket before it)
-/// and takes the smallest `(key, index)` among the entries of the first bucket that has one,
-/// so ties go to the smaller index exactly as in `HeapQueue` and `NaiveQueue` and engines
-/// take the same trajectory on all three. The width only changes how much is walked, never the
-/// answer: every `8 N` pops it is re-estimated from a sample of the keys and the lists rebuilt;
-/// if a whole year of buckets holds nothing due, a direct search moves the cursor to the
-/// smallest key.
+/// Order: `floor(t / w)` is monotone in `t`, so `min` walks the virtual buckets from the cursor
+/// `cur` (no finite key lies before it) and takes the smallest `(key, index)` of the first
+/// bucket that has a due entry: ties go to the smaller index as in the reference queues. The
+/// width only changes how much is walked, never the answer: every `8 N` pops it is
+/// re-estimated from a sample of the keys; after a year without a due entry the cursor jumps.
 ///
-/// Branches: every list ends in one sentinel node `n` whose key is `+inf` and whose link points
-/// to itself, so linking and unlinking write the neighbour's back link without testing for the
-/// end of the list (a coin toss at about one entry per list). The walk keeps its branches: a
-/// branch-free walk (two unconditional steps, the minimum chosen by bit masks) had fewer
-/// mispredicted branches in valgrind's model but takes more CPU time (docs/performance.md,
-/// "Ideas kept and rejected").
+/// Every list ends in one sentinel node `n` (key `+inf`, linked to itself), so linking and
+/// unlinking need no end-of-list test. The walk keeps its branches: a branch-free walk took more
+/// CPU time (docs/performance.md, "Ideas kept and rejected").
 #[derive(Debug, Clone)]
 pub struct CalendarQueue {
     /// Keys of the particles `0..n`, then the sentinel's `+inf`.
     key: Vec<f64>,
-    /// Links of the doubly linked lists over one index space: `0..n` are the particles, `n` is
-    /// the sentinel that ends every list (`next[n] = n`), `n + 1 + b` is the head of list `b`.
-    /// `next[n + 1 + b]` is the first entry of list `b`, `next[i]` the entry after `i`;
-    /// `prev[i]` the node before particle `i` (another particle or its list's head), so that a
-    /// particle leaves its list in `O(1)` without recomputing its bucket (`prev[n]` is written
-    /// and never read).
+    /// Links over one index space: `0..n` the particles, `n` the sentinel (`next[n] = n`),
+    /// `n + 1 + b` the head of list `b`; `prev[i]` is the node before particle `i`, so that it
+    /// leaves its list in `O(1)` (`prev[n]` is written and never read).
     next: Vec<u32>,
     prev: Vec<u32>,
     /// `n`: the sentinel, and the number of particles.
@@ -124,12 +104,7 @@ impl CalendarQueue {
     fn retune(&mut self) {
         let n = self.end;
         self.until_retune = (CALENDAR_RETUNE_PER_PARTICLE * n as u64).max(1024);
-        let mut lo = f64::INFINITY;
-        for &t in &self.key[..n] {
-            if t < lo {
-                lo = t;
-            }
-        }
+        let lo = self.key[..n].iter().copied().fold(f64::INFINITY, f64::min);
         if !lo.is_finite() {
             return;
         }
@@ -171,7 +146,6 @@ impl CalendarQueue {
             return None;
         }
         if self.finite == 0 {
-            // Every key infinite (or NaN): the first particle, as in the other queues.
             return Some((0, self.key[0]));
         }
         self.retune();
@@ -279,9 +253,7 @@ impl EventQueue for CalendarQueue {
         }
     }
 
-    /// The walk over the buckets from the cursor, inlined into the caller; the rare cases (no
-    /// finite key, a re-estimation due, a year without a due entry) are out of line, so that
-    /// the common pop sets up little more than the walk.
+    /// The walk from the cursor, inlined; the rare cases are out of line.
     #[inline]
     fn min(&mut self) -> Option<(usize, f64)> {
         if self.finite == 0 || self.until_retune == 0 {

@@ -66,21 +66,25 @@ impl HeapQueue {
         a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
     }
 
+    /// Puts `entry` into heap slot `s`.
+    fn place(&mut self, s: usize, entry: (f64, u32)) {
+        self.heap[s] = entry;
+        self.slot[entry.1 as usize] = s as u32;
+    }
+
     fn sift_up(&mut self, mut s: usize) {
         let entry = self.heap[s];
         while s > 0 {
             let parent = (s - 1) / ARITY;
             let p = self.heap[parent];
             if Self::less(entry, p) {
-                self.heap[s] = p;
-                self.slot[p.1 as usize] = s as u32;
+                self.place(s, p);
                 s = parent;
             } else {
                 break;
             }
         }
-        self.heap[s] = entry;
-        self.slot[entry.1 as usize] = s as u32;
+        self.place(s, entry);
     }
 
     fn sift_down(&mut self, mut s: usize) {
@@ -100,15 +104,13 @@ impl HeapQueue {
             }
             let c = self.heap[child];
             if Self::less(c, entry) {
-                self.heap[s] = c;
-                self.slot[c.1 as usize] = s as u32;
+                self.place(s, c);
                 s = child;
             } else {
                 break;
             }
         }
-        self.heap[s] = entry;
-        self.slot[entry.1 as usize] = s as u32;
+        self.place(s, entry);
     }
 }
 

@@ -28,11 +28,7 @@ impl SlabSource {
             Some(f) => positions_x.map(|x| f.slab_of(x) as u32).collect(),
             None => Vec::new(),
         };
-        let ev = if field.is_some() {
-            vec![PlaneEvent::NEVER; slab.len()]
-        } else {
-            Vec::new()
-        };
+        let ev = vec![PlaneEvent::NEVER; slab.len()];
         Self { field, slab, ev }
     }
 
@@ -117,17 +113,11 @@ impl SlabSource {
 }
 
 impl EventSource for SlabSource {
-    /// The stored crossing of `i` as an event.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
-        let e = self.ev[i];
-        Event {
-            time: e.time,
-            kind: EventKind::Slab { up: e.up },
-        }
+        self.ev[i].event(|_, up| EventKind::Slab { up })
     }
 
-    /// Renumbers the particles (see [`Bodies::permute`]).
     fn permute(&mut self, order: &[u32], _new_of_old: &[u32]) {
         if self.field.is_some() {
             permute_in_place(&mut self.slab, order);

@@ -2,18 +2,13 @@
 //! one table per `(wall motion, table spec)`, built on first use, shared by every engine that
 //! asks for it, and evicted least recently used first once the cached tables exceed a size cap.
 //!
-//! Who owns a cache: the sweep runner (`run::runner::run_sweeps`) makes one per run with the
-//! cap of `RunOptions::table_cache_mib` (`wetgran sweep run/resume --table-cache-mib`) and
-//! installs it on each worker thread ([`TableCache::enter`]); `wetgran simulate
-//! --table-cache-mib` does the same on its thread. An engine built on a thread without an
-//! installed cache uses the process's default cache ([`TableCache::process_default`], capped
-//! at [`DEFAULT_TABLE_CACHE_MIB`]), so no path keeps tables without bound.
+//! The sweep runner and `wetgran simulate` install a cache capped by `--table-cache-mib` on
+//! their threads ([`TableCache::enter`]); elsewhere engines use the process default
+//! ([`DEFAULT_TABLE_CACHE_MIB`]), so no path keeps tables without bound.
 //!
-//! The cap bounds what the cache keeps. A running engine holds its two tables (floor and lid)
-//! through `Arc`s, so a table evicted while in use is freed when its last engine ends: the
-//! memory in tables is at most the cap plus two tables per running engine. A table larger than
-//! the whole cap is handed out without being cached (a cap of 0 disables caching: every engine
-//! builds its own tables).
+//! Running engines hold their two tables through `Arc`s, so the memory in tables is at most the
+//! cap plus two tables per running engine. A table larger than the cap is not cached (a cap of
+//! 0 disables caching).
 //!
 //! Sizes: at the default 128 x 128 cells a table takes about 14 MiB, a drive (floor and lid)
 //! about 27 MiB, so the default cap of 256 MiB keeps the tables of the last nine drives.
@@ -55,6 +50,18 @@ struct Entries {
     builds: u64,
     /// Largest `bytes` ever held.
     peak: usize,
+}
+
+impl Entries {
+    /// The cached table of `key`, if any, marked as used now.
+    fn touch(&mut self, key: &TableKey) -> Option<Arc<WallTable>> {
+        self.tick += 1;
+        let tick = self.tick;
+        self.map.get_mut(key).map(|(t, used)| {
+            *used = tick;
+            Arc::clone(t)
+        })
+    }
 }
 
 /// A bounded, thread-safe cache of wall tables (least recently used out first). Cloning gives
@@ -118,7 +125,6 @@ impl TableCache {
         CacheScope { previous }
     }
 
-    /// The cap in bytes.
     pub fn cap(&self) -> usize {
         self.cap
     }
@@ -133,12 +139,10 @@ impl TableCache {
         self.lock().peak
     }
 
-    /// Number of tables held now.
     pub fn len(&self) -> usize {
         self.lock().map.len()
     }
 
-    /// Whether the cache holds no table.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -149,8 +153,7 @@ impl TableCache {
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Entries> {
-        // A panic while holding the lock leaves the map consistent (every update is one
-        // statement), so a poisoned lock is still usable.
+        // Every update leaves the map consistent, so a poisoned lock is still usable.
         self.entries.lock().unwrap_or_else(|p| p.into_inner())
     }
 
@@ -158,14 +161,8 @@ impl TableCache {
     /// two threads may build the same table once each; the first one cached is kept).
     pub fn get(&self, motion: WallMotion, spec: TableSpec) -> Arc<WallTable> {
         let key = table_key(&motion, &spec);
-        {
-            let mut e = self.lock();
-            e.tick += 1;
-            let tick = e.tick;
-            if let Some((t, used)) = e.map.get_mut(&key) {
-                *used = tick;
-                return Arc::clone(t);
-            }
+        if let Some(t) = self.lock().touch(&key) {
+            return t;
         }
         let table = Arc::new(crate::sim::threads::install(|| {
             WallTable::build(motion, spec)
@@ -176,12 +173,10 @@ impl TableCache {
         if size > self.cap {
             return table;
         }
-        e.tick += 1;
-        let tick = e.tick;
-        if let Some((t, used)) = e.map.get_mut(&key) {
-            *used = tick;
-            return Arc::clone(t);
+        if let Some(t) = e.touch(&key) {
+            return t;
         }
+        let tick = e.tick;
         e.map.insert(key, (Arc::clone(&table), tick));
         e.bytes += size;
         while e.bytes > self.cap {

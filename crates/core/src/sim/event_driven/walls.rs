@@ -3,16 +3,14 @@
 //! [`WallSolver`] that owns its state (the `table` solver's two tables and its one-particle
 //! memories). [`WallSource`] keeps each particle's next wall event.
 //!
-//! Safeguards (tested in `crates/core/tests/engine_safeguards.rs` and `crates/core/tests/shaken_container.rs`): a
-//! particle found behind a wall and approaching collides now, one separating is left alone
+//! Safeguards (tested in `crates/core/tests/engine_safeguards.rs` and `shaken_container.rs`):
+//! a particle found behind a wall and approaching collides now, one separating is left alone
 //! (B.5.6); a wall event that finds the particle away from the wall is a re-check that changes
-//! nothing; a tabulated hit places the particle exactly on the wall only within
-//! [`TABLE_PLACEMENT_TOLERANCE`] (B.5.1) or when it is late (behind the wall and approaching:
-//! placed whatever the depth), else the exact solver answers for that particle's next
-//! prediction (a table error cannot repeat itself at the same time forever), and only as
-//! far as its neighbours leave room (the rest of the gap stays behind the wall until the
-//! particle leaves it: `placement_room`); no grain leaves the floor slower than the rebound
-//! floor.
+//! nothing; a tabulated hit places the particle on the wall only within
+//! [`TABLE_PLACEMENT_TOLERANCE`] (B.5.1) or when late (placed whatever the depth), else the
+//! exact solver answers that particle's next prediction (a table error cannot repeat itself
+//! forever), and only as far as its neighbours leave room (`placement_room`); no grain leaves
+//! the floor slower than the rebound floor.
 
 use super::bodies::{Bodies, permute_in_place, vec_bytes};
 use super::cell_source::CellSource;
@@ -180,16 +178,8 @@ impl WallSource {
             e_wall,
             tc,
             min_rebound,
-            ev: if walls {
-                vec![PlaneEvent::NEVER; n]
-            } else {
-                Vec::new()
-            },
-            vrel: if tabulated {
-                vec![f64::NAN; n]
-            } else {
-                Vec::new()
-            },
+            ev: vec![PlaneEvent::NEVER; if walls { n } else { 0 }],
+            vrel: vec![f64::NAN; if tabulated { n } else { 0 }],
         }
     }
 
@@ -234,14 +224,12 @@ impl WallSource {
                     ((lid, f64::NAN), (floor, f64::NAN))
                 }
             };
-            if t_lid < best.time {
-                vrel = v_lid;
+            for (t, v, up) in [(t_lid, v_lid, true), (t_floor, v_floor, false)] {
+                if t < best.time {
+                    vrel = v;
+                }
+                best.keep_earlier(t, k, up);
             }
-            best.keep_earlier(t_lid, k, true);
-            if t_floor < best.time {
-                vrel = v_floor;
-            }
-            best.keep_earlier(t_floor, k, false);
         }
         best.time += now;
         self.ev[i] = best;
@@ -313,9 +301,10 @@ impl WallSource {
                 TableHit::Now if h - table.motion().position(t0) <= 1e3 * tol + 1e-12 => {
                     (0.0, f64::NAN)
                 }
-                TableHit::Now => solver.exact(table.motion(), h, v, t0, miss, horizon),
                 TableHit::None => (miss, f64::NAN),
-                TableHit::OutOfRange => solver.exact(table.motion(), h, v, t0, miss, horizon),
+                TableHit::Now | TableHit::OutOfRange => {
+                    solver.exact(table.motion(), h, v, t0, miss, horizon)
+                }
             }
         };
         (
@@ -326,7 +315,6 @@ impl WallSource {
 
     /// Carries out the wall event of `i` at time `t` along `axis` (`lid`: the upper wall); the
     /// caller re-predicts every event of `i` afterwards.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn fire<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -359,24 +347,39 @@ impl WallSource {
             // Round-off put the event a hair late: nothing to do (the caller re-predicts).
             return;
         }
+        let u_out = self.rebound(i, t, v.abs(), floor_under_gravity, bodies, ledger, counts);
+        bodies.body[i].v[axis] = if lid { -u_out } else { u_out };
+    }
+
+    /// Books the wall collision of `i` at `t` at approach speed `u_in` (relative to the wall)
+    /// and returns the outgoing speed. Rest on a floor is the one state an event-driven engine
+    /// cannot represent (zero-time bounces): no grain leaves a `floor` slower than the rebound
+    /// floor.
+    fn rebound<const D: usize, const G: bool, const S: bool>(
+        &self,
+        i: usize,
+        t: f64,
+        u_in: f64,
+        floor: bool,
+        bodies: &mut Bodies<D, G, S>,
+        ledger: &mut Ledger,
+        counts: &mut EventCounts,
+    ) -> f64 {
         bodies.bump(i);
         counts.wall_collisions += 1;
         let since = bodies.since_last_collision(i, i, t);
-        let mut u_out = rebound_speed(v.abs(), self.e_wall, since, self.tc, self.min_rebound);
-        if floor_under_gravity {
-            // Rest on a static floor is the one state an event-driven engine cannot represent
-            // (zero-time bounces): no grain leaves the floor slower than the rebound floor.
+        let mut u_out = rebound_speed(u_in, self.e_wall, since, self.tc, self.min_rebound);
+        if floor {
             u_out = u_out.max(self.min_rebound);
         }
-        ledger.book_restitution(bodies.mass, v.abs(), self.e_wall, u_out);
-        bodies.body[i].v[axis] = if lid { -u_out } else { u_out };
+        ledger.book_restitution(bodies.mass, u_in, self.e_wall, u_out);
         bodies.record_collision(i, t);
+        u_out
     }
 
     /// Collision with the shaken floor or lid, `v' = v_w + e_w (v_w - v)` along the normal
     /// (docs/model.md 4.1), with the collapse remedies applied to the speed relative to the wall. An
     /// event that finds the particle away from the wall is a re-check and changes nothing.
-    #[allow(clippy::too_many_arguments)]
     fn shaken_collision<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
@@ -402,13 +405,10 @@ impl WallSource {
         };
         let tabulated = self.vrel.get(i).copied().unwrap_or(f64::NAN);
         let (contact, approaching) = if tabulated.is_finite() {
-            // A tabulated hit (B.5.1): its approach speed is positive by construction (B.5.4);
-            // the table's time error is absorbed by placing the particle on the wall. A hit
-            // found early by more than the tolerance is a re-check (the exact solver finds the
-            // later one); one found late, the particle behind the wall and still approaching,
-            // is placed whatever the depth: no later prediction can undo a late one (found by
-            // the input fuzzer: a 16 x 16 table 2.9e-3 late left a grain 0.021 d behind the
-            // floor, colliding there).
+            // A tabulated hit (B.5.1): approach speed positive by construction (B.5.4), the
+            // time error absorbed by placing the particle on the wall. Early by more than the
+            // tolerance: a re-check. Late (behind the wall, approaching): placed whatever the
+            // depth, since no later prediction can undo it.
             let late = gap < 0.0 && u_in > 0.0;
             (gap.abs() <= TABLE_PLACEMENT_TOLERANCE || late, true)
         } else {
@@ -431,48 +431,35 @@ impl WallSource {
             u_in = tabulated;
             let z_wall = if lid { h + z_w - b.r } else { z_w + b.r };
             // Placed on the wall as far as the neighbours leave room: a full shift could push
-            // the particle into a grain resting a hair above it (found by the input fuzzer:
-            // an overlap of 1.2e-3 d after a late tabulated floor hit under a stacked grain).
-            // What is left of the gap stays, and the particle leaves the wall at once.
+            // the particle into a grain resting a hair above it. The rest of the gap stays.
             let z_new = z + placement_room(i, z_wall - z, t, bodies, cells);
             if G {
                 ledger.placement += bodies.mass * bodies.gravity * (z_new - z);
             }
             bodies.body[i].x[D - 1] = z_new;
-            // The shift may cross a cell face: keep the cell lists right (the caller rescans
-            // the neighbourhood).
+            // The shift may cross a cell face (the caller rescans the neighbourhood).
             let x = bodies.body[i].x;
             cells.relocate_if_moved(i, &x);
             if let WallSolver::Table(s) = &mut self.solver {
                 s.launched = Some((i, lid));
             }
         }
-        bodies.bump(i);
-        counts.wall_collisions += 1;
-        let since = bodies.since_last_collision(i, i, t);
-        let mut u_out = rebound_speed(u_in, self.e_wall, since, self.tc, self.min_rebound);
-        if !lid {
-            // As on the static floor: no grain leaves the floor slower than the rebound floor.
-            u_out = u_out.max(self.min_rebound);
-        }
+        let u_out = self.rebound(i, t, u_in, !lid, bodies, ledger, counts);
         let v_new = if lid { v_w - u_out } else { v_w + u_out };
         let m = bodies.mass;
         // Loss in the wall's frame; the rest of the kinetic energy change is the wall's work.
-        ledger.book_restitution(m, u_in, self.e_wall, u_out);
         let de = 0.5 * m * (u_in * u_in - u_out * u_out);
         ledger.work_by_drive += 0.5 * m * (v_new * v_new - vz * vz) + de;
         bodies.body[i].v[D - 1] = v_new;
-        bodies.record_collision(i, t);
     }
 }
 
 /// The shift `s` along the vertical axis, of the sign of `want` and at most `|want|`, that
-/// particle `i` can make at time `t` without coming closer than contact to any neighbour it does
-/// not already overlap: the smallest positive root of `|d - s e_z|^2 = sigma^2` over the
-/// neighbours (`d` the separation to the neighbour, `sigma` the contact distance). Neighbours
-/// are those of the `3^D` cells around `i`; the cell edge is at least the largest diameter, and a
-/// shift is at most [`TABLE_PLACEMENT_TOLERANCE`], so a grain farther than one cell can reach
-/// contact only if the edge is within that tolerance of the largest diameter (not excluded).
+/// particle `i` can make at time `t` without coming closer than contact to any neighbour (of
+/// the `3^D` cells around it) it does not already overlap: the smallest positive root of
+/// `|d - s e_z|^2 = sigma^2` (`d` the separation, `sigma` the contact distance). A grain two
+/// cells away is reachable only if the cell edge is within [`TABLE_PLACEMENT_TOLERANCE`] of
+/// the largest diameter (not excluded).
 fn placement_room<const D: usize, const G: bool, const S: bool>(
     i: usize,
     want: f64,
@@ -506,17 +493,10 @@ fn placement_room<const D: usize, const G: bool, const S: bool>(
 }
 
 impl EventSource for WallSource {
-    /// The stored wall event of `i`.
     #[inline]
     fn candidate(&self, i: usize) -> Event {
         let e = self.ev.get(i).copied().unwrap_or(PlaneEvent::NEVER);
-        Event {
-            time: e.time,
-            kind: EventKind::Wall {
-                axis: e.axis,
-                up: e.up,
-            },
-        }
+        e.event(|axis, up| EventKind::Wall { axis, up })
     }
 
     /// Renumbers the particles (see [`Bodies::permute`]). The `table` solver's one-particle
