@@ -212,17 +212,6 @@ impl StateCounts {
     }
 }
 
-/// What one finished job cost (`Store::finished_job_costs`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FinishedCost {
-    /// The simulated time its run ended at.
-    pub simulated_time: f64,
-    /// Wall seconds of the attempt that finished, plus any extensions.
-    pub wall_seconds: f64,
-    /// Its convergence verdict; `None` for a run without a run-length policy.
-    pub converged: Option<bool>,
-}
-
 /// One job of a sweep with everything known about it (for boundaries, plots, exports).
 #[derive(Debug, Clone)]
 pub struct PointRow {
@@ -440,6 +429,27 @@ impl Store {
             tx.commit().await.map_err(|e| self.db(e))?;
             Ok(out)
         })
+    }
+}
+
+/// One statement run inside an open transaction, its error in the store's words
+/// ([`Store::db`]); returns how many rows it changed.
+trait Exec {
+    async fn exec(
+        self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        store: &Store,
+    ) -> Result<u64, StoreError>;
+}
+
+impl Exec for sqlx::query::Query<'_, sqlx::Sqlite, sqlx::sqlite::SqliteArguments> {
+    async fn exec(
+        self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        store: &Store,
+    ) -> Result<u64, StoreError> {
+        let done = self.execute(&mut **tx).await.map_err(|e| store.db(e))?;
+        Ok(done.rows_affected())
     }
 }
 

@@ -251,8 +251,8 @@ async fn trigger_statements(conn: &mut SqliteConnection) -> Vec<(String, String)
     out
 }
 
-/// Runs `body` on a fresh database made by [`populated`].
-fn on_populated(body: impl AsyncFnOnce(&mut SqliteConnection)) {
+/// Runs `body` on a fresh database made by [`populated`] (also the `queries` tests').
+pub(super) fn on_populated(body: impl AsyncFnOnce(&mut SqliteConnection)) {
     let dir = tempfile::tempdir().unwrap();
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()

@@ -6,7 +6,7 @@
 //! what lets a relabelling after a run read only the lines that changed instead of every
 //! result of the sweep.
 
-use super::{PointRow, Store, StoreError, queries};
+use super::{Exec, PointRow, Store, StoreError, queries};
 use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 
@@ -37,9 +37,8 @@ impl Store {
     ) -> Result<(), StoreError> {
         sqlx::query(queries::MARK_RELABEL_JOB)
             .bind(job_id)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            .exec(tx, self)
+            .await?;
         Ok(())
     }
 
@@ -54,9 +53,8 @@ impl Store {
         sqlx::query(queries::MARK_RELABEL_POINT)
             .bind(sweep_id)
             .bind(job_id)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            .exec(tx, self)
+            .await?;
         Ok(())
     }
 
@@ -148,9 +146,8 @@ impl Store {
                 sqlx::query(queries::CLEAR_RELABEL_PENDING)
                     .bind(a)
                     .bind(b)
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+                    .exec(tx, self)
+                    .await?;
             }
             Ok(())
         })

@@ -37,9 +37,10 @@ pub struct PlannedJob {
     pub start: String,
 }
 
-/// A finished job's measured cost.
+/// A finished job's measured cost (`Store::finished_job_costs`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeasuredCost {
+    /// Wall seconds of the attempt that finished, plus any extensions.
     pub wall_seconds: f64,
     /// The simulated time its run ended at.
     pub simulated_time: f64,
@@ -471,6 +472,14 @@ mod tests {
         }
     }
 
+    fn sample(position: f64, seconds_per_time: f64, start: &str) -> RateSample {
+        RateSample {
+            position: vec![position],
+            seconds_per_time,
+            start: start.into(),
+        }
+    }
+
     #[test]
     fn independent_jobs_fill_the_workers_in_grid_order() {
         // Two workers, grid order 3, 3, 2, 2, 2: w0 runs 3 then 2 (ends 5) then 2 (ends 7),
@@ -508,18 +517,7 @@ mod tests {
             job(0.4, 20.0, 80.0),
             job(1.0, 30.0, 120.0),
         ];
-        let samples = [
-            RateSample {
-                position: vec![0.0],
-                seconds_per_time: 1.0,
-                start: "hot".into(),
-            },
-            RateSample {
-                position: vec![1.0],
-                seconds_per_time: 3.0,
-                start: "hot".into(),
-            },
-        ];
+        let samples = [sample(0.0, 1.0, "hot"), sample(1.0, 3.0, "hot")];
         assert_eq!(
             job_seconds(&jobs, &samples, RunLength::FirstCheck, false),
             vec![10.0, 20.0, 90.0]
@@ -592,18 +590,7 @@ mod tests {
         assert_eq!(sample_picks(&hot, 3), vec![0, 2, 4]);
         assert_eq!(sample_picks(&hot, 1), vec![2]);
         // A cold job takes the cold sample's rate even where a hot sample is nearer.
-        let samples = [
-            RateSample {
-                position: vec![0.0],
-                seconds_per_time: 1.0,
-                start: "hot".into(),
-            },
-            RateSample {
-                position: vec![1.0],
-                seconds_per_time: 5.0,
-                start: "cold".into(),
-            },
-        ];
+        let samples = [sample(0.0, 1.0, "hot"), sample(1.0, 5.0, "cold")];
         assert_eq!(nearest_rate(&samples, &[0.1], "hot"), Some(1.0));
         assert_eq!(nearest_rate(&samples, &[0.1], "cold"), Some(5.0));
         // A mode with no sample falls back to the nearest of any mode.
