@@ -75,7 +75,10 @@ impl Store {
             .exec(tx, self)
             .await?;
         // The sweeps holding the job relabel its lines after the run (`run::relabel`).
-        self.mark_relabel_job(tx, job_id).await?;
+        sqlx::query(queries::MARK_RELABEL_JOB)
+            .bind(job_id)
+            .exec(tx, self)
+            .await?;
         if let Some(state) = &result.checkpoint {
             sqlx::query(queries::UPSERT_CHECKPOINT)
                 .bind(job_id)

@@ -32,19 +32,9 @@
 //!   loses at most the jobs that were running. A result arriving for a job that another runner
 //!   already finished is discarded, so a job never has two results.
 //!
-//! SQL: every statement is a file of `sql/` (one statement each, named after what it does, its
-//! bind order in a comment at its top), embedded as a constant of `queries.rs` with
-//! `include_str!`; the code here only binds and reads rows. The statements are not checked at
-//! compile time (no `DATABASE_URL` or offline data in the build); the tests of `queries.rs`
-//! prepare each one against a freshly migrated database. A schema change is a new migration in
-//! `migrations/`.
-//!
-//! Files by concern: `open` (what a file is, the connection, initialisation, migrations, the
-//! re-keying of jobs) and `read_only` (read-only opens, on the same connection code);
-//! `register` (sweeps, their jobs, labels of stored results); `claims` (owners, claims, run
-//! rows, heartbeats, commits of finished, failed and extended jobs); `reads` (counts, a sweep's
-//! jobs with their results, checkpoints, costs); `summary`, `hysteresis`, `stale`,
-//! `relabel_queue` and `cluster` for the reports, relabelling and Slurm.
+//! SQL: one statement per file of `sql/`, embedded by `queries.rs` (which says how they are
+//! checked). A schema change is a new migration in `migrations/`. The files here split the
+//! store by concern; each says which in its header.
 
 #[cfg(test)]
 mod claim_queue_tests;

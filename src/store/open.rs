@@ -300,7 +300,10 @@ impl Store {
                         .await?;
                 }
                 // A merged job may have taken another's result: its lines are relabelled.
-                self.mark_relabel_job(tx, &new).await?;
+                sqlx::query(queries::MARK_RELABEL_JOB)
+                    .bind(&new)
+                    .exec(tx, self)
+                    .await?;
                 sqlx::query(queries::DELETE_JOB)
                     .bind(&old)
                     .exec(tx, self)

@@ -120,7 +120,11 @@ impl Store {
                 .bind(&job.id)
                 .exec(tx, self)
                 .await?;
-            self.mark_relabel_point(tx, sweep_id, &job.id).await?;
+            sqlx::query(queries::MARK_RELABEL_POINT)
+                .bind(sweep_id)
+                .bind(&job.id)
+                .exec(tx, self)
+                .await?;
         }
         Ok(())
     }
