@@ -26,27 +26,31 @@ pub enum TaskState {
     Corrupt,
 }
 
+/// Each state and its name in `submission_tasks.state`.
+const TASK_STATES: [(TaskState, &str); 6] = [
+    (TaskState::Submitted, "submitted"),
+    (TaskState::Collected, "collected"),
+    (TaskState::Duplicate, "duplicate"),
+    (TaskState::Failed, "failed"),
+    (TaskState::Missing, "missing"),
+    (TaskState::Corrupt, "corrupt"),
+];
+
 impl TaskState {
     pub fn as_str(self) -> &'static str {
-        match self {
-            TaskState::Submitted => "submitted",
-            TaskState::Collected => "collected",
-            TaskState::Duplicate => "duplicate",
-            TaskState::Failed => "failed",
-            TaskState::Missing => "missing",
-            TaskState::Corrupt => "corrupt",
-        }
+        TASK_STATES
+            .iter()
+            .find(|(t, _)| *t == self)
+            .expect("every state")
+            .1
     }
 
+    /// The state of a stored name; an unknown name reads as corrupt.
     fn parse(s: &str) -> TaskState {
-        match s {
-            "submitted" => TaskState::Submitted,
-            "collected" => TaskState::Collected,
-            "duplicate" => TaskState::Duplicate,
-            "failed" => TaskState::Failed,
-            "missing" => TaskState::Missing,
-            _ => TaskState::Corrupt,
-        }
+        TASK_STATES
+            .iter()
+            .find(|(_, n)| *n == s)
+            .map_or(TaskState::Corrupt, |(t, _)| *t)
     }
 }
 
