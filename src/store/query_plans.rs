@@ -30,26 +30,8 @@ const WHOLE_TABLE: &[(&str, &str)] = &[
 const GUARDED: &[&str] = &["jobs", "results", "sweep_points"];
 
 /// SQL keywords that may follow a table name where no alias is given.
-const NOT_ALIAS: &[&str] = &[
-    "WHERE",
-    "JOIN",
-    "LEFT",
-    "INNER",
-    "ON",
-    "SET",
-    "GROUP",
-    "ORDER",
-    "LIMIT",
-    "VALUES",
-    "SELECT",
-    "AND",
-    "OR",
-    "USING",
-    "DEFAULT",
-    "RETURNING",
-    "WHEN",
-    "END",
-];
+const NOT_ALIAS: &str = "WHERE JOIN LEFT INNER ON SET GROUP ORDER LIMIT VALUES SELECT AND OR \
+                         USING DEFAULT RETURNING WHEN END";
 
 /// The names a statement gives the guarded tables: the table names and their aliases
 /// (`FROM jobs j`, `JOIN jobs AS c`).
@@ -71,7 +53,9 @@ fn guarded_names(sql: &str) -> Vec<String> {
             next += 1;
         }
         if let Some(alias) = tokens.get(next)
-            && !NOT_ALIAS.iter().any(|w| w.eq_ignore_ascii_case(alias))
+            && !NOT_ALIAS
+                .split_whitespace()
+                .any(|w| w.eq_ignore_ascii_case(alias))
             && !GUARDED.contains(alias)
         {
             names.push(alias.to_string());
