@@ -142,14 +142,9 @@ pub fn nearest_rate(samples: &[RateSample], position: &[f64], start: &str) -> Op
     } else {
         same
     };
-    let mut best: Option<(f64, f64)> = None;
-    for s in pool {
-        let d = dist(s);
-        if best.is_none_or(|(bd, _)| d < bd) {
-            best = Some((d, s.seconds_per_time));
-        }
-    }
-    best.map(|(_, r)| r)
+    // `min_by` keeps the first of equal distances.
+    let nearest = pool.into_iter().min_by(|a, b| dist(a).total_cmp(&dist(b)));
+    nearest.map(|s| s.seconds_per_time)
 }
 
 /// Which jobs `sweep estimate` samples (indices into `starts`, the start mode of each job in
@@ -326,20 +321,17 @@ pub fn planned_jobs(
         .collect()
 }
 
-/// A grid point's index along each axis (row-major, the last axis fastest), scaled to `[0, 1]`.
+/// A grid point's index along each axis ([`super::spec::grid_index`]), scaled to `[0, 1]`.
 fn grid_position(point: usize, lens: &[usize]) -> Vec<f64> {
-    let mut rest = point;
-    let mut position = vec![0.0; lens.len()];
-    for (a, &len) in lens.iter().enumerate().rev() {
-        let i = rest % len;
-        rest /= len;
-        position[a] = if len > 1 {
-            i as f64 / (len - 1) as f64
-        } else {
-            0.0
-        };
-    }
-    position
+    let index = super::spec::grid_index(point, lens);
+    index
+        .iter()
+        .zip(lens)
+        .map(|(&i, &len)| match len {
+            1 => 0.0,
+            _ => i as f64 / (len - 1) as f64,
+        })
+        .collect()
 }
 
 /// The spec a sampled job runs: `settle` time units, then `periods` driving periods, with no

@@ -353,14 +353,9 @@ impl SweepFile {
         let points = self.points();
         let mut jobs = Vec::with_capacity(points * self.replicas as usize);
         let mut skipped = Vec::new();
+        let lens: Vec<usize> = self.axes.iter().map(|a| a.values.len()).collect();
         'points: for point in 0..points {
-            // Row-major index -> one value per axis, the last axis fastest.
-            let mut rest = point;
-            let mut idx = vec![0; self.axes.len()];
-            for (a, axis) in self.axes.iter().enumerate().rev() {
-                idx[a] = rest % axis.values.len();
-                rest /= axis.values.len();
-            }
+            let idx = grid_index(point, &lens);
             let coords: Vec<serde_json::Value> = self
                 .axes
                 .iter()
@@ -735,6 +730,17 @@ impl SweepFile {
             out
         })
     }
+}
+
+/// A grid point's index along each axis of lengths `lens` (row-major, the last axis fastest).
+pub(crate) fn grid_index(point: usize, lens: &[usize]) -> Vec<usize> {
+    let mut rest = point;
+    let mut index = vec![0; lens.len()];
+    for (a, &len) in lens.iter().enumerate().rev() {
+        index[a] = rest % len;
+        rest /= len;
+    }
+    index
 }
 
 /// `" (at Gamma = 2, E* = 3, replica 1)"` for error messages.
