@@ -4,8 +4,9 @@
 //!
 //! The statements are not checked at compile time: sqlx's `query!` macros need a live database
 //! (`DATABASE_URL`) or prepared offline data, and the build has only the Rust toolchain. The
-//! tests below check instead that every file is one constant's and that every statement
-//! prepares against a migrated database, with as many parameters as its comment names.
+//! tests below check instead that every file is one constant's, and those of `query_plans` that
+//! every statement prepares against a migrated database, with as many parameters as its
+//! comment names.
 //! A constant no code uses fails the build (`dead_code` under `-D warnings`).
 
 /// Declares each query constant from its file `sql/<file>.sql` (whose leading comment says
@@ -101,7 +102,6 @@ queries! {
 #[cfg(test)]
 mod tests {
     use super::ALL;
-    use sqlx::{Executor, SqlSafeStr, Statement};
     use std::collections::BTreeSet;
 
     #[test]
@@ -134,46 +134,5 @@ mod tests {
             files, stems,
             "files in src/store/sql/ and query constants differ"
         );
-    }
-
-    /// The `?N` named in a query's leading comment lines.
-    fn documented_parameters(text: &str) -> Vec<usize> {
-        let mut out = Vec::new();
-        for line in text.lines().take_while(|l| l.starts_with("--")) {
-            for part in line.split('?').skip(1) {
-                let digits: String = part.chars().take_while(char::is_ascii_digit).collect();
-                if let Ok(n) = digits.parse() {
-                    out.push(n);
-                }
-            }
-        }
-        out
-    }
-
-    #[test]
-    fn every_query_prepares_against_a_migrated_database() {
-        crate::store::query_plans::on_populated(async |conn| {
-            for (stem, text) in ALL {
-                let statement = (&mut *conn)
-                    .prepare(text.into_sql_str())
-                    .await
-                    .unwrap_or_else(|e| panic!("{stem}.sql does not prepare: {e}"));
-                let count = statement
-                    .parameters()
-                    .map_or(0, |p| p.either(|types| types.len(), |n| n));
-                let documented = documented_parameters(text);
-                let want: Vec<usize> = (1..=count).collect();
-                assert_eq!(
-                    documented, want,
-                    "{stem}.sql: its comment names parameters {documented:?}, the statement has \
-                     {count}"
-                );
-                assert!(
-                    text.lines()
-                        .any(|l| !l.trim().is_empty() && !l.starts_with("--")),
-                    "{stem}.sql: no statement"
-                );
-            }
-        });
     }
 }
