@@ -602,6 +602,27 @@ fn line_edges(points: &[MapPoint], xa: &PlaneAxis) -> Vec<(usize, usize)> {
 mod tests {
     use super::*;
 
+    fn shaken_scene() -> Scene {
+        Scene::from_toml_str(
+            "dimension = 2\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
+             [drive]\nkind = \"sine\"\ngamma = 3.0\ne_star = 2.0\n[initial]\nseed = 1\n\
+             temperature = 1.0\n[run]\nduration = 1.0\n",
+            "test",
+        )
+        .unwrap()
+    }
+
+    fn axis(key: &str, label: &str) -> Axis {
+        Axis {
+            name: key.to_string(),
+            key: key.to_string(),
+            label: label.to_string(),
+            kind: AxisKind::Values,
+            values: vec![],
+            line: 0,
+        }
+    }
+
     fn v(s: &[Option<&str>]) -> Vec<Option<String>> {
         s.iter().map(|x| x.map(str::to_string)).collect()
     }
@@ -625,23 +646,8 @@ mod tests {
 
     #[test]
     fn boundary_points_carry_half_the_edge_and_the_replicas_agreement() {
-        let scene = Scene::from_toml_str(
-            "dimension = 2\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
-             [drive]\nkind = \"sine\"\ngamma = 3.0\ne_star = 2.0\n[initial]\nseed = 1\ntemperature = 1.0\n[run]\nduration = 1.0\n",
-            "test",
-        )
-        .unwrap();
-        let axes: Vec<Axis> = [("drive.gamma", "Gamma"), ("drive.e_star", "E*")]
-            .iter()
-            .map(|(k, l)| Axis {
-                name: k.to_string(),
-                key: k.to_string(),
-                label: l.to_string(),
-                kind: AxisKind::Values,
-                values: vec![],
-                line: 0,
-            })
-            .collect();
+        let scene = shaken_scene();
+        let axes = vec![axis("drive.gamma", "Gamma"), axis("drive.e_star", "E*")];
         // (Gamma 2, E* 1): f, f, g; (Gamma 2, E* 4): g, g, g.
         let obs = |e: f64, r: i64, p: &str| Observation {
             coords: vec![serde_json::json!(2.0), serde_json::json!(e)],
@@ -674,20 +680,8 @@ mod tests {
 
     #[test]
     fn unconverged_points_carry_no_boundary_unless_asked() {
-        let scene = Scene::from_toml_str(
-            "dimension = 2\n[box]\nsize = [20.0, 9.0]\n[particles]\ncount = 10\n\
-             [drive]\nkind = \"sine\"\ngamma = 3.0\ne_star = 2.0\n[initial]\nseed = 1\ntemperature = 1.0\n[run]\nduration = 1.0\n",
-            "test",
-        )
-        .unwrap();
-        let axes = vec![Axis {
-            name: "e".into(),
-            key: "drive.e_star".into(),
-            label: "E*".into(),
-            kind: AxisKind::Values,
-            values: vec![],
-            line: 0,
-        }];
+        let scene = shaken_scene();
+        let axes = vec![axis("drive.e_star", "E*")];
         // A line f (E* 1), g unconverged (E* 2), g (E* 4).
         let obs = |e: f64, p: &str, trusted: bool| Observation {
             coords: vec![serde_json::json!(e)],

@@ -502,8 +502,7 @@ pub(super) fn sweep_estimate(
     dbs: &[PathBuf],
 ) -> Result<(), Failure> {
     use crate::sweep::estimate::{
-        MeasuredCost, RateSample, cost_lines, measured_runs, planned_jobs, sample_picks,
-        sample_spec, time_sample,
+        RateSample, cost_lines, measured_runs, planned_jobs, sample_picks, sample_spec, time_sample,
     };
     if !(periods.is_finite() && periods > 0.0) || samples == 0 {
         return Err(Failure::BadInput(
@@ -520,14 +519,7 @@ pub(super) fn sweep_estimate(
     jobs.retain(|j| seen.insert(j.id.clone()));
     let mut stored = std::collections::HashMap::new();
     for path in dbs {
-        for (id, c) in Store::open_read_only(path)?.finished_job_costs()? {
-            let cost = MeasuredCost {
-                wall_seconds: c.wall_seconds,
-                simulated_time: c.simulated_time,
-                converged: c.converged,
-            };
-            stored.insert(id, cost);
-        }
+        stored.extend(Store::open_read_only(path)?.finished_job_costs()?);
     }
     let planned = planned_jobs(&sweep, &jobs, &stored);
     // Every start mode is sampled (a hot and a cold branch cost different rates).

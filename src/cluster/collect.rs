@@ -62,7 +62,7 @@ pub fn collect(
         }
     }
     let mut batch = Vec::new();
-    for mut task in tasks {
+    for task in tasks {
         // A missing task is looked at again: its file may show up late (a network filesystem's
         // cache can hide a new file for a while).
         let recheck = task.state == TaskState::Missing;
@@ -80,15 +80,8 @@ pub fn collect(
             Ok(r) => r,
             Err(reason) => {
                 let msg = format!("{}: {reason}", path.display());
-                store.set_task_state(
-                    task.submission_id,
-                    task.task,
-                    TaskState::Corrupt,
-                    Some(&msg),
-                )?;
-                task.state = TaskState::Corrupt;
-                task.message = Some(msg);
-                out.corrupt.push(task);
+                out.corrupt
+                    .push(mark(store, task, TaskState::Corrupt, msg)?);
                 continue;
             }
         };
@@ -117,15 +110,8 @@ pub fn collect(
                             task.slurm_job.as_deref().unwrap_or("?"),
                             task.task
                         );
-                        store.set_task_state(
-                            task.submission_id,
-                            task.task,
-                            TaskState::Missing,
-                            Some(&msg),
-                        )?;
-                        task.state = TaskState::Missing;
-                        task.message = Some(msg);
-                        out.missing.push(task);
+                        out.missing
+                            .push(mark(store, task, TaskState::Missing, msg)?);
                     }
                 },
             }
@@ -149,20 +135,26 @@ pub fn collect(
                     &owner,
                     record.finished_at,
                 )?;
-                store.set_task_state(
-                    task.submission_id,
-                    task.task,
-                    TaskState::Failed,
-                    Some(message),
-                )?;
-                task.state = TaskState::Failed;
-                task.message = Some(message.clone());
-                out.failed.push(task);
+                out.failed
+                    .push(mark(store, task, TaskState::Failed, message.clone())?);
             }
         }
     }
     store_batch(store, &mut batch, &mut out)?;
     Ok(out)
+}
+
+/// Records `state` with its message for `task`; returns the task as recorded.
+fn mark(
+    store: &Store,
+    mut task: TaskRow,
+    state: TaskState,
+    message: String,
+) -> Result<TaskRow, StoreError> {
+    store.set_task_state(task.submission_id, task.task, state, Some(&message))?;
+    task.state = state;
+    task.message = Some(message);
+    Ok(task)
 }
 
 /// Results stored per transaction by [`collect`]: one synced commit for this many tasks
@@ -224,6 +216,48 @@ pub fn jobs_to_submit(store: &Store, sweep: &SweepRow) -> Result<Vec<String>, St
         .filter(|p| seen.insert(p.job_id.clone()))
         .map(|p| p.job_id)
         .collect())
+}
+
+/// Where the tasks not collected yet stand, for `sweep status`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct QueueStates {
+    /// One per task still marked `submitted`, in task order: its state in the Slurm queue,
+    /// `finished, not collected`, `left the queue without a result` or `state unknown`.
+    pub states: Vec<String>,
+    /// Why the queue could not be asked (the first answer that said so).
+    pub unavailable: Option<String>,
+}
+
+/// Asks the queue (once per Slurm job) where each task still marked `submitted` stands; a task
+/// that left the queue is told apart by its result file.
+pub fn queue_states(tasks: &[TaskRow], queue: &mut dyn FnMut(&str) -> Queue) -> QueueStates {
+    let mut out = QueueStates::default();
+    let mut queues: HashMap<String, Queue> = HashMap::new();
+    for t in tasks {
+        if t.state != TaskState::Submitted {
+            continue;
+        }
+        let j = t.slurm_job.clone().unwrap_or_else(|| "?".to_string());
+        let q = queues.entry(j.clone()).or_insert_with(|| queue(&j)).clone();
+        let state = match q {
+            Queue::Unavailable(why) => {
+                out.unavailable.get_or_insert(why);
+                "state unknown".to_string()
+            }
+            Queue::Tasks(m) => match m.get(&t.task) {
+                Some(s) => s.clone(),
+                None => {
+                    if SweepDir::new(Path::new(&t.dir)).result(&t.job_id).exists() {
+                        "finished, not collected".to_string()
+                    } else {
+                        "left the queue without a result".to_string()
+                    }
+                }
+            },
+        };
+        out.states.push(state);
+    }
+    out
 }
 
 #[cfg(test)]
@@ -521,46 +555,4 @@ mod tests {
         assert_eq!(runs[&ids[1]], 2);
         assert_eq!(runs[&ids[0]], 1);
     }
-}
-
-/// Where the tasks not collected yet stand, for `sweep status`.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct QueueStates {
-    /// One per task still marked `submitted`, in task order: its state in the Slurm queue,
-    /// `finished, not collected`, `left the queue without a result` or `state unknown`.
-    pub states: Vec<String>,
-    /// Why the queue could not be asked (the first answer that said so).
-    pub unavailable: Option<String>,
-}
-
-/// Asks the queue (once per Slurm job) where each task still marked `submitted` stands; a task
-/// that left the queue is told apart by its result file.
-pub fn queue_states(tasks: &[TaskRow], queue: &mut dyn FnMut(&str) -> Queue) -> QueueStates {
-    let mut out = QueueStates::default();
-    let mut queues: HashMap<String, Queue> = HashMap::new();
-    for t in tasks {
-        if t.state != TaskState::Submitted {
-            continue;
-        }
-        let j = t.slurm_job.clone().unwrap_or_else(|| "?".to_string());
-        let q = queues.entry(j.clone()).or_insert_with(|| queue(&j)).clone();
-        let state = match q {
-            Queue::Unavailable(why) => {
-                out.unavailable.get_or_insert(why);
-                "state unknown".to_string()
-            }
-            Queue::Tasks(m) => match m.get(&t.task) {
-                Some(s) => s.clone(),
-                None => {
-                    if SweepDir::new(Path::new(&t.dir)).result(&t.job_id).exists() {
-                        "finished, not collected".to_string()
-                    } else {
-                        "left the queue without a result".to_string()
-                    }
-                }
-            },
-        };
-        out.states.push(state);
-    }
-    out
 }

@@ -75,11 +75,6 @@ pub fn file_name(sweep: &str) -> String {
         .collect()
 }
 
-/// The job name: `wetgran-` and the sweep name as [`file_name`] cleans it.
-pub fn job_name(sweep: &str) -> String {
-    format!("wetgran-{}", file_name(sweep))
-}
-
 /// The sbatch script of one array. Task `SLURM_ARRAY_TASK_ID` = k runs the job on line k + 1 of
 /// the task list: `wetgran job run DIR/specs/<id>.json --out DIR/results/<id>.json`.
 pub fn array_script(a: &ArrayScript) -> Result<String, String> {
@@ -95,7 +90,10 @@ pub fn array_script(a: &ArrayScript) -> Result<String, String> {
          only its result file.\n",
         a.sweep, a.tasks
     ));
-    s.push_str(&format!("#SBATCH --job-name={}\n", job_name(a.sweep)));
+    s.push_str(&format!(
+        "#SBATCH --job-name=wetgran-{}\n",
+        file_name(a.sweep)
+    ));
     s.push_str(&format!("#SBATCH --array=0-{}\n", a.tasks - 1));
     s.push_str("#SBATCH --ntasks=1\n");
     s.push_str(&format!(

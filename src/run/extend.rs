@@ -71,10 +71,7 @@ pub fn extend_unconverged(
         }
     }
     let workers = workers.max(1);
-    let mut progress = match show_progress {
-        true => Progress::auto(todo.len() as u64, 0, workers),
-        false => Progress::Quiet,
-    };
+    let mut progress = Progress::auto(show_progress, todo.len() as u64, 0, workers);
     let names: Vec<&str> = sweeps.iter().map(|s| s.name.as_str()).collect();
     progress.note(&format!(
         "sweep {}: extending {} job(s) left unconverged to at most {} on {workers} worker{}",

@@ -21,10 +21,12 @@ pub enum Progress {
 }
 
 impl Progress {
-    /// Bars when stderr is a terminal, plain lines otherwise.
-    pub fn auto(total: u64, done: u64, workers: usize) -> Progress {
+    /// Nothing unless `show`; then bars when stderr is a terminal, plain lines otherwise.
+    pub fn auto(show: bool, total: u64, done: u64, workers: usize) -> Progress {
         use std::io::IsTerminal;
-        if std::io::stderr().is_terminal() {
+        if !show {
+            Progress::Quiet
+        } else if std::io::stderr().is_terminal() {
             Self::bars(total, done, workers)
         } else {
             Progress::Plain { total, done }

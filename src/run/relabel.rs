@@ -423,52 +423,41 @@ pub fn relabel_changed(store: &Store, sweep: &SweepRow) -> Result<Relabelled, St
 mod tests {
     use super::*;
 
-    /// Regression: with `sweep.periods` every point of a line of constant Gamma has its own
-    /// run length and sample interval (both in periods of its own drive), and no point found a
-    /// line: the line rule never ran on the shipped sweeps.
+    /// Regressions: with `sweep.periods` every point of a line of constant Gamma has its own
+    /// run length and sample interval (both in periods of its own drive); with the run length in
+    /// time units the default transient is a fixed fraction of the run, so a different number of
+    /// periods at every `E*`. In both, no point found a line: the line rule never ran.
     #[test]
-    fn a_line_spans_points_whose_run_length_is_set_in_periods() {
-        let file = crate::sweep::SweepFile::parse(
-            "[sweep]\nname = \"l\"\nperiods = 10\n[scene]\ndimension = 2\n[scene.box]\n\
-             size = [20.0, 9.0]\n[scene.particles]\ncount = 10\n[scene.capillary]\n\
-             model = \"thin_thread\"\n[scene.drive]\nkind = \"sine\"\n[scene.initial]\n\
-             temperature = 1.0\n[[axis]]\nkey = \"gamma\"\nvalues = [30.0]\n\
-             [[axis]]\nkey = \"e_star\"\nvalues = [0.5, 2.0]\n",
-            std::path::Path::new("l.toml"),
-        )
-        .unwrap();
-        let jobs = file.expand().unwrap();
-        let (a, b) = (&jobs[0].spec.scene, &jobs[1].spec.scene);
-        assert_ne!(a.run.duration, b.run.duration);
-        assert_ne!(a.run.sample_interval, b.run.sample_interval);
-        let (ga, _) = gamma_e_star(a).unwrap();
-        let (gb, _) = gamma_e_star(b).unwrap();
-        assert_eq!(line_key(a, ga), line_key(b, gb));
-        // Another Gamma is another line.
-        assert_ne!(line_key(a, ga), line_key(a, 2.0 * ga));
-    }
-
-    /// Regression: with the run length in time units (no `sweep.periods`), the default
-    /// transient is a fixed fraction of the run, so a different number of periods at every
-    /// `E*`, and no point of such a sweep found a line.
-    #[test]
-    fn a_line_spans_points_whose_run_length_is_set_in_time() {
-        let file = crate::sweep::SweepFile::parse(
-            "[sweep]\nname = \"l\"\n[scene]\ndimension = 2\n[scene.box]\n\
-             size = [20.0, 9.0]\n[scene.particles]\ncount = 10\n[scene.capillary]\n\
-             model = \"thin_thread\"\n[scene.drive]\nkind = \"sine\"\n[scene.initial]\n\
-             temperature = 1.0\n[scene.run]\nduration = 40.0\n[[axis]]\nkey = \"gamma\"\n\
-             values = [30.0]\n[[axis]]\nkey = \"e_star\"\nvalues = [0.5, 2.0]\n",
-            std::path::Path::new("l.toml"),
-        )
-        .unwrap();
-        let jobs = file.expand().unwrap();
-        let (a, b) = (&jobs[0].spec.scene, &jobs[1].spec.scene);
-        assert_eq!(a.run.duration, b.run.duration);
-        assert_ne!(a.observe.transient_periods, b.observe.transient_periods);
-        let (ga, _) = gamma_e_star(a).unwrap();
-        let (gb, _) = gamma_e_star(b).unwrap();
-        assert_eq!(line_key(a, ga), line_key(b, gb));
+    fn a_line_spans_points_whose_run_length_is_set_in_periods_or_in_time() {
+        for (run, periods) in [("periods = 10\n", true), ("", false)] {
+            let duration = if periods {
+                ""
+            } else {
+                "[scene.run]\nduration = 40.0\n"
+            };
+            let text = format!(
+                "[sweep]\nname = \"l\"\n{run}[scene]\ndimension = 2\n[scene.box]\n\
+                 size = [20.0, 9.0]\n[scene.particles]\ncount = 10\n[scene.capillary]\n\
+                 model = \"thin_thread\"\n[scene.drive]\nkind = \"sine\"\n[scene.initial]\n\
+                 temperature = 1.0\n{duration}[[axis]]\nkey = \"gamma\"\nvalues = [30.0]\n\
+                 [[axis]]\nkey = \"e_star\"\nvalues = [0.5, 2.0]\n"
+            );
+            let file = crate::sweep::SweepFile::parse(&text, std::path::Path::new("l.toml"));
+            let jobs = file.unwrap().expand().unwrap();
+            let (a, b) = (&jobs[0].spec.scene, &jobs[1].spec.scene);
+            if periods {
+                assert_ne!(a.run.duration, b.run.duration);
+                assert_ne!(a.run.sample_interval, b.run.sample_interval);
+            } else {
+                assert_eq!(a.run.duration, b.run.duration);
+                assert_ne!(a.observe.transient_periods, b.observe.transient_periods);
+            }
+            let (ga, _) = gamma_e_star(a).unwrap();
+            let (gb, _) = gamma_e_star(b).unwrap();
+            assert_eq!(line_key(a, ga), line_key(b, gb));
+            // Another Gamma is another line.
+            assert_ne!(line_key(a, ga), line_key(a, 2.0 * ga));
+        }
     }
 
     #[test]

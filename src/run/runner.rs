@@ -127,11 +127,7 @@ pub fn run_sweeps_with(
         done_before += c.done + c.failed;
     }
     let n_workers = opts.jobs.max(1);
-    let mut progress = if opts.show_progress {
-        Progress::auto(total, done_before, n_workers)
-    } else {
-        Progress::Quiet
-    };
+    let mut progress = Progress::auto(opts.show_progress, total, done_before, n_workers);
     let names: Vec<&str> = sweeps.iter().map(|s| s.name.as_str()).collect();
     progress.note(&format!(
         "sweep {}: {total} jobs, {done_before} finished before, {} to run on {n_workers} worker{} \

@@ -2,7 +2,7 @@
 //! of orphaned jobs, claims with their run rows, heartbeats, and the commits of finished,
 //! failed and extended jobs (a result row and its checkpoint).
 
-use super::{Claim, STALE_AFTER, Store, StoreError, now, queries};
+use super::{Claim, Exec, STALE_AFTER, Store, StoreError, now, queries};
 use crate::sweep::job::JobResult;
 use crate::sweep::spec::JobSpec;
 use std::path::Path;
@@ -72,20 +72,21 @@ impl Store {
             .bind(owner)
             .bind(finished_at)
             .bind(wetgran_core::observe::converged_in_json(&result.observables).map(i64::from))
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            .exec(tx, self)
+            .await?;
         // The sweeps holding the job relabel its lines after the run (`run::relabel`).
-        self.mark_relabel_job(tx, job_id).await?;
+        sqlx::query(queries::MARK_RELABEL_JOB)
+            .bind(job_id)
+            .exec(tx, self)
+            .await?;
         if let Some(state) = &result.checkpoint {
             sqlx::query(queries::UPSERT_CHECKPOINT)
                 .bind(job_id)
                 .bind(state.time)
                 .bind(serde_json::to_string(state).expect("a state serializes"))
                 .bind(finished_at)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
         }
         wetgran_core::test_pause::pause_at("checkpoint");
         Ok(())
@@ -99,18 +100,16 @@ impl Store {
         self.in_transaction(async |tx| {
             sqlx::query(queries::DELETE_RESULT)
                 .bind(job_id)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
             wetgran_core::test_pause::pause_at("extend");
             self.insert_result(tx, job_id, result, &owner, t).await?;
             sqlx::query(queries::EXTEND_JOB_TIMES)
                 .bind(job_id)
                 .bind(t)
                 .bind(result.wall_seconds)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
             Ok(())
         })
     }
@@ -138,18 +137,15 @@ impl Store {
                 let n = sqlx::query(queries::REQUEUE_JOB)
                     .bind(&id)
                     .bind(&owner)
-                    .execute(&mut *tx)
-                    .await
-                    .map_err(|e| self.db(e))?
-                    .rows_affected();
+                    .exec(&mut tx, self)
+                    .await?;
                 if n == 1 {
                     sqlx::query(queries::MARK_RUNS_ORPHANED)
                         .bind(&id)
                         .bind(&owner)
                         .bind(now())
-                        .execute(&mut *tx)
-                        .await
-                        .map_err(|e| self.db(e))?;
+                        .exec(&mut tx, self)
+                        .await?;
                     requeued.push(id);
                 }
                 tx.commit().await.map_err(|e| self.db(e))?;
@@ -248,24 +244,46 @@ impl Store {
     pub fn finish(&self, claim: &Claim, result: &JobResult) -> Result<bool, StoreError> {
         let t = now();
         self.in_transaction(async |tx| {
-            let n = sqlx::query(queries::FINISH_JOB)
-                .bind(&claim.job_id)
-                .bind(&self.owner)
-                .bind(t)
-                .bind(result.wall_seconds)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?
-                .rows_affected();
-            let kept = n == 1;
-            if kept {
-                self.insert_result(tx, &claim.job_id, result, &self.owner, t)
-                    .await?;
-            }
+            let kept = self
+                .commit_result(
+                    tx,
+                    queries::FINISH_JOB,
+                    &claim.job_id,
+                    result,
+                    &self.owner,
+                    t,
+                )
+                .await?;
             self.end_run(tx, claim.run_id, t, if kept { "done" } else { "discarded" })
                 .await?;
             Ok(kept)
         })
+    }
+
+    /// Marks a job done with `mark` ([`queries::FINISH_JOB`] for a claim here,
+    /// [`queries::INGEST_DONE_JOB`] for a result computed elsewhere: both bind job id, owner,
+    /// finish time, wall seconds) and, where the job had no result yet, inserts this one;
+    /// returns whether it did. Inside an open transaction.
+    pub(super) async fn commit_result(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        mark: &'static str,
+        job_id: &str,
+        result: &JobResult,
+        owner: &str,
+        t: f64,
+    ) -> Result<bool, StoreError> {
+        let n = sqlx::query(mark)
+            .bind(job_id)
+            .bind(owner)
+            .bind(t)
+            .bind(result.wall_seconds)
+            .exec(tx, self)
+            .await?;
+        if n == 1 {
+            self.insert_result(tx, job_id, result, owner, t).await?;
+        }
+        Ok(n == 1)
     }
 
     /// Closes an attempt's row in `runs` with its end time and outcome.
@@ -280,9 +298,8 @@ impl Store {
             .bind(run_id)
             .bind(t)
             .bind(outcome)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            .exec(tx, self)
+            .await?;
         Ok(())
     }
 
@@ -296,9 +313,8 @@ impl Store {
                 .bind(t)
                 .bind(wall_seconds)
                 .bind(message)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
             self.end_run(tx, claim.run_id, t, "failed").await?;
             Ok(())
         })

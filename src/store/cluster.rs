@@ -2,11 +2,11 @@
 //! `submissions`, `submission_tasks`), and the ingestion of results computed elsewhere.
 //!
 //! Submitting changes no job row: a job stays `pending` until `sweep collect` ingests its result
-//! file ([`Store::ingest_result`]: job done, result row, run row, in one transaction; a job that
+//! file ([`Store::ingest_results`]: job done, result row, run row, in one transaction; a job that
 //! already has a result keeps it and nothing is stored) or its error record
 //! ([`Store::ingest_failure`]: job failed with the message, unless it is done or running here).
 
-use super::{Store, StoreError, now, queries};
+use super::{Exec, Store, StoreError, now, queries};
 use crate::sweep::job::JobResult;
 
 /// What `sweep collect` found for a task.
@@ -26,27 +26,31 @@ pub enum TaskState {
     Corrupt,
 }
 
+/// Each state and its name in `submission_tasks.state`.
+const TASK_STATES: [(TaskState, &str); 6] = [
+    (TaskState::Submitted, "submitted"),
+    (TaskState::Collected, "collected"),
+    (TaskState::Duplicate, "duplicate"),
+    (TaskState::Failed, "failed"),
+    (TaskState::Missing, "missing"),
+    (TaskState::Corrupt, "corrupt"),
+];
+
 impl TaskState {
     pub fn as_str(self) -> &'static str {
-        match self {
-            TaskState::Submitted => "submitted",
-            TaskState::Collected => "collected",
-            TaskState::Duplicate => "duplicate",
-            TaskState::Failed => "failed",
-            TaskState::Missing => "missing",
-            TaskState::Corrupt => "corrupt",
-        }
+        TASK_STATES
+            .iter()
+            .find(|(t, _)| *t == self)
+            .expect("every state")
+            .1
     }
 
+    /// The state of a stored name; an unknown name reads as corrupt.
     fn parse(s: &str) -> TaskState {
-        match s {
-            "submitted" => TaskState::Submitted,
-            "collected" => TaskState::Collected,
-            "duplicate" => TaskState::Duplicate,
-            "failed" => TaskState::Failed,
-            "missing" => TaskState::Missing,
-            _ => TaskState::Corrupt,
-        }
+        TASK_STATES
+            .iter()
+            .find(|(_, n)| *n == s)
+            .map_or(TaskState::Corrupt, |(t, _)| *t)
     }
 }
 
@@ -104,9 +108,8 @@ impl Store {
                     .bind(id)
                     .bind(k as i64)
                     .bind(job)
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+                    .exec(tx, self)
+                    .await?;
             }
             Ok(id)
         })
@@ -199,54 +202,13 @@ impl Store {
         Ok(out)
     }
 
-    /// Stores a result computed elsewhere (`owner` names where: `slurm:JOB_TASK@host`): job done,
-    /// result row, run row, in one transaction. Returns `false`, storing nothing, when the job
-    /// already has a result (content-hashed ids: the same job finished twice is stored once).
-    pub fn ingest_result(
-        &self,
-        job_id: &str,
-        result: &JobResult,
-        owner: &str,
-        finished_at: f64,
-    ) -> Result<bool, StoreError> {
-        self.in_transaction(async |tx| self.ingest_in(tx, job_id, result, owner, finished_at).await)
-    }
-
-    /// [`Store::ingest_result`] inside an open transaction.
-    async fn ingest_in(
-        &self,
-        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
-        job_id: &str,
-        result: &JobResult,
-        owner: &str,
-        finished_at: f64,
-    ) -> Result<bool, StoreError> {
-        let n = sqlx::query(queries::INGEST_DONE_JOB)
-            .bind(job_id)
-            .bind(owner)
-            .bind(finished_at)
-            .bind(result.wall_seconds)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?
-            .rows_affected();
-        if n == 1 {
-            self.insert_result(tx, job_id, result, owner, finished_at)
-                .await?;
-            self.insert_remote_run(tx, job_id, owner, result.wall_seconds, finished_at, "done")
-                .await?;
-        }
-        Ok(n == 1)
-    }
-
-    /// Stores results computed elsewhere and the state of the task that brought each
-    /// (`collected`, or `duplicate` where the job already had a result), all in one
-    /// transaction (one sync for the lot, where one per result and one per task state made
-    /// `sweep collect` cost two synced commits a task). Returns, per item, whether its result
-    /// was stored. Each item is what [`Store::ingest_result`] followed by
-    /// [`Store::set_task_state`] would do; a crash before the commit stores none of them and
-    /// leaves their tasks `submitted`, so the next collection reads their files again. An
-    /// item is `(job id, result, owner, finished at, submission id, task)`.
+    /// Stores results computed elsewhere (`owner` names where: `slurm:JOB_TASK@host`; job done,
+    /// result row, run row) and the state of the task that brought each (`collected`, or
+    /// `duplicate`, storing nothing, where the job already had a result: content-hashed ids
+    /// store the same job finished twice once), all in one transaction (one sync for the lot).
+    /// Returns, per item, whether its result was stored. A crash before the commit stores none
+    /// of them and leaves their tasks `submitted`, so the next collection reads their files
+    /// again. An item is `(job id, result, owner, finished at, submission id, task)`.
     pub fn ingest_results(
         &self,
         items: &[(&str, &JobResult, &str, f64, i64, i64)],
@@ -254,9 +216,15 @@ impl Store {
         self.in_transaction(async |tx| {
             let mut kept = Vec::with_capacity(items.len());
             for &(job_id, result, owner, finished_at, submission_id, task) in items {
+                let q = queries::INGEST_DONE_JOB;
                 let k = self
-                    .ingest_in(tx, job_id, result, owner, finished_at)
+                    .commit_result(tx, q, job_id, result, owner, finished_at)
                     .await?;
+                if k {
+                    let wall = result.wall_seconds;
+                    self.insert_remote_run(tx, job_id, owner, wall, finished_at, "done")
+                        .await?;
+                }
                 let state = if k {
                     TaskState::Collected
                 } else {
@@ -267,9 +235,8 @@ impl Store {
                     .bind(task)
                     .bind(state.as_str())
                     .bind(None::<&str>)
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+                    .exec(tx, self)
+                    .await?;
                 kept.push(k);
             }
             Ok(kept)
@@ -294,10 +261,8 @@ impl Store {
                 .bind(finished_at)
                 .bind(wall_seconds)
                 .bind(message)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?
-                .rows_affected();
+                .exec(tx, self)
+                .await?;
             if n == 1 {
                 self.insert_remote_run(tx, job_id, owner, wall_seconds, finished_at, "failed")
                     .await?;
@@ -323,9 +288,8 @@ impl Store {
             .bind(finished_at - wall_seconds)
             .bind(finished_at)
             .bind(outcome)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
+            .exec(tx, self)
+            .await?;
         Ok(())
     }
 }

@@ -32,19 +32,9 @@
 //!   loses at most the jobs that were running. A result arriving for a job that another runner
 //!   already finished is discarded, so a job never has two results.
 //!
-//! SQL: every statement is a file of `sql/` (one statement each, named after what it does, its
-//! bind order in a comment at its top), embedded as a constant of `queries.rs` with
-//! `include_str!`; the code here only binds and reads rows. The statements are not checked at
-//! compile time (no `DATABASE_URL` or offline data in the build); the tests of `queries.rs`
-//! prepare each one against a freshly migrated database. A schema change is a new migration in
-//! `migrations/`.
-//!
-//! Files by concern: `open` (what a file is, the connection, initialisation, migrations, the
-//! re-keying of jobs) and `read_only` (read-only opens, on the same connection code);
-//! `register` (sweeps, their jobs, labels of stored results); `claims` (owners, claims, run
-//! rows, heartbeats, commits of finished, failed and extended jobs); `reads` (counts, a sweep's
-//! jobs with their results, checkpoints, costs); `summary`, `hysteresis`, `stale`,
-//! `relabel_queue` and `cluster` for the reports, relabelling and Slurm.
+//! SQL: one statement per file of `sql/`, embedded by `queries.rs` (which says how they are
+//! checked). A schema change is a new migration in `migrations/`. The files here split the
+//! store by concern; each says which in its header.
 
 #[cfg(test)]
 mod claim_queue_tests;
@@ -210,17 +200,6 @@ impl StateCounts {
     pub fn total(&self) -> u64 {
         self.pending + self.running + self.done + self.failed
     }
-}
-
-/// What one finished job cost (`Store::finished_job_costs`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FinishedCost {
-    /// The simulated time its run ended at.
-    pub simulated_time: f64,
-    /// Wall seconds of the attempt that finished, plus any extensions.
-    pub wall_seconds: f64,
-    /// Its convergence verdict; `None` for a run without a run-length policy.
-    pub converged: Option<bool>,
 }
 
 /// One job of a sweep with everything known about it (for boundaries, plots, exports).
@@ -440,6 +419,27 @@ impl Store {
             tx.commit().await.map_err(|e| self.db(e))?;
             Ok(out)
         })
+    }
+}
+
+/// One statement run inside an open transaction, its error in the store's words
+/// ([`Store::db`]); returns how many rows it changed.
+trait Exec {
+    async fn exec(
+        self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        store: &Store,
+    ) -> Result<u64, StoreError>;
+}
+
+impl Exec for sqlx::query::Query<'_, sqlx::Sqlite, sqlx::sqlite::SqliteArguments> {
+    async fn exec(
+        self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        store: &Store,
+    ) -> Result<u64, StoreError> {
+        let done = self.execute(&mut **tx).await.map_err(|e| store.db(e))?;
+        Ok(done.rows_affected())
     }
 }
 

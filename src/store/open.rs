@@ -4,8 +4,8 @@
 //! [`JOB_ID_RULE`].
 
 use super::{
-    APPLICATION_ID, CACHE_KIB, Durability, JOB_ID_RULE, MIGRATOR, Store, StoreError, busy_timeout,
-    db_error, explain, is_storage_fault, new_owner, queries,
+    APPLICATION_ID, CACHE_KIB, Durability, Exec, JOB_ID_RULE, MIGRATOR, Store, StoreError,
+    busy_timeout, db_error, explain, is_storage_fault, new_owner, queries,
 };
 use crate::sweep::spec::JobSpec;
 use sqlx::SqliteConnection;
@@ -266,30 +266,26 @@ impl Store {
                     sqlx::query(queries::COPY_JOB_TO_NEW_ID)
                         .bind(&old)
                         .bind(&new)
-                        .execute(&mut **tx)
-                        .await
-                        .map_err(|e| self.db(e))?;
+                        .exec(tx, self)
+                        .await?;
                 } else {
                     // Merging: the merged job takes this one's result if it has none.
                     let moved = sqlx::query(queries::MOVE_RESULT_IF_NONE)
                         .bind(&old)
                         .bind(&new)
-                        .execute(&mut **tx)
-                        .await
-                        .map_err(|e| self.db(e))?;
-                    if moved.rows_affected() > 0 {
+                        .exec(tx, self)
+                        .await?;
+                    if moved > 0 {
                         sqlx::query(queries::MARK_MERGED_JOB_DONE)
                             .bind(&old)
                             .bind(&new)
-                            .execute(&mut **tx)
-                            .await
-                            .map_err(|e| self.db(e))?;
+                            .exec(tx, self)
+                            .await?;
                     }
                     sqlx::query(queries::DELETE_RESULT)
                         .bind(&old)
-                        .execute(&mut **tx)
-                        .await
-                        .map_err(|e| self.db(e))?;
+                        .exec(tx, self)
+                        .await?;
                 }
                 for sql in [
                     queries::REKEY_SWEEP_POINTS,
@@ -300,23 +296,23 @@ impl Store {
                     sqlx::query(sql)
                         .bind(&old)
                         .bind(&new)
-                        .execute(&mut **tx)
-                        .await
-                        .map_err(|e| self.db(e))?;
+                        .exec(tx, self)
+                        .await?;
                 }
                 // A merged job may have taken another's result: its lines are relabelled.
-                self.mark_relabel_job(tx, &new).await?;
+                sqlx::query(queries::MARK_RELABEL_JOB)
+                    .bind(&new)
+                    .exec(tx, self)
+                    .await?;
                 sqlx::query(queries::DELETE_JOB)
                     .bind(&old)
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+                    .exec(tx, self)
+                    .await?;
             }
             sqlx::query(queries::SET_JOB_ID_RULE)
                 .bind(JOB_ID_RULE)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
             Ok(())
         })
     }

@@ -6,12 +6,13 @@
 //! `sweep_points_claim` without sorting.
 //!
 //! The database is not `ANALYZE`d, as a user's never is: the plans are the ones SQLite picks
-//! from the schema alone.
+//! from the schema alone. On the same database every statement must prepare, with as many
+//! parameters as its leading comment names (`queries.rs`).
 
 use super::MIGRATOR;
 use super::queries::ALL;
 use sqlx::sqlite::{SqliteConnectOptions, SqliteConnection};
-use sqlx::{AssertSqlSafe, Connection, Executor, Row};
+use sqlx::{AssertSqlSafe, Connection, Executor, Row, SqlSafeStr, Statement};
 
 /// Statements that read a whole table by design, with the reason; each runs once per command.
 const WHOLE_TABLE: &[(&str, &str)] = &[
@@ -30,26 +31,8 @@ const WHOLE_TABLE: &[(&str, &str)] = &[
 const GUARDED: &[&str] = &["jobs", "results", "sweep_points"];
 
 /// SQL keywords that may follow a table name where no alias is given.
-const NOT_ALIAS: &[&str] = &[
-    "WHERE",
-    "JOIN",
-    "LEFT",
-    "INNER",
-    "ON",
-    "SET",
-    "GROUP",
-    "ORDER",
-    "LIMIT",
-    "VALUES",
-    "SELECT",
-    "AND",
-    "OR",
-    "USING",
-    "DEFAULT",
-    "RETURNING",
-    "WHEN",
-    "END",
-];
+const NOT_ALIAS: &str = "WHERE JOIN LEFT INNER ON SET GROUP ORDER LIMIT VALUES SELECT AND OR \
+                         USING DEFAULT RETURNING WHEN END";
 
 /// The names a statement gives the guarded tables: the table names and their aliases
 /// (`FROM jobs j`, `JOIN jobs AS c`).
@@ -71,7 +54,9 @@ fn guarded_names(sql: &str) -> Vec<String> {
             next += 1;
         }
         if let Some(alias) = tokens.get(next)
-            && !NOT_ALIAS.iter().any(|w| w.eq_ignore_ascii_case(alias))
+            && !NOT_ALIAS
+                .split_whitespace()
+                .any(|w| w.eq_ignore_ascii_case(alias))
             && !GUARDED.contains(alias)
         {
             names.push(alias.to_string());
@@ -363,4 +348,45 @@ fn the_detector_sees_aliases_covering_scans_status_walks_and_sorts() {
             "sorts every matching row: USE TEMP B-TREE FOR ORDER BY".to_string(),
         ]
     );
+}
+
+/// The `?N` named in a query's leading comment lines.
+fn documented_parameters(text: &str) -> Vec<usize> {
+    let mut out = Vec::new();
+    for line in text.lines().take_while(|l| l.starts_with("--")) {
+        for part in line.split('?').skip(1) {
+            let digits: String = part.chars().take_while(char::is_ascii_digit).collect();
+            if let Ok(n) = digits.parse() {
+                out.push(n);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn every_query_prepares_against_a_migrated_database() {
+    on_populated(async |conn| {
+        for (stem, text) in ALL {
+            let statement = (&mut *conn)
+                .prepare(text.into_sql_str())
+                .await
+                .unwrap_or_else(|e| panic!("{stem}.sql does not prepare: {e}"));
+            let count = statement
+                .parameters()
+                .map_or(0, |p| p.either(|types| types.len(), |n| n));
+            let documented = documented_parameters(text);
+            let want: Vec<usize> = (1..=count).collect();
+            assert_eq!(
+                documented, want,
+                "{stem}.sql: its comment names parameters {documented:?}, the statement has \
+                 {count}"
+            );
+            assert!(
+                text.lines()
+                    .any(|l| !l.trim().is_empty() && !l.starts_with("--")),
+                "{stem}.sql: no statement"
+            );
+        }
+    });
 }

@@ -1,7 +1,8 @@
 //! The report reads: integrity, counts by state, a sweep's jobs with their results (whole or
 //! page by page), job specs and checkpoints, and what finished jobs cost.
 
-use super::{FinishedCost, POINTS_PAGE, PointRow, StateCounts, Store, StoreError, queries};
+use super::{POINTS_PAGE, PointRow, StateCounts, Store, StoreError, queries};
+use crate::sweep::estimate::MeasuredCost;
 use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 
@@ -200,13 +201,13 @@ impl Store {
     /// its run ended at, its wall seconds (with extensions) and its convergence verdict.
     pub fn finished_job_costs(
         &self,
-    ) -> Result<std::collections::HashMap<String, FinishedCost>, StoreError> {
+    ) -> Result<std::collections::HashMap<String, MeasuredCost>, StoreError> {
         let rows: Vec<(String, f64, f64, Option<i64>)> =
             self.run(sqlx::query_as(queries::FINISHED_JOB_COSTS).fetch_all(&self.pool))?;
         Ok(rows
             .into_iter()
             .map(|(id, simulated_time, wall_seconds, converged)| {
-                let cost = FinishedCost {
+                let cost = MeasuredCost {
                     simulated_time,
                     wall_seconds,
                     converged: converged.map(|c| c != 0),

@@ -2,7 +2,7 @@
 //! refinement adds, the points `skip_invalid` left out, and the labels written to stored
 //! results (`wetgran reclassify`).
 
-use super::{LeftOut, REFINED_FROM, Store, StoreError, SweepRow, now, queries};
+use super::{Exec, LeftOut, REFINED_FROM, Store, StoreError, SweepRow, now, queries};
 use crate::sweep::file::SweepFile;
 use crate::sweep::spec::SweepJob;
 use sqlx::Row;
@@ -28,9 +28,8 @@ impl Store {
                 .bind(job)
                 .bind(phase)
                 .bind(decided_on.to_string())
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
         }
         Ok(())
     }
@@ -72,9 +71,8 @@ impl Store {
                 .bind(changed)
                 .bind(REFINED_FROM)
                 .bind(file.replicas as i64)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
             self.insert_points(tx, id, jobs, t).await?;
             Ok(())
         })?;
@@ -112,19 +110,21 @@ impl Store {
                 .bind(job.spec.canonical_json())
                 .bind(t)
                 .bind(&job.spec.start_from)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
             sqlx::query(queries::INSERT_SWEEP_POINT)
                 .bind(sweep_id)
                 .bind(job.point as i64)
                 .bind(job.replica as i64)
                 .bind(serde_json::to_string(&job.coords).expect("coords serialize"))
                 .bind(&job.id)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
-            self.mark_relabel_point(tx, sweep_id, &job.id).await?;
+                .exec(tx, self)
+                .await?;
+            sqlx::query(queries::MARK_RELABEL_POINT)
+                .bind(sweep_id)
+                .bind(&job.id)
+                .exec(tx, self)
+                .await?;
         }
         Ok(())
     }
@@ -138,9 +138,8 @@ impl Store {
             sqlx::query(queries::TOUCH_SWEEP)
                 .bind(sweep_id)
                 .bind(t)
-                .execute(&mut **tx)
-                .await
-                .map_err(|e| self.db(e))?;
+                .exec(tx, self)
+                .await?;
             wetgran_core::test_pause::pause_at("refine");
             Ok(())
         })

@@ -4,9 +4,11 @@
 //! relabelling clears the marks in the transaction that writes the labels. A crash between
 //! the two leaves the marks, so the next relabelling still sees those results: the marks are
 //! what lets a relabelling after a run read only the lines that changed instead of every
-//! result of the sweep.
+//! result of the sweep. The marks are written by `mark_relabel_job.sql` (a stored or merged
+//! result, in every sweep holding the job) and `mark_relabel_point.sql` (a job with a result
+//! added to a sweep).
 
-use super::{PointRow, Store, StoreError, queries};
+use super::{Exec, PointRow, Store, StoreError, queries};
 use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 
@@ -28,38 +30,6 @@ pub struct PointSpec {
 }
 
 impl Store {
-    /// Marks `job_id`'s result as not yet relabelled in every sweep holding it, inside an open
-    /// transaction (the one that stores the result).
-    pub(super) async fn mark_relabel_job(
-        &self,
-        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
-        job_id: &str,
-    ) -> Result<(), StoreError> {
-        sqlx::query(queries::MARK_RELABEL_JOB)
-            .bind(job_id)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
-        Ok(())
-    }
-
-    /// Marks `job_id` as not yet relabelled in sweep `sweep_id` if it has a result, inside an
-    /// open transaction (the one that adds it to the sweep).
-    pub(super) async fn mark_relabel_point(
-        &self,
-        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
-        sweep_id: i64,
-        job_id: &str,
-    ) -> Result<(), StoreError> {
-        sqlx::query(queries::MARK_RELABEL_POINT)
-            .bind(sweep_id)
-            .bind(job_id)
-            .execute(&mut **tx)
-            .await
-            .map_err(|e| self.db(e))?;
-        Ok(())
-    }
-
     /// The jobs of sweep `sweep_id` whose result (or its removal) no relabelling has seen.
     pub fn relabel_pending(&self, sweep_id: i64) -> Result<Vec<String>, StoreError> {
         let (lo, hi) = range(sweep_id);
@@ -148,9 +118,8 @@ impl Store {
                 sqlx::query(queries::CLEAR_RELABEL_PENDING)
                     .bind(a)
                     .bind(b)
-                    .execute(&mut **tx)
-                    .await
-                    .map_err(|e| self.db(e))?;
+                    .exec(tx, self)
+                    .await?;
             }
             Ok(())
         })

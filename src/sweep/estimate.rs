@@ -37,9 +37,10 @@ pub struct PlannedJob {
     pub start: String,
 }
 
-/// A finished job's measured cost.
+/// A finished job's measured cost (`Store::finished_job_costs`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeasuredCost {
+    /// Wall seconds of the attempt that finished, plus any extensions.
     pub wall_seconds: f64,
     /// The simulated time its run ended at.
     pub simulated_time: f64,
@@ -141,14 +142,9 @@ pub fn nearest_rate(samples: &[RateSample], position: &[f64], start: &str) -> Op
     } else {
         same
     };
-    let mut best: Option<(f64, f64)> = None;
-    for s in pool {
-        let d = dist(s);
-        if best.is_none_or(|(bd, _)| d < bd) {
-            best = Some((d, s.seconds_per_time));
-        }
-    }
-    best.map(|(_, r)| r)
+    // `min_by` keeps the first of equal distances.
+    let nearest = pool.into_iter().min_by(|a, b| dist(a).total_cmp(&dist(b)));
+    nearest.map(|s| s.seconds_per_time)
 }
 
 /// Which jobs `sweep estimate` samples (indices into `starts`, the start mode of each job in
@@ -325,20 +321,17 @@ pub fn planned_jobs(
         .collect()
 }
 
-/// A grid point's index along each axis (row-major, the last axis fastest), scaled to `[0, 1]`.
+/// A grid point's index along each axis ([`super::spec::grid_index`]), scaled to `[0, 1]`.
 fn grid_position(point: usize, lens: &[usize]) -> Vec<f64> {
-    let mut rest = point;
-    let mut position = vec![0.0; lens.len()];
-    for (a, &len) in lens.iter().enumerate().rev() {
-        let i = rest % len;
-        rest /= len;
-        position[a] = if len > 1 {
-            i as f64 / (len - 1) as f64
-        } else {
-            0.0
-        };
-    }
-    position
+    let index = super::spec::grid_index(point, lens);
+    index
+        .iter()
+        .zip(lens)
+        .map(|(&i, &len)| match len {
+            1 => 0.0,
+            _ => i as f64 / (len - 1) as f64,
+        })
+        .collect()
 }
 
 /// The spec a sampled job runs: `settle` time units, then `periods` driving periods, with no
@@ -471,6 +464,14 @@ mod tests {
         }
     }
 
+    fn sample(position: f64, seconds_per_time: f64, start: &str) -> RateSample {
+        RateSample {
+            position: vec![position],
+            seconds_per_time,
+            start: start.into(),
+        }
+    }
+
     #[test]
     fn independent_jobs_fill_the_workers_in_grid_order() {
         // Two workers, grid order 3, 3, 2, 2, 2: w0 runs 3 then 2 (ends 5) then 2 (ends 7),
@@ -508,18 +509,7 @@ mod tests {
             job(0.4, 20.0, 80.0),
             job(1.0, 30.0, 120.0),
         ];
-        let samples = [
-            RateSample {
-                position: vec![0.0],
-                seconds_per_time: 1.0,
-                start: "hot".into(),
-            },
-            RateSample {
-                position: vec![1.0],
-                seconds_per_time: 3.0,
-                start: "hot".into(),
-            },
-        ];
+        let samples = [sample(0.0, 1.0, "hot"), sample(1.0, 3.0, "hot")];
         assert_eq!(
             job_seconds(&jobs, &samples, RunLength::FirstCheck, false),
             vec![10.0, 20.0, 90.0]
@@ -592,18 +582,7 @@ mod tests {
         assert_eq!(sample_picks(&hot, 3), vec![0, 2, 4]);
         assert_eq!(sample_picks(&hot, 1), vec![2]);
         // A cold job takes the cold sample's rate even where a hot sample is nearer.
-        let samples = [
-            RateSample {
-                position: vec![0.0],
-                seconds_per_time: 1.0,
-                start: "hot".into(),
-            },
-            RateSample {
-                position: vec![1.0],
-                seconds_per_time: 5.0,
-                start: "cold".into(),
-            },
-        ];
+        let samples = [sample(0.0, 1.0, "hot"), sample(1.0, 5.0, "cold")];
         assert_eq!(nearest_rate(&samples, &[0.1], "hot"), Some(1.0));
         assert_eq!(nearest_rate(&samples, &[0.1], "cold"), Some(5.0));
         // A mode with no sample falls back to the nearest of any mode.

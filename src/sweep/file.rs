@@ -803,40 +803,30 @@ fn parse_continuation(
         .iter()
         .find(|(n, _, _)| *n == name)
         .map_or(name, |(_, k, _)| *k);
+    let axis_err =
+        |msg: String| SweepError::new(file, at(&raw.axis), "sweep.continuation.axis", msg);
     let Some(axis) = axes.iter().position(|a| a.name == name || a.key == key) else {
         let names: Vec<&str> = axes.iter().map(|a| a.name.as_str()).collect();
-        return Err(SweepError::new(
-            file,
-            at(&raw.axis),
-            "sweep.continuation.axis",
-            format!(
-                "= {name:?} is not an axis of this sweep (axes: {})",
-                if names.is_empty() {
-                    "none".to_string()
-                } else {
-                    names.join(", ")
-                }
-            ),
-        ));
+        let names = if names.is_empty() {
+            "none".to_string()
+        } else {
+            names.join(", ")
+        };
+        return Err(axis_err(format!(
+            "= {name:?} is not an axis of this sweep (axes: {names})"
+        )));
     };
     if axes[axis].values.iter().any(|v| v.as_f64().is_none()) {
-        return Err(SweepError::new(
-            file,
-            at(&raw.axis),
-            "sweep.continuation.axis",
-            format!(
-                "= {name:?}: a continuation runs along a numeric axis; {} has non-numeric values",
-                axes[axis].key
-            ),
-        ));
+        return Err(axis_err(format!(
+            "= {name:?}: a continuation runs along a numeric axis; {} has non-numeric values",
+            axes[axis].key
+        )));
     }
     if axes[axis].key == "initial.start" || axes[axis].key == "initial.seed" {
-        return Err(SweepError::new(
-            file,
-            at(&raw.axis),
-            "sweep.continuation.axis",
-            format!("= {name:?}: cannot continue along {}", axes[axis].key),
-        ));
+        return Err(axis_err(format!(
+            "= {name:?}: cannot continue along {}",
+            axes[axis].key
+        )));
     }
     let descending = match raw.direction.as_ref().map(|d| (d, d.get_ref().as_str())) {
         None | Some((_, "ascending")) => false,

@@ -256,20 +256,6 @@ fn to_toml(v: &serde_json::Value) -> Result<toml::Value, String> {
     toml::Value::try_from(v).map_err(|e| format!("value {v} cannot be written to a scene: {e}"))
 }
 
-fn number(t: &toml::Table, key: &str, file: &SweepFile) -> Result<Option<f64>, SweepError> {
-    match t.get(key) {
-        None => Ok(None),
-        Some(toml::Value::Float(f)) => Ok(Some(*f)),
-        Some(toml::Value::Integer(i)) => Ok(Some(*i as f64)),
-        Some(other) => Err(SweepError::new(
-            &file.path.display().to_string(),
-            super::file::key_line(&file.text, &["observe"], key),
-            &format!("observe.{key}"),
-            format!("= {other} is not a number"),
-        )),
-    }
-}
-
 /// A job's scene tree, its base `observe.transient_periods`, and the `[observe]` keys in time
 /// units held back until the run length is known (see `SweepFile::point_tree`).
 type PointTree = (toml::Table, Option<f64>, Vec<(&'static str, toml::Value)>);
@@ -306,9 +292,19 @@ impl SweepFile {
         )
     }
 
+    /// `observe.<key>` of the sweep file as a number, if given.
+    fn observe_number(&self, key: &str) -> Result<Option<f64>, SweepError> {
+        match self.observe.get(key) {
+            None => Ok(None),
+            Some(toml::Value::Float(f)) => Ok(Some(*f)),
+            Some(toml::Value::Integer(i)) => Ok(Some(*i as f64)),
+            Some(other) => Err(self.observe_err(key, format!("= {other} is not a number"))),
+        }
+    }
+
     /// The settings every job of the sweep shares, checked.
     fn prepare(&self) -> Result<Prepared, SweepError> {
-        let samples_given = number(&self.observe, "samples_per_period", self)?;
+        let samples_given = self.observe_number("samples_per_period")?;
         let samples_per_period = samples_given.unwrap_or(DEFAULT_SAMPLES_PER_PERIOD);
         if !(samples_per_period.is_finite() && samples_per_period > 0.0) {
             return Err(self.observe_err(
@@ -316,7 +312,7 @@ impl SweepFile {
                 format!("= {samples_per_period} is out of range: must be finite and > 0"),
             ));
         }
-        let transient = number(&self.observe, "transient_periods", self)?;
+        let transient = self.observe_number("transient_periods")?;
         if let Some(t) = transient
             && !(t.is_finite() && t >= 0.0)
         {
@@ -357,14 +353,9 @@ impl SweepFile {
         let points = self.points();
         let mut jobs = Vec::with_capacity(points * self.replicas as usize);
         let mut skipped = Vec::new();
+        let lens: Vec<usize> = self.axes.iter().map(|a| a.values.len()).collect();
         'points: for point in 0..points {
-            // Row-major index -> one value per axis, the last axis fastest.
-            let mut rest = point;
-            let mut idx = vec![0; self.axes.len()];
-            for (a, axis) in self.axes.iter().enumerate().rev() {
-                idx[a] = rest % axis.values.len();
-                rest /= axis.values.len();
-            }
+            let idx = grid_index(point, &lens);
             let coords: Vec<serde_json::Value> = self
                 .axes
                 .iter()
@@ -529,9 +520,8 @@ impl SweepFile {
     ) -> Result<PointTree, SweepError> {
         let file = self.path.display().to_string();
         let mut tree = self.scene_tree.clone();
-        // The sweep's `[observe]`, `[classify]` and `[convergence]` tables go into the
-        // scene's sections
-        // of those names (over what the base scene sets), validated with the scene.
+        // The sweep's `[observe]`, `[classify]` and `[convergence]` tables go into the scene's
+        // sections of those names (over what the base scene sets), validated with the scene.
         for (section, table) in [
             ("observe", &self.observe),
             ("classify", &self.classify),
@@ -608,114 +598,109 @@ impl SweepFile {
             transient,
             base_seed,
         } = *prep;
-        {
-            let where_ = describe_point(self, coords, replica);
-            let (mut tree, base_transient, deferred) =
-                self.point_tree(coords, replica, base_seed)?;
-            // `[convergence]` is checked against the run length, which `sweep.periods` sets
-            // below: it joins the scene after that conversion (a base scene's own run length
-            // would otherwise decide whether its cap is long enough).
-            let convergence = if self.periods.is_some() {
-                tree.remove("convergence")
-            } else {
-                None
-            };
-            let scene = match self.scene_of(&tree, &where_) {
-                Ok(s) => s,
-                // A point failing a constraint of the scene may be left out; a key outside its
-                // own range is an error of the sweep file.
-                Err(e) if e.constraint.is_some() => return Ok(Err(e)),
-                Err(e) => return Err(e),
-            };
-            let period = scene.driving_period();
-            let mut scene = scene;
-            if let Some(p) = self.periods {
-                scene.run.duration = p * period;
-            }
-            if let Some(c) = convergence {
-                scene.convergence = Some(c.try_into().map_err(|e: toml::de::Error| {
-                    let (file, line) = self.locate("convergence");
-                    SweepError::new(
-                        &file,
-                        line,
-                        "convergence",
-                        format!("{}{where_}", e.message()),
-                    )
-                })?);
-            }
-            // Sampling: the sweep's `samples_per_period`, else the scene's own `[observe]`
-            // setting if the base scene has one, else the sweep default.
-            let samples_per_period =
-                if samples_given.is_some() || !self.base_sets("observe.samples_per_period") {
-                    samples_per_period
-                } else {
-                    scene.observe.samples_per_period
-                };
-            scene.run.sample_interval = period / samples_per_period;
-            scene.observe.samples_per_period = samples_per_period;
-            let transient_periods = match (transient, base_transient) {
-                (Some(t), _) | (None, Some(t)) => t,
-                (None, None) => DEFAULT_TRANSIENT_FRACTION * scene.run.duration / period,
-            };
-            scene.observe.transient_periods = transient_periods;
-            for (key, v) in deferred {
-                let Some(x) = v.as_float().or(v.as_integer().map(|i| i as f64)) else {
-                    return Err(self.observe_err(key, format!("= {v} is not a number{where_}")));
-                };
-                match key {
-                    "transient_time" => scene.observe.transient_time = x,
-                    _ => scene.observe.min_sample_interval = x,
-                }
-            }
-            if transient_periods * period >= scene.run.duration {
-                return Err(self.observe_err(
-                    "transient_periods",
-                    format!(
-                        "= {transient_periods} periods is not shorter than the run \
-                             ({} periods){where_}",
-                        scene.run.duration / period
-                    ),
-                ));
-            }
-            // The converted run length and sampling must pass validation too.
-            scene.validate(&file).map_err(|e| {
+        let where_ = describe_point(self, coords, replica);
+        let (mut tree, base_transient, deferred) = self.point_tree(coords, replica, base_seed)?;
+        // `[convergence]` is checked against the run length, which `sweep.periods` sets
+        // below: it joins the scene after that conversion (a base scene's own run length
+        // would otherwise decide whether its cap is long enough).
+        let convergence = if self.periods.is_some() {
+            tree.remove("convergence")
+        } else {
+            None
+        };
+        let mut scene = match self.scene_of(&tree, &where_) {
+            Ok(s) => s,
+            // A point failing a constraint of the scene may be left out; a key outside its
+            // own range is an error of the sweep file.
+            Err(e) if e.constraint.is_some() => return Ok(Err(e)),
+            Err(e) => return Err(e),
+        };
+        let period = scene.driving_period();
+        if let Some(p) = self.periods {
+            scene.run.duration = p * period;
+        }
+        if let Some(c) = convergence {
+            scene.convergence = Some(c.try_into().map_err(|e: toml::de::Error| {
+                let (file, line) = self.locate("convergence");
                 SweepError::new(
                     &file,
-                    self.periods
-                        .and(super::file::key_line(&self.text, &["sweep"], "periods")),
-                    &e.key,
-                    format!("{}{where_}", e.message),
+                    line,
+                    "convergence",
+                    format!("{}{where_}", e.message()),
                 )
-            })?;
-            // The time engine's damping calibration is spelled out in the spec: its default
-            // changed (issue 18, "engines like for like"), and a job id must not match a result
-            // computed under the old default (speed 1).
-            let c = &scene.contact;
-            let converts = (c.damping.is_none() && c.restitution < 1.0)
-                || (c.wall_damping.is_none() && c.wall_restitution < 1.0);
-            if scene.engine.kind == wetgran_core::scene::EngineKind::Time
-                && converts
-                && c.restitution_speed.is_none()
-            {
-                scene.contact.restitution_speed =
-                    Some(wetgran_core::scene::RestitutionSpeed::Word(
-                        wetgran_core::scene::AutoWord::Auto,
-                    ));
-            }
-            let spec = JobSpec {
-                format: SPEC_FORMAT,
-                scene,
-                start_from: None,
-            };
-            let id = spec.id();
-            Ok(Ok(SweepJob {
-                point,
-                replica,
-                coords: coords.to_vec(),
-                id,
-                spec,
-            }))
+            })?);
         }
+        // Sampling: the sweep's `samples_per_period`, else the scene's own `[observe]`
+        // setting if the base scene has one, else the sweep default.
+        let samples_per_period =
+            if samples_given.is_some() || !self.base_sets("observe.samples_per_period") {
+                samples_per_period
+            } else {
+                scene.observe.samples_per_period
+            };
+        scene.run.sample_interval = period / samples_per_period;
+        scene.observe.samples_per_period = samples_per_period;
+        let transient_periods = match (transient, base_transient) {
+            (Some(t), _) | (None, Some(t)) => t,
+            (None, None) => DEFAULT_TRANSIENT_FRACTION * scene.run.duration / period,
+        };
+        scene.observe.transient_periods = transient_periods;
+        for (key, v) in deferred {
+            let Some(x) = v.as_float().or(v.as_integer().map(|i| i as f64)) else {
+                return Err(self.observe_err(key, format!("= {v} is not a number{where_}")));
+            };
+            match key {
+                "transient_time" => scene.observe.transient_time = x,
+                _ => scene.observe.min_sample_interval = x,
+            }
+        }
+        if transient_periods * period >= scene.run.duration {
+            return Err(self.observe_err(
+                "transient_periods",
+                format!(
+                    "= {transient_periods} periods is not shorter than the run \
+                         ({} periods){where_}",
+                    scene.run.duration / period
+                ),
+            ));
+        }
+        // The converted run length and sampling must pass validation too.
+        scene.validate(&file).map_err(|e| {
+            SweepError::new(
+                &file,
+                self.periods
+                    .and(super::file::key_line(&self.text, &["sweep"], "periods")),
+                &e.key,
+                format!("{}{where_}", e.message),
+            )
+        })?;
+        // The time engine's damping calibration is spelled out in the spec: its default
+        // changed (issue 18, "engines like for like"), and a job id must not match a result
+        // computed under the old default (speed 1).
+        let c = &scene.contact;
+        let converts = (c.damping.is_none() && c.restitution < 1.0)
+            || (c.wall_damping.is_none() && c.wall_restitution < 1.0);
+        if scene.engine.kind == wetgran_core::scene::EngineKind::Time
+            && converts
+            && c.restitution_speed.is_none()
+        {
+            scene.contact.restitution_speed = Some(wetgran_core::scene::RestitutionSpeed::Word(
+                wetgran_core::scene::AutoWord::Auto,
+            ));
+        }
+        let spec = JobSpec {
+            format: SPEC_FORMAT,
+            scene,
+            start_from: None,
+        };
+        let id = spec.id();
+        Ok(Ok(SweepJob {
+            point,
+            replica,
+            coords: coords.to_vec(),
+            id,
+            spec,
+        }))
     }
 
     /// Parses and validates one job's scene tree; errors point at the axis, the `[scene]` table
@@ -745,6 +730,17 @@ impl SweepFile {
             out
         })
     }
+}
+
+/// A grid point's index along each axis of lengths `lens` (row-major, the last axis fastest).
+pub(crate) fn grid_index(point: usize, lens: &[usize]) -> Vec<usize> {
+    let mut rest = point;
+    let mut index = vec![0; lens.len()];
+    for (a, &len) in lens.iter().enumerate().rev() {
+        index[a] = rest % len;
+        rest /= len;
+    }
+    index
 }
 
 /// `" (at Gamma = 2, E* = 3, replica 1)"` for error messages.
