@@ -230,160 +230,103 @@ impl ObserveSpec {
 
     /// The transient, the lateral bins and the sample spacing, against the run's first window.
     fn validate_sampling(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
-        let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
-        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
+        let check = |key: &str, v: f64, ok: bool, must: &str| {
+            SceneError::unless(ok, origin, &format!("observe.{key}"), v, must)
+        };
         let period = scene.driving_period();
-        // With a run-length policy the first window ends at its first check, not at
-        // `run.duration`.
+        // With a run-length policy the first window ends at its first check.
         let (duration, run_name) = scene
             .convergence
             .as_ref()
             .map_or((scene.run.duration, "run.duration"), |c| {
                 (c.first_check(scene), "the [convergence] first check")
             });
-        // A length in time units that must fit inside the first window.
-        let within_first_window = |key: &str, v: f64| {
-            if v.is_finite() && v >= 0.0 && v < duration {
-                Ok(())
-            } else {
-                Err(err(
-                    key,
-                    format!(
-                        "= {v} is out of range: must be >= 0 and shorter than the first window, \
-                         i.e. < {run_name} = {duration}"
-                    ),
-                ))
-            }
-        };
-        within_first_window("transient_time", self.transient_time)?;
+        let first_window =
+            format!(">= 0 and shorter than the first window, i.e. < {run_name} = {duration}");
+        let t = self.transient_time;
+        let ok = t.is_finite() && t >= 0.0 && t < duration;
+        check("transient_time", t, ok, &first_window)?;
         let t = self.transient_periods;
-        if !(t.is_finite() && t >= 0.0 && t * period < duration) {
-            return Err(err(
-                "transient_periods",
-                format!(
-                    "= {t} is out of range: must be >= 0 and shorter than the run, i.e. < \
-                     {run_name} / period = {duration} / {period:.6} = {:.6} (one period is {})",
-                    duration / period,
-                    if scene.drive_motion().is_some() {
-                        "the driving period 2 pi / omega"
-                    } else {
-                        "one time unit without a drive"
-                    }
-                ),
-            ));
-        }
-        if !finite_pos(self.bin_width) {
-            return Err(err(
-                "bin_width",
-                format!(
-                    "= {} is out of range: must be > 0 (a width above L_x gives one bin)",
-                    self.bin_width
-                ),
-            ));
-        }
+        let must = format!(
+            ">= 0 and shorter than the run, i.e. < {run_name} / period = {duration} / \
+             {period:.6} = {:.6} (one period is {})",
+            duration / period,
+            if scene.drive_motion().is_some() {
+                "the driving period 2 pi / omega"
+            } else {
+                "one time unit without a drive"
+            }
+        );
+        check(
+            "transient_periods",
+            t,
+            t.is_finite() && t >= 0.0 && t * period < duration,
+            &must,
+        )?;
+        let w = self.bin_width;
+        let must = "> 0 (a width above L_x gives one bin)";
+        check("bin_width", w, w.is_finite() && w > 0.0, must)?;
         let s = self.samples_per_period;
-        if !finite_pos(s) {
-            return Err(err(
-                "samples_per_period",
-                format!("= {s} is out of range: must be > 0"),
-            ));
-        }
-        within_first_window("min_sample_interval", self.min_sample_interval)?;
-        Ok(())
+        check("samples_per_period", s, s.is_finite() && s > 0.0, "> 0")?;
+        let t = self.min_sample_interval;
+        let ok = t.is_finite() && t >= 0.0 && t < duration;
+        check("min_sample_interval", t, ok, &first_window)
     }
 
     /// The observers' own settings: layers, the line rule, mobility, bonds, clusters,
     /// stationarity.
     fn validate_observers(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
-        let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
-        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        if self.layers == 0 {
-            return Err(err(
-                "layers",
-                "= 0 is out of range: must be >= 1 (more layers than particles give one \
-                 particle per layer)"
-                    .into(),
-            ));
-        }
-        if !(finite_pos(self.lc_max_edge) && self.lc_max_edge >= 1.0) {
-            return Err(err(
-                "lc_max_edge",
-                format!(
-                    "= {} is out of range: must be >= 1 (units of d; neighbours touch at 1)",
-                    self.lc_max_edge
-                ),
-            ));
-        }
+        let check = |key: &str, v: &dyn std::fmt::Display, ok: bool, must: &str| {
+            SceneError::unless(ok, origin, &format!("observe.{key}"), v, must)
+        };
+        let must = ">= 1 (more layers than particles give one particle per layer)";
+        check("layers", &self.layers, self.layers > 0, must)?;
+        let e = self.lc_max_edge;
+        let must = ">= 1 (units of d; neighbours touch at 1)";
+        check("lc_max_edge", &e, e.is_finite() && e >= 1.0, must)?;
         let m = self.lc_flip_margin;
-        if !(m.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&m)) {
-            return Err(err(
-                "lc_flip_margin",
-                format!("= {m} is out of range: must be in [0, pi/2) (radians)"),
-            ));
-        }
-        if !(self.lc_enter_factor.is_finite() && self.lc_enter_factor >= 1.0) {
-            return Err(err(
-                "lc_enter_factor",
-                format!(
-                    "= {} is out of range: must be >= 1 (touching grains are at 1)",
-                    self.lc_enter_factor
-                ),
-            ));
-        }
-        if !(self.lc_leave_factor.is_finite() && self.lc_leave_factor > self.lc_enter_factor) {
-            return Err(err(
-                "lc_leave_factor",
-                format!(
-                    "= {} is out of range: must be finite and > lc_enter_factor = {}",
-                    self.lc_leave_factor, self.lc_enter_factor
-                ),
-            ));
-        }
-        if !finite_pos(self.mobility_lag) {
-            return Err(err(
-                "mobility_lag",
-                format!(
-                    "= {} is out of range: must be finite and > 0 (time units)",
-                    self.mobility_lag
-                ),
-            ));
-        }
-        if !(self.bond_time.is_finite() && self.bond_time >= 0.0) {
-            return Err(err(
-                "bond_time",
-                format!(
-                    "= {} is out of range: must be finite and >= 0 (time units)",
-                    self.bond_time
-                ),
-            ));
-        }
-        if self.cluster_min_size < 2 {
-            return Err(err(
-                "cluster_min_size",
-                format!(
-                    "= {} is out of range: must be >= 2 (grains)",
-                    self.cluster_min_size
-                ),
-            ));
-        }
+        let ok = m.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&m);
+        check("lc_flip_margin", &m, ok, "in [0, pi/2) (radians)")?;
+        let (enter, leave) = (self.lc_enter_factor, self.lc_leave_factor);
+        let must = ">= 1 (touching grains are at 1)";
+        check(
+            "lc_enter_factor",
+            &enter,
+            enter.is_finite() && enter >= 1.0,
+            must,
+        )?;
+        let must = format!("finite and > lc_enter_factor = {enter}");
+        check(
+            "lc_leave_factor",
+            &leave,
+            leave.is_finite() && leave > enter,
+            &must,
+        )?;
+        let lag = self.mobility_lag;
+        let must = "finite and > 0 (time units)";
+        check("mobility_lag", &lag, lag.is_finite() && lag > 0.0, must)?;
+        let b = self.bond_time;
+        let must = "finite and >= 0 (time units)";
+        check("bond_time", &b, b.is_finite() && b >= 0.0, must)?;
+        let size = self.cluster_min_size;
+        check("cluster_min_size", &size, size >= 2, ">= 2 (grains)")?;
         if self.location_changes == Some(false)
             && scene.classify.mobility == Mobility::LocationChanges
         {
-            return Err(err(
-                "location_changes",
+            return Err(SceneError::new(
+                origin,
+                "observe.location_changes",
                 "= false, but classify.mobility = \"location_changes\" decides solid versus \
-                 mobile by f_lc, which only this observer measures: set it true or leave it out"
-                    .into(),
+                 mobile by f_lc, which only this observer measures: set it true or leave it out",
             ));
         }
         let tol = self.stationarity_tolerance;
-        if !(tol.is_finite() && tol > 0.0) {
-            return Err(err(
-                "stationarity_tolerance",
-                format!("= {tol} is out of range: must be > 0"),
-            ));
-        }
-        Ok(())
+        check(
+            "stationarity_tolerance",
+            &tol,
+            tol.is_finite() && tol > 0.0,
+            "> 0",
+        )
     }
 }
 

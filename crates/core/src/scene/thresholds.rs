@@ -148,8 +148,8 @@ impl Default for Thresholds {
 impl Thresholds {
     /// Checks every key of `[classify]`.
     pub fn validate(&self, origin: &str) -> Result<(), crate::scene::SceneError> {
-        let bad = |key: &str, msg: String| {
-            crate::scene::SceneError::new(origin, &format!("classify.{key}"), msg)
+        let check = |key: &str, v: f64, ok: bool, must: &str| {
+            crate::scene::SceneError::unless(ok, origin, &format!("classify.{key}"), v, must)
         };
         let checks = [
             ("solid_diffusion", self.solid_diffusion),
@@ -160,58 +160,50 @@ impl Thresholds {
             ("shear_e_par", self.shear_e_par),
         ];
         for (key, v) in checks {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(bad(
-                    key,
-                    format!("= {v} is out of range: must be finite and >= 0"),
-                ));
-            }
+            check(key, v, v.is_finite() && v >= 0.0, "finite and >= 0")?;
         }
         let q = self.coexistence_level;
-        if !(q.is_finite() && q > 0.5 && q < 1.0) {
-            return Err(bad(
-                "coexistence_level",
-                format!("= {q} is out of range: must be in (0.5, 1) (a quantile, e.g. 0.99)"),
-            ));
-        }
+        let quantile = "in (0.5, 1) (a quantile, e.g. 0.99)";
+        check(
+            "coexistence_level",
+            q,
+            q.is_finite() && q > 0.5 && q < 1.0,
+            quantile,
+        )?;
         let a = self.diffusive_exponent;
-        if !(a.is_finite() && a > 0.0 && a <= 1.0) {
-            return Err(bad(
-                "diffusive_exponent",
-                format!("= {a} is out of range: must be in (0, 1] (1: diffusion, 0: caged)"),
-            ));
-        }
-        let f = self.cluster_fraction;
-        if !(f.is_finite() && (0.0..=1.0).contains(&f)) {
-            return Err(bad(
-                "cluster_fraction",
-                format!("= {f} is out of range: must be in [0, 1]"),
-            ));
-        }
-        let c = self.coexistence_contrast;
-        if !(c.is_finite() && (0.0..=1.0).contains(&c)) {
-            return Err(bad(
-                "coexistence_contrast",
-                format!("= {c} is out of range: must be in [0, 1]"),
-            ));
+        let exponent = "in (0, 1] (1: diffusion, 0: caged)";
+        check(
+            "diffusive_exponent",
+            a,
+            a.is_finite() && a > 0.0 && a <= 1.0,
+            exponent,
+        )?;
+        for (key, f) in [
+            ("cluster_fraction", self.cluster_fraction),
+            ("coexistence_contrast", self.coexistence_contrast),
+        ] {
+            check(
+                key,
+                f,
+                f.is_finite() && (0.0..=1.0).contains(&f),
+                "in [0, 1]",
+            )?;
         }
         let j = self.line_jump_ratio;
-        if !(j.is_finite() && j > 1.0) {
-            return Err(bad(
-                "line_jump_ratio",
-                format!("= {j} is out of range: must be finite and > 1"),
-            ));
-        }
-        if self.gas_temperature < self.solid_temperature {
-            return Err(bad(
-                "gas_temperature",
-                format!(
-                    "= {} is out of range: must be >= classify.solid_temperature = {} (a gas is \
-                     hotter than a solid)",
-                    self.gas_temperature, self.solid_temperature
-                ),
-            ));
-        }
-        Ok(())
+        check(
+            "line_jump_ratio",
+            j,
+            j.is_finite() && j > 1.0,
+            "finite and > 1",
+        )?;
+        check(
+            "gas_temperature",
+            self.gas_temperature,
+            self.gas_temperature >= self.solid_temperature,
+            &format!(
+                ">= classify.solid_temperature = {} (a gas is hotter than a solid)",
+                self.solid_temperature
+            ),
+        )
     }
 }
