@@ -23,41 +23,26 @@ pub(crate) const DEFAULT_CAP_FACTOR: f64 = 4.0;
 
 /// Scene section `[convergence]` (every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct ConvergenceSpec {
     /// Shortest run in periods (default 0: `run.duration` alone).
-    #[serde(default)]
     pub min_periods: f64,
     /// Shortest run in time units (default 0). A high-Gamma period is short: this keeps the
     /// run long in physical time as well.
-    #[serde(default)]
     pub min_time: f64,
     /// Longest run in periods (default `4 t_1 / T`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_periods: Option<f64>,
     /// Longest run in time units, where that is longer than `max_periods` periods (default
     /// none).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_time: Option<f64>,
     /// Blocks the window is cut into for the tests (default 4, 3 ..= 64).
-    #[serde(default = "default_blocks")]
     pub blocks: usize,
     /// `k`: block means must agree within `k` standard errors (default 3, in (0, 10]).
-    #[serde(default = "default_sigmas")]
     pub sigmas: f64,
     /// Relative allowance `tol / max(|mean|, floor)` (default 0.02, in [0, 1)).
-    #[serde(default = "default_rel_tolerance")]
     pub rel_tolerance: f64,
-}
-
-fn default_blocks() -> usize {
-    4
-}
-fn default_sigmas() -> f64 {
-    3.0
-}
-fn default_rel_tolerance() -> f64 {
-    0.02
 }
 
 impl Default for ConvergenceSpec {
@@ -67,9 +52,9 @@ impl Default for ConvergenceSpec {
             min_time: 0.0,
             max_periods: None,
             max_time: None,
-            blocks: default_blocks(),
-            sigmas: default_sigmas(),
-            rel_tolerance: default_rel_tolerance(),
+            blocks: 4,
+            sigmas: 3.0,
+            rel_tolerance: 0.02,
         }
     }
 }

@@ -48,17 +48,17 @@ impl Scene {
     /// With the time-driven engine: no key of the event engine (those with plain-number
     /// defaults count as set when they differ from their default).
     fn reject_event_keys(&self, c: &Check<'_>) -> Result<(), SceneError> {
-        let e = &self.engine;
-        let d = &self.drive;
+        let (e, d) = (&self.engine, &self.drive);
+        let default = scene::EngineSpec::default();
         let event_only = [
-            ("engine.tc", e.tc != scene::default_tc()),
+            ("engine.tc", e.tc != default.tc),
             (
                 "engine.min_rebound_speed",
-                e.min_rebound_speed != scene::default_min_rebound(),
+                e.min_rebound_speed != default.min_rebound_speed,
             ),
             (
                 "engine.overlap_tolerance",
-                e.overlap_tolerance != scene::default_overlap_tolerance(),
+                e.overlap_tolerance != default.overlap_tolerance,
             ),
             ("engine.cell_size", e.cell_size != 0.0),
             (
