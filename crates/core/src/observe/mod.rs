@@ -811,16 +811,7 @@ fn lateral_profiles(
     let d = scene.particles.diameter;
     let dim = scene.dimension;
     let n_lat = (dim - 1) as f64;
-    let height = scene.container.size[dim - 1];
-    // A representative frame geometry for the bin measures.
-    let lateral_measure = if dim == 2 {
-        bins.width
-    } else if bins.is_plane() {
-        bins.width * bins.width_y
-    } else {
-        bins.width * scene.container.size[1]
-    };
-    let bin_volume = lateral_measure * height;
+    let bin_volume = bins.bin_volume(&scene.container.size);
     // n_cb: bridges per lateral measure per unit height, units d^-D (docs/model.md 7, Eq. 3.3).
     let ncb_scale = d.powi(dim as i32) / bin_volume;
     let n_cb: Vec<f64> = per_sample(field::BRIDGES)
