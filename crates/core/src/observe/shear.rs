@@ -89,9 +89,11 @@ impl ShearObserver {
             e_par,
             e_perp,
             cycles: cycles(&series, e_par),
-            series: keep_series
-                .then(|| self.samples.iter().map(|s| (s.0, s.1, s.2)).collect())
-                .unwrap_or_default(),
+            series: if keep_series {
+                self.samples.iter().map(|s| (s.0, s.1, s.2)).collect()
+            } else {
+                Vec::new()
+            },
         }
     }
 }
