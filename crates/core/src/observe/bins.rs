@@ -116,17 +116,18 @@ impl LateralBins {
         })
     }
 
-    /// Lateral measure of one bin: its width in 2D; width times `L_y` for 3D slabs; the cell's
-    /// area for 3D plane bins.
-    pub(crate) fn lateral_measure(&self, frame: &Frame) -> f64 {
-        if frame.dimension == 2 {
-            return self.width;
-        }
-        if self.is_plane() {
+    /// Volume (area in 2D) of one bin in a box of edges `size` (height last): its lateral
+    /// measure (width in 2D; width times `L_y` for 3D slabs; the cell's area for 3D plane bins)
+    /// times the height.
+    pub(crate) fn bin_volume(&self, size: &[f64]) -> f64 {
+        let lateral = if size.len() == 2 {
+            self.width
+        } else if self.is_plane() {
             self.width * self.width_y
         } else {
-            self.width * frame.box_size[1]
-        }
+            self.width * size[1]
+        };
+        lateral * size[size.len() - 1]
     }
 
     /// Bin of the midpoint of the pair `(i, j)` (nearest periodic image of `j` seen from `i`).

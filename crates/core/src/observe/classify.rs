@@ -492,7 +492,7 @@ pub fn classify_with(
             "sheared: E_par/{} = {:.4} {} {} -> {phase} (rule 4; unsheared rules would say: {})",
             obs.temperature_unit_name,
             sh.e_par,
-            if phase == Phase::S { "<=" } else { ">" },
+            above(sh.e_par, th.shear_e_par),
             th.shear_e_par,
             c.decided_on.reason
         );
@@ -787,49 +787,47 @@ fn describe_test(t: &CoexistenceTest, th: &Thresholds) -> String {
     }
 }
 
+/// The operator that holds between `x` and threshold `t`: `>` or `<=`.
+pub(crate) fn above(x: f64, t: f64) -> &'static str {
+    if x > t { ">" } else { "<=" }
+}
+
 /// One region's decision in words (`unit`: the temperature unit's name, `E_cb` or `m g d`).
 fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
     let mobility = match (r.mobility_from, r.diffusion, r.flc) {
         (Mobility::Displacement, Some(d), _) => {
             let floor = format!(
                 "D_lat = {d:.3e} {} {}",
-                if d > th.solid_diffusion { ">" } else { "<=" },
+                above(d, th.solid_diffusion),
                 th.solid_diffusion
             );
             match r.growth_exponent {
-                Some(a) => format!(
-                    "{floor}, MSD growth exponent {a:.2} {} {}{}",
-                    if a >= th.diffusive_exponent {
-                        ">="
-                    } else {
-                        "<"
-                    },
-                    th.diffusive_exponent,
-                    if a < th.diffusive_exponent && r.phase != Phase::S {
-                        " but spread beyond a cage"
-                    } else {
-                        ""
-                    }
-                ),
+                Some(a) => {
+                    let diffusive = a >= th.diffusive_exponent;
+                    format!(
+                        "{floor}, MSD growth exponent {a:.2} {} {}{}",
+                        if diffusive { ">=" } else { "<" },
+                        th.diffusive_exponent,
+                        if !diffusive && r.phase != Phase::S {
+                            " but spread beyond a cage"
+                        } else {
+                            ""
+                        }
+                    )
+                }
                 None => floor,
             }
         }
         (Mobility::LocationChanges, _, Some(f)) if f <= th.solid_flc && r.phase != Phase::S => {
             format!("f_lc = {f:.4} <= {} but too hot for bridges", th.solid_flc)
         }
-        (Mobility::LocationChanges, _, Some(f)) => format!(
-            "f_lc = {f:.4} {} {}",
-            if f > th.solid_flc { ">" } else { "<=" },
-            th.solid_flc
-        ),
+        (Mobility::LocationChanges, _, Some(f)) => {
+            format!("f_lc = {f:.4} {} {}", above(f, th.solid_flc), th.solid_flc)
+        }
         _ => format!(
             "T_g/{unit} = {:.4} {} {}",
             r.temperature,
-            if r.temperature > th.solid_temperature {
-                ">"
-            } else {
-                "<="
-            },
+            above(r.temperature, th.solid_temperature),
             th.solid_temperature
         ),
     };

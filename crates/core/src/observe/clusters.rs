@@ -257,13 +257,6 @@ pub fn close_pairs(frame: &Frame, gap: f64) -> Vec<(usize, usize)> {
     out
 }
 
-/// For the grains `members` of one cluster, their displacements over a lag with the cluster's
-/// rigid motion removed: `start[i]` and `end[i]` are grain `i`'s positions at the lag's ends
-/// (`dim` numbers each, periodic axes unwrapped continuously so that `end - start` is the true
-/// displacement); `periodic`, `box_size`: the box. Returns one residual vector per member, in
-/// the order of `members`. The translation is the mean displacement; the rotation is fitted
-/// about the centroid when the cluster spans less than half the box along every periodic axis
-/// (a cluster that wraps around the box cannot turn).
 /// Whether the grains `members` (positions `start`, `dim` per grain) spread over half the box or
 /// more along a periodic axis, measured from the first member by nearest image: a cluster that
 /// wraps around the box (a bed, a percolating network) and cannot turn as a whole.
@@ -289,6 +282,13 @@ pub(crate) fn spans_box(
     })
 }
 
+/// For the grains `members` of one cluster, their displacements over a lag with the cluster's
+/// rigid motion removed: `start[i]` and `end[i]` are grain `i`'s positions at the lag's ends
+/// (`dim` numbers each, periodic axes unwrapped continuously so that `end - start` is the true
+/// displacement); `periodic`, `box_size`: the box. Returns one residual vector per member, in
+/// the order of `members`. The translation is the mean displacement; the rotation is fitted
+/// about the centroid when the cluster spans less than half the box along every periodic axis
+/// (a cluster that wraps around the box cannot turn).
 pub(crate) fn rigid_residuals(
     members: &[usize],
     start: &[f64],

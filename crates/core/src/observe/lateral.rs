@@ -308,13 +308,10 @@ impl LateralObserver {
     fn book_sample(&mut self, frame: &Frame, bk: usize, bin: &[u32], members: &Membership) {
         let dim = frame.dimension;
         let nb = self.bins.n;
-        // Per-bin velocity sums for all grains and for members.
-        let mut sv_all = vec![0.0; nb * dim];
-        let mut sq_all = vec![0.0; nb];
-        let mut n_all = vec![0usize; nb];
-        let mut sv_cl = vec![0.0; nb * dim];
-        let mut sq_cl = vec![0.0; nb];
-        let mut n_cl = vec![0usize; nb];
+        // Per-bin velocity sums, `|v|^2` sums and counts: all grains, then members.
+        let mut sv = [vec![0.0; nb * dim], vec![0.0; nb * dim]];
+        let mut sq = [vec![0.0; nb], vec![0.0; nb]];
+        let mut n = [vec![0usize; nb], vec![0usize; nb]];
         let block = &mut self.blocks[bk];
         block.samples += 1;
         block.t1 = frame.time;
@@ -322,17 +319,12 @@ impl LateralObserver {
             let b = bin[i] as usize;
             let v = frame.v(i);
             let s2: f64 = v.iter().map(|x| x * x).sum();
-            n_all[b] += 1;
-            sq_all[b] += s2;
-            for k in 0..dim {
-                sv_all[b * dim + k] += v[k];
-            }
             let member = members.is_member(i);
-            if member {
-                n_cl[b] += 1;
-                sq_cl[b] += s2;
+            for g in 0..1 + usize::from(member) {
+                n[g][b] += 1;
+                sq[g][b] += s2;
                 for k in 0..dim {
-                    sv_cl[b * dim + k] += v[k];
+                    sv[g][b * dim + k] += v[k];
                 }
             }
             let s = &mut block.sums[b * field::COUNT..(b + 1) * field::COUNT];
@@ -348,15 +340,11 @@ impl LateralObserver {
         }
         for b in 0..nb {
             let s = &mut block.sums[b * field::COUNT..(b + 1) * field::COUNT];
-            let groups = [
-                (&sv_all, &sq_all, &n_all, field::T_ALL),
-                (&sv_cl, &sq_cl, &n_cl, field::T_CL),
-            ];
-            for (sv, sq, n, f) in groups {
-                let sums = &sv[b * dim..(b + 1) * dim];
-                if let Some(t) = temperature_of(sums, sq[b], n[b], frame.mass) {
-                    s[f] += n[b] as f64 * t / self.unit;
-                    s[f + 1] += n[b] as f64;
+            for (g, f) in [field::T_ALL, field::T_CL].into_iter().enumerate() {
+                let sums = &sv[g][b * dim..(b + 1) * dim];
+                if let Some(t) = temperature_of(sums, sq[g][b], n[g][b], frame.mass) {
+                    s[f] += n[g][b] as f64 * t / self.unit;
+                    s[f + 1] += n[g][b] as f64;
                 }
             }
         }
@@ -374,11 +362,7 @@ impl LateralObserver {
             for k in 0..dim {
                 let x = frame.x(i)[k];
                 let p = &mut self.previous[i * dim + k];
-                self.unwrapped[i * dim + k] += if frame.periodic[k] {
-                    frame.min_image(k, x - *p)
-                } else {
-                    x - *p
-                };
+                self.unwrapped[i * dim + k] += frame.min_image(k, x - *p);
                 *p = x;
             }
         }

@@ -656,7 +656,7 @@ fn decide(
     let fallback = t > th.gas_temperature;
     let per_point = format!(
         "per-point fallback: T_g/E_cb = {t:.4} {} gas_temperature = {}",
-        if fallback { ">" } else { "<=" },
+        super::classify::above(t, th.gas_temperature),
         th.gas_temperature
     );
     let branch = |b: f64, level: f64, what: &str| -> (bool, String) {

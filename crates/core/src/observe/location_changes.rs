@@ -72,14 +72,6 @@ impl HasPosition for Site {
     }
 }
 
-/// A triangulation site as the edge arithmetic sees it: position, particle, whether a ghost.
-#[derive(Debug, Clone, Copy)]
-struct SiteRef {
-    pub p: [f64; 2],
-    pub id: u32,
-    pub ghost: bool,
-}
-
 /// The sites of one particle: its wrapped position and its images in the ghost band.
 #[derive(Debug, Clone, Copy)]
 struct Images {
@@ -139,20 +131,22 @@ fn angle(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 /// The observer's record of the Delaunay edge `ab` (`opposite`: the vertices across it when both
 /// its triangles are finite), or `None` for an edge between two ghosts or between two images of
 /// one particle. Symmetric in `a` and `b`, and in the two opposite vertices, to the last bit.
-fn edge_between(a: SiteRef, b: SiteRef, opposite: Option<(SiteRef, SiteRef)>) -> Option<Edge> {
+fn edge_between(a: Site, b: Site, opposite: Option<(Site, Site)>) -> Option<Edge> {
     if (a.ghost && b.ghost) || a.id == b.id {
         return None;
     }
+    let xy = |s: &Site| [s.p.x, s.p.y];
+    let (pa, pb) = (xy(&a), xy(&b));
     let opposite = opposite.map(|(c, d)| {
-        let sum = angle(a.p, b.p, c.p) + angle(a.p, b.p, d.p);
+        let sum = angle(pa, pb, xy(&c)) + angle(pa, pb, xy(&d));
         (c.id.min(d.id), c.id.max(d.id), sum)
     });
-    let (dx, dz) = (b.p[0] - a.p[0], b.p[1] - a.p[1]);
+    let (dx, dz) = (pb[0] - pa[0], pb[1] - pa[1]);
     Some(Edge {
         i: a.id.min(b.id),
         j: a.id.max(b.id),
         length: (dx * dx + dz * dz).sqrt(),
-        mid_x: 0.5 * (a.p[0] + b.p[0]),
+        mid_x: 0.5 * (pa[0] + pb[0]),
         mid_y: 0.0,
         opposite,
     })
@@ -229,19 +223,14 @@ pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
     let tri: DelaunayTriangulation<Site> =
         DelaunayTriangulation::bulk_load_stable(sites).expect("finite particle positions");
     let mut edges: Vec<Edge> = Vec::with_capacity(3 * frame.len());
-    let site = |s: &Site| SiteRef {
-        p: [s.p.x, s.p.y],
-        id: s.id,
-        ghost: s.ghost,
-    };
     for e in tri.undirected_edges() {
         let [a, b] = e.vertices();
         let directed = e.as_directed();
         let opposite = match (directed.opposite_vertex(), directed.rev().opposite_vertex()) {
-            (Some(c), Some(d)) => Some((site(c.data()), site(d.data()))),
+            (Some(c), Some(d)) => Some((*c.data(), *d.data())),
             _ => None,
         };
-        if let Some(edge) = edge_between(site(a.data()), site(b.data()), opposite) {
+        if let Some(edge) = edge_between(*a.data(), *b.data(), opposite) {
             edges.push(edge);
         }
     }

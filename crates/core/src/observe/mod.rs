@@ -721,40 +721,25 @@ impl ObserverSet {
         };
         let window = (t_start, window_end);
         let tol = spec.stationarity_tolerance;
-        let mut checks = vec![stationarity::check(
-            "temperature_reduced",
-            &self.temperature.series,
-            window,
-            FLOOR_TEMPERATURE,
-            tol,
-        )];
-        if scene.is_wet() {
-            checks.push(stationarity::check(
+        let e_par = self.shear.as_ref().map(|o| o.e_par_series());
+        let series = [
+            (
+                "temperature_reduced",
+                Some(&self.temperature.series),
+                FLOOR_TEMPERATURE,
+            ),
+            (
                 "bridges_per_particle",
-                &self.profiles.series,
-                window,
+                scene.is_wet().then_some(&self.profiles.series),
                 FLOOR_BRIDGES_PER_PARTICLE,
-                tol,
-            ));
-        }
-        if let Some(o) = lc {
-            checks.push(stationarity::check(
-                "location_changes",
-                &o.series,
-                window,
-                FLOOR_FLC,
-                tol,
-            ));
-        }
-        if let Some(o) = &self.shear {
-            checks.push(stationarity::check(
-                "e_par",
-                &o.e_par_series(),
-                window,
-                FLOOR_E_PAR,
-                tol,
-            ));
-        }
+            ),
+            ("location_changes", lc.map(|o| &o.series), FLOOR_FLC),
+            ("e_par", e_par.as_ref(), FLOOR_E_PAR),
+        ];
+        let checks = series
+            .into_iter()
+            .filter_map(|(name, s, floor)| Some(stationarity::check(name, s?, window, floor, tol)))
+            .collect();
         let in_window = |s: &[(f64, f64)]| -> Vec<f64> {
             s.iter()
                 .filter(|(t, _)| *t >= t_start - eps)
@@ -826,16 +811,7 @@ fn lateral_profiles(
     let d = scene.particles.diameter;
     let dim = scene.dimension;
     let n_lat = (dim - 1) as f64;
-    let height = scene.container.size[dim - 1];
-    // A representative frame geometry for the bin measures.
-    let lateral_measure = if dim == 2 {
-        bins.width
-    } else if bins.is_plane() {
-        bins.width * bins.width_y
-    } else {
-        bins.width * scene.container.size[1]
-    };
-    let bin_volume = lateral_measure * height;
+    let bin_volume = bins.bin_volume(&scene.container.size);
     // n_cb: bridges per lateral measure per unit height, units d^-D (docs/model.md 7, Eq. 3.3).
     let ncb_scale = d.powi(dim as i32) / bin_volume;
     let n_cb: Vec<f64> = per_sample(field::BRIDGES)
@@ -847,32 +823,32 @@ fn lateral_profiles(
         .map(|x| x / bin_volume)
         .collect();
     let particles = per_sample(field::PARTICLES);
-    // Per-bin standard errors from block means (observe::noise).
-    let block_se = |f: usize, scale: f64| -> Option<f64> {
-        let mut sq = 0.0;
-        for b in 0..nb {
-            let means: Vec<f64> = blocks
-                .iter()
-                .map(|k| scale * k.get(b, f) / k.samples.max(1) as f64)
-                .collect();
-            let weights: Vec<f64> = blocks.iter().map(|k| k.samples as f64).collect();
-            let se = noise::block_standard_error(&means, &weights, NOISE_BLOCKS)?;
-            sq += se * se;
-        }
-        Some((sq / nb as f64).sqrt())
-    };
-    // Block means (blocks x bins) for the bootstrap null distribution (observe::noise).
-    let block_means = |f: usize, scale: f64| -> Option<noise::NullRanges> {
-        let means: Vec<Vec<f64>> = blocks
+    // Block means (blocks x bins) and weights: per-bin standard errors and the bootstrap null
+    // distribution of the spread (observe::noise).
+    let weights: Vec<f64> = blocks.iter().map(|k| k.samples as f64).collect();
+    let block_means = |f: usize, scale: f64| -> Vec<Vec<f64>> {
+        blocks
             .iter()
             .map(|k| {
                 (0..nb)
                     .map(|b| scale * k.get(b, f) / k.samples.max(1) as f64)
                     .collect()
             })
-            .collect();
-        let weights: Vec<f64> = blocks.iter().map(|k| k.samples as f64).collect();
-        let (means, weights) = noise::merge_to(means, weights, BOOTSTRAP_MAX_BLOCKS);
+            .collect()
+    };
+    let block_se = |f: usize, scale: f64| -> Option<f64> {
+        let means = block_means(f, scale);
+        let mut sq = 0.0;
+        for b in 0..nb {
+            let column: Vec<f64> = means.iter().map(|row| row[b]).collect();
+            let se = noise::block_standard_error(&column, &weights, NOISE_BLOCKS)?;
+            sq += se * se;
+        }
+        Some((sq / nb as f64).sqrt())
+    };
+    let null = |f: usize, scale: f64| -> Option<noise::NullRanges> {
+        let (means, weights) =
+            noise::merge_to(block_means(f, scale), weights.clone(), BOOTSTRAP_MAX_BLOCKS);
         noise::null_ranges(means, weights)
     };
     let lag = lateral.lag();
@@ -881,16 +857,15 @@ fn lateral_profiles(
     let short_scale = 1.0 / (2.0 * n_lat * short_lag);
     let flc = lc.map(|o| o.per_bin(&particles));
     let sum = |f: usize| -> f64 { field_sums(blocks, nb, f).iter().sum() };
-    let mobility = (sum(field::MSD_ALL_N) > 0.0).then(|| LateralMobility {
+    // `D_lat` of the displacement sums at `f` (their count at `f + 1`), `None` without any.
+    let d_lat = |f: usize, scale: f64| (sum(f + 1) > 0.0).then(|| scale * sum(f) / sum(f + 1));
+    let mobility = d_lat(field::MSD_ALL, diff_scale).map(|diffusion| LateralMobility {
         lag,
-        diffusion: diff_scale * sum(field::MSD_ALL) / sum(field::MSD_ALL_N),
-        diffusion_clustered: (sum(field::MSD_CL_N) > 0.0)
-            .then(|| diff_scale * sum(field::MSD_CL) / sum(field::MSD_CL_N)),
+        diffusion,
+        diffusion_clustered: d_lat(field::MSD_CL, diff_scale),
         short_lag: Some(short_lag),
-        diffusion_short: (sum(field::MSD_SHORT_ALL_N) > 0.0)
-            .then(|| short_scale * sum(field::MSD_SHORT_ALL) / sum(field::MSD_SHORT_ALL_N)),
-        diffusion_clustered_short: (sum(field::MSD_SHORT_CL_N) > 0.0)
-            .then(|| short_scale * sum(field::MSD_SHORT_CL) / sum(field::MSD_SHORT_CL_N)),
+        diffusion_short: d_lat(field::MSD_SHORT_ALL, short_scale),
+        diffusion_clustered_short: d_lat(field::MSD_SHORT_CL, short_scale),
         lags: sum(field::MSD_ALL_N) / scene.particles.count.max(1) as f64,
     });
     let profile = Profiles {
@@ -904,8 +879,8 @@ fn lateral_profiles(
         n_cb_standard_error: block_se(field::BRIDGES, ncb_scale),
         packing_standard_error: block_se(field::VOLUME, 1.0 / bin_volume),
         noise_blocks: blocks.len().min(NOISE_BLOCKS),
-        n_cb_null: block_means(field::BRIDGES, ncb_scale),
-        packing_null: block_means(field::VOLUME, 1.0 / bin_volume),
+        n_cb_null: null(field::BRIDGES, ncb_scale),
+        packing_null: null(field::VOLUME, 1.0 / bin_volume),
         clusters: Some((scene.observe.bond_time, scene.observe.cluster_min_size)),
         member_cages: Some(member_cages(blocks, nb)),
         particles,

@@ -31,8 +31,7 @@ pub fn bridge_counts(frame: &Frame, bins: &LateralBins) -> Vec<usize> {
 /// `n_cb` per bin of one frame, in units of `d^-D` for mean diameter `d`: bridges per lateral
 /// measure of the bin and per unit height (docs/model.md 7).
 pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
-    let height = frame.box_size[frame.dimension - 1];
-    let scale = d.powi(frame.dimension as i32) / (bins.lateral_measure(frame) * height);
+    let scale = d.powi(frame.dimension as i32) / bins.bin_volume(&frame.box_size);
     bridge_counts(frame, bins)
         .iter()
         .map(|&c| c as f64 * scale)
@@ -50,8 +49,7 @@ pub(crate) fn particle_volume(dimension: usize, r: f64) -> f64 {
 
 /// Packing fraction per bin of one frame (areal in 2D, volume in 3D).
 pub fn packing_fraction(frame: &Frame, bins: &LateralBins) -> Vec<f64> {
-    let height = frame.box_size[frame.dimension - 1];
-    let bin_volume = bins.lateral_measure(frame) * height;
+    let bin_volume = bins.bin_volume(&frame.box_size);
     let mut v = vec![0.0; bins.n];
     for i in 0..frame.len() {
         v[bins.of_particle(frame, i)] += particle_volume(frame.dimension, frame.radii[i]);

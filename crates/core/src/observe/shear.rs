@@ -116,23 +116,21 @@ pub fn cycles(series: &[(f64, f64, f64)], level: f64) -> Vec<Cycle> {
         .windows(2)
         .map(|w| {
             let part = &series[w[0]..w[1]];
-            let fold = |f: fn(&(f64, f64, f64)) -> f64, max: bool| {
-                part.iter().map(f).fold(
-                    if max {
-                        f64::NEG_INFINITY
-                    } else {
-                        f64::INFINITY
-                    },
-                    if max { f64::max } else { f64::min },
-                )
+            let range = |f: fn(&(f64, f64, f64)) -> f64| {
+                let extremes = (f64::INFINITY, f64::NEG_INFINITY);
+                part.iter()
+                    .map(f)
+                    .fold(extremes, |(lo, hi), x| (lo.min(x), hi.max(x)))
             };
+            let (e_par_min, e_par_max) = range(|s| s.1);
+            let (e_perp_min, e_perp_max) = range(|s| s.2);
             Cycle {
                 start: series[w[0]].0,
                 end: series[w[1]].0,
-                e_par_min: fold(|s| s.1, false),
-                e_par_max: fold(|s| s.1, true),
-                e_perp_min: fold(|s| s.2, false),
-                e_perp_max: fold(|s| s.2, true),
+                e_par_min,
+                e_par_max,
+                e_perp_min,
+                e_perp_max,
             }
         })
         .collect()

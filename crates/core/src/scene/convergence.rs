@@ -23,41 +23,26 @@ pub(crate) const DEFAULT_CAP_FACTOR: f64 = 4.0;
 
 /// Scene section `[convergence]` (every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct ConvergenceSpec {
     /// Shortest run in periods (default 0: `run.duration` alone).
-    #[serde(default)]
     pub min_periods: f64,
     /// Shortest run in time units (default 0). A high-Gamma period is short: this keeps the
     /// run long in physical time as well.
-    #[serde(default)]
     pub min_time: f64,
     /// Longest run in periods (default `4 t_1 / T`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_periods: Option<f64>,
     /// Longest run in time units, where that is longer than `max_periods` periods (default
     /// none).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub max_time: Option<f64>,
     /// Blocks the window is cut into for the tests (default 4, 3 ..= 64).
-    #[serde(default = "default_blocks")]
     pub blocks: usize,
     /// `k`: block means must agree within `k` standard errors (default 3, in (0, 10]).
-    #[serde(default = "default_sigmas")]
     pub sigmas: f64,
     /// Relative allowance `tol / max(|mean|, floor)` (default 0.02, in [0, 1)).
-    #[serde(default = "default_rel_tolerance")]
     pub rel_tolerance: f64,
-}
-
-fn default_blocks() -> usize {
-    4
-}
-fn default_sigmas() -> f64 {
-    3.0
-}
-fn default_rel_tolerance() -> f64 {
-    0.02
 }
 
 impl Default for ConvergenceSpec {
@@ -67,9 +52,9 @@ impl Default for ConvergenceSpec {
             min_time: 0.0,
             max_periods: None,
             max_time: None,
-            blocks: default_blocks(),
-            sigmas: default_sigmas(),
-            rel_tolerance: default_rel_tolerance(),
+            blocks: 4,
+            sigmas: 3.0,
+            rel_tolerance: 0.02,
         }
     }
 }
@@ -114,76 +99,53 @@ impl ConvergenceSpec {
 
     /// Checks every key against the rest of the scene.
     pub fn validate(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
-        let err =
-            |key: &str, msg: String| SceneError::new(origin, &format!("convergence.{key}"), msg);
+        let check = |key: &str, v: &dyn std::fmt::Display, ok: bool, must: &str| {
+            SceneError::unless(ok, origin, &format!("convergence.{key}"), v, must)
+        };
         let nonneg = |v: f64| v.is_finite() && v >= 0.0;
-        if !nonneg(self.min_periods) {
-            return Err(err(
-                "min_periods",
-                format!(
-                    "= {} is out of range: must be finite and >= 0",
-                    self.min_periods
-                ),
-            ));
-        }
-        if !nonneg(self.min_time) {
-            return Err(err(
-                "min_time",
-                format!(
-                    "= {} is out of range: must be finite and >= 0",
-                    self.min_time
-                ),
-            ));
-        }
-        if !(3..=64).contains(&self.blocks) {
-            return Err(err(
-                "blocks",
-                format!("= {} is out of range: must be in 3 ..= 64", self.blocks),
-            ));
-        }
-        if !(self.sigmas.is_finite() && self.sigmas > 0.0 && self.sigmas <= 10.0) {
-            return Err(err(
-                "sigmas",
-                format!("= {} is out of range: must be in (0, 10]", self.sigmas),
-            ));
-        }
-        if !(self.rel_tolerance.is_finite() && (0.0..1.0).contains(&self.rel_tolerance)) {
-            return Err(err(
-                "rel_tolerance",
-                format!(
-                    "= {} is out of range: must be in [0, 1)",
-                    self.rel_tolerance
-                ),
-            ));
-        }
-        if let Some(t) = self.max_time
-            && !(t.is_finite() && t > 0.0)
-        {
-            return Err(err(
-                "max_time",
-                format!("= {t} is out of range: must be finite and > 0"),
-            ));
+        check(
+            "min_periods",
+            &self.min_periods,
+            nonneg(self.min_periods),
+            "finite and >= 0",
+        )?;
+        check(
+            "min_time",
+            &self.min_time,
+            nonneg(self.min_time),
+            "finite and >= 0",
+        )?;
+        let b = self.blocks;
+        check("blocks", &b, (3..=64).contains(&b), "in 3 ..= 64")?;
+        let k = self.sigmas;
+        check(
+            "sigmas",
+            &k,
+            k.is_finite() && k > 0.0 && k <= 10.0,
+            "in (0, 10]",
+        )?;
+        let tol = self.rel_tolerance;
+        let ok = tol.is_finite() && (0.0..1.0).contains(&tol);
+        check("rel_tolerance", &tol, ok, "in [0, 1)")?;
+        if let Some(t) = self.max_time {
+            check("max_time", &t, t.is_finite() && t > 0.0, "finite and > 0")?;
         }
         let period = scene.driving_period();
         let t1 = self.first_check(scene);
-        if let Some(p) = self.max_periods
-            && !(p.is_finite() && p > 0.0)
-        {
-            return Err(err(
-                "max_periods",
-                format!(
-                    "= {p} is out of range: must be finite and > 0 (a cap below the first check \
-                     max(run.duration, min_periods T, min_time) = {:.6} periods, T = \
-                     {period:.6}, means no extension)",
-                    t1 / period
-                ),
-            ));
+        if let Some(p) = self.max_periods {
+            let must = format!(
+                "finite and > 0 (a cap below the first check max(run.duration, min_periods T, \
+                 min_time) = {:.6} periods, T = {period:.6}, means no extension)",
+                t1 / period
+            );
+            check("max_periods", &p, p.is_finite() && p > 0.0, &must)?;
         }
         let samples =
             (t1 - scene.observe.window_start(scene)) / scene.observe.sample_interval(scene);
         if samples < (2 * self.blocks) as f64 {
-            return Err(err(
-                "blocks",
+            return Err(SceneError::new(
+                origin,
+                "convergence.blocks",
                 format!(
                     "= {} is out of range: the window holds about {samples:.0} observer samples, \
                      at least 2 per block are needed (lengthen the run or raise \

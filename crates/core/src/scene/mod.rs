@@ -97,34 +97,32 @@ pub struct ParticleSpec {
 
 /// Hard-core contact law (docs/model.md 2.1).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct ContactSpec {
     /// Particle-particle coefficient of normal restitution `eps`.
-    #[serde(default = "one")]
     pub restitution: f64,
     /// Particle-wall coefficient of normal restitution `e_w`.
-    #[serde(default = "one")]
     pub wall_restitution: f64,
     /// Time-driven engine: Hertz prefactor `k = 2 Y / (3 (1 - nu^2))` of docs/model.md Eq. 2.7, in
     /// units of `m g / d^2` (default [`DEFAULT_STIFFNESS`]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<f64>,
     /// Time-driven engine: particle-particle damping `A_d` of Eq. 2.7, units of time (default 0,
     /// elastic).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub damping: Option<f64>,
     /// Time-driven engine: particle-wall damping `A_d` (default 0, elastic walls).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub wall_damping: Option<f64>,
     /// Time-driven engine: how `restitution` and `wall_restitution` are converted into damping
     /// constants (`scene::damping`): `"auto"` (the default) matches the mean energy
     /// loss over the impact speeds of a Maxwellian gas at the scene's characteristic temperature;
     /// a number (units of `sqrt(g d)`) gives exactly the restitution at that one impact speed.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub restitution_speed: Option<RestitutionSpeed>,
     /// Time-driven engine: the granular temperature (units of `m g d`, absolute without gravity)
     /// of the `"auto"` calibration, in place of the scene's characteristic temperature.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub restitution_temperature: Option<f64>,
 }
 
@@ -214,31 +212,16 @@ pub(crate) const GEAR_DAMPING_WEIGHT: f64 = 2.0;
 pub(crate) const VERLET_DAMPING_WEIGHT: f64 = 0.5;
 
 /// Capillary bridges (docs/model.md 3).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct CapillarySpec {
-    #[serde(default)]
     pub model: CapillaryModel,
     /// Rupture separation of the surfaces, `s_crit` (thin-thread default 0.0711 d).
-    #[serde(default)]
     pub s_crit: Option<f64>,
     /// Bridge rupture energy `E_cb` (default `F_B s_crit` with `F_B = 4 m g`).
-    #[serde(default)]
     pub e_cb: Option<f64>,
     /// Which kinetic energy pays for a rupture (docs/model.md 3.2); default `reduced_mass`.
-    #[serde(default)]
     pub rupture_rule: Option<RuptureRule>,
-}
-
-impl Default for CapillarySpec {
-    fn default() -> Self {
-        Self {
-            model: CapillaryModel::None,
-            s_crit: None,
-            e_cb: None,
-            rupture_rule: None,
-        }
-    }
 }
 
 /// Which capillary model acts between the grains.
@@ -259,59 +242,44 @@ pub use crate::physics::capillary::RuptureRule;
 /// `z_w(t) = A sin(omega t)`. Give either `amplitude` and `omega`, or `gamma` and `e_star`
 /// (`E*` for wet scenes, `E_d*` for dry ones), converted as in docs/model.md 4.1.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct DriveSpec {
-    #[serde(default)]
     pub kind: DriveKind,
     /// Amplitude `A` of the container motion.
-    #[serde(default)]
     pub amplitude: Option<f64>,
     /// Angular frequency `omega`.
-    #[serde(default)]
     pub omega: Option<f64>,
     /// Peak acceleration `Gamma = A omega^2 / g`.
-    #[serde(default)]
     pub gamma: Option<f64>,
     /// Driving energy `E* = m (A omega)^2 / (2 E_cb)` (wet) or `E_d* = m (A omega)^2 / (2 m g d)`
     /// (dry).
-    #[serde(default)]
     pub e_star: Option<f64>,
     /// How wall collision times are found.
-    #[serde(default)]
     pub wall_solver: WallSolverKind,
     /// Gap tolerance of the wall-root solver, in units of `d` (default 1e-10).
-    #[serde(default)]
     pub root_tolerance: Option<f64>,
     /// Step of the `bracket` solver (docs/model.md 6, B.3), default a thousandth of a period.
-    #[serde(default)]
     pub t_min: Option<f64>,
     /// `table` solver: cells along the phase (or height) and along the mapped velocity
     /// (default `[128, 128]`).
-    #[serde(default)]
     pub table_cells: Option<[usize; 2]>,
     /// `table` solver: where the velocity map turns from linear to logarithmic, in units of the
     /// wall's peak speed `A omega` (default 0.05).
-    #[serde(default)]
     pub table_v_min: Option<f64>,
     /// `table` solver: speed cut-off in units of `A omega`; faster flights go to the exact
     /// solver (default 50).
-    #[serde(default)]
     pub table_v_max: Option<f64>,
     /// `table` solver: check each cell's linear model at its corners and let the exact solver
     /// answer for cells that fail (default true; false is the thesis's table as printed).
-    #[serde(default)]
     pub table_corner_check: Option<bool>,
     /// `table` solver: the corner check's tolerance on root times, in units of the period
     /// (default 1e-3).
-    #[serde(default)]
     pub table_corner_tolerance: Option<f64>,
     /// `shear`: peak body force `F_max` of `F_s(x) = F_max cos(2 pi x / L_x)` along `y`
     /// (docs/model.md 4.2, Eq. 2.20), in units of `m g` (absolute force units without gravity).
-    #[serde(default)]
     pub f_max: Option<f64>,
     /// `shear`: requested width of the slabs of constant force (event-driven engine), in units
     /// of `d` (default 1 mean diameter); rounded so that a whole number of slabs tiles `L_x`.
-    #[serde(default)]
     pub slab_width: Option<f64>,
 }
 
@@ -468,34 +436,30 @@ pub enum IntegratorKind {
 /// and `cell_size` belong to the event-driven engine; `dt`, `integrator` and `skin` to the
 /// time-driven one.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct EngineSpec {
     /// `"event"` (default) or `"time"`.
-    #[serde(default, skip_serializing_if = "EngineKind::is_event")]
+    #[serde(skip_serializing_if = "EngineKind::is_event")]
     pub kind: EngineKind,
     /// Time-driven: the time step (default [`DEFAULT_DT`], or [`Scene::largest_time_step`] where
     /// that is shorter: [`Scene::time_step`]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub dt: Option<f64>,
     /// Time-driven: `"gear5"` (default) or `"verlet"`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub integrator: Option<IntegratorKind>,
     /// Time-driven: Verlet-list skin in units of `d` (default [`DEFAULT_SKIN`]).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub skin: Option<f64>,
     /// TC model (Luding & McNamara 1998): a collision within `tc` of either particle's previous
     /// collision is elastic. 0 (default) disables it.
-    #[serde(default = "default_tc")]
     pub tc: f64,
     /// Rebound floor: an inelastic collision never separates slower than this (collapse remedy
     /// for beds resting on a floor; the energy it adds is booked). 0 disables it.
-    #[serde(default = "default_min_rebound")]
     pub min_rebound_speed: f64,
     /// Largest overlap (in units of `d`) that the sanity check tolerates.
-    #[serde(default = "default_overlap_tolerance")]
     pub(crate) overlap_tolerance: f64,
     /// Cell edge of the neighbour grid; 0 chooses the smallest legal one automatically.
-    #[serde(default)]
     pub(crate) cell_size: f64,
 }
 
@@ -506,9 +470,9 @@ impl Default for EngineSpec {
             dt: None,
             integrator: None,
             skin: None,
-            tc: default_tc(),
-            min_rebound_speed: default_min_rebound(),
-            overlap_tolerance: default_overlap_tolerance(),
+            tc: 0.0,
+            min_rebound_speed: 1e-3,
+            overlap_tolerance: 1e-6,
             cell_size: 0.0,
         }
     }
@@ -522,15 +486,6 @@ fn default_gravity() -> f64 {
 }
 fn default_lattice_spacing() -> f64 {
     1.01
-}
-fn default_tc() -> f64 {
-    0.0
-}
-fn default_min_rebound() -> f64 {
-    1e-3
-}
-fn default_overlap_tolerance() -> f64 {
-    1e-6
 }
 
 /// Thin-thread default rupture separation (docs/model.md 1).

@@ -21,28 +21,25 @@ pub enum Bins3d {
 /// Time is counted in *periods*: the driving period `2 pi / omega` of a shaken scene, or one
 /// time unit `sqrt(d/g)` (the scene's own time unit without gravity) when nothing drives it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct ObserveSpec {
     /// Length of the transient, in periods: the stationary window is
     /// `[max(transient_periods * period, transient_time), run.duration]`. Default 0 (the whole
     /// run).
-    #[serde(default)]
     pub transient_periods: f64,
     /// Shortest transient in time units (default 0): a high-frequency period is short, and a hot
     /// start cools on its own clock, not the drive's. With a `[convergence]` policy this is the
     /// floor; the run's trend decides where its transient really ended (docs/observables.md).
-    #[serde(default, skip_serializing_if = "is_zero")]
+    #[serde(skip_serializing_if = "is_zero")]
     pub transient_time: f64,
     /// Width of the lateral bins of the profiles, in units of length (`d = 1`); rounded so that
     /// a whole number of bins tiles `L_x` (one bin if it exceeds `L_x`). Default 4 d.
-    #[serde(default = "default_bin_width")]
     pub bin_width: f64,
     /// Observer samples per period (default 20). The location-change counter needs it fine
     /// enough (docs/observables.md). A run takes `run.duration / period * samples_per_period`
     /// samples, each costing a Delaunay triangulation in 2D where location changes are counted;
     /// like `run.duration`, that is the user's choice and not capped (a scene run without
     /// observers never samples).
-    #[serde(default = "default_samples_per_period")]
     pub samples_per_period: f64,
     /// Shortest interval between two observer samples, in time units (default 0: none). At
     /// high frequency `period / samples_per_period` is far shorter than anything the observers
@@ -50,48 +47,38 @@ pub struct ObserveSpec {
     /// long in time would cost millions of samples. The interval is then the smallest whole
     /// multiple of `period / samples_per_period` at least this long, so samples stay on the
     /// drive's phase grid.
-    #[serde(default, skip_serializing_if = "is_zero")]
+    #[serde(skip_serializing_if = "is_zero")]
     pub min_sample_interval: f64,
     /// Count location changes (`f_lc`; Delaunay in 2D, neighbour shells in 3D). Left out, it
     /// is on only where the classifier reads `f_lc` (`classify.mobility =
     /// "location_changes"`): [`ObserveSpec::counts_location_changes`]. A scene read from text
     /// has it resolved to `Some` ([`Scene::resolve_observers`]), so a job spec names it.
-    #[serde(default)]
     pub location_changes: Option<bool>,
     /// Per-layer lateral mean-square displacement and diffusion coefficient. Default on.
-    #[serde(default = "yes")]
     pub diffusion: bool,
     /// Number of layers with equal particle numbers for the diffusion observer (default 3; at
     /// most one per particle is used).
-    #[serde(default = "default_layers")]
     pub layers: usize,
     /// Keep the sampled time series in the result (default on).
-    #[serde(default = "yes")]
     pub time_series: bool,
     /// 2D: a new Delaunay edge counts as a location change only if it is at most this long
     /// (units of `d`; default 2). Longer edges span the empty space above a bed or a gas and
     /// change with every rattle of a surface grain without any neighbour exchange.
-    #[serde(default = "default_lc_max_edge")]
     pub lc_max_edge: f64,
     /// 2D: hysteresis of the Delaunay flips, in radians (default 0.2): a flip counts once the
     /// replaced edge violates the in-circle condition by more than this angle
     /// (`angle_a + angle_b - pi` of its quadrilateral).
-    #[serde(default = "default_lc_flip_margin")]
     pub lc_flip_margin: f64,
     /// 3D: two grains become neighbours when their centres come closer than this multiple of
     /// `r_i + r_j` (default 1.2), and stop being neighbours beyond `lc_leave_factor` times it.
-    #[serde(default = "default_lc_enter_factor")]
     pub(crate) lc_enter_factor: f64,
     /// 3D: leaving factor of the neighbour shell (default 1.5; > `lc_enter_factor`).
-    #[serde(default = "default_lc_leave_factor")]
     pub(crate) lc_leave_factor: f64,
     /// Largest relative change between the first and second half of the window that still
     /// counts as stationary (default 0.2).
-    #[serde(default = "default_stationarity_tolerance")]
     pub(crate) stationarity_tolerance: f64,
     /// Lag of the mobility measure, in time units `sqrt(d/g)` (default 10): the lateral
     /// mean-square displacement over this lag gives `D_lat` (`observe::lateral`).
-    #[serde(default = "default_mobility_lag")]
     pub mobility_lag: f64,
     /// How long, in time units `sqrt(d/g)`, a grain must have held a bond (a capillary bridge;
     /// dry: a gap below 0.1 d) at every sample before it counts as bound into a cluster
@@ -99,21 +86,14 @@ pub struct ObserveSpec {
     /// not counted with it (`observe::clusters`).
     /// Left out of the serialized spec at its default, so that job ids (hashes of the spec) of
     /// sweeps that do not set it are those they had before it existed.
-    #[serde(
-        default = "default_bond_time",
-        skip_serializing_if = "is_default_bond_time"
-    )]
+    #[serde(skip_serializing_if = "is_default_bond_time")]
     pub bond_time: f64,
     /// Smallest bonded cluster, in grains, whose grains make up a dense region (default 3).
     /// Left out of the serialized spec at its default (job ids as before it existed).
-    #[serde(
-        default = "default_cluster_min_size",
-        skip_serializing_if = "is_default_cluster_min_size"
-    )]
+    #[serde(skip_serializing_if = "is_default_cluster_min_size")]
     pub cluster_min_size: usize,
     /// 3D: lateral bins as square cells over `(x, y)` (`"plane"`, default) or slabs along `x`
     /// across the whole depth (`"x_slabs"`).
-    #[serde(default)]
     pub bins_3d: Bins3d,
 }
 
@@ -126,67 +106,33 @@ impl Default for ObserveSpec {
         Self {
             transient_periods: 0.0,
             transient_time: 0.0,
-            bin_width: default_bin_width(),
-            samples_per_period: default_samples_per_period(),
+            bin_width: 4.0,
+            samples_per_period: 20.0,
             min_sample_interval: 0.0,
             location_changes: None,
             diffusion: true,
-            layers: default_layers(),
+            layers: 3,
             time_series: true,
-            lc_max_edge: default_lc_max_edge(),
-            lc_flip_margin: default_lc_flip_margin(),
-            lc_enter_factor: default_lc_enter_factor(),
-            lc_leave_factor: default_lc_leave_factor(),
-            stationarity_tolerance: default_stationarity_tolerance(),
-            mobility_lag: default_mobility_lag(),
-            bond_time: default_bond_time(),
-            cluster_min_size: default_cluster_min_size(),
+            lc_max_edge: 2.0,
+            lc_flip_margin: 0.2,
+            lc_enter_factor: 1.2,
+            lc_leave_factor: 1.5,
+            stationarity_tolerance: 0.2,
+            mobility_lag: 10.0,
+            bond_time: DEFAULT_BOND_TIME,
+            cluster_min_size: DEFAULT_CLUSTER_MIN_SIZE,
             bins_3d: Bins3d::default(),
         }
     }
 }
 
-fn yes() -> bool {
-    true
-}
-fn default_bin_width() -> f64 {
-    4.0
-}
-fn default_samples_per_period() -> f64 {
-    20.0
-}
-fn default_layers() -> usize {
-    3
-}
-fn default_lc_max_edge() -> f64 {
-    2.0
-}
-fn default_lc_flip_margin() -> f64 {
-    0.2
-}
-fn default_lc_enter_factor() -> f64 {
-    1.2
-}
-fn default_lc_leave_factor() -> f64 {
-    1.5
-}
-fn default_stationarity_tolerance() -> f64 {
-    0.2
-}
-fn default_mobility_lag() -> f64 {
-    10.0
-}
-fn default_bond_time() -> f64 {
-    0.2
-}
-fn default_cluster_min_size() -> usize {
-    3
-}
+const DEFAULT_BOND_TIME: f64 = 0.2;
+const DEFAULT_CLUSTER_MIN_SIZE: usize = 3;
 fn is_default_bond_time(v: &f64) -> bool {
-    *v == default_bond_time()
+    *v == DEFAULT_BOND_TIME
 }
 fn is_default_cluster_min_size(v: &usize) -> bool {
-    *v == default_cluster_min_size()
+    *v == DEFAULT_CLUSTER_MIN_SIZE
 }
 
 impl ObserveSpec {
@@ -230,160 +176,103 @@ impl ObserveSpec {
 
     /// The transient, the lateral bins and the sample spacing, against the run's first window.
     fn validate_sampling(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
-        let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
-        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
+        let check = |key: &str, v: f64, ok: bool, must: &str| {
+            SceneError::unless(ok, origin, &format!("observe.{key}"), v, must)
+        };
         let period = scene.driving_period();
-        // With a run-length policy the first window ends at its first check, not at
-        // `run.duration`.
+        // With a run-length policy the first window ends at its first check.
         let (duration, run_name) = scene
             .convergence
             .as_ref()
             .map_or((scene.run.duration, "run.duration"), |c| {
                 (c.first_check(scene), "the [convergence] first check")
             });
-        // A length in time units that must fit inside the first window.
-        let within_first_window = |key: &str, v: f64| {
-            if v.is_finite() && v >= 0.0 && v < duration {
-                Ok(())
-            } else {
-                Err(err(
-                    key,
-                    format!(
-                        "= {v} is out of range: must be >= 0 and shorter than the first window, \
-                         i.e. < {run_name} = {duration}"
-                    ),
-                ))
-            }
-        };
-        within_first_window("transient_time", self.transient_time)?;
+        let first_window =
+            format!(">= 0 and shorter than the first window, i.e. < {run_name} = {duration}");
+        let t = self.transient_time;
+        let ok = t.is_finite() && t >= 0.0 && t < duration;
+        check("transient_time", t, ok, &first_window)?;
         let t = self.transient_periods;
-        if !(t.is_finite() && t >= 0.0 && t * period < duration) {
-            return Err(err(
-                "transient_periods",
-                format!(
-                    "= {t} is out of range: must be >= 0 and shorter than the run, i.e. < \
-                     {run_name} / period = {duration} / {period:.6} = {:.6} (one period is {})",
-                    duration / period,
-                    if scene.drive_motion().is_some() {
-                        "the driving period 2 pi / omega"
-                    } else {
-                        "one time unit without a drive"
-                    }
-                ),
-            ));
-        }
-        if !finite_pos(self.bin_width) {
-            return Err(err(
-                "bin_width",
-                format!(
-                    "= {} is out of range: must be > 0 (a width above L_x gives one bin)",
-                    self.bin_width
-                ),
-            ));
-        }
+        let must = format!(
+            ">= 0 and shorter than the run, i.e. < {run_name} / period = {duration} / \
+             {period:.6} = {:.6} (one period is {})",
+            duration / period,
+            if scene.drive_motion().is_some() {
+                "the driving period 2 pi / omega"
+            } else {
+                "one time unit without a drive"
+            }
+        );
+        check(
+            "transient_periods",
+            t,
+            t.is_finite() && t >= 0.0 && t * period < duration,
+            &must,
+        )?;
+        let w = self.bin_width;
+        let must = "> 0 (a width above L_x gives one bin)";
+        check("bin_width", w, w.is_finite() && w > 0.0, must)?;
         let s = self.samples_per_period;
-        if !finite_pos(s) {
-            return Err(err(
-                "samples_per_period",
-                format!("= {s} is out of range: must be > 0"),
-            ));
-        }
-        within_first_window("min_sample_interval", self.min_sample_interval)?;
-        Ok(())
+        check("samples_per_period", s, s.is_finite() && s > 0.0, "> 0")?;
+        let t = self.min_sample_interval;
+        let ok = t.is_finite() && t >= 0.0 && t < duration;
+        check("min_sample_interval", t, ok, &first_window)
     }
 
     /// The observers' own settings: layers, the line rule, mobility, bonds, clusters,
     /// stationarity.
     fn validate_observers(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
-        let err = |key: &str, msg: String| SceneError::new(origin, &format!("observe.{key}"), msg);
-        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        if self.layers == 0 {
-            return Err(err(
-                "layers",
-                "= 0 is out of range: must be >= 1 (more layers than particles give one \
-                 particle per layer)"
-                    .into(),
-            ));
-        }
-        if !(finite_pos(self.lc_max_edge) && self.lc_max_edge >= 1.0) {
-            return Err(err(
-                "lc_max_edge",
-                format!(
-                    "= {} is out of range: must be >= 1 (units of d; neighbours touch at 1)",
-                    self.lc_max_edge
-                ),
-            ));
-        }
+        let check = |key: &str, v: &dyn std::fmt::Display, ok: bool, must: &str| {
+            SceneError::unless(ok, origin, &format!("observe.{key}"), v, must)
+        };
+        let must = ">= 1 (more layers than particles give one particle per layer)";
+        check("layers", &self.layers, self.layers > 0, must)?;
+        let e = self.lc_max_edge;
+        let must = ">= 1 (units of d; neighbours touch at 1)";
+        check("lc_max_edge", &e, e.is_finite() && e >= 1.0, must)?;
         let m = self.lc_flip_margin;
-        if !(m.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&m)) {
-            return Err(err(
-                "lc_flip_margin",
-                format!("= {m} is out of range: must be in [0, pi/2) (radians)"),
-            ));
-        }
-        if !(self.lc_enter_factor.is_finite() && self.lc_enter_factor >= 1.0) {
-            return Err(err(
-                "lc_enter_factor",
-                format!(
-                    "= {} is out of range: must be >= 1 (touching grains are at 1)",
-                    self.lc_enter_factor
-                ),
-            ));
-        }
-        if !(self.lc_leave_factor.is_finite() && self.lc_leave_factor > self.lc_enter_factor) {
-            return Err(err(
-                "lc_leave_factor",
-                format!(
-                    "= {} is out of range: must be finite and > lc_enter_factor = {}",
-                    self.lc_leave_factor, self.lc_enter_factor
-                ),
-            ));
-        }
-        if !finite_pos(self.mobility_lag) {
-            return Err(err(
-                "mobility_lag",
-                format!(
-                    "= {} is out of range: must be finite and > 0 (time units)",
-                    self.mobility_lag
-                ),
-            ));
-        }
-        if !(self.bond_time.is_finite() && self.bond_time >= 0.0) {
-            return Err(err(
-                "bond_time",
-                format!(
-                    "= {} is out of range: must be finite and >= 0 (time units)",
-                    self.bond_time
-                ),
-            ));
-        }
-        if self.cluster_min_size < 2 {
-            return Err(err(
-                "cluster_min_size",
-                format!(
-                    "= {} is out of range: must be >= 2 (grains)",
-                    self.cluster_min_size
-                ),
-            ));
-        }
+        let ok = m.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&m);
+        check("lc_flip_margin", &m, ok, "in [0, pi/2) (radians)")?;
+        let (enter, leave) = (self.lc_enter_factor, self.lc_leave_factor);
+        let must = ">= 1 (touching grains are at 1)";
+        check(
+            "lc_enter_factor",
+            &enter,
+            enter.is_finite() && enter >= 1.0,
+            must,
+        )?;
+        let must = format!("finite and > lc_enter_factor = {enter}");
+        check(
+            "lc_leave_factor",
+            &leave,
+            leave.is_finite() && leave > enter,
+            &must,
+        )?;
+        let lag = self.mobility_lag;
+        let must = "finite and > 0 (time units)";
+        check("mobility_lag", &lag, lag.is_finite() && lag > 0.0, must)?;
+        let b = self.bond_time;
+        let must = "finite and >= 0 (time units)";
+        check("bond_time", &b, b.is_finite() && b >= 0.0, must)?;
+        let size = self.cluster_min_size;
+        check("cluster_min_size", &size, size >= 2, ">= 2 (grains)")?;
         if self.location_changes == Some(false)
             && scene.classify.mobility == Mobility::LocationChanges
         {
-            return Err(err(
-                "location_changes",
+            return Err(SceneError::new(
+                origin,
+                "observe.location_changes",
                 "= false, but classify.mobility = \"location_changes\" decides solid versus \
-                 mobile by f_lc, which only this observer measures: set it true or leave it out"
-                    .into(),
+                 mobile by f_lc, which only this observer measures: set it true or leave it out",
             ));
         }
         let tol = self.stationarity_tolerance;
-        if !(tol.is_finite() && tol > 0.0) {
-            return Err(err(
-                "stationarity_tolerance",
-                format!("= {tol} is out of range: must be > 0"),
-            ));
-        }
-        Ok(())
+        check(
+            "stationarity_tolerance",
+            &tol,
+            tol.is_finite() && tol > 0.0,
+            "> 0",
+        )
     }
 }
 

@@ -35,92 +35,47 @@ pub enum CoexistenceBy {
 /// Thresholds of the classifier (scene section `[classify]`); defaults and their reasoning are
 /// in docs/observables.md.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct Thresholds {
     /// Observable for solid versus mobile.
-    #[serde(default)]
     pub mobility: Mobility,
     /// Largest lateral mobility `D_lat` (units `d^2 / sqrt(d/g)`) of a solid.
-    #[serde(default = "default_solid_diffusion")]
     pub solid_diffusion: f64,
     /// Smallest growth exponent `alpha` of the lateral mean-square displacement between the
     /// short and the long mobility lag (`MSD ~ tau^alpha`) of a mobile region (default 0.5):
     /// caged grains give `alpha` near 0, diffusing ones near 1 (`observe::classify`, rule 1).
-    #[serde(default = "default_diffusive_exponent")]
     pub diffusive_exponent: f64,
     /// Smallest fraction of the dense bins' grains that are members of bonded clusters for a
     /// coexistence (default 0.2): a density wave in a gas or fluid without a bonded cluster is
     /// homogeneous (rule 2).
-    #[serde(default = "default_cluster_fraction")]
     pub cluster_fraction: f64,
     /// Largest `f_lc` (location changes per particle per period) of a solid
     /// (`mobility = "location_changes"`).
-    #[serde(default = "default_solid_flc")]
     pub solid_flc: f64,
     /// Largest `T_g / E_cb` of a solid (used with `mobility = "temperature"` or without
     /// another mobility observable).
-    #[serde(default = "default_solid_temperature")]
     pub solid_temperature: f64,
     /// `T_g / E_cb` above which a mobile region is a gas: the per-point fallback where no line
     /// of constant Gamma decides.
-    #[serde(default = "default_gas_temperature")]
     pub gas_temperature: f64,
     /// Which profile decides coexistence.
-    #[serde(default)]
     pub coexistence_by: CoexistenceBy,
     /// Quantile of the homogeneous-state spread a coexistence must exceed (default 0.99).
-    #[serde(default = "default_coexistence_level")]
     pub coexistence_level: f64,
     /// Smallest relative difference `(dense - dilute) / dense` of the two classes' mean
     /// profile values of a coexistence (default 0.5).
-    #[serde(default = "default_coexistence_contrast")]
     pub coexistence_contrast: f64,
     /// Optional absolute floor on `Delta` (units of the profile; default 0). For results
     /// stored without statistical errors it is the only test (2, in their old `n_cb` units,
     /// when 0).
-    #[serde(default)]
     pub coexistence_delta_n_cb: f64,
     /// Along a line of constant Gamma of elastic grains: smallest ratio of `T_g / E_cb`
     /// between neighbouring points that counts as the fluid-gas jump (default 3).
-    #[serde(default = "default_line_jump_ratio")]
     pub line_jump_ratio: f64,
     /// Sheared scenes: largest window mean of `E_par / E_cb` (`/ (m g d)` dry) of a solid.
-    #[serde(default = "default_shear_e_par")]
     pub shear_e_par: f64,
 }
 
-fn default_shear_e_par() -> f64 {
-    0.1
-}
-fn default_solid_diffusion() -> f64 {
-    SOLID_DIFFUSION
-}
-/// Default of `solid_diffusion` (docs/observables.md gives the calibration).
-pub(crate) const SOLID_DIFFUSION: f64 = 1e-3;
-fn default_diffusive_exponent() -> f64 {
-    0.5
-}
-fn default_cluster_fraction() -> f64 {
-    0.2
-}
-fn default_solid_flc() -> f64 {
-    0.02
-}
-fn default_solid_temperature() -> f64 {
-    0.02
-}
-fn default_gas_temperature() -> f64 {
-    2.0
-}
-fn default_coexistence_level() -> f64 {
-    0.99
-}
-fn default_coexistence_contrast() -> f64 {
-    0.5
-}
-fn default_line_jump_ratio() -> f64 {
-    3.0
-}
 /// The coexistence threshold of results stored before block statistics, in their `n_cb` units
 /// (bridges per lateral measure summed over the height).
 pub const LEGACY_DELTA_N_CB: f64 = 2.0;
@@ -129,18 +84,19 @@ impl Default for Thresholds {
     fn default() -> Self {
         Self {
             mobility: Mobility::default(),
-            solid_diffusion: default_solid_diffusion(),
-            diffusive_exponent: default_diffusive_exponent(),
-            cluster_fraction: default_cluster_fraction(),
-            solid_flc: default_solid_flc(),
-            solid_temperature: default_solid_temperature(),
-            gas_temperature: default_gas_temperature(),
+            // docs/observables.md gives the calibration.
+            solid_diffusion: 1e-3,
+            diffusive_exponent: 0.5,
+            cluster_fraction: 0.2,
+            solid_flc: 0.02,
+            solid_temperature: 0.02,
+            gas_temperature: 2.0,
             coexistence_by: CoexistenceBy::default(),
-            coexistence_level: default_coexistence_level(),
-            coexistence_contrast: default_coexistence_contrast(),
+            coexistence_level: 0.99,
+            coexistence_contrast: 0.5,
             coexistence_delta_n_cb: 0.0,
-            line_jump_ratio: default_line_jump_ratio(),
-            shear_e_par: default_shear_e_par(),
+            line_jump_ratio: 3.0,
+            shear_e_par: 0.1,
         }
     }
 }
@@ -148,8 +104,8 @@ impl Default for Thresholds {
 impl Thresholds {
     /// Checks every key of `[classify]`.
     pub fn validate(&self, origin: &str) -> Result<(), crate::scene::SceneError> {
-        let bad = |key: &str, msg: String| {
-            crate::scene::SceneError::new(origin, &format!("classify.{key}"), msg)
+        let check = |key: &str, v: f64, ok: bool, must: &str| {
+            crate::scene::SceneError::unless(ok, origin, &format!("classify.{key}"), v, must)
         };
         let checks = [
             ("solid_diffusion", self.solid_diffusion),
@@ -160,58 +116,50 @@ impl Thresholds {
             ("shear_e_par", self.shear_e_par),
         ];
         for (key, v) in checks {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(bad(
-                    key,
-                    format!("= {v} is out of range: must be finite and >= 0"),
-                ));
-            }
+            check(key, v, v.is_finite() && v >= 0.0, "finite and >= 0")?;
         }
         let q = self.coexistence_level;
-        if !(q.is_finite() && q > 0.5 && q < 1.0) {
-            return Err(bad(
-                "coexistence_level",
-                format!("= {q} is out of range: must be in (0.5, 1) (a quantile, e.g. 0.99)"),
-            ));
-        }
+        let quantile = "in (0.5, 1) (a quantile, e.g. 0.99)";
+        check(
+            "coexistence_level",
+            q,
+            q.is_finite() && q > 0.5 && q < 1.0,
+            quantile,
+        )?;
         let a = self.diffusive_exponent;
-        if !(a.is_finite() && a > 0.0 && a <= 1.0) {
-            return Err(bad(
-                "diffusive_exponent",
-                format!("= {a} is out of range: must be in (0, 1] (1: diffusion, 0: caged)"),
-            ));
-        }
-        let f = self.cluster_fraction;
-        if !(f.is_finite() && (0.0..=1.0).contains(&f)) {
-            return Err(bad(
-                "cluster_fraction",
-                format!("= {f} is out of range: must be in [0, 1]"),
-            ));
-        }
-        let c = self.coexistence_contrast;
-        if !(c.is_finite() && (0.0..=1.0).contains(&c)) {
-            return Err(bad(
-                "coexistence_contrast",
-                format!("= {c} is out of range: must be in [0, 1]"),
-            ));
+        let exponent = "in (0, 1] (1: diffusion, 0: caged)";
+        check(
+            "diffusive_exponent",
+            a,
+            a.is_finite() && a > 0.0 && a <= 1.0,
+            exponent,
+        )?;
+        for (key, f) in [
+            ("cluster_fraction", self.cluster_fraction),
+            ("coexistence_contrast", self.coexistence_contrast),
+        ] {
+            check(
+                key,
+                f,
+                f.is_finite() && (0.0..=1.0).contains(&f),
+                "in [0, 1]",
+            )?;
         }
         let j = self.line_jump_ratio;
-        if !(j.is_finite() && j > 1.0) {
-            return Err(bad(
-                "line_jump_ratio",
-                format!("= {j} is out of range: must be finite and > 1"),
-            ));
-        }
-        if self.gas_temperature < self.solid_temperature {
-            return Err(bad(
-                "gas_temperature",
-                format!(
-                    "= {} is out of range: must be >= classify.solid_temperature = {} (a gas is \
-                     hotter than a solid)",
-                    self.gas_temperature, self.solid_temperature
-                ),
-            ));
-        }
-        Ok(())
+        check(
+            "line_jump_ratio",
+            j,
+            j.is_finite() && j > 1.0,
+            "finite and > 1",
+        )?;
+        check(
+            "gas_temperature",
+            self.gas_temperature,
+            self.gas_temperature >= self.solid_temperature,
+            &format!(
+                ">= classify.solid_temperature = {} (a gas is hotter than a solid)",
+                self.solid_temperature
+            ),
+        )
     }
 }

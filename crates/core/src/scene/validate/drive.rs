@@ -13,22 +13,14 @@ impl Scene {
     pub(super) fn validate_drive(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let drive = &self.drive;
         match drive.kind {
-            DriveKind::None => {
-                let given = shaking_keys_given(drive);
-                if let Some((key, _)) = given
+            DriveKind::None => c.none_given(
+                shaking_keys_given(drive)
                     .iter()
-                    .chain(table_keys_given(drive).iter())
-                    .chain(shear_keys_given(drive).iter())
-                    .find(|(_, g)| *g)
-                {
-                    return Err(c.err(
-                        key,
-                        "is set but drive.kind = \"none\": set kind = \"sine\" (or \"shear\" \
-                         for f_max, slab_width) or remove the key"
-                            .into(),
-                    ));
-                }
-            }
+                    .chain(&table_keys_given(drive))
+                    .chain(&shear_keys_given(drive)),
+                "is set but drive.kind = \"none\": set kind = \"sine\" (or \"shear\" for \
+                 f_max, slab_width) or remove the key",
+            )?,
             DriveKind::Shear => self.validate_shear(c)?,
             DriveKind::Sine => self.validate_sine(c)?,
         }
@@ -39,16 +31,14 @@ impl Scene {
     /// keys, the wall table and the gap between floor and lid.
     fn validate_sine(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let drive = &self.drive;
-        if let Some((key, _)) = shear_keys_given(drive).iter().find(|(_, g)| *g) {
-            return Err(c.err(
-                key,
-                "is set but drive.kind = \"sine\": it belongs to kind = \"shear\"".into(),
-            ));
-        }
+        c.none_given(
+            &shear_keys_given(drive),
+            "is set but drive.kind = \"sine\": it belongs to kind = \"shear\"",
+        )?;
         if self.gravity <= 0.0 {
             return Err(c.err(
                 "drive.kind",
-                "= \"sine\" needs gravity > 0 (Gamma and E* are defined through g)".into(),
+                "= \"sine\" needs gravity > 0 (Gamma and E* are defined through g)",
             ));
         }
         let physical = drive.amplitude.is_some() || drive.omega.is_some();
@@ -57,8 +47,7 @@ impl Scene {
             return Err(c.err(
                 "drive",
                 "a sine drive needs exactly one pair: amplitude and omega, or gamma and \
-                     e_star"
-                    .into(),
+                     e_star",
             ));
         }
         let pairs = if physical {
@@ -72,7 +61,7 @@ impl Scene {
         for (key, value) in pairs {
             match value {
                 None => {
-                    return Err(c.err(key, "is missing: it comes in a pair".into()));
+                    return Err(c.err(key, "is missing: it comes in a pair"));
                 }
                 Some(v) if key == "drive.amplitude" => c.non_negative(key, v)?,
                 Some(v) => c.positive(key, v)?,
@@ -155,24 +144,17 @@ impl Scene {
     /// The `table` wall solver's keys: only with `wall_solver = "table"`, and in range.
     fn validate_wall_table(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let drive = &self.drive;
-        if drive.wall_solver != WallSolverKind::Table
-            && let Some((key, _)) = table_keys_given(drive).iter().find(|(_, g)| *g)
-        {
-            return Err(c.err(
-                key,
-                "is set but drive.wall_solver is not \"table\": set wall_solver = \
-                 \"table\" or remove the key"
-                    .into(),
-            ));
+        if drive.wall_solver != WallSolverKind::Table {
+            c.none_given(
+                &table_keys_given(drive),
+                "is set but drive.wall_solver is not \"table\": set wall_solver = \"table\" or \
+                 remove the key",
+            )?;
         }
         if let Some(cells) = drive.table_cells {
             for (k, n) in cells.iter().enumerate() {
-                if !(4..=4096).contains(n) {
-                    return Err(c.err(
-                        &format!("drive.table_cells[{k}]"),
-                        format!("= {n} is out of range: must be in [4, 4096]"),
-                    ));
-                }
+                let key = format!("drive.table_cells[{k}]");
+                c.require(&key, n, (4..=4096).contains(n), "in [4, 4096]")?;
             }
         }
         if let Some(v) = drive.table_v_min {
@@ -183,24 +165,21 @@ impl Scene {
             let v_min = drive
                 .table_v_min
                 .unwrap_or(crate::physics::wall_table::DEFAULT_V_MIN_OVER_WALL_SPEED);
-            if v <= v_min {
-                return Err(c.err(
-                    "drive.table_v_max",
-                    format!("= {v} is out of range: must be greater than table_v_min = {v_min}"),
-                ));
-            }
+            let must = format!("greater than table_v_min = {v_min}");
+            c.require("drive.table_v_max", v, v > v_min, &must)?;
         }
         if let Some(tol) = drive.table_corner_tolerance {
-            if !(tol > 0.0 && tol <= 1.0) {
-                return Err(c.err(
-                    "drive.table_corner_tolerance",
-                    format!("= {tol} is out of range: must be in (0, 1] (periods)"),
-                ));
-            }
+            let ok = tol > 0.0 && tol <= 1.0;
+            c.require(
+                "drive.table_corner_tolerance",
+                tol,
+                ok,
+                "in (0, 1] (periods)",
+            )?;
             if drive.table_corner_check == Some(false) {
                 return Err(c.err(
                     "drive.table_corner_tolerance",
-                    "is set but drive.table_corner_check = false".into(),
+                    "is set but drive.table_corner_check = false",
                 ));
             }
         }
@@ -240,8 +219,7 @@ impl Scene {
             return Err(c.err(
                 "drive.kind",
                 "= \"shear\" needs dimension = 3: the force acts along y and varies along x \
-                 (Kolmogorov flow, docs/model.md 4.2); a 2D box (axes x, z) has no y axis"
-                    .into(),
+                 (Kolmogorov flow, docs/model.md 4.2); a 2D box (axes x, z) has no y axis",
             ));
         }
         let b = self.boundaries();
@@ -253,42 +231,30 @@ impl Scene {
                 return Err(c.err(
                     &format!("box.boundary[{k}]"),
                     "is not allowed with drive.kind = \"shear\": the box must be [\"periodic\", \
-                     \"periodic\", \"wall\"] (periodic in x and y, floor and lid)"
-                        .into(),
+                     \"periodic\", \"wall\"] (periodic in x and y, floor and lid)",
                 ));
             }
         }
-        let shaking = shaking_keys_given(drive);
-        if let Some((key, _)) = shaking
-            .iter()
-            .chain(table_keys_given(drive).iter())
-            .find(|(_, g)| *g)
-        {
-            return Err(c.err(
-                key,
-                "is set but drive.kind = \"shear\": floor and lid are static; remove the key"
-                    .into(),
-            ));
-        }
+        let fixed = "is set but drive.kind = \"shear\": floor and lid are static; remove the key";
+        c.none_given(
+            shaking_keys_given(drive)
+                .iter()
+                .chain(&table_keys_given(drive)),
+            fixed,
+        )?;
         if drive.wall_solver != WallSolverKind::Exact {
-            return Err(c.err(
-                "drive.wall_solver",
-                "is set but drive.kind = \"shear\": floor and lid are static; remove the key"
-                    .into(),
-            ));
+            return Err(c.err("drive.wall_solver", fixed));
         }
         match drive.f_max {
             None => {
                 return Err(c.err(
                     "drive.f_max",
-                    "is missing: drive.kind = \"shear\" needs the peak force f_max (>= 0)".into(),
+                    "is missing: drive.kind = \"shear\" needs the peak force f_max (>= 0)",
                 ));
             }
             Some(f) => {
                 c.non_negative("drive.f_max", f)?;
-                if f > MAX_SHEAR_FORCE {
-                    return Err(c.out_of_range("drive.f_max", f, "in [0, 1e3]"));
-                }
+                c.within("drive.f_max", f, f <= MAX_SHEAR_FORCE, "in [0, 1e3]")?;
             }
         }
         // At least 4 slabs: with 2 the slab centres sit on the zeros of the cosine (no force at

@@ -129,6 +129,24 @@ impl SceneError {
     pub(crate) fn io(origin: &str, err: std::io::Error) -> Self {
         Self::new(origin, "", format!("cannot read the scene file: {err}"))
     }
+
+    /// `Ok` where `ok`, else `key = v is out of range: must be {must}`.
+    pub(crate) fn unless(
+        ok: bool,
+        origin: &str,
+        key: &str,
+        v: impl fmt::Display,
+        must: &str,
+    ) -> Result<(), Self> {
+        if ok {
+            return Ok(());
+        }
+        Err(Self::new(
+            origin,
+            key,
+            format!("= {v} is out of range: must be {must}"),
+        ))
+    }
 }
 
 /// The dotted key a TOML error belongs to (empty for syntax errors): the table path the
@@ -189,8 +207,19 @@ fn num(v: f64) -> String {
 }
 
 impl Check<'_> {
-    fn err(&self, key: &str, msg: String) -> SceneError {
+    fn err(&self, key: &str, msg: impl Into<String>) -> SceneError {
         SceneError::new(self.origin, key, msg)
+    }
+
+    /// `Ok` where `ok`, else `key = v is out of range: must be {must}` ([`SceneError::unless`]).
+    fn require(
+        &self,
+        key: &str,
+        v: impl fmt::Display,
+        ok: bool,
+        must: &str,
+    ) -> Result<(), SceneError> {
+        SceneError::unless(ok, self.origin, key, v, must)
     }
 
     /// `= v is out of range: must be <range>`, with "finite and" for `inf` (TOML allows it).
@@ -202,19 +231,32 @@ impl Check<'_> {
         )
     }
 
-    fn positive(&self, key: &str, v: f64) -> Result<(), SceneError> {
-        if v.is_finite() && v > 0.0 {
+    /// `Ok` where `ok`, else [`Check::out_of_range`].
+    fn within(&self, key: &str, v: f64, ok: bool, range: &str) -> Result<(), SceneError> {
+        if ok {
             Ok(())
         } else {
-            Err(self.out_of_range(key, v, "> 0"))
+            Err(self.out_of_range(key, v, range))
         }
     }
 
+    fn positive(&self, key: &str, v: f64) -> Result<(), SceneError> {
+        self.within(key, v, v.is_finite() && v > 0.0, "> 0")
+    }
+
     fn non_negative(&self, key: &str, v: f64) -> Result<(), SceneError> {
-        if v.is_finite() && v >= 0.0 {
-            Ok(())
-        } else {
-            Err(self.out_of_range(key, v, ">= 0"))
+        self.within(key, v, v.is_finite() && v >= 0.0, ">= 0")
+    }
+
+    /// The first of `keys` that is set (`(key, set)`) is rejected with `why`.
+    fn none_given<'k>(
+        &self,
+        keys: impl IntoIterator<Item = &'k (&'static str, bool)>,
+        why: &str,
+    ) -> Result<(), SceneError> {
+        match keys.into_iter().find(|(_, given)| *given) {
+            Some((key, _)) => Err(self.err(key, why.to_string())),
+            None => Ok(()),
         }
     }
 
@@ -245,9 +287,9 @@ impl Scene {
         // A tiny but non-zero g makes the time unit sqrt(d/g) astronomically long: event times
         // of 1e151 leave no digits for the motion between them (found by the input fuzzer: a
         // bond stretched past s_crit at g = 1e-300).
-        if self.gravity > MAX_GRAVITY || (self.gravity > 0.0 && self.gravity < MIN_GRAVITY) {
-            return Err(c.out_of_range("gravity", self.gravity, "0 or in [1e-6, 1e6]"));
-        }
+        let g = self.gravity;
+        let ok = g <= MAX_GRAVITY && (g == 0.0 || g >= MIN_GRAVITY);
+        c.within("gravity", g, ok, "0 or in [1e-6, 1e6]")?;
 
         self.validate_box(&c)?;
         self.validate_particles(&c)?;
@@ -299,8 +341,7 @@ impl Scene {
             return Err(c.err(
                 &format!("box.boundary[{}]", dim - 1),
                 "= \"periodic\" is not allowed with gravity: the vertical axis needs walls \
-                 (\"wall\"), or set gravity = 0"
-                    .to_string(),
+                 (\"wall\"), or set gravity = 0",
             ));
         }
         Ok(())
@@ -309,12 +350,7 @@ impl Scene {
     /// `[particles]`: count, diameter, mass, polydispersity.
     fn validate_particles(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let p = &self.particles;
-        if p.count == 0 {
-            return Err(c.err(
-                "particles.count",
-                "= 0 is out of range: must be >= 1".into(),
-            ));
-        }
+        c.require("particles.count", p.count, p.count > 0, ">= 1")?;
         // The units are those of the scene (d = m = g = 1 in every shipped scene); a diameter or
         // mass many decades off makes speeds or times of 1e150 that leave the motion no digits
         // (found by the input fuzzer: grains overlapping at mass = 1e-300).
@@ -323,40 +359,30 @@ impl Scene {
             ("particles.mass", p.mass),
         ] {
             c.positive(key, v)?;
-            if !(MIN_UNIT_SCALE..=MAX_UNIT_SCALE).contains(&v) {
-                return Err(c.out_of_range(key, v, "in [1e-6, 1e6]"));
-            }
+            let ok = (MIN_UNIT_SCALE..=MAX_UNIT_SCALE).contains(&v);
+            c.within(key, v, ok, "in [1e-6, 1e6]")?;
         }
-        if !(0.0..MAX_POLYDISPERSITY).contains(&p.polydispersity) {
-            return Err(c.err(
-                "particles.polydispersity",
-                format!(
-                    "= {} is out of range: must be in [0, 1/sqrt(3) = 0.5774) (the smallest \
-                     diameter d (1 - sqrt(3) polydispersity) must stay > 0)",
-                    p.polydispersity
-                ),
-            ));
-        }
-        Ok(())
+        let sigma = p.polydispersity;
+        c.require(
+            "particles.polydispersity",
+            sigma,
+            (0.0..MAX_POLYDISPERSITY).contains(&sigma),
+            "in [0, 1/sqrt(3) = 0.5774) (the smallest diameter d (1 - sqrt(3) polydispersity) \
+             must stay > 0)",
+        )
     }
 
     /// `[contact]`: the restitution coefficients.
     fn validate_contact(&self, c: &Check<'_>) -> Result<(), SceneError> {
-        c.closed(
-            "contact.restitution",
-            self.contact.restitution,
-            0.0,
-            1.0,
-            "1",
-        )?;
+        let ct = &self.contact;
+        c.closed("contact.restitution", ct.restitution, 0.0, 1.0, "1")?;
         c.closed(
             "contact.wall_restitution",
-            self.contact.wall_restitution,
+            ct.wall_restitution,
             0.0,
             1.0,
             "1",
-        )?;
-        Ok(())
+        )
     }
 
     /// `[capillary]`: the bridge keys belong to the thin-thread model; `e_cb` is needed
@@ -364,23 +390,15 @@ impl Scene {
     fn validate_capillary(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let cap = &self.capillary;
         match cap.model {
-            CapillaryModel::None => {
-                if cap.s_crit.is_some() || cap.e_cb.is_some() || cap.rupture_rule.is_some() {
-                    let key = if cap.s_crit.is_some() {
-                        "capillary.s_crit"
-                    } else if cap.e_cb.is_some() {
-                        "capillary.e_cb"
-                    } else {
-                        "capillary.rupture_rule"
-                    };
-                    return Err(c.err(
-                        key,
-                        "is set but capillary.model = \"none\": choose model = \"thin_thread\" or \
-                         remove the key"
-                            .into(),
-                    ));
-                }
-            }
+            CapillaryModel::None => c.none_given(
+                &[
+                    ("capillary.s_crit", cap.s_crit.is_some()),
+                    ("capillary.e_cb", cap.e_cb.is_some()),
+                    ("capillary.rupture_rule", cap.rupture_rule.is_some()),
+                ],
+                "is set but capillary.model = \"none\": choose model = \"thin_thread\" or \
+                 remove the key",
+            )?,
             CapillaryModel::ThinThread => {
                 if let Some(s) = cap.s_crit {
                     c.positive("capillary.s_crit", s)?;
@@ -392,8 +410,7 @@ impl Scene {
                     return Err(c.err(
                         "capillary.e_cb",
                         "is required without gravity (its default 4 m g s_crit would be 0): \
-                         give a value >= 0"
-                            .into(),
+                         give a value >= 0",
                     ));
                 }
             }
@@ -411,15 +428,14 @@ impl Scene {
             (Some(_), Some(_)) => {
                 return Err(c.err(
                     "initial.temperature_over_ecb",
-                    "and initial.temperature are both set: give exactly one".into(),
+                    "and initial.temperature are both set: give exactly one",
                 ));
             }
             (None, None) => {
                 return Err(c.err(
                     "initial.temperature",
                     "is missing: give initial.temperature (>= 0) or, for wet scenes, \
-                     initial.temperature_over_ecb (>= 0)"
-                        .into(),
+                     initial.temperature_over_ecb (>= 0)",
                 ));
             }
             (Some(t), None) => {
@@ -444,19 +460,19 @@ impl Scene {
                     return Err(c.err(
                         "initial.temperature_over_ecb",
                         "needs capillary bridges with E_cb > 0: use initial.temperature for dry \
-                         scenes"
-                            .into(),
+                         scenes",
                     ));
                 }
             }
         }
-        if !(init.lattice_spacing.is_finite() && init.lattice_spacing >= 1.0) {
-            return Err(c.out_of_range(
-                "initial.lattice_spacing",
-                init.lattice_spacing,
-                ">= 1 (units of the largest diameter)",
-            ));
-        }
+        let a = init.lattice_spacing;
+        let must = ">= 1 (units of the largest diameter)";
+        c.within(
+            "initial.lattice_spacing",
+            a,
+            a.is_finite() && a >= 1.0,
+            must,
+        )?;
         let (_, d_max) = self.diameter_range();
         let spacing = init.lattice_spacing * d_max;
         // `lattice::capacity` without its overflow: a huge box holds "very many" sites.
@@ -493,9 +509,7 @@ impl Scene {
                 ),
             ));
         }
-        if self.run.max_events == Some(0) {
-            return Err(c.err("run.max_events", "= 0 is out of range: must be >= 1".into()));
-        }
+        c.require("run.max_events", 0, self.run.max_events != Some(0), ">= 1")?;
         Ok(())
     }
 
@@ -506,22 +520,17 @@ impl Scene {
         let e = &self.engine;
         c.non_negative("engine.tc", e.tc)?;
         c.non_negative("engine.min_rebound_speed", e.min_rebound_speed)?;
-        if e.min_rebound_speed >= 0.1 {
-            return Err(c.err(
-                "engine.min_rebound_speed",
-                format!(
-                    "= {} is out of range: must be < 0.1 (a collapse remedy, far below thermal \
-                     speeds)",
-                    e.min_rebound_speed
-                ),
-            ));
-        }
+        c.require(
+            "engine.min_rebound_speed",
+            e.min_rebound_speed,
+            e.min_rebound_speed < 0.1,
+            "< 0.1 (a collapse remedy, far below thermal speeds)",
+        )?;
         if self.is_wet() && e.min_rebound_speed <= 0.0 {
             return Err(c.err(
                 "engine.min_rebound_speed",
                 "= 0 is out of range: must be > 0 with bridges (a bonded pair grazing the well \
-                 wall would bounce ever faster)"
-                    .into(),
+                 wall would bounce ever faster)",
             ));
         }
         if self.gravity > 0.0 && e.min_rebound_speed <= 0.0 {
@@ -539,8 +548,7 @@ impl Scene {
             return Err(c.err(
                 "engine.min_rebound_speed",
                 "= 0 together with engine.tc = 0 leaves inelastic collisions without a collapse \
-                 remedy: set min_rebound_speed > 0 or tc > 0"
-                    .into(),
+                 remedy: set min_rebound_speed > 0 or tc > 0",
             ));
         }
         c.positive("engine.overlap_tolerance", e.overlap_tolerance)?;
@@ -557,18 +565,15 @@ impl Scene {
                 ),
             ));
         }
-        if e.overlap_tolerance > 0.01 * p.diameter {
-            return Err(c.err(
-                "engine.overlap_tolerance",
-                format!(
-                    "= {} is out of range: must be <= 0.01 d = {} (it is what the invariant check \
-                     forgives)",
-                    e.overlap_tolerance,
-                    0.01 * p.diameter
-                ),
-            ));
-        }
-        Ok(())
+        c.require(
+            "engine.overlap_tolerance",
+            e.overlap_tolerance,
+            e.overlap_tolerance <= 0.01 * p.diameter,
+            &format!(
+                "<= 0.01 d = {} (it is what the invariant check forgives)",
+                0.01 * p.diameter
+            ),
+        )
     }
 
     /// `engine.cell_size` and the neighbour grid it gives the box: enough cells on a periodic
@@ -581,15 +586,12 @@ impl Scene {
         let e = &self.engine;
         c.non_negative("engine.cell_size", e.cell_size)?;
         let range = d_max + self.s_crit();
-        if e.cell_size > 0.0 && e.cell_size < range {
-            return Err(c.err(
-                "engine.cell_size",
-                format!(
-                    "= {} is out of range: must be 0 (automatic) or >= d_max + s_crit = {range:.4}",
-                    e.cell_size
-                ),
-            ));
-        }
+        c.require(
+            "engine.cell_size",
+            e.cell_size,
+            e.cell_size <= 0.0 || e.cell_size >= range,
+            &format!("0 (automatic) or >= d_max + s_crit = {range:.4}"),
+        )?;
         let cell = e.cell_size.max(range);
         for k in 0..dim {
             // Counted exactly as the engine's cell grid counts them. Four cells, not three: with

@@ -39,31 +39,26 @@ impl Scene {
                 ct.restitution_temperature.is_some(),
             ),
         ];
-        if let Some((key, _)) = time_only.iter().find(|(_, g)| *g) {
-            return Err(c.err(
-                key,
-                "belongs to the time-driven engine: set engine.kind = \"time\" or remove \
-                 the key"
-                    .into(),
-            ));
-        }
-        Ok(())
+        c.none_given(
+            &time_only,
+            "belongs to the time-driven engine: set engine.kind = \"time\" or remove the key",
+        )
     }
 
     /// With the time-driven engine: no key of the event engine (those with plain-number
     /// defaults count as set when they differ from their default).
     fn reject_event_keys(&self, c: &Check<'_>) -> Result<(), SceneError> {
-        let e = &self.engine;
-        let d = &self.drive;
+        let (e, d) = (&self.engine, &self.drive);
+        let default = scene::EngineSpec::default();
         let event_only = [
-            ("engine.tc", e.tc != scene::default_tc()),
+            ("engine.tc", e.tc != default.tc),
             (
                 "engine.min_rebound_speed",
-                e.min_rebound_speed != scene::default_min_rebound(),
+                e.min_rebound_speed != default.min_rebound_speed,
             ),
             (
                 "engine.overlap_tolerance",
-                e.overlap_tolerance != scene::default_overlap_tolerance(),
+                e.overlap_tolerance != default.overlap_tolerance,
             ),
             ("engine.cell_size", e.cell_size != 0.0),
             (
@@ -79,19 +74,10 @@ impl Scene {
             ("drive.slab_width", d.slab_width.is_some()),
             ("run.max_events", self.run.max_events.is_some()),
         ];
-        if let Some((key, _)) = event_only
-            .iter()
-            .chain(table_keys_given(d).iter())
-            .find(|(_, g)| *g)
-        {
-            return Err(c.err(
-                key,
-                "belongs to the event-driven engine: remove it or set engine.kind = \
-                 \"event\""
-                    .into(),
-            ));
-        }
-        Ok(())
+        c.none_given(
+            event_only.iter().chain(&table_keys_given(d)),
+            "belongs to the event-driven engine: remove it or set engine.kind = \"event\"",
+        )
     }
 
     /// With the time-driven engine: restitution or damping (not both), the restitution speed
@@ -133,30 +119,21 @@ impl Scene {
             }
         }
         if let Some(scene::RestitutionSpeed::Speed(v)) = ct.restitution_speed {
-            if !(v.is_finite() && v > 0.0 && v <= 100.0) {
-                return Err(c.out_of_range(
-                    "contact.restitution_speed",
-                    v,
-                    "in (0, 100] (units of sqrt(g d)), or \"auto\"",
-                ));
-            }
+            let ok = v.is_finite() && v > 0.0 && v <= 100.0;
+            let must = "in (0, 100] (units of sqrt(g d)), or \"auto\"";
+            c.within("contact.restitution_speed", v, ok, must)?;
             if ct.restitution_temperature.is_some() {
                 return Err(c.err(
                     "contact.restitution_temperature",
                     "is the temperature of restitution_speed = \"auto\", but \
-                     contact.restitution_speed is a number: give one of them"
-                        .into(),
+                     contact.restitution_speed is a number: give one of them",
                 ));
             }
         }
-        if let Some(t) = ct.restitution_temperature
-            && !(t.is_finite() && t > 0.0 && t <= 1e6)
-        {
-            return Err(c.out_of_range(
-                "contact.restitution_temperature",
-                t,
-                "in (0, 1e6] (a granular temperature, units of m g d)",
-            ));
+        if let Some(t) = ct.restitution_temperature {
+            let ok = t.is_finite() && t > 0.0 && t <= 1e6;
+            let must = "in (0, 1e6] (a granular temperature, units of m g d)";
+            c.within("contact.restitution_temperature", t, ok, must)?;
         }
         Ok(())
     }
@@ -166,29 +143,25 @@ impl Scene {
     fn validate_time_numbers(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let e = &self.engine;
         let ct = &self.contact;
-        if let Some(dt) = e.dt
-            && !(dt.is_finite() && dt > 0.0 && dt <= scene::MAX_DT)
-        {
-            return Err(c.out_of_range("engine.dt", dt, "in (0, 0.01]"));
+        if let Some(dt) = e.dt {
+            let ok = dt.is_finite() && dt > 0.0 && dt <= scene::MAX_DT;
+            c.within("engine.dt", dt, ok, "in (0, 0.01]")?;
         }
-        if let Some(skin) = e.skin
-            && !(skin.is_finite() && skin > 0.0 && skin <= 1.0)
-        {
-            return Err(c.out_of_range("engine.skin", skin, "in (0, 1] (units of d)"));
+        if let Some(skin) = e.skin {
+            let ok = skin.is_finite() && skin > 0.0 && skin <= 1.0;
+            c.within("engine.skin", skin, ok, "in (0, 1] (units of d)")?;
         }
-        if let Some(k) = ct.stiffness
-            && !(k.is_finite() && (1e2..=1e12).contains(&k))
-        {
-            return Err(c.out_of_range("contact.stiffness", k, "in [1e2, 1e12]"));
+        if let Some(k) = ct.stiffness {
+            let ok = k.is_finite() && (1e2..=1e12).contains(&k);
+            c.within("contact.stiffness", k, ok, "in [1e2, 1e12]")?;
         }
         for (key, v) in [
             ("contact.damping", ct.damping),
             ("contact.wall_damping", ct.wall_damping),
         ] {
-            if let Some(a) = v
-                && !(a.is_finite() && (0.0..=1.0).contains(&a))
-            {
-                return Err(c.out_of_range(key, a, "in [0, 1] (a time)"));
+            if let Some(a) = v {
+                let ok = a.is_finite() && (0.0..=1.0).contains(&a);
+                c.within(key, a, ok, "in [0, 1] (a time)")?;
             }
         }
         self.validate_derived_damping(c)?;
