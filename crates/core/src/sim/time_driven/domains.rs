@@ -41,7 +41,7 @@
 //! chooses the path by the number of particles alone, never by the threads.
 
 use super::integrator::gear_correct_predict_axes;
-use super::neighbours::{EXACT_CHECK_EVERY, NeighbourList, RowScan, max_displacement_sq};
+use super::neighbours::{NeighbourList, RowScan, needs_rebuild, norm};
 use super::pair_kernel::{PairBooks, PairConstants, cross_forces, pair_forces_serial};
 use super::walls::{WallAxis, WallBooks, wall_forces};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -805,12 +805,10 @@ impl<const D: usize> Domain<D> {
             std::array::from_fn(|k| p.periodic[k].then_some(p.size[k])),
             flush,
         );
-        let mut moved2 = 0.0;
-        for mk in moved {
-            moved2 += mk * mk;
-        }
         self.publish(next);
-        self.check_list(moved2.sqrt(), c.half_skin)
+        self.bound += norm(moved);
+        let (x, built_at) = (&self.r[0], &self.built_at);
+        needs_rebuild::<D>(&mut self.bound, &mut self.since_check, c.half_skin, x, built_at)
     }
 
     /// The inner pairs and the cross pairs of this domain ([`pair_forces_serial`],
@@ -851,23 +849,6 @@ impl<const D: usize> Domain<D> {
         sums
     }
 
-    /// The list check of the next step (the engine's `update_list`, on this domain), after a
-    /// step whose moves have the norm `moved`: whether the list must be rebuilt.
-    fn check_list(&mut self, moved: f64, half_skin: f64) -> bool {
-        self.bound += moved;
-        self.since_check += 1;
-        if self.bound < half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
-            return false;
-        }
-        self.since_check = 0;
-        let worst = max_displacement_sq::<D>(&self.r[0], &self.built_at);
-        if worst > half_skin * half_skin {
-            true
-        } else {
-            self.bound = worst.sqrt();
-            false
-        }
-    }
 }
 
 impl DomainBooks {

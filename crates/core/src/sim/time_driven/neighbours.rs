@@ -96,10 +96,47 @@ const NONE: u32 = u32::MAX;
 /// microseconds is paid back from about a thousand particles on).
 pub(crate) const PARALLEL_BUILD_MIN: usize = 1024;
 
+/// The list check of a step (the engine's `State::update_list`, and each spatial domain's):
+/// whether some particle at `x` has moved more than `half_skin` since the build at `built_at`.
+/// The exact test runs only when `bound`, an upper bound on every displacement (the sum over
+/// steps of the per-step moves' [`norm`]), reaches `half_skin` (less a relative margin of
+/// `1e-6` for its round-off), or after [`EXACT_CHECK_EVERY`] steps (`since` counts them);
+/// otherwise no particle can have moved that far, so the decision is the exact test's. After
+/// an exact test that finds no rebuild, the bound restarts from the exact largest displacement.
+pub(crate) fn needs_rebuild<const D: usize>(
+    bound: &mut f64,
+    since: &mut u32,
+    half_skin: f64,
+    x: &[f64],
+    built_at: &[f64],
+) -> bool {
+    *since += 1;
+    if *bound < half_skin * (1.0 - 1e-6) && *since < EXACT_CHECK_EVERY {
+        return false;
+    }
+    *since = 0;
+    let worst = max_displacement_sq::<D>(x, built_at);
+    if worst > half_skin * half_skin {
+        return true;
+    }
+    *bound = worst.sqrt();
+    false
+}
+
+/// `sqrt(sum_k m_k^2)` of the largest moves `m_k` per axis of a step, summed in axis order.
+pub(crate) fn norm<const D: usize>(moved: [f64; D]) -> f64 {
+    let mut moved2 = 0.0;
+    for m in moved {
+        moved2 += m * m;
+    }
+    moved2.sqrt()
+}
+
 /// The largest squared displacement between positions `x` and `built_at` (axis-major, the
-/// same length), without the periodic image; in blocks of 64 particles, so that the loop
-/// vectorises.
-pub(crate) fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
+/// same length), without the periodic image: a particle that crossed a periodic face counts as
+/// having moved by about `L` and triggers a (harmless, rare) rebuild; in exchange the loop,
+/// in blocks of 64 particles, vectorises.
+fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
     let n = x.len() / D;
     let mut worst = 0.0f64;
     let mut acc = [0.0f64; 64];
@@ -227,14 +264,6 @@ impl<const D: usize> NeighbourList<D> {
     /// The skin (the list holds pairs up to `skin` beyond their interaction range).
     pub(crate) fn skin(&self) -> f64 {
         self.skin
-    }
-
-    /// The largest squared displacement of a particle since the last build (`x` axis-major).
-    /// The displacement is taken without the periodic image: a particle that crossed a periodic
-    /// face counts as having moved by about `L` and triggers a (harmless, rare) rebuild; in
-    /// exchange the loop vectorises.
-    pub(crate) fn max_displacement_sq(&self, x: &[f64]) -> f64 {
-        max_displacement_sq::<D>(x, &self.built_at)
     }
 
     fn cell_index(&self, c: &[usize; D]) -> usize {

@@ -105,6 +105,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let mut engine = Self {
             s,
             execution: Execution::default(),
+            serial: Serial::default(),
             rayon: RayonSplit::default(),
             domains: Domains::default(),
         };

@@ -196,7 +196,8 @@ struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
 pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoBodyForce> {
     s: State<D, GRAV, WET, B>,
     execution: Execution,
-    /// The rayon strategy's reused buffers.
+    /// The serial and the rayon strategy's reused buffers.
+    serial: Serial<D>,
     rayon: RayonSplit<D>,
     /// The domain strategy's decomposition and counters.
     domains: Domains<D>,

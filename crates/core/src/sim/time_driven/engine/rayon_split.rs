@@ -10,16 +10,15 @@
 //!    particle's own row), the walls, the body force, `1/m`, then the integrator pass
 //!    ([`particle_chunk`]).
 //!
-//! The accelerations are the same bits as the serial strategy's single loop that scatters each
-//! pair force to both partners; the booked sums (dissipation, drive work, bridge energy) are
-//! summed per chunk in both.
+//! Phases 2 and 3 ([`ParticlePhase`]) are the serial strategy's too, run on the calling thread
+//! after its pair loop; its accelerations are the same bits as the gather's.
 
 use super::stepping::{Then, for_each_axis_segment, max_ignoring_nan, wall_axes};
 use super::*;
 use crate::sim::time_driven::integrator::{
     GEAR_FLUSH_EVERY, gear_correct_predict_axis, verlet_kick,
 };
-use crate::sim::time_driven::pair_kernel::{ENTRY_CHUNK, PairBooks, PairConstants, pair_chunk};
+use crate::sim::time_driven::pair_kernel::{ENTRY_CHUNK, PairBooks, pair_chunk};
 use crate::sim::time_driven::walls::{WallAxis, WallBooks, wall_forces};
 use rayon::prelude::*;
 
@@ -28,11 +27,17 @@ use rayon::prelude::*;
 pub(super) struct RayonSplit<const D: usize> {
     /// Pair force of each Verlet-list entry on its row's particle, `D` values per entry.
     pair_f: Vec<f64>,
+    pair_books: Vec<PairBooks>,
+    phase: ParticlePhase<D>,
+}
+
+/// The buffers of phases 2 and 3, which the serial strategy runs too (on the calling thread).
+#[derive(Debug, Clone, Default)]
+pub(super) struct ParticlePhase<const D: usize> {
     /// Body force per particle, particle-major (empty without one).
     body_f: Vec<f64>,
-    pair_books: Vec<PairBooks>,
-    chunk_books: Vec<ChunkBooks<D>>,
     body_work: Vec<f64>,
+    chunk_books: Vec<ChunkBooks<D>>,
 }
 
 impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> Strategy<D, GRAV, WET, B>
@@ -57,11 +62,47 @@ impl<const D: usize> RayonSplit<D> {
     ) -> [f64; D] {
         s.list.ensure_transposed();
         let pc = s.p.pair_constants(vs, dt);
-        self.pairs::<GRAV, WET, B>(s, &pc);
+        self.pair_f.resize(D * s.list.partner.len(), 0.0);
+        let (x, v, radius) = (&s.r[0], &s.r[1], &s.radius);
+        let (row_of, partner) = (&s.list.row_of, &s.list.partner);
+        s.list
+            .flags
+            .par_chunks_mut(ENTRY_CHUNK)
+            .zip(self.pair_f.par_chunks_mut(ENTRY_CHUNK * D))
+            .enumerate()
+            .with_min_len(1)
+            .map(|(c, (flags, pf))| {
+                let q0 = c * ENTRY_CHUNK;
+                pair_chunk::<D, WET>(&pc, x, v, radius, &row_of[q0..], &partner[q0..], flags, pf)
+            })
+            .collect_into_vec(&mut self.pair_books);
+        let pair_f = Some(&self.pair_f[..]);
+        self.phase.run(s, pair_f, &self.pair_books, t, vs, dt, then)
+    }
+}
+
+impl<const D: usize> ParticlePhase<D> {
+    /// Phases 2 and 3 after the pair phase, on the pool's threads where `pair_f` (phase 1's
+    /// forces, gathered per particle) is given, else on the calling thread (the serial
+    /// strategy: the pair forces are in `acc`, over the force start values). Books the pair
+    /// loop's `pair_books` (in chunk order), then the walls and the body force; returns the
+    /// largest move per axis of the Gear pass.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn run<const GRAV: bool, const WET: bool, B: BodyForce<D>>(
+        &mut self,
+        s: &mut State<D, GRAV, WET, B>,
+        pair_f: Option<&[f64]>,
+        pair_books: &[PairBooks],
+        t: f64,
+        vs: f64,
+        dt: f64,
+        then: Then,
+    ) -> [f64; D] {
+        let min_len = if pair_f.is_some() { 1 } else { usize::MAX };
         let mut diss = 0.0;
         let mut ledger = 0.0;
         let mut max_ov = s.max_overlap;
-        for b in &self.pair_books {
+        for b in pair_books {
             diss += b.dissipated;
             ledger += b.bridge_ledger;
             max_ov = max_ov.max(b.max_overlap);
@@ -70,10 +111,11 @@ impl<const D: usize> RayonSplit<D> {
             s.counts.bridge_ruptures += b.ruptures;
         }
         s.dissipated_bridges += ledger;
-        self.body_forces(s, t, vs, dt);
+        self.body_forces(s, t, vs, dt, min_len);
         // The Gear pass leaves the start values for the next evaluation.
         s.acc_is_start = then == Then::Gear;
-        self.particles(s, wall_axes(&s.p, t, vs, dt), dt, then);
+        let walls = wall_axes(&s.p, t, vs, dt);
+        self.particles(s, pair_f, walls, dt, then, min_len);
         let mut work = 0.0;
         let mut moved = [0.0; D];
         for b in &self.chunk_books {
@@ -94,29 +136,6 @@ impl<const D: usize> RayonSplit<D> {
         moved
     }
 
-    /// Phase 1: the pair force of every list entry into `pair_f`, the books per chunk into
-    /// `pair_books`.
-    fn pairs<const GRAV: bool, const WET: bool, B>(
-        &mut self,
-        s: &mut State<D, GRAV, WET, B>,
-        pc: &PairConstants<D>,
-    ) {
-        self.pair_f.resize(D * s.list.partner.len(), 0.0);
-        let (x, v, radius) = (&s.r[0], &s.r[1], &s.radius);
-        let (row_of, partner) = (&s.list.row_of, &s.list.partner);
-        s.list
-            .flags
-            .par_chunks_mut(ENTRY_CHUNK)
-            .zip(self.pair_f.par_chunks_mut(ENTRY_CHUNK * D))
-            .enumerate()
-            .with_min_len(1)
-            .map(|(c, (flags, pf))| {
-                let q0 = c * ENTRY_CHUNK;
-                pair_chunk::<D, WET>(pc, x, v, radius, &row_of[q0..], &partner[q0..], flags, pf)
-            })
-            .collect_into_vec(&mut self.pair_books);
-    }
-
     /// Phase 2: the body force per particle (all axes at once, particle-major) into `body_f`,
     /// its work per chunk into `body_work` (nothing without a body force).
     fn body_forces<const GRAV: bool, const WET: bool, B: BodyForce<D>>(
@@ -125,6 +144,7 @@ impl<const D: usize> RayonSplit<D> {
         t: f64,
         vs: f64,
         dt: f64,
+        min_len: usize,
     ) {
         self.body_work.clear();
         if !B::ACTIVE {
@@ -136,7 +156,7 @@ impl<const D: usize> RayonSplit<D> {
         self.body_f
             .par_chunks_mut(PARTICLE_CHUNK * D)
             .enumerate()
-            .with_min_len(1)
+            .with_min_len(min_len)
             .map(|(c, bf)| {
                 let i0 = c * PARTICLE_CHUNK;
                 let mut work = 0.0;
@@ -159,14 +179,16 @@ impl<const D: usize> RayonSplit<D> {
     fn particles<const GRAV: bool, const WET: bool, B: BodyForce<D>>(
         &mut self,
         s: &mut State<D, GRAV, WET, B>,
+        pair_f: Option<&[f64]>,
         walls: [WallAxis; D],
         dt: f64,
         then: Then,
+        min_len: usize,
     ) {
         let p = &s.p;
         let cx = ChunkContext::<D> {
             n: s.n,
-            pf: &self.pair_f,
+            pf: pair_f,
             start: &s.list.start,
             row_of: &s.list.row_of,
             partner: &s.list.partner,
@@ -199,7 +221,7 @@ impl<const D: usize> RayonSplit<D> {
         )
             .into_par_iter()
             .enumerate()
-            .with_min_len(1)
+            .with_min_len(min_len)
             .map(|(c, (acc, r0, r1, r2, r3, r4, r5, touch))| {
                 particle_chunk(
                     &cx,
@@ -224,8 +246,8 @@ struct ChunkBooks<const D: usize> {
 /// What the per-particle phase reads (shared by every chunk).
 struct ChunkContext<'a, const D: usize> {
     n: usize,
-    /// Pair forces per list entry, `D` values each (`pair_chunk`).
-    pf: &'a [f64],
+    /// Pair forces per list entry, `D` values each (`pair_chunk`); `None`: already in `acc`.
+    pf: Option<&'a [f64]>,
     start: &'a [u32],
     row_of: &'a [u32],
     partner: &'a [u32],
@@ -266,23 +288,25 @@ fn particle_chunk<const D: usize>(
     for_each_axis_segment(n, e0, acc.len(), |k, o, m| {
         let i0 = (e0 + o) % n;
         let acc = &mut acc[o..o + m];
-        acc.fill(cx.init[k]);
-        // The partners' rows, ascending: `f_j -= f_ij`.
-        for &q in &cx.in_entry[cx.in_start[i0] as usize..cx.in_start[i0 + m] as usize] {
-            let q = q as usize;
-            acc[cx.partner[q] as usize - i0] -= cx.pf[q * D + k];
-        }
-        // The particle's own row, summed first: `f_i += sum_j f_ij`.
-        let (mut q, end) = (cx.start[i0] as usize, cx.start[i0 + m] as usize);
-        while q < end {
-            let i = cx.row_of[q] as usize;
-            let row_end = cx.start[i + 1] as usize;
-            let mut own = 0.0;
-            while q < row_end {
-                own += cx.pf[q * D + k];
-                q += 1;
+        if let Some(pf) = cx.pf {
+            acc.fill(cx.init[k]);
+            // The partners' rows, ascending: `f_j -= f_ij`.
+            for &q in &cx.in_entry[cx.in_start[i0] as usize..cx.in_start[i0 + m] as usize] {
+                let q = q as usize;
+                acc[cx.partner[q] as usize - i0] -= pf[q * D + k];
             }
-            acc[i - i0] += own;
+            // The particle's own row, summed first: `f_i += sum_j f_ij`.
+            let (mut q, end) = (cx.start[i0] as usize, cx.start[i0 + m] as usize);
+            while q < end {
+                let i = cx.row_of[q] as usize;
+                let row_end = cx.start[i + 1] as usize;
+                let mut own = 0.0;
+                while q < row_end {
+                    own += pf[q * D + k];
+                    q += 1;
+                }
+                acc[i - i0] += own;
+            }
         }
         if !cx.periodic[k] {
             let radius = &cx.radius[i0..i0 + m];

@@ -6,7 +6,7 @@
 use super::*;
 use crate::sim::time_driven::domains::DOMAINS;
 use crate::sim::time_driven::integrator::{gear_predict, verlet_drift};
-use crate::sim::time_driven::neighbours::EXACT_CHECK_EVERY;
+use crate::sim::time_driven::neighbours::{needs_rebuild, norm};
 use crate::sim::time_driven::walls::WallAxis;
 use rayon::prelude::*;
 
@@ -53,7 +53,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         } else if self.splits() {
             self.rayon.advance(&mut self.s, target);
         } else {
-            Serial.advance(&mut self.s, target);
+            self.serial.advance(&mut self.s, target);
         }
     }
 
@@ -85,7 +85,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         if self.splits() {
             self.rayon.forces_then(&mut self.s, t, vs, dt, then)
         } else {
-            self.s.forces_then_serial(t, vs, dt, then)
+            self.serial.forces_then(&mut self.s, t, vs, dt, then)
         }
     }
 }
@@ -103,26 +103,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
     }
 
     /// Keeps the Verlet list valid: rebuilds it when some particle has moved more than
-    /// `skin / 2` since the last build. The exact test (a pass over all positions,
-    /// [`NeighbourList::needs_rebuild`]) runs only when the bound `moved_bound` reaches
-    /// `skin / 2` (less a relative margin of `1e-6` for its round-off) or after
-    /// [`EXACT_CHECK_EVERY`] steps; otherwise no particle can have moved that far (each
-    /// particle's displacement is at most the sum of the per-step largest moves), so the
-    /// decision is the one the exact test would take. After an exact test the bound restarts
-    /// from the exact largest displacement.
+    /// `skin / 2` since the last build (tested exactly only where `moved_bound` says it might
+    /// be, [`needs_rebuild`]).
     pub(super) fn update_list(&mut self) {
-        self.since_check += 1;
-        let half_skin = 0.5 * self.list.skin();
-        if self.moved_bound < half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
-            return;
-        }
-        self.since_check = 0;
-        let worst = self.list.max_displacement_sq(&self.r[0]);
-        if worst > half_skin * half_skin {
+        let (half_skin, x) = (0.5 * self.list.skin(), &self.r[0]);
+        let (bound, since) = (&mut self.moved_bound, &mut self.since_check);
+        if needs_rebuild::<D>(bound, since, half_skin, x, self.list.built_at()) {
             self.list.build(&self.r[0], &self.radius);
             self.moved_bound = 0.0;
-        } else {
-            self.moved_bound = worst.sqrt();
         }
     }
 
@@ -195,15 +183,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
                 |a, b| std::array::from_fn(|k| max_ignoring_nan(a[k], b[k])),
             )
     }
-}
-
-/// `sqrt(sum_k m_k^2)`, summed in axis order.
-fn norm<const D: usize>(moved: [f64; D]) -> f64 {
-    let mut moved2 = 0.0;
-    for m in moved {
-        moved2 += m * m;
-    }
-    moved2.sqrt()
 }
 
 /// The walls of every axis at time `t` (used on the non-periodic ones): Hertz with
