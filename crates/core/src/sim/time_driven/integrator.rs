@@ -45,17 +45,14 @@ pub(crate) fn gear_predict(r: &mut [Vec<f64>; 6]) {
     }
 }
 
-/// Below this magnitude the scaled derivatives `r_2 .. r_5` are set to zero (see
-/// [`gear_correct`]).
+/// Safeguard: below this magnitude the corrector sets the scaled derivatives `r_2 .. r_5` to
+/// zero. In free flight the higher derivatives left by a contact decay geometrically and would
+/// become subnormal numbers after some thousand steps, which makes every operation on them about
+/// a hundred times slower; this is far below any physical scale.
 pub(crate) const GEAR_FLUSH: f64 = 1e-200;
 
-/// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta` (the reference the fused loop is
-/// tested against).
-///
-/// Safeguard: in free flight the higher derivatives left by a contact decay geometrically under
-/// predictor and corrector and would become subnormal numbers after some thousand steps, which
-/// makes every operation on them about a hundred times slower. Values below [`GEAR_FLUSH`]
-/// (far below any physical scale) are therefore set to zero.
+/// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta`, flushing at [`GEAR_FLUSH`] (the
+/// reference the fused loop is tested against).
 #[cfg(test)]
 pub(crate) fn gear_correct(r: &mut [Vec<f64>; 6], acc: &[f64], half_dt2: f64, c: &[f64; 6]) {
     let [r0, r1, r2, r3, r4, r5] = r;
@@ -125,22 +122,15 @@ pub(crate) fn gear_unpredict(p: [f64; 6]) -> [f64; 6] {
 /// corrected state is not stored (the engine recovers it on demand with [`gear_unpredict`]),
 /// and two more jobs are done in the same pass:
 ///
-/// - with `period = Some(L)`, the new predicted position `r[0]` is wrapped into `[0, L)`
-///   (`x < 0: x + L; x >= L: x - L`, the same operation as a separate wrap pass, so the
-///   numbers are identical);
-/// - returns `max_e |r0_new[e] - r0_old[e]|`, the largest move of a predicted position in this
-///   step, taken before the wrap (the true displacement). The engine sums these per step into a
-///   bound on every particle's displacement since the last neighbour-list build
-///   (`needs_rebuild` is then only evaluated when the bound reaches `skin / 2`).
+/// - with `period = Some(L)`, the new predicted position `r[0]` is wrapped into `[0, L)` (the
+///   operation of a separate wrap pass, so the numbers are identical);
+/// - returns the largest move of a predicted position in this step, before the wrap (the true
+///   displacement), for the list's displacement bound (`neighbours::needs_rebuild`); NaN
+///   moves are ignored (`lane_max`: the engine's sanity check catches them).
 ///
-/// The reduction is written as a compare-and-select, not `f64::max`, so that it compiles to
-/// packed `maxpd` (NaN positions are caught by the engine's sanity check, not here).
-///
-/// With `flush = false` the subnormal safeguard of [`gear_correct`] is left out of this step;
-/// the engine flushes every [`GEAR_FLUSH_EVERY`] steps instead (see there).
-///
-/// Each `acc[e]` is set to `force_start` once read: the engine's next force evaluation starts
-/// from it (the weight, or 0) without a pass of its own over the array.
+/// With `flush = false` the [`GEAR_FLUSH`] safeguard is left out of this step (see
+/// [`GEAR_FLUSH_EVERY`]). Each `acc[e]` is set to `force_start` once read: the next force
+/// evaluation starts from it without a pass of its own.
 pub(crate) fn gear_correct_predict_axis(
     r: [&mut [f64]; 6],
     acc: &mut [f64],

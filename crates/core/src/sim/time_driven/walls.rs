@@ -1,16 +1,12 @@
 //! The Hertz walls of the time-driven engine (docs/model.md 4.1; Eq. 2.7 with `R_eff = R_i`): the
 //! force of the lower and upper wall of one non-periodic axis on a run of particles, with the
-//! contact onsets, the damping's dissipation and the drive's work. One function shared by the
-//! three execution strategies of the engine (`engine/serial.rs`, `engine/rayon_split.rs`,
-//! `domains.rs`).
+//! contact onsets, the damping's dissipation and the drive's work, for every execution strategy.
 //!
 //! Most particles touch no wall at a given step, so the pass first screens blocks of
-//! [`SCREEN_BLOCK`] particles with branch-free compares of the centres against a band from which
-//! no particle can reach a wall (the compiler turns them into packed compares), and runs the
-//! per-particle code only on a block where some centre is outside the band (or NaN) or some
-//! particle touched a wall at the last evaluation (its contact bit must be cleared). The screen
-//! is conservative (a block it passes is apart by the per-particle test too), so the forces and
-//! books are the same bits as a per-particle pass.
+//! [`SCREEN_BLOCK`] particles with branch-free (packed) compares of the centres against a band
+//! from which no particle can reach a wall, and runs the per-particle code only on a block with
+//! a centre outside the band (or NaN) or a contact bit to clear. The screen is conservative, so
+//! the forces and books are the bits of a per-particle pass.
 
 use crate::physics::hertz;
 
@@ -74,8 +70,7 @@ impl WallAxis {
     }
 }
 
-/// What the walls book; the sums run on in the order of the particles (the engine keeps one
-/// per chunk of coordinates).
+/// What the walls book; the sums run on in the order of the particles.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct WallBooks {
     /// Work of the damping part of Eq. 2.7, `sum F_damp xi_dot dt`.

@@ -185,27 +185,18 @@ impl<const D: usize> ParticlePhase<D> {
         then: Then,
         min_len: usize,
     ) {
-        let p = &s.p;
         let cx = ChunkContext::<D> {
             n: s.n,
             pf: pair_f,
-            start: &s.list.start,
-            row_of: &s.list.row_of,
-            partner: &s.list.partner,
-            in_start: &s.list.in_start,
-            in_entry: &s.list.in_entry,
+            list: &s.list,
             radius: &s.radius,
             wall_kr: &s.wall_kr,
             body_f: if B::ACTIVE { &self.body_f } else { &[] },
             init: s.force_start(),
-            periodic: p.periodic,
-            size: p.size,
+            p: &s.p,
             walls,
-            inv_mass: (p.mass != 1.0).then(|| 1.0 / p.mass),
             dt,
             then,
-            gear: p.gear,
-            half_dt2: 0.5 * p.dt * p.dt,
             flush: s.steps.is_multiple_of(GEAR_FLUSH_EVERY),
         };
         let [r0, r1, r2, r3, r4, r5] = &mut s.r;
@@ -248,26 +239,18 @@ struct ChunkContext<'a, const D: usize> {
     n: usize,
     /// Pair forces per list entry, `D` values each (`pair_chunk`); `None`: already in `acc`.
     pf: Option<&'a [f64]>,
-    start: &'a [u32],
-    row_of: &'a [u32],
-    partner: &'a [u32],
-    in_start: &'a [u32],
-    in_entry: &'a [u32],
+    list: &'a NeighbourList<D>,
     radius: &'a [f64],
     wall_kr: &'a [f64],
     /// Body force per particle, particle-major (empty without one).
     body_f: &'a [f64],
     /// The force every coordinate starts from (the weight on the last axis).
     init: [f64; D],
-    periodic: [bool; D],
-    size: [f64; D],
+    p: &'a Params<D>,
     /// Per axis: the walls (used on the non-periodic axes).
     walls: [WallAxis; D],
-    inv_mass: Option<f64>,
     dt: f64,
     then: Then,
-    gear: [f64; 6],
-    half_dt2: f64,
     /// Whether this step flushes the Gear derivatives ([`GEAR_FLUSH_EVERY`]).
     flush: bool,
 }
@@ -284,22 +267,22 @@ fn particle_chunk<const D: usize>(
 ) -> ChunkBooks<D> {
     let mut walls = WallBooks::default();
     let mut moved = [0.0; D];
-    let n = cx.n;
+    let (n, p, l) = (cx.n, cx.p, cx.list);
     for_each_axis_segment(n, e0, acc.len(), |k, o, m| {
         let i0 = (e0 + o) % n;
         let acc = &mut acc[o..o + m];
         if let Some(pf) = cx.pf {
             acc.fill(cx.init[k]);
             // The partners' rows, ascending: `f_j -= f_ij`.
-            for &q in &cx.in_entry[cx.in_start[i0] as usize..cx.in_start[i0 + m] as usize] {
+            for &q in &l.in_entry[l.in_start[i0] as usize..l.in_start[i0 + m] as usize] {
                 let q = q as usize;
-                acc[cx.partner[q] as usize - i0] -= pf[q * D + k];
+                acc[l.partner[q] as usize - i0] -= pf[q * D + k];
             }
             // The particle's own row, summed first: `f_i += sum_j f_ij`.
-            let (mut q, end) = (cx.start[i0] as usize, cx.start[i0 + m] as usize);
+            let (mut q, end) = (l.start[i0] as usize, l.start[i0 + m] as usize);
             while q < end {
-                let i = cx.row_of[q] as usize;
-                let row_end = cx.start[i + 1] as usize;
+                let i = l.row_of[q] as usize;
+                let row_end = l.start[i + 1] as usize;
                 let mut own = 0.0;
                 while q < row_end {
                     own += pf[q * D + k];
@@ -308,7 +291,7 @@ fn particle_chunk<const D: usize>(
                 acc[i - i0] += own;
             }
         }
-        if !cx.periodic[k] {
+        if !p.periodic[k] {
             let radius = &cx.radius[i0..i0 + m];
             let wall_kr = &cx.wall_kr[i0..i0 + m];
             let (x, v, touching) = (&r[0][o..o + m], &r[1][o..o + m], &mut touch[o..o + m]);
@@ -329,7 +312,8 @@ fn particle_chunk<const D: usize>(
             }
         }
         // a = F / m.
-        if let Some(inv_m) = cx.inv_mass {
+        if p.mass != 1.0 {
+            let inv_m = 1.0 / p.mass;
             for a in acc.iter_mut() {
                 *a *= inv_m;
             }
@@ -341,9 +325,9 @@ fn particle_chunk<const D: usize>(
                     r.each_mut().map(|r| &mut r[o..o + m]),
                     acc,
                     cx.init[k],
-                    cx.half_dt2,
-                    &cx.gear,
-                    cx.periodic[k].then_some(cx.size[k]),
+                    0.5 * p.dt * p.dt,
+                    &p.gear,
+                    p.periodic[k].then_some(p.size[k]),
                     cx.flush,
                 );
                 moved[k] = max_ignoring_nan(moved[k], step_move);

@@ -19,7 +19,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> Strateg
     for Serial<D>
 {
     fn advance(&mut self, s: &mut State<D, GRAV, WET, B>, _target: u64) {
-        s.step_with(false, |s, t, vs, dt, then| self.forces_then(s, t, vs, dt, then));
+        s.step_with(false, |s, t, vs, dt, then| {
+            self.forces_then(s, t, vs, dt, then)
+        });
     }
 }
 

@@ -1,7 +1,6 @@
-//! Stepping the time-driven engine: the [`Strategy`] trait the three execution strategies
-//! implement (`serial.rs`, `rayon_split.rs`, `domain_step.rs`), the choice of strategy per
-//! step, and what the strategies share: one step of Gear or velocity Verlet around a force
-//! evaluation ([`State::step_with`]), the neighbour-list update and the walls of a step.
+//! Stepping the time-driven engine: the [`Strategy`] trait of the three execution strategies,
+//! the choice of strategy per step, and what they share: one step of Gear or velocity Verlet
+//! around a force evaluation ([`State::step_with`]), the list update and the walls of a step.
 
 use super::*;
 use crate::sim::time_driven::domains::DOMAINS;
@@ -10,11 +9,10 @@ use crate::sim::time_driven::neighbours::{needs_rebuild, norm};
 use crate::sim::time_driven::walls::WallAxis;
 use rayon::prelude::*;
 
-/// An execution strategy of the time-driven step: [`Serial`] (the calling thread),
-/// [`RayonSplit`] (each phase of a step split over the pool's threads in fixed chunks) or
-/// [`Domains`] (whole Gear steps on spatial domains, a team of threads with one barrier per
-/// step). Every strategy computes a pair with `pair_kernel`, and all give the same bits on any
-/// number of threads; the domains sum the forces on a particle in another order (round-off).
+/// An execution strategy: [`Serial`] (the calling thread), [`RayonSplit`] (each phase of a step
+/// split over the pool's threads in fixed chunks) or [`Domains`] (whole Gear steps on spatial
+/// domains, one barrier per step). Each gives the same bits on any number of threads; the
+/// domains sum the forces on a particle in another order than the others (round-off).
 pub(super) trait Strategy<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> {
     /// Advances `s` by at least one step and at most to step `target`.
     fn advance(&mut self, s: &mut State<D, GRAV, WET, B>, target: u64);
@@ -44,9 +42,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         true
     }
 
-    /// Advances by at least one step towards `target` with the strategy this step takes: the
-    /// domains for a predicted Gear step where [`Self::uses_domains`], else the rayon split
-    /// where [`Self::splits`], else the serial strategy.
+    /// Advances by at least one step towards `target`: on the domains for a predicted Gear step
+    /// where [`Self::uses_domains`], else split where [`Self::splits`], else serially.
     fn advance(&mut self, target: u64) {
         if self.s.predicted && self.uses_domains() {
             self.domains.advance(&mut self.s, target);
@@ -57,9 +54,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
     }
 
-    /// Whether the Gear steps run on the spatial domains: Gear, no body force, and
-    /// [`Execution::domains_from`] particles or more (at least [`DOMAINS`]). The number of
-    /// threads plays no part, so the numbers do not depend on it.
+    /// Whether the Gear steps run on the domains: no body force and at least
+    /// [`Execution::domains_from`] (and [`DOMAINS`]) particles, whatever the threads.
     pub(super) fn uses_domains(&self) -> bool {
         self.s.p.integrator == IntegratorKind::Gear5
             && !B::ACTIVE
@@ -67,9 +63,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             && self.s.n >= self.execution.domains_from
     }
 
-    /// Whether the steps that do not run on the domains are split over threads: on a pool of
-    /// more than one thread and from [`Execution::split_from`] particles on; otherwise they
-    /// run on the calling thread, without the pool. The numbers are the same either way.
+    /// Whether the other steps are split over threads ([`Execution::split_from`]).
     fn splits(&self) -> bool {
         self.s.n >= self.execution.split_from && rayon::current_num_threads() > 1
     }
@@ -79,8 +73,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// contact onsets and bridge events with weight `dt` (0: a re-evaluation that is not a
     /// step). Returns the largest move per axis of the Gear update (zeros otherwise).
     ///
-    /// On the serial or the rayon strategy, as [`Self::splits`] says (the same bits): the
-    /// initial forces and a re-evaluation after `set_state`.
+    /// Serial or split as [`Self::splits`] says (the same bits): the initial forces and a
+    /// re-evaluation after `set_state`.
     pub(super) fn forces_then(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
         if self.splits() {
             self.rayon.forces_then(&mut self.s, t, vs, dt, then)
@@ -207,7 +201,7 @@ pub(super) fn wall_axes<const D: usize>(p: &Params<D>, t: f64, vs: f64, dt: f64)
     })
 }
 
-/// What the per-particle phase does after the forces ([`TimeEngine::forces_then`], [`State::step_with`]).
+/// What the per-particle phase does after the forces.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Then {
     /// Nothing (the initial forces, a re-evaluation after `set_state`).
@@ -244,12 +238,8 @@ pub(super) fn max_ignoring_nan(a: f64, b: f64) -> f64 {
 /// [`wrap_into`] on every element, writing only the wrapped ones (few are: no store per
 /// element).
 fn wrap_slice(xs: &mut [f64], l: f64) {
-    for x in xs {
-        if *x < 0.0 {
-            *x += l;
-        } else if *x >= l {
-            *x -= l;
-        }
+    for x in xs.iter_mut().filter(|x| **x < 0.0 || **x >= l) {
+        *x = wrap_into(*x, l);
     }
 }
 
