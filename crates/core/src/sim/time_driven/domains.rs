@@ -32,10 +32,10 @@
 //! (engine test `domains_change_the_serial_trajectory_by_round_off`), which is why the engine
 //! chooses the path by the number of particles alone, never by the threads.
 
-use super::integrator::gear_correct_predict_axes;
+use super::integrator::{GEAR_FLUSH_EVERY, gear_correct_predict_axes};
 use super::neighbours::{NeighbourList, RowScan, needs_rebuild, norm};
-use super::pair_kernel::{PairBooks, PairConstants, cross_forces, pair_forces_serial};
-use super::walls::{WallAxis, WallBooks, wall_forces};
+use super::pair_kernel::{Books, PairConstants, cross_forces, pair_forces_serial};
+use super::walls::{WallAxis, wall_forces};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, RwLock};
 
@@ -62,19 +62,9 @@ pub(super) struct StepConstants<const D: usize> {
     pub(crate) half_skin: f64,
 }
 
-/// The counts and the largest overlap a domain booked in a region.
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct DomainBooks {
-    pub max_overlap: f64,
-    pub(crate) pair_onsets: u64,
-    pub(crate) wall_onsets: u64,
-    pub formations: u64,
-    pub ruptures: u64,
-}
-
 /// What each domain booked in a region, in domain order: counts and largest overlap, and the
 /// per-step sums (dissipation, bridge ledger, drive work).
-pub(super) type RegionBooks = Vec<(DomainBooks, Vec<[f64; 3]>)>;
+pub(super) type RegionBooks = Vec<(Books, Vec<[f64; 3]>)>;
 
 /// How a region of domain steps ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -142,9 +132,8 @@ pub(super) struct Domain<const D: usize> {
     pub(crate) cross_ghost: Vec<u32>,
     pub(crate) cross_flags: Vec<u8>,
     pub(crate) cross_src: Vec<u32>,
-    /// Ghosts (the other domain's particles the cross pairs reach), read from its halo.
-    pub(crate) ghosts: usize,
-    /// Radius of each ghost.
+    /// Radius of each ghost (the other domain's particles the cross pairs reach, read from its
+    /// halo).
     pub(crate) ghost_radius: Vec<f64>,
     /// Own particles (local, ascending) that are ghosts of the other domain, in its ghost
     /// order: published into the halo after each step.
@@ -154,8 +143,9 @@ pub(super) struct Domain<const D: usize> {
     /// Displacement bound and steps since the exact test (the engine's `update_list`).
     pub bound: f64,
     pub(crate) since_check: u32,
-    /// Counts and largest overlap booked in the region.
-    pub books: DomainBooks,
+    /// Counts and largest overlap booked in the region (its sums stay zero: see
+    /// `step_books`).
+    pub books: Books,
     /// Per step of the region: dissipation, bridge ledger, drive work (the engine adds them
     /// step by step, domains in order, so where regions end changes no sum).
     pub(crate) step_books: Vec<[f64; 3]>,
@@ -273,12 +263,7 @@ impl<const D: usize> Decomposition<D> {
     /// [`Self::split_lists`], state loaded by [`Self::load`]).
     pub(super) fn new(build: u64, size: [f64; D], x: &[f64]) -> Self {
         let n = x.len() / D;
-        let mut axis = 0;
-        for k in 1..D {
-            if size[k] > size[axis] {
-                axis = k;
-            }
-        }
+        let axis = (0..D).fold(0, |a, k| if size[k] > size[a] { k } else { a });
         let xa = &x[axis * n..(axis + 1) * n];
         let mut order: Vec<u32> = (0..n as u32).collect();
         let half = n / 2;
@@ -317,12 +302,8 @@ impl<const D: usize> Decomposition<D> {
             dom,
             local,
             domains: domains.into_iter().map(Mutex::new).collect(),
-            halo: (0..DOMAINS)
-                .map(|_| [RwLock::new(Vec::new()), RwLock::new(Vec::new())])
-                .collect(),
-            stop: (0..DOMAINS)
-                .map(|_| [AtomicBool::new(false), AtomicBool::new(false)])
-                .collect(),
+            halo: (0..DOMAINS).map(|_| Default::default()).collect(),
+            stop: (0..DOMAINS).map(|_| Default::default()).collect(),
             holds_step: None,
             partial: false,
             checked_for: None,
@@ -413,7 +394,6 @@ impl<const D: usize> Decomposition<D> {
         let mut ghosts: Vec<(u32, u32)> = cross.iter().map(|e| (e.1, e.3)).collect();
         ghosts.sort_unstable();
         ghosts.dedup();
-        dm.ghosts = ghosts.len();
         dm.ghost_radius.clear();
         dm.ghost_radius
             .extend(ghosts.iter().map(|&(_, j)| radius[j as usize]));
@@ -471,12 +451,9 @@ impl<const D: usize> Decomposition<D> {
                 dm.bound = bound;
                 dm.since_check = since_check;
             }
-            dm.books = DomainBooks::default();
+            dm.books = Books::default();
             dm.step_books.clear();
-            let h = self.halo[d][parity]
-                .get_mut()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
-            dm.publish(h);
+            dm.publish(&mut write(&self.halo[d][parity]));
         }
     }
 
@@ -520,23 +497,18 @@ impl<const D: usize> Decomposition<D> {
     /// Test aid: whether both copies of every cross pair hold the same flags (they must: the
     /// two domains take the same decisions on exactly antisymmetric numbers).
     pub(super) fn cross_flags_agree(&mut self) -> bool {
-        let mut by_entry: Vec<(u32, u8)> = Vec::new();
-        let mut other: Vec<(u32, u8)> = Vec::new();
-        for (d, dm) in self.domains.iter_mut().enumerate() {
-            let dm = dm
-                .get_mut()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
-            let v: Vec<(u32, u8)> = dm
+        let mut copies = self.domains.iter_mut().map(|dm| {
+            let dm = get(dm);
+            let mut v: Vec<(u32, u8)> = dm
                 .cross_src
                 .iter()
                 .copied()
                 .zip(dm.cross_flags.iter().copied())
                 .collect();
-            if d == 0 { by_entry = v } else { other = v }
-        }
-        by_entry.sort_unstable();
-        other.sort_unstable();
-        by_entry == other
+            v.sort_unstable();
+            v
+        });
+        copies.next() == copies.next()
     }
 
     /// Runs the steps of one member of a team of `members` (domains `slot`, `slot + members`,
@@ -549,7 +521,6 @@ impl<const D: usize> Decomposition<D> {
         &self,
         c: &StepConstants<D>,
         walls_at: &(dyn Fn(u64) -> [WallAxis; D] + Sync),
-        flush_at: &(dyn Fn(u64) -> bool + Sync),
         build: &TeamBuild<'_, D>,
         slot: usize,
         members: usize,
@@ -564,7 +535,7 @@ impl<const D: usize> Decomposition<D> {
             let rebuild = loop {
                 let parity = (s % 2) as usize;
                 let walls = walls_at(s + 1);
-                let flush = flush_at(s);
+                let flush = s.is_multiple_of(GEAR_FLUSH_EVERY);
                 for (g, &d) in guards.iter_mut().zip(&mine) {
                     let other = 1 - d;
                     let ghosts = read(&self.halo[other][parity]);
@@ -740,13 +711,12 @@ impl<const D: usize> Domain<D> {
         }
         self.acc_is_start = true;
         let mut sums = self.pair_forces::<WET>(&c.pair, ghosts);
-        let b = &mut self.books;
         for k in 0..D {
             if c.pair.periodic[k] {
                 continue;
             }
             let a = k * m..(k + 1) * m;
-            let mut part = WallBooks::default();
+            let mut part = Books::default();
             wall_forces(
                 &walls[k],
                 &self.r[0][a.clone()],
@@ -759,8 +729,7 @@ impl<const D: usize> Domain<D> {
             );
             sums[0] += part.dissipated;
             sums[2] += part.work;
-            b.max_overlap = b.max_overlap.max(part.max_overlap);
-            b.wall_onsets += part.onsets;
+            self.books.add_counts(&part);
         }
         self.step_books.push(sums);
         if let Some(inv_m) = c.inv_mass {
@@ -807,7 +776,7 @@ impl<const D: usize> Domain<D> {
             &mut self.flags,
         );
         let mut sums = [pb.dissipated, pb.bridge_ledger, 0.0];
-        self.books.add_pairs(&pb);
+        self.books.add_counts(&pb);
         let cb = cross_forces::<D, WET>(
             pc,
             &self.r[0],
@@ -823,18 +792,8 @@ impl<const D: usize> Domain<D> {
         if self.books_cross {
             sums[0] += cb.dissipated;
             sums[1] += cb.bridge_ledger;
-            self.books.add_pairs(&cb);
+            self.books.add_counts(&cb);
         }
         sums
-    }
-}
-
-impl DomainBooks {
-    /// Adds the counts and the largest overlap of a pair loop.
-    fn add_pairs(&mut self, pb: &PairBooks) {
-        self.max_overlap = self.max_overlap.max(pb.max_overlap);
-        self.pair_onsets += pb.onsets;
-        self.formations += pb.formations;
-        self.ruptures += pb.ruptures;
     }
 }

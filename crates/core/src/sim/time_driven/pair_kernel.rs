@@ -31,13 +31,19 @@ pub(super) struct PairConstants<const D: usize> {
     pub dt: f64,
 }
 
-/// What one chunk of the pair loop books.
+/// What a loop over pairs or wall contacts books: its sums (run on in its order; the engine
+/// keeps one per chunk), its counts and the largest overlap.
 #[derive(Debug, Clone, Copy, Default)]
-pub(super) struct PairBooks {
+pub(super) struct Books {
+    /// Work of the damping part of Eq. 2.7, `sum F_damp xi_dot dt`.
     pub dissipated: f64,
-    pub max_overlap: f64,
+    /// The bridge energy booked at formations and ruptures.
     pub(crate) bridge_ledger: f64,
-    pub onsets: u64,
+    /// Work of the moving walls, `sum F_wall v_wall dt`.
+    pub work: f64,
+    pub max_overlap: f64,
+    pub(crate) pair_onsets: u64,
+    pub(crate) wall_onsets: u64,
     pub formations: u64,
     pub ruptures: u64,
 }
@@ -161,11 +167,11 @@ pub(super) fn pair_chunk<const D: usize, const WET: bool>(
     partner: &[u32],
     flags: &mut [u8],
     pf: &mut [f64],
-) -> PairBooks {
+) -> Books {
     let n = radius.len();
     let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
     let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
-    let mut b = PairBooks::default();
+    let mut b = Books::default();
     let len = flags.len();
     let (row_of, partner, pf) = (&row_of[..len], &partner[..len], &mut pf[..len * D]);
     for m in 0..len {
@@ -205,7 +211,24 @@ pub(super) struct PairResponse {
     pub ledger: f64,
 }
 
-impl PairBooks {
+impl Books {
+    /// Adds `b`: its sums, then [`Self::add_counts`].
+    pub(super) fn add(&mut self, b: &Books) {
+        self.dissipated += b.dissipated;
+        self.bridge_ledger += b.bridge_ledger;
+        self.work += b.work;
+        self.add_counts(b);
+    }
+
+    /// Adds the counts and the largest overlap of `b`.
+    pub(super) fn add_counts(&mut self, b: &Books) {
+        self.max_overlap = self.max_overlap.max(b.max_overlap);
+        self.pair_onsets += b.pair_onsets;
+        self.wall_onsets += b.wall_onsets;
+        self.formations += b.formations;
+        self.ruptures += b.ruptures;
+    }
+
     /// Books one pair's response in full (the parallel chunks and the domains' cross pairs;
     /// the serial loop books the sums per chunk of entries itself).
     pub(super) fn book(&mut self, pr: &PairResponse) {
@@ -220,7 +243,7 @@ impl PairBooks {
 
     /// Books the onset, formation and rupture counts and the largest overlap of a response.
     pub(super) fn book_counts(&mut self, pr: &PairResponse) {
-        self.onsets += u64::from(pr.onset);
+        self.pair_onsets += u64::from(pr.onset);
         self.formations += u64::from(pr.formation);
         self.ruptures += u64::from(pr.rupture);
         if pr.overlap > 0.0 {
@@ -246,11 +269,11 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     rows: &[u32],
     partner: &[u32],
     flags: &mut [u8],
-) -> PairBooks {
+) -> Books {
     let n = radius.len();
     let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
     let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
-    let mut b = PairBooks::default();
+    let mut b = Books::default();
     // Partial sums of the current chunk of entries.
     let (mut diss, mut ledger, mut boundary) = (0.0, 0.0, ENTRY_CHUNK);
     for &i in rows {
@@ -323,9 +346,9 @@ pub(super) fn cross_forces<const D: usize, const WET: bool>(
     own: &[u32],
     ghost: &[u32],
     flags: &mut [u8],
-) -> PairBooks {
+) -> Books {
     let m = radius.len();
-    let mut b = PairBooks::default();
+    let mut b = Books::default();
     let (own, ghost) = (&own[..flags.len()], &ghost[..flags.len()]);
     for q in 0..flags.len() {
         let (i, g) = (own[q] as usize, ghost[q] as usize);

@@ -38,7 +38,7 @@
 use super::domains::DOMAIN_MIN_PARTICLES;
 use super::integrator::gear_unpredict;
 use super::neighbours::{BOND, NeighbourList};
-use super::pair_kernel::PairConstants;
+use super::pair_kernel::{Books, PairConstants};
 use crate::physics::hertz;
 use crate::scene::IntegratorKind;
 use crate::sim::books::{EnergyLedger, EventCounts};
@@ -310,6 +310,15 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B> State<D, GRAV, WET, B
             IntegratorKind::Gear5 => 1.0 / self.p.dt,
             IntegratorKind::Verlet => 1.0,
         }
+    }
+
+    /// Adds the counts and the largest overlap of `b`.
+    fn add_counts(&mut self, b: &Books) {
+        self.max_overlap = self.max_overlap.max(b.max_overlap);
+        self.counts.pair_collisions += b.pair_onsets;
+        self.counts.wall_collisions += b.wall_onsets;
+        self.counts.bridge_formations += b.formations;
+        self.counts.bridge_ruptures += b.ruptures;
     }
 
     /// The force every coordinate starts from: the weight `-m g` on the last axis (with

@@ -18,8 +18,8 @@ use super::*;
 use crate::sim::time_driven::integrator::{
     GEAR_FLUSH_EVERY, gear_correct_predict_axis, verlet_kick,
 };
-use crate::sim::time_driven::pair_kernel::{ENTRY_CHUNK, PairBooks, pair_chunk};
-use crate::sim::time_driven::walls::{WallAxis, WallBooks, wall_forces};
+use crate::sim::time_driven::pair_kernel::{Books, ENTRY_CHUNK, pair_chunk};
+use crate::sim::time_driven::walls::{WallAxis, wall_forces};
 use rayon::prelude::*;
 
 /// The rayon strategy's buffers, reused from step to step (per list entry or per chunk).
@@ -27,7 +27,7 @@ use rayon::prelude::*;
 pub(super) struct RayonSplit<const D: usize> {
     /// Pair force of each Verlet-list entry on its row's particle, `D` values per entry.
     pair_f: Vec<f64>,
-    pair_books: Vec<PairBooks>,
+    pair_books: Vec<Books>,
     phase: ParticlePhase<D>,
 }
 
@@ -92,47 +92,36 @@ impl<const D: usize> ParticlePhase<D> {
         &mut self,
         s: &mut State<D, GRAV, WET, B>,
         pair_f: Option<&[f64]>,
-        pair_books: &[PairBooks],
+        pair_books: &[Books],
         t: f64,
         vs: f64,
         dt: f64,
         then: Then,
     ) -> [f64; D] {
         let min_len = if pair_f.is_some() { 1 } else { usize::MAX };
-        let mut diss = 0.0;
-        let mut ledger = 0.0;
-        let mut max_ov = s.max_overlap;
+        let mut total = Books::default();
         for b in pair_books {
-            diss += b.dissipated;
-            ledger += b.bridge_ledger;
-            max_ov = max_ov.max(b.max_overlap);
-            s.counts.pair_collisions += b.onsets;
-            s.counts.bridge_formations += b.formations;
-            s.counts.bridge_ruptures += b.ruptures;
+            total.add(b);
         }
-        s.dissipated_bridges += ledger;
         self.body_forces(s, t, vs, dt, min_len);
         // The Gear pass leaves the start values for the next evaluation.
         s.acc_is_start = then == Then::Gear;
         let walls = wall_axes(&s.p, t, vs, dt);
         self.particles(s, pair_f, walls, dt, then, min_len);
-        let mut work = 0.0;
         let mut moved = [0.0; D];
         for b in &self.chunk_books {
-            diss += b.walls.dissipated;
-            work += b.walls.work;
-            max_ov = max_ov.max(b.walls.max_overlap);
-            s.counts.wall_collisions += b.walls.onsets;
+            total.add(&b.walls);
             for k in 0..D {
                 moved[k] = max_ignoring_nan(moved[k], b.moved[k]);
             }
         }
         for w in &self.body_work {
-            work += w;
+            total.work += w;
         }
-        s.dissipated_damping += diss;
-        s.work_by_drive += work;
-        s.max_overlap = max_ov;
+        s.dissipated_damping += total.dissipated;
+        s.dissipated_bridges += total.bridge_ledger;
+        s.work_by_drive += total.work;
+        s.add_counts(&total);
         moved
     }
 
@@ -229,7 +218,7 @@ impl<const D: usize> ParticlePhase<D> {
 /// What one chunk of the per-particle phase books.
 #[derive(Debug, Clone, Copy)]
 struct ChunkBooks<const D: usize> {
-    walls: WallBooks,
+    walls: Books,
     /// Largest move of a predicted position per axis (Gear).
     moved: [f64; D],
 }
@@ -265,7 +254,7 @@ fn particle_chunk<const D: usize>(
     mut r: [&mut [f64]; 6],
     touch: &mut [u8],
 ) -> ChunkBooks<D> {
-    let mut walls = WallBooks::default();
+    let mut walls = Books::default();
     let mut moved = [0.0; D];
     let (n, p, l) = (cx.n, cx.p, cx.list);
     for_each_axis_segment(n, e0, acc.len(), |k, o, m| {
