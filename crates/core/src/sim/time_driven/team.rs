@@ -70,6 +70,7 @@ impl Drop for PoisonOnUnwind<'_> {
 }
 
 /// The state of one wait: spin rounds so far, and when spinning began (read every 64 rounds).
+#[derive(Default)]
 struct Pause {
     rounds: u32,
     since: Option<Instant>,
@@ -77,14 +78,6 @@ struct Pause {
 }
 
 impl Pause {
-    fn new() -> Self {
-        Self {
-            rounds: 0,
-            since: None,
-            yielding: false,
-        }
-    }
-
     /// Waits a little: spins for up to [`SPIN_TIME`], then yields the core at every call.
     /// Panics if the team is poisoned.
     #[inline]
@@ -120,7 +113,7 @@ impl Member<'_> {
             team.generation.store(generation + 1, Ordering::Release);
             return;
         }
-        let mut pause = Pause::new();
+        let mut pause = Pause::default();
         while team.generation.load(Ordering::Acquire) == generation {
             pause.pause(team);
         }
@@ -158,7 +151,7 @@ impl Team {
             self.joined.fetch_or(CLOSED, Ordering::AcqRel);
         }
         let since = Instant::now();
-        let mut pause = Pause::new();
+        let mut pause = Pause::default();
         let members = loop {
             let c = self.joined.load(Ordering::Acquire);
             if c & CLOSED != 0 {
