@@ -61,9 +61,9 @@ pub(crate) struct NeighbourList<const D: usize> {
     /// Cell coordinates of each particle at the last build, `D` per particle.
     cell_at: Vec<u32>,
     /// Per axis `k` and cell coordinate `c`: the coordinates of the cells at offsets -1, 0, +1
-    /// (`3 c + o + 1`), periodic images wrapped, [`NONE`] beyond a wall or where a periodic
-    /// axis has fewer than 3 cells (two offsets would name one cell twice); the build walks
-    /// the `3^D` neighbour cells from these tables, without a division.
+    /// (`3 c + o + 1`), periodic images wrapped (a periodic axis has at least 3 cells, so no
+    /// cell is named twice), [`NONE`] beyond a wall; the build walks the `3^D` neighbour cells
+    /// from these tables, without a division.
     axis_next: [Vec<u32>; D],
     /// Stride of each axis in the cell index.
     stride: [usize; D],
@@ -219,25 +219,19 @@ impl<const D: usize> NeighbourList<D> {
             scratch: vec![0; n],
             cell_at: vec![0; D * n],
             axis_next: std::array::from_fn(|k| {
-                let m = cells[k];
-                let mut t = vec![NONE; 3 * m];
-                for c in 0..m {
-                    for o in 0..3usize {
-                        let v = c as i64 + o as i64 - 1;
-                        t[3 * c + o] = if periodic[k] {
-                            if m < 3 && o != 1 {
-                                NONE
-                            } else {
-                                v.rem_euclid(m as i64) as u32
-                            }
-                        } else if v < 0 || v >= m as i64 {
-                            NONE
-                        } else {
+                let m = cells[k] as i64;
+                (0..3 * m)
+                    .map(|co| {
+                        let v = co / 3 + co % 3 - 1;
+                        if periodic[k] {
+                            v.rem_euclid(m) as u32
+                        } else if (0..m).contains(&v) {
                             v as u32
-                        };
-                    }
-                }
-                t
+                        } else {
+                            NONE
+                        }
+                    })
+                    .collect()
             }),
             stride: std::array::from_fn(|k| cells[..k].iter().product()),
             scan: Default::default(),
