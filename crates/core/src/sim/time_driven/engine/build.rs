@@ -193,12 +193,8 @@ impl<const D: usize> Params<D> {
     /// The parameters of a validated scene whose particles have radii `radius`.
     fn of_scene(scene: &Scene, radius: &[f64]) -> Self {
         let boundaries = scene.boundaries();
-        let mut size = [0.0; D];
-        let mut periodic = [false; D];
-        for k in 0..D {
-            size[k] = scene.container.size[k];
-            periodic[k] = boundaries[k] == Boundary::Periodic;
-        }
+        let size = std::array::from_fn(|k| scene.container.size[k]);
+        let periodic = std::array::from_fn(|k| boundaries[k] == Boundary::Periodic);
         let (damping, wall_damping) = crate::sim::time_driven::damping::contact_damping(scene);
         let mut gear = GEAR5;
         if damping > 0.0 || wall_damping > 0.0 {
