@@ -4,7 +4,9 @@
 
 use super::*;
 use crate::sim::time_driven::domains::DOMAINS;
-use crate::sim::time_driven::integrator::{gear_predict, verlet_drift};
+use crate::sim::time_driven::integrator::{
+    GEAR_FLUSH_EVERY, gear_correct_predict_axes, gear_predict, verlet_drift, verlet_kick,
+};
 use crate::sim::time_driven::neighbours::{needs_rebuild, norm};
 use crate::sim::time_driven::walls::WallAxis;
 use rayon::prelude::*;
@@ -140,6 +142,28 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
             }
         }
         self.steps += 1;
+    }
+
+    /// `then` on whole axes (after the forces, `ParticlePhase::run` on the calling thread):
+    /// returns the largest move per axis of the Gear pass.
+    pub(super) fn integrate_axes(&mut self, then: Then, dt: f64) -> [f64; D] {
+        let (p, init) = (&self.p, self.force_start());
+        match then {
+            Then::Nothing => [0.0; D],
+            Then::Gear => gear_correct_predict_axes(
+                &mut self.r,
+                &mut self.acc,
+                init,
+                0.5 * p.dt * p.dt,
+                &p.gear,
+                std::array::from_fn(|k| p.periodic[k].then_some(p.size[k])),
+                self.steps.is_multiple_of(GEAR_FLUSH_EVERY),
+            ),
+            Then::VerletKick => {
+                verlet_kick(&mut self.r[1], &self.acc, dt);
+                [0.0; D]
+            }
+        }
     }
 
     /// Velocity Verlet's first half on every coordinate (`verlet_drift`), with the wrap of the
