@@ -11,7 +11,8 @@
 //!    ([`particle_chunk`]).
 //!
 //! Phases 2 and 3 ([`ParticlePhase`]) are the serial strategy's too, run on the calling thread
-//! after its pair loop; its accelerations are the same bits as the gather's.
+//! after its pair loop (the integrator pass then on whole axes); its accelerations are the same
+//! bits as the gather's.
 
 use super::stepping::{Then, for_each_axis_segment, max_ignoring_nan, wall_axes};
 use super::*;

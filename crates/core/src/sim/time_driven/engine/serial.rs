@@ -1,10 +1,11 @@
 //! The serial strategy: a step on the calling thread. The pair loop scatters each pair force to
 //! both partners (`pair_forces_serial`, rows ascending, so every particle receives its
-//! partners' forces in the order the rayon strategy's gather adds them), then the per-particle
-//! phase of the rayon strategy runs on this thread (`ParticlePhase`: walls, body force, `1/m`,
-//! the integrator pass, books summed per chunk). So both give the same bits
-//! (`crates/core/tests/time_driven_pins.rs` runs each pin on one thread, this strategy, and on
-//! two, the rayon one); this one does less work (no per-entry force buffer, no gather).
+//! partners' forces in the order the rayon strategy's gather adds them), then the rayon
+//! strategy's per-particle phase runs on this thread (`ParticlePhase`: walls, body force and
+//! `1/m` per chunk, books summed per chunk; the integrator pass on whole axes). So both give
+//! the same bits (`crates/core/tests/time_driven_pins.rs` runs each pin on one thread, this
+//! strategy, and on two, the rayon one); this one does less work (no per-entry force buffer,
+//! no gather).
 
 use super::rayon_split::ParticlePhase;
 use super::stepping::Then;
