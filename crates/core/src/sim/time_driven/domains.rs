@@ -1,37 +1,29 @@
-//! Spatial domain decomposition of the time-driven Gear step (one job on two cores): the box is cut
-//! across its longest axis into [`DOMAINS`] slabs of equal particle counts, each slab's
-//! particles are copied into a [`Domain`] of their own (contiguous local arrays, sorted along
-//! the cut axis), and a team of threads (`team.rs`) runs whole steps on the domains with one
-//! barrier per step. What crosses between the threads per step is only the **halo**: position
-//! and velocity of the particles that some pair of the other domain reaches (a few dozen near
-//! the two cuts), published into a double buffer.
+//! Spatial domain decomposition of the time-driven Gear step (one job on two cores): the box is
+//! cut across its longest axis into [`DOMAINS`] slabs of equal particle counts, each slab's
+//! particles copied into a [`Domain`] of their own (contiguous local arrays), and a team of
+//! threads (`team.rs`) runs whole steps on the domains with one barrier per step. Only the
+//! **halo** crosses between the threads: position and velocity of the particles that some pair
+//! of the other domain reaches (a few dozen near the two cuts), published into a double buffer.
 //!
-//! Per domain and step (docs/model.md 2.2, Eq. 2.7 and 3.1; the same kernels as the serial step):
+//! Per domain and step (docs/model.md 2.2, Eq. 2.7 and 3.1; the kernels of the serial step):
 //!
-//! 1. the pairs inside the domain, each once (Newton's third law, `pair_forces_serial`);
-//! 2. the **cross pairs** (one end in each domain), each computed by *both* domains, each
-//!    for its own particle only, from the other end's halo copy. The arithmetic is exactly
-//!    antisymmetric (`x_i - x_j` and `x_j - x_i` are exact negatives, every later operation
-//!    is symmetric or multiplies by them), so both copies of a cross pair take the same
-//!    contact and bond decisions and exert exactly opposite forces; only domain 0 books them
-//!    (dissipation, onsets, formations, ruptures);
+//! 1. the pairs inside the domain, each once (`pair_forces_serial`);
+//! 2. the **cross pairs** (one end in each domain), computed by *both* domains, each for its own
+//!    particle, from the other end's halo copy. The arithmetic is exactly antisymmetric
+//!    (`x_i - x_j` and `x_j - x_i` are exact negatives, every later operation is symmetric or
+//!    multiplies by them), so both copies take the same contact and bond decisions and exert
+//!    exactly opposite forces; only domain 0 books them;
 //! 3. the walls, `1/m`, Gear's fused corrector-predictor (`integrator.rs`);
-//! 4. the halo of the next step into the other parity of the double buffer, and the
-//!    neighbour-list check for the next step (the displacement bound of the engine's
-//!    `update_list`, per domain, with the exact test on the domain's particles where the bound
-//!    says it might fire).
+//! 4. the halo of the next step into the other parity of the double buffer, and the list check
+//!    for the next step (`neighbours::needs_rebuild`, per domain).
 //!
-//! When a domain's check says the list must be rebuilt (every domain sees it after the
-//! barrier, so all stop at the same step), the **team builds the list itself** and goes on
-//! ([`Decomposition::build_in_team`]): member 0 writes the positions and flags back into the
-//! engine's list and bins the particles, both members scan half the rows each while they are
-//! awake (a build handed to a sleeping pool thread runs serially in effect), member 0 joins the
-//! rows, and each member splits the new list for its own domain. The list is the one the
-//! engine's `update_list` would build at that step (same positions, same code). A region ends
-//! at the run's target step, or when a build calls for a new partition; the engine then copies
-//! the state back and starts the next region with it. The partition (which particle is in
-//! which domain, local order) is made at a list build and kept over later builds (see
-//! [`Decomposition`]), so where the regions end (samples, checkpoints) changes no number.
+//! When a domain's check asks for a rebuild (every domain sees it after the barrier), the
+//! **team builds the list itself** and goes on ([`Decomposition::build_in_team`]): the threads
+//! stay awake (a build handed to a sleeping pool thread runs serially in effect), and the list
+//! is the one the engine's `update_list` would build at that step. A region ends at the run's
+//! target step, or when a build calls for a new partition; the engine then copies the state
+//! back. The partition is made at a list build and kept over later builds ([`Decomposition`]),
+//! so where regions end (samples, checkpoints) changes no number.
 //!
 //! **Determinism.** Which thread runs a domain changes no operation: one thread runs the
 //! domains in turn with the same code (the halo double buffer makes the order irrelevant), so
@@ -40,10 +32,10 @@
 //! (engine test `domains_change_the_serial_trajectory_by_round_off`), which is why the engine
 //! chooses the path by the number of particles alone, never by the threads.
 
-use super::integrator::gear_correct_predict_axes;
-use super::neighbours::{EXACT_CHECK_EVERY, NeighbourList, RowScan, max_displacement_sq};
-use super::pair_kernel::{PairBooks, PairConstants, cross_forces, pair_forces_serial};
-use super::walls::{WallAxis, WallBooks, wall_forces};
+use super::integrator::{GEAR_FLUSH_EVERY, gear_correct_predict_axes};
+use super::neighbours::{NeighbourList, RowScan, needs_rebuild, norm};
+use super::pair_kernel::{Books, PairConstants, cross_forces, pair_forces_serial};
+use super::walls::{WallAxis, wall_forces};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, RwLock};
 
@@ -70,20 +62,9 @@ pub(super) struct StepConstants<const D: usize> {
     pub(crate) half_skin: f64,
 }
 
-/// The counts and the largest overlap a domain booked in a region (the sums are kept per step,
-/// [`Domain::step_books`]).
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct DomainBooks {
-    pub max_overlap: f64,
-    pub(crate) pair_onsets: u64,
-    pub(crate) wall_onsets: u64,
-    pub formations: u64,
-    pub ruptures: u64,
-}
-
 /// What each domain booked in a region, in domain order: counts and largest overlap, and the
 /// per-step sums (dissipation, bridge ledger, drive work).
-pub(super) type RegionBooks = Vec<(DomainBooks, Vec<[f64; 3]>)>;
+pub(super) type RegionBooks = Vec<(Books, Vec<[f64; 3]>)>;
 
 /// How a region of domain steps ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -99,11 +80,8 @@ pub(super) enum RegionEnd {
     Repartition,
 }
 
-/// What a team needs to rebuild the neighbour list without leaving its region (the threads
-/// stay awake: a build handed to a sleeping pool thread runs serially in effect): the engine's
-/// list and positions, the radii, the two parts of the row scan. The list is the one the
-/// engine's `update_list` would build (same positions, same code), so a region that builds
-/// inside the team gives the numbers of one that stops for the build.
+/// What a team needs to rebuild the neighbour list without leaving its region: the engine's
+/// list and positions, the radii, the two parts of the row scan.
 pub(super) struct TeamBuild<'a, const D: usize> {
     list: RwLock<&'a mut NeighbourList<D>>,
     x: Mutex<&'a mut [f64]>,
@@ -154,9 +132,8 @@ pub(super) struct Domain<const D: usize> {
     pub(crate) cross_ghost: Vec<u32>,
     pub(crate) cross_flags: Vec<u8>,
     pub(crate) cross_src: Vec<u32>,
-    /// Ghosts (the other domain's particles the cross pairs reach), read from its halo.
-    pub(crate) ghosts: usize,
-    /// Radius of each ghost.
+    /// Radius of each ghost (the other domain's particles the cross pairs reach, read from its
+    /// halo).
     pub(crate) ghost_radius: Vec<f64>,
     /// Own particles (local, ascending) that are ghosts of the other domain, in its ghost
     /// order: published into the halo after each step.
@@ -166,8 +143,9 @@ pub(super) struct Domain<const D: usize> {
     /// Displacement bound and steps since the exact test (the engine's `update_list`).
     pub bound: f64,
     pub(crate) since_check: u32,
-    /// Counts and largest overlap booked in the region.
-    pub books: DomainBooks,
+    /// Counts and largest overlap booked in the region (its sums stay zero: see
+    /// `step_books`).
+    pub books: Books,
     /// Per step of the region: dissipation, bridge ledger, drive work (the engine adds them
     /// step by step, domains in order, so where regions end changes no sum).
     pub(crate) step_books: Vec<[f64; 3]>,
@@ -175,13 +153,12 @@ pub(super) struct Domain<const D: usize> {
 
 /// Which particle is in which domain, the domains, and the shared halo buffers.
 ///
-/// The **partition** (the cut) is made at a list build and kept over later builds until the
-/// cross pairs outnumber twice those of the partition (plus [`REPARTITION_SLACK`]) or
-/// [`REPARTITION_EVERY`] builds have passed: particles drift across the cut only slowly, any
-/// partition is valid (it only sets which pairs are cross pairs), and a kept partition keeps
-/// the state in the domains (no copy at the build but the positions). Both rules depend on the
-/// trajectory alone, so the partitions, and the numbers, do not depend on the threads or on
-/// where regions end.
+/// The **partition** is made at a list build and kept until the cross pairs outnumber twice
+/// those at the partition (plus [`REPARTITION_SLACK`]) or [`REPARTITION_EVERY`] builds have
+/// passed: particles drift across the cut only slowly, any partition is valid (it only sets
+/// which pairs are cross pairs), and a kept one keeps the state in the domains. Both rules
+/// depend on the trajectory alone, so the numbers do not depend on the threads or on where
+/// regions end.
 #[derive(Debug)]
 pub(super) struct Decomposition<const D: usize> {
     /// The list build whose entries the domains' lists hold (`NeighbourList::builds`).
@@ -205,11 +182,10 @@ pub(super) struct Decomposition<const D: usize> {
     /// Whether the engine's arrays hold only the positions of that step (the rest is in the
     /// domains): between the regions of one run.
     pub partial: bool,
-    /// The step whose list check is done already (by the domains' last step, each domain with
-    /// its own displacement bound and count, or by the team's build): the next region starts
-    /// without the engine's `update_list` and keeps the domains' own bounds, so where regions
-    /// end does not move the exact displacement tests (which decide the rebuilds caused by a
-    /// periodic wrap).
+    /// The step whose list check is done already (by the domains' last step or the team's
+    /// build): the next region skips the engine's `update_list` and keeps the domains' own
+    /// bounds, so where regions end does not move the exact displacement tests (which decide
+    /// the rebuilds caused by a periodic wrap).
     pub(crate) checked_for: Option<u64>,
 }
 
@@ -235,21 +211,14 @@ impl<const D: usize> Clone for Decomposition<D> {
             halo: self
                 .halo
                 .iter()
-                .map(|h| {
-                    [
-                        RwLock::new(read(&h[0]).clone()),
-                        RwLock::new(read(&h[1]).clone()),
-                    ]
-                })
+                .map(|h| h.each_ref().map(|b| RwLock::new(read(b).clone())))
                 .collect(),
             stop: self
                 .stop
                 .iter()
                 .map(|s| {
-                    [
-                        AtomicBool::new(s[0].load(Ordering::Relaxed)),
-                        AtomicBool::new(s[1].load(Ordering::Relaxed)),
-                    ]
+                    s.each_ref()
+                        .map(|b| AtomicBool::new(b.load(Ordering::Relaxed)))
                 })
                 .collect(),
             holds_step: self.holds_step,
@@ -288,19 +257,13 @@ pub(super) struct EngineArrays<'a> {
 }
 
 impl<const D: usize> Decomposition<D> {
-    /// Cuts the particles at positions `x` (axis-major; the engine passes those of the list
-    /// build) across the longest axis of `size` at the median (ties in the coordinate broken
-    /// by the index), [`DOMAINS`] = 2 domains of `n / 2` and `n - n / 2` particles, each in
-    /// ascending scene order. The lists are split by [`Self::split_lists`], the state loaded
-    /// by [`Self::load`].
+    /// Cuts the particles at positions `x` (axis-major, those of the list build) across the
+    /// longest axis of `size` at the median (ties broken by the index) into 2 domains of
+    /// `n / 2` and `n - n / 2` particles, each in ascending scene order (lists split by
+    /// [`Self::split_lists`], state loaded by [`Self::load`]).
     pub(super) fn new(build: u64, size: [f64; D], x: &[f64]) -> Self {
         let n = x.len() / D;
-        let mut axis = 0;
-        for k in 1..D {
-            if size[k] > size[axis] {
-                axis = k;
-            }
-        }
+        let axis = (0..D).fold(0, |a, k| if size[k] > size[a] { k } else { a });
         let xa = &x[axis * n..(axis + 1) * n];
         let mut order: Vec<u32> = (0..n as u32).collect();
         let half = n / 2;
@@ -339,12 +302,8 @@ impl<const D: usize> Decomposition<D> {
             dom,
             local,
             domains: domains.into_iter().map(Mutex::new).collect(),
-            halo: (0..DOMAINS)
-                .map(|_| [RwLock::new(Vec::new()), RwLock::new(Vec::new())])
-                .collect(),
-            stop: (0..DOMAINS)
-                .map(|_| [AtomicBool::new(false), AtomicBool::new(false)])
-                .collect(),
+            halo: (0..DOMAINS).map(|_| Default::default()).collect(),
+            stop: (0..DOMAINS).map(|_| Default::default()).collect(),
             holds_step: None,
             partial: false,
             checked_for: None,
@@ -380,13 +339,11 @@ impl<const D: usize> Decomposition<D> {
         self.built_for.load(Ordering::Relaxed)
     }
 
-    /// Domain `d`'s part of [`Self::split_lists`]: its inner half list (rows and partners in
-    /// local indices, ascending as in the list), its cross entries sorted by own particle,
-    /// ghost and entry, its ghosts (the other domain's particles in cross pairs, by ascending
-    /// local index), the own particles it publishes into its halo (those in cross pairs,
-    /// ascending: the other domain's ghosts, in the other domain's ghost order), and the halo
-    /// buffers of both parities sized for them. Reads only the list and what the partition
-    /// fixed, writes only domain `d`, so the domains can be split at once by different threads.
+    /// Domain `d`'s part of [`Self::split_lists`]: its inner half list (local indices, in list
+    /// order), its cross entries sorted by own particle, ghost and entry, its ghosts (the
+    /// other domain's particles in cross pairs, by local index), the own particles it publishes
+    /// (those in cross pairs, ascending: the other domain's ghost order), and its halo buffers.
+    /// Writes only domain `d`, so different threads can split the domains at once.
     pub(super) fn split_domain(&self, d: usize, list: &NeighbourList<D>, radius: &[f64]) {
         let (start, partner, flags) = (&list.start, &list.partner, &list.flags);
         let built_at = list.built_at();
@@ -437,7 +394,6 @@ impl<const D: usize> Decomposition<D> {
         let mut ghosts: Vec<(u32, u32)> = cross.iter().map(|e| (e.1, e.3)).collect();
         ghosts.sort_unstable();
         ghosts.dedup();
-        dm.ghosts = ghosts.len();
         dm.ghost_radius.clear();
         dm.ghost_radius
             .extend(ghosts.iter().map(|&(_, j)| radius[j as usize]));
@@ -495,12 +451,9 @@ impl<const D: usize> Decomposition<D> {
                 dm.bound = bound;
                 dm.since_check = since_check;
             }
-            dm.books = DomainBooks::default();
+            dm.books = Books::default();
             dm.step_books.clear();
-            let h = self.halo[d][parity]
-                .get_mut()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
-            dm.publish(h);
+            dm.publish(&mut write(&self.halo[d][parity]));
         }
     }
 
@@ -544,37 +497,30 @@ impl<const D: usize> Decomposition<D> {
     /// Test aid: whether both copies of every cross pair hold the same flags (they must: the
     /// two domains take the same decisions on exactly antisymmetric numbers).
     pub(super) fn cross_flags_agree(&mut self) -> bool {
-        let mut by_entry: Vec<(u32, u8)> = Vec::new();
-        let mut other: Vec<(u32, u8)> = Vec::new();
-        for (d, dm) in self.domains.iter_mut().enumerate() {
-            let dm = dm
-                .get_mut()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
-            let v: Vec<(u32, u8)> = dm
+        let mut copies = self.domains.iter_mut().map(|dm| {
+            let dm = get(dm);
+            let mut v: Vec<(u32, u8)> = dm
                 .cross_src
                 .iter()
                 .copied()
                 .zip(dm.cross_flags.iter().copied())
                 .collect();
-            if d == 0 { by_entry = v } else { other = v }
-        }
-        by_entry.sort_unstable();
-        other.sort_unstable();
-        by_entry == other
+            v.sort_unstable();
+            v
+        });
+        copies.next() == copies.next()
     }
 
-    /// Runs the steps of one member of a team of `members` (it takes domains `slot`,
-    /// `slot + members`, ...): global steps `first..` until `target` or until some domain's
-    /// check asks for a list build before `target`: then the team builds the list itself
-    /// ([`Self::build_in_team`]) and goes on, unless the build calls for a new partition.
-    /// `wait` is the team's barrier. Returns the steps taken and how the region ended. Every
-    /// member returns the same.
+    /// Runs the steps of one member of a team of `members` (domains `slot`, `slot + members`,
+    /// ...) from global step `first` until `target`; where some domain's check asks for a list
+    /// build, the team builds it ([`Self::build_in_team`]) and goes on unless a new partition
+    /// is due. `wait` is the team's barrier. Returns (the same on every member) the steps
+    /// taken and how the region ended.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn run_member<const WET: bool>(
         &self,
         c: &StepConstants<D>,
         walls_at: &(dyn Fn(u64) -> [WallAxis; D] + Sync),
-        flush_at: &(dyn Fn(u64) -> bool + Sync),
         build: &TeamBuild<'_, D>,
         slot: usize,
         members: usize,
@@ -589,7 +535,7 @@ impl<const D: usize> Decomposition<D> {
             let rebuild = loop {
                 let parity = (s % 2) as usize;
                 let walls = walls_at(s + 1);
-                let flush = flush_at(s);
+                let flush = s.is_multiple_of(GEAR_FLUSH_EVERY);
                 for (g, &d) in guards.iter_mut().zip(&mine) {
                     let other = 1 - d;
                     let ghosts = read(&self.halo[other][parity]);
@@ -620,13 +566,11 @@ impl<const D: usize> Decomposition<D> {
         }
     }
 
-    /// The list build of step `step` by the team (every member calls it; `mine` are the
-    /// member's domains, which it no longer holds): member 0 writes the positions and the
-    /// flags back and bins the particles, the members scan the two parts of the rows at once,
-    /// member 0 joins them and decides on the partition; then, unless a new partition is
-    /// due, each member splits the new list for its own domains, resets their list checks
-    /// (as `update_list` does at a build) and publishes their halo of the step. Returns
-    /// whether the region goes on.
+    /// The list build of step `step` by the team (every member calls it with its domains
+    /// `mine`): member 0 writes the positions and flags back and bins the particles, the
+    /// members scan the two parts of the rows, member 0 joins them and decides on the
+    /// partition; unless a new one is due, each member splits the new list for its domains,
+    /// resets their list checks and publishes their halo. Returns whether the region goes on.
     fn build_in_team(
         &self,
         b: &TeamBuild<'_, D>,
@@ -767,13 +711,12 @@ impl<const D: usize> Domain<D> {
         }
         self.acc_is_start = true;
         let mut sums = self.pair_forces::<WET>(&c.pair, ghosts);
-        let b = &mut self.books;
         for k in 0..D {
             if c.pair.periodic[k] {
                 continue;
             }
             let a = k * m..(k + 1) * m;
-            let mut part = WallBooks::default();
+            let mut part = Books::default();
             wall_forces(
                 &walls[k],
                 &self.r[0][a.clone()],
@@ -786,8 +729,7 @@ impl<const D: usize> Domain<D> {
             );
             sums[0] += part.dissipated;
             sums[2] += part.work;
-            b.max_overlap = b.max_overlap.max(part.max_overlap);
-            b.wall_onsets += part.onsets;
+            self.books.add_counts(&part);
         }
         self.step_books.push(sums);
         if let Some(inv_m) = c.inv_mass {
@@ -805,12 +747,16 @@ impl<const D: usize> Domain<D> {
             std::array::from_fn(|k| p.periodic[k].then_some(p.size[k])),
             flush,
         );
-        let mut moved2 = 0.0;
-        for mk in moved {
-            moved2 += mk * mk;
-        }
         self.publish(next);
-        self.check_list(moved2.sqrt(), c.half_skin)
+        self.bound += norm(moved);
+        let (x, built_at) = (&self.r[0], &self.built_at);
+        needs_rebuild::<D>(
+            &mut self.bound,
+            &mut self.since_check,
+            c.half_skin,
+            x,
+            built_at,
+        )
     }
 
     /// The inner pairs and the cross pairs of this domain ([`pair_forces_serial`],
@@ -830,7 +776,7 @@ impl<const D: usize> Domain<D> {
             &mut self.flags,
         );
         let mut sums = [pb.dissipated, pb.bridge_ledger, 0.0];
-        self.books.add_pairs(&pb);
+        self.books.add_counts(&pb);
         let cb = cross_forces::<D, WET>(
             pc,
             &self.r[0],
@@ -846,36 +792,8 @@ impl<const D: usize> Domain<D> {
         if self.books_cross {
             sums[0] += cb.dissipated;
             sums[1] += cb.bridge_ledger;
-            self.books.add_pairs(&cb);
+            self.books.add_counts(&cb);
         }
         sums
-    }
-
-    /// The list check of the next step (the engine's `update_list`, on this domain), after a
-    /// step whose moves have the norm `moved`: whether the list must be rebuilt.
-    fn check_list(&mut self, moved: f64, half_skin: f64) -> bool {
-        self.bound += moved;
-        self.since_check += 1;
-        if self.bound < half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
-            return false;
-        }
-        self.since_check = 0;
-        let worst = max_displacement_sq::<D>(&self.r[0], &self.built_at);
-        if worst > half_skin * half_skin {
-            true
-        } else {
-            self.bound = worst.sqrt();
-            false
-        }
-    }
-}
-
-impl DomainBooks {
-    /// Adds the counts and the largest overlap of a pair loop.
-    fn add_pairs(&mut self, pb: &PairBooks) {
-        self.max_overlap = self.max_overlap.max(pb.max_overlap);
-        self.pair_onsets += pb.onsets;
-        self.formations += pb.formations;
-        self.ruptures += pb.ruptures;
     }
 }

@@ -45,17 +45,14 @@ pub(crate) fn gear_predict(r: &mut [Vec<f64>; 6]) {
     }
 }
 
-/// Below this magnitude the scaled derivatives `r_2 .. r_5` are set to zero (see
-/// [`gear_correct`]).
+/// Safeguard: below this magnitude the corrector sets the scaled derivatives `r_2 .. r_5` to
+/// zero. In free flight the higher derivatives left by a contact decay geometrically and would
+/// become subnormal numbers after some thousand steps, which makes every operation on them about
+/// a hundred times slower; this is far below any physical scale.
 pub(crate) const GEAR_FLUSH: f64 = 1e-200;
 
-/// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta` (the reference the fused loop is
-/// tested against).
-///
-/// Safeguard: in free flight the higher derivatives left by a contact decay geometrically under
-/// predictor and corrector and would become subnormal numbers after some thousand steps, which
-/// makes every operation on them about a hundred times slower. Values below [`GEAR_FLUSH`]
-/// (far below any physical scale) are therefore set to zero.
+/// Corrector: `Delta = a dt^2/2 - r_2`, `r_k += c_k Delta`, flushing at [`GEAR_FLUSH`] (the
+/// reference the fused loop is tested against).
 #[cfg(test)]
 pub(crate) fn gear_correct(r: &mut [Vec<f64>; 6], acc: &[f64], half_dt2: f64, c: &[f64; 6]) {
     let [r0, r1, r2, r3, r4, r5] = r;
@@ -105,41 +102,6 @@ macro_rules! lane_max {
 /// Block length of [`lane_max`].
 const BLOCK: usize = 64;
 
-/// Corrector of one step fused with the predictor of the next: `r` goes from predicted (step
-/// `n`) to predicted (step `n + 1`) in one pass, and the corrected position and scaled velocity
-/// of step `n` are written to `now`. The same arithmetic as [`gear_correct`] then
-/// [`gear_predict`], with half the passes over memory. All coordinates are treated alike (no
-/// wrap); the reference of [`gear_correct_predict_axis`], which the engine calls per axis.
-#[cfg(test)]
-pub(crate) fn gear_correct_predict(
-    r: &mut [Vec<f64>; 6],
-    now: &mut [Vec<f64>; 2],
-    acc: &[f64],
-    half_dt2: f64,
-    c: &[f64; 6],
-) {
-    let [r0, r1, r2, r3, r4, r5] = r;
-    let [x_now, v_now] = now;
-    let flush = |x: f64| if x.abs() < GEAR_FLUSH { 0.0 } else { x };
-    for e in 0..r0.len() {
-        let delta = acc[e] * half_dt2 - r2[e];
-        let a0 = r0[e] + c[0] * delta;
-        let a1 = r1[e] + c[1] * delta;
-        let a2 = flush(r2[e] + c[2] * delta);
-        let a3 = flush(r3[e] + c[3] * delta);
-        let a4 = flush(r4[e] + c[4] * delta);
-        let a5 = flush(r5[e] + c[5] * delta);
-        x_now[e] = a0;
-        v_now[e] = a1;
-        r0[e] = a0 + (a1 + a2 + a3 + a4 + a5);
-        r1[e] = a1 + 2.0 * a2 + 3.0 * a3 + 4.0 * a4 + 5.0 * a5;
-        r2[e] = a2 + 3.0 * a3 + 6.0 * a4 + 10.0 * a5;
-        r3[e] = a3 + 4.0 * a4 + 10.0 * a5;
-        r4[e] = a4 + 5.0 * a5;
-        r5[e] = a5;
-    }
-}
-
 /// Inverse of the predictor (the inverse Pascal triangle): the corrected scaled derivatives of
 /// step `n` from the prediction `p` for step `n + 1`. Exact up to round-off (the position to
 /// about one ulp of `|x|`); the engine uses it to read the current state instead of storing it
@@ -154,27 +116,21 @@ pub(crate) fn gear_unpredict(p: [f64; 6]) -> [f64; 6] {
     [a0, a1, a2, a3, a4, a5]
 }
 
-/// [`gear_correct_predict`] on one slice of coordinates (one axis of the engine's axis-major
-/// arrays), without storing the corrected position and velocity (the engine recovers them on
-/// demand with [`gear_unpredict`]: two fewer streams to memory), and with two more jobs done in
-/// the same pass:
+/// Corrector of one step fused with the predictor of the next on one slice of coordinates (one
+/// axis of the engine's axis-major arrays): `r` goes from predicted (step `n`) to predicted
+/// (step `n + 1`) in one pass, the arithmetic of [`gear_correct`] then [`gear_predict`]. The
+/// corrected state is not stored (the engine recovers it on demand with [`gear_unpredict`]),
+/// and two more jobs are done in the same pass:
 ///
-/// - with `period = Some(L)`, the new predicted position `r[0]` is wrapped into `[0, L)`
-///   (`x < 0: x + L; x >= L: x - L`, the same operation as a separate wrap pass, so the
-///   numbers are identical);
-/// - returns `max_e |r0_new[e] - r0_old[e]|`, the largest move of a predicted position in this
-///   step, taken before the wrap (the true displacement). The engine sums these per step into a
-///   bound on every particle's displacement since the last neighbour-list build
-///   (`needs_rebuild` is then only evaluated when the bound reaches `skin / 2`).
+/// - with `period = Some(L)`, the new predicted position `r[0]` is wrapped into `[0, L)` (the
+///   operation of a separate wrap pass, so the numbers are identical);
+/// - returns the largest move of a predicted position in this step, before the wrap (the true
+///   displacement), for the list's displacement bound (`neighbours::needs_rebuild`); NaN
+///   moves are ignored (`lane_max`: the engine's sanity check catches them).
 ///
-/// The reduction is written as a compare-and-select, not `f64::max`, so that it compiles to
-/// packed `maxpd` (NaN positions are caught by the engine's sanity check, not here).
-///
-/// With `flush = false` the subnormal safeguard of [`gear_correct`] is left out of this step;
-/// the engine flushes every [`GEAR_FLUSH_EVERY`] steps instead (see there).
-///
-/// Each `acc[e]` is set to `force_start` once read: the engine's next force evaluation starts
-/// from it (the weight, or 0) without a pass of its own over the array.
+/// With `flush = false` the [`GEAR_FLUSH`] safeguard is left out of this step (see
+/// [`GEAR_FLUSH_EVERY`]). Each `acc[e]` is set to `force_start` once read: the next force
+/// evaluation starts from it without a pass of its own.
 pub(crate) fn gear_correct_predict_axis(
     r: [&mut [f64]; 6],
     acc: &mut [f64],
@@ -330,41 +286,6 @@ pub(crate) fn verlet_kick(v: &mut [f64], acc: &[f64], dt: f64) {
 mod tests {
     use super::*;
 
-    /// Both integrators on the harmonic oscillator `x'' = -x`: the error after one period
-    /// falls with the step at the integrator's order (Verlet 2; the 6-value Gear method, whose
-    /// local error is `O(dt^6)`, at least 4 here).
-    /// The subnormal safeguard: after a kick, free flight drives the higher derivatives to
-    /// exact zeros, never through subnormal numbers.
-    #[test]
-    fn free_flight_leaves_no_subnormal_derivatives() {
-        let dt = 1e-4;
-        let mut r: [Vec<f64>; 6] = [
-            vec![0.0],
-            vec![dt],
-            vec![0.0],
-            vec![1e-12],
-            vec![-3e-13],
-            vec![1e-14],
-        ];
-        let mut saw_zero = false;
-        for _ in 0..200_000 {
-            gear_predict(&mut r);
-            gear_correct(&mut r, &[0.0], 0.5 * dt * dt, &GEAR5);
-            for k in 2..6 {
-                assert!(
-                    !r[k][0].is_subnormal(),
-                    "r_{k} = {:e} is subnormal",
-                    r[k][0]
-                );
-            }
-            saw_zero |= r[5][0] == 0.0;
-        }
-        assert!(
-            saw_zero,
-            "the derivatives never decayed: the test does not exercise the flush"
-        );
-    }
-
     /// The engine's safeguard: the per-axis loop flushing every [`GEAR_FLUSH_EVERY`] steps
     /// keeps every derivative of a free flight away from subnormal numbers and drives them to
     /// exact zeros; without any flush they become subnormal (the test would fail without the
@@ -406,26 +327,10 @@ mod tests {
         );
     }
 
-    /// The fused corrector-predictor is exactly correct-then-predict.
-    #[test]
-    fn fused_corrector_predictor_matches_the_two_passes() {
-        let init: [Vec<f64>; 6] =
-            std::array::from_fn(|k| vec![0.3 / (k + 1) as f64, -1e-3 * k as f64]);
-        let acc = [0.7, -2.0];
-        let (mut a, mut b) = (init.clone(), init);
-        gear_correct(&mut a, &acc, 5e-9, &GEAR5);
-        let corrected = [a[0].clone(), a[1].clone()];
-        gear_predict(&mut a);
-        let mut now = [vec![0.0; 2], vec![0.0; 2]];
-        gear_correct_predict(&mut b, &mut now, &acc, 5e-9, &GEAR5);
-        assert_eq!(a, b);
-        assert_eq!(now, corrected);
-    }
-
-    /// The engine's per-axis loop is the reference `gear_correct_predict` bit for bit (the
+    /// The engine's per-axis loop is `gear_correct` then `gear_predict` bit for bit (the
     /// predicted state, with the wrap on a periodic axis), returns the largest move of the
-    /// predicted position, and `gear_unpredict` recovers the corrected position and velocity
-    /// the reference stores, to round-off.
+    /// predicted position, and `gear_unpredict` recovers the corrected position and velocity,
+    /// to round-off.
     #[test]
     fn axis_loop_matches_the_reference_and_unpredict_recovers_the_corrected_state() {
         let m = 131; // not a multiple of the block length: exercises the tail
@@ -451,8 +356,9 @@ mod tests {
         let acc: Vec<f64> = (0..m).map(|e| (e as f64 * 0.11).cos() - 1.0).collect();
         let h = 5e-9;
         let mut want = init.clone();
-        let mut now = [vec![0.0; m], vec![0.0; m]];
-        gear_correct_predict(&mut want, &mut now, &acc, h, &GEAR5_DAMPED_TEST);
+        gear_correct(&mut want, &acc, h, &GEAR5_DAMPED_TEST);
+        let now = [want[0].clone(), want[1].clone()];
+        gear_predict(&mut want);
         let mut got = init.clone();
         let [g0, g1, g2, g3, g4, g5] = &mut got;
         let mut acc_left = acc.clone();
@@ -508,6 +414,9 @@ mod tests {
         c
     };
 
+    /// Both integrators on the harmonic oscillator `x'' = -x`: the error after one period
+    /// falls with the step at the integrator's order (Verlet 2; the 6-value Gear method, whose
+    /// local error is `O(dt^6)`, at least 4 here).
     #[test]
     fn orders_on_the_harmonic_oscillator() {
         let err = |gear: bool, steps: usize| {

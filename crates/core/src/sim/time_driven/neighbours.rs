@@ -1,14 +1,11 @@
 //! Verlet neighbour list with skin, built from cells (a counting sort by cell), for the
-//! time-driven engine.
-//!
-//! The list is a half list in compressed-row form: row `i` holds the partners `j > i` whose
-//! centres were closer than `R_i + R_j + s_crit + skin` when the list was built, sorted by `j`.
-//! Each entry carries flags (in contact at the last force evaluation; bridged). The list is rebuilt
-//! when some particle has moved more than `skin / 2` since the last build (then no pair can have
-//! come from outside the range into interaction; the engine evaluates this test only when its
-//! bound on the displacements says it might fire); the flags of the old list are carried into the
-//! new one by merging the sorted rows. Every buffer is allocated once and reused: a rebuild
-//! allocates only while the list grows beyond its largest size so far.
+//! time-driven engine: a half list in compressed-row form, row `i` holding the partners `j > i`
+//! whose centres were closer than `R_i + R_j + s_crit + skin` at the build, sorted by `j`, each
+//! entry with flags (in contact at the last force evaluation; bridged). The list is rebuilt when
+//! some particle has moved more than `skin / 2` since the last build ([`needs_rebuild`]; then no
+//! pair can have come into interaction from outside the range), the old flags carried into the
+//! new rows by merging the sorted rows. Buffers are reused: a rebuild allocates only while the
+//! list grows beyond its largest size so far.
 
 /// Entry flag: the pair overlapped at the last force evaluation.
 pub(crate) const CONTACT: u8 = 1;
@@ -28,17 +25,14 @@ pub(crate) struct NeighbourList<const D: usize> {
     pub partner: Vec<u32>,
     /// Flags of each entry ([`CONTACT`], [`BOND`]).
     pub flags: Vec<u8>,
-    /// The rows that hold at least one partner, ascending: the pair loop visits only these
-    /// (in a dilute system most rows are empty, and testing each one costs a mispredicted
-    /// branch).
+    /// The rows that hold at least one partner, ascending: the pair loop visits only these (in
+    /// a dilute system most rows are empty, and testing each costs a mispredicted branch).
     pub rows: Vec<u32>,
-    /// The row (first particle) of each entry: the pair loop runs over entries in parallel
-    /// chunks. Made, with the transposed list, by [`Self::ensure_transposed`] (only the
-    /// rayon-split step reads them).
+    /// The row of each entry (for the rayon strategy's chunks of entries; made, with the
+    /// transposed list, by [`Self::ensure_transposed`]).
     pub(crate) row_of: Vec<u32>,
     /// The transposed list: the entries whose partner is `j` are
-    /// `in_entry[in_start[j]..in_start[j + 1]]`, ascending (so by ascending row). The engine
-    /// gathers each particle's pair forces through it in the order the rows visit them.
+    /// `in_entry[in_start[j]..in_start[j + 1]]`, ascending (so by ascending row).
     pub(crate) in_start: Vec<u32>,
     /// Entry indices of the transposed list.
     pub(crate) in_entry: Vec<u32>,
@@ -67,9 +61,9 @@ pub(crate) struct NeighbourList<const D: usize> {
     /// Cell coordinates of each particle at the last build, `D` per particle.
     cell_at: Vec<u32>,
     /// Per axis `k` and cell coordinate `c`: the coordinates of the cells at offsets -1, 0, +1
-    /// (`3 c + o + 1`), periodic images wrapped, [`NONE`] beyond a wall or where a periodic
-    /// axis has fewer than 3 cells (two offsets would name one cell twice); the build walks
-    /// the `3^D` neighbour cells from these tables, without a division.
+    /// (`3 c + o + 1`), periodic images wrapped (a periodic axis has at least 3 cells, so no
+    /// cell is named twice), [`NONE`] beyond a wall; the build walks the `3^D` neighbour cells
+    /// from these tables, without a division.
     axis_next: [Vec<u32>; D],
     /// Stride of each axis in the cell index.
     stride: [usize; D],
@@ -82,24 +76,60 @@ pub(crate) struct NeighbourList<const D: usize> {
     pub builds: u64,
     /// The build for which `row_of` and the transposed list were made (0: none).
     transposed_at: u64,
-    /// The first flagged pair `(i, j)` found missing from a rebuilt list (its flags dropped):
-    /// it moved apart by more than the skin within one list's life, which only a blown-up run
-    /// does (a time step too large for the speeds reached). The engine's `sanity_check`
-    /// reports it; the list itself goes on.
+    /// The first flagged pair `(i, j)` missing from a rebuilt list (its flags dropped): it moved
+    /// apart by more than the skin within one list's life, which only a blown-up run does. The
+    /// engine's `sanity_check` reports it; the list goes on.
     pub(crate) lost_pair: Option<(usize, usize)>,
 }
 
 const NONE: u32 = u32::MAX;
 
-/// From this many particles on, a build on a pool of several threads scans the rows in two
-/// halves at once (`rayon::join`; about 1000 instructions per particle, so a hand-over of a few
-/// microseconds is paid back from about a thousand particles on).
+/// From this many particles on, a build on a pool of several threads scans the two halves of the
+/// rows at once (about 1000 instructions per particle pay back a hand-over of a few microseconds
+/// from about a thousand particles on).
 pub(crate) const PARALLEL_BUILD_MIN: usize = 1024;
 
+/// The list check of a step (the engine's `State::update_list`, and each spatial domain's):
+/// whether some particle at `x` has moved more than `half_skin` since the build at `built_at`.
+/// The exact test runs only when `bound`, an upper bound on every displacement (the sum over
+/// steps of the per-step moves' [`norm`]), reaches `half_skin` (less a relative margin of
+/// `1e-6` for its round-off), or after [`EXACT_CHECK_EVERY`] steps (`since` counts them);
+/// otherwise no particle can have moved that far, so the decision is the exact test's. After
+/// an exact test that finds no rebuild, the bound restarts from the exact largest displacement.
+pub(crate) fn needs_rebuild<const D: usize>(
+    bound: &mut f64,
+    since: &mut u32,
+    half_skin: f64,
+    x: &[f64],
+    built_at: &[f64],
+) -> bool {
+    *since += 1;
+    if *bound < half_skin * (1.0 - 1e-6) && *since < EXACT_CHECK_EVERY {
+        return false;
+    }
+    *since = 0;
+    let worst = max_displacement_sq::<D>(x, built_at);
+    if worst > half_skin * half_skin {
+        return true;
+    }
+    *bound = worst.sqrt();
+    false
+}
+
+/// `sqrt(sum_k m_k^2)` of the largest moves `m_k` per axis of a step, summed in axis order.
+pub(crate) fn norm<const D: usize>(moved: [f64; D]) -> f64 {
+    let mut moved2 = 0.0;
+    for m in moved {
+        moved2 += m * m;
+    }
+    moved2.sqrt()
+}
+
 /// The largest squared displacement between positions `x` and `built_at` (axis-major, the
-/// same length), without the periodic image; in blocks of 64 particles, so that the loop
-/// vectorises.
-pub(crate) fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
+/// same length), without the periodic image: a particle that crossed a periodic face counts as
+/// having moved by about `L` and triggers a (harmless, rare) rebuild; in exchange the loop,
+/// in blocks of 64 particles, vectorises.
+fn max_displacement_sq<const D: usize>(x: &[f64], built_at: &[f64]) -> f64 {
     let n = x.len() / D;
     let mut worst = 0.0f64;
     let mut acc = [0.0f64; 64];
@@ -189,25 +219,19 @@ impl<const D: usize> NeighbourList<D> {
             scratch: vec![0; n],
             cell_at: vec![0; D * n],
             axis_next: std::array::from_fn(|k| {
-                let m = cells[k];
-                let mut t = vec![NONE; 3 * m];
-                for c in 0..m {
-                    for o in 0..3usize {
-                        let v = c as i64 + o as i64 - 1;
-                        t[3 * c + o] = if periodic[k] {
-                            if m < 3 && o != 1 {
-                                NONE
-                            } else {
-                                v.rem_euclid(m as i64) as u32
-                            }
-                        } else if v < 0 || v >= m as i64 {
-                            NONE
-                        } else {
+                let m = cells[k] as i64;
+                (0..3 * m)
+                    .map(|co| {
+                        let v = co / 3 + co % 3 - 1;
+                        if periodic[k] {
+                            v.rem_euclid(m) as u32
+                        } else if (0..m).contains(&v) {
                             v as u32
-                        };
-                    }
-                }
-                t
+                        } else {
+                            NONE
+                        }
+                    })
+                    .collect()
             }),
             stride: std::array::from_fn(|k| cells[..k].iter().product()),
             scan: Default::default(),
@@ -229,14 +253,6 @@ impl<const D: usize> NeighbourList<D> {
         self.skin
     }
 
-    /// The largest squared displacement of a particle since the last build (`x` axis-major).
-    /// The displacement is taken without the periodic image: a particle that crossed a periodic
-    /// face counts as having moved by about `L` and triggers a (harmless, rare) rebuild; in
-    /// exchange the loop vectorises.
-    pub(crate) fn max_displacement_sq(&self, x: &[f64]) -> f64 {
-        max_displacement_sq::<D>(x, &self.built_at)
-    }
-
     fn cell_index(&self, c: &[usize; D]) -> usize {
         let mut idx = 0;
         for k in (0..D).rev() {
@@ -246,11 +262,9 @@ impl<const D: usize> NeighbourList<D> {
     }
 
     /// Rebuilds the list from positions `x` (axis-major) and radii, keeping the flags of pairs
-    /// that stay listed (a flagged pair always does: it is within `s_crit` of contact).
-    ///
-    /// The three phases ([`Self::begin_build`], [`Self::scan_part`] for both parts,
-    /// [`Self::finish_build`]) can also be run by a team of threads (the spatial domains build
-    /// the list inside their team, `domains.rs`); the list is the same either way.
+    /// that stay listed (a flagged pair always does: it is within `s_crit` of contact). The
+    /// phases ([`Self::begin_build`], [`Self::scan_part`] per part, [`Self::finish_build`])
+    /// are also run by the domains' team (`domains.rs`), with the same list.
     pub(crate) fn build(&mut self, x: &[f64], radius: &[f64]) {
         self.begin_build(x, radius);
         let [mut lo, mut hi] = self.take_scans();
@@ -360,9 +374,8 @@ impl<const D: usize> NeighbourList<D> {
         self.start[n] = self.partner.len() as u32;
     }
 
-    /// Makes `row_of` and the transposed list (`in_start`, `in_entry`) of the current build,
-    /// unless they are made already: the rayon-split step needs them, the serial step and the
-    /// domains do not, so a build does not pay for them.
+    /// Makes `row_of` and the transposed list of the current build unless made already (only
+    /// the rayon strategy reads them, so a build does not pay for them).
     pub(crate) fn ensure_transposed(&mut self) {
         if self.transposed_at == self.builds {
             return;
@@ -392,12 +405,12 @@ impl<const D: usize> NeighbourList<D> {
         }
     }
 
-    /// The rows `range` of a build (after the binning): each row's partners, sorted, with the
-    /// flags carried from the old list, appended to `out` (cleared first). The neighbour
-    /// cells of a row along axis 0 are adjacent in the cell order (stride 1), so each row of
-    /// up to three cells is read as one or two contiguous runs of the sorted arrays (two where
-    /// a periodic axis wraps); the test `j > i` is combined with the distance test, so the
-    /// loop has no data-dependent branch but the rare push.
+    /// The rows `range` of a build (after the binning) into `out` (cleared first): each row's
+    /// partners, sorted, with the flags carried from the old list. The neighbour cells along
+    /// axis 0 are adjacent in the cell order, so each row of up to three cells is read as one
+    /// or two contiguous runs of the sorted arrays (two where a periodic axis wraps); `j > i`
+    /// is combined with the distance test, so the loop has no data-dependent branch but the
+    /// rare push.
     fn scan_rows(&self, radius: &[f64], range: std::ops::Range<usize>, out: &mut RowScan) {
         out.clear();
         let n = radius.len();

@@ -1,18 +1,17 @@
 //! The pair kernel of the time-driven engine: [`pair_kernel`] is the force of one Verlet-list
 //! entry (the minimum image, the reach test, the damped Hertz contact of Eq. 2.7 and the minimal
 //! capillary bridge of docs/model.md 3.1) with its new flags. The three loops over entries call
-//! it and differ only in where the force goes: [`pair_chunk`] (one chunk of entries into a
-//! buffer, the rayon strategy), [`pair_forces_serial`] (the whole half list, scattered to both
-//! partners: the serial strategy and a domain's inner pairs) and [`cross_forces`] (a domain's
-//! pairs with the other domain, the partner read from its halo). The books are summed per
-//! [`ENTRY_CHUNK`] entries, so every strategy gives the same bits.
+//! it and differ only in where the force goes: [`pair_chunk`] (a chunk of entries into a buffer:
+//! the rayon strategy), [`pair_forces_serial`] (scattered to both partners: the serial strategy,
+//! a domain's inner pairs) and [`cross_forces`] (a domain's pairs with the other domain, the
+//! partner read from its halo). The books are summed per [`ENTRY_CHUNK`] entries, so every
+//! strategy gives the same bits.
 
 use super::neighbours::{BOND, CONTACT};
 use crate::physics::hertz;
 
-/// Verlet-list entries per chunk of the pair phase of a step: the unit of work of a thread, and
-/// the unit over which the booked sums are taken before they are added up in chunk order
-/// (fixed, so the numbers do not depend on the number of threads).
+/// Verlet-list entries per chunk of the pair phase: a thread's unit of work and of the booked
+/// sums, added in chunk order (fixed: the numbers do not depend on the number of threads).
 pub(super) const ENTRY_CHUNK: usize = 128;
 
 /// What the pair kernel needs besides the particles' state.
@@ -32,13 +31,19 @@ pub(super) struct PairConstants<const D: usize> {
     pub dt: f64,
 }
 
-/// What one chunk of the pair loop books.
+/// What a loop over pairs or wall contacts books: its sums (run on in its order; the engine
+/// keeps one per chunk), its counts and the largest overlap.
 #[derive(Debug, Clone, Copy, Default)]
-pub(super) struct PairBooks {
+pub(super) struct Books {
+    /// Work of the damping part of Eq. 2.7, `sum F_damp xi_dot dt`.
     pub dissipated: f64,
-    pub max_overlap: f64,
+    /// The bridge energy booked at formations and ruptures.
     pub(crate) bridge_ledger: f64,
-    pub onsets: u64,
+    /// Work of the moving walls, `sum F_wall v_wall dt`.
+    pub work: f64,
+    pub max_overlap: f64,
+    pub(crate) pair_onsets: u64,
+    pub(crate) wall_onsets: u64,
     pub formations: u64,
     pub ruptures: u64,
 }
@@ -79,124 +84,11 @@ pub(super) fn pair_kernel<const D: usize, const WET: bool>(
         }
         return None;
     }
-    let pr = pair_response::<D, WET>(pc, &d, r2, ri, rj, fl, vrel);
-    if pr.flags != fl {
-        *flag = pr.flags;
-    }
-    let mut force = [0.0; D];
-    if pr.fmag != 0.0 {
-        let s = pr.fmag * pr.inv;
-        for k in 0..D {
-            force[k] = s * d[k];
-        }
-    }
-    Some((pr, force))
-}
-
-/// Pair forces of the Verlet-list entries of one chunk ([`pair_kernel`]): entry `m` is the
-/// pair `(row_of[m], partner[m])`; its force on the row's particle goes to
-/// `pf[m * D..(m + 1) * D]` (zeros when the pair does not interact). A free function of slices
-/// so that the compiler keeps every array in a register (no aliasing through `self`).
-#[allow(clippy::too_many_arguments)]
-pub(super) fn pair_chunk<const D: usize, const WET: bool>(
-    pc: &PairConstants<D>,
-    x: &[f64],
-    v: &[f64],
-    radius: &[f64],
-    row_of: &[u32],
-    partner: &[u32],
-    flags: &mut [u8],
-    pf: &mut [f64],
-) -> PairBooks {
-    let n = radius.len();
-    let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
-    let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
-    let mut b = PairBooks::default();
-    let len = flags.len();
-    let (row_of, partner, pf) = (&row_of[..len], &partner[..len], &mut pf[..len * D]);
-    for m in 0..len {
-        let (i, j) = (row_of[m] as usize, partner[m] as usize);
-        let xi: [f64; D] = std::array::from_fn(|k| xs[k][i]);
-        let xj: [f64; D] = std::array::from_fn(|k| xs[k][j]);
-        let vrel = |k: usize| vsl[k][i] - vsl[k][j];
-        let out = &mut pf[m * D..(m + 1) * D];
-        match pair_kernel::<D, WET>(pc, &xi, &xj, radius[i], radius[j], &mut flags[m], vrel) {
-            Some((pr, force)) => {
-                b.book(&pr);
-                out.copy_from_slice(&force);
-            }
-            None => out.fill(0.0),
-        }
-    }
-    b
-}
-
-/// The response of one pair within reach (Eq. 2.7 and docs/model.md 3.1): force magnitude along the
-/// line of centres, new contact and bond flags, and what the step books. Shared by every pair
-/// loop (the serial loop, the parallel chunks, the spatial domains' cross pairs), so that they
-/// take the same decisions with the same arithmetic; `vrel(k)` is `v_i - v_j` along axis `k`
-/// (velocity array units), `d` the nearest-image `x_i - x_j`.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct PairResponse {
-    /// Force magnitude on `i` along `d / r` (0: no force).
-    pub(crate) fmag: f64,
-    /// `1 / r`.
-    pub(crate) inv: f64,
-    /// The pair's new flags.
-    pub flags: u8,
-    /// `R_i + R_j - r` (booked as the largest overlap when positive).
-    pub overlap: f64,
-    pub onset: bool,
-    pub(crate) formation: bool,
-    pub rupture: bool,
-    /// Whether the damping did work, and that work `(F - F_elastic) xi_dot dt`.
-    pub damped: bool,
-    pub dissipated: f64,
-    /// The bridge energy booked at a formation (`F_B overlap`) or rupture (`F_B s`).
-    pub ledger: f64,
-}
-
-impl PairBooks {
-    /// Books one pair's response in full (the parallel chunks and the domains' cross pairs;
-    /// the serial loop books the sums per chunk of entries itself).
-    pub(super) fn book(&mut self, pr: &PairResponse) {
-        self.book_counts(pr);
-        if pr.damped {
-            self.dissipated += pr.dissipated;
-        }
-        if pr.formation || pr.rupture {
-            self.bridge_ledger += pr.ledger;
-        }
-    }
-
-    /// Books the onset, formation and rupture counts and the largest overlap of a response.
-    pub(super) fn book_counts(&mut self, pr: &PairResponse) {
-        self.onsets += u64::from(pr.onset);
-        self.formations += u64::from(pr.formation);
-        self.ruptures += u64::from(pr.rupture);
-        if pr.overlap > 0.0 {
-            self.max_overlap = self.max_overlap.max(pr.overlap);
-        }
-    }
-}
-
-/// See [`PairResponse`]; `fl` the pair's flags at the last evaluation.
-pub(super) fn pair_response<const D: usize, const WET: bool>(
-    pc: &PairConstants<D>,
-    d: &[f64; D],
-    r2: f64,
-    ri: f64,
-    rj: f64,
-    fl: u8,
-    vrel: impl Fn(usize) -> f64,
-) -> PairResponse {
-    let sig = ri + rj;
     let r = r2.sqrt();
     let inv = 1.0 / r;
     let overlap = sig - r;
     let mut out = PairResponse {
         fmag: 0.0,
-        inv,
         flags: fl,
         overlap,
         onset: false,
@@ -248,7 +140,116 @@ pub(super) fn pair_response<const D: usize, const WET: bool>(
             out.fmag -= pc.bridge_force;
         }
     }
-    out
+    if out.flags != fl {
+        *flag = out.flags;
+    }
+    let mut force = [0.0; D];
+    if out.fmag != 0.0 {
+        let s = out.fmag * inv;
+        for k in 0..D {
+            force[k] = s * d[k];
+        }
+    }
+    Some((out, force))
+}
+
+/// Pair forces of the Verlet-list entries of one chunk ([`pair_kernel`]): entry `m` is the
+/// pair `(row_of[m], partner[m])`; its force on the row's particle goes to
+/// `pf[m * D..(m + 1) * D]` (zeros when the pair does not interact). A free function of slices
+/// so that the compiler keeps every array in a register (no aliasing through `self`).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn pair_chunk<const D: usize, const WET: bool>(
+    pc: &PairConstants<D>,
+    x: &[f64],
+    v: &[f64],
+    radius: &[f64],
+    row_of: &[u32],
+    partner: &[u32],
+    flags: &mut [u8],
+    pf: &mut [f64],
+) -> Books {
+    let n = radius.len();
+    let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
+    let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
+    let mut b = Books::default();
+    let len = flags.len();
+    let (row_of, partner, pf) = (&row_of[..len], &partner[..len], &mut pf[..len * D]);
+    for m in 0..len {
+        let (i, j) = (row_of[m] as usize, partner[m] as usize);
+        let xi: [f64; D] = std::array::from_fn(|k| xs[k][i]);
+        let xj: [f64; D] = std::array::from_fn(|k| xs[k][j]);
+        let vrel = |k: usize| vsl[k][i] - vsl[k][j];
+        let out = &mut pf[m * D..(m + 1) * D];
+        match pair_kernel::<D, WET>(pc, &xi, &xj, radius[i], radius[j], &mut flags[m], vrel) {
+            Some((pr, force)) => {
+                b.book(&pr);
+                out.copy_from_slice(&force);
+            }
+            None => out.fill(0.0),
+        }
+    }
+    b
+}
+
+/// The response of one pair within reach ([`pair_kernel`]): force magnitude along the line of
+/// centres, new contact and bond flags, and what the step books.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PairResponse {
+    /// Force magnitude on `i` along `d / r` (0: no force).
+    pub(crate) fmag: f64,
+    /// The pair's new flags.
+    pub flags: u8,
+    /// `R_i + R_j - r` (booked as the largest overlap when positive).
+    pub overlap: f64,
+    pub onset: bool,
+    pub(crate) formation: bool,
+    pub rupture: bool,
+    /// Whether the damping did work, and that work `(F - F_elastic) xi_dot dt`.
+    pub damped: bool,
+    pub dissipated: f64,
+    /// The bridge energy booked at a formation (`F_B overlap`) or rupture (`F_B s`).
+    pub ledger: f64,
+}
+
+impl Books {
+    /// Adds `b`: its sums, then [`Self::add_counts`].
+    pub(super) fn add(&mut self, b: &Books) {
+        self.dissipated += b.dissipated;
+        self.bridge_ledger += b.bridge_ledger;
+        self.work += b.work;
+        self.add_counts(b);
+    }
+
+    /// Adds the counts and the largest overlap of `b`.
+    pub(super) fn add_counts(&mut self, b: &Books) {
+        self.max_overlap = self.max_overlap.max(b.max_overlap);
+        self.pair_onsets += b.pair_onsets;
+        self.wall_onsets += b.wall_onsets;
+        self.formations += b.formations;
+        self.ruptures += b.ruptures;
+    }
+
+    /// Books one pair's response in full (the parallel chunks and the domains' cross pairs;
+    /// the serial loop books the sums per chunk of entries itself).
+    pub(super) fn book(&mut self, pr: &PairResponse) {
+        self.book_counts(pr);
+        if pr.damped {
+            self.dissipated += pr.dissipated;
+        }
+        if pr.formation || pr.rupture {
+            self.bridge_ledger += pr.ledger;
+        }
+    }
+
+    /// Books the onset, formation and rupture counts and the largest overlap of a response.
+    pub(super) fn book_counts(&mut self, pr: &PairResponse) {
+        self.pair_onsets += u64::from(pr.onset);
+        self.formations += u64::from(pr.formation);
+        self.ruptures += u64::from(pr.rupture);
+        if pr.overlap > 0.0 {
+            self.max_overlap = self.max_overlap.max(pr.overlap);
+        }
+    }
 }
 
 /// The pair loop of the serial strategy and of a domain's inner pairs: [`pair_kernel`] over the
@@ -268,11 +269,11 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     rows: &[u32],
     partner: &[u32],
     flags: &mut [u8],
-) -> PairBooks {
+) -> Books {
     let n = radius.len();
     let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
     let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
-    let mut b = PairBooks::default();
+    let mut b = Books::default();
     // Partial sums of the current chunk of entries.
     let (mut diss, mut ledger, mut boundary) = (0.0, 0.0, ENTRY_CHUNK);
     for &i in rows {
@@ -345,9 +346,9 @@ pub(super) fn cross_forces<const D: usize, const WET: bool>(
     own: &[u32],
     ghost: &[u32],
     flags: &mut [u8],
-) -> PairBooks {
+) -> Books {
     let m = radius.len();
-    let mut b = PairBooks::default();
+    let mut b = Books::default();
     let (own, ghost) = (&own[..flags.len()], &ghost[..flags.len()]);
     for q in 0..flags.len() {
         let (i, g) = (own[q] as usize, ghost[q] as usize);

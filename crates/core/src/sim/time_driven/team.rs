@@ -1,34 +1,28 @@
-//! A team of threads that runs many time steps in one parallel region (SPMD): one closure on
-//! every thread of the current rayon pool ([`rayon::broadcast`], so no thread beyond the pool
-//! the job was given: the `sim::threads` core share is respected; at most as many members as
-//! the caller asks for), the members synchronised once per step by a spin barrier
-//! ([`Member::wait`]) instead of handing work over through rayon twice per step. Used by the
-//! spatial domains of the Gear step (`domains.rs`).
+//! A team of threads that runs many time steps in one parallel region (SPMD) for the spatial
+//! domains (`domains.rs`): one closure on every thread of the current rayon pool
+//! ([`rayon::broadcast`]: no thread beyond the pool, so the `sim::threads` core share is
+//! respected), the members synchronised once per step by a spin barrier ([`Member::wait`])
+//! instead of handing work over through rayon twice per step.
 //!
 //! - **Admission** (the door): a pool thread joins when its copy of the closure starts; the
-//!   door closes when every thread of the pool has joined or after [`DOOR_WAIT`] (then the
-//!   members that joined do the work of the others). A pool thread that arrives after the
-//!   door closed returns at once. So two regions started on one pool at the same time (tests
-//!   that share the process pool) never wait for each other's threads: each runs on those it
-//!   got, at worst on one.
-//! - **Barrier**: an atomic arrival counter and a generation number; a waiting member spins
-//!   ([`std::hint::spin_loop`]) up to [`SPIN_TIME`], then yields its core
-//!   ([`std::thread::yield_now`]) at every round, so an oversubscribed machine does not
-//!   livelock.
+//!   door closes when every thread of the pool has joined or after [`DOOR_WAIT`] (the members
+//!   that joined then do the others' work); a thread arriving later returns at once. So two
+//!   regions started on one pool at once never wait for each other's threads.
+//! - **Barrier**: an atomic arrival counter and a generation number; a waiting member spins up
+//!   to [`SPIN_TIME`], then yields its core at every round, so an oversubscribed machine does
+//!   not livelock.
 //! - **Panics**: a member that panics sets the team's poison flag as it unwinds; every member
 //!   waiting at the barrier or the door sees it and panics too, and `rayon::broadcast`
-//!   re-raises a panic on the caller. No member waits for a dead one.
+//!   re-raises the panic on the caller.
 //!
-//! The work of a member must not depend on how many members there are for its numbers: the
-//! engine gives each member fixed domains (one member runs both in turn) and combines their
-//! results in domain order.
+//! A member's numbers must not depend on the number of members: the engine gives each member
+//! fixed domains and combines their results in domain order.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-/// How long a waiting member spins before it starts yielding its core (on a quiet machine a
-/// barrier of the time-driven step takes well under a microsecond; longer means a member is
-/// not running).
+/// How long a waiting member spins before it yields its core (a barrier takes well under a
+/// microsecond on a quiet machine; longer means a member is not running).
 pub(super) const SPIN_TIME: Duration = Duration::from_micros(50);
 
 /// How long the first members wait at the door for the other threads of the pool to start.
@@ -76,6 +70,7 @@ impl Drop for PoisonOnUnwind<'_> {
 }
 
 /// The state of one wait: spin rounds so far, and when spinning began (read every 64 rounds).
+#[derive(Default)]
 struct Pause {
     rounds: u32,
     since: Option<Instant>,
@@ -83,14 +78,6 @@ struct Pause {
 }
 
 impl Pause {
-    fn new() -> Self {
-        Self {
-            rounds: 0,
-            since: None,
-            yielding: false,
-        }
-    }
-
     /// Waits a little: spins for up to [`SPIN_TIME`], then yields the core at every call.
     /// Panics if the team is poisoned.
     #[inline]
@@ -126,7 +113,7 @@ impl Member<'_> {
             team.generation.store(generation + 1, Ordering::Release);
             return;
         }
-        let mut pause = Pause::new();
+        let mut pause = Pause::default();
         while team.generation.load(Ordering::Acquire) == generation {
             pause.pause(team);
         }
@@ -164,7 +151,7 @@ impl Team {
             self.joined.fetch_or(CLOSED, Ordering::AcqRel);
         }
         let since = Instant::now();
-        let mut pause = Pause::new();
+        let mut pause = Pause::default();
         let members = loop {
             let c = self.joined.load(Ordering::Acquire);
             if c & CLOSED != 0 {
@@ -195,11 +182,9 @@ pub(super) fn solo<R>(work: impl FnOnce(Member<'_>) -> R) -> R {
     })
 }
 
-/// Runs `work` once per member of a team of the current pool's threads, at most `max_members`
-/// of them (see the module doc), the door open for `door` ([`DOOR_WAIT`]; tests use a long one,
-/// so that every thread is admitted), and returns the members' results in slot order (at least
-/// one: the calling thread is always admitted or another thread is). A panic of any member is
-/// re-raised here.
+/// Runs `work` once per member of a team of at most `max_members` of the current pool's threads,
+/// the door open for `door` ([`DOOR_WAIT`]; tests use a long one), and returns the members'
+/// results in slot order (at least one). A member's panic is re-raised here.
 pub(crate) fn run_with_door<R: Send>(
     max_members: usize,
     door: Duration,

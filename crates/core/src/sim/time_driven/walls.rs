@@ -1,17 +1,14 @@
 //! The Hertz walls of the time-driven engine (docs/model.md 4.1; Eq. 2.7 with `R_eff = R_i`): the
 //! force of the lower and upper wall of one non-periodic axis on a run of particles, with the
-//! contact onsets, the damping's dissipation and the drive's work. One function shared by the
-//! three execution strategies of the engine (`engine/serial.rs`, `engine/rayon_split.rs`,
-//! `domains.rs`).
+//! contact onsets, the damping's dissipation and the drive's work, for every execution strategy.
 //!
 //! Most particles touch no wall at a given step, so the pass first screens blocks of
-//! [`SCREEN_BLOCK`] particles with branch-free compares of the centres against a band from which
-//! no particle can reach a wall (the compiler turns them into packed compares), and runs the
-//! per-particle code only on a block where some centre is outside the band (or NaN) or some
-//! particle touched a wall at the last evaluation (its contact bit must be cleared). The screen
-//! is conservative (a block it passes is apart by the per-particle test too), so the forces and
-//! books are the same bits as a per-particle pass.
+//! [`SCREEN_BLOCK`] particles with branch-free (packed) compares of the centres against a band
+//! from which no particle can reach a wall, and runs the per-particle code only on a block with
+//! a centre outside the band (or NaN) or a contact bit to clear. The screen is conservative, so
+//! the forces and books are the bits of a per-particle pass.
 
+use super::pair_kernel::Books;
 use crate::physics::hertz;
 
 /// Bits of the per-coordinate wall-contact byte: touching the lower, the upper wall of the
@@ -74,20 +71,6 @@ impl WallAxis {
     }
 }
 
-/// What the walls book; the sums run on in the order of the particles (the engine keeps one
-/// per chunk of coordinates).
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct WallBooks {
-    /// Work of the damping part of Eq. 2.7, `sum F_damp xi_dot dt`.
-    pub dissipated: f64,
-    /// Work of the moving walls, `sum F_wall v_wall dt`.
-    pub work: f64,
-    /// New wall contacts.
-    pub onsets: u64,
-    /// Largest wall overlap.
-    pub max_overlap: f64,
-}
-
 /// Adds the wall forces on particles with positions `x` (one axis), velocities `v * w.vs`, radii
 /// `radius` and wall prefactors `wall_kr` (`k sqrt(R_i)`) to `f`, updates their contact bits
 /// `touching` and books into `b`. All slices have the length of `x`.
@@ -100,7 +83,7 @@ pub(super) fn wall_forces(
     wall_kr: &[f64],
     touching: &mut [u8],
     f: &mut [f64],
-    b: &mut WallBooks,
+    b: &mut Books,
 ) {
     let m = x.len();
     let (v, radius, wall_kr) = (&v[..m], &radius[..m], &wall_kr[..m]);
@@ -129,7 +112,7 @@ pub(super) fn wall_forces(
             };
             if touching[i] & bit == 0 {
                 touching[i] |= bit;
-                b.onsets += 1;
+                b.wall_onsets += 1;
             }
             b.max_overlap = b.max_overlap.max(ov);
             // Overlap rate: lower wall -(v - v_w), upper wall +(v - v_w).
@@ -192,7 +175,7 @@ mod tests {
         }
         touching0[37] = WALL_LO | WALL_HI;
         let reference = |x: &[f64]| {
-            let (mut t, mut f, mut b) = (touching0.clone(), vec![-1.0; m], WallBooks::default());
+            let (mut t, mut f, mut b) = (touching0.clone(), vec![-1.0; m], Books::default());
             for i in 0..m {
                 // One particle at a time: a block of one is never screened.
                 let s = i..i + 1;
@@ -210,17 +193,17 @@ mod tests {
             (t, f, b)
         };
         let (t_ref, f_ref, b_ref) = reference(&x);
-        let (mut t, mut f, mut b) = (touching0.clone(), vec![-1.0; m], WallBooks::default());
+        let (mut t, mut f, mut b) = (touching0.clone(), vec![-1.0; m], Books::default());
         wall_forces(&w, &x, &v, &radius, &wall_kr, &mut t, &mut f, &mut b);
         assert_eq!(t, t_ref);
         let bits = |f: &[f64]| f.iter().map(|a| a.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&f), bits(&f_ref));
         assert_eq!(b.dissipated.to_bits(), b_ref.dissipated.to_bits());
         assert_eq!(b.work.to_bits(), b_ref.work.to_bits());
-        assert_eq!(b.onsets, b_ref.onsets);
+        assert_eq!(b.wall_onsets, b_ref.wall_onsets);
         assert_eq!(b.max_overlap.to_bits(), b_ref.max_overlap.to_bits());
         // The case mix is exercised: onsets at both walls, cleared bits, quiet blocks.
-        assert!(b.onsets >= 10 && b.dissipated != 0.0 && b.work != 0.0);
+        assert!(b.wall_onsets >= 10 && b.dissipated != 0.0 && b.work != 0.0);
         assert!(t.iter().zip(&touching0).any(|(a, b)| *a == 0 && *b != 0));
         assert!(
             (0..m / SCREEN_BLOCK).any(|c| {

@@ -105,6 +105,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         let mut engine = Self {
             s,
             execution: Execution::default(),
+            serial: Serial::default(),
             rayon: RayonSplit::default(),
             domains: Domains::default(),
         };
@@ -112,18 +113,26 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         if let Some(st) = start {
             engine.s.continue_from(st);
         }
-        // Initial accelerations; the bookkeeping of this evaluation is not a step (dt = 0).
-        let t0 = engine.time();
-        engine.forces_then(t0, 1.0, 0.0, Then::Nothing);
+        // The velocities are scaled for Gear after this evaluation.
+        engine.initial_forces(1.0);
         if engine.s.p.integrator == IntegratorKind::Gear5 {
             let dt = engine.s.p.dt;
-            let s = &mut engine.s;
-            for e in 0..D * n {
-                s.r[1][e] *= dt;
+            engine.s.r[1].iter_mut().for_each(|v| *v *= dt);
+        }
+        engine
+    }
+
+    /// The accelerations of the current state (velocity array times `vs`), booked as no step
+    /// (`dt = 0`), and Gear's `r_2` from them.
+    fn initial_forces(&mut self, vs: f64) {
+        let t = self.time();
+        self.forces_then(t, vs, 0.0, Then::Nothing);
+        if self.s.p.integrator == IntegratorKind::Gear5 {
+            let (dt, s) = (self.s.p.dt, &mut self.s);
+            for e in 0..D * s.n {
                 s.r[2][e] = 0.5 * dt * dt * s.acc[e];
             }
         }
-        engine
     }
 
     /// Overwrites position and velocity of particle `i` (tests and set-ups); the higher Gear
@@ -157,14 +166,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         s.list.build(&s.r[0], &s.radius);
         s.moved_bound = 0.0;
         self.domains.forget();
-        let t = self.time();
-        self.forces_then(t, self.s.velocity_scale(), 0.0, Then::Nothing);
-        if self.s.p.integrator == IntegratorKind::Gear5 {
-            let s = &mut self.s;
-            for e in 0..D * n {
-                s.r[2][e] = 0.5 * dt * dt * s.acc[e];
-            }
-        }
+        self.initial_forces(self.s.velocity_scale());
     }
 }
 
@@ -191,12 +193,8 @@ impl<const D: usize> Params<D> {
     /// The parameters of a validated scene whose particles have radii `radius`.
     fn of_scene(scene: &Scene, radius: &[f64]) -> Self {
         let boundaries = scene.boundaries();
-        let mut size = [0.0; D];
-        let mut periodic = [false; D];
-        for k in 0..D {
-            size[k] = scene.container.size[k];
-            periodic[k] = boundaries[k] == Boundary::Periodic;
-        }
+        let size = std::array::from_fn(|k| scene.container.size[k]);
+        let periodic = std::array::from_fn(|k| boundaries[k] == Boundary::Periodic);
         let (damping, wall_damping) = crate::sim::time_driven::damping::contact_damping(scene);
         let mut gear = GEAR5;
         if damping > 0.0 || wall_damping > 0.0 {

@@ -6,25 +6,22 @@ use super::*;
 use crate::sim::time_driven::domains::{
     DOMAINS, Decomposition, EngineArrays, RegionBooks, RegionEnd, StepConstants, TeamBuild,
 };
-use crate::sim::time_driven::integrator::GEAR_FLUSH_EVERY;
 use crate::sim::time_driven::team;
 use stepping::wall_axes;
 
 /// The domain strategy's state: the decomposition in use, if any (a clone carries it: its
-/// partition was made at an earlier build and sets the round-off of the steps that follow),
-/// and what it counts.
+/// partition sets the round-off of the steps that follow), and what it counts.
 #[derive(Debug, Clone)]
 pub(super) struct Domains<const D: usize> {
     pub(super) decomposition: Option<Box<Decomposition<D>>>,
-    /// Steps so far that ran on a team of more than one thread (the others ran on one thread,
-    /// which gives the same numbers).
+    /// Steps so far that ran on a team of more than one thread.
     pub(super) team_steps: u64,
     /// Partitions made.
     pub(super) partitions: u64,
     /// Regions run (a region goes on through list builds).
     pub(super) regions: u64,
     /// How long a region waits for the pool's threads to join its team ([`team::DOOR_WAIT`];
-    /// the domain tests lengthen it so that a loaded machine still runs two members).
+    /// the domain tests lengthen it).
     pub(super) door: std::time::Duration,
 }
 
@@ -100,10 +97,10 @@ impl<const D: usize> Domains<D> {
     }
 
     /// The decomposition for a region starting at the engine's step, after the list check of
-    /// that step: the last region's, if it holds this step and its partition is still wanted,
-    /// else a new one loaded from the engine's arrays. Also whether the domains keep their own
-    /// list checks (the last region's domains did the check of this step already: counting
-    /// it again would move the exact tests with the region ends).
+    /// that step: the last region's if it holds this step and its partition is still wanted,
+    /// else a new one loaded from the engine's arrays; and whether the domains keep their own
+    /// list checks (their last step did this step's check: counting it again would move the
+    /// exact tests with the region ends).
     fn decomposition_for<const GRAV: bool, const WET: bool, B: BodyForce<D>>(
         &mut self,
         s: &mut State<D, GRAV, WET, B>,
@@ -159,13 +156,10 @@ fn run_region<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>
         half_skin: 0.5 * s.list.skin(),
     };
     let walls_at = |step: u64| wall_axes(p, step as f64 * dt, 1.0 / dt, dt);
-    let flush_at = |step: u64| step.is_multiple_of(GEAR_FLUSH_EVERY);
     // The team rebuilds the list itself (its threads stay awake) and goes on.
     let build = TeamBuild::new(&mut s.list, &mut s.r[0], &s.radius);
     let member = |slot: usize, members: usize, wait: &dyn Fn()| {
-        dec.run_member::<WET>(
-            &c, &walls_at, &flush_at, &build, slot, members, first, target, wait,
-        )
+        dec.run_member::<WET>(&c, &walls_at, &build, slot, members, first, target, wait)
     };
     let ((done, end), members) = if rayon::current_num_threads() > 1 {
         let out = team::run_with_door(DOMAINS, door, |m| {
@@ -210,10 +204,6 @@ fn add_books<const D: usize, const GRAV: bool, const WET: bool, B>(
         }
     }
     for (b, _) in books {
-        s.max_overlap = s.max_overlap.max(b.max_overlap);
-        s.counts.pair_collisions += b.pair_onsets;
-        s.counts.wall_collisions += b.wall_onsets;
-        s.counts.bridge_formations += b.formations;
-        s.counts.bridge_ruptures += b.ruptures;
+        s.add_counts(b);
     }
 }

@@ -1,32 +1,26 @@
 //! The time-driven engine: soft disks (`D = 2`) and spheres (`D = 3`) with damped Hertz contacts
-//! (docs/model.md 2.2, Eq. 2.7), the minimal capillary model (docs/model.md 3.1), gravity, periodic lateral
-//! axes, static or sinusoidally shaken Hertz floor and lid (docs/model.md 4.1) and an optional body
-//! force per particle ([`BodyForce`]).
-//!
-//! Effects are compile-time parameters, chosen once at scene start: `GRAV` (gravity), `WET`
-//! (bridges and their bookkeeping) and the body force type `B` ([`NoBodyForce`] compiles to
+//! (docs/model.md 2.2, Eq. 2.7), the minimal capillary model (docs/model.md 3.1), gravity, periodic
+//! lateral axes, static or sinusoidally shaken Hertz floor and lid (docs/model.md 4.1) and an
+//! optional body force per particle ([`BodyForce`]). Effects are compile-time parameters: `GRAV`,
+//! `WET` (bridges and their bookkeeping) and the body force type `B` ([`NoBodyForce`] compiles to
 //! nothing).
 //!
-//! State: structure of arrays, every coordinate axis-major (`x[k * n + i]`). With the Gear
-//! integrator `r[k]` holds the scaled `k`-th derivative (`integrator.rs`); with velocity Verlet
-//! `r[0]` is the position and `r[1]` the velocity. Between Gear steps `r` holds the prediction
-//! for the next step; the current (corrected) position and velocity are recovered on demand by
-//! inverting the predictor (round-off equal to the corrector's output), not stored each step.
-//! Forces come from the Verlet list of `neighbours.rs` with Newton's third law (each pair once),
-//! visiting only non-empty rows, every pair through the one kernel of `pair_kernel.rs`. The
-//! list's displacement test runs only when a bound summed from the integrator loops' largest
-//! moves says it might fire (`State::update_list`); the builds happen at the same steps as with
-//! a test every step (up to the rebuilds a test every step triggers when a particle crosses a
-//! periodic face), and the trajectories are bit-identical (a build changes only which
-//! non-interacting pairs are listed). Nothing is allocated inside a step once the neighbour
-//! list has reached its working size.
+//! State: structure of arrays, axis-major (`x[k * n + i]`). With Gear `r[k]` holds the scaled
+//! `k`-th derivative (`integrator.rs`), with velocity Verlet `r[0]` is the position and `r[1]` the
+//! velocity. Between Gear steps `r` holds the prediction for the next step; the current position
+//! and velocity are recovered on demand by inverting the predictor. Forces come from the Verlet
+//! list (`neighbours.rs`), each pair once, through the one kernel of `pair_kernel.rs`. The list's
+//! displacement test runs only when a bound summed from the integrator loops' largest moves says
+//! it might fire; the builds, and so the trajectories, are those of a test every step (up to the
+//! rebuilds such a test triggers when a particle crosses a periodic face; a build changes only
+//! which non-interacting pairs are listed). Nothing is allocated inside a step once the list has
+//! reached its working size.
 //!
-//! Layout: [`TimeEngine`] is the state every strategy steps (`State`: parameters, arrays,
-//! list, books) and the three execution strategies behind the `Strategy` trait
-//! (`stepping.rs`): `Serial` (`serial.rs`), `RayonSplit` (`rayon_split.rs`) and `Domains`
-//! (`domain_step.rs`, on the decomposition of `domains.rs`), chosen per step from the
-//! [`Execution`] given at construction. Construction and state I/O are in `build.rs`, what the
-//! engine reports in `measures.rs`.
+//! Layout: [`TimeEngine`] is the state every strategy steps (`State`) and the three execution
+//! strategies behind the `Strategy` trait (`stepping.rs`): `Serial` (`serial.rs`), `RayonSplit`
+//! (`rayon_split.rs`) and `Domains` (`domain_step.rs`, on `domains.rs`), chosen per step from the
+//! [`Execution`] given at construction; construction and state I/O in `build.rs`, reports in
+//! `measures.rs`.
 //!
 //! Energy bookkeeping ([`EnergyLedger`], same fields as the event engine):
 //! - `potential`: gravity `m g z`, Hertz elastic energy of pairs and walls (`(2/5) k sqrt(R_eff)
@@ -35,8 +29,8 @@
 //! - `dissipated_restitution`: work of the damping part of Eq. 2.7, `sum F_damp xi_dot dt`;
 //! - `dissipated_ruptures`: the bridge energy `F_B s` removed at each rupture (about `E_cb`),
 //!   minus the (small, negative) `F_B s` a bridge starts with when it forms at overlap `-s`;
-//! - `work_by_drive`: work of the moving walls on the particles, `sum F_wall v_wall dt`, plus the
-//!   work of the body force, `sum F . v dt`.
+//! - `work_by_drive`: work of the moving walls, `sum F_wall v_wall dt`, and of the body force,
+//!   `sum F . v dt`.
 //!
 //! The sums over `dt` are rectangle rules at the force evaluations, so the ledger closes to the
 //! integrator's accuracy (exactly in the limit `dt -> 0`), not to round-off as in the event engine.
@@ -44,7 +38,7 @@
 use super::domains::DOMAIN_MIN_PARTICLES;
 use super::integrator::gear_unpredict;
 use super::neighbours::{BOND, NeighbourList};
-use super::pair_kernel::PairConstants;
+use super::pair_kernel::{Books, PairConstants};
 use crate::physics::hertz;
 use crate::scene::IntegratorKind;
 use crate::sim::books::{EnergyLedger, EventCounts};
@@ -85,31 +79,29 @@ impl<const D: usize> BodyForce<D> for NoBodyForce {
     }
 }
 
-/// Coordinates per chunk of the per-particle phase of a step (and of Verlet's drift): the
-/// unit of work of a thread, and the unit over which the booked sums are taken before they are
-/// added up in chunk order (fixed, so the numbers do not depend on the number of threads).
+/// Coordinates per chunk of the per-particle phase (and of Verlet's drift): a thread's unit of
+/// work and of the booked sums, added in chunk order (fixed: the numbers do not depend on the
+/// number of threads).
 pub(crate) const PARTICLE_CHUNK: usize = 128;
 
-/// Below this many particles (the default [`Execution::split_from`]) the
-/// loops of a step run on the calling thread (same chunks, same numbers): a parallel loop costs
-/// a few microseconds of hand-over per step. On a quiet 2-core machine two threads made the
-/// N = 1200 bench 0.69x as fast, 4 800 disks about even, 19 200 at most 1.37x
-/// (docs/performance-history.md, "Quiet-machine figures after the third round").
+/// The default [`Execution::split_from`]: a parallel loop costs a few microseconds of hand-over
+/// per step. On a quiet 2-core machine two threads made the N = 1200 bench 0.69x as fast, 4 800
+/// disks about even, 19 200 at most 1.37x (docs/performance-history.md, "Quiet-machine figures
+/// after the third round").
 pub(crate) const PARALLEL_MIN_PARTICLES: usize = 16_384;
 
 /// Which execution strategy runs which step, fixed at construction
-/// ([`TimeEngine::with_execution`]). The numbers never depend on the thread count; the
-/// spatial domains sum the forces on a particle in another order than the other two
-/// strategies (a round-off change, `domains.rs`), so `domains_from` is part of a run's
-/// definition and `split_from` is not.
+/// ([`TimeEngine::with_execution`]). The numbers never depend on the thread count; the domains
+/// sum the forces on a particle in another order than the other two strategies (round-off,
+/// `domains.rs`), so `domains_from` is part of a run's definition and `split_from` is not.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Execution {
     /// Gear steps of a scene without a body force run on the spatial domains from this many
     /// particles on ([`DOMAIN_MIN_PARTICLES`] by default; 0: always, `usize::MAX`: never).
     pub domains_from: usize,
-    /// The other steps are split over the threads of the current rayon pool from this many
-    /// particles on ([`PARALLEL_MIN_PARTICLES`] by default), on a pool of more than one thread;
-    /// below, they run on the calling thread. The numbers are the same either way.
+    /// The other steps are split over the threads of the current rayon pool (of more than one
+    /// thread) from this many particles on ([`PARALLEL_MIN_PARTICLES`] by default), else run on
+    /// the calling thread. The numbers are the same either way.
     pub split_from: usize,
 }
 
@@ -159,16 +151,14 @@ struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
     steps: u64,
     /// Scaled derivatives (Gear) or position, velocity (Verlet); axis-major.
     r: [Vec<f64>; 6],
-    /// Gear: whether `r` holds the prediction for the next step (then the corrected position
-    /// and velocity of the current step are recovered on demand by inverting the predictor,
-    /// [`gear_unpredict`], instead of being stored every step).
+    /// Gear: whether `r` holds the prediction for the next step (the current state is then
+    /// recovered by [`gear_unpredict`]).
     predicted: bool,
     /// Acceleration of the last force evaluation, axis-major; or, when `acc_is_start`, the
     /// value every coordinate's force starts from ([`State::force_start`]).
     acc: Vec<f64>,
-    /// Whether `acc` holds the force start values, written by the last integrator pass (Gear's
-    /// corrector-predictor, Verlet's drift) as it read the accelerations: the next force
-    /// evaluation then needs no pass of its own to initialise the forces.
+    /// Whether `acc` holds the force start values, written by the last integrator pass as it
+    /// read the accelerations (the next force evaluation then needs no pass to initialise it).
     acc_is_start: bool,
     radius: Vec<f64>,
     /// `k sqrt(R_i)`: the wall prefactor of each particle (`R_eff = R_i`).
@@ -177,9 +167,8 @@ struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
     /// that axis.
     wall_contact: Vec<u8>,
     list: NeighbourList<D>,
-    /// Upper bound on the displacement of every particle since the last neighbour-list build
-    /// (or exact check): the sum over steps of `sqrt(sum_k m_k^2)`, `m_k` the largest move along
-    /// axis `k` in that step (returned by the integrator loops). See [`State::update_list`].
+    /// Upper bound on every particle's displacement since the last list build or exact check
+    /// (`neighbours::needs_rebuild`).
     moved_bound: f64,
     /// Steps since the last exact displacement check.
     since_check: u32,
@@ -196,7 +185,8 @@ struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
 pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoBodyForce> {
     s: State<D, GRAV, WET, B>,
     execution: Execution,
-    /// The rayon strategy's reused buffers.
+    /// The serial and the rayon strategy's reused buffers.
+    serial: Serial<D>,
     rayon: RayonSplit<D>,
     /// The domain strategy's decomposition and counters.
     domains: Domains<D>,
@@ -205,10 +195,8 @@ pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoB
 impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     TimeEngine<D, GRAV, WET, B>
 {
-    /// Position and scaled velocity (`r_0`, `r_1`) of the current step at flat index `e`. For
-    /// Gear between steps `r` holds the prediction for the next step, and the corrected values
-    /// are recovered by [`gear_unpredict`] (equal to the corrector's output up to round-off),
-    /// the position wrapped into the box on periodic axes.
+    /// Position and scaled velocity (`r_0`, `r_1`) of the current step at flat index `e` (for
+    /// a predicted Gear state by [`gear_unpredict`], wrapped into the box on periodic axes).
     fn now_at(&self, e: usize) -> (f64, f64) {
         let s = &self.s;
         if !s.predicted {
@@ -322,6 +310,15 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B> State<D, GRAV, WET, B
             IntegratorKind::Gear5 => 1.0 / self.p.dt,
             IntegratorKind::Verlet => 1.0,
         }
+    }
+
+    /// Adds the counts and the largest overlap of `b`.
+    fn add_counts(&mut self, b: &Books) {
+        self.max_overlap = self.max_overlap.max(b.max_overlap);
+        self.counts.pair_collisions += b.pair_onsets;
+        self.counts.wall_collisions += b.wall_onsets;
+        self.counts.bridge_formations += b.formations;
+        self.counts.bridge_ruptures += b.ruptures;
     }
 
     /// The force every coordinate starts from: the weight `-m g` on the last axis (with

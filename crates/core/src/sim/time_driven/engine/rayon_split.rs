@@ -10,17 +10,17 @@
 //!    particle's own row), the walls, the body force, `1/m`, then the integrator pass
 //!    ([`particle_chunk`]).
 //!
-//! The accelerations are the same bits as the serial strategy's single loop that scatters each
-//! pair force to both partners; the booked sums (dissipation, drive work, bridge energy) are
-//! summed per chunk in both.
+//! Phases 2 and 3 ([`ParticlePhase`]) are the serial strategy's too, run on the calling thread
+//! after its pair loop (the integrator pass then on whole axes); its accelerations are the same
+//! bits as the gather's.
 
 use super::stepping::{Then, for_each_axis_segment, max_ignoring_nan, wall_axes};
 use super::*;
 use crate::sim::time_driven::integrator::{
     GEAR_FLUSH_EVERY, gear_correct_predict_axis, verlet_kick,
 };
-use crate::sim::time_driven::pair_kernel::{ENTRY_CHUNK, PairBooks, PairConstants, pair_chunk};
-use crate::sim::time_driven::walls::{WallAxis, WallBooks, wall_forces};
+use crate::sim::time_driven::pair_kernel::{Books, ENTRY_CHUNK, pair_chunk};
+use crate::sim::time_driven::walls::{WallAxis, wall_forces};
 use rayon::prelude::*;
 
 /// The rayon strategy's buffers, reused from step to step (per list entry or per chunk).
@@ -28,11 +28,17 @@ use rayon::prelude::*;
 pub(super) struct RayonSplit<const D: usize> {
     /// Pair force of each Verlet-list entry on its row's particle, `D` values per entry.
     pair_f: Vec<f64>,
+    pair_books: Vec<Books>,
+    phase: ParticlePhase<D>,
+}
+
+/// The buffers of phases 2 and 3, which the serial strategy runs too (on the calling thread).
+#[derive(Debug, Clone, Default)]
+pub(super) struct ParticlePhase<const D: usize> {
     /// Body force per particle, particle-major (empty without one).
     body_f: Vec<f64>,
-    pair_books: Vec<PairBooks>,
-    chunk_books: Vec<ChunkBooks<D>>,
     body_work: Vec<f64>,
+    chunk_books: Vec<ChunkBooks<D>>,
 }
 
 impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> Strategy<D, GRAV, WET, B>
@@ -57,50 +63,6 @@ impl<const D: usize> RayonSplit<D> {
     ) -> [f64; D] {
         s.list.ensure_transposed();
         let pc = s.p.pair_constants(vs, dt);
-        self.pairs::<GRAV, WET, B>(s, &pc);
-        let mut diss = 0.0;
-        let mut ledger = 0.0;
-        let mut max_ov = s.max_overlap;
-        for b in &self.pair_books {
-            diss += b.dissipated;
-            ledger += b.bridge_ledger;
-            max_ov = max_ov.max(b.max_overlap);
-            s.counts.pair_collisions += b.onsets;
-            s.counts.bridge_formations += b.formations;
-            s.counts.bridge_ruptures += b.ruptures;
-        }
-        s.dissipated_bridges += ledger;
-        self.body_forces(s, t, vs, dt);
-        // The Gear pass leaves the start values for the next evaluation.
-        s.acc_is_start = then == Then::Gear;
-        self.particles(s, wall_axes(&s.p, t, vs, dt), dt, then);
-        let mut work = 0.0;
-        let mut moved = [0.0; D];
-        for b in &self.chunk_books {
-            diss += b.walls.dissipated;
-            work += b.walls.work;
-            max_ov = max_ov.max(b.walls.max_overlap);
-            s.counts.wall_collisions += b.walls.onsets;
-            for k in 0..D {
-                moved[k] = max_ignoring_nan(moved[k], b.moved[k]);
-            }
-        }
-        for w in &self.body_work {
-            work += w;
-        }
-        s.dissipated_damping += diss;
-        s.work_by_drive += work;
-        s.max_overlap = max_ov;
-        moved
-    }
-
-    /// Phase 1: the pair force of every list entry into `pair_f`, the books per chunk into
-    /// `pair_books`.
-    fn pairs<const GRAV: bool, const WET: bool, B>(
-        &mut self,
-        s: &mut State<D, GRAV, WET, B>,
-        pc: &PairConstants<D>,
-    ) {
         self.pair_f.resize(D * s.list.partner.len(), 0.0);
         let (x, v, radius) = (&s.r[0], &s.r[1], &s.radius);
         let (row_of, partner) = (&s.list.row_of, &s.list.partner);
@@ -112,9 +74,67 @@ impl<const D: usize> RayonSplit<D> {
             .with_min_len(1)
             .map(|(c, (flags, pf))| {
                 let q0 = c * ENTRY_CHUNK;
-                pair_chunk::<D, WET>(pc, x, v, radius, &row_of[q0..], &partner[q0..], flags, pf)
+                pair_chunk::<D, WET>(&pc, x, v, radius, &row_of[q0..], &partner[q0..], flags, pf)
             })
             .collect_into_vec(&mut self.pair_books);
+        let pair_f = Some(&self.pair_f[..]);
+        self.phase.run(s, pair_f, &self.pair_books, t, vs, dt, then)
+    }
+}
+
+impl<const D: usize> ParticlePhase<D> {
+    /// Phases 2 and 3 after the pair phase, on the pool's threads where `pair_f` (phase 1's
+    /// forces, gathered per particle) is given, else on the calling thread (the serial
+    /// strategy: the pair forces are in `acc`, over the force start values). Books the pair
+    /// loop's `pair_books` (in chunk order), then the walls and the body force; returns the
+    /// largest move per axis of the Gear pass.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn run<const GRAV: bool, const WET: bool, B: BodyForce<D>>(
+        &mut self,
+        s: &mut State<D, GRAV, WET, B>,
+        pair_f: Option<&[f64]>,
+        pair_books: &[Books],
+        t: f64,
+        vs: f64,
+        dt: f64,
+        then: Then,
+    ) -> [f64; D] {
+        let min_len = if pair_f.is_some() { 1 } else { usize::MAX };
+        let mut total = Books::default();
+        for b in pair_books {
+            total.add(b);
+        }
+        self.body_forces(s, t, vs, dt, min_len);
+        // The Gear pass leaves the start values for the next evaluation.
+        s.acc_is_start = then == Then::Gear;
+        let walls = wall_axes(&s.p, t, vs, dt);
+        // On the calling thread the integrator pass runs on whole axes afterwards (the same
+        // bits; a call per chunk costs the serial step about a tenth at N = 1200).
+        let chunk_then = if pair_f.is_some() {
+            then
+        } else {
+            Then::Nothing
+        };
+        self.particles(s, pair_f, walls, dt, chunk_then, min_len);
+        let mut moved = if pair_f.is_some() {
+            [0.0; D]
+        } else {
+            s.integrate_axes(then, dt)
+        };
+        for b in &self.chunk_books {
+            total.add(&b.walls);
+            for k in 0..D {
+                moved[k] = max_ignoring_nan(moved[k], b.moved[k]);
+            }
+        }
+        for w in &self.body_work {
+            total.work += w;
+        }
+        s.dissipated_damping += total.dissipated;
+        s.dissipated_bridges += total.bridge_ledger;
+        s.work_by_drive += total.work;
+        s.add_counts(&total);
+        moved
     }
 
     /// Phase 2: the body force per particle (all axes at once, particle-major) into `body_f`,
@@ -125,6 +145,7 @@ impl<const D: usize> RayonSplit<D> {
         t: f64,
         vs: f64,
         dt: f64,
+        min_len: usize,
     ) {
         self.body_work.clear();
         if !B::ACTIVE {
@@ -136,7 +157,7 @@ impl<const D: usize> RayonSplit<D> {
         self.body_f
             .par_chunks_mut(PARTICLE_CHUNK * D)
             .enumerate()
-            .with_min_len(1)
+            .with_min_len(min_len)
             .map(|(c, bf)| {
                 let i0 = c * PARTICLE_CHUNK;
                 let mut work = 0.0;
@@ -159,31 +180,24 @@ impl<const D: usize> RayonSplit<D> {
     fn particles<const GRAV: bool, const WET: bool, B: BodyForce<D>>(
         &mut self,
         s: &mut State<D, GRAV, WET, B>,
+        pair_f: Option<&[f64]>,
         walls: [WallAxis; D],
         dt: f64,
         then: Then,
+        min_len: usize,
     ) {
-        let p = &s.p;
         let cx = ChunkContext::<D> {
             n: s.n,
-            pf: &self.pair_f,
-            start: &s.list.start,
-            row_of: &s.list.row_of,
-            partner: &s.list.partner,
-            in_start: &s.list.in_start,
-            in_entry: &s.list.in_entry,
+            pf: pair_f,
+            list: &s.list,
             radius: &s.radius,
             wall_kr: &s.wall_kr,
             body_f: if B::ACTIVE { &self.body_f } else { &[] },
             init: s.force_start(),
-            periodic: p.periodic,
-            size: p.size,
+            p: &s.p,
             walls,
-            inv_mass: (p.mass != 1.0).then(|| 1.0 / p.mass),
             dt,
             then,
-            gear: p.gear,
-            half_dt2: 0.5 * p.dt * p.dt,
             flush: s.steps.is_multiple_of(GEAR_FLUSH_EVERY),
         };
         let [r0, r1, r2, r3, r4, r5] = &mut s.r;
@@ -199,7 +213,7 @@ impl<const D: usize> RayonSplit<D> {
         )
             .into_par_iter()
             .enumerate()
-            .with_min_len(1)
+            .with_min_len(min_len)
             .map(|(c, (acc, r0, r1, r2, r3, r4, r5, touch))| {
                 particle_chunk(
                     &cx,
@@ -216,7 +230,7 @@ impl<const D: usize> RayonSplit<D> {
 /// What one chunk of the per-particle phase books.
 #[derive(Debug, Clone, Copy)]
 struct ChunkBooks<const D: usize> {
-    walls: WallBooks,
+    walls: Books,
     /// Largest move of a predicted position per axis (Gear).
     moved: [f64; D],
 }
@@ -224,28 +238,20 @@ struct ChunkBooks<const D: usize> {
 /// What the per-particle phase reads (shared by every chunk).
 struct ChunkContext<'a, const D: usize> {
     n: usize,
-    /// Pair forces per list entry, `D` values each (`pair_chunk`).
-    pf: &'a [f64],
-    start: &'a [u32],
-    row_of: &'a [u32],
-    partner: &'a [u32],
-    in_start: &'a [u32],
-    in_entry: &'a [u32],
+    /// Pair forces per list entry, `D` values each (`pair_chunk`); `None`: already in `acc`.
+    pf: Option<&'a [f64]>,
+    list: &'a NeighbourList<D>,
     radius: &'a [f64],
     wall_kr: &'a [f64],
     /// Body force per particle, particle-major (empty without one).
     body_f: &'a [f64],
     /// The force every coordinate starts from (the weight on the last axis).
     init: [f64; D],
-    periodic: [bool; D],
-    size: [f64; D],
+    p: &'a Params<D>,
     /// Per axis: the walls (used on the non-periodic axes).
     walls: [WallAxis; D],
-    inv_mass: Option<f64>,
     dt: f64,
     then: Then,
-    gear: [f64; 6],
-    half_dt2: f64,
     /// Whether this step flushes the Gear derivatives ([`GEAR_FLUSH_EVERY`]).
     flush: bool,
 }
@@ -260,31 +266,33 @@ fn particle_chunk<const D: usize>(
     mut r: [&mut [f64]; 6],
     touch: &mut [u8],
 ) -> ChunkBooks<D> {
-    let mut walls = WallBooks::default();
+    let mut walls = Books::default();
     let mut moved = [0.0; D];
-    let n = cx.n;
+    let (n, p, l) = (cx.n, cx.p, cx.list);
     for_each_axis_segment(n, e0, acc.len(), |k, o, m| {
         let i0 = (e0 + o) % n;
         let acc = &mut acc[o..o + m];
-        acc.fill(cx.init[k]);
-        // The partners' rows, ascending: `f_j -= f_ij`.
-        for &q in &cx.in_entry[cx.in_start[i0] as usize..cx.in_start[i0 + m] as usize] {
-            let q = q as usize;
-            acc[cx.partner[q] as usize - i0] -= cx.pf[q * D + k];
-        }
-        // The particle's own row, summed first: `f_i += sum_j f_ij`.
-        let (mut q, end) = (cx.start[i0] as usize, cx.start[i0 + m] as usize);
-        while q < end {
-            let i = cx.row_of[q] as usize;
-            let row_end = cx.start[i + 1] as usize;
-            let mut own = 0.0;
-            while q < row_end {
-                own += cx.pf[q * D + k];
-                q += 1;
+        if let Some(pf) = cx.pf {
+            acc.fill(cx.init[k]);
+            // The partners' rows, ascending: `f_j -= f_ij`.
+            for &q in &l.in_entry[l.in_start[i0] as usize..l.in_start[i0 + m] as usize] {
+                let q = q as usize;
+                acc[l.partner[q] as usize - i0] -= pf[q * D + k];
             }
-            acc[i - i0] += own;
+            // The particle's own row, summed first: `f_i += sum_j f_ij`.
+            let (mut q, end) = (l.start[i0] as usize, l.start[i0 + m] as usize);
+            while q < end {
+                let i = l.row_of[q] as usize;
+                let row_end = l.start[i + 1] as usize;
+                let mut own = 0.0;
+                while q < row_end {
+                    own += pf[q * D + k];
+                    q += 1;
+                }
+                acc[i - i0] += own;
+            }
         }
-        if !cx.periodic[k] {
+        if !p.periodic[k] {
             let radius = &cx.radius[i0..i0 + m];
             let wall_kr = &cx.wall_kr[i0..i0 + m];
             let (x, v, touching) = (&r[0][o..o + m], &r[1][o..o + m], &mut touch[o..o + m]);
@@ -305,7 +313,8 @@ fn particle_chunk<const D: usize>(
             }
         }
         // a = F / m.
-        if let Some(inv_m) = cx.inv_mass {
+        if p.mass != 1.0 {
+            let inv_m = 1.0 / p.mass;
             for a in acc.iter_mut() {
                 *a *= inv_m;
             }
@@ -317,9 +326,9 @@ fn particle_chunk<const D: usize>(
                     r.each_mut().map(|r| &mut r[o..o + m]),
                     acc,
                     cx.init[k],
-                    cx.half_dt2,
-                    &cx.gear,
-                    cx.periodic[k].then_some(cx.size[k]),
+                    0.5 * p.dt * p.dt,
+                    &p.gear,
+                    p.periodic[k].then_some(p.size[k]),
                     cx.flush,
                 );
                 moved[k] = max_ignoring_nan(moved[k], step_move);

@@ -1,20 +1,20 @@
-//! Stepping the time-driven engine: the [`Strategy`] trait the three execution strategies
-//! implement (`serial.rs`, `rayon_split.rs`, `domain_step.rs`), the choice of strategy per
-//! step, and what the strategies share: one step of Gear or velocity Verlet around a force
-//! evaluation ([`State::step_with`]), the neighbour-list update and the walls of a step.
+//! Stepping the time-driven engine: the [`Strategy`] trait of the three execution strategies,
+//! the choice of strategy per step, and what they share: one step of Gear or velocity Verlet
+//! around a force evaluation ([`State::step_with`]), the list update and the walls of a step.
 
 use super::*;
 use crate::sim::time_driven::domains::DOMAINS;
-use crate::sim::time_driven::integrator::{gear_predict, verlet_drift};
-use crate::sim::time_driven::neighbours::EXACT_CHECK_EVERY;
+use crate::sim::time_driven::integrator::{
+    GEAR_FLUSH_EVERY, gear_correct_predict_axes, gear_predict, verlet_drift, verlet_kick,
+};
+use crate::sim::time_driven::neighbours::{needs_rebuild, norm};
 use crate::sim::time_driven::walls::WallAxis;
 use rayon::prelude::*;
 
-/// An execution strategy of the time-driven step: [`Serial`] (the calling thread),
-/// [`RayonSplit`] (each phase of a step split over the pool's threads in fixed chunks) or
-/// [`Domains`] (whole Gear steps on spatial domains, a team of threads with one barrier per
-/// step). Every strategy computes a pair with `pair_kernel`, and all give the same bits on any
-/// number of threads; the domains sum the forces on a particle in another order (round-off).
+/// An execution strategy: [`Serial`] (the calling thread), [`RayonSplit`] (each phase of a step
+/// split over the pool's threads in fixed chunks) or [`Domains`] (whole Gear steps on spatial
+/// domains, one barrier per step). Each gives the same bits on any number of threads; the
+/// domains sum the forces on a particle in another order than the others (round-off).
 pub(super) trait Strategy<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> {
     /// Advances `s` by at least one step and at most to step `target`.
     fn advance(&mut self, s: &mut State<D, GRAV, WET, B>, target: u64);
@@ -44,22 +44,20 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         true
     }
 
-    /// Advances by at least one step towards `target` with the strategy this step takes: the
-    /// domains for a predicted Gear step where [`Self::uses_domains`], else the rayon split
-    /// where [`Self::splits`], else the serial strategy.
+    /// Advances by at least one step towards `target`: on the domains for a predicted Gear step
+    /// where [`Self::uses_domains`], else split where [`Self::splits`], else serially.
     fn advance(&mut self, target: u64) {
         if self.s.predicted && self.uses_domains() {
             self.domains.advance(&mut self.s, target);
         } else if self.splits() {
             self.rayon.advance(&mut self.s, target);
         } else {
-            Serial.advance(&mut self.s, target);
+            self.serial.advance(&mut self.s, target);
         }
     }
 
-    /// Whether the Gear steps run on the spatial domains: Gear, no body force, and
-    /// [`Execution::domains_from`] particles or more (at least [`DOMAINS`]). The number of
-    /// threads plays no part, so the numbers do not depend on it.
+    /// Whether the Gear steps run on the domains: no body force and at least
+    /// [`Execution::domains_from`] (and [`DOMAINS`]) particles, whatever the threads.
     pub(super) fn uses_domains(&self) -> bool {
         self.s.p.integrator == IntegratorKind::Gear5
             && !B::ACTIVE
@@ -67,9 +65,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
             && self.s.n >= self.execution.domains_from
     }
 
-    /// Whether the steps that do not run on the domains are split over threads: on a pool of
-    /// more than one thread and from [`Execution::split_from`] particles on; otherwise they
-    /// run on the calling thread, without the pool. The numbers are the same either way.
+    /// Whether the other steps are split over threads ([`Execution::split_from`]).
     fn splits(&self) -> bool {
         self.s.n >= self.execution.split_from && rayon::current_num_threads() > 1
     }
@@ -79,13 +75,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// contact onsets and bridge events with weight `dt` (0: a re-evaluation that is not a
     /// step). Returns the largest move per axis of the Gear update (zeros otherwise).
     ///
-    /// On the serial or the rayon strategy, as [`Self::splits`] says (the same bits): the
-    /// initial forces and a re-evaluation after `set_state`.
+    /// Serial or split as [`Self::splits`] says (the same bits): the initial forces and a
+    /// re-evaluation after `set_state`.
     pub(super) fn forces_then(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
         if self.splits() {
             self.rayon.forces_then(&mut self.s, t, vs, dt, then)
         } else {
-            self.s.forces_then_serial(t, vs, dt, then)
+            self.serial.forces_then(&mut self.s, t, vs, dt, then)
         }
     }
 }
@@ -103,26 +99,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
     }
 
     /// Keeps the Verlet list valid: rebuilds it when some particle has moved more than
-    /// `skin / 2` since the last build. The exact test (a pass over all positions,
-    /// [`NeighbourList::needs_rebuild`]) runs only when the bound `moved_bound` reaches
-    /// `skin / 2` (less a relative margin of `1e-6` for its round-off) or after
-    /// [`EXACT_CHECK_EVERY`] steps; otherwise no particle can have moved that far (each
-    /// particle's displacement is at most the sum of the per-step largest moves), so the
-    /// decision is the one the exact test would take. After an exact test the bound restarts
-    /// from the exact largest displacement.
+    /// `skin / 2` since the last build (tested exactly only where `moved_bound` says it might
+    /// be, [`needs_rebuild`]).
     pub(super) fn update_list(&mut self) {
-        self.since_check += 1;
-        let half_skin = 0.5 * self.list.skin();
-        if self.moved_bound < half_skin * (1.0 - 1e-6) && self.since_check < EXACT_CHECK_EVERY {
-            return;
-        }
-        self.since_check = 0;
-        let worst = self.list.max_displacement_sq(&self.r[0]);
-        if worst > half_skin * half_skin {
+        let (half_skin, x) = (0.5 * self.list.skin(), &self.r[0]);
+        let (bound, since) = (&mut self.moved_bound, &mut self.since_check);
+        if needs_rebuild::<D>(bound, since, half_skin, x, self.list.built_at()) {
             self.list.build(&self.r[0], &self.radius);
             self.moved_bound = 0.0;
-        } else {
-            self.moved_bound = worst.sqrt();
         }
     }
 
@@ -158,6 +142,28 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
             }
         }
         self.steps += 1;
+    }
+
+    /// `then` on whole axes (after the forces, `ParticlePhase::run` on the calling thread):
+    /// returns the largest move per axis of the Gear pass.
+    pub(super) fn integrate_axes(&mut self, then: Then, dt: f64) -> [f64; D] {
+        let (p, init) = (&self.p, self.force_start());
+        match then {
+            Then::Nothing => [0.0; D],
+            Then::Gear => gear_correct_predict_axes(
+                &mut self.r,
+                &mut self.acc,
+                init,
+                0.5 * p.dt * p.dt,
+                &p.gear,
+                std::array::from_fn(|k| p.periodic[k].then_some(p.size[k])),
+                self.steps.is_multiple_of(GEAR_FLUSH_EVERY),
+            ),
+            Then::VerletKick => {
+                verlet_kick(&mut self.r[1], &self.acc, dt);
+                [0.0; D]
+            }
+        }
     }
 
     /// Velocity Verlet's first half on every coordinate (`verlet_drift`), with the wrap of the
@@ -197,15 +203,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
     }
 }
 
-/// `sqrt(sum_k m_k^2)`, summed in axis order.
-fn norm<const D: usize>(moved: [f64; D]) -> f64 {
-    let mut moved2 = 0.0;
-    for m in moved {
-        moved2 += m * m;
-    }
-    moved2.sqrt()
-}
-
 /// The walls of every axis at time `t` (used on the non-periodic ones): Hertz with
 /// `R_eff = R_i`; the last axis's walls move with the drive, `z_w(t) = A sin(omega t)`
 /// (docs/model.md 4.1). `vs` turns the velocity array into velocities, `dt` weights the books.
@@ -228,7 +225,7 @@ pub(super) fn wall_axes<const D: usize>(p: &Params<D>, t: f64, vs: f64, dt: f64)
     })
 }
 
-/// What the per-particle phase does after the forces ([`TimeEngine::forces_then`], [`State::step_with`]).
+/// What the per-particle phase does after the forces.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Then {
     /// Nothing (the initial forces, a re-evaluation after `set_state`).
@@ -265,12 +262,8 @@ pub(super) fn max_ignoring_nan(a: f64, b: f64) -> f64 {
 /// [`wrap_into`] on every element, writing only the wrapped ones (few are: no store per
 /// element).
 fn wrap_slice(xs: &mut [f64], l: f64) {
-    for x in xs {
-        if *x < 0.0 {
-            *x += l;
-        } else if *x >= l {
-            *x -= l;
-        }
+    for x in xs.iter_mut().filter(|x| **x < 0.0 || **x >= l) {
+        *x = wrap_into(*x, l);
     }
 }
 
