@@ -79,8 +79,10 @@ pub(super) fn workers(jobs: Option<usize>, oversubscribe: bool) -> Result<usize,
     }
 }
 
-pub(super) fn workers_or_fail(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, Failure> {
-    workers(jobs, oversubscribe).map_err(Failure::BadInput)
+/// Writes a file; a failure names it.
+pub(super) fn write_file(path: &Path, text: impl AsRef<[u8]>) -> Result<(), Failure> {
+    std::fs::write(path, text)
+        .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))
 }
 
 impl From<RefineError> for Failure {
@@ -216,15 +218,31 @@ pub(super) fn read_spec(path: &Path) -> Result<JobSpec, Failure> {
     JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)
 }
 
-/// The run options of refinement rounds: `jobs` workers, progress shown, the wall-table cache
-/// capped at `table_cache_mib`.
-pub(super) fn refine_opts(jobs: usize, table_cache_mib: usize) -> RunOptions {
+/// The options of a local run: `jobs` workers, progress shown, failed jobs left as they are,
+/// the wall-table cache capped at `table_cache_mib`.
+pub(super) fn run_options(jobs: usize, table_cache_mib: usize) -> RunOptions {
     RunOptions {
         jobs,
         retry_failed: false,
         show_progress: true,
         table_cache_mib,
     }
+}
+
+/// The line rule's labels (docs/model.md 7) over the lines of constant Gamma with new or
+/// extended results (after a run, an extension or a collection), with what changed on stderr:
+/// without it a result kept its point's own label, where the same job in a whole run got its
+/// line's.
+pub(super) fn relabel_lines(store: &Store, row: &SweepRow) -> Result<(), Failure> {
+    let relabelled = crate::run::relabel::relabel_changed(store, row)?;
+    if relabelled.changed() > 0 {
+        eprintln!(
+            "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
+            row.name,
+            relabelled.text()
+        );
+    }
+    Ok(())
 }
 
 /// Reports a refinement on stderr.
@@ -243,7 +261,7 @@ pub(super) fn continue_refinement(
     jobs: usize,
     table_cache_mib: usize,
 ) -> Result<(), Failure> {
-    let opts = refine_opts(jobs, table_cache_mib);
+    let opts = run_options(jobs, table_cache_mib);
     crate::refine::driver::continue_refinement(store, rows, &opts, &mut |row, o| {
         refinement_report(row, o)
     })?;

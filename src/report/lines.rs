@@ -118,12 +118,20 @@ fn same(a: f64, b: f64) -> bool {
 
 pub use crate::run::relabel::gamma_e_star;
 
-/// The block standard error of monitored quantity `name` (module doc).
-fn block_error(obs: &serde_json::Value, name: &str) -> Option<f64> {
+/// The stored block test of monitored quantity `name` (`convergence.tests`).
+pub(crate) fn block_test<'a>(
+    obs: &'a serde_json::Value,
+    name: &str,
+) -> Option<&'a serde_json::Value> {
     obs.pointer("/convergence/tests")?
         .as_array()?
         .iter()
-        .find(|t| t["quantity"].as_str() == Some(name))?["standard_error"]
+        .find(|t| t["quantity"].as_str() == Some(name))
+}
+
+/// The block standard error of monitored quantity `name` (module doc).
+fn block_error(obs: &serde_json::Value, name: &str) -> Option<f64> {
+    block_test(obs, name)?["standard_error"]
         .as_f64()
         .filter(|e| e.is_finite())
 }

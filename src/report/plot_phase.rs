@@ -13,14 +13,14 @@
 //! scene (the other axis may change `L_x`, `E_cb`, `s_crit` or anything else).
 //!
 //! A sweep with an `initial.start` axis (the hot and the cold branch of an elastic diagram) is
-//! drawn as one map of its branches ([`branches_svg`]): a grid point where the branches agree is
+//! drawn as one map of its branches ([`branches_map`]): a grid point where the branches agree is
 //! one dot; a bistable point (their phases differ) is a split disc, one sector per branch in its
 //! phase's colour (two branches: left half the first, right half the second), outlined in black
 //! and labelled with the phases in branch order (`g/f`). Each branch's boundary points keep
 //! their own marker, since the boundaries of the branches are extracted separately.
 
 use super::chart::{Swatch, draw_legend, hand_ticks, sector, wrap};
-use crate::boundary::{PhaseMap, PlaneAxis, Slice};
+use crate::boundary::{PhaseMap, Slice};
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
@@ -253,17 +253,6 @@ fn branch_name(slices: &[&Slice], k: usize) -> String {
     )
 }
 
-/// Draws one slice of a phase map as SVG. `landmarks` adds the theory lines (shaking sweeps).
-pub fn phase_svg(
-    map: &PhaseMap,
-    slice: &Slice,
-    landmarks: Option<Landmarks>,
-    chain_model: Option<Vec<(f64, f64)>>,
-    title: &str,
-) -> Result<String, String> {
-    branches_svg(map, &[slice], landmarks, chain_model, title)
-}
-
 /// How a map is drawn: the scale of its axes where the caller chooses (`None`: the plane's, so
 /// `E*` log and `Gamma` linear on a shaking map).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -289,26 +278,9 @@ pub const MAP_HEIGHT: u32 = 640;
 const LEGEND_WIDTH: u32 = 330;
 
 /// Draws the slices of a phase map that differ only in their start mode (the branches) as one
-/// SVG map: bistable points as split discs (module doc). One slice draws as [`phase_svg`].
-pub fn branches_svg(
-    map: &PhaseMap,
-    slices: &[&Slice],
-    landmarks: Option<Landmarks>,
-    chain_model: Option<Vec<(f64, f64)>>,
-    title: &str,
-) -> Result<String, String> {
-    branches_map(
-        map,
-        slices,
-        landmarks,
-        chain_model,
-        title,
-        MapStyle::default(),
-    )
-    .map(|m| m.svg)
-}
-
-/// [`branches_svg`] with the axes' scales of `style`, and the pixel positions of the points.
+/// SVG map, bistable points as split discs (module doc), with the axes' scales of `style`;
+/// `landmarks` adds the theory lines (shaking sweeps). Also gives the pixel positions of the
+/// points.
 pub fn branches_map(
     map: &PhaseMap,
     slices: &[&Slice],
@@ -766,11 +738,6 @@ where
         legend.push((label, Swatch::Cross(color)));
     }
     Ok(())
-}
-
-/// The plane axis labels, for callers that describe a plot.
-pub fn axis_names(map: &PhaseMap) -> Option<(&PlaneAxis, &PlaneAxis)> {
-    Some((map.x.as_ref()?, map.y.as_ref()?))
 }
 
 #[cfg(test)]

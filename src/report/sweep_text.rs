@@ -22,17 +22,11 @@ pub fn duration_text(s: f64) -> String {
 
 /// One line per left-out point: its coordinates and the constraint it fails.
 pub fn left_out_text(axes: &[crate::sweep::Axis], left_out: &[LeftOut]) -> String {
+    let labels: Vec<&str> = axes.iter().map(|a| a.label.as_str()).collect();
     let mut out = String::new();
     for k in left_out {
-        let coords: Vec<String> = axes
-            .iter()
-            .zip(&k.coords)
-            .map(|(a, v)| match v.as_f64() {
-                Some(x) => format!("{} = {}", a.label, short(x)),
-                None => format!("{} = {v}", a.label),
-            })
-            .collect();
-        let _ = writeln!(out, "  left out {}: {}", coords.join(", "), k.constraint);
+        let coords = coords_text(&labels, &k.coords);
+        let _ = writeln!(out, "  left out {coords}: {}", k.constraint);
     }
     out
 }
