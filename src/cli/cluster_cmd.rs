@@ -419,6 +419,7 @@ fn unfinished_for_good(
 /// never ran; the job id of an unreadable spec is its file name without `.json`.
 pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
     let t0 = std::time::Instant::now();
+    let record = |id: &str, o: Outcome| ResultRecord::new(id, o, t0.elapsed().as_secs_f64());
     let (record, code) = match read_spec(spec_path) {
         Err(Failure::BadInput(m) | Failure::JobsFailed(m) | Failure::Other(m)) => {
             eprintln!("error: {m}");
@@ -426,32 +427,16 @@ pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
                 .file_stem()
                 .map(|s| s.to_string_lossy().to_string())
                 .unwrap_or_default();
-            (
-                ResultRecord::new(
-                    &id,
-                    Outcome::Failed(format!("the job spec cannot be read: {m}")),
-                    t0.elapsed().as_secs_f64(),
-                ),
-                2,
-            )
+            let why = format!("the job spec cannot be read: {m}");
+            (record(&id, Outcome::Failed(why)), 2)
         }
         Ok(spec) => {
             let id = spec.id();
             match run_job(&spec, &mut |_| {}) {
-                Ok(r) => (
-                    ResultRecord::new(&id, Outcome::Done(r), t0.elapsed().as_secs_f64()),
-                    0,
-                ),
+                Ok(r) => (record(&id, Outcome::Done(r)), 0),
                 Err(e) => {
                     eprintln!("error: job {id} failed: {e}");
-                    (
-                        ResultRecord::new(
-                            &id,
-                            Outcome::Failed(e.to_string()),
-                            t0.elapsed().as_secs_f64(),
-                        ),
-                        1,
-                    )
+                    (record(&id, Outcome::Failed(e.to_string())), 1)
                 }
             }
         }

@@ -3,7 +3,7 @@
 
 use std::fmt::Write;
 use wetgran_core::observe::ObservedRun;
-use wetgran_core::sim::RunReport;
+use wetgran_core::sim::{EnergyLedger, RunReport};
 
 /// One line of the run summary: the name in a column of 19 characters, then the value.
 fn row(s: &mut String, name: &str, value: impl std::fmt::Display) {
@@ -20,11 +20,8 @@ pub fn summary_text(r: &RunReport) -> String {
     } else {
         ""
     };
-    row(
-        &mut s,
-        "simulated time",
-        format!("{:.6}{capped}", r.simulated_time),
-    );
+    let time = format!("{:.6}{capped}", r.simulated_time);
+    row(&mut s, "simulated time", time);
     let wall = r.wall_seconds.max(1e-9);
     if r.engine == "time" {
         // Time-driven: the counts are contact onsets, formations and ruptures, not events.
@@ -38,11 +35,8 @@ pub fn summary_text(r: &RunReport) -> String {
         row(&mut s, "contact onsets etc.", r.events_total);
     } else {
         let rate = r.events_total as f64 / wall;
-        row(
-            &mut s,
-            "wall time",
-            format!("{:.3} s  ({rate:.3e} events/s)", r.wall_seconds),
-        );
+        let wall_text = format!("{:.3} s  ({rate:.3e} events/s)", r.wall_seconds);
+        row(&mut s, "wall time", wall_text);
         row(&mut s, "events", r.events_total);
     }
     for (name, n, always) in [
@@ -68,35 +62,18 @@ pub fn summary_text(r: &RunReport) -> String {
     row(&mut s, "bridges", r.bridges);
     let (a, b) = (&r.energy_initial, &r.energy_final);
     row(&mut s, "energy", "initial        final");
-    for (name, x, y, sci) in [
-        ("kinetic", a.kinetic, b.kinetic, false),
-        ("potential", a.potential, b.potential, false),
-        (
-            "dissipated (rest.)",
-            a.dissipated_restitution,
-            b.dissipated_restitution,
-            false,
-        ),
-        (
-            "dissipated (rupt.)",
-            a.dissipated_ruptures,
-            b.dissipated_ruptures,
-            false,
-        ),
-        (
-            "added (remedies)",
-            a.added_by_collapse_remedies,
-            b.added_by_collapse_remedies,
-            true,
-        ),
-        (
-            "added (placement)",
-            a.added_by_wall_placement,
-            b.added_by_wall_placement,
-            true,
-        ),
-        ("work by the drive", a.work_by_drive, b.work_by_drive, false),
-    ] {
+    type Field = fn(&EnergyLedger) -> f64;
+    let rows: [(&str, Field, bool); 7] = [
+        ("kinetic", |e| e.kinetic, false),
+        ("potential", |e| e.potential, false),
+        ("dissipated (rest.)", |e| e.dissipated_restitution, false),
+        ("dissipated (rupt.)", |e| e.dissipated_ruptures, false),
+        ("added (remedies)", |e| e.added_by_collapse_remedies, true),
+        ("added (placement)", |e| e.added_by_wall_placement, true),
+        ("work by the drive", |e| e.work_by_drive, false),
+    ];
+    for (name, field, sci) in rows {
+        let (x, y) = (field(a), field(b));
         if name == "added (placement)" && y == 0.0 {
             continue;
         }
