@@ -3,7 +3,7 @@
 //! Exit codes as for the other sweep commands: 0 ok, 2 bad input, 1 any other error; `job run`
 //! exits 1 when the job failed (its error record is written all the same).
 
-use super::common::{Failure, check_regrid, load_sweep_left_out, read_spec, relabel_lines, select};
+use super::common::{Failure, check_regrid, load_sweep, read_spec, relabel_lines, select};
 use crate::cluster::record::write_atomic;
 use crate::cluster::slurm::{self, ArrayScript, SbatchOptions};
 use crate::cluster::{Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
@@ -85,7 +85,7 @@ pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
         ));
     }
     let (file, db) = (&s.file, &s.db);
-    let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
+    let (sweep, expanded, left_out) = load_sweep(file)?;
     if expanded.iter().any(|j| j.spec.start_from.is_some()) {
         // Each task of an array runs on its own; a chain needs its predecessor's final state.
         return Err(Failure::BadInput(format!(

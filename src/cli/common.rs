@@ -102,15 +102,9 @@ pub(super) fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>,
     })
 }
 
-/// Loads and expands a sweep file (the grid points left out are listed on stderr).
-pub(super) fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>), Failure> {
-    let (sweep, jobs, _) = load_sweep_left_out(file)?;
-    Ok((sweep, jobs))
-}
-
 /// Loads and expands a sweep file; also returns the grid points `skip_invalid` left out, each
 /// with the scene constraint it fails, after listing them on stderr.
-pub(super) fn load_sweep_left_out(
+pub(super) fn load_sweep(
     file: &Path,
 ) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>, Vec<LeftOut>), Failure> {
     let sweep = SweepFile::load(file).map_err(|e| Failure::BadInput(e.to_string()))?;

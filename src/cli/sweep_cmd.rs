@@ -4,8 +4,8 @@
 //! unknown sweep), 1 any other error.
 
 use super::common::{
-    Failure, available_cores, check_regrid, continue_refinement, load_sweep, load_sweep_left_out,
-    read_spec, relabel_lines, run_options, select, workers,
+    Failure, available_cores, check_regrid, continue_refinement, load_sweep, read_spec,
+    relabel_lines, run_options, select, workers,
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{
@@ -229,7 +229,7 @@ pub enum BoundaryFormat {
 pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
     let (jobs, table_cache_mib, db) = (a.workers.count()?, a.workers.table_cache_mib, &a.db);
     // The file is checked in full before the database is touched.
-    let (sweep, expanded, left_out) = load_sweep_left_out(&a.file)?;
+    let (sweep, expanded, left_out) = load_sweep(&a.file)?;
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
     // a sync"): everything it writes can be made again from the sweep file.
     let store = Store::open_as(db, true, Durability::Fast)?;
@@ -388,7 +388,7 @@ pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
 }
 
 pub(super) fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
-    let (_, jobs) = load_sweep(file)?;
+    let (_, jobs, _) = load_sweep(file)?;
     for j in &jobs {
         let mut line = serde_json::json!({
             "id": j.id, "point": j.point, "replica": j.replica, "coords": j.coords,
@@ -430,7 +430,7 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
     if !(settle.is_finite() && settle >= 0.0) {
         return Err(Failure::BadInput("--settle must be >= 0".to_string()));
     }
-    let (sweep, mut jobs) = load_sweep(file)?;
+    let (sweep, mut jobs, _) = load_sweep(file)?;
     // One job per id, as the store registers them: a continuation chain's head is the hot job
     // of its point when the sweep also has the hot start (same spec, same id).
     let mut seen = std::collections::HashSet::new();
