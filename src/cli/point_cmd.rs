@@ -90,15 +90,17 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     if !json {
         print!("{}", job_text(&sweep, &p));
     }
-    let observables: Option<Observables> = match &p.observables {
-        Some(v) => Some(serde_json::from_value(v.clone()).map_err(|e| {
+    let observables: Option<Observables> = p
+        .observables
+        .as_ref()
+        .map(|v| serde_json::from_value(v.clone()))
+        .transpose()
+        .map_err(|e| {
             Failure::BadInput(format!(
                 "job {}: stored observables unreadable: {e}",
                 p.job_id
             ))
-        })?),
-        None => None,
-    };
+        })?;
     if !json {
         print!("{}", decision_text(&p));
     }

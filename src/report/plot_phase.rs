@@ -215,16 +215,12 @@ pub fn merge_branches(slices: &[&Slice]) -> Vec<DrawnPoint> {
     let mut at: std::collections::HashMap<(u64, u64), usize> = std::collections::HashMap::new();
     for (b, slice) in slices.iter().enumerate() {
         for p in &slice.points {
-            let key = ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits());
-            let found = if p.x.is_nan() || p.y.is_nan() {
-                None
-            } else {
-                at.get(&key).copied()
-            };
-            let k = match found {
+            let key = (!p.x.is_nan() && !p.y.is_nan())
+                .then(|| ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits()));
+            let k = match key.and_then(|key| at.get(&key).copied()) {
                 Some(k) => k,
                 None => {
-                    if !(p.x.is_nan() || p.y.is_nan()) {
+                    if let Some(key) = key {
                         at.insert(key, out.len());
                     }
                     out.push(DrawnPoint {
