@@ -42,7 +42,7 @@ pub struct SubmitArgs {
     #[arg(long)]
     dry_run: bool,
     /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
-    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
     pub db: PathBuf,
     /// The sweep directory (default: `wetgran-slurm/<sweep name>` beside the database).
     #[arg(long)]
@@ -345,7 +345,7 @@ fn submit_arrays(
 }
 
 /// `wetgran sweep collect`.
-pub(super) fn collect_cmd(a: super::sweep_cmd::DbSweeps) -> Result<(), Failure> {
+pub(super) fn collect_cmd(a: super::common::DbSweeps) -> Result<(), Failure> {
     let db = &a.db;
     let store = Store::open_existing(db)?;
     let sweeps = select(&store, a.sweep.as_deref())?;

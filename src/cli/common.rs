@@ -1,6 +1,7 @@
-//! What the command modules share: the failure kinds and their exit codes, the worker count
-//! of `--jobs`, choosing sweeps in a database, loading a sweep file (with the grid points it
-//! leaves out), the regrid check of `sweep run` / `sweep submit`, and reading a job spec.
+//! What the command modules share: the flags of several commands (`--db` and `--sweep`, the
+//! worker flags), the failure kinds and their exit codes, choosing sweeps in a database, loading
+//! a sweep file (with the grid points it leaves out), the regrid check of `sweep run` / `sweep
+//! submit`, reading a job spec, and the reports after a run.
 
 use crate::refine::driver::{Outcome, RefineError};
 use crate::report::sweep_text::left_out_text;
@@ -8,8 +9,48 @@ use crate::report::sweep_text::refinement_text;
 use crate::run::RunOptions;
 use crate::store::{LeftOut, Store, StoreError, SweepRow};
 use crate::sweep::{JobSpec, SweepFile};
-use std::path::Path;
+use clap::Args;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
+
+/// Default database file, in the working directory.
+pub(super) const DEFAULT_DB: &str = "wetgran.sqlite";
+
+/// `--db` and `--sweep` of the commands that read one sweep or every sweep of a database.
+#[derive(Debug, Args)]
+pub struct DbSweeps {
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
+    pub db: PathBuf,
+    /// Only this sweep (default: all).
+    #[arg(long)]
+    pub sweep: Option<String>,
+}
+
+/// Worker threads and the wall-table cache of the commands that run jobs.
+#[derive(Debug, Args)]
+pub(super) struct Workers {
+    /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Allow --jobs above the available cores (several simulations share a core; each
+    /// runs slower, the sweep no faster).
+    #[arg(long)]
+    oversubscribe: bool,
+    /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
+    /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
+    /// caching.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
+    pub table_cache_mib: usize,
+}
+
+impl Workers {
+    /// The worker count of `--jobs` (`common::workers`).
+    pub(super) fn count(&self) -> Result<usize, Failure> {
+        workers(self.jobs, self.oversubscribe).map_err(Failure::BadInput)
+    }
+}
 
 /// How a command failed: bad input (exit code 2), a sweep that finished with failed jobs
 /// (exit code 4: everything else was done and stored) or anything else (exit code 1).

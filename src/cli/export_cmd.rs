@@ -2,8 +2,8 @@
 //! written as the store reads the rows, with the series in a long-format file of numbers and
 //! their text entries in another.
 
+use super::common::DbSweeps;
 use super::common::{Failure, select};
-use super::sweep_cmd::DbSweeps;
 use crate::report::export::{self, Columns, ExportRow, JsonWriter};
 use crate::store::Store;
 use clap::{Args, ValueEnum};

@@ -14,9 +14,10 @@ mod report_cmd;
 mod simulate_cmd;
 pub mod sweep_cmd;
 
+use common::DbSweeps;
 use common::exit;
 use report_cmd::DbLatest;
-use sweep_cmd::{DbSweeps, SweepCommand};
+use sweep_cmd::SweepCommand;
 
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};

@@ -49,7 +49,7 @@ fn find_job(store: &Store, prefix: &str) -> Result<(String, PointRow), Failure> 
 #[derive(Debug, Args)]
 pub struct ShowArgs {
     /// Database file; also from WETGRAN_DB (the flag wins).
-    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
     pub db: PathBuf,
     /// The job: at least 6 leading hex digits of its id (`wetgran export` lists ids).
     job: String,
@@ -178,7 +178,7 @@ pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
 #[derive(Debug, Args)]
 pub struct InflectionArgs {
     #[command(flatten)]
-    pub from: super::sweep_cmd::DbSweeps,
+    pub from: super::common::DbSweeps,
     /// Print JSON (an array, one object per sweep with its lines) instead of the table.
     #[arg(long)]
     json: bool,

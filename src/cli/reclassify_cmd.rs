@@ -47,7 +47,7 @@ pub struct ReclassifyArgs {
     #[arg(long, value_name = "FILE")]
     classify: Option<PathBuf>,
     /// Database file; also from WETGRAN_DB (the flag wins).
-    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
     pub db: PathBuf,
 }
 

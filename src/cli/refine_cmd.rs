@@ -16,7 +16,7 @@ pub struct RefineArgs {
     #[arg(long)]
     sweep: Option<String>,
     /// Database file; also from WETGRAN_DB (the flag wins).
-    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
     pub db: PathBuf,
     /// Jobs to add (default: what is left of the sweep file's `[refine]` budget).
     #[arg(long)]
@@ -33,7 +33,7 @@ pub struct RefineArgs {
     #[arg(long)]
     max_replicas: Option<u32>,
     #[command(flatten)]
-    workers: super::sweep_cmd::Workers,
+    workers: super::common::Workers,
 }
 
 /// `wetgran sweep refine`: `budget` more jobs (default: what is left of the file's `[refine]`

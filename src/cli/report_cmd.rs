@@ -44,7 +44,7 @@ impl Scale {
 #[derive(Debug, Args)]
 pub struct DbLatest {
     /// Database file; also from WETGRAN_DB (the flag wins).
-    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
     pub db: PathBuf,
     /// The sweep (default: the one registered or updated last).
     #[arg(long)]

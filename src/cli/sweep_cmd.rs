@@ -4,8 +4,8 @@
 //! unknown sweep), 1 any other error.
 
 use super::common::{
-    Failure, available_cores, check_regrid, continue_refinement, load_sweep, read_spec,
-    relabel_lines, run_options, select, workers,
+    DEFAULT_DB, DbSweeps, Failure, Workers, available_cores, check_regrid, continue_refinement,
+    load_sweep, read_spec, relabel_lines, run_options, select,
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{
@@ -21,10 +21,6 @@ use crate::store::{Durability, PointSummary, Store, SweepRow};
 use crate::sweep::run_job;
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
-use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
-
-/// Default database file, in the working directory.
-pub const DEFAULT_DB: &str = "wetgran.sqlite";
 
 /// `wetgran sweep ...`.
 #[derive(Debug, Subcommand)]
@@ -115,41 +111,6 @@ pub enum SweepCommand {
         /// A file with the job spec (`-` for standard input).
         spec: PathBuf,
     },
-}
-
-/// `--db` and `--sweep` of the commands that read one sweep or every sweep of a database.
-#[derive(Debug, Args)]
-pub struct DbSweeps {
-    /// Database file; also from WETGRAN_DB (the flag wins).
-    #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
-    pub db: PathBuf,
-    /// Only this sweep (default: all).
-    #[arg(long)]
-    pub sweep: Option<String>,
-}
-
-/// Worker threads and the wall-table cache of the commands that run jobs.
-#[derive(Debug, Args)]
-pub struct Workers {
-    /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
-    #[arg(long)]
-    jobs: Option<usize>,
-    /// Allow --jobs above the available cores (several simulations share a core; each
-    /// runs slower, the sweep no faster).
-    #[arg(long)]
-    oversubscribe: bool,
-    /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
-    /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
-    /// caching.
-    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
-    pub table_cache_mib: usize,
-}
-
-impl Workers {
-    /// The worker count of `--jobs` (`common::workers`).
-    pub(super) fn count(&self) -> Result<usize, Failure> {
-        workers(self.jobs, self.oversubscribe).map_err(Failure::BadInput)
-    }
 }
 
 /// `sweep run`.
