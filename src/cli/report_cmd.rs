@@ -195,7 +195,7 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
         eprintln!("wrote {}", out.display());
     }
     if let Some(csv) = &args.csv {
-        write_file(csv, &lines_csv(&lines))?;
+        write_file(csv, lines_csv(&lines))?;
         eprintln!("wrote {}", csv.display());
     }
     Ok(())
