@@ -3,7 +3,7 @@
 //! Exit codes as for the other sweep commands: 0 ok, 2 bad input, 1 any other error; `job run`
 //! exits 1 when the job failed (its error record is written all the same).
 
-use super::common::{Failure, check_regrid, load_sweep_left_out, read_spec, select};
+use super::common::{Failure, check_regrid, load_sweep, read_spec, relabel_lines, select};
 use crate::cluster::record::write_atomic;
 use crate::cluster::slurm::{self, ArrayScript, SbatchOptions};
 use crate::cluster::{Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
@@ -18,15 +18,38 @@ use std::process::ExitCode;
 /// cluster user keeps on the shared filesystem), `<db folder>/wetgran-slurm/<sweep name>`.
 pub(super) const DEFAULT_DIR: &str = "wetgran-slurm";
 
-/// `sweep submit` settings.
-#[derive(Debug, Clone)]
-pub(super) struct Submit {
-    pub options: SbatchOptions,
-    pub array_limit: Option<usize>,
-    pub dry_run: bool,
-    pub dir: Option<PathBuf>,
-    /// Allow a registered sweep name to get another grid (`--replace`).
-    pub replace: bool,
+/// `sweep submit`.
+#[derive(Debug, clap::Args)]
+pub struct SubmitArgs {
+    /// The sweep file.
+    file: PathBuf,
+    /// Submit with Slurm's sbatch (the only cluster backend).
+    #[arg(long)]
+    slurm: bool,
+    /// Slurm partition (default: the cluster's).
+    #[arg(long)]
+    partition: Option<String>,
+    /// Wall-time limit per task, as sbatch takes it (`30`, `2:00:00`, `1-00:00:00`).
+    #[arg(long)]
+    time: Option<String>,
+    /// CPUs per task (a job is one simulation on one thread).
+    #[arg(long, default_value_t = 1)]
+    cpus_per_task: u32,
+    /// Most tasks per array (default 1000, and never more than the cluster's MaxArraySize).
+    #[arg(long)]
+    array_limit: Option<usize>,
+    /// Print the array script(s) and submit nothing (nothing is written).
+    #[arg(long)]
+    dry_run: bool,
+    /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
+    pub db: PathBuf,
+    /// The sweep directory (default: `wetgran-slurm/<sweep name>` beside the database).
+    #[arg(long)]
+    dir: Option<PathBuf>,
+    /// Allow a registered sweep name to get a different grid (as `sweep run --replace`).
+    #[arg(long)]
+    replace: bool,
 }
 
 fn absolute(p: &Path) -> Result<PathBuf, Failure> {
@@ -55,8 +78,14 @@ fn next_array_name(arrays: &Path) -> String {
 }
 
 /// `wetgran sweep submit FILE --slurm`.
-pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> {
-    let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
+pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
+    if !s.slurm {
+        return Err(Failure::BadInput(
+            "sweep submit: give --slurm (the only cluster backend so far)".to_string(),
+        ));
+    }
+    let (file, db) = (&s.file, &s.db);
+    let (sweep, expanded, left_out) = load_sweep(file)?;
     if expanded.iter().any(|j| j.spec.start_from.is_some()) {
         // Each task of an array runs on its own; a chain needs its predecessor's final state.
         return Err(Failure::BadInput(format!(
@@ -67,7 +96,7 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
             sweep.name
         )));
     }
-    let target = ArrayTarget::new(db, &sweep.name, s)?;
+    let target = ArrayTarget::new(db, &sweep.name, &s)?;
     if s.dry_run {
         return dry_run(db, &expanded, &target);
     }
@@ -98,7 +127,7 @@ pub(super) fn submit(file: &Path, db: &Path, s: &Submit) -> Result<(), Failure> 
 
 /// Where and how a sweep's arrays go: its sweep directory, the executable the tasks run, the
 /// array size limit and the sbatch options.
-struct ArrayTarget<'a> {
+struct ArrayTarget {
     sweep: String,
     dir: PathBuf,
     sd: SweepDir,
@@ -106,19 +135,16 @@ struct ArrayTarget<'a> {
     /// The cluster's `MaxArraySize` (`None`: scontrol not available).
     max: Option<usize>,
     limit: usize,
-    options: &'a SbatchOptions,
+    options: SbatchOptions,
 }
 
-impl<'a> ArrayTarget<'a> {
+impl ArrayTarget {
     /// Checks the directives that go into the batch script.
-    fn new(db: &Path, sweep: &str, s: &'a Submit) -> Result<Self, Failure> {
+    fn new(db: &Path, sweep: &str, s: &SubmitArgs) -> Result<Self, Failure> {
         let dir = sweep_dir(db, sweep, s.dir.as_deref())?;
         slurm::check_directive("the sweep directory", &dir.display().to_string())
             .map_err(Failure::BadInput)?;
-        for (what, v) in [
-            ("--partition", &s.options.partition),
-            ("--time", &s.options.time),
-        ] {
+        for (what, v) in [("--partition", &s.partition), ("--time", &s.time)] {
             if let Some(v) = v {
                 slurm::check_directive(what, v).map_err(Failure::BadInput)?;
             }
@@ -133,7 +159,11 @@ impl<'a> ArrayTarget<'a> {
             exe,
             max,
             limit: slurm::array_limit(s.array_limit, max),
-            options: &s.options,
+            options: SbatchOptions {
+                partition: s.partition.clone(),
+                time: s.time.clone(),
+                cpus_per_task: s.cpus_per_task,
+            },
         })
     }
 
@@ -145,7 +175,7 @@ impl<'a> ArrayTarget<'a> {
             tasks_file,
             tasks: n,
             wetgran: &self.exe,
-            options: self.options,
+            options: &self.options,
         })
         .map_err(Failure::BadInput)
     }
@@ -215,7 +245,7 @@ fn jobs_left(
         .create()
         .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", target.dir.display())))?;
     let c = collect(store, row, &mut slurm::squeue)?;
-    relabel_collected(store, row)?;
+    relabel_lines(store, row)?;
     if c.stored.len() + c.failed.len() + c.missing.len() + c.corrupt.len() > 0 {
         eprint!("{}", collected_text(row, &store.points(row.id)?, &c));
     }
@@ -233,21 +263,6 @@ fn jobs_left(
         return Ok(None);
     }
     Ok(Some(ids))
-}
-
-/// The line rule's labels (docs/model.md 7) over the lines of constant Gamma that got collected
-/// results, as after a local `sweep run`: without it a collected result kept its point's own
-/// label, where the same job run locally got its line's.
-fn relabel_collected(store: &Store, row: &SweepRow) -> Result<(), Failure> {
-    let relabelled = crate::run::relabel::relabel_changed(store, row)?;
-    if relabelled.changed() > 0 {
-        eprintln!(
-            "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
-            row.name,
-            relabelled.text()
-        );
-    }
-    Ok(())
 }
 
 fn io_failure(p: &Path, e: std::io::Error) -> Failure {
@@ -330,9 +345,10 @@ fn submit_arrays(
 }
 
 /// `wetgran sweep collect`.
-pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> {
+pub(super) fn collect_cmd(a: super::common::DbSweeps) -> Result<(), Failure> {
+    let db = &a.db;
     let store = Store::open_existing(db)?;
-    let sweeps = select(&store, name)?;
+    let sweeps = select(&store, a.sweep.as_deref())?;
     let mut any = false;
     let (mut total_failed, mut total_lost) = (0, 0);
     for s in &sweeps {
@@ -341,7 +357,7 @@ pub(super) fn collect_cmd(db: &Path, name: Option<&str>) -> Result<(), Failure> 
         }
         any = true;
         let c = collect(&store, s, &mut slurm::squeue)?;
-        relabel_collected(&store, s)?;
+        relabel_lines(&store, s)?;
         let points = store.points(s.id)?;
         print!("{}", collected_text(s, &points, &c));
         let (failed, lost) = unfinished_for_good(&points, &store.tasks(s.id)?);
@@ -403,6 +419,7 @@ fn unfinished_for_good(
 /// never ran; the job id of an unreadable spec is its file name without `.json`.
 pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
     let t0 = std::time::Instant::now();
+    let record = |id: &str, o: Outcome| ResultRecord::new(id, o, t0.elapsed().as_secs_f64());
     let (record, code) = match read_spec(spec_path) {
         Err(Failure::BadInput(m) | Failure::JobsFailed(m) | Failure::Other(m)) => {
             eprintln!("error: {m}");
@@ -410,32 +427,16 @@ pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
                 .file_stem()
                 .map(|s| s.to_string_lossy().to_string())
                 .unwrap_or_default();
-            (
-                ResultRecord::new(
-                    &id,
-                    Outcome::Failed(format!("the job spec cannot be read: {m}")),
-                    t0.elapsed().as_secs_f64(),
-                ),
-                2,
-            )
+            let why = format!("the job spec cannot be read: {m}");
+            (record(&id, Outcome::Failed(why)), 2)
         }
         Ok(spec) => {
             let id = spec.id();
             match run_job(&spec, &mut |_| {}) {
-                Ok(r) => (
-                    ResultRecord::new(&id, Outcome::Done(r), t0.elapsed().as_secs_f64()),
-                    0,
-                ),
+                Ok(r) => (record(&id, Outcome::Done(r)), 0),
                 Err(e) => {
                     eprintln!("error: job {id} failed: {e}");
-                    (
-                        ResultRecord::new(
-                            &id,
-                            Outcome::Failed(e.to_string()),
-                            t0.elapsed().as_secs_f64(),
-                        ),
-                        1,
-                    )
+                    (record(&id, Outcome::Failed(e.to_string())), 1)
                 }
             }
         }

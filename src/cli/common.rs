@@ -1,6 +1,7 @@
-//! What the command modules share: the failure kinds and their exit codes, the worker count
-//! of `--jobs`, choosing sweeps in a database, loading a sweep file (with the grid points it
-//! leaves out), the regrid check of `sweep run` / `sweep submit`, and reading a job spec.
+//! What the command modules share: the flags of several commands (`--db` and `--sweep`, the
+//! worker flags), the failure kinds and their exit codes, choosing sweeps in a database, loading
+//! a sweep file (with the grid points it leaves out), the regrid check of `sweep run` / `sweep
+//! submit`, reading a job spec, and the reports after a run.
 
 use crate::refine::driver::{Outcome, RefineError};
 use crate::report::sweep_text::left_out_text;
@@ -8,8 +9,48 @@ use crate::report::sweep_text::refinement_text;
 use crate::run::RunOptions;
 use crate::store::{LeftOut, Store, StoreError, SweepRow};
 use crate::sweep::{JobSpec, SweepFile};
-use std::path::Path;
+use clap::Args;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
+
+/// Default database file, in the working directory.
+pub(super) const DEFAULT_DB: &str = "wetgran.sqlite";
+
+/// `--db` and `--sweep` of the commands that read one sweep or every sweep of a database.
+#[derive(Debug, Args)]
+pub struct DbSweeps {
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
+    pub db: PathBuf,
+    /// Only this sweep (default: all).
+    #[arg(long)]
+    pub sweep: Option<String>,
+}
+
+/// Worker threads and the wall-table cache of the commands that run jobs.
+#[derive(Debug, Args)]
+pub(super) struct Workers {
+    /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Allow --jobs above the available cores (several simulations share a core; each
+    /// runs slower, the sweep no faster).
+    #[arg(long)]
+    oversubscribe: bool,
+    /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
+    /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
+    /// caching.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
+    pub table_cache_mib: usize,
+}
+
+impl Workers {
+    /// The worker count of `--jobs` (`common::workers`).
+    pub(super) fn count(&self) -> Result<usize, Failure> {
+        workers(self.jobs, self.oversubscribe).map_err(Failure::BadInput)
+    }
+}
 
 /// How a command failed: bad input (exit code 2), a sweep that finished with failed jobs
 /// (exit code 4: everything else was done and stored) or anything else (exit code 1).
@@ -79,8 +120,10 @@ pub(super) fn workers(jobs: Option<usize>, oversubscribe: bool) -> Result<usize,
     }
 }
 
-pub(super) fn workers_or_fail(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, Failure> {
-    workers(jobs, oversubscribe).map_err(Failure::BadInput)
+/// Writes a file; a failure names it.
+pub(super) fn write_file(path: &Path, text: impl AsRef<[u8]>) -> Result<(), Failure> {
+    std::fs::write(path, text)
+        .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))
 }
 
 impl From<RefineError> for Failure {
@@ -100,15 +143,9 @@ pub(super) fn select(store: &Store, name: Option<&str>) -> Result<Vec<SweepRow>,
     })
 }
 
-/// Loads and expands a sweep file (the grid points left out are listed on stderr).
-pub(super) fn load_sweep(file: &Path) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>), Failure> {
-    let (sweep, jobs, _) = load_sweep_left_out(file)?;
-    Ok((sweep, jobs))
-}
-
 /// Loads and expands a sweep file; also returns the grid points `skip_invalid` left out, each
 /// with the scene constraint it fails, after listing them on stderr.
-pub(super) fn load_sweep_left_out(
+pub(super) fn load_sweep(
     file: &Path,
 ) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>, Vec<LeftOut>), Failure> {
     let sweep = SweepFile::load(file).map_err(|e| Failure::BadInput(e.to_string()))?;
@@ -216,15 +253,31 @@ pub(super) fn read_spec(path: &Path) -> Result<JobSpec, Failure> {
     JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)
 }
 
-/// The run options of refinement rounds: `jobs` workers, progress shown, the wall-table cache
-/// capped at `table_cache_mib`.
-pub(super) fn refine_opts(jobs: usize, table_cache_mib: usize) -> RunOptions {
+/// The options of a local run: `jobs` workers, progress shown, failed jobs left as they are,
+/// the wall-table cache capped at `table_cache_mib`.
+pub(super) fn run_options(jobs: usize, table_cache_mib: usize) -> RunOptions {
     RunOptions {
         jobs,
         retry_failed: false,
         show_progress: true,
         table_cache_mib,
     }
+}
+
+/// The line rule's labels (docs/model.md 7) over the lines of constant Gamma with new or
+/// extended results (after a run, an extension or a collection), with what changed on stderr:
+/// without it a result kept its point's own label, where the same job in a whole run got its
+/// line's.
+pub(super) fn relabel_lines(store: &Store, row: &SweepRow) -> Result<(), Failure> {
+    let relabelled = crate::run::relabel::relabel_changed(store, row)?;
+    if relabelled.changed() > 0 {
+        eprintln!(
+            "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
+            row.name,
+            relabelled.text()
+        );
+    }
+    Ok(())
 }
 
 /// Reports a refinement on stderr.
@@ -243,7 +296,7 @@ pub(super) fn continue_refinement(
     jobs: usize,
     table_cache_mib: usize,
 ) -> Result<(), Failure> {
-    let opts = refine_opts(jobs, table_cache_mib);
+    let opts = run_options(jobs, table_cache_mib);
     crate::refine::driver::continue_refinement(store, rows, &opts, &mut |row, o| {
         refinement_report(row, o)
     })?;

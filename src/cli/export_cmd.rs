@@ -2,22 +2,46 @@
 //! written as the store reads the rows, with the series in a long-format file of numbers and
 //! their text entries in another.
 
-use super::common::{Failure, exit, select};
-use super::sweep_cmd::ExportFormat;
+use super::common::DbSweeps;
+use super::common::{Failure, select};
 use crate::report::export::{self, Columns, ExportRow, JsonWriter};
 use crate::store::Store;
+use clap::{Args, ValueEnum};
 use std::io::{BufWriter, Write};
-use std::path::Path;
-use std::process::ExitCode;
+use std::path::{Path, PathBuf};
 
-/// What `export` writes where.
-pub(super) struct ExportTo<'a> {
-    pub format: ExportFormat,
-    pub output: Option<&'a Path>,
-    pub series: Option<&'a Path>,
-    pub text: Option<&'a Path>,
-    /// Every scalar column, the empty and constant ones included.
-    pub all: bool,
+/// Output format of `export`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(super) enum ExportFormat {
+    Csv,
+    Json,
+}
+
+/// `wetgran export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    pub from: DbSweeps,
+    /// Write JSON (everything nested, the series included) instead of CSV.
+    #[arg(long, conflicts_with = "format")]
+    json: bool,
+    /// `csv`; `json` is `--json`.
+    #[arg(long, value_enum, default_value = "csv")]
+    format: ExportFormat,
+    /// Write to this file instead of standard output.
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// Write the series (every array of the observables: time series, profiles, MSD) to
+    /// this file in long format, `job_id,series,index,value`, numbers only.
+    #[arg(long, value_name = "FILE")]
+    series: Option<PathBuf>,
+    /// With --series: write the text and true/false entries of the series (the names of the
+    /// monitored quantities, the checks' verdicts) to this file, same columns.
+    #[arg(long, value_name = "FILE")]
+    text: Option<PathBuf>,
+    /// Keep every scalar column, also those empty or the same in every row.
+    #[arg(long)]
+    all: bool,
 }
 
 fn create(path: &Path) -> Result<BufWriter<std::fs::File>, Failure> {
@@ -27,107 +51,106 @@ fn create(path: &Path) -> Result<BufWriter<std::fs::File>, Failure> {
 }
 
 /// `wetgran export`.
-pub(super) fn export(db: &Path, name: Option<&str>, to: ExportTo) -> ExitCode {
-    exit((|| {
-        if to.text.is_some() && to.series.is_none() {
-            return Err(Failure::BadInput(
-                "--text goes with --series (it holds the text entries of the series)".to_string(),
-            ));
+pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
+    let format = if a.json { ExportFormat::Json } else { a.format };
+    let (series_path, text_path) = (a.series.as_deref(), a.text.as_deref());
+    if text_path.is_some() && series_path.is_none() {
+        return Err(Failure::BadInput(
+            "--text goes with --series (it holds the text entries of the series)".to_string(),
+        ));
+    }
+    let store = Store::open_read_only(&a.from.db)?;
+    let sweeps = select(&store, a.from.sweep.as_deref())?;
+    let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
+    let output = a.output.as_deref();
+    let out_name = output.map_or("standard output".to_string(), |p| p.display().to_string());
+    // A reader that closes the pipe (`export | head`) ends the export quietly, with the
+    // status a shell reports for SIGPIPE, as `main` does for a failed print.
+    let out_failed = |e: std::io::Error| {
+        if output.is_none() && e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(141);
         }
-        let store = Store::open_read_only(db)?;
-        let sweeps = select(&store, name)?;
-        let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
-        let out_name = to
-            .output
-            .map_or("standard output".to_string(), |p| p.display().to_string());
-        // A reader that closes the pipe (`export | head`) ends the export quietly, with the
-        // status a shell reports for SIGPIPE, as `main` does for a failed print.
-        let out_failed = |e: std::io::Error| {
-            if to.output.is_none() && e.kind() == std::io::ErrorKind::BrokenPipe {
-                std::process::exit(141);
-            }
-            Failure::Other(format!("{out_name}: cannot write: {e}"))
-        };
-        let mut out: Box<dyn Write> = match to.output {
-            Some(p) => Box::new(create(p)?),
-            None => Box::new(BufWriter::new(std::io::stdout().lock())),
-        };
-        let mut series_out = to.series.map(create).transpose()?;
-        let mut text_out = to.text.map(create).transpose()?;
-        let file_failed = |p: Option<&Path>| {
-            let name = p.map(|p| p.display().to_string()).unwrap_or_default();
-            move |e: std::io::Error| Failure::Other(format!("{name}: cannot write: {e}"))
-        };
-        for (w, p) in [(&mut series_out, to.series), (&mut text_out, to.text)] {
-            if let Some(w) = w {
-                w.write_all(export::SERIES_HEADER.as_bytes())
-                    .map_err(file_failed(p))?;
-            }
+        Failure::Other(format!("{out_name}: cannot write: {e}"))
+    };
+    let mut out: Box<dyn Write> = match output {
+        Some(p) => Box::new(create(p)?),
+        None => Box::new(BufWriter::new(std::io::stdout().lock())),
+    };
+    let mut series_out = series_path.map(create).transpose()?;
+    let mut text_out = text_path.map(create).transpose()?;
+    let file_failed = |p: Option<&Path>| {
+        let name = p.map(|p| p.display().to_string()).unwrap_or_default();
+        move |e: std::io::Error| Failure::Other(format!("{name}: cannot write: {e}"))
+    };
+    for (w, p) in [(&mut series_out, series_path), (&mut text_out, text_path)] {
+        if let Some(w) = w {
+            w.write_all(export::SERIES_HEADER.as_bytes())
+                .map_err(file_failed(p))?;
         }
-        // Two passes in one read transaction (report::export, "Streaming"): the first finds
-        // the columns that carry information, the second writes.
-        let mut columns = Columns::new(to.all);
-        let mut json = JsonWriter::default();
-        let mut started = false;
-        store.scan_points(&ids, 2, |pass, k, p| {
-            let Some(r) = ExportRow::of(&sweeps[k], &p) else {
-                return Ok(());
-            };
-            let (scalars, series) = export::scalars_and_series(&r);
-            if pass == 0 {
-                columns.add(&r, &scalars);
-                return Ok(());
-            }
-            if !started {
-                columns.finish_first_pass();
-                if let ExportFormat::Csv = to.format {
-                    columns.write_csv_header(&mut out).map_err(out_failed)?;
-                }
-                started = true;
-            }
-            match to.format {
-                ExportFormat::Csv => columns
-                    .write_csv_row(&mut out, &r, &scalars)
-                    .map_err(out_failed)?,
-                ExportFormat::Json => json
-                    .row(&mut out, &columns.json_row(&r, &scalars))
-                    .map_err(out_failed)?,
-            }
-            if let Some(w) = series_out.as_mut() {
-                let text = text_out.as_mut().map(|t| t as &mut dyn Write);
-                export::write_series(w, text, &r, &series).map_err(file_failed(to.series))?;
-            }
-            Ok::<(), Failure>(())
-        })?;
+    }
+    // Two passes in one read transaction (report::export, "Streaming"): the first finds
+    // the columns that carry information, the second writes.
+    let mut columns = Columns::new(a.all);
+    let mut json = JsonWriter::default();
+    let mut started = false;
+    store.scan_points(&ids, 2, |pass, k, p| {
+        let Some(r) = ExportRow::of(&sweeps[k], &p) else {
+            return Ok(());
+        };
+        let (scalars, series) = export::scalars_and_series(&r);
+        if pass == 0 {
+            columns.add(&r, &scalars);
+            return Ok(());
+        }
         if !started {
-            // No finished job: the header alone, or an empty array.
             columns.finish_first_pass();
-            if let ExportFormat::Csv = to.format {
+            if let ExportFormat::Csv = format {
                 columns.write_csv_header(&mut out).map_err(out_failed)?;
             }
+            started = true;
         }
-        if let ExportFormat::Json = to.format {
-            json.finish(&mut out).map_err(out_failed)?;
+        match format {
+            ExportFormat::Csv => columns
+                .write_csv_row(&mut out, &r, &scalars)
+                .map_err(out_failed)?,
+            ExportFormat::Json => json
+                .row(&mut out, &columns.json_row(&r, &scalars))
+                .map_err(out_failed)?,
         }
-        out.flush().map_err(out_failed)?;
-        for (w, p) in [(&mut series_out, to.series), (&mut text_out, to.text)] {
-            if let Some(w) = w {
-                w.flush().map_err(file_failed(p))?;
-            }
+        if let Some(w) = series_out.as_mut() {
+            let text = text_out.as_mut().map(|t| t as &mut dyn Write);
+            export::write_series(w, text, &r, &series).map_err(file_failed(series_path))?;
         }
-        let left_out = columns.left_out();
-        if left_out > 0 {
-            eprintln!(
-                "export: {left_out} scalar column(s) left out, empty or the same in every row \
-                 (--all keeps them)"
-            );
+        Ok::<(), Failure>(())
+    })?;
+    if !started {
+        // No finished job: the header alone, or an empty array.
+        columns.finish_first_pass();
+        if let ExportFormat::Csv = format {
+            columns.write_csv_header(&mut out).map_err(out_failed)?;
         }
-        if to.series.is_none() {
-            eprintln!(
-                "export: scalar columns only; the series (time series, profiles) go to \
-                 --series FILE"
-            );
+    }
+    if let ExportFormat::Json = format {
+        json.finish(&mut out).map_err(out_failed)?;
+    }
+    out.flush().map_err(out_failed)?;
+    for (w, p) in [(&mut series_out, series_path), (&mut text_out, text_path)] {
+        if let Some(w) = w {
+            w.flush().map_err(file_failed(p))?;
         }
-        Ok(())
-    })())
+    }
+    let left_out = columns.left_out();
+    if left_out > 0 {
+        eprintln!(
+            "export: {left_out} scalar column(s) left out, empty or the same in every row \
+             (--all keeps them)"
+        );
+    }
+    if series_path.is_none() {
+        eprintln!(
+            "export: scalar columns only; the series (time series, profiles) go to \
+             --series FILE"
+        );
+    }
+    Ok(())
 }

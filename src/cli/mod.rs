@@ -14,11 +14,11 @@ mod report_cmd;
 mod simulate_cmd;
 pub mod sweep_cmd;
 
-use common::{Failure, available_cores, exit, workers_or_fail};
+use common::DbSweeps;
+use common::exit;
+use report_cmd::DbLatest;
 use sweep_cmd::SweepCommand;
 
-use crate::boundary::Extraction;
-use crate::report::ColourBy;
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -57,86 +57,24 @@ pub enum Command {
     /// straddling edge per axis, decades on a log axis) and confidence (the fraction of the
     /// replicas at both ends agreeing with their point's majority). Unconverged points are marked
     /// `?` and carry no boundary unless asked (`--include-unconverged`).
-    Boundaries {
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
-        db: PathBuf,
-        /// Only this sweep (default: all).
-        #[arg(long)]
-        sweep: Option<String>,
-        /// Print JSON (every sweep's map: points, labels, boundaries) instead of the table.
-        #[arg(long, conflicts_with = "format")]
-        json: bool,
-        /// `table`, or `csv` (one row per boundary point); `json` is `--json`.
-        #[arg(long, value_enum, default_value = "table")]
-        format: sweep_cmd::BoundaryFormat,
-        /// Let unconverged points (marked `?`) carry boundaries too; by default a boundary
-        /// rests only on converged points.
-        #[arg(long)]
-        include_unconverged: bool,
-    },
+    Boundaries(sweep_cmd::BoundariesArgs),
     /// Draw a sweep's phase diagram as SVG.
     ///
     /// E* (log axis) against Gamma, points coloured by phase, the boundary points, and the lines
     /// A = s_crit, A = d and Eq. 4.15 (solid-fluid force balance) drawn over; grey error bars
     /// span each boundary point's straddling edge; unconverged points are drawn hollow and carry
     /// no boundary unless asked.
-    Plot {
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
-        db: PathBuf,
-        /// The sweep (default: the one registered or updated last).
-        #[arg(long)]
-        sweep: Option<String>,
-        /// The SVG file to write.
-        #[arg(short = 'o', long = "output")]
-        output: PathBuf,
-        /// Let unconverged points (drawn hollow) carry boundaries too.
-        #[arg(long)]
-        include_unconverged: bool,
-        /// Scale of the y axis (Gamma): `auto` is logarithmic where the sweep's axis is.
-        #[arg(long, value_enum, default_value = "auto")]
-        y_scale: report_cmd::Scale,
-    },
+    Plot(report_cmd::PlotArgs),
     /// Show one stored sweep point: phase, the numbers it was decided on, pictures.
     ///
     /// The lateral profiles come from the stored observables; a snapshot re-runs the job's
     /// stored spec (same spec and seed, same numbers: the event count is compared with the
     /// stored run's) and draws its final configuration.
-    Show {
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
-        db: PathBuf,
-        /// The job: at least 6 leading hex digits of its id (`wetgran export` lists ids).
-        job: String,
-        /// Write a snapshot of the final configuration (`.xyz` for OVITO, or `.svg`); repeatable.
-        #[arg(long)]
-        snapshot: Vec<PathBuf>,
-        /// Colour of the SVG snapshot: `energy` (kinetic energy / E_cb) or `bridges`.
-        #[arg(long, default_value = "energy")]
-        colour_by: String,
-        /// Write the lateral profiles (T_g, packing fraction, n_cb against x) as SVG.
-        #[arg(long)]
-        profiles: Option<PathBuf>,
-        /// Print JSON (one object: the job, its phase and what it was decided on, the files
-        /// written) instead of the text.
-        #[arg(long)]
-        json: bool,
-    },
+    Show(point_cmd::ShowArgs),
     /// The fluid-gas boundary of inelastic systems: the inflection point of T_g/E_cb against
     /// E* along each line of constant Gamma of a sweep (docs/model.md 7), where it stands out
     /// of the line's scatter, else why there is none.
-    Inflection {
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
-        db: PathBuf,
-        /// Only this sweep (default: all).
-        #[arg(long)]
-        sweep: Option<String>,
-        /// Print JSON (an array, one object per sweep with its lines) instead of the table.
-        #[arg(long)]
-        json: bool,
-    },
+    Inflection(point_cmd::InflectionArgs),
     /// Export all finished jobs in tidy form: one row per job, CSV or JSON with the same fields.
     ///
     /// For pandas, Julia and friends: the axis columns in the sweep's order, then
@@ -145,34 +83,7 @@ pub enum Command {
     /// carry information: a column empty or the same in every row is left out unless --all. The
     /// series (time series, profiles) go to --series FILE in long format, numbers only; their
     /// text entries to --text FILE. docs/reports.md reads the database directly from pandas.
-    Export {
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
-        db: PathBuf,
-        /// Only this sweep (default: all).
-        #[arg(long)]
-        sweep: Option<String>,
-        /// Write JSON (everything nested, the series included) instead of CSV.
-        #[arg(long, conflicts_with = "format")]
-        json: bool,
-        /// `csv`; `json` is `--json`.
-        #[arg(long, value_enum, default_value = "csv")]
-        format: sweep_cmd::ExportFormat,
-        /// Write to this file instead of standard output.
-        #[arg(short = 'o', long = "output")]
-        output: Option<PathBuf>,
-        /// Write the series (every array of the observables: time series, profiles, MSD) to
-        /// this file in long format, `job_id,series,index,value`, numbers only.
-        #[arg(long, value_name = "FILE")]
-        series: Option<PathBuf>,
-        /// With --series: write the text and true/false entries of the series (the names of the
-        /// monitored quantities, the checks' verdicts) to this file, same columns.
-        #[arg(long, value_name = "FILE")]
-        text: Option<PathBuf>,
-        /// Keep every scalar column, also those empty or the same in every row.
-        #[arg(long)]
-        all: bool,
-    },
+    Export(export_cmd::ExportArgs),
     /// Plot the order parameters along each line of constant Gamma of a shaking sweep.
     ///
     /// T_g/E_cb, bridges per grain and Delta n_cb (Delta n_area for dry scenes) against E*, one
@@ -195,17 +106,7 @@ pub enum Command {
     /// thresholds (those of the sweep that last registered it), or with the thresholds of
     /// --classify FILE (a `[classify]` table or top-level keys); updates the phase and the
     /// numbers it was decided on, and prints how many labels changed (from -> to).
-    Reclassify {
-        /// Only this sweep's results (default: every sweep's).
-        #[arg(long)]
-        sweep: Option<String>,
-        /// Thresholds file (TOML).
-        #[arg(long, value_name = "FILE")]
-        classify: Option<PathBuf>,
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = sweep_cmd::DEFAULT_DB)]
-        db: PathBuf,
-    },
+    Reclassify(reclassify_cmd::ReclassifyArgs),
 }
 
 /// `wetgran job ...`.
@@ -231,24 +132,52 @@ impl Command {
     fn databases(&self) -> Vec<(&Path, bool)> {
         use SweepCommand as S;
         match self {
-            Command::Boundaries { db, .. }
-            | Command::Plot { db, .. }
-            | Command::Show { db, .. }
-            | Command::Inflection { db, .. }
-            | Command::Export { db, .. }
-            | Command::Reclassify { db, .. } => vec![(db.as_path(), false)],
-            Command::Lines(args) => vec![(args.db(), false)],
-            Command::Report(args) => vec![(args.db(), false)],
-            Command::Sweep { action } => match action {
-                S::Run { db, .. } | S::Submit { db, .. } => vec![(db.as_path(), true)],
-                S::Resume { db, .. }
-                | S::Status { db, .. }
-                | S::Refine { db, .. }
-                | S::Collect { db, .. } => vec![(db.as_path(), false)],
-                S::Estimate { db, .. } => db.iter().map(|d| (d.as_path(), false)).collect(),
-                S::Expand { .. } | S::Job { .. } => Vec::new(),
-            },
-            Command::Simulate(_) | Command::Job { .. } => Vec::new(),
+            Command::Boundaries(sweep_cmd::BoundariesArgs {
+                from: DbSweeps { db, .. },
+                ..
+            })
+            | Command::Inflection(point_cmd::InflectionArgs {
+                from: DbSweeps { db, .. },
+                ..
+            })
+            | Command::Export(export_cmd::ExportArgs {
+                from: DbSweeps { db, .. },
+                ..
+            })
+            | Command::Plot(report_cmd::PlotArgs {
+                from: DbLatest { db, .. },
+                ..
+            })
+            | Command::Lines(report_cmd::LinesArgs {
+                from: DbLatest { db, .. },
+                ..
+            })
+            | Command::Report(report_cmd::ReportArgs {
+                from: DbLatest { db, .. },
+                ..
+            })
+            | Command::Show(point_cmd::ShowArgs { db, .. })
+            | Command::Reclassify(reclassify_cmd::ReclassifyArgs { db, .. })
+            | Command::Sweep {
+                action:
+                    S::Resume(sweep_cmd::ResumeArgs { db, .. })
+                    | S::Status { db, .. }
+                    | S::Refine(refine_cmd::RefineArgs { db, .. })
+                    | S::Collect(DbSweeps { db, .. }),
+            } => vec![(db.as_path(), false)],
+            Command::Sweep {
+                action:
+                    S::Run(sweep_cmd::RunArgs { db, .. })
+                    | S::Submit(cluster_cmd::SubmitArgs { db, .. }),
+            } => vec![(db.as_path(), true)],
+            Command::Sweep {
+                action: S::Estimate(sweep_cmd::EstimateArgs { db, .. }),
+            } => db.iter().map(|d| (d.as_path(), false)).collect(),
+            Command::Sweep {
+                action: S::Expand { .. } | S::Job { .. },
+            }
+            | Command::Simulate(_)
+            | Command::Job { .. } => Vec::new(),
         }
     }
 }
@@ -261,217 +190,29 @@ pub fn main() -> ExitCode {
             return exit(Err(f));
         }
     }
-    match cli.command {
-        Command::Simulate(args) => simulate_cmd::simulate(args),
-        Command::Sweep { action } => sweep(action),
+    exit(match cli.command {
+        Command::Simulate(args) => return simulate_cmd::simulate(args),
         Command::Job {
             action: JobCommand::Run { spec, out },
-        } => cluster_cmd::job_run(&spec, out.as_deref()),
-        Command::Boundaries {
-            db,
-            sweep,
-            json,
-            format,
-            include_unconverged,
-        } => sweep_cmd::boundaries(
-            &db,
-            sweep.as_deref(),
-            if json {
-                sweep_cmd::BoundaryFormat::Json
-            } else {
-                format
-            },
-            Extraction {
-                include_unconverged,
-            },
-        ),
-        Command::Plot {
-            db,
-            sweep,
-            output,
-            include_unconverged,
-            y_scale,
-        } => report_cmd::plot(
-            &db,
-            sweep.as_deref(),
-            &output,
-            Extraction {
-                include_unconverged,
-            },
-            crate::report::plot_phase::MapStyle {
-                x_log: None,
-                y_log: y_scale.log(),
-            },
-        ),
-        Command::Export {
-            db,
-            sweep,
-            json,
-            format,
-            output,
-            series,
-            text,
-            all,
-        } => export_cmd::export(
-            &db,
-            sweep.as_deref(),
-            export_cmd::ExportTo {
-                format: if json {
-                    sweep_cmd::ExportFormat::Json
-                } else {
-                    format
-                },
-                output: output.as_deref(),
-                series: series.as_deref(),
-                text: text.as_deref(),
-                all,
-            },
-        ),
-        Command::Show {
-            db,
-            job,
-            snapshot,
-            colour_by,
-            profiles,
-            json,
-        } => match colour_by.parse::<ColourBy>() {
-            Ok(c) => point_cmd::show(&db, &job, &snapshot, c, profiles.as_deref(), json),
-            Err(e) => {
-                eprintln!("error: --colour-by: {e}");
-                ExitCode::from(2)
-            }
+        } => return cluster_cmd::job_run(&spec, out.as_deref()),
+        Command::Sweep { action } => match action {
+            SweepCommand::Run(a) => sweep_cmd::sweep_run(a),
+            SweepCommand::Resume(a) => sweep_cmd::sweep_resume(a),
+            SweepCommand::Status { db, json } => sweep_cmd::sweep_status(&db, json),
+            SweepCommand::Expand { file, specs } => sweep_cmd::sweep_expand(&file, specs),
+            SweepCommand::Job { spec } => sweep_cmd::sweep_job(&spec),
+            SweepCommand::Submit(a) => cluster_cmd::submit(a),
+            SweepCommand::Collect(a) => cluster_cmd::collect_cmd(a),
+            SweepCommand::Refine(a) => refine_cmd::refine(a),
+            SweepCommand::Estimate(a) => sweep_cmd::sweep_estimate(a),
         },
-        Command::Lines(args) => report_cmd::lines(args),
-        Command::Report(args) => report_cmd::report(args),
-        Command::Inflection { db, sweep, json } => {
-            point_cmd::inflection(&db, sweep.as_deref(), json)
-        }
-        Command::Reclassify {
-            sweep,
-            classify,
-            db,
-        } => reclassify_cmd::reclassify(&db, sweep.as_deref(), classify.as_deref()),
-    }
-}
-
-/// Runs a `sweep` subcommand.
-fn sweep(cmd: SweepCommand) -> ExitCode {
-    exit(match cmd {
-        SweepCommand::Run {
-            file,
-            db,
-            jobs,
-            oversubscribe,
-            retry_failed,
-            replace,
-            table_cache_mib,
-        } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
-            sweep_cmd::sweep_run(&file, &db, n, retry_failed, replace, table_cache_mib)
-        }),
-        SweepCommand::Resume {
-            name,
-            db,
-            jobs,
-            oversubscribe,
-            retry_failed,
-            extend,
-            extend_time,
-            table_cache_mib,
-        } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
-            use crate::sweep::job::ExtendTo;
-            let extend = extend
-                .map(ExtendTo::Periods)
-                .or(extend_time.map(ExtendTo::Time));
-            sweep_cmd::sweep_resume(
-                name.as_deref(),
-                &db,
-                n,
-                retry_failed,
-                extend,
-                table_cache_mib,
-            )
-        }),
-        SweepCommand::Status { db, json } => sweep_cmd::sweep_status(&db, json),
-        SweepCommand::Expand { file, specs } => sweep_cmd::sweep_expand(&file, specs),
-        SweepCommand::Job { spec } => sweep_cmd::sweep_job(&spec),
-        SweepCommand::Submit {
-            file,
-            slurm,
-            partition,
-            time,
-            cpus_per_task,
-            array_limit,
-            dry_run,
-            db,
-            dir,
-            replace,
-        } => {
-            if slurm {
-                cluster_cmd::submit(
-                    &file,
-                    &db,
-                    &cluster_cmd::Submit {
-                        options: crate::cluster::slurm::SbatchOptions {
-                            partition,
-                            time,
-                            cpus_per_task,
-                        },
-                        array_limit,
-                        dry_run,
-                        dir,
-                        replace,
-                    },
-                )
-            } else {
-                Err(Failure::BadInput(
-                    "sweep submit: give --slurm (the only cluster backend so far)".to_string(),
-                ))
-            }
-        }
-        SweepCommand::Collect { db, sweep } => cluster_cmd::collect_cmd(&db, sweep.as_deref()),
-        SweepCommand::Refine {
-            sweep,
-            db,
-            budget,
-            rounds,
-            resolution,
-            max_replicas,
-            jobs,
-            oversubscribe,
-            table_cache_mib,
-        } => workers_or_fail(jobs, oversubscribe).and_then(|n| {
-            refine_cmd::refine(
-                &db,
-                sweep.as_deref(),
-                refine_cmd::Overrides {
-                    budget,
-                    rounds,
-                    resolution,
-                    max_replicas,
-                },
-                n,
-                table_cache_mib,
-            )
-        }),
-        SweepCommand::Estimate {
-            file,
-            periods,
-            settle,
-            samples,
-            cores,
-            db,
-        } => match cores {
-            Some(0) => Err(Failure::BadInput(
-                "--cores 0 is out of range: must be >= 1".to_string(),
-            )),
-            c => sweep_cmd::sweep_estimate(
-                &file,
-                periods,
-                settle,
-                samples,
-                c.unwrap_or_else(available_cores),
-                &db,
-            ),
-        },
+        Command::Boundaries(a) => sweep_cmd::boundaries(a),
+        Command::Plot(a) => report_cmd::plot(a),
+        Command::Export(a) => export_cmd::export(a),
+        Command::Show(a) => point_cmd::show(a),
+        Command::Lines(a) => report_cmd::lines(a),
+        Command::Report(a) => report_cmd::report(a),
+        Command::Inflection(a) => point_cmd::inflection(a),
+        Command::Reclassify(a) => reclassify_cmd::reclassify(a),
     })
 }

@@ -3,14 +3,14 @@
 //! its job spec, which is deterministic) and `wetgran inflection` (the fluid-gas boundary of
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
-use super::common::{Failure, check_snapshot_names, exit, select};
+use super::common::{Failure, check_snapshot_names, select, write_file};
 use crate::report::point_text::{
     decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
 };
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use crate::store::{PointRow, Store};
-use std::path::{Path, PathBuf};
-use std::process::ExitCode;
+use clap::Args;
+use std::path::PathBuf;
 use wetgran_core::observe::{Observables, run_observed_with_frame};
 
 /// The stored job whose id starts with `prefix` (at least 6 characters), with its sweep's name.
@@ -46,112 +46,140 @@ fn find_job(store: &Store, prefix: &str) -> Result<(String, PointRow), Failure> 
 }
 
 /// `wetgran show`.
-pub fn show(
-    db: &Path,
-    job: &str,
-    snapshot: &[PathBuf],
-    colour_by: ColourBy,
-    profiles: Option<&Path>,
+#[derive(Debug, Args)]
+pub struct ShowArgs {
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
+    pub db: PathBuf,
+    /// The job: at least 6 leading hex digits of its id (`wetgran export` lists ids).
+    job: String,
+    /// Write a snapshot of the final configuration (`.xyz` for OVITO, or `.svg`); repeatable.
+    #[arg(long)]
+    snapshot: Vec<PathBuf>,
+    /// Colour of the SVG snapshot: `energy` (kinetic energy / E_cb) or `bridges`.
+    #[arg(long, default_value = "energy")]
+    colour_by: String,
+    /// Write the lateral profiles (T_g, packing fraction, n_cb against x) as SVG.
+    #[arg(long)]
+    profiles: Option<PathBuf>,
+    /// Print JSON (one object: the job, its phase and what it was decided on, the files
+    /// written) instead of the text.
+    #[arg(long)]
     json: bool,
-) -> ExitCode {
-    exit((|| {
-        check_snapshot_names(snapshot)?;
-        let store = Store::open_read_only(db)?;
-        let (sweep, p) = find_job(&store, job)?;
-        // With --json the lines below go to the object, printed at the end.
-        let mut doc = json.then(|| job_json(&sweep, &p));
-        let mut say = |key: &str, value: serde_json::Value, line: String| match doc.as_mut() {
-            Some(d) => match (&mut d[key], value) {
-                (serde_json::Value::Array(a), serde_json::Value::Array(b)) => a.extend(b),
-                (slot, v) => *slot = v,
-            },
-            None => println!("{line}"),
+}
+
+/// `wetgran show`.
+pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
+    let colour_by: ColourBy = a
+        .colour_by
+        .parse()
+        .map_err(|e| Failure::BadInput(format!("--colour-by: {e}")))?;
+    let (snapshot, json) = (&a.snapshot, a.json);
+    check_snapshot_names(snapshot)?;
+    let store = Store::open_read_only(&a.db)?;
+    let (sweep, p) = find_job(&store, &a.job)?;
+    // With --json the lines below go to the object, printed at the end.
+    let mut doc = json.then(|| job_json(&sweep, &p));
+    let mut say = |key: &str, value: serde_json::Value, line: String| match doc.as_mut() {
+        Some(d) => match (&mut d[key], value) {
+            (serde_json::Value::Array(a), serde_json::Value::Array(b)) => a.extend(b),
+            (slot, v) => *slot = v,
+        },
+        None => println!("{line}"),
+    };
+    if !json {
+        print!("{}", job_text(&sweep, &p));
+    }
+    let observables: Option<Observables> = p
+        .observables
+        .as_ref()
+        .map(|v| serde_json::from_value(v.clone()))
+        .transpose()
+        .map_err(|e| {
+            Failure::BadInput(format!(
+                "job {}: stored observables unreadable: {e}",
+                p.job_id
+            ))
+        })?;
+    if !json {
+        print!("{}", decision_text(&p));
+    }
+    if let Some(path) = &a.profiles {
+        let Some(o) = &observables else {
+            return Err(Failure::BadInput(format!(
+                "--profiles: job {} has no stored observables (status {})",
+                p.job_id, p.status
+            )));
         };
-        if !json {
-            print!("{}", job_text(&sweep, &p));
-        }
-        let observables: Option<Observables> = match &p.observables {
-            Some(v) => Some(serde_json::from_value(v.clone()).map_err(|e| {
-                Failure::BadInput(format!(
-                    "job {}: stored observables unreadable: {e}",
-                    p.job_id
-                ))
-            })?),
-            None => None,
+        write_file(path, profiles_svg(o))?;
+        say(
+            "profiles",
+            path.display().to_string().into(),
+            format!(
+                "profiles    {} (from the stored observables)",
+                path.display()
+            ),
+        );
+    }
+    if !snapshot.is_empty() {
+        // The stored spec runs the job again; same spec and seed, same numbers, so the
+        // re-run is the stored run, which the event count confirms.
+        let (run, frame) = run_observed_with_frame(&p.spec.scene, &mut |_| {});
+        let events = run.report.events_total;
+        let line = match p.events {
+            Some(stored) if stored as u64 == events => {
+                format!("re-run      reproduces the stored run ({stored} events)")
+            }
+            Some(stored) => format!(
+                "re-run      WARNING: {events} events, the stored run had {stored} (another \
+                 build or platform?)"
+            ),
+            None => format!("re-run      {events} events"),
         };
-        if !json {
-            print!("{}", decision_text(&p));
-        }
-        if let Some(path) = profiles {
-            let Some(o) = &observables else {
-                return Err(Failure::BadInput(format!(
-                    "--profiles: job {} has no stored observables (status {})",
-                    p.job_id, p.status
-                )));
-            };
-            std::fs::write(path, profiles_svg(o))
-                .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))?;
+        say("rerun_events", events.into(), line);
+        for path in snapshot {
+            write_snapshot(path, &frame, colour_by, run.observables.temperature_unit)
+                .map_err(Failure::Other)?;
             say(
-                "profiles",
-                path.display().to_string().into(),
-                format!(
-                    "profiles    {} (from the stored observables)",
-                    path.display()
-                ),
+                "snapshots",
+                serde_json::json!([path.display().to_string()]),
+                format!("snapshot    {} (final configuration)", path.display()),
             );
         }
-        if !snapshot.is_empty() {
-            // The stored spec runs the job again; same spec and seed, same numbers, so the
-            // re-run is the stored run, which the event count confirms.
-            let (run, frame) = run_observed_with_frame(&p.spec.scene, &mut |_| {});
-            let events = run.report.events_total;
-            let line = match p.events {
-                Some(stored) if stored as u64 == events => {
-                    format!("re-run      reproduces the stored run ({stored} events)")
-                }
-                Some(stored) => format!(
-                    "re-run      WARNING: {events} events, the stored run had {stored} (another \
-                     build or platform?)"
-                ),
-                None => format!("re-run      {events} events"),
-            };
-            say("rerun_events", events.into(), line);
-            for path in snapshot {
-                write_snapshot(path, &frame, colour_by, run.observables.temperature_unit)
-                    .map_err(Failure::Other)?;
-                say(
-                    "snapshots",
-                    serde_json::json!([path.display().to_string()]),
-                    format!("snapshot    {} (final configuration)", path.display()),
-                );
-            }
-        }
-        if let Some(d) = doc {
-            println!("{}", serde_json::to_string_pretty(&d).expect("serializes"));
-        }
-        Ok(())
-    })())
+    }
+    if let Some(d) = doc {
+        println!("{}", serde_json::to_string_pretty(&d).expect("serializes"));
+    }
+    Ok(())
 }
 
 /// `wetgran inflection`.
-pub fn inflection(db: &Path, name: Option<&str>, json: bool) -> ExitCode {
-    exit((|| {
-        let store = Store::open_read_only(db)?;
-        let mut all = Vec::new();
-        for s in select(&store, name)? {
-            let lines = gamma_lines(&store.points(s.id)?);
-            if json {
-                all.push(inflection_json(&s.name, &lines));
-            } else {
-                print!("{}", inflection_text(&s.name, &lines));
-            }
+pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
+    let store = Store::open_read_only(&a.from.db)?;
+    let mut all = Vec::new();
+    for s in select(&store, a.from.sweep.as_deref())? {
+        let lines = gamma_lines(&store.points(s.id)?);
+        if a.json {
+            all.push(inflection_json(&s.name, &lines));
+        } else {
+            print!("{}", inflection_text(&s.name, &lines));
         }
-        if json {
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&all).expect("serializes")
-            );
-        }
-        Ok(())
-    })())
+    }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&all).expect("serializes")
+        );
+    }
+    Ok(())
+}
+
+/// `wetgran inflection`.
+#[derive(Debug, Args)]
+pub struct InflectionArgs {
+    #[command(flatten)]
+    pub from: super::common::DbSweeps,
+    /// Print JSON (an array, one object per sweep with its lines) instead of the table.
+    #[arg(long)]
+    json: bool,
 }

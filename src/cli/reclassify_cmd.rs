@@ -6,11 +6,11 @@
 //! after registering a sweep, so a sweep that differs only in `[classify]` gets its labels at
 //! once.
 
-use super::common::{Failure, exit, select};
+use super::common::{Failure, select};
 use crate::run::relabel::relabel_stored;
 use crate::store::Store;
-use std::path::Path;
-use std::process::ExitCode;
+use clap::Args;
+use std::path::{Path, PathBuf};
 use wetgran_core::observe::Thresholds;
 
 /// Reads classifier thresholds from a TOML file: a `[classify]` table, or the keys at the top
@@ -38,16 +38,30 @@ pub(super) fn thresholds_file(path: &Path) -> Result<Thresholds, String> {
 }
 
 /// `wetgran reclassify [--sweep NAME] [--classify FILE] [--db PATH]`.
-pub(super) fn reclassify(db: &Path, sweep: Option<&str>, classify_file: Option<&Path>) -> ExitCode {
-    exit((|| {
-        let thresholds = classify_file
-            .map(thresholds_file)
-            .transpose()
-            .map_err(Failure::BadInput)?;
-        let store = Store::open_existing(db)?;
-        let sweeps = select(&store, sweep)?;
-        let r = relabel_stored(&store, &sweeps, thresholds.as_ref())?;
-        println!("{}", r.text());
-        Ok(())
-    })())
+#[derive(Debug, Args)]
+pub struct ReclassifyArgs {
+    /// Only this sweep's results (default: every sweep's).
+    #[arg(long)]
+    sweep: Option<String>,
+    /// Thresholds file (TOML).
+    #[arg(long, value_name = "FILE")]
+    classify: Option<PathBuf>,
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
+    pub db: PathBuf,
+}
+
+/// `wetgran reclassify`.
+pub(super) fn reclassify(a: ReclassifyArgs) -> Result<(), Failure> {
+    let thresholds = a
+        .classify
+        .as_deref()
+        .map(thresholds_file)
+        .transpose()
+        .map_err(Failure::BadInput)?;
+    let store = Store::open_existing(&a.db)?;
+    let sweeps = select(&store, a.sweep.as_deref())?;
+    let r = relabel_stored(&store, &sweeps, thresholds.as_ref())?;
+    println!("{}", r.text());
+    Ok(())
 }

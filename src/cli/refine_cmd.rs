@@ -2,32 +2,50 @@
 //! `crate::refine::driver`; the refinement that `sweep run` / `sweep resume` continue is
 //! `common::continue_refinement`).
 
-use super::common::{Failure, refine_opts, refinement_report};
+use super::common::{Failure, refinement_report, run_options};
 use crate::refine::Settings;
 use crate::refine::driver::{refine_sweep, refined_jobs, registered_file};
 use crate::store::Store;
-use std::path::Path;
+use clap::Args;
+use std::path::PathBuf;
 
-/// Command-line overrides of the `[refine]` table.
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct Overrides {
-    pub budget: Option<usize>,
-    pub rounds: Option<usize>,
-    pub resolution: Option<f64>,
-    pub max_replicas: Option<u32>,
+/// `sweep refine`: the command-line overrides of the `[refine]` table.
+#[derive(Debug, Args)]
+pub struct RefineArgs {
+    /// The sweep (default: the only one in the database).
+    #[arg(long)]
+    sweep: Option<String>,
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
+    pub db: PathBuf,
+    /// Jobs to add (default: what is left of the sweep file's `[refine]` budget).
+    #[arg(long)]
+    budget: Option<usize>,
+    /// Rounds the budget is split into (default: the file's, else 4).
+    #[arg(long)]
+    rounds: Option<usize>,
+    /// Stop when every boundary edge spans at most this fraction of each axis' range
+    /// (default: the file's, else 0: the budget only).
+    #[arg(long)]
+    resolution: Option<f64>,
+    /// Most replicas a point whose replicas disagree is raised to (default: the file's,
+    /// else 3 x sweep.replicas).
+    #[arg(long)]
+    max_replicas: Option<u32>,
+    #[command(flatten)]
+    workers: super::common::Workers,
 }
 
 /// `wetgran sweep refine`: `budget` more jobs (default: what is left of the file's `[refine]`
 /// budget).
-pub(super) fn refine(
-    db: &Path,
-    name: Option<&str>,
-    over: Overrides,
-    jobs: usize,
-    table_cache_mib: usize,
-) -> Result<(), Failure> {
+pub(super) fn refine(over: RefineArgs) -> Result<(), Failure> {
+    let (jobs, table_cache_mib, db) = (
+        over.workers.count()?,
+        over.workers.table_cache_mib,
+        &over.db,
+    );
     let store = Store::open_existing(db)?;
-    let row = match name {
+    let row = match &over.sweep {
         Some(n) => store.sweep(n)?,
         None => {
             let mut all = store.sweeps()?;
@@ -99,7 +117,7 @@ pub(super) fn refine(
         budget,
         budget.div_ceil(rounds),
         &settings,
-        &refine_opts(jobs, table_cache_mib),
+        &run_options(jobs, table_cache_mib),
     )?;
     refinement_report(&row, &o);
     Ok(())

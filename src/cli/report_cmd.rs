@@ -3,7 +3,7 @@
 //! parameters along lines of constant Gamma, `report::lines`) and `wetgran report` (a static HTML
 //! site of a sweep, `report::site`).
 
-use super::common::{Failure, exit};
+use super::common::{Failure, write_file};
 use crate::boundary::Extraction;
 use crate::report::boundaries_text::fixed_text;
 use crate::report::boundaries_text::{boundaries_table, chain_model_note, untrusted_points};
@@ -15,15 +15,14 @@ use crate::report::{ColourBy, profiles_svg, snapshot_svg};
 use crate::store::{Store, SweepRow};
 use clap::{Args, ValueEnum};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-use std::process::ExitCode;
+use std::path::PathBuf;
 use wetgran_core::observe::Observables;
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::Frame;
 
 /// The scale of a map's y axis (`Gamma` on a shaking map).
 #[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum Scale {
+pub(super) enum Scale {
     /// Logarithmic where the sweep's axis is (`log = {...}` in the sweep file).
     Auto,
     Linear,
@@ -32,7 +31,7 @@ pub enum Scale {
 
 impl Scale {
     /// `None` for auto, else whether the axis is logarithmic.
-    pub fn log(self) -> Option<bool> {
+    pub(super) fn log(self) -> Option<bool> {
         match self {
             Scale::Auto => None,
             Scale::Linear => Some(false),
@@ -41,15 +40,47 @@ impl Scale {
     }
 }
 
-/// `wetgran report`.
+/// `--db` and `--sweep` of the commands that draw one sweep.
 #[derive(Debug, Args)]
-pub struct ReportArgs {
+pub struct DbLatest {
     /// Database file; also from WETGRAN_DB (the flag wins).
-    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
-    db: PathBuf,
+    #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
+    pub db: PathBuf,
     /// The sweep (default: the one registered or updated last).
     #[arg(long)]
     sweep: Option<String>,
+}
+
+impl DbLatest {
+    /// The database, read only, and the sweep (`pick_sweep`).
+    fn open(&self) -> Result<(Store, SweepRow), Failure> {
+        let store = Store::open_read_only(&self.db)?;
+        let sweep = pick_sweep(&store, self.sweep.as_deref())?;
+        Ok((store, sweep))
+    }
+}
+
+/// `wetgran plot`.
+#[derive(Debug, Args)]
+pub struct PlotArgs {
+    #[command(flatten)]
+    pub from: DbLatest,
+    /// The SVG file to write.
+    #[arg(short = 'o', long = "output")]
+    output: PathBuf,
+    /// Let unconverged points (drawn hollow) carry boundaries too.
+    #[arg(long)]
+    include_unconverged: bool,
+    /// Scale of the y axis (Gamma): `auto` is logarithmic where the sweep's axis is.
+    #[arg(long, value_enum, default_value = "auto")]
+    y_scale: Scale,
+}
+
+/// `wetgran report`.
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    #[command(flatten)]
+    pub from: DbLatest,
     /// The folder to write the report into (created if missing; its files are replaced).
     #[arg(short = 'o', long = "output")]
     output: PathBuf,
@@ -68,12 +99,8 @@ pub struct ReportArgs {
 /// `wetgran lines`.
 #[derive(Debug, Args)]
 pub struct LinesArgs {
-    /// Database file; also from WETGRAN_DB (the flag wins).
-    #[arg(long, env = "WETGRAN_DB", default_value = super::sweep_cmd::DEFAULT_DB)]
-    db: PathBuf,
-    /// The sweep (default: the one registered or updated last).
-    #[arg(long)]
-    sweep: Option<String>,
+    #[command(flatten)]
+    pub from: DbLatest,
     /// The file to write: `.svg` (the panels) or `.csv` (one row per job).
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
@@ -105,11 +132,6 @@ pub(super) fn pick_sweep(store: &Store, name: Option<&str>) -> Result<SweepRow, 
     Ok(last)
 }
 
-pub(super) fn write_file(path: &Path, text: &str) -> Result<(), Failure> {
-    std::fs::write(path, text)
-        .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))
-}
-
 /// The lines of a sweep from its store.
 pub(super) fn sweep_lines(store: &Store, sweep: &SweepRow) -> Result<Lines, Failure> {
     let lines = lines_of(sweep, &store.points(sweep.id)?);
@@ -124,66 +146,59 @@ pub(super) fn sweep_lines(store: &Store, sweep: &SweepRow) -> Result<Lines, Fail
 }
 
 /// `wetgran plot`.
-pub(super) fn plot(
-    db: &Path,
-    name: Option<&str>,
-    output: &Path,
-    how: Extraction,
-    style: MapStyle,
-) -> ExitCode {
-    exit((|| {
-        let store = Store::open_read_only(db)?;
-        let sweep = pick_sweep(&store, name)?;
-        let drawn = draw_map(&store, &sweep, how, style)?;
-        std::fs::write(output, drawn.svg)
-            .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", output.display())))?;
-        eprintln!("wrote {}", output.display());
-        Ok(())
-    })())
+pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
+    let how = Extraction {
+        include_unconverged: a.include_unconverged,
+    };
+    let style = MapStyle {
+        x_log: None,
+        y_log: a.y_scale.log(),
+    };
+    let (store, sweep) = a.from.open()?;
+    write_file(&a.output, draw_map(&store, &sweep, how, style)?.svg)?;
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
 }
 
 /// `wetgran lines`.
-pub(super) fn lines(args: LinesArgs) -> ExitCode {
-    exit((|| {
-        let ext = args
-            .output
-            .as_ref()
-            .map(|p| p.extension().and_then(|e| e.to_str()).unwrap_or(""));
-        if let Some(e) = ext
-            && e != "svg"
-            && e != "csv"
-        {
-            return Err(Failure::BadInput(format!(
-                "-o {}: the file name must end in .svg or .csv",
-                args.output.as_ref().expect("given").display()
-            )));
-        }
-        let store = Store::open_read_only(&args.db)?;
-        let sweep = pick_sweep(&store, args.sweep.as_deref())?;
-        let lines = sweep_lines(&store, &sweep)?;
-        if args.json {
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&lines).expect("serializes")
-            );
+pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
+    let ext = args
+        .output
+        .as_ref()
+        .map(|p| p.extension().and_then(|e| e.to_str()).unwrap_or(""));
+    if let Some(e) = ext
+        && e != "svg"
+        && e != "csv"
+    {
+        return Err(Failure::BadInput(format!(
+            "-o {}: the file name must end in .svg or .csv",
+            args.output.as_ref().expect("given").display()
+        )));
+    }
+    let (store, sweep) = args.from.open()?;
+    let lines = sweep_lines(&store, &sweep)?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&lines).expect("serializes")
+        );
+    } else {
+        print!("{}", lines_table(&lines));
+    }
+    if let Some(out) = &args.output {
+        let text = if ext == Some("csv") {
+            lines_csv(&lines)
         } else {
-            print!("{}", lines_table(&lines));
-        }
-        if let Some(out) = &args.output {
-            let text = if ext == Some("csv") {
-                lines_csv(&lines)
-            } else {
-                lines_svg(&lines).map_err(Failure::BadInput)?
-            };
-            write_file(out, &text)?;
-            eprintln!("wrote {}", out.display());
-        }
-        if let Some(csv) = &args.csv {
-            write_file(csv, &lines_csv(&lines))?;
-            eprintln!("wrote {}", csv.display());
-        }
-        Ok(())
-    })())
+            lines_svg(&lines).map_err(Failure::BadInput)?
+        };
+        write_file(out, &text)?;
+        eprintln!("wrote {}", out.display());
+    }
+    if let Some(csv) = &args.csv {
+        write_file(csv, lines_csv(&lines))?;
+        eprintln!("wrote {}", csv.display());
+    }
+    Ok(())
 }
 
 /// The phase map of a sweep as `wetgran plot` draws it: the first slice of its map with its
@@ -308,102 +323,84 @@ fn pictures(
 }
 
 /// `wetgran report`.
-pub(super) fn report(args: ReportArgs) -> ExitCode {
-    exit((|| {
-        let store = Store::open_read_only(&args.db)?;
-        let sweep = pick_sweep(&store, args.sweep.as_deref())?;
-        let how = Extraction {
-            include_unconverged: args.include_unconverged,
-        };
-        let rows = store.points(sweep.id)?;
-        let summaries = store.point_summaries(&sweep)?;
-        let map = super::sweep_cmd::sweep_map(&sweep, &summaries, how)?;
-        let plane = map
-            .x
+pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
+    let (store, sweep) = args.from.open()?;
+    let how = Extraction {
+        include_unconverged: args.include_unconverged,
+    };
+    let rows = store.points(sweep.id)?;
+    let summaries = store.point_summaries(&sweep)?;
+    let map = super::sweep_cmd::sweep_map(&sweep, &summaries, how)?;
+    let plane = map
+        .x
+        .as_ref()
+        .zip(map.y.as_ref())
+        .map(|(x, y)| (x.index, y.index));
+    let style = MapStyle {
+        x_log: None,
+        y_log: args.y_scale.log(),
+    };
+    // A sweep without a map (one numeric axis, nothing classified yet) still gets its
+    // report, with the reason in place of the map.
+    let drawn = match draw_map(&store, &sweep, how, style) {
+        Ok(d) => Ok(d),
+        Err(Failure::BadInput(m)) => Err(m),
+        Err(e) => return Err(e),
+    };
+    let mut notes = HashMap::new();
+    if let Some(n) = chain_model_note(&summaries) {
+        notes.insert(sweep.name.clone(), n);
+    }
+    let mut untrusted = HashMap::new();
+    untrusted.insert(sweep.name.clone(), untrusted_points(&summaries));
+    let boundaries = boundaries_table(&[(&sweep, map)], &notes, &untrusted, how);
+    let lines = lines_of(&sweep, &rows);
+    let line_pictures = if lines.lines.is_empty() {
+        None
+    } else {
+        let all = lines_svg(&lines).map_err(Failure::Other)?;
+        let per_gamma = lines
+            .gammas()
+            .into_iter()
+            .map(|g| {
+                let one = Lines {
+                    lines: lines.at_gamma(g).into_iter().cloned().collect(),
+                    ..lines.clone()
+                };
+                lines_svg(&one).map_err(Failure::Other)
+            })
+            .collect::<Result<Vec<String>, Failure>>()?;
+        Some((all, per_gamma))
+    };
+    let pictures = pictures(&store, &rows, !args.no_snapshots)?;
+    let source = store.sweep_source(sweep.id)?;
+    let input = SiteInput {
+        sweep: &sweep,
+        source: &source,
+        db: &args.from.db.display().to_string(),
+        out: &args.output.display().to_string(),
+        rows: &rows,
+        map: drawn.as_ref().map_err(Clone::clone),
+        plane,
+        boundaries: &boundaries,
+        lines: line_pictures
             .as_ref()
-            .zip(map.y.as_ref())
-            .map(|(x, y)| (x.index, y.index));
-        let style = MapStyle {
-            x_log: None,
-            y_log: args.y_scale.log(),
-        };
-        // A sweep without a map (one numeric axis, nothing classified yet) still gets its
-        // report, with the reason in place of the map.
-        let drawn = match draw_map(&store, &sweep, how, style) {
-            Ok(d) => Ok(d),
-            Err(Failure::BadInput(m)) => Err(m),
-            Err(e) => return Err(e),
-        };
-        let mut notes = HashMap::new();
-        if let Some(n) = chain_model_note(&summaries) {
-            notes.insert(sweep.name.clone(), n);
+            .map(|(all, per)| (&lines, all.as_str(), per.as_slice())),
+        pictures: &pictures,
+    };
+    let files = site(&input);
+    for (path, text) in &files {
+        let full = args.output.join(path);
+        if let Some(dir) = full.parent() {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", dir.display())))?;
         }
-        let mut untrusted = HashMap::new();
-        untrusted.insert(sweep.name.clone(), untrusted_points(&summaries));
-        let boundaries = boundaries_table(&[(&sweep, map)], &notes, &untrusted, how);
-        let lines = lines_of(&sweep, &rows);
-        let line_pictures = if lines.lines.is_empty() {
-            None
-        } else {
-            let all = lines_svg(&lines).map_err(Failure::Other)?;
-            let per_gamma = lines
-                .gammas()
-                .into_iter()
-                .map(|g| {
-                    let one = Lines {
-                        lines: lines.at_gamma(g).into_iter().cloned().collect(),
-                        ..lines.clone()
-                    };
-                    lines_svg(&one).map_err(Failure::Other)
-                })
-                .collect::<Result<Vec<String>, Failure>>()?;
-            Some((all, per_gamma))
-        };
-        let pictures = pictures(&store, &rows, !args.no_snapshots)?;
-        let source = store.sweep_source(sweep.id)?;
-        let input = SiteInput {
-            sweep: &sweep,
-            source: &source,
-            db: &args.db.display().to_string(),
-            out: &args.output.display().to_string(),
-            rows: &rows,
-            map: drawn.as_ref().map_err(Clone::clone),
-            plane,
-            boundaries: &boundaries,
-            lines: line_pictures
-                .as_ref()
-                .map(|(all, per)| (&lines, all.as_str(), per.as_slice())),
-            pictures: &pictures,
-        };
-        let files = site(&input);
-        for (path, text) in &files {
-            let full = args.output.join(path);
-            if let Some(dir) = full.parent() {
-                std::fs::create_dir_all(dir).map_err(|e| {
-                    Failure::Other(format!("{}: cannot create: {e}", dir.display()))
-                })?;
-            }
-            write_file(&full, text)?;
-        }
-        eprintln!(
-            "wrote {} ({} files; open it in a browser)",
-            args.output.join("index.html").display(),
-            files.len()
-        );
-        Ok(())
-    })())
-}
-
-impl ReportArgs {
-    /// The `--db` path.
-    pub(crate) fn db(&self) -> &std::path::Path {
-        &self.db
+        write_file(&full, text)?;
     }
-}
-
-impl LinesArgs {
-    /// The `--db` path.
-    pub(crate) fn db(&self) -> &std::path::Path {
-        &self.db
-    }
+    eprintln!(
+        "wrote {} ({} files; open it in a browser)",
+        args.output.join("index.html").display(),
+        files.len()
+    );
+    Ok(())
 }

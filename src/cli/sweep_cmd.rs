@@ -4,8 +4,8 @@
 //! unknown sweep), 1 any other error.
 
 use super::common::{
-    Failure, available_cores, check_regrid, continue_refinement, exit, load_sweep,
-    load_sweep_left_out, read_spec, select,
+    DEFAULT_DB, DbSweeps, Failure, Workers, available_cores, check_regrid, continue_refinement,
+    load_sweep, read_spec, relabel_lines, run_options, select,
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{
@@ -19,13 +19,8 @@ use crate::report::sweep_text::{
 use crate::run::{RunOptions, run_sweeps};
 use crate::store::{Durability, PointSummary, Store, SweepRow};
 use crate::sweep::run_job;
-use clap::{Subcommand, ValueEnum};
+use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
-use std::process::ExitCode;
-use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
-
-/// Default database file, in the working directory.
-pub const DEFAULT_DB: &str = "wetgran.sqlite";
 
 /// `wetgran sweep ...`.
 #[derive(Debug, Subcommand)]
@@ -40,67 +35,13 @@ pub enum SweepCommand {
     /// an interrupted run loses at most the jobs that were running; `sweep resume` continues it.
     /// Progress: bars on a terminal, one line per finished job otherwise. Exit status 4 when the
     /// sweep ran to its end but some jobs failed (`sweep status` says why).
-    Run {
-        /// The sweep file.
-        file: PathBuf,
-        /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
-        db: PathBuf,
-        /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
-        #[arg(long)]
-        jobs: Option<usize>,
-        /// Allow --jobs above the available cores (several simulations share a core; each
-        /// runs slower, the sweep no faster).
-        #[arg(long)]
-        oversubscribe: bool,
-        /// Put the failed jobs of this sweep back in the queue first.
-        #[arg(long)]
-        retry_failed: bool,
-        /// Allow a sweep name already in the database to get a different grid (its points not
-        /// in the new grid leave the sweep; their results stay in the database).
-        #[arg(long)]
-        replace: bool,
-        /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
-        /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
-        /// caching.
-        #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
-        table_cache_mib: usize,
-    },
+    Run(RunArgs),
     /// Continue interrupted sweeps: re-queue the jobs of runners that died, run what is pending.
     ///
     /// Jobs that were running under a process that no longer exists (same host) or whose
     /// runner has not sent a heartbeat for 60 s are put back in the queue; finished jobs are
     /// never recomputed. Without NAME every sweep in the database is continued.
-    Resume {
-        /// The sweep to continue (default: all).
-        name: Option<String>,
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
-        db: PathBuf,
-        /// Worker threads (default: the available cores).
-        #[arg(long)]
-        jobs: Option<usize>,
-        /// Allow --jobs above the available cores (several simulations share a core; each
-        /// runs slower, the sweep no faster).
-        #[arg(long)]
-        oversubscribe: bool,
-        /// Put failed jobs back in the queue first.
-        #[arg(long)]
-        retry_failed: bool,
-        /// Afterwards, run the unconverged finished jobs further from their checkpoints, up
-        /// to this many driving periods of total run (docs/observables.md).
-        #[arg(long, value_name = "MAX_PERIODS", conflicts_with = "extend_time")]
-        extend: Option<f64>,
-        /// The same with the total run in time units `sqrt(d/g)` (at high Gamma a period is
-        /// short, and the run policy counts in time).
-        #[arg(long, value_name = "MAX_TIME")]
-        extend_time: Option<f64>,
-        /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
-        /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
-        /// caching.
-        #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
-        table_cache_mib: usize,
-    },
+    Resume(ResumeArgs),
     /// Per sweep: jobs by state, failures with their message, time spent and time left.
     ///
     /// A running job whose runner is gone (its process no longer exists on this host) or silent
@@ -133,27 +74,7 @@ pub enum SweepCommand {
     /// the sweep (same ids: a line of it run first), the run length those actually needed.
     /// The wall time on the cores replays the runner's claim order (chains wait for their
     /// predecessors; a lone long job at the end is a tail). Writes nothing to any database.
-    Estimate {
-        file: PathBuf,
-        /// Driving periods timed per sampled job.
-        #[arg(long, default_value_t = 2.0)]
-        periods: f64,
-        /// Simulated time units `sqrt(d/g)` each sampled job runs untimed first: a hot start
-        /// cools and a bed settles, and the cost per period changes (0: time from the start).
-        #[arg(long, default_value_t = DEFAULT_ESTIMATE_SETTLE)]
-        settle: f64,
-        /// Number of jobs to sample; a sweep with several start modes (`initial.start` axis)
-        /// shares them out among the modes, at least one each.
-        #[arg(long, default_value_t = 6)]
-        samples: usize,
-        /// Cores the estimate is for (default: the available cores).
-        #[arg(long)]
-        cores: Option<usize>,
-        /// A database whose finished jobs of this sweep count with their measured cost and run
-        /// length (any sweep's jobs with the same ids); may be given more than once.
-        #[arg(long)]
-        db: Vec<PathBuf>,
-    },
+    Estimate(EstimateArgs),
     /// Refine a sweep's phase boundaries: add points where neighbours differ in phase.
     ///
     /// In rounds: the stored points are Delaunay-triangulated in the plane of the phase map
@@ -163,38 +84,7 @@ pub enum SweepCommand {
     /// boundary edge is resolved. Interrupted, `sweep resume` runs the jobs of the round it was
     /// in, and continues up to the budget of a `[refine]` table (`--budget` is what one call
     /// adds: a second call adds that many again).
-    Refine {
-        /// The sweep (default: the only one in the database).
-        #[arg(long)]
-        sweep: Option<String>,
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
-        db: PathBuf,
-        /// Jobs to add (default: what is left of the sweep file's `[refine]` budget).
-        #[arg(long)]
-        budget: Option<usize>,
-        /// Rounds the budget is split into (default: the file's, else 4).
-        #[arg(long)]
-        rounds: Option<usize>,
-        /// Stop when every boundary edge spans at most this fraction of each axis' range
-        /// (default: the file's, else 0: the budget only).
-        #[arg(long)]
-        resolution: Option<f64>,
-        /// Most replicas a point whose replicas disagree is raised to (default: the file's,
-        /// else 3 x sweep.replicas).
-        #[arg(long)]
-        max_replicas: Option<u32>,
-        /// Worker threads (default: the available cores).
-        #[arg(long)]
-        jobs: Option<usize>,
-        /// Allow --jobs above the available cores (several simulations share a core; each
-        /// runs slower, the sweep no faster).
-        #[arg(long)]
-        oversubscribe: bool,
-        /// Cap of the wall-table cache in MiB, as for `sweep run`.
-        #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
-        table_cache_mib: usize,
-    },
+    Refine(super::refine_cmd::RefineArgs),
     /// Submit a sweep to a Slurm cluster as job arrays.
     ///
     /// Registers the jobs in the database, writes their self-contained specs and an sbatch array
@@ -205,51 +95,14 @@ pub enum SweepCommand {
     /// --array-limit and the cluster's MaxArraySize) are split into several arrays. Submitting
     /// again first collects what finished, then submits only the jobs that are not done and not
     /// queued: the failed, missing and corrupt ones.
-    Submit {
-        /// The sweep file.
-        file: PathBuf,
-        /// Submit with Slurm's sbatch (the only cluster backend).
-        #[arg(long)]
-        slurm: bool,
-        /// Slurm partition (default: the cluster's).
-        #[arg(long)]
-        partition: Option<String>,
-        /// Wall-time limit per task, as sbatch takes it (`30`, `2:00:00`, `1-00:00:00`).
-        #[arg(long)]
-        time: Option<String>,
-        /// CPUs per task (a job is one simulation on one thread).
-        #[arg(long, default_value_t = 1)]
-        cpus_per_task: u32,
-        /// Most tasks per array (default 1000, and never more than the cluster's MaxArraySize).
-        #[arg(long)]
-        array_limit: Option<usize>,
-        /// Print the array script(s) and submit nothing (nothing is written).
-        #[arg(long)]
-        dry_run: bool,
-        /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
-        db: PathBuf,
-        /// The sweep directory (default: `wetgran-slurm/<sweep name>` beside the database).
-        #[arg(long)]
-        dir: Option<PathBuf>,
-        /// Allow a registered sweep name to get a different grid (as `sweep run --replace`).
-        #[arg(long)]
-        replace: bool,
-    },
+    Submit(super::cluster_cmd::SubmitArgs),
     /// Read the results of submitted Slurm tasks into the database.
     ///
     /// Idempotent: a result already stored is not stored again. Reports failed tasks (with the
     /// job's error), corrupt result files, and missing ones (no result and no longer queued:
     /// killed at a limit, node failure); `sweep submit` submits those again. Exit status 4 when
     /// failed or lost jobs remain (tasks still queued are no failure).
-    Collect {
-        /// Database file; also from WETGRAN_DB (the flag wins).
-        #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
-        db: PathBuf,
-        /// Only this sweep (default: all).
-        #[arg(long)]
-        sweep: Option<String>,
-    },
+    Collect(DbSweeps),
     /// Run one job spec and print its result as JSON.
     ///
     /// The spec is JSON as printed by `sweep expand --specs` (a whole line or its `spec`); the
@@ -260,6 +113,72 @@ pub enum SweepCommand {
     },
 }
 
+/// `sweep run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The sweep file.
+    file: PathBuf,
+    /// Database file (created if missing); also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
+    pub db: PathBuf,
+    #[command(flatten)]
+    workers: Workers,
+    /// Put the failed jobs of this sweep back in the queue first.
+    #[arg(long)]
+    retry_failed: bool,
+    /// Allow a sweep name already in the database to get a different grid (its points not
+    /// in the new grid leave the sweep; their results stay in the database).
+    #[arg(long)]
+    replace: bool,
+}
+
+/// `sweep resume`.
+#[derive(Debug, Args)]
+pub struct ResumeArgs {
+    /// The sweep to continue (default: all).
+    name: Option<String>,
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
+    pub db: PathBuf,
+    #[command(flatten)]
+    workers: Workers,
+    /// Put failed jobs back in the queue first.
+    #[arg(long)]
+    retry_failed: bool,
+    /// Afterwards, run the unconverged finished jobs further from their checkpoints, up
+    /// to this many driving periods of total run (docs/observables.md).
+    #[arg(long, value_name = "MAX_PERIODS", conflicts_with = "extend_time")]
+    extend: Option<f64>,
+    /// The same with the total run in time units `sqrt(d/g)` (at high Gamma a period is
+    /// short, and the run policy counts in time).
+    #[arg(long, value_name = "MAX_TIME")]
+    extend_time: Option<f64>,
+}
+
+/// `sweep estimate`.
+#[derive(Debug, Args)]
+pub struct EstimateArgs {
+    file: PathBuf,
+    /// Driving periods timed per sampled job.
+    #[arg(long, default_value_t = 2.0)]
+    periods: f64,
+    /// Simulated time units `sqrt(d/g)` each sampled job runs untimed first: a hot start
+    /// cools and a bed settles, and the cost per period changes (0: time from the start).
+    #[arg(long, default_value_t = DEFAULT_ESTIMATE_SETTLE)]
+    settle: f64,
+    /// Number of jobs to sample; a sweep with several start modes (`initial.start` axis)
+    /// shares them out among the modes, at least one each.
+    #[arg(long, default_value_t = 6)]
+    samples: usize,
+    /// Cores the estimate is for (default: the available cores).
+    #[arg(long)]
+    cores: Option<usize>,
+    /// A database whose finished jobs of this sweep count with their measured cost and run
+    /// length (any sweep's jobs with the same ids); may be given more than once.
+    #[arg(long)]
+    pub db: Vec<PathBuf>,
+}
+
 /// Output format of `boundaries`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BoundaryFormat {
@@ -268,29 +187,16 @@ pub enum BoundaryFormat {
     Csv,
 }
 
-/// Output format of `export`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ExportFormat {
-    Csv,
-    Json,
-}
-
-pub(super) fn sweep_run(
-    file: &Path,
-    db: &Path,
-    jobs: usize,
-    retry: bool,
-    replace: bool,
-    table_cache_mib: usize,
-) -> Result<(), Failure> {
+pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
+    let (jobs, table_cache_mib, db) = (a.workers.count()?, a.workers.table_cache_mib, &a.db);
     // The file is checked in full before the database is touched.
-    let (sweep, expanded, left_out) = load_sweep_left_out(file)?;
+    let (sweep, expanded, left_out) = load_sweep(&a.file)?;
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
     // a sync"): everything it writes can be made again from the sweep file.
     let store = Store::open_as(db, true, Durability::Fast)?;
     super::interrupt::resume_hint_on_interrupt(Some(&sweep.name), db);
     if let Ok(old) = store.sweep(&sweep.name) {
-        check_regrid(&store, &old, &sweep, &expanded, replace)?;
+        check_regrid(&store, &old, &sweep, &expanded, a.replace)?;
     }
     let row = store.register_sweep(&sweep, &expanded)?;
     store.set_left_out(row.id, &left_out)?;
@@ -299,14 +205,8 @@ pub(super) fn sweep_run(
     if relabelled.changed() > 0 {
         eprintln!("sweep {}: {}", row.name, relabelled.text());
     }
-    run_and_report(
-        &store,
-        std::slice::from_ref(&row),
-        jobs,
-        retry,
-        table_cache_mib,
-    )?;
     let rows = [row];
+    run_and_report(&store, &rows, jobs, a.retry_failed, table_cache_mib)?;
     continue_refinement(&store, &rows, jobs, table_cache_mib)?;
     fail_if_jobs_failed(&store, &rows)
 }
@@ -329,42 +229,30 @@ fn fail_if_jobs_failed(store: &Store, sweeps: &[SweepRow]) -> Result<(), Failure
     )))
 }
 
-pub(super) fn sweep_resume(
-    name: Option<&str>,
-    db: &Path,
-    jobs: usize,
-    retry: bool,
-    extend: Option<crate::sweep::job::ExtendTo>,
-    table_cache_mib: usize,
-) -> Result<(), Failure> {
+pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
+    use crate::sweep::job::ExtendTo;
+    let (jobs, table_cache_mib, db) = (a.workers.count()?, a.workers.table_cache_mib, &a.db);
+    let extend = a
+        .extend
+        .map(ExtendTo::Periods)
+        .or(a.extend_time.map(ExtendTo::Time));
     let store = Store::open_as(db, false, Durability::Fast)?;
-    super::interrupt::resume_hint_on_interrupt(name, db);
-    let sweeps = match name {
-        Some(n) => vec![store.sweep(n)?],
-        None => store.sweeps()?,
-    };
+    super::interrupt::resume_hint_on_interrupt(a.name.as_deref(), db);
+    let sweeps = select(&store, a.name.as_deref())?;
     if sweeps.is_empty() {
         return Err(Failure::BadInput(format!(
             "{}: no sweep in this database: start one with `wetgran sweep run FILE`",
             db.display()
         )));
     }
-    run_and_report(&store, &sweeps, jobs, retry, table_cache_mib)?;
+    run_and_report(&store, &sweeps, jobs, a.retry_failed, table_cache_mib)?;
     continue_refinement(&store, &sweeps, jobs, table_cache_mib)?;
     let Some(cap) = extend else {
         return fail_if_jobs_failed(&store, &sweeps);
     };
     super::extend_cmd::extend_and_report(&store, &sweeps, cap, jobs, table_cache_mib)?;
-    // Extended results get the line rule's labels too, as after any run.
     for s in &sweeps {
-        let relabelled = crate::run::relabel::relabel_changed(&store, s)?;
-        if relabelled.changed() > 0 {
-            eprintln!(
-                "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
-                s.name,
-                relabelled.text()
-            );
-        }
+        relabel_lines(&store, s)?;
     }
     fail_if_jobs_failed(&store, &sweeps)
 }
@@ -376,16 +264,11 @@ fn run_and_report(
     retry: bool,
     table_cache_mib: usize,
 ) -> Result<(), Failure> {
-    let summary = run_sweeps(
-        store,
-        sweeps,
-        &RunOptions {
-            jobs,
-            retry_failed: retry,
-            show_progress: true,
-            table_cache_mib,
-        },
-    )?;
+    let opts = RunOptions {
+        retry_failed: retry,
+        ..run_options(jobs, table_cache_mib)
+    };
+    let summary = run_sweeps(store, sweeps, &opts)?;
     eprintln!(
         "finished: {} job(s) done, {} failed{} in {:.1} s",
         summary.done,
@@ -398,14 +281,7 @@ fn run_and_report(
         summary.wall_seconds
     );
     for s in sweeps {
-        let relabelled = crate::run::relabel::relabel_changed(store, s)?;
-        if relabelled.changed() > 0 {
-            eprintln!(
-                "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
-                s.name,
-                relabelled.text()
-            );
-        }
+        relabel_lines(store, s)?;
         let c = store.counts(s.id)?;
         if c.failed > 0 {
             eprintln!(
@@ -473,7 +349,7 @@ pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
 }
 
 pub(super) fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
-    let (_, jobs) = load_sweep(file)?;
+    let (_, jobs, _) = load_sweep(file)?;
     for j in &jobs {
         let mut line = serde_json::json!({
             "id": j.id, "point": j.point, "replica": j.replica, "coords": j.coords,
@@ -493,16 +369,18 @@ pub(super) fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
 /// Simulated time units `sweep estimate` runs a sampled job before it times it.
 pub const DEFAULT_ESTIMATE_SETTLE: f64 = 20.0;
 
-pub(super) fn sweep_estimate(
-    file: &Path,
-    periods: f64,
-    settle: f64,
-    samples: usize,
-    cores: usize,
-    dbs: &[PathBuf],
-) -> Result<(), Failure> {
+pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
     use crate::sweep::estimate::{
         RateSample, cost_lines, measured_runs, planned_jobs, sample_picks, sample_spec, time_sample,
+    };
+    let (file, periods, settle, samples) = (&a.file, a.periods, a.settle, a.samples);
+    let cores = match a.cores {
+        Some(0) => {
+            return Err(Failure::BadInput(
+                "--cores 0 is out of range: must be >= 1".to_string(),
+            ));
+        }
+        c => c.unwrap_or_else(available_cores),
     };
     if !(periods.is_finite() && periods > 0.0) || samples == 0 {
         return Err(Failure::BadInput(
@@ -512,13 +390,13 @@ pub(super) fn sweep_estimate(
     if !(settle.is_finite() && settle >= 0.0) {
         return Err(Failure::BadInput("--settle must be >= 0".to_string()));
     }
-    let (sweep, mut jobs) = load_sweep(file)?;
+    let (sweep, mut jobs, _) = load_sweep(file)?;
     // One job per id, as the store registers them: a continuation chain's head is the hot job
     // of its point when the sweep also has the hot start (same spec, same id).
     let mut seen = std::collections::HashSet::new();
     jobs.retain(|j| seen.insert(j.id.clone()));
     let mut stored = std::collections::HashMap::new();
-    for path in dbs {
+    for path in &a.db {
         stored.extend(Store::open_read_only(path)?.finished_job_costs()?);
     }
     let planned = planned_jobs(&sweep, &jobs, &stored);
@@ -609,43 +487,60 @@ pub(super) fn sweep_map(
 }
 
 /// `wetgran boundaries`.
-pub fn boundaries(
-    db: &Path,
-    name: Option<&str>,
+#[derive(Debug, Args)]
+pub struct BoundariesArgs {
+    #[command(flatten)]
+    pub from: DbSweeps,
+    /// Print JSON (every sweep's map: points, labels, boundaries) instead of the table.
+    #[arg(long, conflicts_with = "format")]
+    json: bool,
+    /// `table`, or `csv` (one row per boundary point); `json` is `--json`.
+    #[arg(long, value_enum, default_value = "table")]
     format: BoundaryFormat,
-    how: Extraction,
-) -> ExitCode {
-    exit((|| {
-        let store = Store::open_read_only(db)?;
-        let sweeps = select(&store, name)?;
-        let mut maps = Vec::new();
-        let mut points = Vec::new();
-        for s in &sweeps {
-            let p = store.point_summaries(s)?;
-            maps.push((s, sweep_map(s, &p, how)?));
-            points.push(p);
+    /// Let unconverged points (marked `?`) carry boundaries too; by default a boundary
+    /// rests only on converged points.
+    #[arg(long)]
+    include_unconverged: bool,
+}
+
+/// `wetgran boundaries`.
+pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
+    let how = Extraction {
+        include_unconverged: a.include_unconverged,
+    };
+    let store = Store::open_read_only(&a.from.db)?;
+    let sweeps = select(&store, a.from.sweep.as_deref())?;
+    let mut maps = Vec::new();
+    let mut points = Vec::new();
+    for s in &sweeps {
+        let p = store.point_summaries(s)?;
+        maps.push((s, sweep_map(s, &p, how)?));
+        points.push(p);
+    }
+    match if a.json {
+        BoundaryFormat::Json
+    } else {
+        a.format
+    } {
+        BoundaryFormat::Json => {
+            let v: Vec<_> = maps
+                .iter()
+                .map(|(s, m)| serde_json::json!({"sweep": s.name, "map": m}))
+                .collect();
+            println!("{}", serde_json::to_string_pretty(&v).expect("serializes"));
         }
-        match format {
-            BoundaryFormat::Json => {
-                let v: Vec<_> = maps
-                    .iter()
-                    .map(|(s, m)| serde_json::json!({"sweep": s.name, "map": m}))
-                    .collect();
-                println!("{}", serde_json::to_string_pretty(&v).expect("serializes"));
-            }
-            BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
-            BoundaryFormat::Table => {
-                let mut notes = std::collections::HashMap::new();
-                let mut untrusted = std::collections::HashMap::new();
-                for (s, points) in sweeps.iter().zip(&points) {
-                    if let Some(n) = chain_model_note(points) {
-                        notes.insert(s.name.clone(), n);
-                    }
-                    untrusted.insert(s.name.clone(), untrusted_points(points));
+        BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
+        BoundaryFormat::Table => {
+            let mut notes = std::collections::HashMap::new();
+            let mut untrusted = std::collections::HashMap::new();
+            for (s, points) in sweeps.iter().zip(&points) {
+                if let Some(n) = chain_model_note(points) {
+                    notes.insert(s.name.clone(), n);
                 }
-                print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
+                untrusted.insert(s.name.clone(), untrusted_points(points));
             }
+            print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
         }
-        Ok(())
-    })())
+    }
+    Ok(())
 }

@@ -27,6 +27,7 @@ pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
     let mut out = String::from(
         "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence,branch\n",
     );
+    let text = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
     for (s, m) in maps {
         let xl = m.x.as_ref().map(|a| a.key.clone()).unwrap_or_default();
         let yl = m.y.as_ref().map(|a| a.key.clone()).unwrap_or_default();
@@ -41,8 +42,8 @@ pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
                     p.phase,
                     p.x,
                     p.y,
-                    p.amplitude.map(|v| v.to_string()).unwrap_or_default(),
-                    p.omega.map(|v| v.to_string()).unwrap_or_default()
+                    text(p.amplitude),
+                    text(p.omega)
                 );
             }
             for b in slice.boundaries.values().flatten() {
@@ -53,8 +54,8 @@ pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
                     b.pair,
                     b.x,
                     b.y,
-                    b.amplitude.map(|v| v.to_string()).unwrap_or_default(),
-                    b.omega.map(|v| v.to_string()).unwrap_or_default(),
+                    text(b.amplitude),
+                    text(b.omega),
                     b.x_range[0],
                     b.x_range[1],
                     b.y_range[0],
@@ -196,52 +197,43 @@ pub fn boundaries_table(
                 let _ = writeln!(out, "  no boundary: {why}\n");
                 continue;
             }
+            let y_text = |v: f64| ya.as_ref().map(|_| short(v)).unwrap_or_default();
+            let (a, omega) = if m.shaking { ("A", "omega") } else { ("", "") };
+            let error = |log: bool, linear: &str| format!("+-{}", if log { "dec" } else { linear });
+            let y_log = ya.as_ref().is_some_and(|a| a.log);
             for (pair, list) in &slice.boundaries {
                 let _ = writeln!(out, "  boundary {pair} ({} point(s)){branch}", list.len());
-                let _ = writeln!(
-                    out,
-                    "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",
-                    xa.label,
+                let head = [
+                    &xa.label,
                     ylabel,
-                    if m.shaking { "A" } else { "" },
-                    if m.shaking { "omega" } else { "" },
-                    format!("+-{}", if xa.log { "dec" } else { "x" }),
-                    format!(
-                        "+-{}",
-                        if ya.as_ref().is_some_and(|a| a.log) {
-                            "dec"
-                        } else {
-                            "y"
-                        }
-                    ),
-                    "conf"
-                );
+                    a,
+                    omega,
+                    &error(xa.log, "x"),
+                    &error(y_log, "y"),
+                ];
+                table_row(&mut out, head.map(String::from), "conf");
                 for b in list {
-                    let _ = writeln!(
-                        out,
-                        "    {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>6}",
+                    let cells = [
                         short(b.x),
-                        if ya.is_some() {
-                            short(b.y)
-                        } else {
-                            String::new()
-                        },
+                        y_text(b.y),
                         opt_num(b.amplitude),
                         opt_num(b.omega),
                         short(b.x_half),
-                        if ya.is_some() {
-                            short(b.y_half)
-                        } else {
-                            String::new()
-                        },
-                        format!("{:.2}", b.confidence)
-                    );
+                        y_text(b.y_half),
+                    ];
+                    table_row(&mut out, cells, &format!("{:.2}", b.confidence));
                 }
             }
             let _ = writeln!(out);
         }
     }
     out
+}
+
+/// A row of a boundary's table: six columns of 10 characters, then the confidence in 6.
+fn table_row(out: &mut String, cells: [String; 6], confidence: &str) {
+    let line: String = cells.iter().map(|c| format!(" {c:>10}")).collect();
+    let _ = writeln!(out, "   {line} {confidence:>6}");
 }
 
 /// The phase map of a slice as a grid: rows = y (top: largest), columns = x.
@@ -289,14 +281,7 @@ fn write_grid(
         }
     );
     for &yv in ys.iter().rev() {
-        let mut row = format!(
-            "  {:>9} |",
-            if ya.is_some() {
-                short(yv)
-            } else {
-                String::new()
-            }
-        );
+        let mut row = format!("  {:>9} |", ya.map(|_| short(yv)).unwrap_or_default());
         for &xv in xs {
             let cell = slice
                 .points

@@ -29,29 +29,13 @@ use std::io::Write;
 /// One finished job.
 #[derive(Debug, Clone)]
 pub struct ExportRow {
-    pub sweep: String,
-    pub point: i64,
-    pub replica: i64,
     pub job_id: String,
     /// Axis values by scene key, in the sweep's axis order.
     pub params: Vec<(String, Value)>,
-    /// Container amplitude and angular frequency of a shaken scene (docs/model.md 4.1).
-    pub amplitude: Option<f64>,
-    pub omega: Option<f64>,
-    pub phase: Option<String>,
-    /// The run's stationarity verdict (`report::trust::stationary`).
-    pub stationary: Option<bool>,
-    /// The run's trend state (stationary, heating, cooling, coarsening, undecided; `None` for
-    /// results stored before trend states).
-    pub trend: Option<String>,
-    /// The trust mark: `?` label may change, `~` label kept by its trend, `None` stationary.
-    pub trust: Option<String>,
+    /// The values of the [`FIXED`] columns.
+    pub fixed: [Value; FIXED.len()],
     pub decided_on: Option<Value>,
     pub observables: Value,
-    pub simulated_time: Option<f64>,
-    pub wall_seconds: Option<f64>,
-    pub events: Option<i64>,
-    pub finished_at: Option<f64>,
 }
 
 impl ExportRow {
@@ -62,9 +46,6 @@ impl ExportRow {
         }
         let motion = p.spec.scene.drive_motion();
         Some(ExportRow {
-            sweep: sweep.name.clone(),
-            point: p.point,
-            replica: p.replica,
             job_id: p.job_id.clone(),
             params: sweep
                 .axes
@@ -72,48 +53,36 @@ impl ExportRow {
                 .zip(&p.coords)
                 .map(|(a, v)| (a.key.clone(), v.clone()))
                 .collect(),
-            amplitude: motion.map(|m| m.0),
-            omega: motion.map(|m| m.1),
-            phase: p.phase.clone(),
-            stationary: p.observables.as_ref().and_then(super::trust::stationary),
-            trend: p.trend.map(|t| t.name().to_string()),
-            trust: super::trust::mark(p.trust()).map(String::from),
+            fixed: [
+                sweep.name.clone().into(),
+                p.point.into(),
+                p.replica.into(),
+                p.job_id.clone().into(),
+                motion.map(|m| m.0).into(),
+                motion.map(|m| m.1).into(),
+                p.phase.clone().into(),
+                p.observables
+                    .as_ref()
+                    .and_then(super::trust::stationary)
+                    .into(),
+                p.trend.map(|t| t.name()).into(),
+                super::trust::mark(p.trust()).map(String::from).into(),
+                p.simulated_time.into(),
+                p.wall_seconds.into(),
+                p.events.into(),
+                p.finished_at.into(),
+            ],
             decided_on: p.decided_on.clone(),
             observables: p.observables.clone().unwrap_or(Value::Null),
-            simulated_time: p.simulated_time,
-            wall_seconds: p.wall_seconds,
-            events: p.events,
-            finished_at: p.finished_at,
         })
-    }
-
-    /// The columns every row has after the axes, with this row's values.
-    fn fixed(&self) -> [(&'static str, Value); FIXED.len()] {
-        let num = |v: Option<f64>| v.map_or(Value::Null, Value::from);
-        let text = |v: &Option<String>| v.clone().map_or(Value::Null, Value::from);
-        [
-            ("sweep", Value::from(self.sweep.clone())),
-            ("point", Value::from(self.point)),
-            ("replica", Value::from(self.replica)),
-            ("job_id", Value::from(self.job_id.clone())),
-            ("amplitude", num(self.amplitude)),
-            ("omega", num(self.omega)),
-            ("phase", text(&self.phase)),
-            (
-                "stationary",
-                self.stationary.map_or(Value::Null, Value::from),
-            ),
-            ("trend", text(&self.trend)),
-            ("trust", text(&self.trust)),
-            ("simulated_time", num(self.simulated_time)),
-            ("wall_seconds", num(self.wall_seconds)),
-            ("events", self.events.map_or(Value::Null, Value::from)),
-            ("finished_at", num(self.finished_at)),
-        ]
     }
 }
 
-/// The columns every row has, after the axis columns.
+/// The columns every row has, after the axis columns: the container motion of a shaken scene
+/// (`amplitude,omega`, docs/model.md 4.1), the run's stationarity verdict
+/// (`report::trust::stationary`), its trend state (empty for results stored before trend
+/// states) and trust mark (`?` label may change, `~` label kept by its trend, empty
+/// stationary), and the run's cost.
 pub const FIXED: [&str; 14] = [
     "sweep",
     "point",
@@ -378,7 +347,7 @@ impl Columns {
                     .map_or(Value::Null, |(_, v)| v.clone())
             })
             .collect();
-        out.extend(r.fixed().into_iter().map(|(_, v)| v));
+        out.extend(r.fixed.iter().cloned());
         out.extend(
             self.kept_names()
                 .iter()
@@ -482,26 +451,29 @@ mod tests {
     /// `obs`.
     fn row(job: &str, gamma: f64, obs: Value) -> ExportRow {
         ExportRow {
-            sweep: "s".into(),
-            point: 3,
-            replica: 1,
             job_id: job.into(),
             params: vec![
                 ("drive.gamma".to_string(), json!(gamma)),
                 ("drive.e_star".to_string(), json!(2.0)),
             ],
-            amplitude: Some(0.25),
-            omega: None,
-            phase: Some("g".into()),
-            stationary: Some(false),
-            trend: Some("heating".into()),
-            trust: Some("~".into()),
+            fixed: [
+                json!("s"),
+                json!(3),
+                json!(1),
+                json!(job),
+                json!(0.25),
+                Value::Null,
+                json!("g"),
+                json!(false),
+                json!("heating"),
+                json!("~"),
+                json!(10.0),
+                json!(0.5),
+                json!(7),
+                json!(1.0),
+            ],
             decided_on: Some(json!({"reason": "line one\nline \"two\"", "t": [1, 2]})),
             observables: obs,
-            simulated_time: Some(10.0),
-            wall_seconds: Some(0.5),
-            events: Some(7),
-            finished_at: Some(1.0),
         }
     }
 

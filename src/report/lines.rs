@@ -118,12 +118,20 @@ fn same(a: f64, b: f64) -> bool {
 
 pub use crate::run::relabel::gamma_e_star;
 
-/// The block standard error of monitored quantity `name` (module doc).
-fn block_error(obs: &serde_json::Value, name: &str) -> Option<f64> {
+/// The stored block test of monitored quantity `name` (`convergence.tests`).
+pub(crate) fn block_test<'a>(
+    obs: &'a serde_json::Value,
+    name: &str,
+) -> Option<&'a serde_json::Value> {
     obs.pointer("/convergence/tests")?
         .as_array()?
         .iter()
-        .find(|t| t["quantity"].as_str() == Some(name))?["standard_error"]
+        .find(|t| t["quantity"].as_str() == Some(name))
+}
+
+/// The block standard error of monitored quantity `name` (module doc).
+fn block_error(obs: &serde_json::Value, name: &str) -> Option<f64> {
+    block_test(obs, name)?["standard_error"]
         .as_f64()
         .filter(|e| e.is_finite())
 }
@@ -144,23 +152,15 @@ fn line_point(p: &PointRow, axes: [Option<usize>; 3]) -> Option<(Option<String>,
     let wet = p.spec.scene.is_wet();
     let num = |ptr: &str| obs.pointer(ptr).and_then(|v| v.as_f64());
     let temperature = num("/granular_temperature_reduced")?;
-    let (contrast, bins_error) = if wet {
-        (
-            num("/profiles/delta_n_cb")?,
-            num("/profiles/n_cb_standard_error"),
-        )
-    } else {
-        (
-            num("/profiles/delta_n_area")?,
-            num("/profiles/packing_standard_error"),
-        )
+    let (contrast, bins_error) = match wet {
+        true => ("/profiles/delta_n_cb", "/profiles/n_cb_standard_error"),
+        false => ("/profiles/delta_n_area", "/profiles/packing_standard_error"),
     };
-    let contrast_error = if wet {
-        block_error(obs, wetgran_core::observe::trend::DELTA_N_CB)
-    } else {
-        None
-    }
-    .or(bins_error.map(|e| std::f64::consts::SQRT_2 * e));
+    let (contrast, bins_error) = (num(contrast)?, num(bins_error));
+    // Only wet runs monitor their contrast (`Delta n_cb`) in blocks.
+    let block = |name| wet.then(|| block_error(obs, name)).flatten();
+    let contrast_error = block(wetgran_core::observe::trend::DELTA_N_CB)
+        .or(bins_error.map(|e| std::f64::consts::SQRT_2 * e));
     let branch = start_axis
         .and_then(|k| p.coords.get(k))
         .and_then(|v| v.as_str())
@@ -177,11 +177,7 @@ fn line_point(p: &PointRow, axes: [Option<usize>; 3]) -> Option<(Option<String>,
         temperature,
         temperature_error: block_error(obs, wetgran_core::observe::trend::TEMPERATURE),
         bridges: wet.then(|| num("/bridges_per_particle")).flatten(),
-        bridges_error: if wet {
-            block_error(obs, wetgran_core::observe::trend::BRIDGES)
-        } else {
-            None
-        },
+        bridges_error: block(wetgran_core::observe::trend::BRIDGES),
         contrast,
         contrast_error,
     };

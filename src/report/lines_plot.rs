@@ -218,15 +218,12 @@ fn legend(
     ))?;
     area.draw(&text("bar: standard error (blocks)", x + 8, 72))?;
     x += 210;
-    let branches: Vec<Option<&str>> = {
-        let mut b: Vec<Option<&str>> = Vec::new();
-        for l in &lines.lines {
-            if !b.contains(&l.branch.as_deref()) {
-                b.push(l.branch.as_deref());
-            }
+    let mut branches: Vec<Option<&str>> = Vec::new();
+    for l in &lines.lines {
+        if !branches.contains(&l.branch.as_deref()) {
+            branches.push(l.branch.as_deref());
         }
-        b
-    };
+    }
     for (k, b) in branches.iter().enumerate() {
         let colour = BRANCH_COLOURS[k % BRANCH_COLOURS.len()];
         area.draw(&PathElement::new(

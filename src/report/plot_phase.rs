@@ -13,7 +13,7 @@
 //! scene (the other axis may change `L_x`, `E_cb`, `s_crit` or anything else).
 //!
 //! A sweep with an `initial.start` axis (the hot and the cold branch of an elastic diagram) is
-//! drawn as one map of its branches ([`branches_svg`]): a grid point where the branches agree is
+//! drawn as one map of its branches ([`branches_map`]): a grid point where the branches agree is
 //! one dot; a bistable point (their phases differ) is a split disc, one sector per branch in its
 //! phase's colour (two branches: left half the first, right half the second), outlined in black
 //! and labelled with the phases in branch order (`g/f`). Each branch's boundary points keep
@@ -215,16 +215,12 @@ pub fn merge_branches(slices: &[&Slice]) -> Vec<DrawnPoint> {
     let mut at: std::collections::HashMap<(u64, u64), usize> = std::collections::HashMap::new();
     for (b, slice) in slices.iter().enumerate() {
         for p in &slice.points {
-            let key = ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits());
-            let found = if p.x.is_nan() || p.y.is_nan() {
-                None
-            } else {
-                at.get(&key).copied()
-            };
-            let k = match found {
+            let key = (!p.x.is_nan() && !p.y.is_nan())
+                .then(|| ((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits()));
+            let k = match key.and_then(|key| at.get(&key).copied()) {
                 Some(k) => k,
                 None => {
-                    if !(p.x.is_nan() || p.y.is_nan()) {
+                    if let Some(key) = key {
                         at.insert(key, out.len());
                     }
                     out.push(DrawnPoint {
@@ -253,17 +249,6 @@ fn branch_name(slices: &[&Slice], k: usize) -> String {
     )
 }
 
-/// Draws one slice of a phase map as SVG. `landmarks` adds the theory lines (shaking sweeps).
-pub fn phase_svg(
-    map: &PhaseMap,
-    slice: &Slice,
-    landmarks: Option<Landmarks>,
-    chain_model: Option<Vec<(f64, f64)>>,
-    title: &str,
-) -> Result<String, String> {
-    branches_svg(map, &[slice], landmarks, chain_model, title)
-}
-
 /// How a map is drawn: the scale of its axes where the caller chooses (`None`: the plane's, so
 /// `E*` log and `Gamma` linear on a shaking map).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -289,26 +274,9 @@ pub const MAP_HEIGHT: u32 = 640;
 const LEGEND_WIDTH: u32 = 330;
 
 /// Draws the slices of a phase map that differ only in their start mode (the branches) as one
-/// SVG map: bistable points as split discs (module doc). One slice draws as [`phase_svg`].
-pub fn branches_svg(
-    map: &PhaseMap,
-    slices: &[&Slice],
-    landmarks: Option<Landmarks>,
-    chain_model: Option<Vec<(f64, f64)>>,
-    title: &str,
-) -> Result<String, String> {
-    branches_map(
-        map,
-        slices,
-        landmarks,
-        chain_model,
-        title,
-        MapStyle::default(),
-    )
-    .map(|m| m.svg)
-}
-
-/// [`branches_svg`] with the axes' scales of `style`, and the pixel positions of the points.
+/// SVG map, bistable points as split discs (module doc), with the axes' scales of `style`;
+/// `landmarks` adds the theory lines (shaking sweeps). Also gives the pixel positions of the
+/// points.
 pub fn branches_map(
     map: &PhaseMap,
     slices: &[&Slice],
@@ -334,49 +302,34 @@ pub fn branches_map(
     }
     let x_range = range_of(all().map(|p| p.x), x_log);
     let y_range = range_of(all().map(|p| p.y), y_log);
-    let x_grid: Vec<f64> = all().map(|p| p.x).collect();
-    let y_grid: Vec<f64> = all().map(|p| p.y).collect();
-    let ticks = (
-        super::svg::grid_ticks(&x_grid, x_range, x_log, 14),
-        super::svg::grid_ticks(&y_grid, y_range, y_log, 14),
-    );
-    let lines = overlay_lines(map, landmarks, chain_model, (x_range, y_range), x_log);
+    let ticks = |values: Vec<f64>, range, log| super::svg::grid_ticks(&values, range, log, 14);
+    let desc = |a: &PlaneAxis, log: bool| match log {
+        true => format!("{} (log scale)", a.label),
+        false => a.label.clone(),
+    };
+    let drawing = Drawing {
+        title,
+        x_desc: desc(xa, x_log),
+        y_desc: desc(ya, y_log),
+        note: no_boundary_note(slices),
+        slices,
+        lines: overlay_lines(map, landmarks, chain_model, (x_range, y_range), x_log),
+        ticks: (
+            ticks(all().map(|p| p.x).collect(), x_range, x_log),
+            ticks(all().map(|p| p.y).collect(), y_range, y_log),
+        ),
+    };
     let mut svg = String::new();
     let points;
     {
         let root = SVGBackend::with_string(&mut svg, (MAP_WIDTH, MAP_HEIGHT)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let x_desc = if x_log {
-            format!("{} (log scale)", xa.label)
-        } else {
-            xa.label.clone()
-        };
-        let y_desc = if y_log {
-            format!("{} (log scale)", ya.label)
-        } else {
-            ya.label.clone()
-        };
-        let text = Texts {
-            title,
-            x_desc: &x_desc,
-            y_desc: &y_desc,
-            note: no_boundary_note(slices),
-        };
-        let x = x_range.0..x_range.1;
-        let y = y_range.0..y_range.1;
+        let (x, y) = (x_range.0..x_range.1, y_range.0..y_range.1);
         points = match (x_log, y_log) {
-            (true, true) => draw(
-                &root,
-                x.log_scale(),
-                y.log_scale(),
-                slices,
-                &lines,
-                &text,
-                &ticks,
-            ),
-            (true, false) => draw(&root, x.log_scale(), y, slices, &lines, &text, &ticks),
-            (false, true) => draw(&root, x, y.log_scale(), slices, &lines, &text, &ticks),
-            (false, false) => draw(&root, x, y, slices, &lines, &text, &ticks),
+            (true, true) => drawing.draw(&root, x.log_scale(), y.log_scale()),
+            (true, false) => drawing.draw(&root, x.log_scale(), y),
+            (false, true) => drawing.draw(&root, x, y.log_scale()),
+            (false, false) => drawing.draw(&root, x, y),
         }?;
         root.present().map_err(|e| e.to_string())?;
     }
@@ -447,12 +400,16 @@ fn overlay_lines(
     lines
 }
 
-/// The texts of a map: title, axis names, and the note saying why no boundary is drawn.
-struct Texts<'a> {
+/// What a map draws: title, axis names, the note saying why no boundary is drawn, the
+/// branches' points, the overlay lines and the ticks of both axes.
+struct Drawing<'a> {
     title: &'a str,
-    x_desc: &'a str,
-    y_desc: &'a str,
+    x_desc: String,
+    y_desc: String,
     note: Option<String>,
+    slices: &'a [&'a Slice],
+    lines: Vec<Line>,
+    ticks: (Vec<f64>, Vec<f64>),
 }
 
 /// Why a map has no boundary point, in words (`None` when it has one).
@@ -491,129 +448,128 @@ pub fn no_boundary_note(slices: &[&Slice]) -> Option<String> {
     })
 }
 
-fn draw<XR, YR>(
-    root: &DrawingArea<SVGBackend, Shift>,
-    x: XR,
-    y: YR,
-    slices: &[&Slice],
-    lines: &[Line],
-    text: &Texts,
-    ticks: &(Vec<f64>, Vec<f64>),
-) -> Result<Vec<(f64, f64, i32, i32)>, String>
-where
-    XR: AsRangedCoord<Value = f64>,
-    YR: AsRangedCoord<Value = f64>,
-    XR::CoordDescType: ValueFormatter<f64>,
-    YR::CoordDescType: ValueFormatter<f64>,
-{
-    let err = |e: DrawingAreaErrorKind<_>| e.to_string();
-    let mut chart = ChartBuilder::on(root)
-        .caption(text.title, ("sans-serif", 20))
-        .margin(15)
-        .margin_right(15 + LEGEND_WIDTH)
-        .x_label_area_size(45)
-        .y_label_area_size(60)
-        .build_cartesian_2d(x, y)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc(text.x_desc)
-        .y_desc(text.y_desc)
-        .disable_mesh()
-        .x_label_formatter(&|_| String::new())
-        .y_label_formatter(&|_| String::new())
-        .set_all_tick_mark_size(0)
-        .draw()
-        .map_err(err)?;
-    hand_ticks(root, chart.plotting_area(), &ticks.0, &ticks.1).map_err(err)?;
-    if let Some(note) = &text.note {
-        let (xr, yr) = chart.plotting_area().get_pixel_range();
-        let words = wrap(note, 60);
-        for (k, line) in words.iter().enumerate() {
-            root.draw(&Text::new(
-                line.clone(),
-                (xr.start + 12, yr.start + 10 + 18 * k as i32),
-                ("sans-serif", 15).into_font().color(&RGBColor(170, 0, 0)),
-            ))
+impl Drawing<'_> {
+    fn draw<XR, YR>(
+        &self,
+        root: &DrawingArea<SVGBackend, Shift>,
+        x: XR,
+        y: YR,
+    ) -> Result<Vec<(f64, f64, i32, i32)>, String>
+    where
+        XR: AsRangedCoord<Value = f64>,
+        YR: AsRangedCoord<Value = f64>,
+        XR::CoordDescType: ValueFormatter<f64>,
+        YR::CoordDescType: ValueFormatter<f64>,
+    {
+        let err = |e: DrawingAreaErrorKind<_>| e.to_string();
+        let mut chart = ChartBuilder::on(root)
+            .caption(self.title, ("sans-serif", 20))
+            .margin(15)
+            .margin_right(15 + LEGEND_WIDTH)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x, y)
             .map_err(err)?;
-        }
-    }
-    let mut legend: Vec<(String, Swatch)> = Vec::new();
-    for (label, color, parts) in lines {
-        let color = *color;
-        for (k, part) in parts.iter().enumerate() {
-            chart
-                .draw_series(LineSeries::new(part.iter().copied(), color.stroke_width(2)))
+        chart
+            .configure_mesh()
+            .x_desc(&self.x_desc)
+            .y_desc(&self.y_desc)
+            .disable_mesh()
+            .x_label_formatter(&|_| String::new())
+            .y_label_formatter(&|_| String::new())
+            .set_all_tick_mark_size(0)
+            .draw()
+            .map_err(err)?;
+        hand_ticks(root, chart.plotting_area(), &self.ticks.0, &self.ticks.1).map_err(err)?;
+        if let Some(note) = &self.note {
+            let (xr, yr) = chart.plotting_area().get_pixel_range();
+            let words = wrap(note, 60);
+            for (k, line) in words.iter().enumerate() {
+                root.draw(&Text::new(
+                    line.clone(),
+                    (xr.start + 12, yr.start + 10 + 18 * k as i32),
+                    ("sans-serif", 15).into_font().color(&RGBColor(170, 0, 0)),
+                ))
                 .map_err(err)?;
-            if k == 0 {
-                legend.push((label.clone(), Swatch::Line(color)));
             }
         }
+        let mut legend: Vec<(String, Swatch)> = Vec::new();
+        for (label, color, parts) in &self.lines {
+            let color = *color;
+            for (k, part) in parts.iter().enumerate() {
+                chart
+                    .draw_series(LineSeries::new(part.iter().copied(), color.stroke_width(2)))
+                    .map_err(err)?;
+                if k == 0 {
+                    legend.push((label.clone(), Swatch::Line(color)));
+                }
+            }
+        }
+        let points = merge_branches(self.slices);
+        // Smaller dots where refinement packed points densely.
+        let radius = if points.len() > 100 { 3 } else { 6 };
+        let mut phases: Vec<&str> = points
+            .iter()
+            .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
+            .collect();
+        phases.sort();
+        phases.dedup();
+        for phase in phases {
+            let color = phase_color(phase);
+            chart
+                .draw_series(
+                    points
+                        .iter()
+                        .filter(|p| !p.bistable() && p.phase() == phase)
+                        .map(|p| {
+                            // Untrusted points hollow: their label may still change.
+                            let style = if p.trusted {
+                                color.filled()
+                            } else {
+                                color.stroke_width(2)
+                            };
+                            Circle::new((p.x, p.y), radius, style)
+                        }),
+                )
+                .map_err(err)?;
+            legend.push((phase.to_string(), Swatch::Dot(color)));
+        }
+        if points.iter().any(|p| !p.trusted) {
+            let grey = RGBColor(90, 90, 90);
+            legend.push(("hollow: label may change".to_string(), Swatch::Ring(grey)));
+        }
+        // Not stationary, label kept by the trend (a heating gas, a cooling solid, a coarsening
+        // coexistence): a white centre in the filled disc.
+        let kept: Vec<&DrawnPoint> = points
+            .iter()
+            .filter(|p| p.trusted && p.label_kept && !p.bistable())
+            .collect();
+        if !kept.is_empty() {
+            let centre = (radius / 2).max(1);
+            chart
+                .draw_series(
+                    kept.iter()
+                        .map(|p| Circle::new((p.x, p.y), centre, WHITE.filled())),
+                )
+                .map_err(err)?;
+            legend.push((
+                "white centre: drifting, label kept (~)".to_string(),
+                Swatch::Kept,
+            ));
+        }
+        draw_bistable(&mut chart, self.slices, &points, radius, &mut legend)?;
+        draw_boundary_points(&mut chart, self.slices, &mut legend)?;
+        // The legend right of the plot, level with its top: it hides no point.
+        let (xr, yr) = chart.plotting_area().get_pixel_range();
+        draw_legend(root, (xr.end + 14, yr.start), &legend).map_err(err)?;
+        Ok(points
+            .iter()
+            .map(|p| {
+                let (px, py) = chart.backend_coord(&(p.x, p.y));
+                (p.x, p.y, px, py)
+            })
+            .collect())
     }
-    let points = merge_branches(slices);
-    // Smaller dots where refinement packed points densely.
-    let radius = if points.len() > 100 { 3 } else { 6 };
-    let mut phases: Vec<&str> = points
-        .iter()
-        .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
-        .collect();
-    phases.sort();
-    phases.dedup();
-    for phase in phases {
-        let color = phase_color(phase);
-        chart
-            .draw_series(
-                points
-                    .iter()
-                    .filter(|p| !p.bistable() && p.phase() == phase)
-                    .map(|p| {
-                        // Untrusted points hollow: their label may still change.
-                        let style = if p.trusted {
-                            color.filled()
-                        } else {
-                            color.stroke_width(2)
-                        };
-                        Circle::new((p.x, p.y), radius, style)
-                    }),
-            )
-            .map_err(err)?;
-        legend.push((phase.to_string(), Swatch::Dot(color)));
-    }
-    if points.iter().any(|p| !p.trusted) {
-        let grey = RGBColor(90, 90, 90);
-        legend.push(("hollow: label may change".to_string(), Swatch::Ring(grey)));
-    }
-    // Not stationary, label kept by the trend (a heating gas, a cooling solid, a coarsening
-    // coexistence): a white centre in the filled disc.
-    let kept: Vec<&DrawnPoint> = points
-        .iter()
-        .filter(|p| p.trusted && p.label_kept && !p.bistable())
-        .collect();
-    if !kept.is_empty() {
-        let centre = (radius / 2).max(1);
-        chart
-            .draw_series(
-                kept.iter()
-                    .map(|p| Circle::new((p.x, p.y), centre, WHITE.filled())),
-            )
-            .map_err(err)?;
-        legend.push((
-            "white centre: drifting, label kept (~)".to_string(),
-            Swatch::Kept,
-        ));
-    }
-    draw_bistable(&mut chart, slices, &points, radius, &mut legend)?;
-    draw_boundary_points(&mut chart, slices, &mut legend)?;
-    // The legend right of the plot, level with its top: it hides no point.
-    let (xr, yr) = chart.plotting_area().get_pixel_range();
-    draw_legend(root, (xr.end + 14, yr.start), &legend).map_err(err)?;
-    Ok(points
-        .iter()
-        .map(|p| {
-            let (px, py) = chart.backend_coord(&(p.x, p.y));
-            (p.x, p.y, px, py)
-        })
-        .collect())
 }
 
 /// The bistable points (those whose branches disagree): a disc split into one sector per
@@ -766,11 +722,6 @@ where
         legend.push((label, Swatch::Cross(color)));
     }
     Ok(())
-}
-
-/// The plane axis labels, for callers that describe a plot.
-pub fn axis_names(map: &PhaseMap) -> Option<(&PlaneAxis, &PlaneAxis)> {
-    Some((map.x.as_ref()?, map.y.as_ref()?))
 }
 
 #[cfg(test)]

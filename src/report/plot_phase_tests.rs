@@ -2,6 +2,48 @@
 //! and bistable points, the note of a map without boundary, ticks, log axes and the legend.
 
 use super::*;
+use crate::boundary::{MapPoint, PlaneAxis};
+
+/// A map point at `(x, y)` with its coordinates, phase and trust.
+fn point(coords: Vec<serde_json::Value>, x: f64, y: f64, phase: &str, trusted: bool) -> MapPoint {
+    MapPoint {
+        coords,
+        x,
+        y,
+        phase: phase.into(),
+        votes: vec![Some(phase.into())],
+        tie: false,
+        trusted,
+        label_kept: false,
+        amplitude: None,
+        omega: None,
+    }
+}
+
+fn axis(index: usize, key: &str, label: &str, log: bool) -> PlaneAxis {
+    PlaneAxis {
+        index,
+        key: key.into(),
+        label: label.into(),
+        log,
+    }
+}
+
+fn slice(branch: Option<&str>, points: Vec<MapPoint>) -> Slice {
+    Slice {
+        fixed: Vec::new(),
+        branch: branch.map(String::from),
+        points,
+        boundaries: Default::default(),
+    }
+}
+
+/// One slice drawn with the plane's scales.
+fn svg(map: &PhaseMap, slice: &Slice, chain: Option<Vec<(f64, f64)>>) -> String {
+    branches_map(map, &[slice], None, chain, "t", MapStyle::default())
+        .unwrap()
+        .svg
+}
 
 #[test]
 fn landmark_lines_follow_model_4_1_and_eq_4_15() {
@@ -48,7 +90,6 @@ fn chain_model_matches_eq_7_9() {
 
 #[test]
 fn chain_model_line_follows_the_other_axis() {
-    use crate::boundary::MapPoint;
     // Plane: x = L_x (box.size[0]), y = F_max; the line F_c(L_x) = 0.9229 * 6 / L_x.
     let base = include_str!("../../tests/scenes/good/shear_3d.toml");
     let scene_of = |c: &[serde_json::Value]| {
@@ -59,38 +100,14 @@ fn chain_model_line_follows_the_other_axis() {
         );
         Scene::from_toml_str(&text, "test").ok()
     };
-    let point = |l_x: f64, f: f64| MapPoint {
-        coords: vec![serde_json::json!(l_x), serde_json::json!(f)],
-        x: l_x,
-        y: f,
-        phase: "s".into(),
-        votes: vec![Some("s".into())],
-        tie: false,
-        trusted: true,
-        label_kept: false,
-        amplitude: None,
-        omega: None,
-    };
-    let axis = |index: usize, key: &str| PlaneAxis {
-        index,
-        key: key.into(),
-        label: key.into(),
-        log: false,
-    };
-    let slice = Slice {
-        fixed: Vec::new(),
-        branch: None,
-        points: vec![
-            point(24.0, 0.1),
-            point(12.0, 0.1),
-            point(12.0, 0.5),
-            point(24.0, 0.5),
-        ],
-        boundaries: Default::default(),
-    };
+    let at = |l_x: f64, f: f64| point(vec![l_x.into(), f.into()], l_x, f, "s", true);
+    let slice = slice(
+        None,
+        vec![at(24.0, 0.1), at(12.0, 0.1), at(12.0, 0.5), at(24.0, 0.5)],
+    );
     let map = PhaseMap {
-        x: Some(axis(0, "box.size[0]")),
-        y: Some(axis(1, "drive.f_max")),
+        x: Some(axis(0, "box.size[0]", "box.size[0]", false)),
+        y: Some(axis(1, "drive.f_max", "drive.f_max", false)),
         shaking: false,
         slices: vec![slice.clone()],
     };
@@ -102,52 +119,25 @@ fn chain_model_line_follows_the_other_axis() {
     }
     // Without the F_max axis in the plane: no line.
     let other = PhaseMap {
-        y: Some(axis(1, "contact.restitution")),
+        y: Some(axis(1, "contact.restitution", "contact.restitution", false)),
         ..map.clone()
     };
     assert!(chain_model_line(&other, &slice, scene_of).is_none());
     // The plot draws it with its legend.
-    let svg = phase_svg(&map, &slice, None, Some(line), "t").unwrap();
-    assert!(svg.contains("chain model, Eq. 7.9"));
+    assert!(svg(&map, &slice, Some(line)).contains("chain model, Eq. 7.9"));
 }
 
 #[test]
 fn branches_merge_by_position_and_only_disagreeing_points_are_bistable() {
-    use crate::boundary::MapPoint;
-    let point = |x: f64, phase: &str, trusted: bool| MapPoint {
-        coords: vec![serde_json::json!(x)],
-        x,
-        y: 1.0,
-        phase: phase.into(),
-        votes: vec![Some(phase.into())],
-        tie: false,
-        trusted,
-        label_kept: false,
-        amplitude: None,
-        omega: None,
-    };
-    let slice = |branch: &str, points: Vec<MapPoint>| Slice {
-        fixed: Vec::new(),
-        branch: Some(branch.into()),
-        points,
-        boundaries: Default::default(),
-    };
+    let at = |x: f64, phase: &str, trusted: bool| point(vec![x.into()], x, 1.0, phase, trusted);
     // Hot: f, g, g at x = 1, 2, 3; cold: f, f at x = 1, 2 (unconverged at 2), and x = 4.
     let hot = slice(
-        "hot",
-        vec![
-            point(1.0, "f", true),
-            point(2.0, "g", true),
-            point(3.0, "g", true),
-        ],
+        Some("hot"),
+        vec![at(1.0, "f", true), at(2.0, "g", true), at(3.0, "g", true)],
     );
     let cold = slice(
-        "cold",
-        vec![
-            point(1.0, "f", true),
-            point(2.0, "f", false),
-            point(4.0, "s", true),
-        ],
+        Some("cold"),
+        vec![at(1.0, "f", true), at(2.0, "f", false), at(4.0, "s", true)],
     );
     let merged = merge_branches(&[&hot, &cold]);
     let xs: Vec<f64> = merged.iter().map(|p| p.x).collect();
@@ -164,36 +154,14 @@ fn branches_merge_by_position_and_only_disagreeing_points_are_bistable() {
 /// A 3 x 3 (E*, Gamma) grid, Gamma 0.5, 2, 8: f below E* = 2, g from there; `trusted`
 /// marks every point.
 fn grid_map(trusted: bool) -> (PhaseMap, Slice) {
-    use crate::boundary::MapPoint;
     let mut points = Vec::new();
     for g in [0.5, 2.0, 8.0] {
         for e in [0.3, 1.0, 4.0] {
-            points.push(MapPoint {
-                coords: vec![serde_json::json!(g), serde_json::json!(e)],
-                x: e,
-                y: g,
-                phase: if e < 2.0 { "f" } else { "g" }.into(),
-                votes: vec![None],
-                tie: false,
-                trusted,
-                label_kept: false,
-                amplitude: None,
-                omega: None,
-            });
+            let phase = if e < 2.0 { "f" } else { "g" };
+            points.push(point(vec![g.into(), e.into()], e, g, phase, trusted));
         }
     }
-    let axis = |index: usize, key: &str, label: &str, log: bool| PlaneAxis {
-        index,
-        key: key.into(),
-        label: label.into(),
-        log,
-    };
-    let slice = Slice {
-        fixed: Vec::new(),
-        branch: None,
-        points,
-        boundaries: Default::default(),
-    };
+    let slice = slice(None, points);
     let map = PhaseMap {
         x: Some(axis(1, "drive.e_star", "E*", true)),
         y: Some(axis(0, "drive.gamma", "Gamma", false)),
@@ -206,18 +174,17 @@ fn grid_map(trusted: bool) -> (PhaseMap, Slice) {
 #[test]
 fn a_map_without_boundary_says_why_on_the_plot() {
     let (map, slice) = grid_map(false);
-    let svg = phase_svg(&map, &slice, None, None, "t").unwrap();
+    let text = svg(&map, &slice, None);
     assert!(
-        svg.contains("No boundary: none of the 9 points is converged"),
-        "{svg}"
+        text.contains("No boundary: none of the 9 points is converged"),
+        "{text}"
     );
     let (map, slice) = grid_map(true);
     let mut one_phase = slice.clone();
     for p in &mut one_phase.points {
         p.phase = "g".into();
     }
-    let svg = phase_svg(&map, &one_phase, None, None, "t").unwrap();
-    assert!(svg.contains("No boundary: every converged point is g"));
+    assert!(svg(&map, &one_phase, None).contains("No boundary: every converged point is g"));
     // With a boundary point: no note.
     let (_, mut with) = grid_map(true);
     let b = crate::boundary::BoundaryPoint {
@@ -235,15 +202,14 @@ fn a_map_without_boundary_says_why_on_the_plot() {
         branch: None,
     };
     with.boundaries.insert("f|g".into(), vec![b]);
-    let svg = phase_svg(&map, &with, None, None, "t").unwrap();
-    assert!(!svg.contains("No boundary"));
+    assert!(!svg(&map, &with, None).contains("No boundary"));
 }
 
 #[test]
 fn the_axes_have_a_tick_at_every_grid_value_and_gamma_can_be_logarithmic() {
     let (map, slice) = grid_map(true);
     let tick = |svg: &str, v: &str| svg.contains(&format!(">\n{v}\n</text>"));
-    let linear = phase_svg(&map, &slice, None, None, "t").unwrap();
+    let linear = svg(&map, &slice, None);
     let log = branches_map(
         &map,
         &[&slice],

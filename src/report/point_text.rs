@@ -93,11 +93,7 @@ pub fn decision_text(p: &PointRow) -> String {
 /// The relative error of a stored result's `T_g / E_cb`: its temperature block test
 /// (`convergence.tests`, `observe::line::temperature_rel_error`), `None` where none is stored.
 fn temperature_rel_error(obs: &serde_json::Value) -> Option<f64> {
-    let test = obs
-        .pointer("/convergence/tests")?
-        .as_array()?
-        .iter()
-        .find(|t| t["quantity"] == wetgran_core::observe::trend::TEMPERATURE)?;
+    let test = super::lines::block_test(obs, wetgran_core::observe::trend::TEMPERATURE)?;
     let r = test["standard_error"].as_f64()? / test["mean"].as_f64()?.abs();
     (r.is_finite() && r >= 0.0).then_some(r)
 }

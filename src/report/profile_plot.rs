@@ -56,13 +56,7 @@ pub fn profiles_svg(obs: &Observables) -> String {
     let h = mt + panels.len() as f64 * (ph + gap) + 10.0;
     let pw = w - ml - mr;
     let lx = p.centres.len() as f64 * p.bin_width;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{}\" \
-         font-family=\"sans-serif\" font-size=\"11\">",
-        n(h)
-    );
+    let mut s = super::svg::open(w, h);
     let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
     let _ = writeln!(
         s,
@@ -166,14 +160,7 @@ fn maps_svg(
     let rows = panels.len().div_ceil(cols);
     let w = ml + cols as f64 * (pw + gap);
     let h = mt + rows as f64 * (ph + gap) + 10.0;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" \
-         font-family=\"sans-serif\" font-size=\"11\">",
-        n(w),
-        n(h)
-    );
+    let mut s = super::svg::open(w, h);
     let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
     let _ = writeln!(
         s,

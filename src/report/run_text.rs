@@ -1,116 +1,99 @@
 //! The text of `wetgran simulate`: the run summary (events by kind, energy books) and the
 //! observables with the classification, from a [`RunReport`] and an [`ObservedRun`].
 
+use std::fmt::Write;
 use wetgran_core::observe::ObservedRun;
-use wetgran_core::sim::RunReport;
+use wetgran_core::sim::{EnergyLedger, RunReport};
+
+/// One line of the run summary: the name in a column of 19 characters, then the value.
+fn row(s: &mut String, name: &str, value: impl std::fmt::Display) {
+    let _ = writeln!(s, "{name:<19} {value}");
+}
 
 /// Human-readable summary of a run.
 pub fn summary_text(r: &RunReport) -> String {
     let e = &r.events;
     let mut s = String::new();
-    use std::fmt::Write;
     let _ = writeln!(s, "{}D, {} particles", r.dimension, r.particles);
-    let _ = writeln!(
-        s,
-        "simulated time      {:.6}{}",
-        r.simulated_time,
-        if r.stopped_on_event_cap {
-            "  (stopped on run.max_events)"
-        } else {
-            ""
-        }
-    );
+    let capped = if r.stopped_on_event_cap {
+        "  (stopped on run.max_events)"
+    } else {
+        ""
+    };
+    let time = format!("{:.6}{capped}", r.simulated_time);
+    row(&mut s, "simulated time", time);
+    let wall = r.wall_seconds.max(1e-9);
     if r.engine == "time" {
         // Time-driven: the counts are contact onsets, formations and ruptures, not events.
-        let _ = writeln!(
-            s,
-            "wall time           {:.3} s  ({:.3e} particle-steps/s)",
-            r.wall_seconds,
-            r.steps as f64 * r.particles as f64 / r.wall_seconds.max(1e-9)
-        );
-        let _ = writeln!(s, "engine              time-driven, {} steps", r.steps);
+        let rate = r.steps as f64 * r.particles as f64 / wall;
+        let wall_text = format!("{:.3} s  ({rate:.3e} particle-steps/s)", r.wall_seconds);
+        row(&mut s, "wall time", wall_text);
+        row(&mut s, "engine", format!("time-driven, {} steps", r.steps));
         if let Some(ov) = r.max_overlap {
-            let _ = writeln!(s, "largest overlap     {ov:.5} d");
+            row(&mut s, "largest overlap", format!("{ov:.5} d"));
         }
-        let _ = writeln!(s, "contact onsets etc. {}", r.events_total);
+        row(&mut s, "contact onsets etc.", r.events_total);
     } else {
-        let _ = writeln!(
-            s,
-            "wall time           {:.3} s  ({:.3e} events/s)",
-            r.wall_seconds,
-            r.events_total as f64 / r.wall_seconds.max(1e-9)
-        );
-        let _ = writeln!(s, "events              {}", r.events_total);
+        let rate = r.events_total as f64 / wall;
+        let wall_text = format!("{:.3} s  ({rate:.3e} events/s)", r.wall_seconds);
+        row(&mut s, "wall time", wall_text);
+        row(&mut s, "events", r.events_total);
     }
-    let _ = writeln!(s, "  pair collisions   {}", e.pair_collisions);
-    let _ = writeln!(s, "  wall collisions   {}", e.wall_collisions);
-    let _ = writeln!(s, "  cell crossings    {}", e.cell_crossings);
-    let _ = writeln!(s, "  bridge formations {}", e.bridge_formations);
-    let _ = writeln!(s, "  bridge ruptures   {}", e.bridge_ruptures);
-    let _ = writeln!(s, "  well bounces      {}", e.well_bounces);
-    if e.wall_rechecks > 0 {
-        let _ = writeln!(s, "  wall re-checks    {}", e.wall_rechecks);
+    for (name, n, always) in [
+        ("  pair collisions", e.pair_collisions, true),
+        ("  wall collisions", e.wall_collisions, true),
+        ("  cell crossings", e.cell_crossings, true),
+        ("  bridge formations", e.bridge_formations, true),
+        ("  bridge ruptures", e.bridge_ruptures, true),
+        ("  well bounces", e.well_bounces, true),
+        ("  wall re-checks", e.wall_rechecks, false),
+        ("  re-predictions", e.invalidated, true),
+        ("  slab crossings", e.slab_crossings, false),
+    ] {
+        if always || n > 0 {
+            row(&mut s, name, n);
+        }
     }
-    let _ = writeln!(s, "  re-predictions    {}", e.invalidated);
-    if e.slab_crossings > 0 {
-        let _ = writeln!(s, "  slab crossings    {}", e.slab_crossings);
-    }
-    let _ = write!(s, "granular temp. T_g  {:.6}", r.granular_temperature);
-    if let Some(x) = r.granular_temperature_over_ecb {
-        let _ = write!(s, "  (T_g/E_cb = {x:.4})");
-    }
-    let _ = writeln!(s);
-    let _ = writeln!(s, "bridges             {}", r.bridges);
+    let t_over_ecb = r
+        .granular_temperature_over_ecb
+        .map_or_else(String::new, |x| format!("  (T_g/E_cb = {x:.4})"));
+    let t_g = format!("{:.6}{t_over_ecb}", r.granular_temperature);
+    row(&mut s, "granular temp. T_g", t_g);
+    row(&mut s, "bridges", r.bridges);
     let (a, b) = (&r.energy_initial, &r.energy_final);
-    let _ = writeln!(s, "energy              initial        final");
-    let _ = writeln!(
-        s,
-        "  kinetic           {:<14.6} {:.6}",
-        a.kinetic, b.kinetic
-    );
-    let _ = writeln!(
-        s,
-        "  potential         {:<14.6} {:.6}",
-        a.potential, b.potential
-    );
-    let _ = writeln!(
-        s,
-        "  dissipated (rest.) {:<13.6} {:.6}",
-        a.dissipated_restitution, b.dissipated_restitution
-    );
-    let _ = writeln!(
-        s,
-        "  dissipated (rupt.) {:<13.6} {:.6}",
-        a.dissipated_ruptures, b.dissipated_ruptures
-    );
-    let _ = writeln!(
-        s,
-        "  added (remedies)  {:<14.3e} {:.3e}",
-        a.added_by_collapse_remedies, b.added_by_collapse_remedies
-    );
-    if b.added_by_wall_placement != 0.0 {
-        let _ = writeln!(
-            s,
-            "  added (placement) {:<14.3e} {:.3e}",
-            a.added_by_wall_placement, b.added_by_wall_placement
-        );
+    row(&mut s, "energy", "initial        final");
+    type Field = fn(&EnergyLedger) -> f64;
+    let rows: [(&str, Field, bool); 7] = [
+        ("kinetic", |e| e.kinetic, false),
+        ("potential", |e| e.potential, false),
+        ("dissipated (rest.)", |e| e.dissipated_restitution, false),
+        ("dissipated (rupt.)", |e| e.dissipated_ruptures, false),
+        ("added (remedies)", |e| e.added_by_collapse_remedies, true),
+        ("added (placement)", |e| e.added_by_wall_placement, true),
+        ("work by the drive", |e| e.work_by_drive, false),
+    ];
+    for (name, field, sci) in rows {
+        let (x, y) = (field(a), field(b));
+        if name == "added (placement)" && y == 0.0 {
+            continue;
+        }
+        let (x, y) = if sci {
+            (format!("{x:.3e}"), format!("{y:.3e}"))
+        } else {
+            (format!("{x:.6}"), format!("{y:.6}"))
+        };
+        // The initial values from column 21 (20 after a long name), the final ones after
+        // column 34.
+        let start = format!("  {name:<17} {x}");
+        let _ = writeln!(s, "{start:<34} {y}");
     }
-    let _ = writeln!(
-        s,
-        "  work by the drive {:<14.6} {:.6}",
-        a.work_by_drive, b.work_by_drive
-    );
-    let _ = writeln!(
-        s,
-        "  bookkeeping error {:.3e} (relative)",
-        r.energy_bookkeeping_error
-    );
+    let error = r.energy_bookkeeping_error;
+    let _ = writeln!(s, "  bookkeeping error {error:.3e} (relative)");
     s
 }
 
 /// Human-readable summary of the observables and the classification.
 pub fn observed_text(run: &ObservedRun) -> String {
-    use std::fmt::Write;
     let o = &run.observables;
     let c = &run.classification;
     let mut s = String::new();

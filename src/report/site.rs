@@ -68,6 +68,14 @@ struct Position<'a> {
     page: String,
 }
 
+impl Position<'_> {
+    /// The labels of its jobs with their trust marks, joined by `sep`.
+    fn labels(&self, sep: &str) -> String {
+        let labels: Vec<String> = self.jobs.iter().map(|j| mark_label(j)).collect();
+        labels.join(sep)
+    }
+}
+
 fn positions<'a>(sweep: &SweepRow, rows: &'a [PointRow]) -> Vec<Position<'a>> {
     let start = sweep.axes.iter().position(|a| a.key == START_AXIS);
     let mut out: Vec<Position<'a>> = Vec::new();
@@ -224,15 +232,7 @@ fn map_section(input: &SiteInput, positions: &[Position]) -> String {
             );
             for &(x, y, px, py) in &map.points {
                 if let Some(p) = page_at(positions, plane, x, y) {
-                    let what = format!(
-                        "{}: {}",
-                        coords_text(&p.coords),
-                        p.jobs
-                            .iter()
-                            .map(|j| mark_label(j))
-                            .collect::<Vec<_>>()
-                            .join("/")
-                    );
+                    let what = format!("{}: {}", coords_text(&p.coords), p.labels("/"));
                     let _ = writeln!(
                         h,
                         "<area shape=\"circle\" coords=\"{px},{py},9\" href=\"{}\" alt=\"{}\" \
@@ -306,12 +306,7 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
                 .trim_start_matches("points/")
                 .trim_end_matches(".html")),
             esc(&coords_text(&p.coords)),
-            esc(&p
-                .jobs
-                .iter()
-                .map(|j| mark_label(j))
-                .collect::<Vec<_>>()
-                .join(" "))
+            esc(&p.labels(" "))
         );
     }
     let _ = writeln!(h, "</table>");

@@ -185,14 +185,7 @@ pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> Str
     );
     let px = |x: f64| ml + x * scale;
     let pz = |z: f64| mt + (h + top_extra - z) * scale;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" \
-         font-family=\"sans-serif\" font-size=\"11\">",
-        n(w),
-        n(ht)
-    );
+    let mut s = super::svg::open(w, ht);
     let _ = writeln!(
         s,
         "<defs><clipPath id=\"box\"><rect x=\"{}\" y=\"0\" width=\"{}\" height=\"{}\"/></clipPath></defs>",

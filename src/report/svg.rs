@@ -7,6 +7,16 @@ pub(super) fn esc(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
+/// The opening tag of an SVG picture of `w` x `h` pixels (sans-serif text, 11 px).
+pub(super) fn open(w: f64, h: f64) -> String {
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" \
+         font-family=\"sans-serif\" font-size=\"11\">\n",
+        n(w),
+        n(h)
+    )
+}
+
 /// A number with few digits for coordinates (keeps files small).
 pub(super) fn n(v: f64) -> String {
     let r = (v * 100.0).round() / 100.0;

@@ -5,7 +5,9 @@
 
 use crate::run::runner::{point_label, short};
 use crate::store::{LeftOut, PointSummary, RunningJob, Stale, StateCounts, SweepRow};
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use wetgran_core::observe::trend::TrendState;
 
 /// A duration in seconds, minutes, hours or days, whichever reads best.
 pub fn duration_text(s: f64) -> String {
@@ -22,17 +24,11 @@ pub fn duration_text(s: f64) -> String {
 
 /// One line per left-out point: its coordinates and the constraint it fails.
 pub fn left_out_text(axes: &[crate::sweep::Axis], left_out: &[LeftOut]) -> String {
+    let labels: Vec<&str> = axes.iter().map(|a| a.label.as_str()).collect();
     let mut out = String::new();
     for k in left_out {
-        let coords: Vec<String> = axes
-            .iter()
-            .zip(&k.coords)
-            .map(|(a, v)| match v.as_f64() {
-                Some(x) => format!("{} = {}", a.label, short(x)),
-                None => format!("{} = {v}", a.label),
-            })
-            .collect();
-        let _ = writeln!(out, "  left out {}: {}", coords.join(", "), k.constraint);
+        let coords = coords_text(&labels, &k.coords);
+        let _ = writeln!(out, "  left out {coords}: {}", k.constraint);
     }
     out
 }
@@ -142,15 +138,23 @@ fn hysteresis_text(out: &mut String, s: &SweepRow, points: &[PointSummary]) {
     }
 }
 
+/// The trend states of the finished results, counted.
+fn trend_counts(points: &[PointSummary]) -> BTreeMap<TrendState, usize> {
+    let mut trends = BTreeMap::new();
+    for t in points
+        .iter()
+        .filter(|p| p.status == "done")
+        .filter_map(|p| p.trend)
+    {
+        *trends.entry(t).or_insert(0) += 1;
+    }
+    trends
+}
+
 /// The `trend` and `trust` lines of `sweep status`: the trends of the finished results, and how
 /// many of the `done` results are not stationary.
 fn trust_text(out: &mut String, points: &[PointSummary], done: u64) {
-    let mut trends = std::collections::BTreeMap::new();
-    for p in points.iter().filter(|p| p.status == "done") {
-        if let Some(t) = p.trend {
-            *trends.entry(t).or_insert(0usize) += 1;
-        }
-    }
+    let trends = trend_counts(points);
     if !trends.is_empty() {
         let counts: Vec<String> = trends.iter().map(|(t, n)| format!("{n} {t}")).collect();
         let _ = writeln!(out, "  trend  {}", counts.join(", "));
@@ -458,12 +462,10 @@ pub fn sweep_status_json(input: &StatusInput) -> serde_json::Value {
     let live = (c.running as usize).saturating_sub(stale.len());
     let (unconverged, checked) = crate::store::unconverged_summaries(points);
     let starts = crate::store::hysteresis::by_start(&s.axes, points);
-    let mut trends = std::collections::BTreeMap::new();
-    for p in points.iter().filter(|p| p.status == "done") {
-        if let Some(t) = p.trend {
-            *trends.entry(t.to_string()).or_insert(0usize) += 1;
-        }
-    }
+    let trends: BTreeMap<String, usize> = trend_counts(points)
+        .into_iter()
+        .map(|(t, n)| (t.to_string(), n))
+        .collect();
     let stale_runners: Vec<_> = stale_by_owner(&stale)
         .into_iter()
         .map(|(owner, n, why)| {
