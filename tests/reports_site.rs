@@ -66,6 +66,8 @@ fn prepared(dir: &Path) -> PathBuf {
                     test("delta_n_cb", 0.03)]},
                 "trend": {"state": state},
                 "checks": [{"quantity": "T_g", "ok": true}],
+                // Text entries enough to overflow the export's 8 KiB file buffer mid-run.
+                "notes": (0..40).map(|i| format!("note {i} of this job")).collect::<Vec<_>>(),
             }),
             simulated_time: 1.0,
             wall_seconds: 0.01,
@@ -376,6 +378,24 @@ fn the_export_is_tidy() {
     let text = std::fs::read_to_string(&text).unwrap();
     assert!(text.contains(",obs.checks.quantity,0,T_g"), "{text}");
     assert!(text.contains(",obs.convergence.tests.quantity,2,delta_n_cb"));
+    // A write that fails in the middle of the run names the file it failed on: the text file
+    // overflows its buffer before the end, so this error comes from a row, not the last flush.
+    assert!(text.len() > 2 * 8192, "{} bytes", text.len());
+    let full = run(&[
+        "export",
+        "--db",
+        db,
+        "--series",
+        dir.path().join("series2.csv").to_str().unwrap(),
+        "--text",
+        "/dev/full",
+    ]);
+    assert!(!full.status.success());
+    assert!(
+        stderr(&full).contains("/dev/full: cannot write"),
+        "{}",
+        stderr(&full)
+    );
 }
 
 /// The ```sql blocks of docs/reports.md.

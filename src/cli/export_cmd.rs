@@ -4,7 +4,7 @@
 
 use super::common::DbSweeps;
 use super::common::{Failure, select};
-use crate::report::export::{self, Columns, ExportRow, JsonWriter};
+use crate::report::export::{self, Columns, ExportRow, JsonWriter, SeriesFile};
 use crate::store::Store;
 use clap::{Args, ValueEnum};
 use std::io::{BufWriter, Write};
@@ -117,9 +117,14 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
                 .row(&mut out, &columns.json_row(&r, &scalars))
                 .map_err(out_failed)?,
         }
-        if let Some(w) = series_out.as_mut() {
-            let text = text_out.as_mut().map(|t| t as &mut dyn Write);
-            export::write_series(w, text, &r, &series).map_err(file_failed(series_path))?;
+        // Each file's write error names that file.
+        for (w, p, file) in [
+            (&mut series_out, series_path, SeriesFile::Numbers),
+            (&mut text_out, text_path, SeriesFile::Text),
+        ] {
+            if let Some(w) = w {
+                export::write_series(w, file, &r, &series).map_err(file_failed(p))?;
+            }
         }
         Ok::<(), Failure>(())
     })?;

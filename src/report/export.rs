@@ -198,36 +198,32 @@ pub fn scalars_and_series(r: &ExportRow) -> (BTreeMap<String, Value>, Vec<Series
     (m, series)
 }
 
-/// Writes a row's series: numbers (and missing numbers, as an empty value) to `numbers`, text
-/// and true/false entries to `text` where given.
+/// Which entries of a row's series a file holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SeriesFile {
+    /// Numbers, and missing numbers as an empty value (`--series`).
+    Numbers,
+    /// Text and true/false entries (`--text`).
+    Text,
+}
+
+/// Writes the entries of a row's series that belong in `file`, one `job_id,series,index,value`
+/// line each.
 pub fn write_series(
-    numbers: &mut impl Write,
-    text: Option<&mut dyn Write>,
+    w: &mut impl Write,
+    file: SeriesFile,
     r: &ExportRow,
     series: &[SeriesEntry],
 ) -> std::io::Result<()> {
     let job = csv_field(&r.job_id);
     for (name, index, value) in series {
-        if matches!(value, Value::Number(_) | Value::Null) {
-            writeln!(
-                numbers,
-                "{job},{},{index},{}",
-                csv_field(name),
-                scalar_text(value)
-            )?;
-        }
-    }
-    if let Some(w) = text {
-        for (name, index, value) in series {
-            if matches!(value, Value::String(_) | Value::Bool(_)) {
-                writeln!(
-                    w,
-                    "{job},{},{index},{}",
-                    csv_field(name),
-                    csv_field(&scalar_text(value))
-                )?;
-            }
-        }
+        let numeric = matches!(value, Value::Number(_) | Value::Null);
+        let value = match file {
+            SeriesFile::Numbers if numeric => scalar_text(value),
+            SeriesFile::Text if !numeric => csv_field(&scalar_text(value)),
+            _ => continue,
+        };
+        writeln!(w, "{job},{},{index},{value}", csv_field(name))?;
     }
     Ok(())
 }
@@ -579,7 +575,8 @@ mod tests {
         );
         let (_, series) = scalars_and_series(&r);
         let (mut numbers, mut text) = (Vec::new(), Vec::new());
-        write_series(&mut numbers, Some(&mut text), &r, &series).unwrap();
+        write_series(&mut numbers, SeriesFile::Numbers, &r, &series).unwrap();
+        write_series(&mut text, SeriesFile::Text, &r, &series).unwrap();
         let numbers = String::from_utf8(numbers).unwrap();
         let text = String::from_utf8(text).unwrap();
         for line in numbers.lines() {
