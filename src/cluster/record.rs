@@ -115,9 +115,7 @@ impl ResultRecord {
             outcome,
             wall_seconds,
             finished_at: crate::store::now(),
-            host: std::fs::read_to_string("/proc/sys/kernel/hostname")
-                .map(|s| s.trim().to_string())
-                .unwrap_or_else(|_| "unknown".to_string()),
+            host: crate::store::host_name(),
             slurm_task,
         }
     }

@@ -8,8 +8,8 @@ use crate::sweep::spec::JobSpec;
 use std::path::Path;
 use std::time::{SystemTime, UNIX_EPOCH};
 
-/// This host's name, as owner names carry it.
-pub(super) fn host_name() -> String {
+/// This host's name, as owner names and result records carry it.
+pub(crate) fn host_name() -> String {
     std::fs::read_to_string("/proc/sys/kernel/hostname")
         .ok()
         .or_else(|| std::env::var("HOSTNAME").ok())

@@ -60,8 +60,7 @@ pub use summary::{PointSummary, axis_keeps_report_scene, unconverged_summaries};
 
 use crate::sweep::file::Axis;
 use crate::sweep::spec::JobSpec;
-#[cfg(test)]
-use claims::host_name;
+pub(crate) use claims::host_name;
 use claims::{new_owner, owner_is_dead};
 use sqlx::sqlite::SqlitePool;
 use std::fmt;

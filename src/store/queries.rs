@@ -35,7 +35,6 @@ queries! {
     COPY_JOB_TO_NEW_ID = "copy_job_to_new_id";
     FINISHED_JOB_COSTS = "finished_job_costs";
     COUNT_BY_STATUS = "count_by_status";
-    COUNT_RUNS = "count_runs";
     DELETE_GRID_POINTS = "delete_grid_points";
     MARK_RELABEL_JOB = "mark_relabel_job";
     MARK_RELABEL_POINT = "mark_relabel_point";

@@ -13,11 +13,6 @@ impl Store {
         self.run(sqlx::query_scalar(queries::INTEGRITY_CHECK).fetch_all(&self.pool))
     }
 
-    /// Number of rows in the `runs` table: simulations started, ever, in this database.
-    pub fn runs_started(&self) -> Result<i64, StoreError> {
-        self.run(sqlx::query_scalar(queries::COUNT_RUNS).fetch_one(&self.pool))
-    }
-
     /// The spec of a job, if the database has it.
     pub fn job_spec(&self, job_id: &str) -> Result<Option<JobSpec>, StoreError> {
         let row: Option<(String,)> = self.run(
