@@ -261,7 +261,7 @@ fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
     let s = store.sweep("cool").unwrap();
     let before = store.points(s.id).unwrap();
     assert_eq!(
-        wetgran::store::unconverged_count(&before),
+        wetgran::store::unconverged_summaries(&store.point_summaries(&s).unwrap()),
         (2, 2),
         "cooling never settles"
     );

@@ -246,16 +246,6 @@ impl PointRow {
     }
 }
 
-/// Results that did not reach a stationary window ([`wetgran_core::observe::Observables::converged`]),
-/// and the number of results that carry a verdict at all: `(unconverged, with a verdict)`.
-pub fn unconverged_count(points: &[PointRow]) -> (u64, u64) {
-    let verdicts = points
-        .iter()
-        .filter_map(|p| p.observables.as_ref())
-        .filter_map(wetgran_core::observe::converged_in_json);
-    verdicts.fold((0, 0), |(u, n), ok| (u + u64::from(!ok), n + 1))
-}
-
 /// Points added by refinement are numbered from here on (grid points are below: a sweep has at
 /// most `MAX_JOBS` jobs).
 pub const REFINED_FROM: i64 = crate::sweep::file::MAX_JOBS as i64;
@@ -364,11 +354,6 @@ impl Store {
     /// The database file.
     pub fn path(&self) -> &Path {
         &self.path
-    }
-
-    /// This runner's owner name (`host:pid:nonce`).
-    pub fn owner(&self) -> &str {
-        &self.owner
     }
 
     /// A database error in the store's words: a malformed page or header met while reading is

@@ -262,25 +262,14 @@ impl Store {
                     .fetch_optional(&mut **tx)
                     .await
                     .map_err(|e| self.db(e))?;
+                // The statements that bind the old id, then the new one.
+                let pair = |sql| sqlx::query(sql).bind(old.as_str()).bind(new.as_str());
                 if exists.is_none() {
-                    sqlx::query(queries::COPY_JOB_TO_NEW_ID)
-                        .bind(&old)
-                        .bind(&new)
-                        .exec(tx, self)
-                        .await?;
+                    pair(queries::COPY_JOB_TO_NEW_ID).exec(tx, self).await?;
                 } else {
                     // Merging: the merged job takes this one's result if it has none.
-                    let moved = sqlx::query(queries::MOVE_RESULT_IF_NONE)
-                        .bind(&old)
-                        .bind(&new)
-                        .exec(tx, self)
-                        .await?;
-                    if moved > 0 {
-                        sqlx::query(queries::MARK_MERGED_JOB_DONE)
-                            .bind(&old)
-                            .bind(&new)
-                            .exec(tx, self)
-                            .await?;
+                    if pair(queries::MOVE_RESULT_IF_NONE).exec(tx, self).await? > 0 {
+                        pair(queries::MARK_MERGED_JOB_DONE).exec(tx, self).await?;
                     }
                     sqlx::query(queries::DELETE_RESULT)
                         .bind(&old)
@@ -293,11 +282,7 @@ impl Store {
                     queries::REKEY_SUBMISSION_TASKS,
                     queries::REKEY_RESULTS,
                 ] {
-                    sqlx::query(sql)
-                        .bind(&old)
-                        .bind(&new)
-                        .exec(tx, self)
-                        .await?;
+                    pair(sql).exec(tx, self).await?;
                 }
                 // A merged job may have taken another's result: its lines are relabelled.
                 sqlx::query(queries::MARK_RELABEL_JOB)

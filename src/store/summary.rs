@@ -121,8 +121,8 @@ impl StateCounts {
     }
 }
 
-/// Results that did not converge and results with a verdict, `(unconverged, with a verdict)`
-/// ([`super::unconverged_count`] of the summaries).
+/// Results that did not reach a stationary window ([`wetgran_core::observe::Observables::converged`])
+/// and results with a verdict: `(unconverged, with a verdict)`.
 pub fn unconverged_summaries(points: &[PointSummary]) -> (u64, u64) {
     points
         .iter()

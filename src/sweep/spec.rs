@@ -127,50 +127,15 @@ impl JobSpec {
 /// SHA-256 of a canonical JSON text, lower-case hex.
 pub fn id_of_canonical(canonical: &str) -> String {
     let digest = Sha256::digest(canonical.as_bytes());
-    let mut s = String::with_capacity(64);
-    for b in digest.iter() {
-        s.push_str(&format!("{b:02x}"));
-    }
-    s
+    digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// JSON text with object keys sorted at every level and no whitespace; scalars as `serde_json`
-/// prints them (floats in the shortest form that reads back exactly).
+/// prints them (floats in the shortest form that reads back exactly). `serde_json`'s map is a
+/// `BTreeMap` (the workspace leaves its `preserve_order` feature off), so its compact text has
+/// the keys sorted already; the pinned ids of `tests/sweep_expand.rs` fail if that changes.
 pub fn canonical_json(v: &serde_json::Value) -> String {
-    let mut out = String::new();
-    write_canonical(v, &mut out);
-    out
-}
-
-fn write_canonical(v: &serde_json::Value, out: &mut String) {
-    use serde_json::Value;
-    match v {
-        Value::Object(m) => {
-            let mut keys: Vec<&String> = m.keys().collect();
-            keys.sort();
-            out.push('{');
-            for (k, key) in keys.iter().enumerate() {
-                if k > 0 {
-                    out.push(',');
-                }
-                out.push_str(&serde_json::to_string(key).expect("a string serializes"));
-                out.push(':');
-                write_canonical(&m[*key], out);
-            }
-            out.push('}');
-        }
-        Value::Array(a) => {
-            out.push('[');
-            for (k, x) in a.iter().enumerate() {
-                if k > 0 {
-                    out.push(',');
-                }
-                write_canonical(x, out);
-            }
-            out.push(']');
-        }
-        scalar => out.push_str(&serde_json::to_string(scalar).expect("a scalar serializes")),
-    }
+    serde_json::to_string(v).expect("a JSON value serializes")
 }
 
 /// One job of a sweep: its place in the grid and its spec.
