@@ -61,43 +61,16 @@ pub struct Observation {
 }
 
 impl Observation {
-    /// A stored result as one vote of the phase map.
-    pub fn of_row(row: &crate::store::PointRow) -> Observation {
-        Self::vote(
-            &row.coords,
-            row.replica,
-            &row.phase,
-            row.trust(),
-            Arc::new(row.spec.scene.clone()),
-        )
-    }
-
-    /// A report's summary of a stored job as one vote of the phase map (the same vote as
-    /// [`Observation::of_row`] of its full row).
+    /// A report's summary of a stored job as one vote of the phase map.
     pub fn of_summary(row: &crate::store::PointSummary) -> Observation {
-        Self::vote(
-            &row.coords,
-            row.replica,
-            &row.phase,
-            row.trust(),
-            Arc::clone(&row.scene),
-        )
-    }
-
-    fn vote(
-        coords: &[serde_json::Value],
-        replica: i64,
-        phase: &Option<String>,
-        trust: wetgran_core::observe::trend::Trust,
-        scene: Arc<Scene>,
-    ) -> Observation {
+        let trust = row.trust();
         Observation {
-            coords: coords.to_vec(),
-            replica,
-            phase: phase.clone(),
+            coords: row.coords.clone(),
+            replica: row.replica,
+            phase: row.phase.clone(),
             trusted: trust.label_trusted(),
             label_kept: trust == wetgran_core::observe::trend::Trust::LabelKept,
-            scene,
+            scene: Arc::clone(&row.scene),
         }
     }
 }

@@ -140,7 +140,7 @@ fn assert_same_reports(store: &Store, row: &SweepRow) {
         },
     ] {
         let lean_obs: Vec<Observation> = lean.iter().map(Observation::of_summary).collect();
-        let full_obs: Vec<Observation> = full.iter().map(Observation::of_row).collect();
+        let full_obs: Vec<Observation> = of_full.iter().map(Observation::of_summary).collect();
         let a = phase_map_with(&row.axes, &lean_obs, how).unwrap();
         let b = phase_map_with(&row.axes, &full_obs, how).unwrap();
         assert_eq!(
@@ -153,7 +153,7 @@ fn assert_same_reports(store: &Store, row: &SweepRow) {
     let hysteresis = crate::store::hysteresis::by_start(&row.axes, &lean);
     assert_eq!(
         hysteresis,
-        crate::store::hysteresis::by_start(&row.axes, &full)
+        crate::store::hysteresis::by_start(&row.axes, &of_full)
     );
 }
 

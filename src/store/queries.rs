@@ -29,7 +29,6 @@ queries! {
     SWEEP_RUNNING_JOBS = "sweep_running_jobs";
     ALL_JOB_SPECS = "all_job_specs";
     BEGIN_IMMEDIATE = "begin_immediate";
-    INTEGRITY_CHECK = "integrity_check";
     CHECKPOINT_STATE = "checkpoint_state";
     CLAIM_JOB = "claim_job";
     COPY_JOB_TO_NEW_ID = "copy_job_to_new_id";

@@ -7,12 +7,6 @@ use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 
 impl Store {
-    /// SQLite's full integrity check (`PRAGMA integrity_check`): `["ok"]` for a sound file, else
-    /// the problems it found.
-    pub fn integrity_check(&self) -> Result<Vec<String>, StoreError> {
-        self.run(sqlx::query_scalar(queries::INTEGRITY_CHECK).fetch_all(&self.pool))
-    }
-
     /// The spec of a job, if the database has it.
     pub fn job_spec(&self, job_id: &str) -> Result<Option<JobSpec>, StoreError> {
         let row: Option<(String,)> = self.run(

@@ -23,8 +23,6 @@ fn range(sweep_id: i64) -> (String, String) {
 /// One row of a sweep with its job's spec (no result columns).
 #[derive(Debug)]
 pub struct PointSpec {
-    pub point: i64,
-    pub replica: i64,
     pub job_id: String,
     pub spec: JobSpec,
 }
@@ -59,12 +57,7 @@ impl Store {
                 let spec = serde_json::from_str(&spec).map_err(|e| {
                     self.damaged(format!("job {job_id}: stored spec unreadable: {e}"))
                 })?;
-                Ok(PointSpec {
-                    point: r.get("point"),
-                    replica: r.get("replica"),
-                    job_id,
-                    spec,
-                })
+                Ok(PointSpec { job_id, spec })
             })
             .collect()
     }

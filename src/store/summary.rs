@@ -97,11 +97,6 @@ impl PointSummary {
         let phase = self.phase.as_deref().and_then(|p| p.parse().ok());
         wetgran_core::observe::trend::trust(self.trend, self.converged, phase)
     }
-
-    /// Whether the result may carry a phase boundary ([`PointRow::trusted`]).
-    pub fn trusted(&self) -> bool {
-        self.trust().label_trusted()
-    }
 }
 
 impl StateCounts {

@@ -215,7 +215,7 @@ fn refine_round(
     use wetgran::refine::driver::plan_jobs;
     let rows_of = std::slice::from_ref(row);
     let (jobs, plan_s) = timed(|| {
-        let rows = store.points(row.id).map_err(e)?;
+        let rows = store.point_summaries(row).map_err(e)?;
         let settings = wetgran::refine::Settings {
             replicas: row.replicas,
             max_replicas: 3 * row.replicas,
