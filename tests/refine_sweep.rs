@@ -272,7 +272,14 @@ fn a_point_whose_replicas_disagree_gets_more_replicas_through_the_store() {
         resolution: 0.0,
     };
     // Replicas come first: a budget of 2 buys the two next replicas of point 1 (Gamma 2, E* 2).
-    let round = plan_jobs(&sweep, &row, &store.point_summaries(&row).unwrap(), 2, &settings).unwrap();
+    let round = plan_jobs(
+        &sweep,
+        &row,
+        &store.point_summaries(&row).unwrap(),
+        2,
+        &settings,
+    )
+    .unwrap();
     let got: Vec<(usize, u32, u64)> = round
         .iter()
         .map(|j| (j.point, j.replica, j.spec.scene.initial.seed))

@@ -395,11 +395,7 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
         "1",
     ]);
     let store = Store::open_existing(&db).unwrap();
-    assert_eq!(
-        runs_started(&db),
-        4,
-        "nothing may be simulated again"
-    );
+    assert_eq!(runs_started(&db), 4, "nothing may be simulated again");
     let new: Thresholds = toml::from_str(&th.replace("[classify]\n", "")).unwrap();
     assert_eq!(assert_labels_follow(&store, "cls", &new), 4);
 

@@ -349,63 +349,6 @@ mod tests {
         assert!(!s.contains("--partition") && !s.contains("--time"));
     }
 
-fn array_script_old(a: &ArrayScript) -> Result<String, String> {
-        if a.tasks == 0 {
-            return Err("an array needs at least one task".to_string());
-        }
-        let dir = a.dir.display().to_string();
-        check_directive("the sweep directory", &dir)?;
-        let mut s = String::from("#!/bin/bash\n");
-        s.push_str(&format!(
-            "# wetgran sweep {}: {} job(s) as one Slurm array, written by `wetgran sweep submit`.\n\
-             # Task k runs the job on line k + 1 of the task list; it reads only its spec and writes \
-             only its result file.\n",
-            a.sweep, a.tasks
-        ));
-        s.push_str(&format!(
-            "#SBATCH --job-name=wetgran-{}\n",
-            file_name(a.sweep)
-        ));
-        s.push_str(&format!("#SBATCH --array=0-{}\n", a.tasks - 1));
-        s.push_str("#SBATCH --ntasks=1\n");
-        s.push_str(&format!(
-            "#SBATCH --cpus-per-task={}\n",
-            a.options.cpus_per_task.max(1)
-        ));
-        if let Some(p) = &a.options.partition {
-            check_directive("--partition", p)?;
-            s.push_str(&format!("#SBATCH --partition={p}\n"));
-        }
-        if let Some(t) = &a.options.time {
-            check_directive("--time", t)?;
-            s.push_str(&format!("#SBATCH --time={t}\n"));
-        }
-        s.push_str(&format!("#SBATCH --output={dir}/logs/%A_%a.out\n"));
-        s.push_str("set -eu\n");
-        s.push_str(&format!("dir={}\n", shell_quote(&dir)));
-        s.push_str(&format!(
-            "id=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" {})\n",
-            shell_quote(&a.tasks_file.display().to_string())
-        ));
-        s.push_str(
-            "if [ -z \"$id\" ]; then\n    echo \"wetgran: no job for array task \
-             $SLURM_ARRAY_TASK_ID in the task list\" >&2\n    exit 2\nfi\n",
-        );
-        s.push_str(&format!(
-            "exec {} job run \"$dir/specs/$id.json\" --out \"$dir/results/$id.json\"\n",
-            shell_quote(&a.wetgran.display().to_string())
-        ));
-        Ok(s)
-    }
-
-    #[test]
-    fn tmp_same_script() {
-        for opts in [SbatchOptions::default(), SbatchOptions { partition: Some("p".into()), time: Some("1:00".into()), cpus_per_task: 3 }] {
-            let a = ArrayScript { sweep: "my sweep", dir: Path::new("/x/y"), tasks_file: Path::new("/x/t'q"), tasks: 7, wetgran: Path::new("/w g"), options: &opts };
-            assert_eq!(array_script(&a).unwrap(), array_script_old(&a).unwrap());
-        }
-    }
-
     #[test]
     fn the_array_script_runs_the_task_of_its_line_under_bash() {
         // Run the script's body with a stub wetgran that prints its arguments.

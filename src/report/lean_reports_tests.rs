@@ -132,7 +132,10 @@ fn assert_same_reports(store: &Store, row: &SweepRow) {
         status,
         crate::report::sweep_text::sweep_status_text(&input(&of_full))
     );
-    assert_eq!(unconverged_summaries(&lean), unconverged_summaries(&of_full));
+    assert_eq!(
+        unconverged_summaries(&lean),
+        unconverged_summaries(&of_full)
+    );
     for how in [
         Extraction::default(),
         Extraction {
