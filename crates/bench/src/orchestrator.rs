@@ -277,7 +277,7 @@ fn end_of_run_relabel(
             )
         })
         .collect();
-    store.relabel(&labels).map_err(e)?;
+    store.relabel_and_clear(&labels, &[]).map_err(e)?;
     Ok(t)
 }
 
