@@ -509,6 +509,9 @@ mod tests {
             job(0.4, 20.0, 80.0),
             job(1.0, 30.0, 120.0),
         ];
+        // No sample, no rate; no measured job, no measured runs.
+        assert_eq!(nearest_rate(&[], &[0.5], "hot"), None);
+        assert!(measured_runs(&jobs).is_none());
         let samples = [sample(0.0, 1.0, "hot"), sample(1.0, 3.0, "hot")];
         assert_eq!(
             job_seconds(&jobs, &samples, RunLength::FirstCheck, false),
@@ -552,12 +555,6 @@ mod tests {
         assert_eq!(cost.longest_job, 90.0);
         // w0: 10 (0-10), then 8 (10-18); w1: 4 (0-4), then 90 (4-94).
         assert_eq!(cost.wall_seconds, 94.0);
-    }
-
-    #[test]
-    fn no_samples_no_rate() {
-        assert_eq!(nearest_rate(&[], &[0.5], "hot"), None);
-        assert!(measured_runs(&[job(0.0, 1.0, 2.0)]).is_none());
     }
 
     #[test]

@@ -638,52 +638,33 @@ fn axis_values(
             _ => unreachable!("one of the three is given"),
         };
         let rline = Some(line_of(src.text, r.span().start));
-        let rv = r.get_ref();
-        if !(rv.from.is_finite() && rv.to.is_finite()) {
-            return Err(src.err(rline, key, "range ends must be finite numbers".to_string()));
+        let Range { from, to, steps } = *r.get_ref();
+        let bad = |msg: String| Err(src.err(rline, key, msg));
+        if !(from.is_finite() && to.is_finite()) {
+            return bad("range ends must be finite numbers".to_string());
         }
-        if rv.steps == 0 || rv.steps > 100_000 {
-            return Err(src.err(
-                rline,
-                key,
-                format!(
-                    "steps = {} is out of range: must be in [1, 100000]",
-                    rv.steps
-                ),
+        if steps == 0 || steps > 100_000 {
+            return bad(format!(
+                "steps = {steps} is out of range: must be in [1, 100000]"
             ));
         }
-        if rv.steps == 1 && rv.from != rv.to {
-            return Err(src.err(
-                rline,
-                key,
-                format!(
-                    "steps = 1 with from = {} != to = {}: a range needs steps >= 2 \
-                     (or write `values = [{}]` for one value)",
-                    rv.from, rv.to, rv.from
-                ),
+        if steps == 1 && from != to {
+            return bad(format!(
+                "steps = 1 with from = {from} != to = {to}: a range needs steps >= 2 (or write \
+                 `values = [{from}]` for one value)"
             ));
         }
-        if rv.steps > 1 && rv.from == rv.to {
-            return Err(src.err(
-                rline,
-                key,
-                format!(
-                    "from = to = {} with steps = {}: the values would repeat",
-                    rv.from, rv.steps
-                ),
+        if steps > 1 && from == to {
+            return bad(format!(
+                "from = to = {from} with steps = {steps}: the values would repeat"
             ));
         }
-        if log && !(rv.from > 0.0 && rv.to > 0.0) {
-            return Err(src.err(
-                rline,
-                key,
-                format!(
-                    "log range from {} to {}: both ends must be > 0",
-                    rv.from, rv.to
-                ),
+        if log && !(from > 0.0 && to > 0.0) {
+            return bad(format!(
+                "log range from {from} to {to}: both ends must be > 0"
             ));
         }
-        let vals = range_values(rv, log)
+        let vals = range_values(r.get_ref(), log)
             .into_iter()
             .map(|x| serde_json::json!(x))
             .collect();
