@@ -195,7 +195,7 @@ fn the_backfill_of_the_migration_gives_the_verdict_of_the_observables() {
     let start = migration.find("UPDATE results SET converged").unwrap();
     let end = start + migration[start..].find(';').unwrap();
     let backfill = &migration[start..end];
-    store.execute_for_tests("UPDATE results SET converged = NULL");
+    store.execute_for_tests("UPDATE results SET converged = NULL", &[]);
     assert!(
         store
             .point_summaries(&row)
@@ -203,7 +203,7 @@ fn the_backfill_of_the_migration_gives_the_verdict_of_the_observables() {
             .iter()
             .all(|p| p.converged.is_none())
     );
-    store.execute_for_tests(backfill);
+    store.execute_for_tests(backfill, &[]);
     assert_same_reports(&store, &row);
 }
 

@@ -61,13 +61,12 @@ impl Store {
         Ok(c)
     }
 
-    /// Runs one statement on the store's connection (tests that write rows as older versions
-    /// did).
+    /// Runs one statement with its text parameters on the store's connection (tests that write
+    /// rows as older versions did).
     #[cfg(test)]
-    pub(crate) fn execute_for_tests(&self, sql: &'static str) {
-        self.rt
-            .block_on(sqlx::query(sql).execute(&self.pool))
-            .unwrap();
+    pub(crate) fn execute_for_tests(&self, sql: &'static str, binds: &[&str]) {
+        let q = binds.iter().fold(sqlx::query(sql), |q, b| q.bind(*b));
+        self.rt.block_on(q.execute(&self.pool)).unwrap();
     }
 
     /// Every job of a sweep (grid order), with its result where there is one.
