@@ -444,11 +444,6 @@ impl Source<'_> {
     fn err(&self, line: Option<usize>, key: &str, msg: String) -> SweepError {
         SweepError::new(self.file, line, key, msg)
     }
-
-    /// The line of a byte offset into the text.
-    fn span_line(&self, start: usize) -> Option<usize> {
-        Some(line_of(self.text, start))
-    }
 }
 
 /// The `[sweep]` header: name, replicas and run length in periods, checked.
@@ -460,7 +455,7 @@ fn parse_header(src: &Source<'_>, h: &Header) -> Result<(String, u32, Option<f64
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
     {
         return Err(src.err(
-            src.span_line(h.name.span().start),
+            Some(line_of(src.text, h.name.span().start)),
             "sweep.name",
             format!(
                 "= {name:?} is not allowed: must be non-empty letters, digits, '-', '_' or '.'"
@@ -480,7 +475,7 @@ fn parse_header(src: &Source<'_>, h: &Header) -> Result<(String, u32, Option<f64
             let v = *p.get_ref();
             if !(v.is_finite() && v > 0.0) {
                 return Err(src.err(
-                    src.span_line(p.span().start),
+                    Some(line_of(src.text, p.span().start)),
                     "sweep.periods",
                     format!("= {v} is out of range: must be finite and > 0"),
                 ));
@@ -506,7 +501,7 @@ fn parse_base_scene(
         let base_path = dir.join(b.get_ref());
         let base_text = std::fs::read_to_string(&base_path).map_err(|e| {
             src.err(
-                src.span_line(b.span().start),
+                Some(line_of(src.text, b.span().start)),
                 "sweep.base",
                 format!("cannot read the base scene {}: {e}", base_path.display()),
             )

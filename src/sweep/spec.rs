@@ -216,11 +216,6 @@ fn set_key(tree: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), 
     unreachable!("the loop returns at the last part")
 }
 
-/// A JSON axis value as a TOML value.
-fn to_toml(v: &serde_json::Value) -> Result<toml::Value, String> {
-    toml::Value::try_from(v).map_err(|e| format!("value {v} cannot be written to a scene: {e}"))
-}
-
 /// A job's scene tree, its base `observe.transient_periods`, and the `[observe]` keys in time
 /// units held back until the run length is known (see `SweepFile::point_tree`).
 type PointTree = (toml::Table, Option<f64>, Vec<(&'static str, toml::Value)>);
@@ -521,9 +516,10 @@ impl SweepFile {
             }
         }
         for (axis, v) in self.axes.iter().zip(coords) {
-            let value =
-                to_toml(v).map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
-            set_key(&mut tree, &axis.key, value)
+            // A JSON axis value as a TOML value, written at its key.
+            toml::Value::try_from(v)
+                .map_err(|e| format!("value {v} cannot be written to a scene: {e}"))
+                .and_then(|value| set_key(&mut tree, &axis.key, value))
                 .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
         }
         if self.replicas > 1 || replica > 0 {
