@@ -71,20 +71,16 @@ pub struct Header {
     /// Name of the sweep in the database (letters, digits, `-`, `_`, `.`).
     pub name: Spanned<String>,
     /// Free text shown by `sweep status`.
-    #[serde(default)]
     pub description: Option<String>,
     /// Base scene file, relative to the sweep file.
-    #[serde(default)]
     pub base: Option<Spanned<String>>,
     /// Independent runs per grid point; replica `r` uses `initial.seed = base seed + r`.
     #[serde(default = "one_u32")]
     pub replicas: Spanned<u32>,
     /// Run length in driving periods `T = 2 pi / omega` (one time unit `sqrt(d/g)` without a
     /// drive); sets `run.duration`. Without it the base scene's `run.duration` is kept.
-    #[serde(default)]
     pub periods: Option<Spanned<f64>>,
     /// Free-text cost note for long runs (shown by `sweep status`).
-    #[serde(default)]
     pub cost: Option<String>,
     /// Leave out grid points whose scene fails a constraint between keys
     /// ([`wetgran_core::scene::Constraint`], e.g. more grains than fit in the box) instead of rejecting
@@ -94,7 +90,6 @@ pub struct Header {
     pub skip_invalid: bool,
     /// `[sweep.continuation]`: run the points along one axis as chains, each starting from its
     /// neighbour's final state.
-    #[serde(default)]
     pub continuation: Option<Spanned<RawContinuation>>,
 }
 
@@ -105,10 +100,8 @@ pub struct RawContinuation {
     /// The axis to continue along (its name in the file, e.g. `e_star`, or its scene key).
     pub axis: Spanned<String>,
     /// `"ascending"` (default) or `"descending"` axis values.
-    #[serde(default)]
     pub direction: Option<Spanned<String>>,
     /// How the first point of each chain starts: `"hot"` (default) or `"cold"`.
-    #[serde(default)]
     pub first: Option<Spanned<String>>,
 }
 
@@ -145,11 +138,8 @@ pub struct Range {
 #[serde(deny_unknown_fields)]
 pub struct RawAxis {
     pub key: Spanned<String>,
-    #[serde(default)]
     pub values: Option<Spanned<Vec<toml::Value>>>,
-    #[serde(default)]
     pub linear: Option<Spanned<Range>>,
-    #[serde(default)]
     pub log: Option<Spanned<Range>>,
 }
 
@@ -158,18 +148,13 @@ pub struct RawAxis {
 #[serde(deny_unknown_fields)]
 pub struct RawSweep {
     pub sweep: Header,
-    #[serde(default)]
     pub scene: Option<toml::Table>,
-    #[serde(default)]
     pub observe: Option<toml::Table>,
-    #[serde(default)]
     pub classify: Option<toml::Table>,
     /// Run to stationarity: the scene's `[convergence]` keys for every job.
-    #[serde(default)]
     pub convergence: Option<toml::Table>,
     #[serde(default, rename = "axis")]
     pub axes: Vec<RawAxis>,
-    #[serde(default)]
     pub refine: Option<RawRefine>,
 }
 
@@ -179,11 +164,8 @@ pub struct RawSweep {
 pub struct RawRefine {
     /// Jobs refinement may add to the sweep in all.
     pub budget: usize,
-    #[serde(default)]
     pub rounds: Option<usize>,
-    #[serde(default)]
     pub resolution: Option<f64>,
-    #[serde(default)]
     pub max_replicas: Option<u32>,
 }
 
