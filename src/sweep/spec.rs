@@ -25,8 +25,10 @@ pub const DEFAULT_SAMPLES_PER_PERIOD: f64 = 20.0;
 /// Default transient, as a fraction of the run, where the sweep file gives none.
 pub const DEFAULT_TRANSIENT_FRACTION: f64 = 0.25;
 
-/// Everything needed to run one job, anywhere.
+/// Everything needed to run one job, anywhere. Unknown keys are refused, as in a scene (a
+/// misspelt `start_from` would silently run a continuation job hot).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct JobSpec {
     /// [`SPEC_FORMAT`].
     pub format: u32,
@@ -94,18 +96,6 @@ impl JobSpec {
         })?;
         de.end()
             .map_err(|e| format!("{origin}: not a job spec: {e}"))?;
-        // The spec itself keeps unknown keys out as the scene does (a misspelt `start_from`
-        // would silently run a continuation job hot).
-        if let Ok(serde_json::Value::Object(top)) = serde_json::from_str::<serde_json::Value>(text)
-            && let Some(k) = top
-                .keys()
-                .find(|k| !["format", "scene", "start_from"].contains(&k.as_str()))
-        {
-            return Err(format!(
-                "{origin}: key `{k}`: not a job spec: unknown field `{k}`, expected one of \
-                 `format`, `scene`, `start_from`"
-            ));
-        }
         spec.scene.resolve_observers();
         spec.scene.validate(origin).map_err(|e| e.to_string())?;
         if spec.format != SPEC_FORMAT {
