@@ -473,7 +473,7 @@ mod tests {
     }
 
     #[test]
-    fn independent_jobs_fill_the_workers_in_grid_order() {
+    fn jobs_fill_the_workers_in_claim_order_and_chains_run_in_order() {
         // Two workers, grid order 3, 3, 2, 2, 2: w0 runs 3 then 2 (ends 5) then 2 (ends 7),
         // w1 runs 3 then 2 (ends 5): 7.
         assert_eq!(makespan(&[3.0, 3.0, 2.0, 2.0, 2.0], &[None; 5], 2), 7.0);
@@ -484,10 +484,6 @@ mod tests {
         // A long job last is a tail: 1 + 1 then 10 alone.
         assert_eq!(makespan(&[1.0, 1.0, 1.0, 10.0], &[None; 4], 2), 11.0);
         assert_eq!(makespan(&[], &[], 2), 0.0);
-    }
-
-    #[test]
-    fn a_chain_runs_in_order_and_leaves_a_worker_idle() {
         // One chain 0 -> 1 -> 2 of 2 s each and one lone job of 1 s on two workers: the chain
         // takes 6 s whatever the workers; the lone job runs beside it.
         let pred = [None, Some(0), Some(1), None];
