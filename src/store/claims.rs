@@ -383,15 +383,4 @@ mod tests {
         assert_eq!(b.counts(sweep).unwrap().running, 3 - want.len() as u64 + 1);
         drop(mine);
     }
-
-    #[test]
-    fn owner_names_parse_and_a_live_owner_is_not_dead() {
-        let o = new_owner();
-        assert_eq!(o.split(':').count(), 3);
-        assert!(!owner_is_dead(&o), "this process is alive");
-        assert!(
-            !owner_is_dead("other-host:1:abc"),
-            "another host is never judged"
-        );
-    }
 }

@@ -68,7 +68,9 @@ mod tests {
 
     #[test]
     fn silent_or_gone_runners_make_their_jobs_stale() {
-        let me = format!("{}:{}:0", super::super::host_name(), std::process::id());
+        // This runner's owner name `host:pid:nonce`: alive.
+        let me = super::super::new_owner();
+        assert_eq!(me.split(':').count(), 3);
         // Live: this process, a recent heartbeat.
         assert_eq!(job(&me, Some(100.0)).stale(110.0), None);
         // Silent for longer than STALE_AFTER.
