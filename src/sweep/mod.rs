@@ -2,7 +2,7 @@
 //! job runner (`run_job`, the same on any machine). The scheduler that runs a sweep's pending
 //! jobs against the store sits a layer up, in [`crate::run`].
 //!
-//! Data flow (DESIGN.md): sweep file --expand--> job specs --schedule--> workers --run_job-->
+//! Data flow (ARCHITECTURE.md): sweep file --expand--> job specs --schedule--> workers --run_job-->
 //! results --store--> SQLite.
 
 pub mod estimate;
