@@ -199,6 +199,16 @@ impl StateCounts {
     pub fn total(&self) -> u64 {
         self.pending + self.running + self.done + self.failed
     }
+
+    /// Counts `n` jobs of a stored status (any but pending, running and done is failed).
+    fn add(&mut self, status: &str, n: u64) {
+        *match status {
+            "pending" => &mut self.pending,
+            "running" => &mut self.running,
+            "done" => &mut self.done,
+            _ => &mut self.failed,
+        } += n;
+    }
 }
 
 /// One job of a sweep with everything known about it (for boundaries, plots, exports).

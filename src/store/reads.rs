@@ -50,13 +50,7 @@ impl Store {
         )?;
         let mut c = StateCounts::default();
         for (status, n) in rows {
-            let n = n as u64;
-            match status.as_str() {
-                "pending" => c.pending = n,
-                "running" => c.running = n,
-                "done" => c.done = n,
-                _ => c.failed = n,
-            }
+            c.add(&status, n as u64);
         }
         Ok(c)
     }

@@ -105,12 +105,7 @@ impl StateCounts {
     pub fn of_summaries(points: &[PointSummary]) -> StateCounts {
         let mut c = StateCounts::default();
         for p in points {
-            match p.status.as_str() {
-                "pending" => c.pending += 1,
-                "running" => c.running += 1,
-                "done" => c.done += 1,
-                _ => c.failed += 1,
-            }
+            c.add(&p.status, 1);
         }
         c
     }
