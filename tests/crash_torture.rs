@@ -70,7 +70,7 @@ fn stage(db: &Path) -> Stage {
     let Ok(s) = store.sweep("torture") else {
         return Stage::Start;
     };
-    let points = store.points(s.id).unwrap();
+    let points = store.point_summaries(&s).unwrap();
     if points
         .iter()
         .any(|p| p.point < REFINED_FROM && p.status != "done")

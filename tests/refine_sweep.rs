@@ -141,11 +141,11 @@ fn sweep_run_refines_deterministically_and_an_interrupted_refinement_resumes() {
             max_replicas: section.max_replicas,
             resolution: section.resolution,
         };
-        let stored = store.points(row.id).unwrap();
+        let stored = store.point_summaries(&row).unwrap();
         let round = plan_jobs(&sweep, &row, &stored, 2, &settings).unwrap();
         assert_eq!(round.len(), 2);
         store.add_jobs(row.id, &round).unwrap();
-        let stored = store.points(row.id).unwrap();
+        let stored = store.point_summaries(&row).unwrap();
         assert_eq!(refined_jobs(&stored, 1), 2);
         assert_eq!(store.counts(row.id).unwrap().pending, 2);
     }
@@ -272,7 +272,14 @@ fn a_point_whose_replicas_disagree_gets_more_replicas_through_the_store() {
         resolution: 0.0,
     };
     // Replicas come first: a budget of 2 buys the two next replicas of point 1 (Gamma 2, E* 2).
-    let round = plan_jobs(&sweep, &row, &store.points(row.id).unwrap(), 2, &settings).unwrap();
+    let round = plan_jobs(
+        &sweep,
+        &row,
+        &store.point_summaries(&row).unwrap(),
+        2,
+        &settings,
+    )
+    .unwrap();
     let got: Vec<(usize, u32, u64)> = round
         .iter()
         .map(|j| (j.point, j.replica, j.spec.scene.initial.seed))
@@ -286,7 +293,7 @@ fn a_point_whose_replicas_disagree_gets_more_replicas_through_the_store() {
     assert_eq!(finish_synthetic(&store, row.id, phase), 2);
     // At max_replicas the majority (g, 3 of 4) stands: only new points now, each with 2
     // replicas, numbered from REFINED_FROM, between the grid points.
-    let stored = store.points(row.id).unwrap();
+    let stored = store.point_summaries(&row).unwrap();
     assert_eq!(refined_jobs(&stored, 2), 2);
     let round = plan_jobs(&sweep, &row, &stored, 100, &settings).unwrap();
     assert!(!round.is_empty());
@@ -336,7 +343,7 @@ fn new_points_on_an_integer_axis_are_whole_numbers() {
     };
     let mut counts = Vec::new();
     for _ in 0..4 {
-        let stored = store.points(row.id).unwrap();
+        let stored = store.point_summaries(&row).unwrap();
         let round = plan_jobs(&sweep, &row, &stored, 2, &settings).unwrap();
         for j in &round {
             let n = j.coords[0]
@@ -350,7 +357,7 @@ fn new_points_on_an_integer_axis_are_whole_numbers() {
     }
     // Bisection on whole numbers down to 21 | 22, and no point twice.
     assert!(counts.contains(&21) && counts.contains(&22), "{counts:?}");
-    let stored = store.points(row.id).unwrap();
+    let stored = store.point_summaries(&row).unwrap();
     let mut coords: Vec<String> = stored
         .iter()
         .map(|p| serde_json::to_string(&p.coords).unwrap())

@@ -226,6 +226,7 @@ impl wetgran_core::sim::Watcher for NoWatch {
     fn observe(&mut self, _: &wetgran_core::sim::Frame) {}
 }
 
+mod store_inspect;
 #[path = "sweep_common/mod.rs"]
 mod sweep_common;
 
@@ -261,7 +262,7 @@ fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
     let s = store.sweep("cool").unwrap();
     let before = store.points(s.id).unwrap();
     assert_eq!(
-        wetgran::store::unconverged_count(&before),
+        wetgran::store::unconverged_summaries(&store.point_summaries(&s).unwrap()),
         (2, 2),
         "cooling never settles"
     );
@@ -433,7 +434,7 @@ fn hot_and_cold_starts_that_disagree_are_hysteretic() {
     assert!(o.status.success(), "{}", stderr(&o));
     let store = wetgran::store::Store::open_existing(&db).unwrap();
     let s = store.sweep("hc").unwrap();
-    let groups = wetgran::store::hysteresis::by_start(&s.axes, &store.points(s.id).unwrap());
+    let groups = wetgran::store::hysteresis::by_start(&s.axes, &store.point_summaries(&s).unwrap());
     assert_eq!(groups.len(), 1, "{groups:?}");
     let g = &groups[0];
     use wetgran_core::scene::StartMode;
@@ -469,7 +470,7 @@ fn ctrl_c_during_an_extension_keeps_every_result_and_the_next_extend_finishes() 
     let points = |db: &std::path::Path| {
         let store = wetgran::store::Store::open_existing(db).unwrap();
         let s = store.sweep("cool").unwrap();
-        assert_eq!(store.integrity_check().unwrap(), ["ok"]);
+        assert_eq!(store_inspect::integrity(db), ["ok"]);
         store.points(s.id).unwrap()
     };
     let before = points(&db);

@@ -305,7 +305,8 @@ fn hot_and_continued_starts_are_compared_for_hysteresis() {
     };
     assert_eq!(at(1.0, "hot").job_id, at(1.0, "continue").job_id);
     assert_ne!(at(2.0, "hot").job_id, at(2.0, "continue").job_id);
-    let groups = wetgran::store::hysteresis::by_start(&s.axes, &points);
+    let summaries = store.point_summaries(&s).unwrap();
+    let groups = wetgran::store::hysteresis::by_start(&s.axes, &summaries);
     assert_eq!(groups.len(), 2);
     let g2 = groups.iter().find(|g| g.coords[0] == 2.0).unwrap();
     assert!(g2.compared(), "{g2:?}");

@@ -164,7 +164,14 @@ fn canonical_json_is_sorted_round_trips_and_hashes_to_the_id() {
         // The spec alone reproduces the job, floats exactly.
         let back = JobSpec::from_json(&text, "test").unwrap();
         assert_eq!(back, j.spec);
-        assert_eq!(back.id(), j.id);
+        // A misspelt key is refused by name, with the keys allowed.
+        let misspelt = text.replacen('{', "{\"start_fro\":\"x\",", 1);
+        let err = JobSpec::from_json(&misspelt, "test").unwrap_err();
+        assert!(
+            err.starts_with("test: key `start_fro`: not a job spec: unknown field `start_fro`")
+                && err.contains("expected one of `format`, `scene`, `start_from`"),
+            "{err}"
+        );
         // The id hashes the spec without its `[classify]` thresholds (they only label).
         let identity = canonical_json(&j.spec.identity());
         assert!(!identity.contains("\"classify\""), "{identity}");

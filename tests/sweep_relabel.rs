@@ -239,8 +239,6 @@ fn lines_of_constant_gamma_decide_fluid_versus_gas() {
             from(k)
         );
     }
-    // Old labels are reported for the caller to count changes.
-    assert_eq!(labels[0].old.as_deref(), Some("g"));
 }
 
 /// The temperatures of the two elastic lines of the stored sweep below (errors of 1 %): by the

@@ -61,43 +61,16 @@ pub struct Observation {
 }
 
 impl Observation {
-    /// A stored result as one vote of the phase map.
-    pub fn of_row(row: &crate::store::PointRow) -> Observation {
-        Self::vote(
-            &row.coords,
-            row.replica,
-            &row.phase,
-            row.trust(),
-            Arc::new(row.spec.scene.clone()),
-        )
-    }
-
-    /// A report's summary of a stored job as one vote of the phase map (the same vote as
-    /// [`Observation::of_row`] of its full row).
+    /// A report's summary of a stored job as one vote of the phase map.
     pub fn of_summary(row: &crate::store::PointSummary) -> Observation {
-        Self::vote(
-            &row.coords,
-            row.replica,
-            &row.phase,
-            row.trust(),
-            Arc::clone(&row.scene),
-        )
-    }
-
-    fn vote(
-        coords: &[serde_json::Value],
-        replica: i64,
-        phase: &Option<String>,
-        trust: wetgran_core::observe::trend::Trust,
-        scene: Arc<Scene>,
-    ) -> Observation {
+        let trust = row.trust();
         Observation {
-            coords: coords.to_vec(),
-            replica,
-            phase: phase.clone(),
+            coords: row.coords.clone(),
+            replica: row.replica,
+            phase: row.phase.clone(),
             trusted: trust.label_trusted(),
             label_kept: trust == wetgran_core::observe::trend::Trust::LabelKept,
-            scene,
+            scene: Arc::clone(&row.scene),
         }
     }
 }
@@ -623,6 +596,18 @@ mod tests {
         }
     }
 
+    /// One vote at `coords` of the shaken scene.
+    fn obs(coords: &[f64], replica: i64, phase: &str, trusted: bool) -> Observation {
+        Observation {
+            coords: coords.iter().map(|&c| serde_json::json!(c)).collect(),
+            replica,
+            phase: Some(phase.to_string()),
+            trusted,
+            label_kept: false,
+            scene: Arc::new(shaken_scene()),
+        }
+    }
+
     fn v(s: &[Option<&str>]) -> Vec<Option<String>> {
         s.iter().map(|x| x.map(str::to_string)).collect()
     }
@@ -646,25 +631,13 @@ mod tests {
 
     #[test]
     fn boundary_points_carry_half_the_edge_and_the_replicas_agreement() {
-        let scene = shaken_scene();
         let axes = vec![axis("drive.gamma", "Gamma"), axis("drive.e_star", "E*")];
         // (Gamma 2, E* 1): f, f, g; (Gamma 2, E* 4): g, g, g.
-        let obs = |e: f64, r: i64, p: &str| Observation {
-            coords: vec![serde_json::json!(2.0), serde_json::json!(e)],
-            replica: r,
-            phase: Some(p.to_string()),
-            trusted: true,
-            label_kept: false,
-            scene: Arc::new(scene.clone()),
-        };
-        let jobs = vec![
-            obs(1.0, 0, "f"),
-            obs(1.0, 1, "f"),
-            obs(1.0, 2, "g"),
-            obs(4.0, 0, "g"),
-            obs(4.0, 1, "g"),
-            obs(4.0, 2, "g"),
-        ];
+        let jobs: Vec<Observation> = ["f", "f", "g", "g", "g", "g"]
+            .iter()
+            .enumerate()
+            .map(|(k, p)| obs(&[2.0, if k < 3 { 1.0 } else { 4.0 }], k as i64 % 3, p, true))
+            .collect();
         let map = phase_map(&axes, &jobs).unwrap();
         let b = &map.slices[0].boundaries["f|g"][0];
         // Midpoint in log10 E*: E* = 2 (geometric mean), half the edge = log10(2) decades.
@@ -680,21 +653,12 @@ mod tests {
 
     #[test]
     fn unconverged_points_carry_no_boundary_unless_asked() {
-        let scene = shaken_scene();
         let axes = vec![axis("drive.e_star", "E*")];
         // A line f (E* 1), g unconverged (E* 2), g (E* 4).
-        let obs = |e: f64, p: &str, trusted: bool| Observation {
-            coords: vec![serde_json::json!(e)],
-            replica: 0,
-            phase: Some(p.to_string()),
-            trusted,
-            label_kept: false,
-            scene: Arc::new(scene.clone()),
-        };
         let jobs = vec![
-            obs(1.0, "f", true),
-            obs(2.0, "g", false),
-            obs(4.0, "g", true),
+            obs(&[1.0], 0, "f", true),
+            obs(&[2.0], 0, "g", false),
+            obs(&[4.0], 0, "g", true),
         ];
         let map = phase_map(&axes, &jobs).unwrap();
         let slice = &map.slices[0];

@@ -67,7 +67,7 @@ pub(super) fn refine(over: RefineArgs) -> Result<(), Failure> {
         (Some(b), _) => b,
         (None, Some(s)) => s
             .budget
-            .saturating_sub(refined_jobs(&store.points(row.id)?, row.replicas)),
+            .saturating_sub(refined_jobs(&store.point_summaries(&row)?, row.replicas)),
         (None, None) => {
             return Err(Failure::BadInput(format!(
                 "sweep {}: give --budget (jobs to add) or a [refine] table in its sweep file",

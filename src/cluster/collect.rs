@@ -97,10 +97,7 @@ pub fn collect(
                     out.waiting.push((task, None));
                 }
                 Queue::Tasks(tasks) => match tasks.get(&task.task) {
-                    Some(s) => {
-                        let s = s.clone();
-                        out.waiting.push((task, Some(s)));
-                    }
+                    Some(s) => out.waiting.push((task, Some(s.clone()))),
                     None => {
                         let msg = format!(
                             "no result file and no longer in the Slurm queue: the task was \

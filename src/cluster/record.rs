@@ -37,29 +37,20 @@ impl SweepDir {
         }
     }
 
-    pub fn specs(&self) -> PathBuf {
-        self.root.join("specs")
-    }
-    pub fn results(&self) -> PathBuf {
-        self.root.join("results")
-    }
     pub fn arrays(&self) -> PathBuf {
         self.root.join("arrays")
     }
-    pub fn logs(&self) -> PathBuf {
-        self.root.join("logs")
-    }
     pub fn spec(&self, job_id: &str) -> PathBuf {
-        self.specs().join(format!("{job_id}.json"))
+        self.root.join("specs").join(format!("{job_id}.json"))
     }
     pub fn result(&self, job_id: &str) -> PathBuf {
-        self.results().join(format!("{job_id}.json"))
+        self.root.join("results").join(format!("{job_id}.json"))
     }
 
     /// Creates the four folders.
     pub fn create(&self) -> std::io::Result<()> {
-        for d in [self.specs(), self.results(), self.arrays(), self.logs()] {
-            std::fs::create_dir_all(d)?;
+        for d in ["specs", "results", "arrays", "logs"] {
+            std::fs::create_dir_all(self.root.join(d))?;
         }
         Ok(())
     }
@@ -115,9 +106,7 @@ impl ResultRecord {
             outcome,
             wall_seconds,
             finished_at: crate::store::now(),
-            host: std::fs::read_to_string("/proc/sys/kernel/hostname")
-                .map(|s| s.trim().to_string())
-                .unwrap_or_else(|_| "unknown".to_string()),
+            host: crate::store::host_name(),
             slurm_task,
         }
     }

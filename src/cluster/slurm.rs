@@ -83,47 +83,43 @@ pub fn array_script(a: &ArrayScript) -> Result<String, String> {
     }
     let dir = a.dir.display().to_string();
     check_directive("the sweep directory", &dir)?;
-    let mut s = String::from("#!/bin/bash\n");
-    s.push_str(&format!(
-        "# wetgran sweep {}: {} job(s) as one Slurm array, written by `wetgran sweep submit`.\n\
+    let mut optional = String::new();
+    for (flag, value) in [
+        ("--partition", &a.options.partition),
+        ("--time", &a.options.time),
+    ] {
+        if let Some(v) = value {
+            check_directive(flag, v)?;
+            optional += &format!("#SBATCH {flag}={v}\n");
+        }
+    }
+    Ok(format!(
+        "#!/bin/bash\n\
+         # wetgran sweep {sweep}: {tasks} job(s) as one Slurm array, written by `wetgran sweep \
+         submit`.\n\
          # Task k runs the job on line k + 1 of the task list; it reads only its spec and writes \
-         only its result file.\n",
-        a.sweep, a.tasks
-    ));
-    s.push_str(&format!(
-        "#SBATCH --job-name=wetgran-{}\n",
-        file_name(a.sweep)
-    ));
-    s.push_str(&format!("#SBATCH --array=0-{}\n", a.tasks - 1));
-    s.push_str("#SBATCH --ntasks=1\n");
-    s.push_str(&format!(
-        "#SBATCH --cpus-per-task={}\n",
-        a.options.cpus_per_task.max(1)
-    ));
-    if let Some(p) = &a.options.partition {
-        check_directive("--partition", p)?;
-        s.push_str(&format!("#SBATCH --partition={p}\n"));
-    }
-    if let Some(t) = &a.options.time {
-        check_directive("--time", t)?;
-        s.push_str(&format!("#SBATCH --time={t}\n"));
-    }
-    s.push_str(&format!("#SBATCH --output={dir}/logs/%A_%a.out\n"));
-    s.push_str("set -eu\n");
-    s.push_str(&format!("dir={}\n", shell_quote(&dir)));
-    s.push_str(&format!(
-        "id=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" {})\n",
-        shell_quote(&a.tasks_file.display().to_string())
-    ));
-    s.push_str(
-        "if [ -z \"$id\" ]; then\n    echo \"wetgran: no job for array task \
-         $SLURM_ARRAY_TASK_ID in the task list\" >&2\n    exit 2\nfi\n",
-    );
-    s.push_str(&format!(
-        "exec {} job run \"$dir/specs/$id.json\" --out \"$dir/results/$id.json\"\n",
-        shell_quote(&a.wetgran.display().to_string())
-    ));
-    Ok(s)
+         only its result file.\n\
+         #SBATCH --job-name=wetgran-{name}\n\
+         #SBATCH --array=0-{last}\n\
+         #SBATCH --ntasks=1\n\
+         #SBATCH --cpus-per-task={cpus}\n\
+         {optional}\
+         #SBATCH --output={dir}/logs/%A_%a.out\n\
+         set -eu\n\
+         dir={quoted_dir}\n\
+         id=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" {tasks_file})\n\
+         if [ -z \"$id\" ]; then\n    echo \"wetgran: no job for array task \
+         $SLURM_ARRAY_TASK_ID in the task list\" >&2\n    exit 2\nfi\n\
+         exec {wetgran} job run \"$dir/specs/$id.json\" --out \"$dir/results/$id.json\"\n",
+        sweep = a.sweep,
+        tasks = a.tasks,
+        name = file_name(a.sweep),
+        last = a.tasks - 1,
+        cpus = a.options.cpus_per_task.max(1),
+        quoted_dir = shell_quote(&dir),
+        tasks_file = shell_quote(&a.tasks_file.display().to_string()),
+        wetgran = shell_quote(&a.wetgran.display().to_string()),
+    ))
 }
 
 /// The tasks per array: the smaller of `--array-limit` (default [`DEFAULT_ARRAY_LIMIT`]) and

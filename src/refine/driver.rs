@@ -15,7 +15,7 @@ use super::{Sample, Settings, Step, plan_round};
 use crate::boundary::{Observation, PlaneAxis, phase_map};
 use crate::run::relabel::relabel_changed;
 use crate::run::{RunOptions, run_sweeps};
-use crate::store::{PointRow, REFINED_FROM, Store, StoreError, SweepRow};
+use crate::store::{PointSummary, REFINED_FROM, Store, StoreError, SweepRow};
 use crate::sweep::{SweepFile, SweepJob};
 use std::collections::BTreeMap;
 
@@ -57,7 +57,7 @@ impl std::error::Error for RefineError {}
 
 /// Jobs refinement has added to a sweep so far: rows of refined points and replicas beyond the
 /// sweep's own.
-pub fn refined_jobs(rows: &[PointRow], replicas: u32) -> usize {
+pub fn refined_jobs(rows: &[PointSummary], replicas: u32) -> usize {
     rows.iter()
         .filter(|r| r.point >= REFINED_FROM || r.replica >= replicas as i64)
         .count()
@@ -92,7 +92,7 @@ pub fn refine_sweep(
         if left == 0 {
             return Ok(out);
         }
-        let rows = store.points(row.id)?;
+        let rows = store.point_summaries(row)?;
         let jobs = plan_jobs(file, row, &rows, per_round.min(left), settings)?;
         if jobs.is_empty() {
             out.resolved = true;
@@ -117,13 +117,13 @@ pub fn refine_sweep(
 pub fn plan_jobs(
     file: &SweepFile,
     row: &SweepRow,
-    rows: &[PointRow],
+    rows: &[PointSummary],
     budget: usize,
     settings: &Settings,
 ) -> Result<Vec<SweepJob>, RefineError> {
     let bad = |m: String| RefineError::Bad(format!("sweep {}: {m}", row.name));
     // Unconverged points carry no boundary, so refinement does not chase them.
-    let obs: Vec<Observation> = rows.iter().map(Observation::of_row).collect();
+    let obs: Vec<Observation> = rows.iter().map(Observation::of_summary).collect();
     let map = phase_map(&row.axes, &obs).map_err(|e| bad(e.to_string()))?;
     let (Some(xa), Some(ya)) = (&map.x, &map.y) else {
         return Err(bad(
@@ -268,7 +268,7 @@ pub fn continue_refinement(
         };
         let left = s
             .budget
-            .saturating_sub(refined_jobs(&store.points(row.id)?, row.replicas));
+            .saturating_sub(refined_jobs(&store.point_summaries(row)?, row.replicas));
         if left == 0 {
             continue;
         }

@@ -134,7 +134,7 @@ fn assert_same_reports(store: &Store, row: &SweepRow) {
     );
     assert_eq!(
         unconverged_summaries(&lean),
-        crate::store::unconverged_count(&full)
+        unconverged_summaries(&of_full)
     );
     for how in [
         Extraction::default(),
@@ -143,7 +143,7 @@ fn assert_same_reports(store: &Store, row: &SweepRow) {
         },
     ] {
         let lean_obs: Vec<Observation> = lean.iter().map(Observation::of_summary).collect();
-        let full_obs: Vec<Observation> = full.iter().map(Observation::of_row).collect();
+        let full_obs: Vec<Observation> = of_full.iter().map(Observation::of_summary).collect();
         let a = phase_map_with(&row.axes, &lean_obs, how).unwrap();
         let b = phase_map_with(&row.axes, &full_obs, how).unwrap();
         assert_eq!(
@@ -156,7 +156,7 @@ fn assert_same_reports(store: &Store, row: &SweepRow) {
     let hysteresis = crate::store::hysteresis::by_start(&row.axes, &lean);
     assert_eq!(
         hysteresis,
-        crate::store::hysteresis::by_start(&row.axes, &full)
+        crate::store::hysteresis::by_start(&row.axes, &of_full)
     );
 }
 
@@ -195,7 +195,7 @@ fn the_backfill_of_the_migration_gives_the_verdict_of_the_observables() {
     let start = migration.find("UPDATE results SET converged").unwrap();
     let end = start + migration[start..].find(';').unwrap();
     let backfill = &migration[start..end];
-    store.execute_for_tests("UPDATE results SET converged = NULL");
+    store.execute_for_tests("UPDATE results SET converged = NULL", &[]);
     assert!(
         store
             .point_summaries(&row)
@@ -203,7 +203,7 @@ fn the_backfill_of_the_migration_gives_the_verdict_of_the_observables() {
             .iter()
             .all(|p| p.converged.is_none())
     );
-    store.execute_for_tests(backfill);
+    store.execute_for_tests(backfill, &[]);
     assert_same_reports(&store, &row);
 }
 

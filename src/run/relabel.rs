@@ -23,8 +23,6 @@ pub const MIN_LINE_POINTS: usize = 4;
 #[derive(Debug, Clone)]
 pub struct Relabel {
     pub job_id: String,
-    /// The stored label before.
-    pub old: Option<String>,
     pub classification: Classification,
 }
 
@@ -142,7 +140,6 @@ fn relabel_parsed(
         .zip(out)
         .map(|(p, c)| Relabel {
             job_id: p.row.job_id.clone(),
-            old: p.row.phase.clone(),
             classification: c.unwrap_or_else(|| classify(p.obs, &p.th)),
         })
         .collect()

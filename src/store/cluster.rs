@@ -44,9 +44,11 @@ impl TaskState {
             .expect("every state")
             .1
     }
+}
 
+impl From<String> for TaskState {
     /// The state of a stored name; an unknown name reads as corrupt.
-    fn parse(s: &str) -> TaskState {
+    fn from(s: String) -> TaskState {
         TASK_STATES
             .iter()
             .find(|(_, n)| *n == s)
@@ -54,8 +56,8 @@ impl TaskState {
     }
 }
 
-/// One array task as recorded.
-#[derive(Debug, Clone, PartialEq)]
+/// One array task as recorded (a row of `list_tasks.sql`).
+#[derive(Debug, Clone, PartialEq, sqlx::FromRow)]
 pub struct TaskRow {
     pub submission_id: i64,
     pub sweep_id: i64,
@@ -64,23 +66,11 @@ pub struct TaskRow {
     pub slurm_job: Option<String>,
     pub task: i64,
     pub job_id: String,
+    #[sqlx(try_from = "String")]
     pub state: TaskState,
     pub message: Option<String>,
     pub submitted_at: f64,
 }
-
-/// A row of the task query: submission id, dir, Slurm job, task, job id, state, message,
-/// submitted at.
-type TaskTuple = (
-    i64,
-    String,
-    Option<String>,
-    i64,
-    String,
-    String,
-    Option<String>,
-    f64,
-);
 
 impl Store {
     /// Records a job array about to be submitted: its script and the job of each task (task `k`
@@ -138,29 +128,11 @@ impl Store {
 
     /// Every recorded task of a sweep, oldest submission first.
     pub fn tasks(&self, sweep_id: i64) -> Result<Vec<TaskRow>, StoreError> {
-        let rows: Vec<TaskTuple> = self.run(
+        self.run(
             sqlx::query_as(queries::LIST_TASKS)
                 .bind(sweep_id)
                 .fetch_all(&self.pool),
-        )?;
-        Ok(rows
-            .into_iter()
-            .map(
-                |(submission_id, dir, slurm_job, task, job_id, state, message, submitted_at)| {
-                    TaskRow {
-                        submission_id,
-                        sweep_id,
-                        dir,
-                        slurm_job,
-                        task,
-                        job_id,
-                        state: TaskState::parse(&state),
-                        message,
-                        submitted_at,
-                    }
-                },
-            )
-            .collect())
+        )
     }
 
     /// Records what collection found for a task.

@@ -5,7 +5,7 @@
 //! are grouped by their other coordinates. The first point of a continuation chain runs as its
 //! `continuation.first` start (hot or cold) and counts as that.
 
-use super::{PointRow, PointSummary};
+use super::PointSummary;
 use crate::sweep::file::Axis;
 use std::collections::{BTreeMap, HashMap};
 use wetgran_core::scene::StartMode;
@@ -20,51 +20,17 @@ pub struct StartLabels {
     pub hysteretic: bool,
 }
 
-/// What grouping by start mode reads of a stored job: a full row or a report's summary.
-pub trait Started {
-    /// The job's coordinates, in axis order.
-    fn coords(&self) -> &[serde_json::Value];
-    /// Its result's phase label, if any.
-    fn phase(&self) -> Option<&str>;
-    /// The start mode of its spec.
-    fn start(&self) -> StartMode;
-}
-
-impl Started for PointRow {
-    fn coords(&self) -> &[serde_json::Value] {
-        &self.coords
-    }
-    fn phase(&self) -> Option<&str> {
-        self.phase.as_deref()
-    }
-    fn start(&self) -> StartMode {
-        self.spec.scene.initial.start
-    }
-}
-
-impl Started for PointSummary {
-    fn coords(&self) -> &[serde_json::Value] {
-        &self.coords
-    }
-    fn phase(&self) -> Option<&str> {
-        self.phase.as_deref()
-    }
-    fn start(&self) -> StartMode {
-        self.start
-    }
-}
-
-/// Groups the finished results of a sweep by grid point and start mode, the groups in the
-/// order of their first result. A group is found by its coordinates' JSON text in a hash map
-/// (searching the groups found so far made the grouping quadratic in the number of points).
-pub fn by_start<P: Started>(axes: &[Axis], points: &[P]) -> Vec<StartLabels> {
+/// Groups the finished results of a sweep (the reports' summaries) by grid point and start
+/// mode, the groups in the order of their first result. A group is found by its coordinates'
+/// JSON text in a hash map (a search of the groups would make the grouping quadratic).
+pub fn by_start(axes: &[Axis], points: &[PointSummary]) -> Vec<StartLabels> {
     let keep: Vec<bool> = axes.iter().map(|a| a.key != "initial.start").collect();
     let mut out: Vec<StartLabels> = Vec::new();
     let mut index: HashMap<String, usize> = HashMap::new();
     for p in points {
-        let Some(phase) = p.phase() else { continue };
+        let Some(phase) = &p.phase else { continue };
         let coords: Vec<serde_json::Value> = p
-            .coords()
+            .coords
             .iter()
             .zip(&keep)
             .filter(|(_, k)| **k)
@@ -81,9 +47,9 @@ pub fn by_start<P: Started>(axes: &[Axis], points: &[P]) -> Vec<StartLabels> {
         });
         out[i]
             .by_start
-            .entry(p.start())
+            .entry(p.start)
             .or_default()
-            .push(phase.to_string());
+            .push(phase.clone());
     }
     for g in &mut out {
         for labels in g.by_start.values_mut() {

@@ -60,8 +60,7 @@ pub use summary::{PointSummary, axis_keeps_report_scene, unconverged_summaries};
 
 use crate::sweep::file::Axis;
 use crate::sweep::spec::JobSpec;
-#[cfg(test)]
-use claims::host_name;
+pub(crate) use claims::host_name;
 use claims::{new_owner, owner_is_dead};
 use sqlx::sqlite::SqlitePool;
 use std::fmt;
@@ -200,6 +199,16 @@ impl StateCounts {
     pub fn total(&self) -> u64 {
         self.pending + self.running + self.done + self.failed
     }
+
+    /// Counts `n` jobs of a stored status (any but pending, running and done is failed).
+    fn add(&mut self, status: &str, n: u64) {
+        *match status {
+            "pending" => &mut self.pending,
+            "running" => &mut self.running,
+            "done" => &mut self.done,
+            _ => &mut self.failed,
+        } += n;
+    }
 }
 
 /// One job of a sweep with everything known about it (for boundaries, plots, exports).
@@ -245,16 +254,6 @@ impl PointRow {
     pub fn trusted(&self) -> bool {
         self.trust().label_trusted()
     }
-}
-
-/// Results that did not reach a stationary window ([`wetgran_core::observe::Observables::converged`]),
-/// and the number of results that carry a verdict at all: `(unconverged, with a verdict)`.
-pub fn unconverged_count(points: &[PointRow]) -> (u64, u64) {
-    let verdicts = points
-        .iter()
-        .filter_map(|p| p.observables.as_ref())
-        .filter_map(wetgran_core::observe::converged_in_json);
-    verdicts.fold((0, 0), |(u, n), ok| (u + u64::from(!ok), n + 1))
 }
 
 /// Points added by refinement are numbered from here on (grid points are below: a sweep has at
@@ -365,11 +364,6 @@ impl Store {
     /// The database file.
     pub fn path(&self) -> &Path {
         &self.path
-    }
-
-    /// This runner's owner name (`host:pid:nonce`).
-    pub fn owner(&self) -> &str {
-        &self.owner
     }
 
     /// A database error in the store's words: a malformed page or header met while reading is

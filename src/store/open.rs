@@ -262,25 +262,14 @@ impl Store {
                     .fetch_optional(&mut **tx)
                     .await
                     .map_err(|e| self.db(e))?;
+                // The statements that bind the old id, then the new one.
+                let pair = |sql| sqlx::query(sql).bind(old.as_str()).bind(new.as_str());
                 if exists.is_none() {
-                    sqlx::query(queries::COPY_JOB_TO_NEW_ID)
-                        .bind(&old)
-                        .bind(&new)
-                        .exec(tx, self)
-                        .await?;
+                    pair(queries::COPY_JOB_TO_NEW_ID).exec(tx, self).await?;
                 } else {
                     // Merging: the merged job takes this one's result if it has none.
-                    let moved = sqlx::query(queries::MOVE_RESULT_IF_NONE)
-                        .bind(&old)
-                        .bind(&new)
-                        .exec(tx, self)
-                        .await?;
-                    if moved > 0 {
-                        sqlx::query(queries::MARK_MERGED_JOB_DONE)
-                            .bind(&old)
-                            .bind(&new)
-                            .exec(tx, self)
-                            .await?;
+                    if pair(queries::MOVE_RESULT_IF_NONE).exec(tx, self).await? > 0 {
+                        pair(queries::MARK_MERGED_JOB_DONE).exec(tx, self).await?;
                     }
                     sqlx::query(queries::DELETE_RESULT)
                         .bind(&old)
@@ -293,11 +282,7 @@ impl Store {
                     queries::REKEY_SUBMISSION_TASKS,
                     queries::REKEY_RESULTS,
                 ] {
-                    sqlx::query(sql)
-                        .bind(&old)
-                        .bind(&new)
-                        .exec(tx, self)
-                        .await?;
+                    pair(sql).exec(tx, self).await?;
                 }
                 // A merged job may have taken another's result: its lines are relabelled.
                 sqlx::query(queries::MARK_RELABEL_JOB)
@@ -338,15 +323,6 @@ mod tests {
         );
     }
 
-    /// Runs raw SQL on the store's single connection.
-    fn exec(store: &Store, sql: &'static str, binds: &[&str]) {
-        let mut q = sqlx::query(sql);
-        for b in binds {
-            q = q.bind(*b);
-        }
-        store.rt.block_on(q.execute(&store.pool)).unwrap();
-    }
-
     #[test]
     fn a_database_with_old_job_ids_is_rekeyed_once_and_keeps_its_results() {
         let dir = tempfile::tempdir().unwrap();
@@ -366,7 +342,7 @@ mod tests {
         let done_id = claim.job_id.clone();
         // Write the database as the old rule did: ids hashed with the `[classify]` thresholds,
         // plus a second job that differed from the finished one only in its thresholds.
-        exec(&store, "PRAGMA foreign_keys = OFF", &[]);
+        store.execute_for_tests("PRAGMA foreign_keys = OFF", &[]);
         for p in store.points(sweep_id).unwrap() {
             let old = crate::sweep::spec::id_of_canonical(&p.spec.canonical_json());
             assert_ne!(old, p.job_id);
@@ -376,24 +352,22 @@ mod tests {
                 "UPDATE results SET job_id = ?2 WHERE job_id = ?1",
                 "UPDATE runs SET job_id = ?2 WHERE job_id = ?1",
             ] {
-                exec(&store, sql, &[&p.job_id, &old]);
+                store.execute_for_tests(sql, &[&p.job_id, &old]);
             }
         }
         let mut twin = claim.spec.clone();
         twin.scene.classify.gas_temperature *= 2.0;
         let twin_old = crate::sweep::spec::id_of_canonical(&twin.canonical_json());
-        exec(
-            &store,
+        store.execute_for_tests(
             "INSERT INTO jobs (id, spec, created_at) VALUES (?1, ?2, 0)",
             &[&twin_old, &twin.canonical_json()],
         );
-        exec(
-            &store,
+        store.execute_for_tests(
             "INSERT INTO sweep_points (sweep_id, point, replica, coords, job_id) \
              VALUES (1, 99, 0, '[9]', ?1)",
             &[&twin_old],
         );
-        exec(&store, "DELETE FROM meta WHERE key = 'job_ids'", &[]);
+        store.execute_for_tests("DELETE FROM meta WHERE key = 'job_ids'", &[]);
         drop(store);
 
         let store = Store::open_existing(&db).unwrap();

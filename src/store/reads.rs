@@ -7,17 +7,6 @@ use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 
 impl Store {
-    /// SQLite's full integrity check (`PRAGMA integrity_check`): `["ok"]` for a sound file, else
-    /// the problems it found.
-    pub fn integrity_check(&self) -> Result<Vec<String>, StoreError> {
-        self.run(sqlx::query_scalar(queries::INTEGRITY_CHECK).fetch_all(&self.pool))
-    }
-
-    /// Number of rows in the `runs` table: simulations started, ever, in this database.
-    pub fn runs_started(&self) -> Result<i64, StoreError> {
-        self.run(sqlx::query_scalar(queries::COUNT_RUNS).fetch_one(&self.pool))
-    }
-
     /// The spec of a job, if the database has it.
     pub fn job_spec(&self, job_id: &str) -> Result<Option<JobSpec>, StoreError> {
         let row: Option<(String,)> = self.run(
@@ -61,24 +50,17 @@ impl Store {
         )?;
         let mut c = StateCounts::default();
         for (status, n) in rows {
-            let n = n as u64;
-            match status.as_str() {
-                "pending" => c.pending = n,
-                "running" => c.running = n,
-                "done" => c.done = n,
-                _ => c.failed = n,
-            }
+            c.add(&status, n as u64);
         }
         Ok(c)
     }
 
-    /// Runs one statement on the store's connection (tests that write rows as older versions
-    /// did).
+    /// Runs one statement with its text parameters on the store's connection (tests that write
+    /// rows as older versions did).
     #[cfg(test)]
-    pub(crate) fn execute_for_tests(&self, sql: &'static str) {
-        self.rt
-            .block_on(sqlx::query(sql).execute(&self.pool))
-            .unwrap();
+    pub(crate) fn execute_for_tests(&self, sql: &'static str, binds: &[&str]) {
+        let q = binds.iter().fold(sqlx::query(sql), |q, b| q.bind(*b));
+        self.rt.block_on(q.execute(&self.pool)).unwrap();
     }
 
     /// Every job of a sweep (grid order), with its result where there is one.

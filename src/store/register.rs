@@ -1,6 +1,5 @@
 //! Registration: sweeps and their jobs (shared between sweeps by content address), the jobs
-//! refinement adds, the points `skip_invalid` left out, and the labels written to stored
-//! results (`wetgran reclassify`).
+//! refinement adds, and the points `skip_invalid` left out.
 
 use super::{Exec, LeftOut, REFINED_FROM, Store, StoreError, SweepRow, now, queries};
 use crate::sweep::file::SweepFile;
@@ -8,32 +7,6 @@ use crate::sweep::spec::SweepJob;
 use sqlx::Row;
 
 impl Store {
-    /// Sets the phase label and the numbers it was decided on of stored results, in one
-    /// transaction (`wetgran reclassify`): `(job id, phase, decided_on)`.
-    pub fn relabel(
-        &self,
-        labels: &[(String, String, serde_json::Value)],
-    ) -> Result<(), StoreError> {
-        self.in_transaction(async |tx| self.write_labels(tx, labels).await)
-    }
-
-    /// Sets the phase label and decision numbers of stored results inside an open transaction.
-    pub(super) async fn write_labels(
-        &self,
-        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
-        labels: &[(String, String, serde_json::Value)],
-    ) -> Result<(), StoreError> {
-        for (job, phase, decided_on) in labels {
-            sqlx::query(queries::SET_RESULT_LABEL)
-                .bind(job)
-                .bind(phase)
-                .bind(decided_on.to_string())
-                .exec(tx, self)
-                .await?;
-        }
-        Ok(())
-    }
-
     /// Registers (or re-registers) a sweep and its jobs in one transaction. Jobs already in the
     /// database (same id, from any sweep) are shared, never duplicated; the sweep's grid in the
     /// point list is replaced by the new expansion. What refinement added (points numbered from

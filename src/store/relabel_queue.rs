@@ -23,8 +23,6 @@ fn range(sweep_id: i64) -> (String, String) {
 /// One row of a sweep with its job's spec (no result columns).
 #[derive(Debug)]
 pub struct PointSpec {
-    pub point: i64,
-    pub replica: i64,
     pub job_id: String,
     pub spec: JobSpec,
 }
@@ -59,12 +57,7 @@ impl Store {
                 let spec = serde_json::from_str(&spec).map_err(|e| {
                     self.damaged(format!("job {job_id}: stored spec unreadable: {e}"))
                 })?;
-                Ok(PointSpec {
-                    point: r.get("point"),
-                    replica: r.get("replica"),
-                    job_id,
-                    spec,
-                })
+                Ok(PointSpec { job_id, spec })
             })
             .collect()
     }
@@ -93,9 +86,9 @@ impl Store {
         Ok(out)
     }
 
-    /// Writes labels (`Store::relabel`'s `(job id, phase, decided_on)`) and clears marks, in
-    /// one transaction: for each `(sweep id, jobs)`, the marks of those jobs, or every mark of
-    /// the sweep when `jobs` is `None`.
+    /// Sets the phase label and the numbers it was decided on of stored results (`(job id,
+    /// phase, decided_on)`) and clears marks, in one transaction: for each `(sweep id, jobs)`,
+    /// the marks of those jobs, or every mark of the sweep when `jobs` is `None`.
     pub fn relabel_and_clear(
         &self,
         labels: &[(String, String, serde_json::Value)],
@@ -113,7 +106,14 @@ impl Store {
             }
         }
         self.in_transaction(async |tx| {
-            self.write_labels(tx, labels).await?;
+            for (job, phase, decided_on) in labels {
+                sqlx::query(queries::SET_RESULT_LABEL)
+                    .bind(job)
+                    .bind(phase)
+                    .bind(decided_on.to_string())
+                    .exec(tx, self)
+                    .await?;
+            }
             for (a, b) in &ranges {
                 sqlx::query(queries::CLEAR_RELABEL_PENDING)
                     .bind(a)

@@ -4,10 +4,9 @@
 //! [`Store::requeue_orphans`], module doc of `store`).
 
 use super::{STALE_AFTER, Store, StoreError, owner_is_dead, queries};
-use sqlx::Row;
 
-/// A running job of a sweep with its runner.
-#[derive(Debug, Clone, PartialEq)]
+/// A running job of a sweep with its runner (a row of `sweep_running_jobs.sql`).
+#[derive(Debug, Clone, PartialEq, sqlx::FromRow)]
 pub struct RunningJob {
     pub point: i64,
     pub replica: i64,
@@ -43,21 +42,11 @@ impl RunningJob {
 impl Store {
     /// The running jobs of a sweep, in grid order, with their runner and heartbeat.
     pub fn running_jobs(&self, sweep_id: i64) -> Result<Vec<RunningJob>, StoreError> {
-        let rows = self.run(
-            sqlx::query(queries::SWEEP_RUNNING_JOBS)
+        let mut jobs: Vec<RunningJob> = self.run(
+            sqlx::query_as(queries::SWEEP_RUNNING_JOBS)
                 .bind(sweep_id)
                 .fetch_all(&self.pool),
         )?;
-        let mut jobs: Vec<RunningJob> = rows
-            .iter()
-            .map(|r| RunningJob {
-                point: r.get("point"),
-                replica: r.get("replica"),
-                job_id: r.get("job_id"),
-                owner: r.get("owner"),
-                heartbeat: r.get("heartbeat"),
-            })
-            .collect();
         jobs.sort_by_key(|j| (j.point, j.replica));
         Ok(jobs)
     }
@@ -79,7 +68,9 @@ mod tests {
 
     #[test]
     fn silent_or_gone_runners_make_their_jobs_stale() {
-        let me = format!("{}:{}:0", super::super::host_name(), std::process::id());
+        // This runner's owner name `host:pid:nonce`: alive.
+        let me = super::super::new_owner();
+        assert_eq!(me.split(':').count(), 3);
         // Live: this process, a recent heartbeat.
         assert_eq!(job(&me, Some(100.0)).stale(110.0), None);
         // Silent for longer than STALE_AFTER.

@@ -97,11 +97,6 @@ impl PointSummary {
         let phase = self.phase.as_deref().and_then(|p| p.parse().ok());
         wetgran_core::observe::trend::trust(self.trend, self.converged, phase)
     }
-
-    /// Whether the result may carry a phase boundary ([`PointRow::trusted`]).
-    pub fn trusted(&self) -> bool {
-        self.trust().label_trusted()
-    }
 }
 
 impl StateCounts {
@@ -110,19 +105,14 @@ impl StateCounts {
     pub fn of_summaries(points: &[PointSummary]) -> StateCounts {
         let mut c = StateCounts::default();
         for p in points {
-            match p.status.as_str() {
-                "pending" => c.pending += 1,
-                "running" => c.running += 1,
-                "done" => c.done += 1,
-                _ => c.failed += 1,
-            }
+            c.add(&p.status, 1);
         }
         c
     }
 }
 
-/// Results that did not converge and results with a verdict, `(unconverged, with a verdict)`
-/// ([`super::unconverged_count`] of the summaries).
+/// Results that did not reach a stationary window ([`wetgran_core::observe::Observables::converged`])
+/// and results with a verdict: `(unconverged, with a verdict)`.
 pub fn unconverged_summaries(points: &[PointSummary]) -> (u64, u64) {
     points
         .iter()

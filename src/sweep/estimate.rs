@@ -473,7 +473,7 @@ mod tests {
     }
 
     #[test]
-    fn independent_jobs_fill_the_workers_in_grid_order() {
+    fn jobs_fill_the_workers_in_claim_order_and_chains_run_in_order() {
         // Two workers, grid order 3, 3, 2, 2, 2: w0 runs 3 then 2 (ends 5) then 2 (ends 7),
         // w1 runs 3 then 2 (ends 5): 7.
         assert_eq!(makespan(&[3.0, 3.0, 2.0, 2.0, 2.0], &[None; 5], 2), 7.0);
@@ -484,10 +484,6 @@ mod tests {
         // A long job last is a tail: 1 + 1 then 10 alone.
         assert_eq!(makespan(&[1.0, 1.0, 1.0, 10.0], &[None; 4], 2), 11.0);
         assert_eq!(makespan(&[], &[], 2), 0.0);
-    }
-
-    #[test]
-    fn a_chain_runs_in_order_and_leaves_a_worker_idle() {
         // One chain 0 -> 1 -> 2 of 2 s each and one lone job of 1 s on two workers: the chain
         // takes 6 s whatever the workers; the lone job runs beside it.
         let pred = [None, Some(0), Some(1), None];
@@ -509,6 +505,9 @@ mod tests {
             job(0.4, 20.0, 80.0),
             job(1.0, 30.0, 120.0),
         ];
+        // No sample, no rate; no measured job, no measured runs.
+        assert_eq!(nearest_rate(&[], &[0.5], "hot"), None);
+        assert!(measured_runs(&jobs).is_none());
         let samples = [sample(0.0, 1.0, "hot"), sample(1.0, 3.0, "hot")];
         assert_eq!(
             job_seconds(&jobs, &samples, RunLength::FirstCheck, false),
@@ -552,12 +551,6 @@ mod tests {
         assert_eq!(cost.longest_job, 90.0);
         // w0: 10 (0-10), then 8 (10-18); w1: 4 (0-4), then 90 (4-94).
         assert_eq!(cost.wall_seconds, 94.0);
-    }
-
-    #[test]
-    fn no_samples_no_rate() {
-        assert_eq!(nearest_rate(&[], &[0.5], "hot"), None);
-        assert!(measured_runs(&[job(0.0, 1.0, 2.0)]).is_none());
     }
 
     #[test]

@@ -71,20 +71,16 @@ pub struct Header {
     /// Name of the sweep in the database (letters, digits, `-`, `_`, `.`).
     pub name: Spanned<String>,
     /// Free text shown by `sweep status`.
-    #[serde(default)]
     pub description: Option<String>,
     /// Base scene file, relative to the sweep file.
-    #[serde(default)]
     pub base: Option<Spanned<String>>,
     /// Independent runs per grid point; replica `r` uses `initial.seed = base seed + r`.
     #[serde(default = "one_u32")]
     pub replicas: Spanned<u32>,
     /// Run length in driving periods `T = 2 pi / omega` (one time unit `sqrt(d/g)` without a
     /// drive); sets `run.duration`. Without it the base scene's `run.duration` is kept.
-    #[serde(default)]
     pub periods: Option<Spanned<f64>>,
     /// Free-text cost note for long runs (shown by `sweep status`).
-    #[serde(default)]
     pub cost: Option<String>,
     /// Leave out grid points whose scene fails a constraint between keys
     /// ([`wetgran_core::scene::Constraint`], e.g. more grains than fit in the box) instead of rejecting
@@ -94,7 +90,6 @@ pub struct Header {
     pub skip_invalid: bool,
     /// `[sweep.continuation]`: run the points along one axis as chains, each starting from its
     /// neighbour's final state.
-    #[serde(default)]
     pub continuation: Option<Spanned<RawContinuation>>,
 }
 
@@ -105,10 +100,8 @@ pub struct RawContinuation {
     /// The axis to continue along (its name in the file, e.g. `e_star`, or its scene key).
     pub axis: Spanned<String>,
     /// `"ascending"` (default) or `"descending"` axis values.
-    #[serde(default)]
     pub direction: Option<Spanned<String>>,
     /// How the first point of each chain starts: `"hot"` (default) or `"cold"`.
-    #[serde(default)]
     pub first: Option<Spanned<String>>,
 }
 
@@ -145,11 +138,8 @@ pub struct Range {
 #[serde(deny_unknown_fields)]
 pub struct RawAxis {
     pub key: Spanned<String>,
-    #[serde(default)]
     pub values: Option<Spanned<Vec<toml::Value>>>,
-    #[serde(default)]
     pub linear: Option<Spanned<Range>>,
-    #[serde(default)]
     pub log: Option<Spanned<Range>>,
 }
 
@@ -158,18 +148,13 @@ pub struct RawAxis {
 #[serde(deny_unknown_fields)]
 pub struct RawSweep {
     pub sweep: Header,
-    #[serde(default)]
     pub scene: Option<toml::Table>,
-    #[serde(default)]
     pub observe: Option<toml::Table>,
-    #[serde(default)]
     pub classify: Option<toml::Table>,
     /// Run to stationarity: the scene's `[convergence]` keys for every job.
-    #[serde(default)]
     pub convergence: Option<toml::Table>,
     #[serde(default, rename = "axis")]
     pub axes: Vec<RawAxis>,
-    #[serde(default)]
     pub refine: Option<RawRefine>,
 }
 
@@ -179,11 +164,8 @@ pub struct RawSweep {
 pub struct RawRefine {
     /// Jobs refinement may add to the sweep in all.
     pub budget: usize,
-    #[serde(default)]
     pub rounds: Option<usize>,
-    #[serde(default)]
     pub resolution: Option<f64>,
-    #[serde(default)]
     pub max_replicas: Option<u32>,
 }
 
@@ -444,11 +426,6 @@ impl Source<'_> {
     fn err(&self, line: Option<usize>, key: &str, msg: String) -> SweepError {
         SweepError::new(self.file, line, key, msg)
     }
-
-    /// The line of a byte offset into the text.
-    fn span_line(&self, start: usize) -> Option<usize> {
-        Some(line_of(self.text, start))
-    }
 }
 
 /// The `[sweep]` header: name, replicas and run length in periods, checked.
@@ -460,7 +437,7 @@ fn parse_header(src: &Source<'_>, h: &Header) -> Result<(String, u32, Option<f64
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
     {
         return Err(src.err(
-            src.span_line(h.name.span().start),
+            Some(line_of(src.text, h.name.span().start)),
             "sweep.name",
             format!(
                 "= {name:?} is not allowed: must be non-empty letters, digits, '-', '_' or '.'"
@@ -480,7 +457,7 @@ fn parse_header(src: &Source<'_>, h: &Header) -> Result<(String, u32, Option<f64
             let v = *p.get_ref();
             if !(v.is_finite() && v > 0.0) {
                 return Err(src.err(
-                    src.span_line(p.span().start),
+                    Some(line_of(src.text, p.span().start)),
                     "sweep.periods",
                     format!("= {v} is out of range: must be finite and > 0"),
                 ));
@@ -506,7 +483,7 @@ fn parse_base_scene(
         let base_path = dir.join(b.get_ref());
         let base_text = std::fs::read_to_string(&base_path).map_err(|e| {
             src.err(
-                src.span_line(b.span().start),
+                Some(line_of(src.text, b.span().start)),
                 "sweep.base",
                 format!("cannot read the base scene {}: {e}", base_path.display()),
             )
@@ -638,52 +615,33 @@ fn axis_values(
             _ => unreachable!("one of the three is given"),
         };
         let rline = Some(line_of(src.text, r.span().start));
-        let rv = r.get_ref();
-        if !(rv.from.is_finite() && rv.to.is_finite()) {
-            return Err(src.err(rline, key, "range ends must be finite numbers".to_string()));
+        let Range { from, to, steps } = *r.get_ref();
+        let bad = |msg: String| Err(src.err(rline, key, msg));
+        if !(from.is_finite() && to.is_finite()) {
+            return bad("range ends must be finite numbers".to_string());
         }
-        if rv.steps == 0 || rv.steps > 100_000 {
-            return Err(src.err(
-                rline,
-                key,
-                format!(
-                    "steps = {} is out of range: must be in [1, 100000]",
-                    rv.steps
-                ),
+        if steps == 0 || steps > 100_000 {
+            return bad(format!(
+                "steps = {steps} is out of range: must be in [1, 100000]"
             ));
         }
-        if rv.steps == 1 && rv.from != rv.to {
-            return Err(src.err(
-                rline,
-                key,
-                format!(
-                    "steps = 1 with from = {} != to = {}: a range needs steps >= 2 \
-                     (or write `values = [{}]` for one value)",
-                    rv.from, rv.to, rv.from
-                ),
+        if steps == 1 && from != to {
+            return bad(format!(
+                "steps = 1 with from = {from} != to = {to}: a range needs steps >= 2 (or write \
+                 `values = [{from}]` for one value)"
             ));
         }
-        if rv.steps > 1 && rv.from == rv.to {
-            return Err(src.err(
-                rline,
-                key,
-                format!(
-                    "from = to = {} with steps = {}: the values would repeat",
-                    rv.from, rv.steps
-                ),
+        if steps > 1 && from == to {
+            return bad(format!(
+                "from = to = {from} with steps = {steps}: the values would repeat"
             ));
         }
-        if log && !(rv.from > 0.0 && rv.to > 0.0) {
-            return Err(src.err(
-                rline,
-                key,
-                format!(
-                    "log range from {} to {}: both ends must be > 0",
-                    rv.from, rv.to
-                ),
+        if log && !(from > 0.0 && to > 0.0) {
+            return bad(format!(
+                "log range from {from} to {to}: both ends must be > 0"
             ));
         }
-        let vals = range_values(rv, log)
+        let vals = range_values(r.get_ref(), log)
             .into_iter()
             .map(|x| serde_json::json!(x))
             .collect();

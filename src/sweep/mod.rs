@@ -2,8 +2,8 @@
 //! job runner (`run_job`, the same on any machine). The scheduler that runs a sweep's pending
 //! jobs against the store sits a layer up, in [`crate::run`].
 //!
-//! Data flow (DESIGN.md): sweep file --expand--> job specs --schedule--> workers --run_job-->
-//! results --store--> SQLite.
+//! Data flow (ARCHITECTURE.md): sweep file --expand--> job specs --schedule--> workers
+//! --run_job--> results --store--> SQLite.
 
 pub mod estimate;
 pub mod file;

@@ -25,8 +25,10 @@ pub const DEFAULT_SAMPLES_PER_PERIOD: f64 = 20.0;
 /// Default transient, as a fraction of the run, where the sweep file gives none.
 pub const DEFAULT_TRANSIENT_FRACTION: f64 = 0.25;
 
-/// Everything needed to run one job, anywhere.
+/// Everything needed to run one job, anywhere. Unknown keys are refused, as in a scene (a
+/// misspelt `start_from` would silently run a continuation job hot).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct JobSpec {
     /// [`SPEC_FORMAT`].
     pub format: u32,
@@ -94,18 +96,6 @@ impl JobSpec {
         })?;
         de.end()
             .map_err(|e| format!("{origin}: not a job spec: {e}"))?;
-        // The spec itself keeps unknown keys out as the scene does (a misspelt `start_from`
-        // would silently run a continuation job hot).
-        if let Ok(serde_json::Value::Object(top)) = serde_json::from_str::<serde_json::Value>(text)
-            && let Some(k) = top
-                .keys()
-                .find(|k| !["format", "scene", "start_from"].contains(&k.as_str()))
-        {
-            return Err(format!(
-                "{origin}: key `{k}`: not a job spec: unknown field `{k}`, expected one of \
-                 `format`, `scene`, `start_from`"
-            ));
-        }
         spec.scene.resolve_observers();
         spec.scene.validate(origin).map_err(|e| e.to_string())?;
         if spec.format != SPEC_FORMAT {
@@ -127,50 +117,15 @@ impl JobSpec {
 /// SHA-256 of a canonical JSON text, lower-case hex.
 pub fn id_of_canonical(canonical: &str) -> String {
     let digest = Sha256::digest(canonical.as_bytes());
-    let mut s = String::with_capacity(64);
-    for b in digest.iter() {
-        s.push_str(&format!("{b:02x}"));
-    }
-    s
+    digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// JSON text with object keys sorted at every level and no whitespace; scalars as `serde_json`
-/// prints them (floats in the shortest form that reads back exactly).
+/// prints them (floats in the shortest form that reads back exactly). `serde_json`'s map is a
+/// `BTreeMap` (the workspace leaves its `preserve_order` feature off), so its compact text has
+/// the keys sorted already; the pinned ids of `tests/sweep_expand.rs` fail if that changes.
 pub fn canonical_json(v: &serde_json::Value) -> String {
-    let mut out = String::new();
-    write_canonical(v, &mut out);
-    out
-}
-
-fn write_canonical(v: &serde_json::Value, out: &mut String) {
-    use serde_json::Value;
-    match v {
-        Value::Object(m) => {
-            let mut keys: Vec<&String> = m.keys().collect();
-            keys.sort();
-            out.push('{');
-            for (k, key) in keys.iter().enumerate() {
-                if k > 0 {
-                    out.push(',');
-                }
-                out.push_str(&serde_json::to_string(key).expect("a string serializes"));
-                out.push(':');
-                write_canonical(&m[*key], out);
-            }
-            out.push('}');
-        }
-        Value::Array(a) => {
-            out.push('[');
-            for (k, x) in a.iter().enumerate() {
-                if k > 0 {
-                    out.push(',');
-                }
-                write_canonical(x, out);
-            }
-            out.push(']');
-        }
-        scalar => out.push_str(&serde_json::to_string(scalar).expect("a scalar serializes")),
-    }
+    serde_json::to_string(v).expect("a JSON value serializes")
 }
 
 /// One job of a sweep: its place in the grid and its spec.
@@ -249,11 +204,6 @@ fn set_key(tree: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), 
         };
     }
     unreachable!("the loop returns at the last part")
-}
-
-/// A JSON axis value as a TOML value.
-fn to_toml(v: &serde_json::Value) -> Result<toml::Value, String> {
-    toml::Value::try_from(v).map_err(|e| format!("value {v} cannot be written to a scene: {e}"))
 }
 
 /// A job's scene tree, its base `observe.transient_periods`, and the `[observe]` keys in time
@@ -556,9 +506,10 @@ impl SweepFile {
             }
         }
         for (axis, v) in self.axes.iter().zip(coords) {
-            let value =
-                to_toml(v).map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
-            set_key(&mut tree, &axis.key, value)
+            // A JSON axis value as a TOML value, written at its key.
+            toml::Value::try_from(v)
+                .map_err(|e| format!("value {v} cannot be written to a scene: {e}"))
+                .and_then(|value| set_key(&mut tree, &axis.key, value))
                 .map_err(|m| SweepError::new(&file, Some(axis.line), &axis.key, m))?;
         }
         if self.replicas > 1 || replica > 0 {

@@ -194,10 +194,19 @@ pub(crate) fn snapshot(db: &Path) -> Snapshot {
     })
 }
 
-/// SQLite's full `PRAGMA integrity_check` through the store (`["ok"]` for a sound file).
+/// SQLite's full `PRAGMA integrity_check` on a read-only connection (`["ok"]` for a sound
+/// file).
 pub(crate) fn integrity(db: &Path) -> Vec<String> {
-    wetgran::store::Store::open_existing(db)
-        .unwrap()
-        .integrity_check()
-        .unwrap()
+    runtime().block_on(async {
+        let opts = sqlx::sqlite::SqliteConnectOptions::new()
+            .filename(db)
+            .read_only(true);
+        let mut conn = sqlx::ConnectOptions::connect(&opts).await.unwrap();
+        let check = sqlx::query_scalar("PRAGMA integrity_check")
+            .fetch_all(&mut conn)
+            .await
+            .unwrap();
+        sqlx::Connection::close(conn).await.unwrap();
+        check
+    })
 }

@@ -25,9 +25,9 @@
 //!
 //! With `refine` among the reports: first the relabelling that ends `sweep run`
 //! (`run::relabel::relabel_changed` on the sweep's results, every one of them new), timed; the
-//! stand-in labels are then written back (`Store::relabel`, untimed): the classifier gives
-//! every stand-in result one label (their observables are one run's), which would leave no
-//! boundary to plan on. Then one refinement round, in this process, as
+//! stand-in labels are then written back (`Store::relabel_and_clear`, untimed): the classifier
+//! gives every stand-in result one label (their observables are one run's), which would leave
+//! no boundary to plan on. Then one refinement round, in this process, as
 //! `refine::driver::refine_sweep` makes it (reading the rows, planning, adding the jobs, running
 //! them with the stand-in, and the relabelling of the lines of constant Gamma holding the new
 //! results that follows each round's run), each part timed; its budget is a tenth of the sweep.
@@ -215,7 +215,7 @@ fn refine_round(
     use wetgran::refine::driver::plan_jobs;
     let rows_of = std::slice::from_ref(row);
     let (jobs, plan_s) = timed(|| {
-        let rows = store.points(row.id).map_err(e)?;
+        let rows = store.point_summaries(row).map_err(e)?;
         let settings = wetgran::refine::Settings {
             replicas: row.replicas,
             max_replicas: 3 * row.replicas,
@@ -277,7 +277,7 @@ fn end_of_run_relabel(
             )
         })
         .collect();
-    store.relabel(&labels).map_err(e)?;
+    store.relabel_and_clear(&labels, &[]).map_err(e)?;
     Ok(t)
 }
 
