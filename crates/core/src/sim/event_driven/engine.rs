@@ -79,45 +79,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
 {
     /// Builds the engine for a validated scene: initial state, cells, first predictions.
     pub fn new(scene: &Scene) -> Self {
-        Self::assemble(scene, initial_state_flat(scene), None)
-    }
-
-    /// Rebuilds the engine from a saved state (`sim::state`): particles at the state's time,
-    /// bridges, event counts and energy ledger continued, cells and predictions derived afresh,
-    /// the TC remedy's last-collision times unset. It follows the uninterrupted run to
-    /// round-off (`observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
-    pub(crate) fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
-        let init = FlatInitialState {
-            radius: state.radii.clone(),
-            position: state.positions.clone(),
-            velocity: state.velocities.clone(),
-        };
-        Self::assemble(scene, init, Some(state))
-    }
-
-    /// Panics unless the scene matches the engine's const parameters (dimension, gravity,
-    /// capillary, shear).
-    fn check_flags(scene: &Scene) {
-        assert_eq!(
-            scene.dimension, D,
-            "scene dimension does not match the engine"
-        );
-        assert_eq!(
-            GRAV,
-            scene.gravity > 0.0,
-            "gravity flag does not match the scene"
-        );
-        assert_eq!(
-            WET,
-            scene.is_wet(),
-            "capillary flag does not match the scene"
-        );
-        assert_eq!(
-            SHEAR,
-            scene.shear_slabs().is_some(),
-            "shear flag does not match the scene"
-        );
-        assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
+        Self::from_state(scene, None)
     }
 
     /// Takes the bridges, event counts and energy books of a saved state (resumed at `t0`).
@@ -144,13 +106,21 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.next_reorder = self.counts.total().saturating_add(self.reorder_every);
     }
 
-    fn assemble(
-        scene: &Scene,
-        init: FlatInitialState,
-        start: Option<&crate::sim::EngineState>,
-    ) -> Self {
+    /// The engine of [`Self::new`] or, with `Some(state)`, rebuilt from a saved state
+    /// (`sim::state`): particles at the state's time, bridges, event counts and energy ledger
+    /// continued, cells and predictions derived afresh, the TC remedy's last-collision times
+    /// unset. It follows the uninterrupted run to round-off (`observe_runs.rs`,
+    /// `checkpoint_continues_the_event_trajectory`).
+    pub(crate) fn from_state(scene: &Scene, start: Option<&crate::sim::EngineState>) -> Self {
+        let init = start.map_or_else(|| initial_state_flat(scene), FlatInitialState::of_state);
         let t0 = start.map_or(0.0, |s| s.time);
-        Self::check_flags(scene);
+        assert_eq!(
+            (scene.dimension, scene.gravity > 0.0, scene.is_wet()),
+            (D, GRAV, WET),
+            "the scene's dimension, gravity and capillary flags do not match the engine"
+        );
+        assert_eq!(SHEAR, scene.shear_slabs().is_some(), "shear flag");
+        assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
         let n = init.radius.len();
         // Pair events pack the partner's index into 31 bits (`event::PairEvent`).
         assert!(
