@@ -60,7 +60,6 @@ pub struct Collision {
     pub restitution: f64,
     /// Time from first touch to separation.
     pub duration: f64,
-    /// Largest overlap.
     pub max_overlap: f64,
 }
 

@@ -14,9 +14,7 @@ use serde::Serialize;
 pub struct Frame {
     pub time: f64,
     pub dimension: usize,
-    /// Box edge lengths, one per axis.
     pub box_size: Vec<f64>,
-    /// Whether each axis is periodic.
     pub periodic: Vec<bool>,
     /// Vertical displacement of the container (floor and lid) at `time`: `A sin(omega t)`
     /// for a shaken scene (docs/model.md 4.1), 0 otherwise. The floor is at `z = wall_offset`, the lid
@@ -150,12 +148,10 @@ impl Frame {
         self.radii.is_empty()
     }
 
-    /// Position of particle `i`.
     pub fn x(&self, i: usize) -> &[f64] {
         &self.positions[i * self.dimension..(i + 1) * self.dimension]
     }
 
-    /// Velocity of particle `i`.
     pub fn v(&self, i: usize) -> &[f64] {
         &self.velocities[i * self.dimension..(i + 1) * self.dimension]
     }

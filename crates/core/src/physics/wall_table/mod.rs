@@ -155,7 +155,6 @@ pub struct WallTable {
     motion: WallMotion,
     spec: TableSpec,
     edges: Vec<EdgeTable>,
-    /// Seconds spent filling the table.
     pub build_seconds: f64,
     #[cfg(test)]
     stats: BuildStats,

@@ -221,7 +221,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.time
     }
 
-    /// Events processed so far.
     pub fn counts(&self) -> &EventCounts {
         &self.counts
     }
@@ -439,7 +438,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             .collect()
     }
 
-    /// Energy bookkeeping at the current time.
     pub fn energy(&self) -> EnergyLedger {
         let m = self.bodies.mass;
         let states = self.current_states();
@@ -475,7 +473,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         }
     }
 
-    /// Total momentum.
     pub fn momentum(&self) -> Vector<D> {
         let states = self.current_states();
         states.iter().fold(Vector::<D>::zeros(), |a, (_, v)| a + v) * self.bodies.mass

@@ -4,7 +4,7 @@
 //! - `engine`: the scheduler (clock, bodies, queue, books: pop, validate, dispatch);
 //! - `event`: the `Copy` event value and the sources' compact predictions;
 //! - `queue`: the `EventQueue` trait and the calendar queue; `reference_queues` (tests only):
-//!   the heap and the naive reference queue;
+//!   the naive reference queue;
 //! - `bodies`: delayed particle states and free flight;
 //! - `pairs`, `cell_source`, `walls`, `slabs`: the event sources;
 //! - `cells`: the neighbour grid; `shear`: the shear field and the sheared pair quartics;

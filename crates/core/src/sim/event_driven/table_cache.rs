@@ -42,7 +42,6 @@ fn table_key(w: &WallMotion, s: &TableSpec) -> TableKey {
 struct Entries {
     /// Table and the tick of its last use.
     map: HashMap<TableKey, (Arc<WallTable>, u64)>,
-    /// Bytes of the cached tables.
     bytes: usize,
     /// Use counter (the recency order).
     tick: u64,
@@ -100,23 +99,19 @@ impl TableCache {
         }
     }
 
-    /// An empty cache capped at `mib` MiB.
     pub fn with_cap_mib(mib: usize) -> Self {
         Self::new(mib.saturating_mul(1 << 20))
     }
 
-    /// The cache of engines built on threads without an installed cache, capped at
-    /// [`DEFAULT_TABLE_CACHE_MIB`].
-    pub(crate) fn process_default() -> &'static TableCache {
-        static DEFAULT: OnceLock<TableCache> = OnceLock::new();
-        DEFAULT.get_or_init(|| TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB))
-    }
-
-    /// The cache engines on this thread use: the installed one, else the process default.
+    /// The cache engines on this thread use: the installed one, else the process default
+    /// (capped at [`DEFAULT_TABLE_CACHE_MIB`]).
     pub fn current() -> TableCache {
-        CURRENT
-            .with(|c| c.borrow().clone())
-            .unwrap_or_else(|| Self::process_default().clone())
+        static DEFAULT: OnceLock<TableCache> = OnceLock::new();
+        CURRENT.with(|c| c.borrow().clone()).unwrap_or_else(|| {
+            DEFAULT
+                .get_or_init(|| TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB))
+                .clone()
+        })
     }
 
     /// Installs this cache on the current thread until the returned guard is dropped.
@@ -129,7 +124,6 @@ impl TableCache {
         self.cap
     }
 
-    /// Bytes of the tables held now.
     pub fn bytes(&self) -> usize {
         self.lock().bytes
     }

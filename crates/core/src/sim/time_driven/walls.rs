@@ -14,7 +14,6 @@ use crate::physics::hertz;
 /// Bits of the per-coordinate wall-contact byte: touching the lower, the upper wall of the
 /// coordinate's axis.
 pub(super) const WALL_LO: u8 = 1;
-/// See [`WALL_LO`].
 pub(super) const WALL_HI: u8 = 2;
 
 /// Particles per block of the screening pass.

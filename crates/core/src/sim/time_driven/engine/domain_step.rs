@@ -16,7 +16,6 @@ pub(super) struct Domains<const D: usize> {
     pub(super) decomposition: Option<Box<Decomposition<D>>>,
     /// Steps so far that ran on a team of more than one thread.
     pub(super) team_steps: u64,
-    /// Partitions made.
     pub(super) partitions: u64,
     /// Regions run (a region goes on through list builds).
     pub(super) regions: u64,

@@ -222,12 +222,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
     }
 
-    /// Number of particles.
     pub fn len(&self) -> usize {
         self.s.n
     }
 
-    /// Whether the engine holds no particle.
     pub fn is_empty(&self) -> bool {
         self.s.n == 0
     }
@@ -237,22 +235,18 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.s.time()
     }
 
-    /// Steps taken.
     pub fn steps(&self) -> u64 {
         self.s.steps
     }
 
-    /// The time step.
     pub fn dt(&self) -> f64 {
         self.s.p.dt
     }
 
-    /// Neighbour-list builds so far.
     pub fn list_builds(&self) -> u64 {
         self.s.list.builds
     }
 
-    /// Entries of the Verlet list.
     pub fn list_entries(&self) -> usize {
         self.s.list.partner.len()
     }
@@ -272,13 +266,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         std::array::from_fn(|k| self.now_at(k * self.s.n + i).0)
     }
 
-    /// Velocity of particle `i`.
     pub fn velocity(&self, i: usize) -> [f64; D] {
         let vs = self.s.velocity_scale();
         std::array::from_fn(|k| self.now_at(k * self.s.n + i).1 * vs)
     }
 
-    /// Particle radii.
     pub fn radii(&self) -> &[f64] {
         &self.s.radius
     }
@@ -292,14 +284,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
     }
 
-    /// Number of capillary bridges.
     pub fn bridge_count(&self) -> usize {
         if WET { self.s.list.count(BOND) } else { 0 }
     }
 }
 
 impl<const D: usize, const GRAV: bool, const WET: bool, B> State<D, GRAV, WET, B> {
-    /// Current time, `steps * dt`.
     fn time(&self) -> f64 {
         self.steps as f64 * self.p.dt
     }
