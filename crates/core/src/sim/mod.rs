@@ -141,9 +141,7 @@ fn run_dispatch(
     p: &mut dyn FnMut(&Sample),
     o: Observer<'_>,
 ) -> RunReport {
-    if let Some(st) = start
-        && let Err(e) = st.check_fits(scene)
-    {
+    if let Some(Err(e)) = start.map(|st| st.check_fits(scene)) {
         panic!("{e}");
     }
     assert!(
@@ -151,7 +149,6 @@ fn run_dispatch(
         "initial.start = \"continue\" starts from the final state of a neighbouring sweep point \
          (`[sweep.continuation]`); a scene run on its own has none: use \"hot\" or \"cold\""
     );
-    // The cold start is a state of its own (`initial::cold_state`).
     let cold = (start.is_none() && scene.initial.start == crate::scene::StartMode::Cold)
         .then(|| initial::cold_state(scene));
     let st = start.or(cold.as_ref());
@@ -482,15 +479,11 @@ fn run_engine<S: Simulation>(
         stopped_on_event_cap: stopped_on_cap,
         invariant_violation: violation,
         granular_temperature: t_g,
-        granular_temperature_over_ecb: if e_cb > 0.0 { Some(t_g / e_cb) } else { None },
+        granular_temperature_over_ecb: (e_cb > 0.0).then(|| t_g / e_cb),
         bridges: engine.bridge_count(),
         energy_initial,
         energy_final,
-        energy_bookkeeping_error: if a0 != 0.0 {
-            (a1 - a0) / a0.abs()
-        } else {
-            a1 - a0
-        },
+        energy_bookkeeping_error: (a1 - a0) / if a0 != 0.0 { a0.abs() } else { 1.0 },
         samples,
         final_state,
     }

@@ -144,7 +144,7 @@ struct Params<const D: usize> {
 
 /// What every strategy steps: the parameters, the particles' arrays, the neighbour list and
 /// the books. The strategies' own buffers and caches are kept apart ([`TimeEngine`]).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
     p: Params<D>,
     n: usize,
@@ -181,7 +181,7 @@ struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
 }
 
 /// The time-driven simulation state.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoBodyForce> {
     s: State<D, GRAV, WET, B>,
     execution: Execution,
