@@ -1,30 +1,13 @@
 //! The event-driven engine for hard disks (`D = 2`) and spheres (`D = 3`): a small scheduler
-//! over event sources.
+//! over event sources (ARCHITECTURE.md, "Event engine": the sources, one step, renumbering).
 //!
 //! The engine owns the clock, the particles ([`Bodies`]), the queue (`Q`, any [`EventQueue`]),
-//! the books ([`Ledger`], [`EventCounts`]) and four event sources, each of which owns its state
-//! and knows how to predict, fire and renumber its events ([`EventSource`]):
-//! - [`PairSource`] (`pairs.rs`): collisions and, if wet, bridges and well events;
-//! - [`CellSource`] (`cell_source.rs`): the neighbour cells and cell-face crossings;
-//! - [`WallSource`] (`walls.rs`): static walls, or the shaken floor and lid under one
-//!   [`super::walls::WallSolver`] (exact, bracket or table, which owns its tables);
-//! - [`SlabSource`] (`slabs.rs`): the slabs of the shear drive (empty unless `SHEAR`).
-//!
-//! One step: pop the particle with the earliest key, ask each source for its candidate
-//! [`Event`] (pair, slab, wall, cell: among equal times the earlier-named source wins), validate
-//! it (a pair event whose partner changed course since the prediction is stale and only
-//! re-predicted: lazy invalidation with per-particle counters), dispatch it to its source, and
-//! re-predict the particles whose course changed. Every `reorder_interval` events the particles
-//! are renumbered in cell order (`reorder_by_cell`): each source permutes its own arrays.
-//!
-//! Effects are chosen once, at scene start, as compile-time parameters: `GRAV` (parabolic
-//! flights and the vertical-root formulas), `WET` (bridges and their bookkeeping), `SHEAR`
-//! (slab events, flights accelerated along `y`, quartic pair predictions) and the queue `Q`.
-//! Everything is monomorphised: the inner loop has no dynamic dispatch, and a dry, gravity-free
-//! or unsheared scene runs code in which the other branches do not exist.
-//!
-//! Numerical safeguards live with the source they protect (see each module's header) and are
-//! each tested in `crates/core/tests/engine_safeguards.rs`.
+//! the books ([`Ledger`], [`EventCounts`]) and the sources ([`PairSource`], [`CellSource`],
+//! [`WallSource`], [`SlabSource`]), each of which predicts, fires and renumbers its own events
+//! ([`EventSource`]). Effects are compile-time parameters (`GRAV`, `WET`, `SHEAR` and the queue
+//! `Q`): a dry, gravity-free or unsheared scene runs code in which the other branches do not
+//! exist. Numerical safeguards live with the source they protect (see each module's header)
+//! and are each tested in `crates/core/tests/engine_safeguards.rs`.
 
 pub use super::bodies::Vector;
 use super::bodies::{Bodies, Body};

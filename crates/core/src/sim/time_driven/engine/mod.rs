@@ -9,18 +9,10 @@
 //! `k`-th derivative (`integrator.rs`), with velocity Verlet `r[0]` is the position and `r[1]` the
 //! velocity. Between Gear steps `r` holds the prediction for the next step; the current position
 //! and velocity are recovered on demand by inverting the predictor. Forces come from the Verlet
-//! list (`neighbours.rs`), each pair once, through the one kernel of `pair_kernel.rs`. The list's
-//! displacement test runs only when a bound summed from the integrator loops' largest moves says
-//! it might fire; the builds, and so the trajectories, are those of a test every step (up to the
-//! rebuilds such a test triggers when a particle crosses a periodic face; a build changes only
-//! which non-interacting pairs are listed). Nothing is allocated inside a step once the list has
-//! reached its working size.
-//!
-//! Layout: [`TimeEngine`] is the state every strategy steps (`State`) and the three execution
-//! strategies behind the `Strategy` trait (`stepping.rs`): `Serial` (`serial.rs`), `RayonSplit`
-//! (`rayon_split.rs`) and `Domains` (`domain_step.rs`, on `domains.rs`), chosen per step from the
-//! [`Execution`] given at construction; construction and state I/O in `build.rs`, reports in
-//! `measures.rs`.
+//! list (`neighbours.rs`, rebuilt as `neighbours::needs_rebuild` decides), each pair once,
+//! through the one kernel of `pair_kernel.rs`. Nothing is allocated inside a step once the list
+//! has reached its working size. The execution strategies (`stepping.rs`) and the other files
+//! of this folder are described in ARCHITECTURE.md, "Time engine".
 //!
 //! Energy bookkeeping ([`EnergyLedger`], same fields as the event engine):
 //! - `potential`: gravity `m g z`, Hertz elastic energy of pairs and walls (`(2/5) k sqrt(R_eff)
