@@ -9,11 +9,6 @@
 //! its neighbourhood of cells; it remembers the partner's velocity-change count at prediction
 //! time, and the scheduler drops it (and re-predicts) if the count moved on (lazy invalidation).
 //!
-//! Scans without shear or minimum image predict every partner by the whole arithmetic and
-//! choose at the end (`scan_dry`, `dry_time`): whether a pair meets is a coin toss a processor
-//! mispredicts (docs/performance.md, "Ideas kept and rejected"); the same operations as
-//! `predict_image`, so the same events.
-//!
 //! Safeguards (each tested in `crates/core/tests/engine_safeguards.rs`): an overlapping pair
 //! that approaches collides now, one that separates is left alone (B.5.6); a pair half a
 //! periodic box apart (four cells) is predicted through both images; collapse: the TC model and
@@ -445,8 +440,10 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// The time of the contact of `i` (radius `ri`) with `j` (`+inf` if none, or if
     /// `j == i`), and the `b`, `r^2`, `v^2`, `sigma` it used, for a pair under one force for
     /// all and without minimum image (`shift`: the partner's image shift, if `shifted`). Every
-    /// partner pays the whole arithmetic and the result is chosen (see the module header); the
-    /// same operations as [`Self::predict_image`] (Eq. B.3, overlap: `t` itself), so the same bits.
+    /// partner pays the whole arithmetic and the result is chosen without a branch (whether a
+    /// pair meets is a coin toss a processor mispredicts: docs/performance.md, "Ideas kept and
+    /// rejected"); the same operations as [`Self::predict_image`] (Eq. B.3, overlap: `t`
+    /// itself), so the same bits.
     fn dry_time<const G: bool, const S: bool>(
         bodies: &Bodies<D, G, S>,
         xi: &Vector<D>,

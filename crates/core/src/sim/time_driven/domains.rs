@@ -483,7 +483,6 @@ impl<const D: usize> Decomposition<D> {
     /// build, the team builds it ([`Self::build_in_team`]) and goes on unless a new partition
     /// is due. `wait` is the team's barrier. Returns (the same on every member) the steps
     /// taken and how the region ended.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn run_member<const WET: bool>(
         &self,
         c: &StepConstants<D>,

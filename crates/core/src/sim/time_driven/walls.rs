@@ -73,7 +73,6 @@ impl WallAxis {
 /// Adds the wall forces on particles with positions `x` (one axis), velocities `v * w.vs`, radii
 /// `radius` and wall prefactors `wall_kr` (`k sqrt(R_i)`) to `f`, updates their contact bits
 /// `touching` and books into `b`. All slices have the length of `x`.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn wall_forces(
     w: &WallAxis,
     x: &[f64],
