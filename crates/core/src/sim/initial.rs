@@ -103,63 +103,49 @@ pub fn cold_state(scene: &Scene) -> super::EngineState {
         .map(|b| *b == crate::scene::Boundary::Periodic)
         .collect();
     let size = &scene.container.size;
-    // Cells of edge >= d_max + s_crit: bonded pairs are in neighbouring cells.
+    // Cells of edge >= d_max + s_crit: bonded pairs are in neighbouring cells. On a periodic
+    // axis the last cell absorbs the remainder, so cells wrap exactly.
     let ncells: Vec<i64> = size
         .iter()
         .map(|l| ((l / cell).floor() as i64).max(1))
         .collect();
-    // On a periodic axis the last cell absorbs the remainder, so cells wrap exactly.
-    let key = |x: &[f64]| -> Vec<i64> {
-        x.iter()
-            .enumerate()
-            .map(|(k, v)| {
-                let c = (v / cell).floor() as i64;
+    let cell_of = |i: usize, offset: &[i64]| -> Vec<i64> {
+        (0..dim)
+            .map(|k| {
+                let c = (x(i)[k] / cell).floor() as i64;
                 if periodic[k] {
-                    c.clamp(0, ncells[k] - 1)
+                    (c.clamp(0, ncells[k] - 1) + offset[k]).rem_euclid(ncells[k])
                 } else {
-                    c
+                    c + offset[k]
                 }
             })
             .collect()
     };
     let mut grid: std::collections::HashMap<Vec<i64>, Vec<usize>> = Default::default();
-    for (i, x) in init.position.chunks(dim).enumerate() {
-        grid.entry(key(x)).or_default().push(i);
+    for i in 0..n {
+        grid.entry(cell_of(i, &vec![0; dim])).or_default().push(i);
     }
+    let offsets: Vec<Vec<i64>> = (0..3i64.pow(dim as u32))
+        .map(|m| (0..dim).map(|k| m / 3i64.pow(k as u32) % 3 - 1).collect())
+        .collect();
     let mut bridges = Vec::new();
-    if s_crit > 0.0 {
-        for i in 0..n {
-            let c = key(x(i));
-            let mut seen = std::collections::BTreeSet::new();
-            for code in 0..3i64.pow(dim as u32) {
-                let mut nc = c.clone();
-                let mut rest = code;
-                for k in 0..dim {
-                    nc[k] += rest % 3 - 1;
-                    rest /= 3;
-                    if periodic[k] {
-                        nc[k] = nc[k].rem_euclid(ncells[k]);
-                    }
+    for i in (0..n).filter(|_| s_crit > 0.0) {
+        // The neighbour cells, each once (a periodic axis of fewer than 3 cells repeats some).
+        let mut hood: Vec<Vec<i64>> = offsets.iter().map(|o| cell_of(i, o)).collect();
+        hood.sort_unstable();
+        hood.dedup();
+        let partners = hood.iter().filter_map(|c| grid.get(c)).flatten();
+        for &j in partners.filter(|&&j| j > i) {
+            let mut r2 = 0.0;
+            for k in 0..dim {
+                let mut d = x(i)[k] - x(j)[k];
+                if periodic[k] {
+                    d -= size[k] * (d / size[k]).round();
                 }
-                let Some(members) = grid.get(&nc) else {
-                    continue;
-                };
-                for &j in members {
-                    if j <= i || !seen.insert(j) {
-                        continue;
-                    }
-                    let mut r2 = 0.0;
-                    for k in 0..dim {
-                        let mut d = x(i)[k] - x(j)[k];
-                        if periodic[k] {
-                            d -= size[k] * (d / size[k]).round();
-                        }
-                        r2 += d * d;
-                    }
-                    if r2.sqrt() - init.radius[i] - init.radius[j] < s_crit {
-                        bridges.push((i, j));
-                    }
-                }
+                r2 += d * d;
+            }
+            if r2.sqrt() - init.radius[i] - init.radius[j] < s_crit {
+                bridges.push((i, j));
             }
         }
     }
