@@ -143,6 +143,15 @@ pub fn install<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     })
 }
 
+/// A pool of `threads` threads (tests that compare thread counts).
+#[cfg(test)]
+pub(crate) fn test_pool(threads: usize) -> ThreadPool {
+    ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a pool")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -15,7 +15,7 @@ use super::cell_source::CellSource;
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, NONE};
 use super::ledger::Ledger;
-use super::pairs::{PairParams, PairSource};
+use super::pairs::PairSource;
 use super::queue::{CalendarQueue, EventQueue};
 use super::shear::{FORCE_AXIS, ShearField};
 use super::slabs::SlabSource;
@@ -149,25 +149,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             field_work: 0.0,
         };
         let cells = CellSource::new(grid, bodies.body.iter().map(|b| b.x));
-        let pairs = PairSource::new(
-            PairParams {
-                eps: scene.contact.restitution,
-                tc: scene.engine.tc,
-                min_rebound: scene.engine.min_rebound_speed,
-                s_crit: scene.s_crit(),
-                e_cb: scene.e_cb(),
-                rule: scene.rupture_rule(),
-            },
-            n,
-        );
-        let walls = WallSource::new(
-            WallSolver::from_scene(scene),
-            scene.contact.wall_restitution,
-            scene.engine.tc,
-            scene.engine.min_rebound_speed,
-            n,
-            !periodic.iter().all(|&p| p),
-        );
+        let pairs = PairSource::new(scene, n);
+        let walls = WallSource::new(scene, n, !periodic.iter().all(|&p| p));
         let mut engine = Self {
             time: t0,
             bodies,

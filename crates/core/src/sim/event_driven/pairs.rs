@@ -24,7 +24,7 @@ use super::shear::pair_times;
 use super::slabs::SlabSource;
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
-use crate::scene::RuptureRule;
+use crate::scene::{RuptureRule, Scene};
 use crate::sim::books::EventCounts;
 
 /// Fraction of a periodic box edge beyond which a pair is also predicted through its other
@@ -56,9 +56,17 @@ pub struct PairSource<const D: usize, const WET: bool> {
 }
 
 impl<const D: usize, const WET: bool> PairSource<D, WET> {
-    pub fn new(p: PairParams, n: usize) -> Self {
+    /// The source of a validated scene for `n` particles.
+    pub fn new(scene: &Scene, n: usize) -> Self {
         Self {
-            p,
+            p: PairParams {
+                eps: scene.contact.restitution,
+                tc: scene.engine.tc,
+                min_rebound: scene.engine.min_rebound_speed,
+                s_crit: scene.s_crit(),
+                e_cb: scene.e_cb(),
+                rule: scene.rupture_rule(),
+            },
             ev: vec![PairEvent::NEVER; n],
             bonds: vec![NONE; if WET { n * MAX_BONDS } else { 0 }],
             bond_len: vec![0; if WET { n } else { 0 }],

@@ -163,21 +163,15 @@ pub(crate) struct WallSource {
 }
 
 impl WallSource {
-    /// The source for `n` particles; `walls`: whether any axis has walls.
-    pub(crate) fn new(
-        solver: WallSolver,
-        e_wall: f64,
-        tc: f64,
-        min_rebound: f64,
-        n: usize,
-        walls: bool,
-    ) -> Self {
+    /// The source of a validated scene for `n` particles; `walls`: whether any axis has walls.
+    pub(crate) fn new(scene: &Scene, n: usize, walls: bool) -> Self {
+        let solver = WallSolver::from_scene(scene);
         let tabulated = matches!(solver, WallSolver::Table(_));
         Self {
             solver,
-            e_wall,
-            tc,
-            min_rebound,
+            e_wall: scene.contact.wall_restitution,
+            tc: scene.engine.tc,
+            min_rebound: scene.engine.min_rebound_speed,
             ev: vec![PlaneEvent::NEVER; if walls { n } else { 0 }],
             vrel: vec![f64::NAN; if tabulated { n } else { 0 }],
         }
