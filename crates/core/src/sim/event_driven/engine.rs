@@ -2,7 +2,7 @@
 //! over event sources (ARCHITECTURE.md, "Event engine": the sources, one step, renumbering).
 //!
 //! The engine owns the clock, the particles ([`Bodies`]), the queue (`Q`, any [`EventQueue`]),
-//! the books ([`Ledger`], [`EventCounts`]) and the sources ([`PairSource`], [`CellSource`],
+//! the books ([`EnergyLedger`], [`EventCounts`]) and the sources ([`PairSource`], [`CellSource`],
 //! [`WallSource`], [`SlabSource`]), each of which predicts, fires and renumbers its own events
 //! ([`EventSource`]). Effects are compile-time parameters (`GRAV`, `WET`, `SHEAR` and the queue
 //! `Q`): a dry, gravity-free or unsheared scene runs code in which the other branches do not
@@ -14,7 +14,6 @@ use super::bodies::{Bodies, Body};
 use super::cell_source::CellSource;
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, NONE};
-use super::ledger::Ledger;
 use super::pairs::PairSource;
 use super::queue::{CalendarQueue, EventQueue};
 use super::shear::{FORCE_AXIS, ShearField};
@@ -47,7 +46,9 @@ pub struct Engine<
     walls: WallSource,
     slabs: SlabSource,
     counts: EventCounts,
-    ledger: Ledger,
+    /// The energy exchanged at events (kinetic and potential are filled in by `energy`; the
+    /// shear field's work on flights is kept by `Bodies`, which does the flights).
+    ledger: EnergyLedger,
     /// Largest overlap the invariant check tolerates.
     overlap_tolerance: f64,
     /// Events whose time lay before the current time by more than round-off (must stay 0).
@@ -75,16 +76,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             }
         }
         self.counts = st.counts.clone();
-        let l = &st.ledger;
-        self.ledger.dissipated_restitution = l.dissipated_restitution;
-        self.ledger.dissipated_ruptures = l.dissipated_ruptures;
-        self.ledger.added = l.added_by_collapse_remedies;
-        self.ledger.placement = l.added_by_wall_placement;
+        self.ledger = st.ledger.clone();
         if SHEAR {
             // The shear field's work is summed where the flights are done.
-            self.bodies.field_work = l.work_by_drive;
-        } else {
-            self.ledger.work_by_drive = l.work_by_drive;
+            self.bodies.field_work = st.ledger.work_by_drive;
         }
         self.next_reorder = self.counts.total().saturating_add(self.reorder_every);
     }
@@ -160,7 +155,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             walls,
             slabs,
             counts: EventCounts::default(),
-            ledger: Ledger::default(),
+            ledger: EnergyLedger::default(),
             overlap_tolerance: scene.engine.overlap_tolerance,
             time_reversals: 0,
             next_reorder: reorder_interval(n),
@@ -431,11 +426,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         EnergyLedger {
             kinetic,
             potential,
-            dissipated_restitution: self.ledger.dissipated_restitution,
-            dissipated_ruptures: self.ledger.dissipated_ruptures,
-            added_by_collapse_remedies: self.ledger.added,
-            added_by_wall_placement: self.ledger.placement,
             work_by_drive,
+            ..self.ledger.clone()
         }
     }
 

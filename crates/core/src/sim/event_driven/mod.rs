@@ -7,7 +7,6 @@ pub(crate) mod cell_source;
 pub mod cells;
 pub(crate) mod engine;
 pub(crate) mod event;
-pub(crate) mod ledger;
 pub mod pairs;
 pub mod queue;
 #[cfg(any(test, feature = "testing"))]

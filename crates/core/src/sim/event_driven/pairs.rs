@@ -19,13 +19,12 @@ use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cell_source::{CellSource, Neighbourhood};
 use super::cells::{BATCH, CellGrid};
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
-use super::ledger::Ledger;
 use super::shear::pair_times;
 use super::slabs::SlabSource;
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
 use crate::scene::{RuptureRule, Scene};
-use crate::sim::books::EventCounts;
+use crate::sim::books::{EnergyLedger, EventCounts};
 
 /// Fraction of a periodic box edge beyond which a pair is also predicted through its other
 /// image (see `PairSource::predict_pair_from`): above the `0.4 L` that partners in adjacent
@@ -550,7 +549,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         j: usize,
         t: f64,
         bodies: &mut Bodies<D, G, S>,
-        ledger: &mut Ledger,
+        ledger: &mut EnergyLedger,
         counts: &mut EventCounts,
     ) {
         let (n, u) = Self::normal(bodies, i, j, t);
@@ -577,7 +576,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         j: usize,
         t: f64,
         bodies: &mut Bodies<D, G, S>,
-        ledger: &mut Ledger,
+        ledger: &mut EnergyLedger,
         counts: &mut EventCounts,
     ) {
         let (n, u) = Self::normal(bodies, i, j, t);
@@ -589,7 +588,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 // A pair grazing the concave well wall would bounce ever more often: it leaves
                 // at least at the rebound floor, the energy added booked with the remedies.
                 let u_out = reflected.min(-self.p.min_rebound);
-                ledger.added += 0.25 * bodies.mass * (u_out * u_out - u * u);
+                ledger.added_by_collapse_remedies += 0.25 * bodies.mass * (u_out * u_out - u * u);
                 u_out
             }
             WellOutcome::Rupture {
