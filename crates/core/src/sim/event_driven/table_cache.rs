@@ -1,17 +1,8 @@
 //! A bounded cache of the `table` wall solver's tables ([`WallTable`], docs/model.md 6, B.4-B.5):
 //! one table per `(wall motion, table spec)`, built on first use, shared by every engine that
-//! asks for it, and evicted least recently used first once the cached tables exceed a size cap.
-//!
-//! The sweep runner and `wetgran simulate` install a cache capped by `--table-cache-mib` on
-//! their threads ([`TableCache::enter`]); elsewhere engines use the process default
-//! ([`DEFAULT_TABLE_CACHE_MIB`]), so no path keeps tables without bound.
-//!
-//! Running engines hold their two tables through `Arc`s, so the memory in tables is at most the
-//! cap plus two tables per running engine. A table larger than the cap is not cached (a cap of
-//! 0 disables caching).
-//!
-//! Sizes: at the default 128 x 128 cells a table takes about 14 MiB, a drive (floor and lid)
-//! about 27 MiB, so the default cap of 256 MiB keeps the tables of the last nine drives.
+//! asks for it, and evicted least recently used first once the cached tables exceed a size cap
+//! (a table larger than the cap is not cached). Who installs which cache, and what the cap
+//! bounds: ARCHITECTURE.md, "Wall tables".
 
 use crate::physics::shaken_wall::WallMotion;
 use crate::physics::wall_table::{TableSpec, WallTable};
