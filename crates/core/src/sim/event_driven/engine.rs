@@ -411,24 +411,22 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         } else {
             0.0
         };
-        // The drive's work: the shaken walls', or the shear field's including the flights not
-        // yet brought to the current time (the two drives exclude each other).
-        let work_by_drive = if SHEAR {
+        let mut out = EnergyLedger {
+            kinetic,
+            potential,
+            ..self.ledger.clone()
+        };
+        if SHEAR {
+            // The shear field's work, including the flights not yet brought to the current
+            // time (the ledger's is the shaken walls'; the two drives exclude each other).
             let pending: f64 = states
                 .iter()
                 .enumerate()
                 .map(|(i, (x, _))| self.bodies.field_work(i, x))
                 .sum();
-            self.bodies.field_work + pending
-        } else {
-            self.ledger.work_by_drive
-        };
-        EnergyLedger {
-            kinetic,
-            potential,
-            work_by_drive,
-            ..self.ledger.clone()
+            out.work_by_drive = self.bodies.field_work + pending;
         }
+        out
     }
 
     pub fn momentum(&self) -> Vector<D> {
