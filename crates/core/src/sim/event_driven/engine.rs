@@ -92,12 +92,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     pub(crate) fn from_state(scene: &Scene, start: Option<&crate::sim::EngineState>) -> Self {
         let init = start.map_or_else(|| initial_state_flat(scene), FlatInitialState::of_state);
         let t0 = start.map_or(0.0, |s| s.time);
+        let shear = scene.shear_slabs().is_some();
         assert_eq!(
-            (scene.dimension, scene.gravity > 0.0, scene.is_wet()),
-            (D, GRAV, WET),
-            "the scene's dimension, gravity and capillary flags do not match the engine"
+            (scene.dimension, scene.gravity > 0.0, scene.is_wet(), shear),
+            (D, GRAV, WET, SHEAR),
+            "the scene's dimension, gravity, capillary and shear flags do not match the engine"
         );
-        assert_eq!(SHEAR, scene.shear_slabs().is_some(), "shear flag");
         assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
         let n = init.radius.len();
         // Pair events pack the partner's index into 31 bits (`event::PairEvent`).
