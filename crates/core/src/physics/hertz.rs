@@ -60,7 +60,6 @@ pub struct Collision {
     pub restitution: f64,
     /// Time from first touch to separation.
     pub duration: f64,
-    /// Largest overlap.
     pub max_overlap: f64,
 }
 
@@ -180,17 +179,12 @@ fn bisect_damping(too_small: impl Fn(f64) -> bool, halvings: usize) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// Restitution of a head-on collision at approach speed `v`, integrated by [`direct_collision`]
-/// with `steps` RK4 steps per elastic contact time (1000 resolve it to about 1e-6).
-pub(crate) fn restitution_at(kr: f64, a_d: f64, mu: f64, v: f64, steps: f64) -> f64 {
-    direct_collision(kr, a_d, mu, v, contact_time(kr, mu, v) / steps).restitution
-}
-
 /// Simpson intervals in `u = sqrt(x)` over `[0, U_MAX]` of [`maxwellian_loss`].
 const LOSS_INTERVALS: usize = 48;
 /// Upper end of the `u` range: the weight `2 u^3 exp(-u^2)` beyond 6 is below 1e-13.
 const LOSS_U_MAX: f64 = 6.0;
-/// RK4 steps per contact time in [`maxwellian_loss`].
+/// RK4 steps per elastic contact time in [`maxwellian_loss`] (they resolve `e(v)` to about
+/// 1e-6).
 const LOSS_STEPS: f64 = 1000.0;
 
 /// Collision-weighted mean fraction of normal kinetic energy that damped Hertz collisions remove
@@ -211,7 +205,7 @@ const LOSS_STEPS: f64 = 1000.0;
 ///
 /// (the weight `x e^(-x)` has unit integral), which equals `1 - eps^2` for hard spheres of
 /// constant restitution `eps`. Evaluated with Simpson's rule in `u = sqrt(x)` (weight
-/// `2 u^3 exp(-u^2)`, smooth where `1 - e^2 ~ v^(1/5)` is not), `e(v)` by [`restitution_at`].
+/// `2 u^3 exp(-u^2)`, smooth where `1 - e^2 ~ v^(1/5)` is not), `e(v)` by [`direct_collision`].
 /// The particle-wall version is the same with `mu = m` (an infinitely heavy wall).
 pub(crate) fn maxwellian_loss(kr: f64, a_d: f64, mu: f64, t: f64) -> f64 {
     let h = LOSS_U_MAX / LOSS_INTERVALS as f64;
@@ -227,7 +221,7 @@ pub(crate) fn maxwellian_loss(kr: f64, a_d: f64, mu: f64, t: f64) -> f64 {
             2.0
         };
         let v = (2.0 * t * u * u / mu).sqrt();
-        let e = restitution_at(kr, a_d, mu, v, LOSS_STEPS);
+        let e = direct_collision(kr, a_d, mu, v, contact_time(kr, mu, v) / LOSS_STEPS).restitution;
         sum += w * 2.0 * u.powi(3) * (-u * u).exp() * (1.0 - e * e);
     }
     sum * h / 3.0

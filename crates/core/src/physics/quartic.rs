@@ -329,12 +329,4 @@ mod tests {
         assert!(q.eval(0.0) < 0.0);
         assert_eq!(earliest_entry(&q, 10.0), Some(0.0));
     }
-
-    #[test]
-    fn double_root_is_a_contact() {
-        // (t - 1)^2 (t - 3)(t - 5): touches zero at t = 1 without a sign change.
-        let p = Poly::from_roots(&[1.0, 1.0, 3.0, 5.0], 1.0);
-        let t = earliest_entry(&p, 10.0).unwrap();
-        assert!((t - 1.0).abs() < 1e-7, "{t}");
-    }
 }

@@ -1,6 +1,7 @@
 //! The books both engines keep and report: work done by kind ([`EventCounts`]: events of the
 //! event engine; the time-driven engine counts bridge formations and ruptures in the same
-//! fields) and the full energy balance at one time ([`EnergyLedger`]).
+//! fields) and the full energy balance at one time ([`EnergyLedger`], which is also the event
+//! engine's running sum of the energy exchanged at events).
 
 use serde::{Deserialize, Serialize};
 
@@ -56,6 +57,18 @@ pub struct EnergyLedger {
 }
 
 impl EnergyLedger {
+    /// Books a collision of normal speed `u_in` (in the frame of the partner or wall) with
+    /// coefficient `e` that left at `u_out` (event engine): plain restitution dissipates
+    /// `inertia/2 (u_in^2 - e^2 u_in^2)`; what the collapse remedies kept or added on top,
+    /// `inertia/2 (u_out^2 - e^2 u_in^2) >= 0`, is booked apart (`inertia` = `m/2` for pairs,
+    /// `m` for walls).
+    #[inline]
+    pub(crate) fn book_restitution(&mut self, inertia: f64, u_in: f64, e: f64, u_out: f64) {
+        let plain = e * u_in;
+        self.dissipated_restitution += 0.5 * inertia * (u_in * u_in - plain * plain);
+        self.added_by_collapse_remedies += 0.5 * inertia * (u_out * u_out - plain * plain);
+    }
+
     /// `kinetic + potential + dissipated - injected`: constant in exact arithmetic.
     pub fn total_accounted(&self) -> f64 {
         self.kinetic + self.potential + self.dissipated_restitution + self.dissipated_ruptures

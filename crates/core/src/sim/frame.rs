@@ -3,8 +3,9 @@
 //! Observers and pictures work on frames; the engine never sees them.
 
 use super::books::EventCounts;
-use super::event_driven::Engine;
-use super::time_driven::TimeEngine;
+use super::event_driven::queue::EventQueue;
+use super::event_driven::{Engine, Vector};
+use super::time_driven::{BodyForce, TimeEngine};
 use crate::scene::{Boundary, Scene};
 use serde::Serialize;
 
@@ -14,9 +15,7 @@ use serde::Serialize;
 pub struct Frame {
     pub time: f64,
     pub dimension: usize,
-    /// Box edge lengths, one per axis.
     pub box_size: Vec<f64>,
-    /// Whether each axis is periodic.
     pub periodic: Vec<bool>,
     /// Vertical displacement of the container (floor and lid) at `time`: `A sin(omega t)`
     /// for a shaken scene (docs/model.md 4.1), 0 otherwise. The floor is at `z = wall_offset`, the lid
@@ -52,19 +51,12 @@ impl Frame {
     }
 
     /// Copies the current state of an engine.
-    pub fn of_engine<
-        const D: usize,
-        const G: bool,
-        const W: bool,
-        const S: bool,
-        Q: super::event_driven::queue::EventQueue,
-    >(
+    pub fn of_engine<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue>(
         engine: &Engine<D, G, W, S, Q>,
         scene: &Scene,
     ) -> Frame {
-        let flat = |v: Vec<super::event_driven::Vector<D>>| -> Vec<f64> {
-            v.iter().flat_map(|x| x.iter().copied()).collect()
-        };
+        let flat =
+            |v: Vec<Vector<D>>| -> Vec<f64> { v.iter().flat_map(|x| x.iter().copied()).collect() };
         Frame::of_state(
             scene,
             D,
@@ -78,13 +70,10 @@ impl Frame {
 
     /// Copies the current state of a time-driven engine (its event counts are contact onsets,
     /// bridge formations and ruptures; see `time_driven::engine`).
-    pub(crate) fn of_time_engine<const D: usize, const G: bool, const W: bool, B>(
+    pub(crate) fn of_time_engine<const D: usize, const G: bool, const W: bool, B: BodyForce<D>>(
         engine: &TimeEngine<D, G, W, B>,
         scene: &Scene,
-    ) -> Frame
-    where
-        B: super::time_driven::BodyForce<D>,
-    {
+    ) -> Frame {
         Frame::of_state(
             scene,
             D,
@@ -150,12 +139,10 @@ impl Frame {
         self.radii.is_empty()
     }
 
-    /// Position of particle `i`.
     pub fn x(&self, i: usize) -> &[f64] {
         &self.positions[i * self.dimension..(i + 1) * self.dimension]
     }
 
-    /// Velocity of particle `i`.
     pub fn v(&self, i: usize) -> &[f64] {
         &self.velocities[i * self.dimension..(i + 1) * self.dimension]
     }

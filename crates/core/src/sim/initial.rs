@@ -10,22 +10,25 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-/// Particle radii, positions and velocities, flattened per particle (`dim` numbers each).
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct InitialState {
-    pub radius: Vec<f64>,
-    pub position: Vec<Vec<f64>>,
-    pub velocity: Vec<Vec<f64>>,
-}
-
 /// Particle radii, positions and velocities, each flattened into one array (`dim` numbers per
-/// particle in `position` and `velocity`): what the event engine builds from, without a heap
+/// particle in `position` and `velocity`): what both engines build from, without a heap
 /// allocation per particle (`wetgran-bench memory`).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct FlatInitialState {
     pub radius: Vec<f64>,
     pub position: Vec<f64>,
     pub velocity: Vec<f64>,
+}
+
+impl FlatInitialState {
+    /// The particles of a saved state.
+    pub(crate) fn of_state(state: &super::EngineState) -> Self {
+        Self {
+            radius: state.radii.clone(),
+            position: state.positions.clone(),
+            velocity: state.velocities.clone(),
+        }
+    }
 }
 
 /// Builds the initial state of a validated scene, flattened.
@@ -82,25 +85,14 @@ pub(crate) fn initial_state_flat(scene: &Scene) -> FlatInitialState {
     }
 }
 
-/// Builds the initial state of a validated scene (the numbers of [`initial_state_flat`], one
-/// vector per particle).
-pub(crate) fn initial_state(scene: &Scene) -> InitialState {
-    let dim = scene.dimension;
-    let flat = initial_state_flat(scene);
-    InitialState {
-        radius: flat.radius,
-        position: flat.position.chunks(dim).map(<[f64]>::to_vec).collect(),
-        velocity: flat.velocity.chunks(dim).map(<[f64]>::to_vec).collect(),
-    }
-}
-
 /// The cold start (`initial.start = "cold"`): the hot start's lattice and radii, every velocity
 /// zero, and a capillary bridge between every pair whose surface separation
 /// `|x_i - x_j| - r_i - r_j` (nearest image on periodic axes) is below `s_crit`: a bonded bed at
 /// rest that settles under gravity. Time 0, counts and ledger zero.
 pub fn cold_state(scene: &Scene) -> super::EngineState {
-    let init = initial_state(scene);
+    let init = initial_state_flat(scene);
     let dim = scene.dimension;
+    let x = |i: usize| &init.position[i * dim..(i + 1) * dim];
     let n = init.radius.len();
     let s_crit = if scene.is_wet() { scene.s_crit() } else { 0.0 };
     let (_, d_max) = scene.diameter_range();
@@ -111,63 +103,49 @@ pub fn cold_state(scene: &Scene) -> super::EngineState {
         .map(|b| *b == crate::scene::Boundary::Periodic)
         .collect();
     let size = &scene.container.size;
-    // Cells of edge >= d_max + s_crit: bonded pairs are in neighbouring cells.
+    // Cells of edge >= d_max + s_crit: bonded pairs are in neighbouring cells. On a periodic
+    // axis the last cell absorbs the remainder, so cells wrap exactly.
     let ncells: Vec<i64> = size
         .iter()
         .map(|l| ((l / cell).floor() as i64).max(1))
         .collect();
-    // On a periodic axis the last cell absorbs the remainder, so cells wrap exactly.
-    let key = |x: &[f64]| -> Vec<i64> {
-        x.iter()
-            .enumerate()
-            .map(|(k, v)| {
-                let c = (v / cell).floor() as i64;
+    let cell_of = |i: usize, offset: &[i64]| -> Vec<i64> {
+        (0..dim)
+            .map(|k| {
+                let c = (x(i)[k] / cell).floor() as i64;
                 if periodic[k] {
-                    c.clamp(0, ncells[k] - 1)
+                    (c.clamp(0, ncells[k] - 1) + offset[k]).rem_euclid(ncells[k])
                 } else {
-                    c
+                    c + offset[k]
                 }
             })
             .collect()
     };
     let mut grid: std::collections::HashMap<Vec<i64>, Vec<usize>> = Default::default();
-    for (i, x) in init.position.iter().enumerate() {
-        grid.entry(key(x)).or_default().push(i);
+    for i in 0..n {
+        grid.entry(cell_of(i, &vec![0; dim])).or_default().push(i);
     }
+    let offsets: Vec<Vec<i64>> = (0..3i64.pow(dim as u32))
+        .map(|m| (0..dim).map(|k| m / 3i64.pow(k as u32) % 3 - 1).collect())
+        .collect();
     let mut bridges = Vec::new();
-    if s_crit > 0.0 {
-        for i in 0..n {
-            let c = key(&init.position[i]);
-            let mut seen = std::collections::BTreeSet::new();
-            for code in 0..3i64.pow(dim as u32) {
-                let mut nc = c.clone();
-                let mut rest = code;
-                for k in 0..dim {
-                    nc[k] += rest % 3 - 1;
-                    rest /= 3;
-                    if periodic[k] {
-                        nc[k] = nc[k].rem_euclid(ncells[k]);
-                    }
+    for i in (0..n).filter(|_| s_crit > 0.0) {
+        // The neighbour cells, each once (a periodic axis of fewer than 3 cells repeats some).
+        let mut hood: Vec<Vec<i64>> = offsets.iter().map(|o| cell_of(i, o)).collect();
+        hood.sort_unstable();
+        hood.dedup();
+        let partners = hood.iter().filter_map(|c| grid.get(c)).flatten();
+        for &j in partners.filter(|&&j| j > i) {
+            let mut r2 = 0.0;
+            for k in 0..dim {
+                let mut d = x(i)[k] - x(j)[k];
+                if periodic[k] {
+                    d -= size[k] * (d / size[k]).round();
                 }
-                let Some(members) = grid.get(&nc) else {
-                    continue;
-                };
-                for &j in members {
-                    if j <= i || !seen.insert(j) {
-                        continue;
-                    }
-                    let mut r2 = 0.0;
-                    for k in 0..dim {
-                        let mut d = init.position[i][k] - init.position[j][k];
-                        if periodic[k] {
-                            d -= size[k] * (d / size[k]).round();
-                        }
-                        r2 += d * d;
-                    }
-                    if r2.sqrt() - init.radius[i] - init.radius[j] < s_crit {
-                        bridges.push((i, j));
-                    }
-                }
+                r2 += d * d;
+            }
+            if r2.sqrt() - init.radius[i] - init.radius[j] < s_crit {
+                bridges.push((i, j));
             }
         }
     }
@@ -176,7 +154,7 @@ pub fn cold_state(scene: &Scene) -> super::EngineState {
         engine: "cold start".to_string(),
         dimension: dim,
         time: 0.0,
-        positions: init.position.concat(),
+        positions: init.position,
         velocities: vec![0.0; dim * n],
         radii: init.radius,
         bridges,

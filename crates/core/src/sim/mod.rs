@@ -135,31 +135,13 @@ pub fn run_scene_watched(
 
 type Observer<'a> = Option<(f64, &'a mut dyn Watcher)>;
 
-/// Builds the engine `$ty` from the scene or from a saved state.
-macro_rules! build {
-    ($ty:ty, $scene:expr, $start:expr) => {
-        match $start {
-            Some(st) => <$ty>::from_state($scene, st),
-            None => <$ty>::new($scene),
-        }
-    };
-    ($ty:ty, $scene:expr, $start:expr, $field:expr) => {
-        match $start {
-            Some(st) => <$ty>::from_state_with_body_force($scene, st, $field),
-            None => <$ty>::with_body_force($scene, $field),
-        }
-    };
-}
-
 fn run_dispatch(
     scene: &Scene,
     start: Option<&EngineState>,
     p: &mut dyn FnMut(&Sample),
     o: Observer<'_>,
 ) -> RunReport {
-    if let Some(st) = start
-        && let Err(e) = st.check_fits(scene)
-    {
+    if let Some(Err(e)) = start.map(|st| st.check_fits(scene)) {
         panic!("{e}");
     }
     assert!(
@@ -167,7 +149,6 @@ fn run_dispatch(
         "initial.start = \"continue\" starts from the final state of a neighbouring sweep point \
          (`[sweep.continuation]`); a scene run on its own has none: use \"hot\" or \"cold\""
     );
-    // The cold start is a state of its own (`initial::cold_state`).
     let cold = (start.is_none() && scene.initial.start == crate::scene::StartMode::Cold)
         .then(|| initial::cold_state(scene));
     let st = start.or(cold.as_ref());
@@ -215,43 +196,43 @@ pub fn with_engine<V: EngineVisitor>(scene: &Scene, st: Option<&EngineState>, v:
             // Validation admits the shear drive in 3D only.
             return match (grav, wet) {
                 (false, false) => {
-                    v.visit(build!(TimeEngine::<3, false, false, _>, scene, st, field))
+                    v.visit(TimeEngine::<3, false, false, _>::start(scene, st, field))
                 }
-                (false, true) => v.visit(build!(TimeEngine::<3, false, true, _>, scene, st, field)),
-                (true, false) => v.visit(build!(TimeEngine::<3, true, false, _>, scene, st, field)),
-                (true, true) => v.visit(build!(TimeEngine::<3, true, true, _>, scene, st, field)),
+                (false, true) => v.visit(TimeEngine::<3, false, true, _>::start(scene, st, field)),
+                (true, false) => v.visit(TimeEngine::<3, true, false, _>::start(scene, st, field)),
+                (true, true) => v.visit(TimeEngine::<3, true, true, _>::start(scene, st, field)),
             };
         }
         return match (scene.dimension, grav, wet) {
-            (2, false, false) => v.visit(build!(TimeEngine::<2, false, false>, scene, st)),
-            (2, false, true) => v.visit(build!(TimeEngine::<2, false, true>, scene, st)),
-            (2, true, false) => v.visit(build!(TimeEngine::<2, true, false>, scene, st)),
-            (2, true, true) => v.visit(build!(TimeEngine::<2, true, true>, scene, st)),
-            (3, false, false) => v.visit(build!(TimeEngine::<3, false, false>, scene, st)),
-            (3, false, true) => v.visit(build!(TimeEngine::<3, false, true>, scene, st)),
-            (3, true, false) => v.visit(build!(TimeEngine::<3, true, false>, scene, st)),
-            (3, true, true) => v.visit(build!(TimeEngine::<3, true, true>, scene, st)),
+            (2, false, false) => v.visit(TimeEngine::<2, false, false>::from_state(scene, st)),
+            (2, false, true) => v.visit(TimeEngine::<2, false, true>::from_state(scene, st)),
+            (2, true, false) => v.visit(TimeEngine::<2, true, false>::from_state(scene, st)),
+            (2, true, true) => v.visit(TimeEngine::<2, true, true>::from_state(scene, st)),
+            (3, false, false) => v.visit(TimeEngine::<3, false, false>::from_state(scene, st)),
+            (3, false, true) => v.visit(TimeEngine::<3, false, true>::from_state(scene, st)),
+            (3, true, false) => v.visit(TimeEngine::<3, true, false>::from_state(scene, st)),
+            (3, true, true) => v.visit(TimeEngine::<3, true, true>::from_state(scene, st)),
             (d, _, _) => panic!("dimension {d} passed validation"),
         };
     }
     if scene.shear_slabs().is_some() {
         // Validation admits the shear drive in 3D only.
         return match (grav, wet) {
-            (false, false) => v.visit(build!(Engine::<3, false, false, true>, scene, st)),
-            (false, true) => v.visit(build!(Engine::<3, false, true, true>, scene, st)),
-            (true, false) => v.visit(build!(Engine::<3, true, false, true>, scene, st)),
-            (true, true) => v.visit(build!(Engine::<3, true, true, true>, scene, st)),
+            (false, false) => v.visit(Engine::<3, false, false, true>::from_state(scene, st)),
+            (false, true) => v.visit(Engine::<3, false, true, true>::from_state(scene, st)),
+            (true, false) => v.visit(Engine::<3, true, false, true>::from_state(scene, st)),
+            (true, true) => v.visit(Engine::<3, true, true, true>::from_state(scene, st)),
         };
     }
     match (scene.dimension, grav, wet) {
-        (2, false, false) => v.visit(build!(Engine::<2, false, false>, scene, st)),
-        (2, false, true) => v.visit(build!(Engine::<2, false, true>, scene, st)),
-        (2, true, false) => v.visit(build!(Engine::<2, true, false>, scene, st)),
-        (2, true, true) => v.visit(build!(Engine::<2, true, true>, scene, st)),
-        (3, false, false) => v.visit(build!(Engine::<3, false, false>, scene, st)),
-        (3, false, true) => v.visit(build!(Engine::<3, false, true>, scene, st)),
-        (3, true, false) => v.visit(build!(Engine::<3, true, false>, scene, st)),
-        (3, true, true) => v.visit(build!(Engine::<3, true, true>, scene, st)),
+        (2, false, false) => v.visit(Engine::<2, false, false>::from_state(scene, st)),
+        (2, false, true) => v.visit(Engine::<2, false, true>::from_state(scene, st)),
+        (2, true, false) => v.visit(Engine::<2, true, false>::from_state(scene, st)),
+        (2, true, true) => v.visit(Engine::<2, true, true>::from_state(scene, st)),
+        (3, false, false) => v.visit(Engine::<3, false, false>::from_state(scene, st)),
+        (3, false, true) => v.visit(Engine::<3, false, true>::from_state(scene, st)),
+        (3, true, false) => v.visit(Engine::<3, true, false>::from_state(scene, st)),
+        (3, true, true) => v.visit(Engine::<3, true, true>::from_state(scene, st)),
         (d, _, _) => panic!("dimension {d} passed validation"),
     }
 }
@@ -498,15 +479,11 @@ fn run_engine<S: Simulation>(
         stopped_on_event_cap: stopped_on_cap,
         invariant_violation: violation,
         granular_temperature: t_g,
-        granular_temperature_over_ecb: if e_cb > 0.0 { Some(t_g / e_cb) } else { None },
+        granular_temperature_over_ecb: (e_cb > 0.0).then(|| t_g / e_cb),
         bridges: engine.bridge_count(),
         energy_initial,
         energy_final,
-        energy_bookkeeping_error: if a0 != 0.0 {
-            (a1 - a0) / a0.abs()
-        } else {
-            a1 - a0
-        },
+        energy_bookkeeping_error: (a1 - a0) / if a0 != 0.0 { a0.abs() } else { 1.0 },
         samples,
         final_state,
     }

@@ -63,23 +63,18 @@ impl EngineState {
         let shift = prev
             .drive_motion()
             .map_or(0.0, |(a, w)| a * (w * self.time).sin());
-        let mut positions = self.positions.clone();
+        let mut next = EngineState {
+            time: 0.0,
+            counts: Default::default(),
+            ledger: Default::default(),
+            ..self.clone()
+        };
         if d > 0 && shift != 0.0 {
-            for x in positions.chunks_mut(d) {
+            for x in next.positions.chunks_mut(d) {
                 x[d - 1] -= shift;
             }
         }
-        EngineState {
-            engine: self.engine.clone(),
-            dimension: d,
-            time: 0.0,
-            positions,
-            velocities: self.velocities.clone(),
-            radii: self.radii.clone(),
-            bridges: self.bridges.clone(),
-            counts: Default::default(),
-            ledger: Default::default(),
-        }
+        next
     }
 
     /// Whether the snapshot fits a scene: dimension and particle count.

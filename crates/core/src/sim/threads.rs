@@ -1,18 +1,10 @@
-//! How many threads one simulation uses, and the rayon pool it runs on.
-//!
-//! The time-driven engine splits each step into parallel loops (`time_driven::engine`); its
-//! results do not depend on the number of threads (every floating-point sum is taken in a fixed
-//! order over fixed chunks), so the thread count is a pure speed choice, made here:
-//!
-//! - inside a rayon pool (a benchmark or test that installed one), the engine uses that pool;
-//! - on a thread where a [`CoreShare`] is entered (the sweep runner's workers), the job runs on
-//!   a pool of its share of the cores (`CoreShare::threads_per_job`): once the queue is empty
-//!   the idle workers' cores go to the jobs still running, so the last job of a sweep uses the
-//!   whole machine;
-//! - elsewhere (`wetgran simulate`, `job run`, tests), the process pool of all available cores.
-//!
-//! [`install`] is called once per `run_until` of the engine (once per sample or observer frame,
-//! thousands of steps), so a job picks up a larger share at its next sample.
+//! How many threads one simulation uses, and the rayon pool it runs on (a pure speed choice:
+//! the results do not depend on it, ARCHITECTURE.md, "Threads"). Inside a rayon pool (a
+//! benchmark or test that installed one) the engine uses that pool; on a thread where a
+//! [`CoreShare`] is entered (the sweep runner's workers), a pool of its share of the cores
+//! (`CoreShare::threads_per_job`: the idle workers' cores go to the jobs still running once the
+//! queue is empty); elsewhere the process pool of all available cores. [`install`] runs once
+//! per `run_until` of the engine, so a job picks up a larger share at its next sample.
 
 use rayon::{ThreadPool, ThreadPoolBuilder};
 use std::cell::RefCell;
@@ -141,6 +133,15 @@ pub fn install<R: Send>(f: impl FnOnce() -> R + Send) -> R {
         let (_, pool) = e.pool.as_ref().expect("built above");
         pool.install(f)
     })
+}
+
+/// A pool of `threads` threads (tests that compare thread counts).
+#[cfg(test)]
+pub(crate) fn test_pool(threads: usize) -> ThreadPool {
+    ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a pool")
 }
 
 #[cfg(test)]

@@ -155,7 +155,6 @@ pub struct WallTable {
     motion: WallMotion,
     spec: TableSpec,
     edges: Vec<EdgeTable>,
-    /// Seconds spent filling the table.
     pub build_seconds: f64,
     #[cfg(test)]
     stats: BuildStats,
@@ -199,10 +198,6 @@ impl WallTable {
         &self.motion
     }
 
-    pub fn spec(&self) -> &TableSpec {
-        &self.spec
-    }
-
     /// Next entering root for a flight with contact coordinate `h` and velocity `v` at time
     /// `t0`, searched up to `t0 + horizon`.
     pub fn next_hit(&self, h: f64, v: f64, t0: f64, horizon: f64) -> TableHit {
@@ -222,7 +217,7 @@ impl WallTable {
             }
             let (base_time, edge, p1, v_base) = if z > reach {
                 // Above the reach: the flight enters through edge I (or never comes back).
-                let Some(dt) = time_to_reach(z, vz, w.g, reach, false) else {
+                let Some(dt) = time_to_fall_to(z, vz, w.g, reach) else {
                     return TableHit::None;
                 };
                 let te = t + dt;
@@ -453,11 +448,11 @@ fn crossings(z: f64, v: f64, g: f64, plane: f64) -> [f64; 2] {
     [(v - sq) / g, (v + sq) / g]
 }
 
-/// First time `> 0` at which the parabola reaches `plane` moving down (`up = false`) or up.
-fn time_to_reach(z: f64, v: f64, g: f64, plane: f64, up: bool) -> Option<f64> {
+/// First time `>= 0` at which the parabola reaches `plane` moving down.
+fn time_to_fall_to(z: f64, v: f64, g: f64, plane: f64) -> Option<f64> {
     crossings(z, v, g, plane)
         .into_iter()
-        .filter(|&t| t >= 0.0 && ((v - g * t < 0.0) != up))
+        .filter(|&t| t >= 0.0 && v - g * t < 0.0)
         .min_by(f64::total_cmp)
 }
 

@@ -23,11 +23,8 @@ pub struct Gather {
 /// A regular grid of `n[0] x ... x n[D-1]` cells.
 #[derive(Debug, Clone)]
 pub struct CellGrid<const D: usize> {
-    /// Cells per axis.
     pub n: [i32; D],
-    /// Cell edge per axis.
     pub width: [f64; D],
-    /// Whether each axis wraps around.
     pub periodic: [bool; D],
     /// Whether every periodic axis has at least five cells: then two particles in the
     /// neighbourhood of an interior cell are less than half the box apart, so their separation

@@ -1,38 +1,20 @@
 //! The event-driven engine for hard disks (`D = 2`) and spheres (`D = 3`): a small scheduler
-//! over event sources.
+//! over event sources (ARCHITECTURE.md, "Event engine": the sources, one step, renumbering).
 //!
 //! The engine owns the clock, the particles ([`Bodies`]), the queue (`Q`, any [`EventQueue`]),
-//! the books ([`Ledger`], [`EventCounts`]) and four event sources, each of which owns its state
-//! and knows how to predict, fire and renumber its events ([`EventSource`]):
-//! - [`PairSource`] (`pairs.rs`): collisions and, if wet, bridges and well events;
-//! - [`CellSource`] (`cell_source.rs`): the neighbour cells and cell-face crossings;
-//! - [`WallSource`] (`walls.rs`): static walls, or the shaken floor and lid under one
-//!   [`super::walls::WallSolver`] (exact, bracket or table, which owns its tables);
-//! - [`SlabSource`] (`slabs.rs`): the slabs of the shear drive (empty unless `SHEAR`).
-//!
-//! One step: pop the particle with the earliest key, ask each source for its candidate
-//! [`Event`] (pair, slab, wall, cell: among equal times the earlier-named source wins), validate
-//! it (a pair event whose partner changed course since the prediction is stale and only
-//! re-predicted: lazy invalidation with per-particle counters), dispatch it to its source, and
-//! re-predict the particles whose course changed. Every `reorder_interval` events the particles
-//! are renumbered in cell order (`reorder_by_cell`): each source permutes its own arrays.
-//!
-//! Effects are chosen once, at scene start, as compile-time parameters: `GRAV` (parabolic
-//! flights and the vertical-root formulas), `WET` (bridges and their bookkeeping), `SHEAR`
-//! (slab events, flights accelerated along `y`, quartic pair predictions) and the queue `Q`.
-//! Everything is monomorphised: the inner loop has no dynamic dispatch, and a dry, gravity-free
-//! or unsheared scene runs code in which the other branches do not exist.
-//!
-//! Numerical safeguards live with the source they protect (see each module's header) and are
-//! each tested in `crates/core/tests/engine_safeguards.rs`.
+//! the books ([`EnergyLedger`], [`EventCounts`]) and the sources ([`PairSource`], [`CellSource`],
+//! [`WallSource`], [`SlabSource`]), each of which predicts, fires and renumbers its own events
+//! ([`EventSource`]). Effects are compile-time parameters (`GRAV`, `WET`, `SHEAR` and the queue
+//! `Q`): a dry, gravity-free or unsheared scene runs code in which the other branches do not
+//! exist. Numerical safeguards live with the source they protect (see each module's header)
+//! and are each tested in `crates/core/tests/engine_safeguards.rs`.
 
 pub use super::bodies::Vector;
 use super::bodies::{Bodies, Body};
 use super::cell_source::CellSource;
 use super::cells::CellGrid;
 use super::event::{Event, EventKind, EventSource, NONE};
-use super::ledger::Ledger;
-use super::pairs::{PairParams, PairSource};
+use super::pairs::PairSource;
 use super::queue::{CalendarQueue, EventQueue};
 use super::shear::{FORCE_AXIS, ShearField};
 use super::slabs::SlabSource;
@@ -64,7 +46,9 @@ pub struct Engine<
     walls: WallSource,
     slabs: SlabSource,
     counts: EventCounts,
-    ledger: Ledger,
+    /// The energy exchanged at events (kinetic and potential are filled in by `energy`; the
+    /// shear field's work on flights is kept by `Bodies`, which does the flights).
+    ledger: EnergyLedger,
     /// Largest overlap the invariant check tolerates.
     overlap_tolerance: f64,
     /// Events whose time lay before the current time by more than round-off (must stay 0).
@@ -79,45 +63,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
 {
     /// Builds the engine for a validated scene: initial state, cells, first predictions.
     pub fn new(scene: &Scene) -> Self {
-        Self::assemble(scene, initial_state_flat(scene), None)
-    }
-
-    /// Rebuilds the engine from a saved state (`sim::state`): particles at the state's time,
-    /// bridges, event counts and energy ledger continued, cells and predictions derived afresh,
-    /// the TC remedy's last-collision times unset. It follows the uninterrupted run to
-    /// round-off (`observe_runs.rs`, `checkpoint_continues_the_event_trajectory`).
-    pub(crate) fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
-        let init = FlatInitialState {
-            radius: state.radii.clone(),
-            position: state.positions.clone(),
-            velocity: state.velocities.clone(),
-        };
-        Self::assemble(scene, init, Some(state))
-    }
-
-    /// Panics unless the scene matches the engine's const parameters (dimension, gravity,
-    /// capillary, shear).
-    fn check_flags(scene: &Scene) {
-        assert_eq!(
-            scene.dimension, D,
-            "scene dimension does not match the engine"
-        );
-        assert_eq!(
-            GRAV,
-            scene.gravity > 0.0,
-            "gravity flag does not match the scene"
-        );
-        assert_eq!(
-            WET,
-            scene.is_wet(),
-            "capillary flag does not match the scene"
-        );
-        assert_eq!(
-            SHEAR,
-            scene.shear_slabs().is_some(),
-            "shear flag does not match the scene"
-        );
-        assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
+        Self::from_state(scene, None)
     }
 
     /// Takes the bridges, event counts and energy books of a saved state (resumed at `t0`).
@@ -130,27 +76,29 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             }
         }
         self.counts = st.counts.clone();
-        let l = &st.ledger;
-        self.ledger.dissipated_restitution = l.dissipated_restitution;
-        self.ledger.dissipated_ruptures = l.dissipated_ruptures;
-        self.ledger.added = l.added_by_collapse_remedies;
-        self.ledger.placement = l.added_by_wall_placement;
+        self.ledger = st.ledger.clone();
         if SHEAR {
             // The shear field's work is summed where the flights are done.
-            self.bodies.field_work = l.work_by_drive;
-        } else {
-            self.ledger.work_by_drive = l.work_by_drive;
+            self.bodies.field_work = st.ledger.work_by_drive;
         }
         self.next_reorder = self.counts.total().saturating_add(self.reorder_every);
     }
 
-    fn assemble(
-        scene: &Scene,
-        init: FlatInitialState,
-        start: Option<&crate::sim::EngineState>,
-    ) -> Self {
+    /// The engine of [`Self::new`] or, with `Some(state)`, rebuilt from a saved state
+    /// (`sim::state`): particles at the state's time, bridges, event counts and energy ledger
+    /// continued, cells and predictions derived afresh, the TC remedy's last-collision times
+    /// unset. It follows the uninterrupted run to round-off (`observe_runs.rs`,
+    /// `checkpoint_continues_the_event_trajectory`).
+    pub(crate) fn from_state(scene: &Scene, start: Option<&crate::sim::EngineState>) -> Self {
+        let init = start.map_or_else(|| initial_state_flat(scene), FlatInitialState::of_state);
         let t0 = start.map_or(0.0, |s| s.time);
-        Self::check_flags(scene);
+        let shear = scene.shear_slabs().is_some();
+        assert_eq!(
+            (scene.dimension, scene.gravity > 0.0, scene.is_wet(), shear),
+            (D, GRAV, WET, SHEAR),
+            "the scene's dimension, gravity, capillary and shear flags do not match the engine"
+        );
+        assert!(!SHEAR || D > FORCE_AXIS, "shear needs a y axis");
         let n = init.radius.len();
         // Pair events pack the partner's index into 31 bits (`event::PairEvent`).
         assert!(
@@ -196,25 +144,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             field_work: 0.0,
         };
         let cells = CellSource::new(grid, bodies.body.iter().map(|b| b.x));
-        let pairs = PairSource::new(
-            PairParams {
-                eps: scene.contact.restitution,
-                tc: scene.engine.tc,
-                min_rebound: scene.engine.min_rebound_speed,
-                s_crit: scene.s_crit(),
-                e_cb: scene.e_cb(),
-                rule: scene.rupture_rule(),
-            },
-            n,
-        );
-        let walls = WallSource::new(
-            WallSolver::from_scene(scene),
-            scene.contact.wall_restitution,
-            scene.engine.tc,
-            scene.engine.min_rebound_speed,
-            n,
-            !periodic.iter().all(|&p| p),
-        );
+        let pairs = PairSource::new(scene, n);
+        let walls = WallSource::new(scene, n, !periodic.iter().all(|&p| p));
         let mut engine = Self {
             time: t0,
             bodies,
@@ -224,7 +155,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             walls,
             slabs,
             counts: EventCounts::default(),
-            ledger: Ledger::default(),
+            ledger: EnergyLedger::default(),
             overlap_tolerance: scene.engine.overlap_tolerance,
             time_reversals: 0,
             next_reorder: reorder_interval(n),
@@ -251,7 +182,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         self.time
     }
 
-    /// Events processed so far.
     pub fn counts(&self) -> &EventCounts {
         &self.counts
     }
@@ -469,7 +399,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             .collect()
     }
 
-    /// Energy bookkeeping at the current time.
     pub fn energy(&self) -> EnergyLedger {
         let m = self.bodies.mass;
         let states = self.current_states();
@@ -482,30 +411,24 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         } else {
             0.0
         };
-        // The drive's work: the shaken walls', or the shear field's including the flights not
-        // yet brought to the current time (the two drives exclude each other).
-        let work_by_drive = if SHEAR {
+        let mut out = EnergyLedger {
+            kinetic,
+            potential,
+            ..self.ledger.clone()
+        };
+        if SHEAR {
+            // The shear field's work, including the flights not yet brought to the current
+            // time (the ledger's is the shaken walls'; the two drives exclude each other).
             let pending: f64 = states
                 .iter()
                 .enumerate()
                 .map(|(i, (x, _))| self.bodies.field_work(i, x))
                 .sum();
-            self.bodies.field_work + pending
-        } else {
-            self.ledger.work_by_drive
-        };
-        EnergyLedger {
-            kinetic,
-            potential,
-            dissipated_restitution: self.ledger.dissipated_restitution,
-            dissipated_ruptures: self.ledger.dissipated_ruptures,
-            added_by_collapse_remedies: self.ledger.added,
-            added_by_wall_placement: self.ledger.placement,
-            work_by_drive,
+            out.work_by_drive = self.bodies.field_work + pending;
         }
+        out
     }
 
-    /// Total momentum.
     pub fn momentum(&self) -> Vector<D> {
         let states = self.current_states();
         states.iter().fold(Vector::<D>::zeros(), |a, (_, v)| a + v) * self.bodies.mass

@@ -9,11 +9,6 @@
 //! its neighbourhood of cells; it remembers the partner's velocity-change count at prediction
 //! time, and the scheduler drops it (and re-predicts) if the count moved on (lazy invalidation).
 //!
-//! Scans without shear or minimum image predict every partner by the whole arithmetic and
-//! choose at the end (`scan_dry`, `dry_time`): whether a pair meets is a coin toss a processor
-//! mispredicts (docs/performance.md, "Ideas kept and rejected"); the same operations as
-//! `predict_image`, so the same events.
-//!
 //! Safeguards (each tested in `crates/core/tests/engine_safeguards.rs`): an overlapping pair
 //! that approaches collides now, one that separates is left alone (B.5.6); a pair half a
 //! periodic box apart (four cells) is predicted through both images; collapse: the TC model and
@@ -24,13 +19,12 @@ use super::bodies::{Bodies, Vector, permute_in_place, vec_bytes};
 use super::cell_source::{CellSource, Neighbourhood};
 use super::cells::{BATCH, CellGrid};
 use super::event::{Event, EventSource, NONE, PairEvent, PairKind};
-use super::ledger::Ledger;
 use super::shear::pair_times;
 use super::slabs::SlabSource;
 use crate::physics::capillary::{WellOutcome, well_outcome};
 use crate::physics::contact::rebound_speed;
-use crate::scene::RuptureRule;
-use crate::sim::books::EventCounts;
+use crate::scene::{RuptureRule, Scene};
+use crate::sim::books::{EnergyLedger, EventCounts};
 
 /// Fraction of a periodic box edge beyond which a pair is also predicted through its other
 /// image (see `PairSource::predict_pair_from`): above the `0.4 L` that partners in adjacent
@@ -61,9 +55,17 @@ pub struct PairSource<const D: usize, const WET: bool> {
 }
 
 impl<const D: usize, const WET: bool> PairSource<D, WET> {
-    pub fn new(p: PairParams, n: usize) -> Self {
+    /// The source of a validated scene for `n` particles.
+    pub fn new(scene: &Scene, n: usize) -> Self {
         Self {
-            p,
+            p: PairParams {
+                eps: scene.contact.restitution,
+                tc: scene.engine.tc,
+                min_rebound: scene.engine.min_rebound_speed,
+                s_crit: scene.s_crit(),
+                e_cb: scene.e_cb(),
+                rule: scene.rupture_rule(),
+            },
             ev: vec![PairEvent::NEVER; n],
             bonds: vec![NONE; if WET { n * MAX_BONDS } else { 0 }],
             bond_len: vec![0; if WET { n } else { 0 }],
@@ -445,8 +447,10 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
     /// The time of the contact of `i` (radius `ri`) with `j` (`+inf` if none, or if
     /// `j == i`), and the `b`, `r^2`, `v^2`, `sigma` it used, for a pair under one force for
     /// all and without minimum image (`shift`: the partner's image shift, if `shifted`). Every
-    /// partner pays the whole arithmetic and the result is chosen (see the module header); the
-    /// same operations as [`Self::predict_image`] (Eq. B.3, overlap: `t` itself), so the same bits.
+    /// partner pays the whole arithmetic and the result is chosen without a branch (whether a
+    /// pair meets is a coin toss a processor mispredicts: docs/performance.md, "Ideas kept and
+    /// rejected"); the same operations as [`Self::predict_image`] (Eq. B.3, overlap: `t`
+    /// itself), so the same bits.
     fn dry_time<const G: bool, const S: bool>(
         bodies: &Bodies<D, G, S>,
         xi: &Vector<D>,
@@ -545,7 +549,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         j: usize,
         t: f64,
         bodies: &mut Bodies<D, G, S>,
-        ledger: &mut Ledger,
+        ledger: &mut EnergyLedger,
         counts: &mut EventCounts,
     ) {
         let (n, u) = Self::normal(bodies, i, j, t);
@@ -572,7 +576,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
         j: usize,
         t: f64,
         bodies: &mut Bodies<D, G, S>,
-        ledger: &mut Ledger,
+        ledger: &mut EnergyLedger,
         counts: &mut EventCounts,
     ) {
         let (n, u) = Self::normal(bodies, i, j, t);
@@ -584,7 +588,7 @@ impl<const D: usize, const WET: bool> PairSource<D, WET> {
                 // A pair grazing the concave well wall would bounce ever more often: it leaves
                 // at least at the rebound floor, the energy added booked with the remedies.
                 let u_out = reflected.min(-self.p.min_rebound);
-                ledger.added += 0.25 * bodies.mass * (u_out * u_out - u * u);
+                ledger.added_by_collapse_remedies += 0.25 * bodies.mass * (u_out * u_out - u * u);
                 u_out
             }
             WellOutcome::Rupture {

@@ -3,10 +3,10 @@
 //! implementation (`Engine<.., Q: EventQueue>`, monomorphised: no dynamic dispatch in the loop).
 //!
 //! Re-predicting a particle changes its key in place, so a queue never holds stale copies
-//! (invalid events are detected lazily, see `engine.rs`). [`CalendarQueue`] is the default;
-//! `reference_queues.rs` (tests only) holds a heap and a linear scan that the tests run whole
-//! engines on (`crates/core/tests/engine_pins.rs`). All break ties of equal keys by the
-//! smaller particle index, so the trajectory does not depend on the queue.
+//! (invalid events are detected lazily, see `engine.rs`). [`CalendarQueue`] is the engines' queue;
+//! `reference_queues.rs` (tests only) holds a linear scan that the tests run whole engines on
+//! (`crates/core/tests/engine_pins.rs`). Both break ties of equal keys by the smaller particle
+//! index, so the trajectory does not depend on the queue.
 
 /// A priority queue over particles `0..n` with one key (event time) each.
 pub trait EventQueue: Clone + std::fmt::Debug {
@@ -15,9 +15,7 @@ pub trait EventQueue: Clone + std::fmt::Debug {
     /// The particle with the earliest key (the smallest index among equal keys) and that key
     /// (`&mut`: a queue may move its cursor or re-tune itself on the way).
     fn min(&mut self) -> Option<(usize, f64)>;
-    /// The key of particle `i`.
     fn key(&self, i: usize) -> f64;
-    /// Sets the key of particle `i`.
     fn update(&mut self, i: usize, time: f64);
     /// Heap bytes of the queue's arrays, by name (`wetgran-bench memory`).
     fn memory(&self) -> Vec<(&'static str, usize)>;
@@ -39,7 +37,7 @@ const WIDTH_FACTOR: f64 = 2.0;
 ///
 /// Order: `floor(t / w)` is monotone in `t`, so `min` walks the virtual buckets from the cursor
 /// `cur` (no finite key lies before it) and takes the smallest `(key, index)` of the first
-/// bucket that has a due entry: ties go to the smaller index as in the reference queues. The
+/// bucket that has a due entry: ties go to the smaller index as in the reference queue. The
 /// width only changes how much is walked, never the answer: every `8 N` pops it is
 /// re-estimated from a sample of the keys; after a year without a due entry the cursor jumps.
 ///

@@ -1,121 +1,14 @@
-//! Reference event queues for tests: an indexed 4-ary min-heap ([`HeapQueue`]) and a linear
-//! scan ([`NaiveQueue`]), both implementing [`EventQueue`] with ties broken by the smaller
-//! particle index, so that an engine takes the same trajectory on them as on the calendar queue
-//! (`crates/core/tests/engine_pins.rs`). Compiled only for tests (`cfg(test)` and the feature
-//! `testing`, which this crate's tests enable): engines run on the calendar queue.
+//! The reference event queue for tests: a linear scan ([`NaiveQueue`]) implementing
+//! [`EventQueue`] with ties broken by the smaller particle index, so that an engine takes the
+//! same trajectory on it as on the calendar queue (`crates/core/tests/engine_pins.rs`).
+//! Compiled only for tests (`cfg(test)` and the feature `testing`, which this crate's tests
+//! enable): engines run on the calendar queue.
 
 use super::bodies::vec_bytes;
 use super::queue::EventQueue;
 
-/// Children per heap node.
-const ARITY: usize = 4;
-
-/// Indexed 4-ary min-heap over particle indices. Each heap slot stores its key next to the
-/// particle index, so sifting compares without an indirection; four children of 16 bytes share
-/// about one cache line, which makes the frequent sift-down (the processed particle's next event
-/// is later) cheaper than in a binary heap.
-#[derive(Debug, Clone)]
-pub struct HeapQueue {
-    heap: Vec<(f64, u32)>,
-    slot: Vec<u32>,
-}
-
-impl EventQueue for HeapQueue {
-    fn new(n: usize) -> Self {
-        Self {
-            heap: (0..n as u32).map(|i| (f64::INFINITY, i)).collect(),
-            slot: (0..n as u32).collect(),
-        }
-    }
-
-    #[inline]
-    fn min(&mut self) -> Option<(usize, f64)> {
-        self.heap.first().map(|&(k, i)| (i as usize, k))
-    }
-
-    #[inline]
-    fn key(&self, i: usize) -> f64 {
-        self.heap[self.slot[i] as usize].0
-    }
-
-    fn memory(&self) -> Vec<(&'static str, usize)> {
-        vec![
-            ("queue.heap", vec_bytes(&self.heap)),
-            ("queue.slot", vec_bytes(&self.slot)),
-        ]
-    }
-
-    /// Sets the key of particle `i` and restores the heap order.
-    #[inline]
-    fn update(&mut self, i: usize, time: f64) {
-        let s = self.slot[i] as usize;
-        let old = self.heap[s].0;
-        self.heap[s].0 = time;
-        if time < old {
-            self.sift_up(s);
-        } else if time > old {
-            self.sift_down(s);
-        }
-    }
-}
-
-impl HeapQueue {
-    /// Strict order on entries; ties broken by particle index so the order is deterministic.
-    #[inline]
-    fn less(a: (f64, u32), b: (f64, u32)) -> bool {
-        a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
-    }
-
-    /// Puts `entry` into heap slot `s`.
-    fn place(&mut self, s: usize, entry: (f64, u32)) {
-        self.heap[s] = entry;
-        self.slot[entry.1 as usize] = s as u32;
-    }
-
-    fn sift_up(&mut self, mut s: usize) {
-        let entry = self.heap[s];
-        while s > 0 {
-            let parent = (s - 1) / ARITY;
-            let p = self.heap[parent];
-            if Self::less(entry, p) {
-                self.place(s, p);
-                s = parent;
-            } else {
-                break;
-            }
-        }
-        self.place(s, entry);
-    }
-
-    fn sift_down(&mut self, mut s: usize) {
-        let n = self.heap.len();
-        let entry = self.heap[s];
-        loop {
-            let first = ARITY * s + 1;
-            if first >= n {
-                break;
-            }
-            let last = (first + ARITY).min(n);
-            let mut child = first;
-            for k in first + 1..last {
-                if Self::less(self.heap[k], self.heap[child]) {
-                    child = k;
-                }
-            }
-            let c = self.heap[child];
-            if Self::less(c, entry) {
-                self.place(s, c);
-                s = child;
-            } else {
-                break;
-            }
-        }
-        self.place(s, entry);
-    }
-}
-
 /// Reference queue: a linear scan over the keys, `O(N)` per pop. Slow, obviously correct; the
-/// tests run engines on it to check [`HeapQueue`] (and any faster queue to come).
+/// tests run engines on it to check the calendar queue.
 #[derive(Debug, Clone)]
 pub struct NaiveQueue {
     key: Vec<f64>,
@@ -136,8 +29,7 @@ impl EventQueue for NaiveQueue {
     fn memory(&self) -> Vec<(&'static str, usize)> {
         vec![("queue.key", vec_bytes(&self.key))]
     }
-    /// First index with the smallest key (strict `<`: ties go to the smaller index, as in the
-    /// heap).
+    /// First index with the smallest key (strict `<`: ties go to the smaller index).
     fn min(&mut self) -> Option<(usize, f64)> {
         let mut best: Option<(usize, f64)> = None;
         for (i, &k) in self.key.iter().enumerate() {
@@ -149,8 +41,7 @@ impl EventQueue for NaiveQueue {
     }
 }
 
-/// The queues against each other: the calendar queue and the heap against the naive scan under
-/// random updates, and the calendar queue's own edge cases.
+/// The calendar queue against the naive scan under random updates, and its own edge cases.
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -180,23 +71,14 @@ mod tests {
         }
     }
 
-    /// Mix of increases, decreases, repeated values and infinities.
-    fn mixed(step: usize, rng: &mut rand_xoshiro::Xoshiro256PlusPlus) -> f64 {
-        match step % 7 {
+    #[test]
+    fn calendar_agrees_with_naive_queue_under_random_updates() {
+        // A mix of increases, decreases, repeated values and infinities.
+        agrees_with_naive_queue::<CalendarQueue>(257, 3, |step, rng| match step % 7 {
             0 => f64::INFINITY,
             1 => (rng.gen_range(0..50) as f64) * 0.5,
             _ => rng.gen_range(0.0..100.0),
-        }
-    }
-
-    #[test]
-    fn heap_agrees_with_naive_queue_under_random_updates() {
-        agrees_with_naive_queue::<HeapQueue>(257, 3, mixed);
-    }
-
-    #[test]
-    fn calendar_agrees_with_naive_queue_under_random_updates() {
-        agrees_with_naive_queue::<CalendarQueue>(257, 3, mixed);
+        });
         // A clock that advances like an engine's, with keys spread over many decades ahead of
         // it (a year of buckets without a due entry, saturated buckets), exact ties, keys in
         // the past and 0.

@@ -34,7 +34,6 @@ impl ShearField {
         }
     }
 
-    /// Number of slabs.
     pub fn count(&self) -> usize {
         self.accel.len()
     }

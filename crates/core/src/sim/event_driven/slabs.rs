@@ -15,7 +15,6 @@ use crate::physics::flight::linear_time_to_plane;
 #[derive(Debug, Clone)]
 pub struct SlabSource {
     pub field: Option<ShearField>,
-    /// Slab index of each particle.
     pub slab: Vec<u32>,
     /// Next crossing of a slab face.
     pub ev: Vec<PlaneEvent>,

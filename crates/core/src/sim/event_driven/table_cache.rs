@@ -1,17 +1,8 @@
 //! A bounded cache of the `table` wall solver's tables ([`WallTable`], docs/model.md 6, B.4-B.5):
 //! one table per `(wall motion, table spec)`, built on first use, shared by every engine that
-//! asks for it, and evicted least recently used first once the cached tables exceed a size cap.
-//!
-//! The sweep runner and `wetgran simulate` install a cache capped by `--table-cache-mib` on
-//! their threads ([`TableCache::enter`]); elsewhere engines use the process default
-//! ([`DEFAULT_TABLE_CACHE_MIB`]), so no path keeps tables without bound.
-//!
-//! Running engines hold their two tables through `Arc`s, so the memory in tables is at most the
-//! cap plus two tables per running engine. A table larger than the cap is not cached (a cap of
-//! 0 disables caching).
-//!
-//! Sizes: at the default 128 x 128 cells a table takes about 14 MiB, a drive (floor and lid)
-//! about 27 MiB, so the default cap of 256 MiB keeps the tables of the last nine drives.
+//! asks for it, and evicted least recently used first once the cached tables exceed a size cap
+//! (a table larger than the cap is not cached). Who installs which cache, and what the cap
+//! bounds: ARCHITECTURE.md, "Wall tables".
 
 use crate::physics::shaken_wall::WallMotion;
 use crate::physics::wall_table::{TableSpec, WallTable};
@@ -42,7 +33,6 @@ fn table_key(w: &WallMotion, s: &TableSpec) -> TableKey {
 struct Entries {
     /// Table and the tick of its last use.
     map: HashMap<TableKey, (Arc<WallTable>, u64)>,
-    /// Bytes of the cached tables.
     bytes: usize,
     /// Use counter (the recency order).
     tick: u64,
@@ -100,23 +90,19 @@ impl TableCache {
         }
     }
 
-    /// An empty cache capped at `mib` MiB.
     pub fn with_cap_mib(mib: usize) -> Self {
         Self::new(mib.saturating_mul(1 << 20))
     }
 
-    /// The cache of engines built on threads without an installed cache, capped at
-    /// [`DEFAULT_TABLE_CACHE_MIB`].
-    pub(crate) fn process_default() -> &'static TableCache {
-        static DEFAULT: OnceLock<TableCache> = OnceLock::new();
-        DEFAULT.get_or_init(|| TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB))
-    }
-
-    /// The cache engines on this thread use: the installed one, else the process default.
+    /// The cache engines on this thread use: the installed one, else the process default
+    /// (capped at [`DEFAULT_TABLE_CACHE_MIB`]).
     pub fn current() -> TableCache {
-        CURRENT
-            .with(|c| c.borrow().clone())
-            .unwrap_or_else(|| Self::process_default().clone())
+        static DEFAULT: OnceLock<TableCache> = OnceLock::new();
+        CURRENT.with(|c| c.borrow().clone()).unwrap_or_else(|| {
+            DEFAULT
+                .get_or_init(|| TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB))
+                .clone()
+        })
     }
 
     /// Installs this cache on the current thread until the returned guard is dropped.
@@ -129,7 +115,6 @@ impl TableCache {
         self.cap
     }
 
-    /// Bytes of the tables held now.
     pub fn bytes(&self) -> usize {
         self.lock().bytes
     }

@@ -15,13 +15,12 @@
 use super::bodies::{Bodies, permute_in_place, vec_bytes};
 use super::cell_source::CellSource;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
-use super::ledger::Ledger;
 use super::table_cache::TableCache;
 use crate::physics::contact::rebound_speed;
 use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
 use crate::physics::wall_table::{TableHit, WallTable};
 use crate::scene::{DEFAULT_ROOT_TOLERANCE, Scene, WallSolverKind};
-use crate::sim::books::EventCounts;
+use crate::sim::books::{EnergyLedger, EventCounts};
 use std::sync::Arc;
 
 /// Largest gap (in units of `d`) at which a tabulated wall hit is accepted and the particle
@@ -163,21 +162,15 @@ pub(crate) struct WallSource {
 }
 
 impl WallSource {
-    /// The source for `n` particles; `walls`: whether any axis has walls.
-    pub(crate) fn new(
-        solver: WallSolver,
-        e_wall: f64,
-        tc: f64,
-        min_rebound: f64,
-        n: usize,
-        walls: bool,
-    ) -> Self {
+    /// The source of a validated scene for `n` particles; `walls`: whether any axis has walls.
+    pub(crate) fn new(scene: &Scene, n: usize, walls: bool) -> Self {
+        let solver = WallSolver::from_scene(scene);
         let tabulated = matches!(solver, WallSolver::Table(_));
         Self {
             solver,
-            e_wall,
-            tc,
-            min_rebound,
+            e_wall: scene.contact.wall_restitution,
+            tc: scene.engine.tc,
+            min_rebound: scene.engine.min_rebound_speed,
             ev: vec![PlaneEvent::NEVER; if walls { n } else { 0 }],
             vrel: vec![f64::NAN; if tabulated { n } else { 0 }],
         }
@@ -323,7 +316,7 @@ impl WallSource {
         t: f64,
         bodies: &mut Bodies<D, G, S>,
         cells: &mut CellSource<D>,
-        ledger: &mut Ledger,
+        ledger: &mut EnergyLedger,
         counts: &mut EventCounts,
     ) {
         if let Some(w) = self.solver.motion()
@@ -362,7 +355,7 @@ impl WallSource {
         u_in: f64,
         floor: bool,
         bodies: &mut Bodies<D, G, S>,
-        ledger: &mut Ledger,
+        ledger: &mut EnergyLedger,
         counts: &mut EventCounts,
     ) -> f64 {
         bodies.bump(i);
@@ -388,7 +381,7 @@ impl WallSource {
         t: f64,
         bodies: &mut Bodies<D, G, S>,
         cells: &mut CellSource<D>,
-        ledger: &mut Ledger,
+        ledger: &mut EnergyLedger,
         counts: &mut EventCounts,
     ) {
         bodies.advance(i, t);
@@ -434,7 +427,7 @@ impl WallSource {
             // the particle into a grain resting a hair above it. The rest of the gap stays.
             let z_new = z + placement_room(i, z_wall - z, t, bodies, cells);
             if G {
-                ledger.placement += bodies.mass * bodies.gravity * (z_new - z);
+                ledger.added_by_wall_placement += bodies.mass * bodies.gravity * (z_new - z);
             }
             bodies.body[i].x[D - 1] = z_new;
             // The shift may cross a cell face (the caller rescans the neighbourhood).

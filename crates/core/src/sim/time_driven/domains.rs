@@ -195,39 +195,6 @@ pub(super) const REPARTITION_SLACK: usize = 16;
 /// A partition is remade at the latest this many list builds after it was made.
 pub(super) const REPARTITION_EVERY: u64 = 64;
 
-impl<const D: usize> Clone for Decomposition<D> {
-    fn clone(&self) -> Self {
-        Self {
-            built_for: AtomicU64::new(self.built_for()),
-            partitioned_at: self.partitioned_at,
-            cross_at_partition: self.cross_at_partition,
-            dom: self.dom.clone(),
-            local: self.local.clone(),
-            domains: self
-                .domains
-                .iter()
-                .map(|d| Mutex::new(lock(d).clone()))
-                .collect(),
-            halo: self
-                .halo
-                .iter()
-                .map(|h| h.each_ref().map(|b| RwLock::new(read(b).clone())))
-                .collect(),
-            stop: self
-                .stop
-                .iter()
-                .map(|s| {
-                    s.each_ref()
-                        .map(|b| AtomicBool::new(b.load(Ordering::Relaxed)))
-                })
-                .collect(),
-            holds_step: self.holds_step,
-            partial: self.partial,
-            checked_for: self.checked_for,
-        }
-    }
-}
-
 /// Locks a mutex, ignoring poisoning (a member that panicked poisons the team, which re-raises
 /// the panic on the caller; the data is not used after that).
 pub(super) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -516,7 +483,6 @@ impl<const D: usize> Decomposition<D> {
     /// build, the team builds it ([`Self::build_in_team`]) and goes on unless a new partition
     /// is due. `wait` is the team's barrier. Returns (the same on every member) the steps
     /// taken and how the region ended.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn run_member<const WET: bool>(
         &self,
         c: &StepConstants<D>,

@@ -21,7 +21,6 @@ pub(crate) const EXACT_CHECK_EVERY: u32 = 1024;
 pub(crate) struct NeighbourList<const D: usize> {
     /// Row starts, `n + 1` entries.
     pub start: Vec<u32>,
-    /// Partner of each entry.
     pub partner: Vec<u32>,
     /// Flags of each entry ([`CONTACT`], [`BOND`]).
     pub flags: Vec<u8>,
@@ -34,7 +33,6 @@ pub(crate) struct NeighbourList<const D: usize> {
     /// The transposed list: the entries whose partner is `j` are
     /// `in_entry[in_start[j]..in_start[j + 1]]`, ascending (so by ascending row).
     pub(crate) in_start: Vec<u32>,
-    /// Entry indices of the transposed list.
     pub(crate) in_entry: Vec<u32>,
     old_start: Vec<u32>,
     old_partner: Vec<u32>,
@@ -72,7 +70,6 @@ pub(crate) struct NeighbourList<const D: usize> {
     /// Interaction range beyond contact (`s_crit` or 0) plus the skin.
     extra: f64,
     skin: f64,
-    /// Builds so far.
     pub builds: u64,
     /// The build for which `row_of` and the transposed list were made (0: none).
     transposed_at: u64,

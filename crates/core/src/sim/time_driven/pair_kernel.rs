@@ -157,7 +157,6 @@ pub(super) fn pair_kernel<const D: usize, const WET: bool>(
 /// pair `(row_of[m], partner[m])`; its force on the row's particle goes to
 /// `pf[m * D..(m + 1) * D]` (zeros when the pair does not interact). A free function of slices
 /// so that the compiler keeps every array in a register (no aliasing through `self`).
-#[allow(clippy::too_many_arguments)]
 pub(super) fn pair_chunk<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
     x: &[f64],
@@ -258,7 +257,6 @@ impl Books {
 /// every particle receives its partners' forces in the order the rayon strategy's gather adds
 /// them). The dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries as in
 /// [`pair_chunk`].
-#[allow(clippy::too_many_arguments)]
 pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
     x: &[f64],
@@ -334,7 +332,6 @@ pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
 /// from the halo `ghosts`: `2 D` values per ghost, position then velocity array value); entry
 /// `q` is the pair of own particle `own[q]` and ghost `ghost[q]`. Returns the books (the caller
 /// keeps them in one domain only).
-#[allow(clippy::too_many_arguments)]
 pub(super) fn cross_forces<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
     x: &[f64],

@@ -206,13 +206,7 @@ pub(crate) fn run_with_door<R: Send>(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn pool(threads: usize) -> rayon::ThreadPool {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a pool")
-    }
+    use crate::sim::threads::test_pool as pool;
 
     #[test]
     fn members_pass_barriers_in_step() {

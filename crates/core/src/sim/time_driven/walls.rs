@@ -14,7 +14,6 @@ use crate::physics::hertz;
 /// Bits of the per-coordinate wall-contact byte: touching the lower, the upper wall of the
 /// coordinate's axis.
 pub(super) const WALL_LO: u8 = 1;
-/// See [`WALL_LO`].
 pub(super) const WALL_HI: u8 = 2;
 
 /// Particles per block of the screening pass.
@@ -74,7 +73,6 @@ impl WallAxis {
 /// Adds the wall forces on particles with positions `x` (one axis), velocities `v * w.vs`, radii
 /// `radius` and wall prefactors `wall_kr` (`k sqrt(R_i)`) to `f`, updates their contact bits
 /// `touching` and books into `b`. All slices have the length of `x`.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn wall_forces(
     w: &WallAxis,
     x: &[f64],

@@ -5,18 +5,18 @@
 use super::stepping::Then;
 use super::*;
 use crate::scene::{Boundary, DEFAULT_SKIN, DEFAULT_STIFFNESS, Scene};
-use crate::sim::initial::{InitialState, initial_state};
+use crate::sim::initial::{FlatInitialState, initial_state_flat};
 use crate::sim::time_driven::integrator::{GEAR5, GEAR5_C0_VELOCITY_DEPENDENT};
 
 impl<const D: usize, const GRAV: bool, const WET: bool> TimeEngine<D, GRAV, WET, NoBodyForce> {
     /// Builds the engine for a validated scene with `engine.kind = "time"`.
     pub fn new(scene: &Scene) -> Self {
-        Self::with_body_force(scene, NoBodyForce)
+        Self::start(scene, None, NoBodyForce)
     }
 
-    /// Rebuilds the engine from a saved state ([`Self::from_state_with_body_force`]).
-    pub(crate) fn from_state(scene: &Scene, state: &crate::sim::EngineState) -> Self {
-        Self::from_state_with_body_force(scene, state, NoBodyForce)
+    /// [`Self::start`] without a body force.
+    pub(crate) fn from_state(scene: &Scene, state: Option<&crate::sim::EngineState>) -> Self {
+        Self::start(scene, state, NoBodyForce)
     }
 }
 
@@ -25,28 +25,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
 {
     /// Builds the engine with a body force.
     pub fn with_body_force(scene: &Scene, body: B) -> Self {
-        Self::assemble(scene, initial_state(scene), None, body)
-    }
-
-    /// Rebuilds the engine from a saved state (`sim::state`): positions, velocities, radii and
-    /// the bridges (flagged bonded in the neighbour list) at the state's time, rounded to a
-    /// whole number of steps; event counts and energy ledger continued. The Gear derivatives
-    /// beyond the velocity are re-initialised as at a start (`r_2` from the forces, higher
-    /// ones zero), so the continuation is physically continuous (same positions, velocities,
-    /// bridges and energy) but not identical to an uninterrupted run; contacts overlapping at
-    /// the state count as new contact onsets.
-    pub(crate) fn from_state_with_body_force(
-        scene: &Scene,
-        state: &crate::sim::EngineState,
-        body: B,
-    ) -> Self {
-        let d = scene.dimension;
-        let init = InitialState {
-            radius: state.radii.clone(),
-            position: state.positions.chunks(d).map(<[f64]>::to_vec).collect(),
-            velocity: state.velocities.chunks(d).map(<[f64]>::to_vec).collect(),
-        };
-        Self::assemble(scene, init, Some(state), body)
+        Self::start(scene, None, body)
     }
 
     /// The engine with the execution strategies of `execution` (instead of the default),
@@ -57,23 +36,29 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self
     }
 
-    fn assemble(
-        scene: &Scene,
-        init: InitialState,
-        start: Option<&crate::sim::EngineState>,
-        body: B,
-    ) -> Self {
-        assert_eq!(scene.dimension, D, "scene dimension does not match");
-        assert_eq!(GRAV, scene.gravity > 0.0, "gravity flag does not match");
-        assert_eq!(WET, scene.is_wet(), "capillary flag does not match");
+    /// The engine of the scene's initial state or, with `Some(state)`, rebuilt from a saved
+    /// state (`sim::state`): positions, velocities, radii and the bridges (flagged bonded in
+    /// the neighbour list) at the state's time, rounded to a whole number of steps; event
+    /// counts and energy ledger continued. The Gear derivatives beyond the velocity are
+    /// re-initialised as at a start (`r_2` from the forces, higher ones zero), so the
+    /// continuation is physically continuous (same positions, velocities, bridges and energy)
+    /// but not identical to an uninterrupted run; contacts overlapping at the state count as
+    /// new contact onsets.
+    pub(crate) fn start(scene: &Scene, start: Option<&crate::sim::EngineState>, body: B) -> Self {
+        assert_eq!(
+            (scene.dimension, scene.gravity > 0.0, scene.is_wet()),
+            (D, GRAV, WET),
+            "the scene's dimension, gravity and capillary flags do not match the engine"
+        );
+        let init = start.map_or_else(|| initial_state_flat(scene), FlatInitialState::of_state);
         let n = init.radius.len();
         let p = Params::of_scene(scene, &init.radius);
         let list = neighbour_list(scene, &p, n);
         let mut r: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; D * n]);
         for i in 0..n {
             for k in 0..D {
-                r[0][k * n + i] = init.position[i][k];
-                r[1][k * n + i] = init.velocity[i][k];
+                r[0][k * n + i] = init.position[i * D + k];
+                r[1][k * n + i] = init.velocity[i * D + k];
             }
         }
         let wall_kr = init

@@ -9,14 +9,12 @@ use crate::sim::time_driven::domains::{
 use crate::sim::time_driven::team;
 use stepping::wall_axes;
 
-/// The domain strategy's state: the decomposition in use, if any (a clone carries it: its
-/// partition sets the round-off of the steps that follow), and what it counts.
-#[derive(Debug, Clone)]
+/// The domain strategy's state: the decomposition in use, if any, and what it counts.
+#[derive(Debug)]
 pub(super) struct Domains<const D: usize> {
     pub(super) decomposition: Option<Box<Decomposition<D>>>,
     /// Steps so far that ran on a team of more than one thread.
     pub(super) team_steps: u64,
-    /// Partitions made.
     pub(super) partitions: u64,
     /// Regions run (a region goes on through list builds).
     pub(super) regions: u64,

@@ -1,6 +1,7 @@
 //! The spatial domains (`domains.rs`) against the serial step and against themselves.
 use super::*;
 use crate::scene::Scene;
+use crate::sim::threads::test_pool as pool;
 
 /// A shaken wet bed of 360 disks in a 120 x 9 box (bridges form and rupture, across the
 /// cut too).
@@ -69,13 +70,6 @@ fn bits<const D: usize, const W: bool>(e: &TimeEngine<D, true, W>) -> Vec<u64> {
         .map(f64::to_bits),
     );
     v
-}
-
-fn pool(threads: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("a pool")
 }
 
 /// Asserts that `split` (on the domains) differs from `serial` (never on the domains) as a

@@ -82,7 +82,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         r2.sqrt()
     }
 
-    /// Total momentum.
     pub fn momentum(&self) -> [f64; D] {
         let vs = self.s.velocity_scale();
         let v = self.now(1);

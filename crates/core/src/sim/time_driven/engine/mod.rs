@@ -9,18 +9,10 @@
 //! `k`-th derivative (`integrator.rs`), with velocity Verlet `r[0]` is the position and `r[1]` the
 //! velocity. Between Gear steps `r` holds the prediction for the next step; the current position
 //! and velocity are recovered on demand by inverting the predictor. Forces come from the Verlet
-//! list (`neighbours.rs`), each pair once, through the one kernel of `pair_kernel.rs`. The list's
-//! displacement test runs only when a bound summed from the integrator loops' largest moves says
-//! it might fire; the builds, and so the trajectories, are those of a test every step (up to the
-//! rebuilds such a test triggers when a particle crosses a periodic face; a build changes only
-//! which non-interacting pairs are listed). Nothing is allocated inside a step once the list has
-//! reached its working size.
-//!
-//! Layout: [`TimeEngine`] is the state every strategy steps (`State`) and the three execution
-//! strategies behind the `Strategy` trait (`stepping.rs`): `Serial` (`serial.rs`), `RayonSplit`
-//! (`rayon_split.rs`) and `Domains` (`domain_step.rs`, on `domains.rs`), chosen per step from the
-//! [`Execution`] given at construction; construction and state I/O in `build.rs`, reports in
-//! `measures.rs`.
+//! list (`neighbours.rs`, rebuilt as `neighbours::needs_rebuild` decides), each pair once,
+//! through the one kernel of `pair_kernel.rs`. Nothing is allocated inside a step once the list
+//! has reached its working size. The execution strategies (`stepping.rs`) and the other files
+//! of this folder are described in ARCHITECTURE.md, "Time engine".
 //!
 //! Energy bookkeeping ([`EnergyLedger`], same fields as the event engine):
 //! - `potential`: gravity `m g z`, Hertz elastic energy of pairs and walls (`(2/5) k sqrt(R_eff)
@@ -144,7 +136,7 @@ struct Params<const D: usize> {
 
 /// What every strategy steps: the parameters, the particles' arrays, the neighbour list and
 /// the books. The strategies' own buffers and caches are kept apart ([`TimeEngine`]).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
     p: Params<D>,
     n: usize,
@@ -181,7 +173,7 @@ struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
 }
 
 /// The time-driven simulation state.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoBodyForce> {
     s: State<D, GRAV, WET, B>,
     execution: Execution,
@@ -222,12 +214,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
     }
 
-    /// Number of particles.
     pub fn len(&self) -> usize {
         self.s.n
     }
 
-    /// Whether the engine holds no particle.
     pub fn is_empty(&self) -> bool {
         self.s.n == 0
     }
@@ -237,22 +227,18 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         self.s.time()
     }
 
-    /// Steps taken.
     pub fn steps(&self) -> u64 {
         self.s.steps
     }
 
-    /// The time step.
     pub fn dt(&self) -> f64 {
         self.s.p.dt
     }
 
-    /// Neighbour-list builds so far.
     pub fn list_builds(&self) -> u64 {
         self.s.list.builds
     }
 
-    /// Entries of the Verlet list.
     pub fn list_entries(&self) -> usize {
         self.s.list.partner.len()
     }
@@ -272,13 +258,11 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         std::array::from_fn(|k| self.now_at(k * self.s.n + i).0)
     }
 
-    /// Velocity of particle `i`.
     pub fn velocity(&self, i: usize) -> [f64; D] {
         let vs = self.s.velocity_scale();
         std::array::from_fn(|k| self.now_at(k * self.s.n + i).1 * vs)
     }
 
-    /// Particle radii.
     pub fn radii(&self) -> &[f64] {
         &self.s.radius
     }
@@ -292,14 +276,12 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         }
     }
 
-    /// Number of capillary bridges.
     pub fn bridge_count(&self) -> usize {
         if WET { self.s.list.count(BOND) } else { 0 }
     }
 }
 
 impl<const D: usize, const GRAV: bool, const WET: bool, B> State<D, GRAV, WET, B> {
-    /// Current time, `steps * dt`.
     fn time(&self) -> f64 {
         self.steps as f64 * self.p.dt
     }

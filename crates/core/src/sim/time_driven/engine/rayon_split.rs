@@ -88,7 +88,6 @@ impl<const D: usize> ParticlePhase<D> {
     /// strategy: the pair forces are in `acc`, over the force start values). Books the pair
     /// loop's `pair_books` (in chunk order), then the walls and the body force; returns the
     /// largest move per axis of the Gear pass.
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn run<const GRAV: bool, const WET: bool, B: BodyForce<D>>(
         &mut self,
         s: &mut State<D, GRAV, WET, B>,

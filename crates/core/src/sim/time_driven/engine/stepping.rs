@@ -11,10 +11,8 @@ use crate::sim::time_driven::neighbours::{needs_rebuild, norm};
 use crate::sim::time_driven::walls::WallAxis;
 use rayon::prelude::*;
 
-/// An execution strategy: [`Serial`] (the calling thread), [`RayonSplit`] (each phase of a step
-/// split over the pool's threads in fixed chunks) or [`Domains`] (whole Gear steps on spatial
-/// domains, one barrier per step). Each gives the same bits on any number of threads; the
-/// domains sum the forces on a particle in another order than the others (round-off).
+/// An execution strategy: [`Serial`], [`RayonSplit`] or [`Domains`] (ARCHITECTURE.md, "Time
+/// engine"). Each gives the same bits on any number of threads.
 pub(super) trait Strategy<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> {
     /// Advances `s` by at least one step and at most to step `target`.
     fn advance(&mut self, s: &mut State<D, GRAV, WET, B>, target: u64);
