@@ -7,7 +7,7 @@
 //!
 //! | module | observable |
 //! |---|---|
-//! | [`temperature`] | `T_g / E_cb`, global and per lateral bin (Eq. 3.2) |
+//! | [`temperature`] | `T_g / E_cb` of the whole system (Eq. 3.2) |
 //! | [`profiles`] | lateral profiles of `n_cb` and of the packing fraction; `Delta n_cb` (Eq. 3.3), `Delta n_area` |
 //! | [`clusters`] | bonded clusters: bonds older than `bond_time`, components of at least `cluster_min_size` grains, a cluster's rigid motion |
 //! | [`lateral`] | per-bin block sums: packing, bridges, `T_g` of all grains and of cluster members, lateral mobility `D_lat` at two lags |

@@ -47,16 +47,6 @@ pub(crate) fn particle_volume(dimension: usize, r: f64) -> f64 {
     }
 }
 
-/// Packing fraction per bin of one frame (areal in 2D, volume in 3D).
-pub fn packing_fraction(frame: &Frame, bins: &LateralBins) -> Vec<f64> {
-    let bin_volume = bins.bin_volume(&frame.box_size);
-    let mut v = vec![0.0; bins.n];
-    for i in 0..frame.len() {
-        v[bins.of_particle(frame, i)] += particle_volume(frame.dimension, frame.radii[i]);
-    }
-    v.iter().map(|x| x / bin_volume).collect()
-}
-
 /// `max - min` of a profile (0 for an empty one).
 pub fn spread(profile: &[f64]) -> f64 {
     if profile.is_empty() {
