@@ -4,7 +4,7 @@
 
 use std::f64::consts::PI;
 use wetgran_core::observe::bins::LateralBins;
-use wetgran_core::observe::profiles::{bridge_counts, bridge_density, spread};
+use wetgran_core::observe::profiles::{bridge_density, spread};
 use wetgran_core::observe::temperature::granular_temperature;
 use wetgran_core::observe::{ObserverSet, Profiles};
 use wetgran_core::scene::Scene;
@@ -80,9 +80,9 @@ fn bridge_density_equals_hand_count() {
         vec![(0, 1), (3, 2), (4, 5), (5, 6), (8, 7)],
     );
     let bins = LateralBins::new(4, 16.0);
-    assert_eq!(bridge_counts(&f, &bins), vec![2, 1, 2, 0]);
-    // n_cb = bridges per bin area (width 4 x height 4: per unit length of x, averaged over the
-    // height, docs/model.md 7), in units of 1/d^2 with d = 1, then d = 2.
+    // n_cb = bridges per bin (2, 1, 2, 0) over the bin area (width 4 x height 4: per unit
+    // length of x, averaged over the height, docs/model.md 7), in units of 1/d^2 with d = 1,
+    // then d = 2.
     assert_eq!(
         bridge_density(&f, &bins, 1.0),
         vec![0.125, 0.0625, 0.125, 0.0]

@@ -49,7 +49,6 @@ pub use stationarity::{Stationarity, StationarityCheck};
 
 use crate::scene::Scene;
 use crate::sim::{Frame, RunReport};
-use bins::LateralBins;
 use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
 pub use profiles::CageCounts;
@@ -339,7 +338,6 @@ pub enum Ending {
 /// The observers, the window and the run-length policy, seen by the sampling loop.
 struct Watch<'a> {
     scene: &'a Scene,
-    bins: LateralBins,
     set: ObserverSet,
     monitored: Vec<Monitored>,
     /// The policy in absolute times (`None`: fixed length).
@@ -400,7 +398,7 @@ impl crate::sim::Watcher for Watch<'_> {
         let t_g = self.set.temperature.series.last().map_or(f64::NAN, |s| s.1);
         let delta = profiles::spread(&profiles::bridge_density(
             frame,
-            &self.bins,
+            self.set.lateral.bins(),
             self.scene.particles.diameter,
         ));
         self.monitored.push(Monitored {
@@ -471,7 +469,6 @@ pub fn run_observed_from(
     let dt = set.sample_interval();
     let mut watch = Watch {
         scene,
-        bins: spec.lateral_bins(scene),
         set,
         monitored: Vec::new(),
         schedule,

@@ -19,23 +19,15 @@ use crate::sim::Frame;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
-/// Bridges per bin of one frame, each counted at its midpoint.
-pub fn bridge_counts(frame: &Frame, bins: &LateralBins) -> Vec<usize> {
-    let mut c = vec![0; bins.n];
+/// `n_cb` per bin of one frame, in units of `d^-D` for mean diameter `d`: bridges (each counted
+/// at its midpoint) per lateral measure of the bin and per unit height (docs/model.md 7).
+pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
+    let scale = d.powi(frame.dimension as i32) / bins.bin_volume(&frame.box_size);
+    let mut c = vec![0usize; bins.n];
     for &(i, j) in &frame.bridges {
         c[bins.of_pair(frame, i, j)] += 1;
     }
-    c
-}
-
-/// `n_cb` per bin of one frame, in units of `d^-D` for mean diameter `d`: bridges per lateral
-/// measure of the bin and per unit height (docs/model.md 7).
-pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
-    let scale = d.powi(frame.dimension as i32) / bins.bin_volume(&frame.box_size);
-    bridge_counts(frame, bins)
-        .iter()
-        .map(|&c| c as f64 * scale)
-        .collect()
+    c.iter().map(|&c| c as f64 * scale).collect()
 }
 
 /// Volume (area in 2D) of a particle of radius `r`.
