@@ -36,7 +36,6 @@
 //! as the sampling interval shrinks below the time a grain needs to cross a fraction of its
 //! diameter (crates/core/tests/observe_location_changes.rs shows it on a slow system).
 
-use super::Observer;
 use super::bins::LateralBins;
 use crate::sim::Frame;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
@@ -424,10 +423,9 @@ impl LocationChangeCounter {
             })
             .collect()
     }
-}
 
-impl Observer for LocationChangeCounter {
-    fn observe(&mut self, frame: &Frame, in_window: bool) {
+    /// Books one sample; `in_window`: whether its time lies in the stationary window.
+    pub fn observe(&mut self, frame: &Frame, in_window: bool) {
         self.particles = frame.len();
         let first = self.previous.is_none();
         let current = edges(frame, self.method, &self.tracked);

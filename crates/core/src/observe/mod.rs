@@ -56,12 +56,6 @@ use profiles::ProfileObserver;
 use serde::{Deserialize, Serialize};
 use temperature::TemperatureObserver;
 
-/// Something that looks at sampled frames. `in_window` says whether the frame's time lies in the
-/// stationary window.
-pub trait Observer {
-    fn observe(&mut self, frame: &Frame, in_window: bool);
-}
-
 /// Stationarity floors (see [`stationarity`]): below these magnitudes a change is judged
 /// against the floor instead of the value itself.
 pub(crate) const FLOOR_TEMPERATURE: f64 = 0.05;
@@ -656,7 +650,7 @@ impl ObserverSet {
         } = self;
         let mut others = || {
             temperature.observe(frame, in_window);
-            profiles.observe(frame, in_window);
+            profiles.observe(frame);
             if in_window {
                 lateral.observe(frame);
             }

@@ -13,7 +13,6 @@
 //! - [`CageCounts`]: per bin, how many cluster members stayed within given mobilities of their
 //!   cage over the long lag (`observe::lateral` counts them).
 
-use super::Observer;
 use super::bins::LateralBins;
 use crate::sim::Frame;
 use serde::{Deserialize, Serialize};
@@ -57,8 +56,9 @@ pub(crate) struct ProfileObserver {
     pub series: Vec<(f64, f64)>,
 }
 
-impl Observer for ProfileObserver {
-    fn observe(&mut self, frame: &Frame, _in_window: bool) {
+impl ProfileObserver {
+    /// Books one sample.
+    pub(crate) fn observe(&mut self, frame: &Frame) {
         let n = frame.len().max(1) as f64;
         self.series
             .push((frame.time, frame.bridges.len() as f64 / n));

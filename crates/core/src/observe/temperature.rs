@@ -2,7 +2,6 @@
 //! `f_d = D`) of the whole system, reported in units of `E_cb` (of `m g d` for dry scenes).
 //! The per-bin temperatures are `observe::lateral`'s.
 
-use super::Observer;
 use crate::sim::Frame;
 
 /// `T_g` of the particles `sel` (Eq. 3.2); `None` for fewer than two particles.
@@ -50,10 +49,9 @@ impl TemperatureObserver {
     pub(crate) fn mean_reduced(&self) -> f64 {
         self.window_sum / self.window_samples as f64
     }
-}
 
-impl Observer for TemperatureObserver {
-    fn observe(&mut self, frame: &Frame, in_window: bool) {
+    /// Books one sample; `in_window`: whether its time lies in the stationary window.
+    pub(crate) fn observe(&mut self, frame: &Frame, in_window: bool) {
         let all: Vec<usize> = (0..frame.len()).collect();
         let t = granular_temperature(frame, &all).unwrap_or(0.0) / self.unit;
         self.series.push((frame.time, t));
