@@ -115,10 +115,11 @@ impl std::str::FromStr for Phase {
 pub use crate::scene::thresholds::{CoexistenceBy, LEGACY_DELTA_N_CB, Mobility, Thresholds};
 
 /// How the fluid-versus-gas part of a label was decided.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "by")]
 pub enum FluidGasFrom {
     /// Per point: `T_g / E_cb` against `gas_temperature` (no line decided it).
+    #[default]
     PointFallback,
     /// A line of constant Gamma: the fluid-gas boundary at `e_star_boundary`.
     Line {
@@ -216,7 +217,7 @@ pub struct DecisionInputs {
     pub dense: Option<RegionInputs>,
     pub dilute: Option<RegionInputs>,
     /// How fluid versus gas was decided.
-    #[serde(default = "point_fallback")]
+    #[serde(default)]
     pub fluid_gas: FluidGasFrom,
     /// Sheared scenes: the window mean of `E_par / E_cb` that decided (rule 4).
     #[serde(default)]
@@ -304,10 +305,6 @@ fn borderline(d: &DecisionInputs) -> Vec<String> {
         }
     }
     out
-}
-
-fn point_fallback() -> FluidGasFrom {
-    FluidGasFrom::PointFallback
 }
 
 /// A phase and the numbers it was decided on.

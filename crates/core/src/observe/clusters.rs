@@ -79,7 +79,9 @@ impl BondedClusters {
         let pairs = if self.wet {
             frame.bridges.clone()
         } else {
-            close_pairs(frame, DRY_BOND_GAP * mean_diameter(frame))
+            // The gap in units of the frame's mean diameter.
+            let d = 2.0 * frame.radii.iter().sum::<f64>() / n.max(1) as f64;
+            close_pairs(frame, DRY_BOND_GAP * d)
         };
         let first = self.bonded_since.len() != n;
         let mut bonded = vec![false; n];
@@ -115,11 +117,6 @@ impl BondedClusters {
             .collect();
         components(n, &lasting, self.min_size)
     }
-}
-
-/// Mean diameter of a frame's grains (the length unit of the dry bond gap).
-fn mean_diameter(frame: &Frame) -> f64 {
-    2.0 * frame.radii.iter().sum::<f64>() / frame.len().max(1) as f64
 }
 
 /// The connected components of the graph `bonds` over `n` grains (union-find with path halving);

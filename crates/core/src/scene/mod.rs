@@ -34,7 +34,7 @@ pub struct Scene {
     /// Spatial dimension: 2 (disks) or 3 (spheres).
     pub dimension: usize,
     /// Gravitational acceleration along `-z` (0 switches gravity off: straight flights).
-    #[serde(default = "default_gravity")]
+    #[serde(default = "one")]
     pub gravity: f64,
     #[serde(rename = "box")]
     pub container: BoxSpec,
@@ -479,9 +479,6 @@ impl Default for EngineSpec {
 }
 
 fn one() -> f64 {
-    1.0
-}
-fn default_gravity() -> f64 {
     1.0
 }
 fn default_lattice_spacing() -> f64 {
