@@ -50,11 +50,6 @@ pub(crate) fn normal_cdf(x: f64) -> f64 {
     0.5 * erfc(-x * FRAC_1_SQRT_2)
 }
 
-/// Standard normal density `phi(x)`.
-pub(crate) fn normal_pdf(x: f64) -> f64 {
-    (-0.5 * x * x).exp() / (2.0 * PI).sqrt()
-}
-
 /// Trapezoid rule over `[-9, 9]` (3600 steps): the integrands here are smooth and negligible
 /// outside.
 fn integrate(f: impl Fn(f64) -> f64) -> f64 {
@@ -78,7 +73,8 @@ pub(crate) fn range_cdf(b: usize, r: f64) -> f64 {
     }
     let s = integrate(|x| {
         let inner = (normal_cdf(x + r) - normal_cdf(x)).max(0.0);
-        normal_pdf(x) * inner.powi(b as i32 - 1)
+        // The standard normal density phi(x) times the rest of the integrand.
+        (-0.5 * x * x).exp() / (2.0 * PI).sqrt() * inner.powi(b as i32 - 1)
     });
     (b as f64 * s).clamp(0.0, 1.0)
 }
@@ -155,24 +151,23 @@ pub(crate) fn block_standard_error(
 ) -> Option<f64> {
     let (mut m, mut w): (Vec<f64>, Vec<f64>) = (means.to_vec(), weights.to_vec());
     while m.len() > max_blocks.max(2) {
-        let mut mm = Vec::with_capacity(m.len() / 2 + 1);
-        let mut ww = Vec::with_capacity(m.len() / 2 + 1);
-        for k in (0..m.len()).step_by(2) {
-            if k + 1 < m.len() {
-                let wt = w[k] + w[k + 1];
-                mm.push(if wt > 0.0 {
-                    (m[k] * w[k] + m[k + 1] * w[k + 1]) / wt
-                } else {
-                    0.5 * (m[k] + m[k + 1])
-                });
-                ww.push(wt);
-            } else {
-                mm.push(m[k]);
-                ww.push(w[k]);
-            }
-        }
-        m = mm;
-        w = ww;
+        // Neighbours merged by weight; a last odd block kept as it is.
+        (m, w) = m
+            .chunks(2)
+            .zip(w.chunks(2))
+            .map(|pair| match pair {
+                (&[a, b], &[wa, wb]) => {
+                    let wt = wa + wb;
+                    let mean = if wt > 0.0 {
+                        (a * wa + b * wb) / wt
+                    } else {
+                        0.5 * (a + b)
+                    };
+                    (mean, wt)
+                }
+                (a, wa) => (a[0], wa[0]),
+            })
+            .unzip();
     }
     let n = m.len();
     if n < 2 {
