@@ -500,8 +500,8 @@ pub fn classify_with(
 }
 
 /// Rule 2: whether the deciding profile is significantly inhomogeneous and its dense bins are
-/// made of bonded clusters.
-fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec<f64>) {
+/// made of bonded clusters; with the profile and the value splitting it into dense and dilute.
+fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec<f64>, f64) {
     let p = &obs.profiles;
     let wet = obs.temperature_unit_name == "E_cb";
     let by_bridges = match th.coexistence_by {
@@ -596,6 +596,7 @@ fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec
             significant,
         },
         values,
+        split,
     )
 }
 
@@ -672,7 +673,7 @@ fn classify_unsheared(
         th,
         gas,
     );
-    let (test, values) = coexistence_test(obs, th);
+    let (test, values, mid) = coexistence_test(obs, th);
     let mut decided = DecisionInputs {
         thresholds: th.clone(),
         whole: whole.clone(),
@@ -698,7 +699,6 @@ fn classify_unsheared(
             decided_on: decided,
         };
     }
-    let mid = two_class_split(&values);
     let (dense_bins, dilute_bins): (Vec<usize>, Vec<usize>) =
         (0..values.len()).partition(|&b| values[b] >= mid);
     // f_lc per bin is stored per time unit; rule 1 compares per period.

@@ -139,7 +139,6 @@ fn edge_between(a: Site, b: Site, opposite: Option<(Site, Site)>) -> Option<Edge
 /// Whether the copy `p` of a pair's edge is kept before the copy `q` ([`finish_edges`]):
 /// shorter, then the smaller midpoint, then the smaller opposite vertices and angle sum. A
 /// total order on copies: two copies equal under it are equal in every field.
-#[inline]
 fn better_copy(p: &Edge, q: &Edge) -> bool {
     let key = |e: &Edge| e.opposite.map(|(c, d, s)| (c, d, s.to_bits()));
     p.length
