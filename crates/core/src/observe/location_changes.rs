@@ -409,13 +409,12 @@ impl LocationChangeCounter {
     /// `f_lc` per bin per unit time, given the mean particle number of every bin (`0` for
     /// empty bins).
     pub(crate) fn per_bin(&self, particles: &[f64]) -> Vec<f64> {
-        let periods = self.window_time;
         self.bin_count
             .iter()
             .zip(particles)
             .map(|(&c, &n)| {
                 if n > 0.0 {
-                    c as f64 / (n * periods)
+                    c as f64 / (n * self.window_time)
                 } else {
                     0.0
                 }

@@ -26,7 +26,9 @@
 //! ([`decorrelated_blocks`]), so resampling rows as independent draws is justified.
 
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
+use std::sync::{LazyLock, Mutex};
 
 /// `erfc(x)`, relative error below `1.2e-7` everywhere (the Chebyshev-fitted exponential of
 /// Press et al., Numerical Recipes, Sec. 6.2, written out here).
@@ -84,20 +86,16 @@ pub(crate) fn range_cdf(b: usize, r: f64) -> f64 {
 /// one numerical integrals of 3 600 steps, and a sweep's results share a handful of `(b, q)`:
 /// relabelling 10^4 results without a stored bootstrap null asked for the same few values
 /// 10^4 times.
-type RangeCache = std::sync::Mutex<std::collections::HashMap<(usize, Option<u64>), f64>>;
-
-fn range_cache() -> &'static RangeCache {
-    static CACHE: std::sync::OnceLock<RangeCache> = std::sync::OnceLock::new();
-    CACHE.get_or_init(Default::default)
-}
+static RANGE_CACHE: LazyLock<Mutex<HashMap<(usize, Option<u64>), f64>>> =
+    LazyLock::new(Default::default);
 
 /// `f()`, computed once per process for `key` (a poisoned lock only costs the cache).
 fn cached(key: (usize, Option<u64>), f: impl FnOnce() -> f64) -> f64 {
-    if let Some(v) = range_cache().lock().ok().and_then(|c| c.get(&key).copied()) {
+    if let Some(v) = RANGE_CACHE.lock().ok().and_then(|c| c.get(&key).copied()) {
         return v;
     }
     let v = f();
-    if let Ok(mut c) = range_cache().lock() {
+    if let Ok(mut c) = RANGE_CACHE.lock() {
         c.insert(key, v);
     }
     v
