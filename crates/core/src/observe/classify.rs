@@ -145,14 +145,11 @@ pub struct RegionInputs {
     /// Location changes per particle per period (`None` where not observed).
     pub flc: Option<f64>,
     /// Lateral mobility `D_lat` over the long lag (`None` where not observed).
-    #[serde(default)]
     pub diffusion: Option<f64>,
     /// `D_lat` over the short lag (`None` where not observed).
-    #[serde(default)]
     pub diffusion_short: Option<f64>,
     /// Growth exponent `alpha` of the mean-square displacement between the two lags
     /// (`MSD ~ tau^alpha`; `None` without both).
-    #[serde(default)]
     pub(crate) growth_exponent: Option<f64>,
     /// `T_g / E_cb` (`T_g / (m g d)` for dry scenes).
     pub temperature: f64,
@@ -188,11 +185,9 @@ pub struct CoexistenceTest {
     /// where stored (`noise::NullRanges`), else from the independent-bin range model.
     pub noise_threshold: Option<f64>,
     /// `"bootstrap"` or `"independent_bins"`: which null model gave `noise_threshold`.
-    #[serde(default)]
     pub(crate) null_model: Option<String>,
     /// Fraction of the dense bins' grains that are members of bonded clusters (`None` for
     /// results stored before membership was measured).
-    #[serde(default)]
     pub(crate) member_fraction: Option<f64>,
     /// `(dense - dilute) / dense` of the two classes' means.
     pub contrast: f64,
@@ -208,7 +203,6 @@ pub struct DecisionInputs {
     /// `Delta n_cb` (Eq. 3.3), units of `n_cb`.
     pub delta_n_cb: f64,
     /// The coexistence test (rule 2).
-    #[serde(default)]
     pub coexistence: Option<CoexistenceTest>,
     /// Whether rule 3 applied.
     pub split: bool,
@@ -220,7 +214,6 @@ pub struct DecisionInputs {
     #[serde(default)]
     pub fluid_gas: FluidGasFrom,
     /// Sheared scenes: the window mean of `E_par / E_cb` that decided (rule 4).
-    #[serde(default)]
     pub shear_e_par: Option<f64>,
     /// Decisions whose input lies close to its threshold ([`BORDERLINE_FACTOR`]): the label
     /// is uncertain there and should be read with replicas. Empty when every decision is clear.

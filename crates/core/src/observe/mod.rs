@@ -76,7 +76,6 @@ pub struct LocationChanges {
     /// `f_lc`: changes per particle per period.
     pub per_particle_per_period: f64,
     /// `f_lc` per particle per time unit (`None` in results stored before it existed).
-    #[serde(default)]
     pub per_particle_per_time: Option<f64>,
     /// Interval between the samples the count was taken from.
     pub sample_interval: f64,
@@ -100,14 +99,11 @@ pub enum NcbNormalisation {
 pub struct Profiles {
     pub bin_width: f64,
     /// 3D plane bins: width along `y` and the grid `(nx, ny)`.
-    #[serde(default)]
     pub bin_width_y: Option<f64>,
-    #[serde(default)]
     pub grid: Option<(usize, usize)>,
     /// Bin centres along `x` (one per bin).
     pub centres: Vec<f64>,
     /// Bin centres along `y` (3D plane bins).
-    #[serde(default)]
     pub centres_y: Option<Vec<f64>>,
     /// Mean particle number per bin.
     pub particles: Vec<f64>,
@@ -148,10 +144,8 @@ pub struct Profiles {
     pub delta_n_area: f64,
     /// Root mean square over the bins of the standard error of each bin's time-averaged
     /// `n_cb`, from block means (`observe::noise`); `None` with fewer than two blocks.
-    #[serde(default)]
     pub n_cb_standard_error: Option<f64>,
     /// The same for the packing fraction.
-    #[serde(default)]
     pub packing_standard_error: Option<f64>,
     /// Blocks the standard errors were taken from.
     #[serde(default)]
@@ -185,13 +179,10 @@ pub struct LateralMobility {
     /// any).
     pub diffusion_clustered: Option<f64>,
     /// The short lag, a quarter of `lag` (`None` in results stored before it was measured).
-    #[serde(default)]
     pub short_lag: Option<f64>,
     /// `D_lat` over the short lag, all grains.
-    #[serde(default)]
     pub diffusion_short: Option<f64>,
     /// `D_lat` over the short lag, cluster members.
-    #[serde(default)]
     pub diffusion_clustered_short: Option<f64>,
     /// Lag windows that went into it (grain-lags / N).
     pub lags: f64,
@@ -242,7 +233,6 @@ pub struct Observables {
     pub location_changes: Option<LocationChanges>,
     /// Lateral mobility (`None` in results stored before it existed, or when the window is
     /// shorter than the lag).
-    #[serde(default)]
     pub mobility: Option<LateralMobility>,
     pub profiles: Profiles,
     pub diffusion: Option<Diffusion>,
@@ -250,7 +240,6 @@ pub struct Observables {
     pub stationarity: Stationarity,
     pub series: Option<TimeSeries>,
     /// Shear drive only: `E_par`, `E_perp` and their cycles ([`shear`](mod@shear)).
-    #[serde(default)]
     pub shear: Option<shear::ShearObservables>,
     /// Run to stationarity (`[convergence]`): the verdict, the window and the block
     /// statistics ([`convergence`](mod@convergence)); `None` for a fixed-length run.
