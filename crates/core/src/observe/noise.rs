@@ -86,11 +86,13 @@ pub(crate) fn range_cdf(b: usize, r: f64) -> f64 {
 /// one numerical integrals of 3 600 steps, and a sweep's results share a handful of `(b, q)`:
 /// relabelling 10^4 results without a stored bootstrap null asked for the same few values
 /// 10^4 times.
-static RANGE_CACHE: LazyLock<Mutex<HashMap<(usize, Option<u64>), f64>>> =
-    LazyLock::new(Default::default);
+static RANGE_CACHE: LazyLock<Mutex<HashMap<RangeKey, f64>>> = LazyLock::new(Default::default);
+
+/// `(bins, quantile bits)`, `None` for the mean.
+type RangeKey = (usize, Option<u64>);
 
 /// `f()`, computed once per process for `key` (a poisoned lock only costs the cache).
-fn cached(key: (usize, Option<u64>), f: impl FnOnce() -> f64) -> f64 {
+fn cached(key: RangeKey, f: impl FnOnce() -> f64) -> f64 {
     if let Some(v) = RANGE_CACHE.lock().ok().and_then(|c| c.get(&key).copied()) {
         return v;
     }
