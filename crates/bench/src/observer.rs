@@ -15,8 +15,8 @@
 use super::tdmd::thread_cpu_seconds;
 use std::fmt::Write as _;
 use std::time::Instant;
+use wetgran_core::observe::ObserverSet;
 use wetgran_core::observe::location_changes::{LocationChangeCounter, Method};
-use wetgran_core::observe::{Observer, ObserverSet};
 use wetgran_core::scene::reference::shaken_standard;
 use wetgran_core::scene::{CapillaryModel, CapillarySpec, Scene, WallSolverKind};
 use wetgran_core::sim::{Frame, run_scene_observed};

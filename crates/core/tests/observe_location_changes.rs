@@ -4,7 +4,6 @@
 
 mod common;
 
-use wetgran_core::observe::Observer;
 use wetgran_core::observe::bins::LateralBins;
 use wetgran_core::observe::location_changes::{
     LocationChangeCounter, Method, compare, delaunay_edges, neighbour_shell_edges,

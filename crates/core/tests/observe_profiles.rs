@@ -1,11 +1,13 @@
 //! Lateral profiles on hand-built configurations: bridge density against a hand count,
-//! `Delta n_cb` of homogeneous and half-bonded lattices, packing fraction and bin temperature
-//! against their formulas.
+//! `Delta n_cb` of homogeneous and half-bonded lattices, and the packing fraction and bin
+//! temperature a run reports (one frame fed through `ObserverSet`) against their formulas.
 
 use std::f64::consts::PI;
 use wetgran_core::observe::bins::LateralBins;
-use wetgran_core::observe::profiles::{bridge_counts, bridge_density, packing_fraction, spread};
-use wetgran_core::observe::temperature::{granular_temperature, temperature_profile};
+use wetgran_core::observe::profiles::{bridge_density, spread};
+use wetgran_core::observe::temperature::granular_temperature;
+use wetgran_core::observe::{ObserverSet, Profiles};
+use wetgran_core::scene::Scene;
 use wetgran_core::sim::Frame;
 
 /// A 2D frame, periodic in x, walls in z.
@@ -25,6 +27,22 @@ fn frame(
         vec![r; pos.len()],
         bridges,
     )
+}
+
+/// The profiles the observers report for the single frame `f` of a dry, weightless 2D scene
+/// in the box 16 x 4 (periodic in x, walls in z) with bins of width 4: temperatures in units
+/// of `m = 1`. The scene only sets up the observers (its own grains are never placed), so its
+/// particle count need not be the frame's.
+fn observed_profiles(f: &Frame) -> Profiles {
+    let text = "dimension = 2\ngravity = 0.0\n[box]\nsize = [16.0, 4.0]\nboundary = [\"periodic\", \
+         \"wall\"]\n[particles]\ncount = 1\n[initial]\ntemperature = 1.0\n[run]\n\
+         duration = 1.0\n[observe]\nbin_width = 4.0\ndiffusion = false\n";
+    let scene = Scene::from_toml_str(text, "profile frame").expect("valid scene");
+    let mut set = ObserverSet::new(&scene);
+    set.observe(f);
+    let o = set.finish(&scene);
+    assert_eq!(o.temperature_unit, 1.0);
+    o.profiles
 }
 
 /// A square lattice of `cols x rows` sites of spacing 1 starting at (0.5, 0.5), at rest.
@@ -62,16 +80,18 @@ fn bridge_density_equals_hand_count() {
         vec![(0, 1), (3, 2), (4, 5), (5, 6), (8, 7)],
     );
     let bins = LateralBins::new(4, 16.0);
-    assert_eq!(bridge_counts(&f, &bins), vec![2, 1, 2, 0]);
-    // n_cb = bridges per bin area (width 4 x height 4: per unit length of x, averaged over the
-    // height, docs/model.md 7), in units of 1/d^2 with d = 1, then d = 2.
+    // n_cb = bridges per bin (2, 1, 2, 0) over the bin area (width 4 x height 4: per unit
+    // length of x, averaged over the height, docs/model.md 7), in units of 1/d^2 with d = 1,
+    // then d = 2.
     assert_eq!(
         bridge_density(&f, &bins, 1.0),
         vec![0.125, 0.0625, 0.125, 0.0]
     );
     assert_eq!(bridge_density(&f, &bins, 2.0), vec![0.5, 0.25, 0.5, 0.0]);
     // Packing: bin 0 holds particles 0, 1, 2, 7 (4 disks of radius 0.5) in a 4 x 4 bin.
-    let phi = packing_fraction(&f, &bins);
+    let p = observed_profiles(&f);
+    assert_eq!(p.particles, vec![4.0, 1.0, 3.0, 2.0]);
+    let phi = &p.packing;
     let disk = PI * 0.25;
     let expected = [
         4.0 * disk / 16.0,
@@ -129,14 +149,18 @@ fn delta_n_cb_homogeneous_is_zero_and_half_bonded_is_the_jump() {
     assert_eq!(n, vec![9.0 / 16.0, 12.0 / 16.0, 0.0, 0.0]);
     assert_eq!(spread(&n), 0.75);
     // The packing fraction of the lattice is the same in every bin: Delta n_area = 0.
-    assert_eq!(spread(&packing_fraction(&f, &bins)), 0.0);
+    let p = observed_profiles(&f);
+    assert_eq!(p.particles, vec![12.0; 4]);
+    assert_eq!(spread(&p.packing), 0.0);
+    assert_eq!(p.delta_n_area, 0.0);
 }
 
 #[test]
 fn bin_temperature_follows_eq_3_2() {
     // Bin [0, 4): velocities (1, 0), (-1, 0), (0, 2), (0, -2) -> mean 0, <v^2> = 10/4,
-    // T = m <v^2> / 2 = 1.25. Bin [4, 8): two particles moving together at (3, 1): T = 0.
-    // Bin [8, 12): one particle: no temperature. Bin [12, 16): empty.
+    // T = m <v^2> / 2 = 1.25 (Eq. 3.2); the bin profile's unbiased estimate (observe::lateral)
+    // is m sum |v - <v>|^2 / (D (n - 1)) = 10 / 6. Bin [4, 8): two particles moving together at
+    // (3, 1): T = 0. Bin [8, 12): one particle: no temperature. Bin [12, 16): empty.
     let pos = [
         [1.0, 1.0],
         [2.0, 1.0],
@@ -156,10 +180,14 @@ fn bin_temperature_follows_eq_3_2() {
         [7.0, 0.0],
     ];
     let f = frame([16.0, 4.0], &pos, &vel, 0.5, vec![]);
-    let bins = LateralBins::new(4, 16.0);
-    let (t, counts) = temperature_profile(&f, &bins);
-    assert_eq!(counts, vec![4, 2, 1, 0]);
-    assert_eq!(t[0], Some(1.25));
+    assert_eq!(granular_temperature(&f, &[0, 1, 2, 3]), Some(1.25));
+    assert_eq!(granular_temperature(&f, &[4, 5]), Some(0.0));
+    assert_eq!(granular_temperature(&f, &[6]), None);
+    assert_eq!(granular_temperature(&f, &[]), None);
+    let p = observed_profiles(&f);
+    assert_eq!(p.particles, vec![4.0, 2.0, 1.0, 0.0]);
+    let t = &p.temperature_reduced;
+    assert!((t[0].unwrap() - 10.0 / 6.0).abs() < 1e-15, "{t:?}");
     assert_eq!(t[1], Some(0.0));
     assert_eq!(t[2], None);
     assert_eq!(t[3], None);

@@ -11,12 +11,12 @@ pub use crate::scene::observe_section::Bins3d;
 use crate::scene::{ObserveSpec, Scene};
 
 impl ObserveSpec {
-    /// The lateral bins of a scene: slabs along `x` in 2D; in 3D square-ish cells of
-    /// `bin_width` over `(x, y)` (each axis rounded to a whole number of cells), or x-slabs
-    /// with `bins_3d = "x_slabs"`.
+    /// The lateral bins of a scene: `max(1, round(L_x / bin_width))` slabs along `x` in 2D; in
+    /// 3D square-ish cells of `bin_width` over `(x, y)` (each axis rounded to a whole number of
+    /// cells), or x-slabs with `bins_3d = "x_slabs"`.
     pub fn lateral_bins(&self, scene: &Scene) -> LateralBins {
-        let (nx, _) = self.bins(scene);
         let lx = scene.container.size[0];
+        let nx = ((lx / self.bin_width).round() as usize).max(1);
         if scene.dimension == 3 && self.bins_3d == Bins3d::Plane {
             let ly = scene.container.size[1];
             let ny = ((ly / self.bin_width).round() as usize).max(1);

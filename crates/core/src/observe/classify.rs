@@ -115,10 +115,11 @@ impl std::str::FromStr for Phase {
 pub use crate::scene::thresholds::{CoexistenceBy, LEGACY_DELTA_N_CB, Mobility, Thresholds};
 
 /// How the fluid-versus-gas part of a label was decided.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "by")]
 pub enum FluidGasFrom {
     /// Per point: `T_g / E_cb` against `gas_temperature` (no line decided it).
+    #[default]
     PointFallback,
     /// A line of constant Gamma: the fluid-gas boundary at `e_star_boundary`.
     Line {
@@ -144,14 +145,11 @@ pub struct RegionInputs {
     /// Location changes per particle per period (`None` where not observed).
     pub flc: Option<f64>,
     /// Lateral mobility `D_lat` over the long lag (`None` where not observed).
-    #[serde(default)]
     pub diffusion: Option<f64>,
     /// `D_lat` over the short lag (`None` where not observed).
-    #[serde(default)]
     pub diffusion_short: Option<f64>,
     /// Growth exponent `alpha` of the mean-square displacement between the two lags
     /// (`MSD ~ tau^alpha`; `None` without both).
-    #[serde(default)]
     pub(crate) growth_exponent: Option<f64>,
     /// `T_g / E_cb` (`T_g / (m g d)` for dry scenes).
     pub temperature: f64,
@@ -187,11 +185,9 @@ pub struct CoexistenceTest {
     /// where stored (`noise::NullRanges`), else from the independent-bin range model.
     pub noise_threshold: Option<f64>,
     /// `"bootstrap"` or `"independent_bins"`: which null model gave `noise_threshold`.
-    #[serde(default)]
     pub(crate) null_model: Option<String>,
     /// Fraction of the dense bins' grains that are members of bonded clusters (`None` for
     /// results stored before membership was measured).
-    #[serde(default)]
     pub(crate) member_fraction: Option<f64>,
     /// `(dense - dilute) / dense` of the two classes' means.
     pub contrast: f64,
@@ -207,7 +203,6 @@ pub struct DecisionInputs {
     /// `Delta n_cb` (Eq. 3.3), units of `n_cb`.
     pub delta_n_cb: f64,
     /// The coexistence test (rule 2).
-    #[serde(default)]
     pub coexistence: Option<CoexistenceTest>,
     /// Whether rule 3 applied.
     pub split: bool,
@@ -216,10 +211,9 @@ pub struct DecisionInputs {
     pub dense: Option<RegionInputs>,
     pub dilute: Option<RegionInputs>,
     /// How fluid versus gas was decided.
-    #[serde(default = "point_fallback")]
+    #[serde(default)]
     pub fluid_gas: FluidGasFrom,
     /// Sheared scenes: the window mean of `E_par / E_cb` that decided (rule 4).
-    #[serde(default)]
     pub shear_e_par: Option<f64>,
     /// Decisions whose input lies close to its threshold ([`BORDERLINE_FACTOR`]): the label
     /// is uncertain there and should be read with replicas. Empty when every decision is clear.
@@ -304,10 +298,6 @@ fn borderline(d: &DecisionInputs) -> Vec<String> {
         }
     }
     out
-}
-
-fn point_fallback() -> FluidGasFrom {
-    FluidGasFrom::PointFallback
 }
 
 /// A phase and the numbers it was decided on.
@@ -503,8 +493,8 @@ pub fn classify_with(
 }
 
 /// Rule 2: whether the deciding profile is significantly inhomogeneous and its dense bins are
-/// made of bonded clusters.
-fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec<f64>) {
+/// made of bonded clusters; with the profile and the value splitting it into dense and dilute.
+fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec<f64>, f64) {
     let p = &obs.profiles;
     let wet = obs.temperature_unit_name == "E_cb";
     let by_bridges = match th.coexistence_by {
@@ -599,6 +589,7 @@ fn coexistence_test(obs: &Observables, th: &Thresholds) -> (CoexistenceTest, Vec
             significant,
         },
         values,
+        split,
     )
 }
 
@@ -675,7 +666,7 @@ fn classify_unsheared(
         th,
         gas,
     );
-    let (test, values) = coexistence_test(obs, th);
+    let (test, values, mid) = coexistence_test(obs, th);
     let mut decided = DecisionInputs {
         thresholds: th.clone(),
         whole: whole.clone(),
@@ -701,7 +692,6 @@ fn classify_unsheared(
             decided_on: decided,
         };
     }
-    let mid = two_class_split(&values);
     let (dense_bins, dilute_bins): (Vec<usize>, Vec<usize>) =
         (0..values.len()).partition(|&b| values[b] >= mid);
     // f_lc per bin is stored per time unit; rule 1 compares per period.

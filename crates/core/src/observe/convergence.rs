@@ -36,24 +36,11 @@ pub(crate) const MIN_BLOCKS: usize = 16;
 /// Floor of `Delta n_cb` (units `d^-(D-1)`) for the tolerance of the test.
 pub(crate) const FLOOR_DELTA_N_CB: f64 = 0.05;
 
-/// Flyvbjerg-Petersen estimate of the standard error of the mean of a correlated series.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub(crate) struct BlockingError {
-    /// The standard error of the mean.
-    pub standard_error: f64,
-    /// Blocking level the estimate was taken at (block length `2^level` samples).
-    pub level: usize,
-    /// Whether the estimate reached a plateau; if not, it is the last usable level's value
-    /// (a lower bound: the series is short compared with its correlation time).
-    pub(crate) plateau: bool,
-    /// The largest `SE_l` from `level` on: the conservative choice where the series is only a
-    /// few tens of correlation times long and the plateau is still creeping up.
-    pub upper: f64,
-}
-
-/// The standard error of the mean of `x` by blocking (see the module doc). Series shorter than
-/// [`MIN_BLOCKS`] fall back to the uncorrelated estimate `sqrt(c0 / (n - 1))` (no plateau).
-pub(crate) fn blocking_error(x: &[f64]) -> BlockingError {
+/// The standard error of the mean of `x` by blocking (see the module doc), and whether it
+/// reached a plateau: if not, it is the last usable level's value (a lower bound: the series is
+/// short compared with its correlation time). Series shorter than [`MIN_BLOCKS`] fall back to
+/// the uncorrelated estimate `sqrt(c0 / (n - 1))` (no plateau).
+pub(crate) fn blocking_error(x: &[f64]) -> (f64, bool) {
     let se_of = |v: &[f64]| -> f64 {
         let n = v.len();
         if n < 2 {
@@ -70,34 +57,13 @@ pub(crate) fn blocking_error(x: &[f64]) -> BlockingError {
         levels.push((se, se / (2.0 * (v.len() - 1) as f64).sqrt()));
         v = v.chunks_exact(2).map(|p| 0.5 * (p[0] + p[1])).collect();
     }
-    if levels.is_empty() {
-        let se = se_of(x);
-        return BlockingError {
-            standard_error: se,
-            level: 0,
-            plateau: false,
-            upper: se,
-        };
-    }
-    let upper_from = |l: usize| levels[l..].iter().map(|e| e.0).fold(0.0, f64::max);
-    for l in 0..levels.len().saturating_sub(1) {
-        let (se, err) = levels[l];
-        if levels[l + 1].0 <= se + err {
-            return BlockingError {
-                standard_error: se,
-                level: l,
-                plateau: true,
-                upper: upper_from(l),
-            };
+    for pair in levels.windows(2) {
+        let (se, err) = pair[0];
+        if pair[1].0 <= se + err {
+            return (se, true);
         }
     }
-    let l = levels.len() - 1;
-    BlockingError {
-        standard_error: levels[l].0,
-        level: l,
-        plateau: false,
-        upper: levels[l].0,
-    }
+    (levels.last().map_or_else(|| se_of(x), |l| l.0), false)
 }
 
 /// Integrated autocorrelation time `tau = 1 + 2 sum_(t=1..M) rho(t)` (in samples) of the
@@ -191,7 +157,7 @@ pub(crate) fn block_test(
     let mut out = BlockTest {
         quantity: quantity.to_string(),
         mean,
-        standard_error: blocking_error(x).standard_error,
+        standard_error: blocking_error(x).0,
         block_means: Vec::new(),
         block_errors: Vec::new(),
         max_pair_sigmas: f64::INFINITY,
@@ -309,9 +275,9 @@ pub(crate) mod tests {
             let mut ratios = Vec::new();
             for r in 0..4 {
                 let x = ar1(phi, n, seed * 10 + r);
-                let b = blocking_error(&x);
-                assert!(b.plateau, "phi {phi}: {b:?}");
-                ratios.push(b.standard_error / ar1_error(phi, n));
+                let (se, plateau) = blocking_error(&x);
+                assert!(plateau, "phi {phi}: {se}");
+                ratios.push(se / ar1_error(phi, n));
             }
             let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
             assert!((mean - 1.0).abs() < 0.15, "phi {phi}: ratios {ratios:?}");
@@ -321,15 +287,12 @@ pub(crate) mod tests {
     #[test]
     fn blocking_of_white_noise_stays_at_level_zero_value() {
         let x = ar1(0.0, 4096, 7);
-        let b = blocking_error(&x);
+        let (se, _) = blocking_error(&x);
         let naive = {
             let m = x.iter().sum::<f64>() / x.len() as f64;
             (x.iter().map(|a| (a - m).powi(2)).sum::<f64>() / x.len() as f64 / 4095.0).sqrt()
         };
-        assert!(
-            (b.standard_error / naive - 1.0).abs() < 0.1,
-            "{b:?} vs {naive}"
-        );
+        assert!((se / naive - 1.0).abs() < 0.1, "{se} vs {naive}");
     }
 
     #[test]

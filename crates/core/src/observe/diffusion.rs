@@ -10,7 +10,6 @@
 //! the slope fitted by least squares to `MSD_l(t)` over the second half of the window (the first
 //! half holds the ballistic start).
 
-use super::Observer;
 use crate::sim::Frame;
 use serde::{Deserialize, Serialize};
 
@@ -117,10 +116,9 @@ impl DiffusionObserver {
             msd: self.msd.clone(),
         })
     }
-}
 
-impl Observer for DiffusionObserver {
-    fn observe(&mut self, frame: &Frame, in_window: bool) {
+    /// Books one sample; `in_window`: whether its time lies in the stationary window.
+    pub(crate) fn observe(&mut self, frame: &Frame, in_window: bool) {
         if !in_window {
             return;
         }

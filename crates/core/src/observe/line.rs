@@ -453,9 +453,7 @@ pub fn fluid_gas_inflection(points: &[LinePoint]) -> Result<Inflection, String> 
             c.x[k + 1].exp()
         ));
     }
-    let (e_star, max_slope, kb) = steepest(&c.x, &c.y).ok_or_else(|| {
-        format!("the steepest sampled slope lies at an end of the line; {errors}")
-    })?;
+    let (e_star, max_slope, kb) = steepest(&c.x, &c.y, k);
     let xi = e_star.ln();
     let w = ((xi - c.x[kb]) / (c.x[kb + 1] - c.x[kb])).clamp(0.0, 1.0);
     let t_star = (c.y[kb] + w * (c.y[kb + 1] - c.y[kb])).exp();
@@ -496,25 +494,20 @@ fn slope_contrast(c: &Curve) -> Option<(usize, f64, f64)> {
     Some((k, z(flattest(0..k)?), z(flattest(k + 1..m)?)))
 }
 
-/// The steepest slope of the log-log points `(x, y)` (sorted, distinct x): `(E*, slope, k)` of
+/// The steepest slope of the log-log points `(x, y)` (sorted, distinct x): `(E*, slope, kb)` of
 /// the vertex of the parabola through the largest midpoint slope (between points `k` and
-/// `k + 1`) and its two neighbours. `None` when the largest slope is at an end.
-fn steepest(x: &[f64], y: &[f64]) -> Option<(f64, f64, usize)> {
-    let mids: Vec<(f64, f64)> = (0..x.len() - 1)
-        .map(|i| {
-            (
-                0.5 * (x[i] + x[i + 1]),
-                (y[i + 1] - y[i]) / (x[i + 1] - x[i]),
-            )
-        })
-        .collect();
-    let k = (0..mids.len()).max_by(|&a, &b| mids[a].1.total_cmp(&mids[b].1))?;
-    if k == 0 || k == mids.len() - 1 {
-        return None;
-    }
-    let (x0, y0) = mids[k - 1];
-    let (x1, y1) = mids[k];
-    let (x2, y2) = mids[k + 1];
+/// `k + 1`, not at an end: [`slope_contrast`]) and its two neighbours, bracketed by the points
+/// `kb` and `kb + 1`.
+fn steepest(x: &[f64], y: &[f64], k: usize) -> (f64, f64, usize) {
+    let mid = |i: usize| {
+        (
+            0.5 * (x[i] + x[i + 1]),
+            (y[i + 1] - y[i]) / (x[i + 1] - x[i]),
+        )
+    };
+    let (x0, y0) = mid(k - 1);
+    let (x1, y1) = mid(k);
+    let (x2, y2) = mid(k + 1);
     // Vertex of the parabola through three points (divided differences).
     let d01 = (y1 - y0) / (x1 - x0);
     let d12 = (y2 - y1) / (x2 - x1);
@@ -528,7 +521,7 @@ fn steepest(x: &[f64], y: &[f64]) -> Option<(f64, f64, usize)> {
     let kb = (k.saturating_sub(1)..=k + 1)
         .find(|&i| x[i] <= v && v <= x[i + 1])
         .unwrap_or(k);
-    Some((v.exp(), y1, kb))
+    (v.exp(), y1, kb)
 }
 
 /// How a line decides fluid versus gas for its homogeneous points.

@@ -36,7 +36,6 @@
 //! as the sampling interval shrinks below the time a grain needs to cross a fraction of its
 //! diameter (crates/core/tests/observe_location_changes.rs shows it on a slow system).
 
-use super::Observer;
 use super::bins::LateralBins;
 use crate::sim::Frame;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
@@ -72,29 +71,12 @@ impl HasPosition for Site {
     }
 }
 
-/// The sites of one particle: its wrapped position and its images in the ghost band.
-#[derive(Debug, Clone, Copy)]
-struct Images {
-    n: usize,
-    list: [([i32; 2], [f64; 2]); 9],
-}
-
-impl Images {
-    /// `(shift, position)` of each site; shift `[0, 0]` is the particle itself.
-    fn as_slice(&self) -> &[([i32; 2], [f64; 2])] {
-        &self.list[..self.n]
-    }
-}
-
-/// The sites of particle `i`: the wrapped position, plus the images shifted by one box length
-/// along a periodic axis that lie within `ghost_width` (at most the box length) of the box.
-fn images(frame: &Frame, i: usize, ghost_width: f64) -> Images {
+/// Pushes the sites of particle `i`: the wrapped position, plus the images shifted by one box
+/// length along a periodic axis that lie within `ghost_width` (at most the box length) of the
+/// box.
+fn push_images(frame: &Frame, i: usize, ghost_width: f64, sites: &mut Vec<Site>) {
     let size = [frame.box_size[0], frame.box_size[1]];
     let x = [frame.wrap(0, frame.x(i)[0]), frame.wrap(1, frame.x(i)[1])];
-    let mut out = Images {
-        n: 0,
-        list: [([0, 0], [0.0, 0.0]); 9],
-    };
     for sx in -1i32..=1 {
         for sz in -1i32..=1 {
             let shift = [sx, sz];
@@ -114,12 +96,14 @@ fn images(frame: &Frame, i: usize, ghost_width: f64) -> Images {
                 }
             }
             if inside {
-                out.list[out.n] = (shift, p);
-                out.n += 1;
+                sites.push(Site {
+                    p: Point2::new(p[0], p[1]),
+                    id: i as u32,
+                    ghost: shift != [0, 0],
+                });
             }
         }
     }
-    out
 }
 
 /// Angle at `c` of the triangle `(a, b, c)` (symmetric in `a` and `b` to the last bit).
@@ -155,7 +139,6 @@ fn edge_between(a: Site, b: Site, opposite: Option<(Site, Site)>) -> Option<Edge
 /// Whether the copy `p` of a pair's edge is kept before the copy `q` ([`finish_edges`]):
 /// shorter, then the smaller midpoint, then the smaller opposite vertices and angle sum. A
 /// total order on copies: two copies equal under it are equal in every field.
-#[inline]
 fn better_copy(p: &Edge, q: &Edge) -> bool {
     let key = |e: &Edge| e.opposite.map(|(c, d, s)| (c, d, s.to_bits()));
     p.length
@@ -171,11 +154,10 @@ fn better_copy(p: &Edge, q: &Edge) -> bool {
 fn finish_edges(edges: &mut Vec<Edge>) {
     edges.sort_unstable_by_key(|e| ((e.i as u64) << 32) | e.j as u64);
     // Runs of one pair (copies through periodic images): keep the first by the full key.
-    let better = better_copy;
     let mut w = 0;
     for r in 0..edges.len() {
         if w > 0 && (edges[w - 1].i, edges[w - 1].j) == (edges[r].i, edges[r].j) {
-            if better(&edges[r], &edges[w - 1]) {
+            if better_copy(&edges[r], &edges[w - 1]) {
                 edges[w - 1] = edges[r];
             }
         } else {
@@ -212,13 +194,7 @@ pub fn delaunay_edges(frame: &Frame, ghost_width: f64) -> Vec<Edge> {
     assert_eq!(frame.dimension, 2, "Delaunay location changes are 2D");
     let mut sites = Vec::with_capacity(frame.len() * 11 / 10 + 8);
     for i in 0..frame.len() {
-        for (shift, p) in images(frame, i, ghost_width).as_slice() {
-            sites.push(Site {
-                p: Point2::new(p[0], p[1]),
-                id: i as u32,
-                ghost: *shift != [0, 0],
-            });
-        }
+        push_images(frame, i, ghost_width, &mut sites);
     }
     let tri: DelaunayTriangulation<Site> =
         DelaunayTriangulation::bulk_load_stable(sites).expect("finite particle positions");
@@ -292,24 +268,21 @@ pub fn neighbour_shell_edges(
         seen.sort_unstable();
         seen.dedup();
         for j in seen {
-            let mut r2 = 0.0;
+            let mut dx = [0.0; 3];
             for k in 0..d {
-                let dx = frame.min_image(k, frame.x(j)[k] - frame.x(i)[k]);
-                r2 += dx * dx;
+                dx[k] = frame.min_image(k, frame.x(j)[k] - frame.x(i)[k]);
             }
             let contact = frame.radii[i] + frame.radii[j];
-            let r = r2.sqrt();
+            let r = dx.iter().map(|x| x * x).sum::<f64>().sqrt();
             let key = (i as u32, j as u32);
             if r < enter * contact || (r < leave * contact && previous.binary_search(&key).is_ok())
             {
-                let dx = frame.min_image(0, frame.x(j)[0] - frame.x(i)[0]);
-                let dy = frame.min_image(1, frame.x(j)[1] - frame.x(i)[1]);
                 out.push(Edge {
                     i: key.0,
                     j: key.1,
                     length: r,
-                    mid_x: frame.x(i)[0] + 0.5 * dx,
-                    mid_y: frame.x(i)[1] + 0.5 * dy,
+                    mid_x: frame.x(i)[0] + 0.5 * dx[0],
+                    mid_y: frame.x(i)[1] + 0.5 * dx[1],
                     opposite: None,
                 });
             }
@@ -436,23 +409,21 @@ impl LocationChangeCounter {
     /// `f_lc` per bin per unit time, given the mean particle number of every bin (`0` for
     /// empty bins).
     pub(crate) fn per_bin(&self, particles: &[f64]) -> Vec<f64> {
-        let periods = self.window_time;
         self.bin_count
             .iter()
             .zip(particles)
             .map(|(&c, &n)| {
                 if n > 0.0 {
-                    c as f64 / (n * periods)
+                    c as f64 / (n * self.window_time)
                 } else {
                     0.0
                 }
             })
             .collect()
     }
-}
 
-impl Observer for LocationChangeCounter {
-    fn observe(&mut self, frame: &Frame, in_window: bool) {
+    /// Books one sample; `in_window`: whether its time lies in the stationary window.
+    pub fn observe(&mut self, frame: &Frame, in_window: bool) {
         self.particles = frame.len();
         let first = self.previous.is_none();
         let current = edges(frame, self.method, &self.tracked);

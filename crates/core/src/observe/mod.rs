@@ -7,7 +7,7 @@
 //!
 //! | module | observable |
 //! |---|---|
-//! | [`temperature`] | `T_g / E_cb`, global and per lateral bin (Eq. 3.2) |
+//! | [`temperature`] | `T_g / E_cb` of the whole system (Eq. 3.2) |
 //! | [`profiles`] | lateral profiles of `n_cb` and of the packing fraction; `Delta n_cb` (Eq. 3.3), `Delta n_area` |
 //! | [`clusters`] | bonded clusters: bonds older than `bond_time`, components of at least `cluster_min_size` grains, a cluster's rigid motion |
 //! | [`lateral`] | per-bin block sums: packing, bridges, `T_g` of all grains and of cluster members, lateral mobility `D_lat` at two lags |
@@ -49,19 +49,12 @@ pub use stationarity::{Stationarity, StationarityCheck};
 
 use crate::scene::Scene;
 use crate::sim::{Frame, RunReport};
-use bins::LateralBins;
 use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
 pub use profiles::CageCounts;
 use profiles::ProfileObserver;
 use serde::{Deserialize, Serialize};
 use temperature::TemperatureObserver;
-
-/// Something that looks at sampled frames. `in_window` says whether the frame's time lies in the
-/// stationary window.
-pub trait Observer {
-    fn observe(&mut self, frame: &Frame, in_window: bool);
-}
 
 /// Stationarity floors (see [`stationarity`]): below these magnitudes a change is judged
 /// against the floor instead of the value itself.
@@ -83,7 +76,6 @@ pub struct LocationChanges {
     /// `f_lc`: changes per particle per period.
     pub per_particle_per_period: f64,
     /// `f_lc` per particle per time unit (`None` in results stored before it existed).
-    #[serde(default)]
     pub per_particle_per_time: Option<f64>,
     /// Interval between the samples the count was taken from.
     pub sample_interval: f64,
@@ -107,14 +99,11 @@ pub enum NcbNormalisation {
 pub struct Profiles {
     pub bin_width: f64,
     /// 3D plane bins: width along `y` and the grid `(nx, ny)`.
-    #[serde(default)]
     pub bin_width_y: Option<f64>,
-    #[serde(default)]
     pub grid: Option<(usize, usize)>,
     /// Bin centres along `x` (one per bin).
     pub centres: Vec<f64>,
     /// Bin centres along `y` (3D plane bins).
-    #[serde(default)]
     pub centres_y: Option<Vec<f64>>,
     /// Mean particle number per bin.
     pub particles: Vec<f64>,
@@ -155,10 +144,8 @@ pub struct Profiles {
     pub delta_n_area: f64,
     /// Root mean square over the bins of the standard error of each bin's time-averaged
     /// `n_cb`, from block means (`observe::noise`); `None` with fewer than two blocks.
-    #[serde(default)]
     pub n_cb_standard_error: Option<f64>,
     /// The same for the packing fraction.
-    #[serde(default)]
     pub packing_standard_error: Option<f64>,
     /// Blocks the standard errors were taken from.
     #[serde(default)]
@@ -192,13 +179,10 @@ pub struct LateralMobility {
     /// any).
     pub diffusion_clustered: Option<f64>,
     /// The short lag, a quarter of `lag` (`None` in results stored before it was measured).
-    #[serde(default)]
     pub short_lag: Option<f64>,
     /// `D_lat` over the short lag, all grains.
-    #[serde(default)]
     pub diffusion_short: Option<f64>,
     /// `D_lat` over the short lag, cluster members.
-    #[serde(default)]
     pub diffusion_clustered_short: Option<f64>,
     /// Lag windows that went into it (grain-lags / N).
     pub lags: f64,
@@ -249,7 +233,6 @@ pub struct Observables {
     pub location_changes: Option<LocationChanges>,
     /// Lateral mobility (`None` in results stored before it existed, or when the window is
     /// shorter than the lag).
-    #[serde(default)]
     pub mobility: Option<LateralMobility>,
     pub profiles: Profiles,
     pub diffusion: Option<Diffusion>,
@@ -257,7 +240,6 @@ pub struct Observables {
     pub stationarity: Stationarity,
     pub series: Option<TimeSeries>,
     /// Shear drive only: `E_par`, `E_perp` and their cycles ([`shear`](mod@shear)).
-    #[serde(default)]
     pub shear: Option<shear::ShearObservables>,
     /// Run to stationarity (`[convergence]`): the verdict, the window and the block
     /// statistics ([`convergence`](mod@convergence)); `None` for a fixed-length run.
@@ -339,7 +321,6 @@ pub enum Ending {
 /// The observers, the window and the run-length policy, seen by the sampling loop.
 struct Watch<'a> {
     scene: &'a Scene,
-    bins: LateralBins,
     set: ObserverSet,
     monitored: Vec<Monitored>,
     /// The policy in absolute times (`None`: fixed length).
@@ -400,7 +381,7 @@ impl crate::sim::Watcher for Watch<'_> {
         let t_g = self.set.temperature.series.last().map_or(f64::NAN, |s| s.1);
         let delta = profiles::spread(&profiles::bridge_density(
             frame,
-            &self.bins,
+            self.set.lateral.bins(),
             self.scene.particles.diameter,
         ));
         self.monitored.push(Monitored {
@@ -471,7 +452,6 @@ pub fn run_observed_from(
     let dt = set.sample_interval();
     let mut watch = Watch {
         scene,
-        bins: spec.lateral_bins(scene),
         set,
         monitored: Vec::new(),
         schedule,
@@ -659,7 +639,7 @@ impl ObserverSet {
         } = self;
         let mut others = || {
             temperature.observe(frame, in_window);
-            profiles.observe(frame, in_window);
+            profiles.observe(frame);
             if in_window {
                 lateral.observe(frame);
             }

@@ -26,7 +26,9 @@
 //! ([`decorrelated_blocks`]), so resampling rows as independent draws is justified.
 
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
+use std::sync::{LazyLock, Mutex};
 
 /// `erfc(x)`, relative error below `1.2e-7` everywhere (the Chebyshev-fitted exponential of
 /// Press et al., Numerical Recipes, Sec. 6.2, written out here).
@@ -48,11 +50,6 @@ pub(crate) fn erfc(x: f64) -> f64 {
 /// Standard normal distribution function `Phi(x)`.
 pub(crate) fn normal_cdf(x: f64) -> f64 {
     0.5 * erfc(-x * FRAC_1_SQRT_2)
-}
-
-/// Standard normal density `phi(x)`.
-pub(crate) fn normal_pdf(x: f64) -> f64 {
-    (-0.5 * x * x).exp() / (2.0 * PI).sqrt()
 }
 
 /// Trapezoid rule over `[-9, 9]` (3600 steps): the integrands here are smooth and negligible
@@ -78,7 +75,8 @@ pub(crate) fn range_cdf(b: usize, r: f64) -> f64 {
     }
     let s = integrate(|x| {
         let inner = (normal_cdf(x + r) - normal_cdf(x)).max(0.0);
-        normal_pdf(x) * inner.powi(b as i32 - 1)
+        // The standard normal density phi(x) times the rest of the integrand.
+        (-0.5 * x * x).exp() / (2.0 * PI).sqrt() * inner.powi(b as i32 - 1)
     });
     (b as f64 * s).clamp(0.0, 1.0)
 }
@@ -88,20 +86,18 @@ pub(crate) fn range_cdf(b: usize, r: f64) -> f64 {
 /// one numerical integrals of 3 600 steps, and a sweep's results share a handful of `(b, q)`:
 /// relabelling 10^4 results without a stored bootstrap null asked for the same few values
 /// 10^4 times.
-type RangeCache = std::sync::Mutex<std::collections::HashMap<(usize, Option<u64>), f64>>;
+static RANGE_CACHE: LazyLock<Mutex<HashMap<RangeKey, f64>>> = LazyLock::new(Default::default);
 
-fn range_cache() -> &'static RangeCache {
-    static CACHE: std::sync::OnceLock<RangeCache> = std::sync::OnceLock::new();
-    CACHE.get_or_init(Default::default)
-}
+/// `(bins, quantile bits)`, `None` for the mean.
+type RangeKey = (usize, Option<u64>);
 
 /// `f()`, computed once per process for `key` (a poisoned lock only costs the cache).
-fn cached(key: (usize, Option<u64>), f: impl FnOnce() -> f64) -> f64 {
-    if let Some(v) = range_cache().lock().ok().and_then(|c| c.get(&key).copied()) {
+fn cached(key: RangeKey, f: impl FnOnce() -> f64) -> f64 {
+    if let Some(v) = RANGE_CACHE.lock().ok().and_then(|c| c.get(&key).copied()) {
         return v;
     }
     let v = f();
-    if let Ok(mut c) = range_cache().lock() {
+    if let Ok(mut c) = RANGE_CACHE.lock() {
         c.insert(key, v);
     }
     v
@@ -155,24 +151,23 @@ pub(crate) fn block_standard_error(
 ) -> Option<f64> {
     let (mut m, mut w): (Vec<f64>, Vec<f64>) = (means.to_vec(), weights.to_vec());
     while m.len() > max_blocks.max(2) {
-        let mut mm = Vec::with_capacity(m.len() / 2 + 1);
-        let mut ww = Vec::with_capacity(m.len() / 2 + 1);
-        for k in (0..m.len()).step_by(2) {
-            if k + 1 < m.len() {
-                let wt = w[k] + w[k + 1];
-                mm.push(if wt > 0.0 {
-                    (m[k] * w[k] + m[k + 1] * w[k + 1]) / wt
-                } else {
-                    0.5 * (m[k] + m[k + 1])
-                });
-                ww.push(wt);
-            } else {
-                mm.push(m[k]);
-                ww.push(w[k]);
-            }
-        }
-        m = mm;
-        w = ww;
+        // Neighbours merged by weight; a last odd block kept as it is.
+        (m, w) = m
+            .chunks(2)
+            .zip(w.chunks(2))
+            .map(|pair| match pair {
+                (&[a, b], &[wa, wb]) => {
+                    let wt = wa + wb;
+                    let mean = if wt > 0.0 {
+                        (a * wa + b * wb) / wt
+                    } else {
+                        0.5 * (a + b)
+                    };
+                    (mean, wt)
+                }
+                (a, wa) => (a[0], wa[0]),
+            })
+            .unzip();
     }
     let n = m.len();
     if n < 2 {

@@ -13,29 +13,20 @@
 //! - [`CageCounts`]: per bin, how many cluster members stayed within given mobilities of their
 //!   cage over the long lag (`observe::lateral` counts them).
 
-use super::Observer;
 use super::bins::LateralBins;
 use crate::sim::Frame;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
-/// Bridges per bin of one frame, each counted at its midpoint.
-pub fn bridge_counts(frame: &Frame, bins: &LateralBins) -> Vec<usize> {
-    let mut c = vec![0; bins.n];
+/// `n_cb` per bin of one frame, in units of `d^-D` for mean diameter `d`: bridges (each counted
+/// at its midpoint) per lateral measure of the bin and per unit height (docs/model.md 7).
+pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
+    let scale = d.powi(frame.dimension as i32) / bins.bin_volume(&frame.box_size);
+    let mut c = vec![0usize; bins.n];
     for &(i, j) in &frame.bridges {
         c[bins.of_pair(frame, i, j)] += 1;
     }
-    c
-}
-
-/// `n_cb` per bin of one frame, in units of `d^-D` for mean diameter `d`: bridges per lateral
-/// measure of the bin and per unit height (docs/model.md 7).
-pub fn bridge_density(frame: &Frame, bins: &LateralBins, d: f64) -> Vec<f64> {
-    let scale = d.powi(frame.dimension as i32) / bins.bin_volume(&frame.box_size);
-    bridge_counts(frame, bins)
-        .iter()
-        .map(|&c| c as f64 * scale)
-        .collect()
+    c.iter().map(|&c| c as f64 * scale).collect()
 }
 
 /// Volume (area in 2D) of a particle of radius `r`.
@@ -45,16 +36,6 @@ pub(crate) fn particle_volume(dimension: usize, r: f64) -> f64 {
     } else {
         4.0 / 3.0 * PI * r * r * r
     }
-}
-
-/// Packing fraction per bin of one frame (areal in 2D, volume in 3D).
-pub fn packing_fraction(frame: &Frame, bins: &LateralBins) -> Vec<f64> {
-    let bin_volume = bins.bin_volume(&frame.box_size);
-    let mut v = vec![0.0; bins.n];
-    for i in 0..frame.len() {
-        v[bins.of_particle(frame, i)] += particle_volume(frame.dimension, frame.radii[i]);
-    }
-    v.iter().map(|x| x / bin_volume).collect()
 }
 
 /// `max - min` of a profile (0 for an empty one).
@@ -75,8 +56,9 @@ pub(crate) struct ProfileObserver {
     pub series: Vec<(f64, f64)>,
 }
 
-impl Observer for ProfileObserver {
-    fn observe(&mut self, frame: &Frame, _in_window: bool) {
+impl ProfileObserver {
+    /// Books one sample.
+    pub(crate) fn observe(&mut self, frame: &Frame) {
         let n = frame.len().max(1) as f64;
         self.series
             .push((frame.time, frame.bridges.len() as f64 / n));

@@ -16,7 +16,6 @@
 //! `E_par` and of `E_perp` over its samples. A stationary series without oscillation has few or
 //! no complete cycles; the list is then short or empty.
 
-use super::Observer;
 use crate::sim::Frame;
 use serde::{Deserialize, Serialize};
 
@@ -96,10 +95,9 @@ impl ShearObserver {
             },
         }
     }
-}
 
-impl Observer for ShearObserver {
-    fn observe(&mut self, frame: &Frame, in_window: bool) {
+    /// Books one sample; `in_window`: whether its time lies in the stationary window.
+    pub(crate) fn observe(&mut self, frame: &Frame, in_window: bool) {
         let (par, perp) = shear_energies(frame);
         self.samples
             .push((frame.time, par / self.unit, perp / self.unit, in_window));

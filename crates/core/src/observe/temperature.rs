@@ -1,10 +1,7 @@
 //! Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (docs/model.md Eq. 3.2, `k_B = 1`,
-//! `f_d = D`), globally and per lateral bin, reported in units of `E_cb` (of `m g d` for dry
-//! scenes). Each bin uses its own mean velocity; time averages over the window are
-//! particle-weighted per bin (a bin's sample counts as often as it holds particles).
+//! `f_d = D`) of the whole system, reported in units of `E_cb` (of `m g d` for dry scenes).
+//! The per-bin temperatures are `observe::lateral`'s.
 
-use super::Observer;
-use super::bins::LateralBins;
 use crate::sim::Frame;
 
 /// `T_g` of the particles `sel` (Eq. 3.2); `None` for fewer than two particles.
@@ -24,20 +21,6 @@ pub fn granular_temperature(frame: &Frame, sel: &[usize]) -> Option<f64> {
     let n = sel.len() as f64;
     let mean_sq: f64 = mean.iter().map(|m| (m / n) * (m / n)).sum();
     Some(frame.mass * (sq / n - mean_sq) / d as f64)
-}
-
-/// Per-bin `T_g` of one frame (`None` where a bin holds fewer than two particles), and the
-/// particle count of every bin.
-pub fn temperature_profile(frame: &Frame, bins: &LateralBins) -> (Vec<Option<f64>>, Vec<usize>) {
-    let mut members: Vec<Vec<usize>> = vec![Vec::new(); bins.n];
-    for i in 0..frame.len() {
-        members[bins.of_particle(frame, i)].push(i);
-    }
-    let t = members
-        .iter()
-        .map(|m| granular_temperature(frame, m))
-        .collect();
-    (t, members.iter().map(Vec::len).collect())
 }
 
 /// Time series and window mean of the global temperature (the per-bin temperatures are
@@ -66,10 +49,9 @@ impl TemperatureObserver {
     pub(crate) fn mean_reduced(&self) -> f64 {
         self.window_sum / self.window_samples as f64
     }
-}
 
-impl Observer for TemperatureObserver {
-    fn observe(&mut self, frame: &Frame, in_window: bool) {
+    /// Books one sample; `in_window`: whether its time lies in the stationary window.
+    pub(crate) fn observe(&mut self, frame: &Frame, in_window: bool) {
         let all: Vec<usize> = (0..frame.len()).collect();
         let t = granular_temperature(frame, &all).unwrap_or(0.0) / self.unit;
         self.series.push((frame.time, t));

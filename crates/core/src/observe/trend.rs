@@ -316,7 +316,7 @@ fn transient_tail_agrees(a: &[f64], b: &[f64], test: TrendTest, floor: f64) -> b
     }
     let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
     let (ma, mb) = (mean(a), mean(b));
-    let se_b = super::convergence::blocking_error(b).standard_error;
+    let se_b = super::convergence::blocking_error(b).0;
     let se_a = se_b * (b.len() as f64 / a.len() as f64).sqrt();
     let tol = test.rel_tolerance * mb.abs().max(floor);
     (ma - mb).abs() <= test.sigmas * se_a.hypot(se_b) + tol
@@ -381,17 +381,20 @@ mod tests {
             .collect()
     }
 
+    /// A hot start relaxing as `1 + 4 exp(-t / 300)` with 5 % noise over 6000 samples: the
+    /// relaxation is over (below one noise sigma) by about `t = 300 ln(4 / 0.05) = 1300`.
+    fn relaxing(seed: u64) -> Vec<f64> {
+        around(0.0, 0.05, 6000, seed)
+            .iter()
+            .enumerate()
+            .map(|(i, v)| 1.0 + 4.0 * (-(i as f64) / 300.0).exp() + v)
+            .collect()
+    }
+
     #[test]
     fn mser_finds_the_end_of_an_exponential_relaxation() {
-        // A hot start relaxing as 1 + 4 exp(-t / 300) with 5 % noise: the relaxation is over
-        // (below one noise sigma) by about t = 300 ln(4 / 0.05) = 1300.
         for seed in 0..10 {
-            let x: Vec<f64> = around(0.0, 0.05, 6000, seed)
-                .iter()
-                .enumerate()
-                .map(|(i, v)| 1.0 + 4.0 * (-(i as f64) / 300.0).exp() + v)
-                .collect();
-            let (d, relaxed) = mser_truncation(&x);
+            let (d, relaxed) = mser_truncation(&relaxing(seed));
             assert!(relaxed, "seed {seed}");
             assert!((600..=2000).contains(&d), "seed {seed}: truncation {d}");
         }
@@ -472,11 +475,7 @@ mod tests {
     #[test]
     fn a_relaxation_reaching_into_the_window_is_not_stationary() {
         // Relaxed at about t = 1300; a window starting at 500 still holds the transient.
-        let t: Vec<f64> = around(0.0, 0.05, 6000, 11)
-            .iter()
-            .enumerate()
-            .map(|(i, v)| 1.0 + 4.0 * (-(i as f64) / 300.0).exp() + v)
-            .collect();
+        let t = relaxing(11);
         let d = around(0.2, 0.02, 6000, 12);
         let early = state_of(&t, &d, 500.0);
         assert_ne!(early.state, TrendState::Stationary, "{early:?}");

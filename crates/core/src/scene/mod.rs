@@ -34,7 +34,7 @@ pub struct Scene {
     /// Spatial dimension: 2 (disks) or 3 (spheres).
     pub dimension: usize,
     /// Gravitational acceleration along `-z` (0 switches gravity off: straight flights).
-    #[serde(default = "default_gravity")]
+    #[serde(default = "one")]
     pub gravity: f64,
     #[serde(rename = "box")]
     pub container: BoxSpec,
@@ -67,7 +67,6 @@ pub struct BoxSpec {
     /// Edge lengths, one per axis (`[L_x, H]` in 2D, `[L_x, L_y, H]` in 3D), in units of `d`.
     pub size: Vec<f64>,
     /// Boundary per axis; default: periodic laterally, walls (floor and lid) vertically.
-    #[serde(default)]
     pub boundary: Option<Vec<Boundary>>,
 }
 
@@ -340,10 +339,8 @@ pub(crate) const BRACKET_STEPS_PER_PERIOD: f64 = 1000.0;
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {
     /// Granular temperature `T_g` in units of `m g d` (or absolute units without gravity).
-    #[serde(default)]
     pub temperature: Option<f64>,
     /// Granular temperature in units of `E_cb` (needs capillary bridges).
-    #[serde(default)]
     pub temperature_over_ecb: Option<f64>,
     /// Lattice spacing in units of the largest diameter (>= 1; default 1.01).
     #[serde(default = "default_lattice_spacing")]
@@ -400,7 +397,6 @@ pub struct RunSpec {
     #[serde(default)]
     pub sample_interval: f64,
     /// Optional cap on the number of processed events.
-    #[serde(default)]
     pub max_events: Option<u64>,
 }
 
@@ -479,9 +475,6 @@ impl Default for EngineSpec {
 }
 
 fn one() -> f64 {
-    1.0
-}
-fn default_gravity() -> f64 {
     1.0
 }
 fn default_lattice_spacing() -> f64 {

@@ -160,14 +160,6 @@ impl ObserveSpec {
         (self.transient_periods * scene.driving_period()).max(self.transient_time)
     }
 
-    /// Number of lateral bins along `x` and their width: `n = max(1, round(L_x / bin_width))`,
-    /// width `L_x / n`.
-    pub fn bins(&self, scene: &Scene) -> (usize, f64) {
-        let l = scene.container.size[0];
-        let n = ((l / self.bin_width).round() as usize).max(1);
-        (n, l / n as f64)
-    }
-
     /// Checks every key of `[observe]` against the rest of the scene.
     pub fn validate(&self, scene: &Scene, origin: &str) -> Result<(), SceneError> {
         self.validate_sampling(scene, origin)?;

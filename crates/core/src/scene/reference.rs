@@ -14,54 +14,26 @@
 //!   `A = 0.05` at `Gamma = 15`, `dt = 1e-4`, default stiffness, the damping `A_d` that gives
 //!   restitution 0.9 at impact speed 1, elastic walls, initial `T = 1 m g d`.
 
-use super::{
-    Boundary, BoxSpec, CapillaryModel, CapillarySpec, ContactSpec, DEFAULT_STIFFNESS, DriveKind,
-    DriveSpec, EngineSpec, InitialSpec, ParticleSpec, RunSpec, RuptureRule, Scene, WallSolverKind,
-};
+use super::{Boundary, CapillarySpec, DEFAULT_STIFFNESS, DriveKind, Scene, WallSolverKind};
 use crate::physics::hertz;
 
 /// A scene of `32 000` equal elastic particles at `T = 1` in the given box; the reference
-/// systems below change what differs from it.
+/// systems below change what differs from it. Everything else is at its default; the run length
+/// is not used by the benchmarks (they drive the engine themselves) but must be valid.
 pub fn base_scene(
     dimension: usize,
     gravity: f64,
     size: Vec<f64>,
     boundary: Vec<Boundary>,
 ) -> Scene {
-    Scene {
-        dimension,
-        gravity,
-        container: BoxSpec {
-            size,
-            boundary: Some(boundary),
-        },
-        particles: ParticleSpec {
-            count: 32_000,
-            diameter: 1.0,
-            polydispersity: 0.0,
-            mass: 1.0,
-        },
-        contact: ContactSpec::default(),
-        capillary: CapillarySpec::default(),
-        drive: DriveSpec::default(),
-        initial: InitialSpec {
-            temperature: Some(1.0),
-            temperature_over_ecb: None,
-            lattice_spacing: 1.01,
-            seed: 1,
-            start: Default::default(),
-        },
-        run: RunSpec {
-            // Not used by the benchmark (it drives the engine itself); must be valid.
-            duration: 1.0e9,
-            sample_interval: 0.0,
-            max_events: None,
-        },
-        engine: EngineSpec::default(),
-        convergence: None,
-        observe: Default::default(),
-        classify: Default::default(),
-    }
+    let text = format!(
+        "dimension = {dimension}\ngravity = {gravity:?}\n[box]\nsize = {size:?}\n\
+         [particles]\ncount = 32000\n[initial]\ntemperature = 1.0\nseed = 1\n\
+         [run]\nduration = 1.0e9\n"
+    );
+    let mut s: Scene = toml::from_str(&text).expect("the base scene parses");
+    s.container.boundary = Some(boundary);
+    s
 }
 
 /// (a): 32000 elastic spheres at number density 0.5 in a periodic cube, no gravity, `T = 1`.
@@ -90,30 +62,15 @@ pub fn system_b() -> Scene {
     s
 }
 
-/// (c): the 2D standard wet system (as scenes/standard_wet_2d.toml, without a drive).
+/// (c): the 2D standard wet system (as scenes/standard_wet_2d.toml, without a drive), the run
+/// length as in [`base_scene`].
 pub fn system_c() -> Scene {
-    let mut s = base_scene(
-        2,
-        1.0,
-        vec![400.0, 9.0],
-        vec![Boundary::Periodic, Boundary::Wall],
-    );
-    s.particles.count = 1200;
-    s.particles.polydispersity = 0.06;
-    s.contact = ContactSpec {
-        restitution: 0.9,
-        wall_restitution: 1.0,
-        ..ContactSpec::default()
-    };
-    s.capillary = CapillarySpec {
-        model: CapillaryModel::ThinThread,
-        s_crit: Some(0.0711),
-        e_cb: Some(0.2844),
-        rupture_rule: Some(RuptureRule::ReducedMass),
-    };
-    s.initial.temperature = None;
-    s.initial.temperature_over_ecb = Some(20.0);
-    s
+    let text = "dimension = 2\n[box]\nsize = [400.0, 9.0]\nboundary = [\"periodic\", \"wall\"]\n\
+        [particles]\ncount = 1200\npolydispersity = 0.06\n[contact]\nrestitution = 0.9\n\
+        [capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n\
+        rupture_rule = \"reduced_mass\"\n[initial]\ntemperature_over_ecb = 20.0\nseed = 1\n\
+        [run]\nduration = 1.0e9\n";
+    toml::from_str(text).expect("the standard system parses")
 }
 
 /// (c'): (c) without bridges, at the same absolute initial temperature `20 * 0.2844`.

@@ -260,15 +260,10 @@ impl Check<'_> {
         }
     }
 
-    fn closed(&self, key: &str, v: f64, lo: f64, hi: f64, hi_text: &str) -> Result<(), SceneError> {
-        if (lo..=hi).contains(&v) {
-            Ok(())
-        } else {
-            Err(self.err(
-                key,
-                format!("= {} is out of range: must be in [{lo}, {hi_text}]", num(v)),
-            ))
-        }
+    /// `0 <= v <= hi`, the range written `[0, hi_text]`.
+    fn closed(&self, key: &str, v: f64, hi: f64, hi_text: &str) -> Result<(), SceneError> {
+        let range = format!("in [0, {hi_text}]");
+        self.require(key, num(v), (0.0..=hi).contains(&v), &range)
     }
 }
 
@@ -375,14 +370,8 @@ impl Scene {
     /// `[contact]`: the restitution coefficients.
     fn validate_contact(&self, c: &Check<'_>) -> Result<(), SceneError> {
         let ct = &self.contact;
-        c.closed("contact.restitution", ct.restitution, 0.0, 1.0, "1")?;
-        c.closed(
-            "contact.wall_restitution",
-            ct.wall_restitution,
-            0.0,
-            1.0,
-            "1",
-        )
+        c.closed("contact.restitution", ct.restitution, 1.0, "1")?;
+        c.closed("contact.wall_restitution", ct.wall_restitution, 1.0, "1")
     }
 
     /// `[capillary]`: the bridge keys belong to the thin-thread model; `e_cb` is needed
@@ -439,10 +428,10 @@ impl Scene {
                 ));
             }
             (Some(t), None) => {
-                c.closed("initial.temperature", t, 0.0, 1e8, "1e8")?;
+                c.closed("initial.temperature", t, 1e8, "1e8")?;
             }
             (None, Some(r)) => {
-                c.closed("initial.temperature_over_ecb", r, 0.0, 1e8, "1e8")?;
+                c.closed("initial.temperature_over_ecb", r, 1e8, "1e8")?;
                 let t = self.initial_temperature();
                 if t > 1e8 {
                     return Err(c.err(
