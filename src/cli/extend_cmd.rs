@@ -4,6 +4,7 @@
 
 use super::common::Failure;
 use crate::report::sweep_text::extended_text;
+use crate::run::RunOptions;
 use crate::run::extend::extend_unconverged;
 use crate::store::{Store, SweepRow};
 use crate::sweep::job::ExtendTo;
@@ -14,8 +15,7 @@ pub(super) fn extend_and_report(
     store: &Store,
     sweeps: &[SweepRow],
     cap: ExtendTo,
-    workers: usize,
-    table_cache_mib: usize,
+    opts: &RunOptions,
 ) -> Result<(), Failure> {
     let v = cap.value();
     if !(v.is_finite() && v > 0.0) {
@@ -27,7 +27,7 @@ pub(super) fn extend_and_report(
             "{flag} = {v} is out of range: must be a finite number of {unit} > 0"
         )));
     }
-    let s = extend_unconverged(store, sweeps, cap, workers, table_cache_mib, true)?;
+    let s = extend_unconverged(store, sweeps, cap, opts.jobs, opts.table_cache_mib, true)?;
     eprint!(
         "{}",
         extended_text(

@@ -5,7 +5,7 @@
 
 use super::common::{
     DEFAULT_DB, DbSweeps, Failure, Workers, available_cores, check_regrid, continue_refinement,
-    load_sweep, read_spec, relabel_lines, run_options, select,
+    load_sweep, read_spec, relabel_lines, select,
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{
@@ -188,7 +188,7 @@ pub enum BoundaryFormat {
 }
 
 pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
-    let (jobs, table_cache_mib, db) = (a.workers.count()?, a.workers.table_cache_mib, &a.db);
+    let (opts, db) = (a.workers.options()?, &a.db);
     // The file is checked in full before the database is touched.
     let (sweep, expanded, left_out) = load_sweep(&a.file)?;
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
@@ -206,8 +206,8 @@ pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
         eprintln!("sweep {}: {}", row.name, relabelled.text());
     }
     let rows = [row];
-    run_and_report(&store, &rows, jobs, a.retry_failed, table_cache_mib)?;
-    continue_refinement(&store, &rows, jobs, table_cache_mib)?;
+    run_and_report(&store, &rows, &opts, a.retry_failed)?;
+    continue_refinement(&store, &rows, &opts)?;
     fail_if_jobs_failed(&store, &rows)
 }
 
@@ -231,7 +231,7 @@ fn fail_if_jobs_failed(store: &Store, sweeps: &[SweepRow]) -> Result<(), Failure
 
 pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
     use crate::sweep::job::ExtendTo;
-    let (jobs, table_cache_mib, db) = (a.workers.count()?, a.workers.table_cache_mib, &a.db);
+    let (opts, db) = (a.workers.options()?, &a.db);
     let extend = a
         .extend
         .map(ExtendTo::Periods)
@@ -245,12 +245,12 @@ pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
             db.display()
         )));
     }
-    run_and_report(&store, &sweeps, jobs, a.retry_failed, table_cache_mib)?;
-    continue_refinement(&store, &sweeps, jobs, table_cache_mib)?;
+    run_and_report(&store, &sweeps, &opts, a.retry_failed)?;
+    continue_refinement(&store, &sweeps, &opts)?;
     let Some(cap) = extend else {
         return fail_if_jobs_failed(&store, &sweeps);
     };
-    super::extend_cmd::extend_and_report(&store, &sweeps, cap, jobs, table_cache_mib)?;
+    super::extend_cmd::extend_and_report(&store, &sweeps, cap, &opts)?;
     for s in &sweeps {
         relabel_lines(&store, s)?;
     }
@@ -260,13 +260,12 @@ pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
 fn run_and_report(
     store: &Store,
     sweeps: &[SweepRow],
-    jobs: usize,
+    opts: &RunOptions,
     retry: bool,
-    table_cache_mib: usize,
 ) -> Result<(), Failure> {
     let opts = RunOptions {
         retry_failed: retry,
-        ..run_options(jobs, table_cache_mib)
+        ..opts.clone()
     };
     let summary = run_sweeps(store, sweeps, &opts)?;
     eprintln!(
