@@ -7,23 +7,12 @@
 //! `running` under this process's owner name, and the next `sweep resume` re-queues them at
 //! once (their process no longer exists: store module doc).
 
+use crate::report::site::shell_word;
 use std::path::Path;
 use std::sync::Once;
 
 /// Exit status after Ctrl-C.
 pub(super) const INTERRUPTED_EXIT: i32 = 130;
-
-/// A path as a shell word: quoted where it holds anything but letters, digits and `_-./+,:=@`.
-pub(super) fn shell_word(s: &str) -> String {
-    let plain = !s.is_empty()
-        && s.chars()
-            .all(|c| c.is_ascii_alphanumeric() || "_-./+,:=@".contains(c));
-    if plain {
-        s.to_string()
-    } else {
-        format!("'{}'", s.replace('\'', r"'\''"))
-    }
-}
 
 /// The command that continues the sweep `name` (every sweep: `None`) of the database `db`.
 pub(super) fn resume_command(name: Option<&str>, db: &Path) -> String {

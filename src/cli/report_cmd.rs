@@ -5,8 +5,7 @@
 
 use super::common::{Failure, write_file};
 use crate::boundary::Extraction;
-use crate::report::boundaries_text::fixed_text;
-use crate::report::boundaries_text::{boundaries_table, chain_model_note, untrusted_points};
+use crate::report::boundaries_text::{boundaries_table, fixed_text};
 use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
 use crate::report::lines_plot::lines_svg;
 use crate::report::plot_phase::{self, DrawnMap, MapStyle};
@@ -347,13 +346,7 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
         Err(Failure::BadInput(m)) => Err(m),
         Err(e) => return Err(e),
     };
-    let mut notes = HashMap::new();
-    if let Some(n) = chain_model_note(&summaries) {
-        notes.insert(sweep.name.clone(), n);
-    }
-    let mut untrusted = HashMap::new();
-    untrusted.insert(sweep.name.clone(), untrusted_points(&summaries));
-    let boundaries = boundaries_table(&[(&sweep, map)], &notes, &untrusted, how);
+    let boundaries = boundaries_table(&[(&sweep, map)], &[summaries], how);
     let lines = lines_of(&sweep, &rows);
     let line_pictures = if lines.lines.is_empty() {
         None

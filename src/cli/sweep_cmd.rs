@@ -8,9 +8,7 @@ use super::common::{
     load_sweep, read_spec, relabel_lines, select,
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
-use crate::report::boundaries_text::{
-    boundaries_csv, boundaries_table, chain_model_note, untrusted_points,
-};
+use crate::report::boundaries_text::{boundaries_csv, boundaries_table};
 use crate::report::cluster_text::slurm_status_text;
 use crate::report::sweep_text::{
     StatusInput, coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
@@ -529,17 +527,7 @@ pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
             println!("{}", serde_json::to_string_pretty(&v).expect("serializes"));
         }
         BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
-        BoundaryFormat::Table => {
-            let mut notes = std::collections::HashMap::new();
-            let mut untrusted = std::collections::HashMap::new();
-            for (s, points) in sweeps.iter().zip(&points) {
-                if let Some(n) = chain_model_note(points) {
-                    notes.insert(s.name.clone(), n);
-                }
-                untrusted.insert(s.name.clone(), untrusted_points(points));
-            }
-            print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
-        }
+        BoundaryFormat::Table => print!("{}", boundaries_table(&maps, &points, how)),
     }
     Ok(())
 }
