@@ -28,10 +28,12 @@ pub struct DbSweeps {
     pub sweep: Option<String>,
 }
 
-/// Worker threads and the wall-table cache of the commands that run jobs.
+/// Worker threads and the wall-table cache of the commands that run jobs (`sweep run`; `sweep
+/// resume` and `sweep refine` say what their workers run with `mut_arg`).
 #[derive(Debug, Args)]
 pub(super) struct Workers {
-    /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
+    /// Worker threads, one simulation each, for the sweep's jobs and then the refinement of a
+    /// `[refine]` table: 1 to the available cores (default: all of them).
     #[arg(long)]
     jobs: Option<usize>,
     /// Allow --jobs above the available cores (several simulations share a core; each

@@ -11,6 +11,10 @@ use std::path::PathBuf;
 
 /// `sweep refine`: the command-line overrides of the `[refine]` table.
 #[derive(Debug, Args)]
+#[command(mut_arg("jobs", |a| a.help(
+    "Worker threads, one simulation each, for the jobs each round adds: 1 to the available \
+     cores (default: all of them)"
+)))]
 pub struct RefineArgs {
     /// The sweep (default: the only one in the database).
     #[arg(long)]

@@ -132,6 +132,10 @@ pub struct RunArgs {
 
 /// `sweep resume`.
 #[derive(Debug, Args)]
+#[command(mut_arg("jobs", |a| a.help(
+    "Worker threads, one simulation each, for the pending jobs, then the refinement of a \
+     `[refine]` table and the runs of --extend: 1 to the available cores (default: all of them)"
+)))]
 pub struct ResumeArgs {
     /// The sweep to continue (default: all).
     name: Option<String>,
