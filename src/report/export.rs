@@ -63,7 +63,7 @@ impl ExportRow {
                 p.phase.clone().into(),
                 p.observables
                     .as_ref()
-                    .and_then(super::trust::stationary)
+                    .and_then(wetgran_core::observe::converged_in_json)
                     .into(),
                 p.trend.map(|t| t.name()).into(),
                 super::trust::mark(p.trust()).map(String::from).into(),
@@ -80,7 +80,7 @@ impl ExportRow {
 
 /// The columns every row has, after the axis columns: the container motion of a shaken scene
 /// (`amplitude,omega`, docs/model.md 4.1), the run's stationarity verdict
-/// (`report::trust::stationary`), its trend state (empty for results stored before trend
+/// (`observe::converged_in_json`), its trend state (empty for results stored before trend
 /// states) and trust mark (`?` label may change, `~` label kept by its trend, empty
 /// stationary), and the run's cost.
 pub const FIXED: [&str; 14] = [

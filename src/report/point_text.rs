@@ -61,7 +61,7 @@ pub fn decision_text(p: &PointRow) -> String {
         }
     }
     if let Some(o) = &p.observables {
-        match crate::report::trust::stationary(o) {
+        match wetgran_core::observe::converged_in_json(o) {
             Some(true) => {
                 let _ = writeln!(out, "stationary  yes");
             }
@@ -198,7 +198,7 @@ pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
         "trend": p.trend.map(|t| t.to_string()),
         "trust": if p.phase.is_some() { Some(trust) } else { None },
         "ended": ending,
-        "stationary": p.observables.as_ref().and_then(crate::report::trust::stationary),
+        "stationary": p.observables.as_ref().and_then(wetgran_core::observe::converged_in_json),
         "failed_checks": p
             .observables
             .as_ref()
