@@ -103,27 +103,31 @@ pub const FIXED: [&str; 14] = [
 /// One element of a series: `(name, index, value)`.
 pub type SeriesEntry = (String, usize, Value);
 
-/// Scalar leaves of a JSON value with dotted paths (`events.pair_collisions`) into `out`; every
-/// array is a series and goes to `series` instead: `(name, index, value)` per element leaf, the
-/// name being the array's path plus the leaf's path inside the element
-/// (`obs.stationarity.checks.relative_change`, `obs.location_changes.1`).
+/// Scalar leaves of a JSON value with dotted paths (`events.pair_collisions`) into `out`. With
+/// `series`, every array is a series and goes there instead: `(name, index, value)` per element
+/// leaf, the name being the array's path plus the leaf's path inside the element
+/// (`obs.stationarity.checks.relative_change`, `obs.location_changes.1`); without, arrays are
+/// indexed (`a.0`), as nested arrays inside an element are.
 fn flatten(
     prefix: &str,
     v: &Value,
     out: &mut BTreeMap<String, Value>,
-    series: &mut Vec<SeriesEntry>,
+    mut series: Option<&mut Vec<SeriesEntry>>,
 ) {
     match v {
         Value::Object(m) => {
             for (k, x) in m {
-                flatten(&join(prefix, k), x, out, series);
+                flatten(&join(prefix, k), x, out, series.as_deref_mut());
             }
         }
         Value::Array(a) => {
             for (k, x) in a.iter().enumerate() {
+                let Some(series) = series.as_deref_mut() else {
+                    flatten(&join(prefix, &k.to_string()), x, out, None);
+                    continue;
+                };
                 let mut leaves = BTreeMap::new();
-                // Nested arrays inside an element stay in that element's series, flattened.
-                flatten_all("", x, &mut leaves);
+                flatten("", x, &mut leaves, None);
                 for (leaf, value) in leaves {
                     let name = if leaf.is_empty() {
                         prefix.to_string()
@@ -132,25 +136,6 @@ fn flatten(
                     };
                     series.push((name, k, value));
                 }
-            }
-        }
-        other => {
-            out.insert(prefix.to_string(), other.clone());
-        }
-    }
-}
-
-/// Every scalar leaf of a JSON value with dotted paths, arrays indexed (`a.0`).
-fn flatten_all(prefix: &str, v: &Value, out: &mut BTreeMap<String, Value>) {
-    match v {
-        Value::Object(m) => {
-            for (k, x) in m {
-                flatten_all(&join(prefix, k), x, out);
-            }
-        }
-        Value::Array(a) => {
-            for (k, x) in a.iter().enumerate() {
-                flatten_all(&join(prefix, &k.to_string()), x, out);
             }
         }
         other => {
@@ -191,9 +176,9 @@ pub const SERIES_HEADER: &str = "job_id,series,index,value\n";
 pub fn scalars_and_series(r: &ExportRow) -> (BTreeMap<String, Value>, Vec<SeriesEntry>) {
     let mut m = BTreeMap::new();
     let mut series = Vec::new();
-    flatten("obs", &r.observables, &mut m, &mut series);
+    flatten("obs", &r.observables, &mut m, Some(&mut series));
     if let Some(d) = &r.decided_on {
-        flatten("decided_on", d, &mut m, &mut series);
+        flatten("decided_on", d, &mut m, Some(&mut series));
     }
     (m, series)
 }
@@ -425,7 +410,7 @@ mod tests {
             "e": [[0.5, 3.0], [1.0, 4.0]], "f": [{"q": "T", "ok": false}]});
         let mut m = BTreeMap::new();
         let mut series = Vec::new();
-        flatten("obs", &v, &mut m, &mut series);
+        flatten("obs", &v, &mut m, Some(&mut series));
         assert_eq!(m.len(), 2, "{m:?}");
         assert_eq!(m["obs.a.b"], json!(1));
         assert_eq!(m["obs.d"], json!("x"));
