@@ -124,8 +124,12 @@ pub(super) fn available_cores() -> usize {
 
 /// Writes a file; a failure names it.
 pub(super) fn write_file(path: &Path, text: impl AsRef<[u8]>) -> Result<(), Failure> {
-    std::fs::write(path, text)
-        .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))
+    std::fs::write(path, text).map_err(cannot_write(path))
+}
+
+/// The failure of a write to `path`, which it names.
+pub(super) fn cannot_write(path: &Path) -> impl FnOnce(std::io::Error) -> Failure + '_ {
+    move |e| Failure::Other(format!("{}: cannot write: {e}", path.display()))
 }
 
 impl From<RefineError> for Failure {

@@ -290,16 +290,20 @@ impl Columns {
 
     /// The scalar columns left out (empty or constant), for a note.
     pub fn left_out(&self) -> usize {
-        self.seen.len()
-            - self
-                .kept
-                .as_ref()
-                .map_or_else(|| self.kept().len(), Vec::len)
+        self.seen.len() - self.kept_names().len()
     }
 
-    /// Ends the first pass.
-    pub fn finish_first_pass(&mut self) {
-        self.kept = Some(self.kept());
+    /// Ends the first pass and, for CSV, writes the header line; what comes after the first
+    /// call does nothing.
+    pub fn start(&mut self, w: &mut impl Write, csv: bool) -> std::io::Result<()> {
+        if self.kept.is_none() {
+            self.kept = Some(self.kept());
+            if csv {
+                let header: Vec<String> = self.names().iter().map(|h| csv_field(h)).collect();
+                writeln!(w, "{}", header.join(","))?;
+            }
+        }
+        Ok(())
     }
 
     fn kept_names(&self) -> &[String] {
@@ -335,12 +339,6 @@ impl Columns {
                 .map(|k| scalars.get(k).cloned().unwrap_or(Value::Null)),
         );
         out
-    }
-
-    /// The CSV header line.
-    pub fn write_csv_header(&self, w: &mut impl Write) -> std::io::Result<()> {
-        let header: Vec<String> = self.names().iter().map(|h| csv_field(h)).collect();
-        writeln!(w, "{}", header.join(","))
     }
 
     /// The CSV line of one row; a column the row lacks is empty.
@@ -464,11 +462,10 @@ mod tests {
         for r in rows {
             columns.add(r, &scalars_and_series(r).0);
         }
-        columns.finish_first_pass();
         let mut csv = Vec::new();
         let mut json = Vec::new();
         let mut jw = JsonWriter::default();
-        columns.write_csv_header(&mut csv).unwrap();
+        columns.start(&mut csv, true).unwrap();
         for r in rows {
             let s = scalars_and_series(r).0;
             columns.write_csv_row(&mut csv, r, &s).unwrap();
