@@ -18,7 +18,6 @@ use std::process::ExitCode;
 /// cluster user keeps on the shared filesystem), `<db folder>/wetgran-slurm/<sweep name>`.
 pub(super) const DEFAULT_DIR: &str = "wetgran-slurm";
 
-/// `sweep submit`.
 #[derive(Debug, clap::Args)]
 pub struct SubmitArgs {
     /// The sweep file.
@@ -77,7 +76,6 @@ fn next_array_name(arrays: &Path) -> String {
         .expect("a free name")
 }
 
-/// `wetgran sweep submit FILE --slurm`.
 pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
     if !s.slurm {
         return Err(Failure::BadInput(
@@ -344,7 +342,6 @@ fn submit_arrays(
     Ok(())
 }
 
-/// `wetgran sweep collect`.
 pub(super) fn collect_cmd(a: super::common::DbSweeps) -> Result<(), Failure> {
     let db = &a.db;
     let store = Store::open_existing(db)?;

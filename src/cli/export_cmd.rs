@@ -17,7 +17,6 @@ pub(super) enum ExportFormat {
     Json,
 }
 
-/// `wetgran export`.
 #[derive(Debug, Args)]
 pub struct ExportArgs {
     #[command(flatten)]
@@ -50,7 +49,6 @@ fn create(path: &Path) -> Result<BufWriter<std::fs::File>, Failure> {
         .map_err(cannot_write(path))
 }
 
-/// `wetgran export`.
 pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
     let csv = !a.json && a.format == ExportFormat::Csv;
     let (series_path, text_path) = (a.series.as_deref(), a.text.as_deref());

@@ -107,7 +107,6 @@ pub enum Command {
     Reclassify(reclassify_cmd::ReclassifyArgs),
 }
 
-/// `wetgran job ...`.
 #[derive(Debug, Subcommand)]
 pub enum JobCommand {
     /// Run one job spec and write its result record (what a Slurm array task runs).

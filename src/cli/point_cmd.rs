@@ -45,7 +45,6 @@ fn find_job(store: &Store, prefix: &str) -> Result<(String, PointRow), Failure> 
     }
 }
 
-/// `wetgran show`.
 #[derive(Debug, Args)]
 pub struct ShowArgs {
     /// Database file; also from WETGRAN_DB (the flag wins).
@@ -68,7 +67,6 @@ pub struct ShowArgs {
     json: bool,
 }
 
-/// `wetgran show`.
 pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     let colour_by: ColourBy = a
         .colour_by
@@ -153,7 +151,6 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// `wetgran inflection`.
 pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
     let store = Store::open_read_only(&a.from.db)?;
     let mut all = Vec::new();
@@ -174,7 +171,6 @@ pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// `wetgran inflection`.
 #[derive(Debug, Args)]
 pub struct InflectionArgs {
     #[command(flatten)]

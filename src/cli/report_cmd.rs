@@ -59,7 +59,6 @@ impl DbLatest {
     }
 }
 
-/// `wetgran plot`.
 #[derive(Debug, Args)]
 pub struct PlotArgs {
     #[command(flatten)]
@@ -75,7 +74,6 @@ pub struct PlotArgs {
     y_scale: Scale,
 }
 
-/// `wetgran report`.
 #[derive(Debug, Args)]
 pub struct ReportArgs {
     #[command(flatten)]
@@ -95,7 +93,6 @@ pub struct ReportArgs {
     y_scale: Scale,
 }
 
-/// `wetgran lines`.
 #[derive(Debug, Args)]
 pub struct LinesArgs {
     #[command(flatten)]
@@ -144,7 +141,6 @@ pub(super) fn sweep_lines(store: &Store, sweep: &SweepRow) -> Result<Lines, Fail
     Ok(lines)
 }
 
-/// `wetgran plot`.
 pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
     let how = Extraction {
         include_unconverged: a.include_unconverged,
@@ -159,7 +155,6 @@ pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// `wetgran lines`.
 pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
     let ext = args
         .output
@@ -321,7 +316,6 @@ fn pictures(
     Ok(out)
 }
 
-/// `wetgran report`.
 pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
     let (store, sweep) = args.from.open()?;
     let how = Extraction {

@@ -20,7 +20,6 @@ use crate::sweep::run_job;
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 
-/// `wetgran sweep ...`.
 #[derive(Debug, Subcommand)]
 pub enum SweepCommand {
     /// Register a sweep file in the database and run its pending jobs.
@@ -111,7 +110,6 @@ pub enum SweepCommand {
     },
 }
 
-/// `sweep run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
     /// The sweep file.
@@ -130,7 +128,6 @@ pub struct RunArgs {
     replace: bool,
 }
 
-/// `sweep resume`.
 #[derive(Debug, Args)]
 #[command(mut_arg("jobs", |a| a.help(
     "Worker threads, one simulation each, for the pending jobs, then the refinement of a \
@@ -157,7 +154,6 @@ pub struct ResumeArgs {
     extend_time: Option<f64>,
 }
 
-/// `sweep estimate`.
 #[derive(Debug, Args)]
 pub struct EstimateArgs {
     file: PathBuf,
@@ -487,7 +483,6 @@ pub(super) fn sweep_map(
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
 }
 
-/// `wetgran boundaries`.
 #[derive(Debug, Args)]
 pub struct BoundariesArgs {
     #[command(flatten)]
@@ -504,7 +499,6 @@ pub struct BoundariesArgs {
     include_unconverged: bool,
 }
 
-/// `wetgran boundaries`.
 pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
     let how = Extraction {
         include_unconverged: a.include_unconverged,
