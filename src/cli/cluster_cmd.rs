@@ -14,10 +14,6 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-/// Folder of the sweep directories where `--dir` is not given: beside the database (which a
-/// cluster user keeps on the shared filesystem), `<db folder>/wetgran-slurm/<sweep name>`.
-pub(super) const DEFAULT_DIR: &str = "wetgran-slurm";
-
 #[derive(Debug, clap::Args)]
 pub struct SubmitArgs {
     /// The sweep file.
@@ -54,18 +50,6 @@ pub struct SubmitArgs {
 fn absolute(p: &Path) -> Result<PathBuf, Failure> {
     std::path::absolute(p)
         .map_err(|e| Failure::Other(format!("{}: cannot make it absolute: {e}", p.display())))
-}
-
-/// The sweep directory of `sweep` for the database `db`.
-pub(super) fn sweep_dir(db: &Path, sweep: &str, dir: Option<&Path>) -> Result<PathBuf, Failure> {
-    match dir {
-        Some(d) => absolute(d),
-        None => {
-            let db = absolute(db)?;
-            let parent = db.parent().unwrap_or(Path::new("/"));
-            Ok(parent.join(DEFAULT_DIR).join(slurm::file_name(sweep)))
-        }
-    }
 }
 
 /// The first free `array-NNNN` name in the arrays folder.
@@ -139,7 +123,16 @@ struct ArrayTarget {
 impl ArrayTarget {
     /// Checks the directives that go into the batch script.
     fn new(db: &Path, sweep: &str, s: &SubmitArgs) -> Result<Self, Failure> {
-        let dir = sweep_dir(db, sweep, s.dir.as_deref())?;
+        // Without `--dir`: beside the database (which a cluster user keeps on the shared
+        // filesystem), `<db folder>/wetgran-slurm/<sweep name>`.
+        let dir = match &s.dir {
+            Some(d) => absolute(d)?,
+            None => absolute(db)?
+                .parent()
+                .unwrap_or(Path::new("/"))
+                .join("wetgran-slurm")
+                .join(slurm::file_name(sweep)),
+        };
         slurm::check_directive("the sweep directory", &dir.display().to_string())
             .map_err(Failure::BadInput)?;
         for (what, v) in [("--partition", &s.partition), ("--time", &s.time)] {
