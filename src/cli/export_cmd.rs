@@ -4,7 +4,7 @@
 
 use super::common::DbSweeps;
 use super::common::{Failure, cannot_write, select};
-use crate::report::export::{self, Columns, ExportRow, JsonWriter, SeriesFile};
+use crate::report::export::{self, Columns, ExportRow, SeriesFile};
 use crate::store::Store;
 use clap::{Args, ValueEnum};
 use std::io::{BufWriter, Write};
@@ -88,8 +88,7 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
     }
     // Two passes in one read transaction (report::export, "Streaming"): the first finds
     // the columns that carry information, the second writes.
-    let mut columns = Columns::new(a.all);
-    let mut json = JsonWriter::default();
+    let mut columns = Columns::new(a.all, csv);
     store.scan_points(&ids, 2, |pass, k, p| {
         let Some(r) = ExportRow::of(&sweeps[k], &p) else {
             return Ok(());
@@ -99,24 +98,16 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
             columns.add(&r, &scalars);
             return Ok(());
         }
-        columns.start(&mut out, csv).map_err(out_failed)?;
-        if csv {
-            columns.write_csv_row(&mut out, &r, &scalars)
-        } else {
-            json.row(&mut out, &columns.json_row(&r, &scalars))
-        }
-        .map_err(out_failed)?;
+        columns
+            .write_row(&mut out, &r, &scalars)
+            .map_err(out_failed)?;
         // Each file's write error names that file.
         for (w, p, file) in &mut series_files {
             export::write_series(w, *file, &r, &series).map_err(cannot_write(p))?;
         }
         Ok::<(), Failure>(())
     })?;
-    // No finished job: the header alone, or an empty array.
-    columns.start(&mut out, csv).map_err(out_failed)?;
-    if !csv {
-        json.finish(&mut out).map_err(out_failed)?;
-    }
+    columns.finish(&mut out).map_err(out_failed)?;
     out.flush().map_err(out_failed)?;
     for (w, p, _) in &mut series_files {
         w.flush().map_err(cannot_write(p))?;

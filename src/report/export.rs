@@ -233,13 +233,19 @@ pub struct Columns {
     all: bool,
     /// The scalar columns kept, fixed after the first pass.
     kept: Option<Vec<String>>,
+    /// CSV, else JSON.
+    csv: bool,
+    /// Rows written.
+    written: usize,
 }
 
 impl Columns {
-    /// Columns that keep every scalar (`all`) or only those that carry information.
-    pub fn new(all: bool) -> Columns {
+    /// The columns of a CSV (`csv`) or JSON export that keeps every scalar (`all`) or only those
+    /// that carry information.
+    pub fn new(all: bool, csv: bool) -> Columns {
         Columns {
             all,
+            csv,
             ..Columns::default()
         }
     }
@@ -295,10 +301,10 @@ impl Columns {
 
     /// Ends the first pass and, for CSV, writes the header line; what comes after the first
     /// call does nothing.
-    pub fn start(&mut self, w: &mut impl Write, csv: bool) -> std::io::Result<()> {
+    fn start(&mut self, w: &mut impl Write) -> std::io::Result<()> {
         if self.kept.is_none() {
             self.kept = Some(self.kept());
-            if csv {
+            if self.csv {
                 let header: Vec<String> = self.names().iter().map(|h| csv_field(h)).collect();
                 writeln!(w, "{}", header.join(","))?;
             }
@@ -341,52 +347,42 @@ impl Columns {
         out
     }
 
-    /// The CSV line of one row; a column the row lacks is empty.
-    pub fn write_csv_row(
-        &self,
+    /// Writes one row of the second pass (the first call ends the first pass): a CSV line (a
+    /// column the row lacks is empty), or a JSON object on one line with the CSV's columns in
+    /// the CSV's order (a column the row lacks is null) in an array opened by the first row.
+    pub fn write_row(
+        &mut self,
         w: &mut impl Write,
         r: &ExportRow,
         scalars: &BTreeMap<String, Value>,
     ) -> std::io::Result<()> {
-        let line: Vec<String> = self
-            .values(r, scalars)
-            .iter()
-            .map(|v| csv_field(&scalar_text(v)))
-            .collect();
-        writeln!(w, "{}", line.join(","))
-    }
-
-    /// One row as a JSON object on one line, with the CSV's columns in the CSV's order (a
-    /// column the row lacks is null).
-    pub fn json_row(&self, r: &ExportRow, scalars: &BTreeMap<String, Value>) -> String {
-        let cells: Vec<String> = self
-            .names()
-            .iter()
-            .zip(self.values(r, scalars))
-            .map(|(k, v)| format!("{}: {}", Value::from(k.as_str()), v))
-            .collect();
-        format!("{{{}}}", cells.join(", "))
-    }
-}
-
-/// Writes a JSON array one row at a time: `[`, one object per line, `]`.
-#[derive(Debug, Default)]
-pub struct JsonWriter {
-    rows: usize,
-}
-
-impl JsonWriter {
-    /// Writes one row (a [`Columns::json_row`]).
-    pub fn row(&mut self, w: &mut impl Write, object: &str) -> std::io::Result<()> {
-        w.write_all(if self.rows == 0 { b"[\n  " } else { b",\n  " })?;
-        w.write_all(object.as_bytes())?;
-        self.rows += 1;
+        self.start(w)?;
+        let values = self.values(r, scalars);
+        if self.csv {
+            let line: Vec<String> = values.iter().map(|v| csv_field(&scalar_text(v))).collect();
+            writeln!(w, "{}", line.join(","))?;
+        } else {
+            let cells: Vec<String> = self
+                .names()
+                .iter()
+                .zip(values)
+                .map(|(k, v)| format!("{}: {}", Value::from(k.as_str()), v))
+                .collect();
+            let open = if self.written == 0 { "[\n  " } else { ",\n  " };
+            write!(w, "{open}{{{}}}", cells.join(", "))?;
+        }
+        self.written += 1;
         Ok(())
     }
 
-    /// Closes the array (`[]` for no row) and ends the line.
-    pub fn finish(self, w: &mut impl Write) -> std::io::Result<()> {
-        w.write_all(if self.rows == 0 { b"[]\n" } else { b"\n]\n" })
+    /// Ends the export: the CSV header alone where there is no row, the JSON array closed
+    /// (`[]` for no row) and its line ended.
+    pub fn finish(&mut self, w: &mut impl Write) -> std::io::Result<()> {
+        self.start(w)?;
+        if !self.csv {
+            w.write_all(if self.written == 0 { b"[]\n" } else { b"\n]\n" })?;
+        }
+        Ok(())
     }
 }
 
@@ -458,25 +454,24 @@ mod tests {
 
     /// Both passes over `rows`: the columns, the CSV and the JSON.
     fn export(rows: &[ExportRow], all: bool) -> (Columns, String, String) {
-        let mut columns = Columns::new(all);
-        for r in rows {
-            columns.add(r, &scalars_and_series(r).0);
+        let mut texts = Vec::new();
+        let mut columns = Columns::default();
+        for csv in [true, false] {
+            columns = Columns::new(all, csv);
+            for r in rows {
+                columns.add(r, &scalars_and_series(r).0);
+            }
+            let mut w = Vec::new();
+            for r in rows {
+                columns
+                    .write_row(&mut w, r, &scalars_and_series(r).0)
+                    .unwrap();
+            }
+            columns.finish(&mut w).unwrap();
+            texts.push(String::from_utf8(w).unwrap());
         }
-        let mut csv = Vec::new();
-        let mut json = Vec::new();
-        let mut jw = JsonWriter::default();
-        columns.start(&mut csv, true).unwrap();
-        for r in rows {
-            let s = scalars_and_series(r).0;
-            columns.write_csv_row(&mut csv, r, &s).unwrap();
-            jw.row(&mut json, &columns.json_row(r, &s)).unwrap();
-        }
-        jw.finish(&mut json).unwrap();
-        (
-            columns,
-            String::from_utf8(csv).unwrap(),
-            String::from_utf8(json).unwrap(),
-        )
+        let json = texts.pop().unwrap();
+        (columns, texts.pop().unwrap(), json)
     }
 
     #[test]
@@ -544,7 +539,7 @@ mod tests {
         // The series stay out of both.
         assert!(!v[0].contains_key("obs.s"));
         let mut empty = Vec::new();
-        JsonWriter::default().finish(&mut empty).unwrap();
+        Columns::new(false, false).finish(&mut empty).unwrap();
         assert_eq!(empty, b"[]\n");
     }
 
