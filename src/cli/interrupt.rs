@@ -16,14 +16,11 @@ pub(super) const INTERRUPTED_EXIT: i32 = 130;
 
 /// The command that continues the sweep `name` (every sweep: `None`) of the database `db`.
 pub(super) fn resume_command(name: Option<&str>, db: &Path) -> String {
-    let mut cmd = "wetgran sweep resume".to_string();
-    if let Some(n) = name {
-        cmd.push(' ');
-        cmd.push_str(&shell_word(n));
-    }
-    cmd.push_str(" --db ");
-    cmd.push_str(&shell_word(&db.display().to_string()));
-    cmd
+    let name = name
+        .map(|n| format!(" {}", shell_word(n)))
+        .unwrap_or_default();
+    let db = shell_word(&db.display().to_string());
+    format!("wetgran sweep resume{name} --db {db}")
 }
 
 /// From now on, Ctrl-C prints how to resume the sweep `name` (all: `None`) of `db` and exits

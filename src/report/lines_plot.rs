@@ -53,7 +53,8 @@ impl Quantity {
         match self {
             Quantity::Temperature => format!("T_g / {}", lines.energy_unit),
             Quantity::Bridges => "bridges per grain".to_string(),
-            Quantity::Contrast => lines.contrast_name().to_string(),
+            Quantity::Contrast if lines.wet => "Delta n_cb".to_string(),
+            Quantity::Contrast => "Delta n_area".to_string(),
         }
     }
 }
@@ -407,17 +408,19 @@ impl Panel<'_> {
 
 /// The mean of a quantity over the replicas at each `E*` of a line.
 fn means(line: &GammaLine, q: Quantity) -> Vec<(f64, f64)> {
+    let finite = |p: &LinePoint| q.value(p).map(|(v, _)| v).filter(|v| v.is_finite());
     let mut out: Vec<(f64, f64, usize)> = Vec::new();
-    for p in &line.points {
-        let Some((v, _)) = q.value(p).filter(|(v, _)| v.is_finite()) else {
-            continue;
-        };
+    for (e, v) in line
+        .points
+        .iter()
+        .filter_map(|p| Some((p.e_star, finite(p)?)))
+    {
         match out.last_mut() {
-            Some((e, sum, n)) if *e == p.e_star => {
+            Some((last, sum, n)) if *last == e => {
                 *sum += v;
                 *n += 1;
             }
-            _ => out.push((p.e_star, v, 1)),
+            _ => out.push((e, v, 1)),
         }
     }
     out.into_iter().map(|(e, s, n)| (e, s / n as f64)).collect()
