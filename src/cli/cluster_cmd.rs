@@ -3,7 +3,9 @@
 //! Exit codes as for the other sweep commands: 0 ok, 2 bad input, 1 any other error; `job run`
 //! exits 1 when the job failed (its error record is written all the same).
 
-use super::common::{Failure, check_regrid, load_sweep, read_spec, relabel_lines, select};
+use super::common::{
+    Failure, check_regrid, load_sweep, print_json, read_spec, relabel_lines, select,
+};
 use crate::cluster::record::write_atomic;
 use crate::cluster::slurm::{self, ArrayScript, SbatchOptions};
 use crate::cluster::{Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
@@ -438,10 +440,7 @@ pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
                 return ExitCode::from(1);
             }
         }
-        None => println!(
-            "{}",
-            serde_json::to_string_pretty(&record).expect("serializes")
-        ),
+        None => print_json(&record),
     }
     ExitCode::from(code)
 }

@@ -122,6 +122,14 @@ pub(super) fn available_cores() -> usize {
         .unwrap_or(1)
 }
 
+/// Prints a value as pretty JSON.
+pub(super) fn print_json(value: &impl serde::Serialize) {
+    println!(
+        "{}",
+        serde_json::to_string_pretty(value).expect("serializes")
+    );
+}
+
 /// Writes a file; a failure names it.
 pub(super) fn write_file(path: &Path, text: impl AsRef<[u8]>) -> Result<(), Failure> {
     std::fs::write(path, text).map_err(cannot_write(path))

@@ -3,7 +3,7 @@
 //! its job spec, which is deterministic) and `wetgran inflection` (the fluid-gas boundary of
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
-use super::common::{Failure, check_snapshot_names, select, write_file};
+use super::common::{Failure, check_snapshot_names, print_json, select, write_file};
 use crate::report::point_text::{
     decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
 };
@@ -146,7 +146,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
         }
     }
     if let Some(d) = doc {
-        println!("{}", serde_json::to_string_pretty(&d).expect("serializes"));
+        print_json(&d);
     }
     Ok(())
 }
@@ -163,10 +163,7 @@ pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
         }
     }
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&all).expect("serializes")
-        );
+        print_json(&all);
     }
     Ok(())
 }

@@ -3,7 +3,7 @@
 //! parameters along lines of constant Gamma, `report::lines`) and `wetgran report` (a static HTML
 //! site of a sweep, `report::site`).
 
-use super::common::{Failure, write_file};
+use super::common::{Failure, print_json, write_file};
 use crate::boundary::Extraction;
 use crate::report::boundaries_text::{boundaries_table, fixed_text};
 use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
@@ -172,10 +172,7 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
     let (store, sweep) = args.from.open()?;
     let lines = sweep_lines(&store, &sweep)?;
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&lines).expect("serializes")
-        );
+        print_json(&lines);
     } else {
         print!("{}", lines_table(&lines));
     }

@@ -5,7 +5,7 @@
 
 use super::common::{
     DEFAULT_DB, DbSweeps, Failure, Workers, available_cores, check_regrid, continue_refinement,
-    load_sweep, read_spec, relabel_lines, select,
+    load_sweep, print_json, read_spec, relabel_lines, select,
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{boundaries_csv, boundaries_table};
@@ -337,10 +337,7 @@ pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
         }
     }
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&all).expect("serializes")
-        );
+        print_json(&all);
     }
     Ok(())
 }
@@ -464,10 +461,7 @@ pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
     let spec = read_spec(path)?;
     let result = run_job(&spec, &mut |_| {}).map_err(|e| Failure::Other(e.to_string()))?;
     let out = serde_json::json!({ "id": spec.id(), "result": result });
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).expect("serializes")
-    );
+    print_json(&out);
     Ok(())
 }
 
@@ -522,7 +516,7 @@ pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
                 .iter()
                 .map(|(s, m)| serde_json::json!({"sweep": s.name, "map": m}))
                 .collect();
-            println!("{}", serde_json::to_string_pretty(&v).expect("serializes"));
+            print_json(&v);
         }
         BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
         BoundaryFormat::Table => print!("{}", boundaries_table(&maps, &points, how)),
