@@ -184,12 +184,11 @@ fn dry_run(
     // Each job once, in grid order (a set for the test: a list's `contains` made 10^4 jobs
     // cost 5 * 10^7 comparisons).
     let mut seen = std::collections::HashSet::new();
-    let mut ids: Vec<String> = Vec::new();
-    for j in expanded {
-        if seen.insert(j.id.as_str()) {
-            ids.push(j.id.clone());
-        }
-    }
+    let mut ids: Vec<String> = expanded
+        .iter()
+        .filter(|j| seen.insert(j.id.as_str()))
+        .map(|j| j.id.clone())
+        .collect();
     if db.exists() {
         let store = Store::open_read_only(db)?;
         let st = store.job_statuses(&ids)?;
