@@ -181,8 +181,7 @@ fn dry_run(
     expanded: &[crate::sweep::SweepJob],
     target: &ArrayTarget,
 ) -> Result<(), Failure> {
-    // Each job once, in grid order (a set for the test: a list's `contains` made 10^4 jobs
-    // cost 5 * 10^7 comparisons).
+    // Each job once, in grid order.
     let mut seen = std::collections::HashSet::new();
     let mut ids: Vec<String> = expanded
         .iter()

@@ -60,11 +60,7 @@ pub(crate) fn draw_legend(
             Swatch::Split(n) => {
                 let greys = [RGBColor(60, 60, 60), RGBColor(190, 190, 190)];
                 for k in 0..n.min(2) {
-                    let v: Vec<(i32, i32)> = sector(k, n, 6)
-                        .into_iter()
-                        .map(|(a, b)| (a + c.0, b + c.1))
-                        .collect();
-                    root.draw(&Polygon::new(v, greys[k].filled()))?;
+                    shape(root, c, &sector(k, n, 6), greys[k], true)?;
                 }
             }
             Swatch::Cross(col) => root.draw(&Cross::new(c, 4, col.stroke_width(2)))?,
@@ -130,6 +126,24 @@ where
         ))?;
     }
     Ok(())
+}
+
+/// A polygon of pixel offsets from `at` (in `area`'s pixels): filled, or (hollow) its outline
+/// 2 px wide.
+pub(crate) fn shape<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    at: (i32, i32),
+    offsets: &[(i32, i32)],
+    colour: RGBColor,
+    filled: bool,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let mut v: Vec<(i32, i32)> = offsets.iter().map(|(a, b)| (a + at.0, b + at.1)).collect();
+    if filled {
+        area.draw(&Polygon::new(v, colour.filled()))
+    } else {
+        v.push(v[0]);
+        area.draw(&PathElement::new(v, colour.stroke_width(2)))
+    }
 }
 
 /// Splits a note into lines of at most about `width` characters, at spaces.

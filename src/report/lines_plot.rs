@@ -272,28 +272,15 @@ fn marker<DB: DrawingBackend>(
     colour: RGBColor,
     filled: bool,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    let style = if filled {
-        colour.filled()
-    } else {
-        colour.stroke_width(2)
-    };
     let shape: Vec<(i32, i32)> = match state {
         Some("heating") => vec![(0, -6), (6, 5), (-6, 5)],
         Some("cooling") => vec![(0, 6), (6, -5), (-6, -5)],
         Some("coarsening") => vec![(-5, -5), (5, -5), (5, 5), (-5, 5)],
         Some("undecided") => vec![(0, -6), (6, 0), (0, 6), (-6, 0)],
-        _ => return area.draw(&Circle::new(at, 5, style)),
+        _ if filled => return area.draw(&Circle::new(at, 5, colour.filled())),
+        _ => return area.draw(&Circle::new(at, 5, colour.stroke_width(2))),
     };
-    let at_ = |v: &[(i32, i32)]| -> Vec<(i32, i32)> {
-        v.iter().map(|(a, b)| (a + at.0, b + at.1)).collect()
-    };
-    if filled {
-        area.draw(&Polygon::new(at_(&shape), style))
-    } else {
-        let mut closed = at_(&shape);
-        closed.push(closed[0]);
-        area.draw(&PathElement::new(closed, style))
-    }
+    super::chart::shape(area, at, &shape, colour, filled)
 }
 
 /// One panel: one quantity of the lines (branches) at one Gamma.
