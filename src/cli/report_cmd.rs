@@ -145,12 +145,11 @@ pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
     let how = Extraction {
         include_unconverged: a.include_unconverged,
     };
-    let style = MapStyle {
-        x_log: None,
-        y_log: a.y_scale.log(),
-    };
     let (store, sweep) = a.from.open()?;
-    write_file(&a.output, draw_map(&store, &sweep, how, style)?.svg)?;
+    write_file(
+        &a.output,
+        draw_map(&store, &sweep, how, a.y_scale.log())?.svg,
+    )?;
     eprintln!("wrote {}", a.output.display());
     Ok(())
 }
@@ -194,12 +193,12 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
 
 /// The phase map of a sweep as `wetgran plot` draws it: the first slice of its map with its
 /// branches (slices that differ only in `initial.start`), the landmark lines of a shaking sweep
-/// and the chain model of a shear sweep.
+/// and the chain model of a shear sweep; `y_log`: the y axis's scale (`None`: `Scale::Auto`).
 pub(super) fn draw_map(
     store: &Store,
     sweep: &SweepRow,
     how: Extraction,
-    style: MapStyle,
+    y_log: Option<bool>,
 ) -> Result<DrawnMap, Failure> {
     let points = store.point_summaries(sweep)?;
     let map = super::sweep_cmd::sweep_map(sweep, &points, how)?;
@@ -248,14 +247,14 @@ pub(super) fn draw_map(
             }
         );
     }
-    // A log axis where the sweep's axis is logarithmic, unless the caller chose.
+    // A log axis where the sweep's axis is logarithmic, unless `y_log` chose.
     let log_kind = |a: &Option<crate::boundary::PlaneAxis>| {
         a.as_ref()
             .map(|a| a.log || sweep.axes[a.index].kind == crate::sweep::AxisKind::Log)
     };
     let style = MapStyle {
-        x_log: style.x_log.or(log_kind(&map.x)),
-        y_log: style.y_log.or(log_kind(&map.y)),
+        x_log: log_kind(&map.x),
+        y_log: y_log.or(log_kind(&map.y)),
     };
     let title = format!("wetgran phase diagram: {}", sweep.name);
     // The scene of each grid point's first job, by its coordinates (what `find` over the
@@ -326,13 +325,9 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
         .as_ref()
         .zip(map.y.as_ref())
         .map(|(x, y)| (x.index, y.index));
-    let style = MapStyle {
-        x_log: None,
-        y_log: args.y_scale.log(),
-    };
     // A sweep without a map (one numeric axis, nothing classified yet) still gets its
     // report, with the reason in place of the map.
-    let drawn = match draw_map(&store, &sweep, how, style) {
+    let drawn = match draw_map(&store, &sweep, how, args.y_scale.log()) {
         Ok(d) => Ok(d),
         Err(Failure::BadInput(m)) => Err(m),
         Err(e) => return Err(e),
