@@ -79,7 +79,8 @@ impl Workers {
 }
 
 /// How a command failed: bad input (exit code 2), a sweep that finished with failed jobs
-/// (exit code 4: everything else was done and stored) or anything else (exit code 1).
+/// (exit code 4: everything else was done and stored; 3 is a broken engine invariant in
+/// `simulate` and `stress`) or anything else (exit code 1).
 pub(super) enum Failure {
     BadInput(String),
     JobsFailed(String),
@@ -100,15 +101,11 @@ impl From<StoreError> for Failure {
     }
 }
 
-/// Exit status of `sweep run` / `sweep resume` when the sweep ran to its end but some jobs
-/// failed (3 is taken by a broken engine invariant in `simulate` and by `stress`).
-pub(super) const JOBS_FAILED_EXIT: u8 = 4;
-
 pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
     let (m, code) = match r {
         Ok(()) => return ExitCode::SUCCESS,
         Err(Failure::BadInput(m)) => (m, 2),
-        Err(Failure::JobsFailed(m)) => (m, JOBS_FAILED_EXIT),
+        Err(Failure::JobsFailed(m)) => (m, 4),
         Err(Failure::Other(m)) => (m, 1),
     };
     eprintln!("error: {m}");

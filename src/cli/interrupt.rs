@@ -11,9 +11,6 @@ use crate::report::site::shell_word;
 use std::path::Path;
 use std::sync::Once;
 
-/// Exit status after Ctrl-C.
-pub(super) const INTERRUPTED_EXIT: i32 = 130;
-
 /// The command that continues the sweep `name` (every sweep: `None`) of the database `db`.
 pub(super) fn resume_command(name: Option<&str>, db: &Path) -> String {
     let name = name
@@ -24,7 +21,7 @@ pub(super) fn resume_command(name: Option<&str>, db: &Path) -> String {
 }
 
 /// From now on, Ctrl-C prints how to resume the sweep `name` (all: `None`) of `db` and exits
-/// with [`INTERRUPTED_EXIT`]. Only the first call of a process counts.
+/// with status 130 (module doc). Only the first call of a process counts.
 pub(super) fn resume_hint_on_interrupt(name: Option<&str>, db: &Path) {
     static INSTALLED: Once = Once::new();
     let text = format!(
@@ -47,7 +44,7 @@ pub(super) fn resume_hint_on_interrupt(name: Option<&str>, db: &Path) {
                 let mut err = std::io::stderr().lock();
                 let _ = err.write_all(text.as_bytes());
                 let _ = err.flush();
-                std::process::exit(INTERRUPTED_EXIT);
+                std::process::exit(130);
             }
         });
     });

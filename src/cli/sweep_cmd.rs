@@ -162,7 +162,7 @@ pub struct EstimateArgs {
     periods: f64,
     /// Simulated time units `sqrt(d/g)` each sampled job runs untimed first: a hot start
     /// cools and a bed settles, and the cost per period changes (0: time from the start).
-    #[arg(long, default_value_t = DEFAULT_ESTIMATE_SETTLE)]
+    #[arg(long, default_value_t = 20.0)]
     settle: f64,
     /// Number of jobs to sample; a sweep with several start modes (`initial.start` axis)
     /// shares them out among the modes, at least one each.
@@ -359,9 +359,6 @@ pub(super) fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
     }
     Ok(())
 }
-
-/// Simulated time units `sweep estimate` runs a sampled job before it times it.
-pub const DEFAULT_ESTIMATE_SETTLE: f64 = 20.0;
 
 pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
     use crate::sweep::estimate::{
