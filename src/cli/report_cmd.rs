@@ -259,7 +259,7 @@ pub(super) fn draw_map(
     let title = format!("wetgran phase diagram: {}", sweep.name);
     // The scene of each grid point's first job, by its coordinates (what `find` over the
     // points gave, without a search per point).
-    let mut scene_at: std::collections::HashMap<String, &Scene> = std::collections::HashMap::new();
+    let mut scene_at: HashMap<String, &Scene> = HashMap::new();
     for p in &points {
         scene_at
             .entry(serde_json::Value::from(p.coords.clone()).to_string())

@@ -2,10 +2,12 @@
 //! points (table), or as CSV; the chain-model note of shear sweeps and the trust marks of the
 //! grid points. Pure functions of the phase maps and the stored rows.
 
+use super::trust::{LABEL_KEPT, NOT_STATIONARY, mark};
 use crate::boundary::{Extraction, PhaseMap};
 use crate::report::plot_phase;
 use crate::run::runner::short;
 use crate::store::{PointSummary, SweepRow};
+use std::collections::HashMap;
 use std::fmt::Write as _;
 
 /// A number in short form, or nothing.
@@ -94,17 +96,17 @@ pub fn chain_model_note(points: &[PointSummary]) -> Option<String> {
 
 /// The grid points (their coordinates as JSON text) with a replica whose result carries a trust
 /// mark (`report::trust`), with the mark.
-pub fn untrusted_points(points: &[PointSummary]) -> std::collections::HashMap<String, char> {
-    let mut marks = std::collections::HashMap::new();
+pub fn untrusted_points(points: &[PointSummary]) -> HashMap<String, char> {
+    let mut marks = HashMap::new();
     for p in points {
-        let Some(mark) = crate::report::trust::mark(p.trust()) else {
+        let Some(mark) = mark(p.trust()) else {
             continue;
         };
         // Among replicas, a label that may change outweighs one that is kept.
         let e = marks
             .entry(serde_json::Value::from(p.coords.clone()).to_string())
             .or_insert(mark);
-        if mark == crate::report::trust::NOT_STATIONARY {
+        if mark == NOT_STATIONARY {
             *e = mark;
         }
     }
@@ -240,7 +242,7 @@ fn write_grid(
     ya: Option<&crate::boundary::PlaneAxis>,
     xs: &[f64],
     ys: &[f64],
-    marks: &std::collections::HashMap<String, char>,
+    marks: &HashMap<String, char>,
 ) {
     let ylabel = ya.map(|a| a.label.as_str()).unwrap_or("");
     let mark_of = |p: &crate::boundary::MapPoint| {
@@ -261,16 +263,13 @@ fn write_grid(
         {
             let has = |m: char| slice.points.iter().any(|p| mark_of(p) == Some(m));
             let mut legend = String::new();
-            if has(crate::report::trust::NOT_STATIONARY) {
-                legend += &format!(
-                    "; {} = not stationary, label may change",
-                    crate::report::trust::NOT_STATIONARY
-                );
+            if has(NOT_STATIONARY) {
+                legend += &format!("; {} = not stationary, label may change", NOT_STATIONARY);
             }
-            if has(crate::report::trust::LABEL_KEPT) {
+            if has(LABEL_KEPT) {
                 legend += &format!(
                     "; {} = heating gas, cooling solid or coarsening coexistence, label kept",
-                    crate::report::trust::LABEL_KEPT
+                    LABEL_KEPT
                 );
             }
             legend

@@ -3,6 +3,7 @@
 //! along each line of constant Gamma, docs/model.md 7). Pure functions of the stored rows.
 
 use super::lines::gamma_e_star;
+use super::trust::{LABEL_KEPT, NOT_STATIONARY, failed_checks, mark};
 use crate::store::PointRow;
 use std::fmt::Write as _;
 use wetgran_core::observe::fluid_gas_inflection;
@@ -36,9 +37,9 @@ pub fn decision_text(p: &PointRow) -> String {
         let _ = writeln!(out, "phase       {phase}");
     }
     if let Some(t) = p.trend {
-        let what = match crate::report::trust::mark(p.trust()) {
+        let what = match mark(p.trust()) {
             None => "",
-            Some(crate::report::trust::LABEL_KEPT) => {
+            Some(LABEL_KEPT) => {
                 " (not stationary, but the label is safe: a heating gas stays a gas, a cooling \
                  solid a solid, a coarsening coexistence a coexistence; its numbers still drift)"
             }
@@ -69,9 +70,9 @@ pub fn decision_text(p: &PointRow) -> String {
                 let _ = writeln!(
                     out,
                     "stationary  NO ({} in `boundaries`): the averages may still drift",
-                    crate::report::trust::NOT_STATIONARY
+                    NOT_STATIONARY
                 );
-                for c in crate::report::trust::failed_checks(o) {
+                for c in failed_checks(o) {
                     let _ = writeln!(out, "            {c}");
                 }
             }
@@ -175,9 +176,9 @@ pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
 /// `show --json`: the job of [`job_text`] and the decision of [`decision_text`] as one object
 /// (the observables themselves are left out: `export --json` has them).
 pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
-    let trust = match crate::report::trust::mark(p.trust()) {
+    let trust = match mark(p.trust()) {
         None => "stationary",
-        Some(crate::report::trust::LABEL_KEPT) => "label kept (not stationary)",
+        Some(LABEL_KEPT) => "label kept (not stationary)",
         Some(_) => "label may change (not stationary)",
     };
     let ending = p
@@ -202,7 +203,7 @@ pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
         "failed_checks": p
             .observables
             .as_ref()
-            .map(crate::report::trust::failed_checks)
+            .map(failed_checks)
             .unwrap_or_default(),
         "decided_on": p.decided_on,
         "simulated_time": p.simulated_time,
