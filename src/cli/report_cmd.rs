@@ -175,18 +175,15 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
     } else {
         print!("{}", lines_table(&lines));
     }
-    if let Some(out) = &args.output {
-        let text = if ext == Some("csv") {
-            lines_csv(&lines)
-        } else {
+    for (path, svg) in [(&args.output, ext == Some("svg")), (&args.csv, false)] {
+        let Some(path) = path else { continue };
+        let text = if svg {
             lines_svg(&lines).map_err(Failure::BadInput)?
+        } else {
+            lines_csv(&lines)
         };
-        write_file(out, &text)?;
-        eprintln!("wrote {}", out.display());
-    }
-    if let Some(csv) = &args.csv {
-        write_file(csv, lines_csv(&lines))?;
-        eprintln!("wrote {}", csv.display());
+        write_file(path, text)?;
+        eprintln!("wrote {}", path.display());
     }
     Ok(())
 }

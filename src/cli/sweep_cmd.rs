@@ -245,12 +245,11 @@ pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
     }
     run_and_report(&store, &sweeps, &opts, a.retry_failed)?;
     continue_refinement(&store, &sweeps, &opts)?;
-    let Some(cap) = extend else {
-        return fail_if_jobs_failed(&store, &sweeps);
-    };
-    super::extend_cmd::extend_and_report(&store, &sweeps, cap, &opts)?;
-    for s in &sweeps {
-        relabel_lines(&store, s)?;
+    if let Some(cap) = extend {
+        super::extend_cmd::extend_and_report(&store, &sweeps, cap, &opts)?;
+        for s in &sweeps {
+            relabel_lines(&store, s)?;
+        }
     }
     fail_if_jobs_failed(&store, &sweeps)
 }
