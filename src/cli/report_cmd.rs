@@ -155,17 +155,13 @@ pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
 }
 
 pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
-    let ext = args
-        .output
-        .as_ref()
-        .map(|p| p.extension().and_then(|e| e.to_str()).unwrap_or(""));
-    if let Some(e) = ext
-        && e != "svg"
-        && e != "csv"
+    let ext = |p: &PathBuf| p.extension().and_then(|e| e.to_str()).map(String::from);
+    if let Some(p) = &args.output
+        && !matches!(ext(p).as_deref(), Some("svg" | "csv"))
     {
         return Err(Failure::BadInput(format!(
             "-o {}: the file name must end in .svg or .csv",
-            args.output.as_ref().expect("given").display()
+            p.display()
         )));
     }
     let (store, sweep) = args.from.open()?;
@@ -175,9 +171,9 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
     } else {
         print!("{}", lines_table(&lines));
     }
-    for (path, svg) in [(&args.output, ext == Some("svg")), (&args.csv, false)] {
+    for (path, csv) in [(&args.output, false), (&args.csv, true)] {
         let Some(path) = path else { continue };
-        let text = if svg {
+        let text = if !csv && ext(path).as_deref() == Some("svg") {
             lines_svg(&lines).map_err(Failure::BadInput)?
         } else {
             lines_csv(&lines)
