@@ -103,7 +103,7 @@ pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
         ids.len(),
         parts.len(),
         target.limit,
-        target.dir.display(),
+        target.sd.root.display(),
         db = db.display()
     );
     Ok(())
@@ -113,7 +113,6 @@ pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
 /// array size limit and the sbatch options.
 struct ArrayTarget {
     sweep: String,
-    dir: PathBuf,
     sd: SweepDir,
     exe: PathBuf,
     /// The cluster's `MaxArraySize` (`None`: scontrol not available).
@@ -148,7 +147,6 @@ impl ArrayTarget {
         Ok(ArrayTarget {
             sweep: sweep.to_string(),
             sd: SweepDir::new(&dir),
-            dir,
             exe,
             max,
             limit: slurm::array_limit(s.array_limit, max),
@@ -164,7 +162,7 @@ impl ArrayTarget {
     fn script(&self, tasks_file: &Path, n: usize) -> Result<String, Failure> {
         slurm::array_script(&ArrayScript {
             sweep: &self.sweep,
-            dir: &self.dir,
+            dir: &self.sd.root,
             tasks_file,
             tasks: n,
             wetgran: &self.exe,
@@ -204,7 +202,7 @@ fn dry_run(
             Some(m) => format!("cluster MaxArraySize {m}"),
             None => "scontrol not available".to_string(),
         },
-        target.dir.display()
+        target.sd.root.display()
     );
     for (k, part) in parts.iter().enumerate() {
         let tasks = target
@@ -234,7 +232,7 @@ fn jobs_left(
     target
         .sd
         .create()
-        .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", target.dir.display())))?;
+        .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", target.sd.root.display())))?;
     let c = collect(store, row, &mut slurm::squeue)?;
     relabel_lines(store, row)?;
     if c.stored.len() + c.failed.len() + c.missing.len() + c.corrupt.len() > 0 {
@@ -304,7 +302,7 @@ fn submit_arrays(
         write_atomic(&script_path, script.as_bytes()).map_err(|e| io_failure(&script_path, e))?;
         let sub = store.record_submission(
             row.id,
-            &target.dir.display().to_string(),
+            &target.sd.root.display().to_string(),
             &script_path.display().to_string(),
             part,
         )?;
