@@ -317,19 +317,17 @@ pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
             now,
         };
         let tasks = store.tasks(s.id)?;
-        let slurm = if tasks.is_empty() {
-            String::new()
-        } else {
+        let slurm = (!tasks.is_empty()).then(|| {
             let queue = crate::cluster::queue_states(&tasks, &mut crate::cluster::slurm::squeue);
             slurm_status_text(&tasks, &queue)
-        };
+        });
         if json {
             let mut v = sweep_status_json(&input);
-            v["slurm"] = (!slurm.is_empty()).then_some(slurm).into();
+            v["slurm"] = slurm.into();
             all.push(v);
         } else {
             print!("{}", sweep_status_text(&input));
-            if !slurm.is_empty() {
+            if let Some(slurm) = slurm {
                 println!("sweep {} on Slurm", s.name);
                 print!("{slurm}");
             }
