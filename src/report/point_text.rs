@@ -62,22 +62,18 @@ pub fn decision_text(p: &PointRow) -> String {
         }
     }
     if let Some(o) = &p.observables {
-        match wetgran_core::observe::converged_in_json(o) {
-            Some(true) => {
-                let _ = writeln!(out, "stationary  yes");
-            }
+        let stationary = wetgran_core::observe::converged_in_json(o);
+        let verdict = match stationary {
+            Some(true) => "yes".to_string(),
             Some(false) => {
-                let _ = writeln!(
-                    out,
-                    "stationary  NO ({} in `boundaries`): the averages may still drift",
-                    NOT_STATIONARY
-                );
-                for c in failed_checks(o) {
-                    let _ = writeln!(out, "            {c}");
-                }
+                format!("NO ({NOT_STATIONARY} in `boundaries`): the averages may still drift")
             }
-            None => {
-                let _ = writeln!(out, "stationary  unknown (no check stored)");
+            None => "unknown (no check stored)".to_string(),
+        };
+        let _ = writeln!(out, "stationary  {verdict}");
+        if stationary == Some(false) {
+            for c in failed_checks(o) {
+                let _ = writeln!(out, "            {c}");
             }
         }
     }
