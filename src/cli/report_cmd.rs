@@ -51,11 +51,26 @@ pub struct DbLatest {
 }
 
 impl DbLatest {
-    /// The database, read only, and the sweep (`pick_sweep`).
+    /// The database, read only, and the sweep `--sweep`, or the one registered or updated last
+    /// (said on stderr when there are several).
     fn open(&self) -> Result<(Store, SweepRow), Failure> {
         let store = Store::open_read_only(&self.db)?;
-        let sweep = pick_sweep(&store, self.sweep.as_deref())?;
-        Ok((store, sweep))
+        if let Some(n) = &self.sweep {
+            let sweep = store.sweep(n)?;
+            return Ok((store, sweep));
+        }
+        let mut all = store.sweeps()?;
+        all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
+        let last = all.pop().ok_or_else(|| {
+            Failure::BadInput(format!(
+                "{}: no sweep in this database",
+                store.path().display()
+            ))
+        })?;
+        if !all.is_empty() {
+            eprintln!("sweep {} (the latest; choose with --sweep)", last.name);
+        }
+        Ok((store, last))
     }
 }
 
@@ -108,39 +123,6 @@ pub struct LinesArgs {
     json: bool,
 }
 
-/// The sweep `name`, or the one registered or updated last (said on stderr when there are
-/// several).
-pub(super) fn pick_sweep(store: &Store, name: Option<&str>) -> Result<SweepRow, Failure> {
-    if let Some(n) = name {
-        return Ok(store.sweep(n)?);
-    }
-    let mut all = store.sweeps()?;
-    all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
-    let last = all.pop().ok_or_else(|| {
-        Failure::BadInput(format!(
-            "{}: no sweep in this database",
-            store.path().display()
-        ))
-    })?;
-    if !all.is_empty() {
-        eprintln!("sweep {} (the latest; choose with --sweep)", last.name);
-    }
-    Ok(last)
-}
-
-/// The lines of a sweep from its store.
-pub(super) fn sweep_lines(store: &Store, sweep: &SweepRow) -> Result<Lines, Failure> {
-    let lines = lines_of(sweep, &store.points(sweep.id)?);
-    if lines.lines.is_empty() {
-        return Err(Failure::BadInput(format!(
-            "sweep {}: no finished job of a shaken scene: lines of constant Gamma need the \
-             drive's Gamma and E* (and at least one finished job)",
-            sweep.name
-        )));
-    }
-    Ok(lines)
-}
-
 pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
     let how = Extraction {
         include_unconverged: a.include_unconverged,
@@ -165,7 +147,14 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
         )));
     }
     let (store, sweep) = args.from.open()?;
-    let lines = sweep_lines(&store, &sweep)?;
+    let lines = lines_of(&sweep, &store.points(sweep.id)?);
+    if lines.lines.is_empty() {
+        return Err(Failure::BadInput(format!(
+            "sweep {}: no finished job of a shaken scene: lines of constant Gamma need the \
+             drive's Gamma and E* (and at least one finished job)",
+            sweep.name
+        )));
+    }
     if args.json {
         print_json(&lines);
     } else {
