@@ -5,7 +5,6 @@
 mod cluster_cmd;
 mod common;
 mod export_cmd;
-mod extend_cmd;
 mod interrupt;
 pub mod point_cmd;
 mod reclassify_cmd;

@@ -10,12 +10,15 @@ use super::common::{
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{boundaries_csv, boundaries_table};
 use crate::report::cluster_text::slurm_status_text;
+use crate::report::sweep_text::extended_text;
 use crate::report::sweep_text::{
     StatusInput, coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
     estimate_stored_text, estimate_text, sweep_status_json, sweep_status_text,
 };
+use crate::run::extend::extend_unconverged;
 use crate::run::{RunOptions, run_sweeps};
 use crate::store::{Durability, PointSummary, Store, SweepRow};
+use crate::sweep::job::ExtendTo;
 use crate::sweep::run_job;
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -228,7 +231,6 @@ fn fail_if_jobs_failed(store: &Store, sweeps: &[SweepRow]) -> Result<(), Failure
 }
 
 pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
-    use crate::sweep::job::ExtendTo;
     let (opts, db) = (a.workers.options()?, &a.db);
     let extend = a
         .extend
@@ -246,12 +248,53 @@ pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
     run_and_report(&store, &sweeps, &opts, a.retry_failed)?;
     continue_refinement(&store, &sweeps, &opts)?;
     if let Some(cap) = extend {
-        super::extend_cmd::extend_and_report(&store, &sweeps, cap, &opts)?;
+        extend_and_report(&store, &sweeps, cap, &opts)?;
         for s in &sweeps {
             relabel_lines(&store, s)?;
         }
     }
     fail_if_jobs_failed(&store, &sweeps)
+}
+
+/// `sweep resume --extend MAX_PERIODS` (or `--extend-time MAX_TIME`): checks the cap, extends
+/// every unconverged job of `sweeps` that has a checkpoint to at most `cap` of total run through
+/// the worker pool of every run (`run::extend`) and prints a summary.
+fn extend_and_report(
+    store: &Store,
+    sweeps: &[SweepRow],
+    cap: ExtendTo,
+    opts: &RunOptions,
+) -> Result<(), Failure> {
+    let v = cap.value();
+    if !(v.is_finite() && v > 0.0) {
+        let (flag, unit) = match cap {
+            ExtendTo::Periods(_) => ("--extend", "periods"),
+            ExtendTo::Time(_) => ("--extend-time", "time units"),
+        };
+        return Err(Failure::BadInput(format!(
+            "{flag} = {v} is out of range: must be a finite number of {unit} > 0"
+        )));
+    }
+    let s = extend_unconverged(store, sweeps, cap, opts.jobs, opts.table_cache_mib, true)?;
+    eprint!(
+        "{}",
+        extended_text(
+            s.extended,
+            s.converged,
+            s.skipped,
+            &cap.describe(),
+            &s.failed
+        )
+    );
+    if s.failed.is_empty() {
+        Ok(())
+    } else {
+        // The extensions that worked are stored; the exit status says that some did not.
+        Err(Failure::JobsFailed(format!(
+            "{} extension(s) failed (the others are stored)",
+            s.failed.len()
+        )))
+    }
 }
 
 fn run_and_report(
