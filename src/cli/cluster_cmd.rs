@@ -3,7 +3,9 @@
 //! Exit codes as for the other sweep commands: 0 ok, 2 bad input, 1 any other error; `job run`
 //! exits 1 when the job failed (its error record is written all the same).
 
-use super::common::{Failure, check_regrid, load_sweep, read_spec, relabel_lines, select};
+use super::common::{
+    Failure, check_regrid, load_sweep, print_json, read_spec, relabel_lines, select,
+};
 use crate::cluster::record::write_atomic;
 use crate::cluster::slurm::{self, ArrayScript, SbatchOptions};
 use crate::cluster::{Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
@@ -14,11 +16,6 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-/// Folder of the sweep directories where `--dir` is not given: beside the database (which a
-/// cluster user keeps on the shared filesystem), `<db folder>/wetgran-slurm/<sweep name>`.
-pub(super) const DEFAULT_DIR: &str = "wetgran-slurm";
-
-/// `sweep submit`.
 #[derive(Debug, clap::Args)]
 pub struct SubmitArgs {
     /// The sweep file.
@@ -57,18 +54,6 @@ fn absolute(p: &Path) -> Result<PathBuf, Failure> {
         .map_err(|e| Failure::Other(format!("{}: cannot make it absolute: {e}", p.display())))
 }
 
-/// The sweep directory of `sweep` for the database `db`.
-pub(super) fn sweep_dir(db: &Path, sweep: &str, dir: Option<&Path>) -> Result<PathBuf, Failure> {
-    match dir {
-        Some(d) => absolute(d),
-        None => {
-            let db = absolute(db)?;
-            let parent = db.parent().unwrap_or(Path::new("/"));
-            Ok(parent.join(DEFAULT_DIR).join(slurm::file_name(sweep)))
-        }
-    }
-}
-
 /// The first free `array-NNNN` name in the arrays folder.
 fn next_array_name(arrays: &Path) -> String {
     (1..)
@@ -77,7 +62,6 @@ fn next_array_name(arrays: &Path) -> String {
         .expect("a free name")
 }
 
-/// `wetgran sweep submit FILE --slurm`.
 pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
     if !s.slurm {
         return Err(Failure::BadInput(
@@ -119,7 +103,7 @@ pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
         ids.len(),
         parts.len(),
         target.limit,
-        target.dir.display(),
+        target.sd.root.display(),
         db = db.display()
     );
     Ok(())
@@ -129,7 +113,6 @@ pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
 /// array size limit and the sbatch options.
 struct ArrayTarget {
     sweep: String,
-    dir: PathBuf,
     sd: SweepDir,
     exe: PathBuf,
     /// The cluster's `MaxArraySize` (`None`: scontrol not available).
@@ -141,7 +124,16 @@ struct ArrayTarget {
 impl ArrayTarget {
     /// Checks the directives that go into the batch script.
     fn new(db: &Path, sweep: &str, s: &SubmitArgs) -> Result<Self, Failure> {
-        let dir = sweep_dir(db, sweep, s.dir.as_deref())?;
+        // Without `--dir`: beside the database (which a cluster user keeps on the shared
+        // filesystem), `<db folder>/wetgran-slurm/<sweep name>`.
+        let dir = match &s.dir {
+            Some(d) => absolute(d)?,
+            None => absolute(db)?
+                .parent()
+                .unwrap_or(Path::new("/"))
+                .join("wetgran-slurm")
+                .join(slurm::file_name(sweep)),
+        };
         slurm::check_directive("the sweep directory", &dir.display().to_string())
             .map_err(Failure::BadInput)?;
         for (what, v) in [("--partition", &s.partition), ("--time", &s.time)] {
@@ -155,7 +147,6 @@ impl ArrayTarget {
         Ok(ArrayTarget {
             sweep: sweep.to_string(),
             sd: SweepDir::new(&dir),
-            dir,
             exe,
             max,
             limit: slurm::array_limit(s.array_limit, max),
@@ -171,7 +162,7 @@ impl ArrayTarget {
     fn script(&self, tasks_file: &Path, n: usize) -> Result<String, Failure> {
         slurm::array_script(&ArrayScript {
             sweep: &self.sweep,
-            dir: &self.dir,
+            dir: &self.sd.root,
             tasks_file,
             tasks: n,
             wetgran: &self.exe,
@@ -188,15 +179,13 @@ fn dry_run(
     expanded: &[crate::sweep::SweepJob],
     target: &ArrayTarget,
 ) -> Result<(), Failure> {
-    // Each job once, in grid order (a set for the test: a list's `contains` made 10^4 jobs
-    // cost 5 * 10^7 comparisons).
+    // Each job once, in grid order.
     let mut seen = std::collections::HashSet::new();
-    let mut ids: Vec<String> = Vec::new();
-    for j in expanded {
-        if seen.insert(j.id.as_str()) {
-            ids.push(j.id.clone());
-        }
-    }
+    let mut ids: Vec<String> = expanded
+        .iter()
+        .filter(|j| seen.insert(j.id.as_str()))
+        .map(|j| j.id.clone())
+        .collect();
     if db.exists() {
         let store = Store::open_read_only(db)?;
         let st = store.job_statuses(&ids)?;
@@ -213,7 +202,7 @@ fn dry_run(
             Some(m) => format!("cluster MaxArraySize {m}"),
             None => "scontrol not available".to_string(),
         },
-        target.dir.display()
+        target.sd.root.display()
     );
     for (k, part) in parts.iter().enumerate() {
         let tasks = target
@@ -243,7 +232,7 @@ fn jobs_left(
     target
         .sd
         .create()
-        .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", target.dir.display())))?;
+        .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", target.sd.root.display())))?;
     let c = collect(store, row, &mut slurm::squeue)?;
     relabel_lines(store, row)?;
     if c.stored.len() + c.failed.len() + c.missing.len() + c.corrupt.len() > 0 {
@@ -313,7 +302,7 @@ fn submit_arrays(
         write_atomic(&script_path, script.as_bytes()).map_err(|e| io_failure(&script_path, e))?;
         let sub = store.record_submission(
             row.id,
-            &target.dir.display().to_string(),
+            &target.sd.root.display().to_string(),
             &script_path.display().to_string(),
             part,
         )?;
@@ -344,7 +333,6 @@ fn submit_arrays(
     Ok(())
 }
 
-/// `wetgran sweep collect`.
 pub(super) fn collect_cmd(a: super::common::DbSweeps) -> Result<(), Failure> {
     let db = &a.db;
     let store = Store::open_existing(db)?;
@@ -448,10 +436,7 @@ pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
                 return ExitCode::from(1);
             }
         }
-        None => println!(
-            "{}",
-            serde_json::to_string_pretty(&record).expect("serializes")
-        ),
+        None => print_json(&record),
     }
     ExitCode::from(code)
 }

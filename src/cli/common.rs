@@ -28,10 +28,12 @@ pub struct DbSweeps {
     pub sweep: Option<String>,
 }
 
-/// Worker threads and the wall-table cache of the commands that run jobs.
+/// Worker threads and the wall-table cache of the commands that run jobs (`sweep run`; `sweep
+/// resume` and `sweep refine` say what their workers run with `mut_arg`).
 #[derive(Debug, Args)]
 pub(super) struct Workers {
-    /// Worker threads, one simulation each: 1 to the available cores (default: all of them).
+    /// Worker threads, one simulation each, for the sweep's jobs and then the refinement of a
+    /// `[refine]` table: 1 to the available cores (default: all of them).
     #[arg(long)]
     jobs: Option<usize>,
     /// Allow --jobs above the available cores (several simulations share a core; each
@@ -42,18 +44,43 @@ pub(super) struct Workers {
     /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
     /// caching.
     #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
-    pub table_cache_mib: usize,
+    table_cache_mib: usize,
 }
 
 impl Workers {
-    /// The worker count of `--jobs` (`common::workers`).
-    pub(super) fn count(&self) -> Result<usize, Failure> {
-        workers(self.jobs, self.oversubscribe).map_err(Failure::BadInput)
+    /// The options of a local run: `--jobs` workers (by default the available cores; in
+    /// `[1, available cores]` unless `--oversubscribe`), progress shown, failed jobs left as
+    /// they are, the wall-table cache capped at `--table-cache-mib`.
+    pub(super) fn options(&self) -> Result<RunOptions, Failure> {
+        let cores = available_cores();
+        let jobs = match self.jobs {
+            None => cores,
+            Some(0) => {
+                return Err(Failure::BadInput(format!(
+                    "--jobs 0 is out of range: must be in [1, {cores}] (the available cores)"
+                )));
+            }
+            Some(n) if n > cores && !self.oversubscribe => {
+                return Err(Failure::BadInput(format!(
+                    "--jobs {n} is out of range: must be in [1, {cores}] (the available cores; \
+                     one simulation per worker); add --oversubscribe to start more workers than \
+                     cores"
+                )));
+            }
+            Some(n) => n,
+        };
+        Ok(RunOptions {
+            jobs,
+            retry_failed: false,
+            show_progress: true,
+            table_cache_mib: self.table_cache_mib,
+        })
     }
 }
 
 /// How a command failed: bad input (exit code 2), a sweep that finished with failed jobs
-/// (exit code 4: everything else was done and stored) or anything else (exit code 1).
+/// (exit code 4: everything else was done and stored; 3 is a broken engine invariant in
+/// `simulate` and `stress`) or anything else (exit code 1).
 pub(super) enum Failure {
     BadInput(String),
     JobsFailed(String),
@@ -74,26 +101,15 @@ impl From<StoreError> for Failure {
     }
 }
 
-/// Exit status of `sweep run` / `sweep resume` when the sweep ran to its end but some jobs
-/// failed (3 is taken by a broken engine invariant in `simulate` and by `stress`).
-pub(super) const JOBS_FAILED_EXIT: u8 = 4;
-
 pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
-    match r {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::BadInput(m)) => {
-            eprintln!("error: {m}");
-            ExitCode::from(2)
-        }
-        Err(Failure::JobsFailed(m)) => {
-            eprintln!("error: {m}");
-            ExitCode::from(JOBS_FAILED_EXIT)
-        }
-        Err(Failure::Other(m)) => {
-            eprintln!("error: {m}");
-            ExitCode::from(1)
-        }
-    }
+    let (m, code) = match r {
+        Ok(()) => return ExitCode::SUCCESS,
+        Err(Failure::BadInput(m)) => (m, 2),
+        Err(Failure::JobsFailed(m)) => (m, 4),
+        Err(Failure::Other(m)) => (m, 1),
+    };
+    eprintln!("error: {m}");
+    ExitCode::from(code)
 }
 
 /// The cores this process may use (`std::thread::available_parallelism`, 1 if unknown).
@@ -103,27 +119,22 @@ pub(super) fn available_cores() -> usize {
         .unwrap_or(1)
 }
 
-/// Worker threads for `--jobs N`: the available cores by default; `N` must be in
-/// `[1, available cores]` unless `oversubscribe` (`--oversubscribe`) allows more.
-pub(super) fn workers(jobs: Option<usize>, oversubscribe: bool) -> Result<usize, String> {
-    let cores = available_cores();
-    match jobs {
-        None => Ok(cores),
-        Some(0) => Err(format!(
-            "--jobs 0 is out of range: must be in [1, {cores}] (the available cores)"
-        )),
-        Some(n) if n > cores && !oversubscribe => Err(format!(
-            "--jobs {n} is out of range: must be in [1, {cores}] (the available cores; one \
-             simulation per worker); add --oversubscribe to start more workers than cores"
-        )),
-        Some(n) => Ok(n),
-    }
+/// Prints a value as pretty JSON.
+pub(super) fn print_json(value: &impl serde::Serialize) {
+    println!(
+        "{}",
+        serde_json::to_string_pretty(value).expect("serializes")
+    );
 }
 
 /// Writes a file; a failure names it.
 pub(super) fn write_file(path: &Path, text: impl AsRef<[u8]>) -> Result<(), Failure> {
-    std::fs::write(path, text)
-        .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))
+    std::fs::write(path, text).map_err(cannot_write(path))
+}
+
+/// The failure of a write to `path`, which it names.
+pub(super) fn cannot_write(path: &Path) -> impl FnOnce(std::io::Error) -> Failure + '_ {
+    move |e| Failure::Other(format!("{}: cannot write: {e}", path.display()))
 }
 
 impl From<RefineError> for Failure {
@@ -253,17 +264,6 @@ pub(super) fn read_spec(path: &Path) -> Result<JobSpec, Failure> {
     JobSpec::from_json(&spec_value.to_string(), &origin).map_err(Failure::BadInput)
 }
 
-/// The options of a local run: `jobs` workers, progress shown, failed jobs left as they are,
-/// the wall-table cache capped at `table_cache_mib`.
-pub(super) fn run_options(jobs: usize, table_cache_mib: usize) -> RunOptions {
-    RunOptions {
-        jobs,
-        retry_failed: false,
-        show_progress: true,
-        table_cache_mib,
-    }
-}
-
 /// The line rule's labels (docs/model.md 7) over the lines of constant Gamma with new or
 /// extended results (after a run, an extension or a collection), with what changed on stderr:
 /// without it a result kept its point's own label, where the same job in a whole run got its
@@ -293,11 +293,9 @@ pub(super) fn refinement_report(row: &SweepRow, o: &Outcome) {
 pub(super) fn continue_refinement(
     store: &Store,
     rows: &[SweepRow],
-    jobs: usize,
-    table_cache_mib: usize,
+    opts: &RunOptions,
 ) -> Result<(), Failure> {
-    let opts = run_options(jobs, table_cache_mib);
-    crate::refine::driver::continue_refinement(store, rows, &opts, &mut |row, o| {
+    crate::refine::driver::continue_refinement(store, rows, opts, &mut |row, o| {
         refinement_report(row, o)
     })?;
     Ok(())

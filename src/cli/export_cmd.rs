@@ -3,8 +3,8 @@
 //! their text entries in another.
 
 use super::common::DbSweeps;
-use super::common::{Failure, select};
-use crate::report::export::{self, Columns, ExportRow, JsonWriter, SeriesFile};
+use super::common::{Failure, cannot_write, select};
+use crate::report::export::{self, Columns, ExportRow, SeriesFile};
 use crate::store::Store;
 use clap::{Args, ValueEnum};
 use std::io::{BufWriter, Write};
@@ -17,7 +17,6 @@ pub(super) enum ExportFormat {
     Json,
 }
 
-/// `wetgran export`.
 #[derive(Debug, Args)]
 pub struct ExportArgs {
     #[command(flatten)]
@@ -47,12 +46,11 @@ pub struct ExportArgs {
 fn create(path: &Path) -> Result<BufWriter<std::fs::File>, Failure> {
     std::fs::File::create(path)
         .map(BufWriter::new)
-        .map_err(|e| Failure::Other(format!("{}: cannot write: {e}", path.display())))
+        .map_err(cannot_write(path))
 }
 
-/// `wetgran export`.
 pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
-    let format = if a.json { ExportFormat::Json } else { a.format };
+    let csv = !a.json && a.format == ExportFormat::Csv;
     let (series_path, text_path) = (a.series.as_deref(), a.text.as_deref());
     if text_path.is_some() && series_path.is_none() {
         return Err(Failure::BadInput(
@@ -76,23 +74,21 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
         Some(p) => Box::new(create(p)?),
         None => Box::new(BufWriter::new(std::io::stdout().lock())),
     };
-    let mut series_out = series_path.map(create).transpose()?;
-    let mut text_out = text_path.map(create).transpose()?;
-    let file_failed = |p: Option<&Path>| {
-        let name = p.map(|p| p.display().to_string()).unwrap_or_default();
-        move |e: std::io::Error| Failure::Other(format!("{name}: cannot write: {e}"))
-    };
-    for (w, p) in [(&mut series_out, series_path), (&mut text_out, text_path)] {
-        if let Some(w) = w {
+    let mut series_files = Vec::new();
+    for (path, file) in [
+        (series_path, SeriesFile::Numbers),
+        (text_path, SeriesFile::Text),
+    ] {
+        if let Some(p) = path {
+            let mut w = create(p)?;
             w.write_all(export::SERIES_HEADER.as_bytes())
-                .map_err(file_failed(p))?;
+                .map_err(cannot_write(p))?;
+            series_files.push((w, p, file));
         }
     }
     // Two passes in one read transaction (report::export, "Streaming"): the first finds
     // the columns that carry information, the second writes.
-    let mut columns = Columns::new(a.all);
-    let mut json = JsonWriter::default();
-    let mut started = false;
+    let mut columns = Columns::new(a.all, csv);
     store.scan_points(&ids, 2, |pass, k, p| {
         let Some(r) = ExportRow::of(&sweeps[k], &p) else {
             return Ok(());
@@ -102,47 +98,19 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
             columns.add(&r, &scalars);
             return Ok(());
         }
-        if !started {
-            columns.finish_first_pass();
-            if let ExportFormat::Csv = format {
-                columns.write_csv_header(&mut out).map_err(out_failed)?;
-            }
-            started = true;
-        }
-        match format {
-            ExportFormat::Csv => columns
-                .write_csv_row(&mut out, &r, &scalars)
-                .map_err(out_failed)?,
-            ExportFormat::Json => json
-                .row(&mut out, &columns.json_row(&r, &scalars))
-                .map_err(out_failed)?,
-        }
+        columns
+            .write_row(&mut out, &r, &scalars)
+            .map_err(out_failed)?;
         // Each file's write error names that file.
-        for (w, p, file) in [
-            (&mut series_out, series_path, SeriesFile::Numbers),
-            (&mut text_out, text_path, SeriesFile::Text),
-        ] {
-            if let Some(w) = w {
-                export::write_series(w, file, &r, &series).map_err(file_failed(p))?;
-            }
+        for (w, p, file) in &mut series_files {
+            export::write_series(w, *file, &r, &series).map_err(cannot_write(p))?;
         }
         Ok::<(), Failure>(())
     })?;
-    if !started {
-        // No finished job: the header alone, or an empty array.
-        columns.finish_first_pass();
-        if let ExportFormat::Csv = format {
-            columns.write_csv_header(&mut out).map_err(out_failed)?;
-        }
-    }
-    if let ExportFormat::Json = format {
-        json.finish(&mut out).map_err(out_failed)?;
-    }
+    columns.finish(&mut out).map_err(out_failed)?;
     out.flush().map_err(out_failed)?;
-    for (w, p) in [(&mut series_out, series_path), (&mut text_out, text_path)] {
-        if let Some(w) = w {
-            w.flush().map_err(file_failed(p))?;
-        }
+    for (w, p, _) in &mut series_files {
+        w.flush().map_err(cannot_write(p))?;
     }
     let left_out = columns.left_out();
     if left_out > 0 {

@@ -7,38 +7,21 @@
 //! `running` under this process's owner name, and the next `sweep resume` re-queues them at
 //! once (their process no longer exists: store module doc).
 
+use crate::report::site::shell_word;
 use std::path::Path;
 use std::sync::Once;
 
-/// Exit status after Ctrl-C.
-pub(super) const INTERRUPTED_EXIT: i32 = 130;
-
-/// A path as a shell word: quoted where it holds anything but letters, digits and `_-./+,:=@`.
-pub(super) fn shell_word(s: &str) -> String {
-    let plain = !s.is_empty()
-        && s.chars()
-            .all(|c| c.is_ascii_alphanumeric() || "_-./+,:=@".contains(c));
-    if plain {
-        s.to_string()
-    } else {
-        format!("'{}'", s.replace('\'', r"'\''"))
-    }
-}
-
 /// The command that continues the sweep `name` (every sweep: `None`) of the database `db`.
 pub(super) fn resume_command(name: Option<&str>, db: &Path) -> String {
-    let mut cmd = "wetgran sweep resume".to_string();
-    if let Some(n) = name {
-        cmd.push(' ');
-        cmd.push_str(&shell_word(n));
-    }
-    cmd.push_str(" --db ");
-    cmd.push_str(&shell_word(&db.display().to_string()));
-    cmd
+    let name = name
+        .map(|n| format!(" {}", shell_word(n)))
+        .unwrap_or_default();
+    let db = shell_word(&db.display().to_string());
+    format!("wetgran sweep resume{name} --db {db}")
 }
 
 /// From now on, Ctrl-C prints how to resume the sweep `name` (all: `None`) of `db` and exits
-/// with [`INTERRUPTED_EXIT`]. Only the first call of a process counts.
+/// with status 130 (module doc). Only the first call of a process counts.
 pub(super) fn resume_hint_on_interrupt(name: Option<&str>, db: &Path) {
     static INSTALLED: Once = Once::new();
     let text = format!(
@@ -61,7 +44,7 @@ pub(super) fn resume_hint_on_interrupt(name: Option<&str>, db: &Path) {
                 let mut err = std::io::stderr().lock();
                 let _ = err.write_all(text.as_bytes());
                 let _ = err.flush();
-                std::process::exit(INTERRUPTED_EXIT);
+                std::process::exit(130);
             }
         });
     });

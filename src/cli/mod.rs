@@ -5,7 +5,6 @@
 mod cluster_cmd;
 mod common;
 mod export_cmd;
-mod extend_cmd;
 mod interrupt;
 pub mod point_cmd;
 mod reclassify_cmd;
@@ -14,13 +13,11 @@ mod report_cmd;
 mod simulate_cmd;
 pub mod sweep_cmd;
 
-use common::DbSweeps;
 use common::exit;
-use report_cmd::DbLatest;
 use sweep_cmd::SweepCommand;
 
-use clap::{Parser, Subcommand};
-use std::path::{Path, PathBuf};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// Phase diagrams of wet granular matter.
@@ -109,7 +106,6 @@ pub enum Command {
     Reclassify(reclassify_cmd::ReclassifyArgs),
 }
 
-/// `wetgran job ...`.
 #[derive(Debug, Subcommand)]
 pub enum JobCommand {
     /// Run one job spec and write its result record (what a Slurm array task runs).
@@ -127,69 +123,27 @@ pub enum JobCommand {
     },
 }
 
-impl Command {
-    /// The `--db` paths of the command, each with whether the command may create it.
-    fn databases(&self) -> Vec<(&Path, bool)> {
-        use SweepCommand as S;
-        match self {
-            Command::Boundaries(sweep_cmd::BoundariesArgs {
-                from: DbSweeps { db, .. },
-                ..
-            })
-            | Command::Inflection(point_cmd::InflectionArgs {
-                from: DbSweeps { db, .. },
-                ..
-            })
-            | Command::Export(export_cmd::ExportArgs {
-                from: DbSweeps { db, .. },
-                ..
-            })
-            | Command::Plot(report_cmd::PlotArgs {
-                from: DbLatest { db, .. },
-                ..
-            })
-            | Command::Lines(report_cmd::LinesArgs {
-                from: DbLatest { db, .. },
-                ..
-            })
-            | Command::Report(report_cmd::ReportArgs {
-                from: DbLatest { db, .. },
-                ..
-            })
-            | Command::Show(point_cmd::ShowArgs { db, .. })
-            | Command::Reclassify(reclassify_cmd::ReclassifyArgs { db, .. })
-            | Command::Sweep {
-                action:
-                    S::Resume(sweep_cmd::ResumeArgs { db, .. })
-                    | S::Status { db, .. }
-                    | S::Refine(refine_cmd::RefineArgs { db, .. })
-                    | S::Collect(DbSweeps { db, .. }),
-            } => vec![(db.as_path(), false)],
-            Command::Sweep {
-                action:
-                    S::Run(sweep_cmd::RunArgs { db, .. })
-                    | S::Submit(cluster_cmd::SubmitArgs { db, .. }),
-            } => vec![(db.as_path(), true)],
-            Command::Sweep {
-                action: S::Estimate(sweep_cmd::EstimateArgs { db, .. }),
-            } => db.iter().map(|d| (d.as_path(), false)).collect(),
-            Command::Sweep {
-                action: S::Expand { .. } | S::Job { .. },
-            }
-            | Command::Simulate(_)
-            | Command::Job { .. } => Vec::new(),
-        }
-    }
-}
-
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
-    for (db, creates) in cli.command.databases() {
-        if let Err(f) = common::folder_of_database(db, creates) {
+    let matches = Cli::command().get_matches();
+    // Every `--db` of the command is checked before anything else (`folder_of_database`);
+    // `sweep run` and `sweep submit` may create theirs (`job run` has no `--db`).
+    let (mut name, mut args) = ("", &matches);
+    while let Some(sub) = args.subcommand() {
+        (name, args) = sub;
+    }
+    for db in args
+        .try_get_many::<PathBuf>("db")
+        .ok()
+        .flatten()
+        .into_iter()
+        .flatten()
+    {
+        if let Err(f) = common::folder_of_database(db, matches!(name, "run" | "submit")) {
             return exit(Err(f));
         }
     }
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     exit(match cli.command {
         Command::Simulate(args) => return simulate_cmd::simulate(args),
         Command::Job {

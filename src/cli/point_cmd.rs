@@ -3,7 +3,7 @@
 //! its job spec, which is deterministic) and `wetgran inflection` (the fluid-gas boundary of
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
-use super::common::{Failure, check_snapshot_names, select, write_file};
+use super::common::{Failure, check_snapshot_names, print_json, select, write_file};
 use crate::report::point_text::{
     decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
 };
@@ -45,7 +45,6 @@ fn find_job(store: &Store, prefix: &str) -> Result<(String, PointRow), Failure> 
     }
 }
 
-/// `wetgran show`.
 #[derive(Debug, Args)]
 pub struct ShowArgs {
     /// Database file; also from WETGRAN_DB (the flag wins).
@@ -68,7 +67,6 @@ pub struct ShowArgs {
     json: bool,
 }
 
-/// `wetgran show`.
 pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     let colour_by: ColourBy = a
         .colour_by
@@ -148,12 +146,11 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
         }
     }
     if let Some(d) = doc {
-        println!("{}", serde_json::to_string_pretty(&d).expect("serializes"));
+        print_json(&d);
     }
     Ok(())
 }
 
-/// `wetgran inflection`.
 pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
     let store = Store::open_read_only(&a.from.db)?;
     let mut all = Vec::new();
@@ -166,15 +163,11 @@ pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
         }
     }
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&all).expect("serializes")
-        );
+        print_json(&all);
     }
     Ok(())
 }
 
-/// `wetgran inflection`.
 #[derive(Debug, Args)]
 pub struct InflectionArgs {
     #[command(flatten)]

@@ -37,7 +37,6 @@ pub(super) fn thresholds_file(path: &Path) -> Result<Thresholds, String> {
     Ok(th)
 }
 
-/// `wetgran reclassify [--sweep NAME] [--classify FILE] [--db PATH]`.
 #[derive(Debug, Args)]
 pub struct ReclassifyArgs {
     /// Only this sweep's results (default: every sweep's).
@@ -51,7 +50,6 @@ pub struct ReclassifyArgs {
     pub db: PathBuf,
 }
 
-/// `wetgran reclassify`.
 pub(super) fn reclassify(a: ReclassifyArgs) -> Result<(), Failure> {
     let thresholds = a
         .classify

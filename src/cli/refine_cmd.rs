@@ -2,7 +2,7 @@
 //! `crate::refine::driver`; the refinement that `sweep run` / `sweep resume` continue is
 //! `common::continue_refinement`).
 
-use super::common::{Failure, refinement_report, run_options};
+use super::common::{Failure, refinement_report};
 use crate::refine::Settings;
 use crate::refine::driver::{refine_sweep, refined_jobs, registered_file};
 use crate::store::Store;
@@ -11,6 +11,10 @@ use std::path::PathBuf;
 
 /// `sweep refine`: the command-line overrides of the `[refine]` table.
 #[derive(Debug, Args)]
+#[command(mut_arg("jobs", |a| a.help(
+    "Worker threads, one simulation each, for the jobs each round adds: 1 to the available \
+     cores (default: all of them)"
+)))]
 pub struct RefineArgs {
     /// The sweep (default: the only one in the database).
     #[arg(long)]
@@ -39,11 +43,7 @@ pub struct RefineArgs {
 /// `wetgran sweep refine`: `budget` more jobs (default: what is left of the file's `[refine]`
 /// budget).
 pub(super) fn refine(over: RefineArgs) -> Result<(), Failure> {
-    let (jobs, table_cache_mib, db) = (
-        over.workers.count()?,
-        over.workers.table_cache_mib,
-        &over.db,
-    );
+    let (opts, db) = (over.workers.options()?, &over.db);
     let store = Store::open_existing(db)?;
     let row = match &over.sweep {
         Some(n) => store.sweep(n)?,
@@ -117,7 +117,7 @@ pub(super) fn refine(over: RefineArgs) -> Result<(), Failure> {
         budget,
         budget.div_ceil(rounds),
         &settings,
-        &run_options(jobs, table_cache_mib),
+        &opts,
     )?;
     refinement_report(&row, &o);
     Ok(())

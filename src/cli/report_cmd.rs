@@ -3,10 +3,9 @@
 //! parameters along lines of constant Gamma, `report::lines`) and `wetgran report` (a static HTML
 //! site of a sweep, `report::site`).
 
-use super::common::{Failure, write_file};
+use super::common::{Failure, print_json, write_file};
 use crate::boundary::Extraction;
-use crate::report::boundaries_text::fixed_text;
-use crate::report::boundaries_text::{boundaries_table, chain_model_note, untrusted_points};
+use crate::report::boundaries_text::{boundaries_table, fixed_text};
 use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
 use crate::report::lines_plot::lines_svg;
 use crate::report::plot_phase::{self, DrawnMap, MapStyle};
@@ -52,15 +51,29 @@ pub struct DbLatest {
 }
 
 impl DbLatest {
-    /// The database, read only, and the sweep (`pick_sweep`).
+    /// The database, read only, and the sweep `--sweep`, or the one registered or updated last
+    /// (said on stderr when there are several).
     fn open(&self) -> Result<(Store, SweepRow), Failure> {
         let store = Store::open_read_only(&self.db)?;
-        let sweep = pick_sweep(&store, self.sweep.as_deref())?;
-        Ok((store, sweep))
+        if let Some(n) = &self.sweep {
+            let sweep = store.sweep(n)?;
+            return Ok((store, sweep));
+        }
+        let mut all = store.sweeps()?;
+        all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
+        let last = all.pop().ok_or_else(|| {
+            Failure::BadInput(format!(
+                "{}: no sweep in this database",
+                store.path().display()
+            ))
+        })?;
+        if !all.is_empty() {
+            eprintln!("sweep {} (the latest; choose with --sweep)", last.name);
+        }
+        Ok((store, last))
     }
 }
 
-/// `wetgran plot`.
 #[derive(Debug, Args)]
 pub struct PlotArgs {
     #[command(flatten)]
@@ -76,7 +89,6 @@ pub struct PlotArgs {
     y_scale: Scale,
 }
 
-/// `wetgran report`.
 #[derive(Debug, Args)]
 pub struct ReportArgs {
     #[command(flatten)]
@@ -96,7 +108,6 @@ pub struct ReportArgs {
     y_scale: Scale,
 }
 
-/// `wetgran lines`.
 #[derive(Debug, Args)]
 pub struct LinesArgs {
     #[command(flatten)]
@@ -112,29 +123,31 @@ pub struct LinesArgs {
     json: bool,
 }
 
-/// The sweep `name`, or the one registered or updated last (said on stderr when there are
-/// several).
-pub(super) fn pick_sweep(store: &Store, name: Option<&str>) -> Result<SweepRow, Failure> {
-    if let Some(n) = name {
-        return Ok(store.sweep(n)?);
-    }
-    let mut all = store.sweeps()?;
-    all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
-    let last = all.pop().ok_or_else(|| {
-        Failure::BadInput(format!(
-            "{}: no sweep in this database",
-            store.path().display()
-        ))
-    })?;
-    if !all.is_empty() {
-        eprintln!("sweep {} (the latest; choose with --sweep)", last.name);
-    }
-    Ok(last)
+pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
+    let how = Extraction {
+        include_unconverged: a.include_unconverged,
+    };
+    let (store, sweep) = a.from.open()?;
+    write_file(
+        &a.output,
+        draw_map(&store, &sweep, how, a.y_scale.log())?.svg,
+    )?;
+    eprintln!("wrote {}", a.output.display());
+    Ok(())
 }
 
-/// The lines of a sweep from its store.
-pub(super) fn sweep_lines(store: &Store, sweep: &SweepRow) -> Result<Lines, Failure> {
-    let lines = lines_of(sweep, &store.points(sweep.id)?);
+pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
+    let ext = |p: &PathBuf| p.extension().and_then(|e| e.to_str()).map(String::from);
+    if let Some(p) = &args.output
+        && !matches!(ext(p).as_deref(), Some("svg" | "csv"))
+    {
+        return Err(Failure::BadInput(format!(
+            "-o {}: the file name must end in .svg or .csv",
+            p.display()
+        )));
+    }
+    let (store, sweep) = args.from.open()?;
+    let lines = lines_of(&sweep, &store.points(sweep.id)?);
     if lines.lines.is_empty() {
         return Err(Failure::BadInput(format!(
             "sweep {}: no finished job of a shaken scene: lines of constant Gamma need the \
@@ -142,73 +155,32 @@ pub(super) fn sweep_lines(store: &Store, sweep: &SweepRow) -> Result<Lines, Fail
             sweep.name
         )));
     }
-    Ok(lines)
-}
-
-/// `wetgran plot`.
-pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
-    let how = Extraction {
-        include_unconverged: a.include_unconverged,
-    };
-    let style = MapStyle {
-        x_log: None,
-        y_log: a.y_scale.log(),
-    };
-    let (store, sweep) = a.from.open()?;
-    write_file(&a.output, draw_map(&store, &sweep, how, style)?.svg)?;
-    eprintln!("wrote {}", a.output.display());
-    Ok(())
-}
-
-/// `wetgran lines`.
-pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
-    let ext = args
-        .output
-        .as_ref()
-        .map(|p| p.extension().and_then(|e| e.to_str()).unwrap_or(""));
-    if let Some(e) = ext
-        && e != "svg"
-        && e != "csv"
-    {
-        return Err(Failure::BadInput(format!(
-            "-o {}: the file name must end in .svg or .csv",
-            args.output.as_ref().expect("given").display()
-        )));
-    }
-    let (store, sweep) = args.from.open()?;
-    let lines = sweep_lines(&store, &sweep)?;
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&lines).expect("serializes")
-        );
+        print_json(&lines);
     } else {
         print!("{}", lines_table(&lines));
     }
-    if let Some(out) = &args.output {
-        let text = if ext == Some("csv") {
-            lines_csv(&lines)
-        } else {
+    for (path, csv) in [(&args.output, false), (&args.csv, true)] {
+        let Some(path) = path else { continue };
+        let text = if !csv && ext(path).as_deref() == Some("svg") {
             lines_svg(&lines).map_err(Failure::BadInput)?
+        } else {
+            lines_csv(&lines)
         };
-        write_file(out, &text)?;
-        eprintln!("wrote {}", out.display());
-    }
-    if let Some(csv) = &args.csv {
-        write_file(csv, lines_csv(&lines))?;
-        eprintln!("wrote {}", csv.display());
+        write_file(path, text)?;
+        eprintln!("wrote {}", path.display());
     }
     Ok(())
 }
 
 /// The phase map of a sweep as `wetgran plot` draws it: the first slice of its map with its
 /// branches (slices that differ only in `initial.start`), the landmark lines of a shaking sweep
-/// and the chain model of a shear sweep.
+/// and the chain model of a shear sweep; `y_log`: the y axis's scale (`None`: `Scale::Auto`).
 pub(super) fn draw_map(
     store: &Store,
     sweep: &SweepRow,
     how: Extraction,
-    style: MapStyle,
+    y_log: Option<bool>,
 ) -> Result<DrawnMap, Failure> {
     let points = store.point_summaries(sweep)?;
     let map = super::sweep_cmd::sweep_map(sweep, &points, how)?;
@@ -257,19 +229,19 @@ pub(super) fn draw_map(
             }
         );
     }
-    // A log axis where the sweep's axis is logarithmic, unless the caller chose.
+    // A log axis where the sweep's axis is logarithmic, unless `y_log` chose.
     let log_kind = |a: &Option<crate::boundary::PlaneAxis>| {
         a.as_ref()
             .map(|a| a.log || sweep.axes[a.index].kind == crate::sweep::AxisKind::Log)
     };
     let style = MapStyle {
-        x_log: style.x_log.or(log_kind(&map.x)),
-        y_log: style.y_log.or(log_kind(&map.y)),
+        x_log: log_kind(&map.x),
+        y_log: y_log.or(log_kind(&map.y)),
     };
     let title = format!("wetgran phase diagram: {}", sweep.name);
     // The scene of each grid point's first job, by its coordinates (what `find` over the
     // points gave, without a search per point).
-    let mut scene_at: std::collections::HashMap<String, &Scene> = std::collections::HashMap::new();
+    let mut scene_at: HashMap<String, &Scene> = HashMap::new();
     for p in &points {
         scene_at
             .entry(serde_json::Value::from(p.coords.clone()).to_string())
@@ -322,7 +294,6 @@ fn pictures(
     Ok(out)
 }
 
-/// `wetgran report`.
 pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
     let (store, sweep) = args.from.open()?;
     let how = Extraction {
@@ -336,24 +307,14 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
         .as_ref()
         .zip(map.y.as_ref())
         .map(|(x, y)| (x.index, y.index));
-    let style = MapStyle {
-        x_log: None,
-        y_log: args.y_scale.log(),
-    };
     // A sweep without a map (one numeric axis, nothing classified yet) still gets its
     // report, with the reason in place of the map.
-    let drawn = match draw_map(&store, &sweep, how, style) {
+    let drawn = match draw_map(&store, &sweep, how, args.y_scale.log()) {
         Ok(d) => Ok(d),
         Err(Failure::BadInput(m)) => Err(m),
         Err(e) => return Err(e),
     };
-    let mut notes = HashMap::new();
-    if let Some(n) = chain_model_note(&summaries) {
-        notes.insert(sweep.name.clone(), n);
-    }
-    let mut untrusted = HashMap::new();
-    untrusted.insert(sweep.name.clone(), untrusted_points(&summaries));
-    let boundaries = boundaries_table(&[(&sweep, map)], &notes, &untrusted, how);
+    let boundaries = boundaries_table(&[(&sweep, map)], &[summaries], how);
     let lines = lines_of(&sweep, &rows);
     let line_pictures = if lines.lines.is_empty() {
         None

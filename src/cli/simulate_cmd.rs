@@ -1,7 +1,7 @@
 //! `wetgran simulate`: one scene file run with its observers, reported as a table or JSON, with
 //! optional snapshots and profile pictures.
 
-use super::common::{Failure, check_snapshot_names, exit};
+use super::common::{Failure, check_snapshot_names, exit, print_json};
 use crate::report::run_text::{observed_text, summary_text};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use clap::Args;
@@ -74,10 +74,7 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         run_observed_with_frame(&scene, &mut |_| {})
     };
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&run).expect("result serializes")
-        );
+        print_json(&run);
     } else {
         print!("{}", summary_text(&run.report));
         print!("{}", observed_text(&run));

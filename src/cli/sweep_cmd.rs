@@ -5,24 +5,24 @@
 
 use super::common::{
     DEFAULT_DB, DbSweeps, Failure, Workers, available_cores, check_regrid, continue_refinement,
-    load_sweep, read_spec, relabel_lines, run_options, select,
+    load_sweep, print_json, read_spec, relabel_lines, select,
 };
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
-use crate::report::boundaries_text::{
-    boundaries_csv, boundaries_table, chain_model_note, untrusted_points,
-};
+use crate::report::boundaries_text::{boundaries_csv, boundaries_table};
 use crate::report::cluster_text::slurm_status_text;
+use crate::report::sweep_text::extended_text;
 use crate::report::sweep_text::{
     StatusInput, coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
     estimate_stored_text, estimate_text, sweep_status_json, sweep_status_text,
 };
+use crate::run::extend::extend_unconverged;
 use crate::run::{RunOptions, run_sweeps};
 use crate::store::{Durability, PointSummary, Store, SweepRow};
+use crate::sweep::job::ExtendTo;
 use crate::sweep::run_job;
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 
-/// `wetgran sweep ...`.
 #[derive(Debug, Subcommand)]
 pub enum SweepCommand {
     /// Register a sweep file in the database and run its pending jobs.
@@ -113,7 +113,6 @@ pub enum SweepCommand {
     },
 }
 
-/// `sweep run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
     /// The sweep file.
@@ -132,8 +131,11 @@ pub struct RunArgs {
     replace: bool,
 }
 
-/// `sweep resume`.
 #[derive(Debug, Args)]
+#[command(mut_arg("jobs", |a| a.help(
+    "Worker threads, one simulation each, for the pending jobs, then the refinement of a \
+     `[refine]` table and the runs of --extend: 1 to the available cores (default: all of them)"
+)))]
 pub struct ResumeArgs {
     /// The sweep to continue (default: all).
     name: Option<String>,
@@ -155,7 +157,6 @@ pub struct ResumeArgs {
     extend_time: Option<f64>,
 }
 
-/// `sweep estimate`.
 #[derive(Debug, Args)]
 pub struct EstimateArgs {
     file: PathBuf,
@@ -164,7 +165,7 @@ pub struct EstimateArgs {
     periods: f64,
     /// Simulated time units `sqrt(d/g)` each sampled job runs untimed first: a hot start
     /// cools and a bed settles, and the cost per period changes (0: time from the start).
-    #[arg(long, default_value_t = DEFAULT_ESTIMATE_SETTLE)]
+    #[arg(long, default_value_t = 20.0)]
     settle: f64,
     /// Number of jobs to sample; a sweep with several start modes (`initial.start` axis)
     /// shares them out among the modes, at least one each.
@@ -188,7 +189,7 @@ pub enum BoundaryFormat {
 }
 
 pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
-    let (jobs, table_cache_mib, db) = (a.workers.count()?, a.workers.table_cache_mib, &a.db);
+    let (opts, db) = (a.workers.options()?, &a.db);
     // The file is checked in full before the database is touched.
     let (sweep, expanded, left_out) = load_sweep(&a.file)?;
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
@@ -206,8 +207,8 @@ pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
         eprintln!("sweep {}: {}", row.name, relabelled.text());
     }
     let rows = [row];
-    run_and_report(&store, &rows, jobs, a.retry_failed, table_cache_mib)?;
-    continue_refinement(&store, &rows, jobs, table_cache_mib)?;
+    run_and_report(&store, &rows, &opts, a.retry_failed)?;
+    continue_refinement(&store, &rows, &opts)?;
     fail_if_jobs_failed(&store, &rows)
 }
 
@@ -230,8 +231,7 @@ fn fail_if_jobs_failed(store: &Store, sweeps: &[SweepRow]) -> Result<(), Failure
 }
 
 pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
-    use crate::sweep::job::ExtendTo;
-    let (jobs, table_cache_mib, db) = (a.workers.count()?, a.workers.table_cache_mib, &a.db);
+    let (opts, db) = (a.workers.options()?, &a.db);
     let extend = a
         .extend
         .map(ExtendTo::Periods)
@@ -245,28 +245,67 @@ pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
             db.display()
         )));
     }
-    run_and_report(&store, &sweeps, jobs, a.retry_failed, table_cache_mib)?;
-    continue_refinement(&store, &sweeps, jobs, table_cache_mib)?;
-    let Some(cap) = extend else {
-        return fail_if_jobs_failed(&store, &sweeps);
-    };
-    super::extend_cmd::extend_and_report(&store, &sweeps, cap, jobs, table_cache_mib)?;
-    for s in &sweeps {
-        relabel_lines(&store, s)?;
+    run_and_report(&store, &sweeps, &opts, a.retry_failed)?;
+    continue_refinement(&store, &sweeps, &opts)?;
+    if let Some(cap) = extend {
+        extend_and_report(&store, &sweeps, cap, &opts)?;
+        for s in &sweeps {
+            relabel_lines(&store, s)?;
+        }
     }
     fail_if_jobs_failed(&store, &sweeps)
+}
+
+/// `sweep resume --extend MAX_PERIODS` (or `--extend-time MAX_TIME`): checks the cap, extends
+/// every unconverged job of `sweeps` that has a checkpoint to at most `cap` of total run through
+/// the worker pool of every run (`run::extend`) and prints a summary.
+fn extend_and_report(
+    store: &Store,
+    sweeps: &[SweepRow],
+    cap: ExtendTo,
+    opts: &RunOptions,
+) -> Result<(), Failure> {
+    let v = cap.value();
+    if !(v.is_finite() && v > 0.0) {
+        let (flag, unit) = match cap {
+            ExtendTo::Periods(_) => ("--extend", "periods"),
+            ExtendTo::Time(_) => ("--extend-time", "time units"),
+        };
+        return Err(Failure::BadInput(format!(
+            "{flag} = {v} is out of range: must be a finite number of {unit} > 0"
+        )));
+    }
+    let s = extend_unconverged(store, sweeps, cap, opts.jobs, opts.table_cache_mib, true)?;
+    eprint!(
+        "{}",
+        extended_text(
+            s.extended,
+            s.converged,
+            s.skipped,
+            &cap.describe(),
+            &s.failed
+        )
+    );
+    if s.failed.is_empty() {
+        Ok(())
+    } else {
+        // The extensions that worked are stored; the exit status says that some did not.
+        Err(Failure::JobsFailed(format!(
+            "{} extension(s) failed (the others are stored)",
+            s.failed.len()
+        )))
+    }
 }
 
 fn run_and_report(
     store: &Store,
     sweeps: &[SweepRow],
-    jobs: usize,
+    opts: &RunOptions,
     retry: bool,
-    table_cache_mib: usize,
 ) -> Result<(), Failure> {
     let opts = RunOptions {
         retry_failed: retry,
-        ..run_options(jobs, table_cache_mib)
+        ..opts.clone()
     };
     let summary = run_sweeps(store, sweeps, &opts)?;
     eprintln!(
@@ -321,29 +360,24 @@ pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
             now,
         };
         let tasks = store.tasks(s.id)?;
-        let slurm = if tasks.is_empty() {
-            String::new()
-        } else {
+        let slurm = (!tasks.is_empty()).then(|| {
             let queue = crate::cluster::queue_states(&tasks, &mut crate::cluster::slurm::squeue);
             slurm_status_text(&tasks, &queue)
-        };
+        });
         if json {
             let mut v = sweep_status_json(&input);
-            v["slurm"] = (!slurm.is_empty()).then_some(slurm).into();
+            v["slurm"] = slurm.into();
             all.push(v);
         } else {
             print!("{}", sweep_status_text(&input));
-            if !slurm.is_empty() {
+            if let Some(slurm) = slurm {
                 println!("sweep {} on Slurm", s.name);
                 print!("{slurm}");
             }
         }
     }
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&all).expect("serializes")
-        );
+        print_json(&all);
     }
     Ok(())
 }
@@ -365,9 +399,6 @@ pub(super) fn sweep_expand(file: &Path, specs: bool) -> Result<(), Failure> {
     }
     Ok(())
 }
-
-/// Simulated time units `sweep estimate` runs a sampled job before it times it.
-pub const DEFAULT_ESTIMATE_SETTLE: f64 = 20.0;
 
 pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
     use crate::sweep::estimate::{
@@ -467,10 +498,7 @@ pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
     let spec = read_spec(path)?;
     let result = run_job(&spec, &mut |_| {}).map_err(|e| Failure::Other(e.to_string()))?;
     let out = serde_json::json!({ "id": spec.id(), "result": result });
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).expect("serializes")
-    );
+    print_json(&out);
     Ok(())
 }
 
@@ -486,7 +514,6 @@ pub(super) fn sweep_map(
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
 }
 
-/// `wetgran boundaries`.
 #[derive(Debug, Args)]
 pub struct BoundariesArgs {
     #[command(flatten)]
@@ -503,7 +530,6 @@ pub struct BoundariesArgs {
     include_unconverged: bool,
 }
 
-/// `wetgran boundaries`.
 pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
     let how = Extraction {
         include_unconverged: a.include_unconverged,
@@ -527,20 +553,10 @@ pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
                 .iter()
                 .map(|(s, m)| serde_json::json!({"sweep": s.name, "map": m}))
                 .collect();
-            println!("{}", serde_json::to_string_pretty(&v).expect("serializes"));
+            print_json(&v);
         }
         BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
-        BoundaryFormat::Table => {
-            let mut notes = std::collections::HashMap::new();
-            let mut untrusted = std::collections::HashMap::new();
-            for (s, points) in sweeps.iter().zip(&points) {
-                if let Some(n) = chain_model_note(points) {
-                    notes.insert(s.name.clone(), n);
-                }
-                untrusted.insert(s.name.clone(), untrusted_points(points));
-            }
-            print!("{}", boundaries_table(&maps, &notes, &untrusted, how))
-        }
+        BoundaryFormat::Table => print!("{}", boundaries_table(&maps, &points, how)),
     }
     Ok(())
 }

@@ -2,10 +2,12 @@
 //! points (table), or as CSV; the chain-model note of shear sweeps and the trust marks of the
 //! grid points. Pure functions of the phase maps and the stored rows.
 
+use super::trust::{LABEL_KEPT, NOT_STATIONARY, mark};
 use crate::boundary::{Extraction, PhaseMap};
 use crate::report::plot_phase;
 use crate::run::runner::short;
-use crate::store::SweepRow;
+use crate::store::{PointSummary, SweepRow};
+use std::collections::HashMap;
 use std::fmt::Write as _;
 
 /// A number in short form, or nothing.
@@ -70,7 +72,7 @@ pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
 
 /// For shear sweeps of wet scenes: the chain model's critical force (docs/model.md 8, Eq. 7.9),
 /// `F_max = 0.9229 F_B d / L_x`, over the sweep's points (a range if the axes change it).
-pub fn chain_model_note(points: &[crate::store::PointSummary]) -> Option<String> {
+pub fn chain_model_note(points: &[PointSummary]) -> Option<String> {
     let values: Vec<f64> = points
         .iter()
         .filter(|p| p.scene.shear_slabs().is_some())
@@ -94,19 +96,17 @@ pub fn chain_model_note(points: &[crate::store::PointSummary]) -> Option<String>
 
 /// The grid points (their coordinates as JSON text) with a replica whose result carries a trust
 /// mark (`report::trust`), with the mark.
-pub fn untrusted_points(
-    points: &[crate::store::PointSummary],
-) -> std::collections::HashMap<String, char> {
-    let mut marks = std::collections::HashMap::new();
+pub fn untrusted_points(points: &[PointSummary]) -> HashMap<String, char> {
+    let mut marks = HashMap::new();
     for p in points {
-        let Some(mark) = crate::report::trust::mark(p.trust()) else {
+        let Some(mark) = mark(p.trust()) else {
             continue;
         };
         // Among replicas, a label that may change outweighs one that is kept.
         let e = marks
             .entry(serde_json::Value::from(p.coords.clone()).to_string())
             .or_insert(mark);
-        if mark == crate::report::trust::NOT_STATIONARY {
+        if mark == NOT_STATIONARY {
             *e = mark;
         }
     }
@@ -114,21 +114,20 @@ pub fn untrusted_points(
 }
 
 /// `boundaries` (table): per sweep and slice, the phase map as a grid and the boundary
-/// points by phase pair; `notes` (per sweep name) are printed under the sweep's name, `untrusted`
-/// (per sweep name) mark grid points whose results are not stationary.
+/// points by phase pair; `points` are each map's `Store::point_summaries`, for the chain-model
+/// note under the sweep's name and the trust marks of the grid points.
 pub fn boundaries_table(
     maps: &[(&SweepRow, PhaseMap)],
-    notes: &std::collections::HashMap<String, String>,
-    untrusted: &std::collections::HashMap<String, std::collections::HashMap<String, char>>,
+    points: &[Vec<PointSummary>],
     how: Extraction,
 ) -> String {
-    let none = std::collections::HashMap::new();
     let mut out = String::new();
-    for (s, m) in maps {
+    for ((s, m), points) in maps.iter().zip(points) {
         let _ = writeln!(out, "sweep {}", s.name);
-        if let Some(n) = notes.get(&s.name) {
+        if let Some(n) = chain_model_note(points) {
             let _ = writeln!(out, "{n}");
         }
+        let marks = untrusted_points(points);
         let (Some(xa), ya) = (&m.x, &m.y) else {
             let _ = writeln!(out, "  no numeric axis: no phase map\n");
             continue;
@@ -165,8 +164,7 @@ pub fn boundaries_table(
                     ys.len()
                 );
             } else {
-                let marks = untrusted.get(&s.name).unwrap_or(&none);
-                write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys, marks);
+                write_grid(&mut out, slice, xa, ya.as_ref(), &xs, &ys, &marks);
             }
             let unconverged = slice.points.iter().filter(|p| !p.trusted).count();
             if unconverged > 0 {
@@ -244,7 +242,7 @@ fn write_grid(
     ya: Option<&crate::boundary::PlaneAxis>,
     xs: &[f64],
     ys: &[f64],
-    marks: &std::collections::HashMap<String, char>,
+    marks: &HashMap<String, char>,
 ) {
     let ylabel = ya.map(|a| a.label.as_str()).unwrap_or("");
     let mark_of = |p: &crate::boundary::MapPoint| {
@@ -265,16 +263,13 @@ fn write_grid(
         {
             let has = |m: char| slice.points.iter().any(|p| mark_of(p) == Some(m));
             let mut legend = String::new();
-            if has(crate::report::trust::NOT_STATIONARY) {
-                legend += &format!(
-                    "; {} = not stationary, label may change",
-                    crate::report::trust::NOT_STATIONARY
-                );
+            if has(NOT_STATIONARY) {
+                legend += &format!("; {} = not stationary, label may change", NOT_STATIONARY);
             }
-            if has(crate::report::trust::LABEL_KEPT) {
+            if has(LABEL_KEPT) {
                 legend += &format!(
                     "; {} = heating gas, cooling solid or coarsening coexistence, label kept",
-                    crate::report::trust::LABEL_KEPT
+                    LABEL_KEPT
                 );
             }
             legend

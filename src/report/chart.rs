@@ -60,11 +60,7 @@ pub(crate) fn draw_legend(
             Swatch::Split(n) => {
                 let greys = [RGBColor(60, 60, 60), RGBColor(190, 190, 190)];
                 for k in 0..n.min(2) {
-                    let v: Vec<(i32, i32)> = sector(k, n, 6)
-                        .into_iter()
-                        .map(|(a, b)| (a + c.0, b + c.1))
-                        .collect();
-                    root.draw(&Polygon::new(v, greys[k].filled()))?;
+                    shape(root, c, &sector(k, n, 6), greys[k], true)?;
                 }
             }
             Swatch::Cross(col) => root.draw(&Cross::new(c, 4, col.stroke_width(2)))?,
@@ -97,39 +93,50 @@ where
     let (left_edge, bottom) = (xr.start - base.0, yr.end - base.1);
     let y_any = ys.first().copied().unwrap_or(1.0);
     let x_any = xs.first().copied().unwrap_or(1.0);
-    for &t in xs {
-        let px = plot.map_coordinate(&(t, y_any)).0;
-        if px < xr.start || px > xr.end {
-            continue;
+    // The x ticks below the plot, then the y ticks left of it.
+    for (values, on_x) in [(xs, true), (ys, false)] {
+        for &t in values {
+            let (px, py) = plot.map_coordinate(&if on_x { (t, y_any) } else { (x_any, t) });
+            let (tick, at, style) = if on_x {
+                if px < xr.start || px > xr.end {
+                    continue;
+                }
+                let x = px - base.0;
+                ([(x, bottom), (x, bottom + 5)], (x, bottom + 7), &below)
+            } else {
+                if py < yr.start || py > yr.end {
+                    continue;
+                }
+                let y = py - base.1;
+                (
+                    [(left_edge - 5, y), (left_edge, y)],
+                    (left_edge - 7, y),
+                    &left,
+                )
+            };
+            area.draw(&PathElement::new(tick, BLACK.stroke_width(1)))?;
+            area.draw(&Text::new(super::svg::label(t), at, style.clone()))?;
         }
-        let px = px - base.0;
-        area.draw(&PathElement::new(
-            vec![(px, bottom), (px, bottom + 5)],
-            BLACK.stroke_width(1),
-        ))?;
-        area.draw(&Text::new(
-            super::svg::label(t),
-            (px, bottom + 7),
-            below.clone(),
-        ))?;
-    }
-    for &t in ys {
-        let py = plot.map_coordinate(&(x_any, t)).1;
-        if py < yr.start || py > yr.end {
-            continue;
-        }
-        let py = py - base.1;
-        area.draw(&PathElement::new(
-            vec![(left_edge - 5, py), (left_edge, py)],
-            BLACK.stroke_width(1),
-        ))?;
-        area.draw(&Text::new(
-            super::svg::label(t),
-            (left_edge - 7, py),
-            left.clone(),
-        ))?;
     }
     Ok(())
+}
+
+/// A polygon of pixel offsets from `at` (in `area`'s pixels): filled, or (hollow) its outline
+/// 2 px wide.
+pub(crate) fn shape<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    at: (i32, i32),
+    offsets: &[(i32, i32)],
+    colour: RGBColor,
+    filled: bool,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let mut v: Vec<(i32, i32)> = offsets.iter().map(|(a, b)| (a + at.0, b + at.1)).collect();
+    if filled {
+        area.draw(&Polygon::new(v, colour.filled()))
+    } else {
+        v.push(v[0]);
+        area.draw(&PathElement::new(v, colour.stroke_width(2)))
+    }
 }
 
 /// Splits a note into lines of at most about `width` characters, at spaces.

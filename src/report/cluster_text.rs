@@ -98,13 +98,10 @@ pub fn collected_text(sweep: &SweepRow, points: &[PointRow], c: &Collected) -> S
     out
 }
 
-/// The Slurm part of `sweep status` for one sweep (empty when it was never submitted):
-/// task states as recorded, and for the tasks not yet collected their state in the queue
-/// (`queue`, from `cluster::queue_states`).
+/// The Slurm part of `sweep status` for one submitted sweep (`tasks` not empty): task states as
+/// recorded, and for the tasks not yet collected their state in the queue (`queue`, from
+/// `cluster::queue_states`).
 pub fn slurm_status_text(tasks: &[TaskRow], queue: &QueueStates) -> String {
-    if tasks.is_empty() {
-        return String::new();
-    }
     let mut arrays: Vec<String> = Vec::new();
     let mut recorded: HashMap<&'static str, usize> = HashMap::new();
     for t in tasks {

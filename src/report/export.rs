@@ -63,7 +63,7 @@ impl ExportRow {
                 p.phase.clone().into(),
                 p.observables
                     .as_ref()
-                    .and_then(super::trust::stationary)
+                    .and_then(wetgran_core::observe::converged_in_json)
                     .into(),
                 p.trend.map(|t| t.name()).into(),
                 super::trust::mark(p.trust()).map(String::from).into(),
@@ -80,7 +80,7 @@ impl ExportRow {
 
 /// The columns every row has, after the axis columns: the container motion of a shaken scene
 /// (`amplitude,omega`, docs/model.md 4.1), the run's stationarity verdict
-/// (`report::trust::stationary`), its trend state (empty for results stored before trend
+/// (`observe::converged_in_json`), its trend state (empty for results stored before trend
 /// states) and trust mark (`?` label may change, `~` label kept by its trend, empty
 /// stationary), and the run's cost.
 pub const FIXED: [&str; 14] = [
@@ -103,27 +103,31 @@ pub const FIXED: [&str; 14] = [
 /// One element of a series: `(name, index, value)`.
 pub type SeriesEntry = (String, usize, Value);
 
-/// Scalar leaves of a JSON value with dotted paths (`events.pair_collisions`) into `out`; every
-/// array is a series and goes to `series` instead: `(name, index, value)` per element leaf, the
-/// name being the array's path plus the leaf's path inside the element
-/// (`obs.stationarity.checks.relative_change`, `obs.location_changes.1`).
+/// Scalar leaves of a JSON value with dotted paths (`events.pair_collisions`) into `out`. With
+/// `series`, every array is a series and goes there instead: `(name, index, value)` per element
+/// leaf, the name being the array's path plus the leaf's path inside the element
+/// (`obs.stationarity.checks.relative_change`, `obs.location_changes.1`); without, arrays are
+/// indexed (`a.0`), as nested arrays inside an element are.
 fn flatten(
     prefix: &str,
     v: &Value,
     out: &mut BTreeMap<String, Value>,
-    series: &mut Vec<SeriesEntry>,
+    mut series: Option<&mut Vec<SeriesEntry>>,
 ) {
     match v {
         Value::Object(m) => {
             for (k, x) in m {
-                flatten(&join(prefix, k), x, out, series);
+                flatten(&join(prefix, k), x, out, series.as_deref_mut());
             }
         }
         Value::Array(a) => {
             for (k, x) in a.iter().enumerate() {
+                let Some(series) = series.as_deref_mut() else {
+                    flatten(&join(prefix, &k.to_string()), x, out, None);
+                    continue;
+                };
                 let mut leaves = BTreeMap::new();
-                // Nested arrays inside an element stay in that element's series, flattened.
-                flatten_all("", x, &mut leaves);
+                flatten("", x, &mut leaves, None);
                 for (leaf, value) in leaves {
                     let name = if leaf.is_empty() {
                         prefix.to_string()
@@ -132,25 +136,6 @@ fn flatten(
                     };
                     series.push((name, k, value));
                 }
-            }
-        }
-        other => {
-            out.insert(prefix.to_string(), other.clone());
-        }
-    }
-}
-
-/// Every scalar leaf of a JSON value with dotted paths, arrays indexed (`a.0`).
-fn flatten_all(prefix: &str, v: &Value, out: &mut BTreeMap<String, Value>) {
-    match v {
-        Value::Object(m) => {
-            for (k, x) in m {
-                flatten_all(&join(prefix, k), x, out);
-            }
-        }
-        Value::Array(a) => {
-            for (k, x) in a.iter().enumerate() {
-                flatten_all(&join(prefix, &k.to_string()), x, out);
             }
         }
         other => {
@@ -191,9 +176,9 @@ pub const SERIES_HEADER: &str = "job_id,series,index,value\n";
 pub fn scalars_and_series(r: &ExportRow) -> (BTreeMap<String, Value>, Vec<SeriesEntry>) {
     let mut m = BTreeMap::new();
     let mut series = Vec::new();
-    flatten("obs", &r.observables, &mut m, &mut series);
+    flatten("obs", &r.observables, &mut m, Some(&mut series));
     if let Some(d) = &r.decided_on {
-        flatten("decided_on", d, &mut m, &mut series);
+        flatten("decided_on", d, &mut m, Some(&mut series));
     }
     (m, series)
 }
@@ -248,13 +233,19 @@ pub struct Columns {
     all: bool,
     /// The scalar columns kept, fixed after the first pass.
     kept: Option<Vec<String>>,
+    /// CSV, else JSON.
+    csv: bool,
+    /// Rows written.
+    written: usize,
 }
 
 impl Columns {
-    /// Columns that keep every scalar (`all`) or only those that carry information.
-    pub fn new(all: bool) -> Columns {
+    /// The columns of a CSV (`csv`) or JSON export that keeps every scalar (`all`) or only those
+    /// that carry information.
+    pub fn new(all: bool, csv: bool) -> Columns {
         Columns {
             all,
+            csv,
             ..Columns::default()
         }
     }
@@ -305,16 +296,20 @@ impl Columns {
 
     /// The scalar columns left out (empty or constant), for a note.
     pub fn left_out(&self) -> usize {
-        self.seen.len()
-            - self
-                .kept
-                .as_ref()
-                .map_or_else(|| self.kept().len(), Vec::len)
+        self.seen.len() - self.kept_names().len()
     }
 
-    /// Ends the first pass.
-    pub fn finish_first_pass(&mut self) {
-        self.kept = Some(self.kept());
+    /// Ends the first pass and, for CSV, writes the header line; what comes after the first
+    /// call does nothing.
+    fn start(&mut self, w: &mut impl Write) -> std::io::Result<()> {
+        if self.kept.is_none() {
+            self.kept = Some(self.kept());
+            if self.csv {
+                let header: Vec<String> = self.names().iter().map(|h| csv_field(h)).collect();
+                writeln!(w, "{}", header.join(","))?;
+            }
+        }
+        Ok(())
     }
 
     fn kept_names(&self) -> &[String] {
@@ -352,58 +347,42 @@ impl Columns {
         out
     }
 
-    /// The CSV header line.
-    pub fn write_csv_header(&self, w: &mut impl Write) -> std::io::Result<()> {
-        let header: Vec<String> = self.names().iter().map(|h| csv_field(h)).collect();
-        writeln!(w, "{}", header.join(","))
-    }
-
-    /// The CSV line of one row; a column the row lacks is empty.
-    pub fn write_csv_row(
-        &self,
+    /// Writes one row of the second pass (the first call ends the first pass): a CSV line (a
+    /// column the row lacks is empty), or a JSON object on one line with the CSV's columns in
+    /// the CSV's order (a column the row lacks is null) in an array opened by the first row.
+    pub fn write_row(
+        &mut self,
         w: &mut impl Write,
         r: &ExportRow,
         scalars: &BTreeMap<String, Value>,
     ) -> std::io::Result<()> {
-        let line: Vec<String> = self
-            .values(r, scalars)
-            .iter()
-            .map(|v| csv_field(&scalar_text(v)))
-            .collect();
-        writeln!(w, "{}", line.join(","))
-    }
-
-    /// One row as a JSON object on one line, with the CSV's columns in the CSV's order (a
-    /// column the row lacks is null).
-    pub fn json_row(&self, r: &ExportRow, scalars: &BTreeMap<String, Value>) -> String {
-        let cells: Vec<String> = self
-            .names()
-            .iter()
-            .zip(self.values(r, scalars))
-            .map(|(k, v)| format!("{}: {}", Value::from(k.as_str()), v))
-            .collect();
-        format!("{{{}}}", cells.join(", "))
-    }
-}
-
-/// Writes a JSON array one row at a time: `[`, one object per line, `]`.
-#[derive(Debug, Default)]
-pub struct JsonWriter {
-    rows: usize,
-}
-
-impl JsonWriter {
-    /// Writes one row (a [`Columns::json_row`]).
-    pub fn row(&mut self, w: &mut impl Write, object: &str) -> std::io::Result<()> {
-        w.write_all(if self.rows == 0 { b"[\n  " } else { b",\n  " })?;
-        w.write_all(object.as_bytes())?;
-        self.rows += 1;
+        self.start(w)?;
+        let values = self.values(r, scalars);
+        if self.csv {
+            let line: Vec<String> = values.iter().map(|v| csv_field(&scalar_text(v))).collect();
+            writeln!(w, "{}", line.join(","))?;
+        } else {
+            let cells: Vec<String> = self
+                .names()
+                .iter()
+                .zip(values)
+                .map(|(k, v)| format!("{}: {}", Value::from(k.as_str()), v))
+                .collect();
+            let open = if self.written == 0 { "[\n  " } else { ",\n  " };
+            write!(w, "{open}{{{}}}", cells.join(", "))?;
+        }
+        self.written += 1;
         Ok(())
     }
 
-    /// Closes the array (`[]` for no row) and ends the line.
-    pub fn finish(self, w: &mut impl Write) -> std::io::Result<()> {
-        w.write_all(if self.rows == 0 { b"[]\n" } else { b"\n]\n" })
+    /// Ends the export: the CSV header alone where there is no row, the JSON array closed
+    /// (`[]` for no row) and its line ended.
+    pub fn finish(&mut self, w: &mut impl Write) -> std::io::Result<()> {
+        self.start(w)?;
+        if !self.csv {
+            w.write_all(if self.written == 0 { b"[]\n" } else { b"\n]\n" })?;
+        }
+        Ok(())
     }
 }
 
@@ -425,7 +404,7 @@ mod tests {
             "e": [[0.5, 3.0], [1.0, 4.0]], "f": [{"q": "T", "ok": false}]});
         let mut m = BTreeMap::new();
         let mut series = Vec::new();
-        flatten("obs", &v, &mut m, &mut series);
+        flatten("obs", &v, &mut m, Some(&mut series));
         assert_eq!(m.len(), 2, "{m:?}");
         assert_eq!(m["obs.a.b"], json!(1));
         assert_eq!(m["obs.d"], json!("x"));
@@ -475,26 +454,24 @@ mod tests {
 
     /// Both passes over `rows`: the columns, the CSV and the JSON.
     fn export(rows: &[ExportRow], all: bool) -> (Columns, String, String) {
-        let mut columns = Columns::new(all);
-        for r in rows {
-            columns.add(r, &scalars_and_series(r).0);
+        let mut texts = Vec::new();
+        let mut columns = Columns::default();
+        for csv in [true, false] {
+            columns = Columns::new(all, csv);
+            for r in rows {
+                columns.add(r, &scalars_and_series(r).0);
+            }
+            let mut w = Vec::new();
+            for r in rows {
+                columns
+                    .write_row(&mut w, r, &scalars_and_series(r).0)
+                    .unwrap();
+            }
+            columns.finish(&mut w).unwrap();
+            texts.push(String::from_utf8(w).unwrap());
         }
-        columns.finish_first_pass();
-        let mut csv = Vec::new();
-        let mut json = Vec::new();
-        let mut jw = JsonWriter::default();
-        columns.write_csv_header(&mut csv).unwrap();
-        for r in rows {
-            let s = scalars_and_series(r).0;
-            columns.write_csv_row(&mut csv, r, &s).unwrap();
-            jw.row(&mut json, &columns.json_row(r, &s)).unwrap();
-        }
-        jw.finish(&mut json).unwrap();
-        (
-            columns,
-            String::from_utf8(csv).unwrap(),
-            String::from_utf8(json).unwrap(),
-        )
+        let json = texts.pop().unwrap();
+        (columns, texts.pop().unwrap(), json)
     }
 
     #[test]
@@ -562,7 +539,7 @@ mod tests {
         // The series stay out of both.
         assert!(!v[0].contains_key("obs.s"));
         let mut empty = Vec::new();
-        JsonWriter::default().finish(&mut empty).unwrap();
+        Columns::new(false, false).finish(&mut empty).unwrap();
         assert_eq!(empty, b"[]\n");
     }
 

@@ -90,15 +90,6 @@ pub struct Lines {
 }
 
 impl Lines {
-    /// The name of the contrast: `Delta n_cb` or `Delta n_area`.
-    pub fn contrast_name(&self) -> &'static str {
-        if self.wet {
-            "Delta n_cb"
-        } else {
-            "Delta n_area"
-        }
-    }
-
     /// The lines at one Gamma (one per branch).
     pub fn at_gamma(&self, gamma: f64) -> Vec<&GammaLine> {
         self.lines.iter().filter(|l| same(l.gamma, gamma)).collect()
@@ -284,21 +275,14 @@ pub fn lines_of(sweep: &SweepRow, points: &[PointRow]) -> Lines {
 fn label_changes(points: &[LinePoint]) -> Vec<LineBoundary> {
     // Majority label of the trusted replicas at each E*.
     let mut labels: Vec<(f64, String)> = Vec::new();
-    let mut k = 0;
-    while k < points.len() {
-        let e = points[k].e_star;
-        let group: Vec<&LinePoint> = points[k..]
-            .iter()
-            .take_while(|p| same(p.e_star, e))
-            .collect();
-        k += group.len();
+    for group in points.chunk_by(|a, b| same(a.e_star, b.e_star)) {
         let votes: Vec<Option<String>> = group
             .iter()
             .filter(|p| p.trusted)
             .map(|p| p.phase.clone())
             .collect();
         if let Some((phase, false)) = majority(&votes) {
-            labels.push((e, phase));
+            labels.push((group[0].e_star, phase));
         }
     }
     labels

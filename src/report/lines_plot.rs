@@ -53,7 +53,8 @@ impl Quantity {
         match self {
             Quantity::Temperature => format!("T_g / {}", lines.energy_unit),
             Quantity::Bridges => "bridges per grain".to_string(),
-            Quantity::Contrast => lines.contrast_name().to_string(),
+            Quantity::Contrast if lines.wet => "Delta n_cb".to_string(),
+            Quantity::Contrast => "Delta n_area".to_string(),
         }
     }
 }
@@ -271,28 +272,15 @@ fn marker<DB: DrawingBackend>(
     colour: RGBColor,
     filled: bool,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    let style = if filled {
-        colour.filled()
-    } else {
-        colour.stroke_width(2)
-    };
     let shape: Vec<(i32, i32)> = match state {
         Some("heating") => vec![(0, -6), (6, 5), (-6, 5)],
         Some("cooling") => vec![(0, 6), (6, -5), (-6, -5)],
         Some("coarsening") => vec![(-5, -5), (5, -5), (5, 5), (-5, 5)],
         Some("undecided") => vec![(0, -6), (6, 0), (0, 6), (-6, 0)],
-        _ => return area.draw(&Circle::new(at, 5, style)),
+        _ if filled => return area.draw(&Circle::new(at, 5, colour.filled())),
+        _ => return area.draw(&Circle::new(at, 5, colour.stroke_width(2))),
     };
-    let at_ = |v: &[(i32, i32)]| -> Vec<(i32, i32)> {
-        v.iter().map(|(a, b)| (a + at.0, b + at.1)).collect()
-    };
-    if filled {
-        area.draw(&Polygon::new(at_(&shape), style))
-    } else {
-        let mut closed = at_(&shape);
-        closed.push(closed[0]);
-        area.draw(&PathElement::new(closed, style))
-    }
+    super::chart::shape(area, at, &shape, colour, filled)
 }
 
 /// One panel: one quantity of the lines (branches) at one Gamma.
@@ -407,17 +395,19 @@ impl Panel<'_> {
 
 /// The mean of a quantity over the replicas at each `E*` of a line.
 fn means(line: &GammaLine, q: Quantity) -> Vec<(f64, f64)> {
+    let finite = |p: &LinePoint| q.value(p).map(|(v, _)| v).filter(|v| v.is_finite());
     let mut out: Vec<(f64, f64, usize)> = Vec::new();
-    for p in &line.points {
-        let Some((v, _)) = q.value(p).filter(|(v, _)| v.is_finite()) else {
-            continue;
-        };
+    for (e, v) in line
+        .points
+        .iter()
+        .filter_map(|p| Some((p.e_star, finite(p)?)))
+    {
         match out.last_mut() {
-            Some((e, sum, n)) if *e == p.e_star => {
+            Some((last, sum, n)) if *last == e => {
                 *sum += v;
                 *n += 1;
             }
-            _ => out.push((p.e_star, v, 1)),
+            _ => out.push((e, v, 1)),
         }
     }
     out.into_iter().map(|(e, s, n)| (e, s / n as f64)).collect()

@@ -19,7 +19,7 @@
 //! and labelled with the phases in branch order (`g/f`). Each branch's boundary points keep
 //! their own marker, since the boundaries of the branches are extracted separately.
 
-use super::chart::{Swatch, draw_legend, hand_ticks, sector, wrap};
+use super::chart::{Swatch, draw_legend, hand_ticks, sector, shape, wrap};
 use crate::boundary::{PhaseMap, PlaneAxis, Slice};
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
@@ -210,8 +210,8 @@ impl DrawnPoint {
 /// points, then positions only later branches have).
 pub fn merge_branches(slices: &[&Slice]) -> Vec<DrawnPoint> {
     let mut out: Vec<DrawnPoint> = Vec::new();
-    // Position -> index in `out` (a search of `out` per point made 10^5 points cost 10^10
-    // comparisons); `+ 0.0` makes -0.0 and 0.0 one key, as `==` does; NaN never matches.
+    // Position -> index in `out`; `+ 0.0` makes -0.0 and 0.0 one key, as `==` does; NaN
+    // never matches.
     let mut at: std::collections::HashMap<(u64, u64), usize> = std::collections::HashMap::new();
     for (b, slice) in slices.iter().enumerate() {
         for p in &slice.points {
@@ -557,7 +557,7 @@ impl Drawing<'_> {
                 Swatch::Kept,
             ));
         }
-        draw_bistable(&mut chart, self.slices, &points, radius, &mut legend)?;
+        draw_bistable(root, &mut chart, self.slices, &points, radius, &mut legend)?;
         draw_boundary_points(&mut chart, self.slices, &mut legend)?;
         // The legend right of the plot, level with its top: it hides no point.
         let (xr, yr) = chart.plotting_area().get_pixel_range();
@@ -575,6 +575,7 @@ impl Drawing<'_> {
 /// The bistable points (those whose branches disagree): a disc split into one sector per
 /// branch, the phases in branch order beside it, and their legend entries.
 fn draw_bistable<X, Y>(
+    root: &DrawingArea<SVGBackend, Shift>,
     chart: &mut ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
     slices: &[&Slice],
     points: &[DrawnPoint],
@@ -595,27 +596,10 @@ where
     let r = radius + 2;
     let n = slices.len();
     for p in &bistable {
+        let at = chart.backend_coord(&(p.x, p.y));
         for (k, phase) in p.phases.iter().enumerate() {
             let color = phase.as_deref().map_or(WHITE, phase_color);
-            let wedge = sector(k, n, r);
-            let style = if p.trusted {
-                color.filled()
-            } else {
-                color.stroke_width(2)
-            };
-            if p.trusted {
-                chart
-                    .plotting_area()
-                    .draw(&(EmptyElement::at((p.x, p.y)) + Polygon::new(wedge, style)))
-                    .map_err(err)?;
-            } else {
-                let mut closed = wedge;
-                closed.push(closed[0]);
-                chart
-                    .plotting_area()
-                    .draw(&(EmptyElement::at((p.x, p.y)) + PathElement::new(closed, style)))
-                    .map_err(err)?;
-            }
+            shape(root, at, &sector(k, n, r), color, p.trusted).map_err(err)?;
         }
         let text: Vec<&str> = p
             .phases

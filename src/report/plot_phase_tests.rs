@@ -38,6 +38,12 @@ fn slice(branch: Option<&str>, points: Vec<MapPoint>) -> Slice {
     }
 }
 
+/// One slice drawn with the plane's scales, but the y axis's where `y_log` is given.
+fn draw(map: &PhaseMap, slice: &Slice, y_log: Option<bool>) -> Result<DrawnMap, String> {
+    let style = MapStyle { x_log: None, y_log };
+    branches_map(map, &[slice], None, None, "t", style)
+}
+
 /// One slice drawn with the plane's scales.
 fn svg(map: &PhaseMap, slice: &Slice, chain: Option<Vec<(f64, f64)>>) -> String {
     branches_map(map, &[slice], None, chain, "t", MapStyle::default())
@@ -210,18 +216,7 @@ fn the_axes_have_a_tick_at_every_grid_value_and_gamma_can_be_logarithmic() {
     let (map, slice) = grid_map(true);
     let tick = |svg: &str, v: &str| svg.contains(&format!(">\n{v}\n</text>"));
     let linear = svg(&map, &slice, None);
-    let log = branches_map(
-        &map,
-        &[&slice],
-        None,
-        None,
-        "t",
-        MapStyle {
-            x_log: None,
-            y_log: Some(true),
-        },
-    )
-    .unwrap();
+    let log = draw(&map, &slice, Some(true)).unwrap();
     for v in ["0.3", "1", "4", "0.5", "2", "8"] {
         assert!(tick(&linear, v), "linear map: no tick {v}");
         assert!(tick(&log.svg, v), "log map: no tick {v}");
@@ -253,11 +248,7 @@ fn the_axes_have_a_tick_at_every_grid_value_and_gamma_can_be_logarithmic() {
     // A log axis of non-positive values is refused.
     let (map0, mut zero) = grid_map(true);
     zero.points[0].y = 0.0;
-    let style = MapStyle {
-        x_log: None,
-        y_log: Some(true),
-    };
-    assert!(branches_map(&map0, &[&zero], None, None, "t", style).is_err());
+    assert!(draw(&map0, &zero, Some(true)).is_err());
 }
 
 #[test]

@@ -3,6 +3,7 @@
 //! along each line of constant Gamma, docs/model.md 7). Pure functions of the stored rows.
 
 use super::lines::gamma_e_star;
+use super::trust::{LABEL_KEPT, NOT_STATIONARY, failed_checks, mark};
 use crate::store::PointRow;
 use std::fmt::Write as _;
 use wetgran_core::observe::fluid_gas_inflection;
@@ -36,9 +37,9 @@ pub fn decision_text(p: &PointRow) -> String {
         let _ = writeln!(out, "phase       {phase}");
     }
     if let Some(t) = p.trend {
-        let what = match crate::report::trust::mark(p.trust()) {
+        let what = match mark(p.trust()) {
             None => "",
-            Some(crate::report::trust::LABEL_KEPT) => {
+            Some(LABEL_KEPT) => {
                 " (not stationary, but the label is safe: a heating gas stays a gas, a cooling \
                  solid a solid, a coarsening coexistence a coexistence; its numbers still drift)"
             }
@@ -61,22 +62,18 @@ pub fn decision_text(p: &PointRow) -> String {
         }
     }
     if let Some(o) = &p.observables {
-        match crate::report::trust::stationary(o) {
-            Some(true) => {
-                let _ = writeln!(out, "stationary  yes");
-            }
+        let stationary = wetgran_core::observe::converged_in_json(o);
+        let verdict = match stationary {
+            Some(true) => "yes".to_string(),
             Some(false) => {
-                let _ = writeln!(
-                    out,
-                    "stationary  NO ({} in `boundaries`): the averages may still drift",
-                    crate::report::trust::NOT_STATIONARY
-                );
-                for c in crate::report::trust::failed_checks(o) {
-                    let _ = writeln!(out, "            {c}");
-                }
+                format!("NO ({NOT_STATIONARY} in `boundaries`): the averages may still drift")
             }
-            None => {
-                let _ = writeln!(out, "stationary  unknown (no check stored)");
+            None => "unknown (no check stored)".to_string(),
+        };
+        let _ = writeln!(out, "stationary  {verdict}");
+        if stationary == Some(false) {
+            for c in failed_checks(o) {
+                let _ = writeln!(out, "            {c}");
             }
         }
     }
@@ -175,9 +172,9 @@ pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
 /// `show --json`: the job of [`job_text`] and the decision of [`decision_text`] as one object
 /// (the observables themselves are left out: `export --json` has them).
 pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
-    let trust = match crate::report::trust::mark(p.trust()) {
+    let trust = match mark(p.trust()) {
         None => "stationary",
-        Some(crate::report::trust::LABEL_KEPT) => "label kept (not stationary)",
+        Some(LABEL_KEPT) => "label kept (not stationary)",
         Some(_) => "label may change (not stationary)",
     };
     let ending = p
@@ -198,11 +195,11 @@ pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
         "trend": p.trend.map(|t| t.to_string()),
         "trust": if p.phase.is_some() { Some(trust) } else { None },
         "ended": ending,
-        "stationary": p.observables.as_ref().and_then(crate::report::trust::stationary),
+        "stationary": p.observables.as_ref().and_then(wetgran_core::observe::converged_in_json),
         "failed_checks": p
             .observables
             .as_ref()
-            .map(crate::report::trust::failed_checks)
+            .map(failed_checks)
             .unwrap_or_default(),
         "decided_on": p.decided_on,
         "simulated_time": p.simulated_time,

@@ -342,18 +342,22 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
     h
 }
 
+/// A word (a path, a sweep name) for a shell command line: quoted where it holds anything but
+/// letters, digits and `_-./+,:=@`.
+pub(crate) fn shell_word(s: &str) -> String {
+    let plain = !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-./+,:=@".contains(c));
+    if plain {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', r"'\''"))
+    }
+}
+
 /// The command lines that make the database and this report again.
 fn commands(input: &SiteInput) -> String {
     let (db, name) = (input.db, &input.sweep.name);
-    let q = |s: &str| {
-        if s.chars()
-            .all(|c| c.is_ascii_alphanumeric() || "-_./".contains(c))
-        {
-            s.to_string()
-        } else {
-            format!("'{}'", s.replace('\'', "'\\''"))
-        }
-    };
     format!(
         "# run the grid (and any `sweep refine` or `sweep resume --extend` rounds it had)\n\
          wetgran sweep run {file} --db {db}\n\
@@ -362,10 +366,10 @@ fn commands(input: &SiteInput) -> String {
          wetgran plot --db {db} --sweep {name} -o map.svg\n\
          wetgran lines --db {db} --sweep {name} -o lines.svg --csv lines.csv\n\
          wetgran report --db {db} --sweep {name} -o {out}\n",
-        file = q(&input.sweep.file),
-        db = q(db),
-        name = q(name),
-        out = q(input.out),
+        file = shell_word(&input.sweep.file),
+        db = shell_word(db),
+        name = shell_word(name),
+        out = shell_word(input.out),
     )
 }
 

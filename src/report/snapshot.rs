@@ -61,18 +61,10 @@ pub fn snapshot_xyz(frame: &Frame, energy_unit: f64) -> String {
             [v[0], v[1], v[2]]
         }
     };
-    let size = to3(&frame.box_size);
-    let size = if d == 2 {
-        [size[0], 1.0, size[2]]
-    } else {
-        size
-    };
-    let pbc = to3(&frame
-        .periodic
-        .iter()
-        .map(|&p| if p { 1.0 } else { 0.0 })
-        .collect::<Vec<_>>());
-    let tf = |x: f64| if x > 0.5 { "T" } else { "F" };
+    // A 2D box is one unit deep along y, and not periodic along it.
+    let mut size = to3(&frame.box_size);
+    size[1] = if d == 2 { 1.0 } else { size[1] };
+    let tf = |k: usize| if frame.periodic[k] { "T" } else { "F" };
     let deg = bridge_degree(frame);
     let mut s = String::new();
     let _ = writeln!(s, "{}", frame.len());
@@ -86,9 +78,9 @@ pub fn snapshot_xyz(frame: &Frame, energy_unit: f64) -> String {
         size[2],
         if d == 2 { -0.5 } else { 0.0 },
         frame.wall_offset,
-        tf(pbc[0]),
-        if d == 2 { "F" } else { tf(pbc[1]) },
-        tf(pbc[2]),
+        tf(0),
+        if d == 2 { "F" } else { tf(1) },
+        tf(d - 1),
         frame.time,
         frame.wall_offset,
         energy_unit

@@ -3,8 +3,10 @@
 //! durations, the lines of `sweep estimate`, of `sweep resume --extend` and of a refinement. Pure functions of the stored
 //! rows and the figures measured.
 
+use super::trust::{LABEL_KEPT, NOT_STATIONARY, mark};
 use crate::run::runner::{point_label, short};
 use crate::store::{LeftOut, PointSummary, RunningJob, Stale, StateCounts, SweepRow};
+use crate::sweep::estimate::{MeasuredRuns, SweepCost};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use wetgran_core::observe::trend::TrendState;
@@ -163,13 +165,10 @@ fn trust_text(out: &mut String, points: &[PointSummary], done: u64) {
         points
             .iter()
             .filter(|p| p.status == "done")
-            .filter(|p| crate::report::trust::mark(p.trust()) == Some(m))
+            .filter(|p| mark(p.trust()) == Some(m))
             .count()
     };
-    let (may_change, kept) = (
-        marked(crate::report::trust::NOT_STATIONARY),
-        marked(crate::report::trust::LABEL_KEPT),
-    );
+    let (may_change, kept) = (marked(NOT_STATIONARY), marked(LABEL_KEPT));
     if may_change + kept > 0 {
         let _ = writeln!(
             out,
@@ -178,8 +177,8 @@ fn trust_text(out: &mut String, points: &[PointSummary], done: u64) {
              heating gas, a cooling solid, a coarsening coexistence); see `show JOB`",
             may_change + kept,
             done,
-            crate::report::trust::NOT_STATIONARY,
-            crate::report::trust::LABEL_KEPT
+            NOT_STATIONARY,
+            LABEL_KEPT
         );
     }
 }
@@ -360,12 +359,8 @@ pub fn estimate_failed_text(coords: &str, error: &str) -> String {
 pub fn estimate_text(
     jobs: usize,
     cores: usize,
-    measured: Option<&crate::sweep::estimate::MeasuredRuns>,
-    lines: &[(
-        String,
-        crate::sweep::estimate::SweepCost,
-        crate::sweep::estimate::SweepCost,
-    )],
+    measured: Option<&MeasuredRuns>,
+    lines: &[(String, SweepCost, SweepCost)],
     by_start: &[Vec<(String, usize, f64)>],
     settle: f64,
     periods: f64,
