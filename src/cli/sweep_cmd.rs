@@ -1,5 +1,6 @@
-//! The sweep commands: `sweep run|resume|status|expand|job|refine` (and `submit|collect`, in
-//! `cluster_cmd`), `boundaries` (`plot` is in `report_cmd`, `export` in `export_cmd`).
+//! The sweep commands: `sweep run|resume|status|expand|job` (`refine` is in `refine_cmd`,
+//! `submit|collect` in `cluster_cmd`), `boundaries` (`plot` is in `report_cmd`, `export` in
+//! `export_cmd`).
 //! Exit codes: 0 ok, 2 bad input (sweep file, database that is not wetgran's or is damaged,
 //! unknown sweep), 1 any other error.
 
