@@ -44,6 +44,61 @@ use wetgran::run::{JobFn, RunOptions, run_sweeps_with};
 use wetgran::store::{Durability, Store};
 use wetgran::sweep::{JobError, JobResult, JobSpec, SweepFile, SweepJob, run_job};
 
+/// The options of `wetgran-bench orchestrator`.
+#[derive(Debug, clap::Args)]
+pub struct Options {
+    /// Sweep sizes (jobs), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1000,10000")]
+    pub sizes: Vec<usize>,
+    /// Worker threads of the runner.
+    #[arg(long, default_value_t = 2)]
+    pub workers: usize,
+    /// Runs of each report command (the median is printed).
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+    /// Folder for the databases (default: the system's temporary folder).
+    #[arg(long)]
+    pub dir: Option<PathBuf>,
+    /// Sync every commit to disk (SQLite `synchronous = FULL`) instead of committing as
+    /// `sweep run` does (`NORMAL`).
+    #[arg(long)]
+    pub synced: bool,
+    /// Keep each size's folder and database (its path is printed) instead of removing it.
+    #[arg(long)]
+    pub keep: bool,
+    /// Which reports to time, comma-separated (`status`, `boundaries`, `plot`, `export`,
+    /// `reclassify`; `refine`: one refinement round, with stationary stand-in results).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "status,boundaries,plot,export,reclassify"
+    )]
+    pub reports: Vec<String>,
+    /// Instead of the run and the reports: time `sweep collect` of N task result records
+    /// (a submission recorded without Slurm, the records written beforehand).
+    #[arg(long)]
+    pub collect: bool,
+    /// Instead of the run and the reports: time `sweep submit --slurm --dry-run` of the
+    /// N-job sweep (process start, expansion, split into arrays, scripts printed), without
+    /// a database and with the sweep registered in one.
+    #[arg(long)]
+    pub submit_dry_run: bool,
+    /// Instead of the run and the reports: two runner processes on one database, the first
+    /// killed with SIGKILL after a sixth of the jobs, the rest resumed; checks that every
+    /// job is done once and none lost (docs/reliability.md, "Two runners, one killed").
+    #[arg(long)]
+    pub two_runners: bool,
+}
+
+impl Options {
+    fn durability(&self) -> Durability {
+        match self.synced {
+            true => Durability::Synced,
+            false => Durability::Fast,
+        }
+    }
+}
+
 /// An error as its text.
 pub(crate) fn e(x: impl std::fmt::Display) -> String {
     x.to_string()
@@ -331,14 +386,8 @@ fn time_reports(
 }
 
 /// Runs the benchmark at one size in `dir`.
-pub(crate) fn measure(
-    n: usize,
-    workers: usize,
-    repeat: usize,
-    durability: Durability,
-    reports: &[String],
-    dir: &Path,
-) -> Result<Figures, String> {
+pub(crate) fn measure(n: usize, o: &Options, dir: &Path) -> Result<Figures, String> {
+    let (reports, durability) = (&o.reports, o.durability());
     let (file, jobs) = prepare(n, dir)?;
     let jobs_n = jobs.len();
     let (real, real_s) = timed(|| real_result(&jobs[0].spec))?;
@@ -385,7 +434,7 @@ pub(crate) fn measure(
             Ok(())
         })
     };
-    let opts = run_options(workers);
+    let opts = run_options(o.workers.max(1));
     let sweeps = std::slice::from_ref(&sweep);
     let (summary, run_s) = timed(|| run_sweeps_with(&store, sweeps, &opts, job.clone()))?;
     if summary.done as usize != jobs_n {
@@ -409,7 +458,7 @@ pub(crate) fn measure(
     let tenth = (gaps.len() / 10).max(1).min(gaps.len());
     let (first, last) = (&gaps[..tenth], &gaps[gaps.len() - tenth..]);
 
-    let timed = time_reports(&db, dir, reports, repeat, jobs_n)?;
+    let timed = time_reports(&db, dir, reports, o.repeat.max(1), jobs_n)?;
     let refine = if refine {
         let store = Store::open_as(&db, false, durability).map_err(e)?;
         let r = refine_round(&store, &file, &sweep, job, &opts)?;
@@ -500,31 +549,16 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
 
 /// Runs every size, each in a fresh folder under `dir` (default: the system's temporary folder),
 /// removed afterwards unless `keep` (then its path is printed, for profiling a report on it).
-pub fn run(
-    sizes: &[usize],
-    workers: usize,
-    repeat: usize,
-    durability: Durability,
-    reports: &[String],
-    dir: Option<&Path>,
-    keep: bool,
-) -> Result<String, String> {
+pub fn run(o: &Options) -> Result<String, String> {
     let mut rows = Vec::new();
-    for &n in sizes {
-        let tmp = temp_dir(dir)?;
-        rows.push(measure(
-            n,
-            workers,
-            repeat,
-            durability,
-            reports,
-            tmp.path(),
-        )?);
-        if keep {
+    for &n in &o.sizes {
+        let tmp = temp_dir(o.dir.as_deref())?;
+        rows.push(measure(n, o, tmp.path())?);
+        if o.keep {
             eprintln!("N = {n}: database kept in {}", tmp.keep().display());
         }
     }
-    Ok(text(&rows, workers, durability))
+    Ok(text(&rows, o.workers.max(1), o.durability()))
 }
 
 #[cfg(test)]

@@ -25,8 +25,8 @@
 //!   before the kill). Any other outcome is an error.
 
 use crate::orchestrator::{
-    e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir, time_command, timed,
-    wetgran_binary,
+    Options, e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir,
+    time_command, timed, wetgran_binary,
 };
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::io::Write as _;
@@ -354,23 +354,17 @@ pub fn runner(db: &Path, dir: &Path, log: &Path) -> Result<(), String> {
 
 /// Runs the asked scale figures at every size, each in a fresh folder under `dir`, and prints
 /// each figure's line to standard output as soon as it is measured.
-pub fn run(
-    sizes: &[usize],
-    collect: bool,
-    dry_run: bool,
-    two: bool,
-    dir: Option<&Path>,
-) -> Result<(), String> {
-    for &n in sizes {
-        let tmp = temp_dir(dir)?;
-        if collect {
+pub fn run(o: &Options) -> Result<(), String> {
+    for &n in &o.sizes {
+        let tmp = temp_dir(o.dir.as_deref())?;
+        if o.collect {
             let (t, tasks) = time_collect(n, tmp.path())?;
             println!(
                 "{tasks:>8} tasks: `sweep collect` {t:.2} s ({:.3} ms per task)",
                 t / tasks as f64 * 1e3
             );
         }
-        if dry_run {
+        if o.submit_dry_run {
             let r = time_submit_dry_run(n, tmp.path())?;
             println!(
                 "{:>8} jobs: `sweep submit --slurm --dry-run` {:.2} s without a database, \
@@ -378,7 +372,7 @@ pub fn run(
                 r.jobs, r.fresh_s, r.registered_s, r.arrays, r.limit, r.source
             );
         }
-        if two {
+        if o.two_runners {
             let r = two_runners(n, tmp.path())?;
             println!(
                 "{:>8} jobs, two runners, the first killed after {} starts: both {:.1} s; \

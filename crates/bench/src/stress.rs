@@ -30,7 +30,7 @@ use std::time::Instant;
 use wetgran_core::scene::Boundary::{self, Periodic, Wall};
 use wetgran_core::scene::reference::{base_scene, shaken_standard};
 use wetgran_core::scene::{
-    CapillaryModel, CapillarySpec, DriveKind, EngineKind, Scene, WallSolverKind,
+    CapillaryModel, CapillarySpec, DriveKind, EngineKind, Scene, StartMode, WallSolverKind,
 };
 use wetgran_core::sim::EnergyLedger;
 use wetgran_core::sim::event_driven::{Engine, Vector};
@@ -112,11 +112,6 @@ impl StressCase {
             .chain([StressCase::PlantedOverlap].iter())
             .copied()
             .find(|c| c.name() == name)
-    }
-
-    /// Whether the case runs the time-driven engine (its work is counted in time steps).
-    pub(crate) fn is_time_driven(self) -> bool {
-        self == StressCase::TimeLargestDt
     }
 
     /// The case's scene (validated).
@@ -291,10 +286,10 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
     });
     StressRow {
         case,
-        unit: if case.is_time_driven() {
-            "steps"
-        } else {
-            "events"
+        // The time-driven case counts its work in time steps.
+        unit: match case {
+            StressCase::TimeLargestDt => "steps",
+            _ => "events",
         },
         work: m.work,
         simulated_time: m.simulated_time,
@@ -324,15 +319,7 @@ fn measure(case: StressCase, scene: &Scene, events: u64) -> Measured {
             }
             checked_run(e, scene, events, CHECKS)
         }
-        _ => with_engine(
-            scene,
-            None,
-            CheckedRun {
-                scene,
-                events,
-                checks: CHECKS,
-            },
-        ),
+        _ => first_events(scene, events, CHECKS).expect("the hard cases start hot"),
     }
 }
 
@@ -342,9 +329,9 @@ fn measure(case: StressCase, scene: &Scene, events: u64) -> Measured {
 /// (`initial.start = "continue"`) has no state of its own: an error.
 pub fn first_events(scene: &Scene, work: u64, checks: u64) -> Result<Measured, String> {
     let cold = match scene.initial.start {
-        wetgran_core::scene::StartMode::Hot => None,
-        wetgran_core::scene::StartMode::Cold => Some(wetgran_core::sim::initial::cold_state(scene)),
-        wetgran_core::scene::StartMode::Continue => {
+        StartMode::Hot => None,
+        StartMode::Cold => Some(wetgran_core::sim::initial::cold_state(scene)),
+        StartMode::Continue => {
             return Err("initial.start = \"continue\" has no state of its own".into());
         }
     };
