@@ -27,7 +27,7 @@ pub(crate) const MEASURED: f64 = 5.0;
 pub(crate) const EPS: f64 = 0.96;
 
 /// One point and engine: seconds per simulated time unit, one value per repetition.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub(crate) struct EngineRow {
     pub label: &'static str,
     pub gamma: f64,
@@ -81,15 +81,13 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<EngineRow> {
     let warm = (WARM_UP / measured).ceil() * measured;
     let mut rows = Vec::new();
     for &(label, gamma, e_star) in &POINTS {
-        let mut pair =
-            [("event", EngineKind::Event), ("time", EngineKind::Time)].map(|(name, _)| EngineRow {
-                label,
-                gamma,
-                e_star,
-                engine: name,
-                wall_per_time: Vec::new(),
-                cpu_per_time: Vec::new(),
-            });
+        let mut pair = ["event", "time"].map(|engine| EngineRow {
+            label,
+            gamma,
+            e_star,
+            engine,
+            ..EngineRow::default()
+        });
         for _ in 0..repeat {
             for (k, kind) in [EngineKind::Event, EngineKind::Time]
                 .into_iter()

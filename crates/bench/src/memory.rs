@@ -50,14 +50,9 @@ pub(crate) struct MemoryRow {
 }
 
 impl MemoryRow {
-    pub(crate) fn peak_per_particle(&self) -> f64 {
-        self.peak_kib as f64 * 1024.0 / self.particles as f64
-    }
-    pub(crate) fn peak_above_start_per_particle(&self) -> f64 {
-        (self.peak_kib.saturating_sub(self.rss_start_kib)) as f64 * 1024.0 / self.particles as f64
-    }
-    pub(crate) fn engine_bytes(&self) -> usize {
-        self.structures.iter().map(|(_, b)| b).sum()
+    /// Bytes per particle of the engine's arrays.
+    pub(crate) fn engine_bytes_per_particle(&self) -> f64 {
+        self.structures.iter().map(|(_, b)| b).sum::<usize>() as f64 / self.particles as f64
     }
 }
 
@@ -160,6 +155,7 @@ pub(crate) fn report(rows: &[MemoryRow]) -> String {
     );
     let mib = |k: u64| k as f64 / 1024.0;
     for r in rows {
+        let per_particle = |kib: u64| kib as f64 * 1024.0 / r.particles as f64;
         let _ = writeln!(
             s,
             "{:>9} {:>9} {:>10.1} {:>10.1} {:>10.1} {:>9.1} {:>12.1} {:>10.1}",
@@ -168,9 +164,9 @@ pub(crate) fn report(rows: &[MemoryRow]) -> String {
             mib(r.rss_start_kib),
             mib(r.rss_built_kib),
             mib(r.peak_kib),
-            r.peak_per_particle(),
-            r.peak_above_start_per_particle(),
-            r.engine_bytes() as f64 / r.particles as f64,
+            per_particle(r.peak_kib),
+            per_particle(r.peak_kib.saturating_sub(r.rss_start_kib)),
+            r.engine_bytes_per_particle(),
         );
     }
     if let Some(r) = rows.iter().max_by_key(|r| r.particles) {
@@ -189,7 +185,7 @@ pub(crate) fn report(rows: &[MemoryRow]) -> String {
             s,
             "  {:<32} {:>8.2}",
             "total",
-            r.engine_bytes() as f64 / r.particles as f64
+            r.engine_bytes_per_particle()
         );
     }
     s

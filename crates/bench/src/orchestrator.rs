@@ -1,27 +1,14 @@
-//! `wetgran-bench orchestrator`: the sweep orchestrator alone (issue 35), on a file database.
+//! `wetgran-bench orchestrator`: the sweep orchestrator alone (issue 35), on a file database;
+//! what each figure means is in docs/performance.md, "Orchestrator".
 //!
-//! For each size N (default 10^3 and 10^4) the benchmark writes a sweep of N points in
-//! (Gamma, E*) over a tiny real scene (the quickstart's shaken wet 2D system with 20 grains and
-//! 2 periods), registers it in a fresh database (timed), and runs it with the real runner and
-//! store (`run::run_sweeps_with`: claims, run rows, heartbeats, commits of result and checkpoint)
-//! on `--workers` worker threads. The job each worker runs is a stand-in that returns at once a
-//! result of the real shape: the observables and final state of one real run of the first job
-//! (run once before, its time printed), with a phase label that depends on the point, so that
-//! the reports have boundaries to find. So the run's wall time is the orchestration alone:
-//!
-//! - claims per second = N / wall time of the run;
-//! - overhead per job = wall time / N (the one store thread does every claim and commit in turn;
-//!   the stand-in job costs nothing), and the median and 99th percentile of the time between one
-//!   job start and the next, in the first and in the last tenth of the sweep (a claim that grew
-//!   with the sweep would show in the last tenth);
-//! - the database size per result (file + WAL after the run, divided by N).
-//!
-//! The store commits as `sweep run` does (without a sync per commit, `Durability::Fast`), or
-//! with `--synced` as every other command does.
-//!
-//! Then the reports, each as the `wetgran` binary beside this one runs them on that database
-//! (process start included): `sweep status`, `boundaries`, `plot`, `export` (CSV to a file),
-//! `reclassify` (those named by `--reports`), each the median of `--repeat` runs.
+//! For each size N the benchmark sweep (`prepare`) is registered in a fresh database (timed)
+//! and run with the real runner and store (`run::run_sweeps_with`) on `--workers` threads. Each
+//! job is a `stand_in`: it returns at once the result of one real run of the first job (timed
+//! and printed before) with a phase label made up from its point (`stand_in_phase`), so that
+//! the run's wall time is the orchestration alone and the reports have boundaries to find. The
+//! store commits as `sweep run` does (`Durability::Fast`), or with `--synced` as every other
+//! command does. Then each report of `--reports` as the `wetgran` binary beside this one runs it
+//! on that database (process start included), the median of `--repeat` runs.
 //!
 //! With `refine` among the reports: first the relabelling that ends `sweep run`
 //! (`run::relabel::relabel_changed` on the sweep's results, every one of them new), timed; the
@@ -233,8 +220,6 @@ pub struct Figures {
     pub jobs: usize,
     pub(crate) register_s: f64,
     pub(crate) run_s: f64,
-    pub(crate) claims_per_s: f64,
-    pub(crate) overhead_ms: f64,
     /// Median and 99th percentile of the time between job starts (ms), first and last tenth.
     pub(crate) gap_first_ms: (f64, f64),
     pub(crate) gap_last_ms: (f64, f64),
@@ -471,8 +456,6 @@ pub(crate) fn measure(n: usize, o: &Options, dir: &Path) -> Result<Figures, Stri
         jobs: jobs_n,
         register_s,
         run_s,
-        claims_per_s: jobs_n as f64 / run_s,
-        overhead_ms: run_s / jobs_n as f64 * 1e3,
         gap_first_ms: (quantile(first, 0.5), quantile(first, 0.99)),
         gap_last_ms: (quantile(last, 0.5), quantile(last, 0.99)),
         db_bytes_per_result: db_bytes as f64 / jobs_n as f64,
@@ -503,8 +486,8 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
             r.jobs,
             r.register_s,
             r.run_s,
-            r.claims_per_s,
-            r.overhead_ms,
+            r.jobs as f64 / r.run_s,
+            r.run_s / r.jobs as f64 * 1e3,
             r.gap_first_ms.0,
             r.gap_first_ms.1,
             r.gap_last_ms.0,

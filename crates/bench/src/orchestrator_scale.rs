@@ -1,28 +1,17 @@
-//! `wetgran-bench orchestrator --collect`, `--submit-dry-run` and `--two-runners`: the orchestrator at
-//! cluster scale (issue 35, items 3 and 4), with the stand-in jobs of [`crate::orchestrator`].
+//! `wetgran-bench orchestrator --collect`, `--submit-dry-run` and `--two-runners`: the
+//! orchestrator at cluster scale (issue 35, items 3 and 4), with the stand-in jobs of
+//! [`crate::orchestrator`]; docs/orchestrator.md describes each run and its figures.
 //!
-//! - **collect**: registers the benchmark sweep of N points in a fresh database, records one
-//!   submission of N tasks (as `sweep submit --slurm` does after `sbatch`, without a Slurm job
-//!   id, so no queue is asked), writes each task's result record (`results/<job id>.json`, the
-//!   stand-in result of the real shape) into the sweep directory (untimed), and times
-//!   `wetgran sweep collect --db DB` (the process, start included).
-//! - **submit dry run**: writes the benchmark sweep of N points and times
-//!   `wetgran sweep submit FILE --slurm --dry-run --db DB` (the process, start included: the
-//!   sweep file read and expanded, the job ids, the split into arrays at the default
-//!   `--array-limit` or the cluster's `MaxArraySize` where `scontrol` answers, every array
-//!   script printed to a file), twice: with no database (a new study) and with the sweep
-//!   registered in DB (every job's status looked up). The printed header is checked: N jobs in
-//!   `ceil(N / limit)` arrays.
-//! - **two runners**: registers the sweep, starts two runner processes (this binary's hidden
-//!   `orchestrator-runner`, one worker each: the real runner and store, `sweep run`'s
-//!   commits) on the one database, kills the first with SIGKILL once it has started a sixth of
-//!   the jobs, lets the second run to the end, then resumes in this process (the orphaned job
-//!   re-queued, as `sweep resume` does) and relabels the results (`relabel_changed`, as the end
-//!   of `sweep run`). Every stand-in job appends its job id to its process's log file before it
-//!   returns, so the bookkeeping is exact: every job done, with one result; run rows and
-//!   attempts 1 per job, 2 for a job the killed runner held; every job started once in all
-//!   three logs, except that a job the killed runner held may show once more (a start logged
-//!   before the kill). Any other outcome is an error.
+//! - **collect** ([`time_collect`]): a submission of N tasks recorded without a Slurm job id (no
+//!   queue is asked), each task's result record written (untimed), then `wetgran sweep collect`
+//!   timed, process start included.
+//! - **submit dry run** ([`time_submit_dry_run`]): `wetgran sweep submit FILE --slurm --dry-run`
+//!   timed without a database and with the sweep registered in one; header and scripts checked.
+//! - **two runners** ([`two_runners`]): two runner processes (the hidden `orchestrator-runner`)
+//!   on one database, the first killed with SIGKILL after a sixth of the jobs, the rest resumed
+//!   here and relabelled. Every stand-in start is logged, so the books must be exact
+//!   (`check_books`: every job done with one result; run rows and attempts 1 per job, 2 for a
+//!   job the killed runner held, which may show one more logged start); anything else is an error.
 
 use crate::orchestrator::{
     Options, e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir,

@@ -220,6 +220,21 @@ pub struct StressRow {
     pub case: StressCase,
     /// `"events"` (event engine) or `"steps"` (time engine).
     pub unit: &'static str,
+    #[serde(flatten)]
+    pub measured: Measured,
+    pub wall_seconds: f64,
+}
+
+impl StressRow {
+    /// No broken invariant and no non-finite number.
+    pub fn passed(&self) -> bool {
+        self.measured.violation.is_none() && self.measured.nan_count == 0
+    }
+}
+
+/// What a checked run measured.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Measured {
     /// Events or time steps done.
     pub work: u64,
     pub simulated_time: f64,
@@ -232,29 +247,10 @@ pub struct StressRow {
     pub nan_count: u64,
     /// Invariant checks run.
     pub checks: u64,
-    pub wall_seconds: f64,
     /// The first broken invariant; the case stopped there.
     pub violation: Option<String>,
-}
-
-impl StressRow {
-    /// No broken invariant and no non-finite number.
-    pub fn passed(&self) -> bool {
-        self.violation.is_none() && self.nan_count == 0
-    }
-}
-
-/// What a checked run measured (a [`StressRow`] without its case and timing).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Measured {
-    pub work: u64,
-    pub simulated_time: f64,
-    pub max_overlap: f64,
-    pub ledger_error: f64,
-    pub nan_count: u64,
-    pub checks: u64,
-    pub violation: Option<String>,
     /// The engine ran out of events before the work asked (nothing moves).
+    #[serde(skip)]
     pub(crate) exhausted: bool,
 }
 
@@ -263,7 +259,7 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
     let scene = case.scene();
     let start = Instant::now();
     // A panic is a failed case, reported like a broken invariant.
-    let m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+    let mut m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         measure(case, &scene, events)
     }))
     .unwrap_or_else(|payload| Measured {
@@ -280,10 +276,9 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
         exhausted: false,
     });
     // A hard case that runs out of events tests nothing: a failure.
-    let violation = m.violation.or_else(|| {
-        m.exhausted
-            .then(|| format!("no event left to process after {} events", m.work))
-    });
+    if m.exhausted && m.violation.is_none() {
+        m.violation = Some(format!("no event left to process after {} events", m.work));
+    }
     StressRow {
         case,
         // The time-driven case counts its work in time steps.
@@ -291,14 +286,8 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
             StressCase::TimeLargestDt => "steps",
             _ => "events",
         },
-        work: m.work,
-        simulated_time: m.simulated_time,
-        max_overlap: m.max_overlap,
-        ledger_error: m.ledger_error,
-        nan_count: m.nan_count,
-        checks: m.checks,
+        measured: m,
         wall_seconds: start.elapsed().as_secs_f64(),
-        violation,
     }
 }
 
