@@ -48,6 +48,9 @@ pub fn run(
     threads: &[usize],
     n_factor: usize,
 ) -> Result<String, String> {
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(format!("--scale = {scale} must be a finite number > 0"));
+    }
     let (name, arg) = match which.split_once(':') {
         Some((name, arg)) => (name, Some(arg)),
         None => (which, None),
@@ -303,12 +306,6 @@ pub(crate) fn engine_bench_only(
     scale: f64,
     only: Option<&[&str]>,
 ) -> Result<Vec<Row>, String> {
-    if repeat == 0 {
-        return Err("--repeat must be >= 1".into());
-    }
-    if !(scale.is_finite() && scale > 0.0) {
-        return Err(format!("--scale = {scale} must be a finite number > 0"));
-    }
     let all = systems()?;
     if let Some(bad) = only
         .unwrap_or(&[])
@@ -427,7 +424,7 @@ mod tests {
         assert!(run("engine:c'").is_ok());
         assert!(run("nonsense").is_err() && run("engine:x").is_err() && run("wall:").is_err());
         assert_eq!(engine_bench_only(1, 0.001, Some(&["c'"])).unwrap().len(), 1);
-        assert!(engine_bench_only(1, 0.0, None).is_err());
+        assert!(super::run("wall", 1, 0.0, None, &[1], 1).is_err());
     }
 
     #[test]

@@ -85,19 +85,6 @@ pub fn time_collect(n: usize, dir: &Path) -> Result<(f64, usize), String> {
     Ok((t, ids.len()))
 }
 
-/// What `sweep submit --slurm --dry-run` of N jobs took (module doc).
-#[derive(Debug)]
-pub struct DryRun {
-    pub jobs: usize,
-    pub arrays: usize,
-    pub limit: usize,
-    /// Where the limit came from (`cluster MaxArraySize M` or `scontrol not available`).
-    pub source: String,
-    /// Seconds without a database and with the sweep registered in one.
-    pub fresh_s: f64,
-    pub registered_s: f64,
-}
-
 /// `(jobs, arrays, limit, source)` of the dry run's header line
 /// `# dry run: N job(s) to submit as K array(s) of at most L task(s) (SOURCE); ...`.
 fn parse_dry_header(text: &str) -> Option<(usize, usize, usize, String)> {
@@ -157,8 +144,9 @@ fn dry_run_once(
     Ok((t, arrays, limit, source))
 }
 
-/// `sweep submit --slurm --dry-run` of N jobs, without and with a database (module doc).
-pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<DryRun, String> {
+/// `sweep submit --slurm --dry-run` of N jobs, without and with a database (module doc): the
+/// printed line.
+pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<String, String> {
     let (file, jobs) = prepare(n, dir)?;
     let n_ids = jobs
         .iter()
@@ -178,28 +166,11 @@ pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<DryRun, String> {
     if dir.join("wetgran-slurm").exists() {
         return Err("the dry run wrote a sweep directory".to_string());
     }
-    Ok(DryRun {
-        jobs: n_ids,
-        arrays,
-        limit,
-        source,
-        fresh_s,
-        registered_s,
-    })
-}
-
-/// What the two-runner run measured.
-#[derive(Debug)]
-pub struct TwoRunners {
-    pub jobs: usize,
-    /// Seconds from the start of the first runner to the end of the second.
-    pub runners_s: f64,
-    /// Starts logged by the killed runner, the survivor and the resume.
-    pub started: [usize; 3],
-    /// Jobs the killed runner held (re-queued by the resume).
-    pub held: usize,
-    pub resume_s: f64,
-    pub relabel_s: f64,
+    Ok(format!(
+        "{n_ids:>8} jobs: `sweep submit --slurm --dry-run` {fresh_s:.2} s without a database, \
+         {registered_s:.2} s with the sweep registered ({arrays} array(s) of at most {limit}, \
+         {source})"
+    ))
 }
 
 /// The job ids of a start log, one per line (a line cut by the kill is dropped: it has no
@@ -214,8 +185,9 @@ fn lines_in(path: &Path) -> usize {
     std::fs::read(path).map_or(0, |b| b.iter().filter(|&&c| c == b'\n').count())
 }
 
-/// Two runners on one database of N jobs, the first killed with SIGKILL mid-way (module doc).
-pub fn two_runners(n: usize, dir: &Path) -> Result<TwoRunners, String> {
+/// Two runners on one database of N jobs, the first killed with SIGKILL mid-way (module doc):
+/// the printed line. `both` is from the start of the first runner to the end of the second.
+pub fn two_runners(n: usize, dir: &Path) -> Result<String, String> {
     let (file, jobs) = prepare(n, dir)?;
     let spec = serde_json::to_string(&jobs[0].spec).map_err(e)?;
     std::fs::write(dir.join("first_job.json"), spec).map_err(e)?;
@@ -275,14 +247,13 @@ pub fn two_runners(n: usize, dir: &Path) -> Result<TwoRunners, String> {
         read_log(&logs[2])?,
     ];
     check_books(&store, &sweep, total, &held, &started)?;
-    Ok(TwoRunners {
-        jobs: total,
-        runners_s,
-        started: [started[0].len(), started[1].len(), started[2].len()],
-        held: held.len(),
-        resume_s,
-        relabel_s,
-    })
+    let [a, b, r] = started.map(|s| s.len());
+    Ok(format!(
+        "{total:>8} jobs, two runners, the first killed after {a} starts: both {runners_s:.1} s; \
+         starts A {a} / B {b} / resume {r}, {} job(s) held at the kill; resume {resume_s:.2} s, \
+         relabel {relabel_s:.2} s; books exact (every job done once, none lost)",
+        held.len()
+    ))
 }
 
 /// The exact bookkeeping of [`two_runners`] (module doc); an error names what is off.
@@ -354,29 +325,10 @@ pub fn run(o: &Options) -> Result<(), String> {
             );
         }
         if o.submit_dry_run {
-            let r = time_submit_dry_run(n, tmp.path())?;
-            println!(
-                "{:>8} jobs: `sweep submit --slurm --dry-run` {:.2} s without a database, \
-                 {:.2} s with the sweep registered ({} array(s) of at most {}, {})",
-                r.jobs, r.fresh_s, r.registered_s, r.arrays, r.limit, r.source
-            );
+            println!("{}", time_submit_dry_run(n, tmp.path())?);
         }
         if o.two_runners {
-            let r = two_runners(n, tmp.path())?;
-            println!(
-                "{:>8} jobs, two runners, the first killed after {} starts: both {:.1} s; \
-                 starts A {} / B {} / resume {}, {} job(s) held at the kill; resume {:.2} s, \
-                 relabel {:.2} s; books exact (every job done once, none lost)",
-                r.jobs,
-                r.started[0],
-                r.runners_s,
-                r.started[0],
-                r.started[1],
-                r.started[2],
-                r.held,
-                r.resume_s,
-                r.relabel_s
-            );
+            println!("{}", two_runners(n, tmp.path())?);
         }
     }
     Ok(())
