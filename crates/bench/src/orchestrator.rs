@@ -334,24 +334,17 @@ fn time_reports(
     let d = db.display().to_string();
     let svg = dir.join("plot.svg").display().to_string();
     let csv = dir.join("export.csv").display().to_string();
+    // `wetgran CMD --db DB --sweep bench EXTRA...`
+    let on_sweep = |cmd, extra| [vec![cmd, "--db", &d, "--sweep", "bench"], extra].concat();
     let commands: Vec<(&str, Vec<&str>)> = vec![
         ("sweep status", vec!["sweep", "status", "--db", &d]),
-        (
-            "boundaries",
-            vec!["boundaries", "--db", &d, "--sweep", "bench"],
-        ),
-        (
-            "plot",
-            vec!["plot", "--db", &d, "--sweep", "bench", "-o", &svg],
-        ),
+        ("boundaries", on_sweep("boundaries", vec![])),
+        ("plot", on_sweep("plot", vec!["-o", &svg])),
         (
             "export (CSV to a file)",
-            vec!["export", "--db", &d, "--sweep", "bench", "-o", &csv],
+            on_sweep("export", vec!["-o", &csv]),
         ),
-        (
-            "reclassify",
-            vec!["reclassify", "--db", &d, "--sweep", "bench"],
-        ),
+        ("reclassify", on_sweep("reclassify", vec![])),
     ];
     let out = dir.join("stdout.txt");
     let mut timed = Vec::new();
