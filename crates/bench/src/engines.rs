@@ -37,14 +37,6 @@ pub(crate) struct EngineRow {
     pub(crate) cpu_per_time: Vec<f64>,
 }
 
-/// The scene of one point, run by `kind`, `duration` time units.
-pub(crate) fn scene(gamma: f64, e_star: f64, kind: EngineKind, duration: f64) -> Scene {
-    let mut s = standard_shaken(gamma, e_star, EPS, None, duration);
-    s.engine.kind = kind;
-    s.validate("bench engines").expect("bench scene is valid");
-    s
-}
-
 /// Wall and CPU seconds of the timed part of one run, on one core: the run happens inside an
 /// installed one-thread rayon pool, so the time-driven engine steps on the thread whose CPU time
 /// is read (without it the engine ran on a pool thread of its own and the calling thread's CPU
@@ -93,7 +85,9 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<EngineRow> {
                 .into_iter()
                 .enumerate()
             {
-                let s = scene(gamma, e_star, kind, warm + measured);
+                let mut s = standard_shaken(gamma, e_star, EPS, None, warm + measured);
+                s.engine.kind = kind;
+                s.validate("bench engines").expect("bench scene is valid");
                 let (wall, cpu) = time_one(&s, measured);
                 pair[k].wall_per_time.push(wall / measured);
                 if let Some(c) = cpu {

@@ -16,22 +16,14 @@
 //! and the engine's arrays (`sum of Engine::memory / N`).
 
 use std::fmt::Write as _;
+use wetgran_core::scene::Boundary;
 use wetgran_core::scene::reference::base_scene;
-use wetgran_core::scene::{Boundary, Scene};
 use wetgran_core::sim::event_driven::Engine;
 
 /// Sizes measured at `scale = 1`.
 pub(crate) const SIZES: [usize; 2] = [125_000, 1_000_000];
 /// Fewest particles of a scaled size.
 const MIN_PARTICLES: usize = 2_000;
-
-/// The bulk gas of `n` spheres: system (a) of `bench engine` at `n` particles.
-pub(crate) fn bulk_scene(n: usize) -> Scene {
-    let side = (n as f64 / 0.5).cbrt();
-    let mut s = base_scene(3, 0.0, vec![side; 3], vec![Boundary::Periodic; 3]);
-    s.particles.count = n;
-    s
-}
 
 /// What one child process measured.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -72,7 +64,10 @@ fn rss_and_peak_kib() -> Result<(u64, u64), String> {
 
 /// The child's measurement, in this process: build, run `2 n` events, read the peak.
 pub(crate) fn measure_here(n: usize) -> Result<MemoryRow, String> {
-    let scene = bulk_scene(n);
+    // System (a) of `bench engine` at `n` particles (module doc).
+    let side = (n as f64 / 0.5).cbrt();
+    let mut scene = base_scene(3, 0.0, vec![side; 3], vec![Boundary::Periodic; 3]);
+    scene.particles.count = n;
     scene
         .validate("bench memory system")
         .map_err(|e| e.to_string())?;
