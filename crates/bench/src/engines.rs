@@ -27,7 +27,7 @@ pub(crate) const MEASURED: f64 = 5.0;
 pub(crate) const EPS: f64 = 0.96;
 
 /// One point and engine: seconds per simulated time unit, one value per repetition.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub(crate) struct EngineRow {
     pub label: &'static str,
     pub gamma: f64,
@@ -35,14 +35,6 @@ pub(crate) struct EngineRow {
     pub engine: &'static str,
     pub(crate) wall_per_time: Vec<f64>,
     pub(crate) cpu_per_time: Vec<f64>,
-}
-
-/// The scene of one point, run by `kind`, `duration` time units.
-pub(crate) fn scene(gamma: f64, e_star: f64, kind: EngineKind, duration: f64) -> Scene {
-    let mut s = standard_shaken(gamma, e_star, EPS, None, duration);
-    s.engine.kind = kind;
-    s.validate("bench engines").expect("bench scene is valid");
-    s
 }
 
 /// Wall and CPU seconds of the timed part of one run, on one core: the run happens inside an
@@ -81,21 +73,21 @@ pub(crate) fn measure(repeat: usize, scale: f64) -> Vec<EngineRow> {
     let warm = (WARM_UP / measured).ceil() * measured;
     let mut rows = Vec::new();
     for &(label, gamma, e_star) in &POINTS {
-        let mut pair =
-            [("event", EngineKind::Event), ("time", EngineKind::Time)].map(|(name, _)| EngineRow {
-                label,
-                gamma,
-                e_star,
-                engine: name,
-                wall_per_time: Vec::new(),
-                cpu_per_time: Vec::new(),
-            });
+        let mut pair = ["event", "time"].map(|engine| EngineRow {
+            label,
+            gamma,
+            e_star,
+            engine,
+            ..EngineRow::default()
+        });
         for _ in 0..repeat {
             for (k, kind) in [EngineKind::Event, EngineKind::Time]
                 .into_iter()
                 .enumerate()
             {
-                let s = scene(gamma, e_star, kind, warm + measured);
+                let mut s = standard_shaken(gamma, e_star, EPS, None, warm + measured);
+                s.engine.kind = kind;
+                s.validate("bench engines").expect("bench scene is valid");
                 let (wall, cpu) = time_one(&s, measured);
                 pair[k].wall_per_time.push(wall / measured);
                 if let Some(c) = cpu {

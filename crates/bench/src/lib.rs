@@ -10,9 +10,6 @@
 //!
 //! The reference systems (a) 3D bulk, (b) 3D gravity, (c) 2D standard wet and (c') the same
 //! dry are those of [`wetgran_core::scene::reference`].
-//!
-//! `wetgran-bench memory [--scale S]` (`memory.rs`): peak resident memory of the event engine per
-//! particle, with the breakdown by array.
 
 pub(crate) mod barrier;
 pub(crate) mod engines;
@@ -51,6 +48,9 @@ pub fn run(
     threads: &[usize],
     n_factor: usize,
 ) -> Result<String, String> {
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(format!("--scale = {scale} must be a finite number > 0"));
+    }
     let (name, arg) = match which.split_once(':') {
         Some((name, arg)) => (name, Some(arg)),
         None => (which, None),
@@ -113,7 +113,7 @@ pub(crate) struct System {
     /// Short label used in the table: `a`, `b`, `c`, `c'`.
     pub label: &'static str,
     /// One line saying what the system is.
-    pub description: String,
+    pub description: &'static str,
     pub scene: Scene,
     /// Events timed per repetition at `scale = 1`.
     pub(crate) base_events: u64,
@@ -129,15 +129,6 @@ pub(crate) struct Repetition {
     pub collisions: u64,
     /// Simulated time covered by the timed part.
     pub simulated_time: f64,
-}
-
-impl Repetition {
-    pub(crate) fn events_per_second(&self) -> f64 {
-        self.events as f64 / self.wall_seconds.max(1e-12)
-    }
-    pub(crate) fn collisions_per_second(&self) -> f64 {
-        self.collisions as f64 / self.wall_seconds.max(1e-12)
-    }
 }
 
 /// All repetitions of one system.
@@ -194,21 +185,12 @@ pub(crate) fn quantile(v: &[f64], q: f64) -> f64 {
 }
 
 impl Row {
-    pub(crate) fn events_per_second(&self) -> Spread {
-        Spread::of(self.reps.iter().map(Repetition::events_per_second))
-    }
-    pub(crate) fn collisions_per_second(&self) -> Spread {
-        Spread::of(self.reps.iter().map(Repetition::collisions_per_second))
-    }
-    /// Simulated time of the timed part (identical across repetitions; the median is taken).
-    pub fn simulated_time(&self) -> f64 {
-        Spread::of(self.reps.iter().map(|r| r.simulated_time)).median
-    }
-    pub fn events(&self) -> u64 {
-        self.reps[0].events
-    }
-    pub fn collisions(&self) -> u64 {
-        self.reps[0].collisions
+    /// Events, or with `collisions` pair plus wall collisions, per wall-clock second.
+    pub(crate) fn rate(&self, collisions: bool) -> Spread {
+        Spread::of(self.reps.iter().map(|r| {
+            let n = if collisions { r.collisions } else { r.events };
+            n as f64 / r.wall_seconds.max(1e-12)
+        }))
     }
 }
 
@@ -233,31 +215,28 @@ pub(crate) fn systems() -> Result<Vec<System>, String> {
     let list = vec![
         System {
             label: "a",
-            description:
-                "3D bulk: 32000 elastic spheres, density 0.5, periodic cube 40^3, g = 0, T = 1"
-                    .into(),
+            description: "3D bulk: 32000 elastic spheres, density 0.5, periodic cube 40^3, \
+                          g = 0, T = 1",
             scene: system_a(),
             base_events: 2_000_000,
         },
         System {
             label: "b",
             description: "3D gravity: 32000 elastic spheres, g = 1, box 80x80x40 periodic in x,y, \
-                          floor and lid, T = 1"
-                .into(),
+                          floor and lid, T = 1",
             scene: system_b(),
             base_events: 2_000_000,
         },
         System {
             label: "c",
             description: "2D standard wet: 1200 disks, 400x9, sigma_p 0.06, thin thread s_crit \
-                          0.0711, E_cb 0.2844, eps 0.9, e_w 1, T/E_cb = 20"
-                .into(),
+                          0.0711, E_cb 0.2844, eps 0.9, e_w 1, T/E_cb = 20",
             scene: system_c(),
             base_events: 1_000_000,
         },
         System {
             label: "c'",
-            description: "2D standard dry: as (c) without bridges, T = 20 * 0.2844".into(),
+            description: "2D standard dry: as (c) without bridges, T = 20 * 0.2844",
             scene: system_c_dry(),
             base_events: 1_000_000,
         },
@@ -327,12 +306,6 @@ pub(crate) fn engine_bench_only(
     scale: f64,
     only: Option<&[&str]>,
 ) -> Result<Vec<Row>, String> {
-    if repeat == 0 {
-        return Err("--repeat must be >= 1".into());
-    }
-    if !(scale.is_finite() && scale > 0.0) {
-        return Err(format!("--scale = {scale} must be a finite number > 0"));
-    }
     let all = systems()?;
     if let Some(bad) = only
         .unwrap_or(&[])
@@ -387,7 +360,8 @@ pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
     let _ = writeln!(s);
     s.push_str("sys       N    events  warm-up               events/s [M]           collisions/s [M]  sim. time    events/t  coll.%\n");
     for r in rows {
-        let t = r.simulated_time();
+        // Events and simulated time are the same in every repetition (same seed, same cap).
+        let (events, t) = (r.reps[0].events, r.reps[0].simulated_time);
         let mega = |x: Spread| {
             format!(
                 "{:.3} [{:.3}, {:.3}]",
@@ -401,13 +375,13 @@ pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
             "{:<4} {:>6} {:>9} {:>8} {:>26} {:>26} {:>10.4} {:>11.4e} {:>7.1}",
             format!("({})", r.label),
             r.particles,
-            r.events(),
+            events,
             r.warmup_events,
-            mega(r.events_per_second()),
-            mega(r.collisions_per_second()),
+            mega(r.rate(false)),
+            mega(r.rate(true)),
             t,
-            r.events() as f64 / t,
-            100.0 * r.collisions() as f64 / r.events().max(1) as f64,
+            events as f64 / t,
+            100.0 * r.reps[0].collisions as f64 / events.max(1) as f64,
         );
     }
     let wet = rows.iter().find(|r| r.label == "c");
@@ -417,8 +391,8 @@ pub(crate) fn engine_report(rows: &[Row], repeat: usize, scale: f64) -> String {
         let _ = writeln!(
             s,
             "dry/wet events-per-second ratio (c')/(c): {:.3} (collisions per second: {:.3})",
-            dry.events_per_second().median / wet.events_per_second().median,
-            dry.collisions_per_second().median / wet.collisions_per_second().median,
+            dry.rate(false).median / wet.rate(false).median,
+            dry.rate(true).median / wet.rate(true).median,
         );
     }
     s
@@ -450,7 +424,7 @@ mod tests {
         assert!(run("engine:c'").is_ok());
         assert!(run("nonsense").is_err() && run("engine:x").is_err() && run("wall:").is_err());
         assert_eq!(engine_bench_only(1, 0.001, Some(&["c'"])).unwrap().len(), 1);
-        assert!(engine_bench_only(1, 0.0, None).is_err());
+        assert!(super::run("wall", 1, 0.0, None, &[1], 1).is_err());
     }
 
     #[test]

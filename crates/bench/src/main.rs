@@ -4,7 +4,6 @@
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use wetgran::store::Durability;
 use wetgran_bench::stress::{DEFAULT_EVENTS, StressCase, run_case};
 use wetgran_bench::{orchestrator, orchestrator_scale};
 
@@ -63,49 +62,7 @@ enum Command {
     /// print claims per second, overhead per job, database size per result and the time of
     /// `sweep status`, `boundaries`, `plot`, `export` and `reclassify` (docs/performance.md,
     /// "Orchestrator"). Needs the `wetgran` binary beside this one.
-    Orchestrator {
-        /// Sweep sizes (jobs), comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "1000,10000")]
-        sizes: Vec<usize>,
-        /// Worker threads of the runner.
-        #[arg(long, default_value_t = 2)]
-        workers: usize,
-        /// Runs of each report command (the median is printed).
-        #[arg(long, default_value_t = 3)]
-        repeat: usize,
-        /// Folder for the databases (default: the system's temporary folder).
-        #[arg(long)]
-        dir: Option<PathBuf>,
-        /// Sync every commit to disk (SQLite `synchronous = FULL`) instead of committing as
-        /// `sweep run` does (`NORMAL`).
-        #[arg(long)]
-        synced: bool,
-        /// Keep each size's folder and database (its path is printed) instead of removing it.
-        #[arg(long)]
-        keep: bool,
-        /// Which reports to time, comma-separated (`status`, `boundaries`, `plot`, `export`,
-        /// `reclassify`; `refine`: one refinement round, with stationary stand-in results).
-        #[arg(
-            long,
-            value_delimiter = ',',
-            default_value = "status,boundaries,plot,export,reclassify"
-        )]
-        reports: Vec<String>,
-        /// Instead of the run and the reports: time `sweep collect` of N task result records
-        /// (a submission recorded without Slurm, the records written beforehand).
-        #[arg(long)]
-        collect: bool,
-        /// Instead of the run and the reports: time `sweep submit --slurm --dry-run` of the
-        /// N-job sweep (process start, expansion, split into arrays, scripts printed), without
-        /// a database and with the sweep registered in one.
-        #[arg(long)]
-        submit_dry_run: bool,
-        /// Instead of the run and the reports: two runner processes on one database, the first
-        /// killed with SIGKILL after a sixth of the jobs, the rest resumed; checks that every
-        /// job is done once and none lost (docs/reliability.md, "Two runners, one killed").
-        #[arg(long)]
-        two_runners: bool,
-    },
+    Orchestrator(orchestrator::Options),
     /// One runner of `orchestrator --two-runners` (internal).
     #[command(hide = true)]
     OrchestratorRunner {
@@ -139,37 +96,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Some(Command::Stress { case, events, json }) => stress(case.as_deref(), events, json),
-        Some(Command::Orchestrator {
-            sizes,
-            workers,
-            repeat,
-            dir,
-            synced,
-            keep,
-            reports,
-            collect,
-            submit_dry_run,
-            two_runners,
-        }) => report(if collect || submit_dry_run || two_runners {
-            let dir = dir.as_deref();
-            orchestrator_scale::run(&sizes, collect, submit_dry_run, two_runners, dir)
-                .map(|()| String::new())
-        } else {
-            let durability = match synced {
-                true => Durability::Synced,
-                false => Durability::Fast,
-            };
-            let (workers, repeat) = (workers.max(1), repeat.max(1));
-            orchestrator::run(
-                &sizes,
-                workers,
-                repeat,
-                durability,
-                &reports,
-                dir.as_deref(),
-                keep,
-            )
-        }),
+        Some(Command::Orchestrator(o)) => {
+            report(if o.collect || o.submit_dry_run || o.two_runners {
+                orchestrator_scale::run(&o).map(|()| String::new())
+            } else {
+                orchestrator::run(&o)
+            })
+        }
         Some(Command::OrchestratorRunner { db, dir, log }) => {
             match orchestrator_scale::runner(&db, &dir, &log) {
                 Ok(()) => ExitCode::SUCCESS,

@@ -16,22 +16,14 @@
 //! and the engine's arrays (`sum of Engine::memory / N`).
 
 use std::fmt::Write as _;
+use wetgran_core::scene::Boundary;
 use wetgran_core::scene::reference::base_scene;
-use wetgran_core::scene::{Boundary, Scene};
 use wetgran_core::sim::event_driven::Engine;
 
 /// Sizes measured at `scale = 1`.
 pub(crate) const SIZES: [usize; 2] = [125_000, 1_000_000];
 /// Fewest particles of a scaled size.
 const MIN_PARTICLES: usize = 2_000;
-
-/// The bulk gas of `n` spheres: system (a) of `bench engine` at `n` particles.
-pub(crate) fn bulk_scene(n: usize) -> Scene {
-    let side = (n as f64 / 0.5).cbrt();
-    let mut s = base_scene(3, 0.0, vec![side; 3], vec![Boundary::Periodic; 3]);
-    s.particles.count = n;
-    s
-}
 
 /// What one child process measured.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -50,14 +42,9 @@ pub(crate) struct MemoryRow {
 }
 
 impl MemoryRow {
-    pub(crate) fn peak_per_particle(&self) -> f64 {
-        self.peak_kib as f64 * 1024.0 / self.particles as f64
-    }
-    pub(crate) fn peak_above_start_per_particle(&self) -> f64 {
-        (self.peak_kib.saturating_sub(self.rss_start_kib)) as f64 * 1024.0 / self.particles as f64
-    }
-    pub(crate) fn engine_bytes(&self) -> usize {
-        self.structures.iter().map(|(_, b)| b).sum()
+    /// Bytes per particle of the engine's arrays.
+    pub(crate) fn engine_bytes_per_particle(&self) -> f64 {
+        self.structures.iter().map(|(_, b)| b).sum::<usize>() as f64 / self.particles as f64
     }
 }
 
@@ -77,7 +64,10 @@ fn rss_and_peak_kib() -> Result<(u64, u64), String> {
 
 /// The child's measurement, in this process: build, run `2 n` events, read the peak.
 pub(crate) fn measure_here(n: usize) -> Result<MemoryRow, String> {
-    let scene = bulk_scene(n);
+    // System (a) of `bench engine` at `n` particles (module doc).
+    let side = (n as f64 / 0.5).cbrt();
+    let mut scene = base_scene(3, 0.0, vec![side; 3], vec![Boundary::Periodic; 3]);
+    scene.particles.count = n;
     scene
         .validate("bench memory system")
         .map_err(|e| e.to_string())?;
@@ -118,9 +108,6 @@ pub(crate) fn parse_child(text: &str) -> Result<MemoryRow, String> {
 
 /// Runs one child process per size (`SIZES` times `scale`).
 pub(crate) fn measure(scale: f64) -> Result<Vec<MemoryRow>, String> {
-    if !(scale.is_finite() && scale > 0.0) {
-        return Err(format!("--scale = {scale} must be a finite number > 0"));
-    }
     let exe = std::env::current_exe().map_err(|e| format!("cannot find this binary: {e}"))?;
     let mut rows = Vec::new();
     for n in SIZES {
@@ -160,6 +147,7 @@ pub(crate) fn report(rows: &[MemoryRow]) -> String {
     );
     let mib = |k: u64| k as f64 / 1024.0;
     for r in rows {
+        let per_particle = |kib: u64| kib as f64 * 1024.0 / r.particles as f64;
         let _ = writeln!(
             s,
             "{:>9} {:>9} {:>10.1} {:>10.1} {:>10.1} {:>9.1} {:>12.1} {:>10.1}",
@@ -168,9 +156,9 @@ pub(crate) fn report(rows: &[MemoryRow]) -> String {
             mib(r.rss_start_kib),
             mib(r.rss_built_kib),
             mib(r.peak_kib),
-            r.peak_per_particle(),
-            r.peak_above_start_per_particle(),
-            r.engine_bytes() as f64 / r.particles as f64,
+            per_particle(r.peak_kib),
+            per_particle(r.peak_kib.saturating_sub(r.rss_start_kib)),
+            r.engine_bytes_per_particle(),
         );
     }
     if let Some(r) = rows.iter().max_by_key(|r| r.particles) {
@@ -189,7 +177,7 @@ pub(crate) fn report(rows: &[MemoryRow]) -> String {
             s,
             "  {:<32} {:>8.2}",
             "total",
-            r.engine_bytes() as f64 / r.particles as f64
+            r.engine_bytes_per_particle()
         );
     }
     s

@@ -60,7 +60,7 @@ pub(crate) const POINTS: [(&str, f64, f64); 3] = [
 ];
 
 /// One point's figures (seconds summed over the measured samples).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub(crate) struct ObserverRow {
     pub label: &'static str,
     pub gamma: f64,
@@ -113,12 +113,7 @@ fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -
         label,
         gamma,
         e_star,
-        samples: 0,
-        engine: 0.0,
-        others: 0.0,
-        counter: 0.0,
-        cpu: None,
-        changes: 0,
+        ..ObserverRow::default()
     };
     let mut last: Option<Instant> = None;
     let mut cpu_start = None;

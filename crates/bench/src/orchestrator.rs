@@ -1,27 +1,14 @@
-//! `wetgran-bench orchestrator`: the sweep orchestrator alone (issue 35), on a file database.
+//! `wetgran-bench orchestrator`: the sweep orchestrator alone (issue 35), on a file database;
+//! what each figure means is in docs/performance.md, "Orchestrator".
 //!
-//! For each size N (default 10^3 and 10^4) the benchmark writes a sweep of N points in
-//! (Gamma, E*) over a tiny real scene (the quickstart's shaken wet 2D system with 20 grains and
-//! 2 periods), registers it in a fresh database (timed), and runs it with the real runner and
-//! store (`run::run_sweeps_with`: claims, run rows, heartbeats, commits of result and checkpoint)
-//! on `--workers` worker threads. The job each worker runs is a stand-in that returns at once a
-//! result of the real shape: the observables and final state of one real run of the first job
-//! (run once before, its time printed), with a phase label that depends on the point, so that
-//! the reports have boundaries to find. So the run's wall time is the orchestration alone:
-//!
-//! - claims per second = N / wall time of the run;
-//! - overhead per job = wall time / N (the one store thread does every claim and commit in turn;
-//!   the stand-in job costs nothing), and the median and 99th percentile of the time between one
-//!   job start and the next, in the first and in the last tenth of the sweep (a claim that grew
-//!   with the sweep would show in the last tenth);
-//! - the database size per result (file + WAL after the run, divided by N).
-//!
-//! The store commits as `sweep run` does (without a sync per commit, `Durability::Fast`), or
-//! with `--synced` as every other command does.
-//!
-//! Then the reports, each as the `wetgran` binary beside this one runs them on that database
-//! (process start included): `sweep status`, `boundaries`, `plot`, `export` (CSV to a file),
-//! `reclassify` (those named by `--reports`), each the median of `--repeat` runs.
+//! For each size N the benchmark sweep (`prepare`) is registered in a fresh database (timed)
+//! and run with the real runner and store (`run::run_sweeps_with`) on `--workers` threads. Each
+//! job is a `stand_in`: it returns at once the result of one real run of the first job (timed
+//! and printed before) with a phase label made up from its point (`stand_in_phase`), so that
+//! the run's wall time is the orchestration alone and the reports have boundaries to find. The
+//! store commits as `sweep run` does (`Durability::Fast`), or with `--synced` as every other
+//! command does. Then each report of `--reports` as the `wetgran` binary beside this one runs it
+//! on that database (process start included), the median of `--repeat` runs.
 //!
 //! With `refine` among the reports: first the relabelling that ends `sweep run`
 //! (`run::relabel::relabel_changed` on the sweep's results, every one of them new), timed; the
@@ -43,6 +30,61 @@ use std::time::Instant;
 use wetgran::run::{JobFn, RunOptions, run_sweeps_with};
 use wetgran::store::{Durability, Store};
 use wetgran::sweep::{JobError, JobResult, JobSpec, SweepFile, SweepJob, run_job};
+
+/// The options of `wetgran-bench orchestrator`.
+#[derive(Debug, clap::Args)]
+pub struct Options {
+    /// Sweep sizes (jobs), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1000,10000")]
+    pub sizes: Vec<usize>,
+    /// Worker threads of the runner.
+    #[arg(long, default_value_t = 2)]
+    pub workers: usize,
+    /// Runs of each report command (the median is printed).
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+    /// Folder for the databases (default: the system's temporary folder).
+    #[arg(long)]
+    pub dir: Option<PathBuf>,
+    /// Sync every commit to disk (SQLite `synchronous = FULL`) instead of committing as
+    /// `sweep run` does (`NORMAL`).
+    #[arg(long)]
+    pub synced: bool,
+    /// Keep each size's folder and database (its path is printed) instead of removing it.
+    #[arg(long)]
+    pub keep: bool,
+    /// Which reports to time, comma-separated (`status`, `boundaries`, `plot`, `export`,
+    /// `reclassify`; `refine`: one refinement round, with stationary stand-in results).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "status,boundaries,plot,export,reclassify"
+    )]
+    pub reports: Vec<String>,
+    /// Instead of the run and the reports: time `sweep collect` of N task result records
+    /// (a submission recorded without Slurm, the records written beforehand).
+    #[arg(long)]
+    pub collect: bool,
+    /// Instead of the run and the reports: time `sweep submit --slurm --dry-run` of the
+    /// N-job sweep (process start, expansion, split into arrays, scripts printed), without
+    /// a database and with the sweep registered in one.
+    #[arg(long)]
+    pub submit_dry_run: bool,
+    /// Instead of the run and the reports: two runner processes on one database, the first
+    /// killed with SIGKILL after a sixth of the jobs, the rest resumed; checks that every
+    /// job is done once and none lost (docs/reliability.md, "Two runners, one killed").
+    #[arg(long)]
+    pub two_runners: bool,
+}
+
+impl Options {
+    fn durability(&self) -> Durability {
+        match self.synced {
+            true => Durability::Synced,
+            false => Durability::Fast,
+        }
+    }
+}
 
 /// An error as its text.
 pub(crate) fn e(x: impl std::fmt::Display) -> String {
@@ -178,8 +220,6 @@ pub struct Figures {
     pub jobs: usize,
     pub(crate) register_s: f64,
     pub(crate) run_s: f64,
-    pub(crate) claims_per_s: f64,
-    pub(crate) overhead_ms: f64,
     /// Median and 99th percentile of the time between job starts (ms), first and last tenth.
     pub(crate) gap_first_ms: (f64, f64),
     pub(crate) gap_last_ms: (f64, f64),
@@ -294,24 +334,17 @@ fn time_reports(
     let d = db.display().to_string();
     let svg = dir.join("plot.svg").display().to_string();
     let csv = dir.join("export.csv").display().to_string();
+    // `wetgran CMD --db DB --sweep bench EXTRA...`
+    let on_sweep = |cmd, extra| [vec![cmd, "--db", &d, "--sweep", "bench"], extra].concat();
     let commands: Vec<(&str, Vec<&str>)> = vec![
         ("sweep status", vec!["sweep", "status", "--db", &d]),
-        (
-            "boundaries",
-            vec!["boundaries", "--db", &d, "--sweep", "bench"],
-        ),
-        (
-            "plot",
-            vec!["plot", "--db", &d, "--sweep", "bench", "-o", &svg],
-        ),
+        ("boundaries", on_sweep("boundaries", vec![])),
+        ("plot", on_sweep("plot", vec!["-o", &svg])),
         (
             "export (CSV to a file)",
-            vec!["export", "--db", &d, "--sweep", "bench", "-o", &csv],
+            on_sweep("export", vec!["-o", &csv]),
         ),
-        (
-            "reclassify",
-            vec!["reclassify", "--db", &d, "--sweep", "bench"],
-        ),
+        ("reclassify", on_sweep("reclassify", vec![])),
     ];
     let out = dir.join("stdout.txt");
     let mut timed = Vec::new();
@@ -331,14 +364,8 @@ fn time_reports(
 }
 
 /// Runs the benchmark at one size in `dir`.
-pub(crate) fn measure(
-    n: usize,
-    workers: usize,
-    repeat: usize,
-    durability: Durability,
-    reports: &[String],
-    dir: &Path,
-) -> Result<Figures, String> {
+pub(crate) fn measure(n: usize, o: &Options, dir: &Path) -> Result<Figures, String> {
+    let (reports, durability) = (&o.reports, o.durability());
     let (file, jobs) = prepare(n, dir)?;
     let jobs_n = jobs.len();
     let (real, real_s) = timed(|| real_result(&jobs[0].spec))?;
@@ -385,7 +412,7 @@ pub(crate) fn measure(
             Ok(())
         })
     };
-    let opts = run_options(workers);
+    let opts = run_options(o.workers.max(1));
     let sweeps = std::slice::from_ref(&sweep);
     let (summary, run_s) = timed(|| run_sweeps_with(&store, sweeps, &opts, job.clone()))?;
     if summary.done as usize != jobs_n {
@@ -409,7 +436,7 @@ pub(crate) fn measure(
     let tenth = (gaps.len() / 10).max(1).min(gaps.len());
     let (first, last) = (&gaps[..tenth], &gaps[gaps.len() - tenth..]);
 
-    let timed = time_reports(&db, dir, reports, repeat, jobs_n)?;
+    let timed = time_reports(&db, dir, reports, o.repeat.max(1), jobs_n)?;
     let refine = if refine {
         let store = Store::open_as(&db, false, durability).map_err(e)?;
         let r = refine_round(&store, &file, &sweep, job, &opts)?;
@@ -422,8 +449,6 @@ pub(crate) fn measure(
         jobs: jobs_n,
         register_s,
         run_s,
-        claims_per_s: jobs_n as f64 / run_s,
-        overhead_ms: run_s / jobs_n as f64 * 1e3,
         gap_first_ms: (quantile(first, 0.5), quantile(first, 0.99)),
         gap_last_ms: (quantile(last, 0.5), quantile(last, 0.99)),
         db_bytes_per_result: db_bytes as f64 / jobs_n as f64,
@@ -454,8 +479,8 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
             r.jobs,
             r.register_s,
             r.run_s,
-            r.claims_per_s,
-            r.overhead_ms,
+            r.jobs as f64 / r.run_s,
+            r.run_s / r.jobs as f64 * 1e3,
             r.gap_first_ms.0,
             r.gap_first_ms.1,
             r.gap_last_ms.0,
@@ -500,31 +525,16 @@ pub fn text(rows: &[Figures], workers: usize, durability: Durability) -> String 
 
 /// Runs every size, each in a fresh folder under `dir` (default: the system's temporary folder),
 /// removed afterwards unless `keep` (then its path is printed, for profiling a report on it).
-pub fn run(
-    sizes: &[usize],
-    workers: usize,
-    repeat: usize,
-    durability: Durability,
-    reports: &[String],
-    dir: Option<&Path>,
-    keep: bool,
-) -> Result<String, String> {
+pub fn run(o: &Options) -> Result<String, String> {
     let mut rows = Vec::new();
-    for &n in sizes {
-        let tmp = temp_dir(dir)?;
-        rows.push(measure(
-            n,
-            workers,
-            repeat,
-            durability,
-            reports,
-            tmp.path(),
-        )?);
-        if keep {
+    for &n in &o.sizes {
+        let tmp = temp_dir(o.dir.as_deref())?;
+        rows.push(measure(n, o, tmp.path())?);
+        if o.keep {
             eprintln!("N = {n}: database kept in {}", tmp.keep().display());
         }
     }
-    Ok(text(&rows, workers, durability))
+    Ok(text(&rows, o.workers.max(1), o.durability()))
 }
 
 #[cfg(test)]

@@ -1,32 +1,21 @@
-//! `wetgran-bench orchestrator --collect`, `--submit-dry-run` and `--two-runners`: the orchestrator at
-//! cluster scale (issue 35, items 3 and 4), with the stand-in jobs of [`crate::orchestrator`].
+//! `wetgran-bench orchestrator --collect`, `--submit-dry-run` and `--two-runners`: the
+//! orchestrator at cluster scale (issue 35, items 3 and 4), with the stand-in jobs of
+//! [`crate::orchestrator`]; docs/orchestrator.md describes each run and its figures.
 //!
-//! - **collect**: registers the benchmark sweep of N points in a fresh database, records one
-//!   submission of N tasks (as `sweep submit --slurm` does after `sbatch`, without a Slurm job
-//!   id, so no queue is asked), writes each task's result record (`results/<job id>.json`, the
-//!   stand-in result of the real shape) into the sweep directory (untimed), and times
-//!   `wetgran sweep collect --db DB` (the process, start included).
-//! - **submit dry run**: writes the benchmark sweep of N points and times
-//!   `wetgran sweep submit FILE --slurm --dry-run --db DB` (the process, start included: the
-//!   sweep file read and expanded, the job ids, the split into arrays at the default
-//!   `--array-limit` or the cluster's `MaxArraySize` where `scontrol` answers, every array
-//!   script printed to a file), twice: with no database (a new study) and with the sweep
-//!   registered in DB (every job's status looked up). The printed header is checked: N jobs in
-//!   `ceil(N / limit)` arrays.
-//! - **two runners**: registers the sweep, starts two runner processes (this binary's hidden
-//!   `orchestrator-runner`, one worker each: the real runner and store, `sweep run`'s
-//!   commits) on the one database, kills the first with SIGKILL once it has started a sixth of
-//!   the jobs, lets the second run to the end, then resumes in this process (the orphaned job
-//!   re-queued, as `sweep resume` does) and relabels the results (`relabel_changed`, as the end
-//!   of `sweep run`). Every stand-in job appends its job id to its process's log file before it
-//!   returns, so the bookkeeping is exact: every job done, with one result; run rows and
-//!   attempts 1 per job, 2 for a job the killed runner held; every job started once in all
-//!   three logs, except that a job the killed runner held may show once more (a start logged
-//!   before the kill). Any other outcome is an error.
+//! - **collect** ([`time_collect`]): a submission of N tasks recorded without a Slurm job id (no
+//!   queue is asked), each task's result record written (untimed), then `wetgran sweep collect`
+//!   timed, process start included.
+//! - **submit dry run** ([`time_submit_dry_run`]): `wetgran sweep submit FILE --slurm --dry-run`
+//!   timed without a database and with the sweep registered in one; header and scripts checked.
+//! - **two runners** ([`two_runners`]): two runner processes (the hidden `orchestrator-runner`)
+//!   on one database, the first killed with SIGKILL after a sixth of the jobs, the rest resumed
+//!   here and relabelled. Every stand-in start is logged, so the books must be exact
+//!   (`check_books`: every job done with one result; run rows and attempts 1 per job, 2 for a
+//!   job the killed runner held, which may show one more logged start); anything else is an error.
 
 use crate::orchestrator::{
-    e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir, time_command, timed,
-    wetgran_binary,
+    Options, e, prepare, real_result, run_options, stand_in, stand_in_phase, temp_dir,
+    time_command, timed, wetgran_binary,
 };
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::io::Write as _;
@@ -96,19 +85,6 @@ pub fn time_collect(n: usize, dir: &Path) -> Result<(f64, usize), String> {
     Ok((t, ids.len()))
 }
 
-/// What `sweep submit --slurm --dry-run` of N jobs took (module doc).
-#[derive(Debug)]
-pub struct DryRun {
-    pub jobs: usize,
-    pub arrays: usize,
-    pub limit: usize,
-    /// Where the limit came from (`cluster MaxArraySize M` or `scontrol not available`).
-    pub source: String,
-    /// Seconds without a database and with the sweep registered in one.
-    pub fresh_s: f64,
-    pub registered_s: f64,
-}
-
 /// `(jobs, arrays, limit, source)` of the dry run's header line
 /// `# dry run: N job(s) to submit as K array(s) of at most L task(s) (SOURCE); ...`.
 fn parse_dry_header(text: &str) -> Option<(usize, usize, usize, String)> {
@@ -168,8 +144,9 @@ fn dry_run_once(
     Ok((t, arrays, limit, source))
 }
 
-/// `sweep submit --slurm --dry-run` of N jobs, without and with a database (module doc).
-pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<DryRun, String> {
+/// `sweep submit --slurm --dry-run` of N jobs, without and with a database (module doc): the
+/// printed line.
+pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<String, String> {
     let (file, jobs) = prepare(n, dir)?;
     let n_ids = jobs
         .iter()
@@ -189,28 +166,11 @@ pub fn time_submit_dry_run(n: usize, dir: &Path) -> Result<DryRun, String> {
     if dir.join("wetgran-slurm").exists() {
         return Err("the dry run wrote a sweep directory".to_string());
     }
-    Ok(DryRun {
-        jobs: n_ids,
-        arrays,
-        limit,
-        source,
-        fresh_s,
-        registered_s,
-    })
-}
-
-/// What the two-runner run measured.
-#[derive(Debug)]
-pub struct TwoRunners {
-    pub jobs: usize,
-    /// Seconds from the start of the first runner to the end of the second.
-    pub runners_s: f64,
-    /// Starts logged by the killed runner, the survivor and the resume.
-    pub started: [usize; 3],
-    /// Jobs the killed runner held (re-queued by the resume).
-    pub held: usize,
-    pub resume_s: f64,
-    pub relabel_s: f64,
+    Ok(format!(
+        "{n_ids:>8} jobs: `sweep submit --slurm --dry-run` {fresh_s:.2} s without a database, \
+         {registered_s:.2} s with the sweep registered ({arrays} array(s) of at most {limit}, \
+         {source})"
+    ))
 }
 
 /// The job ids of a start log, one per line (a line cut by the kill is dropped: it has no
@@ -225,8 +185,9 @@ fn lines_in(path: &Path) -> usize {
     std::fs::read(path).map_or(0, |b| b.iter().filter(|&&c| c == b'\n').count())
 }
 
-/// Two runners on one database of N jobs, the first killed with SIGKILL mid-way (module doc).
-pub fn two_runners(n: usize, dir: &Path) -> Result<TwoRunners, String> {
+/// Two runners on one database of N jobs, the first killed with SIGKILL mid-way (module doc):
+/// the printed line. `both` is from the start of the first runner to the end of the second.
+pub fn two_runners(n: usize, dir: &Path) -> Result<String, String> {
     let (file, jobs) = prepare(n, dir)?;
     let spec = serde_json::to_string(&jobs[0].spec).map_err(e)?;
     std::fs::write(dir.join("first_job.json"), spec).map_err(e)?;
@@ -286,14 +247,13 @@ pub fn two_runners(n: usize, dir: &Path) -> Result<TwoRunners, String> {
         read_log(&logs[2])?,
     ];
     check_books(&store, &sweep, total, &held, &started)?;
-    Ok(TwoRunners {
-        jobs: total,
-        runners_s,
-        started: [started[0].len(), started[1].len(), started[2].len()],
-        held: held.len(),
-        resume_s,
-        relabel_s,
-    })
+    let [a, b, r] = started.map(|s| s.len());
+    Ok(format!(
+        "{total:>8} jobs, two runners, the first killed after {a} starts: both {runners_s:.1} s; \
+         starts A {a} / B {b} / resume {r}, {} job(s) held at the kill; resume {resume_s:.2} s, \
+         relabel {relabel_s:.2} s; books exact (every job done once, none lost)",
+        held.len()
+    ))
 }
 
 /// The exact bookkeeping of [`two_runners`] (module doc); an error names what is off.
@@ -354,46 +314,21 @@ pub fn runner(db: &Path, dir: &Path, log: &Path) -> Result<(), String> {
 
 /// Runs the asked scale figures at every size, each in a fresh folder under `dir`, and prints
 /// each figure's line to standard output as soon as it is measured.
-pub fn run(
-    sizes: &[usize],
-    collect: bool,
-    dry_run: bool,
-    two: bool,
-    dir: Option<&Path>,
-) -> Result<(), String> {
-    for &n in sizes {
-        let tmp = temp_dir(dir)?;
-        if collect {
+pub fn run(o: &Options) -> Result<(), String> {
+    for &n in &o.sizes {
+        let tmp = temp_dir(o.dir.as_deref())?;
+        if o.collect {
             let (t, tasks) = time_collect(n, tmp.path())?;
             println!(
                 "{tasks:>8} tasks: `sweep collect` {t:.2} s ({:.3} ms per task)",
                 t / tasks as f64 * 1e3
             );
         }
-        if dry_run {
-            let r = time_submit_dry_run(n, tmp.path())?;
-            println!(
-                "{:>8} jobs: `sweep submit --slurm --dry-run` {:.2} s without a database, \
-                 {:.2} s with the sweep registered ({} array(s) of at most {}, {})",
-                r.jobs, r.fresh_s, r.registered_s, r.arrays, r.limit, r.source
-            );
+        if o.submit_dry_run {
+            println!("{}", time_submit_dry_run(n, tmp.path())?);
         }
-        if two {
-            let r = two_runners(n, tmp.path())?;
-            println!(
-                "{:>8} jobs, two runners, the first killed after {} starts: both {:.1} s; \
-                 starts A {} / B {} / resume {}, {} job(s) held at the kill; resume {:.2} s, \
-                 relabel {:.2} s; books exact (every job done once, none lost)",
-                r.jobs,
-                r.started[0],
-                r.runners_s,
-                r.started[0],
-                r.started[1],
-                r.started[2],
-                r.held,
-                r.resume_s,
-                r.relabel_s
-            );
+        if o.two_runners {
+            println!("{}", two_runners(n, tmp.path())?);
         }
     }
     Ok(())

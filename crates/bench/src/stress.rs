@@ -30,7 +30,7 @@ use std::time::Instant;
 use wetgran_core::scene::Boundary::{self, Periodic, Wall};
 use wetgran_core::scene::reference::{base_scene, shaken_standard};
 use wetgran_core::scene::{
-    CapillaryModel, CapillarySpec, DriveKind, EngineKind, Scene, WallSolverKind,
+    CapillaryModel, CapillarySpec, DriveKind, EngineKind, Scene, StartMode, WallSolverKind,
 };
 use wetgran_core::sim::EnergyLedger;
 use wetgran_core::sim::event_driven::{Engine, Vector};
@@ -112,11 +112,6 @@ impl StressCase {
             .chain([StressCase::PlantedOverlap].iter())
             .copied()
             .find(|c| c.name() == name)
-    }
-
-    /// Whether the case runs the time-driven engine (its work is counted in time steps).
-    pub(crate) fn is_time_driven(self) -> bool {
-        self == StressCase::TimeLargestDt
     }
 
     /// The case's scene (validated).
@@ -225,6 +220,21 @@ pub struct StressRow {
     pub case: StressCase,
     /// `"events"` (event engine) or `"steps"` (time engine).
     pub unit: &'static str,
+    #[serde(flatten)]
+    pub measured: Measured,
+    pub wall_seconds: f64,
+}
+
+impl StressRow {
+    /// No broken invariant and no non-finite number.
+    pub fn passed(&self) -> bool {
+        self.measured.violation.is_none() && self.measured.nan_count == 0
+    }
+}
+
+/// What a checked run measured.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Measured {
     /// Events or time steps done.
     pub work: u64,
     pub simulated_time: f64,
@@ -237,29 +247,10 @@ pub struct StressRow {
     pub nan_count: u64,
     /// Invariant checks run.
     pub checks: u64,
-    pub wall_seconds: f64,
     /// The first broken invariant; the case stopped there.
     pub violation: Option<String>,
-}
-
-impl StressRow {
-    /// No broken invariant and no non-finite number.
-    pub fn passed(&self) -> bool {
-        self.violation.is_none() && self.nan_count == 0
-    }
-}
-
-/// What a checked run measured (a [`StressRow`] without its case and timing).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Measured {
-    pub work: u64,
-    pub simulated_time: f64,
-    pub max_overlap: f64,
-    pub ledger_error: f64,
-    pub nan_count: u64,
-    pub checks: u64,
-    pub violation: Option<String>,
     /// The engine ran out of events before the work asked (nothing moves).
+    #[serde(skip)]
     pub(crate) exhausted: bool,
 }
 
@@ -268,7 +259,7 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
     let scene = case.scene();
     let start = Instant::now();
     // A panic is a failed case, reported like a broken invariant.
-    let m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+    let mut m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         measure(case, &scene, events)
     }))
     .unwrap_or_else(|payload| Measured {
@@ -285,25 +276,18 @@ pub fn run_case(case: StressCase, events: u64) -> StressRow {
         exhausted: false,
     });
     // A hard case that runs out of events tests nothing: a failure.
-    let violation = m.violation.or_else(|| {
-        m.exhausted
-            .then(|| format!("no event left to process after {} events", m.work))
-    });
+    if m.exhausted && m.violation.is_none() {
+        m.violation = Some(format!("no event left to process after {} events", m.work));
+    }
     StressRow {
         case,
-        unit: if case.is_time_driven() {
-            "steps"
-        } else {
-            "events"
+        // The time-driven case counts its work in time steps.
+        unit: match case {
+            StressCase::TimeLargestDt => "steps",
+            _ => "events",
         },
-        work: m.work,
-        simulated_time: m.simulated_time,
-        max_overlap: m.max_overlap,
-        ledger_error: m.ledger_error,
-        nan_count: m.nan_count,
-        checks: m.checks,
+        measured: m,
         wall_seconds: start.elapsed().as_secs_f64(),
-        violation,
     }
 }
 
@@ -324,15 +308,7 @@ fn measure(case: StressCase, scene: &Scene, events: u64) -> Measured {
             }
             checked_run(e, scene, events, CHECKS)
         }
-        _ => with_engine(
-            scene,
-            None,
-            CheckedRun {
-                scene,
-                events,
-                checks: CHECKS,
-            },
-        ),
+        _ => first_events(scene, events, CHECKS).expect("the hard cases start hot"),
     }
 }
 
@@ -342,9 +318,9 @@ fn measure(case: StressCase, scene: &Scene, events: u64) -> Measured {
 /// (`initial.start = "continue"`) has no state of its own: an error.
 pub fn first_events(scene: &Scene, work: u64, checks: u64) -> Result<Measured, String> {
     let cold = match scene.initial.start {
-        wetgran_core::scene::StartMode::Hot => None,
-        wetgran_core::scene::StartMode::Cold => Some(wetgran_core::sim::initial::cold_state(scene)),
-        wetgran_core::scene::StartMode::Continue => {
+        StartMode::Hot => None,
+        StartMode::Cold => Some(wetgran_core::sim::initial::cold_state(scene)),
+        StartMode::Continue => {
             return Err("initial.start = \"continue\" has no state of its own".into());
         }
     };

@@ -15,25 +15,24 @@ pub fn stress_text(rows: &[StressRow], events: u64) -> String {
     );
     s.push_str("case                         work   unit    sim. time  max overlap   ledger err   NaN    wall s  verdict\n");
     for r in rows {
+        let m = &r.measured;
         let _ = writeln!(
             s,
             "{:<20} {:>12} {:>6} {:>12.4e} {:>12.3e} {:>12.3e} {:>5} {:>9.2}  {}",
             r.case.name(),
-            r.work,
+            m.work,
             r.unit,
-            r.simulated_time,
-            r.max_overlap,
-            r.ledger_error,
-            r.nan_count,
+            m.simulated_time,
+            m.max_overlap,
+            m.ledger_error,
+            m.nan_count,
             r.wall_seconds,
             if r.passed() { "ok" } else { "FAILED" }
         );
     }
     for r in rows.iter().filter(|r| !r.passed()) {
-        let why = r
-            .violation
-            .clone()
-            .unwrap_or_else(|| format!("{} non-finite numbers", r.nan_count));
+        let why = (r.measured.violation.clone())
+            .unwrap_or_else(|| format!("{} non-finite numbers", r.measured.nan_count));
         let _ = writeln!(s, "{}: {why}", r.case.name());
     }
     let failed = rows.iter().filter(|r| !r.passed()).count();

@@ -52,7 +52,7 @@ pub(crate) fn process_cpu_seconds() -> Option<f64> {
 }
 
 /// One integrator's figures.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub(crate) struct TdmdRow {
     pub integrator: &'static str,
     /// Threads of the pool the runs were made on.
@@ -117,14 +117,10 @@ pub(crate) fn measure_threads(
             rows.push(TdmdRow {
                 integrator: integ,
                 threads: t.max(1),
-                seconds_per_time: Vec::new(),
-                cpu_per_time: Vec::new(),
-                pairs_per_particle: 0.0,
                 particles: s.particles.count,
                 dt: s.engine.dt.unwrap_or(1e-4),
-                max_overlap: 0.0,
-                builds_per_step: 0.0,
                 damping: s.contact.damping.unwrap_or(0.0),
+                ..TdmdRow::default()
             });
         }
         for _ in 0..repeat.max(1) {

@@ -290,14 +290,13 @@ pub(crate) fn svg(rows: &[WallRow]) -> String {
         .iter()
         .map(|r| r.max_error.max(1e-16).log10())
         .collect();
-    let (x0, x1) = (
-        xs.iter().cloned().fold(f64::INFINITY, f64::min).floor(),
-        xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max).ceil(),
-    );
-    let (y0, y1) = (
-        ys.iter().cloned().fold(f64::INFINITY, f64::min).floor(),
-        ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max).ceil(),
-    );
+    // The axes span whole decades.
+    let decades = |v: &[f64]| {
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        (lo.floor(), hi.ceil())
+    };
+    let ((x0, x1), (y0, y1)) = (decades(&xs), decades(&ys));
     let px = |x: f64| margin + (x - x0) / (x1 - x0).max(1.0) * (w - margin - right);
     let py = |y: f64| h - margin - (y - y0) / (y1 - y0).max(1.0) * (h - 2.0 * margin);
     let mut s = String::new();
@@ -352,28 +351,22 @@ pub(crate) fn svg(rows: &[WallRow]) -> String {
         } else {
             "#2c3e50"
         };
-        if r.solver == "exact" {
-            let _ = writeln!(
-                s,
-                "<circle cx=\"{cx}\" cy=\"{cy}\" r=\"5\" fill=\"{colour}\"/>"
-            );
-        } else if r.solver == "table" {
-            let _ = writeln!(
-                s,
-                "<polygon points=\"{},{cy} {cx},{} {},{cy} {cx},{}\" fill=\"{colour}\"/>",
+        let marker = match r.solver {
+            "exact" => format!("<circle cx=\"{cx}\" cy=\"{cy}\" r=\"5\""),
+            "table" => format!(
+                "<polygon points=\"{},{cy} {cx},{} {},{cy} {cx},{}\"",
                 cx - 6.0,
                 cy - 6.0,
                 cx + 6.0,
                 cy + 6.0
-            );
-        } else {
-            let _ = writeln!(
-                s,
-                "<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{colour}\"/>",
+            ),
+            _ => format!(
+                "<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\"",
                 cx - 5.0,
                 cy - 5.0
-            );
-        }
+            ),
+        };
+        let _ = writeln!(s, "{marker} fill=\"{colour}\"/>");
         let _ = writeln!(
             s,
             "<text x=\"{}\" y=\"{}\">{} {} ({:.2}% wrong)</text>",
