@@ -19,8 +19,8 @@
 //! them with the stand-in, and the relabelling of the lines of constant Gamma holding the new
 //! results that follows each round's run), each part timed; its budget is a tenth of the sweep.
 //! So that the map has boundaries to refine, the stand-in results are marked stationary
-//! (`stationarity.stationary`, `convergence.converged`, `trend.state`), which every report also
-//! sees.
+//! (`stationarity.stationary` and, where the run has one, `convergence.converged`), which every
+//! report also sees.
 
 use crate::quantile;
 use std::path::{Path, PathBuf};
