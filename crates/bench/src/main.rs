@@ -40,7 +40,7 @@ struct Figures {
     /// Repetitions per system (the median is reported).
     #[arg(long, default_value_t = 3)]
     repeat: usize,
-    /// Scale the run lengths (events per repetition) by this factor.
+    /// Scale the run lengths (events per repetition) by this factor (finite, > 0).
     #[arg(long, default_value_t = 1.0)]
     scale: f64,
     /// `wall` only: also write the error-against-cost plot as SVG to this file.
