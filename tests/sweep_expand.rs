@@ -504,3 +504,77 @@ fn a_job_spec_names_whether_it_counts_location_changes() {
     );
     assert!(e.contains("observe.location_changes"), "{e}");
 }
+
+/// Regression: three message slips and two gaps of sweep files. `initial.start = "a|b"` lost
+/// its reason (every line with a `|` was taken for TOML's source snippet); a `[convergence]`
+/// error named the base scene file without a line; `replicas = 4294967297` was refused with the
+/// range of a `u32` instead of the key's; a name starting with `-` was accepted (and printed in
+/// hints that the parser then read as an option); `E* = 1e-20` was accepted (its floor moves
+/// by 1.9e-21 d, inside the wall solvers' tolerance).
+#[test]
+fn regression_sweep_file_errors_keep_their_reason_line_and_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "tiny.toml", TINY_SCENE);
+    let file = d.join("bad.toml").display().to_string();
+    let cases: Vec<(String, &str, Vec<&str>)> = vec![
+        (
+            sweep_text("[scene.initial]\nstart = \"a|b\"", ""),
+            ":5",
+            vec!["key `initial.start`", "unknown variant `a|b`", "`hot`"],
+        ),
+        (
+            sweep_text("", "[[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"a|b\"]\n"),
+            ":6",
+            vec!["unknown variant `a|b`"],
+        ),
+        // Without `periods` the table joins the scene; with it, it is read after conversion.
+        (
+            sweep_text("", "[convergence]\nmax_periods = 10\nbogus = 3\n"),
+            ":7",
+            vec!["key `convergence.bogus`", "unknown field `bogus`"],
+        ),
+        (
+            sweep_text("periods = 20", "[convergence]\nmax_periods = 40\nbogus = 3\n"),
+            ":8",
+            vec!["key `convergence.bogus`", "unknown field `bogus`"],
+        ),
+        (
+            sweep_text("periods = 20", "\n[convergence]\nblocks = 100\n"),
+            ":8",
+            vec!["key `convergence.blocks`"],
+        ),
+        (
+            sweep_text("replicas = 4294967297", ""),
+            ":4",
+            vec!["key `sweep.replicas`", "= 4294967297 is out of range: must be in [1, 10000]"],
+        ),
+        (
+            sweep_text("[refine]\nbudget = 10\nmax_replicas = 4294967297", ""),
+            ":6",
+            vec!["key `refine.max_replicas`", "must be in [sweep.replicas = 1, 10000]"],
+        ),
+        (
+            "[sweep]\nname = \"-rf\"\nbase = \"tiny.toml\"\n".to_string(),
+            ":2",
+            vec!["key `sweep.name`", "must not start with '-'"],
+        ),
+        (
+            "[sweep]\nname = \"..\"\nbase = \"tiny.toml\"\n".to_string(),
+            ":2",
+            vec!["key `sweep.name`"],
+        ),
+        (
+            sweep_text("", "[[axis]]\nkey = \"e_star\"\nvalues = [2.0, 1e-20]\n"),
+            ":6",
+            vec!["key `drive.e_star`", "= 1e-20 is out of range", "must be 0 or >= 1e-6 d"],
+        ),
+    ];
+    for (text, line, wants) in cases {
+        let e = err(d, &text);
+        assert!(e.starts_with(&format!("{file}{line}:")), "{e}\n--- for:\n{text}");
+        for want in wants {
+            assert!(e.contains(want), "{want:?} missing: {e}\n--- for:\n{text}");
+        }
+    }
+}

@@ -4,8 +4,11 @@
 //! exits 1 when the job failed (its error record is written all the same).
 
 use super::common::{
-    Failure, check_regrid, load_sweep, print_json, read_spec, relabel_lines, select,
+    Failure, check_regrid, load_sweep, print_json, read_spec, register, relabel_lines, select,
+    show,
 };
+use crate::output::{Outputs, Protected};
+use crate::terminal::{escape, escape_lines};
 use crate::cluster::record::write_atomic;
 use crate::cluster::slurm::{self, ArrayScript, SbatchOptions};
 use crate::cluster::{Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
@@ -88,7 +91,7 @@ pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, s.replace)?;
     }
-    let row = store.register_sweep(&sweep, &expanded)?;
+    let row = register(&store, &sweep, &expanded)?;
     store.set_left_out(row.id, &left_out)?;
     let Some(ids) = jobs_left(&store, &row, db, &target)? else {
         return Ok(());
@@ -99,7 +102,7 @@ pub(super) fn submit(s: SubmitArgs) -> Result<(), Failure> {
     eprintln!(
         "sweep {}: {} job(s) submitted as {} array(s) of at most {} task(s); sweep directory \
          {}. Watch with `wetgran sweep status --db {db}`, then `wetgran sweep collect --db {db}`",
-        row.name,
+        escape(&row.name),
         ids.len(),
         parts.len(),
         target.limit,
@@ -236,7 +239,10 @@ fn jobs_left(
     let c = collect(store, row, &mut slurm::squeue)?;
     relabel_lines(store, row)?;
     if c.stored.len() + c.failed.len() + c.missing.len() + c.corrupt.len() > 0 {
-        eprint!("{}", collected_text(row, &store.points(row.id)?, &c));
+        eprint!(
+            "{}",
+            escape_lines(&collected_text(row, &store.points(row.id)?, &c))
+        );
     }
     let ids = jobs_to_submit(store, row)?;
     if ids.is_empty() {
@@ -244,7 +250,7 @@ fn jobs_left(
         eprintln!(
             "sweep {}: nothing to submit ({} job(s) done, {} task(s) still queued or running: \
              `wetgran sweep status --db {}`)",
-            row.name,
+            escape(&row.name),
             counts.done,
             c.waiting.len(),
             db.display()
@@ -347,7 +353,7 @@ pub(super) fn collect_cmd(a: super::common::DbSweeps) -> Result<(), Failure> {
         let c = collect(&store, s, &mut slurm::squeue)?;
         relabel_lines(&store, s)?;
         let points = store.points(s.id)?;
-        print!("{}", collected_text(s, &points, &c));
+        show(&collected_text(s, &points, &c));
         let (failed, lost) = unfinished_for_good(&points, &store.tasks(s.id)?);
         total_failed += failed;
         total_lost += lost;
@@ -407,10 +413,21 @@ fn unfinished_for_good(
 /// never ran; the job id of an unreadable spec is its file name without `.json`.
 pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
     let t0 = std::time::Instant::now();
+    if let Some(p) = out {
+        let mut outputs = Outputs::new(Protected::none().and("the job spec", spec_path));
+        if let Err(e) = outputs.claim("--out", p) {
+            return super::common::exit(Err(e.into()));
+        }
+    }
     let record = |id: &str, o: Outcome| ResultRecord::new(id, o, t0.elapsed().as_secs_f64());
     let (record, code) = match read_spec(spec_path) {
-        Err(Failure::BadInput(m) | Failure::JobsFailed(m) | Failure::Other(m)) => {
-            eprintln!("error: {m}");
+        Err(
+            Failure::BadInput(m)
+            | Failure::JobsFailed(m)
+            | Failure::Other(m)
+            | Failure::Interrupted(m),
+        ) => {
+            eprintln!("error: {}", escape_lines(&m));
             let id = spec_path
                 .file_stem()
                 .map(|s| s.to_string_lossy().to_string())
@@ -423,7 +440,7 @@ pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
             match run_job(&spec, &mut |_| {}) {
                 Ok(r) => (record(&id, Outcome::Done(r)), 0),
                 Err(e) => {
-                    eprintln!("error: job {id} failed: {e}");
+                    eprintln!("error: job {id} failed: {}", escape_lines(&e.to_string()));
                     (record(&id, Outcome::Failed(e.to_string())), 1)
                 }
             }
@@ -432,7 +449,11 @@ pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
     match out {
         Some(p) => {
             if let Err(e) = record.write(p) {
-                eprintln!("error: {}: cannot write the result: {e}", p.display());
+                eprintln!(
+                    "error: {}: cannot write the result: {}",
+                    p.display(),
+                    escape_lines(&e.to_string())
+                );
                 return ExitCode::from(1);
             }
         }

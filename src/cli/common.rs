@@ -6,9 +6,12 @@
 use crate::refine::driver::{Outcome, RefineError};
 use crate::report::sweep_text::left_out_text;
 use crate::report::sweep_text::refinement_text;
+use crate::output::{OutputError, Protected};
 use crate::run::RunOptions;
+use crate::run::progress::Steps;
 use crate::store::{LeftOut, Store, StoreError, SweepRow};
 use crate::sweep::{JobSpec, SweepFile};
+use crate::terminal::{escape, escape_lines};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -80,11 +83,14 @@ impl Workers {
 
 /// How a command failed: bad input (exit code 2), a sweep that finished with failed jobs
 /// (exit code 4: everything else was done and stored; 3 is a broken engine invariant in
-/// `simulate` and `stress`) or anything else (exit code 1).
+/// `simulate` and `stress`), Ctrl-C before anything was stored (130) or anything else (exit
+/// code 1).
 pub(super) enum Failure {
     BadInput(String),
     JobsFailed(String),
     Other(String),
+    /// Stopped by Ctrl-C before anything was stored (exit code 130).
+    Interrupted(String),
 }
 
 impl From<StoreError> for Failure {
@@ -95,7 +101,12 @@ impl From<StoreError> for Failure {
             | StoreError::Damaged { .. }
             | StoreError::Missing { .. }
             | StoreError::Outdated { .. }
+            | StoreError::Newer { .. }
+            | StoreError::NotAFile { .. }
+            | StoreError::Truncated { .. }
+            | StoreError::NoContent { .. }
             | StoreError::NoSuchSweep { .. } => Failure::BadInput(e.to_string()),
+            StoreError::Interrupted { .. } => Failure::Interrupted(e.to_string()),
             _ => Failure::Other(e.to_string()),
         }
     }
@@ -107,8 +118,9 @@ pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
         Err(Failure::BadInput(m)) => (m, 2),
         Err(Failure::JobsFailed(m)) => (m, 4),
         Err(Failure::Other(m)) => (m, 1),
+        Err(Failure::Interrupted(m)) => (m, 130),
     };
-    eprintln!("error: {m}");
+    eprintln!("error: {}", escape_lines(&m));
     ExitCode::from(code)
 }
 
@@ -127,14 +139,39 @@ pub(super) fn print_json(value: &impl serde::Serialize) {
     );
 }
 
-/// Writes a file; a failure names it.
-pub(super) fn write_file(path: &Path, text: impl AsRef<[u8]>) -> Result<(), Failure> {
-    std::fs::write(path, text).map_err(cannot_write(path))
+/// Writes an output file whole (`output::write_file`), refused where it would overwrite a file
+/// of `protected`; a failure names the file.
+pub(super) fn write_file(
+    path: &Path,
+    text: impl AsRef<[u8]>,
+    protected: &Protected,
+) -> Result<(), Failure> {
+    Ok(crate::output::write_file(path, text, protected)?)
 }
 
 /// The failure of a write to `path`, which it names.
 pub(super) fn cannot_write(path: &Path) -> impl FnOnce(std::io::Error) -> Failure + '_ {
     move |e| Failure::Other(format!("{}: cannot write: {e}", path.display()))
+}
+
+impl From<OutputError> for Failure {
+    fn from(e: OutputError) -> Self {
+        match e {
+            OutputError::Refused(m) => Failure::BadInput(m),
+            OutputError::Io(m) => Failure::Other(m),
+        }
+    }
+}
+
+/// Prints a block of text a command composed (a report, a table) on standard output, with
+/// whatever came from a database or a sweep file made inert (`terminal`).
+pub(super) fn show(text: &str) {
+    print!("{}", escape_lines(text));
+}
+
+/// Prints one message line on standard error, made inert as [`show`] does.
+pub(super) fn note(text: &str) {
+    eprintln!("{}", escape_lines(text));
 }
 
 impl From<RefineError> for Failure {
@@ -160,9 +197,10 @@ pub(super) fn load_sweep(
     file: &Path,
 ) -> Result<(SweepFile, Vec<crate::sweep::SweepJob>, Vec<LeftOut>), Failure> {
     let sweep = SweepFile::load(file).map_err(|e| Failure::BadInput(e.to_string()))?;
-    let (jobs, skipped) = sweep
-        .expand_with_skips()
-        .map_err(|e| Failure::BadInput(e.to_string()))?;
+    let mut progress = Steps::new("expanding grid points", sweep.points(), true);
+    let expanded = sweep.expand_watched(&mut |done| progress.set(done));
+    progress.finish();
+    let (jobs, skipped) = expanded.map_err(|e| Failure::BadInput(e.to_string()))?;
     let left_out: Vec<LeftOut> = skipped
         .iter()
         .map(|k| LeftOut {
@@ -176,12 +214,12 @@ pub(super) fn load_sweep(
         })
         .collect();
     if !left_out.is_empty() {
-        eprintln!(
+        note(&format!(
             "{}: left out {} grid point(s) (sweep.skip_invalid: the scene fails a constraint):",
             file.display(),
             left_out.len()
-        );
-        eprint!("{}", left_out_text(&sweep.axes, &left_out));
+        ));
+        eprint!("{}", escape_lines(&left_out_text(&sweep.axes, &left_out)));
     }
     if jobs.is_empty() {
         return Err(Failure::BadInput(format!(
@@ -190,6 +228,31 @@ pub(super) fn load_sweep(
         )));
     }
     Ok((sweep, jobs, left_out))
+}
+
+/// Registers a sweep (`Store::register_sweep_watched`) with its progress shown for a large
+/// grid, and Ctrl-C turned into a rolled-back registration (`interrupt::registering`): then the
+/// failure says that nothing was stored.
+pub(super) fn register(
+    store: &Store,
+    sweep: &SweepFile,
+    expanded: &[crate::sweep::SweepJob],
+) -> Result<SweepRow, Failure> {
+    let mut progress = Steps::new("registering jobs", expanded.len(), true);
+    let registered = super::interrupt::registering(|cancelled| {
+        store.register_sweep_watched(sweep, expanded, &mut |done| {
+            progress.set(done);
+            !cancelled()
+        })
+    });
+    progress.finish();
+    registered.map_err(|e| match e {
+        StoreError::Interrupted { path, detail } => Failure::Interrupted(format!(
+            "{path}: {detail}; run `wetgran sweep run {}` again to register and run it",
+            escape(&sweep.path.display().to_string())
+        )),
+        e => e.into(),
+    })
 }
 
 /// A sweep name registered before with another grid (axes or replicas) is refused unless
@@ -237,7 +300,7 @@ pub(super) fn check_regrid(
         sweep.path.display(),
         sweep.name,
         store.path().display(),
-        old.file,
+        escape(&old.file),
         grid(&old.axes, old.replicas),
         points.len(),
         grid(&sweep.axes, sweep.replicas),
@@ -271,21 +334,18 @@ pub(super) fn read_spec(path: &Path) -> Result<JobSpec, Failure> {
 pub(super) fn relabel_lines(store: &Store, row: &SweepRow) -> Result<(), Failure> {
     let relabelled = crate::run::relabel::relabel_changed(store, row)?;
     if relabelled.changed() > 0 {
-        eprintln!(
+        note(&format!(
             "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
-            row.name,
+            escape(&row.name),
             relabelled.text()
-        );
+        ));
     }
     Ok(())
 }
 
 /// Reports a refinement on stderr.
 pub(super) fn refinement_report(row: &SweepRow, o: &Outcome) {
-    eprintln!(
-        "{}",
-        refinement_text(&row.name, o.added, o.rounds, o.resolved)
-    );
+    note(&refinement_text(&escape(&row.name), o.added, o.rounds, o.resolved));
 }
 
 /// After `sweep run` / `sweep resume`: continues the refinement of every given sweep whose file

@@ -3,7 +3,8 @@
 //! their text entries in another.
 
 use super::common::DbSweeps;
-use super::common::{Failure, cannot_write, select};
+use super::common::{Failure, cannot_write, note, select};
+use crate::output::{AtomicFile, Outputs, Protected};
 use crate::report::export::{self, Columns, ExportRow, SeriesFile};
 use crate::store::Store;
 use clap::{Args, ValueEnum};
@@ -43,10 +44,9 @@ pub struct ExportArgs {
     all: bool,
 }
 
-fn create(path: &Path) -> Result<BufWriter<std::fs::File>, Failure> {
-    std::fs::File::create(path)
-        .map(BufWriter::new)
-        .map_err(cannot_write(path))
+/// Starts writing the output `path` (whole or not at all: `output::AtomicFile`).
+fn create(path: &Path, protected: &Protected) -> Result<AtomicFile, Failure> {
+    Ok(AtomicFile::create(path, protected)?)
 }
 
 pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
@@ -57,6 +57,17 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
             "--text goes with --series (it holds the text entries of the series)".to_string(),
         ));
     }
+    let mut outputs = Outputs::new(Protected::database(&a.from.db));
+    for (flag, path) in [
+        ("-o", a.output.as_deref()),
+        ("--series", series_path),
+        ("--text", text_path),
+    ] {
+        if let Some(p) = path {
+            outputs.claim(flag, p)?;
+        }
+    }
+    let protected = outputs.protected();
     let store = Store::open_read_only(&a.from.db)?;
     let sweeps = select(&store, a.from.sweep.as_deref())?;
     let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
@@ -70,9 +81,14 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
         }
         Failure::Other(format!("{out_name}: cannot write: {e}"))
     };
-    let mut out: Box<dyn Write> = match output {
-        Some(p) => Box::new(create(p)?),
-        None => Box::new(BufWriter::new(std::io::stdout().lock())),
+    let (mut file, mut stdout) = match output {
+        Some(p) => (Some(create(p, protected)?), None),
+        None => (None, Some(BufWriter::new(std::io::stdout().lock()))),
+    };
+    let mut out: &mut dyn Write = match (&mut file, &mut stdout) {
+        (Some(f), _) => f,
+        (None, Some(s)) => s,
+        (None, None) => unreachable!("one of the two"),
     };
     let mut series_files = Vec::new();
     for (path, file) in [
@@ -80,7 +96,7 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
         (text_path, SeriesFile::Text),
     ] {
         if let Some(p) = path {
-            let mut w = create(p)?;
+            let mut w = create(p, protected)?;
             w.write_all(export::SERIES_HEADER.as_bytes())
                 .map_err(cannot_write(p))?;
             series_files.push((w, p, file));
@@ -112,12 +128,20 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
     for (w, p, _) in &mut series_files {
         w.flush().map_err(cannot_write(p))?;
     }
+    // Every file is put in place only once the whole export is written (and flushed: a write
+    // error of any of them leaves all the old files).
+    if let Some(f) = file {
+        f.commit()?;
+    }
+    for (w, _, _) in series_files {
+        w.commit()?;
+    }
     let left_out = columns.left_out();
     if left_out > 0 {
-        eprintln!(
+        note(&format!(
             "export: {left_out} scalar column(s) left out, empty or the same in every row \
              (--all keeps them)"
-        );
+        ));
     }
     if series_path.is_none() {
         eprintln!(

@@ -104,6 +104,14 @@ pub enum Command {
     /// --classify FILE (a `[classify]` table or top-level keys); updates the phase and the
     /// numbers it was decided on, and prints how many labels changed (from -> to).
     Reclassify(reclassify_cmd::ReclassifyArgs),
+    /// Upgrade a database written by an older wetgran in place: apply this wetgran's migrations
+    /// and job-id rule (the commands that only read refuse such a database and never change
+    /// it). Copy the file first to keep the old one. Prints what was upgraded.
+    Upgrade {
+        /// Database file; also from WETGRAN_DB (the flag wins).
+        #[arg(long, env = "WETGRAN_DB", default_value = common::DEFAULT_DB)]
+        db: PathBuf,
+    },
 }
 
 #[derive(Debug, Subcommand)]
@@ -168,5 +176,6 @@ pub fn main() -> ExitCode {
         Command::Report(a) => report_cmd::report(a),
         Command::Inflection(a) => point_cmd::inflection(a),
         Command::Reclassify(a) => reclassify_cmd::reclassify(a),
+        Command::Upgrade { db } => sweep_cmd::upgrade(&db),
     })
 }

@@ -3,7 +3,9 @@
 //! its job spec, which is deterministic) and `wetgran inflection` (the fluid-gas boundary of
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
-use super::common::{Failure, check_snapshot_names, print_json, select, write_file};
+use super::common::{Failure, check_snapshot_names, print_json, select, show as show_text, write_file};
+use crate::output::{Outputs, Protected};
+use crate::terminal::escape;
 use crate::report::point_text::{
     decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
 };
@@ -74,6 +76,13 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::BadInput(format!("--colour-by: {e}")))?;
     let (snapshot, json) = (&a.snapshot, a.json);
     check_snapshot_names(snapshot)?;
+    let mut outputs = Outputs::new(Protected::database(&a.db));
+    for path in snapshot {
+        outputs.claim("--snapshot", path)?;
+    }
+    if let Some(p) = &a.profiles {
+        outputs.claim("--profiles", p)?;
+    }
     let store = Store::open_read_only(&a.db)?;
     let (sweep, p) = find_job(&store, &a.job)?;
     // With --json the lines below go to the object, printed at the end.
@@ -83,10 +92,10 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
             (serde_json::Value::Array(a), serde_json::Value::Array(b)) => a.extend(b),
             (slot, v) => *slot = v,
         },
-        None => println!("{line}"),
+        None => show_text(&format!("{line}\n")),
     };
     if !json {
-        print!("{}", job_text(&sweep, &p));
+        show_text(&job_text(&escape(&sweep), &p));
     }
     let observables: Option<Observables> = p
         .observables
@@ -100,7 +109,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
             ))
         })?;
     if !json {
-        print!("{}", decision_text(&p));
+        show_text(&decision_text(&p));
     }
     if let Some(path) = &a.profiles {
         let Some(o) = &observables else {
@@ -109,7 +118,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
                 p.job_id, p.status
             )));
         };
-        write_file(path, profiles_svg(o))?;
+        write_file(path, profiles_svg(o), outputs.protected())?;
         say(
             "profiles",
             path.display().to_string().into(),
@@ -136,8 +145,13 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
         };
         say("rerun_events", events.into(), line);
         for path in snapshot {
-            write_snapshot(path, &frame, colour_by, run.observables.temperature_unit)
-                .map_err(Failure::Other)?;
+            write_snapshot(
+                path,
+                &frame,
+                colour_by,
+                run.observables.temperature_unit,
+                outputs.protected(),
+            )?;
             say(
                 "snapshots",
                 serde_json::json!([path.display().to_string()]),
@@ -159,7 +173,7 @@ pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
         if a.json {
             all.push(inflection_json(&s.name, &lines));
         } else {
-            print!("{}", inflection_text(&s.name, &lines));
+            show_text(&inflection_text(&escape(&s.name), &lines));
         }
     }
     if a.json {

@@ -60,6 +60,6 @@ pub(super) fn reclassify(a: ReclassifyArgs) -> Result<(), Failure> {
     let store = Store::open_existing(&a.db)?;
     let sweeps = select(&store, a.sweep.as_deref())?;
     let r = relabel_stored(&store, &sweeps, thresholds.as_ref())?;
-    println!("{}", r.text());
+    super::common::show(&format!("{}\n", r.text()));
     Ok(())
 }

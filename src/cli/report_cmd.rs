@@ -3,8 +3,10 @@
 //! parameters along lines of constant Gamma, `report::lines`) and `wetgran report` (a static HTML
 //! site of a sweep, `report::site`).
 
-use super::common::{Failure, print_json, write_file};
+use super::common::{Failure, note, print_json, show, write_file};
 use crate::boundary::Extraction;
+use crate::output::folder::SiteFolder;
+use crate::output::{Outputs, Protected};
 use crate::report::boundaries_text::{boundaries_table, fixed_text};
 use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
 use crate::report::lines_plot::lines_svg;
@@ -12,6 +14,7 @@ use crate::report::plot_phase::{self, DrawnMap, MapStyle};
 use crate::report::site::{JobPictures, SiteInput, site};
 use crate::report::{ColourBy, profiles_svg, snapshot_svg};
 use crate::store::{Store, SweepRow};
+use crate::terminal::escape;
 use clap::{Args, ValueEnum};
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -68,7 +71,10 @@ impl DbLatest {
             ))
         })?;
         if !all.is_empty() {
-            eprintln!("sweep {} (the latest; choose with --sweep)", last.name);
+            note(&format!(
+                "sweep {} (the latest; choose with --sweep)",
+                escape(&last.name)
+            ));
         }
         Ok((store, last))
     }
@@ -93,9 +99,15 @@ pub struct PlotArgs {
 pub struct ReportArgs {
     #[command(flatten)]
     pub from: DbLatest,
-    /// The folder to write the report into (created if missing; its files are replaced).
+    /// The report folder: written whole beside its target and renamed into place. An existing
+    /// folder is replaced only when it is a report (it holds the `.wetgran-report` marker
+    /// file), else refused unless --force.
     #[arg(short = 'o', long = "output")]
     output: PathBuf,
+    /// Replace an existing folder that is not a report (everything in it is deleted). Never a
+    /// folder holding the database or the working folder, never a symbolic link.
+    #[arg(long)]
+    force: bool,
     /// Leave out the snapshots of the final configurations (each drawn from the job's stored
     /// final state).
     #[arg(long)]
@@ -127,12 +139,15 @@ pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
     let how = Extraction {
         include_unconverged: a.include_unconverged,
     };
+    let mut outputs = Outputs::new(Protected::database(&a.from.db));
+    outputs.claim("-o", &a.output)?;
     let (store, sweep) = a.from.open()?;
     write_file(
         &a.output,
         draw_map(&store, &sweep, how, a.y_scale.log())?.svg,
+        outputs.protected(),
     )?;
-    eprintln!("wrote {}", a.output.display());
+    note(&format!("wrote {}", a.output.display()));
     Ok(())
 }
 
@@ -146,19 +161,25 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
             p.display()
         )));
     }
+    let mut outputs = Outputs::new(Protected::database(&args.from.db));
+    for (flag, path) in [("-o", &args.output), ("--csv", &args.csv)] {
+        if let Some(p) = path {
+            outputs.claim(flag, p)?;
+        }
+    }
     let (store, sweep) = args.from.open()?;
     let lines = lines_of(&sweep, &store.points(sweep.id)?);
     if lines.lines.is_empty() {
         return Err(Failure::BadInput(format!(
             "sweep {}: no finished job of a shaken scene: lines of constant Gamma need the \
              drive's Gamma and E* (and at least one finished job)",
-            sweep.name
+            escape(&sweep.name)
         )));
     }
     if args.json {
         print_json(&lines);
     } else {
-        print!("{}", lines_table(&lines));
+        show(&lines_table(&lines));
     }
     for (path, csv) in [(&args.output, false), (&args.csv, true)] {
         let Some(path) = path else { continue };
@@ -167,8 +188,8 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
         } else {
             lines_csv(&lines)
         };
-        write_file(path, text)?;
-        eprintln!("wrote {}", path.display());
+        write_file(path, text, outputs.protected())?;
+        note(&format!("wrote {}", path.display()));
     }
     Ok(())
 }
@@ -190,7 +211,7 @@ pub(super) fn draw_map(
     let Some(slice) = map.slices.first() else {
         return Err(Failure::BadInput(format!(
             "sweep {}: no classified point to plot yet",
-            sweep.name
+            escape(&sweep.name)
         )));
     };
     // The branches (slices differing only in `initial.start`) draw as one map: the slices
@@ -213,9 +234,9 @@ pub(super) fn draw_map(
         .filter(|sl| others(sl) == others(slice))
         .collect();
     if drawn.len() < map.slices.len() {
-        eprintln!(
+        note(&format!(
             "sweep {} has {} slices (axes beyond the plane); plotting {}{}",
-            sweep.name,
+            escape(&sweep.name),
             map.slices.len(),
             if drawn.len() > 1 {
                 "the branches of the first: "
@@ -227,7 +248,7 @@ pub(super) fn draw_map(
             } else {
                 fixed_text(&others(slice))
             }
-        );
+        ));
     }
     // A log axis where the sweep's axis is logarithmic, unless `y_log` chose.
     let log_kind = |a: &Option<crate::boundary::PlaneAxis>| {
@@ -238,7 +259,7 @@ pub(super) fn draw_map(
         x_log: log_kind(&map.x),
         y_log: y_log.or(log_kind(&map.y)),
     };
-    let title = format!("wetgran phase diagram: {}", sweep.name);
+    let title = format!("wetgran phase diagram: {}", escape(&sweep.name));
     // The scene of each grid point's first job, by its coordinates (what `find` over the
     // points gave, without a search per point).
     let mut scene_at: HashMap<String, &Scene> = HashMap::new();
@@ -253,7 +274,7 @@ pub(super) fn draw_map(
             .map(|s| (*s).clone())
     });
     plot_phase::branches_map(&map, &drawn, landmarks, chain, &title, style)
-        .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
+        .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", escape(&sweep.name))))
 }
 
 /// The snapshot (from the stored final state) and profiles of each finished job.
@@ -295,6 +316,9 @@ fn pictures(
 }
 
 pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
+    let protected = Protected::database(&args.from.db);
+    // The folder is checked (and its temporary twin made) before the work.
+    let folder = SiteFolder::create(&args.output, args.force, &protected)?;
     let (store, sweep) = args.from.open()?;
     let how = Extraction {
         include_unconverged: args.include_unconverged,
@@ -351,17 +375,13 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
     };
     let files = site(&input);
     for (path, text) in &files {
-        let full = args.output.join(path);
-        if let Some(dir) = full.parent() {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| Failure::Other(format!("{}: cannot create: {e}", dir.display())))?;
-        }
-        write_file(&full, text)?;
+        folder.write(path, text)?;
     }
-    eprintln!(
+    folder.commit()?;
+    note(&format!(
         "wrote {} ({} files; open it in a browser)",
         args.output.join("index.html").display(),
         files.len()
-    );
+    ));
     Ok(())
 }

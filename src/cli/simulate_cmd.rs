@@ -1,7 +1,8 @@
 //! `wetgran simulate`: one scene file run with its observers, reported as a table or JSON, with
 //! optional snapshots and profile pictures.
 
-use super::common::{Failure, check_snapshot_names, exit, print_json};
+use super::common::{Failure, check_snapshot_names, exit, print_json, show, write_file};
+use crate::output::{Outputs, Protected};
 use crate::report::run_text::{observed_text, summary_text};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use clap::Args;
@@ -58,6 +59,13 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         .parse()
         .map_err(|e| Failure::BadInput(format!("--colour-by: {e}")))?;
     check_snapshot_names(&args.snapshot)?;
+    let mut outputs = Outputs::new(Protected::none().and("the scene file", &args.scene));
+    for path in &args.snapshot {
+        outputs.claim("--snapshot", path)?;
+    }
+    if let Some(p) = &args.profiles {
+        outputs.claim("--profiles", p)?;
+    }
     let scene = load_scene(&args.scene)?;
     let (run, frame) = if std::io::stderr().is_terminal() {
         let duration = scene.run.duration;
@@ -76,17 +84,15 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
     if args.json {
         print_json(&run);
     } else {
-        print!("{}", summary_text(&run.report));
-        print!("{}", observed_text(&run));
+        show(&summary_text(&run.report));
+        show(&observed_text(&run));
     }
     let unit = run.observables.temperature_unit;
     for path in &args.snapshot {
-        write_snapshot(path, &frame, colour_by, unit)
-            .map_err(|e| Failure::BadInput(e.to_string()))?;
+        write_snapshot(path, &frame, colour_by, unit, outputs.protected())?;
     }
     if let Some(path) = &args.profiles {
-        std::fs::write(path, profiles_svg(&run.observables))
-            .map_err(|e| Failure::BadInput(format!("{}: cannot write: {e}", path.display())))?;
+        write_file(path, profiles_svg(&run.observables), outputs.protected())?;
     }
     Ok(run.report.invariant_violation.clone())
 }

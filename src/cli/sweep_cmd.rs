@@ -6,8 +6,9 @@
 
 use super::common::{
     DEFAULT_DB, DbSweeps, Failure, Workers, available_cores, check_regrid, continue_refinement,
-    load_sweep, print_json, read_spec, relabel_lines, select,
+    load_sweep, note, print_json, read_spec, register, relabel_lines, select, show,
 };
+use crate::terminal::{escape, escape_lines};
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{boundaries_csv, boundaries_table};
 use crate::report::cluster_text::slurm_status_text;
@@ -196,16 +197,17 @@ pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
     // a sync"): everything it writes can be made again from the sweep file.
     let store = Store::open_as(db, true, Durability::Fast)?;
-    super::interrupt::resume_hint_on_interrupt(Some(&sweep.name), db);
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, a.replace)?;
     }
-    let row = store.register_sweep(&sweep, &expanded)?;
+    // Until it is registered there is nothing to resume: Ctrl-C rolls the registration back.
+    let row = register(&store, &sweep, &expanded)?;
+    super::interrupt::resume_hint_on_interrupt(Some(&sweep.name), db);
     store.set_left_out(row.id, &left_out)?;
     // Results shared with an earlier registration get this file's `[classify]` thresholds.
     let relabelled = crate::run::relabel::relabel_stored(&store, std::slice::from_ref(&row), None)?;
     if relabelled.changed() > 0 {
-        eprintln!("sweep {}: {}", row.name, relabelled.text());
+        note(&format!("sweep {}: {}", escape(&row.name), relabelled.text()));
     }
     let rows = [row];
     run_and_report(&store, &rows, &opts, a.retry_failed)?;
@@ -279,13 +281,13 @@ fn extend_and_report(
     let s = extend_unconverged(store, sweeps, cap, opts.jobs, opts.table_cache_mib, true)?;
     eprint!(
         "{}",
-        extended_text(
+        escape_lines(&extended_text(
             s.extended,
             s.converged,
             s.skipped,
             &cap.describe(),
             &s.failed
-        )
+        ))
     );
     if s.failed.is_empty() {
         Ok(())
@@ -324,13 +326,13 @@ fn run_and_report(
         relabel_lines(store, s)?;
         let c = store.counts(s.id)?;
         if c.failed > 0 {
-            eprintln!(
+            note(&format!(
                 "sweep {}: {} failed job(s): see `wetgran sweep status --db {}`; \
                  `--retry-failed` runs them again",
-                s.name,
+                escape(&s.name),
                 c.failed,
                 store.path().display()
-            );
+            ));
         }
     }
     Ok(())
@@ -343,7 +345,7 @@ pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
     let store = Store::open_read_only(db)?;
     let sweeps = store.sweeps()?;
     if sweeps.is_empty() && !json {
-        println!("{}: no sweeps yet", store.path().display());
+        show(&format!("{}: no sweeps yet\n", store.path().display()));
     }
     let cores = available_cores();
     let now = crate::store::now();
@@ -370,10 +372,10 @@ pub(super) fn sweep_status(db: &Path, json: bool) -> Result<(), Failure> {
             v["slurm"] = slurm.into();
             all.push(v);
         } else {
-            print!("{}", sweep_status_text(&input));
+            show(&sweep_status_text(&input));
             if let Some(slurm) = slurm {
-                println!("sweep {} on Slurm", s.name);
-                print!("{slurm}");
+                show(&format!("sweep {} on Slurm\n", escape(&s.name)));
+                show(&slurm);
             }
         }
     }
@@ -435,26 +437,20 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
     // Every start mode is sampled (a hot and a cold branch cost different rates).
     let starts: Vec<String> = planned.iter().map(|j| j.start.clone()).collect();
     let picks = sample_picks(&starts, samples);
-    print!(
-        "{}",
-        estimate_head_text(
+    show(&estimate_head_text(
             &file.display().to_string(),
             jobs.len(),
             picks.len(),
             periods,
             settle
-        )
-    );
+        ));
     let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
     let mut rates = Vec::new();
     for &k in &picks {
         let coords = coords_text(&labels, &jobs[k].coords);
         if let Some(m) = planned[k].measured {
             // The database has its run: its rate is known, nothing to sample.
-            print!(
-                "{}",
-                estimate_stored_text(&coords, m.wall_seconds / m.simulated_time)
-            );
+            show(&estimate_stored_text(&coords, m.wall_seconds / m.simulated_time));
             continue;
         }
         let spec = sample_spec(&sweep, &jobs[k], settle, periods);
@@ -466,12 +462,9 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
                     seconds_per_time: rate,
                     start: planned[k].start.clone(),
                 });
-                print!(
-                    "{}",
-                    estimate_sample_text(&coords, rate * spec.period(), rate, r.events)
-                );
+                show(&estimate_sample_text(&coords, rate * spec.period(), rate, r.events));
             }
-            Err(e) => print!("{}", estimate_failed_text(&coords, &e.to_string())),
+            Err(e) => show(&estimate_failed_text(&coords, &e.to_string())),
         }
     }
     let measured = measured_runs(&planned);
@@ -480,9 +473,7 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
     }
     let policy = jobs.iter().any(|j| j.spec.scene.convergence.is_some());
     let (lines, by_start) = cost_lines(&planned, &rates, measured.as_ref(), policy, cores);
-    print!(
-        "{}",
-        estimate_text(
+    show(&estimate_text(
             jobs.len(),
             cores,
             measured.as_ref(),
@@ -490,8 +481,7 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
             &by_start,
             settle,
             periods
-        )
-    );
+        ));
     Ok(())
 }
 
@@ -512,7 +502,7 @@ pub(super) fn sweep_map(
 ) -> Result<PhaseMap, Failure> {
     let obs: Vec<Observation> = points.iter().map(Observation::of_summary).collect();
     phase_map_with(&sweep.axes, &obs, how)
-        .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", sweep.name)))
+        .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", escape(&sweep.name))))
 }
 
 #[derive(Debug, Args)]
@@ -557,7 +547,20 @@ pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
             print_json(&v);
         }
         BoundaryFormat::Csv => print!("{}", boundaries_csv(&maps)),
-        BoundaryFormat::Table => print!("{}", boundaries_table(&maps, &points, how)),
+        BoundaryFormat::Table => show(&boundaries_table(&maps, &points, how)),
+    }
+    Ok(())
+}
+
+/// `wetgran upgrade`: applies this wetgran's migrations and job-id rule to a database written by
+/// an older one (`Store::upgrade`) and says what it did.
+pub(super) fn upgrade(db: &Path) -> Result<(), Failure> {
+    match Store::upgrade(db)? {
+        None => show(&format!(
+            "{}: up to date (written by this wetgran's schema); nothing was changed\n",
+            db.display()
+        )),
+        Some(what) => show(&format!("{}: upgraded ({what} before)\n", db.display())),
     }
     Ok(())
 }

@@ -18,7 +18,6 @@
 
 use crate::sweep::{JobResult, JobSpec};
 use serde::{Deserialize, Serialize};
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Version of the result-record layout.
@@ -182,25 +181,15 @@ fn check_result(res: &JobResult) -> Result<(), String> {
     Ok(())
 }
 
-/// Writes `bytes` to a temporary file beside `path`, syncs it, and renames it over `path`: on a
-/// POSIX filesystem (NFS and Lustre included) a reader sees the old file or the whole new one.
+/// Writes `bytes` whole to `path` (`output::write_file`: a temporary file beside it, synced and
+/// renamed over it): on a POSIX filesystem (NFS and Lustre included) a reader sees the old file
+/// or the whole new one. A database at `path` is refused.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp.{}", std::process::id()));
-    let written = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    written
+    Ok(crate::output::write_file(
+        path,
+        bytes,
+        &crate::output::Protected::none(),
+    )?)
 }
 
 #[cfg(test)]

@@ -85,7 +85,7 @@ pub fn refine_sweep(
         if opts.show_progress && relabelled.changed() > 0 {
             eprintln!(
                 "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
-                row.name,
+                crate::terminal::escape(&row.name),
                 relabelled.text()
             );
         }
@@ -105,7 +105,7 @@ pub fn refine_sweep(
         if opts.show_progress {
             eprintln!(
                 "sweep {}: refinement round {}: {} job(s) added, {left} left of the budget",
-                row.name,
+                crate::terminal::escape(&row.name),
                 out.rounds,
                 jobs.len()
             );

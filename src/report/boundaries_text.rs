@@ -123,7 +123,7 @@ pub fn boundaries_table(
 ) -> String {
     let mut out = String::new();
     for ((s, m), points) in maps.iter().zip(points) {
-        let _ = writeln!(out, "sweep {}", s.name);
+        let _ = writeln!(out, "sweep {}", crate::terminal::escape(&s.name));
         if let Some(n) = chain_model_note(points) {
             let _ = writeln!(out, "{n}");
         }

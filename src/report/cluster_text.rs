@@ -2,6 +2,7 @@
 //! of `sweep status` (task states as recorded and in the queue). Pure functions of the stored
 //! rows and the collection's outcome.
 
+use crate::terminal::escape;
 use crate::cluster::{Collected, QueueStates};
 use crate::run::runner::point_label;
 use crate::store::{PointRow, SweepRow, TaskRow};
@@ -44,7 +45,7 @@ pub fn collected_text(sweep: &SweepRow, points: &[PointRow], c: &Collected) -> S
         out,
         "sweep {}: {} result(s) stored, {} already stored (not stored twice), {} failed, {} \
          corrupt, {} missing, {} waiting{}{}",
-        sweep.name,
+        escape(&sweep.name),
         c.stored.len(),
         c.duplicates.len(),
         c.failed.len(),
@@ -72,10 +73,10 @@ pub fn collected_text(sweep: &SweepRow, points: &[PointRow], c: &Collected) -> S
                 out,
                 "  {what} {} (job {}, task {}_{}): {}",
                 label(&t.job_id),
-                &t.job_id[..12],
-                t.slurm_job.as_deref().unwrap_or("?"),
+                t.job_id.get(..12).unwrap_or(&t.job_id),
+                escape(t.slurm_job.as_deref().unwrap_or("?")),
                 t.task,
-                t.message.as_deref().unwrap_or("")
+                escape(t.message.as_deref().unwrap_or(""))
             );
         }
     }
@@ -92,7 +93,7 @@ pub fn collected_text(sweep: &SweepRow, points: &[PointRow], c: &Collected) -> S
             out,
             "  `wetgran sweep submit {} --slurm` submits the {again} failed, corrupt or missing \
              job(s) again",
-            sweep.file
+            escape(&sweep.file)
         );
     }
     out

@@ -24,7 +24,7 @@ pub fn job_text(sweep: &str, p: &PointRow) -> String {
     );
     let _ = writeln!(out, "status      {}", p.status);
     if let Some(e) = &p.last_error {
-        let _ = writeln!(out, "last error  {e}");
+        let _ = writeln!(out, "last error  {}", crate::terminal::escape(e));
     }
     out
 }

@@ -254,22 +254,24 @@ pub fn snapshot_svg(frame: &Frame, colour_by: ColourBy, energy_unit: f64) -> Str
     s
 }
 
-/// Writes a snapshot to `path`: extended XYZ for `.xyz`, SVG for `.svg`.
+/// Writes a snapshot to `path` (whole, and never over a file of `protected`: `output`):
+/// extended XYZ for `.xyz`, SVG for `.svg`.
 pub fn write_snapshot(
     path: &Path,
     frame: &Frame,
     colour_by: ColourBy,
     energy_unit: f64,
-) -> Result<(), String> {
+    protected: &crate::output::Protected,
+) -> Result<(), crate::output::OutputError> {
     let text = match path.extension().and_then(|e| e.to_str()) {
         Some("xyz") => snapshot_xyz(frame, energy_unit),
         Some("svg") => snapshot_svg(frame, colour_by, energy_unit),
         _ => {
-            return Err(format!(
+            return Err(crate::output::OutputError::Refused(format!(
                 "{}: unknown snapshot format: the file name must end in .xyz or .svg",
                 path.display()
-            ));
+            )));
         }
     };
-    std::fs::write(path, text).map_err(|e| format!("{}: cannot write: {e}", path.display()))
+    crate::output::write_file(path, text, protected)
 }

@@ -1,8 +1,11 @@
 //! Small SVG helpers shared by the pictures: escaping, number formatting, a colour map.
 
-/// Escapes text for SVG.
+/// Escapes text for SVG (and HTML): the markup characters, and the characters `terminal` makes
+/// inert (control characters are not allowed in XML; bidirectional overrides would reorder the
+/// text around them); line breaks are kept.
 pub(super) fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
+    crate::terminal::escape_lines(s)
+        .replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
 }

@@ -7,6 +7,7 @@ use super::trust::{LABEL_KEPT, NOT_STATIONARY, mark};
 use crate::run::runner::{point_label, short};
 use crate::store::{LeftOut, PointSummary, RunningJob, Stale, StateCounts, SweepRow};
 use crate::sweep::estimate::{MeasuredRuns, SweepCost};
+use crate::terminal::escape;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use wetgran_core::observe::trend::TrendState;
@@ -30,7 +31,7 @@ pub fn left_out_text(axes: &[crate::sweep::Axis], left_out: &[LeftOut]) -> Strin
     let mut out = String::new();
     for k in left_out {
         let coords = coords_text(&labels, &k.coords);
-        let _ = writeln!(out, "  left out {coords}: {}", k.constraint);
+        let _ = writeln!(out, "  left out {coords}: {}", escape(&k.constraint));
     }
     out
 }
@@ -197,16 +198,16 @@ pub fn sweep_status_text(input: &StatusInput) -> String {
     let _ = writeln!(
         out,
         "sweep {}  ({}; {} point(s) x {} replica(s))",
-        s.name,
-        s.file,
+        escape(&s.name),
+        escape(&s.file),
         points.len() as u64 / s.replicas.max(1) as u64,
         s.replicas
     );
     if let Some(d) = &s.description {
-        let _ = writeln!(out, "  {d}");
+        let _ = writeln!(out, "  {}", escape(d));
     }
     if let Some(cost) = &s.cost {
-        let _ = writeln!(out, "  cost: {cost}");
+        let _ = writeln!(out, "  cost: {}", escape(cost));
     }
     let live = (c.running as usize).saturating_sub(stale.len());
     let running = if stale.is_empty() {
@@ -225,8 +226,9 @@ pub fn sweep_status_text(input: &StatusInput) -> String {
     for (owner, n, why) in stale_by_owner(&stale) {
         let _ = writeln!(
             out,
-            "  stale  {n} job(s) of runner {owner} ({}): not running; `sweep resume` runs them \
+            "  stale  {n} job(s) of runner {} ({}): not running; `sweep resume` runs them \
              again",
+            escape(owner),
             heartbeat_text(&why)
         );
     }
@@ -276,9 +278,9 @@ pub fn sweep_status_text(input: &StatusInput) -> String {
             out,
             "  failed {} (job {}, {} attempt(s)): {}",
             point_label(s, &p.coords, p.replica),
-            &p.job_id[..12],
+            p.job_id.get(..12).unwrap_or(&p.job_id),
             p.attempts,
-            p.last_error.as_deref().unwrap_or("no message")
+            escape(p.last_error.as_deref().unwrap_or("no message"))
         );
     }
     out

@@ -1,6 +1,8 @@
 //! Progress display of a sweep run: on a terminal an indicatif overall bar (with ETA) and one
 //! line per worker (its grid point and progress); otherwise one plain line per finished job.
+//! Every line passes through `terminal` (a job's error text may hold anything).
 
+use crate::terminal::{escape, escape_lines};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::Write;
 use std::time::Duration;
@@ -70,7 +72,7 @@ impl Progress {
     pub fn start(&mut self, worker: usize, label: &str) {
         if let Progress::Bars { workers, .. } = self {
             workers[worker].set_position(0);
-            workers[worker].set_message(label.to_string());
+            workers[worker].set_message(escape(label).into_owned());
         }
     }
 
@@ -92,13 +94,13 @@ impl Progress {
                 overall.inc(1);
                 workers[worker].set_position(0);
                 workers[worker].set_message("idle");
-                let _ = multi.println(line);
+                let _ = multi.println(escape_lines(line));
             }
             Progress::Plain { total, done } => {
                 *done += 1;
                 let width = total.to_string().len();
                 let mut err = std::io::stderr().lock();
-                let _ = writeln!(err, "[{:>width$}/{total}] {line}", *done);
+                let _ = writeln!(err, "[{:>width$}/{total}] {}", *done, escape_lines(line));
             }
             Progress::Quiet => {}
         }
@@ -108,9 +110,9 @@ impl Progress {
     pub fn note(&mut self, line: &str) {
         match self {
             Progress::Bars { multi, .. } => {
-                let _ = multi.println(line);
+                let _ = multi.println(escape_lines(line));
             }
-            Progress::Plain { .. } => eprintln!("{line}"),
+            Progress::Plain { .. } => eprintln!("{}", escape_lines(line)),
             Progress::Quiet => {}
         }
     }
@@ -125,6 +127,70 @@ impl Progress {
                 w.finish_and_clear();
             }
             overall.finish();
+        }
+    }
+}
+
+/// Progress of one long step before any job runs (expanding a large grid, registering it):
+/// a bar on a terminal, else a line at every tenth; nothing for fewer than [`STEPS_SHOWN_FROM`]
+/// items (small sweeps print what they printed before).
+#[derive(Debug)]
+pub struct Steps {
+    what: &'static str,
+    total: usize,
+    shown_tenths: usize,
+    bar: Option<ProgressBar>,
+    plain: bool,
+}
+
+/// Steps of fewer items than this show no progress.
+pub const STEPS_SHOWN_FROM: usize = 10_000;
+
+impl Steps {
+    /// `total` items of `what` (`"expanding grid points"`); quiet unless `show` and `total`
+    /// reaches [`STEPS_SHOWN_FROM`].
+    pub fn new(what: &'static str, total: usize, show: bool) -> Steps {
+        use std::io::IsTerminal;
+        let show = show && total >= STEPS_SHOWN_FROM;
+        let bar = (show && std::io::stderr().is_terminal()).then(|| {
+            let b = ProgressBar::with_draw_target(
+                Some(total as u64),
+                ProgressDrawTarget::stderr_with_hz(4),
+            );
+            b.set_style(
+                ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len}  ETA {eta_precise}")
+                    .expect("valid template")
+                    .progress_chars("=> "),
+            );
+            b.set_message(what);
+            b
+        });
+        Steps {
+            what,
+            total,
+            shown_tenths: 0,
+            plain: show && bar.is_none(),
+            bar,
+        }
+    }
+
+    /// `done` of the items are through.
+    pub fn set(&mut self, done: usize) {
+        if let Some(b) = &self.bar {
+            b.set_position(done as u64);
+        } else if self.plain && self.total > 0 {
+            let tenths = done * 10 / self.total;
+            if tenths > self.shown_tenths {
+                self.shown_tenths = tenths;
+                eprintln!("{}: {done} of {}", self.what, self.total);
+            }
+        }
+    }
+
+    /// Removes the bar.
+    pub fn finish(&mut self) {
+        if let Some(b) = self.bar.take() {
+            b.finish_and_clear();
         }
     }
 }

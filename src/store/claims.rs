@@ -154,6 +154,36 @@ impl Store {
         })
     }
 
+    /// Closes the open run rows (no outcome) of every runner whose process is gone (this host,
+    /// `/proc/PID` absent: a runner stopped by Ctrl-C, SIGKILL or a crash) with the outcome
+    /// `interrupted`, in one transaction; returns how many. Every writer's open calls it, so
+    /// the books of an interrupted run are closed by the next command that writes (a resume
+    /// re-queues the jobs themselves). A runner of another host is judged by its heartbeat
+    /// when its jobs are re-queued ([`Store::requeue_orphans`], outcome `orphaned`).
+    pub fn close_interrupted_runs(&self) -> Result<u64, StoreError> {
+        let owners: Vec<String> =
+            self.run(sqlx::query_scalar(queries::OPEN_RUN_OWNERS).fetch_all(&self.pool))?;
+        let gone: Vec<&String> = owners
+            .iter()
+            .filter(|o| **o != self.owner && owner_is_dead(o))
+            .collect();
+        if gone.is_empty() {
+            return Ok(0);
+        }
+        let t = now();
+        self.in_transaction(async |tx| {
+            let mut closed = 0;
+            for owner in gone {
+                closed += sqlx::query(queries::CLOSE_INTERRUPTED_RUNS)
+                    .bind(owner)
+                    .bind(t)
+                    .exec(tx, self)
+                    .await?;
+            }
+            Ok(closed)
+        })
+    }
+
     /// Re-queues the failed jobs of the given sweeps; returns how many.
     pub fn retry_failed(&self, sweep_ids: &[i64]) -> Result<u64, StoreError> {
         let mut total = 0;

@@ -99,8 +99,21 @@ pub enum StoreError {
     Missing { path: String },
     /// A name that is not in the database.
     NoSuchSweep { path: String, name: String },
-    /// Written by an older wetgran and not writable here, so it cannot be upgraded.
+    /// Written by an older wetgran; commands that only read never upgrade it
+    /// (`wetgran upgrade` does).
     Outdated { path: String, detail: String },
+    /// Written by a newer wetgran (a migration this one does not know).
+    Newer { path: String, detail: String },
+    /// Not a regular file (a folder, a named pipe, a device, a socket), or a file of its own
+    /// beside it (`-wal`, `-shm`, `-journal`) that is not one.
+    NotAFile { path: String, detail: String },
+    /// Shorter than its own header says: an incomplete copy or download.
+    Truncated { path: String, detail: String },
+    /// wetgran's, in write-ahead-log mode, but without any table and without its log: the
+    /// main file of a database copied without its `-wal` file while a run was writing it.
+    NoContent { path: String },
+    /// Stopped by the user (Ctrl-C) in the middle of a transaction, which was rolled back.
+    Interrupted { path: String, detail: String },
     /// Any other database error.
     Db { path: String, detail: String },
 }
@@ -133,10 +146,46 @@ impl fmt::Display for StoreError {
             }
             StoreError::Outdated { path, detail } => write!(
                 f,
-                "{path}: written by an older wetgran ({detail}) and read-only here, so it cannot \
-                 be upgraded: run any wetgran command on it once where it can be written, or \
-                 work on a writable copy"
+                "{path}: written by an older wetgran ({detail}); a command that only reads never \
+                 changes a database: `wetgran upgrade --db {path}` upgrades it in place where it \
+                 can be written (copy the file first to keep the old one; commands that write, \
+                 such as `sweep resume`, also upgrade it){}",
+                if read_only::log_missing(Path::new(path)) {
+                    format!(
+                        ". If the file is a copy taken while wetgran was writing the database, \
+                         its write-ahead log {path}-wal was left behind: copy that file beside it \
+                         instead"
+                    )
+                } else {
+                    String::new()
+                }
             ),
+            StoreError::Newer { path, detail } => write!(
+                f,
+                "{path}: written by a newer wetgran ({detail}); it was left unchanged: use that \
+                 version (this is wetgran {})",
+                env!("CARGO_PKG_VERSION")
+            ),
+            StoreError::NotAFile { path, detail } => write!(
+                f,
+                "{path}: not a database file: {detail}; nothing was opened or created. Give the \
+                 path of a database file (or of a new one) with --db"
+            ),
+            StoreError::Truncated { path, detail } => write!(
+                f,
+                "{path}: the wetgran database is cut short ({detail}): an incomplete copy or \
+                 download; it was left unchanged. Copy it again whole (with its -wal file, if \
+                 it has one), or restore a backup"
+            ),
+            StoreError::NoContent { path } => write!(
+                f,
+                "{path}: a wetgran database without its content: the file holds no table and \
+                 its write-ahead log {path}-wal is missing. It looks like the main file of a \
+                 database copied alone while wetgran was writing it: copy the -wal file with it \
+                 (both while no wetgran runs on the database), or restore a backup. It was left \
+                 unchanged"
+            ),
+            StoreError::Interrupted { path, detail } => write!(f, "{path}: {detail}"),
             StoreError::Db { path, detail } => write!(f, "{path}: database error: {detail}"),
         }
     }

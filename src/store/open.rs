@@ -5,7 +5,7 @@
 
 use super::{
     APPLICATION_ID, CACHE_KIB, Durability, Exec, JOB_ID_RULE, MIGRATOR, Store, StoreError,
-    busy_timeout, db_error, explain, is_storage_fault, new_owner, queries,
+    busy_timeout, db_error, explain, is_storage_fault, new_owner, queries, sqlite_code,
 };
 use crate::sweep::spec::JobSpec;
 use sqlx::SqliteConnection;
@@ -16,13 +16,81 @@ use std::time::Duration;
 /// What is at a path before it is opened.
 pub(super) enum Existing {
     New,
-    Ours,
+    /// wetgran's; `wal`: its header says write-ahead-log mode.
+    Ours {
+        wal: bool,
+    },
     OtherSqlite,
 }
 
+/// What kind of file system object `m` is, in words (for one that is not a regular file).
+fn kind_words(m: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = m.file_type();
+    if t.is_dir() {
+        "a folder"
+    } else if t.is_fifo() {
+        "a named pipe (FIFO)"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// Refuses a database path that is not a regular file (opening a named pipe would wait for a
+/// writer forever; beside a device SQLite would create its journal), and one whose `-wal`,
+/// `-shm` or `-journal` is not a regular file, before anything opens them.
+fn check_kinds(path: &Path) -> Result<(), StoreError> {
+    let p = path.display().to_string();
+    if let Ok(m) = std::fs::metadata(path)
+        && !m.is_file()
+    {
+        return Err(StoreError::NotAFile {
+            path: p,
+            detail: format!("it is {}", kind_words(&m)),
+        });
+    }
+    for suffix in crate::output::DATABASE_COMPANIONS {
+        let companion = crate::output::with_suffix(path, suffix);
+        if let Ok(m) = std::fs::metadata(&companion)
+            && !m.is_file()
+        {
+            return Err(StoreError::NotAFile {
+                path: p,
+                detail: format!(
+                    "the file SQLite keeps beside it, {}, is {}: remove it or give another \
+                     path",
+                    companion.display(),
+                    kind_words(&m)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The size the header of an SQLite file says it has (page size times page count), where the
+/// header's page count is valid (SQLite 3.7.0 on: "version-valid-for" equals the change
+/// counter).
+fn header_size(header: &[u8]) -> Option<u64> {
+    let be32 = |at: usize| u32::from_be_bytes([header[at], header[at + 1], header[at + 2], header[at + 3]]);
+    let page_size = match u16::from_be_bytes([header[16], header[17]]) {
+        1 => 65536,
+        n => u64::from(n),
+    };
+    (be32(92) == be32(24) && be32(28) > 0).then(|| page_size * u64::from(be32(28)))
+}
+
 /// What is at `path`, from its header; nothing there (a missing or empty file) is
-/// [`StoreError::Missing`] unless `create`.
+/// [`StoreError::Missing`] unless `create`. A path that is not a regular file, and a file
+/// shorter than its header says (with no log beside it that holds the rest), are refused.
 pub(super) fn inspect(path: &Path, create: bool) -> Result<Existing, StoreError> {
+    check_kinds(path)?;
     let p = path.display().to_string();
     let new = || match create {
         true => Ok(Existing::New),
@@ -58,9 +126,24 @@ pub(super) fn inspect(path: &Path, create: bool) -> Result<Existing, StoreError>
         };
         return Err(StoreError::NotSqlite { path: p, detail });
     }
+    // In WAL mode the log may hold the pages a checkpoint had not yet written: only a file
+    // without a log is measured against its header.
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    if let Some(size) = header_size(&bytes)
+        && len < size
+        && super::read_only::log_missing(path)
+    {
+        return Err(StoreError::Truncated {
+            path: p,
+            detail: format!("{len} bytes, where its header counts {size}"),
+        });
+    }
     let app_id = i32::from_be_bytes([bytes[68], bytes[69], bytes[70], bytes[71]]);
     if app_id == APPLICATION_ID {
-        Ok(Existing::Ours)
+        // File format bytes 18 and 19: 2 in write-ahead-log mode.
+        Ok(Existing::Ours {
+            wal: bytes[18] == 2,
+        })
     } else if app_id != 0 {
         Err(StoreError::NotWetgran {
             path: p,
@@ -102,6 +185,10 @@ impl Store {
 
     fn open_once(path: &Path, create: bool, durability: Durability) -> Result<Store, StoreError> {
         let existing = inspect(path, create)?;
+        if let Existing::Ours { .. } = existing {
+            // What can be refused is refused before SQLite creates the log beside the file.
+            Self::probe(path)?;
+        }
         let opts = SqliteConnectOptions::new()
             .create_if_missing(true)
             .foreign_keys(true)
@@ -112,6 +199,7 @@ impl Store {
         let store = Self::connect(path, opts, explain)?;
         store.prepare(existing)?;
         store.rekey_jobs()?;
+        store.close_interrupted_runs()?;
         Ok(store)
     }
 
@@ -146,7 +234,14 @@ impl Store {
                     .acquire_timeout(busy * 2 + Duration::from_secs(1))
                     .connect_with(opts),
             )
-            .map_err(|e| failed(open_error(&e)))?;
+            .map_err(|e| match sqlite_code(&e) {
+                // Connecting reads the header and the schema: a malformed one is damage.
+                Some(11 | 26) => StoreError::Damaged {
+                    path: path.display().to_string(),
+                    detail: e.to_string(),
+                },
+                _ => failed(open_error(&e)),
+            })?;
         Ok(Store {
             rt,
             pool,
@@ -176,7 +271,7 @@ impl Store {
                         return Err(self.not_wetgran(&tables));
                     }
                 }
-                Existing::Ours => {
+                Existing::Ours { wal } => {
                     let check: Vec<String> = sqlx::query_scalar(queries::QUICK_CHECK)
                         .fetch_all(&mut *conn)
                         .await
@@ -184,10 +279,23 @@ impl Store {
                     if check.first().map(String::as_str) != Some("ok") {
                         return Err(self.damaged(format!("integrity check: {}", check.join("; "))));
                     }
+                    let tables: Vec<String> = sqlx::query_scalar(queries::LIST_TABLES)
+                        .fetch_all(&mut *conn)
+                        .await
+                        .map_err(damaged)?;
+                    if wal && tables.is_empty() && super::read_only::log_missing(&self.path) {
+                        return Err(StoreError::NoContent {
+                            path: self.path.display().to_string(),
+                        });
+                    }
+                    let applied = super::read_only::applied_migrations(conn)
+                        .await
+                        .map_err(damaged)?;
+                    self.refuse_newer(&applied)?;
                 }
                 Existing::New => {}
             }
-            if !matches!(existing, Existing::Ours) {
+            if !matches!(existing, Existing::Ours { .. }) {
                 // Before WAL mode, so that the id is written to the main file at once.
                 sqlx::query(queries::SET_APPLICATION_ID)
                     .execute(&mut *conn)

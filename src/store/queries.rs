@@ -24,6 +24,9 @@ macro_rules! queries {
 
 queries! {
     APPLIED_MIGRATIONS = "applied_migrations";
+    CHECKPOINT_TRUNCATE = "checkpoint_truncate";
+    CLOSE_INTERRUPTED_RUNS = "close_interrupted_runs";
+    OPEN_RUN_OWNERS = "open_run_owners";
     SWEEP_POINT_SUMMARIES_PACKED = "sweep_point_summaries_packed";
     SWEEP_FIRST_SPEC = "sweep_first_spec";
     SWEEP_RUNNING_JOBS = "sweep_running_jobs";

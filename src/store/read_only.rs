@@ -17,9 +17,11 @@
 //!   because SQLite cannot create the `-wal`/`-shm` files (a folder this user cannot write, with
 //!   write bits for another): no writer of this user can exist either.
 //!
-//! A database written by an older wetgran (migrations or the job-id rule not applied) is
-//! upgraded by a read-write open where it can be written, as any command did before; where it
-//! cannot, it is refused with [`StoreError::Outdated`].
+//! A read-only open never changes the database: one written by an older wetgran (migrations or
+//! the job-id rule not applied) is refused with [`StoreError::Outdated`], which names
+//! `wetgran upgrade` ([`Store::upgrade`]); one written by a newer wetgran with
+//! [`StoreError::Newer`]; the main file of a database copied without its `-wal` file while a
+//! run was writing it (wetgran's header, no table, no log) with [`StoreError::NoContent`].
 
 use super::open::{Existing, inspect};
 use super::{MIGRATOR, Store, StoreError, explain, queries, sqlite_code};
@@ -36,9 +38,12 @@ pub enum ReadAccess {
 /// The file beside a database named with `suffix` (`-wal`: its write-ahead log, `-shm`: the
 /// log's index).
 fn beside(path: &Path, suffix: &str) -> PathBuf {
-    let mut name = path.as_os_str().to_owned();
-    name.push(suffix);
-    PathBuf::from(name)
+    crate::output::with_suffix(path, suffix)
+}
+
+/// Whether the write-ahead log beside `path` is missing or empty (holds no commits).
+pub(super) fn log_missing(path: &Path) -> bool {
+    std::fs::metadata(beside(path, "-wal")).map_or(true, |m| m.len() == 0)
 }
 
 /// Whether no write permission bit is set on `path` (an archive marked read-only, also for
@@ -66,29 +71,59 @@ pub fn read_access(path: &Path) -> ReadAccess {
 
 impl Store {
     /// Opens an existing database for reading only (module doc); a database from an older
-    /// wetgran is upgraded first where it can be written.
+    /// wetgran is refused, never upgraded.
     pub fn open_read_only(path: &Path) -> Result<Store, StoreError> {
-        let mut access = read_access(path);
-        let store = match Self::open_reader(path, access) {
-            Err(StoreError::Db { .. })
-                if access == ReadAccess::Shared && cannot_create_beside(path) =>
-            {
-                access = ReadAccess::Immutable;
-                Self::open_reader(path, access)?
-            }
-            other => other?,
-        };
-        match store.outdated()? {
+        let (store, outdated) = Self::open_viewer(path)?;
+        match outdated {
             None => Ok(store),
-            Some(_) if access == ReadAccess::Shared => {
-                drop(store);
-                Self::open_existing(path)
-            }
             Some(detail) => Err(StoreError::Outdated {
                 path: path.display().to_string(),
                 detail,
             }),
         }
+    }
+
+    /// Upgrades a database written by an older wetgran in place (`wetgran upgrade`): the
+    /// migrations and the job-id rule, as any writer's open applies them. Returns what was
+    /// upgraded (`None`: it was up to date, nothing was written).
+    pub fn upgrade(path: &Path) -> Result<Option<String>, StoreError> {
+        let (store, outdated) = Self::open_viewer(path)?;
+        drop(store);
+        let Some(detail) = outdated else {
+            return Ok(None);
+        };
+        drop(Self::open_existing(path)?);
+        Ok(Some(detail))
+    }
+
+    /// Refuses, without creating anything beside it, a database whose main file is all of it
+    /// (no log with commits beside it) and whose schema page is damaged, that a newer wetgran
+    /// wrote, or that is the main file alone of a copied database ([`StoreError::NoContent`]):
+    /// an immutable open (no `-wal`, no `-shm`) sees exactly what a shared one would. Where the
+    /// log holds commits the main file is not the whole database, and the open itself checks.
+    pub(super) fn probe(path: &Path) -> Result<(), StoreError> {
+        if !log_missing(path) {
+            return Ok(());
+        }
+        let store = Self::open_reader(path, ReadAccess::Immutable)?;
+        store.outdated()?;
+        Ok(())
+    }
+
+    /// The read-only store and what an older wetgran left undone in it.
+    fn open_viewer(path: &Path) -> Result<(Store, Option<String>), StoreError> {
+        Self::probe(path)?;
+        let access = read_access(path);
+        let store = match Self::open_reader(path, access) {
+            Err(StoreError::Db { .. })
+                if access == ReadAccess::Shared && cannot_create_beside(path) =>
+            {
+                Self::open_reader(path, ReadAccess::Immutable)?
+            }
+            other => other?,
+        };
+        let outdated = store.outdated()?;
+        Ok((store, outdated))
     }
 
     /// The read-only connection itself; checks what the file holds (header, tables) first.
@@ -114,6 +149,11 @@ impl Store {
                 path: path.display().to_string(),
             }),
             Existing::OtherSqlite => Err(store.not_wetgran(&tables)),
+            Existing::Ours { wal: true } if tables.is_empty() && log_missing(path) => {
+                Err(StoreError::NoContent {
+                    path: path.display().to_string(),
+                })
+            }
             _ => Ok(store),
         }
     }
@@ -121,23 +161,15 @@ impl Store {
     /// What an older wetgran left undone (migrations, the job-id rule), in words; `None` when
     /// the database is as this wetgran writes it. Migrations of a newer wetgran are an error.
     fn outdated(&self) -> Result<Option<String>, StoreError> {
-        let applied = sqlx::query_scalar::<_, i64>(queries::APPLIED_MIGRATIONS);
-        let applied: Vec<i64> = match self.rt.block_on(applied.fetch_all(&self.pool)) {
-            Ok(v) => v,
-            // No migration table: initialised, never migrated.
-            Err(e) if e.to_string().contains("no such table") => Vec::new(),
-            Err(e) => return Err(self.db(e)),
-        };
+        let applied = self
+            .rt
+            .block_on(async {
+                let mut conn = self.pool.acquire().await?;
+                applied_migrations(&mut conn).await
+            })
+            .map_err(|e| self.db(e))?;
         let known: Vec<i64> = MIGRATOR.iter().map(|m| m.version).collect();
-        if let Some(v) = applied.iter().find(|v| !known.contains(v)) {
-            return Err(StoreError::Db {
-                path: self.path.display().to_string(),
-                detail: format!(
-                    "written by a newer wetgran (migration {v} is unknown to this one): use \
-                     that version"
-                ),
-            });
-        }
+        self.refuse_newer(&applied)?;
         let missing: Vec<String> = known
             .iter()
             .filter(|v| !applied.contains(v))
@@ -150,6 +182,37 @@ impl Store {
             )));
         }
         Ok((!self.job_ids_current()?).then(|| "its job ids follow an older rule".to_string()))
+    }
+}
+
+/// The migrations applied to a database (none where it has no migration table yet).
+pub(super) async fn applied_migrations(
+    conn: &mut sqlx::SqliteConnection,
+) -> Result<Vec<i64>, sqlx::Error> {
+    match sqlx::query_scalar::<_, i64>(queries::APPLIED_MIGRATIONS)
+        .fetch_all(conn)
+        .await
+    {
+        Ok(v) => Ok(v),
+        // No migration table: initialised, never migrated.
+        Err(e) if e.to_string().contains("no such table") => Ok(Vec::new()),
+        Err(e) => Err(e),
+    }
+}
+
+impl Store {
+    /// [`StoreError::Newer`] where `applied` holds a migration this wetgran does not know.
+    pub(super) fn refuse_newer(&self, applied: &[i64]) -> Result<(), StoreError> {
+        match applied
+            .iter()
+            .find(|v| !MIGRATOR.iter().any(|m| m.version == **v))
+        {
+            None => Ok(()),
+            Some(v) => Err(StoreError::Newer {
+                path: self.path.display().to_string(),
+                detail: format!("its migration {v} is unknown to this one"),
+            }),
+        }
     }
 }
 

@@ -6,6 +6,9 @@ use crate::sweep::file::SweepFile;
 use crate::sweep::spec::SweepJob;
 use sqlx::Row;
 
+/// Jobs inserted between two calls of a registration's watcher.
+const REGISTER_STEP: usize = 1000;
+
 impl Store {
     /// Registers (or re-registers) a sweep and its jobs in one transaction. Jobs already in the
     /// database (same id, from any sweep) are shared, never duplicated; the sweep's grid in the
@@ -18,9 +21,52 @@ impl Store {
         file: &SweepFile,
         jobs: &[SweepJob],
     ) -> Result<SweepRow, StoreError> {
+        self.register_sweep_watched(file, jobs, &mut |_| true)
+    }
+
+    /// [`Store::register_sweep`], calling `watch(jobs inserted so far)` every
+    /// [`REGISTER_STEP`] jobs (and at the end); when it returns `false` (Ctrl-C) the
+    /// registration stops: the transaction is rolled back, the write-ahead log checkpointed and
+    /// truncated (so the rolled-back pages leave no large `-wal` file behind), and the error is
+    /// [`StoreError::Interrupted`]. Nothing of the sweep is stored then.
+    pub fn register_sweep_watched(
+        &self,
+        file: &SweepFile,
+        jobs: &[SweepJob],
+        watch: &mut dyn FnMut(usize) -> bool,
+    ) -> Result<SweepRow, StoreError> {
         let axes = serde_json::to_string(&file.axes).expect("axes serialize");
         let t = now();
-        self.in_transaction(async |tx| {
+        let registered = self.rt.block_on(async {
+            let mut tx = self.begin().await?;
+            let out = self.register_in(&mut tx, file, jobs, &axes, t, watch).await;
+            match out {
+                Ok(()) => tx.commit().await.map_err(|e| self.db(e)),
+                Err(e) => {
+                    let _ = tx.rollback().await;
+                    Err(e)
+                }
+            }
+        });
+        if let Err(StoreError::Interrupted { .. }) = &registered {
+            // Best effort: a reader holding an old snapshot may keep the log from shrinking.
+            let _ = self.run(sqlx::query(queries::CHECKPOINT_TRUNCATE).execute(&self.pool));
+        }
+        registered?;
+        self.sweep(&file.name)
+    }
+
+    /// The statements of a registration, inside its transaction.
+    async fn register_in(
+        &self,
+        tx: &mut sqlx::Transaction<'_, sqlx::Sqlite>,
+        file: &SweepFile,
+        jobs: &[SweepJob],
+        axes: &str,
+        t: f64,
+        watch: &mut dyn FnMut(usize) -> bool,
+    ) -> Result<(), StoreError> {
+        {
             let old_source: Option<String> = sqlx::query_scalar(queries::SWEEP_SOURCE_BY_NAME)
                 .bind(&file.name)
                 .fetch_optional(&mut **tx)
@@ -33,7 +79,7 @@ impl Store {
                 .bind(&file.text)
                 .bind(&file.description)
                 .bind(&file.cost)
-                .bind(&axes)
+                .bind(axes)
                 .bind(file.replicas as i64)
                 .bind(t)
                 .fetch_one(&mut **tx)
@@ -46,10 +92,22 @@ impl Store {
                 .bind(file.replicas as i64)
                 .exec(tx, self)
                 .await?;
-            self.insert_points(tx, id, jobs, t).await?;
+            for (k, chunk) in jobs.chunks(REGISTER_STEP).enumerate() {
+                self.insert_points(tx, id, chunk, t).await?;
+                wetgran_core::test_pause::pause_at("register");
+                if !watch(k * REGISTER_STEP + chunk.len()) {
+                    return Err(StoreError::Interrupted {
+                        path: self.path.display().to_string(),
+                        detail: format!(
+                            "interrupted while registering sweep `{}`: nothing of it was stored \
+                             (the registration is one transaction, rolled back)",
+                            file.name
+                        ),
+                    });
+                }
+            }
             Ok(())
-        })?;
-        self.sweep(&file.name)
+        }
     }
 
     /// Records the grid points `skip_invalid` left out of a registered sweep (replacing what

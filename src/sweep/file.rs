@@ -74,9 +74,10 @@ pub struct Header {
     pub description: Option<String>,
     /// Base scene file, relative to the sweep file.
     pub base: Option<Spanned<String>>,
-    /// Independent runs per grid point; replica `r` uses `initial.seed = base seed + r`.
-    #[serde(default = "one_u32")]
-    pub replicas: Spanned<u32>,
+    /// Independent runs per grid point; replica `r` uses `initial.seed = base seed + r`. Read
+    /// as any TOML integer, so that a value beyond `u32` gets the range of the key.
+    #[serde(default = "one")]
+    pub replicas: Spanned<i64>,
     /// Run length in driving periods `T = 2 pi / omega` (one time unit `sqrt(d/g)` without a
     /// drive); sets `run.duration`. Without it the base scene's `run.duration` is kept.
     pub periods: Option<Spanned<f64>>,
@@ -120,7 +121,7 @@ pub struct Continuation {
     pub line: usize,
 }
 
-fn one_u32() -> Spanned<u32> {
+fn one() -> Spanned<i64> {
     Spanned::new(0..0, 1)
 }
 
@@ -166,7 +167,8 @@ pub struct RawRefine {
     pub budget: usize,
     pub rounds: Option<usize>,
     pub resolution: Option<f64>,
-    pub max_replicas: Option<u32>,
+    /// Any TOML integer (checked against its range in [`parse_refine`]).
+    pub max_replicas: Option<i64>,
 }
 
 /// The `[refine]` table, checked: after the grid, `sweep run` adds up to `budget` jobs in rounds
@@ -383,6 +385,18 @@ impl SweepFile {
         self.axes.iter().map(|a| a.values.len()).product()
     }
 
+    /// The line of `key` (`convergence.blocks`) in the sweep file's own `[observe]`,
+    /// `[classify]` or `[convergence]` table, where it sets that key; the table's header line
+    /// for the bare section name (`convergence`).
+    pub(crate) fn own_table_line(&self, key: &str) -> Option<usize> {
+        let bare = key.split('[').next().unwrap_or(key);
+        let section = bare.split('.').next().unwrap_or(bare);
+        if !matches!(section, "observe" | "classify" | "convergence") {
+            return None;
+        }
+        key_line(&self.text, &[], key)
+    }
+
     /// Where a scene key's value comes from, for error messages: the axis that sets it, the
     /// inline `[scene]` table of the sweep file, or the base scene file.
     pub(crate) fn locate(&self, key: &str) -> (String, Option<usize>) {
@@ -391,11 +405,9 @@ impl SweepFile {
         if let Some(a) = self.axes.iter().find(|a| a.key == bare) {
             return (file, Some(a.line));
         }
-        // The sweep's own `[observe]` and `[classify]` tables set the scene sections of those
-        // names over the base scene.
-        if (bare.starts_with("observe.") || bare.starts_with("classify."))
-            && let Some(l) = key_line(&self.text, &[], key)
-        {
+        // The sweep's own `[observe]`, `[classify]` and `[convergence]` tables set the scene
+        // sections of those names over the base scene.
+        if let Some(l) = self.own_table_line(key) {
             return (file, Some(l));
         }
         if let Some(l) = key_line(&self.text, &["scene"], key) {
@@ -444,6 +456,18 @@ fn parse_header(src: &Source<'_>, h: &Header) -> Result<(String, u32, Option<f64
             ),
         ));
     }
+    // A name is a word of the commands that name it (`sweep resume NAME`, `--sweep NAME`):
+    // one starting with `-` reads as an option there, and `.`, `..` as folders.
+    if name.starts_with('-') || name == "." || name == ".." {
+        return Err(src.err(
+            Some(line_of(src.text, h.name.span().start)),
+            "sweep.name",
+            format!(
+                "= {name:?} is not allowed: must not start with '-' (it would read as an option \
+                 in `wetgran sweep resume NAME`) nor be \".\" or \"..\""
+            ),
+        ));
+    }
     let replicas = *h.replicas.get_ref();
     if !(1..=10_000).contains(&replicas) {
         return Err(src.err(
@@ -452,6 +476,7 @@ fn parse_header(src: &Source<'_>, h: &Header) -> Result<(String, u32, Option<f64
             format!("= {replicas} is out of range: must be in [1, 10000]"),
         ));
     }
+    let replicas = replicas as u32;
     let periods = match &h.periods {
         Some(p) => {
             let v = *p.get_ref();
@@ -703,8 +728,8 @@ fn parse_refine(
             format!("= {resolution} is out of range: must be in [0, 1)"),
         ));
     }
-    let max_replicas = r.max_replicas.unwrap_or(3 * replicas);
-    if !(replicas..=10_000).contains(&max_replicas) {
+    let max_replicas = r.max_replicas.unwrap_or(3 * i64::from(replicas));
+    if !(i64::from(replicas)..=10_000).contains(&max_replicas) {
         return Err(rerr(
             "max_replicas",
             format!(
@@ -713,6 +738,7 @@ fn parse_refine(
             ),
         ));
     }
+    let max_replicas = max_replicas as u32;
     if axes.iter().any(|a| a.key == "initial.seed") && max_replicas > replicas {
         return Err(rerr(
             "max_replicas",

@@ -299,12 +299,24 @@ impl SweepFile {
     /// [`SweepFile::expand`], also returning the grid points left out by `sweep.skip_invalid`
     /// with the reason (empty without it).
     pub fn expand_with_skips(&self) -> Result<(Vec<SweepJob>, Vec<Skipped>), SweepError> {
+        self.expand_watched(&mut |_| {})
+    }
+
+    /// [`SweepFile::expand_with_skips`], calling `watch(grid points expanded so far)` every
+    /// thousand points and at the end (the progress of a large grid).
+    pub fn expand_watched(
+        &self,
+        watch: &mut dyn FnMut(usize),
+    ) -> Result<(Vec<SweepJob>, Vec<Skipped>), SweepError> {
         let prep = self.prepare()?;
         let points = self.points();
         let mut jobs = Vec::with_capacity(points * self.replicas as usize);
         let mut skipped = Vec::new();
         let lens: Vec<usize> = self.axes.iter().map(|a| a.values.len()).collect();
         'points: for point in 0..points {
+            if point % 1000 == 0 {
+                watch(point);
+            }
             let idx = grid_index(point, &lens);
             let coords: Vec<serde_json::Value> = self
                 .axes
@@ -328,6 +340,7 @@ impl SweepFile {
                 }
             }
         }
+        watch(points);
         self.chain_continuations(&mut jobs)?;
         Ok((jobs, skipped))
     }
@@ -572,13 +585,15 @@ impl SweepFile {
         }
         if let Some(c) = convergence {
             scene.convergence = Some(c.try_into().map_err(|e: toml::de::Error| {
-                let (file, line) = self.locate("convergence");
-                SweepError::new(
-                    &file,
-                    line,
-                    "convergence",
-                    format!("{}{where_}", e.message()),
-                )
+                // The field the error is about (an unknown or a missing one, or the table).
+                let field = wetgran_core::scene::parse_error_key(&e);
+                let key = match field.as_str() {
+                    "" => "convergence".to_string(),
+                    f => format!("convergence.{f}"),
+                };
+                let (file, line) = self.locate(&key);
+                let line = line.or_else(|| self.own_table_line("convergence"));
+                SweepError::new(&file, line, &key, format!("{}{where_}", e.message()))
             })?);
         }
         // Sampling: the sweep's `samples_per_period`, else the scene's own `[observe]`
@@ -615,15 +630,15 @@ impl SweepFile {
                 ),
             ));
         }
-        // The converted run length and sampling must pass validation too.
+        // The converted run length and sampling must pass validation too: an error of a key
+        // of the sweep's own `[observe]` or `[convergence]` table points at it, any other at
+        // `sweep.periods`, which did the converting.
         scene.validate(&file).map_err(|e| {
-            SweepError::new(
-                &file,
+            let line = self.own_table_line(&e.key).or_else(|| {
                 self.periods
-                    .and(super::file::key_line(&self.text, &["sweep"], "periods")),
-                &e.key,
-                format!("{}{where_}", e.message),
-            )
+                    .and(super::file::key_line(&self.text, &["sweep"], "periods"))
+            });
+            SweepError::new(&file, line, &e.key, format!("{}{where_}", e.message))
         })?;
         // The time engine's damping calibration is spelled out in the spec: its default
         // changed (issue 18, "engines like for like"), and a job id must not match a result
@@ -673,7 +688,7 @@ impl SweepFile {
             let message = e
                 .message
                 .lines()
-                .filter(|l| !l.starts_with("TOML parse error") && !l.contains('|'))
+                .filter(|l| !l.starts_with("TOML parse error") && !is_snippet_line(l))
                 .collect::<Vec<_>>()
                 .join(" ");
             let mut out = SweepError::new(&file, line, &e.key, format!("{message}{where_}"));
@@ -681,6 +696,15 @@ impl SweepFile {
             out
         })
     }
+}
+
+/// Whether `line` is a line of the source snippet a TOML error prints (`  |`, `6 | key = ...`,
+/// `  |   ^^^`): an optional line number, then ` |` at its start. The reason below it may hold
+/// a `|` of its own (`unknown variant `a|b``).
+fn is_snippet_line(line: &str) -> bool {
+    line.trim_start_matches(|c: char| c.is_ascii_digit())
+        .trim_start()
+        .starts_with('|')
 }
 
 /// A grid point's index along each axis of lengths `lens` (row-major, the last axis fastest).

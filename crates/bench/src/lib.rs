@@ -60,8 +60,9 @@ pub fn run(
             let rows = wall::measure(repeat, scale);
             let mut text = wall::report(&rows);
             if let Some(path) = svg {
-                std::fs::write(path, wall::svg(&rows))
-                    .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+                // Whole or not at all, never over a database (`wetgran::output`).
+                wetgran::output::write_file(path, wall::svg(&rows), &wetgran::output::Protected::none())
+                    .map_err(|e| e.to_string())?;
                 let _ = writeln!(text, "plot written to {}", path.display());
             }
             text

@@ -3,7 +3,8 @@
 //! drive's box, force and slabs.
 
 use super::{
-    Check, Constraint, MAX_AMPLITUDE, MAX_GAMMA, MAX_SHEAR_FORCE, MAX_WALL_SPEED, SceneError, num,
+    Check, Constraint, MAX_AMPLITUDE, MAX_GAMMA, MAX_OMEGA, MAX_SHEAR_FORCE, MAX_WALL_SPEED,
+    MIN_AMPLITUDE, SceneError, num,
 };
 use super::{MAX_SHEAR_SLABS, MIN_SLAB_WIDTH};
 use crate::scene::{Boundary, DriveKind, DriveSpec, Scene, WallSolverKind};
@@ -81,8 +82,11 @@ impl Scene {
 
     /// The container motion `(A, omega)` of a sine drive (each key already in its own range):
     /// amplitude, wall speed and peak acceleration within [`MAX_AMPLITUDE`],
-    /// [`MAX_WALL_SPEED`] and [`MAX_GAMMA`]. The error names the key that sets the excess:
-    /// `amplitude` / `omega` as given, or `e_star` (wall speed) / `gamma` (amplitude, Gamma).
+    /// [`MAX_WALL_SPEED`] and [`MAX_GAMMA`], then the amplitude at least [`MIN_AMPLITUDE`]
+    /// (or 0) and `omega` at most [`MAX_OMEGA`] (what the engine can integrate). The error
+    /// names the key that sets the excess: `amplitude` / `omega` as given, or `e_star` (wall
+    /// speed, and the smallness of `A` and largeness of `omega` at a given Gamma) / `gamma`
+    /// (amplitude, Gamma).
     fn validate_drive_motion(&self, c: &Check<'_>, physical: bool) -> Result<(), SceneError> {
         let Some((a, omega)) = self.drive_motion() else {
             return Ok(());
@@ -95,6 +99,13 @@ impl Scene {
         } else {
             ("drive.gamma", "drive.e_star", "drive.gamma")
         };
+        let (small_key, fast_key) = if physical {
+            ("drive.amplitude", "drive.omega")
+        } else {
+            ("drive.e_star", "drive.e_star")
+        };
+        let a_d = a / self.particles.diameter;
+        let omega_unit = omega / (self.gravity / self.particles.diameter).sqrt();
         let value = |key: &str| match key {
             "drive.amplitude" => a,
             "drive.omega" => omega,
@@ -128,6 +139,26 @@ impl Scene {
                     "the amplitude A = {} d must be <= {} d",
                     num(a / self.particles.diameter),
                     num(MAX_AMPLITUDE)
+                ),
+            ),
+            (
+                small_key,
+                a_d != 0.0 && a_d < MIN_AMPLITUDE,
+                format!(
+                    "the amplitude A = {} d must be 0 or >= {} d (a smaller stroke is inside the \
+                     wall solvers' tolerance: docs/scene-reference.md, [drive])",
+                    num(a_d),
+                    num(MIN_AMPLITUDE)
+                ),
+            ),
+            (
+                fast_key,
+                omega_unit > MAX_OMEGA,
+                format!(
+                    "omega = {} sqrt(g/d) must be <= {} sqrt(g/d) (every period costs wall events \
+                     and samples: docs/scene-reference.md, [drive])",
+                    num(omega_unit),
+                    num(MAX_OMEGA)
                 ),
             ),
         ] {

@@ -26,6 +26,26 @@ pub(super) const MAX_AMPLITUDE: f64 = 1e4;
 pub(super) const MAX_WALL_SPEED: f64 = 1e3;
 /// Largest peak acceleration `Gamma = A omega^2 / g` (100 times `wetgran-bench stress`'s 1000).
 pub(super) const MAX_GAMMA: f64 = 1e5;
+/// Smallest non-zero amplitude `A` of the shaken container, units of `d`. The wall solvers find
+/// a hit to the gap tolerance `drive.root_tolerance` (1e-10 d by default) and take a tabulated
+/// hit or a late one within a thousand times it (1e-7 d, `sim::event_driven::walls`): a stroke
+/// `2 A` inside that window cannot be told from a floor touching the grain at every instant,
+/// and a grain resting on the floor collides with it at every event (the run spends its events
+/// without advancing, then fails on the guards). The floor keeps `A` ten times above the
+/// window at the default tolerance; it also keeps the motion 4.5e3 times above the round-off
+/// of positions in a box 1e3 d high (`2.2e-16 x 1e3 d`). (Found by the tests: `E* =
+/// 1e-20` at `Gamma = 3` is `A = 1.9e-21 d`.) `A = 0` (a still container) stays allowed.
+pub(super) const MIN_AMPLITUDE: f64 = 1e-6;
+/// Largest angular frequency `omega` of the shaken container, units of `sqrt(g / d)`. Every
+/// period costs at least one wall event per grain the floor touches (it launches or catches
+/// each of them once a period) and the observers' samples of a period (20 by default), while
+/// the bed's own times are in time units (a grain falls one diameter in 1.4 time units; a bed
+/// settles and heats in tens to thousands): at `omega = 1e4` one time unit is 1.6e3 periods, so
+/// a run of 100 time units is already 1.6e5 wall events per floor grain and 3.2e6 samples
+/// before the bed has relaxed. It also keeps a period (6.3e-4 time units) 1e7 times above the
+/// round-off of event times in a run of 2.8e5 time units (`2.2e-16 t`). The largest `omega`
+/// of the shipped sweeps is 112, of the stress cases 3162 (`gamma_1000`).
+pub(super) const MAX_OMEGA: f64 = 1e4;
 /// Largest peak shear force `F_max`, units of `m g` (found by the input fuzzer: at `1e300` the
 /// sheared pair quartics lose every digit and pairs pass through each other).
 pub(super) const MAX_SHEAR_FORCE: f64 = 1e3;
