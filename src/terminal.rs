@@ -94,14 +94,28 @@ mod tests {
         assert_eq!(escape("a\nb\tc\rd"), "a\\nb\\tc\\rd");
         assert_eq!(escape_lines("a\nb\tc\u{85}"), "a\nb\\tc\\u{85}");
         for c in [
-            '\u{9b}', '\u{7f}', '\u{200b}', '\u{200d}', '\u{2066}', '\u{2069}', '\u{feff}',
-            '\u{2028}', '\u{e0041}', '\u{ad}', '\u{61c}',
+            '\u{9b}',
+            '\u{7f}',
+            '\u{200b}',
+            '\u{200d}',
+            '\u{2066}',
+            '\u{2069}',
+            '\u{feff}',
+            '\u{2028}',
+            '\u{e0041}',
+            '\u{ad}',
+            '\u{61c}',
         ] {
             assert!(is_unsafe(c), "{:x}", c as u32);
             assert!(!escape(&c.to_string()).contains(c));
         }
         // Plain text of any script, and the symbols the reports use, is left alone (borrowed).
-        for plain in ["Γ ≥ 0.5, E* = 10", "Größe — 粒子 ∑", "path/to/w.sqlite", "a\\nb"] {
+        for plain in [
+            "Γ ≥ 0.5, E* = 10",
+            "Größe — 粒子 ∑",
+            "path/to/w.sqlite",
+            "a\\nb",
+        ] {
             assert!(matches!(escape(plain), Cow::Borrowed(_)), "{plain}");
         }
     }

@@ -87,22 +87,56 @@ fn regression_an_output_resolving_to_the_database_is_refused_and_the_database_is
     let wal = d.join("w.sqlite-wal");
     let cases: Vec<(Vec<String>, PathBuf)> = vec![
         (vec!["plot".into(), "-o".into(), s(&db).into()], db.clone()),
-        (vec!["plot".into(), "-o".into(), s(&wal).into()], wal.clone()),
-        (vec!["plot".into(), "-o".into(), s(&d.join("link.svg")).into()], d.join("link.svg")),
-        (vec!["plot".into(), "-o".into(), s(&d.join("hard.svg")).into()], d.join("hard.svg")),
         (
-            vec!["plot".into(), "-o".into(), s(&d.join("sub/../w.sqlite-shm")).into()],
+            vec!["plot".into(), "-o".into(), s(&wal).into()],
+            wal.clone(),
+        ),
+        (
+            vec!["plot".into(), "-o".into(), s(&d.join("link.svg")).into()],
+            d.join("link.svg"),
+        ),
+        (
+            vec!["plot".into(), "-o".into(), s(&d.join("hard.svg")).into()],
+            d.join("hard.svg"),
+        ),
+        (
+            vec![
+                "plot".into(),
+                "-o".into(),
+                s(&d.join("sub/../w.sqlite-shm")).into(),
+            ],
             d.join("sub/../w.sqlite-shm"),
         ),
-        (vec!["lines".into(), "--csv".into(), s(&db).into()], db.clone()),
-        (vec!["lines".into(), "-o".into(), s(&d.join("link.csv")).into()], d.join("link.csv")),
-        (vec!["export".into(), "-o".into(), s(&db).into()], db.clone()),
-        (vec!["export".into(), "--series".into(), s(&db).into()], db.clone()),
         (
-            vec!["export".into(), "--series".into(), "/dev/null".into(), "--text".into(), s(&db).into()],
+            vec!["lines".into(), "--csv".into(), s(&db).into()],
             db.clone(),
         ),
-        (vec!["report".into(), "-o".into(), s(d).into(), "--force".into()], d.to_path_buf()),
+        (
+            vec!["lines".into(), "-o".into(), s(&d.join("link.csv")).into()],
+            d.join("link.csv"),
+        ),
+        (
+            vec!["export".into(), "-o".into(), s(&db).into()],
+            db.clone(),
+        ),
+        (
+            vec!["export".into(), "--series".into(), s(&db).into()],
+            db.clone(),
+        ),
+        (
+            vec![
+                "export".into(),
+                "--series".into(),
+                "/dev/null".into(),
+                "--text".into(),
+                s(&db).into(),
+            ],
+            db.clone(),
+        ),
+        (
+            vec!["report".into(), "-o".into(), s(d).into(), "--force".into()],
+            d.to_path_buf(),
+        ),
     ];
     for (args, out) in &cases {
         let mut all: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -119,7 +153,14 @@ fn regression_an_output_resolving_to_the_database_is_refused_and_the_database_is
         .and_then(|l| l.split(',').find(|f| f.len() == 64).map(str::to_string))
         .expect("a job id in the export");
     for flag in ["--snapshot", "--profiles"] {
-        let o = run(&["show", "--db", s(&db), &job[..12], flag, s(&d.join("link.svg"))]);
+        let o = run(&[
+            "show",
+            "--db",
+            s(&db),
+            &job[..12],
+            flag,
+            s(&d.join("link.svg")),
+        ]);
         refused(&o, &[&d.join("link.svg"), &db]);
     }
     // The default database of the working folder (`wetgran.sqlite`).
@@ -154,10 +195,22 @@ fn regression_outputs_are_whole_or_absent_and_two_flags_may_not_name_one_file() 
     // The text file is a device that is always full: the export fails at its first flush,
     // after the other two files are written; neither replaces its old version.
     let o = run(&[
-        "export", "--db", s(&db), "-o", s(&out), "--series", s(&series), "--text", "/dev/full",
+        "export",
+        "--db",
+        s(&db),
+        "-o",
+        s(&out),
+        "--series",
+        s(&series),
+        "--text",
+        "/dev/full",
     ]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("/dev/full: cannot write"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("/dev/full: cannot write"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "old export\n");
     assert_eq!(std::fs::read_to_string(&series).unwrap(), "old series\n");
     assert_eq!(listing(d), before, "no temporary file is left");
@@ -168,7 +221,10 @@ fn regression_outputs_are_whole_or_absent_and_two_flags_may_not_name_one_file() 
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(&out).unwrap();
     assert_eq!(csv.lines().count(), 9, "a header and 8 rows: {csv}");
-    assert_eq!(std::fs::metadata(&out).unwrap().permissions().mode() & 0o777, 0o600);
+    assert_eq!(
+        std::fs::metadata(&out).unwrap().permissions().mode() & 0o777,
+        0o600
+    );
     let o = run(&["lines", "--db", s(&db), "-o", s(&out), "--csv", s(&out)]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("the same file as -o"), "{}", stderr(&o));
@@ -211,15 +267,25 @@ fn regression_report_replaces_only_its_own_folder_follows_no_link_and_keeps_no_s
     let o = report(&mine, false);
     refused(&o, &[&mine]);
     assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
-    assert_eq!(std::fs::read_to_string(mine.join("sweep.toml")).unwrap(), "my own");
+    assert_eq!(
+        std::fs::read_to_string(mine.join("sweep.toml")).unwrap(),
+        "my own"
+    );
     assert!(mine.join("points/point-999.html").exists());
     // Forced: replaced whole; the link is removed, not written through.
     let o = report(&mine, true);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(std::fs::read_to_string(d.join("outside.txt")).unwrap(), "secret");
+    assert_eq!(
+        std::fs::read_to_string(d.join("outside.txt")).unwrap(),
+        "secret"
+    );
     assert!(!mine.join("points/point-999.html").exists());
     assert!(mine.join(".wetgran-report").is_file());
-    assert!(std::fs::read_to_string(mine.join("sweep.toml")).unwrap().contains("name = \"tiny\""));
+    assert!(
+        std::fs::read_to_string(mine.join("sweep.toml"))
+            .unwrap()
+            .contains("name = \"tiny\"")
+    );
     // Its own report is replaced without --force; a page planted since is gone.
     std::fs::write(mine.join("points/point-999.html"), "stale").unwrap();
     let o = report(&mine, false);
@@ -251,19 +317,35 @@ fn regression_report_replaces_only_its_own_folder_follows_no_link_and_keeps_no_s
     let old_index = std::fs::read(mine.join("index.html")).unwrap();
     sql(
         &db,
-        &["PRAGMA foreign_keys = OFF",
-          "UPDATE results SET job_id = '../../evil' || job_id WHERE rowid = 1",
-          "UPDATE sweep_points SET job_id = '../../evil' || job_id WHERE job_id IN \
+        &[
+            "PRAGMA foreign_keys = OFF",
+            "UPDATE results SET job_id = '../../evil' || job_id WHERE rowid = 1",
+            "UPDATE sweep_points SET job_id = '../../evil' || job_id WHERE job_id IN \
            (SELECT substr(job_id, 11) FROM results WHERE rowid = 1)",
-          "UPDATE jobs SET id = '../../evil' || id WHERE id IN \
-           (SELECT substr(job_id, 11) FROM results WHERE rowid = 1)"],
+            "UPDATE jobs SET id = '../../evil' || id WHERE id IN \
+           (SELECT substr(job_id, 11) FROM results WHERE rowid = 1)",
+        ],
     );
     let o = run(&["report", "--db", s(&db), "-o", s(&mine)]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("not a plain path inside the folder"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("not a plain path inside the folder"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(std::fs::read(mine.join("index.html")).unwrap(), old_index);
     assert!(!d.join("evil").exists() && !dir.path().parent().unwrap().join("evil").exists());
-    assert_eq!(listing(d), vec!["mine", "outside.txt", "s.toml", "scene.toml", "via", "w.sqlite"]);
+    assert_eq!(
+        listing(d),
+        vec![
+            "mine",
+            "outside.txt",
+            "s.toml",
+            "scene.toml",
+            "via",
+            "w.sqlite"
+        ]
+    );
 }
 
 /// Regression: `sweep status` printed a shared database's description, cost note and file raw:
@@ -274,13 +356,15 @@ fn regression_text_from_a_database_reaches_the_terminal_inert() {
     let db = finished_sweep(dir.path());
     sql(
         &db,
-        &["UPDATE sweeps SET description = 'evil' || char(27) || ']0;pwned' || char(7) || \
+        &[
+            "UPDATE sweeps SET description = 'evil' || char(27) || ']0;pwned' || char(7) || \
            char(27) || '[2J' || char(8238) || 'txet' || char(0) || 'end', \
            cost = 'c' || char(27) || '[31mred' || char(155) || 'x', \
            file = 'f' || char(10) || 'error: forged line', \
            name = 'tiny' || char(27) || '[1m'",
-          "UPDATE jobs SET status = 'failed', last_error = 'x' || char(27) || '[2J' || char(10) \
-           || 'forged' WHERE rowid = 1"],
+            "UPDATE jobs SET status = 'failed', last_error = 'x' || char(27) || '[2J' || char(10) \
+           || 'forged' WHERE rowid = 1",
+        ],
     );
     let status = run(&["sweep", "status", "--db", s(&db)]);
     assert!(status.status.success(), "{}", stderr(&status));
@@ -292,7 +376,15 @@ fn regression_text_from_a_database_reaches_the_terminal_inert() {
         .unwrap();
     let show = run(&["show", "--db", s(&db), &job[..12]]);
     let boundaries = run(&["boundaries", "--db", s(&db)]);
-    let missing = run(&["plot", "--db", s(&db), "--sweep", "nope\u{1b}[2J", "-o", s(&dir.path().join("m.svg"))]);
+    let missing = run(&[
+        "plot",
+        "--db",
+        s(&db),
+        "--sweep",
+        "nope\u{1b}[2J",
+        "-o",
+        s(&dir.path().join("m.svg")),
+    ]);
     for (what, out) in [
         ("status", text.clone()),
         ("show", stdout(&show)),
@@ -305,10 +397,20 @@ fn regression_text_from_a_database_reaches_the_terminal_inert() {
             .collect();
         assert!(bad.is_empty(), "{what}: raw {bad:?} in\n{out}");
     }
-    assert!(text.contains("evil\\u{1b}]0;pwned\\u{7}\\u{1b}[2J\\u{202e}txet\\u{0}end"), "{text}");
+    assert!(
+        text.contains("evil\\u{1b}]0;pwned\\u{7}\\u{1b}[2J\\u{202e}txet\\u{0}end"),
+        "{text}"
+    );
     assert!(text.contains("(f\\nerror: forged line;"), "{text}");
-    assert!(!text.lines().any(|l| l.starts_with("error: forged")), "{text}");
-    assert!(!stdout(&show).lines().any(|l| l.starts_with("forged")), "{}", stdout(&show));
+    assert!(
+        !text.lines().any(|l| l.starts_with("error: forged")),
+        "{text}"
+    );
+    assert!(
+        !stdout(&show).lines().any(|l| l.starts_with("forged")),
+        "{}",
+        stdout(&show)
+    );
     // JSON stays exact (serde_json escapes the control characters itself).
     let json = stdout(&run(&["sweep", "status", "--db", s(&db), "--json"]));
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();

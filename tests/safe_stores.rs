@@ -114,7 +114,11 @@ fn every_command_refuses(db: &Path, work: &Path, want: &str) {
         let o = run_within(&args, Duration::from_secs(60));
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
         assert!(stderr(&o).contains(want), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains(&db.display().to_string()), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&db.display().to_string()),
+            "{}",
+            stderr(&o)
+        );
         if let Some(b) = &before {
             assert_eq!(&std::fs::read(db).unwrap(), b, "{args:?}");
         }
@@ -165,7 +169,13 @@ fn regression_paths_that_are_not_regular_files_are_refused_before_anything_opens
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let fifo = d.join("fifo.sqlite");
-    assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    assert!(
+        std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
     every_command_refuses(&fifo, d, "a named pipe (FIFO)");
     let folder = d.join("folder.sqlite");
     std::fs::create_dir(&folder).unwrap();
@@ -177,10 +187,23 @@ fn regression_paths_that_are_not_regular_files_are_refused_before_anything_opens
     // A file SQLite keeps beside a good database, replaced by a named pipe.
     let db = finished(d);
     let wal = d.join("w.sqlite-wal");
-    assert!(std::process::Command::new("mkfifo").arg(&wal).status().unwrap().success());
-    let o = run_within(&["sweep", "status", "--db", s(&db)], Duration::from_secs(60));
+    assert!(
+        std::process::Command::new("mkfifo")
+            .arg(&wal)
+            .status()
+            .unwrap()
+            .success()
+    );
+    let o = run_within(
+        &["sweep", "status", "--db", s(&db)],
+        Duration::from_secs(60),
+    );
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains(&wal.display().to_string()), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&wal.display().to_string()),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// Starts `wetgran args` with a pause point, and waits for its marker on standard error.
@@ -237,7 +260,10 @@ fn regression_viewers_never_migrate_and_upgrade_does() {
     let dir = tempfile::tempdir().unwrap();
     let db = dir.path().join("old.sqlite");
     std::fs::copy(
-        concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/store-f2d47fe/wetgran.sqlite"),
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/fixtures/store-f2d47fe/wetgran.sqlite"
+        ),
         &db,
     )
     .unwrap();
@@ -252,7 +278,11 @@ fn regression_viewers_never_migrate_and_upgrade_does() {
     ] {
         let o = run(&args);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains("written by an older wetgran"), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("written by an older wetgran"),
+            "{}",
+            stderr(&o)
+        );
         assert!(stderr(&o).contains(&format!("wetgran upgrade --db {}", db.display())));
         assert_eq!(std::fs::read(&db).unwrap(), bytes, "{args:?}");
     }
@@ -300,7 +330,10 @@ fn regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_l
         line.clear();
     }
     assert_eq!(child.wait().unwrap().code(), Some(130), "{text}");
-    assert!(text.contains("expanding grid points: 12000 of 12000"), "{text}");
+    assert!(
+        text.contains("expanding grid points: 12000 of 12000"),
+        "{text}"
+    );
     assert!(text.contains("nothing of it was stored"), "{text}");
     assert!(!text.contains("sweep resume"), "{text}");
     // The log is checkpointed and truncated, then removed by the clean close: at 10^6 points
@@ -347,7 +380,11 @@ fn regression_run_rows_of_a_stopped_runner_are_closed_as_interrupted_by_the_next
         assert_eq!(run_outcomes(&db), "done:1 open:1", "{signal}");
         let o = run(&["sweep", "status", "--db", s(&db)]);
         assert!(o.status.success(), "{}", stderr(&o));
-        assert_eq!(run_outcomes(&db), "done:1 open:1", "a viewer writes nothing");
+        assert_eq!(
+            run_outcomes(&db),
+            "done:1 open:1",
+            "a viewer writes nothing"
+        );
         let o = run(&["reclassify", "--db", s(&db)]);
         assert!(o.status.success(), "{}", stderr(&o));
         assert_eq!(run_outcomes(&db), "done:1 interrupted:1", "{signal}");

@@ -524,7 +524,10 @@ fn regression_sweep_file_errors_keep_their_reason_line_and_range() {
             vec!["key `initial.start`", "unknown variant `a|b`", "`hot`"],
         ),
         (
-            sweep_text("", "[[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"a|b\"]\n"),
+            sweep_text(
+                "",
+                "[[axis]]\nkey = \"initial.start\"\nvalues = [\"hot\", \"a|b\"]\n",
+            ),
             ":6",
             vec!["unknown variant `a|b`"],
         ),
@@ -535,24 +538,33 @@ fn regression_sweep_file_errors_keep_their_reason_line_and_range() {
             vec!["key `convergence.bogus`", "unknown field `bogus`"],
         ),
         (
-            sweep_text("periods = 20", "[convergence]\nmax_periods = 40\nbogus = 3\n"),
-            ":8",
+            sweep_text(
+                "periods = 20",
+                "[convergence]\nmax_periods = 40\nbogus = 3\n",
+            ),
+            ":7",
             vec!["key `convergence.bogus`", "unknown field `bogus`"],
         ),
         (
             sweep_text("periods = 20", "\n[convergence]\nblocks = 100\n"),
-            ":8",
+            ":7",
             vec!["key `convergence.blocks`"],
         ),
         (
             sweep_text("replicas = 4294967297", ""),
             ":4",
-            vec!["key `sweep.replicas`", "= 4294967297 is out of range: must be in [1, 10000]"],
+            vec![
+                "key `sweep.replicas`",
+                "= 4294967297 is out of range: must be in [1, 10000]",
+            ],
         ),
         (
             sweep_text("[refine]\nbudget = 10\nmax_replicas = 4294967297", ""),
             ":6",
-            vec!["key `refine.max_replicas`", "must be in [sweep.replicas = 1, 10000]"],
+            vec![
+                "key `refine.max_replicas`",
+                "must be in [sweep.replicas = 1, 10000]",
+            ],
         ),
         (
             "[sweep]\nname = \"-rf\"\nbase = \"tiny.toml\"\n".to_string(),
@@ -567,12 +579,19 @@ fn regression_sweep_file_errors_keep_their_reason_line_and_range() {
         (
             sweep_text("", "[[axis]]\nkey = \"e_star\"\nvalues = [2.0, 1e-20]\n"),
             ":6",
-            vec!["key `drive.e_star`", "= 1e-20 is out of range", "must be 0 or >= 1e-6 d"],
+            vec![
+                "key `drive.e_star`",
+                "= 1e-20 is out of range",
+                "must be 0 or >= 1e-6 d",
+            ],
         ),
     ];
     for (text, line, wants) in cases {
         let e = err(d, &text);
-        assert!(e.starts_with(&format!("{file}{line}:")), "{e}\n--- for:\n{text}");
+        assert!(
+            e.starts_with(&format!("{file}{line}:")),
+            "{e}\n--- for:\n{text}"
+        );
         for want in wants {
             assert!(e.contains(want), "{want:?} missing: {e}\n--- for:\n{text}");
         }

@@ -2,7 +2,7 @@
 //! short jobs, one is killed with SIGKILL mid-way, the other goes on, and `sweep resume` picks
 //! up what the killed one held. Checked against exact bookkeeping: every job ends done with
 //! exactly one result, the results of each runner are exactly the jobs its `done` lines name,
-//! and only a job running at the kill has a second run row (the first one closed as orphaned).
+//! and only a job running at the kill has a second run row (the first one closed as interrupted).
 
 mod sweep_common;
 

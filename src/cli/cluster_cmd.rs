@@ -4,17 +4,16 @@
 //! exits 1 when the job failed (its error record is written all the same).
 
 use super::common::{
-    Failure, check_regrid, load_sweep, print_json, read_spec, register, relabel_lines, select,
-    show,
+    Failure, check_regrid, load_sweep, print_json, read_spec, register, relabel_lines, select, show,
 };
-use crate::output::{Outputs, Protected};
-use crate::terminal::{escape, escape_lines};
 use crate::cluster::record::write_atomic;
 use crate::cluster::slurm::{self, ArrayScript, SbatchOptions};
 use crate::cluster::{Outcome, ResultRecord, SweepDir, collect, jobs_to_submit};
+use crate::output::{Outputs, Protected};
 use crate::report::cluster_text::collected_text;
 use crate::store::{Store, SweepRow};
 use crate::sweep::{JobSpec, run_job};
+use crate::terminal::{escape, escape_lines};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

@@ -3,10 +3,10 @@
 //! a sweep file (with the grid points it leaves out), the regrid check of `sweep run` / `sweep
 //! submit`, reading a job spec, and the reports after a run.
 
+use crate::output::{OutputError, Protected};
 use crate::refine::driver::{Outcome, RefineError};
 use crate::report::sweep_text::left_out_text;
 use crate::report::sweep_text::refinement_text;
-use crate::output::{OutputError, Protected};
 use crate::run::RunOptions;
 use crate::run::progress::Steps;
 use crate::store::{LeftOut, Store, StoreError, SweepRow};
@@ -345,7 +345,12 @@ pub(super) fn relabel_lines(store: &Store, row: &SweepRow) -> Result<(), Failure
 
 /// Reports a refinement on stderr.
 pub(super) fn refinement_report(row: &SweepRow, o: &Outcome) {
-    note(&refinement_text(&escape(&row.name), o.added, o.rounds, o.resolved));
+    note(&refinement_text(
+        &escape(&row.name),
+        o.added,
+        o.rounds,
+        o.resolved,
+    ));
 }
 
 /// After `sweep run` / `sweep resume`: continues the refinement of every given sweep whose file

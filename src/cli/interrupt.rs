@@ -71,8 +71,7 @@ fn watch_for_ctrl_c() {
         };
         std::thread::spawn(move || {
             for _ in signals.forever() {
-                if REGISTERING.load(Ordering::SeqCst) && !CANCELLED.swap(true, Ordering::SeqCst)
-                {
+                if REGISTERING.load(Ordering::SeqCst) && !CANCELLED.swap(true, Ordering::SeqCst) {
                     eprintln!(
                         "\ninterrupted: stopping the registration (Ctrl-C again to quit at once)"
                     );

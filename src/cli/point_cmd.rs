@@ -3,14 +3,16 @@
 //! its job spec, which is deterministic) and `wetgran inflection` (the fluid-gas boundary of
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
-use super::common::{Failure, check_snapshot_names, print_json, select, show as show_text, write_file};
+use super::common::{
+    Failure, check_snapshot_names, print_json, select, show as show_text, write_file,
+};
 use crate::output::{Outputs, Protected};
-use crate::terminal::escape;
 use crate::report::point_text::{
     decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
 };
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
 use crate::store::{PointRow, Store};
+use crate::terminal::escape;
 use clap::Args;
 use std::path::PathBuf;
 use wetgran_core::observe::{Observables, run_observed_with_frame};

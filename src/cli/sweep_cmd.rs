@@ -8,7 +8,6 @@ use super::common::{
     DEFAULT_DB, DbSweeps, Failure, Workers, available_cores, check_regrid, continue_refinement,
     load_sweep, note, print_json, read_spec, register, relabel_lines, select, show,
 };
-use crate::terminal::{escape, escape_lines};
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{boundaries_csv, boundaries_table};
 use crate::report::cluster_text::slurm_status_text;
@@ -22,6 +21,7 @@ use crate::run::{RunOptions, run_sweeps};
 use crate::store::{Durability, PointSummary, Store, SweepRow};
 use crate::sweep::job::ExtendTo;
 use crate::sweep::run_job;
+use crate::terminal::{escape, escape_lines};
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 
@@ -207,7 +207,11 @@ pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
     // Results shared with an earlier registration get this file's `[classify]` thresholds.
     let relabelled = crate::run::relabel::relabel_stored(&store, std::slice::from_ref(&row), None)?;
     if relabelled.changed() > 0 {
-        note(&format!("sweep {}: {}", escape(&row.name), relabelled.text()));
+        note(&format!(
+            "sweep {}: {}",
+            escape(&row.name),
+            relabelled.text()
+        ));
     }
     let rows = [row];
     run_and_report(&store, &rows, &opts, a.retry_failed)?;
@@ -438,19 +442,22 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
     let starts: Vec<String> = planned.iter().map(|j| j.start.clone()).collect();
     let picks = sample_picks(&starts, samples);
     show(&estimate_head_text(
-            &file.display().to_string(),
-            jobs.len(),
-            picks.len(),
-            periods,
-            settle
-        ));
+        &file.display().to_string(),
+        jobs.len(),
+        picks.len(),
+        periods,
+        settle,
+    ));
     let labels: Vec<&str> = sweep.axes.iter().map(|a| a.label.as_str()).collect();
     let mut rates = Vec::new();
     for &k in &picks {
         let coords = coords_text(&labels, &jobs[k].coords);
         if let Some(m) = planned[k].measured {
             // The database has its run: its rate is known, nothing to sample.
-            show(&estimate_stored_text(&coords, m.wall_seconds / m.simulated_time));
+            show(&estimate_stored_text(
+                &coords,
+                m.wall_seconds / m.simulated_time,
+            ));
             continue;
         }
         let spec = sample_spec(&sweep, &jobs[k], settle, periods);
@@ -462,7 +469,12 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
                     seconds_per_time: rate,
                     start: planned[k].start.clone(),
                 });
-                show(&estimate_sample_text(&coords, rate * spec.period(), rate, r.events));
+                show(&estimate_sample_text(
+                    &coords,
+                    rate * spec.period(),
+                    rate,
+                    r.events,
+                ));
             }
             Err(e) => show(&estimate_failed_text(&coords, &e.to_string())),
         }
@@ -474,14 +486,14 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
     let policy = jobs.iter().any(|j| j.spec.scene.convergence.is_some());
     let (lines, by_start) = cost_lines(&planned, &rates, measured.as_ref(), policy, cores);
     show(&estimate_text(
-            jobs.len(),
-            cores,
-            measured.as_ref(),
-            &lines,
-            &by_start,
-            settle,
-            periods
-        ));
+        jobs.len(),
+        cores,
+        measured.as_ref(),
+        &lines,
+        &by_start,
+        settle,
+        periods,
+    ));
     Ok(())
 }
 

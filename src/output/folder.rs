@@ -19,7 +19,8 @@ use std::path::{Component, Path, PathBuf};
 /// The marker file of a folder [`SiteFolder`] wrote.
 pub const MARKER: &str = ".wetgran-report";
 /// The first line of [`MARKER`].
-pub const MARKER_LINE: &str = "wetgran report: this folder is replaced by the next `wetgran report -o` into it";
+pub const MARKER_LINE: &str =
+    "wetgran report: this folder is replaced by the next `wetgran report -o` into it";
 
 /// A report folder being written (module doc); dropped without [`SiteFolder::commit`], the
 /// temporary folder is removed and the target left as it was.
@@ -36,19 +37,21 @@ pub struct SiteFolder {
 fn holds_marker(dir: &Path) -> bool {
     let marker = dir.join(MARKER);
     std::fs::symlink_metadata(&marker).is_ok_and(|m| m.file_type().is_file())
-        && std::fs::read_to_string(&marker)
-            .is_ok_and(|t| t.lines().next() == Some(MARKER_LINE))
+        && std::fs::read_to_string(&marker).is_ok_and(|t| t.lines().next() == Some(MARKER_LINE))
 }
 
 impl SiteFolder {
     /// Checks the target `out` and creates the temporary folder beside it; `force` lets an
     /// existing folder without the marker be replaced.
-    pub fn create(out: &Path, force: bool, protected: &Protected) -> Result<SiteFolder, OutputError> {
+    pub fn create(
+        out: &Path,
+        force: bool,
+        protected: &Protected,
+    ) -> Result<SiteFolder, OutputError> {
         let target = check_target(out, force, protected)?;
         let temporary = temporary_beside(&target, "new");
-        std::fs::create_dir(&temporary).map_err(|e| {
-            OutputError::Io(format!("{}: cannot create: {e}", temporary.display()))
-        })?;
+        std::fs::create_dir(&temporary)
+            .map_err(|e| OutputError::Io(format!("{}: cannot create: {e}", temporary.display())))?;
         Ok(SiteFolder {
             shown: out.to_path_buf(),
             target,
@@ -181,6 +184,11 @@ fn check_target(out: &Path, force: bool, protected: &Protected) -> Result<PathBu
         )),
         _ => refuse(format!("cannot be written: {e}")),
     })?;
+    if meta.as_ref().is_ok_and(|m| !m.is_dir()) {
+        return Err(refuse(
+            "exists and is not a folder: give another path for the report folder".to_string(),
+        ));
+    }
     if let Some(g) = protected.inside(&target) {
         return Err(refuse(format!(
             "holds {}: replacing the folder would delete it; give another path",
@@ -198,9 +206,6 @@ fn check_target(out: &Path, force: bool, protected: &Protected) -> Result<PathBu
     match meta {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(target),
         Err(e) => Err(OutputError::Io(format!("-o {}: {e}", out.display()))),
-        Ok(m) if !m.is_dir() => Err(refuse(
-            "exists and is not a folder: give another path for the report folder".to_string(),
-        )),
         Ok(_) if holds_marker(&target) || force => Ok(target),
         Ok(_) => Err(refuse(format!(
             "exists and is not a report wetgran wrote (it has no {MARKER} file): its files would \

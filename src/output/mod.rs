@@ -217,7 +217,12 @@ fn check(out: &Path, protected: &Protected) -> Result<(PathBuf, Target), OutputE
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             return Ok((target, Target::Replaceable));
         }
-        Err(e) => return Err(OutputError::Io(format!("{}: cannot write: {e}", out.display()))),
+        Err(e) => {
+            return Err(OutputError::Io(format!(
+                "{}: cannot write: {e}",
+                out.display()
+            )));
+        }
     };
     let kind = meta.file_type();
     if kind.is_dir() {
@@ -301,10 +306,7 @@ fn temporary_beside(target: &Path, what: &str) -> PathBuf {
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
     let n = TEMPORARIES.fetch_add(1, Ordering::Relaxed);
-    parent_of(target).join(format!(
-        ".{name}.wetgran-{}-{n}.{what}",
-        std::process::id()
-    ))
+    parent_of(target).join(format!(".{name}.wetgran-{}-{n}.{what}", std::process::id()))
 }
 
 /// An output file being written (module doc): bytes go to a temporary file (or, for a device
@@ -322,7 +324,8 @@ impl AtomicFile {
     /// Starts writing the output `out` (checked against `protected` first).
     pub fn create(out: &Path, protected: &Protected) -> Result<AtomicFile, OutputError> {
         let (target, kind) = check(out, protected)?;
-        let failed = |e: std::io::Error| OutputError::Io(format!("{}: cannot write: {e}", out.display()));
+        let failed =
+            |e: std::io::Error| OutputError::Io(format!("{}: cannot write: {e}", out.display()));
         let (file, temporary) = match kind {
             Target::Stream => {
                 let f = std::fs::OpenOptions::new()
@@ -360,8 +363,9 @@ impl AtomicFile {
 
     /// Flushes, syncs and renames the temporary file over the target (then syncs its folder).
     pub fn commit(mut self) -> Result<(), OutputError> {
-        let failed =
-            |e: std::io::Error| OutputError::Io(format!("{}: cannot write: {e}", self.shown.display()));
+        let failed = |e: std::io::Error| {
+            OutputError::Io(format!("{}: cannot write: {e}", self.shown.display()))
+        };
         let file = self.file.take().expect("an uncommitted file");
         let file = file.into_inner().map_err(|e| failed(e.into_error()))?;
         let Some(tmp) = self.temporary.take() else {

@@ -58,7 +58,10 @@ fn an_output_resolving_to_the_database_or_its_companions_is_refused_and_nothing_
         let m = refused(write_file(&out, "<svg/>", &protected));
         assert!(m.contains(&out.display().to_string()), "{m}");
         assert!(m.contains("would overwrite"), "{m}");
-        assert!(m.contains(&db.display().to_string()), "names the database: {m}");
+        assert!(
+            m.contains(&db.display().to_string()),
+            "names the database: {m}"
+        );
         assert_eq!(std::fs::read(&db).unwrap(), bytes);
     }
     assert!(refused(write_file(&d.join("hard.svg"), "x", &protected)).contains("hard link"));
@@ -105,7 +108,11 @@ fn an_output_is_replaced_whole_keeps_its_mode_and_a_dropped_one_leaves_the_old_f
     assert_eq!(names(dir.path()).len(), 2);
     drop(f);
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "old");
-    assert_eq!(names(dir.path()), vec!["map.svg"], "the temporary file is gone");
+    assert_eq!(
+        names(dir.path()),
+        vec!["map.svg"],
+        "the temporary file is gone"
+    );
     write_file(&out, "new", &Protected::none()).unwrap();
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "new");
     let mode = std::fs::metadata(&out).unwrap().permissions().mode() & 0o777;
@@ -115,7 +122,12 @@ fn an_output_is_replaced_whole_keeps_its_mode_and_a_dropped_one_leaves_the_old_f
     std::os::unix::fs::symlink("map.svg", dir.path().join("l.svg")).unwrap();
     write_file(&dir.path().join("l.svg"), "via link", &Protected::none()).unwrap();
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "via link");
-    assert!(std::fs::symlink_metadata(dir.path().join("l.svg")).unwrap().file_type().is_symlink());
+    assert!(
+        std::fs::symlink_metadata(dir.path().join("l.svg"))
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
     // A device is written in place.
     write_file(Path::new("/dev/null"), "anything", &Protected::none()).unwrap();
 }
@@ -136,7 +148,10 @@ fn a_report_folder_replaces_only_its_own_kind_and_never_follows_links() {
     let f = SiteFolder::create(&site, false, &protected).unwrap();
     f.write("index.html", "two").unwrap();
     f.commit().unwrap();
-    assert_eq!(std::fs::read_to_string(site.join("index.html")).unwrap(), "two");
+    assert_eq!(
+        std::fs::read_to_string(site.join("index.html")).unwrap(),
+        "two"
+    );
     assert!(!site.join("points/point-9.html").exists());
     assert_eq!(names(d), vec!["site", "w.sqlite"]);
     // A link planted in the old report is removed, not followed.
@@ -145,7 +160,10 @@ fn a_report_folder_replaces_only_its_own_kind_and_never_follows_links() {
     let f = SiteFolder::create(&site, false, &protected).unwrap();
     f.write("lines.csv", "new").unwrap();
     f.commit().unwrap();
-    assert_eq!(std::fs::read_to_string(d.join("outside.txt")).unwrap(), "mine");
+    assert_eq!(
+        std::fs::read_to_string(d.join("outside.txt")).unwrap(),
+        "mine"
+    );
     // A folder without the marker is refused, with --force named, and left alone.
     let mine = d.join("mine");
     std::fs::create_dir(&mine).unwrap();
@@ -155,7 +173,10 @@ fn a_report_folder_replaces_only_its_own_kind_and_never_follows_links() {
         other => panic!("{other:?}"),
     };
     assert!(m.contains("--force") && m.contains("mine"), "{m}");
-    assert_eq!(std::fs::read_to_string(mine.join("sweep.toml")).unwrap(), "my own");
+    assert_eq!(
+        std::fs::read_to_string(mine.join("sweep.toml")).unwrap(),
+        "my own"
+    );
     let f = SiteFolder::create(&mine, true, &protected).unwrap();
     f.write("index.html", "forced").unwrap();
     f.commit().unwrap();
@@ -177,10 +198,19 @@ fn a_report_folder_replaces_only_its_own_kind_and_never_follows_links() {
     // A file name from a database may not leave the folder; a failed report leaves no trace.
     let f = SiteFolder::create(&site, false, &protected).unwrap();
     for bad in ["../escape.html", "/etc/x", "points/../../x", "", MARKER] {
-        assert!(matches!(f.write(bad, "x"), Err(OutputError::Refused(_))), "{bad}");
+        assert!(
+            matches!(f.write(bad, "x"), Err(OutputError::Refused(_))),
+            "{bad}"
+        );
     }
     drop(f);
     assert!(!d.join("escape.html").exists());
-    assert_eq!(names(d), vec!["mine", "outside.txt", "site", "via", "w.sqlite"]);
-    assert_eq!(std::fs::read_to_string(site.join("lines.csv")).unwrap(), "new");
+    assert_eq!(
+        names(d),
+        vec!["mine", "outside.txt", "site", "via", "w.sqlite"]
+    );
+    assert_eq!(
+        std::fs::read_to_string(site.join("lines.csv")).unwrap(),
+        "new"
+    );
 }

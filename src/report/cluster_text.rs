@@ -2,10 +2,10 @@
 //! of `sweep status` (task states as recorded and in the queue). Pure functions of the stored
 //! rows and the collection's outcome.
 
-use crate::terminal::escape;
 use crate::cluster::{Collected, QueueStates};
 use crate::run::runner::point_label;
 use crate::store::{PointRow, SweepRow, TaskRow};
+use crate::terminal::escape;
 use std::collections::HashMap;
 use std::fmt::Write as _;
 

@@ -78,7 +78,9 @@ fn check_kinds(path: &Path) -> Result<(), StoreError> {
 /// header's page count is valid (SQLite 3.7.0 on: "version-valid-for" equals the change
 /// counter).
 fn header_size(header: &[u8]) -> Option<u64> {
-    let be32 = |at: usize| u32::from_be_bytes([header[at], header[at + 1], header[at + 2], header[at + 3]]);
+    let be32 = |at: usize| {
+        u32::from_be_bytes([header[at], header[at + 1], header[at + 2], header[at + 3]])
+    };
     let page_size = match u16::from_be_bytes([header[16], header[17]]) {
         1 => 65536,
         n => u64::from(n),

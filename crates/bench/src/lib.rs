@@ -61,8 +61,12 @@ pub fn run(
             let mut text = wall::report(&rows);
             if let Some(path) = svg {
                 // Whole or not at all, never over a database (`wetgran::output`).
-                wetgran::output::write_file(path, wall::svg(&rows), &wetgran::output::Protected::none())
-                    .map_err(|e| e.to_string())?;
+                wetgran::output::write_file(
+                    path,
+                    wall::svg(&rows),
+                    &wetgran::output::Protected::none(),
+                )
+                .map_err(|e| e.to_string())?;
                 let _ = writeln!(text, "plot written to {}", path.display());
             }
             text

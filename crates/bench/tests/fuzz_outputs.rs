@@ -159,7 +159,10 @@ fn check_output_path(
     };
     let after = snapshot(d);
     prop_assert_eq!(std::fs::read(&db).unwrap(), db_bytes, "{}", path.display());
-    prop_assert_eq!(std::fs::read(d.join("w.sqlite-shm")).unwrap(), vec![9u8; 64]);
+    prop_assert_eq!(
+        std::fs::read(d.join("w.sqlite-shm")).unwrap(),
+        vec![9u8; 64]
+    );
     prop_assert!(!d.join("w.sqlite-wal").exists() && !d.join("w.sqlite-journal").exists());
     let changed: Vec<&PathBuf> = after
         .iter()
@@ -172,7 +175,12 @@ fn check_output_path(
             prop_assert_eq!(changed.len(), 1, "{}: {:?}", path.display(), changed);
             prop_assert_eq!(after[changed[0]].as_str(), format!("file {:?}", b"NEW"));
         }
-        _ => prop_assert!(changed.is_empty(), "{}: {:?} ({result:?})", path.display(), changed),
+        _ => prop_assert!(
+            changed.is_empty(),
+            "{}: {:?} ({result:?})",
+            path.display(),
+            changed
+        ),
     }
     Ok(())
 }
@@ -238,10 +246,7 @@ fn reports(store: &Store) -> String {
     };
     let mut out = sweep_status_text(&input);
     for p in store.points(sweep.id).unwrap() {
-        out += &wetgran::report::point_text::job_text(
-            &wetgran::terminal::escape(&sweep.name),
-            &p,
-        );
+        out += &wetgran::report::point_text::job_text(&wetgran::terminal::escape(&sweep.name), &p);
     }
     let how = wetgran::boundary::Extraction::default();
     let summaries = store.point_summaries(&sweep).unwrap();
@@ -272,7 +277,10 @@ fn check_stored_text(t: &Texts) -> Result<(), TestCaseError> {
     );
     let (plain_store, _) = forged_store(plain_dir.path(), &plain);
     let text = reports(&forged);
-    let bad: Vec<char> = text.chars().filter(|c| is_unsafe(*c) && *c != '\n').collect();
+    let bad: Vec<char> = text
+        .chars()
+        .filter(|c| is_unsafe(*c) && *c != '\n')
+        .collect();
     prop_assert!(bad.is_empty(), "unescaped {bad:?} in\n{text}");
     prop_assert_eq!(
         text.lines().count(),

@@ -1,5 +1,6 @@
-//! Test-only pause points, for the crash-torture tests (`tests/crash_torture.rs`): they make a
-//! child `wetgran` stop at a named point so that the test can kill it exactly there.
+//! Test-only pause points, for the crash-torture tests (`tests/crash_torture.rs`, and
+//! `tests/safe_stores.rs`): they make a child `wetgran` stop at a named point so that the test
+//! can kill or interrupt it exactly there.
 //!
 //! With `WETGRAN_TEST_PAUSE_AT=NAME` (or `NAME:N`) in the environment, the `N`-th time (default
 //! the first) this process passes the point `NAME`, it prints `wetgran-test-pause: NAME N` to
@@ -12,6 +13,7 @@
 //! | `checkpoint` | `Store::insert_result` (a job finished, or extended) | result and checkpoint rows written, transaction not committed |
 //! | `extend` | `Store::replace_result` (`sweep resume --extend`) | the job's old result deleted, the new one not yet written |
 //! | `refine` | `Store::add_jobs` (a refinement round) | the round's jobs inserted, transaction not committed |
+//! | `register` | `Store::register_sweep_watched`, after each thousand jobs | a sweep's jobs inserted so far, its registration not committed |
 //! | `window` | `observe`'s run-length policy | a job's run about to be extended by one more window |
 
 use std::sync::OnceLock;
