@@ -150,7 +150,7 @@ impl fmt::Display for StoreError {
                  changes a database: `wetgran upgrade --db {path}` upgrades it in place where it \
                  can be written (copy the file first to keep the old one; commands that write, \
                  such as `sweep resume`, also upgrade it){}",
-                if read_only::log_missing(Path::new(path)) {
+                if open::log_missing(Path::new(path)) {
                     format!(
                         ". If the file is a copy taken while wetgran was writing the database, \
                          its write-ahead log {path}-wal was left behind: copy that file beside it \

@@ -133,7 +133,7 @@ pub(super) fn inspect(path: &Path, create: bool) -> Result<Existing, StoreError>
     let len = std::fs::metadata(path).map_or(0, |m| m.len());
     if let Some(size) = header_size(&bytes)
         && len < size
-        && super::read_only::log_missing(path)
+        && log_missing(path)
     {
         return Err(StoreError::Truncated {
             path: p,
@@ -153,6 +153,26 @@ pub(super) fn inspect(path: &Path, create: bool) -> Result<Existing, StoreError>
         })
     } else {
         Ok(Existing::OtherSqlite)
+    }
+}
+
+/// Whether the write-ahead log beside `path` is missing or empty (holds no commits).
+pub(super) fn log_missing(path: &Path) -> bool {
+    std::fs::metadata(crate::output::with_suffix(path, "-wal")).map_or(true, |m| m.len() == 0)
+}
+
+/// The migrations applied to a database (none where it has no migration table yet).
+pub(super) async fn applied_migrations(
+    conn: &mut sqlx::SqliteConnection,
+) -> Result<Vec<i64>, sqlx::Error> {
+    match sqlx::query_scalar::<_, i64>(queries::APPLIED_MIGRATIONS)
+        .fetch_all(conn)
+        .await
+    {
+        Ok(v) => Ok(v),
+        // No migration table: initialised, never migrated.
+        Err(e) if e.to_string().contains("no such table") => Ok(Vec::new()),
+        Err(e) => Err(e),
     }
 }
 
@@ -285,14 +305,12 @@ impl Store {
                         .fetch_all(&mut *conn)
                         .await
                         .map_err(damaged)?;
-                    if wal && tables.is_empty() && super::read_only::log_missing(&self.path) {
+                    if wal && tables.is_empty() && log_missing(&self.path) {
                         return Err(StoreError::NoContent {
                             path: self.path.display().to_string(),
                         });
                     }
-                    let applied = super::read_only::applied_migrations(conn)
-                        .await
-                        .map_err(damaged)?;
+                    let applied = applied_migrations(conn).await.map_err(damaged)?;
                     self.refuse_newer(&applied)?;
                 }
                 Existing::New => {}

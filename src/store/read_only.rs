@@ -23,7 +23,7 @@
 //! [`StoreError::Newer`]; the main file of a database copied without its `-wal` file while a
 //! run was writing it (wetgran's header, no table, no log) with [`StoreError::NoContent`].
 
-use super::open::{Existing, inspect};
+use super::open::{Existing, applied_migrations, inspect, log_missing};
 use super::{MIGRATOR, Store, StoreError, explain, queries, sqlite_code};
 use sqlx::sqlite::SqliteConnectOptions;
 use std::path::{Path, PathBuf};
@@ -39,11 +39,6 @@ pub enum ReadAccess {
 /// log's index).
 fn beside(path: &Path, suffix: &str) -> PathBuf {
     crate::output::with_suffix(path, suffix)
-}
-
-/// Whether the write-ahead log beside `path` is missing or empty (holds no commits).
-pub(super) fn log_missing(path: &Path) -> bool {
-    std::fs::metadata(beside(path, "-wal")).map_or(true, |m| m.len() == 0)
 }
 
 /// Whether no write permission bit is set on `path` (an archive marked read-only, also for
@@ -182,21 +177,6 @@ impl Store {
             )));
         }
         Ok((!self.job_ids_current()?).then(|| "its job ids follow an older rule".to_string()))
-    }
-}
-
-/// The migrations applied to a database (none where it has no migration table yet).
-pub(super) async fn applied_migrations(
-    conn: &mut sqlx::SqliteConnection,
-) -> Result<Vec<i64>, sqlx::Error> {
-    match sqlx::query_scalar::<_, i64>(queries::APPLIED_MIGRATIONS)
-        .fetch_all(conn)
-        .await
-    {
-        Ok(v) => Ok(v),
-        // No migration table: initialised, never migrated.
-        Err(e) if e.to_string().contains("no such table") => Ok(Vec::new()),
-        Err(e) => Err(e),
     }
 }
 
