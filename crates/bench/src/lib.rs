@@ -13,6 +13,7 @@
 
 pub(crate) mod barrier;
 pub(crate) mod engines;
+pub(crate) mod jobs;
 pub(crate) mod memory;
 pub(crate) mod observer;
 pub mod orchestrator;
@@ -47,6 +48,7 @@ pub fn run(
     svg: Option<&std::path::Path>,
     threads: &[usize],
     n_factor: usize,
+    baseline: Option<&std::path::Path>,
 ) -> Result<String, String> {
     if !(scale.is_finite() && scale > 0.0) {
         return Err(format!("--scale = {scale} must be a finite number > 0"));
@@ -90,6 +92,10 @@ pub fn run(
         }
         ("engines", None) => engines::report(&engines::measure(repeat, scale), repeat, scale),
         ("barrier", None) => barrier::report(&barrier::measure(repeat, scale), repeat),
+        ("jobs", None) => {
+            let (rows, perf) = jobs::measure(repeat, scale, baseline)?;
+            jobs::report(&rows, perf, jobs::bulk_rate(repeat, scale)?)
+        }
         ("shake", None) => shake::report(&shake::measure(40, scale)),
         ("engine", labels) => {
             let only: Option<Vec<&str>> = labels.map(|l| l.split(',').map(str::trim).collect());
@@ -101,7 +107,7 @@ pub fn run(
         }
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `jobs`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
             ));
         }
     })

@@ -279,6 +279,18 @@ pub trait Simulation {
     fn energy(&self) -> EnergyLedger;
     fn granular_temperature(&self) -> f64;
     fn bridge_count(&self) -> usize;
+    /// The report's sample now: the energies of [`Self::energy`], the temperature and the
+    /// bridges.
+    fn sample(&self) -> Sample {
+        let energy = self.energy();
+        Sample {
+            time: self.time(),
+            granular_temperature: self.granular_temperature(),
+            bridges: self.bridge_count(),
+            kinetic: energy.kinetic,
+            potential: energy.potential,
+        }
+    }
     /// Every invariant; the first violation.
     fn sanity_check(&self) -> Result<(), String>;
     /// The invariants of each particle on its own, `O(N)` (the per-sample check of
@@ -323,6 +335,17 @@ impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue>
     }
     fn bridge_count(&self) -> usize {
         Engine::bridge_count(self)
+    }
+    fn sample(&self) -> Sample {
+        // One pass over the particles (a sample may come every few hundred events).
+        let (kinetic, potential, granular_temperature) = self.sample_energies();
+        Sample {
+            time: self.time(),
+            granular_temperature,
+            bridges: self.bridge_count(),
+            kinetic,
+            potential,
+        }
     }
     fn sanity_check(&self) -> Result<(), String> {
         Engine::sanity_check(self)
@@ -397,17 +420,6 @@ impl<const D: usize, const G: bool, const W: bool, B: BodyForce<D>> Simulation
     }
 }
 
-fn sample<S: Simulation>(e: &S) -> Sample {
-    let energy = e.energy();
-    Sample {
-        time: e.time(),
-        granular_temperature: e.granular_temperature(),
-        bridges: e.bridge_count(),
-        kinetic: energy.kinetic,
-        potential: energy.potential,
-    }
-}
-
 /// Seconds since `t0`.
 fn since(t0: Instant) -> f64 {
     t0.elapsed().as_secs_f64()
@@ -422,7 +434,7 @@ fn run_engine<S: Simulation>(
 ) -> RunReport {
     let start = Instant::now();
     let energy_initial = engine.energy();
-    let mut samples = vec![sample(&engine)];
+    let mut samples = vec![engine.sample()];
     let (stopped_on_cap, violation) = sample_loop(
         &mut engine,
         scene,
@@ -524,7 +536,7 @@ fn sample_loop<S: Simulation>(
         let reached = engine.run_until(target, scene.run.max_events);
         cadence.timing.engine += since(t);
         if !reached {
-            samples.push(sample(engine));
+            samples.push(engine.sample());
             return (true, None);
         }
         if target == target_obs {
@@ -534,7 +546,7 @@ fn sample_loop<S: Simulation>(
                 // A blown-up state between two samples stops the run as a broken invariant
                 // before it reaches the observers.
                 if let Some(bad) = frame.non_finite() {
-                    samples.push(sample(engine));
+                    samples.push(engine.sample());
                     return (false, Some(engine.sanity_check().err().unwrap_or(bad)));
                 }
                 obs.observe(&frame);
@@ -546,7 +558,7 @@ fn sample_loop<S: Simulation>(
             continue;
         }
         let t = Instant::now();
-        samples.push(sample(engine));
+        samples.push(engine.sample());
         cadence.timing.samples += since(t);
         progress(samples.last().expect("just pushed"));
         // The end of a stretch gets the full check before the watcher may extend the run.

@@ -19,10 +19,12 @@ use super::queue::{CalendarQueue, EventQueue};
 use super::shear::{FORCE_AXIS, ShearField};
 use super::slabs::SlabSource;
 use super::table_cache::{DEFAULT_TABLE_CACHE_MIB, TableCache};
-use super::walls::{WallSolver, WallSource};
+use super::walls::WallSource;
 use crate::scene::{Boundary, Scene};
 use crate::sim::books::{EnergyLedger, EventCounts};
 use crate::sim::initial::{FlatInitialState, initial_state_flat};
+
+mod checks;
 
 /// Events between two renumberings of the particles in cell order (see `reorder_by_cell`).
 fn reorder_interval(n: usize) -> u64 {
@@ -456,6 +458,28 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         out
     }
 
+    /// The kinetic and potential energies of [`Self::energy`] and the granular temperature of
+    /// [`Self::granular_temperature`] in one pass over the particles (a report sample), each
+    /// summed in the same order, so with the same bits.
+    pub fn sample_energies(&self) -> (f64, f64, f64) {
+        let (m, g, n) = (self.bodies.mass, self.bodies.gravity, self.len() as f64);
+        // `-0.0` is the neutral element of a float sum, as in `Iterator::sum`.
+        let (mut kinetic, mut potential, mut v_sq) = (-0.0f64, -0.0f64, -0.0f64);
+        let mut v_sum = Vector::<D>::zeros();
+        for (x, v) in self.current_states() {
+            let v2 = v.norm_squared();
+            kinetic += 0.5 * m * v2;
+            if GRAV {
+                potential += m * g * x[D - 1];
+            }
+            v_sum += v;
+            v_sq += v2;
+        }
+        let mean = v_sum / n;
+        let t_g = m * (v_sq / n - mean.norm_squared()) / D as f64;
+        (kinetic, if GRAV { potential } else { 0.0 }, t_g)
+    }
+
     pub fn momentum(&self) -> Vector<D> {
         self.current_states()
             .fold(Vector::<D>::zeros(), |a, (_, v)| a + v)
@@ -561,122 +585,5 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         out.extend(self.slabs.memory());
         out.extend(self.queue.memory());
         out
-    }
-
-    /// Checks every invariant ([`Self::quick_check`], then [`Self::pair_check`]) and returns
-    /// the first violation.
-    pub fn sanity_check(&self) -> Result<(), String> {
-        self.quick_check()?;
-        self.pair_check()
-    }
-
-    /// The invariants of each particle on its own, in `O(N)` without allocation: no time
-    /// reversal, finite numbers, every particle inside the box (with the `table` solver up to
-    /// `walls::TABLE_PLACEMENT_TOLERANCE` behind a shaken wall, by design), in its cell (and
-    /// slab), no event in the past. Returns the first violation.
-    pub fn quick_check(&self) -> Result<(), String> {
-        let tol = self.overlap_tolerance;
-        let t = self.time;
-        let b = &self.bodies;
-        if self.time_reversals > 0 {
-            return Err(format!(
-                "{} events processed out of time order",
-                self.time_reversals
-            ));
-        }
-        // The shaken floor and lid move by z_w(t).
-        let shift = self.walls.solver.motion().map_or(0.0, |w| w.position(t));
-        let tabulated = matches!(self.walls.solver, WallSolver::Table(_));
-        for i in 0..self.len() {
-            // Messages name particles by their scene index.
-            let si = b.id[i];
-            let (x, v) = b.state_at(i, t);
-            if !x.iter().chain(v.iter()).all(|a| a.is_finite()) {
-                return Err(format!("particle {si} has a non-finite state at t = {t}"));
-            }
-            for k in 0..D {
-                let r = b.body[i].r;
-                let s = if k == D - 1 { shift } else { 0.0 };
-                let (lo, hi) = if b.periodic[k] {
-                    (0.0, b.size[k])
-                } else {
-                    (r + s, b.size[k] - r + s)
-                };
-                // The `table` solver places a particle on the shaken wall only as far as its
-                // neighbours leave room (`walls::placement_room`): the rest, at most its
-                // placement tolerance, may stay behind the wall until the particle leaves it.
-                let behind = (lo - x[k]).max(x[k] - hi);
-                let table_residual =
-                    k == D - 1 && behind <= super::walls::TABLE_PLACEMENT_TOLERANCE && tabulated;
-                if behind > tol && !table_residual {
-                    return Err(format!(
-                        "particle {si} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
-                        x[k]
-                    ));
-                }
-            }
-            if let Some(e) = self.cells.check(i, &x, &b.periodic, tol) {
-                return Err(format!("particle {si} {e} at t = {t}"));
-            }
-            if SHEAR && let Err(e) = self.slabs.check(i, x[0], tol) {
-                return Err(format!("particle {si} {e} at t = {t}"));
-            }
-            if self.queue.key(i) < t - 1e-9 * t.abs().max(1.0) {
-                return Err(format!(
-                    "particle {si} has an event in the past: {} < {t}",
-                    self.queue.key(i)
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// The invariants of pairs, `O(N x neighbours)` without allocation: no pair overlap and no
-    /// bonded pair beyond `s_crit` by more than the tolerance, no one-sided bond. Returns the
-    /// first violation.
-    pub fn pair_check(&self) -> Result<(), String> {
-        let tol = self.overlap_tolerance;
-        let t = self.time;
-        let b = &self.bodies;
-        for i in 0..self.len() {
-            let si = b.id[i];
-            let xi = b.state_at(i, t).0;
-            let mut err = None;
-            self.cells.for_each_near(i, |j| {
-                if j <= i || err.is_some() {
-                    return;
-                }
-                let r = b.min_image(xi - b.state_at(j, t).0).norm();
-                let sigma = b.body[i].r + b.body[j].r;
-                if r < sigma - tol {
-                    err = Some(format!(
-                        "particles {si} and {} overlap by {} at t = {t}",
-                        b.id[j],
-                        sigma - r
-                    ));
-                }
-            });
-            if let Some(e) = err {
-                return Err(e);
-            }
-            if WET {
-                for &j in self.pairs.bonds_of(i) {
-                    let j = j as usize;
-                    let sj = b.id[j];
-                    let r = b.min_image(xi - b.state_at(j, t).0).norm();
-                    let lambda = b.body[i].r + b.body[j].r + self.pairs.p.s_crit;
-                    if r > lambda + tol {
-                        return Err(format!(
-                            "bonded pair {si}-{sj} stretched beyond s_crit by {} at t = {t}",
-                            r - lambda
-                        ));
-                    }
-                    if !self.pairs.bonded(j, i) {
-                        return Err(format!("bond {si}-{sj} is one-sided"));
-                    }
-                }
-            }
-        }
-        Ok(())
     }
 }
