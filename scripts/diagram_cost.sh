@@ -43,7 +43,7 @@ for sweep in "$@"; do
       "$bin" sweep run "$sweep" --db "$db" --jobs "$workers" > "$out/$name-$who.log" 2>&1 ||
       echo "  ($name, $who: sweep run exited $?; see $out/$name-$who.log)"
     end=$(date +%s.%N)
-    "$bin" export --json --db "$db" > "$out/$name-$who.json"
+    "$bin" export --json --db "$db" > "$out/$name-$who.json" 2>/dev/null
     python3 - "$name" "$who" "$start" "$end" "$out/$name-$who.json" "$out/$name-$who.time" <<'PY'
 import json, sys
 name, who, start, end, export, timing = sys.argv[1:]
