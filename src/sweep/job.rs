@@ -213,7 +213,7 @@ mod tests {
         let mut spec = tiny_spec();
         // Bypasses validation: the engine refuses a dimension it has no type for.
         spec.scene.dimension = 4;
-        match run_job(&spec, &mut |_| {}) {
+        match run_job(&spec, &RunSettings::default(), &mut |_| {}) {
             Err(JobError::Panic(m)) => assert!(m.contains("dimension 4"), "{m}"),
             other => panic!("expected a panic error, got {other:?}"),
         }
@@ -223,7 +223,7 @@ mod tests {
     fn averages_cover_the_samples_after_the_transient() {
         let spec = tiny_spec();
         let mut fractions = Vec::new();
-        let r = run_job(&spec, &mut |f| fractions.push(f)).unwrap();
+        let r = run_job(&spec, &RunSettings::default(), &mut |f| fractions.push(f)).unwrap();
         // The classifier ran and kept the numbers it decided on.
         let phase: wetgran_core::observe::Phase = r.phase.as_deref().unwrap().parse().unwrap();
         assert!(wetgran_core::observe::Phase::ALL.contains(&phase));

@@ -426,11 +426,11 @@ mod tests {
         }
         let text = engine_report(&rows, 1, 0.001);
         assert!(text.contains("dry/wet events-per-second ratio"));
-        let run = |which| run(which, 1, 0.001, None, &[1], 1);
+        let run = |which| run(which, 1, 0.001, None, &[1], 1, None);
         assert!(run("engine:c'").is_ok());
         assert!(run("nonsense").is_err() && run("engine:x").is_err() && run("wall:").is_err());
         assert_eq!(engine_bench_only(1, 0.001, Some(&["c'"])).unwrap().len(), 1);
-        assert!(super::run("wall", 1, 0.0, None, &[1], 1).is_err());
+        assert!(super::run("wall", 1, 0.0, None, &[1], 1, None).is_err());
     }
 
     #[test]
