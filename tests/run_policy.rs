@@ -133,7 +133,12 @@ fn checkpoint_continues_the_event_trajectory() {
     );
     // The state survives the store's JSON exactly.
     let state: EngineState = serde_json::from_str(&serde_json::to_string(&state).unwrap()).unwrap();
-    let (cont, _) = run_observed_from(&s, Some(&state), &mut |_| {});
+    let (cont, _) = run_observed_from(
+        &s,
+        Some(&state),
+        &wetgran_core::sim::RunSettings::every_sample(),
+        &mut |_| {},
+    );
     let mut long = s.clone();
     long.run.duration = 2.0 * t;
     let whole = run_scene(&long);
@@ -188,8 +193,14 @@ fn checkpoint_restores_the_time_engine_continuously() {
     // A zero-length continuation reports the restored state itself.
     let mut zero = s.clone();
     zero.run.duration = state.time;
-    let restored =
-        wetgran_core::sim::run_scene_watched(&zero, Some(&state), 1.0, &mut NoWatch, &mut |_| {});
+    let restored = wetgran_core::sim::run_scene_watched(
+        &zero,
+        Some(&state),
+        &wetgran_core::sim::RunSettings::every_sample(),
+        1.0,
+        &mut NoWatch,
+        &mut |_| {},
+    );
     let r = restored.final_state.unwrap();
     assert_eq!(r.time, state.time);
     assert_eq!(r.bridges, state.bridges);
@@ -210,7 +221,12 @@ fn checkpoint_restores_the_time_engine_continuously() {
     assert!((e0.potential - e1.potential).abs() < 1e-9 * e0.potential.abs().max(1.0));
     assert!((e0.total_accounted() - e1.total_accounted()).abs() < 1e-9 * e0.potential.abs());
     // Running on: time continues, the ledger stays as balanced as in the first stretch.
-    let (cont, _) = run_observed_from(&s, Some(&state), &mut |_| {});
+    let (cont, _) = run_observed_from(
+        &s,
+        Some(&state),
+        &wetgran_core::sim::RunSettings::every_sample(),
+        &mut |_| {},
+    );
     assert!((cont.report.simulated_time - 2.0 * state.time).abs() < 1e-9);
     assert!(
         cont.report.energy_bookkeeping_error.abs()

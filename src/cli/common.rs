@@ -31,8 +31,8 @@ pub struct DbSweeps {
     pub sweep: Option<String>,
 }
 
-/// Worker threads and the wall-table cache of the commands that run jobs (`sweep run`; `sweep
-/// resume` and `sweep refine` say what their workers run with `mut_arg`).
+/// Worker threads of the commands that run jobs (`sweep run`; `sweep resume` and `sweep refine`
+/// say what their workers run with `mut_arg`).
 #[derive(Debug, Args)]
 pub(super) struct Workers {
     /// Worker threads, one simulation each, for the sweep's jobs and then the refinement of a
@@ -43,17 +43,13 @@ pub(super) struct Workers {
     /// runs slower, the sweep no faster).
     #[arg(long)]
     oversubscribe: bool,
-    /// Cap of the wall-table cache in MiB (`table` wall solver): least recently used
-    /// tables are dropped beyond it; about 27 MiB per drive at 128 x 128 cells; 0: no
-    /// caching.
-    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_TABLE_CACHE_MIB)]
-    table_cache_mib: usize,
 }
 
 impl Workers {
     /// The options of a local run: `--jobs` workers (by default the available cores; in
     /// `[1, available cores]` unless `--oversubscribe`), progress shown, failed jobs left as
-    /// they are, the wall-table cache capped at `--table-cache-mib`.
+    /// they are, the wall-table cache at its default cap (no shipped sweep selects the `table`
+    /// wall solver).
     pub(super) fn options(&self) -> Result<RunOptions, Failure> {
         let cores = available_cores();
         let jobs = match self.jobs {
@@ -76,7 +72,7 @@ impl Workers {
             jobs,
             retry_failed: false,
             show_progress: true,
-            table_cache_mib: self.table_cache_mib,
+            table_cache_mib: DEFAULT_TABLE_CACHE_MIB,
         })
     }
 }

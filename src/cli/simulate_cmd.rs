@@ -11,7 +11,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use wetgran_core::observe::run_observed_with_frame;
 use wetgran_core::scene::{Scene, StartMode};
-use wetgran_core::sim::event_driven::table_cache::TableCache;
 
 /// The arguments of `wetgran simulate`.
 #[derive(Debug, Args)]
@@ -32,10 +31,6 @@ pub struct SimulateArgs {
     /// Write the lateral profiles (T_g / E_cb, packing fraction, n_cb, f_lc against x) as SVG.
     #[arg(long, value_name = "FILE.svg")]
     pub profiles: Option<PathBuf>,
-    /// Cap of the wall-table cache in MiB (`table` wall solver; one drive's tables take
-    /// about 27 MiB at 128 x 128 cells; 0: no caching).
-    #[arg(long, value_name = "MIB", default_value_t = wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB)]
-    pub table_cache_mib: usize,
 }
 
 /// Runs the scene; exit status 2 on bad input, 3 when the run stopped on a broken invariant.
@@ -52,8 +47,6 @@ pub(super) fn simulate(args: SimulateArgs) -> ExitCode {
 
 /// The run and its outputs; the broken invariant it stopped on, if any.
 fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
-    let tables = TableCache::with_cap_mib(args.table_cache_mib);
-    let _tables = tables.enter();
     let colour_by: ColourBy = args
         .colour_by
         .parse()

@@ -499,7 +499,12 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
 
 pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
     let spec = read_spec(path)?;
-    let result = run_job(&spec, &mut |_| {}).map_err(|e| Failure::Other(e.to_string()))?;
+    let result = run_job(
+        &spec,
+        &wetgran_core::sim::RunSettings::default(),
+        &mut |_| {},
+    )
+    .map_err(|e| Failure::Other(e.to_string()))?;
     let out = serde_json::json!({ "id": spec.id(), "result": result });
     print_json(&out);
     Ok(())

@@ -14,7 +14,7 @@ use super::runner::point_label;
 use crate::store::{PointRow, Store, StoreError, SweepRow};
 use crate::sweep::job::{ExtendTo, JobError, JobResult, extend_job};
 use std::sync::Arc;
-use wetgran_core::sim::EngineState;
+use wetgran_core::sim::{EngineState, RunSettings};
 
 /// What an extension run did.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -85,9 +85,11 @@ pub fn extend_unconverged(
         todo: todo.into_iter(),
         summary: ExtendSummary::default(),
     };
-    let work = Arc::new(move |x: &Extension, report: &mut dyn FnMut(f64)| {
-        extend_job(&x.point.spec, &x.state, cap, report)
-    });
+    let work = Arc::new(
+        move |x: &Extension, settings: &RunSettings, report: &mut dyn FnMut(f64)| {
+            extend_job(&x.point.spec, &x.state, cap, settings, report)
+        },
+    );
     run_queue(
         store,
         &mut queue,

@@ -9,9 +9,9 @@
 //! to extend from their checkpoints (`extend`).
 //!
 //! The pool owns the wall-table cache of its jobs (`table` wall solver): one bounded
-//! [`TableCache`] per run, capped by `table_cache_mib`, installed on every worker thread and
-//! dropped with the run, so a sweep over many drives keeps at most the cap in cached tables
-//! (plus the two tables each running job holds).
+//! [`TableCache`] per run, capped by `table_cache_mib`, handed to every job in its
+//! [`RunSettings`] and dropped with the run, so a sweep over many drives keeps at most the cap
+//! in cached tables (plus the two tables each running job holds).
 //!
 //! The pool also shares the machine's cores among its jobs ([`CoreShare`], `sim::threads`):
 //! each worker enters the run's share, and the pool tells it how many workers are busy and
@@ -25,6 +25,7 @@ use crate::store::{HEARTBEAT_INTERVAL, Store, StoreError};
 use std::sync::{Arc, mpsc};
 use std::thread;
 use std::time::{Duration, Instant};
+use wetgran_core::sim::RunSettings;
 use wetgran_core::sim::event_driven::table_cache::TableCache;
 use wetgran_core::sim::threads::{self, CoreShare};
 
@@ -52,9 +53,13 @@ pub(crate) trait Queue {
     ) -> Result<String, StoreError>;
 }
 
-/// What a worker calls to run one job, with a progress callback taking the fraction done.
-pub(crate) type Work<Q> =
-    Arc<dyn Fn(&<Q as Queue>::Job, &mut dyn FnMut(f64)) -> <Q as Queue>::Outcome + Send + Sync>;
+/// What a worker calls to run one job, with the run's settings (the shared table cache) and a
+/// progress callback taking the fraction done.
+pub(crate) type Work<Q> = Arc<
+    dyn Fn(&<Q as Queue>::Job, &RunSettings, &mut dyn FnMut(f64)) -> <Q as Queue>::Outcome
+        + Send
+        + Sync,
+>;
 
 /// The run's wall-table cache at its end: tables built, and the most bytes held at once.
 pub(crate) struct TableStats {
@@ -79,8 +84,9 @@ pub(crate) fn run_queue<Q: Queue>(
     let n_workers = n_workers.max(1);
     let (msg_tx, msg_rx) = mpsc::channel::<Msg<Q::Job, Q::Outcome>>();
     let tables = TableCache::with_cap_mib(table_cache_mib);
+    let settings = RunSettings::new(tables.clone());
     let cores = CoreShare::new(threads::available_cores(), n_workers);
-    let (job_tx, handles) = spawn_workers::<Q>(n_workers, &msg_tx, &tables, &cores, &work);
+    let (job_tx, handles) = spawn_workers::<Q>(n_workers, &msg_tx, &settings, &cores, &work);
     drop(msg_tx);
 
     let mut idle: Vec<usize> = (0..n_workers).rev().collect();
@@ -146,12 +152,12 @@ pub(crate) fn run_queue<Q: Queue>(
 /// Handles of the workers and the channels that hand each its jobs.
 type Workers<J> = (Vec<mpsc::Sender<J>>, Vec<thread::JoinHandle<()>>);
 
-/// Starts `n_workers` worker threads, each in the wall-table cache `tables` and its share of
-/// `cores`.
+/// Starts `n_workers` worker threads, each running its jobs with `settings` (the run's table
+/// cache) in its share of `cores`.
 fn spawn_workers<Q: Queue>(
     n_workers: usize,
     msg_tx: &mpsc::Sender<Msg<Q::Job, Q::Outcome>>,
-    tables: &TableCache,
+    settings: &RunSettings,
     cores: &Arc<CoreShare>,
     work: &Work<Q>,
 ) -> Workers<Q::Job> {
@@ -161,16 +167,15 @@ fn spawn_workers<Q: Queue>(
         let (tx, rx) = mpsc::channel::<Q::Job>();
         job_tx.push(tx);
         let out = msg_tx.clone();
-        let tables = tables.clone();
+        let settings = settings.clone();
         let cores = cores.clone();
         let work = work.clone();
         handles.push(
             thread::Builder::new()
                 .name(format!("wetgran-worker-{w}"))
                 .spawn(move || {
-                    let _tables = tables.enter();
                     let _cores = threads::enter(&cores, w);
-                    worker::<Q>(w, rx, out, work)
+                    worker::<Q>(w, rx, out, &settings, work)
                 })
                 .expect("spawn a worker thread"),
         );
@@ -183,6 +188,7 @@ fn worker<Q: Queue>(
     w: usize,
     jobs: mpsc::Receiver<Q::Job>,
     out: mpsc::Sender<Msg<Q::Job, Q::Outcome>>,
+    settings: &RunSettings,
     work: Work<Q>,
 ) {
     while let Ok(job) = jobs.recv() {
@@ -195,7 +201,7 @@ fn worker<Q: Queue>(
                 let _ = out.send(Msg::Progress(w, f));
             }
         };
-        let outcome = work(&job, &mut report);
+        let outcome = work(&job, settings, &mut report);
         let wall = t0.elapsed().as_secs_f64();
         if out
             .send(Msg::Finished(w, Box::new(job), outcome, wall))

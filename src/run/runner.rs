@@ -8,6 +8,7 @@ use crate::store::{Claim, Store, StoreError, SweepRow};
 use crate::sweep::job::{JobError, JobResult, run_job, run_job_from};
 use std::sync::Arc;
 use std::time::Instant;
+use wetgran_core::sim::RunSettings;
 
 /// How to run.
 #[derive(Debug, Clone)]
@@ -81,15 +82,21 @@ pub fn short(x: f64) -> String {
 }
 
 /// What a worker calls to run one claimed job (its spec, and a continuation job's start state
-/// in `claim.start`), with a progress callback taking the fraction done.
-pub type JobFn =
-    Arc<dyn Fn(&Claim, &mut dyn FnMut(f64)) -> Result<JobResult, JobError> + Send + Sync>;
+/// in `claim.start`) with the run's settings, with a progress callback taking the fraction
+/// done.
+pub type JobFn = Arc<
+    dyn Fn(&Claim, &RunSettings, &mut dyn FnMut(f64)) -> Result<JobResult, JobError> + Send + Sync,
+>;
 
 /// The simulation of a claimed job: `sweep::run_job`, or `run_job_from` its start state.
-pub fn simulate(claim: &Claim, progress: &mut dyn FnMut(f64)) -> Result<JobResult, JobError> {
+pub fn simulate(
+    claim: &Claim,
+    settings: &RunSettings,
+    progress: &mut dyn FnMut(f64),
+) -> Result<JobResult, JobError> {
     match claim.start.as_deref() {
-        Some(state) => run_job_from(&claim.spec, state, progress),
-        None => run_job(&claim.spec, progress),
+        Some(state) => run_job_from(&claim.spec, state, settings, progress),
+        None => run_job(&claim.spec, settings, progress),
     }
 }
 

@@ -370,7 +370,8 @@ pub fn time_sample(spec: &JobSpec, settle: f64) -> Result<SampledRate, JobError>
     let settled = settle / spec.scene.run.duration;
     let mut mark: Option<(Instant, f64)> = None;
     let t0 = Instant::now();
-    let outcome = run_job(spec, &mut |f| {
+    let settings = wetgran_core::sim::RunSettings::default();
+    let outcome = run_job(spec, &settings, &mut |f| {
         if mark.is_none() && f >= settled {
             mark = Some((Instant::now(), f));
         }

@@ -5,6 +5,8 @@
 use super::spec::JobSpec;
 use serde::{Deserialize, Serialize};
 use std::fmt;
+use wetgran_core::observe::run_observed_from;
+use wetgran_core::sim::RunSettings;
 
 /// What one finished job produced.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,10 +46,15 @@ impl fmt::Display for JobError {
 
 impl std::error::Error for JobError {}
 
-/// Runs a job spec; `progress` gets the completed fraction of the simulated time, in `[0, 1]`.
-/// The observers and thresholds are the scene's `[observe]` and `[classify]` sections.
-pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResult, JobError> {
-    guarded_run(|| wetgran_core::observe::run_observed(&spec.scene, progress))
+/// Runs a job spec with `settings` (invariant checks, wall-table cache); `progress` gets the
+/// completed fraction of the simulated time, in `[0, 1]`. The observers and thresholds are the
+/// scene's `[observe]` and `[classify]` sections.
+pub fn run_job(
+    spec: &JobSpec,
+    settings: &RunSettings,
+    progress: &mut dyn FnMut(f64),
+) -> Result<JobResult, JobError> {
+    guarded_run(|| run_observed_from(&spec.scene, None, settings, progress).0)
 }
 
 /// Runs a continuation job (`spec.start_from`) from `start`, its predecessor's final state
@@ -56,9 +63,10 @@ pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResul
 pub fn run_job_from(
     spec: &JobSpec,
     start: &wetgran_core::sim::EngineState,
+    settings: &RunSettings,
     progress: &mut dyn FnMut(f64),
 ) -> Result<JobResult, JobError> {
-    guarded_run(|| wetgran_core::observe::run_observed_from(&spec.scene, Some(start), progress).0)
+    guarded_run(|| run_observed_from(&spec.scene, Some(start), settings, progress).0)
 }
 
 /// Runs `run` with panics caught, checks its guards and turns it into a [`JobResult`] (the
@@ -93,6 +101,7 @@ pub fn extend_job(
     spec: &JobSpec,
     state: &wetgran_core::sim::EngineState,
     cap: ExtendTo,
+    settings: &RunSettings,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Option<JobResult>, JobError> {
     let scene = &spec.scene;
@@ -116,8 +125,7 @@ pub fn extend_job(
         max_time: None,
         ..policy
     });
-    guarded_run(|| wetgran_core::observe::run_observed_from(&ext, Some(state), progress).0)
-        .map(Some)
+    guarded_run(|| run_observed_from(&ext, Some(state), settings, progress).0).map(Some)
 }
 
 /// The total run length `sweep resume --extend` / `--extend-time` allows an unconverged job.
@@ -205,7 +213,7 @@ mod tests {
         let mut spec = tiny_spec();
         // Bypasses validation: the engine refuses a dimension it has no type for.
         spec.scene.dimension = 4;
-        match run_job(&spec, &mut |_| {}) {
+        match run_job(&spec, &RunSettings::default(), &mut |_| {}) {
             Err(JobError::Panic(m)) => assert!(m.contains("dimension 4"), "{m}"),
             other => panic!("expected a panic error, got {other:?}"),
         }
@@ -215,7 +223,7 @@ mod tests {
     fn averages_cover_the_samples_after_the_transient() {
         let spec = tiny_spec();
         let mut fractions = Vec::new();
-        let r = run_job(&spec, &mut |f| fractions.push(f)).unwrap();
+        let r = run_job(&spec, &RunSettings::default(), &mut |f| fractions.push(f)).unwrap();
         // The classifier ran and kept the numbers it decided on.
         let phase: wetgran_core::observe::Phase = r.phase.as_deref().unwrap().parse().unwrap();
         assert!(wetgran_core::observe::Phase::ALL.contains(&phase));

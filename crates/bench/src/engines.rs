@@ -17,7 +17,7 @@ use super::tdmd::thread_cpu_seconds;
 use std::fmt::Write as _;
 use std::time::Instant;
 use wetgran_core::scene::{EngineKind, Scene};
-use wetgran_core::sim::{Frame, run_scene_observed};
+use wetgran_core::sim::{Frame, RunSettings, run_scene_observed};
 
 /// Untimed time units before the timed part.
 pub(crate) const WARM_UP: f64 = 10.0;
@@ -51,6 +51,7 @@ fn time_one(scene: &Scene, measured: f64) -> (f64, Option<f64>) {
         let mut end = None;
         run_scene_observed(
             scene,
+            &RunSettings::default(),
             measured,
             &mut |f: &Frame| {
                 if start.is_none() && f.time >= WARM_UP - 1e-9 {

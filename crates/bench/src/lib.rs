@@ -13,6 +13,7 @@
 
 pub(crate) mod barrier;
 pub(crate) mod engines;
+pub(crate) mod jobs;
 pub(crate) mod memory;
 pub(crate) mod observer;
 pub mod orchestrator;
@@ -47,6 +48,7 @@ pub fn run(
     svg: Option<&std::path::Path>,
     threads: &[usize],
     n_factor: usize,
+    baseline: Option<&std::path::Path>,
 ) -> Result<String, String> {
     if !(scale.is_finite() && scale > 0.0) {
         return Err(format!("--scale = {scale} must be a finite number > 0"));
@@ -95,6 +97,10 @@ pub fn run(
         }
         ("engines", None) => engines::report(&engines::measure(repeat, scale), repeat, scale),
         ("barrier", None) => barrier::report(&barrier::measure(repeat, scale), repeat),
+        ("jobs", None) => {
+            let (rows, perf) = jobs::measure(repeat, scale, baseline)?;
+            jobs::report(&rows, perf, jobs::bulk_rate(repeat, scale)?)
+        }
         ("shake", None) => shake::report(&shake::measure(40, scale)),
         ("engine", labels) => {
             let only: Option<Vec<&str>> = labels.map(|l| l.split(',').map(str::trim).collect());
@@ -106,7 +112,7 @@ pub fn run(
         }
         _ => {
             return Err(format!(
-                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
+                "unknown benchmark `{which}`: use `engine`, `engine:LABELS` (LABELS from a,b,c,c'), `wall`, `shake`, `tdmd`, `slab`, `memory`, `engines`, `barrier`, `jobs`, `observer` or `observer:POINTS` (POINTS from gas,fluid,coexistence)"
             ));
         }
     })
@@ -425,11 +431,11 @@ mod tests {
         }
         let text = engine_report(&rows, 1, 0.001);
         assert!(text.contains("dry/wet events-per-second ratio"));
-        let run = |which| run(which, 1, 0.001, None, &[1], 1);
+        let run = |which| run(which, 1, 0.001, None, &[1], 1, None);
         assert!(run("engine:c'").is_ok());
         assert!(run("nonsense").is_err() && run("engine:x").is_err() && run("wall:").is_err());
         assert_eq!(engine_bench_only(1, 0.001, Some(&["c'"])).unwrap().len(), 1);
-        assert!(super::run("wall", 1, 0.0, None, &[1], 1).is_err());
+        assert!(super::run("wall", 1, 0.0, None, &[1], 1, None).is_err());
     }
 
     #[test]

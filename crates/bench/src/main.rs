@@ -34,7 +34,9 @@ struct Figures {
     /// `engines` (event- vs time-driven engine on the 2D standard wet system, seconds per time
     /// unit), `observer` (cost of the location-change observer as a share of an observed
     /// run; `observer:POINTS` for some of gas, fluid, coexistence), `barrier` (what two threads meeting twice per step, with
-    /// and without a hand-over of data, can gain on this machine).
+    /// and without a hand-over of data, can gain on this machine), `jobs` (representative jobs
+    /// of the shipped 2D elastic diagram at fixed length: events/s and where the CPU time goes,
+    /// beside `--baseline`'s; `scale` scales their length).
     #[arg(default_value = "engine")]
     which: String,
     /// Repetitions per system (the median is reported).
@@ -53,6 +55,10 @@ struct Figures {
     /// `tdmd` only: `K` times the particles in a box `K` times as wide (same density).
     #[arg(long, default_value_t = 1)]
     n_factor: usize,
+    /// `jobs` only: another build's `wetgran` binary (e.g. main's, kept aside) to run the same
+    /// jobs with, alternated with this build's.
+    #[arg(long, value_name = "PATH")]
+    baseline: Option<PathBuf>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -121,6 +127,7 @@ fn main() -> ExitCode {
                 f.svg.as_deref(),
                 &f.threads,
                 f.n_factor.max(1),
+                f.baseline.as_deref(),
             ))
         }
     }

@@ -19,7 +19,7 @@ use wetgran_core::observe::ObserverSet;
 use wetgran_core::observe::location_changes::{LocationChangeCounter, Method};
 use wetgran_core::scene::reference::shaken_standard;
 use wetgran_core::scene::{CapillaryModel, CapillarySpec, Scene, WallSolverKind};
-use wetgran_core::sim::{Frame, run_scene_observed};
+use wetgran_core::sim::{Frame, RunSettings, run_scene_observed};
 
 /// Samples per driving period (the default of `[observe]`).
 pub(crate) const SAMPLES_PER_PERIOD: f64 = 20.0;
@@ -120,6 +120,7 @@ fn measure_point(label: &'static str, gamma: f64, e_star: f64, samples: usize) -
     let t_first = first * interval - 0.5 * interval;
     run_scene_observed(
         &scene,
+        &RunSettings::default(),
         interval,
         &mut |f: &Frame| {
             if f.time < t_first {

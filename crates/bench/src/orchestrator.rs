@@ -137,7 +137,12 @@ pub(crate) fn prepare(n: usize, dir: &Path) -> Result<(SweepFile, Vec<SweepJob>)
 
 /// One real run of `spec`: the shape of every stand-in result.
 pub(crate) fn real_result(spec: &JobSpec) -> Result<JobResult, String> {
-    run_job(spec, &mut |_| {}).map_err(e)
+    run_job(
+        spec,
+        &wetgran_core::sim::RunSettings::default(),
+        &mut |_| {},
+    )
+    .map_err(e)
 }
 
 /// A stand-in job: `on_start(job id)`, then `result` with the point's made-up label.
@@ -145,7 +150,7 @@ pub(crate) fn stand_in(
     result: JobResult,
     on_start: impl Fn(&str) -> Result<(), JobError> + Send + Sync + 'static,
 ) -> JobFn {
-    Arc::new(move |claim, _progress| {
+    Arc::new(move |claim, _settings, _progress| {
         on_start(&claim.job_id)?;
         let mut r = result.clone();
         r.phase = Some(stand_in_phase(&claim.coords).to_string());

@@ -33,6 +33,7 @@ use wetgran_core::scene::{
     CapillaryModel, CapillarySpec, DriveKind, EngineKind, Scene, StartMode, WallSolverKind,
 };
 use wetgran_core::sim::EnergyLedger;
+use wetgran_core::sim::event_driven::table_cache::{DEFAULT_TABLE_CACHE_MIB, TableCache};
 use wetgran_core::sim::event_driven::{Engine, Vector};
 use wetgran_core::sim::{EngineVisitor, Frame, Simulation, with_engine};
 
@@ -324,9 +325,11 @@ pub fn first_events(scene: &Scene, work: u64, checks: u64) -> Result<Measured, S
             return Err("initial.start = \"continue\" has no state of its own".into());
         }
     };
+    let tables = TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB);
     Ok(with_engine(
         scene,
         cold.as_ref(),
+        &tables,
         CheckedRun {
             scene,
             events: work,

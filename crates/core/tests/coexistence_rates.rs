@@ -68,6 +68,7 @@ fn run(p: &Point, seed: u64) -> Vec<Outcome> {
     let eps = 1e-9;
     run_scene_observed(
         &sc,
+        &wetgran_core::sim::RunSettings::every_sample(),
         dt,
         &mut |f| {
             if f.time < TRANSIENT - eps {

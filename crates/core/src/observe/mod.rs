@@ -294,7 +294,7 @@ pub fn run_observed_with_frame(
     scene: &Scene,
     progress: &mut dyn FnMut(f64),
 ) -> (ObservedRun, Frame) {
-    run_observed_from(scene, None, progress)
+    run_observed_from(scene, None, &crate::sim::RunSettings::default(), progress)
 }
 
 /// The monitored quantities of one observer sample (the convergence test's input):
@@ -432,9 +432,11 @@ impl crate::sim::Watcher for Watch<'_> {
 /// initial state): the run, its transient and its windows are those of a fresh run shifted
 /// by `t0` (`[t0 + transient, t0 + duration]`, and so on). With a `[convergence]` section the
 /// run is extended on the same trajectory until the window is stationary ([`policy`]).
+/// `settings`: the invariant checks and the wall-table cache of the run.
 pub fn run_observed_from(
     scene: &Scene,
     start: Option<&crate::sim::EngineState>,
+    settings: &crate::sim::RunSettings,
     progress: &mut dyn FnMut(f64),
 ) -> (ObservedRun, Frame) {
     let spec = &scene.observe;
@@ -464,7 +466,8 @@ pub fn run_observed_from(
     };
     let mut run_scene = scene.clone();
     run_scene.run.duration = duration;
-    let report = crate::sim::run_scene_watched(&run_scene, start, dt, &mut watch, &mut |_| {});
+    let report =
+        crate::sim::run_scene_watched(&run_scene, start, settings, dt, &mut watch, &mut |_| {});
     // A policy run that stopped before its cap reports its end as complete.
     if watch
         .set

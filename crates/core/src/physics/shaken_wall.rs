@@ -78,12 +78,56 @@ pub enum WallRoot {
 /// The search gives up after `horizon` (returns [`WallRoot::None`]); with `g > 0` every flight
 /// comes back, so callers pass a horizon beyond which they re-query.
 pub fn exact_root(w: &WallMotion, h: f64, v: f64, t0: f64, tol: f64, horizon: f64) -> WallRoot {
+    match exact_root_until(w, h, v, t0, tol, horizon, f64::INFINITY, None) {
+        Search::Done(root) => root,
+        Search::Later(_) => unreachable!("a search without a bound runs to its end"),
+    }
+}
+
+/// Where an [`exact_root_until`] search stands.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Search {
+    /// The answer of [`exact_root`].
+    Done(WallRoot),
+    /// [`exact_root`]'s answer lies beyond the bound `until`: the search goes on from this
+    /// step (`None`: from its start), with the same steps as one search without a bound.
+    Later(Option<f64>),
+}
+
+/// [`exact_root`] stopped once its answer is known to lie beyond `until` (a time after `t0`,
+/// as `horizon`), and resumed from where it stopped (`from`, a [`Search::Later`]'s step):
+/// searches resumed until [`Search::Done`] give exactly [`exact_root`]'s answer, bit for bit,
+/// whatever the bounds. A search starts with a bound that needs no sine: when the particle's
+/// flight stays above the wall's crest (`A`) by more than `tol` up to `until` and the steps
+/// cannot fall below the clock's resolution there, no answer lies before `until` and nothing
+/// is computed (`Later(None)`). Otherwise the search steps on and stops at its first step
+/// beyond `until`.
+pub fn exact_root_until(
+    w: &WallMotion,
+    h: f64,
+    v: f64,
+    t0: f64,
+    tol: f64,
+    horizon: f64,
+    until: f64,
+    from: Option<f64>,
+) -> Search {
     let k = w.curvature_bound();
+    if let Some(tau) = from {
+        let (s, ds) = w.gap(h, v, t0, tau);
+        if s <= tol {
+            return Search::Done(WallRoot::Hit(tau));
+        }
+        return advance(w, h, v, t0, tol, horizon, until, (tau, s, ds));
+    }
+    if until < horizon && clear_of_the_wall(w, h, v, tol, until) {
+        return Search::Later(None);
+    }
     let (mut s, mut ds) = w.gap(h, v, t0, 0.0);
     // On or behind the wall: hit now if approaching; if separating, first march until the gap
     // has opened (bound-based steps need s > 0).
     if s <= tol && ds < 0.0 {
-        return WallRoot::Hit(0.0);
+        return Search::Done(WallRoot::Hit(0.0));
     }
     let mut tau = 0.0;
     let mut guard = 0u32;
@@ -93,30 +137,68 @@ pub fn exact_root(w: &WallMotion, h: f64, v: f64, t0: f64, tol: f64, horizon: f6
         tau += step;
         (s, ds) = w.gap(h, v, t0, tau);
         if s <= tol && ds < 0.0 {
-            return WallRoot::Hit(tau);
+            return Search::Done(WallRoot::Hit(tau));
         }
         guard += 1;
         if guard > 1_000_000 || tau > horizon {
-            return WallRoot::None;
+            return Search::Done(WallRoot::None);
         }
     }
+    advance(w, h, v, t0, tol, horizon, until, (tau, s, ds))
+}
+
+/// The conservative advancement of [`exact_root_until`] from `(tau, s, ds)` (`s > tol`),
+/// stopped at its first step beyond `until`.
+fn advance(
+    w: &WallMotion,
+    h: f64,
+    v: f64,
+    t0: f64,
+    tol: f64,
+    horizon: f64,
+    until: f64,
+    (mut tau, mut s, mut ds): (f64, f64, f64),
+) -> Search {
+    let k = w.curvature_bound();
     loop {
         // First zero of the lower bound s + ds h - k h^2 / 2 (cancellation-free form).
         let step = 2.0 * s / ((ds * ds + 2.0 * k * s).sqrt() - ds);
         if tau + step <= tau {
             // The step fell below the resolution of the clock: the root is here to machine
             // precision (a tolerance below round-off of the gap lands in this case).
-            return WallRoot::Hit(tau);
+            return Search::Done(WallRoot::Hit(tau));
         }
         tau += step;
         if tau > horizon {
-            return WallRoot::None;
+            return Search::Done(WallRoot::None);
+        }
+        if tau > until {
+            return Search::Later(Some(tau));
         }
         (s, ds) = w.gap(h, v, t0, tau);
         if s <= tol {
-            return WallRoot::Hit(tau);
+            return Search::Done(WallRoot::Hit(tau));
         }
     }
+}
+
+/// Whether [`exact_root`] from `(h, v)` surely ends after `until`, from bounds without a
+/// sine: on `[0, until]` the gap is at least `m = h - A - max(0, -v) until - max(0, g) until^2
+/// / 2` and its rate at most `|v| + |g| until + A omega` in size, so with `m` above `tol` (by a
+/// margin for the gap's round-off) no step stops on a contact, and with the smallest step
+/// `2 m / (sqrt(rate^2 + 2 K m) + rate)` (the step grows with the gap) above four times the
+/// clock's resolution at `until` none stops on the resolution either.
+fn clear_of_the_wall(w: &WallMotion, h: f64, v: f64, tol: f64, until: f64) -> bool {
+    let a = w.amplitude.abs();
+    let m = h - a - (-v).max(0.0) * until - 0.5 * w.g.max(0.0) * until * until;
+    let margin = 1e-9 * (1.0 + h.abs() + a);
+    if !(m > tol + margin) {
+        return false;
+    }
+    let rate = v.abs() + w.g.abs() * until + a * w.omega.abs();
+    let k = w.curvature_bound();
+    let step = 2.0 * m / ((rate * rate + 2.0 * k * m).sqrt() + rate);
+    step > 4.0 * f64::EPSILON * until
 }
 
 /// The thesis's reference algorithm (B.3): march in steps of `t_min` until the gap changes
@@ -337,6 +419,84 @@ mod tests {
             }
         }
         assert!(worst_gap_time < 1e-6, "worst time error {worst_gap_time}");
+    }
+
+    /// Runs `exact_root_until` from the start through the bounds `untils` (then without a
+    /// bound) and checks every `Later` against `answer` (in time units after `t0`).
+    fn resumed(w: &WallMotion, h: f64, v: f64, t0: f64, untils: &[f64]) -> (WallRoot, usize) {
+        let (tol, horizon) = (1e-10, 2.0 * w.period());
+        let answer = exact_root(w, h, v, t0, tol, horizon);
+        let mut from = None;
+        let mut skipped = 0;
+        for &until in untils.iter().chain(std::iter::once(&f64::INFINITY)) {
+            match exact_root_until(w, h, v, t0, tol, horizon, until, from) {
+                Search::Done(r) => return (r, skipped),
+                Search::Later(f) => {
+                    // The answer lies beyond the bound: a hit after it, or a miss (the caller's
+                    // re-check at the horizon, which lies beyond it too).
+                    if let WallRoot::Hit(t) = answer {
+                        assert!(t > until, "answer {t} not beyond the bound {until}");
+                    }
+                    assert!(until < horizon);
+                    skipped += usize::from(f.is_none());
+                    from = f;
+                }
+            }
+        }
+        unreachable!("the last search has no bound")
+    }
+
+    #[test]
+    fn a_search_resumed_through_bounds_gives_the_same_bits_as_one_search() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(29);
+        let (mut paused, mut skipped) = (0, 0);
+        for _ in 0..4000 {
+            let w = random_motion(&mut rng);
+            let lid = rng.gen_bool(0.3);
+            let w = if lid { WallMotion { g: -w.g, ..w } } else { w };
+            let h = rng.gen_range(-0.5 * w.amplitude..(w.amplitude + 4.0));
+            let v = rng.gen_range(-3.0..3.0);
+            let t0 = rng.gen_range(0.0..50.0);
+            let mut untils: Vec<f64> = (0..rng.gen_range(0..5))
+                .map(|_| rng.gen_range(0.0..2.0 * w.period()))
+                .collect();
+            untils.sort_by(f64::total_cmp);
+            let one = exact_root(&w, h, v, t0, 1e-10, 2.0 * w.period());
+            let (pieces, s) = resumed(&w, h, v, t0, &untils);
+            let bits = |r: WallRoot| match r {
+                WallRoot::Hit(t) => Some(t.to_bits()),
+                WallRoot::None => None,
+            };
+            assert_eq!(
+                bits(one),
+                bits(pieces),
+                "{w:?} h={h} v={v} t0={t0} {untils:?}"
+            );
+            paused += usize::from(!untils.is_empty());
+            skipped += s;
+        }
+        assert!(
+            paused > 2000 && skipped > 200,
+            "{paused} paused, {skipped} without a sine"
+        );
+    }
+
+    #[test]
+    fn the_bound_without_a_sine_says_no_near_the_crest() {
+        // Within reach of the crest, or a flight that falls to it before the bound, or a gap
+        // too small for the clock at the bound: the search must compute.
+        let w = motion(0.1, 4.0, 1.0);
+        assert!(clear_of_the_wall(&w, 2.0, 0.0, 1e-10, 0.5));
+        assert!(!clear_of_the_wall(&w, 0.1, 0.0, 1e-10, 0.5), "at the crest");
+        assert!(!clear_of_the_wall(&w, 2.0, -4.0, 1e-10, 0.5), "falls to it");
+        assert!(
+            !clear_of_the_wall(&w, 2.0, 0.0, 1e-10, 2.0),
+            "falls to it by gravity"
+        );
+        assert!(
+            !clear_of_the_wall(&w, 0.1 + 1e-9, 0.0, 1e-10, 1e-6),
+            "inside the round-off margin"
+        );
     }
 
     #[test]

@@ -9,10 +9,13 @@
 //! [`run_scene_watched`] is the general form: it can start from a saved [`EngineState`] instead
 //! of the scene's initial state, and its [`Watcher`] may extend the run on the same trajectory
 //! when it reaches its end (run to stationarity, `crate::scene::convergence`). Every run reports
-//! its final state ([`RunReport::final_state`]) for checkpoints. [`threads`] chooses how many
-//! threads a simulation uses (the time-driven engine's steps are parallel).
+//! its final state ([`RunReport::final_state`]) for checkpoints. What the caller gives a run
+//! besides the scene (how often the invariants are checked, the wall-table cache) is its
+//! [`RunSettings`] ([`checks`]). [`threads`] chooses how many threads a simulation uses (the
+//! time-driven engine's steps are parallel).
 
 pub mod books;
+pub mod checks;
 pub mod event_driven;
 pub(crate) mod frame;
 pub mod initial;
@@ -21,12 +24,15 @@ pub mod threads;
 pub mod time_driven;
 
 pub use books::{EnergyLedger, EventCounts};
+pub use checks::{CheckPolicy, RunSettings, RunTiming};
 pub use frame::Frame;
 pub use state::EngineState;
 
 use crate::scene::{EngineKind, Scene};
+use checks::CheckCadence;
 use event_driven::Engine;
 use event_driven::queue::EventQueue;
+use event_driven::table_cache::TableCache;
 use serde::Serialize;
 use std::time::Instant;
 use time_driven::{BodyForce, TimeEngine};
@@ -61,8 +67,8 @@ pub struct RunReport {
     pub events_total: u64,
     /// Whether the run stopped on `run.max_events` before `run.duration`.
     pub stopped_on_event_cap: bool,
-    /// The first broken invariant (`Engine::sanity_check`, run at every sample), if any; the run
-    /// stops there.
+    /// The first broken invariant (the checks of [`RunSettings::checks`] at the samples, the
+    /// full check at the end), if any; the run stops there.
     pub invariant_violation: Option<String>,
     pub granular_temperature: f64,
     /// `T_g / E_cb` where bridges exist.
@@ -73,14 +79,17 @@ pub struct RunReport {
     /// `(accounted_final - accounted_initial) / accounted_initial`: round-off only.
     pub energy_bookkeeping_error: f64,
     pub samples: Vec<Sample>,
+    /// Where the wall time went (not part of the run's numbers).
+    pub timing: RunTiming,
     /// The state at the end of the run (for checkpoints; not part of the JSON report).
     #[serde(skip)]
     pub final_state: Option<EngineState>,
 }
 
-/// Runs a validated scene to the end and reports.
+/// Runs a validated scene to the end and reports, with the full invariant check at every
+/// sample ([`RunSettings::every_sample`]).
 pub fn run_scene(scene: &Scene) -> RunReport {
-    run_dispatch(scene, None, &mut |_| {}, None)
+    run_dispatch(scene, None, &RunSettings::every_sample(), &mut |_| {}, None)
 }
 
 /// Runs a validated scene and hands a [`Frame`] to `observer` at every time `k * interval`
@@ -88,11 +97,13 @@ pub fn run_scene(scene: &Scene) -> RunReport {
 /// reads copies of the state, so the trajectory is the same as with [`run_scene`].
 pub fn run_scene_observed(
     scene: &Scene,
+    settings: &RunSettings,
     interval: f64,
     observer: &mut dyn FnMut(&Frame),
     progress: &mut dyn FnMut(&Sample),
 ) -> RunReport {
-    run_scene_watched(scene, None, interval, &mut FnWatcher(observer), progress)
+    let mut watcher = FnWatcher(observer);
+    run_scene_watched(scene, None, settings, interval, &mut watcher, progress)
 }
 
 /// What the sampling loop hands frames to, and asks whether to go on at the end of the run.
@@ -122,6 +133,7 @@ impl Watcher for FnWatcher<'_> {
 pub fn run_scene_watched(
     scene: &Scene,
     start: Option<&EngineState>,
+    settings: &RunSettings,
     interval: f64,
     watcher: &mut dyn Watcher,
     progress: &mut dyn FnMut(&Sample),
@@ -130,7 +142,7 @@ pub fn run_scene_watched(
         interval > 0.0 && interval.is_finite(),
         "observer interval must be > 0"
     );
-    run_dispatch(scene, start, progress, Some((interval, watcher)))
+    run_dispatch(scene, start, settings, progress, Some((interval, watcher)))
 }
 
 type Observer<'a> = Option<(f64, &'a mut dyn Watcher)>;
@@ -138,6 +150,7 @@ type Observer<'a> = Option<(f64, &'a mut dyn Watcher)>;
 fn run_dispatch(
     scene: &Scene,
     start: Option<&EngineState>,
+    settings: &RunSettings,
     p: &mut dyn FnMut(&Sample),
     o: Observer<'_>,
 ) -> RunReport {
@@ -155,8 +168,10 @@ fn run_dispatch(
     with_engine(
         scene,
         st,
+        &settings.tables,
         RunVisitor {
             scene,
+            checks: settings.checks,
             progress: p,
             observer: o,
         },
@@ -173,6 +188,7 @@ pub trait EngineVisitor {
 /// The sampling loop of [`run_scene_watched`] as an [`EngineVisitor`].
 struct RunVisitor<'a, 'b> {
     scene: &'a Scene,
+    checks: CheckPolicy,
     progress: &'a mut dyn FnMut(&Sample),
     observer: Observer<'b>,
 }
@@ -180,15 +196,21 @@ struct RunVisitor<'a, 'b> {
 impl EngineVisitor for RunVisitor<'_, '_> {
     type Output = RunReport;
     fn visit<S: Simulation>(self, engine: S) -> RunReport {
-        run_engine(engine, self.scene, self.progress, self.observer)
+        let cadence = CheckCadence::new(self.checks);
+        run_engine(engine, self.scene, cadence, self.progress, self.observer)
     }
 }
 
 /// Builds the engine a validated scene asks for (engine kind, dimension, gravity on or off,
 /// bridges or none, shear drive or not), from the saved state `start` or, with `None`, from the
 /// scene's initial state (a `"cold"` start is the caller's: pass `initial::cold_state`), and
-/// hands it to `v`.
-pub fn with_engine<V: EngineVisitor>(scene: &Scene, st: Option<&EngineState>, v: V) -> V::Output {
+/// hands it to `v`. A `table` wall solver takes its tables from `tables`.
+pub fn with_engine<V: EngineVisitor>(
+    scene: &Scene,
+    st: Option<&EngineState>,
+    tables: &TableCache,
+    v: V,
+) -> V::Output {
     let grav = scene.gravity > 0.0;
     let wet = scene.is_wet();
     if scene.engine.kind == EngineKind::Time {
@@ -218,21 +240,27 @@ pub fn with_engine<V: EngineVisitor>(scene: &Scene, st: Option<&EngineState>, v:
     if scene.shear_slabs().is_some() {
         // Validation admits the shear drive in 3D only.
         return match (grav, wet) {
-            (false, false) => v.visit(Engine::<3, false, false, true>::from_state(scene, st)),
-            (false, true) => v.visit(Engine::<3, false, true, true>::from_state(scene, st)),
-            (true, false) => v.visit(Engine::<3, true, false, true>::from_state(scene, st)),
-            (true, true) => v.visit(Engine::<3, true, true, true>::from_state(scene, st)),
+            (false, false) => v.visit(Engine::<3, false, false, true>::from_state(
+                scene, st, tables,
+            )),
+            (false, true) => v.visit(Engine::<3, false, true, true>::from_state(
+                scene, st, tables,
+            )),
+            (true, false) => v.visit(Engine::<3, true, false, true>::from_state(
+                scene, st, tables,
+            )),
+            (true, true) => v.visit(Engine::<3, true, true, true>::from_state(scene, st, tables)),
         };
     }
     match (scene.dimension, grav, wet) {
-        (2, false, false) => v.visit(Engine::<2, false, false>::from_state(scene, st)),
-        (2, false, true) => v.visit(Engine::<2, false, true>::from_state(scene, st)),
-        (2, true, false) => v.visit(Engine::<2, true, false>::from_state(scene, st)),
-        (2, true, true) => v.visit(Engine::<2, true, true>::from_state(scene, st)),
-        (3, false, false) => v.visit(Engine::<3, false, false>::from_state(scene, st)),
-        (3, false, true) => v.visit(Engine::<3, false, true>::from_state(scene, st)),
-        (3, true, false) => v.visit(Engine::<3, true, false>::from_state(scene, st)),
-        (3, true, true) => v.visit(Engine::<3, true, true>::from_state(scene, st)),
+        (2, false, false) => v.visit(Engine::<2, false, false>::from_state(scene, st, tables)),
+        (2, false, true) => v.visit(Engine::<2, false, true>::from_state(scene, st, tables)),
+        (2, true, false) => v.visit(Engine::<2, true, false>::from_state(scene, st, tables)),
+        (2, true, true) => v.visit(Engine::<2, true, true>::from_state(scene, st, tables)),
+        (3, false, false) => v.visit(Engine::<3, false, false>::from_state(scene, st, tables)),
+        (3, false, true) => v.visit(Engine::<3, false, true>::from_state(scene, st, tables)),
+        (3, true, false) => v.visit(Engine::<3, true, false>::from_state(scene, st, tables)),
+        (3, true, true) => v.visit(Engine::<3, true, true>::from_state(scene, st, tables)),
         (d, _, _) => panic!("dimension {d} passed validation"),
     }
 }
@@ -251,7 +279,23 @@ pub trait Simulation {
     fn energy(&self) -> EnergyLedger;
     fn granular_temperature(&self) -> f64;
     fn bridge_count(&self) -> usize;
+    /// The report's sample now: the energies of [`Self::energy`], the temperature and the
+    /// bridges.
+    fn sample(&self) -> Sample {
+        let energy = self.energy();
+        Sample {
+            time: self.time(),
+            granular_temperature: self.granular_temperature(),
+            bridges: self.bridge_count(),
+            kinetic: energy.kinetic,
+            potential: energy.potential,
+        }
+    }
+    /// Every invariant; the first violation.
     fn sanity_check(&self) -> Result<(), String>;
+    /// The invariants of each particle on its own, `O(N)` (the per-sample check of
+    /// [`CheckPolicy::WallShare`]).
+    fn quick_check(&self) -> Result<(), String>;
     fn counts(&self) -> &EventCounts;
     fn frame(&self, scene: &Scene) -> Frame;
     /// Time steps taken (0 for the event engine).
@@ -292,8 +336,22 @@ impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue>
     fn bridge_count(&self) -> usize {
         Engine::bridge_count(self)
     }
+    fn sample(&self) -> Sample {
+        // One pass over the particles (a sample may come every few hundred events).
+        let (kinetic, potential, granular_temperature) = self.sample_energies();
+        Sample {
+            time: self.time(),
+            granular_temperature,
+            bridges: self.bridge_count(),
+            kinetic,
+            potential,
+        }
+    }
     fn sanity_check(&self) -> Result<(), String> {
         Engine::sanity_check(self)
+    }
+    fn quick_check(&self) -> Result<(), String> {
+        Engine::quick_check(self)
     }
     fn counts(&self) -> &EventCounts {
         Engine::counts(self)
@@ -336,6 +394,9 @@ impl<const D: usize, const G: bool, const W: bool, B: BodyForce<D>> Simulation
     fn sanity_check(&self) -> Result<(), String> {
         TimeEngine::sanity_check(self)
     }
+    fn quick_check(&self) -> Result<(), String> {
+        TimeEngine::quick_check(self)
+    }
     fn counts(&self) -> &EventCounts {
         TimeEngine::counts(self)
     }
@@ -359,103 +420,36 @@ impl<const D: usize, const G: bool, const W: bool, B: BodyForce<D>> Simulation
     }
 }
 
-fn sample<S: Simulation>(e: &S) -> Sample {
-    let energy = e.energy();
-    Sample {
-        time: e.time(),
-        granular_temperature: e.granular_temperature(),
-        bridges: e.bridge_count(),
-        kinetic: energy.kinetic,
-        potential: energy.potential,
-    }
+/// Seconds since `t0`.
+fn since(t0: Instant) -> f64 {
+    t0.elapsed().as_secs_f64()
 }
 
 fn run_engine<S: Simulation>(
     mut engine: S,
     scene: &Scene,
+    mut cadence: CheckCadence,
     progress: &mut dyn FnMut(&Sample),
     mut observer: Observer<'_>,
 ) -> RunReport {
     let start = Instant::now();
     let energy_initial = engine.energy();
-    let mut samples = vec![sample(&engine)];
-    let mut duration = scene.run.duration;
-    let interval = if scene.run.sample_interval > 0.0 {
-        scene.run.sample_interval
-    } else {
-        duration
-    };
-    let mut stopped_on_cap = false;
-    let mut violation = None;
-    // Observer times `j * dt` for `j = j0 ..= last_obs` (none without an observer); a run from
-    // a saved state at `t0` starts at the first `j0` with `j0 * dt >= t0` (up to round-off).
-    let t0 = engine.time();
-    let last_obs_of = |duration: f64, dt: f64| (duration / dt * (1.0 + 1e-12)).floor() as u64;
-    let (obs_dt, mut last_obs) = match &observer {
-        Some((dt, _)) => (*dt, last_obs_of(duration, *dt)),
-        None => (f64::INFINITY, 0),
-    };
-    let mut j = 0u64;
-    if let Some((dt, obs)) = observer.as_mut() {
-        obs.observe(&engine.frame(scene));
-        j = (t0 / *dt * (1.0 - 1e-12)).floor() as u64 + 1;
-    }
-    // Report samples at `k * interval`, the first after `t0`.
-    let mut k = (t0 / interval * (1.0 - 1e-12)).floor() as u64 + 1;
-    loop {
-        let target_report = (k as f64 * interval).min(duration);
-        let target_obs = if observer.is_some() && j <= last_obs {
-            let t = j as f64 * obs_dt;
-            // The last sample lands on `duration` exactly when round-off alone separates them.
-            if j == last_obs && (duration - t).abs() <= 1e-9 * duration {
-                duration
-            } else {
-                t.min(duration)
-            }
-        } else {
-            f64::INFINITY
-        };
-        let target = target_report.min(target_obs);
-        if !engine.run_until(target, scene.run.max_events) {
-            stopped_on_cap = true;
-            samples.push(sample(&engine));
-            break;
-        }
-        if target == target_obs {
-            if let Some((_, obs)) = observer.as_mut() {
-                let frame = engine.frame(scene);
-                // A blown-up state between two samples stops the run as a broken invariant
-                // before it reaches the observers.
-                if let Some(bad) = frame.non_finite() {
-                    violation = Some(engine.sanity_check().err().unwrap_or(bad));
-                    samples.push(sample(&engine));
-                    break;
-                }
-                obs.observe(&frame);
-            }
-            j += 1;
-        }
-        if target < target_report {
-            continue;
-        }
-        samples.push(sample(&engine));
-        progress(samples.last().expect("just pushed"));
-        if let Err(e) = engine.sanity_check() {
-            violation = Some(e);
-            break;
-        }
-        if target >= duration {
-            // The watcher may continue the same trajectory to a later end.
-            match observer.as_mut().and_then(|(_, obs)| obs.extend(duration)) {
-                Some(end) if end > duration => {
-                    duration = end;
-                    last_obs = last_obs_of(duration, obs_dt);
-                }
-                _ => break,
-            }
-        }
-        k += 1;
-    }
+    let mut samples = vec![engine.sample()];
+    let (stopped_on_cap, violation) = sample_loop(
+        &mut engine,
+        scene,
+        &mut cadence,
+        &mut samples,
+        progress,
+        &mut observer,
+    );
+    // The end of the run, whatever stopped it: the full check (the final state is the job's
+    // checkpoint), unless the last sample just ran it on this state.
+    let violation = violation.or_else(|| {
+        (cadence.last_full_at() != Some(engine.work_done()))
+            .then(|| cadence.full(&engine).err())
+            .flatten()
+    });
     let energy_final = engine.energy();
     let final_state = Some(EngineState::of_frame(
         S::KIND,
@@ -485,6 +479,111 @@ fn run_engine<S: Simulation>(
         energy_final,
         energy_bookkeeping_error: (a1 - a0) / if a0 != 0.0 { a0.abs() } else { 1.0 },
         samples,
+        timing: cadence.timing,
         final_state,
+    }
+}
+
+/// The sampling loop of [`run_engine`]: advances the engine to each report sample and observer
+/// time, feeds the watcher, records the samples and runs the checks; returns whether it
+/// stopped on the event cap and the first broken invariant.
+fn sample_loop<S: Simulation>(
+    engine: &mut S,
+    scene: &Scene,
+    cadence: &mut CheckCadence,
+    samples: &mut Vec<Sample>,
+    progress: &mut dyn FnMut(&Sample),
+    observer: &mut Observer<'_>,
+) -> (bool, Option<String>) {
+    let mut duration = scene.run.duration;
+    let interval = if scene.run.sample_interval > 0.0 {
+        scene.run.sample_interval
+    } else {
+        duration
+    };
+    // Observer times `j * dt` for `j = j0 ..= last_obs` (none without an observer); a run from
+    // a saved state at `t0` starts at the first `j0` with `j0 * dt >= t0` (up to round-off).
+    let t0 = engine.time();
+    let last_obs_of = |duration: f64, dt: f64| (duration / dt * (1.0 + 1e-12)).floor() as u64;
+    let (obs_dt, mut last_obs) = match &observer {
+        Some((dt, _)) => (*dt, last_obs_of(duration, *dt)),
+        None => (f64::INFINITY, 0),
+    };
+    let mut j = 0u64;
+    if let Some((dt, obs)) = observer.as_mut() {
+        let t = Instant::now();
+        obs.observe(&engine.frame(scene));
+        cadence.timing.observers += since(t);
+        j = (t0 / *dt * (1.0 - 1e-12)).floor() as u64 + 1;
+    }
+    // Report samples at `k * interval`, the first after `t0`.
+    let mut k = (t0 / interval * (1.0 - 1e-12)).floor() as u64 + 1;
+    loop {
+        let target_report = (k as f64 * interval).min(duration);
+        let target_obs = if observer.is_some() && j <= last_obs {
+            let t = j as f64 * obs_dt;
+            // The last sample lands on `duration` exactly when round-off alone separates them.
+            if j == last_obs && (duration - t).abs() <= 1e-9 * duration {
+                duration
+            } else {
+                t.min(duration)
+            }
+        } else {
+            f64::INFINITY
+        };
+        let target = target_report.min(target_obs);
+        let t = Instant::now();
+        let reached = engine.run_until(target, scene.run.max_events);
+        cadence.timing.engine += since(t);
+        if !reached {
+            samples.push(engine.sample());
+            return (true, None);
+        }
+        if target == target_obs {
+            if let Some((_, obs)) = observer.as_mut() {
+                let t = Instant::now();
+                let frame = engine.frame(scene);
+                // A blown-up state between two samples stops the run as a broken invariant
+                // before it reaches the observers.
+                if let Some(bad) = frame.non_finite() {
+                    samples.push(engine.sample());
+                    return (false, Some(engine.sanity_check().err().unwrap_or(bad)));
+                }
+                obs.observe(&frame);
+                cadence.timing.observers += since(t);
+            }
+            j += 1;
+        }
+        if target < target_report {
+            continue;
+        }
+        let t = Instant::now();
+        samples.push(engine.sample());
+        cadence.timing.samples += since(t);
+        progress(samples.last().expect("just pushed"));
+        // The end of a stretch gets the full check before the watcher may extend the run.
+        let stretch_end = target >= duration;
+        let checked = if stretch_end {
+            cadence.full(engine)
+        } else {
+            cadence.at_sample(engine)
+        };
+        if let Err(e) = checked {
+            return (false, Some(e));
+        }
+        if stretch_end {
+            // The watcher may continue the same trajectory to a later end.
+            let t = Instant::now();
+            let extended = observer.as_mut().and_then(|(_, obs)| obs.extend(duration));
+            cadence.timing.observers += since(t);
+            match extended {
+                Some(end) if end > duration => {
+                    duration = end;
+                    last_obs = last_obs_of(duration, obs_dt);
+                }
+                _ => return (false, None),
+            }
+        }
+        k += 1;
     }
 }

@@ -1,14 +1,14 @@
 //! A bounded cache of the `table` wall solver's tables ([`WallTable`], docs/model.md 6, B.4-B.5):
 //! one table per `(wall motion, table spec)`, built on first use, shared by every engine that
 //! asks for it, and evicted least recently used first once the cached tables exceed a size cap
-//! (a table larger than the cap is not cached). Who installs which cache, and what the cap
+//! (a table larger than the cap is not cached). An engine gets its cache from its caller (the
+//! sweep runner shares one among the jobs of a run); who holds which cache, and what the cap
 //! bounds: ARCHITECTURE.md, "Wall tables".
 
 use crate::physics::shaken_wall::WallMotion;
 use crate::physics::wall_table::{TableSpec, WallTable};
-use std::cell::RefCell;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 
 /// Default cap of a table cache, in MiB (2^20 bytes).
 pub const DEFAULT_TABLE_CACHE_MIB: usize = 256;
@@ -62,25 +62,6 @@ pub struct TableCache {
     entries: Arc<Mutex<Entries>>,
 }
 
-thread_local! {
-    /// The cache installed on this thread by [`TableCache::enter`].
-    static CURRENT: RefCell<Option<TableCache>> = const { RefCell::new(None) };
-}
-
-/// Keeps a cache installed on the current thread; dropping it restores the previous one.
-#[must_use = "the cache is installed only while the guard lives"]
-#[derive(Debug)]
-pub struct CacheScope {
-    previous: Option<TableCache>,
-}
-
-impl Drop for CacheScope {
-    fn drop(&mut self) {
-        let previous = self.previous.take();
-        CURRENT.with(|c| *c.borrow_mut() = previous);
-    }
-}
-
 impl TableCache {
     /// An empty cache that keeps at most `cap_bytes` of tables.
     pub fn new(cap_bytes: usize) -> Self {
@@ -92,23 +73,6 @@ impl TableCache {
 
     pub fn with_cap_mib(mib: usize) -> Self {
         Self::new(mib.saturating_mul(1 << 20))
-    }
-
-    /// The cache engines on this thread use: the installed one, else the process default
-    /// (capped at [`DEFAULT_TABLE_CACHE_MIB`]).
-    pub fn current() -> TableCache {
-        static DEFAULT: OnceLock<TableCache> = OnceLock::new();
-        CURRENT.with(|c| c.borrow().clone()).unwrap_or_else(|| {
-            DEFAULT
-                .get_or_init(|| TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB))
-                .clone()
-        })
-    }
-
-    /// Installs this cache on the current thread until the returned guard is dropped.
-    pub fn enter(&self) -> CacheScope {
-        let previous = CURRENT.with(|c| c.borrow_mut().replace(self.clone()));
-        CacheScope { previous }
     }
 
     pub fn cap(&self) -> usize {
@@ -271,7 +235,7 @@ mod tests {
     }
 
     #[test]
-    fn a_cap_of_zero_caches_nothing_and_an_installed_cache_is_scoped() {
+    fn a_cap_of_zero_caches_nothing() {
         let cache = TableCache::new(0);
         let w = motion(3.0, 2.0);
         let a = cache.get(w, spec(&w, 8));
@@ -279,20 +243,5 @@ mod tests {
         assert!(!Arc::ptr_eq(&a, &b));
         assert!(cache.is_empty());
         assert_eq!(cache.builds(), 2);
-        {
-            let _scope = cache.enter();
-            assert_eq!(TableCache::current().cap(), 0);
-            let inner = TableCache::new(7);
-            {
-                let _s2 = inner.enter();
-                assert_eq!(TableCache::current().cap(), 7);
-            }
-            assert_eq!(TableCache::current().cap(), 0);
-        }
-        assert_eq!(
-            TableCache::current().cap(),
-            DEFAULT_TABLE_CACHE_MIB << 20,
-            "outside a scope: the process default"
-        );
     }
 }

@@ -11,13 +11,25 @@
 //! exact solver answers that particle's next prediction (a table error cannot repeat itself
 //! forever), and only as far as its neighbours leave room (`placement_room`); no grain leaves
 //! the floor slower than the rebound floor.
+//!
+//! Searches stopped at the particle's next event (`exact` solver): a particle in a dense bed
+//! meets many partners before it reaches a wall, and each of its events used to search the
+//! floor's and the lid's roots to the end (a sine and a cosine per step). The search of each
+//! shaken wall now stops once its answer is known to lie beyond the particle's next other
+//! event (`shaken_wall::exact_root_until`: before any sine when the flight stays above the
+//! wall's crest until then); every event that changes the flight predicts afresh, and a cell
+//! crossing, which does not, resumes a stopped search whose bound it has reached
+//! ([`WallSource::resume`]). The resumed pieces give the search's answer bit for bit and a
+//! stopped wall is always later than the particle's key, so the engine's events are the same.
 
 use super::bodies::{Bodies, permute_in_place, vec_bytes};
 use super::cell_source::CellSource;
 use super::event::{Event, EventKind, EventSource, PlaneEvent};
 use super::table_cache::TableCache;
 use crate::physics::contact::rebound_speed;
-use crate::physics::shaken_wall::{WallMotion, WallRoot, bracket_root, exact_root};
+use crate::physics::shaken_wall::{
+    Search, WallMotion, WallRoot, bracket_root, exact_root, exact_root_until,
+};
 use crate::physics::wall_table::{TableHit, WallTable};
 use crate::scene::{DEFAULT_ROOT_TOLERANCE, Scene, WallSolverKind};
 use crate::sim::books::{EnergyLedger, EventCounts};
@@ -34,7 +46,7 @@ pub(crate) struct TableState {
     pub motion: WallMotion,
     /// Gap tolerance of the exact solver it falls back on.
     pub tol: f64,
-    /// The tables of the floor and of the lid (gravity pointing away), from the thread's
+    /// The tables of the floor and of the lid (gravity pointing away), from the engine's
     /// [`TableCache`].
     pub tables: [Arc<WallTable>; 2],
     /// The particle that has just left the floor (`false`) or lid (`true`); its next wall
@@ -65,8 +77,8 @@ pub(crate) enum WallSolver {
 }
 
 impl WallSolver {
-    /// The solver the scene asks for (its table from the thread's [`TableCache`]).
-    pub(crate) fn from_scene(scene: &Scene) -> Self {
+    /// The solver the scene asks for (a `table` solver's tables from `tables`).
+    pub(crate) fn from_scene(scene: &Scene, tables: &TableCache) -> Self {
         let Some((amplitude, omega)) = scene.drive_motion() else {
             return WallSolver::Static;
         };
@@ -88,11 +100,10 @@ impl WallSolver {
                     g: -scene.gravity,
                     ..motion
                 };
-                let cache = TableCache::current();
                 WallSolver::Table(Box::new(TableState {
                     motion,
                     tol,
-                    tables: [cache.get(motion, spec), cache.get(lid, spec)],
+                    tables: [tables.get(motion, spec), tables.get(lid, spec)],
                     launched: None,
                     distrusted: None,
                 }))
@@ -145,6 +156,30 @@ impl WallSolver {
     }
 }
 
+/// One shaken wall's root search for one particle (`exact` solver), in the wall's frame.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct WallSearch {
+    /// Contact coordinate and velocity at the prediction (the `h`, `v` of `exact_root`).
+    h: f64,
+    v: f64,
+    /// `Some(from)`: stopped, to go on from step `from` (`None`: from its start); `None`: done.
+    stopped: Option<Option<f64>>,
+    /// Done: the event's time after the prediction. Stopped: the earliest absolute time the
+    /// event can have.
+    time: f64,
+}
+
+/// The `exact` solver's searches of one particle: what its wall event is made of.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct WallSearches {
+    /// Time of the prediction.
+    now: f64,
+    /// Earliest event of the static walls (the axes before the shaken one), after `now`.
+    fixed: PlaneEvent,
+    /// The lid and the floor, in the order their events are offered.
+    wall: [WallSearch; 2],
+}
+
 /// Each particle's next wall event and the solver.
 #[derive(Debug, Clone)]
 pub(crate) struct WallSource {
@@ -159,13 +194,29 @@ pub(crate) struct WallSource {
     /// `table` solver: tabulated approach speed of each particle's predicted wall hit (NaN when
     /// the hit was not tabulated; empty, i.e. NaN throughout, under the other solvers).
     pub(crate) vrel: Vec<f64>,
+    /// `exact` solver on a shaken container: each particle's searches (empty otherwise).
+    searches: Vec<WallSearches>,
 }
 
 impl WallSource {
-    /// The source of a validated scene for `n` particles; `walls`: whether any axis has walls.
-    pub(crate) fn new(scene: &Scene, n: usize, walls: bool) -> Self {
-        let solver = WallSolver::from_scene(scene);
+    /// The source of a validated scene for `n` particles; `walls`: whether any axis has walls;
+    /// a `table` solver's tables from `tables`.
+    pub(crate) fn new(scene: &Scene, n: usize, walls: bool, tables: &TableCache) -> Self {
+        let solver = WallSolver::from_scene(scene, tables);
         let tabulated = matches!(solver, WallSolver::Table(_));
+        let vertical_walls = scene.boundaries().last() == Some(&crate::scene::Boundary::Wall);
+        let stopped = vertical_walls && matches!(solver, WallSolver::Exact { .. });
+        let none = WallSearch {
+            h: 0.0,
+            v: 0.0,
+            stopped: None,
+            time: f64::INFINITY,
+        };
+        let searches = WallSearches {
+            now: 0.0,
+            fixed: PlaneEvent::NEVER,
+            wall: [none; 2],
+        };
         Self {
             solver,
             e_wall: scene.contact.wall_restitution,
@@ -173,6 +224,7 @@ impl WallSource {
             min_rebound: scene.engine.min_rebound_speed,
             ev: vec![PlaneEvent::NEVER; if walls { n } else { 0 }],
             vrel: vec![f64::NAN; if tabulated { n } else { 0 }],
+            searches: vec![searches; if stopped { n } else { 0 }],
         }
     }
 
@@ -186,20 +238,27 @@ impl WallSource {
         vec![
             ("walls.ev", vec_bytes(&self.ev)),
             ("walls.vrel", vec_bytes(&self.vrel)),
+            ("walls.searches", vec_bytes(&self.searches)),
         ]
     }
 
     /// Predicts the next wall collision of `i` (at time `now`; `up`: the lid or upper wall) and
-    /// the tabulated approach speed of a shaken-wall hit. Ends the `table` solver's memories of
-    /// `i` (edge table after a launch, exact solver after a table error): they serve one
-    /// prediction.
+    /// the tabulated approach speed of a shaken-wall hit; `other`: the particle's earliest
+    /// other event (the `exact` solver's searches stop beyond it). Ends the `table` solver's
+    /// memories of `i` (edge table after a launch, exact solver after a table error): they
+    /// serve one prediction.
     pub(crate) fn predict<const D: usize, const G: bool, const S: bool>(
         &mut self,
         i: usize,
         bodies: &Bodies<D, G, S>,
         now: f64,
+        other: f64,
     ) {
         if self.ev.is_empty() {
+            return;
+        }
+        if !self.searches.is_empty() {
+            self.predict_stopped(i, bodies, now, other);
             return;
         }
         let mut best = PlaneEvent::NEVER;
@@ -237,6 +296,112 @@ impl WallSource {
                 s.distrusted = None;
             }
         }
+    }
+
+    /// [`Self::predict`] under the `exact` solver on a shaken container: the static walls as
+    /// there, the lid and the floor by searches stopped beyond `other`.
+    fn predict_stopped<const D: usize, const G: bool, const S: bool>(
+        &mut self,
+        i: usize,
+        bodies: &Bodies<D, G, S>,
+        now: f64,
+        other: f64,
+    ) {
+        let r = bodies.body[i].r;
+        let mut fixed = PlaneEvent::NEVER;
+        for k in 0..D - 1 {
+            if !bodies.periodic[k] {
+                let (lid, floor) = bodies.times_to_planes(i, k, r, bodies.size[k] - r);
+                fixed.keep_earlier(lid, k, true);
+                fixed.keep_earlier(floor, k, false);
+            }
+        }
+        let b = &bodies.body[i];
+        let (z, vz) = (b.x[D - 1], b.v[D - 1]);
+        let search = |h: f64, v: f64| WallSearch {
+            h,
+            v,
+            stopped: Some(None),
+            time: now,
+        };
+        let mut s = WallSearches {
+            now,
+            fixed,
+            wall: [search(bodies.size[D - 1] - z - r, -vz), search(z - r, vz)],
+        };
+        for wall in 0..2 {
+            self.search(&mut s, wall, other);
+        }
+        self.ev[i] = combined::<D>(&s);
+        self.searches[i] = s;
+    }
+
+    /// Goes on with the stopped searches of `i` whose bound the particle's key has reached
+    /// (`other`: its earliest event besides the walls), after an event that left its flight
+    /// unchanged (a cell crossing).
+    pub(crate) fn resume<const D: usize>(&mut self, i: usize, other: f64) {
+        let Some(mut s) = self.searches.get(i).copied() else {
+            return;
+        };
+        for wall in 0..2 {
+            let key = other.min(self.ev[i].time);
+            if s.wall[wall].stopped.is_some() && s.wall[wall].time <= key {
+                self.search(&mut s, wall, key);
+                self.ev[i] = combined::<D>(&s);
+            }
+        }
+        self.searches[i] = s;
+    }
+
+    /// Runs the search of `wall` (0: the lid, 1: the floor) of `s` until its answer is known or
+    /// known to lie after the absolute time `until`.
+    fn search(&self, s: &mut WallSearches, wall: usize, until: f64) {
+        let WallSolver::Exact { motion, tol } = self.solver else {
+            unreachable!("stopped searches belong to the exact solver")
+        };
+        let horizon = 2.0 * motion.period();
+        // The lid is the floor problem mirrored: gravity pointing away, phase shifted by pi.
+        let (w, t0, miss) = if wall == 0 {
+            let lid = WallMotion {
+                g: -motion.g,
+                ..motion
+            };
+            (lid, s.now + 0.5 * motion.period(), f64::INFINITY)
+        } else {
+            (motion, s.now, horizon)
+        };
+        let x = &mut s.wall[wall];
+        let from = x.stopped.expect("only a stopped search goes on");
+        // In time after the prediction, with a margin for the round-off of the difference.
+        let bound = if until.is_finite() {
+            (until - s.now) + 8.0 * f64::EPSILON * (until.abs() + s.now.abs())
+        } else {
+            f64::INFINITY
+        };
+        let mut outcome = exact_root_until(&w, x.h, x.v, t0, tol, horizon, bound, from);
+        if let Search::Later(next) = outcome {
+            let earliest = next.unwrap_or(bound) + s.now;
+            if earliest > until {
+                *x = WallSearch {
+                    stopped: Some(next),
+                    time: earliest,
+                    ..*x
+                };
+                return;
+            }
+            // The margin did not clear the bound after round-off: search to the end.
+            outcome = exact_root_until(&w, x.h, x.v, t0, tol, horizon, f64::INFINITY, next);
+        }
+        let dt = match outcome {
+            Search::Done(WallRoot::Hit(dt)) => dt,
+            Search::Done(WallRoot::None) => miss,
+            Search::Later(_) => unreachable!("a search without a bound runs to its end"),
+        };
+        *x = WallSearch {
+            stopped: None,
+            time: dt,
+            ..*x
+        };
     }
 
     /// Times until particle `i` meets the shaken lid and floor (docs/model.md 6), with the scene's
@@ -447,6 +612,20 @@ impl WallSource {
     }
 }
 
+/// The wall event of a particle's searches: the earliest of the static walls, the lid and the
+/// floor (in that order among equal times, as the solver's loop over the axes offers them) of
+/// those whose search is done, at its absolute time.
+fn combined<const D: usize>(s: &WallSearches) -> PlaneEvent {
+    let mut best = s.fixed;
+    for (x, up) in s.wall.iter().zip([true, false]) {
+        if x.stopped.is_none() {
+            best.keep_earlier(x.time, D - 1, up);
+        }
+    }
+    best.time += s.now;
+    best
+}
+
 /// The shift `s` along the vertical axis, of the sign of `want` and at most `|want|`, that
 /// particle `i` can make at time `t` without coming closer than contact to any neighbour (of
 /// the `3^D` cells around it) it does not already overlap: the smallest positive root of
@@ -498,6 +677,7 @@ impl EventSource for WallSource {
     fn permute(&mut self, order: &[u32], new_of_old: &[u32]) {
         permute_in_place(&mut self.ev, order);
         permute_in_place(&mut self.vrel, order);
+        permute_in_place(&mut self.searches, order);
         if let WallSolver::Table(s) = &mut self.solver {
             s.launched = s.launched.map(|(j, lid)| (new_of_old[j] as usize, lid));
             s.distrusted = s.distrusted.map(|j| new_of_old[j] as usize);

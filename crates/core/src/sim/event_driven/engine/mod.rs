@@ -18,10 +18,13 @@ use super::pairs::PairSource;
 use super::queue::{CalendarQueue, EventQueue};
 use super::shear::{FORCE_AXIS, ShearField};
 use super::slabs::SlabSource;
-use super::walls::{WallSolver, WallSource};
+use super::table_cache::{DEFAULT_TABLE_CACHE_MIB, TableCache};
+use super::walls::WallSource;
 use crate::scene::{Boundary, Scene};
 use crate::sim::books::{EnergyLedger, EventCounts};
 use crate::sim::initial::{FlatInitialState, initial_state_flat};
+
+mod checks;
 
 /// Events between two renumberings of the particles in cell order (see `reorder_by_cell`).
 fn reorder_interval(n: usize) -> u64 {
@@ -61,9 +64,14 @@ pub struct Engine<
 impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: EventQueue>
     Engine<D, GRAV, WET, SHEAR, Q>
 {
-    /// Builds the engine for a validated scene: initial state, cells, first predictions.
+    /// Builds the engine for a validated scene: initial state, cells, first predictions; a
+    /// `table` wall solver builds its tables into a cache of its own.
     pub fn new(scene: &Scene) -> Self {
-        Self::from_state(scene, None)
+        Self::from_state(
+            scene,
+            None,
+            &TableCache::with_cap_mib(DEFAULT_TABLE_CACHE_MIB),
+        )
     }
 
     /// Takes the bridges, event counts and energy books of a saved state (resumed at `t0`).
@@ -88,8 +96,13 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     /// (`sim::state`): particles at the state's time, bridges, event counts and energy ledger
     /// continued, cells and predictions derived afresh, the TC remedy's last-collision times
     /// unset. It follows the uninterrupted run to round-off (`observe_runs.rs`,
-    /// `checkpoint_continues_the_event_trajectory`).
-    pub(crate) fn from_state(scene: &Scene, start: Option<&crate::sim::EngineState>) -> Self {
+    /// `checkpoint_continues_the_event_trajectory`). A `table` wall solver takes its tables
+    /// from `tables`.
+    pub(crate) fn from_state(
+        scene: &Scene,
+        start: Option<&crate::sim::EngineState>,
+        tables: &TableCache,
+    ) -> Self {
         let init = start.map_or_else(|| initial_state_flat(scene), FlatInitialState::of_state);
         let t0 = start.map_or(0.0, |s| s.time);
         let shear = scene.shear_slabs().is_some();
@@ -145,7 +158,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         };
         let cells = CellSource::new(grid, bodies.body.iter().map(|b| b.x));
         let pairs = PairSource::new(scene, n);
-        let walls = WallSource::new(scene, n, !periodic.iter().all(|&p| p));
+        let walls = WallSource::new(scene, n, !periodic.iter().all(|&p| p), tables);
         let mut engine = Self {
             time: t0,
             bodies,
@@ -235,6 +248,17 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         }
     }
 
+    /// The time of the earliest event of `i` other than its wall event.
+    #[inline]
+    fn earliest_but_walls(&self, i: usize) -> f64 {
+        let t = self.pairs.ev[i].time.min(self.cells.ev[i].time);
+        if SHEAR {
+            t.min(self.slabs.ev[i].time)
+        } else {
+            t
+        }
+    }
+
     /// Full re-prediction of every event of `i` (brought to the current time first).
     fn predict_all(&mut self, i: usize) {
         let t = self.time;
@@ -253,7 +277,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
             t,
         );
         self.cells.predict(i, &self.bodies, t);
-        self.walls.predict(i, &self.bodies, t);
+        let other = self.earliest_but_walls(i);
+        self.walls.predict(i, &self.bodies, t, other);
         self.queue.update(i, self.queue_key(i));
     }
 
@@ -355,6 +380,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
                     now,
                 );
                 self.cells.predict(i, &self.bodies, now);
+                // The flight is unchanged: a stopped wall search goes on only if the new key
+                // reaches its bound.
+                let other = self.earliest_but_walls(i);
+                self.walls.resume::<D>(i, other);
                 self.queue.update(i, self.queue_key(i));
             }
             EventKind::Never => unreachable!("a particle with a finite key has an event"),
@@ -392,20 +421,20 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
     }
 
     /// Position and velocity of every particle at the current time, in internal order, leaving
-    /// the delayed states alone: observing never changes the round-off of a trajectory.
-    fn current_states(&self) -> Vec<(Vector<D>, Vector<D>)> {
-        (0..self.len())
-            .map(|i| self.bodies.state_at(i, self.time))
-            .collect()
+    /// the delayed states alone (observing never changes the round-off of a trajectory), and
+    /// without allocating: computed as they are read.
+    fn current_states(&self) -> impl Iterator<Item = (Vector<D>, Vector<D>)> + '_ {
+        (0..self.len()).map(|i| self.bodies.state_at(i, self.time))
     }
 
     pub fn energy(&self) -> EnergyLedger {
         let m = self.bodies.mass;
-        let states = self.current_states();
-        let kinetic = states.iter().map(|(_, v)| 0.5 * m * v.norm_squared()).sum();
+        let kinetic = self
+            .current_states()
+            .map(|(_, v)| 0.5 * m * v.norm_squared())
+            .sum();
         let potential = if GRAV {
-            states
-                .iter()
+            self.current_states()
                 .map(|(x, _)| m * self.bodies.gravity * x[D - 1])
                 .sum()
         } else {
@@ -419,27 +448,56 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         if SHEAR {
             // The shear field's work, including the flights not yet brought to the current
             // time (the ledger's is the shaken walls'; the two drives exclude each other).
-            let pending: f64 = states
-                .iter()
+            let pending: f64 = self
+                .current_states()
                 .enumerate()
-                .map(|(i, (x, _))| self.bodies.field_work(i, x))
+                .map(|(i, (x, _))| self.bodies.field_work(i, &x))
                 .sum();
             out.work_by_drive = self.bodies.field_work + pending;
         }
         out
     }
 
+    /// The kinetic and potential energies of [`Self::energy`] and the granular temperature of
+    /// [`Self::granular_temperature`] in one pass over the particles (a report sample), each
+    /// summed in the same order, so with the same bits.
+    pub fn sample_energies(&self) -> (f64, f64, f64) {
+        let (m, g, n) = (self.bodies.mass, self.bodies.gravity, self.len() as f64);
+        // `-0.0` is the neutral element of a float sum, as in `Iterator::sum`.
+        let (mut kinetic, mut potential, mut v_sq) = (-0.0f64, -0.0f64, -0.0f64);
+        let mut v_sum = Vector::<D>::zeros();
+        for (x, v) in self.current_states() {
+            let v2 = v.norm_squared();
+            kinetic += 0.5 * m * v2;
+            if GRAV {
+                potential += m * g * x[D - 1];
+            }
+            v_sum += v;
+            v_sq += v2;
+        }
+        let mean = v_sum / n;
+        let t_g = m * (v_sq / n - mean.norm_squared()) / D as f64;
+        (kinetic, if GRAV { potential } else { 0.0 }, t_g)
+    }
+
     pub fn momentum(&self) -> Vector<D> {
-        let states = self.current_states();
-        states.iter().fold(Vector::<D>::zeros(), |a, (_, v)| a + v) * self.bodies.mass
+        self.current_states()
+            .fold(Vector::<D>::zeros(), |a, (_, v)| a + v)
+            * self.bodies.mass
     }
 
     /// Granular temperature `T_g = m (<v^2> - <v>^2) / f_d` (Eq. 3.2, `k_B = 1`, `f_d = D`).
     pub fn granular_temperature(&self) -> f64 {
-        let states = self.current_states();
         let n = self.len() as f64;
-        let mean = states.iter().fold(Vector::<D>::zeros(), |a, (_, v)| a + v) / n;
-        let mean_sq = states.iter().map(|(_, v)| v.norm_squared()).sum::<f64>() / n;
+        let mean = self
+            .current_states()
+            .fold(Vector::<D>::zeros(), |a, (_, v)| a + v)
+            / n;
+        let mean_sq = self
+            .current_states()
+            .map(|(_, v)| v.norm_squared())
+            .sum::<f64>()
+            / n;
         self.bodies.mass * (mean_sq - mean.norm_squared()) / D as f64
     }
 
@@ -527,108 +585,5 @@ impl<const D: usize, const GRAV: bool, const WET: bool, const SHEAR: bool, Q: Ev
         out.extend(self.slabs.memory());
         out.extend(self.queue.memory());
         out
-    }
-
-    /// Checks the invariants: finite numbers, every particle inside the box (with the `table`
-    /// solver up to `walls::TABLE_PLACEMENT_TOLERANCE` behind a shaken wall, by design), no pair
-    /// overlap and no bonded pair beyond `s_crit` by more than the tolerance, every particle in
-    /// its cell (and slab), no event in the past, no time reversal. Returns the first violation.
-    pub fn sanity_check(&self) -> Result<(), String> {
-        let states = self.current_states();
-        let tol = self.overlap_tolerance;
-        let t = self.time;
-        let b = &self.bodies;
-        if self.time_reversals > 0 {
-            return Err(format!(
-                "{} events processed out of time order",
-                self.time_reversals
-            ));
-        }
-        let drive = self.walls.solver.motion();
-        for i in 0..self.len() {
-            // Messages name particles by their scene index.
-            let si = b.id[i];
-            let (x, v) = states[i];
-            if !x.iter().chain(v.iter()).all(|a| a.is_finite()) {
-                return Err(format!("particle {si} has a non-finite state at t = {t}"));
-            }
-            for k in 0..D {
-                // The shaken floor and lid move by z_w(t).
-                let shift = match drive {
-                    Some(w) if k == D - 1 => w.position(t),
-                    _ => 0.0,
-                };
-                let r = b.body[i].r;
-                let (lo, hi) = if b.periodic[k] {
-                    (0.0, b.size[k])
-                } else {
-                    (r + shift, b.size[k] - r + shift)
-                };
-                // The `table` solver places a particle on the shaken wall only as far as its
-                // neighbours leave room (`walls::placement_room`): the rest, at most its
-                // placement tolerance, may stay behind the wall until the particle leaves it.
-                let behind = (lo - x[k]).max(x[k] - hi);
-                let table_residual = k == D - 1
-                    && behind <= super::walls::TABLE_PLACEMENT_TOLERANCE
-                    && matches!(self.walls.solver, WallSolver::Table(_));
-                if behind > tol && !table_residual {
-                    return Err(format!(
-                        "particle {si} is outside the box along axis {k}: x = {} not in [{lo}, {hi}] at t = {t}",
-                        x[k]
-                    ));
-                }
-            }
-            if let Some(e) = self.cells.check(i, &x, &b.periodic, tol) {
-                return Err(format!("particle {si} {e} at t = {t}"));
-            }
-            if SHEAR && let Err(e) = self.slabs.check(i, x[0], tol) {
-                return Err(format!("particle {si} {e} at t = {t}"));
-            }
-            if self.queue.key(i) < t - 1e-9 * t.abs().max(1.0) {
-                return Err(format!(
-                    "particle {si} has an event in the past: {} < {t}",
-                    self.queue.key(i)
-                ));
-            }
-        }
-        for i in 0..self.len() {
-            let si = b.id[i];
-            let mut err = None;
-            self.cells.for_each_near(i, |j| {
-                if j <= i || err.is_some() {
-                    return;
-                }
-                let sj = b.id[j];
-                let r = b.min_image(states[i].0 - states[j].0).norm();
-                let sigma = b.body[i].r + b.body[j].r;
-                if r < sigma - tol {
-                    err = Some(format!(
-                        "particles {si} and {sj} overlap by {} at t = {t}",
-                        sigma - r
-                    ));
-                }
-            });
-            if let Some(e) = err {
-                return Err(e);
-            }
-            if WET {
-                for &j in self.pairs.bonds_of(i) {
-                    let j = j as usize;
-                    let sj = b.id[j];
-                    let r = b.min_image(states[i].0 - states[j].0).norm();
-                    let lambda = b.body[i].r + b.body[j].r + self.pairs.p.s_crit;
-                    if r > lambda + tol {
-                        return Err(format!(
-                            "bonded pair {si}-{sj} stretched beyond s_crit by {} at t = {t}",
-                            r - lambda
-                        ));
-                    }
-                    if !self.pairs.bonded(j, i) {
-                        return Err(format!("bond {si}-{sj} is one-sided"));
-                    }
-                }
-            }
-        }
-        Ok(())
     }
 }
