@@ -193,7 +193,7 @@ fn a_continued_sweep_runs_each_point_from_its_neighbours_final_state() {
             .unwrap()
             .expect("the predecessor's final state")
             .continued(&prev_spec.scene);
-        let again = run_job_from(&p.spec, &state, &mut |_| {}).unwrap();
+        let again = run_job_from(&p.spec, &state, &Default::default(), &mut |_| {}).unwrap();
         assert_eq!(Some(again.events as i64), p.events);
         assert_eq!(Some(&again.observables), p.observables.as_ref());
         // And not from a hot start: the stored run differs from one.
@@ -207,6 +207,7 @@ fn a_continued_sweep_runs_each_point_from_its_neighbours_final_state() {
                 },
                 ..p.spec.clone()
             },
+            &Default::default(),
             &mut |_| {},
         )
         .unwrap();
@@ -330,7 +331,8 @@ fn a_continued_state_keeps_the_grains_in_the_container() {
     let period = 2.0 * std::f64::consts::PI / w;
     let mut s1 = first.clone();
     s1.run.duration = 20.75 * period;
-    let (run1, _) = wetgran_core::observe::run_observed_from(&s1, None, &mut |_| {});
+    let (run1, _) =
+        wetgran_core::observe::run_observed_from(&s1, None, &Default::default(), &mut |_| {});
     let end = run1.report.final_state.expect("a final state");
     let floor = a * (w * end.time).sin();
     assert!((floor + a).abs() < 1e-6 * a, "floor at {floor}, A = {a}");
@@ -358,7 +360,12 @@ fn a_continued_state_keeps_the_grains_in_the_container() {
     let mut s2 = first.clone();
     s2.drive.e_star = Some(1.0);
     s2.run.duration = 5.0 * period;
-    let (run2, _) = wetgran_core::observe::run_observed_from(&s2, Some(&cont), &mut |_| {});
+    let (run2, _) = wetgran_core::observe::run_observed_from(
+        &s2,
+        Some(&cont),
+        &Default::default(),
+        &mut |_| {},
+    );
     assert_eq!(run2.report.invariant_violation, None);
     assert!(
         run2.report.energy_bookkeeping_error < 1e-6,

@@ -420,7 +420,7 @@ pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
         }
         Ok(spec) => {
             let id = spec.id();
-            match run_job(&spec, &mut |_| {}) {
+            match run_job(&spec, &super::common::all_cores(), &mut |_| {}) {
                 Ok(r) => (record(&id, Outcome::Done(r)), 0),
                 Err(e) => {
                     eprintln!("error: job {id} failed: {e}");

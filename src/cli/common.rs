@@ -50,8 +50,13 @@ pub(super) struct Workers {
 impl Workers {
     /// The options of a local run: `--jobs` workers (by default the available cores; in
     /// `[1, available cores]` unless `--oversubscribe`), progress shown, failed jobs left as
-    /// they are, the wall-table cache capped at `--table-cache-mib`.
+    /// they are, the wall-table cache capped at `--table-cache-mib`, no hook.
     pub(super) fn options(&self) -> Result<RunOptions, Failure> {
+        self.options_with(&super::Hooks::default())
+    }
+
+    /// [`Self::options`] with the extension hook of `hooks`.
+    pub(super) fn options_with(&self, hooks: &super::Hooks) -> Result<RunOptions, Failure> {
         let cores = available_cores();
         let jobs = match self.jobs {
             None => cores,
@@ -74,6 +79,7 @@ impl Workers {
             retry_failed: false,
             show_progress: true,
             table_cache_mib: self.table_cache_mib,
+            on_extend: hooks.extend.clone(),
         })
     }
 }
@@ -110,6 +116,13 @@ pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
     };
     eprintln!("error: {m}");
     ExitCode::from(code)
+}
+
+/// The context of a run on its own (`simulate`, `job run`): every core the process may use
+/// (`sim::threads::available_cores`, `WETGRAN_THREADS`), no hook.
+pub(super) fn all_cores() -> wetgran_core::sim::RunContext {
+    use wetgran_core::sim::threads::{Threads, available_cores};
+    wetgran_core::sim::RunContext::on(Threads::new(available_cores()))
 }
 
 /// The cores this process may use (`std::thread::available_parallelism`, 1 if unknown).

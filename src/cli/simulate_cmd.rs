@@ -59,9 +59,10 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         .map_err(|e| Failure::BadInput(format!("--colour-by: {e}")))?;
     check_snapshot_names(&args.snapshot)?;
     let scene = load_scene(&args.scene)?;
+    let ctx = super::common::all_cores();
     let (run, frame) = if std::io::stderr().is_terminal() {
         let duration = scene.run.duration;
-        let out = run_observed_with_frame(&scene, &mut |f| {
+        let out = run_observed_with_frame(&scene, &ctx, &mut |f| {
             eprint!(
                 "\r  t = {:.3} / {duration}  ({:.0}%)   ",
                 f * duration,
@@ -71,7 +72,7 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         eprintln!();
         out
     } else {
-        run_observed_with_frame(&scene, &mut |_| {})
+        run_observed_with_frame(&scene, &ctx, &mut |_| {})
     };
     if args.json {
         print_json(&run);

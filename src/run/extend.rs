@@ -14,7 +14,7 @@ use super::runner::point_label;
 use crate::store::{PointRow, Store, StoreError, SweepRow};
 use crate::sweep::job::{ExtendTo, JobError, JobResult, extend_job};
 use std::sync::Arc;
-use wetgran_core::sim::EngineState;
+use wetgran_core::sim::{EngineState, RunContext};
 
 /// What an extension run did.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -46,16 +46,15 @@ struct ExtendQueue<'a> {
 }
 
 /// Extends every unconverged finished job of `sweeps` that has a checkpoint to at most `cap` of
-/// total run, on `workers` worker threads sharing a wall-table cache of `table_cache_mib` MiB;
-/// `show_progress` as for [`super::RunOptions`].
+/// total run, with the workers, wall-table cache, hook and progress of `opts` (its
+/// `retry_failed` does not apply).
 pub fn extend_unconverged(
     store: &Store,
     sweeps: &[SweepRow],
     cap: ExtendTo,
-    workers: usize,
-    table_cache_mib: usize,
-    show_progress: bool,
+    opts: &super::RunOptions,
 ) -> Result<ExtendSummary, StoreError> {
+    let (workers, show_progress) = (opts.jobs, opts.show_progress);
     let mut todo = Vec::new();
     let mut seen = std::collections::BTreeSet::new();
     for (k, s) in sweeps.iter().enumerate() {
@@ -85,14 +84,17 @@ pub fn extend_unconverged(
         todo: todo.into_iter(),
         summary: ExtendSummary::default(),
     };
-    let work = Arc::new(move |x: &Extension, report: &mut dyn FnMut(f64)| {
-        extend_job(&x.point.spec, &x.state, cap, report)
-    });
+    let work = Arc::new(
+        move |x: &Extension, ctx: &RunContext, report: &mut dyn FnMut(f64)| {
+            extend_job(&x.point.spec, &x.state, cap, ctx, report)
+        },
+    );
     run_queue(
         store,
         &mut queue,
         workers,
-        table_cache_mib,
+        opts.table_cache_mib,
+        opts.on_extend.clone(),
         &mut progress,
         work,
     )?;

@@ -13,12 +13,9 @@
 //! dropped with the run, so a sweep over many drives keeps at most the cap in cached tables
 //! (plus the two tables each running job holds).
 //!
-//! The pool also shares the machine's cores among its jobs ([`CoreShare`], `sim::threads`):
-//! each worker enters the run's share, and the pool tells it how many workers are busy and
-//! whether the queue is empty. While jobs wait, each job gets `cores / workers` threads; once
-//! the queue is empty, the jobs still running get the idle workers' cores (the time-driven
-//! engine's steps are parallel, with the same numbers on any number of threads), so the tail
-//! of a run does not leave cores idle.
+//! The pool also shares the machine's cores among its jobs: each job runs in a [`RunContext`]
+//! whose [`Threads`] are its share, `cores / workers` (at least one; `sim::threads`), and whose
+//! hook is the run's (`on_extend`).
 
 use super::progress::Progress;
 use crate::store::{HEARTBEAT_INTERVAL, Store, StoreError};
@@ -26,7 +23,8 @@ use std::sync::{Arc, mpsc};
 use std::thread;
 use std::time::{Duration, Instant};
 use wetgran_core::sim::event_driven::table_cache::TableCache;
-use wetgran_core::sim::threads::{self, CoreShare};
+use wetgran_core::sim::threads::{self, Threads};
+use wetgran_core::sim::{ExtendHook, RunContext};
 
 /// What a run claims and how it stores what its workers return.
 pub(crate) trait Queue {
@@ -52,9 +50,13 @@ pub(crate) trait Queue {
     ) -> Result<String, StoreError>;
 }
 
-/// What a worker calls to run one job, with a progress callback taking the fraction done.
-pub(crate) type Work<Q> =
-    Arc<dyn Fn(&<Q as Queue>::Job, &mut dyn FnMut(f64)) -> <Q as Queue>::Outcome + Send + Sync>;
+/// What a worker calls to run one job in its context, with a progress callback taking the
+/// fraction done.
+pub(crate) type Work<Q> = Arc<
+    dyn Fn(&<Q as Queue>::Job, &RunContext, &mut dyn FnMut(f64)) -> <Q as Queue>::Outcome
+        + Send
+        + Sync,
+>;
 
 /// The run's wall-table cache at its end: tables built, and the most bytes held at once.
 pub(crate) struct TableStats {
@@ -67,36 +69,38 @@ enum Msg<J, O> {
     Finished(usize, Box<J>, O, f64),
 }
 
-/// Runs the jobs of `queue` on `n_workers` threads until it has none left and none is running.
+/// Runs the jobs of `queue` on `n_workers` threads until it has none left and none is running;
+/// `on_extend` is every job's hook (`RunContext::on_extend`).
 pub(crate) fn run_queue<Q: Queue>(
     store: &Store,
     queue: &mut Q,
     n_workers: usize,
     table_cache_mib: usize,
+    on_extend: Option<ExtendHook>,
     progress: &mut Progress,
     work: Work<Q>,
 ) -> Result<TableStats, StoreError> {
     let n_workers = n_workers.max(1);
     let (msg_tx, msg_rx) = mpsc::channel::<Msg<Q::Job, Q::Outcome>>();
     let tables = TableCache::with_cap_mib(table_cache_mib);
-    let cores = CoreShare::new(threads::available_cores(), n_workers);
-    let (job_tx, handles) = spawn_workers::<Q>(n_workers, &msg_tx, &tables, &cores, &work);
+    let ctx = RunContext {
+        threads: Threads::new(threads::available_cores() / n_workers),
+        on_extend,
+    };
+    let (job_tx, handles) = spawn_workers::<Q>(n_workers, &msg_tx, &tables, &ctx, &work);
     drop(msg_tx);
 
     let mut idle: Vec<usize> = (0..n_workers).rev().collect();
     let mut busy = 0usize;
-    // Whether the last claim found the queue empty (a continuation job may become claimable
-    // later, when its predecessor ends).
-    let mut drained = false;
     let mut last_beat = Instant::now();
     let outcome = (|| -> Result<(), StoreError> {
         loop {
             while let Some(&w) = idle.last() {
+                // None: nothing claimable now (a continuation job may become claimable when
+                // its predecessor ends).
                 let Some((job, label)) = queue.claim(store, progress)? else {
-                    drained = true;
                     break;
                 };
-                drained = false;
                 idle.pop();
                 progress.start(w, &label);
                 job_tx[w].send(job).expect("worker alive");
@@ -105,7 +109,6 @@ pub(crate) fn run_queue<Q: Queue>(
             if busy == 0 {
                 return Ok(());
             }
-            cores.set(busy, drained);
             let wait = HEARTBEAT_INTERVAL.saturating_sub(last_beat.elapsed());
             match msg_rx.recv_timeout(wait.max(Duration::from_millis(10))) {
                 Ok(Msg::Progress(w, f)) => progress.update(w, f),
@@ -146,13 +149,13 @@ pub(crate) fn run_queue<Q: Queue>(
 /// Handles of the workers and the channels that hand each its jobs.
 type Workers<J> = (Vec<mpsc::Sender<J>>, Vec<thread::JoinHandle<()>>);
 
-/// Starts `n_workers` worker threads, each in the wall-table cache `tables` and its share of
-/// `cores`.
+/// Starts `n_workers` worker threads, each in the wall-table cache `tables`, running its jobs
+/// in a context like `ctx` with threads of its own.
 fn spawn_workers<Q: Queue>(
     n_workers: usize,
     msg_tx: &mpsc::Sender<Msg<Q::Job, Q::Outcome>>,
     tables: &TableCache,
-    cores: &Arc<CoreShare>,
+    ctx: &RunContext,
     work: &Work<Q>,
 ) -> Workers<Q::Job> {
     let mut job_tx = Vec::new();
@@ -162,15 +165,17 @@ fn spawn_workers<Q: Queue>(
         job_tx.push(tx);
         let out = msg_tx.clone();
         let tables = tables.clone();
-        let cores = cores.clone();
+        let ctx = RunContext {
+            threads: Threads::new(ctx.threads.count()),
+            on_extend: ctx.on_extend.clone(),
+        };
         let work = work.clone();
         handles.push(
             thread::Builder::new()
                 .name(format!("wetgran-worker-{w}"))
                 .spawn(move || {
                     let _tables = tables.enter();
-                    let _cores = threads::enter(&cores, w);
-                    worker::<Q>(w, rx, out, work)
+                    worker::<Q>(w, rx, out, &ctx, work)
                 })
                 .expect("spawn a worker thread"),
         );
@@ -183,6 +188,7 @@ fn worker<Q: Queue>(
     w: usize,
     jobs: mpsc::Receiver<Q::Job>,
     out: mpsc::Sender<Msg<Q::Job, Q::Outcome>>,
+    ctx: &RunContext,
     work: Work<Q>,
 ) {
     while let Ok(job) = jobs.recv() {
@@ -195,7 +201,7 @@ fn worker<Q: Queue>(
                 let _ = out.send(Msg::Progress(w, f));
             }
         };
-        let outcome = work(&job, &mut report);
+        let outcome = work(&job, ctx, &mut report);
         let wall = t0.elapsed().as_secs_f64();
         if out
             .send(Msg::Finished(w, Box::new(job), outcome, wall))

@@ -8,6 +8,7 @@ use crate::store::{Claim, Store, StoreError, SweepRow};
 use crate::sweep::job::{JobError, JobResult, run_job, run_job_from};
 use std::sync::Arc;
 use std::time::Instant;
+use wetgran_core::sim::{ExtendHook, RunContext};
 
 /// How to run.
 #[derive(Debug, Clone)]
@@ -21,6 +22,9 @@ pub struct RunOptions {
     /// Cap of the run's wall-table cache in MiB (least recently used tables out first;
     /// default `table_cache::DEFAULT_TABLE_CACHE_MIB`; 0: no caching, each job builds its own).
     pub table_cache_mib: usize,
+    /// Called in a job's run each time the run-length policy extends it by a window
+    /// (`RunContext::on_extend`).
+    pub on_extend: Option<ExtendHook>,
 }
 
 /// What a run did.
@@ -81,15 +85,21 @@ pub fn short(x: f64) -> String {
 }
 
 /// What a worker calls to run one claimed job (its spec, and a continuation job's start state
-/// in `claim.start`), with a progress callback taking the fraction done.
-pub type JobFn =
-    Arc<dyn Fn(&Claim, &mut dyn FnMut(f64)) -> Result<JobResult, JobError> + Send + Sync>;
+/// in `claim.start`) in its context (its share of the cores), with a progress callback taking
+/// the fraction done.
+pub type JobFn = Arc<
+    dyn Fn(&Claim, &RunContext, &mut dyn FnMut(f64)) -> Result<JobResult, JobError> + Send + Sync,
+>;
 
 /// The simulation of a claimed job: `sweep::run_job`, or `run_job_from` its start state.
-pub fn simulate(claim: &Claim, progress: &mut dyn FnMut(f64)) -> Result<JobResult, JobError> {
+pub fn simulate(
+    claim: &Claim,
+    ctx: &RunContext,
+    progress: &mut dyn FnMut(f64),
+) -> Result<JobResult, JobError> {
     match claim.start.as_deref() {
-        Some(state) => run_job_from(&claim.spec, state, progress),
-        None => run_job(&claim.spec, progress),
+        Some(state) => run_job_from(&claim.spec, state, ctx, progress),
+        None => run_job(&claim.spec, ctx, progress),
     }
 }
 
@@ -157,6 +167,7 @@ pub fn run_sweeps_with(
         &mut queue,
         n_workers,
         opts.table_cache_mib,
+        opts.on_extend.clone(),
         &mut progress,
         job,
     )?;

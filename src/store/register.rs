@@ -113,7 +113,7 @@ impl Store {
                 .bind(t)
                 .exec(tx, self)
                 .await?;
-            wetgran_core::test_pause::pause_at("refine");
+            self.reached(super::WritePoint::Refine);
             Ok(())
         })
     }

@@ -365,12 +365,16 @@ pub struct SampledRate {
 }
 
 /// Runs a sample spec (from [`sample_spec`]) and times it from the first progress report past
-/// `settle` time units to its end.
-pub fn time_sample(spec: &JobSpec, settle: f64) -> Result<SampledRate, JobError> {
+/// `settle` time units to its end, in the context `ctx`.
+pub fn time_sample(
+    spec: &JobSpec,
+    settle: f64,
+    ctx: &wetgran_core::sim::RunContext,
+) -> Result<SampledRate, JobError> {
     let settled = settle / spec.scene.run.duration;
     let mut mark: Option<(Instant, f64)> = None;
     let t0 = Instant::now();
-    let outcome = run_job(spec, &mut |f| {
+    let outcome = run_job(spec, ctx, &mut |f| {
         if mark.is_none() && f >= settled {
             mark = Some((Instant::now(), f));
         }

@@ -5,6 +5,7 @@
 use super::spec::JobSpec;
 use serde::{Deserialize, Serialize};
 use std::fmt;
+use wetgran_core::sim::RunContext;
 
 /// What one finished job produced.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,10 +45,15 @@ impl fmt::Display for JobError {
 
 impl std::error::Error for JobError {}
 
-/// Runs a job spec; `progress` gets the completed fraction of the simulated time, in `[0, 1]`.
-/// The observers and thresholds are the scene's `[observe]` and `[classify]` sections.
-pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResult, JobError> {
-    guarded_run(|| wetgran_core::observe::run_observed(&spec.scene, progress))
+/// Runs a job spec in the caller's context `ctx` (threads, hook); `progress` gets the
+/// completed fraction of the simulated time, in `[0, 1]`. The observers and thresholds are the
+/// scene's `[observe]` and `[classify]` sections.
+pub fn run_job(
+    spec: &JobSpec,
+    ctx: &RunContext,
+    progress: &mut dyn FnMut(f64),
+) -> Result<JobResult, JobError> {
+    guarded_run(|| wetgran_core::observe::run_observed(&spec.scene, ctx, progress))
 }
 
 /// Runs a continuation job (`spec.start_from`) from `start`, its predecessor's final state
@@ -56,9 +62,12 @@ pub fn run_job(spec: &JobSpec, progress: &mut dyn FnMut(f64)) -> Result<JobResul
 pub fn run_job_from(
     spec: &JobSpec,
     start: &wetgran_core::sim::EngineState,
+    ctx: &RunContext,
     progress: &mut dyn FnMut(f64),
 ) -> Result<JobResult, JobError> {
-    guarded_run(|| wetgran_core::observe::run_observed_from(&spec.scene, Some(start), progress).0)
+    guarded_run(|| {
+        wetgran_core::observe::run_observed_from(&spec.scene, Some(start), ctx, progress).0
+    })
 }
 
 /// Runs `run` with panics caught, checks its guards and turns it into a [`JobResult`] (the
@@ -93,6 +102,7 @@ pub fn extend_job(
     spec: &JobSpec,
     state: &wetgran_core::sim::EngineState,
     cap: ExtendTo,
+    ctx: &RunContext,
     progress: &mut dyn FnMut(f64),
 ) -> Result<Option<JobResult>, JobError> {
     let scene = &spec.scene;
@@ -116,7 +126,7 @@ pub fn extend_job(
         max_time: None,
         ..policy
     });
-    guarded_run(|| wetgran_core::observe::run_observed_from(&ext, Some(state), progress).0)
+    guarded_run(|| wetgran_core::observe::run_observed_from(&ext, Some(state), ctx, progress).0)
         .map(Some)
 }
 
@@ -205,7 +215,7 @@ mod tests {
         let mut spec = tiny_spec();
         // Bypasses validation: the engine refuses a dimension it has no type for.
         spec.scene.dimension = 4;
-        match run_job(&spec, &mut |_| {}) {
+        match run_job(&spec, &Default::default(), &mut |_| {}) {
             Err(JobError::Panic(m)) => assert!(m.contains("dimension 4"), "{m}"),
             other => panic!("expected a panic error, got {other:?}"),
         }
@@ -215,7 +225,7 @@ mod tests {
     fn averages_cover_the_samples_after_the_transient() {
         let spec = tiny_spec();
         let mut fractions = Vec::new();
-        let r = run_job(&spec, &mut |f| fractions.push(f)).unwrap();
+        let r = run_job(&spec, &Default::default(), &mut |f| fractions.push(f)).unwrap();
         // The classifier ran and kept the numbers it decided on.
         let phase: wetgran_core::observe::Phase = r.phase.as_deref().unwrap().parse().unwrap();
         assert!(wetgran_core::observe::Phase::ALL.contains(&phase));

@@ -137,7 +137,7 @@ pub(crate) fn prepare(n: usize, dir: &Path) -> Result<(SweepFile, Vec<SweepJob>)
 
 /// One real run of `spec`: the shape of every stand-in result.
 pub(crate) fn real_result(spec: &JobSpec) -> Result<JobResult, String> {
-    run_job(spec, &mut |_| {}).map_err(e)
+    run_job(spec, &Default::default(), &mut |_| {}).map_err(e)
 }
 
 /// A stand-in job: `on_start(job id)`, then `result` with the point's made-up label.
@@ -145,7 +145,7 @@ pub(crate) fn stand_in(
     result: JobResult,
     on_start: impl Fn(&str) -> Result<(), JobError> + Send + Sync + 'static,
 ) -> JobFn {
-    Arc::new(move |claim, _progress| {
+    Arc::new(move |claim, _ctx, _progress| {
         on_start(&claim.job_id)?;
         let mut r = result.clone();
         r.phase = Some(stand_in_phase(&claim.coords).to_string());
@@ -160,6 +160,7 @@ pub(crate) fn run_options(workers: usize) -> RunOptions {
         retry_failed: false,
         show_progress: false,
         table_cache_mib: 0,
+        on_extend: None,
     }
 }
 

@@ -96,7 +96,7 @@ fn a_bonded_crystal_strip_in_a_hot_dilute_gas_is_sgc() {
     for seed in 1..=2 {
         let state = prepared(30.0, 30.0, 3, 15, seed);
         let n = state.radii.len();
-        let (run, _) = run_observed_from(&scene(n), Some(&state), &mut |_| {});
+        let (run, _) = run_observed_from(&scene(n), Some(&state), &Default::default(), &mut |_| {});
         let c = &run.classification;
         eprintln!("seed {seed}: {}", c.decided_on.reason);
         let dense = c.decided_on.dense.as_ref().expect("a coexistence");
@@ -113,7 +113,7 @@ fn a_bonded_crystal_strip_in_a_hot_dilute_gas_is_sgc() {
 fn the_hot_dilute_gas_alone_is_a_homogeneous_gas() {
     let state = prepared(0.0, 0.0, 0, 40, 3);
     let n = state.radii.len();
-    let (run, _) = run_observed_from(&scene(n), Some(&state), &mut |_| {});
+    let (run, _) = run_observed_from(&scene(n), Some(&state), &Default::default(), &mut |_| {});
     let c = &run.classification;
     assert!(!c.decided_on.split, "{}", c.decided_on.reason);
     assert_eq!(c.phase, Phase::G, "{}", c.decided_on.reason);

@@ -9,8 +9,9 @@
 //! [`run_scene_watched`] is the general form: it can start from a saved [`EngineState`] instead
 //! of the scene's initial state, and its [`Watcher`] may extend the run on the same trajectory
 //! when it reaches its end (run to stationarity, `crate::scene::convergence`). Every run reports
-//! its final state ([`RunReport::final_state`]) for checkpoints. [`threads`] chooses how many
-//! threads a simulation uses (the time-driven engine's steps are parallel).
+//! its final state ([`RunReport::final_state`]) for checkpoints. The caller of a watched run
+//! gives it a [`RunContext`]: the [`threads::Threads`] it runs on and a hook called at each
+//! extension of the run.
 
 pub mod books;
 pub mod event_driven;
@@ -28,8 +29,46 @@ use crate::scene::{EngineKind, Scene};
 use event_driven::Engine;
 use event_driven::queue::EventQueue;
 use serde::Serialize;
+use std::fmt;
+use std::sync::Arc;
 use std::time::Instant;
+use threads::Threads;
 use time_driven::{BodyForce, TimeEngine};
+
+/// What the caller of a run gives it besides the scene: the threads it runs on, and a hook
+/// called each time its [`Watcher`] extends it (before the next stretch starts).
+#[derive(Debug, Clone, Default)]
+pub struct RunContext {
+    pub threads: Threads,
+    pub on_extend: Option<ExtendHook>,
+}
+
+impl RunContext {
+    /// A context of `threads` and no hook.
+    pub fn on(threads: Threads) -> Self {
+        Self {
+            threads,
+            on_extend: None,
+        }
+    }
+}
+
+/// The function a run calls when its watcher extends it (the crash tests stop a process
+/// there, between two windows of the run-length policy).
+#[derive(Clone)]
+pub struct ExtendHook(Arc<dyn Fn() + Send + Sync>);
+
+impl ExtendHook {
+    pub fn new(f: impl Fn() + Send + Sync + 'static) -> Self {
+        Self(Arc::new(f))
+    }
+}
+
+impl fmt::Debug for ExtendHook {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("ExtendHook")
+    }
+}
 
 /// One sample of the global observables.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -80,7 +119,7 @@ pub struct RunReport {
 
 /// Runs a validated scene to the end and reports.
 pub fn run_scene(scene: &Scene) -> RunReport {
-    run_dispatch(scene, None, &mut |_| {}, None)
+    run_dispatch(scene, None, &RunContext::default(), &mut |_| {}, None)
 }
 
 /// Runs a validated scene and hands a [`Frame`] to `observer` at every time `k * interval`
@@ -92,7 +131,15 @@ pub fn run_scene_observed(
     observer: &mut dyn FnMut(&Frame),
     progress: &mut dyn FnMut(&Sample),
 ) -> RunReport {
-    run_scene_watched(scene, None, interval, &mut FnWatcher(observer), progress)
+    let ctx = RunContext::default();
+    run_scene_watched(
+        scene,
+        None,
+        interval,
+        &mut FnWatcher(observer),
+        &ctx,
+        progress,
+    )
 }
 
 /// What the sampling loop hands frames to, and asks whether to go on at the end of the run.
@@ -118,19 +165,21 @@ impl Watcher for FnWatcher<'_> {
 /// [`run_scene_observed`] with a [`Watcher`] that may extend the run, starting from `start`
 /// (a saved state, continued at its time with its counts and ledger) or, with `None`, from
 /// the scene's initial state. `run.duration` is then the end time of the first stretch, in
-/// absolute time (a state saved at `t0` runs from `t0` to `run.duration`).
+/// absolute time (a state saved at `t0` runs from `t0` to `run.duration`). The engine steps on
+/// `ctx.threads`; `ctx.on_extend` is called at each extension.
 pub fn run_scene_watched(
     scene: &Scene,
     start: Option<&EngineState>,
     interval: f64,
     watcher: &mut dyn Watcher,
+    ctx: &RunContext,
     progress: &mut dyn FnMut(&Sample),
 ) -> RunReport {
     assert!(
         interval > 0.0 && interval.is_finite(),
         "observer interval must be > 0"
     );
-    run_dispatch(scene, start, progress, Some((interval, watcher)))
+    run_dispatch(scene, start, ctx, progress, Some((interval, watcher)))
 }
 
 type Observer<'a> = Option<(f64, &'a mut dyn Watcher)>;
@@ -138,6 +187,7 @@ type Observer<'a> = Option<(f64, &'a mut dyn Watcher)>;
 fn run_dispatch(
     scene: &Scene,
     start: Option<&EngineState>,
+    ctx: &RunContext,
     p: &mut dyn FnMut(&Sample),
     o: Observer<'_>,
 ) -> RunReport {
@@ -157,6 +207,7 @@ fn run_dispatch(
         st,
         RunVisitor {
             scene,
+            ctx,
             progress: p,
             observer: o,
         },
@@ -173,6 +224,7 @@ pub trait EngineVisitor {
 /// The sampling loop of [`run_scene_watched`] as an [`EngineVisitor`].
 struct RunVisitor<'a, 'b> {
     scene: &'a Scene,
+    ctx: &'a RunContext,
     progress: &'a mut dyn FnMut(&Sample),
     observer: Observer<'b>,
 }
@@ -180,7 +232,7 @@ struct RunVisitor<'a, 'b> {
 impl EngineVisitor for RunVisitor<'_, '_> {
     type Output = RunReport;
     fn visit<S: Simulation>(self, engine: S) -> RunReport {
-        run_engine(engine, self.scene, self.progress, self.observer)
+        run_engine(engine, self.scene, self.ctx, self.progress, self.observer)
     }
 }
 
@@ -238,7 +290,7 @@ pub fn with_engine<V: EngineVisitor>(scene: &Scene, st: Option<&EngineState>, v:
 }
 
 /// What the sampling loop needs from an engine (both engines implement it).
-pub trait Simulation {
+pub trait Simulation: Send {
     /// `"event"` or `"time"`.
     const KIND: &'static str;
     fn time(&self) -> f64;
@@ -262,15 +314,9 @@ pub trait Simulation {
     fn max_overlap(&self) -> Option<f64> {
         None
     }
-    /// The engine's units of work done so far: events (event engine) or time steps (time
-    /// engine).
-    fn work_done(&self) -> u64;
-    /// Does `n` more units of work (events or time steps), whatever simulated time they take;
-    /// false when the engine has nothing left to do (an event engine with no event pending).
-    fn advance_work(&mut self, n: u64) -> bool;
 }
 
-impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue> Simulation
+impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue + Send> Simulation
     for Engine<D, G, W, S, Q>
 {
     const KIND: &'static str = "event";
@@ -300,14 +346,6 @@ impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue>
     }
     fn frame(&self, scene: &Scene) -> Frame {
         Frame::of_engine(self, scene)
-    }
-    fn work_done(&self) -> u64 {
-        Engine::counts(self).total()
-    }
-    fn advance_work(&mut self, n: u64) -> bool {
-        let before = self.work_done();
-        Engine::run_until(self, f64::INFINITY, Some(before.saturating_add(n)));
-        self.work_done() > before || n == 0
     }
 }
 
@@ -348,15 +386,6 @@ impl<const D: usize, const G: bool, const W: bool, B: BodyForce<D>> Simulation
     fn max_overlap(&self) -> Option<f64> {
         Some(TimeEngine::max_overlap(self))
     }
-    fn work_done(&self) -> u64 {
-        TimeEngine::steps(self)
-    }
-    fn advance_work(&mut self, n: u64) -> bool {
-        for _ in 0..n {
-            TimeEngine::step(self);
-        }
-        true
-    }
 }
 
 fn sample<S: Simulation>(e: &S) -> Sample {
@@ -373,6 +402,7 @@ fn sample<S: Simulation>(e: &S) -> Sample {
 fn run_engine<S: Simulation>(
     mut engine: S,
     scene: &Scene,
+    ctx: &RunContext,
     progress: &mut dyn FnMut(&Sample),
     mut observer: Observer<'_>,
 ) -> RunReport {
@@ -416,7 +446,8 @@ fn run_engine<S: Simulation>(
             f64::INFINITY
         };
         let target = target_report.min(target_obs);
-        if !engine.run_until(target, scene.run.max_events) {
+        let cap = scene.run.max_events;
+        if !ctx.threads.install(|| engine.run_until(target, cap)) {
             stopped_on_cap = true;
             samples.push(sample(&engine));
             break;
@@ -448,6 +479,9 @@ fn run_engine<S: Simulation>(
             // The watcher may continue the same trajectory to a later end.
             match observer.as_mut().and_then(|(_, obs)| obs.extend(duration)) {
                 Some(end) if end > duration => {
+                    if let Some(hook) = &ctx.on_extend {
+                        (hook.0)();
+                    }
                     duration = end;
                     last_obs = last_obs_of(duration, obs_dt);
                 }
