@@ -15,9 +15,7 @@
 use wetgran_core::observe::run_observed;
 use wetgran_core::scene::{EngineKind, Scene};
 
-#[path = "../crates/core/tests/common/standard.rs"]
-mod standard;
-use standard::{STANDARD_SEED, StandardWet, Transient};
+use wetgran_testkit::standard::{STANDARD_SEED, StandardWet, Transient};
 
 /// The scene of the point: the standard system builder of the tests, location changes off.
 fn base(
@@ -73,7 +71,7 @@ fn main() {
         } else {
             0.0
         };
-        let r = run_observed(&t, &mut |_| {});
+        let r = run_observed(&t, &Default::default(), &mut |_| {});
         let o = &r.observables;
         let p = &o.profiles;
         let mut dil = (0.0, 0.0, 0usize);

@@ -8,7 +8,12 @@ which is where this project keeps its unit tests). Run from the repository root.
 import os
 import sys
 
-CRATES = [("wetgran", "src"), ("wetgran-core", "crates/core/src"), ("wetgran-bench", "crates/bench/src")]
+CRATES = [
+    ("wetgran", "src"),
+    ("wetgran-core", "crates/core/src"),
+    ("wetgran-bench", "crates/bench/src"),
+    ("wetgran-testkit", "crates/testkit/src"),
+]
 
 
 def count(root):
@@ -38,7 +43,7 @@ def count(root):
 
 def main():
     total = {"files": 0, "all": 0, "code": 0, "comment": 0, "blank": 0, "test": 0}
-    print(f"{'crate':<14} {'files':>5} {'all':>7} {'code':>7} {'comment':>8} {'blank':>6} {'test':>6}")
+    print(f"{'crate':<16} {'files':>5} {'all':>7} {'code':>7} {'comment':>8} {'blank':>6} {'test':>6}")
     for crate, root in CRATES:
         if not os.path.isdir(root):
             sys.exit(f"{root} not found: run from the repository root")
@@ -47,9 +52,9 @@ def main():
         row = {"files": files, "all": lines, **tally}
         for key in total:
             total[key] += row[key]
-        print(f"{crate:<14} {files:>5} {lines:>7} {tally['code']:>7} {tally['comment']:>8} "
+        print(f"{crate:<16} {files:>5} {lines:>7} {tally['code']:>7} {tally['comment']:>8} "
               f"{tally['blank']:>6} {tally['test']:>6}")
-    print(f"{'total':<14} {total['files']:>5} {total['all']:>7} {total['code']:>7} "
+    print(f"{'total':<16} {total['files']:>5} {total['all']:>7} {total['code']:>7} "
           f"{total['comment']:>8} {total['blank']:>6} {total['test']:>6}")
 
 

@@ -1,16 +1,20 @@
 //! Crash torture (issue 17, docs/reliability.md "Crash torture"): `wetgran sweep run` / `sweep
 //! resume --extend` as child processes, killed with SIGKILL again and again at instants drawn
-//! from a seeded RNG (after a random delay, or at a pause point of `wetgran_core::test_pause`: inside
-//! the transaction that writes a result and its checkpoint, inside the replacement of an
-//! extended result, inside the transaction that adds a refinement round, at the start of a
-//! run-length window), resumed each time. After every kill the database passes SQLite's full
+//! from a seeded RNG (after a random delay, or at a pause point: inside the transaction that
+//! writes a result and its checkpoint, inside the replacement of an extended result, inside the
+//! transaction that adds a refinement round, at the start of a run-length window), resumed each
+//! time. After every kill the database passes SQLite's full
 //! integrity check and every row is whole and consistent (`store_inspect::snapshot`); at the end
 //! every job has exactly one result and the stored numbers equal, bit for bit, those of an
 //! uninterrupted run of the same sweep.
 //!
 //! In CI: one episode of five kills, one at each kind of instant (a few seconds). The full
 //! torture is opt-in: `cargo test --release --test crash_torture -- --ignored --nocapture`.
+//!
+//! The killed child is this test binary itself (its own harness, `harness = false`; the pause
+//! points and the child's environment are `paused_child`).
 
+mod paused_child;
 mod store_inspect;
 mod sweep_common;
 
@@ -18,13 +22,51 @@ use rand::{Rng, SeedableRng};
 use std::io::{BufRead, BufReader};
 use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
-use std::process::Stdio;
+use std::process::{ExitCode, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
+use paused_child::{MARKER, child, run_child};
 use store_inspect::{Snapshot, differences, integrity, snapshot};
 use sweep_common::*;
 use wetgran::store::{REFINED_FROM, Store};
-use wetgran_core::test_pause::{MARKER, PAUSE_AT_VAR, PAUSE_SECS_VAR};
+
+fn main() -> ExitCode {
+    if let Some(code) = run_child() {
+        return code;
+    }
+    let args = libtest_mimic::Arguments::from_args();
+    let trial = |name: &str, f: fn()| {
+        libtest_mimic::Trial::test(name, move || {
+            f();
+            Ok(())
+        })
+    };
+    let trials = vec![
+        trial(
+            "killed_at_each_kind_of_instant_the_sweep_resumes_to_the_uninterrupted_numbers",
+            killed_at_each_kind_of_instant_the_sweep_resumes_to_the_uninterrupted_numbers,
+        ),
+        trial(
+            "regression_a_kill_in_the_grid_leaves_the_labels_of_the_uninterrupted_run",
+            regression_a_kill_in_the_grid_leaves_the_labels_of_the_uninterrupted_run,
+        ),
+        trial(
+            "regression_labels_are_the_line_rules_after_refinement_and_extension",
+            regression_labels_are_the_line_rules_after_refinement_and_extension,
+        ),
+        trial(
+            "ctrl_c_during_an_extension_keeps_every_result_and_the_next_extend_finishes",
+            ctrl_c_during_an_extension_keeps_every_result_and_the_next_extend_finishes,
+        ),
+        // The full crash torture, ~1 min: `-- --ignored`.
+        trial(
+            "at_least_32_kills_20_after_random_delays_lose_and_change_nothing",
+            at_least_32_kills_20_after_random_delays_lose_and_change_nothing,
+        )
+        .with_ignored_flag(true),
+    ];
+    libtest_mimic::run(&args, trials).exit_code()
+}
 
 /// Periods of total run `sweep resume --extend` takes the unconverged jobs to.
 const EXTEND_TO: &str = "240";
@@ -89,7 +131,7 @@ fn stage(db: &Path) -> Stage {
 enum Kill {
     /// SIGKILL this long after the start.
     After(Duration),
-    /// SIGKILL at the `n`-th pass of a pause point (`WETGRAN_TEST_PAUSE_AT=point:n`).
+    /// SIGKILL at the `n`-th pass of a pause point (`paused_child::PAUSE_AT_VAR` `point:n`).
     At(&'static str, u64),
 }
 
@@ -132,16 +174,12 @@ fn reference(dir: &Path, file: &Path) -> Snapshot {
 /// Starts an attempt and kills it as `kill` says. `Some(stage)`: it was killed (the stage read
 /// after the kill); `None`: it ended by itself first (its exit status checked: success).
 fn attempt(args: &[String], kill: &Kill, db: &Path) -> Option<Stage> {
-    let mut cmd = wetgran();
-    cmd.args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .env_remove(PAUSE_AT_VAR)
-        .env_remove(PAUSE_SECS_VAR);
-    if let Kill::At(point, n) = kill {
-        cmd.env(PAUSE_AT_VAR, format!("{point}:{n}"))
-            .env(PAUSE_SECS_VAR, "60");
-    }
+    let pause = match kill {
+        Kill::At(point, n) => Some(format!("{point}:{n}")),
+        Kill::After(_) => None,
+    };
+    let mut cmd = child(pause.as_deref().map(|at| (at, "60")));
+    cmd.args(args).stdout(Stdio::null()).stderr(Stdio::piped());
     let t0 = Instant::now();
     let mut child = cmd.spawn().unwrap();
     let (tx, rx) = mpsc::channel::<String>();
@@ -291,7 +329,6 @@ fn summary(landed: &[Landed]) -> String {
 }
 
 /// CI: five kills, one at each kind of instant, in pipeline order.
-#[test]
 fn killed_at_each_kind_of_instant_the_sweep_resumes_to_the_uninterrupted_numbers() {
     let dir = tempfile::tempdir().unwrap();
     let file = sweep_file(dir.path());
@@ -327,7 +364,6 @@ fn killed_at_each_kind_of_instant_the_sweep_resumes_to_the_uninterrupted_numbers
 /// relabelled them; extended results kept their per-point labels until some later resume
 /// relabelled them. Now every run, refinement round and extension ends with the relabelling
 /// of the lines holding its new results (`run::relabel::relabel_changed`).
-#[test]
 fn regression_a_kill_in_the_grid_leaves_the_labels_of_the_uninterrupted_run() {
     let dir = tempfile::tempdir().unwrap();
     let file = sweep_file(dir.path());
@@ -342,7 +378,6 @@ fn regression_a_kill_in_the_grid_leaves_the_labels_of_the_uninterrupted_run() {
 /// The cause of the regression above, without kills: after `sweep run` (whose refinement rounds
 /// end it) and after `sweep resume --extend`, every stored label is already the line rule's, so
 /// `wetgran reclassify` (the same relabelling) changes no row.
-#[test]
 fn regression_labels_are_the_line_rules_after_refinement_and_extension() {
     let dir = tempfile::tempdir().unwrap();
     let file = sweep_file(dir.path());
@@ -363,13 +398,107 @@ fn regression_labels_are_the_line_rules_after_refinement_and_extension() {
     }
 }
 
+/// A wet 2D gas cooling without a drive (the standard `s_crit`, `E_cb`, eps 0.9), `duration`
+/// time units: `T_g` drifts down for the whole run.
+const COOLING: &str = "dimension = 2\n[box]\nsize = [30.0, 9.0]\n[particles]\ncount = 60\n\
+    polydispersity = 0.06\n[contact]\nrestitution = 0.9\n[capillary]\nmodel = \"thin_thread\"\n\
+    [initial]\ntemperature_over_ecb = 20.0\nseed = 2\n[run]\nduration = 4.0\n";
+
+/// The sweep `cool` of two cooling gases that never settle, capped at 8 periods, written to
+/// `dir` and run with one worker; returns its database.
+fn cool_sweep_run(dir: &Path) -> PathBuf {
+    write(dir, "cool.toml", COOLING);
+    let sweep = write(
+        dir,
+        "cool_sweep.toml",
+        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\n\
+         [convergence]\nmax_periods = 8.0\n\
+         [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 0.9]\n",
+    );
+    let db = dir.join("w.sqlite");
+    let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
+    let o = run(&["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    db
+}
+
+/// Ctrl-C while `sweep resume --extend` replaces a result (the `extend` pause point: the old
+/// result deleted, the new one not written): the process says how to resume and exits with
+/// 130, the extension committed before stays, the interrupted job keeps its old result, and the
+/// next `--extend` extends it.
+fn ctrl_c_during_an_extension_keeps_every_result_and_the_next_extend_finishes() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = cool_sweep_run(dir.path());
+    let db_s = db.to_str().unwrap();
+    let points = |db: &std::path::Path| {
+        let store = wetgran::store::Store::open_existing(db).unwrap();
+        let s = store.sweep("cool").unwrap();
+        assert_eq!(store_inspect::integrity(db), ["ok"]);
+        store.points(s.id).unwrap()
+    };
+    let before = points(&db);
+    assert!(before.iter().all(|p| p.simulated_time == Some(8.0)));
+
+    // One worker takes the jobs in grid order: the second replacement pauses.
+    let mut child = child(Some(("extend:2", "60")))
+        .args(["sweep", "resume", "cool", "--db", db_s, "--extend", "16"])
+        .args(["--jobs", "1"])
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut seen = String::new();
+    while !seen.contains(MARKER) {
+        let line = lines
+            .next()
+            .unwrap_or_else(|| panic!("the extension ended before its pause:\n{seen}"))
+            .unwrap();
+        seen += &line;
+        seen.push('\n');
+    }
+    let pid = child.id().to_string();
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let status = child.wait().unwrap();
+    let err = rest.join("\n");
+    assert_eq!(status.code(), Some(130), "{seen}{err}");
+    let hint = format!("wetgran sweep resume cool --db {db_s}");
+    assert!(err.contains(&hint), "no `{hint}` in:\n{seen}{err}");
+
+    let mid = points(&db);
+    let t: Vec<f64> = mid.iter().map(|p| p.simulated_time.unwrap()).collect();
+    assert!(
+        t[0] > 8.0 && t[0] <= 16.0 + 1e-9,
+        "the first extension is stored: {t:?}"
+    );
+    assert_eq!(
+        mid[1].simulated_time,
+        Some(8.0),
+        "the second job keeps its old result"
+    );
+    assert_eq!(mid[1].observables, before[1].observables);
+
+    let o = run(&["sweep", "resume", "cool", "--db", db_s, "--extend", "16"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let after = points(&db);
+    assert_eq!(after[0].observables, mid[0].observables, "{}", stderr(&o));
+    let t = after[1].simulated_time.unwrap();
+    assert!(
+        t > 8.0 && t <= 16.0 + 1e-9,
+        "the second job is extended now: {t}"
+    );
+}
+
 /// The full torture (opt-in): episodes of up to 10 kills (seeds 1, 2, ...) until at least 32
 /// kills landed, at least 20 of them after a random delay; each kill after a random delay of 0.05-1.5 s (half of them) or at a random
 /// pass of a random pause point (`pause_point_for`). An episode ends early when a `sweep
 /// resume --extend` ends by itself (its pause point was not reached, or its delay was past
 /// its end).
-#[test]
-#[ignore = "full crash torture, ~1 min: cargo test --release --test crash_torture -- --ignored"]
 fn at_least_32_kills_20_after_random_delays_lose_and_change_nothing() {
     let t0 = Instant::now();
     let dir = tempfile::tempdir().unwrap();

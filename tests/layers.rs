@@ -29,7 +29,7 @@ struct Layers {
 const CORE: Layers = Layers {
     crate_dir: "crates/core/src",
     layer: &[("physics", 0), ("scene", 1), ("sim", 2), ("observe", 3)],
-    leaves: &["test_pause"],
+    leaves: &[],
 };
 
 const APP: Layers = Layers {

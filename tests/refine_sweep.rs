@@ -133,6 +133,7 @@ fn sweep_run_refines_deterministically_and_an_interrupted_refinement_resumes() {
             retry_failed: false,
             show_progress: false,
             table_cache_mib: 256,
+            on_extend: None,
         };
         run_sweeps(&store, std::slice::from_ref(&row), &opts).unwrap();
         let section = sweep.refine.unwrap();

@@ -2,8 +2,7 @@
 //! every grain (and its periodic image at the seam) and every bridge, the profile plot has one
 //! panel per profile, and `wetgran simulate` writes them all.
 
-#[path = "../crates/core/tests/common/mod.rs"]
-mod common;
+use wetgran_testkit as common;
 
 use std::process::Command;
 use wetgran::report::{ColourBy, profiles_svg, snapshot_svg, snapshot_xyz};
@@ -88,7 +87,7 @@ fn profile_plot_and_cli_outputs() {
          [initial]\ntemperature_over_ecb = 20.0\nseed = 1\n[run]\nduration = 8.0\n\
          [observe]\ntransient_periods = 1.0\nlocation_changes = true\n";
     let s = common::scene(scene_text);
-    let (run, _) = run_observed_with_frame(&s, &mut |_| {});
+    let (run, _) = run_observed_with_frame(&s, &Default::default(), &mut |_| {});
     let svg = profiles_svg(&run.observables);
     // T_g, packing, n_cb, D_lat and f_lc panels: one frame and one curve each.
     assert_eq!(svg.matches("<rect x=").count(), 5);
@@ -157,7 +156,7 @@ fn three_dimensional_profiles_are_maps_over_the_plane() {
          [run]\nduration = 3.0\n[observe]\nbin_width = 2.0\ntransient_periods = 1.0\n\
          location_changes = false\nmobility_lag = 0.5\n",
     );
-    let (run, _) = run_observed_with_frame(&s, &mut |_| {});
+    let (run, _) = run_observed_with_frame(&s, &Default::default(), &mut |_| {});
     assert_eq!(run.observables.profiles.grid, Some((4, 4)));
     let svg = profiles_svg(&run.observables);
     assert!(svg.contains("lateral maps over (x, y)"), "{svg}");

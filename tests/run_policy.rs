@@ -2,8 +2,7 @@
 //! by window up to its cap and stores the verdict; its keys are validated; engines rebuilt from
 //! a saved state continue the run (event engine to round-off, time engine physically).
 
-#[path = "../crates/core/tests/common/mod.rs"]
-mod common;
+use wetgran_testkit as common;
 
 use wetgran_core::observe::trend::TrendState;
 use wetgran_core::observe::{Ending, run_observed, run_observed_from};
@@ -25,7 +24,7 @@ fn a_drifting_run_is_extended_on_one_trajectory_up_to_the_cap() {
     // No drive: one period is one time unit; no transient, so the window is the whole first
     // stretch, W = 8, and the cap 24 allows checks at 8, 16 and 24.
     let s = common::scene(&cooling(8.0, "[convergence]\nmax_periods = 24.0\n"));
-    let run = run_observed(&s, &mut |_| {});
+    let run = run_observed(&s, &Default::default(), &mut |_| {});
     let o = &run.observables;
     let c = o
         .convergence
@@ -73,7 +72,7 @@ fn a_stationary_elastic_gas_converges_at_the_first_check() {
          \"periodic\"]\n[particles]\ncount = 40\n[initial]\ntemperature = 1.0\nseed = 3\n\
          [run]\nduration = 2.0\n[convergence]\nmin_time = 4.0\nmax_periods = 20.0\n",
     );
-    let run = run_observed(&s, &mut |_| {});
+    let run = run_observed(&s, &Default::default(), &mut |_| {});
     let c = run.observables.convergence.as_ref().unwrap();
     assert!(c.converged, "{c:?}");
     assert_eq!(c.checks, 1);
@@ -89,7 +88,7 @@ fn a_stationary_elastic_gas_converges_at_the_first_check() {
 #[test]
 fn fixed_length_runs_store_no_convergence_and_keep_their_json() {
     let s = common::scene(&cooling(2.0, ""));
-    let run = run_observed(&s, &mut |_| {});
+    let run = run_observed(&s, &Default::default(), &mut |_| {});
     assert!(run.observables.convergence.is_none());
     let json = serde_json::to_string(&run.observables).unwrap();
     assert!(!json.contains("convergence"), "old layout unchanged");
@@ -243,7 +242,6 @@ impl wetgran_core::sim::Watcher for NoWatch {
 }
 
 mod store_inspect;
-#[path = "sweep_common/mod.rs"]
 mod sweep_common;
 
 /// The sweep `cool` of two cooling gases that never settle, capped at 8 periods, written to
@@ -469,82 +467,4 @@ fn hot_and_cold_starts_that_disagree_are_hysteretic() {
     );
     // The point is listed with the labels of each start.
     assert!(stdout(&o).contains("hot fgc, cold s"), "{}", stdout(&o));
-}
-
-/// Ctrl-C while `sweep resume --extend` replaces a result (the `extend` pause point: the old
-/// result deleted, the new one not written): the process says how to resume and exits with
-/// 130, the extension committed before stays, the interrupted job keeps its old result, and the
-/// next `--extend` extends it.
-#[test]
-fn ctrl_c_during_an_extension_keeps_every_result_and_the_next_extend_finishes() {
-    use std::io::{BufRead, BufReader};
-    use sweep_common::*;
-    use wetgran_core::test_pause::{MARKER, PAUSE_AT_VAR, PAUSE_SECS_VAR};
-    let dir = tempfile::tempdir().unwrap();
-    let db = cool_sweep_run(dir.path());
-    let db_s = db.to_str().unwrap();
-    let points = |db: &std::path::Path| {
-        let store = wetgran::store::Store::open_existing(db).unwrap();
-        let s = store.sweep("cool").unwrap();
-        assert_eq!(store_inspect::integrity(db), ["ok"]);
-        store.points(s.id).unwrap()
-    };
-    let before = points(&db);
-    assert!(before.iter().all(|p| p.simulated_time == Some(8.0)));
-
-    // One worker takes the jobs in grid order: the second replacement pauses.
-    let mut child = wetgran()
-        .args(["sweep", "resume", "cool", "--db", db_s, "--extend", "16"])
-        .args(["--jobs", "1"])
-        .env(PAUSE_AT_VAR, "extend:2")
-        .env(PAUSE_SECS_VAR, "60")
-        .stderr(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
-    let mut seen = String::new();
-    while !seen.contains(MARKER) {
-        let line = lines
-            .next()
-            .unwrap_or_else(|| panic!("the extension ended before its pause:\n{seen}"))
-            .unwrap();
-        seen += &line;
-        seen.push('\n');
-    }
-    let pid = child.id().to_string();
-    let kill = std::process::Command::new("kill")
-        .args(["-INT", &pid])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let rest: Vec<String> = lines.map_while(Result::ok).collect();
-    let status = child.wait().unwrap();
-    let err = rest.join("\n");
-    assert_eq!(status.code(), Some(130), "{seen}{err}");
-    let hint = format!("wetgran sweep resume cool --db {db_s}");
-    assert!(err.contains(&hint), "no `{hint}` in:\n{seen}{err}");
-
-    let mid = points(&db);
-    let t: Vec<f64> = mid.iter().map(|p| p.simulated_time.unwrap()).collect();
-    assert!(
-        t[0] > 8.0 && t[0] <= 16.0 + 1e-9,
-        "the first extension is stored: {t:?}"
-    );
-    assert_eq!(
-        mid[1].simulated_time,
-        Some(8.0),
-        "the second job keeps its old result"
-    );
-    assert_eq!(mid[1].observables, before[1].observables);
-
-    let o = run(&["sweep", "resume", "cool", "--db", db_s, "--extend", "16"]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let after = points(&db);
-    assert_eq!(after[0].observables, mid[0].observables, "{}", stderr(&o));
-    let t = after[1].simulated_time.unwrap();
-    assert!(
-        t > 8.0 && t <= 16.0 + 1e-9,
-        "the second job is extended now: {t}"
-    );
 }

@@ -6,13 +6,38 @@
 //! of a runner that was stopped are closed as `interrupted` by the next writer. Each test is a
 //! regression test of a hole the issue found on main `424f846`.
 
+mod paused_child;
 mod sweep_common;
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Output, Stdio};
+use paused_child::{MARKER, child, run_child};
+use std::process::{Child, ExitCode, Output, Stdio};
 use std::time::{Duration, Instant};
 use sweep_common::*;
+
+fn main() -> ExitCode {
+    if let Some(code) = run_child() {
+        return code;
+    }
+    let args = libtest_mimic::Arguments::from_args();
+    let trial = |name: &str, f: fn()| {
+        libtest_mimic::Trial::test(name, move || {
+            f();
+            Ok(())
+        })
+    };
+    let trials = vec![
+        trial("regression_truncated_and_malformed_databases_are_named_with_exit_status_2", regression_truncated_and_malformed_databases_are_named_with_exit_status_2),
+        trial("regression_a_newer_database_is_named_with_exit_status_2", regression_a_newer_database_is_named_with_exit_status_2),
+        trial("regression_paths_that_are_not_regular_files_are_refused_before_anything_opens_them", regression_paths_that_are_not_regular_files_are_refused_before_anything_opens_them),
+        trial("regression_a_copy_without_its_log_is_named_and_never_turned_into_an_empty_database", regression_a_copy_without_its_log_is_named_and_never_turned_into_an_empty_database),
+        trial("regression_viewers_never_migrate_and_upgrade_does", regression_viewers_never_migrate_and_upgrade_does),
+        trial("regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_log", regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_log),
+        trial("regression_run_rows_of_a_stopped_runner_are_closed_as_interrupted_by_the_next_writer", regression_run_rows_of_a_stopped_runner_are_closed_as_interrupted_by_the_next_writer),
+    ];
+    libtest_mimic::run(&args, trials).exit_code()
+}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -131,7 +156,6 @@ fn every_command_refuses(db: &Path, work: &Path, want: &str) {
 
 /// Regression: a truncated database exited 1 with "database error: (code: 11) ... malformed"
 /// instead of being named as damaged (exit 2); a malformed schema likewise.
-#[test]
 fn regression_truncated_and_malformed_databases_are_named_with_exit_status_2() {
     let dir = tempfile::tempdir().unwrap();
     let db = finished(dir.path());
@@ -150,7 +174,6 @@ fn regression_truncated_and_malformed_databases_are_named_with_exit_status_2() {
 }
 
 /// Regression: a database of a newer wetgran was "database error ... newer" with exit 1.
-#[test]
 fn regression_a_newer_database_is_named_with_exit_status_2() {
     let dir = tempfile::tempdir().unwrap();
     let db = finished(dir.path());
@@ -164,7 +187,6 @@ fn regression_a_newer_database_is_named_with_exit_status_2() {
 
 /// Regression: a FIFO as `--db` hung every command; `sweep run --db /dev/null` created
 /// `/dev/null-journal`; a folder was a "database error".
-#[test]
 fn regression_paths_that_are_not_regular_files_are_refused_before_anything_opens_them() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -208,10 +230,8 @@ fn regression_paths_that_are_not_regular_files_are_refused_before_anything_opens
 
 /// Starts `wetgran args` with a pause point, and waits for its marker on standard error.
 fn start_paused(args: &[&str], point: &str, secs: &str) -> Child {
-    let mut child = wetgran()
+    let mut child = child(Some((point, secs)))
         .args(args)
-        .env("WETGRAN_TEST_PAUSE_AT", point)
-        .env("WETGRAN_TEST_PAUSE_SECS", secs)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -221,7 +241,7 @@ fn start_paused(args: &[&str], point: &str, secs: &str) -> Child {
     loop {
         line.clear();
         assert!(err.read_line(&mut line).unwrap() > 0, "no pause at {point}");
-        if line.starts_with("wetgran-test-pause:") {
+        if line.starts_with(MARKER) {
             break;
         }
     }
@@ -233,7 +253,6 @@ fn start_paused(args: &[&str], point: &str, secs: &str) -> Child {
 /// Regression: the main file of a database copied without its `-wal` while a run wrote it was
 /// called "written by an older wetgran" (read-only), and a viewer migrated it in place into an
 /// empty database (writable).
-#[test]
 fn regression_a_copy_without_its_log_is_named_and_never_turned_into_an_empty_database() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -255,7 +274,6 @@ fn regression_a_copy_without_its_log_is_named_and_never_turned_into_an_empty_dat
 /// Regression: a viewer (`sweep status`, `boundaries`, ...) migrated a database of an older
 /// wetgran in place where it could write it. It is refused now with the command that upgrades
 /// it, and `wetgran upgrade` does.
-#[test]
 fn regression_viewers_never_migrate_and_upgrade_does() {
     let dir = tempfile::tempdir().unwrap();
     let db = dir.path().join("old.sqlite");
@@ -300,16 +318,13 @@ fn regression_viewers_never_migrate_and_upgrade_does() {
 /// Regression: Ctrl-C while a large grid registered printed a `sweep resume` hint for a sweep
 /// that was never stored and left the rolled-back transaction's pages in a large `-wal`
 /// (705 MB at 10^6 points), after an expansion that showed no progress.
-#[test]
 fn regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_log() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let sweep = sweep_file(d, "big", 12_000, 2.0);
     let db = d.join("w.sqlite");
-    let mut child = wetgran()
+    let mut child = child(Some(("register:2", "3")))
         .args(["sweep", "run", s(&sweep), "--db", s(&db), "--jobs", "1"])
-        .env("WETGRAN_TEST_PAUSE_AT", "register:2")
-        .env("WETGRAN_TEST_PAUSE_SECS", "3")
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -317,7 +332,7 @@ fn regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_l
     let mut err = BufReader::new(child.stderr.take().unwrap());
     let (mut text, mut line) = (String::new(), String::new());
     while err.read_line(&mut line).unwrap() > 0 {
-        if line.starts_with("wetgran-test-pause:") {
+        if line.starts_with(MARKER) {
             // 2000 jobs inserted, not committed (the log holds the schema's commits): Ctrl-C.
             assert!(std::fs::metadata(d.join("w.sqlite-wal")).unwrap().len() > 0);
             let kill = std::process::Command::new("kill")
@@ -357,7 +372,6 @@ fn run_outcomes(db: &Path) -> String {
 /// (no outcome) until a resume re-queued those jobs, and a viewer showed them as running
 /// attempts. The next writer (here `reclassify`) closes them as `interrupted`; a viewer
 /// changes nothing; a resume runs the job again with a new row.
-#[test]
 fn regression_run_rows_of_a_stopped_runner_are_closed_as_interrupted_by_the_next_writer() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -131,9 +131,10 @@ fn point(k: usize, scene: Scene, obs: Value) -> PointRow {
 
 #[test]
 fn lines_of_constant_gamma_decide_fluid_versus_gas() {
-    let template =
-        serde_json::to_value(run_observed(&scene(30.0, 1.0, 1.0, 1), &mut |_| {}).observables)
-            .unwrap();
+    let template = serde_json::to_value(
+        run_observed(&scene(30.0, 1.0, 1.0, 1), &Default::default(), &mut |_| {}).observables,
+    )
+    .unwrap();
     let mut rows = Vec::new();
     // Elastic line at Gamma = 30: T jumps thirty-fold between E* = 1 and 1.5 (errors of 1 %
     // stored). The per-point fallback (gas above T = 2) would call E* = 1 (T = 2.5) a gas.
@@ -341,9 +342,10 @@ fn stored_labels(store: &wetgran::store::Store, row: &wetgran::store::SweepRow) 
 #[test]
 fn relabelling_only_the_changed_lines_equals_relabelling_everything() {
     use wetgran::run::relabel::{relabel_changed, relabel_stored};
-    let template =
-        serde_json::to_value(run_observed(&scene(30.0, 1.0, 1.0, 1), &mut |_| {}).observables)
-            .unwrap();
+    let template = serde_json::to_value(
+        run_observed(&scene(30.0, 1.0, 1.0, 1), &Default::default(), &mut |_| {}).observables,
+    )
+    .unwrap();
     let dir = tempfile::tempdir().unwrap();
 
     // All results at once, then one relabelling of what changed.

@@ -37,6 +37,7 @@ fn a_table_solver_sweep_over_many_drives_stays_under_the_cache_cap() {
             retry_failed: false,
             show_progress: false,
             table_cache_mib: cap_mib,
+            on_extend: None,
         },
     )
     .unwrap();

@@ -35,7 +35,7 @@ fn outcomes(scenes: &[Scene]) -> Vec<(Phase, TrendState, Option<Ending>, f64)> {
     scenes
         .par_iter()
         .map(|s| {
-            let run = run_observed(s, &mut |_| {});
+            let run = run_observed(s, &Default::default(), &mut |_| {});
             let o = &run.observables;
             (
                 run.classification.phase,

@@ -17,7 +17,6 @@ use crate::terminal::{escape, escape_lines};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use wetgran_core::sim::RunSettings;
 
 #[derive(Debug, clap::Args)]
 pub struct SubmitArgs {
@@ -437,7 +436,7 @@ pub(super) fn job_run(spec_path: &Path, out: Option<&Path>) -> ExitCode {
         }
         Ok(spec) => {
             let id = spec.id();
-            match run_job(&spec, &RunSettings::default(), &mut |_| {}) {
+            match run_job(&spec, &super::common::all_cores(), &mut |_| {}) {
                 Ok(r) => (record(&id, Outcome::Done(r)), 0),
                 Err(e) => {
                     eprintln!("error: job {id} failed: {}", escape_lines(&e.to_string()));

@@ -49,8 +49,13 @@ impl Workers {
     /// The options of a local run: `--jobs` workers (by default the available cores; in
     /// `[1, available cores]` unless `--oversubscribe`), progress shown, failed jobs left as
     /// they are, the wall-table cache at its default cap (no shipped sweep selects the `table`
-    /// wall solver).
+    /// wall solver), no hook.
     pub(super) fn options(&self) -> Result<RunOptions, Failure> {
+        self.options_with(&super::Hooks::default())
+    }
+
+    /// [`Self::options`] with the extension hook of `hooks`.
+    pub(super) fn options_with(&self, hooks: &super::Hooks) -> Result<RunOptions, Failure> {
         let cores = available_cores();
         let jobs = match self.jobs {
             None => cores,
@@ -73,6 +78,7 @@ impl Workers {
             retry_failed: false,
             show_progress: true,
             table_cache_mib: DEFAULT_TABLE_CACHE_MIB,
+            on_extend: hooks.extend.clone(),
         })
     }
 }
@@ -118,6 +124,13 @@ pub(super) fn exit(r: Result<(), Failure>) -> ExitCode {
     };
     eprintln!("error: {}", escape_lines(&m));
     ExitCode::from(code)
+}
+
+/// The context of a run on its own (`simulate`, `job run`): every core the process may use
+/// (`sim::threads::available_cores`, `WETGRAN_THREADS`), no hook.
+pub(super) fn all_cores() -> wetgran_core::sim::RunSettings {
+    use wetgran_core::sim::threads::{Threads, available_cores};
+    wetgran_core::sim::RunSettings::on(Threads::new(available_cores()))
 }
 
 /// The cores this process may use (`std::thread::available_parallelism`, 1 if unknown).

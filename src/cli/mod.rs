@@ -1,6 +1,8 @@
 //! The command line: `wetgran simulate` and the sweep commands (`sweep`, `boundaries`, `plot`,
-//! `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`]. The benchmarks and the stress
-//! cases are the binary of the crate `wetgran-bench`.
+//! `export`; see `sweep_cmd`). `src/main.rs` only calls [`main`]; [`main_with`] is the same
+//! command line with [`Hooks`] of the caller's (a program that embeds it: the crash tests stop
+//! their child process at the hooks' points). The benchmarks and the stress cases are the
+//! binary of the crate `wetgran-bench`.
 
 mod cluster_cmd;
 mod common;
@@ -19,6 +21,16 @@ use sweep_cmd::SweepCommand;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use wetgran_core::sim::ExtendHook;
+
+/// Functions the command line calls at points of `sweep run` and `sweep resume`: `write` inside
+/// the store's write transactions (`store::WritePoint`), `extend` each time a job's run-length
+/// policy extends its run by a window.
+#[derive(Debug, Clone, Default)]
+pub struct Hooks {
+    pub write: Option<crate::store::WriteHook>,
+    pub extend: Option<ExtendHook>,
+}
 
 /// Phase diagrams of wet granular matter.
 #[derive(Debug, Parser)]
@@ -133,6 +145,11 @@ pub enum JobCommand {
 
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
+    main_with(&Hooks::default())
+}
+
+/// The command line with `hooks` (module doc).
+pub fn main_with(hooks: &Hooks) -> ExitCode {
     let matches = Cli::command().get_matches();
     // Every `--db` of the command is checked before anything else (`folder_of_database`);
     // `sweep run` and `sweep submit` may create theirs (`job run` has no `--db`).
@@ -158,8 +175,8 @@ pub fn main() -> ExitCode {
             action: JobCommand::Run { spec, out },
         } => return cluster_cmd::job_run(&spec, out.as_deref()),
         Command::Sweep { action } => match action {
-            SweepCommand::Run(a) => sweep_cmd::sweep_run(a),
-            SweepCommand::Resume(a) => sweep_cmd::sweep_resume(a),
+            SweepCommand::Run(a) => sweep_cmd::sweep_run(a, hooks),
+            SweepCommand::Resume(a) => sweep_cmd::sweep_resume(a, hooks),
             SweepCommand::Status { db, json } => sweep_cmd::sweep_status(&db, json),
             SweepCommand::Expand { file, specs } => sweep_cmd::sweep_expand(&file, specs),
             SweepCommand::Job { spec } => sweep_cmd::sweep_job(&spec),

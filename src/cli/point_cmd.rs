@@ -133,7 +133,8 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     if !snapshot.is_empty() {
         // The stored spec runs the job again; same spec and seed, same numbers, so the
         // re-run is the stored run, which the event count confirms.
-        let (run, frame) = run_observed_with_frame(&p.spec.scene, &mut |_| {});
+        let (run, frame) =
+            run_observed_with_frame(&p.spec.scene, &super::common::all_cores(), &mut |_| {});
         let events = run.report.events_total;
         let line = match p.events {
             Some(stored) if stored as u64 == events => {

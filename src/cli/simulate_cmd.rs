@@ -60,9 +60,10 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         outputs.claim("--profiles", p)?;
     }
     let scene = load_scene(&args.scene)?;
+    let ctx = super::common::all_cores();
     let (run, frame) = if std::io::stderr().is_terminal() {
         let duration = scene.run.duration;
-        let out = run_observed_with_frame(&scene, &mut |f| {
+        let out = run_observed_with_frame(&scene, &ctx, &mut |f| {
             eprint!(
                 "\r  t = {:.3} / {duration}  ({:.0}%)   ",
                 f * duration,
@@ -72,7 +73,7 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         eprintln!();
         out
     } else {
-        run_observed_with_frame(&scene, &mut |_| {})
+        run_observed_with_frame(&scene, &ctx, &mut |_| {})
     };
     if args.json {
         print_json(&run);

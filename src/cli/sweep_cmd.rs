@@ -190,13 +190,13 @@ pub enum BoundaryFormat {
     Csv,
 }
 
-pub(super) fn sweep_run(a: RunArgs) -> Result<(), Failure> {
-    let (opts, db) = (a.workers.options()?, &a.db);
+pub(super) fn sweep_run(a: RunArgs, hooks: &super::Hooks) -> Result<(), Failure> {
+    let (opts, db) = (a.workers.options_with(hooks)?, &a.db);
     // The file is checked in full before the database is touched.
     let (sweep, expanded, left_out) = load_sweep(&a.file)?;
     // A local run commits without a sync per transaction (docs/reliability.md, "Commits without
     // a sync"): everything it writes can be made again from the sweep file.
-    let store = Store::open_as(db, true, Durability::Fast)?;
+    let store = Store::open_as(db, true, Durability::Fast)?.with_write_hook(hooks.write.clone());
     if let Ok(old) = store.sweep(&sweep.name) {
         check_regrid(&store, &old, &sweep, &expanded, a.replace)?;
     }
@@ -237,13 +237,13 @@ fn fail_if_jobs_failed(store: &Store, sweeps: &[SweepRow]) -> Result<(), Failure
     )))
 }
 
-pub(super) fn sweep_resume(a: ResumeArgs) -> Result<(), Failure> {
-    let (opts, db) = (a.workers.options()?, &a.db);
+pub(super) fn sweep_resume(a: ResumeArgs, hooks: &super::Hooks) -> Result<(), Failure> {
+    let (opts, db) = (a.workers.options_with(hooks)?, &a.db);
     let extend = a
         .extend
         .map(ExtendTo::Periods)
         .or(a.extend_time.map(ExtendTo::Time));
-    let store = Store::open_as(db, false, Durability::Fast)?;
+    let store = Store::open_as(db, false, Durability::Fast)?.with_write_hook(hooks.write.clone());
     super::interrupt::resume_hint_on_interrupt(a.name.as_deref(), db);
     let sweeps = select(&store, a.name.as_deref())?;
     if sweeps.is_empty() {
@@ -282,7 +282,7 @@ fn extend_and_report(
             "{flag} = {v} is out of range: must be a finite number of {unit} > 0"
         )));
     }
-    let s = extend_unconverged(store, sweeps, cap, opts.jobs, opts.table_cache_mib, true)?;
+    let s = extend_unconverged(store, sweeps, cap, opts)?;
     eprint!(
         "{}",
         escape_lines(&extended_text(
@@ -461,7 +461,7 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
             continue;
         }
         let spec = sample_spec(&sweep, &jobs[k], settle, periods);
-        match time_sample(&spec, settle) {
+        match time_sample(&spec, settle, &super::common::all_cores()) {
             Ok(r) => {
                 let rate = r.seconds_per_time;
                 rates.push(RateSample {
@@ -499,12 +499,8 @@ pub(super) fn sweep_estimate(a: EstimateArgs) -> Result<(), Failure> {
 
 pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
     let spec = read_spec(path)?;
-    let result = run_job(
-        &spec,
-        &wetgran_core::sim::RunSettings::default(),
-        &mut |_| {},
-    )
-    .map_err(|e| Failure::Other(e.to_string()))?;
+    let result = run_job(&spec, &super::common::all_cores(), &mut |_| {})
+        .map_err(|e| Failure::Other(e.to_string()))?;
     let out = serde_json::json!({ "id": spec.id(), "result": result });
     print_json(&out);
     Ok(())

@@ -46,16 +46,15 @@ struct ExtendQueue<'a> {
 }
 
 /// Extends every unconverged finished job of `sweeps` that has a checkpoint to at most `cap` of
-/// total run, on `workers` worker threads sharing a wall-table cache of `table_cache_mib` MiB;
-/// `show_progress` as for [`super::RunOptions`].
+/// total run, with the workers, wall-table cache, hook and progress of `opts` (its
+/// `retry_failed` does not apply).
 pub fn extend_unconverged(
     store: &Store,
     sweeps: &[SweepRow],
     cap: ExtendTo,
-    workers: usize,
-    table_cache_mib: usize,
-    show_progress: bool,
+    opts: &super::RunOptions,
 ) -> Result<ExtendSummary, StoreError> {
+    let (workers, show_progress) = (opts.jobs, opts.show_progress);
     let mut todo = Vec::new();
     let mut seen = std::collections::BTreeSet::new();
     for (k, s) in sweeps.iter().enumerate() {
@@ -94,7 +93,8 @@ pub fn extend_unconverged(
         store,
         &mut queue,
         workers,
-        table_cache_mib,
+        opts.table_cache_mib,
+        opts.on_extend.clone(),
         &mut progress,
         work,
     )?;

@@ -13,21 +13,18 @@
 //! [`RunSettings`] and dropped with the run, so a sweep over many drives keeps at most the cap
 //! in cached tables (plus the two tables each running job holds).
 //!
-//! The pool also shares the machine's cores among its jobs ([`CoreShare`], `sim::threads`):
-//! each worker enters the run's share, and the pool tells it how many workers are busy and
-//! whether the queue is empty. While jobs wait, each job gets `cores / workers` threads; once
-//! the queue is empty, the jobs still running get the idle workers' cores (the time-driven
-//! engine's steps are parallel, with the same numbers on any number of threads), so the tail
-//! of a run does not leave cores idle.
+//! The pool also shares the machine's cores among its jobs: each job runs in a [`RunSettings`]
+//! whose [`Threads`] are its share, `cores / workers` (at least one; `sim::threads`), and whose
+//! hook is the run's (`on_extend`).
 
 use super::progress::Progress;
 use crate::store::{HEARTBEAT_INTERVAL, Store, StoreError};
 use std::sync::{Arc, mpsc};
 use std::thread;
 use std::time::{Duration, Instant};
-use wetgran_core::sim::RunSettings;
 use wetgran_core::sim::event_driven::table_cache::TableCache;
-use wetgran_core::sim::threads::{self, CoreShare};
+use wetgran_core::sim::threads::{self, Threads};
+use wetgran_core::sim::{ExtendHook, RunSettings};
 
 /// What a run claims and how it stores what its workers return.
 pub(crate) trait Queue {
@@ -72,37 +69,39 @@ enum Msg<J, O> {
     Finished(usize, Box<J>, O, f64),
 }
 
-/// Runs the jobs of `queue` on `n_workers` threads until it has none left and none is running.
+/// Runs the jobs of `queue` on `n_workers` threads until it has none left and none is running;
+/// `on_extend` is every job's hook (`RunSettings::on_extend`).
 pub(crate) fn run_queue<Q: Queue>(
     store: &Store,
     queue: &mut Q,
     n_workers: usize,
     table_cache_mib: usize,
+    on_extend: Option<ExtendHook>,
     progress: &mut Progress,
     work: Work<Q>,
 ) -> Result<TableStats, StoreError> {
     let n_workers = n_workers.max(1);
     let (msg_tx, msg_rx) = mpsc::channel::<Msg<Q::Job, Q::Outcome>>();
     let tables = TableCache::with_cap_mib(table_cache_mib);
-    let settings = RunSettings::new(tables.clone());
-    let cores = CoreShare::new(threads::available_cores(), n_workers);
-    let (job_tx, handles) = spawn_workers::<Q>(n_workers, &msg_tx, &settings, &cores, &work);
+    let settings = RunSettings {
+        threads: Threads::new(threads::available_cores() / n_workers),
+        on_extend,
+        ..RunSettings::new(tables.clone())
+    };
+    let (job_tx, handles) = spawn_workers::<Q>(n_workers, &msg_tx, &settings, &work);
     drop(msg_tx);
 
     let mut idle: Vec<usize> = (0..n_workers).rev().collect();
     let mut busy = 0usize;
-    // Whether the last claim found the queue empty (a continuation job may become claimable
-    // later, when its predecessor ends).
-    let mut drained = false;
     let mut last_beat = Instant::now();
     let outcome = (|| -> Result<(), StoreError> {
         loop {
             while let Some(&w) = idle.last() {
+                // None: nothing claimable now (a continuation job may become claimable when
+                // its predecessor ends).
                 let Some((job, label)) = queue.claim(store, progress)? else {
-                    drained = true;
                     break;
                 };
-                drained = false;
                 idle.pop();
                 progress.start(w, &label);
                 job_tx[w].send(job).expect("worker alive");
@@ -111,7 +110,6 @@ pub(crate) fn run_queue<Q: Queue>(
             if busy == 0 {
                 return Ok(());
             }
-            cores.set(busy, drained);
             let wait = HEARTBEAT_INTERVAL.saturating_sub(last_beat.elapsed());
             match msg_rx.recv_timeout(wait.max(Duration::from_millis(10))) {
                 Ok(Msg::Progress(w, f)) => progress.update(w, f),
@@ -152,13 +150,12 @@ pub(crate) fn run_queue<Q: Queue>(
 /// Handles of the workers and the channels that hand each its jobs.
 type Workers<J> = (Vec<mpsc::Sender<J>>, Vec<thread::JoinHandle<()>>);
 
-/// Starts `n_workers` worker threads, each running its jobs with `settings` (the run's table
-/// cache) in its share of `cores`.
+/// Starts `n_workers` worker threads, each running its jobs with settings like `settings` (the
+/// run's table cache and hook) on threads of its own.
 fn spawn_workers<Q: Queue>(
     n_workers: usize,
     msg_tx: &mpsc::Sender<Msg<Q::Job, Q::Outcome>>,
     settings: &RunSettings,
-    cores: &Arc<CoreShare>,
     work: &Work<Q>,
 ) -> Workers<Q::Job> {
     let mut job_tx = Vec::new();
@@ -167,16 +164,15 @@ fn spawn_workers<Q: Queue>(
         let (tx, rx) = mpsc::channel::<Q::Job>();
         job_tx.push(tx);
         let out = msg_tx.clone();
-        let settings = settings.clone();
-        let cores = cores.clone();
+        let settings = RunSettings {
+            threads: Threads::new(settings.threads.count()),
+            ..settings.clone()
+        };
         let work = work.clone();
         handles.push(
             thread::Builder::new()
                 .name(format!("wetgran-worker-{w}"))
-                .spawn(move || {
-                    let _cores = threads::enter(&cores, w);
-                    worker::<Q>(w, rx, out, &settings, work)
-                })
+                .spawn(move || worker::<Q>(w, rx, out, &settings, work))
                 .expect("spawn a worker thread"),
         );
     }

@@ -8,7 +8,7 @@ use crate::store::{Claim, Store, StoreError, SweepRow};
 use crate::sweep::job::{JobError, JobResult, run_job, run_job_from};
 use std::sync::Arc;
 use std::time::Instant;
-use wetgran_core::sim::RunSettings;
+use wetgran_core::sim::{ExtendHook, RunSettings};
 
 /// How to run.
 #[derive(Debug, Clone)]
@@ -22,6 +22,9 @@ pub struct RunOptions {
     /// Cap of the run's wall-table cache in MiB (least recently used tables out first;
     /// default `table_cache::DEFAULT_TABLE_CACHE_MIB`; 0: no caching, each job builds its own).
     pub table_cache_mib: usize,
+    /// Called in a job's run each time the run-length policy extends it by a window
+    /// (`RunSettings::on_extend`).
+    pub on_extend: Option<ExtendHook>,
 }
 
 /// What a run did.
@@ -164,6 +167,7 @@ pub fn run_sweeps_with(
         &mut queue,
         n_workers,
         opts.table_cache_mib,
+        opts.on_extend.clone(),
         &mut progress,
         job,
     )?;

@@ -88,7 +88,7 @@ impl Store {
                 .exec(tx, self)
                 .await?;
         }
-        wetgran_core::test_pause::pause_at("checkpoint");
+        self.reached(super::WritePoint::Checkpoint);
         Ok(())
     }
 
@@ -102,7 +102,7 @@ impl Store {
                 .bind(job_id)
                 .exec(tx, self)
                 .await?;
-            wetgran_core::test_pause::pause_at("extend");
+            self.reached(super::WritePoint::Extend);
             self.insert_result(tx, job_id, result, &owner, t).await?;
             sqlx::query(queries::EXTEND_JOB_TIMES)
                 .bind(job_id)

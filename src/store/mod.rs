@@ -40,6 +40,7 @@
 mod claim_queue_tests;
 mod claims;
 mod cluster;
+mod hooks;
 pub mod hysteresis;
 mod open;
 mod queries;
@@ -53,6 +54,7 @@ mod stale;
 mod summary;
 
 pub use cluster::{TaskRow, TaskState};
+pub use hooks::{WriteHook, WritePoint};
 pub use read_only::{ReadAccess, read_access};
 pub use relabel_queue::PointSpec;
 pub use stale::{RunningJob, Stale};
@@ -335,6 +337,8 @@ pub struct Store {
     pool: SqlitePool,
     path: PathBuf,
     owner: String,
+    /// Called inside the write transactions (`hooks`).
+    write_hook: Option<WriteHook>,
 }
 
 /// How long a statement waits for another process's lock: [`BUSY_TIMEOUT_VAR`] seconds when

@@ -269,6 +269,7 @@ impl Store {
             pool,
             path: path.to_path_buf(),
             owner: new_owner(),
+            write_hook: None,
         })
     }
 

@@ -94,7 +94,7 @@ impl Store {
                 .await?;
             for (k, chunk) in jobs.chunks(REGISTER_STEP).enumerate() {
                 self.insert_points(tx, id, chunk, t).await?;
-                wetgran_core::test_pause::pause_at("register");
+                self.reached(super::WritePoint::Register);
                 if !watch(k * REGISTER_STEP + chunk.len()) {
                     return Err(StoreError::Interrupted {
                         path: self.path.display().to_string(),
@@ -171,7 +171,7 @@ impl Store {
                 .bind(t)
                 .exec(tx, self)
                 .await?;
-            wetgran_core::test_pause::pause_at("refine");
+            self.reached(super::WritePoint::Refine);
             Ok(())
         })
     }

@@ -365,13 +365,16 @@ pub struct SampledRate {
 }
 
 /// Runs a sample spec (from [`sample_spec`]) and times it from the first progress report past
-/// `settle` time units to its end.
-pub fn time_sample(spec: &JobSpec, settle: f64) -> Result<SampledRate, JobError> {
+/// `settle` time units to its end, with `settings` (the threads it runs on).
+pub fn time_sample(
+    spec: &JobSpec,
+    settle: f64,
+    settings: &wetgran_core::sim::RunSettings,
+) -> Result<SampledRate, JobError> {
     let settled = settle / spec.scene.run.duration;
     let mut mark: Option<(Instant, f64)> = None;
     let t0 = Instant::now();
-    let settings = wetgran_core::sim::RunSettings::default();
-    let outcome = run_job(spec, &settings, &mut |f| {
+    let outcome = run_job(spec, settings, &mut |f| {
         if mark.is_none() && f >= settled {
             mark = Some((Instant::now(), f));
         }

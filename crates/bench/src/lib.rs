@@ -9,7 +9,7 @@
 //! and the events per unit of simulated time.
 //!
 //! The reference systems (a) 3D bulk, (b) 3D gravity, (c) 2D standard wet and (c') the same
-//! dry are those of [`wetgran_core::scene::reference`].
+//! dry are those of [`wetgran_testkit::reference`].
 
 pub(crate) mod barrier;
 pub(crate) mod engines;
@@ -28,9 +28,9 @@ pub(crate) mod wall;
 use std::fmt::Write as _;
 use std::hint::black_box;
 use std::time::Instant;
-use wetgran_core::scene::reference::{system_a, system_b, system_c, system_c_dry};
 use wetgran_core::scene::{Scene, lattice};
 use wetgran_core::sim::event_driven::Engine;
+use wetgran_testkit::reference::{system_a, system_b, system_c, system_c_dry};
 
 /// Fewest events timed per repetition, whatever `scale` says (keeps tiny scales meaningful).
 const MIN_EVENTS: u64 = 5_000;

@@ -17,8 +17,8 @@
 
 use std::fmt::Write as _;
 use wetgran_core::scene::Boundary;
-use wetgran_core::scene::reference::base_scene;
 use wetgran_core::sim::event_driven::Engine;
+use wetgran_testkit::reference::base_scene;
 
 /// Sizes measured at `scale = 1`.
 pub(crate) const SIZES: [usize; 2] = [125_000, 1_000_000];

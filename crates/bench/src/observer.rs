@@ -17,9 +17,9 @@ use std::fmt::Write as _;
 use std::time::Instant;
 use wetgran_core::observe::ObserverSet;
 use wetgran_core::observe::location_changes::{LocationChangeCounter, Method};
-use wetgran_core::scene::reference::shaken_standard;
 use wetgran_core::scene::{CapillaryModel, CapillarySpec, Scene, WallSolverKind};
 use wetgran_core::sim::{Frame, RunSettings, run_scene_observed};
+use wetgran_testkit::reference::shaken_standard;
 
 /// Samples per driving period (the default of `[observe]`).
 pub(crate) const SAMPLES_PER_PERIOD: f64 = 20.0;

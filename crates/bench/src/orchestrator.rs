@@ -165,6 +165,7 @@ pub(crate) fn run_options(workers: usize) -> RunOptions {
         retry_failed: false,
         show_progress: false,
         table_cache_mib: 0,
+        on_extend: None,
     }
 }
 

@@ -9,8 +9,8 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 use wetgran_core::scene::WallSolverKind;
-use wetgran_core::scene::reference::shaken_standard;
 use wetgran_core::sim::event_driven::Engine;
+use wetgran_testkit::reference::shaken_standard;
 
 /// One (point, solver) run.
 #[derive(Debug, Clone, PartialEq)]

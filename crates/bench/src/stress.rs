@@ -6,7 +6,7 @@
 //! wall hits, Gamma = 1000 with a tiny amplitude, a wall speed of 50 `sqrt(g d)`, a packing near
 //! jamming, the shear drive's quartic pair predictions near double roots, and the time-driven
 //! engine at the largest time step validation admits. [`run_case`] builds the case's scene (on
-//! `wetgran_core::scene::reference`), runs it in [`CHECKS`] chunks and after every chunk
+//! `wetgran_testkit::reference`), runs it in [`CHECKS`] chunks and after every chunk
 //!
 //! - runs the engine's own `sanity_check` (finite states, inside the box, no overlap beyond the
 //!   tolerance, no over-stretched bond, no event in the past, ...): the first violation stops
@@ -28,7 +28,6 @@
 use serde::Serialize;
 use std::time::Instant;
 use wetgran_core::scene::Boundary::{self, Periodic, Wall};
-use wetgran_core::scene::reference::{base_scene, shaken_standard};
 use wetgran_core::scene::{
     CapillaryModel, CapillarySpec, DriveKind, EngineKind, Scene, StartMode, WallSolverKind,
 };
@@ -36,6 +35,7 @@ use wetgran_core::sim::EnergyLedger;
 use wetgran_core::sim::event_driven::table_cache::{DEFAULT_TABLE_CACHE_MIB, TableCache};
 use wetgran_core::sim::event_driven::{Engine, Vector};
 use wetgran_core::sim::{EngineVisitor, Frame, Simulation, with_engine};
+use wetgran_testkit::reference::{base_scene, shaken_standard};
 
 /// Events (or time steps) per case by default.
 pub const DEFAULT_EVENTS: u64 = 10_000_000;
@@ -366,6 +366,25 @@ impl EngineVisitor for CheckedRun<'_> {
     }
 }
 
+/// The engine's units of work done so far: time steps (time engine) or events.
+fn work_done<S: Simulation>(e: &S) -> u64 {
+    match S::KIND {
+        "time" => e.steps(),
+        _ => e.counts().total(),
+    }
+}
+
+/// Does `n` more units of work, whatever simulated time they take (`dt`: the time engine's
+/// step); false when the engine has nothing left to do (an event engine with no event pending).
+fn advance_work<S: Simulation>(e: &mut S, n: u64, dt: f64) -> bool {
+    let before = work_done(e);
+    match S::KIND {
+        "time" => e.run_until((before + n) as f64 * dt, None),
+        _ => e.run_until(f64::INFINITY, Some(before.saturating_add(n))),
+    };
+    work_done(e) > before || n == 0
+}
+
 /// Runs `events` units of work in `checks` chunks, checking the invariants after each.
 fn checked_run<S: Simulation>(
     mut e: S,
@@ -374,13 +393,14 @@ fn checked_run<S: Simulation>(
     checks_wanted: u64,
 ) -> Measured {
     let chunk = events.div_ceil(checks_wanted.max(1)).max(1);
+    let dt = scene.time_step();
     let a0 = e.energy();
-    let w0 = e.work_done();
+    let w0 = work_done(&e);
     let (mut max_overlap, mut nan_count, mut checks) = (0.0f64, 0u64, 0u64);
     let (mut violation, mut exhausted) = (None, false);
-    while e.work_done() - w0 < events {
-        let n = chunk.min(events - (e.work_done() - w0));
-        let moved = e.advance_work(n);
+    while work_done(&e) - w0 < events {
+        let n = chunk.min(events - (work_done(&e) - w0));
+        let moved = advance_work(&mut e, n, dt);
         checks += 1;
         let frame = e.frame(scene);
         nan_count += non_finite(&frame, &e.energy());
@@ -398,7 +418,7 @@ fn checked_run<S: Simulation>(
         }
     }
     Measured {
-        work: e.work_done() - w0,
+        work: work_done(&e) - w0,
         simulated_time: e.time(),
         max_overlap,
         ledger_error: ledger_error(&a0, &e.energy()),

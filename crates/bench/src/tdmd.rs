@@ -22,8 +22,8 @@ use crate::{Spread, median};
 use std::fmt::Write as _;
 use std::time::Instant;
 use wetgran_core::scene::DEFAULT_STIFFNESS;
-use wetgran_core::scene::reference::dry_shaken_time_driven_widened;
-use wetgran_core::sim::time_driven::{DOMAIN_MIN_PARTICLES, Execution, TimeEngine};
+use wetgran_core::sim::time_driven::TimeEngine;
+use wetgran_testkit::reference::dry_shaken_time_driven_widened;
 
 /// Wall seconds per simulated time unit of the C++ reference code (issue 6).
 pub(crate) const BASELINE_SECONDS_PER_TIME_UNIT: f64 = 0.38;
@@ -91,27 +91,10 @@ pub(crate) fn measure_threads(
         })
         .collect();
     let mut rows = Vec::new();
-    // `gear5` runs its default path (for N = 1200 the spatial domains, `domains.rs`),
-    // `gear5-ser` the same integrator on the serial (with several threads: rayon-split) path.
-    for (integ, domains_from) in [
-        ("gear5", DOMAIN_MIN_PARTICLES),
-        ("gear5-ser", usize::MAX),
-        ("verlet", DOMAIN_MIN_PARTICLES),
-    ] {
-        // The bench measures the parallel path itself: with several thread counts the step is
-        // split whatever the system size (below the default threshold it would run serially).
-        let execution = Execution {
-            domains_from,
-            split_from: if threads.iter().any(|&t| t > 1) {
-                0
-            } else {
-                Execution::default().split_from
-            },
-        };
-        let s = dry_shaken_time_driven_widened(
-            &integ[..integ.find('-').unwrap_or(integ.len())],
-            n_factor.max(1),
-        );
+    // Each integrator on its default path: Gear on the spatial domains (`domains.rs`, a team
+    // of the pool's threads), Verlet serially.
+    for integ in ["gear5", "verlet"] {
+        let s = dry_shaken_time_driven_widened(integ, n_factor.max(1));
         let first = rows.len();
         for &t in threads {
             rows.push(TdmdRow {
@@ -126,7 +109,7 @@ pub(crate) fn measure_threads(
         for _ in 0..repeat.max(1) {
             for (pool, row) in pools.iter().zip(&mut rows[first..]) {
                 pool.install(|| {
-                    let mut e = TimeEngine::<2, true, false>::new(&s).with_execution(execution);
+                    let mut e = TimeEngine::<2, true, false>::new(&s);
                     e.run_until(1.0);
                     let (b0, s0) = (e.list_builds(), e.steps());
                     let cpu0 = process_cpu_seconds();
@@ -218,22 +201,6 @@ pub(crate) fn report(rows: &[TdmdRow]) -> String {
             m1,
             m0
         );
-    }
-    for r in rows.iter().filter(|r| r.integrator == "gear5") {
-        if let Some(b) = rows
-            .iter()
-            .find(|b| b.integrator == "gear5-ser" && b.threads == 1)
-        {
-            let (m0, m1) = (median(&b.seconds_per_time), median(&r.seconds_per_time));
-            let _ = writeln!(
-                s,
-                "gear5 on {} thread(s) {:.2}x faster than gear5-ser on 1 (the serial path; {:.4} s vs {:.4} s)",
-                r.threads,
-                m0 / m1,
-                m1,
-                m0
-            );
-        }
     }
     if let Some(r) = rows.first() {
         let _ = writeln!(

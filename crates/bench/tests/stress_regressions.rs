@@ -63,7 +63,7 @@ fn regression_blown_up_frame_never_reaches_the_observers() {
     s.observe.location_changes = Some(true);
     s.observe.transient_periods = 0.0;
     s.observe.samples_per_period = 20.0;
-    let run = wetgran_core::observe::run_observed(&s, &mut |_| {});
+    let run = wetgran_core::observe::run_observed(&s, &Default::default(), &mut |_| {});
     let v = run
         .report
         .invariant_violation

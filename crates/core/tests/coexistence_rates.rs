@@ -16,8 +16,8 @@
 use rayon::prelude::*;
 use wetgran_core::observe::{ObserverSet, Phase, Thresholds, classify, noise};
 use wetgran_core::scene::Scene;
-use wetgran_core::scene::reference::shaken_standard;
 use wetgran_core::sim::run_scene_observed;
+use wetgran_testkit::reference::shaken_standard;
 
 /// Transient before the first sub-window, time units.
 const TRANSIENT: f64 = 50.0;

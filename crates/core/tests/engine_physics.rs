@@ -2,7 +2,7 @@
 //! theory (Enskog collision frequency with the Henderson and Carnahan-Starling equations of
 //! state). Run in release mode: `cargo test --release`.
 
-mod common;
+use wetgran_testkit as common;
 
 use common::{run_checked, run_events, scene, scene_with};
 use std::f64::consts::PI;

@@ -9,13 +9,13 @@
 //! Every pinned run is made twice, on the default queue and on the naive reference queue, and
 //! the two trajectories must agree bit for bit (`pinned_run`).
 
-mod common;
+use wetgran_testkit as common;
 
 use common::scene;
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::event_driven::Engine;
 use wetgran_core::sim::event_driven::queue::{CalendarQueue, EventQueue};
-use wetgran_core::sim::event_driven::reference_queues::NaiveQueue;
+use wetgran_testkit::NaiveQueue;
 
 /// FNV-1a over 64-bit words.
 struct Digest(u64);

@@ -1,7 +1,7 @@
 //! Hard cases that must stay numerically stable, and one test per numerical safeguard of the
 //! event-driven engine that fails without that safeguard.
 
-mod common;
+use wetgran_testkit as common;
 
 use common::{run_checked, run_events, scene_with};
 use wetgran_core::sim::event_driven::{Engine, Vector};
@@ -588,7 +588,7 @@ fn tabulated_wall_placement_never_pushes_a_grain_into_its_neighbour() {
         "fuzz case",
     )
     .expect("valid scene");
-    let run = wetgran_core::observe::run_observed(&s, &mut |_| {});
+    let run = wetgran_core::observe::run_observed(&s, &Default::default(), &mut |_| {});
     assert_eq!(run.report.invariant_violation, None);
     assert!(run.report.energy_final.added_by_wall_placement != 0.0);
 }

@@ -22,8 +22,8 @@
 use wetgran_core::observe::{ObservedRun, run_observed};
 use wetgran_core::scene::Scene;
 
-mod common;
 use common::standard::{StandardWet, Transient, time_twin};
+use wetgran_testkit as common;
 
 /// Largest packing fraction of a bin counted as dilute.
 const DILUTE: f64 = 0.3;
@@ -128,8 +128,8 @@ fn summaries(event: &ObservedRun, time: &ObservedRun) -> (Summary, Summary) {
 /// impact speed) and prints a table row.
 fn compare(p: Point, n: usize, lx: f64, speed: Option<f64>) -> (Summary, Summary) {
     let s = scene(p, n, lx);
-    let event = run_observed(&s, &mut |_| {});
-    let time = run_observed(&time_twin(&s, speed), &mut |_| {});
+    let event = run_observed(&s, &Default::default(), &mut |_| {});
+    let time = run_observed(&time_twin(&s, speed), &Default::default(), &mut |_| {});
     let (e, t) = summaries(&event, &time);
     let cal = speed.map_or("auto".to_string(), |v| format!("speed {v}"));
     println!(

@@ -2,7 +2,7 @@
 //! for prescribed neighbour exchanges, a rate that grows with temperature in a dilute gas, and a
 //! count that converges as the sampling gets finer.
 
-mod common;
+use wetgran_testkit as common;
 
 use wetgran_core::observe::bins::LateralBins;
 use wetgran_core::observe::location_changes::{
@@ -237,7 +237,7 @@ fn dilute_gas_rate_grows_with_temperature() {
              [particles]\ncount = 120\n[initial]\ntemperature = {t:?}\nseed = 3\n\
              [run]\nduration = 6.0\n[observe]\ntransient_periods = 1.0\nsamples_per_period = 20.0\nlocation_changes = true\n"
         ));
-        let run = run_observed(&s, &mut |_| {});
+        let run = run_observed(&s, &Default::default(), &mut |_| {});
         run.observables
             .location_changes
             .expect("observed")
@@ -264,7 +264,7 @@ fn count_converges_with_finer_sampling() {
              [particles]\ncount = 150\n[initial]\ntemperature = 0.02\nlattice_spacing = 1.5\nseed = 5\n\
              [run]\nduration = 20.0\n[observe]\nsamples_per_period = {samples:?}\nlocation_changes = true\n"
         ));
-        run_observed(&s, &mut |_| {})
+        run_observed(&s, &Default::default(), &mut |_| {})
             .observables
             .location_changes
             .expect("observed")

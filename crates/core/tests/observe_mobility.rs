@@ -54,7 +54,7 @@ time_series = false
 }
 
 fn observed(scene: &Scene) -> Observables {
-    run_observed(scene, &mut |_| {}).observables
+    run_observed(scene, &Default::default(), &mut |_| {}).observables
 }
 
 /// Doubling and quadrupling the sampling changes `D_lat` by less than 10 % (here far less: the

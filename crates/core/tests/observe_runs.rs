@@ -4,10 +4,12 @@
 //! changes a trajectory; bookkeeping identities of the profiles and counts; stationarity flags a
 //! cooling run; 3D runs observe neighbour shells.
 
-mod common;
+use wetgran_testkit as common;
 
 use wetgran_core::observe::{Phase, run_observed, run_observed_with_frame};
+use wetgran_core::sim::RunSettings;
 use wetgran_core::sim::run_scene;
+use wetgran_core::sim::threads::Threads;
 
 /// The 2D standard wet system in a box `lx` wide with `n` grains, shaken at `(gamma, e_star)`.
 fn standard_2d(lx: f64, n: usize, gamma: f64, e_star: f64, periods: f64, transient: f64) -> String {
@@ -26,7 +28,7 @@ fn standard_2d(lx: f64, n: usize, gamma: f64, e_star: f64, periods: f64, transie
 #[test]
 fn gamma_below_one_with_small_e_star_is_solid() {
     let s = common::scene(&standard_2d(20.0, 54, 0.5, 0.3, 5.0, 3.0));
-    let run = run_observed(&s, &mut |_| {});
+    let run = run_observed(&s, &Default::default(), &mut |_| {});
     let o = &run.observables;
     assert_eq!(
         run.classification.phase,
@@ -51,7 +53,7 @@ fn gamma_below_one_with_small_e_star_is_solid() {
 #[test]
 fn strongly_driven_dilute_system_is_gas() {
     let s = common::scene(&standard_2d(40.0, 60, 6.0, 10.0, 12.0, 4.0));
-    let run = run_observed(&s, &mut |_| {});
+    let run = run_observed(&s, &Default::default(), &mut |_| {});
     let o = &run.observables;
     assert_eq!(
         run.classification.phase,
@@ -83,11 +85,11 @@ fn strongly_driven_dilute_system_is_gas() {
 fn observing_changes_nothing_and_is_deterministic() {
     let s = common::scene(&standard_2d(40.0, 80, 3.0, 1.0, 6.0, 2.0));
     let plain = run_scene(&s);
-    let a = run_observed(&s, &mut |_| {});
+    let a = run_observed(&s, &Default::default(), &mut |_| {});
     assert_eq!(a.report.events, plain.events);
     assert_eq!(a.report.energy_final, plain.energy_final);
     assert_eq!(a.report.samples, plain.samples);
-    let b = run_observed(&s, &mut |_| {});
+    let b = run_observed(&s, &Default::default(), &mut |_| {});
     assert_eq!(a.observables, b.observables);
     assert_eq!(a.classification, b.classification);
 }
@@ -100,7 +102,7 @@ fn profiles_and_counts_add_up() {
     text += "bin_width = 5.0\n";
     let s = common::scene(&text);
     let mut fractions = Vec::new();
-    let (run, frame) = run_observed_with_frame(&s, &mut |f| fractions.push(f));
+    let (run, frame) = run_observed_with_frame(&s, &Default::default(), &mut |f| fractions.push(f));
     let o = &run.observables;
     let p = &o.profiles;
     assert_eq!(p.centres.len(), 8);
@@ -153,7 +155,7 @@ fn cooling_run_is_flagged_not_stationary() {
          [contact]\nrestitution = 0.9\n[capillary]\nmodel = \"thin_thread\"\n\
          [initial]\ntemperature_over_ecb = 20.0\nseed = 2\n[run]\nduration = 8.0\n",
     );
-    let run = run_observed(&s, &mut |_| {});
+    let run = run_observed(&s, &Default::default(), &mut |_| {});
     let st = &run.observables.stationarity;
     assert!(!st.stationary, "{st:?}");
     let t = st
@@ -172,7 +174,7 @@ fn three_dimensional_run_observes_neighbour_shells() {
          [capillary]\nmodel = \"thin_thread\"\n[initial]\ntemperature_over_ecb = 5.0\nseed = 1\n\
          [run]\nduration = 3.0\n[observe]\nbin_width = 2.0\ntransient_periods = 1.0\nlocation_changes = true\n",
     );
-    let run = run_observed(&s, &mut |_| {});
+    let run = run_observed(&s, &Default::default(), &mut |_| {});
     let o = &run.observables;
     let lc = o.location_changes.as_ref().unwrap();
     assert_eq!(lc.method, "neighbour_shell");
@@ -198,17 +200,12 @@ fn three_dimensional_run_observes_neighbour_shells() {
 fn observing_on_two_threads_gives_the_same_observables() {
     let s = common::scene(&standard_2d(20.0, 54, 2.0, 1.0, 4.0, 1.0));
     let on = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a pool")
-            .install(|| {
-                let run = run_observed(&s, &mut |_| {});
-                (
-                    serde_json::to_string(&run.observables).expect("observables serialise"),
-                    run.classification.phase,
-                )
-            })
+        let ctx = RunSettings::on(Threads::new(threads));
+        let run = run_observed(&s, &ctx, &mut |_| {});
+        (
+            serde_json::to_string(&run.observables).expect("observables serialise"),
+            run.classification.phase,
+        )
     };
     let (one, two) = (on(1), on(2));
     assert!(one.0.contains("location_changes"), "{}", one.0);
@@ -229,7 +226,7 @@ fn location_changes_are_counted_only_when_asked_for() {
     for (text, counted) in [(&off, false), (&on, true), (&by_classifier, true)] {
         let s = common::scene(text);
         assert_eq!(s.observe.location_changes, Some(counted), "{text}");
-        let o = run_observed(&s, &mut |_| {}).observables;
+        let o = run_observed(&s, &Default::default(), &mut |_| {}).observables;
         assert_eq!(o.location_changes.is_some(), counted, "{text}");
         assert_eq!(o.profiles.flc.is_some(), counted, "{text}");
         let series = o.series.as_ref().unwrap();

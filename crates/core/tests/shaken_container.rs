@@ -2,7 +2,7 @@
 //! drive's work, the A = 0 limit, nothing leaving the box, re-checks; the hard cases run with the
 //! exact solver and with the tabulated one (`table`, B.4-B.5).
 
-mod common;
+use wetgran_testkit as common;
 
 use common::{run_checked, scene, scene_with};
 use wetgran_core::sim::event_driven::{Engine, Vector};
@@ -388,7 +388,7 @@ fn standard_wet_system_ten_million_events_stays_inside() {
         .into_iter()
         .flat_map(|p| [WallSolverKind::Exact, WallSolverKind::Table].map(|s| (p, s)))
     {
-        let s = wetgran_core::scene::reference::shaken_standard(gamma, e_star, solver);
+        let s = wetgran_testkit::reference::shaken_standard(gamma, e_star, solver);
         let mut e = Engine::<2, true, true>::new(&s);
         let mut rates = vec![];
         let target = per_point;
@@ -413,7 +413,7 @@ fn table_errors_cannot_stall_the_clock() {
     // not at the wall. The event is a re-check, and the next prediction of that particle comes
     // from the exact solver: without that rule the same wrong answer came back at the same
     // time, and this run spent its 3 million events on re-checks before t = 2.
-    let mut s = wetgran_core::scene::reference::shaken_standard(
+    let mut s = wetgran_testkit::reference::shaken_standard(
         5.0,
         10.0,
         wetgran_core::scene::WallSolverKind::Table,

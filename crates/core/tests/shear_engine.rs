@@ -2,7 +2,7 @@
 //! analytic piecewise trajectory across slabs; in elastic dry runs the work booked for the field
 //! equals the change of kinetic energy; a dense sheared wet packing keeps its invariants.
 
-mod common;
+use wetgran_testkit as common;
 
 use common::{run_checked, scene, scene_with};
 use wetgran_core::sim::event_driven::{Engine, Vector};
@@ -199,7 +199,7 @@ fn observed_shear_run_reports_e_par_and_classifies_fluidised() {
     s.drive.f_max = Some(1.5);
     s.run.duration = 6.0;
     s.observe.transient_periods = 3.0;
-    let run = wetgran_core::observe::run_observed(&s, &mut |_| {});
+    let run = wetgran_core::observe::run_observed(&s, &Default::default(), &mut |_| {});
     let sh = run
         .observables
         .shear

@@ -3,7 +3,7 @@
 //! elastic dry runs the booked work of the field equals the change of kinetic energy; the small
 //! wet shear scene is solid below and fluidised above the chain-model force (docs/model.md 8).
 
-mod common;
+use wetgran_testkit as common;
 
 use common::scene_with;
 use wetgran_core::scene::Scene;
@@ -120,7 +120,7 @@ fn small_wet_scene_is_solid_below_and_fluid_above_the_chain_model_force() {
             .replace("transient_periods = 20", "transient_periods = 6");
         let s =
             Scene::from_toml_str(&text, "shear_small_3d_time").unwrap_or_else(|e| panic!("{e}"));
-        let run = wetgran_core::observe::run_observed(&s, &mut |_| {});
+        let run = wetgran_core::observe::run_observed(&s, &Default::default(), &mut |_| {});
         assert!(run.report.invariant_violation.is_none());
         assert!(run.report.max_overlap.expect("time engine") < 0.05);
         assert_eq!(

@@ -10,8 +10,8 @@
 use wetgran_core::observe::run_observed;
 use wetgran_core::scene::{Boundary, Scene};
 
-mod common;
 use common::standard::{OTHER_SEED, STANDARD_SEED as SEED, StandardWet, Transient};
+use wetgran_testkit as common;
 
 /// The standard system at `(Gamma = 30, E*)`, eps = 1: `duration` and `transient` in time units,
 /// `spp` observer samples per period.
@@ -26,7 +26,7 @@ fn standard(e_star: f64, seed: u64, duration: f64, transient: f64, spp: f64) -> 
 
 /// The per-point label (fluid vs gas by the per-point fallback: these runs have no line).
 fn label(scene: &Scene) -> (String, f64) {
-    let run = run_observed(scene, &mut |_| {});
+    let run = run_observed(scene, &Default::default(), &mut |_| {});
     assert_eq!(run.report.invariant_violation, None);
     (
         run.classification.phase.to_string(),

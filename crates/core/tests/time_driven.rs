@@ -415,12 +415,15 @@ kind = "time"
     assert!(r.events.pair_collisions > 0 && r.events.wall_collisions > 0);
 }
 
-/// Opt-in table for docs/accuracy.md: energy-ledger error of the 6-unit runs of
-/// [`small_wet`] with and without drive, damping and bridges, for both integrators.
-/// Run with `cargo test --release --test time_driven ledger_table -- --ignored --nocapture`.
+/// The ledger error by effect (docs/accuracy.md, "Ledger error by effect"): the 6-unit runs
+/// of [`small_wet`] with and without drive, damping and bridges, for both integrators. Every
+/// error stays below 1 % of the energy that went through the ledger, and the table's reading
+/// holds: Gear's error comes from the bridges (with bridges off, damped, it is 20 times
+/// smaller), Verlet's from its first-order damping term (damped and dry, 100 times Gear's).
+/// Prints the table: `cargo test --release --test time_driven ledger_table -- --nocapture`.
 #[test]
-#[ignore]
 fn ledger_table() {
+    let mut error = std::collections::HashMap::new();
     for drive in ["", SHAKEN] {
         for (damp, wet) in [(true, true), (false, true), (true, false), (false, false)] {
             for integ in ["gear5", "verlet"] {
@@ -434,39 +437,40 @@ fn ledger_table() {
                     s.initial.temperature_over_ecb = None;
                 }
                 let r = run_scene(&s);
-                let e = r.energy_final.total_accounted() - r.energy_initial.total_accounted();
+                let l = &r.energy_final;
+                let e = l.total_accounted() - r.energy_initial.total_accounted();
+                let through = l.dissipated_restitution.abs()
+                    + l.dissipated_ruptures.abs()
+                    + l.work_by_drive.abs();
                 println!(
                     "drive {:5} damp {damp} wet {wet} {integ}: err {e:.4e} diss {:.3e} rupt {:.3e} drive {:.3e} ruptures {}",
                     !drive.is_empty(),
-                    r.energy_final.dissipated_restitution,
-                    r.energy_final.dissipated_ruptures,
-                    r.energy_final.work_by_drive,
+                    l.dissipated_restitution,
+                    l.dissipated_ruptures,
+                    l.work_by_drive,
                     r.events.bridge_ruptures
                 );
+                if through > 0.0 {
+                    assert!(
+                        e.abs() < 1e-2 * through,
+                        "drive {drive:?} damp {damp} wet {wet} {integ}: {e} of {through}"
+                    );
+                }
+                error.insert((drive.is_empty(), damp, wet, integ), e.abs());
             }
         }
     }
-}
-
-/// Safeguard of the Verlet list: with the rebuild criterion (some particle moved by more than
-/// skin / 2), no interacting pair is ever missing from the list, even with a thin skin in a hot
-/// shaken system; checked by brute force every 50 steps.
-#[test]
-fn verlet_list_never_misses_an_interacting_pair() {
-    let mut s = small_wet(SHAKEN, "skin = 0.02");
-    s.run.duration = 1.0;
-    let mut e = TimeEngine::<2, true, true>::new(&s);
-    for step in 0..10_000 {
-        e.step();
-        if step % 50 == 0 {
-            assert_eq!(e.pair_missing_from_list(), None, "at step {step}");
-        }
+    for static_drive in [true, false] {
+        let at = |damp, wet, integ| error[&(static_drive, damp, wet, integ)];
+        assert!(
+            20.0 * at(true, false, "gear5") < at(true, true, "gear5"),
+            "static {static_drive}: Gear's error is the bridges'"
+        );
+        assert!(
+            at(true, false, "verlet") > 100.0 * at(true, false, "gear5"),
+            "static {static_drive}: Verlet's damping error dominates Gear's"
+        );
     }
-    assert!(
-        e.list_builds() > 20,
-        "the list was hardly rebuilt: {}",
-        e.list_builds()
-    );
 }
 
 /// Mean `T_g / E_cb` over the second half of a run's samples.

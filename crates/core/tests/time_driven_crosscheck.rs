@@ -22,8 +22,8 @@
 use wetgran_core::observe::{ObservedRun, run_observed};
 use wetgran_core::scene::Scene;
 
-mod common;
 use common::standard::{StandardWet, Transient, time_twin};
+use wetgran_testkit as common;
 
 /// Largest packing fraction of a bin counted as dilute.
 const DILUTE: f64 = 0.3;
@@ -44,8 +44,8 @@ struct Comparison {
 }
 
 fn compare(s: &Scene) -> Comparison {
-    let event = run_observed(s, &mut |_| {});
-    let time = run_observed(&time_twin(s, None), &mut |_| {});
+    let event = run_observed(s, &Default::default(), &mut |_| {});
+    let time = run_observed(&time_twin(s, None), &Default::default(), &mut |_| {});
     let (pe, pt) = (&event.observables.profiles, &time.observables.profiles);
     let mut rows = Vec::new();
     for b in 0..pe.centres.len() {

@@ -14,15 +14,15 @@
 //! and say why in its commit.
 //!
 //! Every pinned run is made with one thread and with two (a rayon pool of that size installed
-//! around the run), and the two runs must agree bit for bit: the engine's result does not
-//! depend on the number of threads.
+//! around the run, as `sim::threads::Threads` does), and the two runs must agree bit for bit:
+//! the engine's result does not depend on the number of threads.
 
-mod common;
+use wetgran_testkit as common;
 
 use common::scene_with;
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::time_driven::shear::CosineShear;
-use wetgran_core::sim::time_driven::{BodyForce, Execution, TimeEngine};
+use wetgran_core::sim::time_driven::{BodyForce, TimeEngine};
 
 /// FNV-1a over 64-bit words.
 struct Digest(u64);
@@ -86,16 +86,6 @@ fn digest<const D: usize, const G: bool, const W: bool, B: BodyForce<D>>(
     (state, h.0)
 }
 
-/// Every engine here splits its steps over the threads from this many particles on (the old
-/// default threshold), so that these sizes exercise the parallel path.
-const SPLIT_FROM: usize = 512;
-
-/// The default strategies, with the rayon split from [`SPLIT_FROM`] particles on.
-const SPLIT: Execution = Execution {
-    split_from: SPLIT_FROM,
-    domains_from: wetgran_core::sim::time_driven::DOMAIN_MIN_PARTICLES,
-};
-
 /// Runs `run` on a rayon pool of `threads` threads and returns its digests.
 fn on_threads(threads: usize, run: impl FnOnce() -> (u64, u64) + Send) -> (u64, u64) {
     rayon::ThreadPoolBuilder::new()
@@ -133,7 +123,7 @@ fn check(name: &str, want: (u64, u64), run: impl Fn() -> (u64, u64) + Send + Syn
 /// bisection's own resolution (1e-2 / 2^50 = 9e-18 absolute). Both integrators' state and books
 /// digests changed with it; nothing else did.
 fn bench_scene(integrator: &str) -> Scene {
-    wetgran_core::scene::reference::dry_shaken_time_driven(integrator)
+    wetgran_testkit::reference::dry_shaken_time_driven(integrator)
 }
 
 /// Gear on this scene (1200 particles) runs on the spatial domains (`domains.rs`, issue 15
@@ -148,7 +138,7 @@ fn bench_scene_gear() {
         "bench gear5",
         (0x4cef_122d_97f7_9569, 0x7a37_ea3b_3ce6_04de),
         || {
-            let mut e = TimeEngine::<2, true, false>::new(&s).with_execution(SPLIT);
+            let mut e = TimeEngine::<2, true, false>::new(&s);
             e.run_until(0.3);
             digest(&e)
         },
@@ -162,7 +152,7 @@ fn bench_scene_verlet() {
         "bench verlet",
         (0xd19b_9c90_240d_9390, 0x056b_3114_7928_054a),
         || {
-            let mut e = TimeEngine::<2, true, false>::new(&s).with_execution(SPLIT);
+            let mut e = TimeEngine::<2, true, false>::new(&s);
             e.run_until(0.3);
             digest(&e)
         },
@@ -192,7 +182,7 @@ fn wet_2d_gear() {
         "wet 2D gear5",
         (0x5cf0_9ae3_7594_a66a, 0x7b4d_fcee_2b9e_47bc),
         || {
-            let mut e = TimeEngine::<2, true, true>::new(&s).with_execution(SPLIT);
+            let mut e = TimeEngine::<2, true, true>::new(&s);
             e.run_until(1.5);
             assert!(e.counts().bridge_ruptures > 0, "the run ruptures bridges");
             digest(&e)
@@ -207,7 +197,7 @@ fn wet_2d_verlet() {
         "wet 2D verlet",
         (0xdaec_5b1f_afe8_a063, 0xbf20_8030_40b7_bcd9),
         || {
-            let mut e = TimeEngine::<2, true, true>::new(&s).with_execution(SPLIT);
+            let mut e = TimeEngine::<2, true, true>::new(&s);
             e.run_until(1.5);
             digest(&e)
         },
@@ -231,7 +221,7 @@ fn wet_3d_gear() {
         "wet 3D gear5",
         (0x0d73_c090_5dd6_d1c1, 0xf150_4364_fc96_d60c),
         || {
-            let mut e = TimeEngine::<3, true, true>::new(&s).with_execution(SPLIT);
+            let mut e = TimeEngine::<3, true, true>::new(&s);
             e.run_until(0.5);
             digest(&e)
         },
@@ -255,38 +245,9 @@ fn sheared_3d_gear() {
         "sheared 3D gear5",
         (0xf930_23bd_a721_634c, 0xa188_7632_67d8_c325),
         || {
-            let mut e = TimeEngine::<3, false, false, CosineShear>::with_body_force(&s, field)
-                .with_execution(SPLIT);
+            let mut e = TimeEngine::<3, false, false, CosineShear>::with_body_force(&s, field);
             e.run_until(0.5);
             digest(&e)
         },
     );
-}
-
-/// The parallel path on every effect at once (bridges, shaken walls, the body force, 3D):
-/// 600 wet spheres (above the threshold `on_threads` sets, so the loops are split over the threads)
-/// give the same bits on one, two and three threads.
-#[test]
-fn threads_do_not_change_a_wet_sheared_run() {
-    let s = scene_with(
-        3,
-        0.0,
-        &[16.0, 16.0, 8.0],
-        &["periodic", "periodic", "wall"],
-        600,
-        "[contact]\ndamping = 1.5e-4\n[capillary]\nmodel = \"thin_thread\"\ns_crit = 0.0711\ne_cb = 0.2844\n\
-         [drive]\nkind = \"shear\"\nf_max = 0.5\n[initial]\ntemperature = 2.0\n[engine]\nkind = \"time\"\n",
-    );
-    assert!(s.particles.count >= SPLIT_FROM);
-    let field = CosineShear::of_scene(&s).expect("a shear scene");
-    let run = || {
-        let mut e = TimeEngine::<3, false, true, CosineShear>::with_body_force(&s, field)
-            .with_execution(SPLIT);
-        e.run_until(0.2);
-        assert!(e.counts().bridge_formations > 0, "bridges form");
-        digest(&e)
-    };
-    let one = on_threads(1, run);
-    assert_eq!(one, on_threads(2, run));
-    assert_eq!(one, on_threads(3, run));
 }

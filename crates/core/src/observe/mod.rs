@@ -48,7 +48,8 @@ pub use line::{Inflection, fluid_gas_inflection};
 pub use stationarity::{Stationarity, StationarityCheck};
 
 use crate::scene::Scene;
-use crate::sim::{Frame, RunReport};
+use crate::sim::threads::Threads;
+use crate::sim::{Frame, RunSettings, RunReport};
 use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
 pub use profiles::CageCounts;
@@ -284,14 +285,16 @@ pub struct ObservedRun {
 }
 
 /// Runs a validated scene with the observers of its `[observe]` section and classifies it with
-/// its `[classify]` thresholds; `progress` gets the completed fraction in `[0, 1]`.
-pub fn run_observed(scene: &Scene, progress: &mut dyn FnMut(f64)) -> ObservedRun {
-    run_observed_with_frame(scene, progress).0
+/// its `[classify]` thresholds, in the caller's context `ctx` (threads, hook); `progress` gets
+/// the completed fraction in `[0, 1]`.
+pub fn run_observed(scene: &Scene, ctx: &RunSettings, progress: &mut dyn FnMut(f64)) -> ObservedRun {
+    run_observed_with_frame(scene, ctx, progress).0
 }
 
 /// Like [`run_observed`], and also returns the last sampled configuration (for pictures).
 pub fn run_observed_with_frame(
     scene: &Scene,
+    ctx: &RunSettings,
     progress: &mut dyn FnMut(f64),
 ) -> (ObservedRun, Frame) {
     run_observed_from(scene, None, &crate::sim::RunSettings::default(), progress)
@@ -322,6 +325,8 @@ pub enum Ending {
 struct Watch<'a> {
     scene: &'a Scene,
     set: ObserverSet,
+    /// The run's threads (the location-change counter runs beside the other observers).
+    threads: &'a Threads,
     monitored: Vec<Monitored>,
     /// The policy in absolute times (`None`: fixed length).
     schedule: Option<crate::scene::convergence::Schedule>,
@@ -376,7 +381,11 @@ impl Watch<'_> {
 
 impl crate::sim::Watcher for Watch<'_> {
     fn observe(&mut self, frame: &Frame) {
-        self.set.observe(frame);
+        let set = &mut self.set;
+        match self.threads.count() {
+            1 => set.observe(frame),
+            _ => self.threads.install(|| set.observe(frame)),
+        }
         let n = frame.len().max(1) as f64;
         let t_g = self.set.temperature.series.last().map_or(f64::NAN, |s| s.1);
         let delta = profiles::spread(&profiles::bridge_density(
@@ -417,7 +426,6 @@ impl crate::sim::Watcher for Watch<'_> {
         if self.ending.is_some() {
             return None;
         }
-        crate::test_pause::pause_at("window");
         // The run so far is transient: fresh observers from the frame at `t_end` on.
         let last = self.set.last.take().expect("the end frame was observed");
         self.set = ObserverSet::with_window_start(self.scene, t_end);
@@ -455,6 +463,7 @@ pub fn run_observed_from(
     let mut watch = Watch {
         scene,
         set,
+        threads: &ctx.threads,
         monitored: Vec::new(),
         schedule,
         t_floor: t0 + spec.window_start(scene),
@@ -626,9 +635,9 @@ impl ObserverSet {
     }
 
     /// Hands one sampled frame to every observer. The location-change counter (a triangulation
-    /// per frame, by far the dearest) runs beside the others (`rayon::join`) when the pool that
-    /// `sim::threads` chooses for this job has more than one thread; the observers share no
-    /// state, so the results are the same either way.
+    /// per frame, by far the dearest) runs beside the others (`rayon::join`) when called on a
+    /// rayon pool of more than one thread (the run's `Threads`); the observers share no state,
+    /// so the results are the same either way.
     pub fn observe(&mut self, frame: &Frame) {
         let in_window = frame.time >= self.t_start - self.eps;
         let Self {
@@ -654,14 +663,14 @@ impl ObserverSet {
             }
         };
         match lc.as_mut() {
-            Some(lc) => crate::sim::threads::install(|| {
-                if rayon::current_num_threads() > 1 {
+            Some(lc) => {
+                if rayon::current_thread_index().is_some() && rayon::current_num_threads() > 1 {
                     rayon::join(|| lc.observe(frame, in_window), others);
                 } else {
                     lc.observe(frame, in_window);
                     others();
                 }
-            }),
+            }
             None => others(),
         }
         if in_window {

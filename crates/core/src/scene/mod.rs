@@ -12,7 +12,6 @@ pub(crate) mod convergence;
 pub mod damping;
 pub mod lattice;
 pub(crate) mod observe_section;
-pub mod reference;
 pub(crate) mod thresholds;
 mod validate;
 

@@ -1,5 +1,6 @@
 //! How often the sampling loop checks an engine's invariants, and what a run is given by its
-//! caller besides the scene ([`RunSettings`]: the check policy and the wall-table cache).
+//! caller besides the scene ([`RunSettings`]: the check policy, the wall-table cache, the
+//! threads it runs on and the hook called when its watcher extends it).
 //!
 //! An engine has two checks (`Simulation::quick_check`, `Simulation::sanity_check`): the
 //! per-particle invariants in `O(N)` (finite state, inside the box, in its cell, no event in
@@ -12,7 +13,8 @@
 //! the end of every stretch of the run (before a watcher extends it) and at the end of the run,
 //! whatever stopped it, so the state a checkpoint stores has always passed the full check.
 
-use super::Simulation;
+use super::threads::Threads;
+use super::{ExtendHook, Simulation};
 use super::event_driven::table_cache::{DEFAULT_TABLE_CACHE_MIB, TableCache};
 use std::time::Instant;
 
@@ -38,12 +40,15 @@ impl Default for CheckPolicy {
 }
 
 /// What a run is given by its caller besides the scene: how often it checks the engine's
-/// invariants and the cache the `table` wall solver takes its tables from (shared by the jobs
-/// of a sweep run).
+/// invariants, the cache the `table` wall solver takes its tables from (shared by the jobs
+/// of a sweep run), the threads the engine steps on, and a hook called each time its
+/// `Watcher` extends it (before the next stretch starts).
 #[derive(Debug, Clone)]
 pub struct RunSettings {
     pub checks: CheckPolicy,
     pub tables: TableCache,
+    pub threads: Threads,
+    pub on_extend: Option<ExtendHook>,
 }
 
 impl RunSettings {
@@ -53,6 +58,16 @@ impl RunSettings {
         Self {
             checks: CheckPolicy::default(),
             tables,
+            threads: Threads::default(),
+            on_extend: None,
+        }
+    }
+
+    /// The product's settings on `threads`, a table cache of its own, no hook.
+    pub fn on(threads: Threads) -> Self {
+        Self {
+            threads,
+            ..Self::default()
         }
     }
 

@@ -11,8 +11,8 @@
 //! when it reaches its end (run to stationarity, `crate::scene::convergence`). Every run reports
 //! its final state ([`RunReport::final_state`]) for checkpoints. What the caller gives a run
 //! besides the scene (how often the invariants are checked, the wall-table cache) is its
-//! [`RunSettings`] ([`checks`]). [`threads`] chooses how many threads a simulation uses (the
-//! time-driven engine's steps are parallel).
+//! [`RunSettings`] ([`checks`]), which also names the [`threads::Threads`] it runs on and a
+//! hook called at each extension of the run ([`ExtendHook`]).
 
 pub mod books;
 pub mod checks;
@@ -34,8 +34,27 @@ use event_driven::Engine;
 use event_driven::queue::EventQueue;
 use event_driven::table_cache::TableCache;
 use serde::Serialize;
+use std::fmt;
+use std::sync::Arc;
 use std::time::Instant;
 use time_driven::{BodyForce, TimeEngine};
+
+/// The function a run calls when its watcher extends it (the crash tests stop a process
+/// there, between two windows of the run-length policy).
+#[derive(Clone)]
+pub struct ExtendHook(Arc<dyn Fn() + Send + Sync>);
+
+impl ExtendHook {
+    pub fn new(f: impl Fn() + Send + Sync + 'static) -> Self {
+        Self(Arc::new(f))
+    }
+}
+
+impl fmt::Debug for ExtendHook {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("ExtendHook")
+    }
+}
 
 /// One sample of the global observables.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -171,7 +190,7 @@ fn run_dispatch(
         &settings.tables,
         RunVisitor {
             scene,
-            checks: settings.checks,
+            settings,
             progress: p,
             observer: o,
         },
@@ -188,7 +207,7 @@ pub trait EngineVisitor {
 /// The sampling loop of [`run_scene_watched`] as an [`EngineVisitor`].
 struct RunVisitor<'a, 'b> {
     scene: &'a Scene,
-    checks: CheckPolicy,
+    settings: &'a RunSettings,
     progress: &'a mut dyn FnMut(&Sample),
     observer: Observer<'b>,
 }
@@ -196,8 +215,7 @@ struct RunVisitor<'a, 'b> {
 impl EngineVisitor for RunVisitor<'_, '_> {
     type Output = RunReport;
     fn visit<S: Simulation>(self, engine: S) -> RunReport {
-        let cadence = CheckCadence::new(self.checks);
-        run_engine(engine, self.scene, cadence, self.progress, self.observer)
+        run_engine(engine, self.scene, self.settings, self.progress, self.observer)
     }
 }
 
@@ -266,7 +284,7 @@ pub fn with_engine<V: EngineVisitor>(
 }
 
 /// What the sampling loop needs from an engine (both engines implement it).
-pub trait Simulation {
+pub trait Simulation: Send {
     /// `"event"` or `"time"`.
     const KIND: &'static str;
     fn time(&self) -> f64;
@@ -309,12 +327,9 @@ pub trait Simulation {
     /// The engine's units of work done so far: events (event engine) or time steps (time
     /// engine).
     fn work_done(&self) -> u64;
-    /// Does `n` more units of work (events or time steps), whatever simulated time they take;
-    /// false when the engine has nothing left to do (an event engine with no event pending).
-    fn advance_work(&mut self, n: u64) -> bool;
 }
 
-impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue> Simulation
+impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue + Send> Simulation
     for Engine<D, G, W, S, Q>
 {
     const KIND: &'static str = "event";
@@ -362,11 +377,6 @@ impl<const D: usize, const G: bool, const W: bool, const S: bool, Q: EventQueue>
     fn work_done(&self) -> u64 {
         Engine::counts(self).total()
     }
-    fn advance_work(&mut self, n: u64) -> bool {
-        let before = self.work_done();
-        Engine::run_until(self, f64::INFINITY, Some(before.saturating_add(n)));
-        self.work_done() > before || n == 0
-    }
 }
 
 impl<const D: usize, const G: bool, const W: bool, B: BodyForce<D>> Simulation
@@ -412,12 +422,6 @@ impl<const D: usize, const G: bool, const W: bool, B: BodyForce<D>> Simulation
     fn work_done(&self) -> u64 {
         TimeEngine::steps(self)
     }
-    fn advance_work(&mut self, n: u64) -> bool {
-        for _ in 0..n {
-            TimeEngine::step(self);
-        }
-        true
-    }
 }
 
 /// Seconds since `t0`.
@@ -428,16 +432,18 @@ fn since(t0: Instant) -> f64 {
 fn run_engine<S: Simulation>(
     mut engine: S,
     scene: &Scene,
-    mut cadence: CheckCadence,
+    settings: &RunSettings,
     progress: &mut dyn FnMut(&Sample),
     mut observer: Observer<'_>,
 ) -> RunReport {
+    let mut cadence = CheckCadence::new(settings.checks);
     let start = Instant::now();
     let energy_initial = engine.energy();
     let mut samples = vec![engine.sample()];
     let (stopped_on_cap, violation) = sample_loop(
         &mut engine,
         scene,
+        settings,
         &mut cadence,
         &mut samples,
         progress,
@@ -490,6 +496,7 @@ fn run_engine<S: Simulation>(
 fn sample_loop<S: Simulation>(
     engine: &mut S,
     scene: &Scene,
+    settings: &RunSettings,
     cadence: &mut CheckCadence,
     samples: &mut Vec<Sample>,
     progress: &mut dyn FnMut(&Sample),
@@ -533,7 +540,8 @@ fn sample_loop<S: Simulation>(
         };
         let target = target_report.min(target_obs);
         let t = Instant::now();
-        let reached = engine.run_until(target, scene.run.max_events);
+        let cap = scene.run.max_events;
+        let reached = settings.threads.install(|| engine.run_until(target, cap));
         cadence.timing.engine += since(t);
         if !reached {
             samples.push(engine.sample());
@@ -578,6 +586,9 @@ fn sample_loop<S: Simulation>(
             cadence.timing.observers += since(t);
             match extended {
                 Some(end) if end > duration => {
+                    if let Some(hook) = &settings.on_extend {
+                        (hook.0)();
+                    }
                     duration = end;
                     last_obs = last_obs_of(duration, obs_dt);
                 }

@@ -9,8 +9,6 @@ pub(crate) mod engine;
 pub(crate) mod event;
 pub mod pairs;
 pub mod queue;
-#[cfg(any(test, feature = "testing"))]
-pub mod reference_queues;
 pub(crate) mod shear;
 pub(crate) mod slabs;
 pub mod table_cache;

@@ -4,8 +4,8 @@
 //!
 //! Re-predicting a particle changes its key in place, so a queue never holds stale copies
 //! (invalid events are detected lazily, see `engine.rs`). [`CalendarQueue`] is the engines' queue;
-//! `reference_queues.rs` (tests only) holds a linear scan that the tests run whole engines on
-//! (`crates/core/tests/engine_pins.rs`). Both break ties of equal keys by the smaller particle
+//! the tests run whole engines on a linear scan too (`wetgran_testkit::NaiveQueue`,
+//! `crates/core/tests/engine_pins.rs`). Both break ties of equal keys by the smaller particle
 //! index, so the trajectory does not depend on the queue.
 
 /// A priority queue over particles `0..n` with one key (event time) each.

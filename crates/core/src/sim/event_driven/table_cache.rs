@@ -113,9 +113,7 @@ impl TableCache {
         if let Some(t) = self.lock().touch(&key) {
             return t;
         }
-        let table = Arc::new(crate::sim::threads::install(|| {
-            WallTable::build(motion, spec)
-        }));
+        let table = Arc::new(WallTable::build(motion, spec));
         let size = table.bytes();
         let mut e = self.lock();
         e.builds += 1;

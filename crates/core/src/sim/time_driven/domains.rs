@@ -46,7 +46,7 @@ pub(crate) const DOMAINS: usize = 2;
 /// From this many particles on, every Gear step of a scene without a body force runs on the
 /// domains, on any number of threads (below, a step is too short for two threads to gain:
 /// docs/performance-history.md, "Sixth round: spatial domains").
-pub const DOMAIN_MIN_PARTICLES: usize = 1024;
+pub(crate) const DOMAIN_MIN_PARTICLES: usize = 1024;
 
 /// What a domain step needs besides its own arrays (the same for every domain of a step).
 #[derive(Debug, Clone, Copy)]

@@ -1,5 +1,5 @@
 //! Time-driven molecular dynamics of soft (Hertz) disks and spheres with the minimal capillary
-//! model (docs/model.md 2.2, 3.1), chosen by `engine.kind = "time"`: the engine and its three
+//! model (docs/model.md 2.2, 3.1), chosen by `engine.kind = "time"`: the engine and its two
 //! execution strategies in `engine/`, the parts as ARCHITECTURE.md, "Time engine", describes;
 //! the damping constants are `scene::damping` (validation needs them to bound the time step).
 
@@ -13,5 +13,4 @@ pub mod shear;
 mod team;
 mod walls;
 
-pub use domains::DOMAIN_MIN_PARTICLES;
-pub use engine::{BodyForce, Execution, NoBodyForce, TimeEngine};
+pub use engine::{BodyForce, NoBodyForce, TimeEngine};

@@ -27,13 +27,6 @@ pub(crate) struct NeighbourList<const D: usize> {
     /// The rows that hold at least one partner, ascending: the pair loop visits only these (in
     /// a dilute system most rows are empty, and testing each costs a mispredicted branch).
     pub rows: Vec<u32>,
-    /// The row of each entry (for the rayon strategy's chunks of entries; made, with the
-    /// transposed list, by [`Self::ensure_transposed`]).
-    pub(crate) row_of: Vec<u32>,
-    /// The transposed list: the entries whose partner is `j` are
-    /// `in_entry[in_start[j]..in_start[j + 1]]`, ascending (so by ascending row).
-    pub(crate) in_start: Vec<u32>,
-    pub(crate) in_entry: Vec<u32>,
     old_start: Vec<u32>,
     old_partner: Vec<u32>,
     old_flags: Vec<u8>,
@@ -71,8 +64,6 @@ pub(crate) struct NeighbourList<const D: usize> {
     extra: f64,
     skin: f64,
     pub builds: u64,
-    /// The build for which `row_of` and the transposed list were made (0: none).
-    transposed_at: u64,
     /// The first flagged pair `(i, j)` missing from a rebuilt list (its flags dropped): it moved
     /// apart by more than the skin within one list's life, which only a blown-up run does. The
     /// engine's `sanity_check` reports it; the list goes on.
@@ -197,9 +188,6 @@ impl<const D: usize> NeighbourList<D> {
             partner: Vec::with_capacity(8 * n),
             flags: Vec::with_capacity(8 * n),
             rows: Vec::with_capacity(n),
-            row_of: Vec::with_capacity(8 * n),
-            in_start: vec![0; n + 1],
-            in_entry: Vec::with_capacity(8 * n),
             old_start: vec![0; n + 1],
             old_partner: Vec::with_capacity(8 * n),
             old_flags: Vec::with_capacity(8 * n),
@@ -235,7 +223,6 @@ impl<const D: usize> NeighbourList<D> {
             extra,
             skin,
             builds: 0,
-            transposed_at: 0,
             lost_pair: None,
         }
     }
@@ -369,37 +356,6 @@ impl<const D: usize> NeighbourList<D> {
         }
         self.scan = parts;
         self.start[n] = self.partner.len() as u32;
-    }
-
-    /// Makes `row_of` and the transposed list of the current build unless made already (only
-    /// the rayon strategy reads them, so a build does not pay for them).
-    pub(crate) fn ensure_transposed(&mut self) {
-        if self.transposed_at == self.builds {
-            return;
-        }
-        self.transposed_at = self.builds;
-        let n = self.scratch.len();
-        self.row_of.clear();
-        for i in 0..n {
-            self.row_of.resize(self.start[i + 1] as usize, i as u32);
-        }
-        // The transposed list, by counting: entries of each partner in ascending order.
-        self.in_start.fill(0);
-        for &j in &self.partner {
-            self.in_start[j as usize + 1] += 1;
-        }
-        for j in 0..n {
-            self.in_start[j + 1] += self.in_start[j];
-        }
-        self.in_entry.resize(self.partner.len(), 0);
-        // `scratch` (the cells) is free after a build: it serves as the fill cursor of each
-        // partner.
-        self.scratch[..n].copy_from_slice(&self.in_start[..n]);
-        for (q, &j) in self.partner.iter().enumerate() {
-            let c = &mut self.scratch[j as usize];
-            self.in_entry[*c as usize] = q as u32;
-            *c += 1;
-        }
     }
 
     /// The rows `range` of a build (after the binning) into `out` (cleared first): each row's

@@ -1,17 +1,16 @@
 //! The pair kernel of the time-driven engine: [`pair_kernel`] is the force of one Verlet-list
 //! entry (the minimum image, the reach test, the damped Hertz contact of Eq. 2.7 and the minimal
-//! capillary bridge of docs/model.md 3.1) with its new flags. The three loops over entries call
-//! it and differ only in where the force goes: [`pair_chunk`] (a chunk of entries into a buffer:
-//! the rayon strategy), [`pair_forces_serial`] (scattered to both partners: the serial strategy,
-//! a domain's inner pairs) and [`cross_forces`] (a domain's pairs with the other domain, the
-//! partner read from its halo). The books are summed per [`ENTRY_CHUNK`] entries, so every
-//! strategy gives the same bits.
+//! capillary bridge of docs/model.md 3.1) with its new flags. The two loops over entries call it
+//! and differ only in where the force goes: [`pair_forces_serial`] (scattered to both partners:
+//! the serial strategy, a domain's inner pairs) and [`cross_forces`] (a domain's pairs with the
+//! other domain, the partner read from its halo). The books are summed per [`ENTRY_CHUNK`]
+//! entries.
 
 use super::neighbours::{BOND, CONTACT};
 use crate::physics::hertz;
 
-/// Verlet-list entries per chunk of the pair phase: a thread's unit of work and of the booked
-/// sums, added in chunk order (fixed: the numbers do not depend on the number of threads).
+/// Verlet-list entries per chunk of the pair loop: the unit of the booked sums, added in chunk
+/// order.
 pub(super) const ENTRY_CHUNK: usize = 128;
 
 /// What the pair kernel needs besides the particles' state.
@@ -153,43 +152,6 @@ pub(super) fn pair_kernel<const D: usize, const WET: bool>(
     Some((out, force))
 }
 
-/// Pair forces of the Verlet-list entries of one chunk ([`pair_kernel`]): entry `m` is the
-/// pair `(row_of[m], partner[m])`; its force on the row's particle goes to
-/// `pf[m * D..(m + 1) * D]` (zeros when the pair does not interact). A free function of slices
-/// so that the compiler keeps every array in a register (no aliasing through `self`).
-pub(super) fn pair_chunk<const D: usize, const WET: bool>(
-    pc: &PairConstants<D>,
-    x: &[f64],
-    v: &[f64],
-    radius: &[f64],
-    row_of: &[u32],
-    partner: &[u32],
-    flags: &mut [u8],
-    pf: &mut [f64],
-) -> Books {
-    let n = radius.len();
-    let xs: [&[f64]; D] = std::array::from_fn(|k| &x[k * n..(k + 1) * n]);
-    let vsl: [&[f64]; D] = std::array::from_fn(|k| &v[k * n..(k + 1) * n]);
-    let mut b = Books::default();
-    let len = flags.len();
-    let (row_of, partner, pf) = (&row_of[..len], &partner[..len], &mut pf[..len * D]);
-    for m in 0..len {
-        let (i, j) = (row_of[m] as usize, partner[m] as usize);
-        let xi: [f64; D] = std::array::from_fn(|k| xs[k][i]);
-        let xj: [f64; D] = std::array::from_fn(|k| xs[k][j]);
-        let vrel = |k: usize| vsl[k][i] - vsl[k][j];
-        let out = &mut pf[m * D..(m + 1) * D];
-        match pair_kernel::<D, WET>(pc, &xi, &xj, radius[i], radius[j], &mut flags[m], vrel) {
-            Some((pr, force)) => {
-                b.book(&pr);
-                out.copy_from_slice(&force);
-            }
-            None => out.fill(0.0),
-        }
-    }
-    b
-}
-
 /// The response of one pair within reach ([`pair_kernel`]): force magnitude along the line of
 /// centres, new contact and bond flags, and what the step books.
 #[derive(Debug, Clone, Copy)]
@@ -228,8 +190,8 @@ impl Books {
         self.ruptures += b.ruptures;
     }
 
-    /// Books one pair's response in full (the parallel chunks and the domains' cross pairs;
-    /// the serial loop books the sums per chunk of entries itself).
+    /// Books one pair's response in full (the domains' cross pairs; the serial loop books the
+    /// sums per chunk of entries itself).
     pub(super) fn book(&mut self, pr: &PairResponse) {
         self.book_counts(pr);
         if pr.damped {
@@ -253,10 +215,8 @@ impl Books {
 
 /// The pair loop of the serial strategy and of a domain's inner pairs: [`pair_kernel`] over the
 /// half list (`rows` the non-empty rows, `start` their entries), each pair once (Newton's third
-/// law), added to `f` (the partner's share at once, the row's own sum at the end of its row:
-/// every particle receives its partners' forces in the order the rayon strategy's gather adds
-/// them). The dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries as in
-/// [`pair_chunk`].
+/// law), added to `f` (the partner's share at once, the row's own sum at the end of its row).
+/// The dissipation and bridge energy are summed per [`ENTRY_CHUNK`] entries.
 pub(super) fn pair_forces_serial<const D: usize, const WET: bool>(
     pc: &PairConstants<D>,
     x: &[f64],

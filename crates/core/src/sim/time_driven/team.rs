@@ -1,6 +1,6 @@
 //! A team of threads that runs many time steps in one parallel region (SPMD) for the spatial
 //! domains (`domains.rs`): one closure on every thread of the current rayon pool
-//! ([`rayon::broadcast`]: no thread beyond the pool, so the `sim::threads` core share is
+//! ([`rayon::broadcast`]: no thread beyond the pool, so the run's `sim::threads::Threads` are
 //! respected), the members synchronised once per step by a spin barrier ([`Member::wait`])
 //! instead of handing work over through rayon twice per step.
 //!
@@ -206,7 +206,14 @@ pub(crate) fn run_with_door<R: Send>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::threads::test_pool as pool;
+
+    /// A rayon pool of `threads` threads.
+    fn pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a pool")
+    }
 
     #[test]
     fn members_pass_barriers_in_step() {

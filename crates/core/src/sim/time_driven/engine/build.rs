@@ -1,6 +1,5 @@
 //! Construction and state I/O of the time-driven engine: the engine from a scene or from a
-//! saved state (`sim::state`), the execution strategies chosen at construction, and the
-//! overwriting of one particle's state. Nothing here steps.
+//! saved state (`sim::state`) and the overwriting of one particle's state. Nothing here steps.
 
 use super::stepping::Then;
 use super::*;
@@ -26,14 +25,6 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     /// Builds the engine with a body force.
     pub fn with_body_force(scene: &Scene, body: B) -> Self {
         Self::start(scene, None, body)
-    }
-
-    /// The engine with the execution strategies of `execution` (instead of the default),
-    /// chosen as it is built: before its first step.
-    #[must_use]
-    pub fn with_execution(mut self, execution: Execution) -> Self {
-        self.execution = execution;
-        self
     }
 
     /// The engine of the scene's initial state or, with `Some(state)`, rebuilt from a saved
@@ -89,9 +80,8 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
         };
         let mut engine = Self {
             s,
-            execution: Execution::default(),
+            domains_from: DOMAIN_MIN_PARTICLES,
             serial: Serial::default(),
-            rayon: RayonSplit::default(),
             domains: Domains::default(),
         };
         engine.s.list.build(&engine.s.r[0], &engine.s.radius);

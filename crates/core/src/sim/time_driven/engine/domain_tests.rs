@@ -1,7 +1,14 @@
 //! The spatial domains (`domains.rs`) against the serial step and against themselves.
 use super::*;
 use crate::scene::Scene;
-use crate::sim::threads::test_pool as pool;
+
+/// A rayon pool of `threads` threads.
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a pool")
+}
 
 /// A shaken wet bed of 360 disks in a 120 x 9 box (bridges form and rupture, across the
 /// cut too).
@@ -17,21 +24,16 @@ fn wet_bed() -> Scene {
 
 type Wet = TimeEngine<2, true, true>;
 
-/// Gear steps on the domains whatever the size, or never.
-const ALWAYS: Execution = Execution {
-    domains_from: 0,
-    split_from: PARALLEL_MIN_PARTICLES,
-};
-const NEVER: Execution = Execution {
-    domains_from: usize::MAX,
-    split_from: PARALLEL_MIN_PARTICLES,
-};
+/// Gear steps on the domains whatever the size (`TimeEngine::domains_from`), or never.
+const ALWAYS: usize = 0;
+const NEVER: usize = usize::MAX;
 
 /// A door of a minute: every thread of the pool joins the team, even on a loaded machine.
 const LONG_DOOR: std::time::Duration = std::time::Duration::from_secs(60);
 
-fn engine(execution: Execution) -> Wet {
-    let mut e = Wet::new(&wet_bed()).with_execution(execution);
+fn engine(domains_from: usize) -> Wet {
+    let mut e = Wet::new(&wet_bed());
+    e.domains_from = domains_from;
     e.domains.door = LONG_DOOR;
     e
 }
@@ -200,9 +202,10 @@ fn spheres_on_domains_agree_with_the_serial_step() {
         gamma = 5.0\ne_star = 10.0\n[initial]\ntemperature_over_ecb = 20.0\nseed = 5\n\
         [run]\nduration = 1.0\n[engine]\nkind = \"time\"\n";
     let scene = Scene::from_toml_str(text, "domain test 3D").expect("valid scene");
-    let run = |execution: Execution, threads: usize| {
+    let run = |domains_from: usize, threads: usize| {
         pool(threads).install(|| {
-            let mut e = TimeEngine::<3, true, true>::new(&scene).with_execution(execution);
+            let mut e = TimeEngine::<3, true, true>::new(&scene);
+            e.domains_from = domains_from;
             e.domains.door = LONG_DOOR;
             e.run_until(0.4);
             e
@@ -220,12 +223,23 @@ fn spheres_on_domains_agree_with_the_serial_step() {
     agree_to_round_off(&serial, &one);
 }
 
-/// The point of the domains: in the bench system (1200 disks, 400 x 9, cut across x)
+/// The point of the domains: in the bench system (`wetgran-bench tdmd`: 1200 dry disks,
+/// 400 x 9, shaken at `A = 0.05`, `Gamma = 15`, cut across x)
 /// the threads exchange only a small halo per step. Prints the figures quoted in
 /// docs/performance-history.md ("Sixth round: spatial domains").
 #[test]
 fn the_halo_is_a_small_part_of_the_bench_system() {
-    let s = crate::scene::reference::dry_shaken_time_driven("gear5");
+    let kr = crate::scene::DEFAULT_STIFFNESS * 0.25f64.sqrt();
+    let a_d = crate::physics::hertz::damping_for_restitution(kr, 0.5, 1.0, 0.9);
+    let text = format!(
+        "dimension = 2\ngravity = 1.0\n[box]\nsize = [400.0, 9.0]\nboundary = [\"periodic\", \"wall\"]\n\
+         [particles]\ncount = 1200\npolydispersity = 0.06\n[contact]\ndamping = {a_d}\n\
+         [drive]\nkind = \"sine\"\namplitude = 0.05\nomega = {}\n\
+         [initial]\ntemperature = 1.0\nseed = 1\n[run]\nduration = 1.0\n\
+         [engine]\nkind = \"time\"\ndt = 1e-4\nintegrator = \"gear5\"\n",
+        (15.0f64 / 0.05).sqrt()
+    );
+    let s = Scene::from_toml_str(&text, "the bench system").expect("valid scene");
     let mut e = TimeEngine::<2, true, false>::new(&s);
     assert!(e.uses_domains(), "N = 1200 runs on the domains by default");
     e.run_until(0.5);

@@ -41,12 +41,11 @@ mod domain_step;
 #[cfg(test)]
 mod domain_tests;
 mod measures;
-mod rayon_split;
+mod particle_phase;
 mod serial;
 mod stepping;
 
 use domain_step::Domains;
-use rayon_split::RayonSplit;
 use serial::Serial;
 use stepping::Strategy;
 
@@ -71,40 +70,9 @@ impl<const D: usize> BodyForce<D> for NoBodyForce {
     }
 }
 
-/// Coordinates per chunk of the per-particle phase (and of Verlet's drift): a thread's unit of
-/// work and of the booked sums, added in chunk order (fixed: the numbers do not depend on the
-/// number of threads).
+/// Coordinates per chunk of the per-particle phase (and of Verlet's drift): the unit of the
+/// booked sums, added in chunk order.
 pub(crate) const PARTICLE_CHUNK: usize = 128;
-
-/// The default [`Execution::split_from`]: a parallel loop costs a few microseconds of hand-over
-/// per step. On a quiet 2-core machine two threads made the N = 1200 bench 0.69x as fast, 4 800
-/// disks about even, 19 200 at most 1.37x (docs/performance-history.md, "Quiet-machine figures
-/// after the third round").
-pub(crate) const PARALLEL_MIN_PARTICLES: usize = 16_384;
-
-/// Which execution strategy runs which step, fixed at construction
-/// ([`TimeEngine::with_execution`]). The numbers never depend on the thread count; the domains
-/// sum the forces on a particle in another order than the other two strategies (round-off,
-/// `domains.rs`), so `domains_from` is part of a run's definition and `split_from` is not.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Execution {
-    /// Gear steps of a scene without a body force run on the spatial domains from this many
-    /// particles on ([`DOMAIN_MIN_PARTICLES`] by default; 0: always, `usize::MAX`: never).
-    pub domains_from: usize,
-    /// The other steps are split over the threads of the current rayon pool (of more than one
-    /// thread) from this many particles on ([`PARALLEL_MIN_PARTICLES`] by default), else run on
-    /// the calling thread. The numbers are the same either way.
-    pub split_from: usize,
-}
-
-impl Default for Execution {
-    fn default() -> Self {
-        Self {
-            domains_from: DOMAIN_MIN_PARTICLES,
-            split_from: PARALLEL_MIN_PARTICLES,
-        }
-    }
-}
 
 /// Largest overlap, in units of the mean diameter, that [`TimeEngine::sanity_check`] tolerates
 /// (five times the 1 % the default stiffness is chosen for).
@@ -176,10 +144,13 @@ struct State<const D: usize, const GRAV: bool, const WET: bool, B> {
 #[derive(Debug)]
 pub struct TimeEngine<const D: usize, const GRAV: bool, const WET: bool, B = NoBodyForce> {
     s: State<D, GRAV, WET, B>,
-    execution: Execution,
-    /// The serial and the rayon strategy's reused buffers.
+    /// Gear steps of a scene without a body force run on the spatial domains from this many
+    /// particles on ([`DOMAIN_MIN_PARTICLES`]; the domain tests move it). The domains sum the
+    /// forces on a particle in another order than the serial step (round-off, `domains.rs`),
+    /// so it is part of a run's definition.
+    domains_from: usize,
+    /// The serial strategy's reused buffers.
     serial: Serial<D>,
-    rayon: RayonSplit<D>,
     /// The domain strategy's decomposition and counters.
     domains: Domains<D>,
 }

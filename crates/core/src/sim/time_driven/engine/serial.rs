@@ -1,13 +1,9 @@
 //! The serial strategy: a step on the calling thread. The pair loop scatters each pair force to
-//! both partners (`pair_forces_serial`, rows ascending, so every particle receives its
-//! partners' forces in the order the rayon strategy's gather adds them), then the rayon
-//! strategy's per-particle phase runs on this thread (`ParticlePhase`: walls, body force and
-//! `1/m` per chunk, books summed per chunk; the integrator pass on whole axes). So both give
-//! the same bits (`crates/core/tests/time_driven_pins.rs` runs each pin on one thread, this
-//! strategy, and on two, the rayon one); this one does less work (no per-entry force buffer,
-//! no gather).
+//! both partners (`pair_forces_serial`, rows ascending), then the per-particle phase runs
+//! (`ParticlePhase`: walls, body force and `1/m` per chunk, books summed per chunk; the
+//! integrator pass on whole axes).
 
-use super::rayon_split::ParticlePhase;
+use super::particle_phase::ParticlePhase;
 use super::stepping::Then;
 use super::*;
 use crate::sim::time_driven::pair_kernel::pair_forces_serial;
@@ -20,9 +16,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> Strateg
     for Serial<D>
 {
     fn advance(&mut self, s: &mut State<D, GRAV, WET, B>, _target: u64) {
-        s.step_with(false, |s, t, vs, dt, then| {
-            self.forces_then(s, t, vs, dt, then)
-        });
+        s.step_with(|s, t, vs, dt, then| self.forces_then(s, t, vs, dt, then));
     }
 }
 
@@ -56,6 +50,6 @@ impl<const D: usize> Serial<D> {
             &list.partner,
             &mut list.flags,
         );
-        self.0.run(s, None, &[pb], t, vs, dt, then)
+        self.0.run(s, &[pb], t, vs, dt, then)
     }
 }

@@ -1,4 +1,4 @@
-//! Stepping the time-driven engine: the [`Strategy`] trait of the three execution strategies,
+//! Stepping the time-driven engine: the [`Strategy`] trait of the two execution strategies,
 //! the choice of strategy per step, and what they share: one step of Gear or velocity Verlet
 //! around a force evaluation ([`State::step_with`]), the list update and the walls of a step.
 
@@ -9,10 +9,9 @@ use crate::sim::time_driven::integrator::{
 };
 use crate::sim::time_driven::neighbours::{needs_rebuild, norm};
 use crate::sim::time_driven::walls::WallAxis;
-use rayon::prelude::*;
 
-/// An execution strategy: [`Serial`], [`RayonSplit`] or [`Domains`] (ARCHITECTURE.md, "Time
-/// engine"). Each gives the same bits on any number of threads.
+/// An execution strategy: [`Serial`] or [`Domains`] (ARCHITECTURE.md, "Time engine"). Each
+/// gives the same bits on any number of threads.
 pub(super) trait Strategy<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> {
     /// Advances `s` by at least one step and at most to step `target`.
     fn advance(&mut self, s: &mut State<D, GRAV, WET, B>, target: u64);
@@ -28,59 +27,41 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>>
     }
 
     /// Runs until the time is the multiple of `dt` nearest to `t_end`. Always returns true (the
-    /// time engine has no event cap). Runs on the thread pool `sim::threads` chooses.
+    /// time engine has no event cap). Runs on the caller's rayon pool (`sim::threads::Threads`).
     pub fn run_until(&mut self, t_end: f64) -> bool {
         let target = (t_end / self.s.p.dt).round().max(0.0) as u64;
-        if self.s.steps >= target {
-            return true;
+        while self.s.steps < target {
+            self.advance(target);
         }
-        crate::sim::threads::install(|| {
-            while self.s.steps < target {
-                self.advance(target);
-            }
-        });
         true
     }
 
     /// Advances by at least one step towards `target`: on the domains for a predicted Gear step
-    /// where [`Self::uses_domains`], else split where [`Self::splits`], else serially.
+    /// where [`Self::uses_domains`], else serially.
     fn advance(&mut self, target: u64) {
         if self.s.predicted && self.uses_domains() {
             self.domains.advance(&mut self.s, target);
-        } else if self.splits() {
-            self.rayon.advance(&mut self.s, target);
         } else {
             self.serial.advance(&mut self.s, target);
         }
     }
 
     /// Whether the Gear steps run on the domains: no body force and at least
-    /// [`Execution::domains_from`] (and [`DOMAINS`]) particles, whatever the threads.
+    /// `domains_from` (and [`DOMAINS`]) particles, whatever the threads.
     pub(super) fn uses_domains(&self) -> bool {
         self.s.p.integrator == IntegratorKind::Gear5
             && !B::ACTIVE
             && self.s.n >= DOMAINS
-            && self.s.n >= self.execution.domains_from
-    }
-
-    /// Whether the other steps are split over threads ([`Execution::split_from`]).
-    fn splits(&self) -> bool {
-        self.s.n >= self.execution.split_from && rayon::current_num_threads() > 1
+            && self.s.n >= self.domains_from
     }
 
     /// Accelerations at positions `r[0]` and velocities `r[1] * vs` at time `t`, then `then`
     /// (the Gear corrector-predictor or Verlet's second half); books dissipation, drive work,
     /// contact onsets and bridge events with weight `dt` (0: a re-evaluation that is not a
-    /// step). Returns the largest move per axis of the Gear update (zeros otherwise).
-    ///
-    /// Serial or split as [`Self::splits`] says (the same bits): the initial forces and a
-    /// re-evaluation after `set_state`.
+    /// step). Returns the largest move per axis of the Gear update (zeros otherwise). Serial:
+    /// the initial forces and a re-evaluation after `set_state`.
     pub(super) fn forces_then(&mut self, t: f64, vs: f64, dt: f64, then: Then) -> [f64; D] {
-        if self.splits() {
-            self.rayon.forces_then(&mut self.s, t, vs, dt, then)
-        } else {
-            self.serial.forces_then(&mut self.s, t, vs, dt, then)
-        }
+        self.serial.forces_then(&mut self.s, t, vs, dt, then)
     }
 }
 
@@ -109,10 +90,9 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
     }
 
     /// One step of the scene's integrator around the force evaluation `forces` (a strategy's
-    /// `forces_then`); `split` says whether Verlet's drift is split over the pool's threads.
+    /// `forces_then`).
     pub(super) fn step_with(
         &mut self,
-        split: bool,
         forces: impl FnOnce(&mut Self, f64, f64, f64, Then) -> [f64; D],
     ) {
         let dt = self.p.dt;
@@ -133,7 +113,7 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
                 self.predicted = true;
             }
             IntegratorKind::Verlet => {
-                let moved = self.verlet_drift_wrap(dt, split);
+                let moved = self.verlet_drift_wrap(dt);
                 self.moved_bound += norm(moved);
                 self.update_list();
                 forces(self, t1, 1.0, dt, Then::VerletKick);
@@ -164,11 +144,10 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
         }
     }
 
-    /// Velocity Verlet's first half on every coordinate (`verlet_drift`), with the wrap of the
-    /// periodic axes; returns the largest move per axis.
-    fn verlet_drift_wrap(&mut self, dt: f64, split: bool) -> [f64; D] {
+    /// Velocity Verlet's first half on every coordinate (`verlet_drift`), chunk by chunk, with
+    /// the wrap of the periodic axes; returns the largest move per axis.
+    fn verlet_drift_wrap(&mut self, dt: f64) -> [f64; D] {
         let n = self.n;
-        let min_len = if split { 1 } else { usize::MAX };
         let (periodic, size) = (self.p.periodic, self.p.size);
         let start = self.force_start();
         self.acc_is_start = true;
@@ -185,19 +164,14 @@ impl<const D: usize, const GRAV: bool, const WET: bool, B: BodyForce<D>> State<D
             });
             moved
         };
-        (
-            x.par_chunks_mut(PARTICLE_CHUNK),
-            v.par_chunks_mut(PARTICLE_CHUNK),
-            self.acc.par_chunks_mut(PARTICLE_CHUNK),
-        )
-            .into_par_iter()
+        x.chunks_mut(PARTICLE_CHUNK)
+            .zip(v.chunks_mut(PARTICLE_CHUNK))
+            .zip(self.acc.chunks_mut(PARTICLE_CHUNK))
             .enumerate()
-            .with_min_len(min_len)
-            .map(|(c, (x, v, acc))| drift(c * PARTICLE_CHUNK, x, v, acc))
-            .reduce(
-                || [0.0; D],
-                |a, b| std::array::from_fn(|k| max_ignoring_nan(a[k], b[k])),
-            )
+            .map(|(c, ((x, v), acc))| drift(c * PARTICLE_CHUNK, x, v, acc))
+            .fold([0.0; D], |a, b| {
+                std::array::from_fn(|k| max_ignoring_nan(a[k], b[k]))
+            })
     }
 }
 

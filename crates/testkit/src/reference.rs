@@ -14,8 +14,10 @@
 //!   `A = 0.05` at `Gamma = 15`, `dt = 1e-4`, default stiffness, the damping `A_d` that gives
 //!   restitution 0.9 at impact speed 1, elastic walls, initial `T = 1 m g d`.
 
-use super::{Boundary, CapillarySpec, DEFAULT_STIFFNESS, DriveKind, Scene, WallSolverKind};
-use crate::physics::hertz;
+use wetgran_core::physics::hertz;
+use wetgran_core::scene::{
+    Boundary, CapillarySpec, DEFAULT_STIFFNESS, DriveKind, Scene, WallSolverKind,
+};
 
 /// A scene of `32 000` equal elastic particles at `T = 1` in the given box; the reference
 /// systems below change what differs from it. Everything else is at its default; the run length

@@ -1,19 +1,25 @@
-//! Shared helpers of the engine tests: scene construction and a run loop that checks the
-//! engine's invariants (`sanity_check`) as it goes.
-#![allow(dead_code)]
+//! What the tests and benchmarks of wetgran share, kept out of the product crates (a
+//! dev-dependency of `wetgran-core` and `wetgran`, a dependency of `wetgran-bench`): scene
+//! construction and a run loop that checks the engine's invariants (`sanity_check`) as it goes
+//! (here), the 2D standard wet system ([`standard`]), the reference systems of the benchmarks
+//! ([`reference`]) and the reference event queue ([`NaiveQueue`]).
 
-pub(crate) mod standard;
+mod queues;
+pub mod reference;
+pub mod standard;
+
+pub use queues::NaiveQueue;
 
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::event_driven::Engine;
 
 /// Parses and validates a scene written inline in a test.
-pub(crate) fn scene(text: &str) -> Scene {
+pub fn scene(text: &str) -> Scene {
     Scene::from_toml_str(text, "<test scene>").unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// A scene with the given header lines; `[run]` and `[initial]` are added if missing.
-pub(crate) fn scene_with(
+pub fn scene_with(
     dimension: usize,
     gravity: f64,
     size: &[f64],
@@ -45,7 +51,7 @@ pub(crate) fn scene_with(
 }
 
 /// Runs the engine in `chunks` steps up to `t_end`, checking invariants after each chunk.
-pub(crate) fn run_checked<const D: usize, const G: bool, const W: bool, const S: bool>(
+pub fn run_checked<const D: usize, const G: bool, const W: bool, const S: bool>(
     e: &mut Engine<D, G, W, S>,
     t_end: f64,
     chunks: usize,
@@ -65,7 +71,7 @@ pub(crate) fn run_checked<const D: usize, const G: bool, const W: bool, const S:
 
 /// Runs until at least `events` more events have been processed, checking invariants every
 /// `every` events.
-pub(crate) fn run_events<const D: usize, const G: bool, const W: bool, const S: bool>(
+pub fn run_events<const D: usize, const G: bool, const W: bool, const S: bool>(
     e: &mut Engine<D, G, W, S>,
     events: u64,
     every: u64,

@@ -8,26 +8,24 @@
 //! in y, elastic walls, `s_crit` and `E_cb` of the thin thread), so the text leaves them out;
 //! `standard_defaults_are_the_standard_system` in `crates/core/tests/standard_invariance.rs` pins that.
 
-#![allow(dead_code)]
-
 use wetgran_core::scene::{EngineKind, RestitutionSpeed, Scene};
 
 /// Seed of the initial state used by every documented figure unless the test says otherwise.
-pub(crate) const STANDARD_SEED: u64 = 1;
+pub const STANDARD_SEED: u64 = 1;
 /// The second seed of the seed-invariance checks.
-pub(crate) const OTHER_SEED: u64 = 2;
+pub const OTHER_SEED: u64 = 2;
 /// `E_cb` of the standard system (docs/model.md 1), units of m g d.
-pub(crate) const E_CB: f64 = 0.2844;
+pub const E_CB: f64 = 0.2844;
 
 /// The driving period `T = 2 pi v_w / (Gamma g)` with `v_w = sqrt(2 E* E_cb / m)` (docs/model.md
 /// 4.1; m = g = 1).
-pub(crate) fn driving_period(gamma: f64, e_star: f64) -> f64 {
+pub fn driving_period(gamma: f64, e_star: f64) -> f64 {
     std::f64::consts::TAU * (2.0 * e_star * E_CB).sqrt() / gamma
 }
 
 /// How long the observers skip at the start of a run.
 #[derive(Debug, Clone, Copy)]
-pub(crate) enum Transient {
+pub enum Transient {
     /// In driving periods, as the scene counts it.
     Periods(f64),
     /// In time units, converted with [`driving_period`].
@@ -37,7 +35,7 @@ pub(crate) enum Transient {
 /// One run of the standard system; [`StandardWet::new`] gives the standard values and the
 /// fields say what a test changes.
 #[derive(Debug, Clone)]
-pub(crate) struct StandardWet {
+pub struct StandardWet {
     pub gamma: f64,
     pub e_star: f64,
     /// Normal restitution between grains (walls stay elastic).
@@ -62,13 +60,7 @@ pub(crate) struct StandardWet {
 impl StandardWet {
     /// The standard system (N = 1200 in 400 x 9, seed [`STANDARD_SEED`]) at (Gamma, E*) with
     /// restitution `eps`, run for `duration` time units after skipping `transient`.
-    pub(crate) fn new(
-        gamma: f64,
-        e_star: f64,
-        eps: f64,
-        duration: f64,
-        transient: Transient,
-    ) -> Self {
+    pub fn new(gamma: f64, e_star: f64, eps: f64, duration: f64, transient: Transient) -> Self {
         StandardWet {
             gamma,
             e_star,
@@ -87,26 +79,26 @@ impl StandardWet {
     }
 
     /// `count` grains in `l_x x 9` instead of 1200 in 400 x 9.
-    pub(crate) fn sized(mut self, count: usize, l_x: f64) -> Self {
+    pub fn sized(mut self, count: usize, l_x: f64) -> Self {
         self.count = count;
         self.l_x = l_x;
         self
     }
 
-    pub(crate) fn seed(mut self, seed: u64) -> Self {
+    pub fn seed(mut self, seed: u64) -> Self {
         self.seed = seed;
         self
     }
 
     /// Without the Delaunay and diffusion observers (what the engine comparisons skip).
-    pub(crate) fn without_mobility(mut self) -> Self {
+    pub fn without_mobility(mut self) -> Self {
         self.location_changes = false;
         self.diffusion = false;
         self
     }
 
     /// The transient in driving periods.
-    pub(crate) fn transient_periods(&self) -> f64 {
+    pub fn transient_periods(&self) -> f64 {
         match self.transient {
             Transient::Periods(p) => p,
             Transient::Time(t) => t / driving_period(self.gamma, self.e_star),
@@ -114,7 +106,7 @@ impl StandardWet {
     }
 
     /// The scene file's text.
-    pub(crate) fn toml(&self) -> String {
+    pub fn toml(&self) -> String {
         let mut text = format!(
             "dimension = 2\n\
              [box]\nsize = [{:?}, 9.0]\n\
@@ -145,14 +137,14 @@ impl StandardWet {
     }
 
     /// The validated scene, run by the event-driven engine.
-    pub(crate) fn scene(&self) -> Scene {
+    pub fn scene(&self) -> Scene {
         Scene::from_toml_str(&self.toml(), "standard wet system").unwrap_or_else(|e| panic!("{e}"))
     }
 }
 
 /// The same scene run by the time-driven engine: `engine.kind` is the only change, and
 /// `contact.restitution_speed` where a single-speed calibration is wanted instead of `"auto"`.
-pub(crate) fn time_twin(s: &Scene, speed: Option<f64>) -> Scene {
+pub fn time_twin(s: &Scene, speed: Option<f64>) -> Scene {
     let mut t = s.clone();
     t.engine.kind = EngineKind::Time;
     t.contact.restitution_speed = speed.map(RestitutionSpeed::Speed);
