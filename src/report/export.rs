@@ -61,10 +61,7 @@ impl ExportRow {
                 motion.map(|m| m.0).into(),
                 motion.map(|m| m.1).into(),
                 p.phase.clone().into(),
-                p.observables
-                    .as_ref()
-                    .and_then(wetgran_core::observe::converged_in_json)
-                    .into(),
+                p.verdict().map(|v| v.name()).into(),
                 p.trend.map(|t| t.name()).into(),
                 super::trust::mark(p.trust()).map(String::from).into(),
                 p.simulated_time.into(),
@@ -91,7 +88,7 @@ pub const FIXED: [&str; 14] = [
     "amplitude",
     "omega",
     "phase",
-    "stationary",
+    "verdict",
     "trend",
     "trust",
     "simulated_time",

@@ -232,16 +232,23 @@ pub struct DecisionInputs {
     pub borderline: Vec<String>,
     /// The decision in words.
     pub reason: String,
+    /// The verdict on the label (`observe::settling`): recomputed with the label, because what
+    /// may still drift depends on it.
+    pub settling: Settling,
 }
 
-/// A phase, the numbers it was decided on, and whether the run had settled into it.
+/// A phase and the numbers it was decided on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Classification {
     pub phase: Phase,
     pub decided_on: DecisionInputs,
-    /// The verdict on this label (`observe::settling`): recomputed with the label, because
-    /// what may still drift depends on it.
-    pub settling: Settling,
+}
+
+impl Classification {
+    /// The verdict on this label.
+    pub fn verdict(&self) -> Verdict {
+        self.decided_on.settling.verdict
+    }
 }
 
 /// The bridge density separating dense from dilute bins: the split of the sorted values into
@@ -434,20 +441,13 @@ pub fn classify_with(
         }
         _ => None,
     };
-    let settling = match &obs.trend {
-        Some(t) => {
-            let tests: Vec<_> = t.all_tests().cloned().collect();
-            settling::settle(phase, parts, &t.unrelaxed, &tests)
-        }
-        None => Settling {
-            verdict: Verdict::NotSettled,
-            regions: Vec::new(),
-        },
-    };
+    if let Some(t) = &obs.trend {
+        let tests: Vec<_> = t.all_tests().cloned().collect();
+        decided.settling = settling::settle(phase, parts, &t.unrelaxed, &tests);
+    }
     Classification {
         phase,
         decided_on: decided,
-        settling,
     }
 }
 
@@ -639,6 +639,10 @@ fn classify_unsheared(
         shear_e_par: None,
         borderline: Vec::new(),
         reason: String::new(),
+        settling: Settling {
+            verdict: Verdict::NotSettled,
+            regions: Vec::new(),
+        },
     };
     if !test.significant {
         decided.reason = format!(

@@ -403,11 +403,11 @@ impl crate::sim::Watcher for Watch<'_> {
         let now = self.assess();
         let label = self.label(&now);
         self.trend = Some(now);
-        let kept = (label.settling.verdict == Verdict::LabelKept).then_some(label.phase);
+        let kept = (label.verdict() == Verdict::LabelKept).then_some(label.phase);
         let kept_twice = kept.is_some() && self.kept == kept;
         self.kept = kept;
         let next = t_end + schedule.window;
-        self.ending = if label.settling.verdict == Verdict::Stationary {
+        self.ending = if label.verdict() == Verdict::Stationary {
             Some(Ending::Stationary)
         } else if kept_twice {
             Some(Ending::Settled)
@@ -456,7 +456,7 @@ pub fn run_observed_from(
         scene,
         set,
         monitored: Vec::new(),
-        regions: lateral_observer(scene),
+        regions: lateral_observer(scene, settling::block_time(scene.driving_period())),
         schedule,
         t_floor: t0 + spec.window_start(scene),
         checks: 0,
@@ -515,8 +515,8 @@ pub fn run_observed_from(
 }
 
 /// The lateral observer of a validated scene: its bins, bonds and mobility lags
-/// (`observe::lateral`).
-fn lateral_observer(scene: &Scene) -> LateralObserver {
+/// (`observe::lateral`), its blocks `block_time` long at first.
+fn lateral_observer(scene: &Scene, block_time: f64) -> LateralObserver {
     let spec = &scene.observe;
     let dt = spec.sample_interval(scene);
     LateralObserver::new(
@@ -525,7 +525,7 @@ fn lateral_observer(scene: &Scene) -> LateralObserver {
             wet: scene.is_wet(),
             unit: temperature_unit(scene).0,
             sample_interval: dt,
-            block_time: scene.driving_period(),
+            block_time,
             lag: spec.mobility_lag,
             bond_time: spec.bond_time,
             cluster_min_size: spec.cluster_min_size,
@@ -605,7 +605,7 @@ impl ObserverSet {
             unit_name,
             temperature: TemperatureObserver::new(unit),
             profiles: ProfileObserver::default(),
-            lateral: lateral_observer(scene),
+            lateral: lateral_observer(scene, scene.driving_period()),
             lc,
             diffusion: spec
                 .diffusion

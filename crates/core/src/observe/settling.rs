@@ -12,8 +12,8 @@
 //! **Series.** The whole system's `T_g / E_cb`, bridges per grain and `Delta n_cb` are sampled at
 //! every observer sample (`observe::trend`). The regions' own quantities come from a lateral
 //! observer that runs over the whole history from the transient floor on (not window by window),
-//! one value per block of whole driving periods (so the drive's oscillation averages out, as in
-//! `observe::lateral`): the member fraction, the members' and the other grains' temperatures,
+//! one value per block of a driving period, or of a whole fraction of a slow drive's period no
+//! longer than [`MAX_BLOCK_TIME`] (blocks merge as the history grows, `observe::lateral`): the member fraction, the members' and the other grains' temperatures,
 //! the lateral mobility `D_lat` of all grains, of the members and of the others over the long
 //! lag, and the fraction of members that stay in their cage (within `solid_diffusion` of the
 //! grains they were bonded to, over the long lag). [`region_series`] builds them.
@@ -67,6 +67,17 @@ pub const MEMBERS_STILL: &str = "members_still";
 pub const UNBONDED_TEMPERATURE: &str = "unbonded_temperature";
 /// `D_lat` of the grains that are not members, per block.
 pub const UNBONDED_MOBILITY: &str = "unbonded_mobility";
+
+/// Longest first block of the regions' observer, time units: a slow drive's period is cut into
+/// this many equal parts or more, so that a run of a few periods still gives the tests enough
+/// values (the big blocks of the block test average the drive's oscillation out again).
+pub(crate) const MAX_BLOCK_TIME: f64 = 1.0;
+
+/// The regions' first block length for a drive of period `period`: the period, or the largest
+/// whole fraction of it no longer than [`MAX_BLOCK_TIME`].
+pub(crate) fn block_time(period: f64) -> f64 {
+    period / (period / MAX_BLOCK_TIME).ceil().max(1.0)
+}
 
 /// Tolerance floor of the member fractions (a change of a few hundredths of the grains joining
 /// or leaving clusters is nothing to the phase).

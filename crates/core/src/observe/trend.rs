@@ -89,7 +89,7 @@ impl fmt::Display for TrendState {
 pub struct Trend {
     pub state: TrendState,
     /// The end of the transient found by MSER (the latest over the sampled quantities).
-    pub(crate) relaxed_at: f64,
+    pub relaxed_at: f64,
     /// Whether the sampled history had relaxed (every quantity's truncation in the first half).
     pub relaxed: bool,
     /// The history the tests of the sampled quantities cover, `[from, to]`.
