@@ -97,13 +97,14 @@ fn main() {
                         method,
                         ..
                     } => format!("point (line: no {method})"),
+                    wetgran_core::observe::classify::FluidGasFrom::OwnEvidence {
+                        method,
+                        line_said,
+                        ..
+                    } => format!("own evidence ({method} said {line_said})"),
                 },
                 if d.borderline.is_empty() { "" } else { "yes" },
-                if obs.stationarity.stationary {
-                    "yes"
-                } else {
-                    "no"
-                }
+                c.verdict()
             );
         } else {
             println!("{path}: {} | {}", c.phase, c.decided_on.reason);

@@ -89,7 +89,7 @@ fn main() {
             .iter()
             .fold((9.0f64, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
         println!(
-            "eps {eps} G {gamma} E* {e_star} N {n} {cal:>8} A_d {ad:.3e}: phase {} Tg/Ecb {:.3} dilute({}) T {:.3} pack {:.4} | pack range {:.3}-{:.3} bridges/p {:.3} Dlat {:?} dncb {:.3} stationary {} wall {:.1}s",
+            "eps {eps} G {gamma} E* {e_star} N {n} {cal:>8} A_d {ad:.3e}: phase {} Tg/Ecb {:.3} dilute({}) T {:.3} pack {:.4} | pack range {:.3}-{:.3} bridges/p {:.3} Dlat {:?} dncb {:.3} verdict {} wall {:.1}s",
             r.classification.phase,
             o.granular_temperature_reduced,
             dil.2,
@@ -100,7 +100,7 @@ fn main() {
             o.bridges_per_particle,
             o.mobility.as_ref().map(|m| m.diffusion),
             p.delta_n_cb,
-            o.converged(),
+            r.classification.verdict(),
             r.report.wall_seconds
         );
     }

@@ -54,17 +54,22 @@ fn prepared(dir: &Path) -> PathBuf {
         let result = JobResult {
             checkpoint: None,
             phase: Some(phase.into()),
-            decided_on: Some(serde_json::json!({"synthetic": true, "t": t})),
+            decided_on: Some(serde_json::json!({"synthetic": true, "t": t, "settling": {
+                "verdict": match state {
+                    "stationary" => "stationary",
+                    "heating" => "label_kept",
+                    _ => "not_settled",
+                },
+                "regions": []}})),
             observables: serde_json::json!({
                 "granular_temperature_reduced": t,
                 "bridges_per_particle": 2.0 / (1.0 + t),
                 "temperature_unit_name": "E_cb",
                 "profiles": {"delta_n_cb": 0.5 / (1.0 + t), "n_cb": [1.0, 2.0 + t, 3.0]},
-                "convergence": {"converged": state == "stationary", "tests": [
+                "trend": {"state": state, "tests": [
                     test("temperature_reduced", 0.01 * t),
                     test("bridges_per_particle", 0.02),
                     test("delta_n_cb", 0.03)]},
-                "trend": {"state": state},
                 "checks": [{"quantity": "T_g", "ok": true}],
                 // Text entries enough to overflow the export's 8 KiB file buffer mid-run.
                 "notes": (0..40).map(|i| format!("note {i} of this job")).collect::<Vec<_>>(),
@@ -367,7 +372,7 @@ fn the_export_is_tidy() {
         want.sort();
         assert_eq!(keys, want);
     }
-    assert!(rows[0]["drive.gamma"].is_number() && rows[0]["stationary"].is_boolean());
+    assert!(rows[0]["drive.gamma"].is_number() && rows[0]["verdict"].is_string());
     // Series: numbers only; the text entries in their own file.
     let series = std::fs::read_to_string(&series).unwrap();
     assert!(series.lines().count() > 16);
@@ -377,7 +382,7 @@ fn the_export_is_tidy() {
     }
     let text = std::fs::read_to_string(&text).unwrap();
     assert!(text.contains(",obs.checks.quantity,0,T_g"), "{text}");
-    assert!(text.contains(",obs.convergence.tests.quantity,2,delta_n_cb"));
+    assert!(text.contains(",obs.trend.tests.quantity,2,delta_n_cb"));
     // A write that fails in the middle of the run names the file it failed on: the text file
     // overflows its buffer before the end, so this error comes from a row, not the last flush.
     assert!(text.len() > 2 * 8192, "{} bytes", text.len());

@@ -1,21 +1,24 @@
-//! Run to stationarity (issue 14): the `[convergence]` policy extends the same trajectory window
-//! by window up to its cap and stores the verdict; its keys are validated; engines rebuilt from
-//! a saved state continue the run (event engine to round-off, time engine physically).
+//! Run to a settled label: the `[convergence]` policy extends the same trajectory window by
+//! window up to its cap and stores how it ended; the window always holds the mobility lag; its
+//! keys are validated; engines rebuilt from a saved state continue the run (event engine to
+//! round-off, time engine physically).
 
 use wetgran_testkit as common;
 
 use wetgran_core::observe::trend::TrendState;
-use wetgran_core::observe::{Ending, run_observed, run_observed_from};
+use wetgran_core::observe::{Ending, Verdict, run_observed, run_observed_from};
 use wetgran_core::scene::Scene;
 use wetgran_core::sim::{EngineState, run_scene};
 
 /// A wet 2D gas cooling without a drive (the standard `s_crit`, `E_cb`, eps 0.9): `T_g`
-/// drifts down for the whole run.
+/// drifts down for the whole run. Mobility over a lag of 2 time units, so that a window of 8
+/// holds it.
 fn cooling(duration: f64, extra: &str) -> String {
     format!(
         "dimension = 2\n[box]\nsize = [30.0, 9.0]\n[particles]\ncount = 60\npolydispersity = 0.06\n\
          [contact]\nrestitution = 0.9\n[capillary]\nmodel = \"thin_thread\"\n\
-         [initial]\ntemperature_over_ecb = 20.0\nseed = 2\n[run]\nduration = {duration:?}\n{extra}"
+         [initial]\ntemperature_over_ecb = 20.0\nseed = 2\n[run]\nduration = {duration:?}\n\
+         [observe]\nmobility_lag = 2.0\n{extra}"
     )
 }
 
@@ -26,26 +29,26 @@ fn a_drifting_run_is_extended_on_one_trajectory_up_to_the_cap() {
     let s = common::scene(&cooling(8.0, "[convergence]\nmax_periods = 24.0\n"));
     let run = run_observed(&s, &Default::default(), &mut |_| {});
     let o = &run.observables;
-    let c = o
-        .convergence
-        .as_ref()
-        .expect("a policy run stores its verdict");
-    assert!(!c.converged, "{c:?}");
-    assert!(!o.converged());
+    let trend = o.trend.as_ref().expect("every run stores its trend");
+    let c = trend.policy.expect("a policy run stores how it ended");
+    assert_eq!(run.classification.verdict(), Verdict::NotSettled);
     assert_eq!(c.checks, 3, "{c:?}");
     // Cooling can change a label: the run goes on to its cap and says why it stopped.
-    assert_eq!(c.ending, Some(Ending::Cap));
-    assert_eq!(o.trend.as_ref().unwrap().state, TrendState::Cooling);
+    assert_eq!(c.ending, Ending::Cap);
+    assert_eq!(trend.state, TrendState::Cooling);
     assert_eq!((c.first_check, c.cap), (8.0, 24.0));
-    assert!((c.window_start - 16.0).abs() < 1e-9 && (c.window_end - 24.0).abs() < 1e-9);
-    assert_eq!(
-        (o.window_start, o.window_end),
-        (c.window_start, c.window_end)
-    );
-    let t = &c.tests[0];
+    assert!((o.window_start - 16.0).abs() < 1e-9 && (o.window_end - 24.0).abs() < 1e-9);
+    let t = &trend.tests[0];
     assert_eq!(t.quantity, "temperature_reduced");
     assert!(t.drift < 0.0 && !t.no_trend, "cooling: {t:?}");
-    assert_eq!(c.tests.len(), 3, "wet: T_g, bridges and Delta n_cb");
+    assert_eq!(trend.tests.len(), 3, "wet: T_g, bridges and Delta n_cb");
+    // The regions' quantities are tested too, over the whole history.
+    assert!(
+        trend
+            .region_tests
+            .iter()
+            .any(|t| t.quantity == "member_fraction")
+    );
     // 20 samples per period over the last window of 8: 161 samples, both ends included.
     assert_eq!(o.window_samples, 161);
     // The extension continued the same trajectory: the state equals a fixed run of 24.
@@ -59,9 +62,43 @@ fn a_drifting_run_is_extended_on_one_trajectory_up_to_the_cap() {
     let series = o.series.as_ref().unwrap();
     assert_eq!(series.time.first().copied(), Some(0.0));
     assert!((series.time.last().unwrap() - 24.0).abs() < 1e-9);
-    // The verdict survives the JSON round trip of the store.
-    let json = serde_json::to_value(o).unwrap();
-    assert_eq!(wetgran_core::observe::converged_in_json(&json), Some(false));
+    // The trend survives the JSON round trip of the store.
+    let json = serde_json::to_string(o).unwrap();
+    let back: wetgran_core::observe::Observables = serde_json::from_str(&json).unwrap();
+    assert_eq!(back.trend.as_ref(), Some(trend));
+}
+
+#[test]
+fn the_window_holds_the_mobility_lag() {
+    // A first check at 8 with the default lag of 10: the first window is lengthened to two
+    // lags, and the mobility is measured, not replaced by the temperature.
+    let s = common::scene(&cooling(8.0, "[convergence]\nmax_periods = 24.0\n").replace(
+        "mobility_lag = 2.0",
+        "mobility_lag = 10.0",
+    ));
+    let c = s.convergence.as_ref().unwrap().schedule(&s);
+    assert_eq!((c.first_check, c.window), (20.0, 20.0));
+    let run = run_observed(&s, &Default::default(), &mut |_| {});
+    assert!(run.observables.mobility.is_some());
+    assert_eq!(
+        run.classification.decided_on.whole.mobility_from,
+        wetgran_core::observe::Mobility::Displacement
+    );
+    // A fixed-length run cannot lengthen its window: the temperature decides, and the label is
+    // flagged.
+    let mut fixed = s.clone();
+    fixed.convergence = None;
+    let run = run_observed(&fixed, &Default::default(), &mut |_| {});
+    assert!(run.observables.mobility.is_none());
+    assert!(
+        run.classification
+            .decided_on
+            .borderline
+            .iter()
+            .any(|b| b.contains("mobility not measured")),
+        "{:?}",
+        run.classification.decided_on.borderline
+    );
 }
 
 #[test]
@@ -73,29 +110,25 @@ fn a_stationary_elastic_gas_converges_at_the_first_check() {
          [run]\nduration = 2.0\n[convergence]\nmin_time = 4.0\nmax_periods = 20.0\n",
     );
     let run = run_observed(&s, &Default::default(), &mut |_| {});
-    let c = run.observables.convergence.as_ref().unwrap();
-    assert!(c.converged, "{c:?}");
-    assert_eq!(c.checks, 1);
-    assert_eq!(c.ending, Some(Ending::Stationary));
     let trend = run.observables.trend.as_ref().unwrap();
+    let c = trend.policy.unwrap();
+    assert_eq!(run.classification.verdict(), Verdict::Stationary, "{trend:?}");
+    assert_eq!(c.checks, 1);
+    assert_eq!(c.ending, Ending::Stationary);
     assert_eq!(trend.state, TrendState::Stationary);
     assert!(trend.relaxed);
     // min_time beats run.duration: the first check is at 4.
     assert!((run.report.simulated_time - 4.0).abs() < 1e-12);
-    assert_eq!(c.tests.len(), 1, "dry: T_g only");
+    assert_eq!(trend.tests.len(), 1, "dry: T_g only");
 }
 
 #[test]
-fn fixed_length_runs_store_no_convergence_and_keep_their_json() {
+fn fixed_length_runs_are_assessed_once_at_their_end() {
     let s = common::scene(&cooling(2.0, ""));
     let run = run_observed(&s, &Default::default(), &mut |_| {});
-    assert!(run.observables.convergence.is_none());
-    let json = serde_json::to_string(&run.observables).unwrap();
-    assert!(!json.contains("convergence"), "old layout unchanged");
-    assert_eq!(
-        run.observables.converged(),
-        run.observables.stationarity.stationary
-    );
+    let trend = run.observables.trend.as_ref().unwrap();
+    assert!(trend.policy.is_none());
+    assert!((trend.to - 2.0).abs() < 1e-9);
 }
 
 #[test]

@@ -470,7 +470,7 @@ fn a_database_locked_past_the_busy_timeout_stops_the_run_by_name_and_loses_nothi
 fn a_damaged_checkpoint_is_reported_and_never_used() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "tiny.toml", TINY_SCENE);
-    // A cap of one window: the jobs that drift end unconverged, for `--extend`.
+    // A cap of one window: the jobs that drift end unsettled, for `--extend`.
     let file = write(
         dir.path(),
         "cap.toml",
@@ -487,12 +487,7 @@ fn a_damaged_checkpoint_is_reported_and_never_used() {
         .points(sweep.id)
         .unwrap()
         .into_iter()
-        .filter(|p| {
-            p.observables
-                .as_ref()
-                .and_then(wetgran_core::observe::converged_in_json)
-                == Some(false)
-        })
+        .filter(|p| p.verdict() != wetgran_core::observe::Verdict::Stationary)
         .map(|p| p.job_id)
         .collect();
     drop(store);

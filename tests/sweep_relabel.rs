@@ -10,7 +10,7 @@ use wetgran::store::PointRow;
 use wetgran::sweep::JobSpec;
 use wetgran::sweep::spec::SPEC_FORMAT;
 use wetgran_core::observe::classify::FluidGasFrom;
-use wetgran_core::observe::convergence::{BlockTest, Convergence};
+use wetgran_core::observe::convergence::BlockTest;
 use wetgran_core::observe::{Phase, run_observed};
 use wetgran_core::scene::Scene;
 
@@ -70,22 +70,11 @@ fn observables(template: &Value, t: f64) -> Value {
     o
 }
 
-/// `o` with a stored block error of its temperature, `rel` of its value (as a run to
-/// stationarity stores it).
+/// `o` with a stored block error of its temperature, `rel` of its value (as the trend of a run
+/// stores it).
 fn with_error(mut o: Value, rel: f64) -> Value {
     let t = o["granular_temperature_reduced"].as_f64().unwrap();
-    let c = Convergence {
-        converged: true,
-        ending: None,
-        window_start: 0.0,
-        window_end: 2.0,
-        checks: 1,
-        first_check: 2.0,
-        cap: 2.0,
-        blocks: 4,
-        sigmas: 3.0,
-        rel_tolerance: 0.02,
-        tests: vec![BlockTest {
+    let tests = vec![BlockTest {
             quantity: wetgran_core::observe::trend::TEMPERATURE.into(),
             mean: t,
             standard_error: rel * t,
@@ -97,9 +86,8 @@ fn with_error(mut o: Value, rel: f64) -> Value {
             tolerance: 0.02 * t,
             agree: true,
             no_trend: true,
-        }],
-    };
-    o["convergence"] = serde_json::to_value(c).unwrap();
+        }];
+    o["trend"]["tests"] = serde_json::to_value(tests).unwrap();
     o
 }
 

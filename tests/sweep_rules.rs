@@ -475,10 +475,10 @@ fn a_changed_classify_relabels_without_simulating_and_exports_stay_scalar() {
 
     let ids = check_export(dir.path(), db_s);
 
-    // `show` states the stationarity verdict.
+    // `show` states the verdict on the label.
     let job = &ids[0];
     let shown = ok(&["show", "--db", db_s, job]);
-    assert!(shown.contains("stationary  "), "{shown}");
+    assert!(shown.contains("settled     "), "{shown}");
 }
 
 #[test]
@@ -498,9 +498,10 @@ fn non_stationary_results_are_counted_and_marked() {
         let drifting = c.coords[0] == serde_json::json!(3.0);
         let result = wetgran::sweep::JobResult {
             phase: Some("g".into()),
-            decided_on: None,
-            observables: serde_json::json!({"stationarity": {"tolerance": 0.1,
-                "stationary": !drifting, "checks": []}}),
+            decided_on: Some(serde_json::json!({"settling": {
+                "verdict": if drifting { "not_settled" } else { "stationary" },
+                "regions": []}})),
+            observables: serde_json::json!({}),
             simulated_time: 1.0,
             wall_seconds: 0.01,
             events: 10,

@@ -1,9 +1,9 @@
-//! Trend states on the real system (docs/observables.md "Run to stationarity"): the 2D standard
+//! Trend states on the real system (docs/observables.md "Run to a settled label"): the 2D standard
 //! wet system (N = 1200, 400 d x 9 d, eps = 1) on the line Gamma = 30, under the run policy of the
 //! shipped validation sweep `sweeps/validation/gamma30_seeds.toml`. The elastic gas heats without
-//! bound and must read `heating` (docs/validation.md); the fluid-gas coexistence's drops grow and
-//! it must read `coarsening` with its coexistence label; both runs stop as soon as their trend is
-//! found twice, not at the cap.
+//! bound and must read `heating` (docs/validation.md), its label kept while nothing condenses,
+//! and stop before the cap; the fluid-gas coexistence's drops grow and it must read `coarsening`
+//! with its coexistence label.
 
 use std::path::Path;
 use wetgran::sweep::file::SweepFile;
@@ -40,7 +40,7 @@ fn outcomes(scenes: &[Scene]) -> Vec<(Phase, TrendState, Option<Ending>, f64)> {
             (
                 run.classification.phase,
                 o.trend.as_ref().expect("every run has a trend").state,
-                o.convergence.as_ref().and_then(|c| c.ending),
+                o.trend.as_ref().and_then(|t| t.policy).map(|p| p.ending),
                 run.report.simulated_time,
             )
         })
@@ -60,7 +60,7 @@ fn the_elastic_gas_at_gamma_30_reads_heating_and_stops_early() {
     let heating = got
         .iter()
         .filter(|(p, t, e, time)| {
-            *p == Phase::G && *t == TrendState::Heating && *e == Some(Ending::Trend) && *time < cap
+            *p == Phase::G && *t == TrendState::Heating && *e == Some(Ending::Settled) && *time < cap
         })
         .count();
     assert!(heating >= 4, "{got:?}");

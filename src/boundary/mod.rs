@@ -69,7 +69,7 @@ impl Observation {
             replica: row.replica,
             phase: row.phase.clone(),
             trusted: trust.label_trusted(),
-            label_kept: trust == wetgran_core::observe::trend::Trust::LabelKept,
+            label_kept: trust == wetgran_core::observe::Verdict::LabelKept,
             scene: Arc::clone(&row.scene),
         }
     }

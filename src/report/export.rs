@@ -61,10 +61,7 @@ impl ExportRow {
                 motion.map(|m| m.0).into(),
                 motion.map(|m| m.1).into(),
                 p.phase.clone().into(),
-                p.observables
-                    .as_ref()
-                    .and_then(wetgran_core::observe::converged_in_json)
-                    .into(),
+                p.verdict().map(|v| v.name()).into(),
                 p.trend.map(|t| t.name()).into(),
                 super::trust::mark(p.trust()).map(String::from).into(),
                 p.simulated_time.into(),
@@ -79,9 +76,9 @@ impl ExportRow {
 }
 
 /// The columns every row has, after the axis columns: the container motion of a shaken scene
-/// (`amplitude,omega`, docs/model.md 4.1), the run's stationarity verdict
-/// (`observe::converged_in_json`), its trend state (empty for results stored before trend
-/// states) and trust mark (`?` label may change, `~` label kept by its trend, empty
+/// (`amplitude,omega`, docs/model.md 4.1), the run's settling verdict (`observe::Verdict`:
+/// stationary, label_kept or not_settled), its trend state (empty for results stored before
+/// trend states) and trust mark (`?` not settled, `~` label kept by its settled regions, empty
 /// stationary), and the run's cost.
 pub const FIXED: [&str; 14] = [
     "sweep",
@@ -91,7 +88,7 @@ pub const FIXED: [&str; 14] = [
     "amplitude",
     "omega",
     "phase",
-    "stationary",
+    "verdict",
     "trend",
     "trust",
     "simulated_time",

@@ -11,6 +11,7 @@ use crate::store::{
 use crate::sweep::SweepFile;
 use crate::sweep::job::JobResult;
 use std::sync::Arc;
+use wetgran_core::observe::Verdict;
 use wetgran_core::scene::StartMode;
 
 /// A sweep over the quickstart's base scene with `axes` (TOML `[[axis]]` tables), two
@@ -33,15 +34,16 @@ fn prepared(dir: &std::path::Path, axes: &str) -> (Store, SweepRow) {
     let jobs = file.expand().unwrap();
     let store = Store::open(&dir.join("w.sqlite")).unwrap();
     let row = store.register_sweep(&file, &jobs).unwrap();
-    let observables = [
-        serde_json::json!({"convergence": {"converged": true}, "trend": {"state": "stationary"}}),
-        serde_json::json!({"convergence": {"converged": false}, "trend": {"state": "heating"}}),
-        serde_json::json!({"convergence": {"converged": false}, "trend": {"state": "undecided"}}),
-        serde_json::json!({"stationarity": {"stationary": false}}),
-        serde_json::json!({"stationarity": {"stationary": true}}),
-        serde_json::json!({"convergence": {"converged": null}, "stationarity": {"stationary": false}}),
-        serde_json::json!({"convergence": {"converged": false}, "trend": {"state": "cooling"}}),
-        serde_json::json!({}),
+    // (trend state, verdict) of each kind of result; None: not stored.
+    let kinds = [
+        (Some("stationary"), Some("stationary")),
+        (Some("heating"), Some("label_kept")),
+        (Some("undecided"), Some("not_settled")),
+        (None, Some("not_settled")),
+        (None, Some("stationary")),
+        (Some("cooling"), None),
+        (Some("cooling"), Some("label_kept")),
+        (None, None),
     ];
     let phases = ["g", "f", "s", "g", "fgc", "f", "s"];
     let mut k = 0;
@@ -53,8 +55,13 @@ fn prepared(dir: &std::path::Path, axes: &str) -> (Store, SweepRow) {
         } else {
             let result = JobResult {
                 phase: (k % 9 != 4).then(|| phases[k % phases.len()].to_string()),
-                decided_on: None,
-                observables: observables[k % observables.len()].clone(),
+                decided_on: kinds[k % kinds.len()]
+                    .1
+                    .map(|v| serde_json::json!({"settling": {"verdict": v, "regions": []}})),
+                observables: match kinds[k % kinds.len()].0 {
+                    Some(state) => serde_json::json!({"trend": {"state": state}}),
+                    None => serde_json::json!({}),
+                },
                 simulated_time: 1.0 + k as f64,
                 wall_seconds: 0.5 + k as f64,
                 events: 3,
@@ -90,8 +97,8 @@ fn assert_same_reports(store: &Store, row: &SweepRow) {
             (&b.last_error, b.start, &b.phase)
         );
         assert_eq!(
-            (a.wall_seconds, a.trend, a.converged, a.trust()),
-            (b.wall_seconds, b.trend, b.converged, b.trust()),
+            (a.wall_seconds, a.trend, a.verdict, a.trust()),
+            (b.wall_seconds, b.trend, b.verdict, b.trust()),
             "job {}",
             a.job_id
         );
@@ -172,9 +179,14 @@ fn summaries_give_the_reports_of_the_full_rows() {
     for status in ["done", "failed", "running"] {
         assert!(lean.iter().any(|p| p.status == status), "{status}");
     }
-    for v in [Some(true), Some(false), None] {
+    for v in [
+        Some(Verdict::Stationary),
+        Some(Verdict::LabelKept),
+        Some(Verdict::NotSettled),
+        None,
+    ] {
         assert!(
-            lean.iter().any(|p| p.status == "done" && p.converged == v),
+            lean.iter().any(|p| p.status == "done" && p.verdict == v),
             "{v:?}"
         );
     }
@@ -182,26 +194,6 @@ fn summaries_give_the_reports_of_the_full_rows() {
     assert!(lean.iter().any(|p| p.start == StartMode::Hot));
     // Axes that leave the scene as the base sets it: one scene for the sweep.
     assert!(lean.iter().all(|p| Arc::ptr_eq(&p.scene, &lean[0].scene)));
-    assert_same_reports(&store, &row);
-}
-
-#[test]
-fn the_backfill_of_the_migration_gives_the_verdict_of_the_observables() {
-    let dir = tempfile::tempdir().unwrap();
-    let (store, row) = prepared(dir.path(), PLANE);
-    let migration = include_str!("../../migrations/20261127130000_result_converged.sql");
-    let start = migration.find("UPDATE results SET converged").unwrap();
-    let end = start + migration[start..].find(';').unwrap();
-    let backfill = &migration[start..end];
-    store.execute_for_tests("UPDATE results SET converged = NULL", &[]);
-    assert!(
-        store
-            .point_summaries(&row)
-            .unwrap()
-            .iter()
-            .all(|p| p.converged.is_none())
-    );
-    store.execute_for_tests(backfill, &[]);
     assert_same_reports(&store, &row);
 }
 

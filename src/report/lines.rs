@@ -4,10 +4,9 @@
 //! against `E*`, with their standard errors, the label, the trend state and the trust of the run
 //! (`report::trust`). What `wetgran lines` draws (`lines_plot`) and writes as CSV or JSON.
 //!
-//! Errors: the standard error of the monitored quantity's mean from the blocks of the
-//! run-to-stationarity check (`observables.convergence.tests[].standard_error`, docs/observables.md
-//! "Run to stationarity"). Where a run stored no such test (a fixed-length run, or `Delta n_area`,
-//! which is not monitored), the contrast's error is `sqrt(2)` times the root mean square of the
+//! Errors: the standard error of the monitored quantity's mean from the blocks of the run's
+//! trend test (`observables.trend.tests[].standard_error`, docs/observables.md "Run to a settled
+//! label"). Where a run stored no such test (`Delta n_area`, which is not monitored), the contrast's error is `sqrt(2)` times the root mean square of the
 //! bins' standard errors (`profiles.n_cb_standard_error`, `profiles.packing_standard_error`): the
 //! error of a difference of two bins; the other quantities then have none.
 //!
@@ -109,12 +108,12 @@ fn same(a: f64, b: f64) -> bool {
 
 pub use crate::run::relabel::gamma_e_star;
 
-/// The stored block test of monitored quantity `name` (`convergence.tests`).
+/// The stored block test of monitored quantity `name` (`trend.tests`).
 pub(crate) fn block_test<'a>(
     obs: &'a serde_json::Value,
     name: &str,
 ) -> Option<&'a serde_json::Value> {
-    obs.pointer("/convergence/tests")?
+    obs.pointer("/trend/tests")?
         .as_array()?
         .iter()
         .find(|t| t["quantity"].as_str() == Some(name))
@@ -482,7 +481,7 @@ mod tests {
 
     #[test]
     fn block_errors_are_read_by_quantity() {
-        let obs = serde_json::json!({"convergence": {"tests": [
+        let obs = serde_json::json!({"trend": {"tests": [
             {"quantity": "temperature_reduced", "standard_error": 0.25},
             {"quantity": "delta_n_cb", "standard_error": 0.5}]}});
         assert_eq!(block_error(&obs, "temperature_reduced"), Some(0.25));

@@ -3,7 +3,8 @@
 //! along each line of constant Gamma, docs/model.md 7). Pure functions of the stored rows.
 
 use super::lines::gamma_e_star;
-use super::trust::{LABEL_KEPT, NOT_STATIONARY, failed_checks, mark};
+use super::trust::unsettled;
+use wetgran_core::observe::Verdict;
 use crate::store::PointRow;
 use std::fmt::Write as _;
 use wetgran_core::observe::fluid_gas_inflection;
@@ -37,44 +38,35 @@ pub fn decision_text(p: &PointRow) -> String {
         let _ = writeln!(out, "phase       {phase}");
     }
     if let Some(t) = p.trend {
-        let what = match mark(p.trust()) {
-            None => "",
-            Some(LABEL_KEPT) => {
-                " (not stationary, but the label is safe: a heating gas stays a gas, a cooling \
-                 solid a solid, a coarsening coexistence a coexistence; its numbers still drift)"
+        let _ = writeln!(out, "trend       {t} (what the whole system's history did)");
+    }
+    if p.phase.is_some() {
+        let verdict = match p.verdict() {
+            Some(Verdict::Stationary) => "stationary: every quantity the label rests on is flat",
+            Some(Verdict::LabelKept) => {
+                "label kept (~): every region settled, some quantity still drifts in a direction \
+                 that cannot change its phase"
             }
-            Some(_) => " (not stationary: the label may still change)",
+            Some(Verdict::NotSettled) => "NOT SETTLED (?): the label may still change",
+            None => "none stored (a result of an older run policy: outdated, its label may change)",
         };
-        let _ = writeln!(out, "trend       {t}{what}");
+        let _ = writeln!(out, "settled     {verdict}");
+        for u in p.decided_on.as_ref().map(unsettled).unwrap_or_default() {
+            let _ = writeln!(out, "            {u}");
+        }
         if let Some(ending) = p
             .observables
             .as_ref()
-            .and_then(|o| o.pointer("/convergence/ending"))
+            .and_then(|o| o.pointer("/trend/policy/ending"))
             .and_then(|e| e.as_str())
         {
             let why = match ending {
-                "stationary" => "its history was stationary",
-                "trend" => "its trend was found twice in a row and cannot change its label",
-                "cap" => "it reached the cap of the run-length policy",
+                "stationary" => "its label's verdict was stationary",
+                "settled" => "its label was kept, every region settled, at two checks in a row",
+                "cap" => "it reached the cap of the run-length policy before its label settled",
                 other => other,
             };
             let _ = writeln!(out, "ended       {why}");
-        }
-    }
-    if let Some(o) = &p.observables {
-        let stationary = wetgran_core::observe::converged_in_json(o);
-        let verdict = match stationary {
-            Some(true) => "yes".to_string(),
-            Some(false) => {
-                format!("NO ({NOT_STATIONARY} in `boundaries`): the averages may still drift")
-            }
-            None => "unknown (no check stored)".to_string(),
-        };
-        let _ = writeln!(out, "stationary  {verdict}");
-        if stationary == Some(false) {
-            for c in failed_checks(o) {
-                let _ = writeln!(out, "            {c}");
-            }
         }
     }
     if let Some(d) = &p.decided_on {
@@ -172,15 +164,15 @@ pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
 /// `show --json`: the job of [`job_text`] and the decision of [`decision_text`] as one object
 /// (the observables themselves are left out: `export --json` has them).
 pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
-    let trust = match mark(p.trust()) {
-        None => "stationary",
-        Some(LABEL_KEPT) => "label kept (not stationary)",
-        Some(_) => "label may change (not stationary)",
+    let trust = match p.trust() {
+        Verdict::Stationary => "stationary",
+        Verdict::LabelKept => "label kept (not stationary)",
+        Verdict::NotSettled => "label may change (not settled)",
     };
     let ending = p
         .observables
         .as_ref()
-        .and_then(|o| o.pointer("/convergence/ending"))
+        .and_then(|o| o.pointer("/trend/policy/ending"))
         .cloned();
     serde_json::json!({
         "job_id": p.job_id,
@@ -195,12 +187,8 @@ pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
         "trend": p.trend.map(|t| t.to_string()),
         "trust": if p.phase.is_some() { Some(trust) } else { None },
         "ended": ending,
-        "stationary": p.observables.as_ref().and_then(wetgran_core::observe::converged_in_json),
-        "failed_checks": p
-            .observables
-            .as_ref()
-            .map(failed_checks)
-            .unwrap_or_default(),
+        "verdict": p.verdict().map(|v| v.name()),
+        "unsettled": p.decided_on.as_ref().map(unsettled).unwrap_or_default(),
         "decided_on": p.decided_on,
         "simulated_time": p.simulated_time,
         "wall_seconds": p.wall_seconds,

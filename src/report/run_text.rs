@@ -179,24 +179,10 @@ pub fn observed_text(run: &ObservedRun) -> String {
         k.bridge_formations,
         k.bridge_ruptures
     );
-    let st = &o.stationarity;
-    let _ = writeln!(
-        s,
-        "  stationary        {} (first vs second half, tolerance {}): {}",
-        if st.stationary { "yes" } else { "NO" },
-        st.tolerance,
-        st.checks
-            .iter()
-            .map(|c| format!(
-                "{} {:.4} -> {:.4}{}",
-                c.quantity,
-                c.first_half,
-                c.second_half,
-                if c.ok { "" } else { " (!)" }
-            ))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
+    let _ = writeln!(s, "  settled           {}", c.verdict());
+    for u in c.decided_on.settling.unsettled_text() {
+        let _ = writeln!(s, "                    {u}");
+    }
     let _ = writeln!(s, "phase               {}", c.phase);
     let _ = writeln!(s, "  because           {}", c.decided_on.reason);
     s

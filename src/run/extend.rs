@@ -60,10 +60,7 @@ pub fn extend_unconverged(
     for (k, s) in sweeps.iter().enumerate() {
         for p in store.points(s.id)? {
             let unconverged = p.status == "done"
-                && p.observables
-                    .as_ref()
-                    .and_then(wetgran_core::observe::converged_in_json)
-                    == Some(false);
+                && p.verdict() != Some(wetgran_core::observe::Verdict::Stationary);
             if unconverged && seen.insert(p.job_id.clone()) {
                 todo.push((k, p));
             }
@@ -143,17 +140,18 @@ impl Queue for ExtendQueue<'_> {
         let s = &mut self.summary;
         let why = match outcome {
             Ok(Some(r)) => {
-                let ok = r
-                    .observables
-                    .get("convergence")
-                    .and_then(|c| c.get("converged"))
-                    .and_then(serde_json::Value::as_bool)
-                    == Some(true);
+                let verdict = r
+                    .decided_on
+                    .as_ref()
+                    .and_then(|d| d.pointer("/settling/verdict"))
+                    .and_then(serde_json::Value::as_str)
+                    .and_then(wetgran_core::observe::Verdict::parse);
+                let ok = verdict == Some(wetgran_core::observe::Verdict::Stationary);
                 match store.replace_result(&x.point.job_id, &r) {
                     Ok(()) => {
                         s.extended += 1;
                         s.converged += usize::from(ok);
-                        let verdict = if ok { "converged" } else { "not converged" };
+                        let verdict = verdict.map_or("no verdict", |v| v.name());
                         return Ok(format!(
                             "extended {label}: {verdict} at t = {:.4}, {wall:.1} s (job {short_id})",
                             r.simulated_time

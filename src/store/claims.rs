@@ -71,7 +71,6 @@ impl Store {
             .bind(result.events as i64)
             .bind(owner)
             .bind(finished_at)
-            .bind(wetgran_core::observe::converged_in_json(&result.observables).map(i64::from))
             .exec(tx, self)
             .await?;
         // The sweeps holding the job relabel its lines after the run (`run::relabel`).

@@ -288,16 +288,25 @@ pub struct PointRow {
 }
 
 impl PointRow {
-    /// How far the result's label can be trusted (`observe::trend::trust`): stationary (also
-    /// where the result carries no verdict, or there is no result yet), a trend that keeps the
-    /// label, or a label that may still change.
-    pub fn trust(&self) -> wetgran_core::observe::trend::Trust {
-        let converged = self
-            .observables
-            .as_ref()
-            .and_then(wetgran_core::observe::converged_in_json);
-        let phase = self.phase.as_deref().and_then(|p| p.parse().ok());
-        wetgran_core::observe::trend::trust(self.trend, converged, phase)
+    /// The verdict on the result's label, from its decision (`settling.verdict`); `None`
+    /// without a result or for a result stored before verdicts.
+    pub fn verdict(&self) -> Option<wetgran_core::observe::Verdict> {
+        self.decided_on
+            .as_ref()?
+            .pointer("/settling/verdict")?
+            .as_str()
+            .and_then(wetgran_core::observe::Verdict::parse)
+    }
+
+    /// The verdict as the reports read it: stationary, label kept, or a label that may still
+    /// change (also a result stored before verdicts); no result yet reads as stationary.
+    pub fn trust(&self) -> wetgran_core::observe::Verdict {
+        use wetgran_core::observe::Verdict;
+        match (&self.phase, self.verdict()) {
+            (_, Some(v)) => v,
+            (Some(_), None) => Verdict::NotSettled,
+            (None, None) => Verdict::Stationary,
+        }
     }
 
     /// Whether the result may carry a phase boundary: stationary, or a trend that cannot change

@@ -3,6 +3,7 @@
 
 use super::{POINTS_PAGE, PointRow, StateCounts, Store, StoreError, queries};
 use crate::sweep::estimate::MeasuredCost;
+use wetgran_core::observe::Verdict;
 use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 
@@ -180,19 +181,22 @@ impl Store {
     }
 
     /// What every finished job in the database cost, by job id (any sweep): the simulated time
-    /// its run ended at, its wall seconds (with extensions) and its convergence verdict.
+    /// its run ended at, its wall seconds (with extensions) and whether its label settled.
     pub fn finished_job_costs(
         &self,
     ) -> Result<std::collections::HashMap<String, MeasuredCost>, StoreError> {
-        let rows: Vec<(String, f64, f64, Option<i64>)> =
+        let rows: Vec<(String, f64, f64, Option<String>)> =
             self.run(sqlx::query_as(queries::FINISHED_JOB_COSTS).fetch_all(&self.pool))?;
         Ok(rows
             .into_iter()
-            .map(|(id, simulated_time, wall_seconds, converged)| {
+            .map(|(id, simulated_time, wall_seconds, verdict)| {
                 let cost = MeasuredCost {
                     simulated_time,
                     wall_seconds,
-                    converged: converged.map(|c| c != 0),
+                    settled: verdict
+                        .as_deref()
+                        .and_then(Verdict::parse)
+                        .map(Verdict::label_trusted),
                 };
                 (id, cost)
             })

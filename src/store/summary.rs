@@ -21,7 +21,8 @@ use super::{PointRow, StateCounts, Store, StoreError, SweepRow, queries};
 use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 use std::sync::Arc;
-use wetgran_core::observe::trend::{TrendState, Trust};
+use wetgran_core::observe::Verdict;
+use wetgran_core::observe::trend::TrendState;
 use wetgran_core::scene::{Scene, StartMode};
 
 /// A row of the summary statements, as read (`sweep_point_summaries.sql`, or one element of
@@ -41,7 +42,7 @@ struct SummaryRow {
     phase: Option<String>,
     wall_seconds: Option<f64>,
     trend: Option<String>,
-    converged: Option<i64>,
+    verdict: Option<String>,
 }
 
 /// One job of a sweep as the reports see it (see the module doc).
@@ -61,9 +62,9 @@ pub struct PointSummary {
     pub wall_seconds: Option<f64>,
     /// The result's trend state (`results.trend`).
     pub trend: Option<TrendState>,
-    /// The result's convergence verdict (`results.converged`,
-    /// `observe::converged_in_json`); `None` without a result or without a verdict.
-    pub converged: Option<bool>,
+    /// The verdict on the result's label (`results.verdict`); `None` without a result, or for
+    /// a result stored before verdicts (outdated: its label may change).
+    pub verdict: Option<Verdict>,
     /// A scene equal to the job's in every field the reports read (module doc); its axis
     /// values, seed, run length and start mode may be another job's of the same sweep.
     pub scene: Arc<Scene>,
@@ -84,18 +85,19 @@ impl PointSummary {
             phase: row.phase.clone(),
             wall_seconds: row.wall_seconds,
             trend: row.trend,
-            converged: row
-                .observables
-                .as_ref()
-                .and_then(wetgran_core::observe::converged_in_json),
+            verdict: row.verdict(),
             scene: Arc::new(row.spec.scene.clone()),
         }
     }
 
-    /// How far the result's label can be trusted ([`PointRow::trust`], from the columns).
-    pub fn trust(&self) -> Trust {
-        let phase = self.phase.as_deref().and_then(|p| p.parse().ok());
-        wetgran_core::observe::trend::trust(self.trend, self.converged, phase)
+    /// The verdict on the label as the reports read it: a result without one (stored before
+    /// verdicts) may change; no result yet reads as stationary (nothing to mark).
+    pub fn trust(&self) -> Verdict {
+        match (&self.phase, self.verdict) {
+            (_, Some(v)) => v,
+            (Some(_), None) => Verdict::NotSettled,
+            (None, None) => Verdict::Stationary,
+        }
     }
 }
 
@@ -111,13 +113,13 @@ impl StateCounts {
     }
 }
 
-/// Results that did not reach a stationary window ([`wetgran_core::observe::Observables::converged`])
-/// and results with a verdict: `(unconverged, with a verdict)`.
+/// Results whose label had not settled, and results with a verdict: `(not settled, with a
+/// verdict)`.
 pub fn unconverged_summaries(points: &[PointSummary]) -> (u64, u64) {
     points
         .iter()
-        .filter_map(|p| p.converged)
-        .fold((0, 0), |(u, n), ok| (u + u64::from(!ok), n + 1))
+        .filter_map(|p| p.verdict)
+        .fold((0, 0), |(u, n), v| (u + u64::from(!v.label_trusted()), n + 1))
 }
 
 /// Whether an axis with this (dotted scene) key leaves every scene field the reports read as
@@ -206,7 +208,7 @@ impl Store {
                     phase: r.get("phase"),
                     wall_seconds: r.get("wall_seconds"),
                     trend: r.get("trend"),
-                    converged: r.get("converged"),
+                    verdict: r.get("verdict"),
                 });
             }
             Ok(out)
@@ -263,7 +265,7 @@ impl Store {
             phase: r.phase,
             wall_seconds: r.wall_seconds,
             trend: r.trend.as_deref().and_then(TrendState::parse),
-            converged: r.converged.map(|c| c != 0),
+            verdict: r.verdict.as_deref().and_then(Verdict::parse),
             scene,
             job_id,
         })

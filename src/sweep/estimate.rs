@@ -44,8 +44,9 @@ pub struct MeasuredCost {
     pub wall_seconds: f64,
     /// The simulated time its run ended at.
     pub simulated_time: f64,
-    /// Its convergence verdict (`None` without a policy).
-    pub converged: Option<bool>,
+    /// Whether its label settled (`observe::settling::Verdict`; `None` for a result stored
+    /// before verdicts).
+    pub settled: Option<bool>,
 }
 
 /// A measured rate at a grid position.
@@ -88,7 +89,7 @@ pub struct MeasuredRuns {
     pub mean_length_factor: f64,
     /// How many ran beyond their first check.
     pub extended: usize,
-    /// How many ended unconverged (at their cap).
+    /// How many ended with a label that had not settled (at their cap).
     pub unconverged: usize,
     /// Their summed wall seconds.
     pub wall_seconds: f64,
@@ -119,7 +120,7 @@ pub fn measured_runs(jobs: &[PlannedJob]) -> Option<MeasuredRuns> {
             .count(),
         unconverged: measured
             .iter()
-            .filter(|(_, m)| m.converged == Some(false))
+            .filter(|(_, m)| m.settled == Some(false))
             .count(),
         wall_seconds: measured.iter().map(|(_, m)| m.wall_seconds).sum(),
     })
@@ -536,7 +537,7 @@ mod tests {
         jobs[3].measured = Some(MeasuredCost {
             wall_seconds: 8.0,
             simulated_time: 40.0,
-            converged: Some(true),
+            settled: Some(true),
         });
         assert_eq!(
             job_seconds(&jobs, &samples, RunLength::FirstCheck, false),

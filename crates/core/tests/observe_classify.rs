@@ -3,12 +3,15 @@
 //! re-classification from stored numbers, legacy results, the line rule for fluid versus gas,
 //! and the fluid-gas inflection line analysis on curves with a known answer.
 
-use wetgran_core::observe::classify::{FluidGasFrom, LEGACY_DELTA_N_CB, two_class_split};
-use wetgran_core::observe::convergence::{BlockTest, Convergence};
+use wetgran_core::observe::classify::{
+    FluidGasFrom, LEGACY_DELTA_N_CB, classify_with, two_class_split,
+};
+use wetgran_core::observe::convergence::BlockTest;
+use wetgran_core::observe::trend::{Trend, TrendState};
 use wetgran_core::observe::line::{LinePoint, classify_line, fluid_gas_jump};
 use wetgran_core::observe::noise::range_quantile;
 use wetgran_core::observe::{
-    LateralMobility, Mobility, NcbNormalisation, Observables, Phase, Profiles, Stationarity,
+    LateralMobility, Mobility, NcbNormalisation, Observables, Phase, Profiles,
     Thresholds, WindowCounts, classify, fluid_gas_inflection,
 };
 
@@ -94,14 +97,8 @@ fn synthetic(d: f64, t: f64, b: Bins, wet: bool) -> Observables {
             bridge_ruptures: 0,
             pair_per_wall: None,
         },
-        stationarity: Stationarity {
-            tolerance: 0.2,
-            checks: vec![],
-            stationary: true,
-        },
         series: None,
         shear: None,
-        convergence: None,
         trend: None,
     }
 }
@@ -143,21 +140,19 @@ fn th() -> Thresholds {
     Thresholds::default()
 }
 
-/// `o` with a stored block error of its temperature, `rel` of its value (the `[convergence]`
-/// verdict's block test, where the line rule reads it).
+/// `o` with a stored block error of its temperature, `rel` of its value (the trend's block test,
+/// where the line rule reads it).
 fn with_error(mut o: Observables, rel: f64) -> Observables {
     let t = o.granular_temperature_reduced;
-    o.convergence = Some(Convergence {
-        converged: true,
-        ending: None,
-        window_start: 0.0,
-        window_end: 100.0,
-        checks: 1,
-        first_check: 100.0,
-        cap: 100.0,
-        blocks: 4,
-        sigmas: 3.0,
-        rel_tolerance: 0.02,
+    o.trend = Some(Trend {
+        state: TrendState::Stationary,
+        relaxed_at: 0.0,
+        relaxed: true,
+        from: 0.0,
+        to: 100.0,
+        region_tests: Vec::new(),
+        unrelaxed: Vec::new(),
+        policy: None,
         tests: vec![BlockTest {
             quantity: wetgran_core::observe::trend::TEMPERATURE.into(),
             mean: t,
@@ -488,7 +483,8 @@ fn fluid_gas_along_a_line() {
     }
     // Inelastic: the inflection of a sigmoid in log-log decides; the per-point threshold (2)
     // would have put the boundary elsewhere (T = 2 lies at E* = 1.26 here). No errors stored:
-    // the line's scatter stands in, and the reason says so.
+    // the line's scatter stands in, and the reason says so. Half a bridge per grain: neither a
+    // gas's nor a fluid's own evidence (rule 5), so the line alone decides.
     let e0: f64 = 3.0;
     let sig: Vec<(f64, f64)> = (0..12)
         .map(|k| {
@@ -501,7 +497,10 @@ fn fluid_gas_along_a_line() {
         .collect();
     let obs: Vec<Observables> = sig
         .iter()
-        .map(|&(_, temp)| homogeneous(1.0, temp, 0.0))
+        .map(|&(_, temp)| Observables {
+            bridges_per_particle: 0.5,
+            ..homogeneous(1.0, temp, 0.0)
+        })
         .collect();
     let pts: Vec<(f64, &Observables)> = sig.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
     let cs = classify_line(10.0, &pts, &t, false);
@@ -902,4 +901,104 @@ fn fluid_gas_records_old_and_new_deserialize() {
     let v = serde_json::to_value(&none).unwrap();
     assert_eq!(v["by"], "line_without_transition");
     assert_eq!(serde_json::from_value::<FluidGasFrom>(v).unwrap(), none);
+}
+
+/// What a line of constant Gamma said about a point: fluid (`false`) or gas (`true`) at a jump
+/// between E* = 1 and 2.
+fn line_said(o: &Observables, gas: bool) -> wetgran_core::observe::Classification {
+    let from = FluidGasFrom::Line {
+        gamma: 10.0,
+        method: "jump".into(),
+        e_star_boundary: 1.5,
+    };
+    classify_with(o, &th(), &|_| gas, from)
+}
+
+/// Rule 5: a line may not call fluid what is hot and nearly bridgeless, nor gas what is cold
+/// and bonded; the point's own evidence decides and the conflict is flagged. The eps = 0.96 line
+/// at Gamma = 10 read f at T_g/E_cb 12.8-26 with fewer than 0.15 bridges per grain.
+#[test]
+fn a_point_s_own_evidence_bounds_the_line() {
+    let hot = Observables {
+        bridges_per_particle: 0.12,
+        ..homogeneous(1.0, 12.8, 0.0)
+    };
+    let c = line_said(&hot, false);
+    assert_eq!(c.phase, Phase::G, "{}", c.decided_on.reason);
+    assert!(matches!(
+        c.decided_on.fluid_gas,
+        FluidGasFrom::OwnEvidence {
+            line_said: Phase::F,
+            ..
+        }
+    ));
+    assert!(
+        c.decided_on.borderline.iter().any(|b| b.contains("rule 5")),
+        "{:?}",
+        c.decided_on.borderline
+    );
+    assert!(c.decided_on.reason.contains("own evidence"));
+    // Cold and bonded: a fluid, whatever the line said.
+    let cold = Observables {
+        bridges_per_particle: 1.5,
+        ..homogeneous(1.0, 0.6, 0.0)
+    };
+    assert_eq!(line_said(&cold, true).phase, Phase::F);
+    // Between the two (T_g/E_cb 5, half a bridge per grain, or hot but bonded) the line decides.
+    for (t, b) in [(5.0, 0.5), (12.8, 0.5), (0.6, 0.5)] {
+        let o = Observables {
+            bridges_per_particle: b,
+            ..homogeneous(1.0, t, 0.0)
+        };
+        for gas in [false, true] {
+            let c = line_said(&o, gas);
+            assert_eq!(c.phase == Phase::G, gas, "T {t}, bridges {b}");
+            assert!(matches!(c.decided_on.fluid_gas, FluidGasFrom::Line { .. }));
+            assert!(c.decided_on.borderline.iter().all(|x| !x.contains("rule 5")));
+        }
+    }
+    // A dry point has no bridges to weigh: the line decides.
+    let mut dry = hot.clone();
+    dry.temperature_unit_name = "m g d".into();
+    assert_eq!(line_said(&dry, false).phase, Phase::F);
+}
+
+/// A fluid-gas decision by the per-point fallback is flagged when the temperature lies within a
+/// factor 2 of `gas_temperature`, and not otherwise; a solid-mobile decision that fell back to
+/// the temperature because the mobility was not measured is flagged.
+#[test]
+fn fallback_decisions_near_their_threshold_are_borderline() {
+    let near = classify(&homogeneous(1.0, 2.5, 0.0), &th());
+    assert_eq!(near.phase, Phase::G);
+    assert!(
+        near.decided_on
+            .borderline
+            .iter()
+            .any(|b| b.contains("gas_temperature")),
+        "{:?}",
+        near.decided_on.borderline
+    );
+    for t in [0.5, 8.0] {
+        let far = classify(&homogeneous(1.0, t, 0.0), &th());
+        assert!(
+            far.decided_on
+                .borderline
+                .iter()
+                .all(|b| !b.contains("gas_temperature")),
+            "T {t}: {:?}",
+            far.decided_on.borderline
+        );
+    }
+    let mut unmeasured = homogeneous(1.0, 0.5, 0.0);
+    unmeasured.mobility = None;
+    let c = classify(&unmeasured, &th());
+    assert_eq!(c.decided_on.whole.mobility_from, Mobility::Temperature);
+    assert!(
+        c.decided_on
+            .borderline
+            .iter()
+            .any(|b| b.contains("mobility not measured")),
+        "{:?}",
+        c.decided_on.borderline
+    );
 }

@@ -6,7 +6,8 @@
 
 use wetgran_testkit as common;
 
-use wetgran_core::observe::{Phase, run_observed, run_observed_with_frame};
+use wetgran_core::observe::trend::TrendState;
+use wetgran_core::observe::{Phase, Verdict, run_observed, run_observed_with_frame};
 use wetgran_core::sim::RunSettings;
 use wetgran_core::sim::run_scene;
 use wetgran_core::sim::threads::Threads;
@@ -147,23 +148,22 @@ fn profiles_and_counts_add_up() {
     assert_eq!(series.location_changes.len(), 80);
 }
 
-/// An undriven wet system cooling from T_g/E_cb = 20 is not stationary over its whole run.
+/// An undriven wet system cooling from T_g/E_cb = 20 reads cooling, and its label (a gas or a
+/// coexistence still condensing) has not settled.
 #[test]
-fn cooling_run_is_flagged_not_stationary() {
+fn cooling_run_is_flagged_not_settled() {
     let s = common::scene(
         "dimension = 2\n[box]\nsize = [30.0, 9.0]\n[particles]\ncount = 60\npolydispersity = 0.06\n\
          [contact]\nrestitution = 0.9\n[capillary]\nmodel = \"thin_thread\"\n\
          [initial]\ntemperature_over_ecb = 20.0\nseed = 2\n[run]\nduration = 8.0\n",
     );
     let run = run_observed(&s, &Default::default(), &mut |_| {});
-    let st = &run.observables.stationarity;
-    assert!(!st.stationary, "{st:?}");
-    let t = st
-        .checks
-        .iter()
-        .find(|c| c.quantity == "temperature_reduced")
-        .unwrap();
-    assert!(!t.ok && t.second_half < t.first_half, "{t:?}");
+    let trend = run.observables.trend.as_ref().unwrap();
+    assert_eq!(trend.state, TrendState::Cooling, "{trend:?}");
+    let c = &run.classification;
+    assert_ne!(c.phase, Phase::S, "{c:?}");
+    assert_eq!(c.verdict(), Verdict::NotSettled, "{c:?}");
+    assert!(!c.decided_on.settling.unsettled_text().is_empty());
 }
 
 /// 3D: location changes come from neighbour shells, bins are square cells over (x, y).
@@ -213,7 +213,7 @@ fn observing_on_two_threads_gives_the_same_observables() {
 }
 
 /// `observe.location_changes` is opt-in: left out, the counter does not run and `f_lc` is
-/// absent (no value, no profile, no series, no stationarity check); `classify.mobility =
+/// absent (no value, no profile, no series); `classify.mobility =
 /// "location_changes"` turns it on, and so does setting it. Each scene names the resolved
 /// choice, and observing or not never changes the trajectory.
 #[test]
@@ -231,12 +231,6 @@ fn location_changes_are_counted_only_when_asked_for() {
         assert_eq!(o.profiles.flc.is_some(), counted, "{text}");
         let series = o.series.as_ref().unwrap();
         assert_eq!(series.location_changes.is_empty(), !counted, "{text}");
-        let checked = o
-            .stationarity
-            .checks
-            .iter()
-            .any(|c| c.quantity == "location_changes");
-        assert_eq!(checked, counted, "{text}");
         runs.push(o);
     }
     // The same trajectory, observed with and without the counter.

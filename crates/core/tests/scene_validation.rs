@@ -223,7 +223,6 @@ bad_scenes! {
     observe_lc_max_edge_below_one,
     observe_lc_flip_margin_negative,
     observe_lc_leave_not_above_enter,
-    observe_stationarity_tolerance_zero,
     observe_unknown_key,
     classify_solid_flc_negative,
     classify_gas_below_solid,

@@ -1,3 +1,4 @@
--- Sets the phase label of a stored result and the numbers it was decided on.
--- ?1: job id, ?2: phase, ?3: decided_on (JSON)
-UPDATE results SET phase = ?2, decided_on = ?3 WHERE job_id = ?1
+-- Sets the phase label of a stored result, the numbers it was decided on and the verdict on it.
+-- ?1: job id, ?2: phase, ?3: decided_on (JSON; the verdict is its `settling.verdict`)
+UPDATE results SET phase = ?2, decided_on = ?3, verdict = json_extract(?3, '$.settling.verdict')
+WHERE job_id = ?1

@@ -5,7 +5,7 @@
 -- ?1: sweep id
 SELECT json_group_array(json_array(p.point, p.replica, json(p.coords), p.job_id, j.status,
     j.attempts, j.last_error, j.wall_seconds, j.start_mode,
-    NULL, r.phase, r.wall_seconds, r.trend, r.converged))
+    NULL, r.phase, r.wall_seconds, r.trend, r.verdict))
 FROM sweep_points p
 JOIN jobs j INDEXED BY jobs_report ON j.id = p.job_id
 LEFT JOIN results r INDEXED BY results_report ON r.job_id = p.job_id

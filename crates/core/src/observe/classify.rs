@@ -39,7 +39,8 @@
 //!
 //! A value equal to a threshold stays on the calmer side (solid, not gas, homogeneous).
 
-use super::{Observables, noise};
+use super::settling::{self, Settling, Verdict};
+use super::{Observables, evidence, noise};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -129,6 +130,16 @@ pub enum FluidGasFrom {
         method: String,
         e_star_boundary: f64,
     },
+    /// A line of constant Gamma put the point on one side, and the point's own temperature and
+    /// bridges said the other (rule 5, `observe::evidence`): the point's evidence decided.
+    OwnEvidence {
+        gamma: f64,
+        /// The line's method (`"jump"`, `"inflection"`, `"coexistence"`).
+        method: String,
+        e_star_boundary: f64,
+        /// The phase the line gave.
+        line_said: Phase,
+    },
     /// A line of constant Gamma whose curve shows no fluid-gas transition that stands out of
     /// its scatter: the per-point fallback decided, and `reason` says why the line did not.
     LineWithoutTransition {
@@ -215,89 +226,15 @@ pub struct DecisionInputs {
     pub fluid_gas: FluidGasFrom,
     /// Sheared scenes: the window mean of `E_par / E_cb` that decided (rule 4).
     pub shear_e_par: Option<f64>,
-    /// Decisions whose input lies close to its threshold ([`BORDERLINE_FACTOR`]): the label
+    /// Decisions whose input lies close to its threshold (`observe::evidence`): the label
     /// is uncertain there and should be read with replicas. Empty when every decision is clear.
     #[serde(default)]
     pub borderline: Vec<String>,
     /// The decision in words.
     pub reason: String,
-}
-
-/// A decision is borderline when its input lies within this factor of its threshold (either
-/// side): `D_lat` against `solid_diffusion`, `Delta` against the noise threshold.
-pub(crate) const BORDERLINE_FACTOR: f64 = 2.0;
-/// The contrast of a coexistence, the fraction of its dense bins' grains that are cluster
-/// members, and the fraction of a dense region's members still in their cage, are borderline
-/// within this distance of their thresholds.
-pub(crate) const BORDERLINE_CONTRAST: f64 = 0.1;
-
-/// Whether `x` lies within [`BORDERLINE_FACTOR`] of a positive threshold `t`.
-fn near(x: f64, t: f64) -> bool {
-    t > 0.0 && x > 0.0 && x / t < BORDERLINE_FACTOR && t / x < BORDERLINE_FACTOR
-}
-
-/// The borderline decisions of a classification (see [`DecisionInputs::borderline`]).
-fn borderline(d: &DecisionInputs) -> Vec<String> {
-    let th = &d.thresholds;
-    let mut out = Vec::new();
-    let regions = [
-        ("whole", Some(&d.whole)),
-        ("dense", d.dense.as_ref()),
-        ("dilute", d.dilute.as_ref()),
-    ];
-    for (name, r) in regions {
-        let Some(r) = r else { continue };
-        if (name == "whole") == d.split {
-            continue;
-        }
-        if let (Mobility::Displacement, Some(x)) = (r.mobility_from, r.diffusion)
-            && near(x, th.solid_diffusion)
-        {
-            out.push(format!(
-                "{name}: D_lat = {x:.3e} near solid_diffusion = {}",
-                th.solid_diffusion
-            ));
-        }
-        if let (Mobility::Displacement, Some(f)) = (r.mobility_from, r.members_still)
-            && (f - STILL_MEMBERS).abs() < BORDERLINE_CONTRAST
-        {
-            out.push(format!(
-                "{name}: members still in their cage {f:.2} near {STILL_MEMBERS}"
-            ));
-        }
-    }
-    if let Some(t) = &d.coexistence {
-        if let Some(q) = t.noise_threshold
-            && near(t.delta, q)
-            && t.contrast >= th.coexistence_contrast
-        {
-            out.push(format!(
-                "Delta {} = {:.4} near the noise threshold {q:.4}",
-                t.profile, t.delta
-            ));
-        }
-        if t.noise_threshold.is_some_and(|q| t.delta > q)
-            && (t.contrast - th.coexistence_contrast).abs() < BORDERLINE_CONTRAST
-        {
-            out.push(format!(
-                "contrast {:.2} near coexistence_contrast = {}",
-                t.contrast, th.coexistence_contrast
-            ));
-        }
-        // The bonded part decides between a coexistence and a modulated homogeneous state
-        // only where the profile's spread and contrast pass.
-        if let Some(f) = t.member_fraction
-            && t.noise_threshold.is_some_and(|q| t.delta > q)
-            && t.contrast >= th.coexistence_contrast
-            && (f - th.cluster_fraction).abs() < BORDERLINE_CONTRAST
-        {
-            out.push(format!(
-                "cluster members {f:.2} of the dense bins near cluster_fraction = {}",
-                th.cluster_fraction
-            ));
-        }
-    }
-    out
+    /// The verdict on the label (`observe::settling`): recomputed with the label, because what
+    /// may still drift depends on it.
+    pub settling: Settling,
 }
 
 /// A phase and the numbers it was decided on.
@@ -305,6 +242,13 @@ fn borderline(d: &DecisionInputs) -> Vec<String> {
 pub struct Classification {
     pub phase: Phase,
     pub decided_on: DecisionInputs,
+}
+
+impl Classification {
+    /// The verdict on this label.
+    pub fn verdict(&self) -> Verdict {
+        self.decided_on.settling.verdict
+    }
 }
 
 /// The bridge density separating dense from dilute bins: the split of the sorted values into
@@ -469,27 +413,42 @@ pub fn classify_with(
     gas: &dyn Fn(f64) -> bool,
     from: FluidGasFrom,
 ) -> Classification {
-    let mut c = classify_unsheared(obs, th, gas);
-    c.decided_on.fluid_gas = from;
-    c.decided_on.borderline = borderline(&c.decided_on);
+    let (mut phase, mut decided) = classify_unsheared(obs, th, gas);
+    decided.fluid_gas = from;
+    if let Some(own) = evidence::overrule_line(obs, &mut decided) {
+        phase = own;
+    }
+    decided.borderline = evidence::borderline(&decided);
     if let Some(sh) = &obs.shear {
-        let phase = if sh.e_par <= th.shear_e_par {
+        phase = if sh.e_par <= th.shear_e_par {
             Phase::S
         } else {
             Phase::F
         };
-        c.decided_on.reason = format!(
+        decided.reason = format!(
             "sheared: E_par/{} = {:.4} {} {} -> {phase} (rule 4; unsheared rules would say: {})",
             obs.temperature_unit_name,
             sh.e_par,
             above(sh.e_par, th.shear_e_par),
             th.shear_e_par,
-            c.decided_on.reason
+            decided.reason
         );
-        c.decided_on.shear_e_par = Some(sh.e_par);
-        c.phase = phase;
+        decided.shear_e_par = Some(sh.e_par);
     }
-    c
+    let parts = match (&decided.dense, &decided.dilute) {
+        (Some(d), Some(l)) if decided.split && Phase::coexistence(d.phase, l.phase) == Some(phase) => {
+            Some((d.phase, l.phase))
+        }
+        _ => None,
+    };
+    if let Some(t) = &obs.trend {
+        let tests: Vec<_> = t.all_tests().cloned().collect();
+        decided.settling = settling::settle(phase, parts, &t.unrelaxed, &tests);
+    }
+    Classification {
+        phase,
+        decided_on: decided,
+    }
 }
 
 /// Rule 2: whether the deciding profile is significantly inhomogeneous and its dense bins are
@@ -639,7 +598,7 @@ fn classify_unsheared(
     obs: &Observables,
     th: &Thresholds,
     gas: &dyn Fn(f64) -> bool,
-) -> Classification {
+) -> (Phase, DecisionInputs) {
     let p = &obs.profiles;
     let flc_whole = obs
         .location_changes
@@ -680,6 +639,10 @@ fn classify_unsheared(
         shear_e_par: None,
         borderline: Vec::new(),
         reason: String::new(),
+        settling: Settling {
+            verdict: Verdict::NotSettled,
+            regions: Vec::new(),
+        },
     };
     if !test.significant {
         decided.reason = format!(
@@ -687,10 +650,7 @@ fn classify_unsheared(
             describe_test(&test, th),
             describe(&whole, th, &obs.temperature_unit_name)
         );
-        return Classification {
-            phase: whole.phase,
-            decided_on: decided,
-        };
+        return (whole.phase, decided);
     }
     let (dense_bins, dilute_bins): (Vec<usize>, Vec<usize>) =
         (0..values.len()).partition(|&b| values[b] >= mid);
@@ -742,10 +702,7 @@ fn classify_unsheared(
     decided.split_n_cb = Some(mid);
     decided.dense = Some(dense);
     decided.dilute = Some(dilute);
-    Classification {
-        phase,
-        decided_on: decided,
-    }
+    (phase, decided)
 }
 
 /// The coexistence test in words.

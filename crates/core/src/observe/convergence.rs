@@ -1,6 +1,6 @@
-//! The run-to-stationarity test (scene section `[convergence]`, docs/observables.md "Run to
-//! stationarity"): block statistics of the sampled time series of a window and the verdict
-//! whether the window is stationary.
+//! The block test behind the run policy (scene section `[convergence]`, docs/observables.md
+//! "Run to a settled label"): block statistics of a sampled history, whether its blocks agree
+//! and whether it drifts (`observe::trend` applies it to each monitored quantity).
 //!
 //! - **Standard error of a correlated series**: Flyvbjerg-Petersen blocking (J. Chem. Phys. 91,
 //!   461 (1989)). At level `l` the series of `n_l` values is replaced by the means of
@@ -214,32 +214,6 @@ pub(crate) fn block_test(
     out.agree = agree;
     out.max_pair_sigmas = max_sig;
     out
-}
-
-/// The stored verdict of a run with a `[convergence]` policy.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Convergence {
-    /// The run's history was stationary at its last check (its trend state
-    /// `stationary`, `observe::trend`).
-    pub converged: bool,
-    /// Why the run ended (`None` in results stored before it was recorded).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ending: Option<super::Ending>,
-    /// The window the tests (and every stationary average of the result) cover.
-    pub window_start: f64,
-    pub window_end: f64,
-    /// Checks made (1 = no extension).
-    pub checks: usize,
-    /// Time of the first check (the minimum run).
-    pub first_check: f64,
-    /// Longest run the policy allowed.
-    pub cap: f64,
-    pub blocks: usize,
-    pub sigmas: f64,
-    pub rel_tolerance: f64,
-    /// The tests of the last check, one per monitored quantity, over the history from the
-    /// end of the transient (or the window's start, where earlier) to the end of the run.
-    pub tests: Vec<BlockTest>,
 }
 
 #[cfg(test)]

@@ -80,8 +80,13 @@ pub(crate) mod field {
     /// Of those, the number whose cage-relative mobility is at most `CAGE_EDGES[k]`, at
     /// `CAGE_WITHIN + k`.
     pub(crate) const CAGE_WITHIN: usize = 17;
+    /// `sum n_b T_b` and `sum n_b` of the grains of the bin that are not members
+    /// (`observe::settling` follows the dilute region by them).
+    pub(crate) const T_UB: usize = 22;
+    pub(crate) const T_UB_W: usize = 23;
     /// Number of fields.
-    pub(crate) const COUNT: usize = CAGE_WITHIN + super::CAGE_EDGES.len();
+    pub(crate) const COUNT: usize = T_UB_W + 1;
+    const _: () = assert!(CAGE_WITHIN + super::CAGE_EDGES.len() == T_UB);
 }
 
 /// Mobilities `d^2 / (2 n_lat tau)` (`d^2` per time unit) at which the cage-relative
@@ -308,10 +313,10 @@ impl LateralObserver {
     fn book_sample(&mut self, frame: &Frame, bk: usize, bin: &[u32], members: &Membership) {
         let dim = frame.dimension;
         let nb = self.bins.n;
-        // Per-bin velocity sums, `|v|^2` sums and counts: all grains, then members.
-        let mut sv = [vec![0.0; nb * dim], vec![0.0; nb * dim]];
-        let mut sq = [vec![0.0; nb], vec![0.0; nb]];
-        let mut n = [vec![0usize; nb], vec![0usize; nb]];
+        // Per-bin velocity sums, `|v|^2` sums and counts: all grains, members, the others.
+        let mut sv = [vec![0.0; nb * dim], vec![0.0; nb * dim], vec![0.0; nb * dim]];
+        let mut sq = [vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]];
+        let mut n = [vec![0usize; nb], vec![0usize; nb], vec![0usize; nb]];
         let block = &mut self.blocks[bk];
         block.samples += 1;
         block.t1 = frame.time;
@@ -320,7 +325,7 @@ impl LateralObserver {
             let v = frame.v(i);
             let s2: f64 = v.iter().map(|x| x * x).sum();
             let member = members.is_member(i);
-            for g in 0..1 + usize::from(member) {
+            for g in [0, if member { 1 } else { 2 }] {
                 n[g][b] += 1;
                 sq[g][b] += s2;
                 for k in 0..dim {
@@ -340,7 +345,7 @@ impl LateralObserver {
         }
         for b in 0..nb {
             let s = &mut block.sums[b * field::COUNT..(b + 1) * field::COUNT];
-            for (g, f) in [field::T_ALL, field::T_CL].into_iter().enumerate() {
+            for (g, f) in [field::T_ALL, field::T_CL, field::T_UB].into_iter().enumerate() {
                 let sums = &sv[g][b * dim..(b + 1) * dim];
                 if let Some(t) = temperature_of(sums, sq[g][b], n[g][b], frame.mass) {
                     s[f] += n[g][b] as f64 * t / self.unit;

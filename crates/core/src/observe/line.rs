@@ -12,7 +12,7 @@
 //! and a dilute region. Replicas of one `E*` are averaged in `y`.
 //!
 //! **Errors.** Each point carries the standard error of `y`: the relative block error of the
-//! temperature where the run stored one (`Observables::convergence`, the block test of
+//! temperature where the run stored one (`Observables::trend`, the block test of
 //! `temperature_reduced`: `standard_error / mean`), for replicas `sqrt(sum s_i^2) / n` or
 //! their spread `sd / sqrt(n)`, whichever is larger. Where no error is stored (results from
 //! before the run-length policy) the scatter is estimated from the line itself: the median
@@ -108,10 +108,10 @@ pub struct Curve {
 }
 
 /// The relative standard error of a result's `T_g / E_cb`: the block test of the temperature in
-/// its `[convergence]` verdict (`None` for runs without one).
+/// its trend (`None` for observables without one).
 pub fn temperature_rel_error(obs: &Observables) -> Option<f64> {
     let t = obs
-        .convergence
+        .trend
         .as_ref()?
         .tests
         .iter()

@@ -14,10 +14,11 @@
 //! | [`noise`] | statistical error of the profiles and the noise baseline of `Delta n` |
 //! | [`location_changes`] | `f_lc` (Delaunay in 2D, neighbour shells in 3D), only when asked for |
 //! | [`diffusion`] | per-layer lateral MSD and diffusion coefficient |
-//! | [`stationarity`] | first versus second half of the window |
 //! | [`trend`](mod@trend) | the end of the transient and what the run did after it: stationary, heating, cooling, coarsening or undecided |
+//! | [`settling`] | whether each region of a label has settled: the one verdict on a run |
 //! | [`shear`](mod@shear) | shear drive: `E_par`, `E_perp`, their window means and extrema per cycle |
 //! | [`classify`](mod@classify) | the phase from the observables and the `[classify]` thresholds |
+//! | [`evidence`] | a point's own evidence against the line rule; borderline decisions |
 //! | [`line`](mod@line) | the fluid-gas inflection point along a line of constant Gamma |
 //!
 //! Collision counts (pair, wall), bridge formations and ruptures over the window come from the
@@ -29,13 +30,14 @@ pub mod classify;
 pub mod clusters;
 pub mod convergence;
 pub(crate) mod diffusion;
+pub(crate) mod evidence;
 pub(crate) mod lateral;
 pub mod line;
 pub mod location_changes;
 pub mod noise;
 pub mod profiles;
+pub mod settling;
 pub mod shear;
-pub(crate) mod stationarity;
 pub mod temperature;
 pub mod trend;
 
@@ -45,7 +47,8 @@ pub use classify::{
 };
 pub use diffusion::{Diffusion, LayerDiffusion};
 pub use line::{Inflection, fluid_gas_inflection};
-pub use stationarity::{Stationarity, StationarityCheck};
+pub use settling::{Settling, Verdict};
+pub use trend::Ending;
 
 use crate::scene::Scene;
 use crate::sim::threads::Threads;
@@ -57,14 +60,12 @@ use profiles::ProfileObserver;
 use serde::{Deserialize, Serialize};
 use temperature::TemperatureObserver;
 
-/// Stationarity floors (see [`stationarity`]): below these magnitudes a change is judged
-/// against the floor instead of the value itself.
+/// Tolerance floors of the trend tests (`observe::trend`): below these magnitudes a drift is
+/// judged against the floor instead of the value itself. `T_g / E_cb`:
 pub(crate) const FLOOR_TEMPERATURE: f64 = 0.05;
-/// Floor for bridges per particle.
+/// Bridges per particle.
 pub(crate) const FLOOR_BRIDGES_PER_PARTICLE: f64 = 0.1;
-/// Floor for `f_lc` (location changes per particle per period).
-pub(crate) const FLOOR_FLC: f64 = 0.05;
-/// Floor for `E_par` in units of `E_cb` (`m g d` dry): the default solid threshold.
+/// `E_par` in units of `E_cb` (`m g d` dry): the default solid threshold.
 pub(crate) const FLOOR_E_PAR: f64 = 0.1;
 
 /// `f_lc` over the window.
@@ -211,7 +212,7 @@ pub struct TimeSeries {
     pub location_changes: Vec<(f64, f64)>,
 }
 
-/// Stationary averages, the stationarity check and the counts of one run.
+/// Stationary averages, the trend of the history and the counts of one run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Observables {
     pub dimension: usize,
@@ -238,42 +239,13 @@ pub struct Observables {
     pub profiles: Profiles,
     pub diffusion: Option<Diffusion>,
     pub counts: WindowCounts,
-    pub stationarity: Stationarity,
     pub series: Option<TimeSeries>,
     /// Shear drive only: `E_par`, `E_perp` and their cycles ([`shear`](mod@shear)).
     pub shear: Option<shear::ShearObservables>,
-    /// Run to stationarity (`[convergence]`): the verdict, the window and the block
-    /// statistics ([`convergence`](mod@convergence)); `None` for a fixed-length run.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub convergence: Option<convergence::Convergence>,
-    /// What the monitored series did over the run ([`trend`](mod@trend)): every run stores one
-    /// state (`None` in results stored before it existed).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// What the history did ([`trend`](mod@trend)): the tests of the sampled and the regions'
+    /// quantities, and how the run policy ended the run. Every run stores one; observables
+    /// built by hand (tests) may have none, and their label's verdict is then not settled.
     pub trend: Option<trend::Trend>,
-}
-
-impl Observables {
-    /// Whether the run reached a stationary window: the `[convergence]` verdict where the
-    /// run had a policy, else the first-half/second-half check ([`stationarity`]).
-    pub fn converged(&self) -> bool {
-        self.convergence
-            .as_ref()
-            .map_or(self.stationarity.stationary, |c| c.converged)
-    }
-}
-
-/// [`Observables::converged`] of a stored observables JSON object (`None` if it has neither
-/// a convergence verdict nor a stationarity check).
-pub fn converged_in_json(observables: &serde_json::Value) -> Option<bool> {
-    observables
-        .get("convergence")
-        .and_then(|c| c.get("converged"))
-        .or_else(|| {
-            observables
-                .get("stationarity")
-                .and_then(|s| s.get("stationary"))
-        })
-        .and_then(serde_json::Value::as_bool)
 }
 
 /// What [`run_observed`] returns.
@@ -300,25 +272,13 @@ pub fn run_observed_with_frame(
     run_observed_from(scene, None, &crate::sim::RunSettings::default(), progress)
 }
 
-/// The monitored quantities of one observer sample (the convergence test's input):
-/// `T_g / unit`, bridges per particle, `Delta n_cb` of the sample (Eq. 3.3 on one frame).
+/// The monitored quantities of one observer sample (the trend test's input): `T_g / unit`,
+/// bridges per particle, `Delta n_cb` of the sample (Eq. 3.3 on one frame), and `E_par / unit`
+/// of a sheared scene (NaN otherwise).
 #[derive(Debug, Clone, Copy)]
 struct Monitored {
     time: f64,
-    values: [f64; 3],
-}
-
-/// Why a run with a `[convergence]` policy ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Ending {
-    /// Its history was stationary.
-    Stationary,
-    /// Its trend was the same at two checks in a row and cannot change its label (a heating
-    /// gas, a cooling solid, a coarsening coexistence: [`trend::TrendState::keeps_label`]).
-    Trend,
-    /// The next window would have passed the cap.
-    Cap,
+    values: [f64; 4],
 }
 
 /// The observers, the window and the run-length policy, seen by the sampling loop.
@@ -328,6 +288,9 @@ struct Watch<'a> {
     /// The run's threads (the location-change counter runs beside the other observers).
     threads: &'a Threads,
     monitored: Vec<Monitored>,
+    /// The regions' lateral observer over the whole history from `t_floor` on
+    /// (`observe::settling`): never restarted with the windows.
+    regions: LateralObserver,
     /// The policy in absolute times (`None`: fixed length).
     schedule: Option<crate::scene::convergence::Schedule>,
     /// The shortest transient the scene allows, in absolute time: the history the trend looks
@@ -336,6 +299,8 @@ struct Watch<'a> {
     checks: usize,
     /// The trend at the latest check.
     trend: Option<trend::Trend>,
+    /// The label kept at the latest check (its verdict `label_kept`), if it was.
+    kept: Option<Phase>,
     ending: Option<Ending>,
     /// End of the whole run so far (for progress).
     progress_end: f64,
@@ -344,38 +309,65 @@ struct Watch<'a> {
 
 impl Watch<'_> {
     /// The trend of the run so far: the monitored history from `t_floor` on, the current
-    /// window starting at the observers' window start.
+    /// window starting at the observers' window start, and the regions' quantities.
     fn assess(&self) -> trend::Trend {
         let spec = self.scene.convergence.clone().unwrap_or_default();
-        let names = [trend::TEMPERATURE, trend::BRIDGES, trend::DELTA_N_CB];
+        let names = [
+            trend::TEMPERATURE,
+            trend::BRIDGES,
+            trend::DELTA_N_CB,
+            trend::E_PAR,
+        ];
         let floors = [
             FLOOR_TEMPERATURE,
             FLOOR_BRIDGES_PER_PARTICLE,
             convergence::FLOOR_DELTA_N_CB,
+            FLOOR_E_PAR,
         ];
-        let quantities = if self.scene.is_wet() { 3 } else { 1 };
-        let time: Vec<f64> = self.monitored.iter().map(|m| m.time).collect();
-        let series: Vec<Vec<f64>> = (0..quantities)
-            .map(|q| self.monitored.iter().map(|m| m.values[q]).collect())
+        let wet = self.scene.is_wet();
+        let sheared = self.scene.shear_slabs().is_some();
+        let used: Vec<usize> = (0..4)
+            .filter(|&q| q == 0 || (q < 3 && wet) || (q == 3 && sheared))
             .collect();
-        let monitored: Vec<trend::Monitored<'_>> = (0..quantities)
-            .map(|q| trend::Monitored {
+        let time: Vec<f64> = self.monitored.iter().map(|m| m.time).collect();
+        let series: Vec<Vec<f64>> = used
+            .iter()
+            .map(|&q| self.monitored.iter().map(|m| m.values[q]).collect())
+            .collect();
+        let monitored: Vec<trend::Monitored<'_>> = used
+            .iter()
+            .enumerate()
+            .map(|(k, &q)| trend::Monitored {
                 name: names[q],
                 floor: floors[q],
-                values: &series[q],
+                values: &series[k],
             })
             .collect();
-        trend::assess(
-            &time,
-            &monitored,
-            self.t_floor,
-            self.set.window_start(),
-            trend::TrendTest {
-                blocks: spec.blocks,
-                sigmas: spec.sigmas,
-                rel_tolerance: spec.rel_tolerance,
-            },
-        )
+        let test = trend::TrendTest {
+            blocks: spec.blocks,
+            sigmas: spec.sigmas,
+            rel_tolerance: spec.rel_tolerance,
+        };
+        let window_start = self.set.window_start();
+        let mut t = trend::assess(&time, &monitored, self.t_floor, window_start, test);
+        let blocks = settling::region_series(
+            &self.regions,
+            self.scene.dimension,
+            self.scene.classify.solid_diffusion,
+            FLOOR_TEMPERATURE,
+        );
+        let (tests, unrelaxed) =
+            trend::assess_regions(&blocks, self.t_floor, window_start, test);
+        t.region_tests = tests;
+        t.unrelaxed.extend(unrelaxed);
+        t
+    }
+
+    /// The label of the current window and its verdict under the trend `t`.
+    fn label(&self, t: &trend::Trend) -> Classification {
+        let mut obs = self.set.finish(self.scene);
+        obs.trend = Some(t.clone());
+        classify(&obs, &self.scene.classify)
     }
 }
 
@@ -386,6 +378,9 @@ impl crate::sim::Watcher for Watch<'_> {
             1 => set.observe(frame),
             _ => self.threads.install(|| set.observe(frame)),
         }
+        if frame.time >= self.t_floor - 1e-9 * self.t_floor.abs().max(1.0) {
+            self.regions.observe(frame);
+        }
         let n = frame.len().max(1) as f64;
         let t_g = self.set.temperature.series.last().map_or(f64::NAN, |s| s.1);
         let delta = profiles::spread(&profiles::bridge_density(
@@ -393,31 +388,38 @@ impl crate::sim::Watcher for Watch<'_> {
             self.set.lateral.bins(),
             self.scene.particles.diameter,
         ));
+        let e_par = self
+            .set
+            .shear
+            .as_ref()
+            .and_then(|o| o.last_e_par())
+            .unwrap_or(f64::NAN);
         self.monitored.push(Monitored {
             time: frame.time,
-            values: [t_g, frame.bridges.len() as f64 / n, delta],
+            values: [t_g, frame.bridges.len() as f64 / n, delta, e_par],
         });
         let t0 = self.progress_end;
         (self.progress)((frame.time / t0).clamp(0.0, 1.0));
     }
 
-    /// The run-length policy: assess the history ([`trend::assess`]); stop if it is
-    /// stationary, if the same trend that cannot change the window's label was found at this
-    /// check and the one before, or if the next window would pass the cap; else start a new
-    /// window here and run one more.
+    /// The run-length policy (docs/observables.md "Run to a settled label"): assess the history
+    /// and label the window; stop if the label's verdict is stationary, if it was kept (every
+    /// region settled) at this check and the one before with the same label, or if the next
+    /// window would pass the cap; else start a new window here and run one more.
     fn extend(&mut self, t_end: f64) -> Option<f64> {
         let schedule = self.schedule?;
         self.checks += 1;
         let now = self.assess();
-        let previous = self.trend.replace(now).map(|t| t.state);
-        let state = self.trend.as_ref().expect("just set").state;
+        let label = self.label(&now);
+        self.trend = Some(now);
+        let kept = (label.verdict() == Verdict::LabelKept).then_some(label.phase);
+        let kept_twice = kept.is_some() && self.kept == kept;
+        self.kept = kept;
         let next = t_end + schedule.window;
-        self.ending = if state == trend::TrendState::Stationary {
+        self.ending = if label.verdict() == Verdict::Stationary {
             Some(Ending::Stationary)
-        } else if previous == Some(state)
-            && state.keeps_label(classify(&self.set.finish(self.scene), &self.scene.classify).phase)
-        {
-            Some(Ending::Trend)
+        } else if kept_twice {
+            Some(Ending::Settled)
         } else if next > schedule.cap * (1.0 + 1e-12) {
             Some(Ending::Cap)
         } else {
@@ -426,12 +428,12 @@ impl crate::sim::Watcher for Watch<'_> {
         if self.ending.is_some() {
             return None;
         }
-        // The run so far is transient: fresh observers from the frame at `t_end` on.
+        // The run so far is transient to the window's observers: fresh ones from the frame at
+        // `t_end` on (the monitored series and the regions' observer go on).
         let last = self.set.last.take().expect("the end frame was observed");
         self.set = ObserverSet::with_window_start(self.scene, t_end);
-        self.monitored.pop();
+        self.set.observe(&last);
         self.progress_end = schedule.cap;
-        crate::sim::Watcher::observe(self, &last);
         Some(next)
     }
 }
@@ -439,8 +441,8 @@ impl crate::sim::Watcher for Watch<'_> {
 /// Like [`run_observed_with_frame`], starting from a saved state at `t0` (or the scene's
 /// initial state): the run, its transient and its windows are those of a fresh run shifted
 /// by `t0` (`[t0 + transient, t0 + duration]`, and so on). With a `[convergence]` section the
-/// run is extended on the same trajectory until the window is stationary ([`policy`]).
-/// `settings`: the invariant checks and the wall-table cache of the run.
+/// run is extended on the same trajectory until its label settles (docs/observables.md).
+/// `settings`: the invariant checks, the wall-table cache and the threads of the run.
 pub fn run_observed_from(
     scene: &Scene,
     start: Option<&crate::sim::EngineState>,
@@ -465,10 +467,12 @@ pub fn run_observed_from(
         set,
         threads: &ctx.threads,
         monitored: Vec::new(),
+        regions: lateral_observer(scene, settling::block_time(scene.driving_period())),
         schedule,
         t_floor: t0 + spec.window_start(scene),
         checks: 0,
         trend: None,
+        kept: None,
         ending: None,
         progress_end: duration,
         progress,
@@ -500,26 +504,16 @@ pub fn run_observed_from(
         series.bridges_per_particle = m.iter().map(|x| x.values[1]).collect();
     }
     // A fixed-length run is assessed once, at its end; a policy run keeps its last check's.
-    let trend = watch.trend.take().unwrap_or_else(|| watch.assess());
-    observables.convergence = schedule.map(|s| {
-        let c = scene
-            .convergence
-            .as_ref()
-            .expect("a schedule comes from a policy");
-        convergence::Convergence {
-            converged: trend.state == trend::TrendState::Stationary,
-            ending: watch.ending,
-            window_start: observables.window_start,
-            window_end: observables.window_end,
+    let mut trend = watch.trend.take().unwrap_or_else(|| watch.assess());
+    trend.policy = match (schedule, watch.ending) {
+        (Some(s), Some(ending)) => Some(trend::PolicyEnd {
+            ending,
             checks: watch.checks,
             first_check: s.first_check,
             cap: s.cap,
-            blocks: c.blocks,
-            sigmas: c.sigmas,
-            rel_tolerance: c.rel_tolerance,
-            tests: trend.tests.clone(),
-        }
-    });
+        }),
+        _ => None,
+    };
     observables.trend = Some(trend);
     let classification = classify(&observables, &scene.classify);
     (
@@ -530,6 +524,37 @@ pub fn run_observed_from(
         },
         last,
     )
+}
+
+/// The lateral observer of a validated scene: its bins, bonds and mobility lags
+/// (`observe::lateral`), its blocks `block_time` long at first.
+fn lateral_observer(scene: &Scene, block_time: f64) -> LateralObserver {
+    let spec = &scene.observe;
+    let dt = spec.sample_interval(scene);
+    LateralObserver::new(
+        spec.lateral_bins(scene),
+        lateral::LateralSettings {
+            wet: scene.is_wet(),
+            unit: temperature_unit(scene).0,
+            sample_interval: dt,
+            block_time,
+            lag: spec.mobility_lag,
+            bond_time: spec.bond_time,
+            cluster_min_size: spec.cluster_min_size,
+        },
+    )
+}
+
+/// The energy unit of a scene's reduced temperatures and its name: `E_cb` for a wet scene,
+/// `m g d` for a dry one under gravity, else 1.
+fn temperature_unit(scene: &Scene) -> (f64, &'static str) {
+    let e_cb = scene.e_cb();
+    if e_cb > 0.0 {
+        (e_cb, "E_cb")
+    } else {
+        let u = scene.particles.mass * scene.gravity.max(0.0) * scene.particles.diameter;
+        if u > 0.0 { (u, "m g d") } else { (1.0, "1") }
+    }
 }
 
 /// Every observer a scene's `[observe]` section asks for, fed frame by frame
@@ -568,13 +593,7 @@ impl ObserverSet {
         let period = scene.driving_period();
         let dt = spec.sample_interval(scene);
         let bins = spec.lateral_bins(scene);
-        let e_cb = scene.e_cb();
-        let (unit, unit_name) = if e_cb > 0.0 {
-            (e_cb, "E_cb")
-        } else {
-            let u = scene.particles.mass * scene.gravity.max(0.0) * scene.particles.diameter;
-            if u > 0.0 { (u, "m g d") } else { (1.0, "1") }
-        };
+        let (unit, unit_name) = temperature_unit(scene);
         let lc = spec.counts_location_changes(&scene.classify).then(|| {
             let method = if scene.dimension == 2 {
                 Method::Delaunay {
@@ -587,7 +606,7 @@ impl ObserverSet {
                     leave: spec.lc_leave_factor,
                 }
             };
-            LocationChangeCounter::new(method, bins.clone(), period)
+            LocationChangeCounter::new(method, bins, period)
         });
         Self {
             period,
@@ -598,18 +617,7 @@ impl ObserverSet {
             unit_name,
             temperature: TemperatureObserver::new(unit),
             profiles: ProfileObserver::default(),
-            lateral: LateralObserver::new(
-                bins,
-                lateral::LateralSettings {
-                    wet: scene.is_wet(),
-                    unit,
-                    sample_interval: dt,
-                    block_time: period,
-                    lag: spec.mobility_lag,
-                    bond_time: spec.bond_time,
-                    cluster_min_size: spec.cluster_min_size,
-                },
-            ),
+            lateral: lateral_observer(scene, scene.driving_period()),
             lc,
             diffusion: spec
                 .diffusion
@@ -711,27 +719,6 @@ impl ObserverSet {
             bridge_ruptures: c1.bridge_ruptures - c0.bridge_ruptures,
             pair_per_wall: (walls > 0).then(|| pairs as f64 / walls as f64),
         };
-        let window = (t_start, window_end);
-        let tol = spec.stationarity_tolerance;
-        let e_par = self.shear.as_ref().map(|o| o.e_par_series());
-        let series = [
-            (
-                "temperature_reduced",
-                Some(&self.temperature.series),
-                FLOOR_TEMPERATURE,
-            ),
-            (
-                "bridges_per_particle",
-                scene.is_wet().then_some(&self.profiles.series),
-                FLOOR_BRIDGES_PER_PARTICLE,
-            ),
-            ("location_changes", lc.map(|o| &o.series), FLOOR_FLC),
-            ("e_par", e_par.as_ref(), FLOOR_E_PAR),
-        ];
-        let checks = series
-            .into_iter()
-            .filter_map(|(name, s, floor)| Some(stationarity::check(name, s?, window, floor, tol)))
-            .collect();
         let in_window = |s: &[(f64, f64)]| -> Vec<f64> {
             s.iter()
                 .filter(|(t, _)| *t >= t_start - eps)
@@ -766,10 +753,8 @@ impl ObserverSet {
                 .as_ref()
                 .and_then(|o| o.finish(scene.dimension)),
             counts,
-            stationarity: stationarity::verdict(tol, checks),
             series,
             shear: self.shear.as_ref().map(|o| o.finish(spec.time_series)),
-            convergence: None,
             trend: None,
         }
     }

@@ -72,9 +72,9 @@ impl ShearObserver {
         }
     }
 
-    /// `(t, E_par / unit)` at every sample (for the stationarity check).
-    pub(crate) fn e_par_series(&self) -> Vec<(f64, f64)> {
-        self.samples.iter().map(|s| (s.0, s.1)).collect()
+    /// `E_par / unit` of the latest sample (the run policy monitors it).
+    pub(crate) fn last_e_par(&self) -> Option<f64> {
+        self.samples.last().map(|s| s.1)
     }
 
     /// Window means, cycles and (if `keep_series`) the series.

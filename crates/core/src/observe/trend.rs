@@ -21,14 +21,12 @@
 //!   else `heating` / `cooling` when `T_g` rises / falls beyond its errors, else `undecided`
 //!   (no monotone trend, yet not stationary: steps, or a history too short to tell).
 //!
-//! Which labels a trend cannot change (used by the run policy to stop early, and by
-//! `boundaries` to keep the point): a heating gas stays a gas (it only gets hotter), a cooling
-//! solid stays a solid (it only gets colder), and a coarsening coexistence stays a coexistence
-//! (its drops merge into fewer, larger ones).
-//! [`TrendState::keeps_label`] holds that rule.
+//! The state describes the whole system. Whether a label is settled is decided region by region
+//! from the same tests and the regions' own quantities ([`assess_regions`],
+//! `observe::settling`).
 
-use super::Phase;
 use super::convergence::{BlockTest, block_test};
+use super::settling::BlockSeries;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -77,18 +75,6 @@ impl TrendState {
     pub fn parse(s: &str) -> Option<TrendState> {
         Self::ALL.into_iter().find(|t| t.name() == s)
     }
-
-    /// Whether a run in this state with label `phase` keeps that label however long it runs:
-    /// stationary runs, heating gases, cooling solids and coarsening coexistences.
-    pub(crate) fn keeps_label(self, phase: Phase) -> bool {
-        match self {
-            TrendState::Stationary => true,
-            TrendState::Heating => phase == Phase::G,
-            TrendState::Cooling => phase == Phase::S,
-            TrendState::Coarsening => matches!(phase, Phase::Sfc | Phase::Sgc | Phase::Fgc),
-            TrendState::Undecided => false,
-        }
-    }
 }
 
 impl fmt::Display for TrendState {
@@ -97,50 +83,60 @@ impl fmt::Display for TrendState {
     }
 }
 
-/// How far a stored label can be trusted ([`trust`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Trust {
-    /// Stationary, or a result that carries no verdict at all.
-    Stationary,
-    /// Not stationary, but its trend cannot change its label ([`TrendState::keeps_label`]).
-    LabelKept,
-    /// Not stationary; more time may change the label.
-    MayChange,
-}
-
-impl Trust {
-    /// Whether the label may carry a phase boundary.
-    pub fn label_trusted(self) -> bool {
-        self != Trust::MayChange
-    }
-}
-
-/// The trust of a stored result from its trend state (`None`: stored before trend states), its
-/// convergence verdict (used only without a trend state) and its label.
-pub fn trust(trend: Option<TrendState>, converged: Option<bool>, phase: Option<Phase>) -> Trust {
-    match trend {
-        Some(TrendState::Stationary) => Trust::Stationary,
-        Some(t) if phase.is_some_and(|p| t.keeps_label(p)) => Trust::LabelKept,
-        Some(_) => Trust::MayChange,
-        None if converged == Some(false) => Trust::MayChange,
-        None => Trust::Stationary,
-    }
-}
-
-/// The trend of a run, stored with its result.
+/// The trend of a run, stored with its result: what its history did and, for a run under a
+/// `[convergence]` policy, how the policy ended it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Trend {
     pub state: TrendState,
-    /// The end of the transient found by MSER (the latest over the quantities).
-    pub(crate) relaxed_at: f64,
-    /// Whether the history had relaxed (every quantity's truncation in the first half).
+    /// The end of the transient found by MSER (the latest over the sampled quantities).
+    pub relaxed_at: f64,
+    /// Whether the sampled history had relaxed (every quantity's truncation in the first half).
     pub relaxed: bool,
-    /// The history the tests cover, `[from, to]`.
+    /// The history the tests of the sampled quantities cover, `[from, to]`.
     pub from: f64,
     pub to: f64,
-    /// The tests over that history, one per monitored quantity (drift = change from the first
+    /// The tests over that history, one per sampled quantity (drift = change from the first
     /// to the last block, with its error).
     pub tests: Vec<BlockTest>,
+    /// The tests of the regions' quantities (`observe::settling`), each over its own history
+    /// of per-period blocks.
+    pub region_tests: Vec<BlockTest>,
+    /// The quantities, sampled or per block, whose history had not relaxed.
+    pub unrelaxed: Vec<String>,
+    /// How the run policy ended the run (`None`: a fixed-length run).
+    pub policy: Option<PolicyEnd>,
+}
+
+impl Trend {
+    /// Every test, the sampled quantities' first.
+    pub fn all_tests(&self) -> impl Iterator<Item = &BlockTest> {
+        self.tests.iter().chain(&self.region_tests)
+    }
+}
+
+/// Why and when a run under a `[convergence]` policy ended.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PolicyEnd {
+    pub ending: Ending,
+    /// Checks made (1 = no extension).
+    pub checks: usize,
+    /// Time of the first check (the minimum run).
+    pub first_check: f64,
+    /// Longest run the policy allowed.
+    pub cap: f64,
+}
+
+/// Why a run with a `[convergence]` policy ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Ending {
+    /// Its label's verdict was stationary (`observe::settling::Verdict`).
+    Stationary,
+    /// Its label was kept (every region settled, some quantity still moving in a direction
+    /// that cannot change it) at two checks in a row with the same label.
+    Settled,
+    /// The next window would have passed the cap before the label settled.
+    Cap,
 }
 
 /// The parameters of the tests (the scene's `[convergence]` section, or its defaults).
@@ -217,6 +213,7 @@ pub(crate) fn assess(
     // MSER has no scale, and a solid's T_g creeping from 0.0019 to 0.0012 E_cb is a trend to
     // it, but not one that changes anything.
     let (mut cut, mut relaxed) = (0usize, true);
+    let mut unrelaxed = Vec::new();
     for q in quantities {
         let x = &q.values[first..];
         let (d, ok) = mser_truncation(x);
@@ -225,6 +222,9 @@ pub(crate) fn assess(
         }
         cut = cut.max(d);
         relaxed &= ok;
+        if !ok {
+            unrelaxed.push(q.name.to_string());
+        }
     }
     // A relaxed history is tested from its relaxation on, or from the window's start where
     // that is earlier: a transient tail inside the window then fails the tests if it matters,
@@ -262,6 +262,9 @@ pub(crate) fn assess(
     // there.
     let late_relaxation = !relaxed && all_ok && in_window >= start;
     let relaxed = relaxed || late_relaxation;
+    if late_relaxation {
+        unrelaxed.clear();
+    }
     let relaxed_at = time
         .get(if late_relaxation { start } else { first + cut })
         .copied()
@@ -293,7 +296,40 @@ pub(crate) fn assess(
         from: time.get(start).copied().unwrap_or(f64::NAN),
         to: time.last().copied().unwrap_or(f64::NAN),
         tests,
+        region_tests: Vec::new(),
+        unrelaxed,
+        policy: None,
     }
+}
+
+/// The tests of the regions' per-block quantities (`observe::settling::region_series`), each
+/// assessed on its own history like the sampled ones ([`assess`]): its MSER cut, then the block
+/// test from there (or from the window's start, where earlier). Returns the tests and the names
+/// of the quantities whose history had not relaxed.
+pub(crate) fn assess_regions(
+    series: &[BlockSeries],
+    t_floor: f64,
+    window_start: f64,
+    test: TrendTest,
+) -> (Vec<BlockTest>, Vec<String>) {
+    let mut tests = Vec::new();
+    let mut unrelaxed = Vec::new();
+    for s in series {
+        let one = assess(
+            &s.time,
+            &[Monitored {
+                name: s.name,
+                floor: s.floor,
+                values: &s.values,
+            }],
+            t_floor,
+            window_start,
+            test,
+        );
+        unrelaxed.extend(one.unrelaxed);
+        tests.extend(one.tests);
+    }
+    (tests, unrelaxed)
 }
 
 /// Whether the means of the two halves of `x` differ by at most `rel_tolerance * max(|mean|,
@@ -328,6 +364,8 @@ pub const TEMPERATURE: &str = "temperature_reduced";
 pub const BRIDGES: &str = "bridges_per_particle";
 /// The name of the bridge-density contrast among the monitored quantities.
 pub const DELTA_N_CB: &str = "delta_n_cb";
+/// The name of a sheared scene's `E_par` among the monitored quantities.
+pub const E_PAR: &str = "e_par";
 
 #[cfg(test)]
 mod tests {
@@ -533,20 +571,10 @@ mod tests {
     }
 
     #[test]
-    fn only_safe_trends_keep_a_label() {
-        assert!(TrendState::Heating.keeps_label(Phase::G));
-        assert!(!TrendState::Heating.keeps_label(Phase::F));
-        assert!(!TrendState::Heating.keeps_label(Phase::Fgc));
-        assert!(TrendState::Coarsening.keeps_label(Phase::Fgc));
-        assert!(TrendState::Coarsening.keeps_label(Phase::Sgc));
-        assert!(!TrendState::Coarsening.keeps_label(Phase::G));
-        assert!(TrendState::Cooling.keeps_label(Phase::S));
-        assert!(!TrendState::Cooling.keeps_label(Phase::F));
-        assert!(!TrendState::Cooling.keeps_label(Phase::G));
-        assert!(!TrendState::Undecided.keeps_label(Phase::G));
-        assert!(TrendState::Stationary.keeps_label(Phase::F));
+    fn states_round_trip_their_names() {
         for s in TrendState::ALL {
             assert_eq!(TrendState::parse(s.name()), Some(s));
         }
+        assert_eq!(TrendState::parse("boiling"), None);
     }
 }

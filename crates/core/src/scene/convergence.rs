@@ -4,9 +4,10 @@
 //! name the file, the key and the allowed range). Without the section a run has the fixed
 //! length `run.duration`.
 //!
-//! Windows (docs/observables.md "Run to stationarity"): the first check is at
-//! `t_1 = max(run.duration, min_periods T, min_time)` (`T` the period of [`Scene::driving_period`]) and
-//! tests the window `[transient, t_1]`, `transient = observe.transient_periods T`. A failed
+//! Windows (docs/observables.md "Run to a settled label"): the first check is at
+//! `t_1 = max(run.duration, min_periods T, min_time, transient + 2 lag)` (`T` the period of
+//! [`Scene::driving_period`], `lag` the mobility lag: the window holds it, [`MIN_WINDOW_LAGS`])
+//! and tests the window `[transient, t_1]`, `transient = observe.transient_periods T`. A failed
 //! check extends the run by one window length `W = t_1 - transient`: the next window is
 //! `[t_1, t_1 + W]`, and so on, so the reported window is always the last `W` of the run and
 //! everything before it is transient. The run stops unconverged when the next window would end
@@ -20,6 +21,11 @@ use serde::{Deserialize, Serialize};
 
 /// Default cap, in units of the first check time.
 pub(crate) const DEFAULT_CAP_FACTOR: f64 = 4.0;
+
+/// Shortest window, in mobility lags (`observe.mobility_lag`): a window must hold the lag over
+/// which the classifier measures mobility, with lags from several origins (one every quarter
+/// lag: `observe::lateral`), or solid versus mobile falls back to the temperature.
+pub(crate) const MIN_WINDOW_LAGS: f64 = 2.0;
 
 /// Scene section `[convergence]` (every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -71,13 +77,16 @@ pub struct Schedule {
 }
 
 impl ConvergenceSpec {
-    /// `t_1 = max(run.duration, min_periods T, min_time)`.
+    /// `t_1 = max(run.duration, min_periods T, min_time, transient + MIN_WINDOW_LAGS lag)`.
     pub fn first_check(&self, scene: &Scene) -> f64 {
+        let holds_the_lag =
+            scene.observe.window_start(scene) + MIN_WINDOW_LAGS * scene.observe.mobility_lag;
         scene
             .run
             .duration
             .max(self.min_periods * scene.driving_period())
             .max(self.min_time)
+            .max(holds_the_lag)
     }
 
     /// The schedule of a validated scene.

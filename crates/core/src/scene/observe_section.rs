@@ -74,9 +74,6 @@ pub struct ObserveSpec {
     pub(crate) lc_enter_factor: f64,
     /// 3D: leaving factor of the neighbour shell (default 1.5; > `lc_enter_factor`).
     pub(crate) lc_leave_factor: f64,
-    /// Largest relative change between the first and second half of the window that still
-    /// counts as stationary (default 0.2).
-    pub(crate) stationarity_tolerance: f64,
     /// Lag of the mobility measure, in time units `sqrt(d/g)` (default 10): the lateral
     /// mean-square displacement over this lag gives `D_lat` (`observe::lateral`).
     pub mobility_lag: f64,
@@ -117,7 +114,6 @@ impl Default for ObserveSpec {
             lc_flip_margin: 0.2,
             lc_enter_factor: 1.2,
             lc_leave_factor: 1.5,
-            stationarity_tolerance: 0.2,
             mobility_lag: 10.0,
             bond_time: DEFAULT_BOND_TIME,
             cluster_min_size: DEFAULT_CLUSTER_MIN_SIZE,
@@ -258,13 +254,7 @@ impl ObserveSpec {
                  mobile by f_lc, which only this observer measures: set it true or leave it out",
             ));
         }
-        let tol = self.stationarity_tolerance;
-        check(
-            "stationarity_tolerance",
-            &tol,
-            tol.is_finite() && tol > 0.0,
-            "> 0",
-        )
+        Ok(())
     }
 }
 

@@ -74,6 +74,17 @@ pub struct Thresholds {
     pub line_jump_ratio: f64,
     /// Sheared scenes: largest window mean of `E_par / E_cb` (`/ (m g d)` dry) of a solid.
     pub shear_e_par: f64,
+    /// A homogeneous mobile wet point is a gas by its own evidence, whatever a line rule says,
+    /// when its `T_g / E_cb` is at least this (default 10: fewer than 1 - exp(-1/10) = 9.5 %
+    /// of collisions can leave a bridge bound, docs/observables.md)...
+    pub gas_evidence_temperature: f64,
+    /// ... and its bridges per grain at most this (default 0.2, a tenth of a bonded bed's 2).
+    pub gas_evidence_bridges: f64,
+    /// It is a fluid by its own evidence when its `T_g / E_cb` is at most this (default 1: most
+    /// collisions bind, 1 - exp(-1) = 63 %)...
+    pub fluid_evidence_temperature: f64,
+    /// ... and its bridges per grain at least this (default 1, half a bonded bed's).
+    pub fluid_evidence_bridges: f64,
 }
 
 /// The coexistence threshold of results stored before block statistics, in their `n_cb` units
@@ -97,6 +108,10 @@ impl Default for Thresholds {
             coexistence_delta_n_cb: 0.0,
             line_jump_ratio: 3.0,
             shear_e_par: 0.1,
+            gas_evidence_temperature: 10.0,
+            gas_evidence_bridges: 0.2,
+            fluid_evidence_temperature: 1.0,
+            fluid_evidence_bridges: 1.0,
         }
     }
 }
@@ -114,6 +129,9 @@ impl Thresholds {
             ("gas_temperature", self.gas_temperature),
             ("coexistence_delta_n_cb", self.coexistence_delta_n_cb),
             ("shear_e_par", self.shear_e_par),
+            ("gas_evidence_bridges", self.gas_evidence_bridges),
+            ("fluid_evidence_temperature", self.fluid_evidence_temperature),
+            ("fluid_evidence_bridges", self.fluid_evidence_bridges),
         ];
         for (key, v) in checks {
             check(key, v, v.is_finite() && v >= 0.0, "finite and >= 0")?;
@@ -159,6 +177,17 @@ impl Thresholds {
             &format!(
                 ">= classify.solid_temperature = {} (a gas is hotter than a solid)",
                 self.solid_temperature
+            ),
+        )?;
+        let g = self.gas_evidence_temperature;
+        check(
+            "gas_evidence_temperature",
+            g,
+            g.is_finite() && g > self.fluid_evidence_temperature,
+            &format!(
+                "finite and > classify.fluid_evidence_temperature = {} (a gas's own evidence is \
+                 hotter than a fluid's)",
+                self.fluid_evidence_temperature
             ),
         )
     }
