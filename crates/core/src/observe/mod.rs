@@ -19,6 +19,7 @@
 //! | [`shear`](mod@shear) | shear drive: `E_par`, `E_perp`, their window means and extrema per cycle |
 //! | [`classify`](mod@classify) | the phase from the observables and the `[classify]` thresholds |
 //! | [`line`](mod@line) | the fluid-gas inflection point along a line of constant Gamma |
+//! | [`criterion`] | which criterion decided a label, from its decision record |
 //!
 //! Collision counts (pair, wall), bridge formations and ruptures over the window come from the
 //! engine's event counters at the window's first and last sample. Observers only read copies of
@@ -28,6 +29,7 @@ pub mod bins;
 pub mod classify;
 pub mod clusters;
 pub mod convergence;
+pub mod criterion;
 pub(crate) mod diffusion;
 pub(crate) mod lateral;
 pub mod line;
