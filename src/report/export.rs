@@ -45,6 +45,10 @@ impl ExportRow {
             return None;
         }
         let motion = p.spec.scene.drive_motion();
+        let decided_by = p
+            .decided_on
+            .as_ref()
+            .and_then(wetgran_core::observe::criterion::DecidedBy::of_json);
         Some(ExportRow {
             job_id: p.job_id.clone(),
             params: sweep
@@ -67,6 +71,8 @@ impl ExportRow {
                     .into(),
                 p.trend.map(|t| t.name()).into(),
                 super::trust::mark(p.trust()).map(String::from).into(),
+                decided_by.as_ref().map(|d| d.criterion.name()).into(),
+                decided_by.as_ref().map(|d| d.fallback).into(),
                 p.simulated_time.into(),
                 p.wall_seconds.into(),
                 p.events.into(),
@@ -82,8 +88,10 @@ impl ExportRow {
 /// (`amplitude,omega`, docs/model.md 4.1), the run's stationarity verdict
 /// (`observe::converged_in_json`), its trend state (empty for results stored before trend
 /// states) and trust mark (`?` label may change, `~` label kept by its trend, empty
-/// stationary), and the run's cost.
-pub const FIXED: [&str; 14] = [
+/// stationary), the criterion that decided the label (`observe::criterion`: its snake_case
+/// name, and whether a fallback decided it; empty for a record this wetgran cannot read), and
+/// the run's cost.
+pub const FIXED: [&str; 16] = [
     "sweep",
     "point",
     "replica",
@@ -94,6 +102,8 @@ pub const FIXED: [&str; 14] = [
     "stationary",
     "trend",
     "trust",
+    "decided_by",
+    "decided_by_fallback",
     "simulated_time",
     "wall_seconds",
     "events",
@@ -161,7 +171,7 @@ fn join(prefix: &str, k: &str) -> String {
     }
 }
 
-fn csv_field(s: &str) -> String {
+pub(crate) fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {

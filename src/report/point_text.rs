@@ -6,6 +6,7 @@ use super::lines::gamma_e_star;
 use super::trust::{LABEL_KEPT, NOT_STATIONARY, failed_checks, mark};
 use crate::store::PointRow;
 use std::fmt::Write as _;
+use wetgran_core::observe::criterion::DecidedBy;
 use wetgran_core::observe::fluid_gas_inflection;
 use wetgran_core::observe::line::LinePoint;
 
@@ -35,6 +36,18 @@ pub fn decision_text(p: &PointRow) -> String {
     let mut out = String::new();
     if let Some(phase) = &p.phase {
         let _ = writeln!(out, "phase       {phase}");
+    }
+    if let Some(by) = p.decided_on.as_ref().and_then(DecidedBy::of_json) {
+        let fallback = if by.fallback {
+            " (a fallback decided it)"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            out,
+            "decided by  {}{fallback}: {}",
+            by.criterion, by.summary
+        );
     }
     if let Some(t) = p.trend {
         let what = match mark(p.trust()) {
@@ -201,6 +214,7 @@ pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
             .as_ref()
             .map(failed_checks)
             .unwrap_or_default(),
+        "decided_by": p.decided_on.as_ref().and_then(DecidedBy::of_json),
         "decided_on": p.decided_on,
         "simulated_time": p.simulated_time,
         "wall_seconds": p.wall_seconds,
