@@ -452,6 +452,8 @@ mod tests {
                 json!(false),
                 json!("heating"),
                 json!("~"),
+                json!("gas_temperature_fallback"),
+                json!(true),
                 json!(10.0),
                 json!(0.5),
                 json!(7),

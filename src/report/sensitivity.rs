@@ -192,6 +192,9 @@ pub struct Sensitivity {
     pub variations: Vec<Variation>,
 }
 
+/// A function from a job's own thresholds to those a relabelling uses.
+type Variant = dyn Fn(&Thresholds) -> Thresholds;
+
 /// The sensitivity of a sweep (module doc): `rows` its jobs with their results
 /// (`Store::points`), `summaries` its `Store::point_summaries`, `how` the extraction of
 /// `boundaries`.
@@ -208,11 +211,11 @@ pub fn sensitivity(
         }
     }
     let own = |th: &Thresholds| th.clone();
-    let fns: Vec<Box<dyn Fn(&Thresholds) -> Thresholds>> = variants
+    let fns: Vec<Box<Variant>> = variants
         .iter()
         .map(|&(key, k)| Box::new(move |th: &Thresholds| varied(th, key, k)) as Box<_>)
         .collect();
-    let mut all: Vec<&dyn Fn(&Thresholds) -> Thresholds> = vec![&own];
+    let mut all: Vec<&Variant> = vec![&own];
     all.extend(fns.iter().map(|f| f.as_ref()));
     let labels: Vec<HashMap<String, String>> = relabel_variants(rows, &all)
         .into_iter()
