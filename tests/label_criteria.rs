@@ -204,6 +204,10 @@ fn every_report_says_which_criterion_decided_each_label() {
         show.contains("decided by  temperature_fallback (a fallback decided it)"),
         "{show}"
     );
+    let show: Value =
+        serde_json::from_str(&ok_stdout(&["show", "--db", db, &job[..12], "--json"])).unwrap();
+    assert_eq!(show["decided_by"]["criterion"], json!("temperature_fallback"));
+    assert_eq!(show["decided_by"]["fallback"], json!(true));
 
     // plot: fallback points drawn in a square, with a legend entry.
     let svg = dir.path().join("map.svg");
