@@ -85,16 +85,17 @@ fn each_branch_has_its_own_named_boundaries() {
     );
 
     let csv = ok_stdout(&["boundaries", "--db", db, "--format", "csv"]);
+    // The branch column, then `decided_by` (empty on a boundary row).
     let boundary_rows: Vec<&str> = csv.lines().filter(|l| l.contains(",boundary,")).collect();
     assert_eq!(boundary_rows.len(), 6, "{csv}");
     assert_eq!(
-        boundary_rows.iter().filter(|l| l.ends_with(",hot")).count(),
+        boundary_rows.iter().filter(|l| l.ends_with(",hot,")).count(),
         3
     );
     assert_eq!(
         boundary_rows
             .iter()
-            .filter(|l| l.ends_with(",cold"))
+            .filter(|l| l.ends_with(",cold,"))
             .count(),
         3
     );

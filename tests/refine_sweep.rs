@@ -234,7 +234,8 @@ fn sweep_refine_adds_its_budget_and_boundaries_carry_the_uncertainty() {
     assert!(n > 0, "no boundary in {slice}");
     let csv = stdout(&run(&["boundaries", "--db", d, "--format", "csv"]));
     assert!(csv.starts_with(
-        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence,branch\n"
+        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence,branch,\
+         decided_by\n"
     ));
 }
 

@@ -41,6 +41,7 @@ use serde::Serialize;
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
 use std::collections::BTreeMap;
 use std::sync::Arc;
+use wetgran_core::observe::criterion::DecidedBy;
 use wetgran_core::scene::{DriveKind, Scene};
 
 /// One job's contribution to the map.
@@ -58,6 +59,8 @@ pub struct Observation {
     /// The job's scene (for physical units); shared between the jobs of a sweep where their
     /// scenes agree in what the map reads (`store::PointSummary`).
     pub scene: Arc<Scene>,
+    /// The criterion that decided its label (`observe::criterion`; `None`: not known).
+    pub decided_by: Option<DecidedBy>,
 }
 
 impl Observation {
@@ -71,6 +74,7 @@ impl Observation {
             trusted: trust.label_trusted(),
             label_kept: trust == wetgran_core::observe::Verdict::LabelKept,
             scene: Arc::clone(&row.scene),
+            decided_by: None,
         }
     }
 }
@@ -124,6 +128,10 @@ pub struct MapPoint {
     /// Container amplitude `A` and angular frequency `omega` (shaking sweeps).
     pub amplitude: Option<f64>,
     pub omega: Option<f64>,
+    /// The criterion that decided the majority label: that of its lowest replica with the
+    /// majority phase (`None`: not known).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub decided_by: Option<DecidedBy>,
 }
 
 /// A boundary point: the midpoint of a Delaunay edge between two phases.
@@ -421,6 +429,10 @@ impl Plane<'_> {
             let label_kept = votes.iter().any(|v| v.phase.is_some() && v.label_kept);
             let (xv, yv) = (Self::value(job, self.x)?, Self::value(job, self.y)?);
             let (amplitude, omega) = self.motion(&job.scene, xv, yv);
+            let decided_by = votes
+                .iter()
+                .find(|v| v.phase.as_deref() == Some(phase.as_str()))
+                .and_then(|v| v.decided_by.clone());
             points.push(MapPoint {
                 coords: job.coords.clone(),
                 x: xv,
@@ -432,6 +444,7 @@ impl Plane<'_> {
                 label_kept,
                 amplitude,
                 omega,
+                decided_by,
             });
             scenes.push(job.scene.as_ref());
         }
@@ -605,6 +618,7 @@ mod tests {
             trusted,
             label_kept: false,
             scene: Arc::new(shaken_scene()),
+            decided_by: None,
         }
     }
 

@@ -204,7 +204,7 @@ pub(super) fn draw_map(
     y_log: Option<bool>,
 ) -> Result<DrawnMap, Failure> {
     let points = store.point_summaries(sweep)?;
-    let map = super::sweep_cmd::sweep_map(sweep, &points, how)?;
+    let map = super::sweep_cmd::sweep_map(store, sweep, &points, how)?;
     let landmarks = points
         .first()
         .and_then(|p| plot_phase::Landmarks::of(&p.scene));
@@ -325,7 +325,7 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
     };
     let rows = store.points(sweep.id)?;
     let summaries = store.point_summaries(&sweep)?;
-    let map = super::sweep_cmd::sweep_map(&sweep, &summaries, how)?;
+    let map = super::sweep_cmd::sweep_map(&store, &sweep, &summaries, how)?;
     let plane = map
         .x
         .as_ref()
@@ -338,6 +338,8 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
         Err(Failure::BadInput(m)) => Err(m),
         Err(e) => return Err(e),
     };
+    let sensitivity = crate::report::sensitivity::sensitivity(&sweep, &rows, &summaries, how)
+        .map(|s| crate::report::sensitivity::sensitivity_text(&s));
     let boundaries = boundaries_table(&[(&sweep, map)], &[summaries], how);
     let lines = lines_of(&sweep, &rows);
     let line_pictures = if lines.lines.is_empty() {
@@ -368,6 +370,7 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
         map: drawn.as_ref().map_err(Clone::clone),
         plane,
         boundaries: &boundaries,
+        sensitivity: sensitivity.as_deref().map_err(Clone::clone),
         lines: line_pictures
             .as_ref()
             .map(|(all, per)| (&lines, all.as_str(), per.as_slice())),

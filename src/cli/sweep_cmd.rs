@@ -11,6 +11,7 @@ use super::common::{
 use crate::boundary::{Extraction, Observation, PhaseMap, phase_map_with};
 use crate::report::boundaries_text::{boundaries_csv, boundaries_table};
 use crate::report::cluster_text::slurm_status_text;
+use crate::report::sensitivity::{sensitivity, sensitivity_csv, sensitivity_text};
 use crate::report::sweep_text::extended_text;
 use crate::report::sweep_text::{
     StatusInput, coords_text, estimate_failed_text, estimate_head_text, estimate_sample_text,
@@ -507,13 +508,21 @@ pub(super) fn sweep_job(path: &Path) -> Result<(), Failure> {
 }
 
 /// The phase map of a sweep from its stored results (`points`: its
-/// `Store::point_summaries`).
+/// `Store::point_summaries`), each point with the criterion that decided its label.
 pub(super) fn sweep_map(
+    store: &Store,
     sweep: &SweepRow,
     points: &[PointSummary],
     how: Extraction,
 ) -> Result<PhaseMap, Failure> {
-    let obs: Vec<Observation> = points.iter().map(Observation::of_summary).collect();
+    let decided = store.decisions(sweep.id)?;
+    let obs: Vec<Observation> = points
+        .iter()
+        .map(|p| Observation {
+            decided_by: decided.get(&p.job_id).cloned(),
+            ..Observation::of_summary(p)
+        })
+        .collect();
     phase_map_with(&sweep.axes, &obs, how)
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", escape(&sweep.name))))
 }
@@ -532,6 +541,11 @@ pub struct BoundariesArgs {
     /// rests only on converged points.
     #[arg(long)]
     include_unconverged: bool,
+    /// Instead of the map: relabel the sweep from its stored observables with each
+    /// label-deciding threshold varied by 0.5 and by 2, one at a time, and print how far each
+    /// boundary moves (docs/classification.md, "Sensitivity to the thresholds").
+    #[arg(long)]
+    sensitivity: bool,
 }
 
 pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
@@ -540,18 +554,22 @@ pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
     };
     let store = Store::open_read_only(&a.from.db)?;
     let sweeps = select(&store, a.from.sweep.as_deref())?;
+    let format = if a.json {
+        BoundaryFormat::Json
+    } else {
+        a.format
+    };
+    if a.sensitivity {
+        return boundaries_sensitivity(&store, &sweeps, how, format);
+    }
     let mut maps = Vec::new();
     let mut points = Vec::new();
     for s in &sweeps {
         let p = store.point_summaries(s)?;
-        maps.push((s, sweep_map(s, &p, how)?));
+        maps.push((s, sweep_map(&store, s, &p, how)?));
         points.push(p);
     }
-    match if a.json {
-        BoundaryFormat::Json
-    } else {
-        a.format
-    } {
+    match format {
         BoundaryFormat::Json => {
             let v: Vec<_> = maps
                 .iter()
@@ -574,6 +592,30 @@ pub(super) fn upgrade(db: &Path) -> Result<(), Failure> {
             db.display()
         )),
         Some(what) => show(&format!("{}: upgraded ({what} before)\n", db.display())),
+    }
+    Ok(())
+}
+
+/// `boundaries --sensitivity` (`report::sensitivity`).
+fn boundaries_sensitivity(
+    store: &Store,
+    sweeps: &[SweepRow],
+    how: Extraction,
+    format: BoundaryFormat,
+) -> Result<(), Failure> {
+    let mut all = Vec::new();
+    for s in sweeps {
+        let (rows, summaries) = (store.points(s.id)?, store.point_summaries(s)?);
+        all.push(sensitivity(s, &rows, &summaries, how).map_err(Failure::BadInput)?);
+    }
+    match format {
+        BoundaryFormat::Json => print_json(&all),
+        BoundaryFormat::Csv => print!("{}", sensitivity_csv(&all)),
+        BoundaryFormat::Table => {
+            for s in &all {
+                println!("{}", sensitivity_text(s));
+            }
+        }
     }
     Ok(())
 }

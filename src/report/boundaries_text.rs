@@ -9,6 +9,7 @@ use crate::run::runner::short;
 use crate::store::{PointSummary, SweepRow};
 use std::collections::HashMap;
 use std::fmt::Write as _;
+use wetgran_core::observe::criterion::{Criterion, DecidedBy};
 
 /// A number in short form, or nothing.
 fn opt_num(v: Option<f64>) -> String {
@@ -27,7 +28,8 @@ pub fn fixed_text(fixed: &[(String, serde_json::Value)]) -> String {
 /// `boundaries --format csv`: the points and the boundary points of each sweep's map.
 pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
     let mut out = String::from(
-        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence,branch\n",
+        "sweep,slice,kind,phase,x_axis,x,y_axis,y,amplitude,omega,x_lo,x_hi,y_lo,y_hi,confidence,branch,\
+         decided_by\n",
     );
     let text = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
     for (s, m) in maps {
@@ -39,19 +41,20 @@ pub fn boundaries_csv(maps: &[(&SweepRow, PhaseMap)]) -> String {
             for p in &slice.points {
                 let _ = writeln!(
                     out,
-                    "{},{k},point,{},{xl},{},{yl},{},{},{},,,,,,{branch}",
+                    "{},{k},point,{},{xl},{},{yl},{},{},{},,,,,,{branch},{}",
                     s.name,
                     p.phase,
                     p.x,
                     p.y,
                     text(p.amplitude),
-                    text(p.omega)
+                    text(p.omega),
+                    p.decided_by.as_ref().map_or("", |d| d.criterion.name())
                 );
             }
             for b in slice.boundaries.values().flatten() {
                 let _ = writeln!(
                     out,
-                    "{},{k},boundary,{},{xl},{},{yl},{},{},{},{},{},{},{},{},{branch}",
+                    "{},{k},boundary,{},{xl},{},{yl},{},{},{},{},{},{},{},{},{branch},",
                     s.name,
                     b.pair,
                     b.x,
@@ -284,10 +287,14 @@ fn write_grid(
                 .find(|p| p.x == xv && p.y == yv)
                 .map(|p| {
                     format!(
-                        "{}{}{}",
+                        "{}{}{}{}",
                         p.phase,
                         if p.tie { "*" } else { "" },
-                        mark_of(p).map(String::from).unwrap_or_default()
+                        mark_of(p).map(String::from).unwrap_or_default(),
+                        p.decided_by
+                            .as_ref()
+                            .map(|d| String::from(d.criterion.letter()))
+                            .unwrap_or_default()
                     )
                 })
                 .unwrap_or_else(|| ".".to_string());
@@ -305,4 +312,32 @@ fn write_grid(
         let _ = write!(labels, " {:>7}", short(xv));
     }
     let _ = writeln!(out, "{labels}");
+    if let Some(legend) = criterion_legend(&slice.points) {
+        let _ = writeln!(out, "{legend}");
+    }
+}
+
+/// The legend of the criterion letters of a phase map's cells (`observe::criterion`): the
+/// letters present, and how many points rest on a fallback; `None` where no point has one.
+pub fn criterion_legend(points: &[crate::boundary::MapPoint]) -> Option<String> {
+    let decided: Vec<&DecidedBy> = points
+        .iter()
+        .filter_map(|p| p.decided_by.as_ref())
+        .collect();
+    let mut used: Vec<Criterion> = decided.iter().map(|d| d.criterion).collect();
+    used.sort();
+    used.dedup();
+    if used.is_empty() {
+        return None;
+    }
+    let letters: Vec<String> = used
+        .iter()
+        .map(|c| format!("{} = {}", c.letter(), c.words()))
+        .collect();
+    let fallback = decided.iter().filter(|d| d.fallback).count();
+    Some(format!(
+        "  decided by (letter after the label): {}; {fallback} of {} label(s) rest on a fallback",
+        letters.join(", "),
+        decided.len()
+    ))
 }

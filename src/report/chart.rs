@@ -16,6 +16,8 @@ pub(crate) enum Swatch {
     /// A disc split into `n` grey sectors (bistable).
     Split(usize),
     Cross(RGBColor),
+    /// A square outline (a label decided by a fallback).
+    Square(RGBColor),
     /// Text only (a continued line).
     None,
 }
@@ -64,6 +66,10 @@ pub(crate) fn draw_legend(
                 }
             }
             Swatch::Cross(col) => root.draw(&Cross::new(c, 4, col.stroke_width(2)))?,
+            Swatch::Square(col) => root.draw(&Rectangle::new(
+                [(c.0 - 6, c.1 - 6), (c.0 + 6, c.1 + 6)],
+                col.stroke_width(1),
+            ))?,
             Swatch::None => {}
         }
         root.draw(&Text::new(text.clone(), (x + 28, y), font.clone()))?;

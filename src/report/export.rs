@@ -45,6 +45,10 @@ impl ExportRow {
             return None;
         }
         let motion = p.spec.scene.drive_motion();
+        let decided_by = p
+            .decided_on
+            .as_ref()
+            .and_then(wetgran_core::observe::criterion::DecidedBy::of_json);
         Some(ExportRow {
             job_id: p.job_id.clone(),
             params: sweep
@@ -64,6 +68,8 @@ impl ExportRow {
                 p.verdict().map(|v| v.name()).into(),
                 p.trend.map(|t| t.name()).into(),
                 super::trust::mark(p.trust()).map(String::from).into(),
+                decided_by.as_ref().map(|d| d.criterion.name()).into(),
+                decided_by.as_ref().map(|d| d.fallback).into(),
                 p.simulated_time.into(),
                 p.wall_seconds.into(),
                 p.events.into(),
@@ -79,8 +85,10 @@ impl ExportRow {
 /// (`amplitude,omega`, docs/model.md 4.1), the run's settling verdict (`observe::Verdict`:
 /// stationary, label_kept or not_settled), its trend state (empty for results stored before
 /// trend states) and trust mark (`?` not settled, `~` label kept by its settled regions, empty
-/// stationary), and the run's cost.
-pub const FIXED: [&str; 14] = [
+/// stationary), the criterion that decided the label (`observe::criterion`: its snake_case
+/// name, and whether a fallback decided it; empty for a record this wetgran cannot read), and
+/// the run's cost.
+pub const FIXED: [&str; 16] = [
     "sweep",
     "point",
     "replica",
@@ -91,6 +99,8 @@ pub const FIXED: [&str; 14] = [
     "verdict",
     "trend",
     "trust",
+    "decided_by",
+    "decided_by_fallback",
     "simulated_time",
     "wall_seconds",
     "events",
@@ -158,7 +168,7 @@ fn join(prefix: &str, k: &str) -> String {
     }
 }
 
-fn csv_field(s: &str) -> String {
+pub(crate) fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
@@ -439,6 +449,8 @@ mod tests {
                 json!(false),
                 json!("heating"),
                 json!("~"),
+                json!("gas_temperature_fallback"),
+                json!(true),
                 json!(10.0),
                 json!(0.5),
                 json!(7),

@@ -5,8 +5,9 @@
 //! points, refinements), `boundaries_text`, `cluster_text` (`sweep collect`, Slurm status),
 //! `point_text` (`show`, `inflection`). Pictures and exports: `snapshot` (extended XYZ, SVG),
 //! `profile_plot`, `plot_phase` (the phase map), `lines` and `lines_plot` (lines of constant
-//! Gamma), `site` (the HTML report), `export` (tidy CSV/JSON), with `trust` (the trust mark of a
-//! stored result), `chart` and `svg` (shared drawing helpers).
+//! Gamma), `site` (the HTML report), `export` (tidy CSV/JSON), `sensitivity` (how far each
+//! boundary moves with the thresholds, relabelled from the stored observables), with `trust`
+//! (the trust mark of a stored result), `chart` and `svg` (shared drawing helpers).
 
 pub mod boundaries_text;
 mod chart;
@@ -20,6 +21,7 @@ pub mod plot_phase;
 pub mod point_text;
 pub mod profile_plot;
 pub mod run_text;
+pub mod sensitivity;
 pub mod site;
 pub mod snapshot;
 mod svg;

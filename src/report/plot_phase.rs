@@ -186,6 +186,8 @@ pub struct DrawnPoint {
     pub trusted: bool,
     /// Whether a branch's point here is not stationary but on a trend that keeps its label.
     pub label_kept: bool,
+    /// Whether a branch's label here rests on a fallback (`observe::criterion`).
+    pub fallback: bool,
 }
 
 impl DrawnPoint {
@@ -229,6 +231,7 @@ pub fn merge_branches(slices: &[&Slice]) -> Vec<DrawnPoint> {
                         phases: vec![None; slices.len()],
                         trusted: true,
                         label_kept: false,
+                        fallback: false,
                     });
                     out.len() - 1
                 }
@@ -236,6 +239,7 @@ pub fn merge_branches(slices: &[&Slice]) -> Vec<DrawnPoint> {
             out[k].phases[b] = Some(p.phase.clone());
             out[k].trusted &= p.trusted;
             out[k].label_kept |= p.label_kept;
+            out[k].fallback |= p.decided_by.as_ref().is_some_and(|d| d.fallback);
         }
     }
     out
@@ -558,6 +562,7 @@ impl Drawing<'_> {
             ));
         }
         draw_bistable(root, &mut chart, self.slices, &points, radius, &mut legend)?;
+        draw_fallbacks(&mut chart, &points, radius, &mut legend)?;
         draw_boundary_points(&mut chart, self.slices, &mut legend)?;
         // The legend right of the plot, level with its top: it hides no point.
         let (xr, yr) = chart.plotting_area().get_pixel_range();
@@ -634,6 +639,35 @@ where
     legend.push((
         format!("text by the disc: phases {}", short.join("/")),
         Swatch::None,
+    ));
+    Ok(())
+}
+
+/// A square outline around every point whose label rests on a fallback (the temperature for an
+/// unmeasured mobility, or `gas_temperature` where no line decided), and its legend entry.
+fn draw_fallbacks<X, Y>(
+    chart: &mut ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
+    points: &[DrawnPoint],
+    radius: i32,
+    legend: &mut Vec<(String, Swatch)>,
+) -> Result<(), String>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let fallback: Vec<&DrawnPoint> = points.iter().filter(|p| p.fallback).collect();
+    if fallback.is_empty() {
+        return Ok(());
+    }
+    let r = radius + 3;
+    chart
+        .draw_series(fallback.iter().map(|p| {
+            EmptyElement::at((p.x, p.y)) + Rectangle::new([(-r, -r), (r, r)], BLACK.stroke_width(1))
+        }))
+        .map_err(|e| e.to_string())?;
+    legend.push((
+        "square: decided by a fallback (T_g/E_cb)".to_string(),
+        Swatch::Square(BLACK),
     ));
     Ok(())
 }

@@ -17,6 +17,7 @@ fn point(coords: Vec<serde_json::Value>, x: f64, y: f64, phase: &str, trusted: b
         label_kept: false,
         amplitude: None,
         omega: None,
+        decided_by: None,
     }
 }
 

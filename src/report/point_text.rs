@@ -7,6 +7,7 @@ use super::trust::unsettled;
 use wetgran_core::observe::Verdict;
 use crate::store::PointRow;
 use std::fmt::Write as _;
+use wetgran_core::observe::criterion::DecidedBy;
 use wetgran_core::observe::fluid_gas_inflection;
 use wetgran_core::observe::line::LinePoint;
 
@@ -36,6 +37,18 @@ pub fn decision_text(p: &PointRow) -> String {
     let mut out = String::new();
     if let Some(phase) = &p.phase {
         let _ = writeln!(out, "phase       {phase}");
+    }
+    if let Some(by) = p.decided_on.as_ref().and_then(DecidedBy::of_json) {
+        let fallback = if by.fallback {
+            " (a fallback decided it)"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            out,
+            "decided by  {}{fallback}: {}",
+            by.criterion, by.summary
+        );
     }
     if let Some(t) = p.trend {
         let _ = writeln!(out, "trend       {t} (what the whole system's history did)");
@@ -189,6 +202,7 @@ pub fn job_json(sweep: &str, p: &PointRow) -> serde_json::Value {
         "ended": ending,
         "verdict": p.verdict().map(|v| v.name()),
         "unsettled": p.decided_on.as_ref().map(unsettled).unwrap_or_default(),
+        "decided_by": p.decided_on.as_ref().and_then(DecidedBy::of_json),
         "decided_on": p.decided_on,
         "simulated_time": p.simulated_time,
         "wall_seconds": p.wall_seconds,

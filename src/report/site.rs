@@ -21,6 +21,7 @@ use crate::boundary::START_AXIS;
 use crate::store::{PointRow, SweepRow};
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
+use wetgran_core::observe::criterion::DecidedBy;
 
 /// The pictures of one job, as SVG text, and why one is missing.
 #[derive(Debug, Clone, Default)]
@@ -47,6 +48,8 @@ pub struct SiteInput<'a> {
     pub plane: Option<(usize, usize)>,
     /// The text of `wetgran boundaries` for the sweep.
     pub boundaries: &'a str,
+    /// The text of `wetgran boundaries --sensitivity` for the sweep, or why there is none.
+    pub sensitivity: Result<&'a str, String>,
     /// The lines of constant Gamma, their SVG (all lines) and one SVG per Gamma (the order of
     /// `Lines::gammas`); `None` for a sweep that is not a shaking one.
     pub lines: Option<(&'a Lines, &'a str, &'a [String])>,
@@ -73,6 +76,31 @@ impl Position<'_> {
     fn labels(&self, sep: &str) -> String {
         let labels: Vec<String> = self.jobs.iter().map(|j| mark_label(j)).collect();
         labels.join(sep)
+    }
+
+    /// The criterion that decided each job's label (`observe::criterion`), as HTML: a fallback
+    /// marked, the numbers compared in the title; `-` where a job has none.
+    fn decided_by(&self) -> String {
+        let cells: Vec<String> = self
+            .jobs
+            .iter()
+            .map(
+                |j| match j.decided_on.as_ref().and_then(DecidedBy::of_json) {
+                    Some(by) if by.fallback => format!(
+                        "<span class=\"untrusted\" title=\"{}\">{} (fallback)</span>",
+                        esc(&by.summary),
+                        by.criterion
+                    ),
+                    Some(by) => format!(
+                        "<span title=\"{}\">{}</span>",
+                        esc(&by.summary),
+                        by.criterion
+                    ),
+                    None => "-".to_string(),
+                },
+            )
+            .collect();
+        cells.join(" ")
     }
 }
 
@@ -286,27 +314,31 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
     let _ = writeln!(
         h,
         "<p>Contents: <a href=\"#map\">phase map</a> &middot; <a href=\"#points\">points</a> \
-         &middot; <a href=\"#boundaries\">boundaries</a> &middot; <a href=\"#lines\">lines of \
+         &middot; <a href=\"#boundaries\">boundaries</a> &middot; <a href=\"#sensitivity\">\
+         sensitivity</a> &middot; <a href=\"#lines\">lines of \
          constant Gamma</a> &middot; <a href=\"#sweep\">sweep file</a> &middot; \
          <a href=\"#reproduce\">reproduce</a></p>"
     );
     h.push_str(&map_section(input, positions));
     let _ = writeln!(
         h,
-        "<h2 id=\"points\">Points</h2>\n<table>\n<tr><th>point</th><th>coordinates</th>\
-         <th>labels (jobs)</th></tr>"
+        "<h2 id=\"points\">Points</h2>\n<p><em>decided by</em>: the criterion of each job's \
+         label (docs/classification.md; the numbers compared in its tooltip), in red where a \
+         fallback decided it.</p>\n<table>\n<tr><th>point</th><th>coordinates</th>\
+         <th>labels (jobs)</th><th>decided by</th></tr>"
     );
     for p in positions {
         let _ = writeln!(
             h,
-            "<tr><td><a href=\"{}\">{}</a></td><td>{}</td><td>{}</td></tr>",
+            "<tr><td><a href=\"{}\">{}</a></td><td>{}</td><td>{}</td><td>{}</td></tr>",
             p.page,
             esc(p
                 .page
                 .trim_start_matches("points/")
                 .trim_end_matches(".html")),
             esc(&coords_text(&p.coords)),
-            esc(&p.labels(" "))
+            esc(&p.labels(" ")),
+            p.decided_by()
         );
     }
     let _ = writeln!(h, "</table>");
@@ -315,6 +347,20 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
         "<h2 id=\"boundaries\">Boundaries</h2>\n<pre>{}</pre>",
         esc(input.boundaries)
     );
+    let _ = writeln!(
+        h,
+        "<h2 id=\"sensitivity\">Sensitivity to the thresholds</h2>\n<p>How far each boundary \
+         moves when one label-deciding threshold is varied by 0.5 and by 2 (relabelled from the \
+         stored observables; docs/classification.md).</p>"
+    );
+    match &input.sensitivity {
+        Ok(text) => {
+            let _ = writeln!(h, "<pre>{}</pre>", esc(text));
+        }
+        Err(e) => {
+            let _ = writeln!(h, "<p class=\"untrusted\">Not measured: {}</p>", esc(e));
+        }
+    }
     let _ = writeln!(h, "<h2 id=\"lines\">Lines of constant Gamma</h2>");
     if input.lines.is_some() {
         let _ = writeln!(
@@ -363,6 +409,7 @@ fn commands(input: &SiteInput) -> String {
          wetgran sweep run {file} --db {db}\n\
          # the tables and pictures of this report\n\
          wetgran boundaries --db {db} --sweep {name}\n\
+         wetgran boundaries --db {db} --sweep {name} --sensitivity\n\
          wetgran plot --db {db} --sweep {name} -o map.svg\n\
          wetgran lines --db {db} --sweep {name} -o lines.svg --csv lines.csv\n\
          wetgran report --db {db} --sweep {name} -o {out}\n",

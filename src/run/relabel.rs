@@ -64,7 +64,30 @@ fn line_key(scene: &Scene, gamma: f64) -> String {
 /// Re-classifies every finished point of a sweep from its stored observables, with
 /// `thresholds` (or each point's own `[classify]`) and the line rule where a line exists.
 pub fn relabel(points: &[PointRow], thresholds: Option<&Thresholds>) -> Vec<Relabel> {
-    relabel_parsed(points, &parse_observables(points), thresholds)
+    relabel_parsed(
+        points,
+        &parse_observables(points),
+        &given_or_own(thresholds),
+    )
+}
+
+/// [`relabel`] once per variant of the thresholds, the observables parsed once: `variants[k]`
+/// maps a point's own `[classify]` thresholds to those variant `k` labels it with (the line
+/// rule reads the variant of the line's first point, as [`relabel`] reads its thresholds).
+pub fn relabel_variants(
+    points: &[PointRow],
+    variants: &[&dyn Fn(&Thresholds) -> Thresholds],
+) -> Vec<Vec<Relabel>> {
+    let parsed = parse_observables(points);
+    variants
+        .iter()
+        .map(|v| relabel_parsed(points, &parsed, v))
+        .collect()
+}
+
+/// The thresholds a relabelling gives a point: `thresholds`, or the point's own.
+fn given_or_own(thresholds: Option<&Thresholds>) -> impl Fn(&Thresholds) -> Thresholds + '_ {
+    move |own| thresholds.unwrap_or(own).clone()
 }
 
 /// Each point's stored observables as this wetgran reads them (`None`: no result, or a layout
@@ -80,13 +103,14 @@ fn parse_observables(points: &[PointRow]) -> Vec<Option<Observables>> {
         .collect()
 }
 
-/// [`relabel`] with the observables already parsed (`parsed[k]` those of `points[k]`). The
-/// points are grouped by line in one pass (a map from line key to members), so the work is
-/// one line key and one classification per point whatever the number of lines.
+/// [`relabel`] with the observables already parsed (`parsed[k]` those of `points[k]`), each
+/// point labelled with `thresholds_of(its own [classify])`. The points are grouped by line in
+/// one pass (a map from line key to members), so the work is one line key and one
+/// classification per point whatever the number of lines.
 fn relabel_parsed(
     points: &[PointRow],
     parsed: &[Option<Observables>],
-    thresholds: Option<&Thresholds>,
+    thresholds_of: &dyn Fn(&Thresholds) -> Thresholds,
 ) -> Vec<Relabel> {
     struct P<'a> {
         row: &'a PointRow,
@@ -99,9 +123,7 @@ fn relabel_parsed(
     for (row, obs) in points.iter().zip(parsed) {
         let Some(obs) = obs else { continue };
         let scene = &row.spec.scene;
-        let th = thresholds
-            .cloned()
-            .unwrap_or_else(|| scene.classify.clone());
+        let th = thresholds_of(&scene.classify);
         let line = (scene.drive.kind == DriveKind::Sine && obs.shear.is_none())
             .then(|| gamma_e_star(scene))
             .flatten();
@@ -259,7 +281,7 @@ impl Tally {
         }
         let before: BTreeMap<&str, &PointRow> =
             points.iter().map(|p| (p.job_id.as_str(), p)).collect();
-        for l in relabel_parsed(points, &parsed, thresholds) {
+        for l in relabel_parsed(points, &parsed, &given_or_own(thresholds)) {
             let p = before[l.job_id.as_str()];
             let phase = l.classification.phase.to_string();
             let decided_on =

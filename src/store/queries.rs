@@ -88,6 +88,7 @@ queries! {
     SET_SLURM_JOB = "set_slurm_job";
     SET_TASK_STATE = "set_task_state";
     SET_WAL_MODE = "set_wal_mode";
+    SWEEP_DECISIONS = "sweep_decisions";
     SWEEP_POINTS = "sweep_points";
     SWEEP_POINT_SUMMARIES = "sweep_point_summaries";
     SWEEP_POINTS_PAGE = "sweep_points_page";

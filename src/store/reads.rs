@@ -1,11 +1,14 @@
 //! The report reads: integrity, counts by state, a sweep's jobs with their results (whole or
-//! page by page), job specs and checkpoints, and what finished jobs cost.
+//! page by page), job specs and checkpoints, what finished jobs cost, and the criterion that
+//! decided each label.
 
 use super::{POINTS_PAGE, PointRow, StateCounts, Store, StoreError, queries};
 use crate::sweep::estimate::MeasuredCost;
 use wetgran_core::observe::Verdict;
 use crate::sweep::spec::JobSpec;
 use sqlx::Row;
+use std::collections::HashMap;
+use wetgran_core::observe::criterion::DecidedBy;
 
 impl Store {
     /// The spec of a job, if the database has it.
@@ -199,6 +202,24 @@ impl Store {
                         .map(Verdict::label_trusted),
                 };
                 (id, cost)
+            })
+            .collect())
+    }
+
+    /// The criterion that decided each stored label of a sweep, by job id
+    /// (`observe::criterion`, from `results.decided_on`); a record this wetgran cannot read
+    /// (another version's) has none.
+    pub fn decisions(&self, sweep_id: i64) -> Result<HashMap<String, DecidedBy>, StoreError> {
+        let rows: Vec<(String, String)> = self.run(
+            sqlx::query_as(queries::SWEEP_DECISIONS)
+                .bind(sweep_id)
+                .fetch_all(&self.pool),
+        )?;
+        Ok(rows
+            .into_iter()
+            .filter_map(|(job, text)| {
+                let record: serde_json::Value = serde_json::from_str(&text).ok()?;
+                Some((job, DecidedBy::of_json(&record)?))
             })
             .collect())
     }

@@ -233,6 +233,7 @@ bad_scenes! {
     observe_location_changes_off_but_classified_by_it,
     classify_coexistence_level_one,
     classify_coexistence_contrast_above_one,
+    classify_still_members_above_one,
     classify_line_jump_ratio_one,
     classify_solid_diffusion_negative,
     // Format.

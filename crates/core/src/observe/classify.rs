@@ -291,13 +291,6 @@ struct RegionObservables {
     members_still: Option<f64>,
 }
 
-/// A dense region is solid when at least this fraction of its members' displacements stay
-/// within `solid_diffusion` of their cage: nearly all its grains keep their neighbours, whatever
-/// a mobile surface layer or an eroding edge (a few grains that move far) adds to the mean. Not
-/// the median (0.5): the liquid drop of the fluid-gas coexistence at Gamma = 30 has 0.57 over a
-/// 300-unit run and up to more than half in 25-unit windows (docs/validation.md).
-pub const STILL_MEMBERS: f64 = 0.8;
-
 /// A region whose mean-square displacement over the long lag stays below this (units `d^2`) and
 /// grows slower than `diffusive_exponent` is caged: its grains rattle without leaving their
 /// neighbours. A gas confined to a narrow pocket also saturates, but at the pocket's size.
@@ -352,7 +345,7 @@ fn region(
                 }
                 _ => false,
             };
-            let still = members_still.is_some_and(|f| f >= STILL_MEMBERS);
+            let still = members_still.is_some_and(|f| f >= th.still_members);
             (
                 d > th.solid_diffusion && !caged && !still,
                 Mobility::Displacement,
@@ -780,8 +773,9 @@ fn describe(r: &RegionInputs, th: &Thresholds, unit: &str) -> String {
     };
     let mobility = match (r.mobility_from, r.members_still) {
         (Mobility::Displacement, Some(f)) => format!(
-            "{mobility}, members still in their cage {f:.2} {} {STILL_MEMBERS}",
-            if f >= STILL_MEMBERS { ">=" } else { "<" }
+            "{mobility}, members still in their cage {f:.2} {} {}",
+            if f >= th.still_members { ">=" } else { "<" },
+            th.still_members
         ),
         _ => mobility,
     };

@@ -21,7 +21,7 @@
 //! solid-mobile decision that fell back to the temperature because the mobility was not
 //! measured, and a line placement overruled by the point's own evidence.
 
-use super::classify::{DecisionInputs, FluidGasFrom, Mobility, Phase, STILL_MEMBERS};
+use super::classify::{DecisionInputs, FluidGasFrom, Mobility, Phase};
 use super::Observables;
 
 /// The phase a wet homogeneous point's own temperature and bridges demand, if any (module doc).
@@ -121,10 +121,11 @@ pub(crate) fn borderline(d: &DecisionInputs) -> Vec<String> {
             ));
         }
         if let (Mobility::Displacement, Some(f)) = (r.mobility_from, r.members_still)
-            && (f - STILL_MEMBERS).abs() < BORDERLINE_CONTRAST
+            && (f - th.still_members).abs() < BORDERLINE_CONTRAST
         {
             out.push(format!(
-                "{name}: members still in their cage {f:.2} near {STILL_MEMBERS}"
+                "{name}: members still in their cage {f:.2} near still_members = {}",
+                th.still_members
             ));
         }
         if th.mobility != Mobility::Temperature && r.mobility_from == Mobility::Temperature {

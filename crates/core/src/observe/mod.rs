@@ -20,6 +20,7 @@
 //! | [`classify`](mod@classify) | the phase from the observables and the `[classify]` thresholds |
 //! | [`evidence`] | a point's own evidence against the line rule; borderline decisions |
 //! | [`line`](mod@line) | the fluid-gas inflection point along a line of constant Gamma |
+//! | [`criterion`] | which criterion decided a label, from its decision record |
 //!
 //! Collision counts (pair, wall), bridge formations and ruptures over the window come from the
 //! engine's event counters at the window's first and last sample. Observers only read copies of
@@ -29,6 +30,7 @@ pub mod bins;
 pub mod classify;
 pub mod clusters;
 pub mod convergence;
+pub mod criterion;
 pub(crate) mod diffusion;
 pub(crate) mod evidence;
 pub(crate) mod lateral;

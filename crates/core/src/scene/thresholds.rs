@@ -49,6 +49,13 @@ pub struct Thresholds {
     /// coexistence (default 0.2): a density wave in a gas or fluid without a bonded cluster is
     /// homogeneous (rule 2).
     pub cluster_fraction: f64,
+    /// Smallest fraction of a coexistence's dense-region members whose displacement over the
+    /// long lag stays within `solid_diffusion` of their cage (the grains they were bonded to)
+    /// for that region to be solid (default 0.8): nearly all its grains keep their neighbours,
+    /// whatever a mobile surface layer or an eroding edge adds to the mean (rule 1). Not the
+    /// median (0.5): the liquid drop of the fluid-gas coexistence at Gamma = 30 has 0.57 over a
+    /// 300-unit run and more than half in many 25-unit windows (docs/observables.md).
+    pub still_members: f64,
     /// Largest `f_lc` (location changes per particle per period) of a solid
     /// (`mobility = "location_changes"`).
     pub solid_flc: f64,
@@ -99,6 +106,7 @@ impl Default for Thresholds {
             solid_diffusion: 1e-3,
             diffusive_exponent: 0.5,
             cluster_fraction: 0.2,
+            still_members: 0.8,
             solid_flc: 0.02,
             solid_temperature: 0.02,
             gas_temperature: 2.0,
@@ -154,6 +162,7 @@ impl Thresholds {
         )?;
         for (key, f) in [
             ("cluster_fraction", self.cluster_fraction),
+            ("still_members", self.still_members),
             ("coexistence_contrast", self.coexistence_contrast),
         ] {
             check(
