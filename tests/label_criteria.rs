@@ -69,10 +69,11 @@ fn observables(template: &Value, e_star: f64, mobility: bool) -> Value {
     o["profiles"]["diffusion"] = json!(vec![Value::Null; bins]);
     o["profiles"]["delta_n_cb"] = json!(0.0);
     o["profiles"]["delta_n_area"] = json!(0.0);
-    // A stationary record without a run-length verdict or trend.
-    o["stationarity"]["stationary"] = json!(true);
-    o["convergence"] = Value::Null;
-    o["trend"] = Value::Null;
+    // A fixed-length record whose history tested flat in everything: its label is stationary.
+    o["trend"]["tests"] = json!([]);
+    o["trend"]["region_tests"] = json!([]);
+    o["trend"]["unrelaxed"] = json!([]);
+    o["trend"]["policy"] = Value::Null;
     o
 }
 
@@ -87,7 +88,7 @@ fn prepared(dir: &Path) -> PathBuf {
          [[axis]]\nkey = \"e_star\"\nvalues = [0.5, 1.0, 2.0, 4.0, 8.0]\n",
     );
     let scene = Scene::from_toml_str(SCENE, "template").unwrap();
-    let template = serde_json::to_value(run_observed(&scene, &mut |_| {}).observables).unwrap();
+    let template = serde_json::to_value(run_observed(&scene, &Default::default(), &mut |_| {}).observables).unwrap();
     let sweep = SweepFile::load(&file).unwrap();
     let db = dir.join("grid.sqlite");
     let store = Store::open(&db).unwrap();

@@ -487,7 +487,7 @@ fn a_damaged_checkpoint_is_reported_and_never_used() {
         .points(sweep.id)
         .unwrap()
         .into_iter()
-        .filter(|p| p.verdict() != wetgran_core::observe::Verdict::Stationary)
+        .filter(|p| p.trust() != wetgran_core::observe::Verdict::Stationary)
         .map(|p| p.job_id)
         .collect();
     drop(store);

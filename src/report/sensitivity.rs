@@ -48,7 +48,7 @@ pub const FACTORS: [f64; 2] = [0.5, 2.0];
 /// The `[classify]` thresholds that decide labels, in the order they are reported. Left out:
 /// `coexistence_delta_n_cb` (0 by default, and scaling 0 leaves it 0), `mobility` and
 /// `coexistence_by` (choices, not numbers).
-pub const THRESHOLDS: [&str; 11] = [
+pub const THRESHOLDS: [&str; 15] = [
     "solid_diffusion",
     "diffusive_exponent",
     "still_members",
@@ -60,6 +60,10 @@ pub const THRESHOLDS: [&str; 11] = [
     "solid_temperature",
     "solid_flc",
     "shear_e_par",
+    "gas_evidence_temperature",
+    "gas_evidence_bridges",
+    "fluid_evidence_temperature",
+    "fluid_evidence_bridges",
 ];
 
 /// How a threshold is varied by a factor `k` (module doc).
@@ -101,6 +105,10 @@ fn slot<'a>(th: &'a mut Thresholds, key: &str) -> &'a mut f64 {
         "solid_temperature" => &mut th.solid_temperature,
         "solid_flc" => &mut th.solid_flc,
         "shear_e_par" => &mut th.shear_e_par,
+        "gas_evidence_temperature" => &mut th.gas_evidence_temperature,
+        "gas_evidence_bridges" => &mut th.gas_evidence_bridges,
+        "fluid_evidence_temperature" => &mut th.fluid_evidence_temperature,
+        "fluid_evidence_bridges" => &mut th.fluid_evidence_bridges,
         other => panic!("`{other}` is not a varied threshold"),
     }
 }
@@ -125,6 +133,9 @@ pub fn varied(th: &Thresholds, key: &str, k: f64) -> Thresholds {
         "line_jump_ratio" => v.max(1.0 + 1e-9),
         "gas_temperature" => v.max(th.solid_temperature),
         "solid_temperature" => v.min(th.gas_temperature),
+        // A gas's own evidence stays hotter than a fluid's.
+        "gas_evidence_temperature" => v.max(th.fluid_evidence_temperature * (1.0 + 1e-9)),
+        "fluid_evidence_temperature" => v.min(th.gas_evidence_temperature * (1.0 - 1e-9)),
         _ => v,
     };
     let mut out = th.clone();

@@ -8,6 +8,9 @@
 //! (`wetgran_core::sim::RunSettings::on_extend`). A binary using this module has its own
 //! harness (`harness = false` in Cargo.toml) and starts its `main` with [`run_child`].
 
+// Each binary uses part of the module.
+#![allow(dead_code)]
+
 use std::process::{Command, ExitCode};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -17,16 +20,16 @@ use wetgran::store::WriteHook;
 use wetgran_core::sim::ExtendHook;
 
 /// Set in the environment of a child: this binary is then the command line.
-pub const CHILD_VAR: &str = "WETGRAN_CRASH_CHILD";
+pub(crate) const CHILD_VAR: &str = "WETGRAN_CRASH_CHILD";
 /// The point a child pauses at: `point` or `point:n`.
-pub const PAUSE_AT_VAR: &str = "WETGRAN_CRASH_PAUSE_AT";
+pub(crate) const PAUSE_AT_VAR: &str = "WETGRAN_CRASH_PAUSE_AT";
 /// How long a child pauses, in seconds.
-pub const PAUSE_SECS_VAR: &str = "WETGRAN_CRASH_PAUSE_SECS";
+pub(crate) const PAUSE_SECS_VAR: &str = "WETGRAN_CRASH_PAUSE_SECS";
 /// What a child prints to standard error at its pause, before the point and the pass.
-pub const MARKER: &str = "wetgran-pause:";
+pub(crate) const MARKER: &str = "wetgran-pause:";
 
 /// The command line's exit code when this process is a child, `None` when it is the tests.
-pub fn run_child() -> Option<ExitCode> {
+pub(crate) fn run_child() -> Option<ExitCode> {
     std::env::var_os(CHILD_VAR).map(|_| wetgran::cli::main_with(&child_hooks()))
 }
 
@@ -76,7 +79,7 @@ fn child_hooks() -> Hooks {
 
 /// This binary as a child (the command line), pausing `secs` seconds at `pause` (`point:n`)
 /// if given.
-pub fn child(pause: Option<(&str, &str)>) -> Command {
+pub(crate) fn child(pause: Option<(&str, &str)>) -> Command {
     let mut cmd = Command::new(std::env::current_exe().expect("the test binary"));
     cmd.env(CHILD_VAR, "1")
         .env_remove(PAUSE_AT_VAR)

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 use wetgran::sweep::{JobSpec, SweepFile};
-use wetgran_core::scene::reference::system_a;
+use wetgran_testkit::reference::system_a;
 use wetgran_core::sim::event_driven::Engine;
 
 /// The representative jobs: label, Gamma, E*.

@@ -4,7 +4,7 @@
 //! otherwise only while the share allows; the report's one-pass sample equals the engine's
 //! energies and temperature bit for bit.
 
-mod common;
+use wetgran_testkit as common;
 
 use common::scene_with;
 use wetgran_core::scene::Scene;

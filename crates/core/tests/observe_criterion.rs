@@ -11,7 +11,7 @@ use wetgran_core::observe::criterion::{Criterion, DecidedBy, Region};
 use wetgran_core::observe::line::classify_line;
 use wetgran_core::observe::{
     CageCounts, Classification, LateralMobility, Mobility, NcbNormalisation, Observables, Phase,
-    Profiles, Stationarity, Thresholds, WindowCounts, classify,
+    Profiles, Thresholds, WindowCounts, classify,
 };
 
 /// A result of 10 bins: `n_cb` and `(D_lat, T_g/E_cb)` per bin, every grain a cluster member
@@ -82,14 +82,8 @@ fn synthetic(n_cb: Vec<f64>, bins: Vec<(f64, f64)>, d: f64, d_short: Option<f64>
             bridge_ruptures: 0,
             pair_per_wall: None,
         },
-        stationarity: Stationarity {
-            tolerance: 0.2,
-            checks: vec![],
-            stationary: true,
-        },
         series: None,
         shear: None,
-        convergence: None,
         trend: None,
     }
 }
@@ -375,19 +369,18 @@ fn names_letters_and_unreadable_records() {
 
 /// `o` with a stored block error of its temperature, `rel` of its value.
 fn with_error(mut o: Observables, rel: f64) -> Observables {
-    use wetgran_core::observe::convergence::{BlockTest, Convergence};
+    use wetgran_core::observe::convergence::BlockTest;
+    use wetgran_core::observe::trend::{Trend, TrendState};
     let t = o.granular_temperature_reduced;
-    o.convergence = Some(Convergence {
-        converged: true,
-        ending: None,
-        window_start: 0.0,
-        window_end: 100.0,
-        checks: 1,
-        first_check: 100.0,
-        cap: 100.0,
-        blocks: 4,
-        sigmas: 3.0,
-        rel_tolerance: 0.02,
+    o.trend = Some(Trend {
+        state: TrendState::Stationary,
+        relaxed_at: 0.0,
+        relaxed: true,
+        from: 0.0,
+        to: 100.0,
+        region_tests: Vec::new(),
+        unrelaxed: Vec::new(),
+        policy: None,
         tests: vec![BlockTest {
             quantity: wetgran_core::observe::trend::TEMPERATURE.into(),
             mean: t,

@@ -59,6 +59,9 @@ pub enum Criterion {
     LineCoexistences,
     /// Fluid or gas by `T_g / E_cb` against the per-point `gas_temperature`: no line decided.
     GasTemperatureFallback,
+    /// Fluid or gas by the point's own evidence against what its line said (rule 5: a gas's
+    /// temperature and bridge count, or a fluid's, bound the line rule).
+    OwnEvidence,
     /// A coexistence region fluid or gas by its own `T_g / E_cb` against `gas_temperature`
     /// (rule 3).
     RegionTemperature,
@@ -71,7 +74,7 @@ pub enum Criterion {
 
 impl Criterion {
     /// Every criterion, in declaration order.
-    pub const ALL: [Criterion; 13] = [
+    pub const ALL: [Criterion; 14] = [
         Criterion::Displacement,
         Criterion::Cage,
         Criterion::MembersStill,
@@ -82,6 +85,7 @@ impl Criterion {
         Criterion::LineInflection,
         Criterion::LineCoexistences,
         Criterion::GasTemperatureFallback,
+        Criterion::OwnEvidence,
         Criterion::RegionTemperature,
         Criterion::DiluteHotter,
         Criterion::EPar,
@@ -100,6 +104,7 @@ impl Criterion {
             Criterion::LineInflection => "line_inflection",
             Criterion::LineCoexistences => "line_coexistences",
             Criterion::GasTemperatureFallback => "gas_temperature_fallback",
+            Criterion::OwnEvidence => "own_evidence",
             Criterion::RegionTemperature => "region_temperature",
             Criterion::DiluteHotter => "dilute_hotter",
             Criterion::EPar => "e_par",
@@ -119,6 +124,7 @@ impl Criterion {
             Criterion::LineInflection => 'I',
             Criterion::LineCoexistences => 'X',
             Criterion::GasTemperatureFallback => 'G',
+            Criterion::OwnEvidence => 'O',
             Criterion::RegionTemperature => 'R',
             Criterion::DiluteHotter => 'V',
             Criterion::EPar => 'E',
@@ -141,6 +147,9 @@ impl Criterion {
             Criterion::LineCoexistences => "the line's fluid-gas coexistences",
             Criterion::GasTemperatureFallback => {
                 "gas-temperature fallback (no line decided: T_g against gas_temperature)"
+            }
+            Criterion::OwnEvidence => {
+                "the point's own T_g/E_cb and bridges overruled its line (rule 5)"
             }
             Criterion::RegionTemperature => "a coexistence region's T_g against gas_temperature",
             Criterion::DiluteHotter => {
@@ -485,6 +494,7 @@ fn homogeneous_fluid_gas(d: &DecisionInputs) -> Criterion {
         FluidGasFrom::PointFallback | FluidGasFrom::LineWithoutTransition { .. } => {
             Criterion::GasTemperatureFallback
         }
+        FluidGasFrom::OwnEvidence { .. } => Criterion::OwnEvidence,
     }
 }
 
@@ -527,6 +537,22 @@ fn homogeneous_fluid_gas_text(d: &DecisionInputs, c: Criterion, unit: &str) -> S
             sig(*gamma)
         ),
         (FluidGasFrom::PointFallback, _) => format!("{fallback} (no line of constant Gamma)"),
+        (
+            FluidGasFrom::OwnEvidence {
+                gamma,
+                method,
+                line_said,
+                ..
+            },
+            _,
+        ) => format!(
+            "{what} by its own T_g/{unit} {} and bridges per grain, although the {} of the \
+             line at Gamma {} said {}",
+            sig(t),
+            method,
+            sig(*gamma),
+            line_said
+        ),
     }
 }
 

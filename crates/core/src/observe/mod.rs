@@ -259,19 +259,23 @@ pub struct ObservedRun {
 }
 
 /// Runs a validated scene with the observers of its `[observe]` section and classifies it with
-/// its `[classify]` thresholds, in the caller's context `ctx` (threads, hook); `progress` gets
+/// its `[classify]` thresholds, with the caller's `settings` (threads, hook); `progress` gets
 /// the completed fraction in `[0, 1]`.
-pub fn run_observed(scene: &Scene, ctx: &RunSettings, progress: &mut dyn FnMut(f64)) -> ObservedRun {
-    run_observed_with_frame(scene, ctx, progress).0
+pub fn run_observed(
+    scene: &Scene,
+    settings: &RunSettings,
+    progress: &mut dyn FnMut(f64),
+) -> ObservedRun {
+    run_observed_with_frame(scene, settings, progress).0
 }
 
 /// Like [`run_observed`], and also returns the last sampled configuration (for pictures).
 pub fn run_observed_with_frame(
     scene: &Scene,
-    ctx: &RunSettings,
+    settings: &RunSettings,
     progress: &mut dyn FnMut(f64),
 ) -> (ObservedRun, Frame) {
-    run_observed_from(scene, None, &crate::sim::RunSettings::default(), progress)
+    run_observed_from(scene, None, settings, progress)
 }
 
 /// The monitored quantities of one observer sample (the trend test's input): `T_g / unit`,
@@ -467,7 +471,7 @@ pub fn run_observed_from(
     let mut watch = Watch {
         scene,
         set,
-        threads: &ctx.threads,
+        threads: &settings.threads,
         monitored: Vec::new(),
         regions: lateral_observer(scene, settling::block_time(scene.driving_period())),
         schedule,
