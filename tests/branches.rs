@@ -89,7 +89,10 @@ fn each_branch_has_its_own_named_boundaries() {
     let boundary_rows: Vec<&str> = csv.lines().filter(|l| l.contains(",boundary,")).collect();
     assert_eq!(boundary_rows.len(), 6, "{csv}");
     assert_eq!(
-        boundary_rows.iter().filter(|l| l.ends_with(",hot,")).count(),
+        boundary_rows
+            .iter()
+            .filter(|l| l.ends_with(",hot,"))
+            .count(),
         3
     );
     assert_eq!(

@@ -18,6 +18,7 @@ mod paused_child;
 mod store_inspect;
 mod sweep_common;
 
+use paused_child::{MARKER, child, run_child};
 use rand::{Rng, SeedableRng};
 use std::io::{BufRead, BufReader};
 use std::os::unix::process::ExitStatusExt;
@@ -25,7 +26,6 @@ use std::path::{Path, PathBuf};
 use std::process::{ExitCode, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
-use paused_child::{MARKER, child, run_child};
 use store_inspect::{Snapshot, differences, integrity, snapshot};
 use sweep_common::*;
 use wetgran::store::{REFINED_FROM, Store};
@@ -83,7 +83,7 @@ fn sweep_file(dir: &Path) -> PathBuf {
         "torture.toml",
         &format!(
             "[sweep]\nname = \"torture\"\nbase = \"tiny.toml\"\nperiods = 40\n\
-             [convergence]\nmax_periods = 120\n\
+             [convergence]\nmax_periods = 80\n\
              [[axis]]\nkey = \"gamma\"\nvalues = [2.0, 6.0]\n\
              [[axis]]\nkey = \"e_star\"\nlog = {{ from = 0.5, to = 4.0, steps = 3 }}\n\
              [refine]\nbudget = {REFINE_BUDGET}\nrounds = 2\n"
@@ -411,7 +411,7 @@ fn cool_sweep_run(dir: &Path) -> PathBuf {
     let sweep = write(
         dir,
         "cool_sweep.toml",
-        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\n\
+        "[sweep]\nname = \"cool\"\nbase = \"cool.toml\"\n[observe]\ntransient_periods = 0.0\nmobility_lag = 1.0\n\
          [convergence]\nmax_periods = 8.0\n\
          [[axis]]\nkey = \"contact.restitution\"\nvalues = [0.8, 0.9]\n",
     );

@@ -468,10 +468,11 @@ fn location_changes_rule() -> Result<(), String> {
 }
 
 fn max_periods_rule() -> Result<(), String> {
-    let s = checked("[convergence]\nmin_time = 10.0\n")?;
+    // Longer than the two mobility lags (20 time units) the first check holds at least.
+    let s = checked("[convergence]\nmin_time = 30.0\n")?;
     let schedule = s.convergence.as_ref().ok_or("no convergence")?.schedule(&s);
     ensure(
-        schedule.cap == 4.0 * schedule.first_check && schedule.first_check == 10.0,
+        schedule.cap == 4.0 * schedule.first_check && schedule.first_check == 30.0,
         format!("{schedule:?}"),
     )
 }

@@ -88,7 +88,9 @@ fn prepared(dir: &Path) -> PathBuf {
          [[axis]]\nkey = \"e_star\"\nvalues = [0.5, 1.0, 2.0, 4.0, 8.0]\n",
     );
     let scene = Scene::from_toml_str(SCENE, "template").unwrap();
-    let template = serde_json::to_value(run_observed(&scene, &Default::default(), &mut |_| {}).observables).unwrap();
+    let template =
+        serde_json::to_value(run_observed(&scene, &Default::default(), &mut |_| {}).observables)
+            .unwrap();
     let sweep = SweepFile::load(&file).unwrap();
     let db = dir.join("grid.sqlite");
     let store = Store::open(&db).unwrap();
@@ -207,7 +209,10 @@ fn every_report_says_which_criterion_decided_each_label() {
     );
     let show: Value =
         serde_json::from_str(&ok_stdout(&["show", "--db", db, &job[..12], "--json"])).unwrap();
-    assert_eq!(show["decided_by"]["criterion"], json!("temperature_fallback"));
+    assert_eq!(
+        show["decided_by"]["criterion"],
+        json!("temperature_fallback")
+    );
     assert_eq!(show["decided_by"]["fallback"], json!(true));
 
     // plot: fallback points drawn in a square, with a legend entry.

@@ -9,9 +9,9 @@
 mod paused_child;
 mod sweep_common;
 
+use paused_child::{MARKER, child, run_child};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use paused_child::{MARKER, child, run_child};
 use std::process::{Child, ExitCode, Output, Stdio};
 use std::time::{Duration, Instant};
 use sweep_common::*;
@@ -28,13 +28,34 @@ fn main() -> ExitCode {
         })
     };
     let trials = vec![
-        trial("regression_truncated_and_malformed_databases_are_named_with_exit_status_2", regression_truncated_and_malformed_databases_are_named_with_exit_status_2),
-        trial("regression_a_newer_database_is_named_with_exit_status_2", regression_a_newer_database_is_named_with_exit_status_2),
-        trial("regression_paths_that_are_not_regular_files_are_refused_before_anything_opens_them", regression_paths_that_are_not_regular_files_are_refused_before_anything_opens_them),
-        trial("regression_a_copy_without_its_log_is_named_and_never_turned_into_an_empty_database", regression_a_copy_without_its_log_is_named_and_never_turned_into_an_empty_database),
-        trial("regression_viewers_never_migrate_and_upgrade_does", regression_viewers_never_migrate_and_upgrade_does),
-        trial("regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_log", regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_log),
-        trial("regression_run_rows_of_a_stopped_runner_are_closed_as_interrupted_by_the_next_writer", regression_run_rows_of_a_stopped_runner_are_closed_as_interrupted_by_the_next_writer),
+        trial(
+            "regression_truncated_and_malformed_databases_are_named_with_exit_status_2",
+            regression_truncated_and_malformed_databases_are_named_with_exit_status_2,
+        ),
+        trial(
+            "regression_a_newer_database_is_named_with_exit_status_2",
+            regression_a_newer_database_is_named_with_exit_status_2,
+        ),
+        trial(
+            "regression_paths_that_are_not_regular_files_are_refused_before_anything_opens_them",
+            regression_paths_that_are_not_regular_files_are_refused_before_anything_opens_them,
+        ),
+        trial(
+            "regression_a_copy_without_its_log_is_named_and_never_turned_into_an_empty_database",
+            regression_a_copy_without_its_log_is_named_and_never_turned_into_an_empty_database,
+        ),
+        trial(
+            "regression_viewers_never_migrate_and_upgrade_does",
+            regression_viewers_never_migrate_and_upgrade_does,
+        ),
+        trial(
+            "regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_log",
+            regression_ctrl_c_while_a_grid_registers_stores_nothing_and_leaves_no_large_log,
+        ),
+        trial(
+            "regression_run_rows_of_a_stopped_runner_are_closed_as_interrupted_by_the_next_writer",
+            regression_run_rows_of_a_stopped_runner_are_closed_as_interrupted_by_the_next_writer,
+        ),
     ];
     libtest_mimic::run(&args, trials).exit_code()
 }
@@ -307,7 +328,12 @@ fn regression_viewers_never_migrate_and_upgrade_does() {
     assert_eq!(migrations(), before);
     let o = run(&["upgrade", "--db", s(&db)]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stdout(&o).contains("upgraded (migrations 20261127150000 not applied before)"));
+    assert!(
+        stdout(&o)
+            .contains("upgraded (migrations 20261127150000, 20261202000000 not applied before)"),
+        "{}",
+        stdout(&o)
+    );
     assert_ne!(migrations(), before);
     let o = run(&["upgrade", "--db", s(&db)]);
     assert!(stdout(&o).contains("up to date"), "{}", stdout(&o));

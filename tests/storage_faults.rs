@@ -521,7 +521,7 @@ fn a_damaged_checkpoint_is_reported_and_never_used() {
         "--db",
         s(&db),
         "--extend",
-        "80",
+        "120",
         "--jobs",
         "1",
     ]);

@@ -461,12 +461,9 @@ fn a_time_engine_job_spells_out_its_damping_calibration() {
 /// The location-change observer is off unless asked for, and a job spec names the choice: left
 /// out it reads `false`; `classify.mobility = "location_changes"` turns it on (another job: its
 /// observables hold `f_lc`); `location_changes = true` spelled out is the same job as that (the
-/// thresholds are not part of the id), with the id the job had while the observer was on by
-/// default (`OLD_DEFAULT_ID`: `wetgran sweep expand` of the same file without the key, built
-/// from main at f1bbb82), so results stored before stay found by asking for the observer.
+/// thresholds are not part of the id).
 #[test]
 fn a_job_spec_names_whether_it_counts_location_changes() {
-    const OLD_DEFAULT_ID: &str = "4f90a49189ecc12c5cc642d1433d24f4650c237159fb39a10e912b8157f3ec37";
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "tiny.toml", TINY_SCENE);
     let axes = "[[axis]]\nkey = \"gamma\"\nvalues = [2.0]\n";
@@ -493,7 +490,6 @@ fn a_job_spec_names_whether_it_counts_location_changes() {
     let by_hand = job("[observe]\nlocation_changes = true");
     assert_eq!(by_hand.spec.scene.observe.location_changes, Some(true));
     assert_eq!(by_hand.id, by_classifier.id);
-    assert_eq!(by_hand.id, OLD_DEFAULT_ID);
     // Switched off by hand while the classifier reads f_lc: an error naming the key.
     let e = err(
         dir.path(),

@@ -57,7 +57,7 @@ mobility_lag = 0.5
 }
 
 /// Observables of a homogeneous mobile state at `T_g / E_cb = t`: a real short run's record
-/// with a flat profile and the temperature set.
+/// with a flat profile, the temperature set and no stored error of it.
 fn observables(template: &Value, t: f64) -> Value {
     let mut o = template.clone();
     o["granular_temperature_reduced"] = json!(t);
@@ -67,6 +67,8 @@ fn observables(template: &Value, t: f64) -> Value {
     o["profiles"]["packing"] = json!(vec![0.5; bins]);
     o["profiles"]["delta_n_cb"] = json!(0.0);
     o["profiles"]["delta_n_area"] = json!(0.0);
+    // No stored temperature error unless `with_error` adds one.
+    o["trend"]["tests"] = json!([]);
     o
 }
 
@@ -75,18 +77,18 @@ fn observables(template: &Value, t: f64) -> Value {
 fn with_error(mut o: Value, rel: f64) -> Value {
     let t = o["granular_temperature_reduced"].as_f64().unwrap();
     let tests = vec![BlockTest {
-            quantity: wetgran_core::observe::trend::TEMPERATURE.into(),
-            mean: t,
-            standard_error: rel * t,
-            block_means: vec![t; 4],
-            block_errors: vec![2.0 * rel * t; 4],
-            max_pair_sigmas: 0.0,
-            drift: 0.0,
-            drift_error: 0.0,
-            tolerance: 0.02 * t,
-            agree: true,
-            no_trend: true,
-        }];
+        quantity: wetgran_core::observe::trend::TEMPERATURE.into(),
+        mean: t,
+        standard_error: rel * t,
+        block_means: vec![t; 4],
+        block_errors: vec![2.0 * rel * t; 4],
+        max_pair_sigmas: 0.0,
+        drift: 0.0,
+        drift_error: 0.0,
+        tolerance: 0.02 * t,
+        agree: true,
+        no_trend: true,
+    }];
     o["trend"]["tests"] = serde_json::to_value(tests).unwrap();
     o
 }

@@ -303,7 +303,7 @@ fn check_export(dir: &std::path::Path, db_s: &str) -> Vec<String> {
     let csv = std::fs::read_to_string(&csv_path).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     assert!(header.len() < 100, "{} columns: {header:?}", header.len());
-    assert!(header.contains(&"stationary") && header.contains(&"trust"));
+    assert!(header.contains(&"verdict") && header.contains(&"trust"));
     assert!(
         !header
             .iter()
@@ -521,13 +521,13 @@ fn non_stationary_results_are_counted_and_marked() {
     assert_eq!(map.matches("g?").count(), 2, "{map}");
     let csv = stdout(&run(&["export", "--db", db_s]));
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    let col = header.iter().position(|h| *h == "stationary").unwrap();
-    let falses = csv
+    let col = header.iter().position(|h| *h == "verdict").unwrap();
+    let unsettled = csv
         .lines()
         .skip(1)
-        .filter(|l| l.split(',').nth(col) == Some("false"))
+        .filter(|l| l.split(',').nth(col) == Some("not_settled"))
         .count();
-    assert_eq!(falses, 2, "{csv}");
+    assert_eq!(unsettled, 2, "{csv}");
 }
 
 /// Every sweep file shipped under `sweeps/` (the validation sweeps in `sweeps/validation/`

@@ -1,8 +1,9 @@
 //! Trend states in the reports (issue 32, item 2): results prepared through the store with
 //! synthetic observables (no simulation) carrying a trend state. The state lands in
-//! `results.trend`; `sweep status` counts the states, `boundaries` marks `?` (label may change)
-//! and `~` (trend keeps the label) and rests boundaries on the stationary and the `~` points
-//! only, `plot` draws the two kinds apart, `export` has the columns.
+//! `results.trend`, the verdict (in `decided_on.settling`) in `results.verdict`; `sweep status`
+//! counts the states, `boundaries` marks `?` (not settled: the label may change) and `~` (label
+//! kept) and rests boundaries on the stationary and the `~` points only, `plot` draws the two
+//! kinds apart, `export` has the columns.
 
 mod sweep_common;
 
@@ -31,20 +32,20 @@ fn prepared(dir: &Path) -> PathBuf {
         .unwrap();
     while let Some(c) = store.claim(&[row.id]).expect("claim") {
         let e = c.coords[1].as_f64().unwrap();
-        let (phase, state) = match e as i64 {
-            1 => ("f", "stationary"),
-            2 => ("f", "undecided"),
-            4 => ("g", "heating"),
-            _ => ("g", "stationary"),
+        let (phase, state, verdict) = match e as i64 {
+            1 => ("f", "stationary", "stationary"),
+            2 => ("f", "undecided", "not_settled"),
+            4 => ("g", "heating", "label_kept"),
+            _ => ("g", "stationary", "stationary"),
         };
         let result = JobResult {
             checkpoint: None,
             phase: Some(phase.into()),
-            decided_on: Some(serde_json::json!({"synthetic": true})),
-            observables: serde_json::json!({
-                "convergence": {"converged": state == "stationary"},
-                "trend": {"state": state},
-            }),
+            decided_on: Some(serde_json::json!({
+                "synthetic": true,
+                "settling": {"verdict": verdict, "regions": []},
+            })),
+            observables: serde_json::json!({"trend": {"state": state}}),
             simulated_time: 1.0,
             wall_seconds: 0.01,
             events: 10,
@@ -93,7 +94,7 @@ fn the_trend_state_is_stored_and_shown_by_every_report() {
         "{status}"
     );
     assert!(
-        status.contains("2 of 5 result(s) not stationary: 1 whose label may change"),
+        status.contains("2 of 5 result(s) not stationary: 1 not settled"),
         "{status}"
     );
 

@@ -60,7 +60,10 @@ fn the_elastic_gas_at_gamma_30_reads_heating_and_stops_early() {
     let heating = got
         .iter()
         .filter(|(p, t, e, time)| {
-            *p == Phase::G && *t == TrendState::Heating && *e == Some(Ending::Settled) && *time < cap
+            *p == Phase::G
+                && *t == TrendState::Heating
+                && *e == Some(Ending::Settled)
+                && *time < cap
         })
         .count();
     assert!(heating >= 4, "{got:?}");

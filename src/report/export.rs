@@ -446,7 +446,7 @@ mod tests {
                 json!(0.25),
                 Value::Null,
                 json!("g"),
-                json!(false),
+                json!("label_kept"),
                 json!("heating"),
                 json!("~"),
                 json!("gas_temperature_fallback"),
@@ -542,7 +542,7 @@ mod tests {
         assert!(line.find("\"drive.gamma\"").unwrap() < line.find("\"drive.e_star\"").unwrap());
         assert_eq!(v[1]["drive.gamma"], json!(2.0));
         assert_eq!(v[1]["obs.t"], json!(2.5));
-        assert_eq!(v[0]["stationary"], json!(false));
+        assert_eq!(v[0]["verdict"], json!("label_kept"));
         assert_eq!(v[0]["trust"], json!("~"));
         assert_eq!(v[0]["omega"], Value::Null);
         // The series stay out of both.

@@ -4,9 +4,9 @@
 
 use super::lines::gamma_e_star;
 use super::trust::unsettled;
-use wetgran_core::observe::Verdict;
 use crate::store::PointRow;
 use std::fmt::Write as _;
+use wetgran_core::observe::Verdict;
 use wetgran_core::observe::criterion::DecidedBy;
 use wetgran_core::observe::fluid_gas_inflection;
 use wetgran_core::observe::line::LinePoint;

@@ -301,8 +301,8 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
     let _ = writeln!(
         h,
         "<p>{} jobs, {done} finished; labels: {}. A mark after a label: <code>?</code> the \
-         run is not stationary and its label may still change, <code>~</code> not stationary \
-         but its trend keeps the label. Written by wetgran {}.</p>",
+         run did not settle and its label may still change, <code>~</code> every region its \
+         label names settled, some numbers still drift. Written by wetgran {}.</p>",
         input.rows.len(),
         labels
             .iter()

@@ -173,9 +173,9 @@ fn trust_text(out: &mut String, points: &[PointSummary], done: u64) {
     if may_change + kept > 0 {
         let _ = writeln!(
             out,
-            "  trust  {} of {} result(s) not stationary: {may_change} whose label may change ({} \
-             in `boundaries`, left out of them), {kept} whose trend keeps the label ({}: a \
-             heating gas, a cooling solid, a coarsening coexistence); see `show JOB`",
+            "  trust  {} of {} result(s) not stationary: {may_change} not settled, the label may \
+             change ({} in `boundaries`, left out of them), {kept} label kept ({}: every region \
+             the label names settled, some numbers still drift); see `show JOB`",
             may_change + kept,
             done,
             NOT_STATIONARY,

@@ -4,10 +4,10 @@
 
 use super::{POINTS_PAGE, PointRow, StateCounts, Store, StoreError, queries};
 use crate::sweep::estimate::MeasuredCost;
-use wetgran_core::observe::Verdict;
 use crate::sweep::spec::JobSpec;
 use sqlx::Row;
 use std::collections::HashMap;
+use wetgran_core::observe::Verdict;
 use wetgran_core::observe::criterion::DecidedBy;
 
 impl Store {

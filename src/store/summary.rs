@@ -119,7 +119,9 @@ pub fn unconverged_summaries(points: &[PointSummary]) -> (u64, u64) {
     points
         .iter()
         .filter_map(|p| p.verdict)
-        .fold((0, 0), |(u, n), v| (u + u64::from(!v.label_trusted()), n + 1))
+        .fold((0, 0), |(u, n), v| {
+            (u + u64::from(!v.label_trusted()), n + 1)
+        })
 }
 
 /// Whether an axis with this (dotted scene) key leaves every scene field the reports read as

@@ -68,7 +68,11 @@ pub(crate) fn finish_synthetic(
         let result = JobResult {
             checkpoint: None,
             phase: phase(&c.coords, c.replica),
-            decided_on: Some(serde_json::json!({"synthetic": true})),
+            // Settled, so that every synthetic point carries boundaries.
+            decided_on: Some(serde_json::json!({
+                "synthetic": true,
+                "settling": {"verdict": "stationary", "regions": []}
+            })),
             observables: serde_json::json!({"granular_temperature": 1.5, "n": c.point}),
             simulated_time: 1.0,
             wall_seconds: 0.01,

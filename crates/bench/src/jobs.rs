@@ -17,8 +17,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 use wetgran::sweep::{JobSpec, SweepFile};
-use wetgran_testkit::reference::system_a;
 use wetgran_core::sim::event_driven::Engine;
+use wetgran_testkit::reference::system_a;
 
 /// The representative jobs: label, Gamma, E*.
 pub(crate) const JOBS: [(&str, f64, f64); 5] = [

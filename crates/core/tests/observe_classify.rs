@@ -7,12 +7,12 @@ use wetgran_core::observe::classify::{
     FluidGasFrom, LEGACY_DELTA_N_CB, classify_with, two_class_split,
 };
 use wetgran_core::observe::convergence::BlockTest;
-use wetgran_core::observe::trend::{Trend, TrendState};
 use wetgran_core::observe::line::{LinePoint, classify_line, fluid_gas_jump};
 use wetgran_core::observe::noise::range_quantile;
+use wetgran_core::observe::trend::{Trend, TrendState};
 use wetgran_core::observe::{
-    LateralMobility, Mobility, NcbNormalisation, Observables, Phase, Profiles,
-    Thresholds, WindowCounts, classify, fluid_gas_inflection,
+    LateralMobility, Mobility, NcbNormalisation, Observables, Phase, Profiles, Thresholds,
+    WindowCounts, classify, fluid_gas_inflection,
 };
 
 /// Statistical error of every synthetic bin's time average.
@@ -954,7 +954,12 @@ fn a_point_s_own_evidence_bounds_the_line() {
             let c = line_said(&o, gas);
             assert_eq!(c.phase == Phase::G, gas, "T {t}, bridges {b}");
             assert!(matches!(c.decided_on.fluid_gas, FluidGasFrom::Line { .. }));
-            assert!(c.decided_on.borderline.iter().all(|x| !x.contains("rule 5")));
+            assert!(
+                c.decided_on
+                    .borderline
+                    .iter()
+                    .all(|x| !x.contains("rule 5"))
+            );
         }
     }
     // A dry point has no bridges to weigh: the line decides.

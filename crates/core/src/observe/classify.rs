@@ -40,9 +40,11 @@
 //! A value equal to a threshold stays on the calmer side (solid, not gas, homogeneous).
 
 use super::settling::{self, Settling, Verdict};
-use super::{Observables, evidence, noise};
+use super::{Observables, noise};
 use serde::{Deserialize, Serialize};
 use std::fmt;
+
+mod evidence;
 
 /// The six phases of docs/model.md 7.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -131,7 +133,7 @@ pub enum FluidGasFrom {
         e_star_boundary: f64,
     },
     /// A line of constant Gamma put the point on one side, and the point's own temperature and
-    /// bridges said the other (rule 5, `observe::evidence`): the point's evidence decided.
+    /// bridges said the other (rule 5, `observe::classify::evidence`): the point's evidence decided.
     OwnEvidence {
         gamma: f64,
         /// The line's method (`"jump"`, `"inflection"`, `"coexistence"`).
@@ -226,7 +228,7 @@ pub struct DecisionInputs {
     pub fluid_gas: FluidGasFrom,
     /// Sheared scenes: the window mean of `E_par / E_cb` that decided (rule 4).
     pub shear_e_par: Option<f64>,
-    /// Decisions whose input lies close to its threshold (`observe::evidence`): the label
+    /// Decisions whose input lies close to its threshold (`observe::classify::evidence`): the label
     /// is uncertain there and should be read with replicas. Empty when every decision is clear.
     #[serde(default)]
     pub borderline: Vec<String>,
@@ -429,7 +431,9 @@ pub fn classify_with(
         decided.shear_e_par = Some(sh.e_par);
     }
     let parts = match (&decided.dense, &decided.dilute) {
-        (Some(d), Some(l)) if decided.split && Phase::coexistence(d.phase, l.phase) == Some(phase) => {
+        (Some(d), Some(l))
+            if decided.split && Phase::coexistence(d.phase, l.phase) == Some(phase) =>
+        {
             Some((d.phase, l.phase))
         }
         _ => None,

@@ -100,13 +100,16 @@ pub(crate) fn integrated_time(x: &[f64], block_means: &[f64], per: usize) -> f64
     tau.max(1.0)
 }
 
-/// The block statistics and the verdict of one monitored quantity.
+/// The block statistics and the verdict of one monitored quantity. A quantity with too few
+/// values to test has NaN statistics, which JSON stores as `null`: they read back as NaN.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BlockTest {
     pub quantity: String,
     /// Mean over the window.
+    #[serde(deserialize_with = "nan_if_null")]
     pub mean: f64,
     /// Standard error of the window mean (blocking).
+    #[serde(deserialize_with = "nan_if_null")]
     pub standard_error: f64,
     pub block_means: Vec<f64>,
     /// Standard error of each block mean, pooled over the blocks:
@@ -114,17 +117,26 @@ pub struct BlockTest {
     /// `tau` from [`integrated_time`] (the same for every block).
     pub block_errors: Vec<f64>,
     /// Largest `|m_i - m_j| / (sqrt(2) SE)` over the pairs of blocks (`SE` pooled).
+    #[serde(deserialize_with = "nan_if_null")]
     pub max_pair_sigmas: f64,
     /// Least-squares change of the block means from the first to the last block.
+    #[serde(deserialize_with = "nan_if_null")]
     pub drift: f64,
     /// Standard error of `drift`.
+    #[serde(deserialize_with = "nan_if_null")]
     pub drift_error: f64,
     /// The allowance `rel_tolerance * max(|mean|, floor)`.
+    #[serde(deserialize_with = "nan_if_null")]
     pub tolerance: f64,
     /// Every pair of blocks agrees.
     pub agree: bool,
     /// No trend beyond the errors.
     pub no_trend: bool,
+}
+
+/// A stored number, or NaN where JSON stored `null` (serde_json writes NaN as `null`).
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 impl BlockTest {

@@ -314,7 +314,11 @@ impl LateralObserver {
         let dim = frame.dimension;
         let nb = self.bins.n;
         // Per-bin velocity sums, `|v|^2` sums and counts: all grains, members, the others.
-        let mut sv = [vec![0.0; nb * dim], vec![0.0; nb * dim], vec![0.0; nb * dim]];
+        let mut sv = [
+            vec![0.0; nb * dim],
+            vec![0.0; nb * dim],
+            vec![0.0; nb * dim],
+        ];
         let mut sq = [vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]];
         let mut n = [vec![0usize; nb], vec![0usize; nb], vec![0usize; nb]];
         let block = &mut self.blocks[bk];
@@ -345,7 +349,10 @@ impl LateralObserver {
         }
         for b in 0..nb {
             let s = &mut block.sums[b * field::COUNT..(b + 1) * field::COUNT];
-            for (g, f) in [field::T_ALL, field::T_CL, field::T_UB].into_iter().enumerate() {
+            for (g, f) in [field::T_ALL, field::T_CL, field::T_UB]
+                .into_iter()
+                .enumerate()
+            {
                 let sums = &sv[g][b * dim..(b + 1) * dim];
                 if let Some(t) = temperature_of(sums, sq[g][b], n[g][b], frame.mass) {
                     s[f] += n[g][b] as f64 * t / self.unit;

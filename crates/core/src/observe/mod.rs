@@ -18,7 +18,7 @@
 //! | [`settling`] | whether each region of a label has settled: the one verdict on a run |
 //! | [`shear`](mod@shear) | shear drive: `E_par`, `E_perp`, their window means and extrema per cycle |
 //! | [`classify`](mod@classify) | the phase from the observables and the `[classify]` thresholds |
-//! | [`evidence`] | a point's own evidence against the line rule; borderline decisions |
+//! | [`classify`]`::evidence` | a point's own evidence against the line rule; borderline decisions |
 //! | [`line`](mod@line) | the fluid-gas inflection point along a line of constant Gamma |
 //! | [`criterion`] | which criterion decided a label, from its decision record |
 //!
@@ -32,7 +32,6 @@ pub mod clusters;
 pub mod convergence;
 pub mod criterion;
 pub(crate) mod diffusion;
-pub(crate) mod evidence;
 pub(crate) mod lateral;
 pub mod line;
 pub mod location_changes;
@@ -54,7 +53,7 @@ pub use trend::Ending;
 
 use crate::scene::Scene;
 use crate::sim::threads::Threads;
-use crate::sim::{Frame, RunSettings, RunReport};
+use crate::sim::{Frame, RunReport, RunSettings};
 use lateral::{LateralObserver, field, field_sums};
 use location_changes::{LocationChangeCounter, Method};
 pub use profiles::CageCounts;
@@ -362,8 +361,7 @@ impl Watch<'_> {
             self.scene.classify.solid_diffusion,
             FLOOR_TEMPERATURE,
         );
-        let (tests, unrelaxed) =
-            trend::assess_regions(&blocks, self.t_floor, window_start, test);
+        let (tests, unrelaxed) = trend::assess_regions(&blocks, self.t_floor, window_start, test);
         t.region_tests = tests;
         t.unrelaxed.extend(unrelaxed);
         t
@@ -473,7 +471,13 @@ pub fn run_observed_from(
         set,
         threads: &settings.threads,
         monitored: Vec::new(),
-        regions: lateral_observer(scene, settling::block_time(scene.driving_period())),
+        regions: lateral_observer(
+            scene,
+            settling::block_time(
+                scene.driving_period(),
+                duration - (t0 + spec.window_start(scene)),
+            ),
+        ),
         schedule,
         t_floor: t0 + spec.window_start(scene),
         checks: 0,

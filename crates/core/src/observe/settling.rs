@@ -13,7 +13,8 @@
 //! every observer sample (`observe::trend`). The regions' own quantities come from a lateral
 //! observer that runs over the whole history from the transient floor on (not window by window),
 //! one value per block of a driving period, or of a whole fraction of a slow drive's period no
-//! longer than [`MAX_BLOCK_TIME`] (blocks merge as the history grows, `observe::lateral`): the member fraction, the members' and the other grains' temperatures,
+//! longer than [`MAX_BLOCK_TIME`] and than a [`MIN_WINDOW_BLOCKS`]-th of the first window
+//! (blocks merge as the history grows, `observe::lateral`): the member fraction, the members' and the other grains' temperatures,
 //! the lateral mobility `D_lat` of all grains, of the members and of the others over the long
 //! lag, and the fraction of members that stay in their cage (within `solid_diffusion` of the
 //! grains they were bonded to, over the long lag). [`region_series`] builds them.
@@ -50,6 +51,7 @@
 use super::Phase;
 use super::convergence::BlockTest;
 use super::lateral::{Block, LateralObserver, field};
+use super::trend::BlockSeries;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -73,25 +75,25 @@ pub const UNBONDED_MOBILITY: &str = "unbonded_mobility";
 /// values (the big blocks of the block test average the drive's oscillation out again).
 pub(crate) const MAX_BLOCK_TIME: f64 = 1.0;
 
-/// The regions' first block length for a drive of period `period`: the period, or the largest
-/// whole fraction of it no longer than [`MAX_BLOCK_TIME`].
-pub(crate) fn block_time(period: f64) -> f64 {
-    period / (period / MAX_BLOCK_TIME).ceil().max(1.0)
+/// Fewest blocks of the regions' observer in the first window: a block test of 4 blocks needs
+/// at least 8 values, and the test of a history that has not relaxed takes its second half.
+pub(crate) const MIN_WINDOW_BLOCKS: f64 = 16.0;
+
+/// The regions' first block length for a drive of period `period` and a first window `window`
+/// time units long: the period, or the largest whole fraction of it no longer than
+/// [`MAX_BLOCK_TIME`] and than `window / MIN_WINDOW_BLOCKS`.
+pub(crate) fn block_time(period: f64, window: f64) -> f64 {
+    let longest = if window > 0.0 {
+        MAX_BLOCK_TIME.min(window / MIN_WINDOW_BLOCKS)
+    } else {
+        MAX_BLOCK_TIME
+    };
+    period / (period / longest).ceil().max(1.0)
 }
 
 /// Tolerance floor of the member fractions (a change of a few hundredths of the grains joining
 /// or leaving clusters is nothing to the phase).
 pub(crate) const FLOOR_FRACTION: f64 = 0.05;
-
-/// One region quantity over the blocks of the history: its name, its tolerance floor, the
-/// blocks' mid times and values (blocks where it is undefined left out).
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct BlockSeries {
-    pub name: &'static str,
-    pub floor: f64,
-    pub time: Vec<f64>,
-    pub values: Vec<f64>,
-}
 
 /// The region quantities of the blocks of `monitor` (module doc), `solid_diffusion` the
 /// mobility at which a member counts as still, `temperature_floor` the tolerance floor of the
@@ -130,7 +132,9 @@ pub(crate) fn region_series(
                     .collect(),
             ],
         };
-        cages.fraction_within(&[0], solid_diffusion).unwrap_or(f64::NAN)
+        cages
+            .fraction_within(&[0], solid_diffusion)
+            .unwrap_or(f64::NAN)
     };
     type Of<'a> = Box<dyn Fn(&Block) -> f64 + 'a>;
     let quantities: Vec<(&'static str, f64, Of<'_>)> = vec![

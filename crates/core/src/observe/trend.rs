@@ -26,7 +26,6 @@
 //! `observe::settling`).
 
 use super::convergence::{BlockTest, block_test};
-use super::settling::BlockSeries;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -99,11 +98,15 @@ pub struct Trend {
     /// to the last block, with its error).
     pub tests: Vec<BlockTest>,
     /// The tests of the regions' quantities (`observe::settling`), each over its own history
-    /// of per-period blocks.
+    /// of per-period blocks (empty in results stored before they existed).
+    #[serde(default)]
     pub region_tests: Vec<BlockTest>,
     /// The quantities, sampled or per block, whose history had not relaxed.
+    #[serde(default)]
     pub unrelaxed: Vec<String>,
-    /// How the run policy ended the run (`None`: a fixed-length run).
+    /// How the run policy ended the run (`None`: a fixed-length run, or a result stored before
+    /// it was recorded).
+    #[serde(default)]
     pub policy: Option<PolicyEnd>,
 }
 
@@ -302,6 +305,16 @@ pub(crate) fn assess(
     }
 }
 
+/// One region quantity over the blocks of the history: its name, its tolerance floor, the
+/// blocks' mid times and values (blocks where it is undefined left out).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct BlockSeries {
+    pub name: &'static str,
+    pub floor: f64,
+    pub time: Vec<f64>,
+    pub values: Vec<f64>,
+}
+
 /// The tests of the regions' per-block quantities (`observe::settling::region_series`), each
 /// assessed on its own history like the sampled ones ([`assess`]): its MSER cut, then the block
 /// test from there (or from the window's start, where earlier). Returns the tests and the names
@@ -314,7 +327,10 @@ pub(crate) fn assess_regions(
 ) -> (Vec<BlockTest>, Vec<String>) {
     let mut tests = Vec::new();
     let mut unrelaxed = Vec::new();
-    for s in series {
+    // A quantity with no value at all was not measured in this run (no grain in a cluster, or
+    // a run shorter than the mobility lag): it is left out, not tested. One with a few values
+    // is tested, and reads unknown where they cannot fill the blocks.
+    for s in series.iter().filter(|s| !s.values.is_empty()) {
         let one = assess(
             &s.time,
             &[Monitored {

@@ -489,6 +489,16 @@ impl Scene {
     /// Parses and validates a scene; `origin` names the file in error messages.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
         let mut scene: Scene = toml::from_str(text).map_err(|e| SceneError::parse(origin, e))?;
+        if let Some(v) = scene.observe.removed_stationarity_tolerance {
+            SceneError::unless(
+                false,
+                origin,
+                "observe.stationarity_tolerance",
+                v,
+                "left out: the key was removed, a run's label is now held to the history of \
+                 each region it names (docs/observables.md, \"Run to a settled label\")",
+            )?;
+        }
         scene.resolve_observers();
         scene.validate(origin)?;
         Ok(scene)

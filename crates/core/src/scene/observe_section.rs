@@ -92,6 +92,11 @@ pub struct ObserveSpec {
     /// 3D: lateral bins as square cells over `(x, y)` (`"plane"`, default) or slabs along `x`
     /// across the whole depth (`"x_slabs"`).
     pub bins_3d: Bins3d,
+    /// `stationarity_tolerance`, a key of the run policy the settling verdict replaced: read
+    /// from the stored specs of older results and ignored (never written, so it is no part of
+    /// a job id); a scene file that sets it is refused (`Scene::from_toml_str`).
+    #[serde(default, skip_serializing, rename = "stationarity_tolerance")]
+    pub(crate) removed_stationarity_tolerance: Option<f64>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -118,6 +123,7 @@ impl Default for ObserveSpec {
             bond_time: DEFAULT_BOND_TIME,
             cluster_min_size: DEFAULT_CLUSTER_MIN_SIZE,
             bins_3d: Bins3d::default(),
+            removed_stationarity_tolerance: None,
         }
     }
 }

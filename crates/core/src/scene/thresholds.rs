@@ -138,7 +138,10 @@ impl Thresholds {
             ("coexistence_delta_n_cb", self.coexistence_delta_n_cb),
             ("shear_e_par", self.shear_e_par),
             ("gas_evidence_bridges", self.gas_evidence_bridges),
-            ("fluid_evidence_temperature", self.fluid_evidence_temperature),
+            (
+                "fluid_evidence_temperature",
+                self.fluid_evidence_temperature,
+            ),
             ("fluid_evidence_bridges", self.fluid_evidence_bridges),
         ];
         for (key, v) in checks {

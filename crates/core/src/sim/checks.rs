@@ -13,9 +13,9 @@
 //! the end of every stretch of the run (before a watcher extends it) and at the end of the run,
 //! whatever stopped it, so the state a checkpoint stores has always passed the full check.
 
+use super::event_driven::table_cache::{DEFAULT_TABLE_CACHE_MIB, TableCache};
 use super::threads::Threads;
 use super::{ExtendHook, Simulation};
-use super::event_driven::table_cache::{DEFAULT_TABLE_CACHE_MIB, TableCache};
 use std::time::Instant;
 
 /// The product's share of a run's wall time for the full invariant check: 1 %, half the 2 %

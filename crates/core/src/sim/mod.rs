@@ -215,7 +215,13 @@ struct RunVisitor<'a, 'b> {
 impl EngineVisitor for RunVisitor<'_, '_> {
     type Output = RunReport;
     fn visit<S: Simulation>(self, engine: S) -> RunReport {
-        run_engine(engine, self.scene, self.settings, self.progress, self.observer)
+        run_engine(
+            engine,
+            self.scene,
+            self.settings,
+            self.progress,
+            self.observer,
+        )
     }
 }
 

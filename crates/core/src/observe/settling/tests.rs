@@ -51,6 +51,21 @@ fn whole_except(moving: &[(&str, f64)]) -> Vec<BlockTest> {
 }
 
 #[test]
+fn blocks_are_a_whole_fraction_of_the_period_and_fill_the_first_window() {
+    // A fast drive: one period per block.
+    assert_eq!(block_time(0.5, 30.0), 0.5);
+    // A slow drive: the largest whole fraction of the period no longer than a time unit.
+    assert!((block_time(3.0, 30.0) - 1.0).abs() < 1e-12);
+    assert!((block_time(2.5, 30.0) - 2.5 / 3.0).abs() < 1e-12);
+    // A short first window: at least 16 blocks in it.
+    let b = block_time(1.58, 4.0);
+    assert!(
+        (b - 1.58 / 7.0).abs() < 1e-12 && 4.0 / b >= MIN_WINDOW_BLOCKS,
+        "{b}"
+    );
+}
+
+#[test]
 fn directions_read_from_block_tests() {
     assert_eq!(Direction::of(&test("x", 1.0, 0.0, 1)), Direction::Flat);
     assert_eq!(Direction::of(&test("x", 1.0, 0.3, 2)), Direction::Rising);
@@ -146,8 +161,7 @@ fn a_coexistence_is_settled_only_when_each_region_is() {
         vec!["dense (f): member_temperature falling"]
     );
     // A solid drop still cooling, its members stiffening, is still solid.
-    let stiffening =
-        coexistence_except(&[(MEMBER_TEMPERATURE, -0.4), (MEMBERS_STILL, 0.2)]);
+    let stiffening = coexistence_except(&[(MEMBER_TEMPERATURE, -0.4), (MEMBERS_STILL, 0.2)]);
     let sgc = settle(Phase::Sgc, Some((Phase::S, Phase::G)), &[], &stiffening);
     assert_eq!(sgc.verdict, Verdict::LabelKept, "{sgc:?}");
     // Drops merging into fewer, larger ones keep the coexistence; dissolving ones do not.
@@ -165,7 +179,10 @@ fn a_coexistence_is_settled_only_when_each_region_is() {
     let growing = coexistence_except(&[(MEMBER_FRACTION, 0.5)]);
     let s = settle(Phase::Sgc, Some((Phase::S, Phase::G)), &[], &growing);
     assert_eq!(s.verdict, Verdict::NotSettled);
-    assert_eq!(s.unsettled_text(), vec!["whole (sgc): member_fraction rising"]);
+    assert_eq!(
+        s.unsettled_text(),
+        vec!["whole (sgc): member_fraction rising"]
+    );
     // The vapour of a solid-gas coexistence may heat.
     let hot_vapour = coexistence_except(&[(UNBONDED_TEMPERATURE, 0.5)]);
     assert_eq!(
@@ -211,8 +228,19 @@ fn a_quantity_without_a_test_is_left_out_one_without_data_is_unknown() {
         s.unsettled_text(),
         vec!["whole (s): bridges_per_particle unknown"]
     );
+    // A quantity with no values at all has NaN statistics; stored (NaN as JSON null) and read
+    // back, it is still unknown.
+    let empty = block_test(MOBILITY, &[], 4, 3.0, 0.02, 0.1);
+    assert!(empty.mean.is_nan());
+    let stored = serde_json::to_string(&empty).unwrap();
+    assert!(stored.contains("\"mean\":null"), "{stored}");
+    let read: BlockTest = serde_json::from_str(&stored).expect("a stored empty test reads back");
+    assert_eq!(Direction::of(&read), Direction::Unknown);
     // Observables without any trend: nothing to settle on.
-    assert_eq!(settle(Phase::G, None, &[], &[]).verdict, Verdict::Stationary);
+    assert_eq!(
+        settle(Phase::G, None, &[], &[]).verdict,
+        Verdict::Stationary
+    );
 }
 
 /// A 2D frame in a 40 x 10 box periodic in x.
@@ -260,7 +288,11 @@ fn region_series_follow_members_and_the_other_grains() {
     let get = |name: &str| series.iter().find(|s| s.name == name).unwrap();
     // The first two samples precede the bond age of 0.5: the first block has fewer members.
     let fraction = get(MEMBER_FRACTION);
-    assert!(fraction.values[1..].iter().all(|&f| (f - 0.6).abs() < 1e-12));
+    assert!(
+        fraction.values[1..]
+            .iter()
+            .all(|&f| (f - 0.6).abs() < 1e-12)
+    );
     assert!(fraction.values[0] < 0.6);
     assert!(get(MEMBER_TEMPERATURE).values.iter().all(|&t| t == 0.0));
     // Four grains, mean velocity 0: 1 * 4 * 4 / (2 * 3) = 8/3 (from the second block on: the

@@ -21,11 +21,11 @@
 //! solid-mobile decision that fell back to the temperature because the mobility was not
 //! measured, and a line placement overruled by the point's own evidence.
 
-use super::classify::{DecisionInputs, FluidGasFrom, Mobility, Phase};
-use super::Observables;
+use super::{DecisionInputs, FluidGasFrom, Mobility, Phase};
+use crate::observe::{Observables, Thresholds};
 
 /// The phase a wet homogeneous point's own temperature and bridges demand, if any (module doc).
-pub(crate) fn own_evidence(obs: &Observables, th: &super::Thresholds) -> Option<Phase> {
+pub(crate) fn own_evidence(obs: &Observables, th: &Thresholds) -> Option<Phase> {
     if obs.temperature_unit_name != "E_cb" {
         return None;
     }
@@ -193,4 +193,3 @@ pub(crate) fn borderline(d: &DecisionInputs) -> Vec<String> {
     }
     out
 }
-
