@@ -192,7 +192,8 @@ fn clear_of_the_wall(w: &WallMotion, h: f64, v: f64, tol: f64, until: f64) -> bo
     let a = w.amplitude.abs();
     let m = h - a - (-v).max(0.0) * until - 0.5 * w.g.max(0.0) * until * until;
     let margin = 1e-9 * (1.0 + h.abs() + a);
-    if !(m > tol + margin) {
+    // A NaN bound proves nothing.
+    if m.is_nan() || m <= tol + margin {
         return false;
     }
     let rate = v.abs() + w.g.abs() * until + a * w.omega.abs();
