@@ -517,7 +517,7 @@ fn non_stationary_results_are_counted_and_marked() {
         "{status}"
     );
     let map = ok(&["boundaries", "--db", db_s]);
-    assert!(map.contains("? = not stationary"), "{map}");
+    assert!(map.contains("? = not settled"), "{map}");
     assert_eq!(map.matches("g?").count(), 2, "{map}");
     let csv = stdout(&run(&["export", "--db", db_s]));
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();

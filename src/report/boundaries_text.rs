@@ -173,7 +173,7 @@ pub fn boundaries_table(
             if unconverged > 0 {
                 let _ = writeln!(
                     out,
-                    "  {unconverged} point(s) not stationary whose label may change: {}",
+                    "  {unconverged} point(s) not settled, their label may change: {}",
                     if how.include_unconverged {
                         "used for the boundaries as asked (--include-unconverged)"
                     } else {
@@ -267,11 +267,11 @@ fn write_grid(
             let has = |m: char| slice.points.iter().any(|p| mark_of(p) == Some(m));
             let mut legend = String::new();
             if has(NOT_STATIONARY) {
-                legend += &format!("; {} = not stationary, label may change", NOT_STATIONARY);
+                legend += &format!("; {} = not settled, label may change", NOT_STATIONARY);
             }
             if has(LABEL_KEPT) {
                 legend += &format!(
-                    "; {} = heating gas, cooling solid or coarsening coexistence, label kept",
+                    "; {} = label kept: its regions settled, numbers still drift",
                     LABEL_KEPT
                 );
             }

@@ -522,7 +522,7 @@ fn summary_text(s: &Sensitivity, xl: &str, xu: &str, yl: &str, yu: &str) -> Stri
     );
     let _ = writeln!(
         out,
-        "    {:<22} {:>13} {:>19} {:>19} {:>13}",
+        "    {:<26} {:>13} {:>19} {:>19} {:>13}",
         "threshold",
         "labels",
         format!("{xl} max{xu}"),
@@ -546,7 +546,7 @@ fn summary_text(s: &Sensitivity, xl: &str, xu: &str, yl: &str, yu: &str) -> Stri
             |v: &Variation, st: Status| v.boundaries.iter().filter(|m| m.status == st).count();
         let _ = writeln!(
             out,
-            "    {:<22} {:>13} {:>19} {:>19} {:>13}",
+            "    {:<26} {:>13} {:>19} {:>19} {:>13}",
             key,
             cell(&|v| v.labels_changed.to_string()),
             cell(&|v| max(v, false)),
