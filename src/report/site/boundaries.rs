@@ -16,7 +16,11 @@ fn opt(v: Option<f64>) -> String {
 }
 
 /// A grid point of a slice as text with a link to its page (`page_of` of its coordinates).
-fn end_point(slice: &Slice, k: usize, page_of: &dyn Fn(&[serde_json::Value]) -> Option<String>) -> String {
+fn end_point(
+    slice: &Slice,
+    k: usize,
+    page_of: &dyn Fn(&[serde_json::Value]) -> Option<String>,
+) -> String {
     let Some(p) = slice.points.get(k) else {
         return "–".to_string();
     };

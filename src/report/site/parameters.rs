@@ -62,7 +62,13 @@ const PARAMETERS: &[Parameter] = &[
         symbol: "",
         unit: "",
         key: "dimension",
-        value: |s| text(if s.dimension == 2 { "2D, disks" } else { "3D, spheres" }),
+        value: |s| {
+            text(if s.dimension == 2 {
+                "2D, disks"
+            } else {
+                "3D, spheres"
+            })
+        },
     },
     Parameter {
         name: "grains",
@@ -329,7 +335,10 @@ pub(super) fn parameters_table(scenes: &[&Scene]) -> String {
             continue;
         };
         let (class, note) = if varies {
-            (" class=\"varies\"", " <span class=\"note\">varies over the jobs</span>")
+            (
+                " class=\"varies\"",
+                " <span class=\"note\">varies over the jobs</span>",
+            )
         } else {
             ("", "")
         };
@@ -385,9 +394,11 @@ mod tests {
         assert!(!row(&html, "particles.count").unwrap().contains("varies"));
         // 40 disks of <d^2> = 1.0036 in 20 x 9.
         let phi = 40.0 * std::f64::consts::PI * 1.0036 / 4.0 / 180.0;
-        assert!(row(&html, "N π ⟨d²⟩ / 4 per area (3D: ⟨d³⟩ / 6 per volume)")
-            .unwrap()
-            .contains(&short(phi)));
+        assert!(
+            row(&html, "N π ⟨d²⟩ / 4 per area (3D: ⟨d³⟩ / 6 per volume)")
+                .unwrap()
+                .contains(&short(phi))
+        );
         // A shaken scene has no shear force row.
         assert!(row(&html, "drive.f_max").is_none());
     }

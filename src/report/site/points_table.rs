@@ -188,7 +188,11 @@ pub(super) fn points_table(
         for v in &r.coords {
             cells.push(match v.as_f64() {
                 Some(x) => number(Some(x)),
-                None => words(v.as_str().map_or_else(|| v.to_string(), String::from).as_str()),
+                None => words(
+                    v.as_str()
+                        .map_or_else(|| v.to_string(), String::from)
+                        .as_str(),
+                ),
             });
         }
         cells.push(number(Some(r.replica as f64)));
