@@ -5,13 +5,13 @@
 //! in full without it.
 //!
 //! Layout:
-//! - `index.html`: a summary of the labels; the table of the physical parameters
-//!   (`site::parameters`, from the jobs' scenes) with the scene of the first job (`scene.toml`);
-//!   the phase map (`map.svg`) with every drawn point a link (an HTML image map,
-//!   `<map>`/`<area>`); the points table (`site::points_table`: one row per job, sortable); the
-//!   boundaries as tables (`site::boundaries`, from the phase map); their sensitivity to the
-//!   thresholds; the order parameters along the lines (`lines.svg`, `lines.csv`); the sweep
-//!   file (`sweep.toml`) and the command lines that reproduce the report;
+//! - `index.html`: a summary of the labels; the phase map (`map.svg`) with every drawn point a
+//!   link (an HTML image map, `<map>`/`<area>`); the points table (`site::points_table`: one
+//!   row per job, sortable); the boundaries as tables (`site::boundaries`, from the phase map);
+//!   their sensitivity to the thresholds; the order parameters along the lines (`lines.svg`,
+//!   `lines.csv`); the table of the physical parameters (`site::parameters`, from the jobs'
+//!   scenes) with the scene of the first job (`scene.toml`); the sweep file (`sweep.toml`) and
+//!   the command lines that reproduce the report;
 //! - `points/point-N.html`: one page per grid position (N: the lowest point index there; the
 //!   branches of an `initial.start` axis share a page): per job its facts (id, status, cost),
 //!   the decision section ([`decision_section`]: the label, its run state and the numbers it
@@ -315,12 +315,12 @@ fn map_section(input: &SiteInput, positions: &[Position]) -> String {
 
 /// The index's contents: (anchor, text).
 const CONTENTS: &[(&str, &str)] = &[
-    ("parameters", "parameters"),
     ("map", "phase map"),
     ("points", "points"),
     ("boundaries", "boundaries"),
     ("sensitivity", "sensitivity"),
     ("lines", "lines of constant Γ"),
+    ("parameters", "parameters"),
     ("sweep", "sweep file"),
     ("reproduce", "reproduce"),
 ];
@@ -362,28 +362,6 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let scenes: Vec<&wetgran_core::scene::Scene> =
-        input.rows.iter().map(|r| &r.spec.scene).collect();
-    let _ = writeln!(
-        h,
-        "<section id=\"parameters\">\n<h2>Parameters</h2>\n<p class=\"lead\">The physical \
-         constants of the jobs' scenes (units of the mean diameter <i>d</i>, the grain mass \
-         <i>m</i> and gravity <i>g</i>, docs/model.md 1); a shaded row varies over the jobs \
-         (an axis, or what follows from one).</p>\n<div class=\"scroll\">{}</div>",
-        parameters::parameters_table(&scenes)
-    );
-    if let Some(first) = input.rows.first() {
-        let _ = writeln!(
-            h,
-            "<details><summary>The scene of point {} (TOML, every default filled in; \
-             <code>wetgran simulate</code> reads it)</summary>\n<p><a href=\"scene.toml\">\
-             scene.toml</a>: the sweep's base scene with the axis values of this point.</p>\n\
-             <pre>{}</pre></details>",
-            first.point,
-            esc(&scene_toml(first))
-        );
-    }
-    h.push_str("</section>\n");
     h.push_str(&map_section(input, positions));
     let page_of_row: HashMap<&str, &str> = positions
         .iter()
@@ -460,9 +438,32 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
     } else {
         let _ = writeln!(h, "<p>Not a shaking sweep: no lines of constant Gamma.</p>");
     }
+    h.push_str("</section>\n");
+    let scenes: Vec<&wetgran_core::scene::Scene> =
+        input.rows.iter().map(|r| &r.spec.scene).collect();
     let _ = writeln!(
         h,
-        "</section>\n<section id=\"sweep\">\n<h2>Sweep file</h2>\n<p><a href=\"sweep.toml\">\
+        "<section id=\"parameters\">\n<h2>Parameters</h2>\n<p class=\"lead\">The physical \
+         constants of the jobs' scenes (units of the mean diameter <i>d</i>, the grain mass \
+         <i>m</i> and gravity <i>g</i>, docs/model.md 1); a shaded row varies over the jobs \
+         (an axis, or what follows from one).</p>\n<div class=\"scroll\">{}</div>",
+        parameters::parameters_table(&scenes)
+    );
+    if let Some(first) = input.rows.first() {
+        let _ = writeln!(
+            h,
+            "<details><summary>The scene of point {} (TOML, every default filled in; \
+             <code>wetgran simulate</code> reads it)</summary>\n<p><a href=\"scene.toml\">\
+             scene.toml</a>: the sweep's base scene with the axis values of this point.</p>\n\
+             <pre>{}</pre></details>",
+            first.point,
+            esc(&scene_toml(first))
+        );
+    }
+    h.push_str("</section>\n");
+    let _ = writeln!(
+        h,
+        "<section id=\"sweep\">\n<h2>Sweep file</h2>\n<p><a href=\"sweep.toml\">\
          sweep.toml</a> (registered from <code>{}</code>; its <code>base</code> scene is found \
          relative to that file)</p>\n<pre>{}</pre>\n</section>",
         esc(&sweep.file),
