@@ -238,43 +238,14 @@ fn numbers(body: &[Vec<String>], k: usize) -> Vec<f64> {
     body.iter().map(|r| r[k].parse::<f64>().unwrap()).collect()
 }
 
-#[test]
-fn the_report_reads_as_a_results_page_in_a_browser() {
-    let Some(browser) = browser() else {
-        skip_unless_ci(
-            "the_report_reads_as_a_results_page_in_a_browser",
-            "no chromium (scripts/chromium-local.sh install, or WETGRAN_CHROMIUM)",
-        );
-        return;
-    };
-    // A real sweep (2 x 2 points, a second): observables, final states and labels as a run
-    // stores them. Point order is Gamma first, so E* runs 1, 4, 1, 4 down the table.
-    let dir = tempfile::tempdir().unwrap();
-    write(dir.path(), "tiny.toml", TINY_SCENE);
-    let sweep = write(
-        dir.path(),
-        "grid.toml",
-        "[sweep]\nname = \"grid\"\nbase = \"tiny.toml\"\nperiods = 6\n\
-         [[axis]]\nkey = \"gamma\"\nlog = { from = 1.5, to = 3.0, steps = 2 }\n\
-         [[axis]]\nkey = \"e_star\"\nvalues = [1.0, 4.0]\n",
-    );
-    let db = dir.path().join("w.sqlite");
-    let db_s = db.to_str().unwrap();
-    let o = run(&["sweep", "run", sweep.to_str().unwrap(), "--db", db_s]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let site = dir.path().join("site");
-    let o = run(&["report", "--db", db_s, "-o", site.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let site = site.canonicalize().unwrap();
-    let index = site.join("index.html");
-    let point = site.join("points/point-0.html");
-
+/// The screenshots of the index and a point page at a laptop's window size (module doc).
+fn check_screenshots(browser: &Path, dir: &Path, index: &Path, point: &Path) {
     // Screenshots at a laptop's window size: decoded, of that size, not blank, the style
     // sheet applied (the dark bar at the top, #18324a).
-    for (page, name) in [(&index, "index.png"), (&point, "point.png")] {
-        let shot = dir.path().join(name);
+    for (page, name) in [(index, "index.png"), (point, "point.png")] {
+        let shot = dir.join(name);
         headless(
-            &browser,
+            browser,
             &[
                 &format!("--screenshot={}", shot.display()),
                 "--window-size=1280,900",
@@ -291,25 +262,32 @@ fn the_report_reads_as_a_results_page_in_a_browser() {
             std::fs::copy(&shot, Path::new(&keep).join(name)).unwrap();
         }
     }
+}
+
+/// The index printed to PDF.
+fn check_print(browser: &Path, dir: &Path, index: &Path) {
     // Printed: a PDF of several pages.
-    let pdf = dir.path().join("index.pdf");
+    let pdf = dir.join("index.pdf");
     headless(
-        &browser,
+        browser,
         &[
             &format!("--print-to-pdf={}", pdf.display()),
             "--no-pdf-header-footer",
         ],
-        &url(&index, ""),
+        &url(index, ""),
     );
     let pdf = std::fs::read(&pdf).unwrap();
     assert!(pdf.starts_with(b"%PDF-"), "not a PDF");
     let raw = String::from_utf8_lossy(&pdf);
     let pages = raw.matches("/Type /Page").count() - raw.matches("/Type /Pages").count();
     assert!(pages >= 2, "{pages} page(s) printed");
+}
 
+/// The rendered index against the database: returns the points table's keys and rows.
+fn check_index(browser: &Path, db: &Path, index: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     // The rendered index: the script ran (it marks the page), the parameters table holds the
     // scene's constants, the points table its columns and the database's values.
-    let dom = headless(&browser, &["--dump-dom"], &url(&index, ""));
+    let dom = headless(browser, &["--dump-dom"], &url(index, ""));
     assert!(
         dom.contains("<html lang=\"en\" class=\"js\">"),
         "the script did not run"
@@ -344,7 +322,7 @@ fn the_report_reads_as_a_results_page_in_a_browser() {
             "wall_s"
         ]
     );
-    let store = Store::open_existing(&db).unwrap();
+    let store = Store::open_existing(db).unwrap();
     let s = store.sweep("grid").unwrap();
     let stored = store.points(s.id).unwrap();
     assert_eq!(body.len(), stored.len());
@@ -369,9 +347,15 @@ fn the_report_reads_as_a_results_page_in_a_browser() {
         "point order is already E* order: {unsorted:?}"
     );
 
+    (keys, body)
+}
+
+/// The points table sorted from the address; `keys`, `body`: the table unsorted.
+fn check_sorting(browser: &Path, index: &Path, keys: &[String], body: &[Vec<String>]) {
+    let (t_g, e_star) = (column(keys, "T_g"), column(keys, "e_star"));
     // Sorted from the address: by E* up, by T_g down; the same rows, the header marked.
     let sorted = |hash: &str| {
-        let dom = headless(&browser, &["--dump-dom"], &url(&index, hash));
+        let dom = headless(browser, &["--dump-dom"], &url(index, hash));
         let (_, body) = points_table(&dom);
         let th = element(
             &dom,
@@ -404,10 +388,13 @@ fn the_report_reads_as_a_results_page_in_a_browser() {
     a.sort();
     b.sort();
     assert_eq!(a, b, "sorting lost or doubled rows");
+}
 
+/// A point page (module doc).
+fn check_point_page(browser: &Path, point: &Path) {
     // A point page: the decision section, the snapshot and profiles side by side, the raw
     // records folded away (every JSON or TOML block inside a <details>).
-    let dom = headless(&browser, &["--dump-dom"], &url(&point, ""));
+    let dom = headless(browser, &["--dump-dom"], &url(point, ""));
     let decision = element(&dom, "section", "class=\"decision\"").expect("a decision section");
     assert!(text(decision).contains("decided by"), "{decision}");
     let figures = element(&dom, "div", "class=\"figures\"").expect("figures");
@@ -438,4 +425,42 @@ fn the_report_reads_as_a_results_page_in_a_browser() {
         !outside.contains("\"granular_temperature_reduced\""),
         "raw observables outside <details>"
     );
+}
+
+#[test]
+fn the_report_reads_as_a_results_page_in_a_browser() {
+    let Some(browser) = browser() else {
+        skip_unless_ci(
+            "the_report_reads_as_a_results_page_in_a_browser",
+            "no chromium (scripts/chromium-local.sh install, or WETGRAN_CHROMIUM)",
+        );
+        return;
+    };
+    // A real sweep (2 x 2 points, a second): observables, final states and labels as a run
+    // stores them. Point order is Gamma first, so E* runs 1, 4, 1, 4 down the table.
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "tiny.toml", TINY_SCENE);
+    let sweep = write(
+        dir.path(),
+        "grid.toml",
+        "[sweep]\nname = \"grid\"\nbase = \"tiny.toml\"\nperiods = 6\n\
+         [[axis]]\nkey = \"gamma\"\nlog = { from = 1.5, to = 3.0, steps = 2 }\n\
+         [[axis]]\nkey = \"e_star\"\nvalues = [1.0, 4.0]\n",
+    );
+    let db = dir.path().join("w.sqlite");
+    let db_s = db.to_str().unwrap();
+    let o = run(&["sweep", "run", sweep.to_str().unwrap(), "--db", db_s]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let site = dir.path().join("site");
+    let o = run(&["report", "--db", db_s, "-o", site.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let site = site.canonicalize().unwrap();
+    let index = site.join("index.html");
+    let point = site.join("points/point-0.html");
+
+    check_screenshots(&browser, dir.path(), &index, &point);
+    check_print(&browser, dir.path(), &index);
+    let (keys, body) = check_index(&browser, &db, &index);
+    check_sorting(&browser, &index, &keys, &body);
+    check_point_page(&browser, &point);
 }

@@ -583,6 +583,10 @@ fn the_reports_boundaries_are_tables_of_the_phase_map() {
     // The points table has a row per job with its temperature.
     let points = &index[index.find("id=\"points-table\"").unwrap()..];
     let points = &points[..points.find("</table>").unwrap()];
-    assert_eq!(points.matches("<tr>").count(), 1 + 16, "a header and a row per job");
+    assert_eq!(
+        points.matches("<tr>").count(),
+        1 + 16,
+        "a header and a row per job"
+    );
     assert!(points.contains("data-v=\"2e1\""), "T_g = 20 at E* = 4");
 }

@@ -325,6 +325,68 @@ const CONTENTS: &[(&str, &str)] = &[
     ("reproduce", "reproduce"),
 ];
 
+/// The parameters section of the index: the table and the first point's scene.
+fn parameters_section(input: &SiteInput) -> String {
+    let mut h = String::new();
+    let scenes: Vec<&wetgran_core::scene::Scene> =
+        input.rows.iter().map(|r| &r.spec.scene).collect();
+    let _ = writeln!(
+        h,
+        "<section id=\"parameters\">\n<h2>Parameters</h2>\n<p class=\"lead\">The physical \
+         constants of the jobs' scenes (units of the mean diameter <i>d</i>, the grain mass \
+         <i>m</i> and gravity <i>g</i>, docs/model.md 1); a shaded row varies over the jobs \
+         (an axis, or what follows from one).</p>\n<div class=\"scroll\">{}</div>",
+        parameters::parameters_table(&scenes)
+    );
+    if let Some(first) = input.rows.first() {
+        let _ = writeln!(
+            h,
+            "<details><summary>The scene of point {} (TOML, every default filled in; \
+             <code>wetgran simulate</code> reads it)</summary>\n<p><a href=\"scene.toml\">\
+             scene.toml</a>: the sweep's base scene with the axis values of this point.</p>\n\
+             <pre>{}</pre></details>",
+            first.point,
+            esc(&scene_toml(first))
+        );
+    }
+    h.push_str("</section>\n");
+    h
+}
+
+/// The boundaries section of the index: the tables of `site::boundaries`.
+fn boundaries_section(input: &SiteInput, positions: &[Position]) -> String {
+    let mut h = String::new();
+    // The page of a map point by its coordinates (every axis, the start axis included).
+    let page_of_coords: HashMap<String, &str> = positions
+        .iter()
+        .flat_map(|p| {
+            p.jobs.iter().map(|j| {
+                (
+                    serde_json::Value::from(j.coords.clone()).to_string(),
+                    p.page.as_str(),
+                )
+            })
+        })
+        .collect();
+    let _ = writeln!(
+        h,
+        "<section id=\"boundaries\">\n<h2>Boundaries</h2>\n<p class=\"lead\">The boundary \
+         points between two phases, as <code>wetgran boundaries</code> finds them: each halfway \
+         along an edge between neighbouring grid points of different phase, with half that \
+         edge as its uncertainty (decades on a logarithmic axis) and the share of replicas at \
+         its two ends that agree with their majority.</p>\n{}</section>",
+        boundaries::boundaries_html(
+            input.phase_map,
+            input.summaries,
+            input.how,
+            &|coords: &[serde_json::Value]| page_of_coords
+                .get(&serde_json::Value::from(coords.to_vec()).to_string())
+                .map(|p| p.to_string())
+        )
+    );
+    h
+}
+
 fn index(input: &SiteInput, positions: &[Position]) -> String {
     let sweep = input.sweep;
     let mut h = head(
@@ -384,34 +446,7 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
             &mark_label,
         )
     );
-    // The page of a map point by its coordinates (every axis, the start axis included).
-    let page_of_coords: HashMap<String, &str> = positions
-        .iter()
-        .flat_map(|p| {
-            p.jobs.iter().map(|j| {
-                (
-                    serde_json::Value::from(j.coords.clone()).to_string(),
-                    p.page.as_str(),
-                )
-            })
-        })
-        .collect();
-    let _ = writeln!(
-        h,
-        "<section id=\"boundaries\">\n<h2>Boundaries</h2>\n<p class=\"lead\">The boundary \
-         points between two phases, as <code>wetgran boundaries</code> finds them: each halfway \
-         along an edge between neighbouring grid points of different phase, with half that \
-         edge as its uncertainty (decades on a logarithmic axis) and the share of replicas at \
-         its two ends that agree with their majority.</p>\n{}</section>",
-        boundaries::boundaries_html(
-            input.phase_map,
-            input.summaries,
-            input.how,
-            &|coords: &[serde_json::Value]| page_of_coords
-                .get(&serde_json::Value::from(coords.to_vec()).to_string())
-                .map(|p| p.to_string())
-        )
-    );
+    h.push_str(&boundaries_section(input, positions));
     let _ = writeln!(
         h,
         "<section id=\"sensitivity\">\n<h2>Sensitivity to the thresholds</h2>\n<p \
@@ -439,28 +474,7 @@ fn index(input: &SiteInput, positions: &[Position]) -> String {
         let _ = writeln!(h, "<p>Not a shaking sweep: no lines of constant Gamma.</p>");
     }
     h.push_str("</section>\n");
-    let scenes: Vec<&wetgran_core::scene::Scene> =
-        input.rows.iter().map(|r| &r.spec.scene).collect();
-    let _ = writeln!(
-        h,
-        "<section id=\"parameters\">\n<h2>Parameters</h2>\n<p class=\"lead\">The physical \
-         constants of the jobs' scenes (units of the mean diameter <i>d</i>, the grain mass \
-         <i>m</i> and gravity <i>g</i>, docs/model.md 1); a shaded row varies over the jobs \
-         (an axis, or what follows from one).</p>\n<div class=\"scroll\">{}</div>",
-        parameters::parameters_table(&scenes)
-    );
-    if let Some(first) = input.rows.first() {
-        let _ = writeln!(
-            h,
-            "<details><summary>The scene of point {} (TOML, every default filled in; \
-             <code>wetgran simulate</code> reads it)</summary>\n<p><a href=\"scene.toml\">\
-             scene.toml</a>: the sweep's base scene with the axis values of this point.</p>\n\
-             <pre>{}</pre></details>",
-            first.point,
-            esc(&scene_toml(first))
-        );
-    }
-    h.push_str("</section>\n");
+    h.push_str(&parameters_section(input));
     let _ = writeln!(
         h,
         "<section id=\"sweep\">\n<h2>Sweep file</h2>\n<p><a href=\"sweep.toml\">\
