@@ -15,16 +15,22 @@ fn opt(v: Option<f64>) -> String {
     v.map(short).unwrap_or_else(|| "–".to_string())
 }
 
-/// A grid point of a slice as text with a link to its page (`page_of` of its coordinates).
+/// A grid point of a slice as text with a link to its page (`page_of` of its coordinates);
+/// `has_y`: whether the plane has a y axis.
 fn end_point(
     slice: &Slice,
     k: usize,
+    has_y: bool,
     page_of: &dyn Fn(&[serde_json::Value]) -> Option<String>,
 ) -> String {
     let Some(p) = slice.points.get(k) else {
         return "–".to_string();
     };
-    let text = format!("{} at ({}, {})", p.phase, short(p.x), short(p.y));
+    let text = if has_y {
+        format!("{} at ({}, {})", p.phase, short(p.x), short(p.y))
+    } else {
+        format!("{} at {}", p.phase, short(p.x))
+    };
     match page_of(&p.coords) {
         Some(page) => format!("<a href=\"{page}\">{}</a>", esc(&text)),
         None => esc(&text),
@@ -127,8 +133,8 @@ pub(super) fn boundaries_html(
                 }
                 h.push_str(&format!(
                     "<td>{}</td><td>{}</td><td class=\"num\">{:.2}</td></tr>\n",
-                    end_point(slice, b.between[0], page_of),
-                    end_point(slice, b.between[1], page_of),
+                    end_point(slice, b.between[0], ya.is_some(), page_of),
+                    end_point(slice, b.between[1], ya.is_some(), page_of),
                     b.confidence
                 ));
             }
