@@ -235,8 +235,10 @@ fn every_report_says_which_criterion_decided_each_label() {
         "--no-snapshots",
     ]);
     let index = std::fs::read_to_string(site.join("index.html")).unwrap();
-    assert!(index.contains("<th>decided by</th>"));
-    assert!(index.contains("temperature_fallback (fallback)</span>"));
+    assert!(index.contains("data-key=\"decided_by\""));
+    // A fallback in red, by its name (`temperature fallback`).
+    assert!(index.contains("<span class=\"untrusted\" title=\""));
+    assert!(index.contains("\">temperature fallback</span>"));
     assert!(index.contains("id=\"sensitivity\""));
     assert!(
         index.contains("solid_diffusion 0.001 -&gt; 0.002 (x2): 2 label(s) changed (f -&gt; s 2)")

@@ -1,6 +1,7 @@
 //! From results to understanding (issue 33, items 3-6): `wetgran lines` (order parameters along
 //! lines of constant Gamma, per branch, with errors, run states and label changes), `wetgran
-//! report` (a static HTML site: every point has a page, every link and image resolves), the
+//! report` (a static HTML site: every point has a page, every link and image resolves; its
+//! boundaries as tables read from the phase map), the
 //! tidy `export` (axes first, informative columns, JSON with the CSV's fields, numeric series)
 //! and the SQL of the pandas example in docs/reports.md, run against a real database file.
 
@@ -216,7 +217,15 @@ fn check_links(root: &Path) -> BTreeSet<PathBuf> {
             continue;
         }
         let html = std::fs::read_to_string(&page).unwrap();
-        assert!(!html.contains("<script"), "{}: a script", page.display());
+        // One script, the report's own file (no inline code, nothing fetched).
+        for (k, _) in html.match_indices("<script") {
+            let tag = &html[k..k + html[k..].find('>').unwrap()];
+            assert!(
+                tag.contains("src=\"sort.js\""),
+                "{}: a script other than sort.js: {tag}",
+                page.display()
+            );
+        }
         for link in attrs(&html, "href").into_iter().chain(attrs(&html, "src")) {
             if let Some(anchor) = link.strip_prefix('#') {
                 assert!(
@@ -231,13 +240,23 @@ fn check_links(root: &Path) -> BTreeSet<PathBuf> {
                 "{}: not offline: {link}",
                 page.display()
             );
-            let target = page.parent().unwrap().join(&link);
+            // A link to another page's anchor: the page, then the anchor's id on it.
+            let (file, anchor) = link.split_once('#').unwrap_or((&link, ""));
+            let target = page.parent().unwrap().join(file);
             assert!(
                 target.is_file(),
                 "{}: {link} does not resolve",
                 page.display()
             );
-            if link.ends_with(".html") {
+            if !anchor.is_empty() {
+                let there = std::fs::read_to_string(&target).unwrap();
+                assert!(
+                    there.contains(&format!("id=\"{anchor}\"")),
+                    "{}: anchor {link}",
+                    page.display()
+                );
+            }
+            if file.ends_with(".html") {
                 todo.push(target.canonicalize().unwrap());
             }
         }
@@ -457,4 +476,117 @@ fn the_pandas_example_reads_the_database() {
             (0..3).contains(&bin) && v > 0.0
         }));
     });
+}
+
+/// The rows of the `<table class="boundary">` whose caption starts with `caption`: its cells'
+/// text, the header row first.
+fn boundary_table(html: &str, caption: &str) -> Option<Vec<Vec<String>>> {
+    let strip = |c: &str| {
+        let mut out = String::new();
+        let mut tag = false;
+        for ch in c.chars() {
+            match ch {
+                '<' => tag = true,
+                '>' => tag = false,
+                ch if !tag => out.push(ch),
+                _ => {}
+            }
+        }
+        out.replace("&amp;", "&").trim().to_string()
+    };
+    html.split("<table class=\"boundary\">")
+        .skip(1)
+        .find_map(|t| {
+            let t = &t[..t.find("</table>").unwrap()];
+            let cap = strip(&t[t.find("<caption>")?..t.find("</caption>")?]);
+            if !cap.starts_with(caption) {
+                return None;
+            }
+            Some(
+                t.split("<tr>")
+                    .skip(1)
+                    .map(|tr| {
+                        // Each cell from its opening tag to its closing one (links inside).
+                        let mut cells = Vec::new();
+                        let mut rest = tr;
+                        while let Some(k) = rest.find("<t") {
+                            let c = &rest[k..];
+                            if !["<td", "<th>", "<th "].iter().any(|t| c.starts_with(t)) {
+                                rest = &c[2..];
+                                continue;
+                            }
+                            let close = if c.starts_with("<td") {
+                                "</td>"
+                            } else {
+                                "</th>"
+                            };
+                            let end = c.find(close).unwrap();
+                            cells.push(c[c.find('>').unwrap() + 1..end].to_string());
+                            rest = &c[end + close.len()..];
+                        }
+                        cells
+                    })
+                    .map(|cells| cells.iter().map(|c| strip(c)).collect())
+                    .collect(),
+            )
+        })
+}
+
+#[test]
+fn the_reports_boundaries_are_tables_of_the_phase_map() {
+    // The synthetic sweep: on Gamma = 1, hot start, f up to E* = 1 and g from 2, so one f|g
+    // boundary point at E* = sqrt(2), between the pages of E* = 1 and E* = 2.
+    let dir = tempfile::tempdir().unwrap();
+    let db = prepared(dir.path());
+    let out = dir.path().join("site");
+    let o = run(&[
+        "report",
+        "--db",
+        db.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--no-snapshots",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    check_links(&out.canonicalize().unwrap());
+    let index = std::fs::read_to_string(out.join("index.html")).unwrap();
+    let boundaries = &index[index.find("id=\"boundaries\"").unwrap()..];
+    let boundaries = &boundaries[..boundaries.find("</section>").unwrap()];
+    assert!(!boundaries.contains("<pre>"), "a text dump: {boundaries}");
+    // The hot branch of Gamma = 1 comes first (slices in the map's order).
+    let table = boundary_table(boundaries, "boundary f|g").expect("an f|g table");
+    assert_eq!(
+        table[0],
+        [
+            "E*",
+            "Gamma",
+            "A",
+            "ω",
+            "± E* (decades)",
+            "± Gamma",
+            "between",
+            "and",
+            "agree"
+        ]
+    );
+    let first: Vec<&str> = table[1].iter().map(String::as_str).collect();
+    assert_eq!(first[0], "1.414", "{first:?}");
+    assert!(
+        first[6].starts_with("f at (1, ") && first[7].starts_with("g at (2, "),
+        "{first:?}"
+    );
+    assert_eq!(first[8], "1.00");
+    // The ends link to their grid positions' pages.
+    let links = boundaries.matches("<td><a href=\"points/point-").count();
+    let ends = 2 * (boundaries.matches("<tr>").count() - boundaries.matches("<caption>").count());
+    assert_eq!(links, ends, "{boundaries}");
+    // The points table has a row per job with its temperature.
+    let points = &index[index.find("id=\"points-table\"").unwrap()..];
+    let points = &points[..points.find("</table>").unwrap()];
+    assert_eq!(
+        points.matches("<tr>").count(),
+        1 + 16,
+        "a header and a row per job"
+    );
+    assert!(points.contains("data-v=\"2e1\""), "T_g = 20 at E* = 4");
 }

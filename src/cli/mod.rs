@@ -101,11 +101,13 @@ pub enum Command {
     /// dashed. Prints the lines' label changes and T_g inflections (--json: as JSON). -o FILE
     /// writes SVG (.svg) or CSV (.csv).
     Lines(report_cmd::LinesArgs),
-    /// Write a sweep's report: a static HTML site (no script, works offline).
+    /// Write a sweep's report: a static HTML site (works offline; one small script sorts its
+    /// points table).
     ///
-    /// index.html: the phase map with every point a link to its page, the table of points, the
-    /// boundaries, the order parameters along lines of constant Gamma, the sweep file and the
-    /// command lines that reproduce it; one page per grid position with each job's label, run
+    /// index.html: the phase map with every point a link to its page, the sortable table of
+    /// points, the boundaries as tables, the order parameters along lines of constant Gamma, the
+    /// physical parameters, the sweep file and the command lines that reproduce it; one page
+    /// per grid position with each job's label, run
     /// state and the numbers it was decided on, its snapshot (from the stored final state), its
     /// lateral profiles and its line's curves.
     Report(report_cmd::ReportArgs),

@@ -7,7 +7,7 @@ use super::common::{Failure, note, print_json, show, write_file};
 use crate::boundary::Extraction;
 use crate::output::folder::SiteFolder;
 use crate::output::{Outputs, Protected};
-use crate::report::boundaries_text::{boundaries_table, fixed_text};
+use crate::report::boundaries_text::fixed_text;
 use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
 use crate::report::lines_plot::lines_svg;
 use crate::report::plot_phase::{self, DrawnMap, MapStyle};
@@ -340,7 +340,6 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
     };
     let sensitivity = crate::report::sensitivity::sensitivity(&sweep, &rows, &summaries, how)
         .map(|s| crate::report::sensitivity::sensitivity_text(&s));
-    let boundaries = boundaries_table(&[(&sweep, map)], &[summaries], how);
     let lines = lines_of(&sweep, &rows);
     let line_pictures = if lines.lines.is_empty() {
         None
@@ -369,7 +368,9 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
         rows: &rows,
         map: drawn.as_ref().map_err(Clone::clone),
         plane,
-        boundaries: &boundaries,
+        phase_map: &map,
+        summaries: &summaries,
+        how,
         sensitivity: sensitivity.as_deref().map_err(Clone::clone),
         lines: line_pictures
             .as_ref()

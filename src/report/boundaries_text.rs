@@ -182,20 +182,7 @@ pub fn boundaries_table(
                 );
             }
             if slice.boundaries.is_empty() {
-                let carriers: Vec<&str> = slice
-                    .points
-                    .iter()
-                    .filter(|p| how.include_unconverged || p.trusted)
-                    .map(|p| p.phase.as_str())
-                    .collect();
-                let why = if carriers.len() < 2 {
-                    "fewer than two trusted points"
-                } else if carriers.iter().all(|p| *p == carriers[0]) {
-                    "every point that carries one has the same phase"
-                } else {
-                    "no two neighbours differ"
-                };
-                let _ = writeln!(out, "  no boundary: {why}\n");
+                let _ = writeln!(out, "  no boundary: {}\n", no_boundary_reason(slice, how));
                 continue;
             }
             let y_text = |v: f64| ya.as_ref().map(|_| short(v)).unwrap_or_default();
@@ -229,6 +216,24 @@ pub fn boundaries_table(
         }
     }
     out
+}
+
+/// Why a slice without boundary points has none: too few points carry one, they all share a
+/// phase, or no two neighbours differ.
+pub fn no_boundary_reason(slice: &crate::boundary::Slice, how: Extraction) -> &'static str {
+    let carriers: Vec<&str> = slice
+        .points
+        .iter()
+        .filter(|p| how.include_unconverged || p.trusted)
+        .map(|p| p.phase.as_str())
+        .collect();
+    if carriers.len() < 2 {
+        "fewer than two trusted points"
+    } else if carriers.iter().all(|p| *p == carriers[0]) {
+        "every point that carries one has the same phase"
+    } else {
+        "no two neighbours differ"
+    }
 }
 
 /// A row of a boundary's table: six columns of 10 characters, then the confidence in 6.
