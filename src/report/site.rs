@@ -10,9 +10,11 @@
 //!   (`sweep.toml`) and the command lines that reproduce the report;
 //! - `points/point-N.html`: one page per grid position (N: the lowest point index there; the
 //!   branches of an `initial.start` axis share a page): per job its label, trend and trust, the
-//!   numbers the label was decided on, its snapshot (`points/JOB-snapshot.svg`, from the stored
-//!   final state) and lateral profiles (`points/JOB-profiles.svg`), and the curves of its line of
-//!   constant Gamma (`lines/gamma-K.svg`).
+//!   decision summary of `wetgran show` (`point_text::decision_text`), its time series
+//!   (`points/JOB-series.svg`, `series_plot`, as `show --series` draws them), its snapshot
+//!   (`points/JOB-snapshot.svg`, from the stored final state, as `show --snapshot` draws it)
+//!   and lateral profiles (`points/JOB-profiles.svg`), and the curves of its line of constant
+//!   Gamma (`lines/gamma-K.svg`).
 
 use super::lines::Lines;
 use super::plot_phase::DrawnMap;
@@ -28,6 +30,8 @@ use wetgran_core::observe::criterion::DecidedBy;
 pub struct JobPictures {
     pub snapshot: Option<String>,
     pub profiles: Option<String>,
+    /// The time series (`series_plot`).
+    pub series: Option<String>,
     pub notes: Vec<String>,
 }
 
@@ -219,6 +223,9 @@ pub fn site(input: &SiteInput) -> Vec<(String, String)> {
                 }
                 if let Some(s) = &pics.profiles {
                     files.push((format!("points/{}-profiles.svg", j.job_id), s.clone()));
+                }
+                if let Some(s) = &pics.series {
+                    files.push((format!("points/{}-series.svg", j.job_id), s.clone()));
                 }
             }
         }
@@ -451,11 +458,19 @@ fn point_page(input: &SiteInput, p: &Position, line_of_job: &HashMap<&str, usize
         if !why.is_empty() {
             let _ = writeln!(
                 h,
-                "<h3>Label, run state and the numbers it was decided on</h3>\n<pre>{}</pre>",
+                "<h3>Decision: label, criterion, regions, run state</h3>\n<pre>{}</pre>",
                 esc(&why)
             );
         }
         if let Some(pics) = input.pictures.get(&j.job_id) {
+            if pics.series.is_some() {
+                let _ = writeln!(
+                    h,
+                    "<h3>Time series: did it settle?</h3>\n<img src=\"{0}-series.svg\" \
+                     alt=\"time series of job {0}\">",
+                    j.job_id
+                );
+            }
             if pics.snapshot.is_some() {
                 let _ = writeln!(
                     h,
@@ -479,7 +494,7 @@ fn point_page(input: &SiteInput, p: &Position, line_of_job: &HashMap<&str, usize
         let _ = writeln!(
             h,
             "<p>Again from the database: <code>wetgran show --db {} {} --snapshot \
-             snapshot.xyz --profiles profiles.svg</code></p>",
+             snapshot.xyz --profiles profiles.svg --series series.svg</code></p>",
             esc(input.db),
             &j.job_id[..12.min(j.job_id.len())]
         );
