@@ -10,7 +10,7 @@ use super::common::{
 use crate::output::{Outputs, Protected};
 use crate::boundary::START_AXIS;
 use crate::report::point_text::{
-    decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
+    coordinates_text, decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
     series_title,
 };
 use crate::report::series_plot::series_svg;
@@ -357,12 +357,19 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     if !others.is_empty() {
         let list: Vec<String> = others
             .iter()
-            .map(|o| format!("{} ({})", &o.job_id[..12.min(o.job_id.len())], branch_text(&axes, o)))
+            .map(|o| {
+                format!(
+                    "{} ({}; {})",
+                    &o.job_id[..12.min(o.job_id.len())],
+                    escape(&coordinates_text(&axes, o)),
+                    branch_text(&axes, o)
+                )
+            })
             .collect();
         say(
-            "also_at_this_position",
+            "also_near",
             serde_json::json!(others.iter().map(|o| o.job_id.clone()).collect::<Vec<_>>()),
-            format!("also here  {}", list.join(", ")),
+            format!("also near   {}", list.join(", ")),
         );
     }
     let observables: Option<Observables> = p
@@ -399,7 +406,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     }
     if let Some(path) = &a.series {
         let o = observables.as_ref().ok_or_else(|| no_observables("--series"))?;
-        write_series_figure(path, series_svg(o, &series_title(&sweep.name, &axes, &p)), outputs.protected())?;
+        write_series_figure(path, series_svg(o, &series_title(&sweep.name, &axes, &p), p.phase.as_deref()), outputs.protected())?;
         say(
             "series",
             path.display().to_string().into(),

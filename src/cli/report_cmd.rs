@@ -297,7 +297,7 @@ fn pictures(
             Some(o) => {
                 pics.profiles = Some(profiles_svg(o));
                 let title = series_title(&sweep.name, &sweep.axes, r);
-                pics.series = Some(series_svg(o, &title));
+                pics.series = Some(series_svg(o, &title, r.phase.as_deref()));
             }
             None => pics
                 .notes

@@ -91,7 +91,7 @@ fn regions_table(d: &DecisionInputs, by: &DecidedBy, unit: &str) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "  {:<7} {:<6} {:<12} {:>10} {:>10}  {:<22} {:<22} settled",
+        "  {:<7} {:<6} {:<12} {:>10} {:>10}  {:<22} {:<25} settled",
         "region",
         "phase",
         "grains",
@@ -133,14 +133,15 @@ fn regions_table(d: &DecisionInputs, by: &DecidedBy, unit: &str) -> String {
         };
         let _ = writeln!(
             out,
-            "  {:<7} {:<6} {:<12} {:>10} {:>10}  {:<22} {:<22} {settled}",
+            "  {:<7} {:<6} {:<12} {:>10} {:>10}  {:<22} {:<25} {settled}",
             name,
             r.phase.to_string(),
             crate::terminal::escape(&grains),
             t,
             dl,
-            r.mobility.to_string(),
-            r.fluid_gas.map_or("-".to_string(), |c| c.to_string()),
+            r.mobility.name().replace('_', " "),
+            r.fluid_gas
+                .map_or("-".to_string(), |c| c.name().replace('_', " ")),
         );
     }
     out
@@ -170,9 +171,11 @@ pub fn decision_text(p: &PointRow) -> String {
         };
         let _ = writeln!(out, "decided by  {}{fallback}", by.summary);
     }
+    let mut table = false;
     if let (Some(d), Some(by)) = (&inputs, &by)
         && !by.regions.is_empty()
     {
+        table = true;
         let unit = if d.reason.contains("T_g/m g d") {
             "mgd"
         } else {
@@ -186,8 +189,11 @@ pub fn decision_text(p: &PointRow) -> String {
     }
     if p.phase.is_some() {
         let _ = writeln!(out, "settled     {}", verdict_words(p.verdict()));
-        for u in p.decided_on.as_ref().map(unsettled).unwrap_or_default() {
-            let _ = writeln!(out, "            {u}");
+        // The regions' table names what did not settle; without it, a line each.
+        if !table {
+            for u in p.decided_on.as_ref().map(unsettled).unwrap_or_default() {
+                let _ = writeln!(out, "            {u}");
+            }
         }
         if let Some(ending) = p
             .observables
@@ -257,6 +263,18 @@ pub fn gamma_lines(points: &[PointRow]) -> Vec<(f64, Vec<LinePoint>)> {
     lines
 }
 
+/// A reason of `observe::line` split into what it says and its note on the errors used
+/// (`...; errors: ...`), which `inflection` prints once below its table.
+fn split_errors(why: &str) -> (String, Option<String>) {
+    match why.split_once("; errors: ") {
+        Some((what, e)) => (what.to_string(), Some(format!("errors: {e}"))),
+        None => match why.split_once("; no block errors stored") {
+            Some((what, e)) => (what.to_string(), Some(format!("no block errors stored{e}"))),
+            None => (why.to_string(), None),
+        },
+    }
+}
+
 /// `inflection` for one sweep: per line of constant Gamma, the inflection point of T_g/E_cb
 /// against E* and the bracket it lies in, where it stands out of the line's scatter
 /// (`observe::line`), else why there is none. The homogeneous mobile points enter (see
@@ -273,6 +291,7 @@ pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
         "{:>10} {:>7} {:>12} {:>10} {:>22}",
         "Gamma", "points", "E* inflect.", "max slope", "between E*"
     );
+    let mut notes: Vec<String> = Vec::new();
     for (gamma, pts) in lines {
         let _ = match fluid_gas_inflection(pts) {
             Ok(i) => writeln!(
@@ -286,14 +305,25 @@ pub fn inflection_text(sweep: &str, lines: &[(f64, Vec<LinePoint>)]) -> String {
                 i.bracket.1,
                 i.p_value
             ),
-            Err(why) => writeln!(
-                out,
-                "{:>10.4} {:>7} {:>12} ({why})",
-                gamma,
-                pts.len(),
-                "none"
-            ),
+            Err(why) => {
+                let (why, errors) = split_errors(&why);
+                if let Some(e) = errors
+                    && !notes.contains(&e)
+                {
+                    notes.push(e);
+                }
+                writeln!(
+                    out,
+                    "{:>10.4} {:>7} {:>12}  {why}",
+                    gamma,
+                    pts.len(),
+                    "none:"
+                )
+            }
         };
+    }
+    for e in notes {
+        let _ = writeln!(out, "  ({e})");
     }
     out
 }

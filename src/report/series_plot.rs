@@ -38,8 +38,9 @@ struct Panel<'a> {
     by_block: bool,
 }
 
-/// The panels of a result, in drawing order (module doc).
-fn panels(obs: &Observables) -> Vec<Panel<'_>> {
+/// The panels of a result, in drawing order (module doc); `coexistence`: its label names a
+/// dense and a dilute region.
+fn panels(obs: &Observables, coexistence: bool) -> Vec<Panel<'_>> {
     let unit = &obs.temperature_unit_name;
     let wet = unit == "E_cb";
     let trend = obs.trend.as_ref();
@@ -85,7 +86,7 @@ fn panels(obs: &Observables) -> Vec<Panel<'_>> {
     .filter_map(|(q, c, what)| region(q).map(|b| (b, c, what)))
     .filter(|(b, _, _)| !b.block_means.is_empty())
     .collect();
-    if !regions.is_empty() {
+    if coexistence && !regions.is_empty() {
         out.push(Panel {
             title: format!(
                 "T_g / {unit} per region: block means, each over its own tested history"
@@ -127,6 +128,31 @@ fn range(p: &Panel) -> ((f64, f64), bool) {
     };
     let pad = 0.06 * (hi - lo);
     ((lo - pad, hi + pad), false)
+}
+
+/// Round tick values inside `[lo, hi]`: multiples of 1, 2 or 5 times a power of ten, about
+/// `want` of them (exact multiples, so no float noise such as `-1.4e-17` shows).
+fn nice_ticks(lo: f64, hi: f64, want: usize) -> Vec<f64> {
+    if !(hi > lo) {
+        return vec![lo];
+    }
+    let raw = (hi - lo) / want.max(1) as f64;
+    let p = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * p)
+        .find(|s| *s >= raw)
+        .unwrap_or(10.0 * p);
+    let (a, b) = ((lo / step).ceil() as i64, (hi / step).floor() as i64);
+    (a..=b)
+        .map(|k| {
+            let v = k as f64 * step;
+            // Round away the last bits of the product (0.30000000000000004).
+            let digits = (-step.log10().floor()).max(0.0) as i32 + 1;
+            let f = 10f64.powi(digits);
+            (v * f).round() / f
+        })
+        .collect()
 }
 
 /// The time of a result's end: its last sample, else the window's end.
@@ -181,9 +207,11 @@ pub fn ending_words(obs: &Observables) -> (String, &'static str) {
     }
 }
 
-/// The SVG of a result's time series; `title` heads it (the job and its label).
-pub fn series_svg(obs: &Observables, title: &str) -> String {
-    let panels = panels(obs);
+/// The SVG of a result's time series; `title` heads it (the job and its label), `phase` is its
+/// label (a coexistence, `sfc`, `sgc` or `fgc`, adds the regions' panel).
+pub fn series_svg(obs: &Observables, title: &str, phase: Option<&str>) -> String {
+    let coexistence = phase.is_some_and(|p| p.len() == 3 && p.ends_with('c'));
+    let panels = panels(obs, coexistence);
     let h = TOP + panels.len() as f64 * (PANEL_H + GAP) + 10.0;
     let pw = WIDTH - LEFT - RIGHT;
     let t_end = end_time(obs);
@@ -257,8 +285,7 @@ pub fn series_svg(obs: &Observables, title: &str) -> String {
             let (a, b) = (lo.log10().ceil() as i32, hi.log10().floor() as i32);
             (a..=b).map(|e| 10f64.powi(e)).collect()
         } else {
-            let pad = (hi - lo) * 0.06 / 1.12;
-            vec![lo + pad, 0.5 * (lo + hi), hi - pad]
+            nice_ticks(lo, hi, 4)
         };
         for v in ticks {
             let _ = writeln!(
@@ -272,7 +299,7 @@ pub fn series_svg(obs: &Observables, title: &str) -> String {
         let x_ticks: Vec<f64> = if p.by_block {
             (1..=blocks_n).map(|b| b as f64).collect()
         } else {
-            (0..=5).map(|q| t_end * q as f64 / 5.0).collect()
+            nice_ticks(0.0, t_end, 6)
         };
         for x in x_ticks {
             let _ = writeln!(
