@@ -288,11 +288,12 @@ fn the_report_gives_every_point_a_page_and_every_link_resolves() {
         let html = std::fs::read_to_string(root.join(&page)).unwrap();
         // Label, its decision and run state, snapshot, profiles, its line.
         assert!(html.contains(&p.job_id), "{page}");
-        assert!(html.contains("decided on"), "{page}");
+        assert!(html.contains("decided by  "), "{page}");
         assert!(html.contains("trend"), "{page}");
         for img in [
             format!("{}-snapshot.svg", p.job_id),
             format!("{}-profiles.svg", p.job_id),
+            format!("{}-series.svg", p.job_id),
             "../lines/gamma-".to_string(),
         ] {
             assert!(html.contains(&img), "{page}: no {img}");
@@ -301,6 +302,26 @@ fn the_report_gives_every_point_a_page_and_every_link_resolves() {
             std::fs::read_to_string(root.join(format!("points/{}-snapshot.svg", p.job_id)))
                 .unwrap();
         assert!(snapshot.matches("<circle").count() >= 40, "40 grains");
+        // The time series figure: T_g, bridges, Delta n_cb (and the regions of a coexistence).
+        let series =
+            std::fs::read_to_string(root.join(format!("points/{}-series.svg", p.job_id)))
+                .unwrap();
+        let panels = series.matches("<g class=\"panel\"").count();
+        let coexistence = p.phase.as_deref().is_some_and(|l| l.len() == 3);
+        assert_eq!(panels, if coexistence { 4 } else { 3 }, "{series}");
+        assert!(series.contains("T_g / E_cb, whole system"), "{series}");
+        // One final configuration per job: `show --snapshot` draws the report's.
+        let mine = dir.path().join(format!("{}.svg", p.job_id));
+        let o = run(&[
+            "show",
+            "--db",
+            db_s,
+            &p.job_id,
+            "--snapshot",
+            mine.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(std::fs::read_to_string(&mine).unwrap(), snapshot, "{}", p.job_id);
     }
     // The boundaries table, the sweep file, the commands that reproduce it.
     assert!(index.contains("Gamma"), "{index}");
