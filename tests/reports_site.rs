@@ -479,3 +479,44 @@ fn the_pandas_example_reads_the_database() {
         }));
     });
 }
+
+#[test]
+fn show_at_names_the_branches_and_redraws_a_job_without_a_stored_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = prepared(dir.path());
+    let db = db.to_str().unwrap();
+    // Two branches at Gamma = 2, E* = 1: the first by point is shown, the other named.
+    let out = ok_stdout(&["show", "--db", db, "--at", "gamma=2.1,e_star=0.9"]);
+    let at = out.lines().find(|l| l.starts_with("at ")).unwrap();
+    assert_eq!(at, "at          Gamma = 2, E* = 1, branch: hot start", "{out}");
+    let also = out.lines().find(|l| l.starts_with("also near")).unwrap();
+    assert!(also.contains("branch: continuation") || also.contains("continuation, replica 0"), "{out}");
+    assert_eq!(also.matches(" replica ").count(), 1, "one other job: {out}");
+    // A text value picks the branch.
+    let out = ok_stdout(&[
+        "show",
+        "--db",
+        db,
+        "--at",
+        "gamma=2,e_star=1,initial.start=continuation",
+    ]);
+    assert!(
+        out.contains("at          Gamma = 2, E* = 1, branch: continuation\n"),
+        "{out}"
+    );
+    assert!(!out.contains("also near"), "{out}");
+    // No final state stored (these results carry none): the spec runs again, and says so.
+    let snap = dir.path().join("s.xyz");
+    let out = ok_stdout(&[
+        "show",
+        "--db",
+        db,
+        "--at",
+        "gamma=1,e_star=0.5",
+        "--snapshot",
+        snap.to_str().unwrap(),
+    ]);
+    assert!(out.contains("final state no stored one: re-run"), "{out}");
+    let xyz = std::fs::read_to_string(&snap).unwrap();
+    assert_eq!(xyz.lines().next(), Some("40"), "the tiny scene's 40 grains");
+}

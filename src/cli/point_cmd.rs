@@ -372,28 +372,28 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
             format!("also near   {}", list.join(", ")),
         );
     }
-    let observables: Option<Observables> = p
+    // Read when a picture needs them: the summary comes from the stored decision alone.
+    let observables: Result<Option<Observables>, String> = p
         .observables
         .as_ref()
         .map(|v| serde_json::from_value(v.clone()))
         .transpose()
-        .map_err(|e| {
-            Failure::BadInput(format!(
-                "job {}: stored observables unreadable: {e}",
-                p.job_id
-            ))
-        })?;
+        .map_err(|e| format!("job {}: stored observables unreadable: {e}", p.job_id));
     if !json {
         show_text(&decision_text(&p));
     }
-    let no_observables = |flag: &str| {
-        Failure::BadInput(format!(
-            "{flag}: job {} has no stored observables (status {})",
-            p.job_id, p.status
-        ))
+    let need = |flag: &str| -> Result<&Observables, Failure> {
+        match &observables {
+            Ok(Some(o)) => Ok(o),
+            Ok(None) => Err(Failure::BadInput(format!(
+                "{flag}: job {} has no stored observables (status {})",
+                p.job_id, p.status
+            ))),
+            Err(e) => Err(Failure::BadInput(format!("{flag}: {e}"))),
+        }
     };
     if let Some(path) = &a.profiles {
-        let o = observables.as_ref().ok_or_else(|| no_observables("--profiles"))?;
+        let o = need("--profiles")?;
         write_file(path, profiles_svg(o), outputs.protected())?;
         say(
             "profiles",
@@ -405,7 +405,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
         );
     }
     if let Some(path) = &a.series {
-        let o = observables.as_ref().ok_or_else(|| no_observables("--series"))?;
+        let o = need("--series")?;
         write_series_figure(path, series_svg(o, &series_title(&sweep.name, &axes, &p), p.phase.as_deref()), outputs.protected())?;
         say(
             "series",
@@ -416,7 +416,11 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     if !snapshot.is_empty() {
         let (frame, source, line) = final_frame(&store, &p)?;
         say("final_state", source, line);
-        let unit = observables.as_ref().map_or(1.0, |o| o.temperature_unit);
+        // As the report colours it (1 where the observables are unreadable).
+        let unit = match &observables {
+            Ok(Some(o)) => o.temperature_unit,
+            _ => 1.0,
+        };
         for path in snapshot {
             write_snapshot(path, &frame, colour_by, unit, outputs.protected())?;
             say(
