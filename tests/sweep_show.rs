@@ -129,6 +129,43 @@ fn show_redraws_a_stored_point_and_inflection_reads_the_lines() {
         .count();
     assert!(stored > 10, "{long}");
     assert_eq!(vertices, stored, "one vertex per stored sample");
+    // A coexistence adds its regions' panel: the members' and the other grains' temperatures,
+    // block means against block number (their tested histories' starts are not stored).
+    {
+        let store = wetgran::store::Store::open_existing(&db).unwrap();
+        let sweep = store.sweep("line").unwrap();
+        let row = store
+            .points(sweep.id)
+            .unwrap()
+            .into_iter()
+            .find(|r| r.job_id == id)
+            .unwrap();
+        let mut obs = row.observables.clone().unwrap();
+        let test = |q: &str, means: [f64; 4]| {
+            serde_json::json!({"quantity": q, "mean": 1.0, "standard_error": 0.1,
+                "block_means": means, "block_errors": [0.1, 0.1, 0.1, 0.1],
+                "max_pair_sigmas": 1.0, "drift": 0.0, "drift_error": 0.1, "tolerance": 0.02,
+                "agree": true, "no_trend": true})
+        };
+        obs["trend"]["region_tests"] = serde_json::json!([
+            test("member_temperature", [0.2, 0.21, 0.19, 0.2]),
+            test("unbonded_temperature", [3.0, 3.1, 2.9, 3.0]),
+        ]);
+        let obs: wetgran_core::observe::Observables = serde_json::from_value(obs).unwrap();
+        let coexistence = wetgran::report::series_plot::series_svg(&obs, "t", Some("fgc"));
+        assert_eq!(coexistence.matches("<g class=\"panel\"").count(), 4);
+        let regions = &coexistence[coexistence.find("data-quantity=\"regions\"").unwrap()..];
+        for q in ["member_temperature", "unbonded_temperature"] {
+            let path = regions
+                .split(&format!("class=\"blocks\" data-quantity=\"{q}\" d=\""))
+                .nth(1)
+                .unwrap_or_else(|| panic!("no {q}: {regions}"));
+            // Four steps, each with its error bar.
+            assert_eq!(path[..path.find('"').unwrap()].matches('M').count(), 8, "{q}");
+        }
+        let homogeneous = wetgran::report::series_plot::series_svg(&obs, "t", Some("f"));
+        assert_eq!(homogeneous.matches("<g class=\"panel\"").count(), 3);
+    }
     // Only SVG for now.
     let pdf = wetgran()
         .args(["show", "--db", db_s, &id[..10], "--series"])
