@@ -304,8 +304,7 @@ fn the_report_gives_every_point_a_page_and_every_link_resolves() {
         assert!(snapshot.matches("<circle").count() >= 40, "40 grains");
         // The time series figure: T_g, bridges, Delta n_cb (and the regions of a coexistence).
         let series =
-            std::fs::read_to_string(root.join(format!("points/{}-series.svg", p.job_id)))
-                .unwrap();
+            std::fs::read_to_string(root.join(format!("points/{}-series.svg", p.job_id))).unwrap();
         let panels = series.matches("<g class=\"panel\"").count();
         let coexistence = p.phase.as_deref().is_some_and(|l| l.len() == 3);
         assert_eq!(panels, if coexistence { 4 } else { 3 }, "{series}");
@@ -321,7 +320,12 @@ fn the_report_gives_every_point_a_page_and_every_link_resolves() {
             mine.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
-        assert_eq!(std::fs::read_to_string(&mine).unwrap(), snapshot, "{}", p.job_id);
+        assert_eq!(
+            std::fs::read_to_string(&mine).unwrap(),
+            snapshot,
+            "{}",
+            p.job_id
+        );
     }
     // The boundaries table, the sweep file, the commands that reproduce it.
     assert!(index.contains("Gamma"), "{index}");
@@ -488,9 +492,15 @@ fn show_at_names_the_branches_and_redraws_a_job_without_a_stored_state() {
     // Two branches at Gamma = 2, E* = 1: the first by point is shown, the other named.
     let out = ok_stdout(&["show", "--db", db, "--at", "gamma=2.1,e_star=0.9"]);
     let at = out.lines().find(|l| l.starts_with("at ")).unwrap();
-    assert_eq!(at, "at          Gamma = 2, E* = 1, branch: hot start", "{out}");
+    assert_eq!(
+        at, "at          Gamma = 2, E* = 1, branch: hot start",
+        "{out}"
+    );
     let also = out.lines().find(|l| l.starts_with("also near")).unwrap();
-    assert!(also.contains("branch: continuation") || also.contains("continuation, replica 0"), "{out}");
+    assert!(
+        also.contains("branch: continuation") || also.contains("continuation, replica 0"),
+        "{out}"
+    );
     assert_eq!(also.matches(" replica ").count(), 1, "one other job: {out}");
     // A text value picks the branch.
     let out = ok_stdout(&[

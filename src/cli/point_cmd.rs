@@ -7,11 +7,11 @@
 use super::common::{
     Failure, check_snapshot_names, print_json, select, show as show_text, write_file,
 };
-use crate::output::{Outputs, Protected};
 use crate::boundary::START_AXIS;
+use crate::output::{Outputs, Protected};
 use crate::report::point_text::{
-    coordinates_text, decision_text, gamma_lines, inflection_json, inflection_text, job_json, job_text,
-    series_title,
+    coordinates_text, decision_text, gamma_lines, inflection_json, inflection_text, job_json,
+    job_text, series_title,
 };
 use crate::report::series_plot::series_svg;
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
@@ -152,7 +152,13 @@ fn find_at(
                 let c = r.coords.get(k);
                 match (v.as_f64(), c.and_then(|c| c.as_f64())) {
                     (Some(w), Some(x)) => {
-                        let f = |x: f64| if log { x.max(f64::MIN_POSITIVE).log10() } else { x };
+                        let f = |x: f64| {
+                            if log {
+                                x.max(f64::MIN_POSITIVE).log10()
+                            } else {
+                                x
+                            }
+                        };
                         d2 += ((f(x) - f(w)) / span).powi(2);
                     }
                     _ => {
@@ -204,7 +210,11 @@ fn find_at(
         return Err(Failure::BadInput(format!(
             "--at `{}`: {what}; the axes are {}",
             escape(at),
-            if known.is_empty() { "none (no sweep stored)".to_string() } else { known.join("; ") }
+            if known.is_empty() {
+                "none (no sweep stored)".to_string()
+            } else {
+                known.join("; ")
+            }
         )));
     }
     let Some((_, s, mut jobs)) = best else {
@@ -216,6 +226,22 @@ fn find_at(
     jobs.sort_by_key(|j| (j.point, j.replica));
     let first = jobs.remove(0);
     Ok((s, first, jobs))
+}
+
+/// The `also near` line of `show --at`: the other jobs as near as the one shown.
+fn also_near(axes: &[Axis], others: &[PointRow]) -> String {
+    let list: Vec<String> = others
+        .iter()
+        .map(|o| {
+            format!(
+                "{} ({}; {})",
+                &o.job_id[..12.min(o.job_id.len())],
+                escape(&coordinates_text(axes, o)),
+                branch_text(axes, o)
+            )
+        })
+        .collect();
+    format!("also near   {}", list.join(", "))
 }
 
 /// The branch and replica of a job, in words (`cold start, replica 0`).
@@ -299,7 +325,9 @@ fn final_frame(store: &Store, p: &PointRow) -> Result<(Frame, serde_json::Value,
     let events = run.report.events_total;
     let line = match p.events {
         Some(stored) if stored as u64 == events => {
-            format!("final state no stored one: re-run, reproduces the stored run ({stored} events)")
+            format!(
+                "final state no stored one: re-run, reproduces the stored run ({stored} events)"
+            )
         }
         Some(stored) => format!(
             "final state no stored one: re-run, WARNING: {events} events, the stored run had \
@@ -355,22 +383,8 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
         show_text(&job_text(&escape(&sweep.name), &axes, &p));
     }
     if !others.is_empty() {
-        let list: Vec<String> = others
-            .iter()
-            .map(|o| {
-                format!(
-                    "{} ({}; {})",
-                    &o.job_id[..12.min(o.job_id.len())],
-                    escape(&coordinates_text(&axes, o)),
-                    branch_text(&axes, o)
-                )
-            })
-            .collect();
-        say(
-            "also_near",
-            serde_json::json!(others.iter().map(|o| o.job_id.clone()).collect::<Vec<_>>()),
-            format!("also near   {}", list.join(", ")),
-        );
+        let ids = others.iter().map(|o| o.job_id.clone()).collect::<Vec<_>>();
+        say("also_near", ids.into(), also_near(&axes, &others));
     }
     // Read when a picture needs them: the summary comes from the stored decision alone.
     let observables: Result<Option<Observables>, String> = p
@@ -406,11 +420,18 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     }
     if let Some(path) = &a.series {
         let o = need("--series")?;
-        write_series_figure(path, series_svg(o, &series_title(&sweep.name, &axes, &p), p.phase.as_deref()), outputs.protected())?;
+        write_series_figure(
+            path,
+            series_svg(o, &series_title(&sweep.name, &axes, &p), p.phase.as_deref()),
+            outputs.protected(),
+        )?;
         say(
             "series",
             path.display().to_string().into(),
-            format!("series      {} (time series, from the stored observables)", path.display()),
+            format!(
+                "series      {} (time series, from the stored observables)",
+                path.display()
+            ),
         );
     }
     if !snapshot.is_empty() {

@@ -11,23 +11,25 @@ use serde::Deserialize as _;
 use std::fmt::Write as _;
 use wetgran_core::observe::Verdict;
 use wetgran_core::observe::classify::DecisionInputs;
-use wetgran_core::observe::criterion::{DecidedBy, sig};
 use wetgran_core::observe::criterion::Region;
-use wetgran_core::observe::settling::Region as SettlingRegion;
+use wetgran_core::observe::criterion::{DecidedBy, sig};
 use wetgran_core::observe::fluid_gas_inflection;
 use wetgran_core::observe::line::LinePoint;
+use wetgran_core::observe::settling::Region as SettlingRegion;
 
 /// A point's coordinates with their axes' labels, rounded for reading (`Gamma = 2.187, E* =
 /// 1.194`); an `initial.start` axis shows as its branch in words (`branch: cold start`).
 pub fn coordinates_text(axes: &[Axis], p: &PointRow) -> String {
     axes.iter()
         .zip(&p.coords)
-        .map(|(a, v)| match (a.key == START_AXIS, v.as_f64(), v.as_str()) {
-            (true, _, Some(b)) => format!("branch: {}", branch_words(b)),
-            (_, Some(x), _) => format!("{} = {}", a.label, super::svg::label(x)),
-            (_, _, Some(t)) => format!("{} = {t}", a.label),
-            _ => format!("{} = {v}", a.label),
-        })
+        .map(
+            |(a, v)| match (a.key == START_AXIS, v.as_f64(), v.as_str()) {
+                (true, _, Some(b)) => format!("branch: {}", branch_words(b)),
+                (_, Some(x), _) => format!("{} = {}", a.label, super::svg::label(x)),
+                (_, _, Some(t)) => format!("{} = {t}", a.label),
+                _ => format!("{} = {v}", a.label),
+            },
+        )
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -111,18 +113,22 @@ fn regions_table(d: &DecisionInputs, by: &DecidedBy, unit: &str) -> String {
             Region::Dense => d.dense.as_ref(),
             Region::Dilute => d.dilute.as_ref(),
         };
-        let (grains, t, dl) = inputs.map_or(("-".to_string(), "-".to_string(), "-".to_string()), |i| {
-            (
-                i.grains.clone(),
-                sig(i.temperature),
-                i.diffusion.map_or("-".to_string(), sig),
-            )
-        });
+        let (grains, t, dl) =
+            inputs.map_or(("-".to_string(), "-".to_string(), "-".to_string()), |i| {
+                (
+                    i.grains.clone(),
+                    sig(i.temperature),
+                    i.diffusion.map_or("-".to_string(), sig),
+                )
+            });
         let drifting: Vec<String> = settling
             .regions
             .iter()
             .filter(|s| s.region == settling_region)
-            .flat_map(|s| s.unsettled().map(|q| format!("{} {}", q.quantity, q.direction)))
+            .flat_map(|s| {
+                s.unsettled()
+                    .map(|q| format!("{} {}", q.quantity, q.direction))
+            })
             .collect();
         let settled = if settling.regions.iter().all(|s| s.region != settling_region) {
             "-".to_string()

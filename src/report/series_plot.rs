@@ -45,7 +45,8 @@ fn panels(obs: &Observables, coexistence: bool) -> Vec<Panel<'_>> {
     let wet = unit == "E_cb";
     let trend = obs.trend.as_ref();
     let test = |name: &str| trend.and_then(|t| t.tests.iter().find(|b| b.quantity == name));
-    let region = |name: &str| trend.and_then(|t| t.region_tests.iter().find(|b| b.quantity == name));
+    let region =
+        |name: &str| trend.and_then(|t| t.region_tests.iter().find(|b| b.quantity == name));
     let series = obs.series.as_ref();
     let pairs = |v: Option<&Vec<f64>>| -> Vec<(f64, f64)> {
         match (series, v) {
@@ -57,7 +58,10 @@ fn panels(obs: &Observables, coexistence: bool) -> Vec<Panel<'_>> {
         title: format!("T_g / {unit}, whole system"),
         quantity: "temperature",
         samples: pairs(series.map(|s| &s.temperature_reduced)),
-        blocks: test(TEMPERATURE).map(|b| (b, "#d62728", "block means")).into_iter().collect(),
+        blocks: test(TEMPERATURE)
+            .map(|b| (b, "#d62728", "block means"))
+            .into_iter()
+            .collect(),
         by_block: false,
     }];
     if wet {
@@ -65,7 +69,10 @@ fn panels(obs: &Observables, coexistence: bool) -> Vec<Panel<'_>> {
             title: "bridges per grain".to_string(),
             quantity: "bridges",
             samples: pairs(series.map(|s| &s.bridges_per_particle)),
-            blocks: test(BRIDGES).map(|b| (b, "#d62728", "block means")).into_iter().collect(),
+            blocks: test(BRIDGES)
+                .map(|b| (b, "#d62728", "block means"))
+                .into_iter()
+                .collect(),
             by_block: false,
         });
         out.push(Panel {
@@ -74,7 +81,10 @@ fn panels(obs: &Observables, coexistence: bool) -> Vec<Panel<'_>> {
                 .to_string(),
             quantity: "delta_n_cb",
             samples: Vec::new(),
-            blocks: test(DELTA_N_CB).map(|b| (b, "#d62728", "block means")).into_iter().collect(),
+            blocks: test(DELTA_N_CB)
+                .map(|b| (b, "#d62728", "block means"))
+                .into_iter()
+                .collect(),
             by_block: false,
         });
     }
@@ -104,7 +114,11 @@ fn panels(obs: &Observables, coexistence: bool) -> Vec<Panel<'_>> {
 fn range(p: &Panel) -> ((f64, f64), bool) {
     let mut vals: Vec<f64> = p.samples.iter().map(|s| s.1).collect();
     for (b, _, _) in &p.blocks {
-        for (m, e) in b.block_means.iter().zip(b.block_errors.iter().chain(std::iter::repeat(&0.0))) {
+        for (m, e) in b
+            .block_means
+            .iter()
+            .zip(b.block_errors.iter().chain(std::iter::repeat(&0.0)))
+        {
             let e = if e.is_finite() { *e } else { 0.0 };
             vals.extend([m - e, m + e]);
         }
@@ -115,7 +129,11 @@ fn range(p: &Panel) -> ((f64, f64), bool) {
     if !lo.is_finite() {
         return ((0.0, 1.0), false);
     }
-    let positive = vals.iter().copied().filter(|v| *v > 0.0).fold(f64::INFINITY, f64::min);
+    let positive = vals
+        .iter()
+        .copied()
+        .filter(|v| *v > 0.0)
+        .fold(f64::INFINITY, f64::min);
     let temperature = p.quantity == "temperature" || p.quantity == "regions";
     if temperature && positive.is_finite() && hi / positive > 20.0 {
         return ((positive / 1.3, hi * 1.3), true);
@@ -133,7 +151,7 @@ fn range(p: &Panel) -> ((f64, f64), bool) {
 /// Round tick values inside `[lo, hi]`: multiples of 1, 2 or 5 times a power of ten, about
 /// `want` of them (exact multiples, so no float noise such as `-1.4e-17` shows).
 fn nice_ticks(lo: f64, hi: f64, want: usize) -> Vec<f64> {
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return vec![lo];
     }
     let raw = (hi - lo) / want.max(1) as f64;
@@ -183,7 +201,11 @@ pub fn ending_words(obs: &Observables) -> (String, &'static str) {
     match obs.trend.as_ref().and_then(|t| t.policy.as_ref()) {
         Some(p) => match p.ending {
             Ending::Stationary => (
-                format!("ended at t = {}: stationary (check {})", label(end), p.checks),
+                format!(
+                    "ended at t = {}: stationary (check {})",
+                    label(end),
+                    p.checks
+                ),
                 "#2ca02c",
             ),
             Ending::Settled => (
@@ -203,7 +225,186 @@ pub fn ending_words(obs: &Observables) -> (String, &'static str) {
                 "#d62728",
             ),
         },
-        None => (format!("ended at t = {} (fixed run length)", label(end)), "#444444"),
+        None => (
+            format!("ended at t = {} (fixed run length)", label(end)),
+            "#444444",
+        ),
+    }
+}
+
+/// The pixel mapping of one panel: its top `y0`, its value range (log or not) and its x range
+/// (time, or block number).
+struct Axes {
+    y0: f64,
+    lo: f64,
+    hi: f64,
+    log: bool,
+    x_lo: f64,
+    x_hi: f64,
+}
+
+impl Axes {
+    fn px(&self, t: f64) -> f64 {
+        LEFT + (t - self.x_lo) / (self.x_hi - self.x_lo) * (WIDTH - LEFT - RIGHT)
+    }
+
+    fn py(&self, v: f64) -> f64 {
+        let f = |v: f64| if self.log { v.max(self.lo).log10() } else { v };
+        self.y0 + PANEL_H - (f(v) - f(self.lo)) / (f(self.hi) - f(self.lo)) * PANEL_H
+    }
+}
+
+/// The transient, the window and the checks of a time panel.
+fn draw_marks(s: &mut String, obs: &Observables, ax: &Axes, t_end: f64, relaxed: Option<f64>) {
+    let (px, y0) = (|t: f64| ax.px(t), ax.y0);
+    if let Some(r) = relaxed.filter(|r| *r > 0.0) {
+        let _ = writeln!(
+            s,
+            "<rect class=\"transient\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{PANEL_H}\" \
+             fill=\"#dddddd\"/>",
+            n(px(0.0)),
+            n(y0),
+            n(px(r.min(t_end)) - px(0.0))
+        );
+    }
+    let _ = writeln!(
+        s,
+        "<rect class=\"window\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{PANEL_H}\" \
+         fill=\"#1f77b4\" fill-opacity=\"0.12\"/>",
+        n(px(obs.window_start)),
+        n(y0),
+        n(px(obs.window_end) - px(obs.window_start))
+    );
+    for c in checks(obs) {
+        let _ = writeln!(
+            s,
+            "<line class=\"check\" x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\" stroke=\"black\"/>",
+            n(px(c)),
+            n(y0),
+            n(y0 + 7.0)
+        );
+    }
+}
+
+/// The ticks and labels of a panel's axes.
+fn draw_ticks(s: &mut String, p: &Panel, ax: &Axes, blocks_n: usize, t_end: f64) {
+    let (px, py, y0, lo, hi, log) = (
+        |t: f64| ax.px(t),
+        |v: f64| ax.py(v),
+        ax.y0,
+        ax.lo,
+        ax.hi,
+        ax.log,
+    );
+    let pw = WIDTH - LEFT - RIGHT;
+    // y ticks: decades on a log axis, else three values.
+    let ticks: Vec<f64> = if log {
+        let (a, b) = (lo.log10().ceil() as i32, hi.log10().floor() as i32);
+        (a..=b).map(|e| 10f64.powi(e)).collect()
+    } else {
+        nice_ticks(lo, hi, 4)
+    };
+    for v in ticks {
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
+            n(LEFT - 4.0),
+            n(py(v) + 4.0),
+            label(v)
+        );
+    }
+    let x_ticks: Vec<f64> = if p.by_block {
+        (1..=blocks_n).map(|b| b as f64).collect()
+    } else {
+        nice_ticks(0.0, t_end, 6)
+    };
+    for x in x_ticks {
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
+            n(px(x)),
+            n(y0 + PANEL_H + 13.0),
+            label(x)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
+        n(LEFT + pw),
+        n(y0 + PANEL_H + 27.0),
+        if p.by_block {
+            "block of the tested history"
+        } else {
+            "t (time units)"
+        }
+    );
+}
+
+/// A panel's sampled curve and its block means with their errors and verdicts.
+fn draw_data(s: &mut String, obs: &Observables, p: &Panel, ax: &Axes, t_end: f64) {
+    let (px, py, y0) = (|t: f64| ax.px(t), |v: f64| ax.py(v), ax.y0);
+    let pw = WIDTH - LEFT - RIGHT;
+    if !p.samples.is_empty() {
+        let mut d = String::new();
+        for (i, (t, v)) in p.samples.iter().filter(|(_, v)| v.is_finite()).enumerate() {
+            let _ = write!(
+                d,
+                "{}{} {}",
+                if i == 0 { "M" } else { "L" },
+                n(px(*t)),
+                n(py(*v))
+            );
+        }
+        let _ = writeln!(
+            s,
+            "<path class=\"samples\" d=\"{d}\" fill=\"none\" stroke=\"#555555\" stroke-width=\"0.8\"/>"
+        );
+    }
+    let (from, to) = obs.trend.as_ref().map_or((0.0, t_end), |t| (t.from, t.to));
+    for (legend_row, (b, colour, what)) in p.blocks.iter().enumerate() {
+        let m = b.block_means.len();
+        if m == 0 {
+            continue;
+        }
+        let span = |i: usize| -> (f64, f64) {
+            if p.by_block {
+                (i as f64 + 0.6, i as f64 + 1.4)
+            } else {
+                let w = (to - from) / m as f64;
+                (from + i as f64 * w, from + (i + 1) as f64 * w)
+            }
+        };
+        let mut d = String::new();
+        for (i, v) in b.block_means.iter().enumerate() {
+            let (a, z) = span(i);
+            let _ = write!(d, "M{} {}H{}", n(px(a)), n(py(*v)), n(px(z)));
+            if let Some(e) = b.block_errors.get(i).filter(|e| e.is_finite() && **e > 0.0) {
+                let c = px(0.5 * (a + z));
+                let _ = write!(d, "M{} {}V{}", n(c), n(py(v - e)), n(py(v + e)));
+            }
+        }
+        let _ = writeln!(
+            s,
+            "<path class=\"blocks\" data-quantity=\"{}\" d=\"{d}\" fill=\"none\" stroke=\"{colour}\" \
+             stroke-width=\"2\"/>",
+            esc(&b.quantity)
+        );
+        let verdict = if b.ok() {
+            "flat"
+        } else if b.no_trend {
+            "blocks disagree"
+        } else {
+            "drifts"
+        };
+        let _ = writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"end\" fill=\"{colour}\">{what}: {}, drift {} +- {}</text>",
+            n(LEFT + pw - 4.0),
+            n(y0 + 12.0 + 13.0 * legend_row as f64),
+            verdict,
+            label(b.drift),
+            label(b.drift_error)
+        );
     }
 }
 
@@ -219,7 +420,11 @@ pub fn series_svg(obs: &Observables, title: &str, phase: Option<&str>) -> String
     let (ending, ending_colour) = ending_words(obs);
     let mut s = super::svg::open(WIDTH, h);
     let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
-    let _ = writeln!(s, "<text x=\"{LEFT}\" y=\"16\" font-size=\"13\">{}</text>", esc(title));
+    let _ = writeln!(
+        s,
+        "<text x=\"{LEFT}\" y=\"16\" font-size=\"13\">{}</text>",
+        esc(title)
+    );
     let _ = writeln!(
         s,
         "<text x=\"{LEFT}\" y=\"32\">grey: transient (relaxed at t = {}); blue: window t = {} .. {} \
@@ -227,7 +432,9 @@ pub fn series_svg(obs: &Observables, title: &str, phase: Option<&str>) -> String
         relaxed.map_or("?".to_string(), label),
         label(obs.window_start),
         label(obs.window_end),
-        obs.trend.as_ref().map_or("?".to_string(), |t| label(t.from)),
+        obs.trend
+            .as_ref()
+            .map_or("?".to_string(), |t| label(t.from)),
         obs.trend.as_ref().map_or("?".to_string(), |t| label(t.to)),
     );
     let _ = writeln!(
@@ -238,41 +445,35 @@ pub fn series_svg(obs: &Observables, title: &str, phase: Option<&str>) -> String
     for (k, p) in panels.iter().enumerate() {
         let y0 = TOP + k as f64 * (PANEL_H + GAP);
         let ((lo, hi), log) = range(p);
-        let f = |v: f64| if log { v.max(lo).log10() } else { v };
-        let py = |v: f64| y0 + PANEL_H - (f(v) - f(lo)) / (f(hi) - f(lo)) * PANEL_H;
-        let blocks_n = p.blocks.iter().map(|b| b.0.block_means.len()).max().unwrap_or(1).max(1);
-        let (x_lo, x_hi) = if p.by_block { (0.5, blocks_n as f64 + 0.5) } else { (0.0, t_end.max(1e-9)) };
-        let px = |t: f64| LEFT + (t - x_lo) / (x_hi - x_lo) * pw;
+        let blocks_n = p
+            .blocks
+            .iter()
+            .map(|b| b.0.block_means.len())
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let (x_lo, x_hi) = if p.by_block {
+            (0.5, blocks_n as f64 + 0.5)
+        } else {
+            (0.0, t_end.max(1e-9))
+        };
         let _ = writeln!(s, "<g class=\"panel\" data-quantity=\"{}\">", p.quantity);
-        let _ = writeln!(s, "<text x=\"{LEFT}\" y=\"{}\">{}</text>", n(y0 - 5.0), esc(&p.title));
+        let _ = writeln!(
+            s,
+            "<text x=\"{LEFT}\" y=\"{}\">{}</text>",
+            n(y0 - 5.0),
+            esc(&p.title)
+        );
+        let ax = Axes {
+            y0,
+            lo,
+            hi,
+            log,
+            x_lo,
+            x_hi,
+        };
         if !p.by_block {
-            if let Some(r) = relaxed.filter(|r| *r > 0.0) {
-                let _ = writeln!(
-                    s,
-                    "<rect class=\"transient\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{PANEL_H}\" \
-                     fill=\"#dddddd\"/>",
-                    n(px(0.0)),
-                    n(y0),
-                    n(px(r.min(t_end)) - px(0.0))
-                );
-            }
-            let _ = writeln!(
-                s,
-                "<rect class=\"window\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{PANEL_H}\" \
-                 fill=\"#1f77b4\" fill-opacity=\"0.12\"/>",
-                n(px(obs.window_start)),
-                n(y0),
-                n(px(obs.window_end) - px(obs.window_start))
-            );
-            for c in checks(obs) {
-                let _ = writeln!(
-                    s,
-                    "<line class=\"check\" x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\" stroke=\"black\"/>",
-                    n(px(c)),
-                    n(y0),
-                    n(y0 + 7.0)
-                );
-            }
+            draw_marks(&mut s, obs, &ax, t_end, relaxed);
         }
         let _ = writeln!(
             s,
@@ -280,99 +481,14 @@ pub fn series_svg(obs: &Observables, title: &str, phase: Option<&str>) -> String
             n(y0),
             n(pw)
         );
-        // y ticks: decades on a log axis, else three values.
-        let ticks: Vec<f64> = if log {
-            let (a, b) = (lo.log10().ceil() as i32, hi.log10().floor() as i32);
-            (a..=b).map(|e| 10f64.powi(e)).collect()
-        } else {
-            nice_ticks(lo, hi, 4)
-        };
-        for v in ticks {
-            let _ = writeln!(
-                s,
-                "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
-                n(LEFT - 4.0),
-                n(py(v) + 4.0),
-                label(v)
-            );
-        }
-        let x_ticks: Vec<f64> = if p.by_block {
-            (1..=blocks_n).map(|b| b as f64).collect()
-        } else {
-            nice_ticks(0.0, t_end, 6)
-        };
-        for x in x_ticks {
-            let _ = writeln!(
-                s,
-                "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
-                n(px(x)),
-                n(y0 + PANEL_H + 13.0),
-                label(x)
-            );
-        }
-        let _ = writeln!(
-            s,
-            "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
-            n(LEFT + pw),
-            n(y0 + PANEL_H + 27.0),
-            if p.by_block { "block of the tested history" } else { "t (time units)" }
-        );
-        if !p.samples.is_empty() {
-            let mut d = String::new();
-            for (i, (t, v)) in p.samples.iter().filter(|(_, v)| v.is_finite()).enumerate() {
-                let _ = write!(d, "{}{} {}", if i == 0 { "M" } else { "L" }, n(px(*t)), n(py(*v)));
-            }
-            let _ = writeln!(
-                s,
-                "<path class=\"samples\" d=\"{d}\" fill=\"none\" stroke=\"#555555\" stroke-width=\"0.8\"/>"
-            );
-        }
-        let (from, to) = obs.trend.as_ref().map_or((0.0, t_end), |t| (t.from, t.to));
-        for (legend_row, (b, colour, what)) in p.blocks.iter().enumerate() {
-            let m = b.block_means.len();
-            if m == 0 {
-                continue;
-            }
-            let span = |i: usize| -> (f64, f64) {
-                if p.by_block {
-                    (i as f64 + 0.6, i as f64 + 1.4)
-                } else {
-                    let w = (to - from) / m as f64;
-                    (from + i as f64 * w, from + (i + 1) as f64 * w)
-                }
-            };
-            let mut d = String::new();
-            for (i, v) in b.block_means.iter().enumerate() {
-                let (a, z) = span(i);
-                let _ = write!(d, "M{} {}H{}", n(px(a)), n(py(*v)), n(px(z)));
-                if let Some(e) = b.block_errors.get(i).filter(|e| e.is_finite() && **e > 0.0) {
-                    let c = px(0.5 * (a + z));
-                    let _ = write!(d, "M{} {}V{}", n(c), n(py(v - e)), n(py(v + e)));
-                }
-            }
-            let _ = writeln!(
-                s,
-                "<path class=\"blocks\" data-quantity=\"{}\" d=\"{d}\" fill=\"none\" stroke=\"{colour}\" \
-                 stroke-width=\"2\"/>",
-                esc(&b.quantity)
-            );
-            let verdict = if b.ok() { "flat" } else if b.no_trend { "blocks disagree" } else { "drifts" };
-            let _ = writeln!(
-                s,
-                "<text x=\"{}\" y=\"{}\" text-anchor=\"end\" fill=\"{colour}\">{what}: {}, drift {} +- {}</text>",
-                n(LEFT + pw - 4.0),
-                n(y0 + 12.0 + 13.0 * legend_row as f64),
-                verdict,
-                label(b.drift),
-                label(b.drift_error)
-            );
-        }
+        draw_ticks(&mut s, p, &ax, blocks_n, t_end);
+        draw_data(&mut s, obs, p, &ax, t_end);
         if !p.by_block {
             let _ = writeln!(
                 s,
                 "<line class=\"ending\" x1=\"{0}\" x2=\"{0}\" y1=\"{1}\" y2=\"{2}\" stroke=\"{ending_colour}\" \
                  stroke-width=\"2\"/>",
-                n(px(t_end)),
+                n(ax.px(t_end)),
                 n(y0),
                 n(y0 + PANEL_H)
             );

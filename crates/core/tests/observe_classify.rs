@@ -409,7 +409,13 @@ fn line_reasons_round_their_numbers() {
     let gamma = 0.1 * 5.0 - 1e-16 * 0.6; // 0.49999999999999994
     assert_ne!(gamma, 0.5);
     let e = |k: i32| 0.3 * 4.0f64.powf(k as f64 / 3.0);
-    let curve = [(e(0), 0.3), (e(1), 0.5), (e(2), 0.8), (e(3), 30.0), (e(4), 60.0)];
+    let curve = [
+        (e(0), 0.3),
+        (e(1), 0.5),
+        (e(2), 0.8),
+        (e(3), 30.0),
+        (e(4), 60.0),
+    ];
     let obs: Vec<Observables> = curve
         .iter()
         .map(|&(_, temp)| with_error(homogeneous(1.0, temp, 0.0), 0.01))
@@ -422,7 +428,9 @@ fn line_reasons_round_their_numbers() {
         // Every number in the line's part has at most four significant digits (p-values in
         // scientific notation aside).
         let line_part = &r[r.find("line at Gamma").unwrap()..];
-        for word in line_part.split(|ch: char| !(ch.is_ascii_digit() || ch == '.' || ch == 'e' || ch == '-')) {
+        for word in line_part
+            .split(|ch: char| !(ch.is_ascii_digit() || ch == '.' || ch == 'e' || ch == '-'))
+        {
             if let Ok(x) = word.parse::<f64>()
                 && !word.contains('e')
             {

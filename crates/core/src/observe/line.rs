@@ -584,8 +584,11 @@ pub fn classify_line(
             } else {
                 "solid: kept out of the line's curve".to_string()
             };
-            c.decided_on.reason =
-                format!("{}; line at Gamma = {}: {note}", c.decided_on.reason, sig(gamma));
+            c.decided_on.reason = format!(
+                "{}; line at Gamma = {}: {note}",
+                c.decided_on.reason,
+                sig(gamma)
+            );
             c
         })
         .collect()
@@ -655,37 +658,26 @@ fn decide(
         sig(th.gas_temperature)
     );
     let branch = |b: f64, level: f64, what: &str| -> (bool, String) {
+        let (es, bs, ts, ls) = (sig(e), sig(b), sig(t), sig(level));
         if e <= b {
             (
                 false,
-                format!(
-                    "E* = {} below the {what} boundary E* = {}: fluid side",
-                    sig(e),
-                    sig(b)
-                ),
+                format!("E* = {es} below the {what} boundary E* = {bs}: fluid side"),
             )
         } else if t >= level {
             (
                 true,
                 format!(
-                    "E* = {} above the {what} boundary E* = {} and T_g/E_cb = {} on the gas \
-                     branch (>= {})",
-                    sig(e),
-                    sig(b),
-                    sig(t),
-                    sig(level)
+                    "E* = {es} above the {what} boundary E* = {bs} and T_g/E_cb = {ts} on the \
+                     gas branch (>= {ls})"
                 ),
             )
         } else {
             (
                 false,
                 format!(
-                    "E* = {} above the {what} boundary E* = {}, but T_g/E_cb = {} below \
-                     the gas branch ({}): stays fluid",
-                    sig(e),
-                    sig(b),
-                    sig(t),
-                    sig(level)
+                    "E* = {es} above the {what} boundary E* = {bs}, but T_g/E_cb = {ts} below \
+                     the gas branch ({ls}): stays fluid"
                 ),
             )
         }
