@@ -196,9 +196,7 @@ fn every_report_says_which_criterion_decided_each_label() {
     let job = solid["job_id"].as_str().unwrap();
     let show = ok_stdout(&["show", "--db", db, &job[..12]]);
     assert!(
-        show.contains(
-            "decided by  s by displacement: D_lat 3.57e-4 <= solid_diffusion 0.001\n"
-        ),
+        show.contains("decided by  s by displacement: D_lat 3.57e-4 <= solid_diffusion 0.001\n"),
         "{show}"
     );
     let job = hot["job_id"].as_str().unwrap();
