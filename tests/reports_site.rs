@@ -307,11 +307,12 @@ fn the_report_gives_every_point_a_page_and_every_link_resolves() {
         let html = std::fs::read_to_string(root.join(&page)).unwrap();
         // Label, its decision and run state, snapshot, profiles, its line.
         assert!(html.contains(&p.job_id), "{page}");
-        assert!(html.contains("decided on"), "{page}");
+        assert!(html.contains("decided by  "), "{page}");
         assert!(html.contains("trend"), "{page}");
         for img in [
             format!("{}-snapshot.svg", p.job_id),
             format!("{}-profiles.svg", p.job_id),
+            format!("{}-series.svg", p.job_id),
             "../lines/gamma-".to_string(),
         ] {
             assert!(html.contains(&img), "{page}: no {img}");
@@ -320,6 +321,30 @@ fn the_report_gives_every_point_a_page_and_every_link_resolves() {
             std::fs::read_to_string(root.join(format!("points/{}-snapshot.svg", p.job_id)))
                 .unwrap();
         assert!(snapshot.matches("<circle").count() >= 40, "40 grains");
+        // The time series figure: T_g, bridges, Delta n_cb (and the regions of a coexistence).
+        let series =
+            std::fs::read_to_string(root.join(format!("points/{}-series.svg", p.job_id))).unwrap();
+        let panels = series.matches("<g class=\"panel\"").count();
+        let coexistence = p.phase.as_deref().is_some_and(|l| l.len() == 3);
+        assert_eq!(panels, if coexistence { 4 } else { 3 }, "{series}");
+        assert!(series.contains("T_g / E_cb, whole system"), "{series}");
+        // One final configuration per job: `show --snapshot` draws the report's.
+        let mine = dir.path().join(format!("{}.svg", p.job_id));
+        let o = run(&[
+            "show",
+            "--db",
+            db_s,
+            &p.job_id,
+            "--snapshot",
+            mine.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            std::fs::read_to_string(&mine).unwrap(),
+            snapshot,
+            "{}",
+            p.job_id
+        );
     }
     // The boundaries table, the sweep file, the commands that reproduce it.
     assert!(index.contains("Gamma"), "{index}");
@@ -589,4 +614,51 @@ fn the_reports_boundaries_are_tables_of_the_phase_map() {
         "a header and a row per job"
     );
     assert!(points.contains("data-v=\"2e1\""), "T_g = 20 at E* = 4");
+}
+
+#[test]
+fn show_at_names_the_branches_and_redraws_a_job_without_a_stored_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = prepared(dir.path());
+    let db = db.to_str().unwrap();
+    // Two branches at Gamma = 2, E* = 1: the first by point is shown, the other named.
+    let out = ok_stdout(&["show", "--db", db, "--at", "gamma=2.1,e_star=0.9"]);
+    let at = out.lines().find(|l| l.starts_with("at ")).unwrap();
+    assert_eq!(
+        at, "at          Gamma = 2, E* = 1, branch: hot start",
+        "{out}"
+    );
+    let also = out.lines().find(|l| l.starts_with("also near")).unwrap();
+    assert!(
+        also.contains("branch: continuation") || also.contains("continuation, replica 0"),
+        "{out}"
+    );
+    assert_eq!(also.matches(" replica ").count(), 1, "one other job: {out}");
+    // A text value picks the branch.
+    let out = ok_stdout(&[
+        "show",
+        "--db",
+        db,
+        "--at",
+        "gamma=2,e_star=1,initial.start=continuation",
+    ]);
+    assert!(
+        out.contains("at          Gamma = 2, E* = 1, branch: continuation\n"),
+        "{out}"
+    );
+    assert!(!out.contains("also near"), "{out}");
+    // No final state stored (these results carry none): the spec runs again, and says so.
+    let snap = dir.path().join("s.xyz");
+    let out = ok_stdout(&[
+        "show",
+        "--db",
+        db,
+        "--at",
+        "gamma=1,e_star=0.5",
+        "--snapshot",
+        snap.to_str().unwrap(),
+    ]);
+    assert!(out.contains("final state no stored one: re-run"), "{out}");
+    let xyz = std::fs::read_to_string(&snap).unwrap();
+    assert_eq!(xyz.lines().next(), Some("40"), "the tiny scene's 40 grains");
 }

@@ -1,5 +1,6 @@
-//! `wetgran show` (one stored point: phase, decision, profiles from the stored observables, a
-//! snapshot from re-running the stored spec) and `wetgran inflection` on a real database.
+//! `wetgran show` (one stored point, by job id or by `--at` coordinates: phase, decision
+//! summary, profiles and time series from the stored observables, a snapshot of the stored
+//! final state) and `wetgran inflection` on a real database.
 
 mod sweep_common;
 
@@ -55,23 +56,21 @@ fn show_redraws_a_stored_point_and_inflection_reads_the_lines() {
     let svg = dir.path().join("snap.svg");
     let xyz = dir.path().join("snap.xyz");
     let prof = dir.path().join("prof.svg");
+    let series = dir.path().join("series.svg");
     let show = wetgran()
         .args(["show", "--db", db_s, &id[..10]])
         .args(["--snapshot", svg.to_str().unwrap()])
         .args(["--snapshot", xyz.to_str().unwrap()])
         .args(["--profiles", prof.to_str().unwrap()])
+        .args(["--series", series.to_str().unwrap()])
         .output()
         .unwrap();
     let out = text(&show);
     assert!(show.status.success(), "{out}");
-    assert!(
-        out.contains(&format!("phase       {stored_phase}")),
-        "{out}"
-    );
-    assert!(out.contains("decided on"), "{out}");
-    // Same spec and seed, same numbers: the re-run is the stored run.
-    assert!(out.contains("reproduces the stored run"), "{out}");
+    check_summary(&out, &id, &stored_phase);
     assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+    check_series(dir.path(), &db, db_s, &id, &stored_phase, &series);
+    check_at(db_s);
     assert!(std::fs::read_to_string(&prof).unwrap().starts_with("<svg"));
     // Extended XYZ: the particle count, then one line per particle.
     let x = std::fs::read_to_string(&xyz).unwrap();
@@ -143,4 +142,170 @@ fn show_redraws_a_stored_point_and_inflection_reads_the_lines() {
         .find(|l| l.trim_start().starts_with("3.0000"))
         .unwrap_or_else(|| panic!("{out}"));
     assert_eq!(line.split_whitespace().nth(1), Some("5"), "{line}");
+}
+
+/// The time series figure of `show --series` (written to `series`) and the regions panel of a
+/// coexistence; `--series` refuses what is not SVG.
+fn check_series(
+    dir: &std::path::Path,
+    db: &std::path::Path,
+    db_s: &str,
+    id: &str,
+    stored_phase: &str,
+    series: &std::path::Path,
+) {
+    // The time series: three panels (a wet scene, homogeneous or not split: no regions panel
+    // unless its label is a coexistence), each time panel with the window and the ending
+    // marked; the temperature curve has one vertex per stored sample.
+    let fig = std::fs::read_to_string(series).unwrap();
+    let panels: Vec<&str> = fig
+        .match_indices("<g class=\"panel\" data-quantity=\"")
+        .map(|(k, m)| {
+            let rest = &fig[k + m.len()..];
+            &rest[..rest.find('"').unwrap()]
+        })
+        .collect();
+    let coexistence = stored_phase.len() == 3;
+    let mut expected = vec!["temperature", "bridges", "delta_n_cb"];
+    if coexistence {
+        expected.push("regions");
+    }
+    assert_eq!(panels, expected, "{fig}");
+    assert_eq!(fig.matches("class=\"window\"").count(), 3, "{fig}");
+    assert_eq!(fig.matches("class=\"ending\"").count(), 3, "{fig}");
+    assert!(fig.contains("ended at t = "), "{fig}");
+    let samples = fig.split("class=\"samples\" d=\"").nth(1).unwrap();
+    let vertices = samples[..samples.find('"').unwrap()]
+        .matches(['M', 'L'])
+        .count();
+    let ts = wetgran()
+        .args(["export", "--db", db_s, "--series"])
+        .arg(dir.join("series.csv"))
+        .output()
+        .unwrap();
+    assert!(ts.status.success(), "{}", text(&ts));
+    let long = std::fs::read_to_string(dir.join("series.csv")).unwrap();
+    let stored = long
+        .lines()
+        .filter(|l| l.starts_with(id) && l.contains(",obs.series.temperature_reduced,"))
+        .count();
+    assert!(stored > 10, "{long}");
+    assert_eq!(vertices, stored, "one vertex per stored sample");
+    // A coexistence adds its regions' panel: the members' and the other grains' temperatures,
+    // block means against block number (their tested histories' starts are not stored).
+    {
+        let store = wetgran::store::Store::open_existing(db).unwrap();
+        let sweep = store.sweep("line").unwrap();
+        let row = store
+            .points(sweep.id)
+            .unwrap()
+            .into_iter()
+            .find(|r| r.job_id == id)
+            .unwrap();
+        let mut obs = row.observables.clone().unwrap();
+        let test = |q: &str, means: [f64; 4]| {
+            serde_json::json!({"quantity": q, "mean": 1.0, "standard_error": 0.1,
+                "block_means": means, "block_errors": [0.1, 0.1, 0.1, 0.1],
+                "max_pair_sigmas": 1.0, "drift": 0.0, "drift_error": 0.1, "tolerance": 0.02,
+                "agree": true, "no_trend": true})
+        };
+        obs["trend"]["region_tests"] = serde_json::json!([
+            test("member_temperature", [0.2, 0.21, 0.19, 0.2]),
+            test("unbonded_temperature", [3.0, 3.1, 2.9, 3.0]),
+        ]);
+        let obs: wetgran_core::observe::Observables = serde_json::from_value(obs).unwrap();
+        let coexistence = wetgran::report::series_plot::series_svg(&obs, "t", Some("fgc"));
+        assert_eq!(coexistence.matches("<g class=\"panel\"").count(), 4);
+        let regions = &coexistence[coexistence.find("data-quantity=\"regions\"").unwrap()..];
+        for q in ["member_temperature", "unbonded_temperature"] {
+            let path = regions
+                .split(&format!("class=\"blocks\" data-quantity=\"{q}\" d=\""))
+                .nth(1)
+                .unwrap_or_else(|| panic!("no {q}: {regions}"));
+            // Four steps, each with its error bar.
+            assert_eq!(
+                path[..path.find('"').unwrap()].matches('M').count(),
+                8,
+                "{q}"
+            );
+        }
+        let homogeneous = wetgran::report::series_plot::series_svg(&obs, "t", Some("f"));
+        assert_eq!(homogeneous.matches("<g class=\"panel\"").count(), 3);
+    }
+    // Only SVG for now.
+    let pdf = wetgran()
+        .args(["show", "--db", db_s, &id[..10], "--series"])
+        .arg(dir.join("series.pdf"))
+        .output()
+        .unwrap();
+    assert_eq!(pdf.status.code(), Some(2), "{}", text(&pdf));
+}
+
+/// `show --at`: the nearest job in the axes' own scale, by names, keys and labels; unknown axes
+/// and a missing job refused.
+fn check_at(db_s: &str) {
+    // Found by its coordinates: E* = 0.5 lies nearer 0.721 than 0.3 on the log axis (on a
+    // linear one it would be 0.3); axis names, keys and labels all work.
+    for at in [
+        "gamma=3,e_star=0.5",
+        "Gamma=3.1,E*=0.5",
+        "drive.gamma=2.9,e_star=0.5",
+    ] {
+        let o = wetgran()
+            .args(["show", "--db", db_s, "--at", at])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{at}: {}", text(&o));
+        assert!(
+            text(&o).contains("at          Gamma = 3, E* = 0.721\n"),
+            "{at}: {}",
+            text(&o)
+        );
+    }
+    let unknown = wetgran()
+        .args(["show", "--db", db_s, "--at", "gama=3"])
+        .output()
+        .unwrap();
+    assert_eq!(unknown.status.code(), Some(2), "{}", text(&unknown));
+    assert!(
+        text(&unknown).contains("unknown axis `gama`")
+            && text(&unknown).contains("gamma (Gamma), e_star (E*)"),
+        "{}",
+        text(&unknown)
+    );
+    let neither = wetgran().args(["show", "--db", db_s]).output().unwrap();
+    assert_eq!(neither.status.code(), Some(2), "{}", text(&neither));
+}
+
+/// The text of `show JOB --snapshot ...`: the decision summary and the stored final state.
+fn check_summary(out: &str, id: &str, stored_phase: &str) {
+    assert!(out.starts_with(&format!("job         {id}")), "{out}");
+    // The phase line carries the verdict's mark after the label (none, `~` or `?`).
+    assert!(
+        out.lines().any(|l| l.starts_with("phase       ")
+            && l["phase       ".len()..].trim_end_matches(['~', '?']) == stored_phase),
+        "{out}"
+    );
+    // Labelled, rounded coordinates; one "decided by" line; the regions' table; no JSON.
+    assert!(out.contains("at          Gamma = 3, E* = "), "{out}");
+    assert_eq!(out.matches("decided by  ").count(), 1, "{out}");
+    let table = out
+        .lines()
+        .position(|l| l == "regions")
+        .unwrap_or_else(|| panic!("no regions table: {out}"));
+    let head: Vec<&str> = out
+        .lines()
+        .nth(table + 1)
+        .unwrap()
+        .split_whitespace()
+        .collect();
+    assert_eq!(&head[..3], ["region", "phase", "grains"], "{out}");
+    let whole = out.lines().nth(table + 2).unwrap();
+    assert!(whole.trim_start().starts_with("whole "), "{out}");
+    assert!(out.contains("\ntrend       "), "{out}");
+    assert!(out.contains("\nsettled     "), "{out}");
+    assert!(!out.contains('{'), "JSON in the text output: {out}");
+    // The snapshot is the stored final state, as the report's (no re-run).
+    assert!(out.contains("final state the stored one, t = "), "{out}");
+    assert!(!out.contains("re-run"), "{out}");
 }

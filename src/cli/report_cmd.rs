@@ -11,6 +11,8 @@ use crate::report::boundaries_text::fixed_text;
 use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
 use crate::report::lines_plot::lines_svg;
 use crate::report::plot_phase::{self, DrawnMap, MapStyle};
+use crate::report::point_text::series_title;
+use crate::report::series_plot::series_svg;
 use crate::report::site::{JobPictures, SiteInput, site};
 use crate::report::{ColourBy, profiles_svg, snapshot_svg};
 use crate::store::{Store, SweepRow};
@@ -277,9 +279,10 @@ pub(super) fn draw_map(
         .map_err(|e| Failure::BadInput(format!("sweep {}: {e}", escape(&sweep.name))))
 }
 
-/// The snapshot (from the stored final state) and profiles of each finished job.
+/// The snapshot (from the stored final state), profiles and time series of each finished job.
 fn pictures(
     store: &Store,
+    sweep: &crate::store::SweepRow,
     rows: &[crate::store::PointRow],
     snapshots: bool,
 ) -> Result<HashMap<String, JobPictures>, Failure> {
@@ -291,7 +294,11 @@ fn pictures(
             .as_ref()
             .and_then(|o| serde_json::from_value(o.clone()).ok());
         match &observables {
-            Some(o) => pics.profiles = Some(profiles_svg(o)),
+            Some(o) => {
+                pics.profiles = Some(profiles_svg(o));
+                let title = series_title(&sweep.name, &sweep.axes, r);
+                pics.series = Some(series_svg(o, &title, r.phase.as_deref()));
+            }
             None => pics
                 .notes
                 .push("No profiles: the stored observables are not readable.".to_string()),
@@ -358,7 +365,7 @@ pub(super) fn report(args: ReportArgs) -> Result<(), Failure> {
             .collect::<Result<Vec<String>, Failure>>()?;
         Some((all, per_gamma))
     };
-    let pictures = pictures(&store, &rows, !args.no_snapshots)?;
+    let pictures = pictures(&store, &sweep, &rows, !args.no_snapshots)?;
     let source = store.sweep_source(sweep.id)?;
     let input = SiteInput {
         sweep: &sweep,

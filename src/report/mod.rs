@@ -4,7 +4,7 @@
 //! prints: `run_text` (`simulate`), `sweep_text` (`sweep status`, `sweep estimate`, left-out
 //! points, refinements), `boundaries_text`, `cluster_text` (`sweep collect`, Slurm status),
 //! `point_text` (`show`, `inflection`). Pictures and exports: `snapshot` (extended XYZ, SVG),
-//! `profile_plot`, `plot_phase` (the phase map), `lines` and `lines_plot` (lines of constant
+//! `profile_plot`, `series_plot` (one run's time series), `plot_phase` (the phase map), `lines` and `lines_plot` (lines of constant
 //! Gamma), `site` (the HTML report), `export` (tidy CSV/JSON), `sensitivity` (how far each
 //! boundary moves with the thresholds, relabelled from the stored observables), with `trust`
 //! (the trust mark of a stored result), `chart` and `svg` (shared drawing helpers).
@@ -22,6 +22,7 @@ pub mod point_text;
 pub mod profile_plot;
 pub mod run_text;
 pub mod sensitivity;
+pub mod series_plot;
 pub mod site;
 pub mod snapshot;
 mod svg;

@@ -14,8 +14,9 @@
 //!   the command lines that reproduce the report;
 //! - `points/point-N.html`: one page per grid position (N: the lowest point index there; the
 //!   branches of an `initial.start` axis share a page): per job its facts (id, status, cost),
-//!   the decision section ([`decision_section`]: the label, its run state and the numbers it
-//!   was decided on), its snapshot (`points/JOB-snapshot.svg`, from the stored final state) and
+//!   the decision section ([`decision_section`]: the decision summary of `wetgran show`,
+//!   `point_text::decision_text`), its time series (`points/JOB-series.svg`, `series_plot`, as
+//!   `show --series` draws them), its snapshot (`points/JOB-snapshot.svg`, from the stored final state) and
 //!   lateral profiles (`points/JOB-profiles.svg`) side by side, and, folded away
 //!   (`<details>`), the stored decision and observables as JSON and the job's scene as TOML;
 //!   then the curves of its line of constant Gamma (`lines/gamma-K.svg`);
@@ -39,6 +40,8 @@ use wetgran_core::observe::criterion::DecidedBy;
 pub struct JobPictures {
     pub snapshot: Option<String>,
     pub profiles: Option<String>,
+    /// The time series (`series_plot`).
+    pub series: Option<String>,
     pub notes: Vec<String>,
 }
 
@@ -244,6 +247,9 @@ pub fn site(input: &SiteInput) -> Vec<(String, String)> {
                 }
                 if let Some(s) = &pics.profiles {
                     files.push((format!("points/{}-profiles.svg", j.job_id), s.clone()));
+                }
+                if let Some(s) = &pics.series {
+                    files.push((format!("points/{}-series.svg", j.job_id), s.clone()));
                 }
             }
         }
@@ -539,8 +545,7 @@ fn decision_section(j: &PointRow) -> String {
         return String::new();
     }
     format!(
-        "<section class=\"decision\">\n<h3>Label, run state and the numbers it was decided \
-         on</h3>\n<pre>{}</pre>\n</section>\n",
+        "<section class=\"decision\">\n<h3>Decision: label, criterion, regions, run state</h3>\n<pre>{}</pre>\n</section>\n",
         esc(&text.join("\n"))
     )
 }
@@ -626,6 +631,14 @@ fn point_page(input: &SiteInput, p: &Position, line_of_job: &HashMap<&str, usize
         }
         h.push_str(&decision_section(j));
         if let Some(pics) = input.pictures.get(&j.job_id) {
+            if pics.series.is_some() {
+                let _ = writeln!(
+                    h,
+                    "<h3>Time series: did it settle?</h3>\n<img src=\"{0}-series.svg\" \
+                     alt=\"time series of job {0}\">",
+                    j.job_id
+                );
+            }
             let mut figures = String::new();
             if pics.snapshot.is_some() {
                 let _ = writeln!(
@@ -656,7 +669,7 @@ fn point_page(input: &SiteInput, p: &Position, line_of_job: &HashMap<&str, usize
         let _ = writeln!(
             h,
             "<p class=\"note\">Again from the database: <code>wetgran show --db {} {} \
-             --snapshot snapshot.xyz --profiles profiles.svg</code></p>\n</section>",
+             --snapshot snapshot.xyz --profiles profiles.svg --series series.svg</code></p>\n</section>",
             esc(input.db),
             &j.job_id[..12.min(j.job_id.len())]
         );

@@ -246,7 +246,11 @@ fn reports(store: &Store) -> String {
     };
     let mut out = sweep_status_text(&input);
     for p in store.points(sweep.id).unwrap() {
-        out += &wetgran::report::point_text::job_text(&wetgran::terminal::escape(&sweep.name), &p);
+        out += &wetgran::report::point_text::job_text(
+            &wetgran::terminal::escape(&sweep.name),
+            &sweep.axes,
+            &p,
+        );
     }
     let how = wetgran::boundary::Extraction::default();
     let summaries = store.point_summaries(&sweep).unwrap();

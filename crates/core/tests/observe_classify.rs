@@ -401,6 +401,46 @@ fn legacy_results_use_the_legacy_threshold() {
     assert!(classify(&above, &th()).decided_on.split);
 }
 
+/// The reasons of a line's labels carry the numbers rounded (three significant digits), not the
+/// float noise of a grid (`Gamma = 0.49999999999999994`, `E* = 1.1943617542...`).
+#[test]
+fn line_reasons_round_their_numbers() {
+    let t = th();
+    let gamma = 0.1 * 5.0 - 1e-16 * 0.6; // 0.49999999999999994
+    assert_ne!(gamma, 0.5);
+    let e = |k: i32| 0.3 * 4.0f64.powf(k as f64 / 3.0);
+    let curve = [
+        (e(0), 0.3),
+        (e(1), 0.5),
+        (e(2), 0.8),
+        (e(3), 30.0),
+        (e(4), 60.0),
+    ];
+    let obs: Vec<Observables> = curve
+        .iter()
+        .map(|&(_, temp)| with_error(homogeneous(1.0, temp, 0.0), 0.01))
+        .collect();
+    let pts: Vec<(f64, &Observables)> = curve.iter().zip(&obs).map(|(c, o)| (c.0, o)).collect();
+    for c in classify_line(gamma, &pts, &t, true) {
+        let r = &c.decided_on.reason;
+        assert!(r.contains("line at Gamma = 0.5: "), "{r}");
+        assert!(!r.contains("0.4999") && !r.contains("1.19436"), "{r}");
+        // Every number in the line's part has at most four significant digits (p-values in
+        // scientific notation aside).
+        let line_part = &r[r.find("line at Gamma").unwrap()..];
+        for word in line_part
+            .split(|ch: char| !(ch.is_ascii_digit() || ch == '.' || ch == 'e' || ch == '-'))
+        {
+            if let Ok(x) = word.parse::<f64>()
+                && !word.contains('e')
+            {
+                let digits = word.trim_start_matches(['-', '0', '.']).replace('.', "");
+                assert!(digits.len() <= 4, "{word} in {r} ({x})");
+            }
+        }
+    }
+}
+
 /// Along a line of constant Gamma, fluid versus gas follows the jump of `T_g/E_cb(E*)`
 /// (elastic) or its inflection (inelastic), for every homogeneous point of the line, whatever
 /// the per-point threshold says; solid points do not make the jump.

@@ -246,7 +246,7 @@ fn the_curve_combines_replicas_and_says_where_its_errors_came_from() {
     assert!((c.y[2] - (3f64.ln() + 0.6)).abs() < 1e-12);
     assert!((c.sigma[2] - 0.6).abs() < 1e-12);
     assert_eq!(c.sigma[3], wetgran_core::observe::line::MIN_REL_ERROR);
-    assert!(c.errors.starts_with("errors from the runs' block errors"));
+    assert!(c.errors.starts_with("errors: each run's block error"));
     let bare: Vec<LinePoint> = (1..8).map(|k| p(k as f64, k as f64, None)).collect();
     let c = curve(&bare).unwrap();
     assert!(

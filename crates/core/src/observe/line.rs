@@ -56,6 +56,7 @@
 
 use super::Observables;
 use super::classify::{Classification, FluidGasFrom, Phase, Thresholds, classify, classify_with};
+use super::criterion::sig;
 use super::noise::{erfc, normal_cdf};
 use serde::{Deserialize, Serialize};
 
@@ -205,7 +206,7 @@ pub fn curve(points: &[LinePoint]) -> Result<Curve, String> {
         })
         .collect();
     let errors = match (missing, scatter) {
-        (0, _) => "errors from the runs' block errors (replicas: or their spread)".to_string(),
+        (0, _) => "errors: each run's block error, or the spread of its replicas".to_string(),
         (m, Some(s)) => format!(
             "no block errors stored for {m} of {} point(s): their error {s:.3} in ln(T_g/E_cb) \
              estimated from the line's scatter",
@@ -583,8 +584,11 @@ pub fn classify_line(
             } else {
                 "solid: kept out of the line's curve".to_string()
             };
-            c.decided_on.reason =
-                format!("{}; line at Gamma = {gamma}: {note}", c.decided_on.reason);
+            c.decided_on.reason = format!(
+                "{}; line at Gamma = {}: {note}",
+                c.decided_on.reason,
+                sig(gamma)
+            );
             c
         })
         .collect()
@@ -648,30 +652,32 @@ fn decide(
     };
     let fallback = t > th.gas_temperature;
     let per_point = format!(
-        "per-point fallback: T_g/E_cb = {t:.4} {} gas_temperature = {}",
+        "per-point fallback: T_g/E_cb = {} {} gas_temperature = {}",
+        sig(t),
         super::classify::above(t, th.gas_temperature),
-        th.gas_temperature
+        sig(th.gas_temperature)
     );
     let branch = |b: f64, level: f64, what: &str| -> (bool, String) {
+        let (es, bs, ts, ls) = (sig(e), sig(b), sig(t), sig(level));
         if e <= b {
             (
                 false,
-                format!("E* = {e} below the {what} boundary E* = {b:.4}: fluid side"),
+                format!("E* = {es} below the {what} boundary E* = {bs}: fluid side"),
             )
         } else if t >= level {
             (
                 true,
                 format!(
-                    "E* = {e} above the {what} boundary E* = {b:.4} and T_g/E_cb = {t:.4} on \
-                     the gas branch (>= {level:.4})"
+                    "E* = {es} above the {what} boundary E* = {bs} and T_g/E_cb = {ts} on the \
+                     gas branch (>= {ls})"
                 ),
             )
         } else {
             (
                 false,
                 format!(
-                    "E* = {e} above the {what} boundary E* = {b:.4}, but T_g/E_cb = {t:.4} \
-                     below the gas branch ({level:.4}): stays fluid"
+                    "E* = {es} above the {what} boundary E* = {bs}, but T_g/E_cb = {ts} below \
+                     the gas branch ({ls}): stays fluid"
                 ),
             )
         }
@@ -681,7 +687,11 @@ fn decide(
             let (gas, note) = branch(j.e_star, j.gas_temperature(e), "jump");
             let note = format!(
                 "{note}; the jump: ratio {:.2} between E* = {} and {}, p = {:.2e}; {}",
-                j.ratio, j.bracket.0, j.bracket.1, j.p_value, j.errors
+                j.ratio,
+                sig(j.bracket.0),
+                sig(j.bracket.1),
+                j.p_value,
+                j.errors
             );
             (gas, line("jump", j.e_star), note)
         }
@@ -690,7 +700,11 @@ fn decide(
             let note = format!(
                 "{note}; the inflection: between E* = {} and {}, power law p = {:.2e}, slopes p = \
                  {:.2e}; {}",
-                i.bracket.0, i.bracket.1, i.p_line, i.p_value, i.errors
+                sig(i.bracket.0),
+                sig(i.bracket.1),
+                i.p_line,
+                i.p_value,
+                i.errors
             );
             (gas, line("inflection", i.e_star), note)
         }
@@ -704,16 +718,20 @@ fn decide(
                 (
                     false,
                     format!(
-                        "below the line's fluid-gas coexistences (E* >= {lo}) and colder than \
-                         all of them (T_g/E_cb >= {tlo:.4}): fluid"
+                        "below the line's fluid-gas coexistences (E* >= {}) and colder than \
+                         all of them (T_g/E_cb >= {}): fluid",
+                        sig(*lo),
+                        sig(*tlo)
                     ),
                 )
             } else if e > *hi && t >= *thi {
                 (
                     true,
                     format!(
-                        "above the line's fluid-gas coexistences (E* <= {hi}) and hotter than \
-                         all of them (T_g/E_cb <= {thi:.4}): gas"
+                        "above the line's fluid-gas coexistences (E* <= {}) and hotter than \
+                         all of them (T_g/E_cb <= {}): gas",
+                        sig(*hi),
+                        sig(*thi)
                     ),
                 )
             } else {
