@@ -4,7 +4,7 @@
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
 use super::common::{
-    Failure, check_snapshot_names, print_json, select, show as show_text, write_file,
+    Failure, check_snapshot_names, note, print_json, show as show_text, write_file,
 };
 use crate::output::{Outputs, Protected};
 use crate::report::point_text::{
@@ -17,26 +17,49 @@ use clap::Args;
 use std::path::PathBuf;
 use wetgran_core::observe::{Observables, run_observed_with_frame};
 
-/// The stored job whose id starts with `prefix` (at least 6 characters), with its sweep's name.
-fn find_job(store: &Store, prefix: &str) -> Result<(String, PointRow), Failure> {
+/// The stored job whose id starts with `prefix` (at least 6 characters), with its sweep's name:
+/// of the sweeps that hold the job, the one `sweep` names, else the one registered or refined
+/// last (the rule of `common::latest_sweep`), named on stderr when several hold it.
+fn find_job(
+    store: &Store,
+    prefix: &str,
+    sweep: Option<&str>,
+) -> Result<(String, PointRow), Failure> {
     if prefix.len() < 6 || !prefix.chars().all(|c| c.is_ascii_hexdigit()) {
         return Err(Failure::BadInput(format!(
             "job `{prefix}`: give at least 6 hex digits of a job id (`wetgran export` lists them)"
         )));
     }
-    let names: std::collections::HashMap<i64, String> = store
-        .sweeps()?
-        .into_iter()
-        .map(|s| (s.id, s.name))
-        .collect();
-    let mut found: Vec<(String, PointRow)> = Vec::new();
+    let sweeps: std::collections::HashMap<i64, crate::store::SweepRow> =
+        store.sweeps()?.into_iter().map(|s| (s.id, s)).collect();
+    let wanted = sweep.map(|n| store.sweep(n)).transpose()?;
+    // Later is (updated_at, id) greater: the order of `common::latest_sweep`.
+    let when = |id: &i64| sweeps.get(id).map(|s| (s.updated_at, s.id));
+    let mut found: Vec<(i64, usize, PointRow)> = Vec::new();
     for (sweep_id, p) in store.points_with_job_prefix(prefix)? {
-        // A job shared by several sweeps is shown once, under the first.
-        if !found.iter().any(|(_, q)| q.job_id == p.job_id) {
-            let name = names.get(&sweep_id).cloned().unwrap_or_default();
-            found.push((name, p));
+        if wanted.as_ref().is_some_and(|w| w.id != sweep_id) {
+            continue;
+        }
+        match found.iter_mut().find(|(_, _, q)| q.job_id == p.job_id) {
+            None => found.push((sweep_id, 1, p)),
+            Some((id, holders, q)) => {
+                *holders += 1;
+                if when(&sweep_id) > when(id) {
+                    (*id, *q) = (sweep_id, p);
+                }
+            }
         }
     }
+    let name = |id: &i64| sweeps.get(id).map(|s| s.name.clone()).unwrap_or_default();
+    if let [(id, holders @ 2.., _)] = found.as_slice() {
+        note(&format!(
+            "job in {holders} sweeps: shown under sweep {} (registered or refined last; \
+             --sweep NAME takes another)",
+            escape(&name(id))
+        ));
+    }
+    let mut found: Vec<(String, PointRow)> =
+        found.into_iter().map(|(id, _, p)| (name(&id), p)).collect();
     match found.len() {
         1 => Ok(found.remove(0)),
         0 => Err(Failure::BadInput(format!(
@@ -56,6 +79,10 @@ pub struct ShowArgs {
     pub db: PathBuf,
     /// The job: at least 6 leading hex digits of its id (`wetgran export` lists ids).
     job: String,
+    /// Of the sweeps that hold the job, this one [default: the one registered (`sweep run`)
+    /// or refined last; named on standard error when several hold it].
+    #[arg(long)]
+    sweep: Option<String>,
     /// Write a snapshot of the final configuration (`.xyz` for OVITO, or `.svg`); repeatable.
     #[arg(long)]
     snapshot: Vec<PathBuf>,
@@ -86,7 +113,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
         outputs.claim("--profiles", p)?;
     }
     let store = Store::open_read_only(&a.db)?;
-    let (sweep, p) = find_job(&store, &a.job)?;
+    let (sweep, p) = find_job(&store, &a.job, a.sweep.as_deref())?;
     // With --json the lines below go to the object, printed at the end.
     let mut doc = json.then(|| job_json(&sweep, &p));
     let mut say = |key: &str, value: serde_json::Value, line: String| match doc.as_mut() {
@@ -171,7 +198,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
 pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
     let store = Store::open_read_only(&a.from.db)?;
     let mut all = Vec::new();
-    for s in select(&store, a.from.sweep.as_deref())? {
+    for s in a.from.select(&store)? {
         let lines = gamma_lines(&store.points(s.id)?);
         if a.json {
             all.push(inflection_json(&s.name, &lines));
@@ -188,7 +215,7 @@ pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
 #[derive(Debug, Args)]
 pub struct InflectionArgs {
     #[command(flatten)]
-    pub from: super::common::DbSweeps,
+    pub from: super::common::DbPick,
     /// Print JSON (an array, one object per sweep with its lines) instead of the table.
     #[arg(long)]
     json: bool,

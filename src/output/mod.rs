@@ -170,6 +170,17 @@ pub fn resolve(path: &Path) -> std::io::Result<PathBuf> {
     Err(std::io::Error::other("too many levels of symbolic links"))
 }
 
+/// The file an output `path` lands in ([`resolve`]: symbolic links followed), or `None` where
+/// it is written in place as a stream (a character device or a named pipe: `-o /dev/stdout` on
+/// a terminal or a pipe) or cannot be resolved. `export` puts its sidecar file beside it.
+pub fn file_target(path: &Path) -> Option<PathBuf> {
+    let target = resolve(path).ok()?;
+    match std::fs::metadata(&target) {
+        Ok(m) if !m.file_type().is_file() => None,
+        _ => Some(target),
+    }
+}
+
 /// The folder holding `path` (`.` for a bare file name).
 fn parent_of(path: &Path) -> PathBuf {
     match path.parent() {
