@@ -376,9 +376,9 @@ fn unconverged_jobs_are_counted_and_extended_from_their_checkpoints() {
     let o = run(&["sweep", "resume", "cool", "--db", db_s, "--extend", "16"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("extended 2 unconverged job(s)"),
+        stdout(&o).contains("extended 2 unconverged job(s)"),
         "{}",
-        stderr(&o)
+        both(&o)
     );
     let store = wetgran::store::Store::open_existing(&db).unwrap();
     let after = store.points(s.id).unwrap();
