@@ -323,3 +323,52 @@ fn export_carries_standard_errors_and_a_sidecar_of_the_system() {
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
+
+/// docs/cli.md names the panels of `--profiles` (issue 45: it named `f_lc` where the plot drew
+/// `D_lat`): the sentence lists exactly the panels `report::profiles_svg` draws for a run that
+/// observed everything.
+#[test]
+fn docs_cli_names_the_panels_that_profiles_draws() {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cli.md")).unwrap();
+    let flat = doc.split_whitespace().collect::<Vec<_>>().join(" ");
+    let from = flat
+        .find("`--profiles FILE.svg` the lateral profiles, one panel each:")
+        .expect("the --profiles sentence of docs/cli.md");
+    let sentence = &flat[from..from + flat[from..].find(". ").unwrap()];
+    let list = sentence.split_once("one panel each:").unwrap().1;
+    let mut named: Vec<String> = list
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(String::from)
+        .collect();
+    if list.contains("packing fraction") {
+        named.push("packing fraction".to_string());
+    }
+    let scene = wetgran_core::scene::Scene::from_toml_str(
+        "dimension = 2\n[box]\nsize = [24.0, 9.0]\n[particles]\ncount = 40\n\
+         polydispersity = 0.06\n[contact]\nrestitution = 0.9\n[capillary]\n\
+         model = \"thin_thread\"\n[drive]\nkind = \"sine\"\ngamma = 4.0\ne_star = 3.0\n\
+         [initial]\ntemperature_over_ecb = 20.0\nseed = 1\n[run]\nduration = 8.0\n\
+         [observe]\ntransient_periods = 1.0\nlocation_changes = true\n",
+        "profiles scene",
+    )
+    .unwrap();
+    let (run, _) =
+        wetgran_core::observe::run_observed_with_frame(&scene, &Default::default(), &mut |_| {});
+    let svg = wetgran::report::profiles_svg(&run.observables);
+    // Each panel has one frame; its title starts with the quantity's name.
+    let titles: Vec<&str> = svg
+        .split("<text")
+        .filter_map(|t| t.split_once('>').map(|(_, rest)| rest))
+        .filter_map(|t| t.split_once("</text>").map(|(title, _)| title))
+        .filter(|t| named.iter().any(|n| t.starts_with(n.as_str())))
+        .collect();
+    assert_eq!(svg.matches("<rect x=").count(), named.len(), "{named:?}: {svg}");
+    for n in &named {
+        assert!(
+            titles.iter().any(|t| t.starts_with(n.as_str())),
+            "docs/cli.md names `{n}`, the plot draws no such panel: {titles:?}"
+        );
+    }
+}
