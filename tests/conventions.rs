@@ -364,7 +364,11 @@ fn docs_cli_names_the_panels_that_profiles_draws() {
         .filter_map(|t| t.split_once("</text>").map(|(title, _)| title))
         .filter(|t| named.iter().any(|n| t.starts_with(n.as_str())))
         .collect();
-    assert_eq!(svg.matches("<rect x=").count(), named.len(), "{named:?}: {svg}");
+    assert_eq!(
+        svg.matches("<rect x=").count(),
+        named.len(),
+        "{named:?}: {svg}"
+    );
     for n in &named {
         assert!(
             titles.iter().any(|t| t.starts_with(n.as_str())),

@@ -521,7 +521,7 @@ fn a_damaged_checkpoint_is_reported_and_never_used() {
         "--jobs",
         "1",
     ]);
-    let log = stderr(&out);
+    let log = both(&out);
     // The other extensions are stored; the exit status says that one failed.
     assert_eq!(out.status.code(), Some(4), "{log}");
     assert!(
