@@ -8,9 +8,7 @@
 mod sweep_common;
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::Stdio;
 use sweep_common::*;
 
 /// A sweep of 2 x 3 jobs of the tiny wet system, `periods` driving periods each.
@@ -200,15 +198,12 @@ fn wetgran_db_gives_the_database_and_the_flag_wins() {
 /// Starts `sweep run` on one worker and returns it once `done` jobs were committed and the
 /// next one is running, with the stderr lines read so far.
 fn runner_midway(sweep: &Path, db: &Path, done: usize) -> (std::process::Child, String) {
-    let mut child = wetgran()
-        .args(["sweep", "run", sweep.to_str().unwrap(), "--db"])
-        .arg(db)
-        .args(["--jobs", "1"])
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let (child, mut lines) = spawn_merged(
+        wetgran()
+            .args(["sweep", "run", sweep.to_str().unwrap(), "--db"])
+            .arg(db)
+            .args(["--jobs", "1"]),
+    );
     let mut seen = String::new();
     let mut n = 0;
     while n < done {
@@ -273,15 +268,12 @@ fn ctrl_c_during_a_run_says_how_to_resume_and_exits_with_130() {
     let work = tempfile::tempdir().unwrap();
     let sweep = sweep_file(work.path(), "intr", 250);
     let db = work.path().join("w.sqlite");
-    let mut child = wetgran()
-        .args(["sweep", "run", sweep.to_str().unwrap(), "--db"])
-        .arg(&db)
-        .args(["--jobs", "1"])
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let (mut child, mut lines) = spawn_merged(
+        wetgran()
+            .args(["sweep", "run", sweep.to_str().unwrap(), "--db"])
+            .arg(&db)
+            .args(["--jobs", "1"]),
+    );
     let mut seen = String::new();
     while !seen.contains("] done ") {
         let line = lines

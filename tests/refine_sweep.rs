@@ -48,7 +48,7 @@ fn rows(db: &Path) -> Vec<(i64, i64, String, String)> {
 fn run_ok(args: &[&str]) -> String {
     let o = run(args);
     assert!(o.status.success(), "{args:?}: {}", stderr(&o));
-    stderr(&o)
+    both(&o)
 }
 
 #[test]

@@ -13,9 +13,8 @@
 mod store_inspect;
 mod sweep_common;
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
 use store_inspect::{Snapshot, StoredJob, integrity, snapshot};
 use sweep_common::*;
@@ -147,7 +146,7 @@ fn kept(before: &Snapshot, after: &Snapshot) {
     }
 }
 
-/// The job ids of the `] done ` lines of a runner's standard error (printed after the commit).
+/// The job ids of the `] done ` lines of a runner's output (printed after the commit).
 fn done_lines(text: &str) -> Vec<String> {
     text.lines()
         .filter(|l| l.contains("] done "))
@@ -314,7 +313,7 @@ fn a_full_disk_stops_the_run_by_name_and_loses_no_committed_result() {
     let file = sweep_file(dir.path(), "full");
     let db = mnt.join("full.sqlite");
     let o = run(&["sweep", "run", s(&file), "--db", s(&db), "--jobs", "1"]);
-    let e = stderr(&o);
+    let e = both(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(
         e.contains(&format!(
@@ -413,14 +412,11 @@ fn a_database_locked_past_the_busy_timeout_stops_the_run_by_name_and_loses_nothi
     let file = sweep_file(dir.path(), "locked");
     let db = dir.path().join("locked.sqlite");
     // A busy timeout of 1 s (default 30 s) keeps the test short.
-    let mut child = wetgran()
-        .args(["sweep", "run", s(&file), "--db", s(&db), "--jobs", "1"])
-        .env(wetgran::store::BUSY_TIMEOUT_VAR, "1")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let (mut child, mut lines) = spawn_merged(
+        wetgran()
+            .args(["sweep", "run", s(&file), "--db", s(&db), "--jobs", "1"])
+            .env(wetgran::store::BUSY_TIMEOUT_VAR, "1"),
+    );
     let mut seen = String::new();
     // After the second committed job, another program takes the write lock and keeps it.
     let mut done = 0;
@@ -525,7 +521,7 @@ fn a_damaged_checkpoint_is_reported_and_never_used() {
         "--jobs",
         "1",
     ]);
-    let log = stderr(&out);
+    let log = both(&out);
     // The other extensions are stored; the exit status says that one failed.
     assert_eq!(out.status.code(), Some(4), "{log}");
     assert!(

@@ -244,7 +244,7 @@ fn a_chain_whose_head_failed_fails_with_the_reason() {
         store.fail(&head, "injected failure", 0.0).unwrap();
     }
     let o = run(&["sweep", "resume", "c1", "--db", db_s, "--jobs", "1"]);
-    let err = stderr(&o);
+    let err = both(&o);
     assert!(err.contains("has no final state"), "{err}");
     let store = Store::open_existing(&db).unwrap();
     let s = store.sweep("c1").unwrap();

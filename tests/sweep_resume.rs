@@ -4,7 +4,6 @@
 
 mod sweep_common;
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
 use sweep_common::*;
@@ -30,14 +29,9 @@ fn a_sweep_killed_midway_resumes_without_recomputing_finished_jobs() {
     let sweep = tiny_sweep(dir.path(), "tiny", 2, "");
     let db = dir.path().join("w.sqlite");
     let (sweep_s, db_s) = (sweep.to_str().unwrap(), db.to_str().unwrap());
-    let mut child = wetgran()
-        .args(["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"])
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
-        .spawn()
-        .unwrap();
+    let (mut child, mut lines) =
+        spawn_merged(wetgran().args(["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"]));
     // A "done" line is printed after its job was committed: kill -9 after the third.
-    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
     let mut done = 0;
     let mut seen = String::new();
     while done < 3 {
@@ -138,8 +132,8 @@ fn two_runners_on_one_database_never_run_a_job_twice() {
     let spawn = || {
         wetgran()
             .args(["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"])
+            .stdout(Stdio::piped())
             .stderr(Stdio::piped())
-            .stdout(Stdio::null())
             .spawn()
             .unwrap()
     };
@@ -161,7 +155,7 @@ fn two_runners_on_one_database_never_run_a_job_twice() {
         .map(|p| p.result_owner.clone().unwrap())
         .collect();
     assert_eq!(owners.len(), 2, "both runners took jobs");
-    let lines = |o: &std::process::Output| stderr(o).matches("] done ").count();
+    let lines = |o: &std::process::Output| stdout(o).matches("] done ").count();
     assert_eq!(lines(&a) + lines(&b), 18);
 }
 
@@ -196,7 +190,7 @@ fn a_failing_job_is_recorded_and_the_sweep_goes_on() {
         stderr(&out)
     );
     assert_eq!(
-        stderr(&out).matches("FAILED").count(),
+        stdout(&out).matches("FAILED").count(),
         6,
         "{}",
         stderr(&out)

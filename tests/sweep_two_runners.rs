@@ -7,7 +7,6 @@
 mod sweep_common;
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Stdio;
 use sweep_common::*;
@@ -70,13 +69,13 @@ fn two_runners_one_killed_midway_every_job_done_once_none_lost() {
     let spawn = |args: &[&str]| {
         wetgran()
             .args(args)
+            .stdout(Stdio::piped())
             .stderr(Stdio::piped())
-            .stdout(Stdio::null())
             .spawn()
             .unwrap()
     };
     let run_args = ["sweep", "run", sweep_s, "--db", db_s, "--jobs", "1"];
-    let mut a = spawn(&run_args);
+    let (mut a, a_lines) = spawn_merged(wetgran().args(run_args));
     // B starts once A has registered the sweep (B registers it again, unchanged).
     let t0 = std::time::Instant::now();
     while Store::open_existing(&db)
@@ -90,7 +89,7 @@ fn two_runners_one_killed_midway_every_job_done_once_none_lost() {
     let b = spawn(&run_args);
 
     // Kill A with SIGKILL after its `kill_after`-th committed job.
-    let mut lines = BufReader::new(a.stderr.take().unwrap()).lines();
+    let mut lines = a_lines;
     let mut a_text = String::new();
     let mut a_done = 0;
     while a_done < kill_after {
@@ -116,7 +115,7 @@ fn two_runners_one_killed_midway_every_job_done_once_none_lost() {
     }
     let b = b.wait_with_output().unwrap();
     assert!(b.status.success(), "{}", stderr(&b));
-    let b_text = stderr(&b);
+    let b_text = both(&b);
 
     let store = Store::open_existing(&db).unwrap();
     let s = store.sweep("quick").unwrap();
@@ -133,7 +132,7 @@ fn two_runners_one_killed_midway_every_job_done_once_none_lost() {
     drop(store);
     let out = run(&["sweep", "resume", "--db", db_s, "--jobs", "1"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let r_text = stderr(&out);
+    let r_text = both(&out);
 
     let store = Store::open_existing(&db).unwrap();
     let points = store.points(s.id).unwrap();

@@ -20,7 +20,7 @@ use wetgran_core::sim::event_driven::table_cache::DEFAULT_TABLE_CACHE_MIB;
 /// Default database file, in the working directory.
 pub(super) const DEFAULT_DB: &str = "wetgran.sqlite";
 
-/// `--db` and `--sweep` of the commands that read one sweep or every sweep of a database.
+/// `--db` and `--sweep` of the commands that work on the whole database (`sweep collect`).
 #[derive(Debug, Args)]
 pub struct DbSweeps {
     /// Database file; also from WETGRAN_DB (the flag wins).
@@ -29,6 +29,76 @@ pub struct DbSweeps {
     /// Only this sweep (default: all).
     #[arg(long)]
     pub sweep: Option<String>,
+}
+
+/// The help of `--sweep` of the commands that read a sweep's results: the one rule by which
+/// they take a sweep (docs/cli.md, "Which sweep a command takes").
+pub(super) const SWEEP_HELP: &str = "The sweep [default: the one registered (`sweep run`) or \
+     refined last; named on standard error when the database holds several]";
+
+/// `--db`, `--sweep` and `--all-sweeps` of the commands that read sweeps' results and can
+/// combine several (`boundaries`, `export`, `inflection`): one sweep by the rule of
+/// [`latest_sweep`], or every sweep.
+#[derive(Debug, Args)]
+pub struct DbPick {
+    /// Database file; also from WETGRAN_DB (the flag wins).
+    #[arg(long, env = "WETGRAN_DB", default_value = DEFAULT_DB)]
+    pub db: PathBuf,
+    #[arg(long, help = SWEEP_HELP, conflicts_with = "all_sweeps")]
+    pub sweep: Option<String>,
+    /// Every sweep of the database, one after the other, instead of one.
+    #[arg(long)]
+    pub all_sweeps: bool,
+}
+
+impl DbPick {
+    /// The sweeps the command reads: `--sweep NAME`, every sweep with `--all-sweeps` (none in an
+    /// empty database), else the one registered or refined last ([`latest_sweep`]).
+    pub(super) fn select(&self, store: &Store) -> Result<Vec<SweepRow>, Failure> {
+        if self.all_sweeps {
+            return Ok(store.sweeps()?);
+        }
+        Ok(vec![latest_sweep(store, self.sweep.as_deref(), true)?])
+    }
+}
+
+/// The sweep a command reads (docs/cli.md, "Which sweep a command takes"): the one named, or
+/// else the one registered (`sweep run`) or refined last (`sweeps.updated_at`; the later
+/// registered of two at the same time), named on stderr when the database holds several. An
+/// empty database is refused.
+/// `combines`: the command also takes `--all-sweeps`, which the note then names.
+pub(super) fn latest_sweep(
+    store: &Store,
+    name: Option<&str>,
+    combines: bool,
+) -> Result<SweepRow, Failure> {
+    if let Some(n) = name {
+        return Ok(store.sweep(n)?);
+    }
+    let mut all = store.sweeps()?;
+    // Stable: among equal times the order of registration (`sweeps()` is by id) stays.
+    all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
+    let last = all.pop().ok_or_else(|| {
+        Failure::BadInput(format!(
+            "{}: no sweep in this database: start one with `wetgran sweep run FILE`",
+            store.path().display()
+        ))
+    })?;
+    if !all.is_empty() {
+        note(&format!(
+            "sweep {} (registered or refined last of the {} sweeps in {}; --sweep NAME takes \
+             another{})",
+            escape(&last.name),
+            all.len() + 1,
+            store.path().display(),
+            if combines {
+                ", --all-sweeps every one"
+            } else {
+                ""
+            }
+        ));
+    }
+    Ok(last)
 }
 
 /// Worker threads of the commands that run jobs (`sweep run`; `sweep resume` and `sweep refine`
@@ -337,14 +407,14 @@ pub(super) fn read_spec(path: &Path) -> Result<JobSpec, Failure> {
 }
 
 /// The line rule's labels (docs/model.md 7) over the lines of constant Gamma with new or
-/// extended results (after a run, an extension or a collection), with what changed on stderr:
+/// extended results (after a run, an extension or a collection), with what changed on stdout:
 /// without it a result kept its point's own label, where the same job in a whole run got its
 /// line's.
 pub(super) fn relabel_lines(store: &Store, row: &SweepRow) -> Result<(), Failure> {
     let relabelled = crate::run::relabel::relabel_changed(store, row)?;
     if relabelled.changed() > 0 {
-        note(&format!(
-            "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}",
+        show(&format!(
+            "sweep {}: labels along lines of constant Gamma (docs/model.md 7): {}\n",
             escape(&row.name),
             relabelled.text()
         ));
@@ -352,14 +422,9 @@ pub(super) fn relabel_lines(store: &Store, row: &SweepRow) -> Result<(), Failure
     Ok(())
 }
 
-/// Reports a refinement on stderr.
+/// Reports a refinement on stdout (a result, as the job lines are).
 pub(super) fn refinement_report(row: &SweepRow, o: &Outcome) {
-    note(&refinement_text(
-        &escape(&row.name),
-        o.added,
-        o.rounds,
-        o.resolved,
-    ));
+    show(&(refinement_text(&escape(&row.name), o.added, o.rounds, o.resolved) + "\n"));
 }
 
 /// After `sweep run` / `sweep resume`: continues the refinement of every given sweep whose file

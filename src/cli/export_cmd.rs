@@ -2,8 +2,8 @@
 //! written as the store reads the rows, with the series in a long-format file of numbers and
 //! their text entries in another.
 
-use super::common::DbSweeps;
-use super::common::{Failure, cannot_write, note, select};
+use super::common::DbPick;
+use super::common::{Failure, cannot_write, note};
 use crate::output::{AtomicFile, Outputs, Protected};
 use crate::report::export::{self, Columns, ExportRow, SeriesFile};
 use crate::store::Store;
@@ -21,7 +21,7 @@ pub(super) enum ExportFormat {
 #[derive(Debug, Args)]
 pub struct ExportArgs {
     #[command(flatten)]
-    pub from: DbSweeps,
+    pub from: DbPick,
     /// Write JSON (everything nested, the series included) instead of CSV.
     #[arg(long, conflicts_with = "format")]
     json: bool,
@@ -42,6 +42,31 @@ pub struct ExportArgs {
     /// Keep every scalar column, also those empty or the same in every row.
     #[arg(long)]
     all: bool,
+    /// Write the sidecar (JSON: the system's constants, the columns left out of the rows with
+    /// their values, the sweeps, wetgran's version) to this file [default: beside the -o file,
+    /// `FILE.meta.json`; none for standard output, a device or a pipe].
+    #[arg(long, value_name = "FILE")]
+    meta: Option<PathBuf>,
+}
+
+/// The suffix of the sidecar written beside an `-o` file (`results.csv.meta.json`).
+const META_SUFFIX: &str = ".meta.json";
+
+/// Where the sidecar goes: `--meta FILE`, else beside the file `-o` lands in (symbolic links
+/// followed, as the export follows them); none for standard output or an `-o` that is a
+/// device or a pipe (`-o /dev/stdout`), where no file is written beside it.
+fn meta_path(a: &ExportArgs) -> Option<PathBuf> {
+    if let Some(m) = &a.meta {
+        return Some(m.clone());
+    }
+    let out = a.output.as_deref()?;
+    let target = crate::output::file_target(out)?;
+    let linked = std::fs::symlink_metadata(out).is_ok_and(|m| m.file_type().is_symlink());
+    // Named as the user named the output, unless that is a link.
+    Some(crate::output::with_suffix(
+        if linked { &target } else { out },
+        META_SUFFIX,
+    ))
 }
 
 /// Starts writing the output `path` (whole or not at all: `output::AtomicFile`).
@@ -58,10 +83,12 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
         ));
     }
     let mut outputs = Outputs::new(Protected::database(&a.from.db));
+    let meta_path = meta_path(&a);
     for (flag, path) in [
         ("-o", a.output.as_deref()),
         ("--series", series_path),
         ("--text", text_path),
+        ("the sidecar (--meta)", meta_path.as_deref()),
     ] {
         if let Some(p) = path {
             outputs.claim(flag, p)?;
@@ -69,7 +96,7 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
     }
     let protected = outputs.protected();
     let store = Store::open_read_only(&a.from.db)?;
-    let sweeps = select(&store, a.from.sweep.as_deref())?;
+    let sweeps = a.from.select(&store)?;
     let ids: Vec<i64> = sweeps.iter().map(|s| s.id).collect();
     let output = a.output.as_deref();
     let out_name = output.map_or("standard output".to_string(), |p| p.display().to_string());
@@ -135,6 +162,23 @@ pub(super) fn export(a: ExportArgs) -> Result<(), Failure> {
     }
     for (w, _, _) in series_files {
         w.commit()?;
+    }
+    let names: Vec<String> = sweeps.iter().map(|s| s.name.clone()).collect();
+    match &meta_path {
+        Some(p) => {
+            let meta = columns.meta(&a.from.db.display().to_string(), &names);
+            let text = serde_json::to_string_pretty(&meta).expect("serializes") + "\n";
+            super::common::write_file(p, text, protected)?;
+            note(&format!(
+                "export: the system's constants and the columns left out are in {}",
+                p.display()
+            ));
+        }
+        None => note(
+            "export: no sidecar beside standard output or a stream: the system's constants \
+             left out of the rows are not written (--meta FILE writes them, --all keeps every \
+             column)",
+        ),
     }
     let left_out = columns.left_out();
     if left_out > 0 {

@@ -57,7 +57,7 @@ pub enum Command {
         #[command(subcommand)]
         action: JobCommand,
     },
-    /// Print the phase map of each sweep and its boundary points.
+    /// Print the phase map of a sweep and its boundary points (--all-sweeps: of each sweep).
     ///
     /// docs/model.md 7: the grid points (majority phase of their replicas) are Delaunay-triangulated
     /// in the (log E*, Gamma) plane and a boundary point is put at the midpoint of every edge
@@ -84,14 +84,18 @@ pub enum Command {
     /// E* along each line of constant Gamma of a sweep (docs/model.md 7), where it stands out
     /// of the line's scatter, else why there is none.
     Inflection(point_cmd::InflectionArgs),
-    /// Export all finished jobs in tidy form: one row per job, CSV or JSON with the same fields.
+    /// Export a sweep's finished jobs in tidy form: one row per job, CSV or JSON with the same
+    /// fields (--all-sweeps: every sweep's).
     ///
     /// For pandas, Julia and friends: the axis columns in the sweep's order, then
     /// sweep,point,replica,job_id, the container motion, phase, stationary, trend, trust and the
-    /// run's cost, then the scalar observables (`obs.`) and decision inputs (`decided_on.`) that
-    /// carry information: a column empty or the same in every row is left out unless --all. The
-    /// series (time series, profiles) go to --series FILE in long format, numbers only; their
-    /// text entries to --text FILE. docs/reports.md reads the database directly from pandas.
+    /// run's cost, then the scalar observables (`obs.`, each averaged one with its standard
+    /// error `obs.NAME_se` beside it), decision inputs (`decided_on.`) and the system's
+    /// constants (`sys.`) that carry information: a column empty or the same in every row is
+    /// left out unless --all, and written with its value to the sidecar FILE.meta.json beside
+    /// -o FILE (--meta elsewhere). The series (time series, profiles) go to --series FILE in
+    /// long format, numbers only; their text entries to --text FILE. docs/reports.md reads the
+    /// export and its sidecar from pandas.
     Export(export_cmd::ExportArgs),
     /// Plot the order parameters along each line of constant Gamma of a shaking sweep.
     ///

@@ -5,7 +5,7 @@
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
 use super::common::{
-    Failure, check_snapshot_names, print_json, select, show as show_text, write_file,
+    Failure, check_snapshot_names, latest_sweep, note, print_json, show as show_text, write_file,
 };
 use crate::boundary::START_AXIS;
 use crate::output::{Outputs, Protected};
@@ -23,8 +23,14 @@ use std::path::{Path, PathBuf};
 use wetgran_core::observe::{Observables, run_observed_with_frame};
 use wetgran_core::sim::Frame;
 
-/// The stored job whose id starts with `prefix` (at least 6 characters), with its sweep.
-fn find_job(store: &Store, prefix: &str) -> Result<(SweepRow, PointRow), Failure> {
+/// The stored job whose id starts with `prefix` (at least 6 characters), with its sweep:
+/// of the sweeps that hold the job, the one `sweep` names, else the one registered or refined
+/// last (the rule of `common::latest_sweep`), named on stderr when several hold it.
+fn find_job(
+    store: &Store,
+    prefix: &str,
+    sweep: Option<&str>,
+) -> Result<(SweepRow, PointRow), Failure> {
     if prefix.len() < 6 || !prefix.chars().all(|c| c.is_ascii_hexdigit()) {
         return Err(Failure::BadInput(format!(
             "job `{prefix}`: give at least 6 hex digits of a job id (`wetgran export` lists \
@@ -33,15 +39,36 @@ fn find_job(store: &Store, prefix: &str) -> Result<(SweepRow, PointRow), Failure
     }
     let sweeps: std::collections::HashMap<i64, SweepRow> =
         store.sweeps()?.into_iter().map(|s| (s.id, s)).collect();
-    let mut found: Vec<(SweepRow, PointRow)> = Vec::new();
+    let wanted = sweep.map(|n| store.sweep(n)).transpose()?;
+    // Later is (updated_at, id) greater: the order of `common::latest_sweep`.
+    let when = |id: &i64| sweeps.get(id).map(|s| (s.updated_at, s.id));
+    let mut found: Vec<(i64, usize, PointRow)> = Vec::new();
     for (sweep_id, p) in store.points_with_job_prefix(prefix)? {
-        // A job shared by several sweeps is shown once, under the first.
-        if !found.iter().any(|(_, q)| q.job_id == p.job_id)
-            && let Some(s) = sweeps.get(&sweep_id)
-        {
-            found.push((s.clone(), p));
+        if wanted.as_ref().is_some_and(|w| w.id != sweep_id) {
+            continue;
+        }
+        match found.iter_mut().find(|(_, _, q)| q.job_id == p.job_id) {
+            None => found.push((sweep_id, 1, p)),
+            Some((id, holders, q)) => {
+                *holders += 1;
+                if when(&sweep_id) > when(id) {
+                    (*id, *q) = (sweep_id, p);
+                }
+            }
         }
     }
+    let name = |id: &i64| sweeps.get(id).map(|s| s.name.clone()).unwrap_or_default();
+    if let [(id, holders @ 2.., _)] = found.as_slice() {
+        note(&format!(
+            "job in {holders} sweeps: shown under sweep {} (registered or refined last; \
+             --sweep NAME takes another)",
+            escape(&name(id))
+        ));
+    }
+    let mut found: Vec<(SweepRow, PointRow)> = found
+        .into_iter()
+        .filter_map(|(id, _, p)| Some((sweeps.get(&id)?.clone(), p)))
+        .collect();
     match found.len() {
         1 => Ok(found.remove(0)),
         0 => Err(Failure::BadInput(format!(
@@ -107,7 +134,8 @@ fn find_at(
     at: &str,
 ) -> Result<(SweepRow, PointRow, Vec<PointRow>), Failure> {
     let wanted = parse_at(at)?;
-    let sweeps = select(store, sweep)?;
+    // The one rule of every command: the sweep named, else the one registered or refined last.
+    let sweeps = vec![latest_sweep(store, sweep, false)?];
     let mut best: Option<(f64, SweepRow, Vec<PointRow>)> = None;
     let mut matching_sweeps = 0;
     for s in &sweeps {
@@ -270,8 +298,10 @@ pub struct ShowArgs {
     /// own scale (log where it is log).
     #[arg(long)]
     at: Option<String>,
-    /// With `--at`: search this sweep only.
-    #[arg(long, requires = "at")]
+    /// Of the sweeps that hold the job (or, with `--at`, the sweep searched), this one
+    /// [default: the one registered (`sweep run`) or refined last; named on standard error when
+    /// several hold it].
+    #[arg(long)]
     sweep: Option<String>,
     /// Write a snapshot of the stored final configuration (`.xyz` for OVITO, or `.svg`);
     /// repeatable.
@@ -363,7 +393,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     let store = Store::open_read_only(&a.db)?;
     let (sweep, p, others) = match (&a.job, &a.at) {
         (Some(job), _) => {
-            let (sweep, p) = find_job(&store, job)?;
+            let (sweep, p) = find_job(&store, job, a.sweep.as_deref())?;
             (sweep, p, Vec::new())
         }
         (None, Some(at)) => find_at(&store, a.sweep.as_deref(), at)?,
@@ -465,7 +495,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
 pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
     let store = Store::open_read_only(&a.from.db)?;
     let mut all = Vec::new();
-    for s in select(&store, a.from.sweep.as_deref())? {
+    for s in a.from.select(&store)? {
         let lines = gamma_lines(&store.points(s.id)?);
         if a.json {
             all.push(inflection_json(&s.name, &lines));
@@ -482,7 +512,7 @@ pub(super) fn inflection(a: InflectionArgs) -> Result<(), Failure> {
 #[derive(Debug, Args)]
 pub struct InflectionArgs {
     #[command(flatten)]
-    pub from: super::common::DbSweeps,
+    pub from: super::common::DbPick,
     /// Print JSON (an array, one object per sweep with its lines) instead of the table.
     #[arg(long)]
     json: bool,

@@ -16,8 +16,7 @@ use std::path::PathBuf;
      cores (default: all of them)"
 )))]
 pub struct RefineArgs {
-    /// The sweep (default: the only one in the database).
-    #[arg(long)]
+    #[arg(long, help = super::common::SWEEP_HELP)]
     sweep: Option<String>,
     /// Database file; also from WETGRAN_DB (the flag wins).
     #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
@@ -45,20 +44,7 @@ pub struct RefineArgs {
 pub(super) fn refine(over: RefineArgs) -> Result<(), Failure> {
     let (opts, db) = (over.workers.options()?, &over.db);
     let store = Store::open_existing(db)?;
-    let row = match &over.sweep {
-        Some(n) => store.sweep(n)?,
-        None => {
-            let mut all = store.sweeps()?;
-            if all.len() != 1 {
-                return Err(Failure::BadInput(format!(
-                    "{}: {} sweeps in this database: name one with --sweep",
-                    db.display(),
-                    all.len()
-                )));
-            }
-            all.remove(0)
-        }
-    };
+    let row = super::common::latest_sweep(&store, over.sweep.as_deref(), false)?;
     super::interrupt::resume_hint_on_interrupt(Some(&row.name), db);
     let file = registered_file(&store, &row)?;
     let section = file.refine;

@@ -50,35 +50,16 @@ pub struct DbLatest {
     /// Database file; also from WETGRAN_DB (the flag wins).
     #[arg(long, env = "WETGRAN_DB", default_value = super::common::DEFAULT_DB)]
     pub db: PathBuf,
-    /// The sweep (default: the one registered or updated last).
-    #[arg(long)]
+    #[arg(long, help = super::common::SWEEP_HELP)]
     sweep: Option<String>,
 }
 
 impl DbLatest {
-    /// The database, read only, and the sweep `--sweep`, or the one registered or updated last
-    /// (said on stderr when there are several).
+    /// The database, read only, and its sweep by the rule of `common::latest_sweep`.
     fn open(&self) -> Result<(Store, SweepRow), Failure> {
         let store = Store::open_read_only(&self.db)?;
-        if let Some(n) = &self.sweep {
-            let sweep = store.sweep(n)?;
-            return Ok((store, sweep));
-        }
-        let mut all = store.sweeps()?;
-        all.sort_by(|a, b| a.updated_at.total_cmp(&b.updated_at));
-        let last = all.pop().ok_or_else(|| {
-            Failure::BadInput(format!(
-                "{}: no sweep in this database",
-                store.path().display()
-            ))
-        })?;
-        if !all.is_empty() {
-            note(&format!(
-                "sweep {} (the latest; choose with --sweep)",
-                escape(&last.name)
-            ));
-        }
-        Ok((store, last))
+        let sweep = super::common::latest_sweep(&store, self.sweep.as_deref(), false)?;
+        Ok((store, sweep))
     }
 }
 

@@ -208,8 +208,8 @@ pub(super) fn sweep_run(a: RunArgs, hooks: &super::Hooks) -> Result<(), Failure>
     // Results shared with an earlier registration get this file's `[classify]` thresholds.
     let relabelled = crate::run::relabel::relabel_stored(&store, std::slice::from_ref(&row), None)?;
     if relabelled.changed() > 0 {
-        note(&format!(
-            "sweep {}: {}",
+        show(&format!(
+            "sweep {}: {}\n",
             escape(&row.name),
             relabelled.text()
         ));
@@ -284,7 +284,7 @@ fn extend_and_report(
         )));
     }
     let s = extend_unconverged(store, sweeps, cap, opts)?;
-    eprint!(
+    print!(
         "{}",
         escape_lines(&extended_text(
             s.extended,
@@ -316,7 +316,8 @@ fn run_and_report(
         ..opts.clone()
     };
     let summary = run_sweeps(store, sweeps, &opts)?;
-    eprintln!(
+    // A result, on stdout with the job lines (`run::progress`).
+    println!(
         "finished: {} job(s) done, {} failed{} in {:.1} s",
         summary.done,
         summary.failed,
@@ -530,7 +531,7 @@ pub(super) fn sweep_map(
 #[derive(Debug, Args)]
 pub struct BoundariesArgs {
     #[command(flatten)]
-    pub from: DbSweeps,
+    pub from: super::common::DbPick,
     /// Print JSON (every sweep's map: points, labels, boundaries) instead of the table.
     #[arg(long, conflicts_with = "format")]
     json: bool,
@@ -553,7 +554,7 @@ pub(super) fn boundaries(a: BoundariesArgs) -> Result<(), Failure> {
         include_unconverged: a.include_unconverged,
     };
     let store = Store::open_read_only(&a.from.db)?;
-    let sweeps = select(&store, a.from.sweep.as_deref())?;
+    let sweeps = a.from.select(&store)?;
     let format = if a.json {
         BoundaryFormat::Json
     } else {

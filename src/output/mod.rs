@@ -170,6 +170,21 @@ pub fn resolve(path: &Path) -> std::io::Result<PathBuf> {
     Err(std::io::Error::other("too many levels of symbolic links"))
 }
 
+/// The file an output `path` lands in ([`resolve`]: symbolic links followed), or `None` where
+/// it is written in place as a stream (a character device or a named pipe: `-o /dev/stdout` on
+/// a terminal or a pipe) or cannot be resolved. `export` puts its sidecar file beside it.
+pub fn file_target(path: &Path) -> Option<PathBuf> {
+    // The kernel follows the path itself (a `/proc/self/fd` link to a pipe has no name to
+    // resolve); only a file or a name not there yet lands in a file.
+    match std::fs::metadata(path) {
+        Ok(m) if !m.file_type().is_file() => return None,
+        Ok(_) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(_) => return None,
+    }
+    resolve(path).ok()
+}
+
 /// The folder holding `path` (`.` for a bare file name).
 fn parent_of(path: &Path) -> PathBuf {
     match path.parent() {
@@ -189,6 +204,13 @@ enum Target {
 /// Checks an output path against `protected` (module doc) and says how it is written.
 fn check(out: &Path, protected: &Protected) -> Result<(PathBuf, Target), OutputError> {
     let refuse = |why: String| OutputError::Refused(format!("{}: {why}", out.display()));
+    // A stream as the kernel opens it: `/dev/stdout` is a `/proc/self/fd` link whose target
+    // (`pipe:[N]`) names no file, so it cannot be resolved by name; it is written in place.
+    if std::fs::metadata(out)
+        .is_ok_and(|m| m.file_type().is_char_device() || m.file_type().is_fifo())
+    {
+        return Ok((out.to_path_buf(), Target::Stream));
+    }
     let target = resolve(out).map_err(|e| match e.kind() {
         std::io::ErrorKind::NotFound => refuse(format!(
             "the folder {} does not exist",

@@ -14,6 +14,21 @@
 //! empty value is a missing number); the text and true/false entries of those arrays (the names
 //! of the monitored quantities, the checks' verdicts) go to their own file of the same shape.
 //!
+//! Standard errors (issue 45): every averaged observable whose run stores an error gets a
+//! column `NAME_se` beside it ([`STANDARD_ERRORS`]): the block standard error of the window mean
+//! from the run's trend test (`trend.tests[].standard_error` of the monitored quantity:
+//! `temperature_reduced`, `bridges_per_particle`, `delta_n_cb`, `e_par`); for a contrast
+//! `Delta n` without a block test, `sqrt(2)` times the root mean square of its bins' standard
+//! errors (`profiles.n_cb_standard_error`, `profiles.packing_standard_error`), the error of a
+//! difference of two bins, as `wetgran lines` takes it. A row without either has an empty cell
+//! (JSON `null`). An `_se` column is kept exactly when its observable's column is.
+//!
+//! The system (issue 45): each row's constants of the scene (`sys.` columns: `N`, the box,
+//! `eps`, `E_cb`, `s_crit`, diameter, mass, gravity, [`system_of`]) go through the same rule as
+//! the observables, so a constant one is left out of the rows; [`Columns::meta`] is the sidecar
+//! file that says what the rows do not: those constants with their values, every other column
+//! left out as constant (with its value) or empty, the sweeps and wetgran's version.
+//!
 //! Streaming (issue 35): the export is written row by row as the store reads it
 //! (`Store::scan_points`, a page of rows at a time), so its memory does not grow with the number
 //! of results. Which columns carry information is known only after every row, so the export
@@ -22,9 +37,11 @@
 //! is a few hundred columns whatever the number of rows.
 
 use crate::store::{PointRow, SweepRow};
-use serde_json::Value;
+use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::io::Write;
+use wetgran_core::observe::trend;
+use wetgran_core::scene::Scene;
 
 /// One finished job.
 #[derive(Debug, Clone)]
@@ -36,6 +53,8 @@ pub struct ExportRow {
     pub fixed: [Value; FIXED.len()],
     pub decided_on: Option<Value>,
     pub observables: Value,
+    /// The scene's constants ([`system_of`]), a JSON object.
+    pub system: Value,
 }
 
 impl ExportRow {
@@ -77,8 +96,89 @@ impl ExportRow {
             ],
             decided_on: p.decided_on.clone(),
             observables: p.observables.clone().unwrap_or(Value::Null),
+            system: system_of(&p.spec.scene),
         })
     }
+}
+
+/// The constants of a scene that say what system a row is (the `sys.` columns, module doc):
+/// `dimension`, `N` (`particles.count`), `box.0`, `box.1` (, `box.2`) (`box.size`, in `d`),
+/// `diameter`, `polydispersity`, `mass`, `gravity`, `eps` and `eps_wall`
+/// (`contact.restitution`, `contact.wall_restitution`), the capillary model, and for a wet
+/// scene `E_cb` and `s_crit` with their defaults filled in (empty for a dry one).
+pub fn system_of(scene: &Scene) -> Value {
+    let mut m = serde_json::Map::new();
+    m.insert("dimension".into(), scene.dimension.into());
+    m.insert("N".into(), scene.particles.count.into());
+    for (k, l) in scene.container.size.iter().enumerate() {
+        m.insert(format!("box.{k}"), (*l).into());
+    }
+    m.insert("diameter".into(), scene.particles.diameter.into());
+    m.insert(
+        "polydispersity".into(),
+        scene.particles.polydispersity.into(),
+    );
+    m.insert("mass".into(), scene.particles.mass.into());
+    m.insert("gravity".into(), scene.gravity.into());
+    m.insert("eps".into(), scene.contact.restitution.into());
+    m.insert("eps_wall".into(), scene.contact.wall_restitution.into());
+    m.insert(
+        "capillary".into(),
+        serde_json::to_value(scene.capillary.model).unwrap_or(Value::Null),
+    );
+    let wet = scene.is_wet();
+    m.insert("E_cb".into(), wet.then(|| scene.e_cb()).into());
+    m.insert("s_crit".into(), wet.then(|| scene.s_crit()).into());
+    Value::Object(m)
+}
+
+/// The suffix of a standard-error column (`obs.bridges_per_particle_se`).
+pub const SE_SUFFIX: &str = "_se";
+
+/// The averaged observables exported with a standard error (module doc): the column, the
+/// monitored quantity of the trend test whose block standard error it takes, and the profile's
+/// root-mean-square bin error (a JSON pointer into the observables) whose `sqrt(2)` multiple
+/// stands in where the run stored no block test of it.
+pub const STANDARD_ERRORS: [(&str, Option<&str>, Option<&str>); 5] = [
+    (
+        "obs.granular_temperature_reduced",
+        Some(trend::TEMPERATURE),
+        None,
+    ),
+    ("obs.bridges_per_particle", Some(trend::BRIDGES), None),
+    (
+        "obs.profiles.delta_n_cb",
+        Some(trend::DELTA_N_CB),
+        Some("/profiles/n_cb_standard_error"),
+    ),
+    (
+        "obs.profiles.delta_n_area",
+        None,
+        Some("/profiles/packing_standard_error"),
+    ),
+    ("obs.shear.e_par", Some(trend::E_PAR), None),
+];
+
+/// The standard error of one of [`STANDARD_ERRORS`] in `observables`, `None` where the run
+/// stored neither source (or a non-finite one).
+fn standard_error(observables: &Value, block: Option<&str>, bins: Option<&str>) -> Option<f64> {
+    let finite = |x: Option<f64>| x.filter(|e| e.is_finite());
+    let from_block = block
+        .and_then(|q| super::lines::block_test(observables, q))
+        .and_then(|t| finite(t["standard_error"].as_f64()));
+    from_block.or_else(|| {
+        let e = finite(bins.and_then(|p| observables.pointer(p)?.as_f64()))?;
+        Some(std::f64::consts::SQRT_2 * e)
+    })
+}
+
+/// The observable column a standard-error column belongs to.
+fn se_base(column: &str) -> Option<&'static str> {
+    let base = column.strip_suffix(SE_SUFFIX)?;
+    STANDARD_ERRORS
+        .iter()
+        .map(|(c, _, _)| *c)
+        .find(|c| *c == base)
 }
 
 /// The columns every row has, after the axis columns: the container motion of a shaken scene
@@ -184,9 +284,16 @@ pub fn scalars_and_series(r: &ExportRow) -> (BTreeMap<String, Value>, Vec<Series
     let mut m = BTreeMap::new();
     let mut series = Vec::new();
     flatten("obs", &r.observables, &mut m, Some(&mut series));
+    for (column, block, bins) in STANDARD_ERRORS {
+        if m.contains_key(column) {
+            let se = standard_error(&r.observables, block, bins);
+            m.insert(format!("{column}{SE_SUFFIX}"), se.into());
+        }
+    }
     if let Some(d) = &r.decided_on {
         flatten("decided_on", d, &mut m, Some(&mut series));
     }
+    flatten("sys", &r.system, &mut m, None);
     (m, series)
 }
 
@@ -289,16 +396,82 @@ impl Columns {
     /// The scalar columns written: all, or those with a value somewhere that differs between
     /// rows (a value in some rows only differs from the empty ones); with one row, every
     /// column with a value.
+    /// A standard-error column goes with its observable's.
     fn kept(&self) -> Vec<String> {
         self.seen
-            .iter()
-            .filter(|(_, c)| {
-                self.all
-                    || c.as_ref()
-                        .is_some_and(|c| self.rows < 2 || c.varies || c.filled < self.rows)
+            .keys()
+            .filter(|k| match se_base(k) {
+                Some(base) => self.carries(base),
+                None => self.carries(k),
             })
-            .map(|(k, _)| k.clone())
+            .cloned()
             .collect()
+    }
+
+    /// Whether the column `k` carries information (or `--all` keeps everything).
+    fn carries(&self, k: &str) -> bool {
+        self.all
+            || self.seen.get(k).is_some_and(|c| {
+                c.as_ref()
+                    .is_some_and(|c| self.rows < 2 || c.varies || c.filled < self.rows)
+            })
+    }
+
+    /// The value of a column that holds the same value in every row (after the first pass).
+    fn constant(&self, k: &str) -> Option<&Value> {
+        match self.seen.get(k)? {
+            Some(c) if !c.varies && c.filled == self.rows => Some(&c.first),
+            _ => None,
+        }
+    }
+
+    /// The sidecar of the export (module doc), after the first pass: wetgran's version, the
+    /// database and the sweeps, the rows, the system's constants (`system`: every `sys.` column
+    /// with one value in every row, by its name without the prefix; `system_columns`: those
+    /// that vary, which the rows hold), the other columns left out of the rows (`constant`:
+    /// name and value; `empty`), and the rule of the `_se` columns.
+    pub fn meta(&self, database: &str, sweeps: &[String]) -> Value {
+        let kept = self.kept();
+        let mut system = serde_json::Map::new();
+        let mut system_columns = Vec::new();
+        let mut constant = serde_json::Map::new();
+        let mut empty = Vec::new();
+        for k in self.seen.keys() {
+            if let Some(name) = k.strip_prefix("sys.") {
+                match (self.constant(k), &self.seen[k]) {
+                    (Some(v), _) => {
+                        system.insert(name.to_string(), v.clone());
+                    }
+                    // Empty in every row (a dry scene's E_cb).
+                    (None, None) => {
+                        system.insert(name.to_string(), Value::Null);
+                    }
+                    (None, Some(_)) => system_columns.push(k.clone()),
+                }
+            } else if !kept.contains(k) {
+                match self.constant(k) {
+                    Some(v) => {
+                        constant.insert(k.clone(), v.clone());
+                    }
+                    None => empty.push(k.clone()),
+                }
+            }
+        }
+        json!({
+            "wetgran_version": env!("CARGO_PKG_VERSION"),
+            "database": database,
+            "sweeps": sweeps,
+            "rows": self.rows,
+            "units": "docs/model.md 1.1: lengths in d, masses in m, accelerations in g; times in \
+                sqrt(d/g), energies in m g d",
+            "system": system,
+            "system_columns": system_columns,
+            "constant": constant,
+            "empty": empty,
+            "standard_errors": "COLUMN_se: the block standard error of the window mean (trend \
+                test); for a Delta n without one, sqrt(2) x the rms of its bins' standard \
+                errors; empty where the run stored neither",
+        })
     }
 
     /// The scalar columns left out (empty or constant), for a note.
@@ -458,6 +631,7 @@ mod tests {
             ],
             decided_on: Some(json!({"reason": "line one\nline \"two\"", "t": [1, 2]})),
             observables: obs,
+            system: json!({"N": 300, "E_cb": 0.2844, "box.0": 100.0}),
         }
     }
 
@@ -502,7 +676,8 @@ mod tests {
         // always empty, decided_on.reason constant: left out.
         let extra: Vec<&str> = header[2 + FIXED.len()..].to_vec();
         assert_eq!(extra, ["obs.some", "obs.t"], "{header:?}");
-        assert_eq!(columns.left_out(), 3);
+        // ... and the system's constants, the same in both rows.
+        assert_eq!(columns.left_out(), 6);
         let (_, all, _) = export(&rows, true);
         let header: Vec<&str> = all.lines().next().unwrap().split(',').collect();
         for c in ["obs.unit", "obs.gone", "decided_on.reason", "obs.t"] {
@@ -511,6 +686,77 @@ mod tests {
         // One row: every column with a value stays (nothing to compare with).
         let (_, one, _) = export(&rows[..1], false);
         assert!(one.lines().next().unwrap().contains("obs.unit"), "{one}");
+    }
+
+    #[test]
+    fn standard_errors_sit_beside_their_observables() {
+        let obs = |t: f64, b: f64, se_t: f64| {
+            json!({"granular_temperature_reduced": t, "bridges_per_particle": b,
+                "profiles": {"delta_n_cb": 0.5 * t, "n_cb_standard_error": 0.1, "delta_n_area": 1.0},
+                "trend": {"tests": [{"quantity": "temperature_reduced", "standard_error": se_t}]}})
+        };
+        let rows = vec![
+            row("a", 0.5, obs(1.0, 2.0, 0.25)),
+            row("b", 2.0, obs(3.0, 4.0, 0.5)),
+        ];
+        let (_, csv, json) = export(&rows, false);
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let at = |c: &str| header.iter().position(|h| *h == c);
+        for base in [
+            "obs.granular_temperature_reduced",
+            "obs.bridges_per_particle",
+            "obs.profiles.delta_n_cb",
+        ] {
+            let k = at(base).unwrap_or_else(|| panic!("{base}: {header:?}"));
+            assert_eq!(header[k + 1], format!("{base}_se"), "{header:?}");
+        }
+        // Delta n_area is the same in both rows: left out, and its error with it.
+        assert_eq!(at("obs.profiles.delta_n_area"), None, "{header:?}");
+        assert_eq!(at("obs.profiles.delta_n_area_se"), None, "{header:?}");
+        let v: Vec<serde_json::Map<String, Value>> = serde_json::from_str(&json).unwrap();
+        // From the block test; from the bins (sqrt(2) x 0.1); none stored: null.
+        assert_eq!(v[1]["obs.granular_temperature_reduced_se"], json!(0.5));
+        let se_cb = v[0]["obs.profiles.delta_n_cb_se"].as_f64().unwrap();
+        assert!(
+            (se_cb - 0.1 * std::f64::consts::SQRT_2).abs() < 1e-15,
+            "{se_cb}"
+        );
+        assert_eq!(v[0]["obs.bridges_per_particle_se"], Value::Null);
+        // The CSV cell of a missing error is empty.
+        let line: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+        assert_eq!(line[at("obs.bridges_per_particle_se").unwrap()], "");
+        assert_eq!(
+            line[at("obs.granular_temperature_reduced_se").unwrap()],
+            "0.25"
+        );
+    }
+
+    #[test]
+    fn the_meta_names_the_system_and_what_the_rows_leave_out() {
+        let mut rows = vec![
+            row("a", 0.5, json!({"t": 1.0, "unit": "E_cb", "gone": null})),
+            row("b", 2.0, json!({"t": 2.5, "unit": "E_cb", "gone": null})),
+        ];
+        rows[1].system = json!({"N": 600, "E_cb": 0.2844, "box.0": 100.0});
+        let (columns, csv, _) = export(&rows, false);
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let meta = columns.meta("w.sqlite", &["s".to_string()]);
+        // The constants are in the meta, not in the rows; N varies: a column, named there.
+        assert_eq!(meta["system"], json!({"E_cb": 0.2844, "box.0": 100.0}));
+        assert_eq!(meta["system_columns"], json!(["sys.N"]));
+        assert!(
+            header.contains(&"sys.N") && !header.contains(&"sys.E_cb"),
+            "{header:?}"
+        );
+        assert_eq!(meta["constant"]["obs.unit"], json!("E_cb"));
+        assert_eq!(
+            meta["constant"]["decided_on.reason"],
+            json!("line one\nline \"two\"")
+        );
+        assert_eq!(meta["empty"], json!(["obs.gone"]));
+        assert_eq!(meta["sweeps"], json!(["s"]));
+        assert_eq!(meta["rows"], json!(2));
+        assert_eq!(meta["wetgran_version"], json!(env!("CARGO_PKG_VERSION")));
     }
 
     #[test]

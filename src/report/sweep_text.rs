@@ -234,11 +234,17 @@ pub fn sweep_status_text(input: &StatusInput) -> String {
     }
     let (unconverged, checked) = crate::store::unconverged_summaries(points);
     if checked > 0 {
+        // The hint to extend only where a run stopped at its cap (issue 45).
+        let hint = if unconverged > 0 {
+            " (`sweep resume --extend` runs those further; the trend and trust lines say whether \
+             a label may still change)"
+        } else {
+            ""
+        };
         let _ = writeln!(
             out,
             "  run end  {} of {checked} result(s) passed the run policy's convergence test, \
-             {unconverged} stopped at its cap (`sweep resume --extend` runs those further; the \
-             trend and trust lines say whether a label may still change)",
+             {unconverged} stopped at its cap{hint}",
             checked - unconverged
         );
     }
@@ -356,7 +362,8 @@ pub fn estimate_failed_text(coords: &str, error: &str) -> String {
 }
 
 /// The closing lines of `sweep estimate`: what the stored results say, then per assumption on
-/// the run lengths the CPU time and the wall time on the cores, of the whole sweep and of what
+/// the run lengths the job time (the jobs' wall times summed: a job on several threads uses
+/// more CPU) and the wall time on the cores, of the whole sweep and of what
 /// is left to run.
 pub fn estimate_text(
     jobs: usize,
@@ -388,8 +395,9 @@ pub fn estimate_text(
     for (k, (label, whole, left)) in lines.iter().enumerate() {
         let _ = write!(
             out,
-            "  {label}:\n    {} of CPU, {} wall (longest job {})",
-            duration_text(whole.cpu_seconds),
+            "  {label}:\n    {} of job time (the jobs' wall times summed), {} wall (longest \
+             job {})",
+            duration_text(whole.job_seconds),
             duration_text(whole.wall_seconds),
             duration_text(whole.longest_job)
         );
@@ -397,15 +405,15 @@ pub fn estimate_text(
             let _ = write!(out, "; left: {} wall", duration_text(left.wall_seconds));
         }
         out.push('\n');
-        // A sweep of several starts (hot and cold branch): the CPU time of each.
+        // A sweep of several starts (hot and cold branch): the job time of each.
         if let Some(split) = by_start.get(k).filter(|s| s.len() > 1) {
             let parts: Vec<String> = split
                 .iter()
-                .map(|(mode, n, cpu)| {
+                .map(|(mode, n, seconds)| {
                     format!(
-                        "{} {n} job(s) {} of CPU",
+                        "{} {n} job(s) {} of job time",
                         crate::boundary::branch_words(mode),
-                        duration_text(*cpu)
+                        duration_text(*seconds)
                     )
                 })
                 .collect();

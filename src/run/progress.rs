@@ -1,5 +1,10 @@
 //! Progress display of a sweep run: on a terminal an indicatif overall bar (with ETA) and one
-//! line per worker (its grid point and progress); otherwise one plain line per finished job.
+//! line per worker (its grid point and progress); otherwise nothing but the lines.
+//! Results go to standard output, progress to standard error (issue 45): the line of each
+//! finished job (`[ 3/30] done ...`, and the jobs that fail before they start) is a result, so
+//! `sweep run > log` keeps them in `log`; the bars and the status notes stay on stderr. Where
+//! standard output is the bars' terminal too, a job line is printed above the bars (through
+//! indicatif) so that it does not tear them.
 //! Every line passes through `terminal` (a job's error text may hold anything).
 
 use crate::terminal::{escape, escape_lines};
@@ -10,16 +15,26 @@ use std::time::Duration;
 /// Where progress goes.
 #[derive(Debug)]
 pub enum Progress {
-    /// indicatif bars on stderr.
+    /// indicatif bars on stderr; job lines above them when stdout is the same terminal
+    /// (`stdout_tty`), else on stdout.
     Bars {
         multi: MultiProgress,
         overall: ProgressBar,
         workers: Vec<ProgressBar>,
+        stdout_tty: bool,
     },
-    /// Plain lines on stderr (not a terminal).
+    /// Job lines on stdout, notes on stderr (stderr not a terminal).
     Plain { total: u64, done: u64 },
     /// Nothing (library use).
     Quiet,
+}
+
+/// Writes a result line on standard output (a closed pipe is not the run's failure: the
+/// results are in the database).
+fn print_out(line: &str) {
+    let mut out = std::io::stdout().lock();
+    let _ = writeln!(out, "{line}");
+    let _ = out.flush();
 }
 
 impl Progress {
@@ -61,10 +76,12 @@ impl Progress {
             })
             .collect();
         overall.enable_steady_tick(Duration::from_millis(500));
+        use std::io::IsTerminal;
         Progress::Bars {
             multi,
             overall,
             workers,
+            stdout_tty: std::io::stdout().is_terminal(),
         }
     }
 
@@ -83,30 +100,47 @@ impl Progress {
         }
     }
 
-    /// A worker's job ended; `line` describes the outcome.
+    /// A worker's job ended; `line` describes the outcome (a result: module doc).
     pub fn finish(&mut self, worker: usize, line: &str) {
         match self {
             Progress::Bars {
-                multi,
-                overall,
-                workers,
+                overall, workers, ..
             } => {
                 overall.inc(1);
                 workers[worker].set_position(0);
                 workers[worker].set_message("idle");
-                let _ = multi.println(escape_lines(line));
+                self.outcome(line);
             }
             Progress::Plain { total, done } => {
                 *done += 1;
                 let width = total.to_string().len();
-                let mut err = std::io::stderr().lock();
-                let _ = writeln!(err, "[{:>width$}/{total}] {}", *done, escape_lines(line));
+                print_out(&format!(
+                    "[{:>width$}/{total}] {}",
+                    *done,
+                    escape_lines(line)
+                ));
             }
             Progress::Quiet => {}
         }
     }
 
-    /// A message outside the job lines.
+    /// A result line outside the count of finished jobs (a job that failed before it started):
+    /// on stdout, above the bars where stdout is their terminal.
+    pub fn outcome(&mut self, line: &str) {
+        match self {
+            Progress::Bars {
+                multi,
+                stdout_tty: true,
+                ..
+            } => {
+                let _ = multi.println(escape_lines(line));
+            }
+            Progress::Bars { .. } | Progress::Plain { .. } => print_out(&escape_lines(line)),
+            Progress::Quiet => {}
+        }
+    }
+
+    /// A status message outside the job lines (stderr).
     pub fn note(&mut self, line: &str) {
         match self {
             Progress::Bars { multi, .. } => {

@@ -219,7 +219,7 @@ impl Queue for SweepQueue<'_> {
                 Err(why) => {
                     store.fail(&claim, &why, 0.0)?;
                     self.summary.failed += 1;
-                    progress.note(&format!(
+                    progress.outcome(&format!(
                         "FAILED  {label}: {why} (job {})",
                         &claim.job_id[..12]
                     ));

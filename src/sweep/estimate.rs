@@ -5,7 +5,7 @@
 //! nearest rate known on the grid: sampled short runs or other stored results. The run length
 //! is what the job's policy sets: its first check (the minimum run), that times the extension
 //! factor measured on the stored results of the sweep, or its cap. The wall time of the whole
-//! sweep on `w` workers is not `CPU / w`: [`makespan`] replays the runner's claim order (a
+//! sweep on `w` workers is not `job time / w`: [`makespan`] replays the runner's claim order (a
 //! continuation job only once its predecessor has ended; a chain's next link before grid
 //! order, as `claim_next_job.sql`), so the tail of lone long jobs and the waits along chains
 //! are counted.
@@ -73,8 +73,9 @@ pub enum RunLength {
 /// The cost of a sweep under one assumption on the run lengths.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SweepCost {
-    /// Sum of the jobs' wall times (CPU seconds of one core each).
-    pub cpu_seconds: f64,
+    /// Sum of the jobs' wall times ("job time": a job on `t` threads uses up to `t` times that in
+    /// CPU, so it is not called CPU time).
+    pub job_seconds: f64,
     /// Wall time on the workers in the runner's claim order.
     pub wall_seconds: f64,
     /// The dearest single job.
@@ -219,11 +220,11 @@ pub fn job_seconds(
         .collect()
 }
 
-/// CPU and wall time of jobs costing `seconds` each on `workers` workers.
+/// Job time (summed wall times) and wall time of jobs costing `seconds` each on `workers` workers.
 pub fn sweep_cost(jobs: &[PlannedJob], seconds: &[f64], workers: usize) -> SweepCost {
     let predecessors: Vec<Option<usize>> = jobs.iter().map(|j| j.predecessor).collect();
     SweepCost {
-        cpu_seconds: seconds.iter().sum(),
+        job_seconds: seconds.iter().sum(),
         wall_seconds: makespan(seconds, &predecessors, workers),
         longest_job: seconds.iter().cloned().fold(0.0, f64::max),
     }
@@ -394,12 +395,12 @@ pub fn time_sample(
 /// left to run.
 pub type CostLine = (String, SweepCost, SweepCost);
 
-/// CPU seconds per start mode, in order of appearance: (start mode, jobs, CPU seconds).
+/// Job seconds per start mode, in order of appearance: (start mode, jobs, job seconds).
 pub type StartSplit = Vec<(String, usize, f64)>;
 
 /// The cost of the sweep under each assumption on the run lengths that applies: with a
 /// convergence policy (`policy`) the minimum, the stored runs' mean extension (when `measured`
-/// has one) and the cap; without one, the sweep's run length. Each line comes with its CPU
+/// has one) and the cap; without one, the sweep's run length. Each line comes with its job
 /// time per start mode.
 pub fn cost_lines(
     planned: &[PlannedJob],
@@ -439,7 +440,7 @@ pub fn cost_lines(
     (lines, by_start)
 }
 
-/// Jobs and CPU seconds per start mode, in order of appearance.
+/// Jobs and job seconds per start mode, in order of appearance.
 fn start_split(planned: &[PlannedJob], seconds: &[f64]) -> StartSplit {
     let mut split: StartSplit = Vec::new();
     for (j, s) in planned.iter().zip(seconds) {
@@ -552,7 +553,7 @@ mod tests {
         assert_eq!(runs.mean_length_factor, 2.0);
         assert_eq!(runs.wall_seconds, 8.0);
         let cost = sweep_cost(&jobs, &[10.0, 4.0, 90.0, 8.0], 2);
-        assert_eq!(cost.cpu_seconds, 112.0);
+        assert_eq!(cost.job_seconds, 112.0);
         assert_eq!(cost.longest_job, 90.0);
         // w0: 10 (0-10), then 8 (10-18); w1: 4 (0-4), then 90 (4-94).
         assert_eq!(cost.wall_seconds, 94.0);

@@ -56,6 +56,34 @@ pub(crate) fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).to_string()
 }
 
+/// Standard output then standard error of `o` (`sweep run` prints its job lines on stdout and
+/// its messages on stderr).
+pub(crate) fn both(o: &Output) -> String {
+    stdout(o) + &stderr(o)
+}
+
+/// Starts `cmd` with its standard output and standard error written into one pipe, in the
+/// order written (the job lines of `sweep run` on stdout, its messages and pause markers on
+/// stderr), and returns the child with the lines of that pipe.
+pub(crate) fn spawn_merged(
+    cmd: &mut Command,
+) -> (
+    std::process::Child,
+    std::io::Lines<std::io::BufReader<std::io::PipeReader>>,
+) {
+    use std::io::BufRead;
+    let (reader, writer) = std::io::pipe().expect("a pipe");
+    let child = cmd
+        .stdout(writer.try_clone().expect("a pipe"))
+        .stderr(writer)
+        .spawn()
+        .expect("start wetgran");
+    // The command holds the pipe's writing end: drop it, so the lines end with the child.
+    cmd.stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null());
+    (child, std::io::BufReader::new(reader).lines())
+}
+
 /// Claims every pending job of the sweep and finishes it with the phase `phase(coords,
 /// replica)`, as a runner would (no simulation).
 pub(crate) fn finish_synthetic(
