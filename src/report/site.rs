@@ -254,8 +254,8 @@ fn map_section(input: &SiteInput, positions: &[Position]) -> String {
                 h,
                 "<p>Click a point for its page.</p>\n<img src=\"map.svg\" usemap=\"#points\" \
                  width=\"{}\" height=\"{}\" alt=\"phase map of {}\">\n<map name=\"points\">",
-                super::plot_phase::MAP_WIDTH,
-                super::plot_phase::MAP_HEIGHT,
+                map.width,
+                map.height,
                 esc(&sweep.name)
             );
             for &(x, y, px, py) in &map.points {
