@@ -45,9 +45,9 @@ pub(crate) enum Swatch {
     None,
 }
 
-/// The width in pixels a legend entry's text takes (an estimate: 0.56 em a character).
+/// The width in pixels a legend entry's text takes (an estimate: 0.52 em a character).
 fn text_width(text: &str) -> i32 {
-    (0.56 * LEGEND_FONT * text.chars().filter(|c| *c != super::typeset::MARK).count() as f64).ceil()
+    (0.52 * LEGEND_FONT * text.chars().filter(|c| *c != super::typeset::MARK).count() as f64).ceil()
         as i32
 }
 

@@ -214,7 +214,7 @@ pub fn overlay_svg(lines: &Lines) -> Result<String, String> {
     };
     let (x_range, x_log, x_ticks) = e_star_axis(lines);
     let per_row = 4;
-    let header = 30 + 18 * gammas.len().div_ceil(per_row) as u32 + 24;
+    let header = 30 + 18 * gammas.len().div_ceil(per_row) as u32 + 36;
     let height = header + OVERLAY_PANEL * quantities.len() as u32;
     let mut svg = String::new();
     {
@@ -223,7 +223,7 @@ pub fn overlay_svg(lines: &Lines) -> Result<String, String> {
         root.fill(&WHITE).map_err(err)?;
         let (top, body) = root.split_vertically(header);
         top.draw(&Text::new(
-            format!("{}: all lines of constant Gamma", lines.sweep),
+            marked(&format!("{}: all lines of constant Gamma", lines.sweep)),
             (10, 6),
             font(14.0),
         ))
@@ -252,12 +252,20 @@ pub fn overlay_svg(lines: &Lines) -> Result<String, String> {
             ))
             .map_err(err)?;
         }
-        top.draw(&Text::new(
-            "shape: run state (circle stationary, triangles heating/cooling); hollow: label may change; bars: standard error".to_string(),
-            (14, header as i32 - 14),
-            font(10.5),
-        ))
-        .map_err(err)?;
+        for (k, note) in [
+            "shape: run state (circle stationary, triangles heating/cooling);",
+            "hollow: label may change; bars: standard error",
+        ]
+        .iter()
+        .enumerate()
+        {
+            top.draw(&Text::new(
+                note.to_string(),
+                (14, header as i32 - 30 + 14 * k as i32),
+                font(11.5),
+            ))
+            .map_err(err)?;
+        }
         let panels = body.split_evenly((quantities.len(), 1));
         for (r, &q) in quantities.iter().enumerate() {
             let (y_range, y_log) = column_range(lines, q, matches!(q, Quantity::Temperature));

@@ -354,9 +354,10 @@ pub fn branches_map(
             .filter(|l| map.shaking && l.wet.is_some())
             .map(|l| {
                 format!(
-                    "Eq. 4.15: Gamma_C = 1 + F_B (1 - E*) / (M m g), F_B = E_cb / s_crit, with M = \
-                     {:.2} layers of grains; it never falls below 1 - 1/M = {:.2} (its flat part at \
-                     large E*).",
+                    "Eq. 4.15: Gamma_C = 1 + F_B (1 \u{2212} E*) / (M m g), F_B = E_cb / s_crit, \
+                     with M = {:.2} layers of grains; it never falls below 1 \u{2212} 1/M = {:.2} \
+                     (its flat part at large E*). Shades: the phases' regions (the cells of the \
+                     sampled points), paler where the label may change.",
                     l.layers,
                     1.0 - 1.0 / l.layers
                 )
@@ -546,7 +547,7 @@ impl Drawing<'_> {
         }
         if points.iter().any(|p| !p.trusted) {
             legend.push((
-                "hollow, pale: label may change".to_string(),
+                "hollow: label may change".to_string(),
                 Swatch::Ring(RGBColor(90, 90, 90)),
             ));
         }
@@ -554,10 +555,7 @@ impl Drawing<'_> {
             .iter()
             .any(|p| p.trusted && p.label_kept && !p.bistable())
         {
-            legend.push((
-                "white centre: drifting, label kept".to_string(),
-                Swatch::Kept,
-            ));
+            legend.push(("white centre: label kept".to_string(), Swatch::Kept));
         }
         let n = self.slices.len();
         if points.iter().any(DrawnPoint::bistable) {
@@ -583,7 +581,7 @@ impl Drawing<'_> {
         }
         if points.iter().any(|p| p.fallback) {
             legend.push((
-                "square: decided by a fallback (T_g/E_cb)".to_string(),
+                "square: decided by a fallback".to_string(),
                 Swatch::Square(BLACK),
             ));
         }
@@ -605,7 +603,7 @@ impl Drawing<'_> {
         }
         if any_boundary {
             legend.push((
-                "boundary point, bars: straddling edge".to_string(),
+                "bars: straddling edge".to_string(),
                 Swatch::ErrorBar(RGBColor(70, 70, 70)),
             ));
         }

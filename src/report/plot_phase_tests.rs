@@ -366,7 +366,7 @@ fn each_phase_has_its_region_and_the_boundary_is_a_line_between_them() {
     assert!(drawn.svg.matches("stroke=\"#464646\"").count() >= 3 * 3);
     // The legend names the boundary and its bars.
     assert!(drawn.svg.contains("phase boundary"));
-    assert!(drawn.svg.contains("boundary point, bars: straddling edge"));
+    assert!(drawn.svg.contains("bars: straddling edge"));
 }
 
 /// The black, 2 px wide straight segments of an SVG (the boundary lines), in pixels.
@@ -474,7 +474,7 @@ fn the_guides_are_in_the_legend_and_the_caption_explains_the_floor_of_eq_4_15() 
     }
     let caption = texts.join(" ");
     assert!(
-        caption.contains("never falls below 1 - 1/M = 0.67"),
+        caption.contains("never falls below 1 \u{2212} 1/M = 0.67"),
         "{caption}"
     );
     assert!(caption.contains("M = 3.00 layers"), "{caption}");
