@@ -198,9 +198,14 @@ fn lines_follow_each_branch_with_errors_states_and_label_changes() {
         "{}",
         stderr(&bad)
     );
+    figures_read_back(dir.path(), db);
+}
+
+/// `lines` as PDF and, with --overlay, as PNG: read back, not only written.
+fn figures_read_back(dir: &Path, db: &str) {
     // The figure as PDF: one page with the panels' text; as PNG, the overlay: three times the
     // SVG's size (480 px wide), not blank.
-    let pdf = dir.path().join("l.pdf");
+    let pdf = dir.join("l.pdf");
     ok_stdout(&["lines", "--db", db, "-o", pdf.to_str().unwrap()]);
     let doc = lopdf::Document::load(&pdf).unwrap();
     assert_eq!(doc.get_pages().len(), 1);
@@ -209,7 +214,7 @@ fn lines_follow_each_branch_with_errors_states_and_label_changes() {
         text.contains("bridgespergrain") || text.contains("bridges per grain"),
         "{text}"
     );
-    let png = dir.path().join("o.png");
+    let png = dir.join("o.png");
     ok_stdout(&[
         "lines",
         "--db",

@@ -146,8 +146,9 @@ pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
         include_unconverged: a.include_unconverged,
     };
     let mut outputs = Outputs::new(Protected::database(&a.from.db));
-    figure_format("-o", &a.output)?;
+    // The database's protection first (its refusal names the database), then the extension.
     outputs.claim("-o", &a.output)?;
+    figure_format("-o", &a.output)?;
     let (store, sweep) = a.from.open()?;
     let map = draw_map(&store, &sweep, how, a.y_scale.log())?;
     write_figure(&a.output, &map.svg, outputs.protected())?;

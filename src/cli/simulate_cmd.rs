@@ -58,8 +58,8 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         outputs.claim("--snapshot", path)?;
     }
     if let Some(p) = &args.profiles {
-        crate::report::figure::figure_format("--profiles", p)?;
         outputs.claim("--profiles", p)?;
+        crate::report::figure::figure_format("--profiles", p)?;
     }
     let scene = load_scene(&args.scene)?;
     let ctx = super::common::all_cores();

@@ -370,7 +370,7 @@ fn each_phase_has_its_region_and_the_boundary_is_a_line_between_them() {
 }
 
 /// The black, 2 px wide straight segments of an SVG (the boundary lines), in pixels.
-fn black_segments(svg: &str) -> Vec<((f64, f64), (f64, f64))> {
+fn black_segments(svg: &str) -> Vec<crate::report::regions::Segment> {
     let doc = roxmltree::Document::parse(svg).unwrap();
     doc.descendants()
         .filter(|n| {
@@ -397,7 +397,7 @@ fn black_segments(svg: &str) -> Vec<((f64, f64), (f64, f64))> {
 }
 
 /// The ends of segments that no other segment shares (a line has two; crosses four each).
-fn loose_ends(segments: &[((f64, f64), (f64, f64))]) -> usize {
+fn loose_ends(segments: &[crate::report::regions::Segment]) -> usize {
     let ends: Vec<(f64, f64)> = segments.iter().flat_map(|s| [s.0, s.1]).collect();
     let near = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() <= 1.0 && (a.1 - b.1).abs() <= 1.0;
     ends.iter()

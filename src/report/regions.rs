@@ -11,6 +11,9 @@
 /// A polygon, its vertices in order.
 pub(crate) type Polygon = Vec<(f64, f64)>;
 
+/// A segment between two points.
+pub(crate) type Segment = ((f64, f64), (f64, f64));
+
 /// `poly` clipped to the half-plane of points at least as close to `p` as to `q`.
 fn clip_to_nearer(poly: &Polygon, p: (f64, f64), q: (f64, f64)) -> Polygon {
     let (nx, ny) = (q.0 - p.0, q.1 - p.1);
@@ -82,11 +85,7 @@ pub(crate) fn voronoi_cells(points: &[(f64, f64)], rect: (f64, f64, f64, f64)) -
 
 /// The interface of the cell `cell` of `p` with the cell of its neighbour `q`: the stretch of
 /// the cell's outline on their bisector (`None` where the cells do not touch).
-pub(crate) fn interface(
-    cell: &Polygon,
-    p: (f64, f64),
-    q: (f64, f64),
-) -> Option<((f64, f64), (f64, f64))> {
+pub(crate) fn interface(cell: &Polygon, p: (f64, f64), q: (f64, f64)) -> Option<Segment> {
     let (nx, ny) = (q.0 - p.0, q.1 - p.1);
     let len = nx.hypot(ny);
     if len == 0.0 {
@@ -97,17 +96,16 @@ pub(crate) fn interface(
     // The cell is convex: its vertices on the bisector span the interface (clipping may leave
     // near-duplicates of a vertex, so take the two farthest apart).
     let on_line: Vec<(f64, f64)> = cell.iter().copied().filter(|&v| on(v)).collect();
-    let mut best: Option<((f64, f64), (f64, f64), f64)> = None;
+    let mut best: Option<(Segment, f64)> = None;
     for (k, &a) in on_line.iter().enumerate() {
         for &b in &on_line[k + 1..] {
             let d = (a.0 - b.0).hypot(a.1 - b.1);
-            if best.is_none_or(|(_, _, e)| d > e) {
-                best = Some((a, b, d));
+            if best.is_none_or(|(_, e)| d > e) {
+                best = Some(((a, b), d));
             }
         }
     }
-    best.filter(|b| b.2 > 1e-9 * (1.0 + len))
-        .map(|(a, b, _)| (a, b))
+    best.filter(|b| b.1 > 1e-9 * (1.0 + len)).map(|(s, _)| s)
 }
 
 /// The area of a polygon (shoelace formula, positive).

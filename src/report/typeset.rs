@@ -21,8 +21,11 @@ pub(crate) fn marked(text: &str) -> String {
 /// and whether it is italic.
 type Run = (String, i32, bool);
 
+/// A run of a name's symbol: text, shift, italic.
+type Part = (&'static str, i32, bool);
+
 /// The names typeset, longest first where one begins another: each is a list of runs.
-fn names() -> Vec<(&'static str, Vec<(&'static str, i32, bool)>)> {
+fn names() -> Vec<(&'static str, Vec<Part>)> {
     vec![
         ("Gamma_C", vec![("Γ", 0, false), ("C", -1, false)]),
         ("Gamma", vec![("Γ", 0, false)]),
@@ -182,7 +185,8 @@ mod tests {
             .collect();
         let first: String = texts[0]
             .descendants()
-            .filter_map(|n| n.is_text().then(|| n.text().unwrap_or("")))
+            .filter(|n| n.is_text())
+            .map(|n| n.text().unwrap_or(""))
             .collect();
         assert_eq!(first, "Tg/Ecb against E* (Γ = 2)");
         // The subscript g: 7 px, shifted 2.5 px down; the star raised.
