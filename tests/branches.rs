@@ -124,6 +124,14 @@ fn plot(dir: &Path, db: &Path) -> String {
     std::fs::read_to_string(svg).unwrap()
 }
 
+/// The polygons of an SVG filled with `colour` (`#RRGGBB`).
+fn polygons(svg: &str, colour: &str) -> usize {
+    let doc = roxmltree::Document::parse(svg).expect("the SVG parses");
+    doc.descendants()
+        .filter(|n| n.has_tag_name("polygon") && n.attribute("fill") == Some(colour))
+        .count()
+}
+
 #[test]
 fn the_map_marks_bistable_points_with_both_labels_only_where_the_starts_disagree() {
     let dir = tempfile::tempdir().unwrap();
@@ -134,21 +142,26 @@ fn the_map_marks_bistable_points_with_both_labels_only_where_the_starts_disagree
             && svg.contains("text by the disc: phases hot/cold"),
         "{svg}"
     );
-    // The two bistable points (E* = 2): hot gas, cold fluid, two half discs each, and the
-    // legend's two; their label in branch order.
-    assert_eq!(svg.matches("<polygon").count(), 2 * 2 + 2, "{svg}");
+    // The two bistable points (E* = 2): hot gas, cold fluid, two half discs each in the full
+    // colours of their phases (the regions are paler shades), and the legend's two in greys;
+    // their label in branch order.
+    let full = |svg: &str| polygons(svg, "#2CA02C") + polygons(svg, "#D62728");
+    assert_eq!(full(&svg), 2 * 2, "{svg}");
+    assert_eq!(polygons(&svg, "#3C3C3C"), 1, "{svg}");
+    // Their regions grey: the branches disagree there.
+    assert_eq!(polygons(&svg, "#D7D7D7"), 2, "{svg}");
     assert_eq!(svg.matches("\ng/f\n").count(), 2, "{svg}");
-    // Each branch's boundary points with their own legend entry.
-    assert!(svg.contains("boundary points, hot start"), "{svg}");
-    assert!(svg.contains("boundary points, cold start"), "{svg}");
+    // Each branch's boundary lines with their own legend entry.
+    assert!(svg.contains("phase boundary, hot start"), "{svg}");
+    assert!(svg.contains("phase boundary, cold start"), "{svg}");
 
     let dir = tempfile::tempdir().unwrap();
     let db = prepared(dir.path(), false);
     let svg = plot(dir.path(), &db);
     assert!(!svg.contains("bistable"), "{svg}");
-    assert_eq!(svg.matches("<polygon").count(), 0, "{svg}");
+    assert_eq!(full(&svg), 0, "{svg}");
     assert!(!svg.contains("\ng/f\n"), "{svg}");
-    assert!(svg.contains("boundary points, cold start"), "{svg}");
+    assert!(svg.contains("phase boundary, cold start"), "{svg}");
 }
 
 #[test]

@@ -357,12 +357,24 @@ fn docs_cli_names_the_panels_that_profiles_draws() {
     let (run, _) =
         wetgran_core::observe::run_observed_with_frame(&scene, &Default::default(), &mut |_| {});
     let svg = wetgran::report::profiles_svg(&run.observables);
-    // Each panel has one frame; its title starts with the quantity's name.
-    let titles: Vec<&str> = svg
-        .split("<text")
-        .filter_map(|t| t.split_once('>').map(|(_, rest)| rest))
-        .filter_map(|t| t.split_once("</text>").map(|(title, _)| title))
-        .filter(|t| named.iter().any(|n| t.starts_with(n.as_str())))
+    // Each panel has one frame; its title starts with the quantity's name. The names are
+    // typeset (subscripts as `<tspan>`s), so a title is its text element's characters joined,
+    // and names compare without the `_` and spaces of their plain spelling.
+    let plain = |t: &str| t.replace(['_', ' '], "");
+    let doc = roxmltree::Document::parse(&svg).expect("the SVG parses");
+    let texts: Vec<String> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| {
+            n.descendants()
+                .filter_map(|d| d.is_text().then(|| d.text()).flatten())
+                .collect::<String>()
+        })
+        .collect();
+    let titles: Vec<String> = texts
+        .iter()
+        .map(|t| plain(t))
+        .filter(|t| named.iter().any(|n| t.starts_with(&plain(n))))
         .collect();
     assert_eq!(
         svg.matches("<rect x=").count(),
@@ -371,7 +383,7 @@ fn docs_cli_names_the_panels_that_profiles_draws() {
     );
     for n in &named {
         assert!(
-            titles.iter().any(|t| t.starts_with(n.as_str())),
+            titles.iter().any(|t| t.starts_with(&plain(n))),
             "docs/cli.md names `{n}`, the plot draws no such panel: {titles:?}"
         );
     }

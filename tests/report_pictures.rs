@@ -92,6 +92,31 @@ fn profile_plot_and_cli_outputs() {
     // T_g, packing, n_cb, D_lat and f_lc panels: one frame and one curve each.
     assert_eq!(svg.matches("<rect x=").count(), 5);
     assert_eq!(svg.matches("stroke=\"#1f77b4\"").count(), 5);
+    // Ticks at round steps in one format per axis (not min/mid/max of the data): the x axis
+    // of the 24 d wide box at 0, 5, 10, 15, 20 in each of the 5 panels; units named.
+    let doc = roxmltree::Document::parse(&svg).unwrap();
+    let texts: Vec<String> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| {
+            let t: String = n
+                .descendants()
+                .filter(|d| d.is_text())
+                .filter_map(|d| d.text())
+                .collect();
+            t.trim().to_string()
+        })
+        .collect();
+    for x in ["0", "5", "10", "15", "20"] {
+        assert!(
+            texts.iter().filter(|t| *t == x).count() >= 5,
+            "x tick {x}: {texts:?}"
+        );
+    }
+    assert!(
+        texts.iter().any(|t| t == "x (grain diameters d)"),
+        "{texts:?}"
+    );
 
     let dir = std::env::temp_dir().join(format!("wetgran-report-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -126,6 +151,22 @@ fn profile_plot_and_cli_outputs() {
             .contains("<circle")
     );
     assert_eq!(std::fs::read_to_string(dir.join("p.svg")).unwrap(), svg);
+    // The same profiles as PDF: one page of the figure's size (760 px wide: 760 pt).
+    let out = Command::new(env!("CARGO_BIN_EXE_wetgran"))
+        .arg("simulate")
+        .arg(&scene)
+        .args(["--profiles", dir.join("p.pdf").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let pdf = lopdf::Document::load(dir.join("p.pdf")).unwrap();
+    assert_eq!(pdf.get_pages().len(), 1);
+    let text = pdf.extract_text(&[1]).unwrap().replace('\n', "");
+    assert!(text.contains("packing"), "{text}");
     // The table names the phase; a bad snapshot extension is refused before running.
     let out = Command::new(env!("CARGO_BIN_EXE_wetgran"))
         .arg("simulate")

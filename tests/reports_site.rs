@@ -175,10 +175,11 @@ fn lines_follow_each_branch_with_errors_states_and_label_changes() {
     // The SVG: a row of panels per Gamma, each branch named, the run states in the legend, a
     // marker for every job.
     let svg = std::fs::read_to_string(&svg).unwrap();
+    let texts = svg_texts(&svg);
+    for text in ["Γ = 1", "Γ = 2", "Tg / Ecb", "Δncb", "bridges per grain"] {
+        assert!(texts.iter().any(|t| t == text), "missing {text}: {texts:?}");
+    }
     for text in [
-        "Gamma = 1: T_g / E_cb",
-        "Gamma = 2: Delta n_cb",
-        "Gamma = 2: bridges per grain",
         "hot start: mean over replicas",
         "continuation: mean over replicas",
         "undecided",
@@ -191,9 +192,48 @@ fn lines_follow_each_branch_with_errors_states_and_label_changes() {
     let other = dir.path().join("l.csv");
     ok_stdout(&["lines", "--db", db, "-o", other.to_str().unwrap()]);
     assert_eq!(std::fs::read_to_string(&other).unwrap(), csv);
-    let bad = run(&["lines", "--db", db, "-o", "x.png"]);
+    let bad = run(&["lines", "--db", db, "-o", "x.jpg"]);
     assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
-    assert!(stderr(&bad).contains(".svg or .csv"), "{}", stderr(&bad));
+    assert!(
+        stderr(&bad).contains(".svg, .pdf or .png (a figure) or .csv"),
+        "{}",
+        stderr(&bad)
+    );
+    figures_read_back(dir.path(), db);
+}
+
+/// `lines` as PDF and, with --overlay, as PNG: read back, not only written.
+fn figures_read_back(dir: &Path, db: &str) {
+    // The figure as PDF: one page with the panels' text; as PNG, the overlay: three times the
+    // SVG's size (480 px wide), not blank.
+    let pdf = dir.join("l.pdf");
+    ok_stdout(&["lines", "--db", db, "-o", pdf.to_str().unwrap()]);
+    let doc = lopdf::Document::load(&pdf).unwrap();
+    assert_eq!(doc.get_pages().len(), 1);
+    let text = doc.extract_text(&[1]).unwrap().replace('\n', "");
+    assert!(
+        text.contains("bridgespergrain") || text.contains("bridges per grain"),
+        "{text}"
+    );
+    let png = dir.join("o.png");
+    ok_stdout(&[
+        "lines",
+        "--db",
+        db,
+        "--overlay",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.width, 3 * 480);
+    let dark = buf[..info.buffer_size()]
+        .chunks(4)
+        .filter(|p| p[0] < 80 && p[1] < 80 && p[2] < 80)
+        .count();
+    assert!(dark > 10_000, "{dark} dark pixels: axes, text and lines");
 }
 
 /// The values of every `attr="..."` in an HTML text.
@@ -360,7 +400,12 @@ fn the_report_gives_every_point_a_page_and_every_link_resolves() {
     // The map's Gamma axis is logarithmic, as the sweep's is; every link sits on its point's
     // disc.
     let map = std::fs::read_to_string(root.join("map.svg")).unwrap();
-    assert!(map.contains("Gamma (log scale)"), "{map}");
+    // (typeset Γ; a log axis under a decade labels 1, 2 and 5 of it, "2" here, where a linear
+    // one would label steps with one decimal, "2.0").
+    let texts = svg_texts(&map);
+    assert!(texts.iter().any(|t| t == "Γ"), "{texts:?}");
+    assert!(texts.iter().any(|t| t == "2"), "{texts:?}");
+    assert!(!texts.iter().any(|t| t == "2.0"), "{texts:?}");
     for coords in attrs(&index, "coords") {
         let c: Vec<&str> = coords.split(',').collect();
         assert!(
@@ -661,4 +706,20 @@ fn show_at_names_the_branches_and_redraws_a_job_without_a_stored_state() {
     assert!(out.contains("final state no stored one: re-run"), "{out}");
     let xyz = std::fs::read_to_string(&snap).unwrap();
     assert_eq!(xyz.lines().next(), Some("40"), "the tiny scene's 40 grains");
+}
+
+/// Every text of an SVG, each text element's characters joined (typeset tspans included).
+fn svg_texts(svg: &str) -> Vec<String> {
+    let doc = roxmltree::Document::parse(svg).expect("the SVG parses");
+    doc.descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| {
+            n.descendants()
+                .filter(|d| d.is_text())
+                .filter_map(|d| d.text())
+                .collect::<String>()
+                .trim()
+                .to_string()
+        })
+        .collect()
 }

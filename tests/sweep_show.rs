@@ -145,7 +145,7 @@ fn show_redraws_a_stored_point_and_inflection_reads_the_lines() {
 }
 
 /// The time series figure of `show --series` (written to `series`) and the regions panel of a
-/// coexistence; `--series` refuses what is not SVG.
+/// coexistence; the same figure as PNG and PDF, and any other extension refused.
 fn check_series(
     dir: &std::path::Path,
     db: &std::path::Path,
@@ -232,13 +232,49 @@ fn check_series(
         let homogeneous = wetgran::report::series_plot::series_svg(&obs, "t", Some("f"));
         assert_eq!(homogeneous.matches("<g class=\"panel\"").count(), 3);
     }
-    // Only SVG for now.
-    let pdf = wetgran()
+    // The same figure as PNG and PDF (by the extension): the PNG decodes at three times the
+    // SVG's width, and the PDF's one page carries the panels' quantity names.
+    let png = dir.join("series.png");
+    let pdf = dir.join("series.pdf");
+    let o = wetgran()
         .args(["show", "--db", db_s, &id[..10], "--series"])
-        .arg(dir.join("series.pdf"))
+        .arg(&png)
         .output()
         .unwrap();
-    assert_eq!(pdf.status.code(), Some(2), "{}", text(&pdf));
+    assert!(o.status.success(), "{}", text(&o));
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let info = decoder.read_info().unwrap().info().clone();
+    let svg_width: f64 = {
+        let doc = roxmltree::Document::parse(&fig).unwrap();
+        doc.root_element()
+            .attribute("width")
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    assert_eq!(
+        info.width as f64,
+        (3.0 * svg_width).round(),
+        "PNG at 3 px per SVG px"
+    );
+    let o = wetgran()
+        .args(["show", "--db", db_s, &id[..10], "--series"])
+        .arg(&pdf)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    let doc = lopdf::Document::load(&pdf).unwrap();
+    assert_eq!(doc.get_pages().len(), 1, "one page");
+    // Anything else is refused, naming the figure formats, and nothing is written.
+    let bad = dir.join("series.txt");
+    let o = wetgran()
+        .args(["show", "--db", db_s, &id[..10], "--series"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains(".svg, .pdf or .png"), "{}", text(&o));
+    assert!(!bad.exists());
 }
 
 /// `show --at`: the nearest job in the axes' own scale, by names, keys and labels; unknown axes

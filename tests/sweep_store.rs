@@ -341,16 +341,39 @@ fn plot_and_export_show_every_result() {
     assert!(out.status.success(), "{}", stderr(&out));
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg"));
-    // 100 points + one legend marker per phase (f, g).
-    assert_eq!(text.matches("<circle").count(), 102);
+    // 100 points + one legend marker per phase (f, g), filled in the phase's colour.
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let dots = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("circle"))
+        .filter(|n| matches!(n.attribute("fill"), Some("#2CA02C" | "#D62728")))
+        .count();
+    assert_eq!(dots, 102);
+    // The legend and axis names, typeset (s_crit with a subscript, Γ_C).
+    let texts: Vec<String> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| {
+            let t: String = n
+                .descendants()
+                .filter_map(|d| d.is_text().then(|| d.text()).flatten())
+                .collect();
+            t.trim().to_string()
+        })
+        .collect();
     for label in [
         "A = d",
-        "A = s_crit",
-        "Eq. 4.15",
-        "boundary points",
-        "E* (log scale)",
+        "A = scrit",
+        "Eq. 4.15, ΓC (caption)",
+        "phase boundary",
+        "E*",
+        "fluid",
+        "gas",
     ] {
-        assert!(text.contains(label), "missing {label}");
+        assert!(
+            texts.iter().any(|t| t == label),
+            "missing {label}: {texts:?}"
+        );
     }
 
     // --all: decided_on.synthetic is the same in every row, left out by default.

@@ -122,10 +122,7 @@ fn the_trend_state_is_stored_and_shown_by_every_report() {
     assert!(o.status.success(), "{}", stderr(&o));
     let svg = std::fs::read_to_string(&svg_path).unwrap();
     assert!(svg.contains("hollow: label may change"), "legend for ?");
-    assert!(
-        svg.contains("white centre: drifting, label kept"),
-        "legend for ~"
-    );
+    assert!(svg.contains("white centre: label kept"), "legend for ~");
 
     let csv = ok_stdout(&["export", "--db", db]);
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();

@@ -5,10 +5,11 @@
 //! inelastic systems along lines of constant Gamma, docs/model.md 7).
 
 use super::common::{
-    Failure, check_snapshot_names, latest_sweep, note, print_json, show as show_text, write_file,
+    Failure, check_snapshot_names, latest_sweep, note, print_json, show as show_text,
 };
 use crate::boundary::START_AXIS;
 use crate::output::{Outputs, Protected};
+use crate::report::figure::{figure_format, write_figure};
 use crate::report::point_text::{
     coordinates_text, decision_text, gamma_lines, inflection_json, inflection_text, job_json,
     job_text, series_title,
@@ -19,7 +20,7 @@ use crate::store::{PointRow, Store, SweepRow};
 use crate::sweep::file::{Axis, AxisKind};
 use crate::terminal::escape;
 use clap::Args;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use wetgran_core::observe::{Observables, run_observed_with_frame};
 use wetgran_core::sim::Frame;
 
@@ -310,29 +311,19 @@ pub struct ShowArgs {
     /// Colour of the SVG snapshot: `energy` (kinetic energy / E_cb) or `bridges`.
     #[arg(long, default_value = "energy")]
     colour_by: String,
-    /// Write the lateral profiles (T_g, packing fraction, n_cb against x) as SVG.
+    /// Write the lateral profiles (T_g / E_cb, packing fraction, n_cb, D_lat against x): a
+    /// figure, `.svg`, `.pdf` or `.png` by the extension.
     #[arg(long)]
     profiles: Option<PathBuf>,
     /// Write the run's time series (T_g/E_cb, bridges per grain, Delta n_cb against time, the
-    /// transient, the window and the run's end marked) as SVG.
+    /// transient, the window and the run's end marked): a figure, `.svg`, `.pdf` or `.png` by
+    /// the extension.
     #[arg(long)]
     series: Option<PathBuf>,
     /// Print JSON (one object: the job, its phase and what it was decided on, the files
     /// written) instead of the text.
     #[arg(long)]
     json: bool,
-}
-
-/// Writes the series figure: the one place its file is written (a figure writer that also
-/// writes PDF or PNG by the extension replaces this call).
-fn write_series_figure(path: &Path, svg: String, protected: &Protected) -> Result<(), Failure> {
-    if path.extension().and_then(|e| e.to_str()) != Some("svg") {
-        return Err(Failure::BadInput(format!(
-            "--series {}: the time series are written as SVG (name the file `.svg`)",
-            path.display()
-        )));
-    }
-    write_file(path, svg, protected)
 }
 
 /// The final configuration of a job: its stored final state (the checkpoint, which the report
@@ -386,9 +377,11 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     }
     if let Some(p) = &a.profiles {
         outputs.claim("--profiles", p)?;
+        figure_format("--profiles", p)?;
     }
     if let Some(p) = &a.series {
         outputs.claim("--series", p)?;
+        figure_format("--series", p)?;
     }
     let store = Store::open_read_only(&a.db)?;
     let (sweep, p, others) = match (&a.job, &a.at) {
@@ -438,7 +431,7 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     };
     if let Some(path) = &a.profiles {
         let o = need("--profiles")?;
-        write_file(path, profiles_svg(o), outputs.protected())?;
+        write_figure(path, &profiles_svg(o), outputs.protected())?;
         say(
             "profiles",
             path.display().to_string().into(),
@@ -450,11 +443,8 @@ pub(super) fn show(a: ShowArgs) -> Result<(), Failure> {
     }
     if let Some(path) = &a.series {
         let o = need("--series")?;
-        write_series_figure(
-            path,
-            series_svg(o, &series_title(&sweep.name, &axes, &p), p.phase.as_deref()),
-            outputs.protected(),
-        )?;
+        let svg = series_svg(o, &series_title(&sweep.name, &axes, &p), p.phase.as_deref());
+        write_figure(path, &svg, outputs.protected())?;
         say(
             "series",
             path.display().to_string().into(),

@@ -8,8 +8,9 @@ use crate::boundary::Extraction;
 use crate::output::folder::SiteFolder;
 use crate::output::{Outputs, Protected};
 use crate::report::boundaries_text::fixed_text;
+use crate::report::figure::{FIGURE_EXTENSIONS, FigureFormat, figure_format, write_figure};
 use crate::report::lines::{Lines, lines_csv, lines_of, lines_table};
-use crate::report::lines_plot::lines_svg;
+use crate::report::lines_plot::{lines_svg, overlay_svg};
 use crate::report::plot_phase::{self, DrawnMap, MapStyle};
 use crate::report::point_text::series_title;
 use crate::report::series_plot::series_svg;
@@ -67,7 +68,7 @@ impl DbLatest {
 pub struct PlotArgs {
     #[command(flatten)]
     pub from: DbLatest,
-    /// The SVG file to write.
+    /// The figure to write: `.svg`, `.pdf` or `.png` by the extension.
     #[arg(short = 'o', long = "output")]
     output: PathBuf,
     /// Let unconverged points (drawn hollow) carry boundaries too.
@@ -107,9 +108,14 @@ pub struct ReportArgs {
 pub struct LinesArgs {
     #[command(flatten)]
     pub from: DbLatest,
-    /// The file to write: `.svg` (the panels) or `.csv` (one row per job).
+    /// The file to write: a figure (`.svg`, `.pdf` or `.png`: the panels) or `.csv` (one row
+    /// per job).
     #[arg(short = 'o', long = "output")]
     output: Option<PathBuf>,
+    /// Draw each quantity in one panel for all Gamma (one colour per Gamma) instead of one row
+    /// of panels per Gamma.
+    #[arg(long)]
+    overlay: bool,
     /// Also write the CSV (one row per job) to this file.
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
@@ -123,24 +129,25 @@ pub(super) fn plot(a: PlotArgs) -> Result<(), Failure> {
         include_unconverged: a.include_unconverged,
     };
     let mut outputs = Outputs::new(Protected::database(&a.from.db));
+    // The database's protection first (its refusal names the database), then the extension.
     outputs.claim("-o", &a.output)?;
+    figure_format("-o", &a.output)?;
     let (store, sweep) = a.from.open()?;
-    write_file(
-        &a.output,
-        draw_map(&store, &sweep, how, a.y_scale.log())?.svg,
-        outputs.protected(),
-    )?;
+    let map = draw_map(&store, &sweep, how, a.y_scale.log())?;
+    write_figure(&a.output, &map.svg, outputs.protected())?;
     note(&format!("wrote {}", a.output.display()));
     Ok(())
 }
 
 pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
     let ext = |p: &PathBuf| p.extension().and_then(|e| e.to_str()).map(String::from);
+    let figure = |p: &PathBuf| FigureFormat::of(p).is_some();
     if let Some(p) = &args.output
-        && !matches!(ext(p).as_deref(), Some("svg" | "csv"))
+        && !figure(p)
+        && ext(p).as_deref() != Some("csv")
     {
         return Err(Failure::BadInput(format!(
-            "-o {}: the file name must end in .svg or .csv",
+            "-o {}: the file name must end in {FIGURE_EXTENSIONS} (a figure) or .csv",
             p.display()
         )));
     }
@@ -166,12 +173,17 @@ pub(super) fn lines(args: LinesArgs) -> Result<(), Failure> {
     }
     for (path, csv) in [(&args.output, false), (&args.csv, true)] {
         let Some(path) = path else { continue };
-        let text = if !csv && ext(path).as_deref() == Some("svg") {
-            lines_svg(&lines).map_err(Failure::BadInput)?
+        if !csv && figure(path) {
+            let svg = if args.overlay {
+                overlay_svg(&lines)
+            } else {
+                lines_svg(&lines)
+            }
+            .map_err(Failure::BadInput)?;
+            write_figure(path, &svg, outputs.protected())?;
         } else {
-            lines_csv(&lines)
-        };
-        write_file(path, text, outputs.protected())?;
+            write_file(path, lines_csv(&lines), outputs.protected())?;
+        }
         note(&format!("wrote {}", path.display()));
     }
     Ok(())

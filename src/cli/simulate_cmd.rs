@@ -1,7 +1,7 @@
 //! `wetgran simulate`: one scene file run with its observers, reported as a table or JSON, with
 //! optional snapshots and profile pictures.
 
-use super::common::{Failure, check_snapshot_names, exit, print_json, show, write_file};
+use super::common::{Failure, check_snapshot_names, exit, print_json, show};
 use crate::output::{Outputs, Protected};
 use crate::report::run_text::{observed_text, summary_text};
 use crate::report::{ColourBy, profiles_svg, write_snapshot};
@@ -28,8 +28,9 @@ pub struct SimulateArgs {
     /// Colour of the SVG snapshot: `energy` (kinetic energy / E_cb) or `bridges`.
     #[arg(long, default_value = "energy", value_name = "BY")]
     pub colour_by: String,
-    /// Write the lateral profiles (T_g / E_cb, packing fraction, n_cb, f_lc against x) as SVG.
-    #[arg(long, value_name = "FILE.svg")]
+    /// Write the lateral profiles (T_g / E_cb, packing fraction, n_cb, f_lc against x): a
+    /// figure, `.svg`, `.pdf` or `.png` by the extension.
+    #[arg(long, value_name = "FILE")]
     pub profiles: Option<PathBuf>,
 }
 
@@ -58,6 +59,7 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
     }
     if let Some(p) = &args.profiles {
         outputs.claim("--profiles", p)?;
+        crate::report::figure::figure_format("--profiles", p)?;
     }
     let scene = load_scene(&args.scene)?;
     let ctx = super::common::all_cores();
@@ -86,7 +88,8 @@ fn run(args: &SimulateArgs) -> Result<Option<String>, Failure> {
         write_snapshot(path, &frame, colour_by, unit, outputs.protected())?;
     }
     if let Some(path) = &args.profiles {
-        write_file(path, profiles_svg(&run.observables), outputs.protected())?;
+        let svg = profiles_svg(&run.observables);
+        crate::report::figure::write_figure(path, &svg, outputs.protected())?;
     }
     Ok(run.report.invariant_violation.clone())
 }

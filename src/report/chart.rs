@@ -1,71 +1,146 @@
 //! Plotting helpers shared by the pictures drawn with plotters (`plot_phase`, `lines_plot`):
-//! tick marks at chosen values (a sweep's grid values, which plotters' own log axis skips), a
-//! legend drawn outside the plot, and line breaking of a note.
+//! font sizes in the SVG's pixels, tick marks drawn by hand (`report::ticks`: decades and minor
+//! ticks, which plotters' own log axis does not draw), a legend in a framed box of one or two
+//! columns, and line breaking of a note.
 
+use super::ticks::Tick;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+
+/// The plotters font size that comes out as `px` pixels in the SVG (plotters writes its size
+/// divided by 1.24).
+pub(crate) fn px(px: f64) -> f64 {
+    px * 1.24
+}
+
+/// A sans-serif font of `size` SVG pixels.
+pub(crate) fn font(size: f64) -> FontDesc<'static> {
+    ("sans-serif", px(size)).into_font()
+}
+
+/// Font sizes of the figures, in SVG pixels: at a column width of 8.5 cm a figure 480 px wide
+/// prints its 13 px text at 6.5 pt and its 15 px axis names at 7.5 pt.
+pub(crate) const TICK_FONT: f64 = 13.0;
+pub(crate) const AXIS_FONT: f64 = 15.0;
+pub(crate) const LEGEND_FONT: f64 = 12.5;
 
 /// The mark of a legend entry.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Swatch {
     Line(RGBColor),
-    Dot(RGBColor),
+    /// A dashed line (a guide).
+    Dashed(RGBColor),
+    /// A shaded square with a dot: a phase's region and its sampled points.
+    Region(RGBColor, RGBColor),
+    /// A marker with a horizontal error bar (a boundary point and its uncertainty).
+    ErrorBar(RGBColor),
     Ring(RGBColor),
     /// A grey disc with a white centre (label kept by its trend).
     Kept,
     /// A disc split into `n` grey sectors (bistable).
     Split(usize),
-    Cross(RGBColor),
     /// A square outline (a label decided by a fallback).
     Square(RGBColor),
     /// Text only (a continued line).
     None,
 }
 
-/// Draws the legend entries from `at` (pixels) downwards, framed.
+/// The width in pixels a legend entry's text takes (an estimate: 0.52 em a character).
+fn text_width(text: &str) -> i32 {
+    (0.52 * LEGEND_FONT * text.chars().filter(|c| *c != super::typeset::MARK).count() as f64).ceil()
+        as i32
+}
+
+/// The size in pixels of the legend of `entries` when it may be `width` pixels wide: one or two
+/// columns (two where the longest entry fits twice).
+pub(crate) fn legend_size(entries: &[(String, Swatch)], width: i32) -> (i32, i32, usize) {
+    let widest = entries
+        .iter()
+        .map(|(t, _)| text_width(t) + 34)
+        .max()
+        .unwrap_or(0);
+    let columns = if 2 * widest + 10 <= width { 2 } else { 1 };
+    let rows = entries.len().div_ceil(columns) as i32;
+    (columns as i32 * widest + 10, LEGEND_ROW * rows + 8, columns)
+}
+
+/// The height of a legend row in pixels.
+pub(crate) const LEGEND_ROW: i32 = 17;
+
+/// Draws the legend entries in a framed box at `at` (pixels), at most `width` wide: in two
+/// columns where they fit (down the first, then the second), else one.
 pub(crate) fn draw_legend(
     root: &DrawingArea<SVGBackend, Shift>,
     at: (i32, i32),
+    width: i32,
     entries: &[(String, Swatch)],
 ) -> Result<(), DrawingAreaErrorKind<std::io::Error>> {
-    const ROW: i32 = 18;
-    let (x, y0) = at;
-    let width = entries
-        .iter()
-        .map(|(t, _)| 7 * t.len() as i32 + 34)
-        .max()
-        .unwrap_or(0);
+    if entries.is_empty() {
+        return Ok(());
+    }
+    let (w, h, columns) = legend_size(entries, width);
+    let (x0, y0) = at;
     root.draw(&Rectangle::new(
-        [(x, y0), (x + width, y0 + ROW * entries.len() as i32 + 8)],
-        BLACK.stroke_width(1),
+        [(x0, y0), (x0 + w, y0 + h)],
+        WHITE.filled(),
     ))?;
-    let font = TextStyle::from(("sans-serif", 13).into_font()).pos(
-        plotters::style::text_anchor::Pos::new(
-            plotters::style::text_anchor::HPos::Left,
-            plotters::style::text_anchor::VPos::Center,
-        ),
-    );
+    root.draw(&Rectangle::new(
+        [(x0, y0), (x0 + w, y0 + h)],
+        RGBColor(120, 120, 120).stroke_width(1),
+    ))?;
+    let font = TextStyle::from(font(LEGEND_FONT)).pos(plotters::style::text_anchor::Pos::new(
+        plotters::style::text_anchor::HPos::Left,
+        plotters::style::text_anchor::VPos::Center,
+    ));
+    let rows = entries.len().div_ceil(columns);
+    let column_width = (w - 10) / columns as i32;
     for (k, (text, swatch)) in entries.iter().enumerate() {
-        let y = y0 + 13 + ROW * k as i32;
-        let c = (x + 14, y);
+        let x = x0 + 4 + column_width * (k / rows) as i32;
+        let y = y0 + 12 + LEGEND_ROW * (k % rows) as i32;
+        let c = (x + 12, y);
         match *swatch {
             Swatch::Line(col) => root.draw(&PathElement::new(
-                vec![(x + 5, y), (x + 23, y)],
+                vec![(x + 2, y), (x + 22, y)],
                 col.stroke_width(2),
             ))?,
-            Swatch::Dot(col) => root.draw(&Circle::new(c, 5, col.filled()))?,
-            Swatch::Ring(col) => root.draw(&Circle::new(c, 5, col.stroke_width(2)))?,
+            Swatch::Dashed(col) => root.draw(&plotters::element::DashedPathElement::new(
+                vec![(x + 2, y), (x + 22, y)],
+                5,
+                3,
+                col.stroke_width(2),
+            ))?,
+            Swatch::Region(tint, col) => {
+                root.draw(&Rectangle::new(
+                    [(x + 2, y - 7), (x + 22, y + 7)],
+                    tint.filled(),
+                ))?;
+                root.draw(&Circle::new(c, 3, col.filled()))?;
+            }
+            Swatch::ErrorBar(col) => {
+                root.draw(&PathElement::new(
+                    vec![(x + 2, y), (x + 22, y)],
+                    col.stroke_width(1),
+                ))?;
+                for end in [x + 2, x + 22] {
+                    root.draw(&PathElement::new(
+                        vec![(end, y - 3), (end, y + 3)],
+                        col.stroke_width(1),
+                    ))?;
+                }
+                root.draw(&Circle::new(c, 3, WHITE.filled()))?;
+                root.draw(&Circle::new(c, 3, BLACK.stroke_width(1)))?;
+            }
+            Swatch::Ring(col) => root.draw(&Circle::new(c, 4, col.stroke_width(2)))?,
             Swatch::Kept => {
-                root.draw(&Circle::new(c, 5, RGBColor(90, 90, 90).filled()))?;
+                root.draw(&Circle::new(c, 4, RGBColor(90, 90, 90).filled()))?;
                 root.draw(&Circle::new(c, 2, WHITE.filled()))?;
             }
             Swatch::Split(n) => {
                 let greys = [RGBColor(60, 60, 60), RGBColor(190, 190, 190)];
                 for k in 0..n.min(2) {
-                    shape(root, c, &sector(k, n, 6), greys[k], true)?;
+                    shape(root, c, &sector(k, n, 5), greys[k], true)?;
                 }
             }
-            Swatch::Cross(col) => root.draw(&Cross::new(c, 4, col.stroke_width(2)))?,
             Swatch::Square(col) => root.draw(&Rectangle::new(
                 [(c.0 - 6, c.1 - 6), (c.0 + 6, c.1 + 6)],
                 col.stroke_width(1),
@@ -77,15 +152,14 @@ pub(crate) fn draw_legend(
     Ok(())
 }
 
-/// Tick marks and labels at the given values of both axes of a chart (`plot`: its plotting
-/// area; `area`: the drawing area the chart was built on), in the chart's scale: the ticks a
-/// log axis of plotters would not draw at a sweep's grid values. Values outside the plot are
-/// skipped.
+/// Tick marks and labels of both axes of a chart (`plot`: its plotting area; `area`: the
+/// drawing area the chart was built on), in the chart's scale: labelled ticks 5 px long, minor
+/// ones 3 px (`report::ticks`). Ticks outside the plot are skipped.
 pub(crate) fn hand_ticks<CT>(
     area: &DrawingArea<SVGBackend, Shift>,
     plot: &DrawingArea<SVGBackend, CT>,
-    xs: &[f64],
-    ys: &[f64],
+    xs: &[Tick],
+    ys: &[Tick],
 ) -> Result<(), DrawingAreaErrorKind<std::io::Error>>
 where
     CT: plotters::coord::CoordTranslate<From = (f64, f64)>,
@@ -93,35 +167,40 @@ where
     use plotters::style::text_anchor::{HPos, Pos, VPos};
     let (xr, yr) = plot.get_pixel_range();
     let base = area.get_base_pixel();
-    let font = TextStyle::from(("sans-serif", 12).into_font());
+    let font = TextStyle::from(font(TICK_FONT));
     let below = font.pos(Pos::new(HPos::Center, VPos::Top));
     let left = font.pos(Pos::new(HPos::Right, VPos::Center));
     let (left_edge, bottom) = (xr.start - base.0, yr.end - base.1);
-    let y_any = ys.first().copied().unwrap_or(1.0);
-    let x_any = xs.first().copied().unwrap_or(1.0);
+    let y_any = ys.first().map_or(1.0, |t| t.value);
+    let x_any = xs.first().map_or(1.0, |t| t.value);
     // The x ticks below the plot, then the y ticks left of it.
-    for (values, on_x) in [(xs, true), (ys, false)] {
-        for &t in values {
-            let (px, py) = plot.map_coordinate(&if on_x { (t, y_any) } else { (x_any, t) });
+    for (ticks, on_x) in [(xs, true), (ys, false)] {
+        for t in ticks {
+            let v = t.value;
+            let (px, py) = plot.map_coordinate(&if on_x { (v, y_any) } else { (x_any, v) });
+            let len = if t.label.is_some() { 5 } else { 3 };
             let (tick, at, style) = if on_x {
                 if px < xr.start || px > xr.end {
                     continue;
                 }
                 let x = px - base.0;
-                ([(x, bottom), (x, bottom + 5)], (x, bottom + 7), &below)
+                ([(x, bottom), (x, bottom + len)], (x, bottom + 7), &below)
             } else {
                 if py < yr.start || py > yr.end {
                     continue;
                 }
                 let y = py - base.1;
                 (
-                    [(left_edge - 5, y), (left_edge, y)],
+                    [(left_edge - len, y), (left_edge, y)],
                     (left_edge - 7, y),
                     &left,
                 )
             };
             area.draw(&PathElement::new(tick, BLACK.stroke_width(1)))?;
-            area.draw(&Text::new(super::svg::label(t), at, style.clone()))?;
+            if let Some(label) = &t.label {
+                let text = super::typeset::marked(label);
+                area.draw(&Text::new(text, at, style.clone()))?;
+            }
         }
     }
     Ok(())

@@ -11,10 +11,18 @@
 //! inflection with a grey dotted line. `E*` is on a log axis; `T_g` too when it spans more than
 //! a factor of 20 (a solid is orders of magnitude colder than a gas); the other two are linear
 //! from zero. The panels of one column share their range, so the lines compare at a glance.
+//! Log axes have decade ticks (`report::ticks`), each axis one tick format; error bars have caps.
+//!
+//! [`overlay_svg`] (`lines --overlay`) draws each quantity in one panel for all Gamma, one colour
+//! per Gamma (dark blue at the lowest to yellow at the highest), where a collapse of the lines
+//! shows first; its markers have the Gamma's colour and the run state's shape.
 
+use super::chart::{AXIS_FONT, LEGEND_FONT, TICK_FONT, font, px};
 use super::lines::{GammaLine, LinePoint, Lines};
 use super::plot_phase::phase_color;
-use super::svg::{grid_ticks, label};
+use super::svg::label;
+use super::ticks::{Tick, axis_ticks};
+use super::typeset::{marked, typeset_svg};
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::element::DashedPathElement;
@@ -93,7 +101,7 @@ fn column_range(lines: &Lines, q: Quantity, log_allowed: bool) -> ((f64, f64), b
 }
 
 /// The `E*` range and ticks: log when every `E*` is positive.
-fn e_star_axis(lines: &Lines) -> ((f64, f64), bool, Vec<f64>) {
+fn e_star_axis(lines: &Lines) -> ((f64, f64), bool, Vec<Tick>) {
     let e: Vec<f64> = lines
         .lines
         .iter()
@@ -102,7 +110,7 @@ fn e_star_axis(lines: &Lines) -> ((f64, f64), bool, Vec<f64>) {
     let lo = e.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if !lo.is_finite() {
-        return ((0.1, 10.0), true, vec![1.0]);
+        return ((0.1, 10.0), true, axis_ticks((0.1, 10.0), true));
     }
     let log = lo > 0.0;
     let range = if log {
@@ -112,7 +120,7 @@ fn e_star_axis(lines: &Lines) -> ((f64, f64), bool, Vec<f64>) {
         let pad = ((hi - lo) * 0.06).max(0.05);
         (lo - pad, hi + pad)
     };
-    (range, log, grid_ticks(&e, range, log, 10))
+    (range, log, axis_ticks(range, log))
 }
 
 /// Draws the lines of a sweep as SVG (module doc).
@@ -143,11 +151,18 @@ pub fn lines_svg(lines: &Lines) -> Result<String, String> {
             let (y_range, y_log) = column_range(lines, q, matches!(q, Quantity::Temperature));
             for (r, &gamma) in gammas.iter().enumerate() {
                 let panel = Panel {
-                    lines: lines.at_gamma(gamma),
+                    lines: lines
+                        .at_gamma(gamma)
+                        .into_iter()
+                        .enumerate()
+                        .map(|(k, l)| (l, BRANCH_COLOURS[k % BRANCH_COLOURS.len()]))
+                        .collect(),
+                    by_gamma: false,
                     quantity: q,
-                    caption: format!("Gamma = {}: {}", label(gamma), q.name(lines)),
-                    y_name: q.name(lines),
+                    caption: marked(&format!("Gamma = {}", label(gamma))),
+                    y_name: marked(&q.name(lines)),
                     y_range,
+                    y_ticks: axis_ticks(y_range, y_log),
                     x_ticks: &x_ticks,
                 };
                 let area = &panels[r * quantities.len() + c];
@@ -162,7 +177,130 @@ pub fn lines_svg(lines: &Lines) -> Result<String, String> {
         }
         root.present().map_err(err)?;
     }
-    Ok(svg)
+    Ok(typeset_svg(&svg))
+}
+
+/// The colour of Gamma `k` of `n` in an overlay (dark blue to yellow, `svg::colour`).
+fn gamma_colour(k: usize, n: usize) -> RGBColor {
+    let hex = super::svg::colour(
+        if n > 1 {
+            k as f64 / (n - 1) as f64
+        } else {
+            0.0
+        } * 0.9,
+    );
+    let c = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).unwrap_or(0);
+    RGBColor(c(1), c(3), c(5))
+}
+
+/// The width and the panel height of an overlay, in pixels.
+const OVERLAY_WIDTH: u32 = 480;
+const OVERLAY_PANEL: u32 = 300;
+
+/// Draws each quantity of the lines in one panel for all Gamma (module doc), the panels one
+/// above the other, a legend of the Gamma values on top.
+pub fn overlay_svg(lines: &Lines) -> Result<String, String> {
+    let gammas = lines.gammas();
+    if gammas.is_empty() {
+        return Err(format!(
+            "sweep {}: no finished job of a shaken scene to draw along lines of constant Gamma",
+            lines.sweep
+        ));
+    }
+    let quantities: Vec<Quantity> = if lines.wet {
+        vec![Quantity::Temperature, Quantity::Bridges, Quantity::Contrast]
+    } else {
+        vec![Quantity::Temperature, Quantity::Contrast]
+    };
+    let (x_range, x_log, x_ticks) = e_star_axis(lines);
+    let per_row = 4;
+    let header = 30 + 18 * gammas.len().div_ceil(per_row) as u32 + 36;
+    let height = header + OVERLAY_PANEL * quantities.len() as u32;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (OVERLAY_WIDTH, height)).into_drawing_area();
+        let err = |e: DrawingAreaErrorKind<_>| e.to_string();
+        root.fill(&WHITE).map_err(err)?;
+        let (top, body) = root.split_vertically(header);
+        top.draw(&Text::new(
+            marked(&format!("{}: all lines of constant Gamma", lines.sweep)),
+            (10, 6),
+            font(14.0),
+        ))
+        .map_err(err)?;
+        let left = TextStyle::from(font(LEGEND_FONT)).pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Left,
+            plotters::style::text_anchor::VPos::Center,
+        ));
+        for (k, &g) in gammas.iter().enumerate() {
+            let (x, y) = (
+                14 + 115 * (k % per_row) as i32,
+                36 + 18 * (k / per_row) as i32,
+            );
+            let c = gamma_colour(k, gammas.len());
+            top.draw(&PathElement::new(
+                vec![(x, y), (x + 20, y)],
+                c.stroke_width(2),
+            ))
+            .map_err(err)?;
+            top.draw(&Circle::new((x + 10, y), 4, c.filled()))
+                .map_err(err)?;
+            top.draw(&Text::new(
+                marked(&format!("Gamma = {}", label(g))),
+                (x + 26, y),
+                left.clone(),
+            ))
+            .map_err(err)?;
+        }
+        for (k, note) in [
+            "shape: run state (circle stationary, triangles heating/cooling);",
+            "hollow: label may change; bars: standard error",
+        ]
+        .iter()
+        .enumerate()
+        {
+            top.draw(&Text::new(
+                note.to_string(),
+                (14, header as i32 - 30 + 14 * k as i32),
+                font(11.5),
+            ))
+            .map_err(err)?;
+        }
+        let panels = body.split_evenly((quantities.len(), 1));
+        for (r, &q) in quantities.iter().enumerate() {
+            let (y_range, y_log) = column_range(lines, q, matches!(q, Quantity::Temperature));
+            let panel = Panel {
+                lines: lines
+                    .lines
+                    .iter()
+                    .map(|l| {
+                        let k = gammas
+                            .iter()
+                            .position(|g| (g - l.gamma).abs() <= 1e-9 * g.abs())
+                            .unwrap_or(0);
+                        (l, gamma_colour(k, gammas.len()))
+                    })
+                    .collect(),
+                by_gamma: true,
+                quantity: q,
+                caption: String::new(),
+                y_name: marked(&q.name(lines)),
+                y_range,
+                y_ticks: axis_ticks(y_range, y_log),
+                x_ticks: &x_ticks,
+            };
+            let area = &panels[r];
+            let (x, y) = (x_range.0..x_range.1, y_range.0..y_range.1);
+            match (x_log, y_log) {
+                (true, true) => panel.draw(area, x.log_scale(), y.log_scale()),
+                (true, false) => panel.draw(area, x.log_scale(), y),
+                (false, true) => panel.draw(area, x, y.log_scale()),
+                (false, false) => panel.draw(area, x, y),
+            }?;
+        }
+        root.present().map_err(err)?;
+    }
+    Ok(typeset_svg(&svg))
 }
 
 /// The legend above the panels: labels, trend shapes, fill, branches, boundaries.
@@ -170,15 +308,15 @@ fn legend(
     area: &DrawingArea<SVGBackend, Shift>,
     lines: &Lines,
 ) -> Result<(), DrawingAreaErrorKind<std::io::Error>> {
-    let font = ("sans-serif", 13).into_font();
-    let text = |s: &str, x: i32, y: i32| Text::new(s.to_string(), (x, y - 7), font.clone());
+    let small = font(LEGEND_FONT);
+    let text = |s: &str, x: i32, y: i32| Text::new(marked(s), (x, y - 7), small.clone());
     area.draw(&Text::new(
         format!(
             "wetgran lines: {} (order parameters along lines of constant Gamma)",
             lines.sweep
         ),
         (12, 8),
-        ("sans-serif", 18).into_font(),
+        font(16.0),
     ))?;
     let mut phases: Vec<&str> = lines
         .lines
@@ -192,8 +330,9 @@ fn legend(
     x += 48;
     for ph in phases {
         area.draw(&Circle::new((x, 46), 5, phase_color(ph).filled()))?;
-        area.draw(&text(ph, x + 9, 46))?;
-        x += 22 + 8 * ph.len() as i32;
+        let name = super::plot_phase::phase_name(ph);
+        area.draw(&text(&name, x + 9, 46))?;
+        x += 22 + 8 * name.len() as i32;
     }
     x += 16;
     area.draw(&text("run state:", x, 46))?;
@@ -255,7 +394,7 @@ fn legend(
     ))?;
     area.draw(&text("fluid-gas inflection of T_g", x + 8, 72))?;
     area.draw(&text(
-        "E* on a log axis, ticks at the sweep's E* values; panels of a column share their range",
+        "E* on a log axis; panels of a column share their range; --overlay: all Gamma in one panel",
         14,
         100,
     ))?;
@@ -283,14 +422,18 @@ fn marker<DB: DrawingBackend>(
     super::chart::shape(area, at, &shape, colour, filled)
 }
 
-/// One panel: one quantity of the lines (branches) at one Gamma.
+/// One panel: one quantity of the lines (the branches at one Gamma, or every line of an
+/// overlay), each with its colour; `by_gamma`: the markers take the line's colour (an overlay)
+/// rather than their label's, and label changes and inflections are left out.
 struct Panel<'a> {
-    lines: Vec<&'a GammaLine>,
+    lines: Vec<(&'a GammaLine, RGBColor)>,
+    by_gamma: bool,
     quantity: Quantity,
     caption: String,
     y_name: String,
     y_range: (f64, f64),
-    x_ticks: &'a [f64],
+    y_ticks: Vec<Tick>,
+    x_ticks: &'a [Tick],
 }
 
 impl Panel<'_> {
@@ -307,39 +450,41 @@ impl Panel<'_> {
         YR::CoordDescType: ValueFormatter<f64>,
     {
         let err = |e: DrawingAreaErrorKind<_>| e.to_string();
-        let mut chart = ChartBuilder::on(area)
-            .caption(&self.caption, ("sans-serif", 14))
+        let mut builder = ChartBuilder::on(area);
+        if !self.caption.is_empty() {
+            builder.caption(&self.caption, font(TICK_FONT + 1.0));
+        }
+        let mut chart = builder
             .margin(8)
-            .x_label_area_size(34)
-            .y_label_area_size(58)
+            .margin_right(14)
+            .x_label_area_size(42)
+            .y_label_area_size(62)
             .build_cartesian_2d(x, y)
             .map_err(err)?;
         chart
             .configure_mesh()
-            .x_desc("E*")
+            .x_desc(marked("E*"))
             .y_desc(self.y_name.as_str())
-            .disable_x_mesh()
+            .axis_desc_style(("sans-serif", px(AXIS_FONT)))
+            .disable_mesh()
             .x_label_formatter(&|_| String::new())
-            .set_tick_mark_size(LabelAreaPosition::Bottom, 0)
-            .y_labels(6)
-            .y_label_formatter(&|v| label(*v))
-            .light_line_style(WHITE)
+            .y_label_formatter(&|_| String::new())
+            .set_all_tick_mark_size(0)
             .draw()
             .map_err(err)?;
         let plot = chart.plotting_area();
         let (y0, y1) = self.y_range;
-        // Ticks at the grid's E* values, drawn by hand (the log axis's own ticks skip most).
-        super::chart::hand_ticks(area, plot, self.x_ticks, &[]).map_err(err)?;
+        // Decade ticks drawn by hand (the log axis's own ticks skip most), one format per axis.
+        super::chart::hand_ticks(area, plot, self.x_ticks, &self.y_ticks).map_err(err)?;
         let clip = |v: f64| v.clamp(y0, y1);
-        for (k, line) in self.lines.iter().enumerate() {
-            let colour = BRANCH_COLOURS[k % BRANCH_COLOURS.len()];
+        for &(line, colour) in &self.lines {
             let means = means(line, self.quantity);
             plot.draw(&PathElement::new(
                 means.iter().map(|&(e, v)| (e, clip(v))).collect::<Vec<_>>(),
                 colour.stroke_width(1),
             ))
             .map_err(err)?;
-            for b in &line.boundaries {
+            for b in line.boundaries.iter().filter(|_| !self.by_gamma) {
                 plot.draw(&DashedPathElement::new(
                     vec![(b.e_star, y0), (b.e_star, y1)],
                     4,
@@ -349,11 +494,13 @@ impl Panel<'_> {
                 .map_err(err)?;
                 plot.draw(
                     &(EmptyElement::at((b.e_star, y1))
-                        + Text::new(b.pair.clone(), (3, 2), ("sans-serif", 11))),
+                        + Text::new(b.pair.clone(), (3, 2), font(11.0))),
                 )
                 .map_err(err)?;
             }
-            if let (Quantity::Temperature, Some(e)) = (self.quantity, line.inflection) {
+            if let (Quantity::Temperature, Some(e), false) =
+                (self.quantity, line.inflection, self.by_gamma)
+            {
                 plot.draw(&DashedPathElement::new(
                     vec![(e, y0), (e, y1)],
                     1,
@@ -366,19 +513,33 @@ impl Panel<'_> {
                 let Some((v, se)) = self.quantity.value(p).filter(|(v, _)| v.is_finite()) else {
                     continue;
                 };
-                if let Some(se) = se.filter(|s| *s > 0.0) {
-                    plot.draw(&PathElement::new(
-                        vec![(p.e_star, clip(v - se)), (p.e_star, clip(v + se))],
-                        RGBColor(90, 90, 90).stroke_width(1),
-                    ))
-                    .map_err(err)?;
-                }
-                let colour = p
-                    .phase
-                    .as_deref()
-                    .map_or(RGBColor(127, 127, 127), phase_color);
-                let at = plot.map_coordinate(&(p.e_star, clip(v)));
                 let base = area.get_base_pixel();
+                let to_area = |v: f64| {
+                    let at = plot.map_coordinate(&(p.e_star, clip(v)));
+                    (at.0 - base.0, at.1 - base.1)
+                };
+                // The standard error: a bar with caps, 1.5 px, drawn under the marker.
+                if let Some(se) = se.filter(|s| *s > 0.0) {
+                    let (lo, hi) = (to_area(v - se), to_area(v + se));
+                    let bar = RGBColor(60, 60, 60).stroke_width(1);
+                    area.draw(&PathElement::new(vec![lo, hi], bar))
+                        .map_err(err)?;
+                    for end in [lo, hi] {
+                        area.draw(&PathElement::new(
+                            vec![(end.0 - 3, end.1), (end.0 + 3, end.1)],
+                            bar,
+                        ))
+                        .map_err(err)?;
+                    }
+                }
+                let colour = if self.by_gamma {
+                    colour
+                } else {
+                    p.phase
+                        .as_deref()
+                        .map_or(RGBColor(127, 127, 127), phase_color)
+                };
+                let at = plot.map_coordinate(&(p.e_star, clip(v)));
                 marker(
                     area,
                     (at.0 - base.0, at.1 - base.1),
@@ -411,4 +572,103 @@ fn means(line: &GammaLine, q: Quantity) -> Vec<(f64, f64)> {
         }
     }
     out.into_iter().map(|(e, s, n)| (e, s / n as f64)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::figure_read::{svg_count, svg_texts};
+
+    /// Three lines of constant Gamma, five E* each (0.001 .. 10: four decades), with errors.
+    fn lines() -> Lines {
+        let line = |gamma: f64| GammaLine {
+            gamma,
+            branch: None,
+            points: (0..5)
+                .map(|k| {
+                    let e = 10f64.powi(k - 3);
+                    LinePoint {
+                        job_id: format!("j{gamma}{k}"),
+                        point: k as i64,
+                        replica: 0,
+                        e_star: e,
+                        phase: Some(if k < 3 { "f" } else { "g" }.into()),
+                        trend: Some("stationary".into()),
+                        trust: None,
+                        trusted: true,
+                        temperature: 0.01 * gamma * 10f64.powi(k),
+                        temperature_error: Some(0.002 * gamma * 10f64.powi(k)),
+                        bridges: Some(1.0 - 0.2 * k as f64),
+                        bridges_error: Some(0.05),
+                        contrast: 0.1,
+                        contrast_error: Some(0.02),
+                    }
+                })
+                .collect(),
+            boundaries: vec![],
+            inflection: None,
+        };
+        Lines {
+            sweep: "s".into(),
+            wet: true,
+            energy_unit: "E_cb".into(),
+            lines: vec![line(1.0), line(2.0), line(4.0)],
+            left_out: 0,
+        }
+    }
+
+    /// The number of panels of a drawing: the frames plotters draws around each plot area
+    /// are not elements of their own, so count the y axis names.
+    fn axis_names(svg: &str, name: &str) -> usize {
+        svg_texts(svg).iter().filter(|t| *t == name).count()
+    }
+
+    #[test]
+    fn the_panels_have_one_tick_format_per_axis_and_error_bars_with_caps() {
+        let svg = lines_svg(&lines()).unwrap();
+        // 3 Gamma x 3 quantities: one T_g/E_cb panel per Gamma, typeset.
+        assert_eq!(axis_names(&svg, "Tg / Ecb"), 3);
+        assert_eq!(axis_names(&svg, "bridges per grain"), 3);
+        assert_eq!(axis_names(&svg, "E*"), 9);
+        let texts = svg_texts(&svg);
+        // E* over four decades: decades in plain decimals, no 1.00e-3 beside 0.01.
+        for t in ["0.001", "0.01", "0.1", "1", "10"] {
+            assert!(texts.iter().any(|x| x == t), "no tick {t}: {texts:?}");
+        }
+        assert!(!texts.iter().any(|t| t.contains("e-")));
+        // Error bars: a bar and two caps per point and quantity (45 points x 3).
+        let bars = svg_count(&svg, "polyline", Some(("stroke", "#3C3C3C")));
+        assert_eq!(bars, 3 * 45, "{bars}");
+    }
+
+    #[test]
+    fn the_overlay_draws_every_gamma_in_one_panel_per_quantity() {
+        let svg = overlay_svg(&lines()).unwrap();
+        assert_eq!(axis_names(&svg, "Tg / Ecb"), 1);
+        assert_eq!(axis_names(&svg, "bridges per grain"), 1);
+        assert_eq!(axis_names(&svg, "ΔNcb".replace('N', "n").as_str()), 1);
+        let texts = svg_texts(&svg);
+        for g in ["Γ = 1", "Γ = 2", "Γ = 4"] {
+            assert!(
+                texts.iter().any(|t| t == g),
+                "no legend entry {g}: {texts:?}"
+            );
+        }
+        // One line per Gamma in each panel, each in its own colour.
+        let colours: std::collections::BTreeSet<String> = (0..3)
+            .map(|k| {
+                let c = gamma_colour(k, 3);
+                format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
+            })
+            .collect();
+        assert_eq!(colours.len(), 3);
+        for c in &colours {
+            // The legend's line and one mean line per panel.
+            assert_eq!(
+                svg_count(&svg, "polyline", Some(("stroke", c))),
+                1 + 3,
+                "{c}"
+            );
+        }
+    }
 }

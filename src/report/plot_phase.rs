@@ -1,6 +1,10 @@
-//! The phase diagram as SVG (plotters): map points coloured by phase, boundary points, and for
-//! shaking sweeps the landmark lines of docs/model.md 4.1 and 8 drawn over, on `E*` (log axis)
-//! against `Gamma`:
+//! The phase diagram as SVG (plotters), a figure for a paper: each phase's **region** shaded (the
+//! Voronoi cell of every sampled point, in the axes' own scales: `report::regions`), the sampled
+//! points as dots in their phase's colour, the **boundaries** as lines (the interfaces between
+//! cells of different phase, each through the boundary point halfway between the two samples)
+//! with every boundary point's uncertainty as an error bar with caps (the straddling edge), and
+//! for shaking sweeps the guides of docs/model.md 4.1 and 8 dashed, on `E*` (log axis, decade
+//! ticks) against `Gamma`:
 //! - `A = s_crit`: `Gamma = 2 E* E_cb / (m g s_crit)` (wet scenes),
 //! - `A = d`:      `Gamma = 2 E* E_cb / (m g d)` (with `m g d` in place of `E_cb` for `E_d*`),
 //! - Eq. 4.15:     `Gamma_C = 1 + F_B (1 - E*) / (M m g)`, never below `1 - 1/M`, with
@@ -12,6 +16,10 @@
 //! the line `F_max = 0.9229 F_B d / L_x` (`F_B = E_cb / s_crit`) evaluated on each point's own
 //! scene (the other axis may change `L_x`, `E_cb`, `s_crit` or anything else).
 //!
+//! Axis names and legend are typeset (`report::typeset`: Γ, E*, ...), phases named in full
+//! (`solid`, `fluid-gas coexistence`); the legend is a box of one or two columns below the plot,
+//! and a caption under it gives Eq. 4.15 with its floor and the number of layers `M`.
+//!
 //! A sweep with an `initial.start` axis (the hot and the cold branch of an elastic diagram) is
 //! drawn as one map of its branches ([`branches_map`]): a grid point where the branches agree is
 //! one dot; a bistable point (their phases differ) is a split disc, one sector per branch in its
@@ -19,7 +27,11 @@
 //! and labelled with the phases in branch order (`g/f`). Each branch's boundary points keep
 //! their own marker, since the boundaries of the branches are extracted separately.
 
-use super::chart::{Swatch, draw_legend, hand_ticks, sector, shape, wrap};
+use super::chart::{
+    AXIS_FONT, LEGEND_FONT, LEGEND_ROW, Swatch, draw_legend, font, hand_ticks, legend_size, px,
+    sector, shape, wrap,
+};
+use super::typeset::{marked, typeset_svg};
 use crate::boundary::{PhaseMap, PlaneAxis, Slice};
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
@@ -37,6 +49,27 @@ pub fn phase_color(phase: &str) -> RGBColor {
         "fgc" => RGBColor(140, 86, 75),
         _ => RGBColor(127, 127, 127),
     }
+}
+
+/// The name of a phase label in a legend: `s` solid, `f` fluid, `g` gas and the coexistences in
+/// words (any other label as it is).
+pub fn phase_name(phase: &str) -> String {
+    match phase {
+        "s" => "solid",
+        "f" => "fluid",
+        "g" => "gas",
+        "sfc" => "solid-fluid coexistence",
+        "sgc" => "solid-gas coexistence",
+        "fgc" => "fluid-gas coexistence",
+        other => other,
+    }
+    .to_string()
+}
+
+/// `colour` mixed with white: `share` of the colour (the shade of a region).
+fn tint(colour: RGBColor, share: f64) -> RGBColor {
+    let mix = |c: u8| (255.0 - share * (255.0 - c as f64)).round() as u8;
+    RGBColor(mix(colour.0), mix(colour.1), mix(colour.2))
 }
 
 /// The theory lines of a shaking sweep, from its scene.
@@ -266,16 +299,18 @@ pub struct MapStyle {
 #[derive(Debug, Clone, PartialEq)]
 pub struct DrawnMap {
     pub svg: String,
+    /// The size of the SVG in pixels (its height grows with the legend).
+    pub width: u32,
+    pub height: u32,
     /// `(x, y, pixel x, pixel y)` of every merged grid position ([`merge_branches`] order).
     pub points: Vec<(f64, f64, i32, i32)>,
 }
 
-/// The width of the map's SVG: the plot, then the legend to its right.
-pub const MAP_WIDTH: u32 = 1240;
-/// The height of the map's SVG.
-pub const MAP_HEIGHT: u32 = 640;
-/// The width kept right of the plot for the legend.
-const LEGEND_WIDTH: u32 = 330;
+/// The width of the map's SVG (the legend goes below the plot): 480 px, so its text stays
+/// readable at a column width of 8.5 cm (`chart::TICK_FONT`).
+pub const MAP_WIDTH: u32 = 480;
+/// The height of the map's plot, title and axes (the legend and caption come below).
+const PLOT_HEIGHT: u32 = 400;
 
 /// Draws the slices of a phase map that differ only in their start mode (the branches) as one
 /// SVG map, bistable points as split discs (module doc), with the axes' scales of `style`;
@@ -306,27 +341,40 @@ pub fn branches_map(
     }
     let x_range = range_of(all().map(|p| p.x), x_log);
     let y_range = range_of(all().map(|p| p.y), y_log);
-    let ticks = |values: Vec<f64>, range, log| super::svg::grid_ticks(&values, range, log, 14);
-    let desc = |a: &PlaneAxis, log: bool| match log {
-        true => format!("{} (log scale)", a.label),
-        false => a.label.clone(),
-    };
     let drawing = Drawing {
         title,
-        x_desc: desc(xa, x_log),
-        y_desc: desc(ya, y_log),
+        x_desc: marked(&xa.label),
+        y_desc: marked(&ya.label),
         note: no_boundary_note(slices),
         slices,
+        axes: (xa, ya),
+        ranges: (x_range, y_range),
         lines: overlay_lines(map, landmarks, chain_model, (x_range, y_range), x_log),
+        caption: landmarks
+            .filter(|l| map.shaking && l.wet.is_some())
+            .map(|l| {
+                format!(
+                    "Eq. 4.15: Gamma_C = 1 + F_B (1 \u{2212} E*) / (M m g), F_B = E_cb / s_crit, \
+                     with M = {:.2} layers of grains; it never falls below 1 \u{2212} 1/M = {:.2} \
+                     (its flat part at large E*). Shades: the phases' regions (the cells of the \
+                     sampled points), paler where the label may change.",
+                    l.layers,
+                    1.0 - 1.0 / l.layers
+                )
+            }),
         ticks: (
-            ticks(all().map(|p| p.x).collect(), x_range, x_log),
-            ticks(all().map(|p| p.y).collect(), y_range, y_log),
+            super::ticks::axis_ticks(x_range, x_log),
+            super::ticks::axis_ticks(y_range, y_log),
         ),
     };
+    let legend = drawing.legend();
+    let legend_h = legend_size(&legend, MAP_WIDTH as i32 - 20).1;
+    let caption_lines = drawing.caption.as_ref().map_or(0, |c| wrap(c, 74).len()) as i32;
+    let height = PLOT_HEIGHT + (legend_h + 10 + caption_lines * LEGEND_ROW + 6) as u32;
     let mut svg = String::new();
     let points;
     {
-        let root = SVGBackend::with_string(&mut svg, (MAP_WIDTH, MAP_HEIGHT)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (MAP_WIDTH, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let (x, y) = (x_range.0..x_range.1, y_range.0..y_range.1);
         points = match (x_log, y_log) {
@@ -335,9 +383,17 @@ pub fn branches_map(
             (false, true) => drawing.draw(&root, x, y.log_scale()),
             (false, false) => drawing.draw(&root, x, y),
         }?;
+        drawing
+            .draw_legend(&root, &legend)
+            .map_err(|e| e.to_string())?;
         root.present().map_err(|e| e.to_string())?;
     }
-    Ok(DrawnMap { svg, points })
+    Ok(DrawnMap {
+        svg: typeset_svg(&svg),
+        width: MAP_WIDTH,
+        height,
+        points,
+    })
 }
 
 /// The overlay lines of a map (the landmarks of a shaking map, the chain model), clipped to the
@@ -366,19 +422,19 @@ fn overlay_lines(
         if let Some((s_crit, _)) = l.wet {
             lines.push((
                 "A = s_crit".to_string(),
-                RGBColor(0, 0, 0),
+                RGBColor(60, 60, 170),
                 clipped(&xs, |e| Some(l.gamma_at_amplitude(e, s_crit)), y0, y1),
             ));
         }
         lines.push((
             "A = d".to_string(),
-            RGBColor(90, 90, 90),
+            RGBColor(110, 110, 110),
             clipped(&xs, |e| Some(l.gamma_at_amplitude(e, l.diameter)), y0, y1),
         ));
         if l.wet.is_some() {
             lines.push((
-                format!("Eq. 4.15 (M = {:.2})", l.layers),
-                RGBColor(23, 190, 207),
+                "Eq. 4.15, Gamma_C (caption)".to_string(),
+                RGBColor(0, 150, 170),
                 clipped(&xs, |e| l.gamma_c(e), y0, y1),
             ));
         }
@@ -396,7 +452,7 @@ fn overlay_lines(
             line
         };
         lines.push((
-            format!("chain model, Eq. 7.9 (F_max L_x / (F_B d) = {CHAIN_MODEL_CONSTANT})"),
+            format!("chain model, Eq. 7.9: F_max L_x / (F_B d) = {CHAIN_MODEL_CONSTANT}"),
             RGBColor(214, 39, 40),
             vec![line],
         ));
@@ -404,16 +460,22 @@ fn overlay_lines(
     lines
 }
 
-/// What a map draws: title, axis names, the note saying why no boundary is drawn, the
-/// branches' points, the overlay lines and the ticks of both axes.
+/// What a map draws: title, axis names (marked for typesetting), the note saying why no
+/// boundary is drawn, the branches' points, the overlay lines, the caption under the legend and
+/// the ticks of both axes.
 struct Drawing<'a> {
     title: &'a str,
     x_desc: String,
     y_desc: String,
     note: Option<String>,
     slices: &'a [&'a Slice],
+    /// The plane's axes (the tessellation is in their scales, as the boundaries' extraction)
+    /// and the plot's ranges on them.
+    axes: (&'a PlaneAxis, &'a PlaneAxis),
+    ranges: ((f64, f64), (f64, f64)),
     lines: Vec<Line>,
-    ticks: (Vec<f64>, Vec<f64>),
+    caption: Option<String>,
+    ticks: (Vec<super::ticks::Tick>, Vec<super::ticks::Tick>),
 }
 
 /// Why a map has no boundary point, in words (`None` when it has one).
@@ -452,7 +514,131 @@ pub fn no_boundary_note(slices: &[&Slice]) -> Option<String> {
     })
 }
 
+/// The colours of each branch's boundary lines (the first black).
+const BRANCH_COLOURS: [RGBColor; 3] = [
+    RGBColor(0, 0, 0),
+    RGBColor(170, 0, 170),
+    RGBColor(0, 110, 110),
+];
+
+/// The share of a phase's colour in its region's shade: trusted points, and points whose label
+/// may still change (paler).
+const REGION_SHADE: f64 = 0.3;
+const UNTRUSTED_SHADE: f64 = 0.12;
+
+/// The shade of a bistable point's region.
+const BISTABLE_SHADE: RGBColor = RGBColor(215, 215, 215);
+
 impl Drawing<'_> {
+    /// The legend's entries, in the order drawn: phases (region and dot), the marks of trust,
+    /// bistable and fallback points, boundaries and their uncertainty, the guides.
+    fn legend(&self) -> Vec<(String, Swatch)> {
+        let points = merge_branches(self.slices);
+        let mut legend: Vec<(String, Swatch)> = Vec::new();
+        let mut phases: Vec<&str> = points
+            .iter()
+            .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
+            .collect();
+        phases.sort();
+        phases.dedup();
+        for phase in phases {
+            let c = phase_color(phase);
+            legend.push((phase_name(phase), Swatch::Region(tint(c, REGION_SHADE), c)));
+        }
+        if points.iter().any(|p| !p.trusted) {
+            legend.push((
+                "hollow: label may change".to_string(),
+                Swatch::Ring(RGBColor(90, 90, 90)),
+            ));
+        }
+        if points
+            .iter()
+            .any(|p| p.trusted && p.label_kept && !p.bistable())
+        {
+            legend.push(("white centre: label kept".to_string(), Swatch::Kept));
+        }
+        let n = self.slices.len();
+        if points.iter().any(DrawnPoint::bistable) {
+            let names: Vec<String> = (0..n).map(|k| branch_name(self.slices, k)).collect();
+            let how = if n == 2 {
+                format!("left {}, right {}", names[0], names[1])
+            } else {
+                format!("anticlockwise from the top: {}", names.join(", "))
+            };
+            legend.push((format!("split disc: bistable ({how})"), Swatch::Split(n)));
+            let short: Vec<String> = (0..n)
+                .map(|k| {
+                    self.slices[k]
+                        .branch
+                        .clone()
+                        .unwrap_or_else(|| (k + 1).to_string())
+                })
+                .collect();
+            legend.push((
+                format!("text by the disc: phases {}", short.join("/")),
+                Swatch::None,
+            ));
+        }
+        if points.iter().any(|p| p.fallback) {
+            legend.push((
+                "square: decided by a fallback".to_string(),
+                Swatch::Square(BLACK),
+            ));
+        }
+        let mut any_boundary = false;
+        for (k, slice) in self.slices.iter().enumerate() {
+            if slice.boundaries.values().all(Vec::is_empty) {
+                continue;
+            }
+            any_boundary = true;
+            let label = if n > 1 {
+                format!("phase boundary, {}", branch_name(self.slices, k))
+            } else {
+                "phase boundary".to_string()
+            };
+            legend.push((
+                marked(&label),
+                Swatch::Line(BRANCH_COLOURS[k % BRANCH_COLOURS.len()]),
+            ));
+        }
+        if any_boundary {
+            legend.push((
+                "bars: straddling edge".to_string(),
+                Swatch::ErrorBar(RGBColor(70, 70, 70)),
+            ));
+        }
+        for (label, colour, parts) in &self.lines {
+            if !parts.is_empty() {
+                legend.push((marked(label), Swatch::Dashed(*colour)));
+            }
+        }
+        legend
+    }
+
+    /// The legend (a box of one or two columns) and the caption below the plot.
+    fn draw_legend(
+        &self,
+        root: &DrawingArea<SVGBackend, Shift>,
+        legend: &[(String, Swatch)],
+    ) -> Result<(), DrawingAreaErrorKind<std::io::Error>> {
+        let top = PLOT_HEIGHT as i32;
+        draw_legend(root, (10, top), MAP_WIDTH as i32 - 20, legend)?;
+        let below = top + legend_size(legend, MAP_WIDTH as i32 - 20).1 + 8;
+        if let Some(caption) = &self.caption {
+            for (k, line) in wrap(caption, 74).iter().enumerate() {
+                root.draw(&Text::new(
+                    marked(line),
+                    (10, below + 12 + LEGEND_ROW * k as i32),
+                    TextStyle::from(font(LEGEND_FONT)).pos(plotters::style::text_anchor::Pos::new(
+                        plotters::style::text_anchor::HPos::Left,
+                        plotters::style::text_anchor::VPos::Center,
+                    )),
+                ))?;
+            }
+        }
+        Ok(())
+    }
+
     fn draw<XR, YR>(
         &self,
         root: &DrawingArea<SVGBackend, Shift>,
@@ -466,141 +652,252 @@ impl Drawing<'_> {
         YR::CoordDescType: ValueFormatter<f64>,
     {
         let err = |e: DrawingAreaErrorKind<_>| e.to_string();
-        let mut chart = ChartBuilder::on(root)
-            .caption(self.title, ("sans-serif", 20))
-            .margin(15)
-            .margin_right(15 + LEGEND_WIDTH)
-            .x_label_area_size(45)
-            .y_label_area_size(60)
+        let (upper, _) = root.split_vertically(PLOT_HEIGHT);
+        let mut chart = ChartBuilder::on(&upper)
+            .caption(self.title, font(14.0))
+            .margin(10)
+            .margin_right(16)
+            .x_label_area_size(46)
+            .y_label_area_size(58)
             .build_cartesian_2d(x, y)
             .map_err(err)?;
         chart
             .configure_mesh()
             .x_desc(&self.x_desc)
             .y_desc(&self.y_desc)
+            .axis_desc_style(("sans-serif", px(AXIS_FONT)))
             .disable_mesh()
             .x_label_formatter(&|_| String::new())
             .y_label_formatter(&|_| String::new())
             .set_all_tick_mark_size(0)
             .draw()
             .map_err(err)?;
+        let points = merge_branches(self.slices);
+        let at: Vec<(i32, i32)> = points
+            .iter()
+            .map(|p| chart.backend_coord(&(p.x, p.y)))
+            .collect();
+        let cells = self.draw_regions(root, &chart, &points).map_err(err)?;
+        // The frame again, over the shades.
+        let (xr, yr) = chart.plotting_area().get_pixel_range();
+        root.draw(&Rectangle::new(
+            [(xr.start, yr.start), (xr.end - 1, yr.end - 1)],
+            BLACK.stroke_width(1),
+        ))
+        .map_err(err)?;
         hand_ticks(root, chart.plotting_area(), &self.ticks.0, &self.ticks.1).map_err(err)?;
+        for (_, color, parts) in &self.lines {
+            for part in parts {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        part.iter().copied(),
+                        6,
+                        4,
+                        color.stroke_width(2),
+                    ))
+                    .map_err(err)?;
+            }
+        }
+        self.draw_boundaries(root, &chart, &points, &cells)?;
+        // Smaller dots where refinement packed points densely.
+        let radius = if points.len() > 100 { 2 } else { 3 };
+        for (p, &c) in points.iter().zip(&at) {
+            if p.bistable() {
+                continue;
+            }
+            let color = phase_color(p.phase());
+            // Untrusted points hollow: their label may still change.
+            let style = if p.trusted {
+                color.filled()
+            } else {
+                color.stroke_width(2)
+            };
+            root.draw(&Circle::new(c, radius, style)).map_err(err)?;
+            // Not stationary, label kept by the trend (a heating gas, a cooling solid, a
+            // coarsening coexistence): a white centre in the filled disc.
+            if p.trusted && p.label_kept {
+                root.draw(&Circle::new(c, (radius / 2).max(1), WHITE.filled()))
+                    .map_err(err)?;
+            }
+        }
+        draw_bistable(root, &mut chart, self.slices, &points, radius + 1)?;
+        draw_fallbacks(&mut chart, &points, radius)?;
         if let Some(note) = &self.note {
-            let (xr, yr) = chart.plotting_area().get_pixel_range();
-            let words = wrap(note, 60);
-            for (k, line) in words.iter().enumerate() {
+            for (k, line) in wrap(note, 52).iter().enumerate() {
                 root.draw(&Text::new(
                     line.clone(),
-                    (xr.start + 12, yr.start + 10 + 18 * k as i32),
-                    ("sans-serif", 15).into_font().color(&RGBColor(170, 0, 0)),
+                    (xr.start + 8, yr.start + 8 + 16 * k as i32),
+                    font(12.5).color(&RGBColor(170, 0, 0)),
                 ))
                 .map_err(err)?;
             }
         }
-        let mut legend: Vec<(String, Swatch)> = Vec::new();
-        for (label, color, parts) in &self.lines {
-            let color = *color;
-            for (k, part) in parts.iter().enumerate() {
-                chart
-                    .draw_series(LineSeries::new(part.iter().copied(), color.stroke_width(2)))
-                    .map_err(err)?;
-                if k == 0 {
-                    legend.push((label.clone(), Swatch::Line(color)));
-                }
-            }
-        }
-        let points = merge_branches(self.slices);
-        // Smaller dots where refinement packed points densely.
-        let radius = if points.len() > 100 { 3 } else { 6 };
-        let mut phases: Vec<&str> = points
-            .iter()
-            .flat_map(|p| p.phases.iter().flatten().map(String::as_str))
-            .collect();
-        phases.sort();
-        phases.dedup();
-        for phase in phases {
-            let color = phase_color(phase);
-            chart
-                .draw_series(
-                    points
-                        .iter()
-                        .filter(|p| !p.bistable() && p.phase() == phase)
-                        .map(|p| {
-                            // Untrusted points hollow: their label may still change.
-                            let style = if p.trusted {
-                                color.filled()
-                            } else {
-                                color.stroke_width(2)
-                            };
-                            Circle::new((p.x, p.y), radius, style)
-                        }),
-                )
-                .map_err(err)?;
-            legend.push((phase.to_string(), Swatch::Dot(color)));
-        }
-        if points.iter().any(|p| !p.trusted) {
-            let grey = RGBColor(90, 90, 90);
-            legend.push(("hollow: label may change".to_string(), Swatch::Ring(grey)));
-        }
-        // Not stationary, label kept by the trend (a heating gas, a cooling solid, a coarsening
-        // coexistence): a white centre in the filled disc.
-        let kept: Vec<&DrawnPoint> = points
-            .iter()
-            .filter(|p| p.trusted && p.label_kept && !p.bistable())
-            .collect();
-        if !kept.is_empty() {
-            let centre = (radius / 2).max(1);
-            chart
-                .draw_series(
-                    kept.iter()
-                        .map(|p| Circle::new((p.x, p.y), centre, WHITE.filled())),
-                )
-                .map_err(err)?;
-            legend.push((
-                "white centre: drifting, label kept (~)".to_string(),
-                Swatch::Kept,
-            ));
-        }
-        draw_bistable(root, &mut chart, self.slices, &points, radius, &mut legend)?;
-        draw_fallbacks(&mut chart, &points, radius, &mut legend)?;
-        draw_boundary_points(&mut chart, self.slices, &mut legend)?;
-        // The legend right of the plot, level with its top: it hides no point.
-        let (xr, yr) = chart.plotting_area().get_pixel_range();
-        draw_legend(root, (xr.end + 14, yr.start), &legend).map_err(err)?;
         Ok(points
             .iter()
-            .map(|p| {
-                let (px, py) = chart.backend_coord(&(p.x, p.y));
-                (p.x, p.y, px, py)
-            })
+            .zip(&at)
+            .map(|(p, &(px, py))| (p.x, p.y, px, py))
             .collect())
+    }
+
+    /// The plane coordinates of an axis value pair (the scales the boundaries are extracted in).
+    fn plane(&self, (x, y): (f64, f64)) -> (f64, f64) {
+        (self.axes.0.scale(x), self.axes.1.scale(y))
+    }
+
+    /// The pixel position of plane coordinates.
+    fn pixel<X, Y>(
+        &self,
+        chart: &ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
+        (u, v): (f64, f64),
+    ) -> (i32, i32)
+    where
+        X: Ranged<ValueType = f64>,
+        Y: Ranged<ValueType = f64>,
+    {
+        chart.backend_coord(&(self.axes.0.unscale(u), self.axes.1.unscale(v)))
+    }
+
+    /// Shades every sampled point's Voronoi cell in its phase's colour: paler where its label
+    /// may change, grey where the branches disagree. The cells are those of the plane the
+    /// boundaries are extracted in (`boundary`: log10 on a log axis), so each boundary point's
+    /// straddling edge joins two neighbouring cells. Returns the cells, in plane coordinates.
+    fn draw_regions<X, Y>(
+        &self,
+        root: &DrawingArea<SVGBackend, Shift>,
+        chart: &ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
+        points: &[DrawnPoint],
+    ) -> Result<Vec<super::regions::Polygon>, DrawingAreaErrorKind<std::io::Error>>
+    where
+        X: Ranged<ValueType = f64>,
+        Y: Ranged<ValueType = f64>,
+    {
+        let ((x0, x1), (y0, y1)) = self.ranges;
+        let (a, b) = (self.plane((x0, y0)), self.plane((x1, y1)));
+        let rect = (a.0.min(b.0), a.1.min(b.1), a.0.max(b.0), a.1.max(b.1));
+        let pos: Vec<(f64, f64)> = points.iter().map(|p| self.plane((p.x, p.y))).collect();
+        let cells = super::regions::voronoi_cells(&pos, rect);
+        for (p, cell) in points.iter().zip(&cells) {
+            if cell.len() < 3 {
+                continue;
+            }
+            let shade = if p.bistable() {
+                BISTABLE_SHADE
+            } else {
+                let share = if p.trusted {
+                    REGION_SHADE
+                } else {
+                    UNTRUSTED_SHADE
+                };
+                tint(phase_color(p.phase()), share)
+            };
+            let v: Vec<(i32, i32)> = cell.iter().map(|&c| self.pixel(chart, c)).collect();
+            root.draw(&Polygon::new(v.clone(), shade.filled()))?;
+            // The outline in the same shade closes the seams between neighbouring cells.
+            let mut closed = v;
+            closed.push(closed[0]);
+            root.draw(&PathElement::new(closed, shade.stroke_width(1)))?;
+        }
+        Ok(cells)
+    }
+
+    /// Each branch's boundaries: the interface of the two cells of every boundary point's
+    /// straddling edge as a line, the point on it, and its uncertainty (the straddling edge's
+    /// extent along each axis) as error bars with caps.
+    fn draw_boundaries<X, Y>(
+        &self,
+        root: &DrawingArea<SVGBackend, Shift>,
+        chart: &ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
+        points: &[DrawnPoint],
+        cells: &[super::regions::Polygon],
+    ) -> Result<(), String>
+    where
+        X: Ranged<ValueType = f64>,
+        Y: Ranged<ValueType = f64>,
+    {
+        let err = |e: DrawingAreaErrorKind<_>| e.to_string();
+        let index: std::collections::HashMap<(u64, u64), usize> = points
+            .iter()
+            .enumerate()
+            .map(|(k, p)| (((p.x + 0.0).to_bits(), (p.y + 0.0).to_bits()), k))
+            .collect();
+        let find = |x: f64, y: f64| index.get(&((x + 0.0).to_bits(), (y + 0.0).to_bits()));
+        let bar = RGBColor(70, 70, 70);
+        let mut marks: Vec<(i32, i32)> = Vec::new();
+        for (k, slice) in self.slices.iter().enumerate() {
+            let colour = BRANCH_COLOURS[k % BRANCH_COLOURS.len()];
+            for b in slice.boundaries.values().flatten() {
+                let ends = b.between.map(|i| slice.points.get(i));
+                if let [Some(p), Some(q)] = ends
+                    && let (Some(&i), Some(&j)) = (find(p.x, p.y), find(q.x, q.y))
+                {
+                    let f = |k: usize| self.plane((points[k].x, points[k].y));
+                    if let Some((a, c)) = super::regions::interface(&cells[i], f(i), f(j)) {
+                        let line = vec![self.pixel(chart, a), self.pixel(chart, c)];
+                        root.draw(&PathElement::new(line, colour.stroke_width(2)))
+                            .map_err(err)?;
+                    }
+                }
+                let c = chart.backend_coord(&(b.x, b.y));
+                let (x0, x1) = (
+                    chart.backend_coord(&(b.x_range[0], b.y)).0,
+                    chart.backend_coord(&(b.x_range[1], b.y)).0,
+                );
+                let (y0, y1) = (
+                    chart.backend_coord(&(b.x, b.y_range[0])).1,
+                    chart.backend_coord(&(b.x, b.y_range[1])).1,
+                );
+                for (from, to, cap) in [
+                    ((x0, c.1), (x1, c.1), (0, 3)),
+                    ((c.0, y0), (c.0, y1), (3, 0)),
+                ] {
+                    if from == to {
+                        continue;
+                    }
+                    root.draw(&PathElement::new(vec![from, to], bar.stroke_width(1)))
+                        .map_err(err)?;
+                    for end in [from, to] {
+                        root.draw(&PathElement::new(
+                            vec![
+                                (end.0 - cap.0, end.1 - cap.1),
+                                (end.0 + cap.0, end.1 + cap.1),
+                            ],
+                            bar.stroke_width(1),
+                        ))
+                        .map_err(err)?;
+                    }
+                }
+                marks.push(c);
+            }
+        }
+        // The points last, over every bar and line: white discs outlined in black.
+        for c in marks {
+            root.draw(&Circle::new(c, 3, WHITE.filled())).map_err(err)?;
+            root.draw(&Circle::new(c, 3, BLACK.stroke_width(1)))
+                .map_err(err)?;
+        }
+        Ok(())
     }
 }
 
 /// The bistable points (those whose branches disagree): a disc split into one sector per
-/// branch, the phases in branch order beside it, and their legend entries.
+/// branch, the phases in branch order beside it.
 fn draw_bistable<X, Y>(
     root: &DrawingArea<SVGBackend, Shift>,
     chart: &mut ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
     slices: &[&Slice],
     points: &[DrawnPoint],
     radius: i32,
-    legend: &mut Vec<(String, Swatch)>,
 ) -> Result<(), String>
 where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
     let err = |e: DrawingAreaErrorKind<_>| e.to_string();
-    let bistable: Vec<&DrawnPoint> = points.iter().filter(|p| p.bistable()).collect();
-    if bistable.is_empty() {
-        return Ok(());
-    }
     // One sector per branch in its phase's colour (white where that branch has no point),
     // a black outline, and the phases in branch order beside it.
     let r = radius + 2;
     let n = slices.len();
-    for p in &bistable {
+    for p in points.iter().filter(|p| p.bistable()) {
         let at = chart.backend_coord(&(p.x, p.y));
         for (k, phase) in p.phases.iter().enumerate() {
             let color = phase.as_deref().map_or(WHITE, phase_color);
@@ -616,129 +913,30 @@ where
             .draw(
                 &(EmptyElement::at((p.x, p.y))
                     + Circle::new((0, 0), r, BLACK.stroke_width(1))
-                    + Text::new(text.join("/"), (r + 2, -r - 10), ("sans-serif", 12))),
+                    + Text::new(text.join("/"), (r + 2, -r - 12), font(12.0))),
             )
             .map_err(err)?;
     }
-    let names: Vec<String> = (0..n).map(|k| branch_name(slices, k)).collect();
-    // The branches' short names for the text's order: `hot/cold`.
-    let short: Vec<String> = (0..n)
-        .map(|k| {
-            slices[k]
-                .branch
-                .clone()
-                .unwrap_or_else(|| (k + 1).to_string())
-        })
-        .collect();
-    let how = if n == 2 {
-        format!("left {}, right {}", names[0], names[1])
-    } else {
-        format!("anticlockwise from the top: {}", names.join(", "))
-    };
-    legend.push((format!("split disc: bistable ({how})"), Swatch::Split(n)));
-    legend.push((
-        format!("text by the disc: phases {}", short.join("/")),
-        Swatch::None,
-    ));
     Ok(())
 }
 
 /// A square outline around every point whose label rests on a fallback (the temperature for an
-/// unmeasured mobility, or `gas_temperature` where no line decided), and its legend entry.
+/// unmeasured mobility, or `gas_temperature` where no line decided).
 fn draw_fallbacks<X, Y>(
     chart: &mut ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
     points: &[DrawnPoint],
     radius: i32,
-    legend: &mut Vec<(String, Swatch)>,
 ) -> Result<(), String>
 where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
-    let fallback: Vec<&DrawnPoint> = points.iter().filter(|p| p.fallback).collect();
-    if fallback.is_empty() {
-        return Ok(());
-    }
     let r = radius + 3;
     chart
-        .draw_series(fallback.iter().map(|p| {
+        .draw_series(points.iter().filter(|p| p.fallback).map(|p| {
             EmptyElement::at((p.x, p.y)) + Rectangle::new([(-r, -r), (r, r)], BLACK.stroke_width(1))
         }))
         .map_err(|e| e.to_string())?;
-    legend.push((
-        "square: decided by a fallback (T_g/E_cb)".to_string(),
-        Swatch::Square(BLACK),
-    ));
-    Ok(())
-}
-
-/// The boundary points of each branch, with the uncertainty bars of their straddling edges,
-/// and their legend entries.
-fn draw_boundary_points<X, Y>(
-    chart: &mut ChartContext<'_, SVGBackend<'_>, Cartesian2d<X, Y>>,
-    slices: &[&Slice],
-    legend: &mut Vec<(String, Swatch)>,
-) -> Result<(), String>
-where
-    X: Ranged<ValueType = f64>,
-    Y: Ranged<ValueType = f64>,
-{
-    let err = |e: DrawingAreaErrorKind<_>| e.to_string();
-    // Uncertainty of each boundary point: the straddling edge's extent along each axis.
-    let bars: Vec<Vec<(f64, f64)>> = slices
-        .iter()
-        .flat_map(|s| s.boundaries.values().flatten())
-        .flat_map(|b| {
-            [
-                vec![(b.x_range[0], b.y), (b.x_range[1], b.y)],
-                vec![(b.x, b.y_range[0]), (b.x, b.y_range[1])],
-            ]
-        })
-        .collect();
-    if !bars.is_empty() {
-        let grey = RGBColor(110, 110, 110);
-        chart
-            .draw_series(
-                bars.into_iter()
-                    .map(|bar| PathElement::new(bar, grey.stroke_width(1))),
-            )
-            .map_err(err)?;
-        legend.push((
-            "uncertainty (straddling edge)".to_string(),
-            Swatch::Line(grey),
-        ));
-    }
-    // Each branch's boundary points with their own colour (the first black).
-    const BRANCH_COLOURS: [RGBColor; 3] = [
-        RGBColor(0, 0, 0),
-        RGBColor(170, 0, 170),
-        RGBColor(0, 110, 110),
-    ];
-    for (k, slice) in slices.iter().enumerate() {
-        let boundary: Vec<(f64, f64)> = slice
-            .boundaries
-            .values()
-            .flatten()
-            .map(|b| (b.x, b.y))
-            .collect();
-        if boundary.is_empty() {
-            continue;
-        }
-        let color = BRANCH_COLOURS[k % BRANCH_COLOURS.len()];
-        let label = if slices.len() > 1 {
-            format!("boundary points, {}", branch_name(slices, k))
-        } else {
-            "boundary points".to_string()
-        };
-        chart
-            .draw_series(
-                boundary
-                    .iter()
-                    .map(|&(bx, by)| Cross::new((bx, by), 4, color.stroke_width(2))),
-            )
-            .map_err(err)?;
-        legend.push((label, Swatch::Cross(color)));
-    }
     Ok(())
 }
 

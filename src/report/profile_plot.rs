@@ -1,7 +1,8 @@
 //! The lateral-profile plot: `T_g / E_cb`, packing fraction, bridge density `n_cb`, the
 //! mobility `D_lat` and (when observed) `f_lc` against `x`, one stacked panel each,
 //! time-averaged over the window. With 3D plane bins each panel is a map over `(x, y)`
-//! (darker is larger).
+//! (darker is larger). Ticks at steps of 1, 2 or 5 times a power of ten, one format per axis
+//! (`report::ticks`); `x` in grain diameters; names typeset (`report::typeset`).
 
 use super::svg::{esc, label, n};
 use std::fmt::Write;
@@ -52,7 +53,7 @@ pub fn profiles_svg(obs: &Observables) -> String {
     if let Some((nx, ny)) = p.grid {
         return maps_svg(obs, &panels, nx, ny);
     }
-    let (w, ph, ml, mr, mt, gap) = (760.0, 120.0, 70.0, 20.0, 44.0, 36.0);
+    let (w, ph, ml, mr, mt, gap) = (760.0, 120.0, 70.0, 20.0, 44.0, 40.0);
     let h = mt + panels.len() as f64 * (ph + gap) + 10.0;
     let pw = w - ml - mr;
     let lx = p.centres.len() as f64 * p.bin_width;
@@ -90,27 +91,39 @@ pub fn profiles_svg(obs: &Observables) -> String {
         );
         let _ = writeln!(
             s,
-            "<text x=\"{ml}\" y=\"{}\">{}</text>",
+            "<text x=\"{ml}\" y=\"{}\">{}{}</text>",
             n(y0 - 4.0),
+            super::typeset::MARK,
             esc(name)
         );
-        for v in [lo + pad, 0.5 * (lo + hi), hi - pad] {
+        for t in super::ticks::axis_ticks((lo, hi), false) {
+            let Some(text) = t.label else { continue };
+            let y = py(t.value);
             let _ = writeln!(
                 s,
-                "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>",
+                "<path d=\"M{} {}H{}\" stroke=\"black\"/><text x=\"{}\" y=\"{}\" \
+                 text-anchor=\"end\">{}</text>",
                 n(ml - 4.0),
-                n(py(v) + 4.0),
-                label(v)
+                n(y),
+                n(ml),
+                n(ml - 6.0),
+                n(y + 4.0),
+                text
             );
         }
-        for q in 0..=4 {
-            let x = lx * q as f64 / 4.0;
+        for t in super::ticks::axis_ticks((0.0, lx), false) {
+            let Some(text) = t.label else { continue };
+            let x = px(t.value);
             let _ = writeln!(
                 s,
-                "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
-                n(px(x)),
-                n(y0 + ph + 13.0),
-                label(x)
+                "<path d=\"M{} {}V{}\" stroke=\"black\"/><text x=\"{}\" y=\"{}\" \
+                 text-anchor=\"middle\">{}</text>",
+                n(x),
+                n(y0 + ph),
+                n(y0 + ph + 4.0),
+                n(x),
+                n(y0 + ph + 15.0),
+                text
             );
         }
         // One polyline per run of bins with values.
@@ -138,12 +151,13 @@ pub fn profiles_svg(obs: &Observables) -> String {
     }
     let _ = writeln!(
         s,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">x</text>",
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\"><tspan font-style=\"italic\">x</tspan> \
+         (grain diameters <tspan font-style=\"italic\">d</tspan>)</text>",
         n(ml + pw / 2.0),
         n(h - 2.0)
     );
     s.push_str("</svg>\n");
-    s
+    super::typeset::typeset_svg(&s)
 }
 
 /// The panels as maps over the lateral plane (3D plane bins, numbered `ix + nx iy`).

@@ -286,8 +286,8 @@ fn map_section(input: &SiteInput, positions: &[Position]) -> String {
                 "<p class=\"lead\">One disc per grid point, coloured by its label; click one for \
                  its page.</p>\n<div class=\"mapbox\"><img src=\"map.svg\" usemap=\"#points\" \
                  width=\"{}\" height=\"{}\" alt=\"phase map of {}\"></div>\n<map name=\"points\">",
-                super::plot_phase::MAP_WIDTH,
-                super::plot_phase::MAP_HEIGHT,
+                map.width,
+                map.height,
                 esc(&sweep.name)
             );
             for &(x, y, px, py) in &map.points {
