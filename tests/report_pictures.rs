@@ -91,7 +91,27 @@ fn profile_plot_and_cli_outputs() {
     let svg = profiles_svg(&run.observables);
     // T_g, packing, n_cb, D_lat and f_lc panels: one frame and one curve each.
     assert_eq!(svg.matches("<rect x=").count(), 5);
-    assert_eq!(svg.matches("stroke=\"#1f77b4\"").count(), 5);
+    assert_eq!(
+        svg.matches("stroke=\"#1f77b4\" stroke-width=\"1.5\"")
+            .count(),
+        5
+    );
+    // Error bars of one standard error on the packing and n_cb panels (their stored
+    // rms-over-bins errors), one bar per bin with a value: 24 bins of width 1 each.
+    let p = &run.observables.profiles;
+    assert!(p.packing_standard_error.is_some() && p.n_cb_standard_error.is_some());
+    let bars: Vec<&str> = svg
+        .split("<path class=\"errorbar\" d=\"")
+        .skip(1)
+        .map(|t| t.split('"').next().unwrap())
+        .collect();
+    assert_eq!(bars.len(), 2, "packing and n_cb");
+    for (d, values) in bars.iter().zip([&p.packing, &p.n_cb]) {
+        // Each bar is three strokes (the bar and its two caps).
+        assert_eq!(d.matches('M').count(), 3 * values.len(), "{d}");
+    }
+    let titles = svg.matches("bars: one standard error").count();
+    assert_eq!(titles, 2, "the panels with bars say so");
     // Ticks at round steps in one format per axis (not min/mid/max of the data): the x axis
     // of the 24 d wide box at 0, 5, 10, 15, 20 in each of the 5 panels; units named.
     let doc = roxmltree::Document::parse(&svg).unwrap();

@@ -223,7 +223,7 @@ pub fn overlay_svg(lines: &Lines) -> Result<String, String> {
         root.fill(&WHITE).map_err(err)?;
         let (top, body) = root.split_vertically(header);
         top.draw(&Text::new(
-            marked(&format!("{}: all lines of constant Gamma", lines.sweep)),
+            marked(&format!("{}: all lines of constant Γ", lines.sweep)),
             (10, 6),
             font(14.0),
         ))

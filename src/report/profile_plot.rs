@@ -2,45 +2,65 @@
 //! mobility `D_lat` and (when observed) `f_lc` against `x`, one stacked panel each,
 //! time-averaged over the window. With 3D plane bins each panel is a map over `(x, y)`
 //! (darker is larger). Ticks at steps of 1, 2 or 5 times a power of ten, one format per axis
-//! (`report::ticks`); `x` in grain diameters; names typeset (`report::typeset`).
+//! (`report::ticks`); `x` in grain diameters; names typeset (`report::typeset`). The packing
+//! and `n_cb` panels carry error bars of one standard error (`Profiles::packing_standard_error`,
+//! `n_cb_standard_error`: the root mean square over the bins of each bin's block standard error,
+//! so one bar length for every bin); the others store no per-bin error and have none.
 
 use super::svg::{esc, label, n};
 use std::fmt::Write;
 use wetgran_core::observe::Observables;
 
-/// The profiles plotted, one panel each: its title and its value per bin (`None`: no value).
-fn profile_panels(obs: &Observables) -> Vec<(String, Vec<Option<f64>>)> {
+/// One panel of the profile plot: its title, its value per bin (`None`: no value) and the
+/// standard error of a bin's value where one is stored.
+struct Panel {
+    title: String,
+    values: Vec<Option<f64>>,
+    standard_error: Option<f64>,
+}
+
+/// The profiles plotted, one panel each.
+fn profile_panels(obs: &Observables) -> Vec<Panel> {
     let p = &obs.profiles;
     let unit = &obs.temperature_unit_name;
-    let mut panels: Vec<(String, Vec<Option<f64>>)> = vec![
-        (format!("T_g / {unit}"), p.temperature_reduced.clone()),
-        (
+    let panel = |title: String, values: Vec<Option<f64>>, standard_error: Option<f64>| Panel {
+        title,
+        values,
+        standard_error,
+    };
+    let mut panels = vec![
+        panel(format!("T_g / {unit}"), p.temperature_reduced.clone(), None),
+        panel(
             if obs.dimension == 2 {
                 "packing fraction (areal)".to_string()
             } else {
                 "packing fraction (volume)".to_string()
             },
             p.packing.iter().map(|&x| Some(x)).collect(),
+            p.packing_standard_error,
         ),
-        (
+        panel(
             format!(
                 "n_cb (bridges per d^{}, averaged over the height), Delta n_cb = {}",
                 obs.dimension,
                 label(p.delta_n_cb)
             ),
             p.n_cb.iter().map(|&x| Some(x)).collect(),
+            p.n_cb_standard_error,
         ),
     ];
     if !p.diffusion.is_empty() {
-        panels.push((
+        panels.push(panel(
             "D_lat (lateral mobility, d^2 per time unit)".to_string(),
             p.diffusion.clone(),
+            None,
         ));
     }
     if let Some(f) = &p.flc {
-        panels.push((
+        panels.push(panel(
             "f_lc (per particle per time unit)".to_string(),
             f.iter().map(|&x| Some(x)).collect(),
+            None,
         ));
     }
     panels
@@ -64,13 +84,17 @@ pub fn profiles_svg(obs: &Observables) -> String {
         "<text x=\"{ml}\" y=\"16\">lateral profiles, window t = {:.2} .. {:.2} ({} samples), bin width {:.3}</text>",
         obs.window_start, obs.window_end, obs.window_samples, p.bin_width
     );
-    for (k, (name, values)) in panels.iter().enumerate() {
+    for (k, panel) in panels.iter().enumerate() {
+        let (name, values) = (&panel.title, &panel.values);
+        let se = panel.standard_error.filter(|e| e.is_finite() && *e > 0.0);
         let y0 = mt + k as f64 * (ph + gap);
         let vals: Vec<f64> = values.iter().flatten().copied().collect();
+        // The range holds the bars too.
+        let bar = se.unwrap_or(0.0);
         let (mut lo, mut hi) = vals
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v), b.max(v))
+                (a.min(v - bar), b.max(v + bar))
             });
         if !lo.is_finite() {
             (lo, hi) = (0.0, 1.0);
@@ -91,10 +115,15 @@ pub fn profiles_svg(obs: &Observables) -> String {
         );
         let _ = writeln!(
             s,
-            "<text x=\"{ml}\" y=\"{}\">{}{}</text>",
+            "<text x=\"{ml}\" y=\"{}\">{}{}{}</text>",
             n(y0 - 4.0),
             super::typeset::MARK,
-            esc(name)
+            esc(name),
+            if se.is_some() {
+                "; bars: one standard error"
+            } else {
+                ""
+            }
         );
         for t in super::ticks::axis_ticks((lo, hi), false) {
             let Some(text) = t.label else { continue };
@@ -148,6 +177,33 @@ pub fn profiles_svg(obs: &Observables) -> String {
             s,
             "<path d=\"{path}\" fill=\"none\" stroke=\"#1f77b4\" stroke-width=\"1.5\"/>"
         );
+        // A bar of +- one standard error with caps at each bin with a value.
+        if let Some(e) = se {
+            let cap = 3.0;
+            let mut bars = String::new();
+            for (b, v) in values.iter().enumerate() {
+                let Some(v) = v else { continue };
+                let (x, top, bottom) = (px(p.centres[b]), py(v + e), py(v - e));
+                let _ = write!(
+                    bars,
+                    "M{} {}V{}M{} {}H{}M{} {}H{}",
+                    n(x),
+                    n(top),
+                    n(bottom),
+                    n(x - cap),
+                    n(top),
+                    n(x + cap),
+                    n(x - cap),
+                    n(bottom),
+                    n(x + cap)
+                );
+            }
+            let _ = writeln!(
+                s,
+                "<path class=\"errorbar\" d=\"{bars}\" fill=\"none\" stroke=\"#1f77b4\" \
+                 stroke-width=\"1\"/>"
+            );
+        }
     }
     let _ = writeln!(
         s,
@@ -161,12 +217,7 @@ pub fn profiles_svg(obs: &Observables) -> String {
 }
 
 /// The panels as maps over the lateral plane (3D plane bins, numbered `ix + nx iy`).
-fn maps_svg(
-    obs: &Observables,
-    panels: &[(String, Vec<Option<f64>>)],
-    nx: usize,
-    ny: usize,
-) -> String {
+fn maps_svg(obs: &Observables, panels: &[Panel], nx: usize, ny: usize) -> String {
     let p = &obs.profiles;
     let (ml, mt, gap, pw) = (20.0, 44.0, 40.0, 360.0);
     let ph = (pw * ny as f64 / nx as f64).min(360.0);
@@ -186,7 +237,8 @@ fn maps_svg(
         p.bin_width_y.unwrap_or(p.bin_width)
     );
     let (cw, ch) = (pw / nx as f64, ph / ny as f64);
-    for (k, (name, values)) in panels.iter().enumerate() {
+    for (k, panel) in panels.iter().enumerate() {
+        let (name, values) = (&panel.title, &panel.values);
         let x0 = ml + (k % cols) as f64 * (pw + gap);
         let y0 = mt + (k / cols) as f64 * (ph + gap);
         let vals: Vec<f64> = values.iter().flatten().copied().collect();
