@@ -97,7 +97,7 @@ fn profile_plot_and_cli_outputs() {
         5
     );
     // Error bars of one standard error on the packing and n_cb panels (their stored
-    // rms-over-bins errors), one bar per bin with a value: 24 bins of width 1 each.
+    // rms-over-bins errors), one bar per bin with a value.
     let p = &run.observables.profiles;
     assert!(p.packing_standard_error.is_some() && p.n_cb_standard_error.is_some());
     let bars: Vec<&str> = svg

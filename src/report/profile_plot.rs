@@ -81,7 +81,7 @@ pub fn profiles_svg(obs: &Observables) -> String {
     let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
     let _ = writeln!(
         s,
-        "<text x=\"{ml}\" y=\"16\">lateral profiles, window t = {:.2} .. {:.2} ({} samples), bin width {:.3}</text>",
+        "<text x=\"{ml}\" y=\"16\">lateral profiles, window t = {:.2} .. {:.2} ({} samples), bin width {:.3} d</text>",
         obs.window_start, obs.window_end, obs.window_samples, p.bin_width
     );
     for (k, panel) in panels.iter().enumerate() {
@@ -177,6 +177,16 @@ pub fn profiles_svg(obs: &Observables) -> String {
             s,
             "<path d=\"{path}\" fill=\"none\" stroke=\"#1f77b4\" stroke-width=\"1.5\"/>"
         );
+        if vals.is_empty() {
+            // Say so rather than leave an empty frame (D_lat of a run shorter than its lag).
+            let _ = writeln!(
+                s,
+                "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" fill=\"#555\">no value in any \
+                 bin</text>",
+                n(ml + pw / 2.0),
+                n(y0 + ph / 2.0)
+            );
+        }
         // A bar of +- one standard error with caps at each bin with a value.
         if let Some(e) = se {
             let cap = 3.0;
