@@ -89,22 +89,7 @@ pub fn profiles_svg(obs: &Observables) -> String {
         let se = panel.standard_error.filter(|e| e.is_finite() && *e > 0.0);
         let y0 = mt + k as f64 * (ph + gap);
         let vals: Vec<f64> = values.iter().flatten().copied().collect();
-        // The range holds the bars too.
-        let bar = se.unwrap_or(0.0);
-        let (mut lo, mut hi) = vals
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                (a.min(v - bar), b.max(v + bar))
-            });
-        if !lo.is_finite() {
-            (lo, hi) = (0.0, 1.0);
-        }
-        if hi - lo < 1e-12 * hi.abs().max(1.0) {
-            let pad = 0.5 * hi.abs().max(1e-3);
-            (lo, hi) = (lo - pad, hi + pad);
-        }
-        let pad = 0.05 * (hi - lo);
-        let (lo, hi) = (lo - pad, hi + pad);
+        let (lo, hi) = value_range(&vals, se.unwrap_or(0.0));
         let px = |x: f64| ml + x / lx * pw;
         let py = |v: f64| y0 + ph - (v - lo) / (hi - lo) * ph;
         let _ = writeln!(
@@ -187,32 +172,8 @@ pub fn profiles_svg(obs: &Observables) -> String {
                 n(y0 + ph / 2.0)
             );
         }
-        // A bar of +- one standard error with caps at each bin with a value.
         if let Some(e) = se {
-            let cap = 3.0;
-            let mut bars = String::new();
-            for (b, v) in values.iter().enumerate() {
-                let Some(v) = v else { continue };
-                let (x, top, bottom) = (px(p.centres[b]), py(v + e), py(v - e));
-                let _ = write!(
-                    bars,
-                    "M{} {}V{}M{} {}H{}M{} {}H{}",
-                    n(x),
-                    n(top),
-                    n(bottom),
-                    n(x - cap),
-                    n(top),
-                    n(x + cap),
-                    n(x - cap),
-                    n(bottom),
-                    n(x + cap)
-                );
-            }
-            let _ = writeln!(
-                s,
-                "<path class=\"errorbar\" d=\"{bars}\" fill=\"none\" stroke=\"#1f77b4\" \
-                 stroke-width=\"1\"/>"
-            );
+            s.push_str(&error_bars(values, &p.centres, e, &px, &py));
         }
     }
     let _ = writeln!(
@@ -224,6 +185,59 @@ pub fn profiles_svg(obs: &Observables) -> String {
     );
     s.push_str("</svg>\n");
     super::typeset::typeset_svg(&s)
+}
+
+/// The value axis of a panel: the values with their bars (`bar`: half a bar's length), widened
+/// where they are all equal and padded by 5 % on each side; `(0, 1)` without values.
+fn value_range(vals: &[f64], bar: f64) -> (f64, f64) {
+    let (mut lo, mut hi) = vals
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v - bar), b.max(v + bar))
+        });
+    if !lo.is_finite() {
+        (lo, hi) = (0.0, 1.0);
+    }
+    if hi - lo < 1e-12 * hi.abs().max(1.0) {
+        let pad = 0.5 * hi.abs().max(1e-3);
+        (lo, hi) = (lo - pad, hi + pad);
+    }
+    let pad = 0.05 * (hi - lo);
+    (lo - pad, hi + pad)
+}
+
+/// The bars of +- one standard error `e` with caps at each bin with a value, one SVG path
+/// (`px`, `py`: the panel's scales).
+fn error_bars(
+    values: &[Option<f64>],
+    centres: &[f64],
+    e: f64,
+    px: &dyn Fn(f64) -> f64,
+    py: &dyn Fn(f64) -> f64,
+) -> String {
+    const CAP: f64 = 3.0;
+    let mut bars = String::new();
+    for (b, v) in values.iter().enumerate() {
+        let Some(v) = v else { continue };
+        let (x, top, bottom) = (px(centres[b]), py(v + e), py(v - e));
+        let _ = write!(
+            bars,
+            "M{} {}V{}M{} {}H{}M{} {}H{}",
+            n(x),
+            n(top),
+            n(bottom),
+            n(x - CAP),
+            n(top),
+            n(x + CAP),
+            n(x - CAP),
+            n(bottom),
+            n(x + CAP)
+        );
+    }
+    format!(
+        "<path class=\"errorbar\" d=\"{bars}\" fill=\"none\" stroke=\"#1f77b4\" \
+         stroke-width=\"1\"/>\n"
+    )
 }
 
 /// The panels as maps over the lateral plane (3D plane bins, numbered `ix + nx iy`).
