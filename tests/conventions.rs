@@ -361,16 +361,7 @@ fn docs_cli_names_the_panels_that_profiles_draws() {
     // typeset (subscripts as `<tspan>`s), so a title is its text element's characters joined,
     // and names compare without the `_` and spaces of their plain spelling.
     let plain = |t: &str| t.replace(['_', ' '], "");
-    let doc = roxmltree::Document::parse(&svg).expect("the SVG parses");
-    let texts: Vec<String> = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("text"))
-        .map(|n| {
-            n.descendants()
-                .filter_map(|d| d.is_text().then(|| d.text()).flatten())
-                .collect::<String>()
-        })
-        .collect();
+    let texts = wetgran_testkit::figures::svg_texts(&svg);
     let titles: Vec<String> = texts
         .iter()
         .map(|t| plain(t))

@@ -114,19 +114,7 @@ fn profile_plot_and_cli_outputs() {
     assert_eq!(titles, 2, "the panels with bars say so");
     // Ticks at round steps in one format per axis (not min/mid/max of the data): the x axis
     // of the 24 d wide box at 0, 5, 10, 15, 20 in each of the 5 panels; units named.
-    let doc = roxmltree::Document::parse(&svg).unwrap();
-    let texts: Vec<String> = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("text"))
-        .map(|n| {
-            let t: String = n
-                .descendants()
-                .filter(|d| d.is_text())
-                .filter_map(|d| d.text())
-                .collect();
-            t.trim().to_string()
-        })
-        .collect();
+    let texts = wetgran_testkit::figures::svg_texts(&svg);
     for x in ["0", "5", "10", "15", "20"] {
         assert!(
             texts.iter().filter(|t| *t == x).count() >= 5,

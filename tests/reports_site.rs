@@ -708,18 +708,4 @@ fn show_at_names_the_branches_and_redraws_a_job_without_a_stored_state() {
     assert_eq!(xyz.lines().next(), Some("40"), "the tiny scene's 40 grains");
 }
 
-/// Every text of an SVG, each text element's characters joined (typeset tspans included).
-fn svg_texts(svg: &str) -> Vec<String> {
-    let doc = roxmltree::Document::parse(svg).expect("the SVG parses");
-    doc.descendants()
-        .filter(|n| n.has_tag_name("text"))
-        .map(|n| {
-            n.descendants()
-                .filter(|d| d.is_text())
-                .filter_map(|d| d.text())
-                .collect::<String>()
-                .trim()
-                .to_string()
-        })
-        .collect()
-}
+use wetgran_testkit::figures::svg_texts;

@@ -1,21 +1,7 @@
 //! Test helpers that read a written figure back as a reader's program would: the text of an
 //! SVG (roxmltree), the pixels of a PNG (png), the pages and text of a PDF (lopdf).
 
-/// Every text of an SVG, each text element's characters joined (tspans included), in order.
-pub(crate) fn svg_texts(svg: &str) -> Vec<String> {
-    let doc = roxmltree::Document::parse(svg).expect("the SVG parses");
-    doc.descendants()
-        .filter(|n| n.has_tag_name("text"))
-        .map(|n| {
-            n.descendants()
-                .filter(|d| d.is_text())
-                .filter_map(|d| d.text())
-                .collect::<String>()
-                .trim()
-                .to_string()
-        })
-        .collect()
-}
+pub(crate) use wetgran_testkit::figures::svg_texts;
 
 /// The elements of an SVG with tag `tag`, as parsed.
 pub(crate) fn svg_count(svg: &str, tag: &str, attr: Option<(&str, &str)>) -> usize {

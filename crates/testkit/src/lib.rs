@@ -2,8 +2,10 @@
 //! dev-dependency of `wetgran-core` and `wetgran`, a dependency of `wetgran-bench`): scene
 //! construction and a run loop that checks the engine's invariants (`sanity_check`) as it goes
 //! (here), the 2D standard wet system ([`standard`]), the reference systems of the benchmarks
-//! ([`reference`]) and the reference event queue ([`NaiveQueue`]).
+//! ([`reference`]), the reference event queue ([`NaiveQueue`]) and the reading of a written
+//! figure's text ([`figures`]).
 
+pub mod figures;
 mod queues;
 pub mod reference;
 pub mod standard;
